@@ -1,0 +1,92 @@
+#pragma once
+// Exact inverses of the hysteresis models (desired output -> input).
+//
+// pi, gpi, mpi-deadzone: analytical. The dead zones are inverted piecewise
+// linearly (memoryless), the PI part by the inverse PI of Eqs. 9-11
+//   x = gamma^-1( q' v + sum_i p'_i x_i ),  x_i = F_{r'_i}[v]          (Eqs. 9-10)
+//   q' = 1/q,  r'_i = q r_i + sum_{j<i} p_j (r_i - r_j),
+//   p'_i = -p_i / ((q + sum_{j<=i} p_j)(q + sum_{j<i} p_j))           (Eq. 11)
+// mpi-asym: no closed form; each sample solves f(x) = y exactly for the
+// current operator state, with f strictly increasing, by safeguarded Newton
+// steps inside a shrinking bracket (to machine precision, not an approximation).
+//
+// Saturation: an output beyond the reachable range gives the nearest input
+// limit (never NaN, never outside the limits); the inverse's state then
+// follows the forward model driven by the saturated input, so it stays exact.
+//
+// Starting state: an inverse can be started from any forward state that a
+// forward model reaches from its virgin state (reset(const ModelState&)), so
+// that Inverse(forward(x)) == x sample by sample.
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "hysteron/models.hpp"
+
+namespace hysteron {
+
+struct InverseOptions {
+  // Input limits to saturate at. Unset (infinite) fields fall back to the model's
+  // input_limits; for a saturating envelope (tanh, atan) with no limit at all, the
+  // inverse stops where the envelope reaches 1e-9 of its range from its asymptote.
+  Limits input_limits;
+};
+
+class Inverse {
+ public:
+  // Throws hysteron::Error if the model is not invertible, naming the condition
+  // (e.g. "q + p_1 + ... + p_3 = -0.1 must be > 0").
+  explicit Inverse(ModelParams params, InverseOptions options = {});
+
+  const Structure<double>& structure() const noexcept { return s_; }
+  // The input limits the inverse saturates at.
+  const Limits& limits() const noexcept { return lim_; }
+  bool analytical() const noexcept { return !s_.asymmetric; }
+
+  // Virgin state (matches Model::reset()).
+  void reset() noexcept;
+  // Start consistently from a forward model's state. Throws hysteron::Error if the
+  // state has the wrong size, is not finite, or cannot be reached by the model
+  // (operator outputs whose spread breaks |d_i - d_j| <= r_j - r_i).
+  void reset(const ModelState& forward_state);
+
+  // One sample: the input that makes the model output y_desired. Never
+  // allocates, never throws; a non-finite y_desired holds the last input and
+  // is counted in faults().
+  double step(double y_desired) noexcept;
+  // Batch. Throws hysteron::Error on unequal sizes or a non-finite value.
+  void simulate(std::span<const double> y, std::span<double> x);
+  std::vector<double> simulate(std::span<const double> y);
+
+  // True if the last step saturated at an input limit.
+  bool saturated() const noexcept { return saturated_; }
+  double input() const noexcept { return x_; }
+  std::size_t faults() const noexcept { return faults_; }
+  // The equivalent forward-model state after the last step.
+  ModelState forward_state() const;
+
+ private:
+  double step_analytical(double y) noexcept;
+  double step_numerical(double y) noexcept;
+  double dead_zone_inverse(double y) const noexcept;
+  double forward_tentative(double x, double* dfdx) const noexcept;
+
+  ModelParams params_;
+  Structure<double> s_;
+  Limits lim_;
+  double u_lo_ = 0.0, u_hi_ = 0.0;  // envelope values at the limits
+  // analytical inverse: inverse-PI parameters and state (Eqs. 9-11)
+  double qi_ = 1.0;
+  std::vector<double> ri_, pi_;
+  std::vector<double> xi_, scratch_, dev_;  // x'_i, tentative x'_i, deviations
+  double v_prev_ = 0.0;
+  // dead-zone inverse tables: breakpoints and slopes (positive and negative side)
+  std::vector<double> zp_, dp_, sp_, zn_, dn_, sn_;
+  // numerical inverse: forward operator state
+  std::vector<double> y_;
+  double x_ = 0.0;
+  bool saturated_ = false;
+  std::size_t faults_ = 0;
+};
+
+}  // namespace hysteron

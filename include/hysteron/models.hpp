@@ -1,0 +1,206 @@
+#pragma once
+// Hysteresis models of the Prandtl-Ishlinskii family and their common
+// canonical structure. Equation numbers refer to
+// ../shared/papers/gpi-lm-feedforward-pid.txt unless noted.
+//
+// Every model is the same pipeline, evaluated once per sample:
+//
+//   u_a = gamma_a(x),  u_d = gamma_d(x)                       envelopes (Eq. 5)
+//   y_i = max{ u_a - r_i, min{ u_d + r_i, y_i } }             operators (Eqs. 1, 4)
+//   v   = q u_m + sum_i p_i y_i,   u_m = (u_a + u_d) / 2       superposition (Eqs. 3, 6)
+//   out = g0 v + sum_k g_k S_{z_k}(v)   (dead-zone MPI only)   output dead zones
+//
+//   model          envelopes               direct term  dead zones
+//   pi             identity                q x          -
+//   gpi            tanh (or any), shared   q gamma(x)   -
+//   mpi-deadzone   identity                q x          yes
+//   mpi-asym       gamma_a != gamma_d      q u_m        -
+//
+// mpi-asym (../shared/papers/mpi-asymmetric-openloop.txt lost its equations):
+// the paper replaces the play by "two more flexible elementary operators to
+// independently describe the ascending branch and descending branch". We use
+// the asymmetric generalized play: while the input rises, an operator's output
+// is pushed up by the ascending envelope gamma_a(x) - r_i; while it falls, it is
+// pushed down by the descending envelope gamma_d(x) + r_i. With fixed envelopes
+// the output is linear in (q, p_i), so the weights can be identified by
+// recursive least squares as in the paper; the envelopes (e.g. two tanh or an
+// affine and a tanh) let the rising and falling branches have different
+// curvature, which a classical PI (whose loops are point-symmetric about their
+// centre) cannot produce. Its inverse has no closed form and is computed
+// exactly per sample by monotone bracketing (see inverse.hpp).
+#include <cstddef>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "hysteron/envelope.hpp"
+#include "hysteron/operators.hpp"
+
+namespace hysteron {
+
+// Closed input interval [lo, hi]; infinite by default.
+struct Limits {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool bounded() const noexcept { return lo > -std::numeric_limits<double>::infinity() &&
+                                         hi < std::numeric_limits<double>::infinity(); }
+  bool operator==(const Limits&) const = default;
+};
+
+// Classical PI, Eq. 3 plus an optional direct term:  y = q x + sum_i p_i F_{r_i}[x].
+// Free thresholds r_i >= 0 and weights p_i (any sign). Eq. 3 is q = 0.
+struct PiParams {
+  double q = 0.0;
+  std::vector<double> r;
+  std::vector<double> p;
+  Limits input_limits;  // saturation limits of the inverse (optional)
+};
+
+// Generalized PI, Eq. 6:  y = q gamma(x) + sum_{i=1..n} p(r_i) y_i,  with
+// r_i = alpha i (Eq. 7) and p(r_i) = rho exp(-tau r_i) (Eq. 8).
+// Free-weight variant: when `r` is non-empty, r and p are used as given and
+// n, rho, tau, alpha are ignored.
+struct GpiParams {
+  Envelope envelope = Envelope::tanh(1.0, 1.0, 0.0, 0.0);  // Eq. 5
+  double q = 1.0;
+  int n = 10;
+  double rho = 0.0;
+  double tau = 0.0;
+  double alpha = 0.0;
+  std::vector<double> r;
+  std::vector<double> p;
+  Limits input_limits;
+};
+
+// Modified PI with one-sided dead zones (Kuhnen; mpi-deadzone-switching-valves.txt):
+//   v = q x + sum_i p_i F_{r_i}[x],   y = g0 v + sum_k g_k S_{z_k}(v),  z_k != 0.
+struct MpiDeadzoneParams {
+  double q = 1.0;
+  std::vector<double> r;
+  std::vector<double> p;
+  double g0 = 1.0;
+  std::vector<double> z;
+  std::vector<double> g;
+  Limits input_limits;
+};
+
+// Modified PI with asymmetric ascending/descending operators (see above):
+//   y = q (gamma_a(x) + gamma_d(x)) / 2 + sum_i p_i A_{r_i}[x].
+struct MpiAsymParams {
+  Envelope ascending = Envelope::identity();
+  Envelope descending = Envelope::identity();
+  double q = 1.0;
+  std::vector<double> r;
+  std::vector<double> p;
+  Limits input_limits;
+};
+
+using ModelParams = std::variant<PiParams, GpiParams, MpiDeadzoneParams, MpiAsymParams>;
+
+// "pi", "gpi", "mpi-deadzone", "mpi-asym".
+std::string_view model_name(const ModelParams& params) noexcept;
+const Limits& input_limits(const ModelParams& params) noexcept;
+
+// The canonical structure every model reduces to (see the top of this file),
+// templated on the scalar so identification can differentiate through it.
+// Thresholds are strictly increasing and positive: operators with r = 0 are
+// folded into q, equal thresholds merged. Dead zones: z sorted increasing.
+template <class T>
+struct Structure {
+  EnvelopeKind asc_kind = EnvelopeKind::identity;
+  EnvelopeKind desc_kind = EnvelopeKind::identity;
+  std::array<T, 4> asc_c{T(1), T(0), T(0), T(0)};
+  std::array<T, 4> desc_c{T(1), T(0), T(0), T(0)};
+  bool asymmetric = false;
+  T q = T(0);
+  std::vector<T> r;
+  std::vector<T> p;
+  bool has_dead_zones = false;
+  T g0 = T(1);
+  std::vector<T> z;
+  std::vector<T> g;
+};
+
+// Dead-zone output map  g0 v + sum_k g_k S_{z_k}(v).
+template <class T>
+inline T dead_zone_map(const Structure<T>& s, const T& v) {
+  T out = s.g0 * v;
+  for (std::size_t k = 0; k < s.z.size(); ++k) out += s.g[k] * ops::dead_zone<T>(v, s.z[k]);
+  return out;
+}
+
+// One sample of the model: updates the operator outputs y[0..n) in place and
+// returns the model output. Allocation-free; works for double and Jets.
+template <class T, class X>
+inline T structure_step(const Structure<T>& s, const X& x, T* y) {
+  const T u_a = envelope_value<T>(s.asc_kind, s.asc_c.data(), x);
+  const std::size_t n = s.r.size();
+  T v;
+  if (!s.asymmetric) {
+    v = s.q * u_a;
+    for (std::size_t i = 0; i < n; ++i) {
+      y[i] = ops::generalized_play<T>(u_a, s.r[i], y[i]);
+      v += s.p[i] * y[i];
+    }
+  } else {
+    const T u_d = envelope_value<T>(s.desc_kind, s.desc_c.data(), x);
+    v = s.q * (u_a + u_d) * T(0.5);
+    for (std::size_t i = 0; i < n; ++i) {
+      y[i] = ops::asymmetric_play<T>(u_a, u_d, s.r[i], y[i]);
+      v += s.p[i] * y[i];
+    }
+  }
+  return s.has_dead_zones ? dead_zone_map(s, v) : v;
+}
+
+// Validates `params` and builds the canonical structure. Throws hysteron::Error
+// with a message naming the offending key (e.g. "gpi: alpha must be > 0").
+Structure<double> canonical_structure(const ModelParams& params);
+
+// Forward-model state: operator outputs y_i and the envelope value u = gamma(x)
+// of the last input (0 in the virgin state; used to start an inverse).
+struct ModelState {
+  std::vector<double> y;
+  double u = 0.0;
+};
+
+// A hysteresis model ready to run sample by sample.
+class Model {
+ public:
+  explicit Model(ModelParams params);  // throws hysteron::Error on invalid params
+
+  const ModelParams& params() const noexcept { return params_; }
+  std::string_view name() const noexcept { return model_name(params_); }
+  const Structure<double>& structure() const noexcept { return s_; }
+  std::size_t num_operators() const noexcept { return s_.r.size(); }
+
+  // Virgin state y_i0 = 0 (Eq. 2 applies it at the first sample).
+  void reset() noexcept;
+  // Explicit initial state; throws hysteron::Error on a size mismatch or a non-finite value.
+  void reset(const ModelState& state);
+  // Initial state relaxed at input x0: y_i = gamma(x0), as if x0 had been held forever.
+  void reset_relaxed(double x0) noexcept;
+
+  // One sample. Never allocates, never throws. A non-finite input leaves the
+  // state unchanged, returns the previous output and is counted in faults().
+  double step(double x) noexcept;
+  // Batch: y[k] = step(x[k]). Throws hysteron::Error on unequal sizes or a non-finite x[k].
+  void simulate(std::span<const double> x, std::span<double> y);
+  std::vector<double> simulate(std::span<const double> x);
+
+  const ModelState& state() const noexcept { return state_; }
+  double output() const noexcept { return out_; }
+  std::size_t faults() const noexcept { return faults_; }
+
+ private:
+  ModelParams params_;
+  Structure<double> s_;
+  ModelState state_;
+  double out_ = 0.0;
+  std::size_t faults_ = 0;
+};
+
+}  // namespace hysteron

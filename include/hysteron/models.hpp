@@ -134,9 +134,11 @@ inline T dead_zone_map(const Structure<T>& s, const T& v) {
 
 // One sample of the model: updates the operator outputs y[0..n) in place and
 // returns the model output. Allocation-free; works for double and Jets.
+// If u_out is given it receives gamma_a(x).
 template <class T, class X>
-inline T structure_step(const Structure<T>& s, const X& x, T* y) {
+inline T structure_step(const Structure<T>& s, const X& x, T* y, T* u_out = nullptr) {
   const T u_a = envelope_value<T>(s.asc_kind, s.asc_c.data(), x);
+  if (u_out) *u_out = u_a;
   const std::size_t n = s.r.size();
   T v;
   if (!s.asymmetric) {

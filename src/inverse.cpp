@@ -1,0 +1,336 @@
+#include "hysteron/inverse.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// Deviation map between a PI operator and its inverse (see docs/models.md):
+// for play deviations d_i = u - y_i of a PI with direct weight q and weights p,
+// the inverse operators have deviations d'_i = q d_i + sum_{j<i} p_j (d_i - d_j).
+// The same map with (q', p') takes d' back to d. O(n) with running sums.
+void map_deviations(double q, const std::vector<double>& p, const double* d, double* out) noexcept {
+  double psum = 0.0, pdsum = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    out[i] = q * d[i] + psum * d[i] - pdsum;
+    psum += p[i];
+    pdsum += p[i] * d[i];
+  }
+}
+
+}  // namespace
+
+Inverse::Inverse(ModelParams params, InverseOptions options)
+    : params_(std::move(params)), s_(canonical_structure(params_)) {
+  const std::string_view name = model_name(params_);
+  const Limits& ml = input_limits(params_);
+  lim_.lo = std::isinf(options.input_limits.lo) ? ml.lo : options.input_limits.lo;
+  lim_.hi = std::isinf(options.input_limits.hi) ? ml.hi : options.input_limits.hi;
+  if (std::isnan(lim_.lo) || std::isnan(lim_.hi) || !(lim_.lo < lim_.hi))
+    throw Error(fmt::format("{}: inverse input limits must satisfy lo < hi, got [{}, {}]", name, lim_.lo, lim_.hi));
+
+  const std::size_t n = s_.r.size();
+  if (!(s_.q > 0))
+    throw Error(fmt::format("{}: not invertible: q (plus the weights of zero-threshold operators) = {} must be > 0, "
+                            "otherwise the output is flat after every reversal",
+                            name, s_.q));
+  if (!s_.asymmetric) {
+    // Eq. 11: partial sums q + p_1 + ... + p_i must stay positive.
+    double sum = s_.q;
+    for (std::size_t i = 0; i < n; ++i) {
+      sum += s_.p[i];
+      if (!(sum > 0))
+        throw Error(fmt::format("{}: not invertible: q + p_1 + ... + p_{} = {} must be > 0 (Eq. 11; the loading "
+                                "curve must be strictly increasing)",
+                                name, i + 1, sum));
+    }
+    qi_ = 1.0 / s_.q;
+    ri_.resize(n);
+    pi_.resize(n);
+    double prev = s_.q;  // q + sum_{j<i} p_j
+    for (std::size_t i = 0; i < n; ++i) {
+      double r = s_.q * s_.r[i];
+      for (std::size_t j = 0; j < i; ++j) r += s_.p[j] * (s_.r[i] - s_.r[j]);
+      const double cur = prev + s_.p[i];
+      ri_[i] = r;
+      pi_[i] = -s_.p[i] / (cur * prev);
+      prev = cur;
+    }
+    if (s_.has_dead_zones) {
+      if (!(s_.g0 > 0))
+        throw Error(fmt::format("{}: not invertible: g0 (plus weights of zero dead zones) = {} must be > 0", name, s_.g0));
+      // Positive side: breakpoints 0 < z_1 < z_2 ..., slope after z_k = g0 + sum g_j (z_j in (0, z_k]).
+      zp_ = {0.0};
+      dp_ = {0.0};
+      sp_ = {s_.g0};
+      for (std::size_t k = 0; k < s_.z.size(); ++k) {
+        if (!(s_.z[k] > 0)) continue;
+        const double dz = s_.z[k] - zp_.back();
+        dp_.push_back(dp_.back() + sp_.back() * dz);
+        zp_.push_back(s_.z[k]);
+        sp_.push_back(sp_.back() + s_.g[k]);
+        if (!(sp_.back() > 0))
+          throw Error(fmt::format("{}: not invertible: g0 + weights of dead zones in (0, {}] = {} must be > 0", name,
+                                  s_.z[k], sp_.back()));
+      }
+      // Negative side: 0 > z_1 > z_2 ... (walk z from the largest negative down).
+      zn_ = {0.0};
+      dn_ = {0.0};
+      sn_ = {s_.g0};
+      for (std::size_t kk = s_.z.size(); kk-- > 0;) {
+        if (!(s_.z[kk] < 0)) continue;
+        const double dz = s_.z[kk] - zn_.back();  // negative
+        dn_.push_back(dn_.back() + sn_.back() * dz);
+        zn_.push_back(s_.z[kk]);
+        sn_.push_back(sn_.back() + s_.g[kk]);
+        if (!(sn_.back() > 0))
+          throw Error(fmt::format("{}: not invertible: g0 + weights of dead zones in [{}, 0) = {} must be > 0", name,
+                                  s_.z[kk], sn_.back()));
+      }
+    }
+    // Saturating envelopes with no limit: stop 1e-9 of the range short of the asymptote.
+    env_ = Envelope{s_.asc_kind, s_.asc_c};
+    const Envelope& env = env_;
+    const double span = env.range_hi() - env.range_lo();
+    if (std::isinf(lim_.lo) && std::isfinite(span)) lim_.lo = env.inverse(env.range_lo() + 1e-9 * span);
+    if (std::isinf(lim_.hi) && std::isfinite(span)) lim_.hi = env.inverse(env.range_hi() - 1e-9 * span);
+    u_lo_ = std::isinf(lim_.lo) ? -kInf : env.value(lim_.lo);
+    u_hi_ = std::isinf(lim_.hi) ? kInf : env.value(lim_.hi);
+    xi_.assign(n, 0.0);
+    scratch_.assign(n, 0.0);
+    dev_.assign(n, 0.0);
+    y_.assign(n, 0.0);
+  } else {
+    for (std::size_t i = 0; i < n; ++i)
+      if (s_.p[i] < 0)
+        throw Error(fmt::format("{}: not invertible: the numerical inverse needs p_i >= 0, got p[{}] = {}", name, i,
+                                s_.p[i]));
+    if (!lim_.bounded())
+      throw Error(fmt::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));
+    y_.assign(n, 0.0);
+  }
+  reset();
+}
+
+void Inverse::reset() noexcept {
+  std::fill(xi_.begin(), xi_.end(), 0.0);
+  std::fill(y_.begin(), y_.end(), 0.0);
+  v_prev_ = 0.0;
+  x_ = std::clamp(0.0, lim_.lo, lim_.hi);
+  saturated_ = false;
+  faults_ = 0;
+}
+
+void Inverse::reset(const ModelState& fs) {
+  const std::string_view name = model_name(params_);
+  const std::size_t n = s_.r.size();
+  if (fs.y.size() != n)
+    throw Error(fmt::format("{}: inverse start state has {} operator outputs, the model has {}", name, fs.y.size(), n));
+  if (!std::isfinite(fs.u)) throw Error(fmt::format("{}: inverse start state u is not finite", name));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(fs.y[i])) throw Error(fmt::format("{}: inverse start state y[{}] is not finite", name, i));
+  saturated_ = false;
+  faults_ = 0;
+  if (s_.asymmetric) {
+    std::copy(fs.y.begin(), fs.y.end(), y_.begin());
+    const Envelope env{s_.asc_kind, s_.asc_c};
+    const double x = env.inverse(fs.u);
+    x_ = std::clamp(std::isfinite(x) ? x : 0.0, lim_.lo, lim_.hi);
+    return;
+  }
+  // Reachability: |d_1| <= r_1 and |d_i - d_{i-1}| <= r_i - r_{i-1} (1-Lipschitz memory curve).
+  double scale = std::abs(fs.u);
+  for (double v : fs.y) scale = std::max(scale, std::abs(v));
+  const double tol = 1e-9 * std::max(1.0, scale);
+  double d_prev = 0.0, r_prev = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    dev_[i] = fs.u - fs.y[i];
+    if (std::abs(dev_[i] - d_prev) > s_.r[i] - r_prev + tol)
+      throw Error(fmt::format("{}: inverse start state is not reachable by the model: operator {} (r = {}) deviates by "
+                              "{} from the input, operator {} by {}",
+                              name, i + 1, s_.r[i], dev_[i], i, d_prev));
+    d_prev = dev_[i];
+    r_prev = s_.r[i];
+  }
+  double v = s_.q * fs.u;
+  for (std::size_t i = 0; i < n; ++i) v += s_.p[i] * fs.y[i];
+  map_deviations(s_.q, s_.p, dev_.data(), scratch_.data());
+  for (std::size_t i = 0; i < n; ++i) xi_[i] = v - scratch_[i];
+  v_prev_ = v;
+  const Envelope env{s_.asc_kind, s_.asc_c};
+  const double x = env.inverse(fs.u);
+  x_ = std::clamp(std::isfinite(x) ? x : 0.0, lim_.lo, lim_.hi);
+}
+
+ModelState Inverse::forward_state() const {
+  ModelState fs;
+  const std::size_t n = s_.r.size();
+  if (s_.asymmetric) {
+    fs.y = y_;
+    fs.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x_);
+    return fs;
+  }
+  std::vector<double> dprime(n), d(n);
+  double u = qi_ * v_prev_;
+  for (std::size_t i = 0; i < n; ++i) {
+    dprime[i] = v_prev_ - xi_[i];
+    u += pi_[i] * xi_[i];
+  }
+  map_deviations(qi_, pi_, dprime.data(), d.data());
+  fs.y.resize(n);
+  for (std::size_t i = 0; i < n; ++i) fs.y[i] = u - d[i];
+  fs.u = u;
+  return fs;
+}
+
+double Inverse::dead_zone_inverse(double y) const noexcept {
+  if (y >= 0) {
+    std::size_t k = 0;
+    while (k + 1 < dp_.size() && dp_[k + 1] <= y) ++k;
+    return zp_[k] + (y - dp_[k]) / sp_[k];
+  }
+  std::size_t k = 0;
+  while (k + 1 < dn_.size() && dn_[k + 1] >= y) ++k;
+  return zn_[k] + (y - dn_[k]) / sn_[k];
+}
+
+double Inverse::step(double y) noexcept {
+  if (!std::isfinite(y)) {
+    ++faults_;
+    return x_;
+  }
+  return s_.asymmetric ? step_numerical(y) : step_analytical(y);
+}
+
+double Inverse::step_analytical(double y) noexcept {
+  const std::size_t n = s_.r.size();
+  const double v = s_.has_dead_zones ? dead_zone_inverse(y) : y;
+  // Eqs. 9-10 on the tentative state.
+  double u = qi_ * v;
+  const double* ri = ri_.data();
+  const double* pi = pi_.data();
+  const double* xi = xi_.data();
+  double* sc = scratch_.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    sc[i] = ops::generalized_play<double>(v, ri[i], xi[i]);
+    u += pi[i] * sc[i];
+  }
+  if (u >= u_lo_ && u <= u_hi_) {
+    const double x = env_.inverse(u);
+    xi_.swap(scratch_);
+    v_prev_ = v;
+    saturated_ = false;
+    x_ = std::clamp(x, lim_.lo, lim_.hi);
+    return x_;
+  }
+  // Saturated: drive the forward model with the limit and re-derive the inverse state.
+  const bool high = u > u_hi_;
+  const double uc = high ? u_hi_ : u_lo_;
+  double* d = dev_.data();
+  double u_prev = qi_ * v_prev_;
+  for (std::size_t i = 0; i < n; ++i) {
+    d[i] = v_prev_ - xi_[i];
+    u_prev += pi[i] * xi_[i];
+  }
+  map_deviations(qi_, pi_, d, sc);  // sc = forward deviations
+  double vc = s_.q * uc;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double yi = ops::generalized_play<double>(uc, s_.r[i], u_prev - sc[i]);
+    vc += s_.p[i] * yi;
+    d[i] = uc - yi;
+  }
+  map_deviations(s_.q, s_.p, d, sc);
+  for (std::size_t i = 0; i < n; ++i) xi_[i] = vc - sc[i];
+  v_prev_ = vc;
+  saturated_ = true;
+  x_ = high ? lim_.hi : lim_.lo;
+  return x_;
+}
+
+double Inverse::forward_tentative(double x, double* dfdx) const noexcept {
+  const double ua = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
+  const double ud = envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x);
+  const Envelope ea{s_.asc_kind, s_.asc_c}, ed{s_.desc_kind, s_.desc_c};
+  const double da = ea.derivative(x), dd = ed.derivative(x);
+  double f = s_.q * 0.5 * (ua + ud);
+  double df = s_.q * 0.5 * (da + dd);
+  for (std::size_t i = 0; i < s_.r.size(); ++i) {
+    // y_i = max{lo, min{hi, y_i}} exactly as the operator (lo may exceed hi).
+    const double lo = ua - s_.r[i], hi = ud + s_.r[i];
+    const double m = std::min(hi, y_[i]);
+    if (lo > m) {
+      f += s_.p[i] * lo;
+      df += s_.p[i] * da;
+    } else {
+      f += s_.p[i] * m;
+      if (hi < y_[i]) df += s_.p[i] * dd;
+    }
+  }
+  *dfdx = df;
+  return f;
+}
+
+double Inverse::step_numerical(double y) noexcept {
+  double df = 0.0;
+  double a = lim_.lo, b = lim_.hi;
+  const double fa = forward_tentative(a, &df);
+  const double fb = forward_tentative(b, &df);
+  double x;
+  if (y >= fb) {
+    x = b;
+    saturated_ = y > fb;
+  } else if (y <= fa) {
+    x = a;
+    saturated_ = y < fa;
+  } else {
+    saturated_ = false;
+    // Safeguarded Newton inside the bracket [a, b] with f(a) < y < f(b).
+    x = std::clamp(x_, a, b);
+    for (int it = 0; it < 200; ++it) {
+      const double fx = forward_tentative(x, &df);
+      if (fx == y) break;
+      if (fx < y) a = x; else b = x;
+      double xn = x - (fx - y) / df;
+      if (!(df > 0) || !(xn > a && xn < b)) xn = 0.5 * (a + b);
+      if (b - a <= 4 * kEps * std::max(std::abs(a), std::abs(b)) || xn == x) {
+        x = xn;
+        break;
+      }
+      x = xn;
+    }
+  }
+  // Commit: the forward operators driven by x.
+  const double ua = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
+  const double ud = envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x);
+  for (std::size_t i = 0; i < s_.r.size(); ++i) y_[i] = ops::asymmetric_play<double>(ua, ud, s_.r[i], y_[i]);
+  x_ = x;
+  return x_;
+}
+
+void Inverse::simulate(std::span<const double> y, std::span<double> x) {
+  const std::string_view name = model_name(params_);
+  if (x.size() != y.size())
+    throw Error(fmt::format("{}: inverse simulate: {} desired outputs but room for {} inputs", name, y.size(), x.size()));
+  for (std::size_t k = 0; k < y.size(); ++k)
+    if (!std::isfinite(y[k]))
+      throw Error(fmt::format("{}: inverse simulate: desired output sample {} is not finite ({})", name, k, y[k]));
+  for (std::size_t k = 0; k < y.size(); ++k) x[k] = step(y[k]);
+}
+
+std::vector<double> Inverse::simulate(std::span<const double> y) {
+  std::vector<double> x(y.size());
+  simulate(y, x);
+  return x;
+}
+
+}  // namespace hysteron

@@ -1,0 +1,217 @@
+#include "hysteron/models.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+
+namespace {
+
+struct NameVisitor {
+  std::string_view operator()(const PiParams&) const { return "pi"; }
+  std::string_view operator()(const GpiParams&) const { return "gpi"; }
+  std::string_view operator()(const MpiDeadzoneParams&) const { return "mpi-deadzone"; }
+  std::string_view operator()(const MpiAsymParams&) const { return "mpi-asym"; }
+};
+
+void require_finite(double v, std::string_view model, std::string_view key) {
+  if (!std::isfinite(v)) throw Error(fmt::format("{}: {} must be a finite number, got {}", model, key, v));
+}
+
+void check_limits(const Limits& l, std::string_view model) {
+  if (std::isnan(l.lo) || std::isnan(l.hi) || !(l.lo < l.hi))
+    throw Error(fmt::format("{}: input_limits must satisfy lo < hi, got [{}, {}]", model, l.lo, l.hi));
+}
+
+// Thresholds and weights of the operators: equal lengths, finite, r >= 0.
+// Sorts by threshold, folds r = 0 into q and merges equal thresholds.
+void add_operators(Structure<double>& s, const std::vector<double>& r, const std::vector<double>& p,
+                   std::string_view model) {
+  if (r.size() != p.size())
+    throw Error(fmt::format("{}: r has {} entries but p has {} (one weight per threshold)", model, r.size(), p.size()));
+  std::vector<std::size_t> idx(r.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    require_finite(r[i], model, fmt::format("r[{}]", i));
+    require_finite(p[i], model, fmt::format("p[{}]", i));
+    if (r[i] < 0) throw Error(fmt::format("{}: r[{}] = {} must be >= 0 (play thresholds are half-widths)", model, i, r[i]));
+  }
+  std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return r[a] < r[b]; });
+  for (std::size_t k : idx) {
+    if (r[k] == 0.0) {
+      s.q += p[k];  // a play with zero threshold is the identity
+    } else if (!s.r.empty() && s.r.back() == r[k]) {
+      s.p.back() += p[k];
+    } else {
+      s.r.push_back(r[k]);
+      s.p.push_back(p[k]);
+    }
+  }
+}
+
+void set_envelope(std::array<double, 4>& c, EnvelopeKind& kind, const Envelope& e) {
+  kind = e.kind;
+  c = e.c;
+}
+
+struct CanonicalVisitor {
+  Structure<double> operator()(const PiParams& m) const {
+    Structure<double> s;
+    require_finite(m.q, "pi", "q");
+    check_limits(m.input_limits, "pi");
+    s.q = m.q;
+    add_operators(s, m.r, m.p, "pi");
+    if (s.r.empty() && s.q == 0.0) throw Error("pi: the model has no operator and q = 0 (output is constant)");
+    return s;
+  }
+  Structure<double> operator()(const GpiParams& m) const {
+    Structure<double> s;
+    m.envelope.validate("gpi: c");
+    check_limits(m.input_limits, "gpi");
+    require_finite(m.q, "gpi", "q");
+    if (!(m.q > 0)) throw Error(fmt::format("gpi: q must be > 0 (Eq. 6), got {}", m.q));
+    set_envelope(s.asc_c, s.asc_kind, m.envelope);
+    set_envelope(s.desc_c, s.desc_kind, m.envelope);
+    s.q = m.q;
+    if (!m.r.empty() || !m.p.empty()) {
+      add_operators(s, m.r, m.p, "gpi");
+    } else {
+      if (m.n < 0 || m.n > 100000) throw Error(fmt::format("gpi: n must be in 0..100000, got {}", m.n));
+      require_finite(m.rho, "gpi", "rho");
+      require_finite(m.tau, "gpi", "tau");
+      require_finite(m.alpha, "gpi", "alpha");
+      if (m.n > 0) {
+        if (!(m.alpha > 0)) throw Error(fmt::format("gpi: alpha must be > 0 (Eq. 7, r_i = alpha i), got {}", m.alpha));
+        if (!(m.rho > 0)) throw Error(fmt::format("gpi: rho must be > 0 (Eq. 8), got {}", m.rho));
+        if (!(m.tau > 0)) throw Error(fmt::format("gpi: tau must be > 0 (Eq. 8), got {}", m.tau));
+      }
+      for (int i = 1; i <= m.n; ++i) {
+        const double ri = m.alpha * i;                  // Eq. 7
+        s.r.push_back(ri);
+        s.p.push_back(m.rho * std::exp(-m.tau * ri));  // Eq. 8
+      }
+    }
+    return s;
+  }
+  Structure<double> operator()(const MpiDeadzoneParams& m) const {
+    Structure<double> s;
+    require_finite(m.q, "mpi-deadzone", "q");
+    require_finite(m.g0, "mpi-deadzone", "g0");
+    check_limits(m.input_limits, "mpi-deadzone");
+    s.q = m.q;
+    add_operators(s, m.r, m.p, "mpi-deadzone");
+    if (m.z.size() != m.g.size())
+      throw Error(fmt::format("mpi-deadzone: z has {} entries but g has {} (one weight per dead zone)", m.z.size(), m.g.size()));
+    s.has_dead_zones = true;
+    s.g0 = m.g0;
+    std::vector<std::size_t> idx(m.z.size());
+    std::iota(idx.begin(), idx.end(), 0);
+    for (std::size_t i = 0; i < m.z.size(); ++i) {
+      require_finite(m.z[i], "mpi-deadzone", fmt::format("z[{}]", i));
+      require_finite(m.g[i], "mpi-deadzone", fmt::format("g[{}]", i));
+    }
+    std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return m.z[a] < m.z[b]; });
+    for (std::size_t k : idx) {
+      if (m.z[k] == 0.0) {
+        s.g0 += m.g[k];
+      } else if (!s.z.empty() && s.z.back() == m.z[k]) {
+        s.g.back() += m.g[k];
+      } else {
+        s.z.push_back(m.z[k]);
+        s.g.push_back(m.g[k]);
+      }
+    }
+    return s;
+  }
+  Structure<double> operator()(const MpiAsymParams& m) const {
+    Structure<double> s;
+    m.ascending.validate("mpi-asym: ascending");
+    m.descending.validate("mpi-asym: descending");
+    require_finite(m.q, "mpi-asym", "q");
+    check_limits(m.input_limits, "mpi-asym");
+    set_envelope(s.asc_c, s.asc_kind, m.ascending);
+    set_envelope(s.desc_c, s.desc_kind, m.descending);
+    s.asymmetric = !(m.ascending == m.descending);
+    s.q = m.q;
+    add_operators(s, m.r, m.p, "mpi-asym");
+    return s;
+  }
+};
+
+}  // namespace
+
+std::string_view model_name(const ModelParams& params) noexcept { return std::visit(NameVisitor{}, params); }
+
+const Limits& input_limits(const ModelParams& params) noexcept {
+  return std::visit([](const auto& m) -> const Limits& { return m.input_limits; }, params);
+}
+
+Structure<double> canonical_structure(const ModelParams& params) { return std::visit(CanonicalVisitor{}, params); }
+
+Model::Model(ModelParams params) : params_(std::move(params)), s_(canonical_structure(params_)) {
+  state_.y.assign(s_.r.size(), 0.0);
+}
+
+void Model::reset() noexcept {
+  std::fill(state_.y.begin(), state_.y.end(), 0.0);
+  state_.u = 0.0;
+  out_ = 0.0;
+  faults_ = 0;
+}
+
+void Model::reset(const ModelState& state) {
+  if (state.y.size() != s_.r.size())
+    throw Error(fmt::format("{}: initial state has {} operator outputs, the model has {} operators", name(),
+                            state.y.size(), s_.r.size()));
+  for (std::size_t i = 0; i < state.y.size(); ++i)
+    if (!std::isfinite(state.y[i])) throw Error(fmt::format("{}: initial state y[{}] is not finite", name(), i));
+  if (!std::isfinite(state.u)) throw Error(fmt::format("{}: initial state u is not finite", name()));
+  std::copy(state.y.begin(), state.y.end(), state_.y.begin());
+  state_.u = state.u;
+  out_ = 0.0;
+  faults_ = 0;
+}
+
+void Model::reset_relaxed(double x0) noexcept {
+  const double u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x0);
+  if (!std::isfinite(u)) return;
+  std::fill(state_.y.begin(), state_.y.end(), u);
+  state_.u = u;
+  faults_ = 0;
+  out_ = 0.0;
+}
+
+double Model::step(double x) noexcept {
+  if (!std::isfinite(x)) {
+    ++faults_;
+    return out_;
+  }
+  out_ = structure_step<double>(s_, x, state_.y.data(), &state_.u);
+  return out_;
+}
+
+void Model::simulate(std::span<const double> x, std::span<double> y) {
+  if (x.size() != y.size())
+    throw Error(fmt::format("{}: simulate: input has {} samples but output has room for {}", name(), x.size(), y.size()));
+  for (std::size_t k = 0; k < x.size(); ++k)
+    if (!std::isfinite(x[k])) throw Error(fmt::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
+  double* yi = state_.y.data();
+  for (std::size_t k = 0; k < x.size(); ++k) y[k] = structure_step<double>(s_, x[k], yi);
+  if (!x.empty()) {
+    out_ = y.back();
+    state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x.back());
+  }
+}
+
+std::vector<double> Model::simulate(std::span<const double> x) {
+  std::vector<double> y(x.size());
+  simulate(x, y);
+  return y;
+}
+
+}  // namespace hysteron

@@ -117,7 +117,7 @@ struct LoadParams {
   // 20 kg: the GPI paper's sinusoid (5..95 mm contraction) is reachable within
   // 0..0.6 MPa (static contraction ~104 mm at 0.6 MPa, 0 at 0 MPa; see docs/plant.md). [E]
   double mass = 20.0;                   // m [kg]                         [E] literature 0-30 kg
-  double damping = 200.0;               // c [N s/m]                      [E] damping ratio ~0.2
+  double damping = 100.0;               // c [N s/m]                      [E] damping ratio ~0.13
   double gravity = 9.81;                // g [m/s^2]                      [F]
 };
 

@@ -1,0 +1,397 @@
+// The simulated DMSP-20-500 rig (plant.hpp). Equation tags P1-P12 refer to the
+// comment at the top of include/hysteron/plant.hpp.
+#include "hysteron/plant.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include <fmt/format.h>
+
+namespace hysteron {
+
+// ---- physics -------------------------------------------------------------------
+
+double festo_force(const MuscleParams& m, double p_gauge, double eps) noexcept {  // P1
+  const double e = eps / m.eps_620;
+  const double ps = p_gauge / m.reference_pressure;
+  const double f = m.c0 * (std::exp(-m.c1 * e) - 1.0) + ps * std::exp(-m.c2 * e * e);
+  return m.force_620 * std::max(0.0, f);
+}
+
+namespace {
+double volume_scale(const MuscleParams& m) noexcept {
+  const double s = std::sin(m.rest_braid_angle);
+  return std::numbers::pi * m.effective_radius * m.effective_radius * m.rest_length / (s * s);
+}
+}  // namespace
+
+double muscle_volume(const MuscleParams& m, double eps) noexcept {  // P6
+  const double c = std::cos(m.rest_braid_angle);
+  const double u = 1.0 - eps;
+  return volume_scale(m) * u * (1.0 - u * u * c * c) + m.dead_volume;
+}
+
+double muscle_volume_derivative(const MuscleParams& m, double eps) noexcept {
+  const double c = std::cos(m.rest_braid_angle);
+  const double u = 1.0 - eps;
+  return -volume_scale(m) * (1.0 - 3.0 * u * u * c * c);
+}
+
+double iso6358_mass_flow(double conductance, double b, double p_up, double p_down, double t_up,
+                         const AirParams& air) noexcept {  // P8
+  if (!(p_up > p_down) || p_up <= 0.0) return 0.0;
+  const double r = p_down / p_up;
+  const double choked = conductance * air.rho0 * p_up * std::sqrt(air.t0 / t_up);
+  if (r <= b) return choked;
+  const double rl = air.linear_ratio;
+  if (r <= rl) {
+    const double q = (r - b) / (1.0 - b);
+    return choked * std::sqrt(1.0 - q * q);
+  }
+  const double ql = (rl - b) / (1.0 - b);
+  return choked * std::sqrt(1.0 - ql * ql) * (1.0 - r) / (1.0 - rl);
+}
+
+double static_contraction(const PamRigParams& p, double p_gauge, double z) noexcept {
+  const auto& m = p.muscle;
+  const double band = p.hysteresis.pressure_band + p.hysteresis.pressure_band_slope * std::max(0.0, p_gauge);
+  const double p_eff = p_gauge - band * z;
+  const double weight = p.load.mass * p.load.gravity;
+  // F(p, eps) is non-increasing in eps >= 0: bisection on [0, eps_max].
+  double lo = 0.0, hi = m.max_contraction;
+  if (festo_force(m, p_eff, lo) <= weight) return 0.0;
+  if (festo_force(m, p_eff, hi) >= weight) return hi * m.rest_length;
+  for (int i = 0; i < 200 && hi - lo > 1e-15; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (festo_force(m, p_eff, mid) > weight ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi) * m.rest_length;
+}
+
+// ---- rig -----------------------------------------------------------------------
+
+struct PamRig::Deriv {
+  double pressure, contraction, velocity, bouc_wen, creep;
+};
+
+namespace {
+// Largest slope dm/d(p_up - p_down) [kg/(s Pa)] of P8 (its linear part).
+double linear_slope(double conductance, double b, const AirParams& air) {
+  const double q = (air.linear_ratio - b) / (1.0 - b);
+  return conductance * air.rho0 * std::sqrt(air.t0 / air.temperature) * std::sqrt(1.0 - q * q) /
+         (1.0 - air.linear_ratio);
+}
+}  // namespace
+
+PamRig::PamRig(PamRigParams params, std::uint64_t seed) : p_(params), seed_(seed), rng_(seed) {
+  validate(p_);
+  const double dt = p_.simulation.dt;
+  const auto n_delay = static_cast<std::size_t>(std::llround(p_.regulator.dead_time / dt));
+  delay_.assign(n_delay, 0.0);
+  reg_alpha_ = -std::expm1(-dt / p_.regulator.time_constant);
+  sensor_alpha_ = p_.sensors.pressure_time_constant > 0.0
+                      ? -std::expm1(-dt / p_.sensors.pressure_time_constant)
+                      : 1.0;
+  pwm_period_ = 1.0 / p_.valves.pwm_frequency;
+
+  // P12: the stiffest pneumatic mode, linearised at the smallest volume; RK4 is
+  // run with h lambda <= 1 (its stability limit on the real axis is 2.78).
+  const auto& a = p_.air;
+  const double dm_reg = p_.regulator.sonic_conductance * a.rho0 * std::sqrt(a.t0 / a.temperature) *
+                            a.supply_pressure / p_.regulator.proportional_band +
+                        linear_slope(p_.regulator.sonic_conductance, p_.regulator.critical_ratio, a);
+  const double dm_valves = 2.0 * linear_slope(p_.valves.sonic_conductance, p_.valves.critical_ratio, a);
+  const double v_min = muscle_volume(p_.muscle, 0.0);
+  const double lambda = std::max(a.k_in, a.k_out) * a.gas_constant * a.temperature / v_min *
+                        std::max(dm_reg, dm_valves);
+  const double needed = std::ceil(dt * lambda / 1.0);
+  if (needed > p_.simulation.max_substeps)
+    throw Error(fmt::format(
+        "rig: the air dynamics (rate {:.4g} 1/s) need {} sub-steps per dt = {} s, more than "
+        "simulation.max_substeps = {}; reduce simulation.dt or a valve conductance",
+        lambda, needed, dt, p_.simulation.max_substeps));
+  substeps_ = std::max(1, static_cast<int>(needed));
+  reset();
+}
+
+void PamRig::reset() noexcept {
+  rng_.seed(seed_);
+  has_spare_ = false;
+  s_ = RigState{};
+  s_.pressure = p_.air.atmospheric_pressure;
+  n_ = 0;
+  ok_ = true;
+  fault_reason_ = "";
+  input_faults_ = 0;
+  last_in_ = RigInputs{};
+  std::fill(delay_.begin(), delay_.end(), 0.0);
+  delay_pos_ = 0;
+  pwm_index_ = -1;
+  duty_ = {};
+  p_filtered_ = 0.0;
+  out_ = RigOutputs{};
+  measure();
+}
+
+void PamRig::reset_at_pressure(double p_gauge) noexcept {
+  reset();
+  if (!std::isfinite(p_gauge)) return;
+  p_gauge = std::clamp(p_gauge, 0.0, p_.air.supply_pressure - p_.air.atmospheric_pressure);
+  s_.pressure = p_.air.atmospheric_pressure + p_gauge;
+  s_.contraction = static_contraction(p_, p_gauge, 0.0);
+  s_.creep = s_.contraction;
+  s_.regulator_setpoint = p_gauge;
+  std::fill(delay_.begin(), delay_.end(), p_gauge);
+  last_in_.pressure_command = p_gauge * 1e-6;
+  p_filtered_ = p_gauge;
+  out_ = RigOutputs{};
+  measure();
+}
+
+void PamRig::derivative(const RigState& s, const Flow& f, double p_set, Deriv& d) const noexcept {
+  const auto& m = p_.muscle;
+  const auto& h = p_.hysteresis;
+  const auto& a = p_.air;
+  const double eps = s.contraction / m.rest_length;
+  const double eps_dot = s.velocity / m.rest_length;
+  const double p_gauge = s.pressure - a.atmospheric_pressure;
+
+  // P2-P5: force on the effective pressure, creep, load.
+  const double band = h.pressure_band + h.pressure_band_slope * std::max(0.0, p_gauge);
+  const double force = festo_force(m, p_gauge - band * s.bouc_wen, eps) -
+                       h.creep_stiffness * (s.contraction - s.creep);
+  d.contraction = s.velocity;
+  d.velocity = (force - p_.load.mass * p_.load.gravity - p_.load.damping * s.velocity) / p_.load.mass;
+  const double zn = std::pow(std::abs(s.bouc_wen), h.exponent);
+  const double sgn = (s.bouc_wen * eps_dot > 0.0) ? 1.0 : -1.0;
+  d.bouc_wen = eps_dot / h.transition_strain * (1.0 - zn * (h.beta * sgn + 1.0 - h.beta));
+  d.creep = (s.contraction - s.creep) / h.creep_time;
+
+  // P8-P10: valve mass flows.
+  double m_in = 0.0, m_out = 0.0;
+  if (f.regulator) {
+    const auto& r = p_.regulator;
+    const double opening = std::clamp((p_set - p_gauge) / r.proportional_band, -1.0, 1.0);
+    if (opening > 0.0)
+      m_in = opening * iso6358_mass_flow(r.sonic_conductance, r.critical_ratio, a.supply_pressure,
+                                         s.pressure, a.temperature, a);
+    else if (opening < 0.0)
+      m_out = -opening * iso6358_mass_flow(r.sonic_conductance, r.critical_ratio, s.pressure,
+                                           a.atmospheric_pressure, a.temperature, a);
+  } else {
+    const auto& v = p_.valves;
+    if (f.inlet)
+      m_in = iso6358_mass_flow(v.sonic_conductance, v.critical_ratio, a.supply_pressure, s.pressure,
+                               a.temperature, a);
+    if (f.exhaust)
+      m_out = iso6358_mass_flow(v.sonic_conductance, v.critical_ratio, s.pressure,
+                                a.atmospheric_pressure, a.temperature, a);
+  }
+  // P6-P7: chamber.
+  const double vol = muscle_volume(m, eps);
+  const double vol_dot = muscle_volume_derivative(m, eps) * eps_dot;
+  d.pressure = a.gas_constant * a.temperature / vol * (a.k_in * m_in - a.k_out * m_out) -
+               a.k * s.pressure * vol_dot / vol;
+}
+
+void PamRig::integrate(double h, const Flow& f) noexcept {  // P12: classical RK4
+  const double p_set = s_.regulator_setpoint;
+  auto add = [](const RigState& s, const Deriv& d, double k) {
+    RigState r = s;
+    r.pressure += k * d.pressure;
+    r.contraction += k * d.contraction;
+    r.velocity += k * d.velocity;
+    r.bouc_wen += k * d.bouc_wen;
+    r.creep += k * d.creep;
+    return r;
+  };
+  Deriv k1, k2, k3, k4;
+  derivative(s_, f, p_set, k1);
+  derivative(add(s_, k1, 0.5 * h), f, p_set, k2);
+  derivative(add(s_, k2, 0.5 * h), f, p_set, k3);
+  derivative(add(s_, k3, h), f, p_set, k4);
+  const double w = h / 6.0;
+  s_.pressure += w * (k1.pressure + 2.0 * k2.pressure + 2.0 * k3.pressure + k4.pressure);
+  s_.contraction += w * (k1.contraction + 2.0 * k2.contraction + 2.0 * k3.contraction + k4.contraction);
+  s_.velocity += w * (k1.velocity + 2.0 * k2.velocity + 2.0 * k3.velocity + k4.velocity);
+  s_.bouc_wen += w * (k1.bouc_wen + 2.0 * k2.bouc_wen + 2.0 * k3.bouc_wen + k4.bouc_wen);
+  s_.creep += w * (k1.creep + 2.0 * k2.creep + 2.0 * k3.creep + k4.creep);
+  apply_stops();
+}
+
+void PamRig::apply_stops() noexcept {  // P5: hard end stops, |z| <= 1 (P3)
+  const double top = p_.muscle.max_contraction * p_.muscle.rest_length;
+  if (s_.contraction <= 0.0) {
+    s_.contraction = 0.0;
+    s_.velocity = std::max(0.0, s_.velocity);
+  } else if (s_.contraction >= top) {
+    s_.contraction = top;
+    s_.velocity = std::min(0.0, s_.velocity);
+  }
+  s_.bouc_wen = std::clamp(s_.bouc_wen, -1.0, 1.0);
+}
+
+bool PamRig::valve_open(bool inlet, double t) const noexcept {  // P10
+  const auto& v = p_.valves;
+  const double period = pwm_period_;
+  const auto j = static_cast<std::int64_t>(std::floor(t / period));
+  // Only periods j and j - 1 can be active: the delays are shorter than a period.
+  for (std::int64_t k = j - 1; k <= j; ++k) {
+    if (k < 0 || k > pwm_index_ || k < pwm_index_ - 2) continue;
+    const double d = duty_[static_cast<std::size_t>(k % 3)];
+    const double width = (inlet ? d : -d) * period;  // command pulse length
+    if (width <= v.min_pulse) continue;
+    double start = static_cast<double>(k) * period + v.on_delay;
+    // A valve held open through a period boundary (100 % duty) does not re-open.
+    if (k >= 1 && k - 1 >= pwm_index_ - 2) {
+      const double prev = duty_[static_cast<std::size_t>((k - 1) % 3)];
+      if ((inlet ? prev : -prev) >= 1.0) start = static_cast<double>(k) * period;
+    }
+    const double end = static_cast<double>(k) * period + width + v.off_delay;
+    if (t >= start && t < end) return true;
+  }
+  return false;
+}
+
+double PamRig::gaussian() noexcept {
+  // Box-Muller on 53-bit uniforms: identical on every standard library.
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_gauss_;
+  }
+  constexpr double scale = 1.0 / 9007199254740992.0;  // 2^-53
+  const double u1 = (static_cast<double>(rng_() >> 11) + 1.0) * scale;  // (0, 1]
+  const double u2 = static_cast<double>(rng_() >> 11) * scale;          // [0, 1)
+  const double r = std::sqrt(-2.0 * std::log(u1));
+  spare_gauss_ = r * std::sin(2.0 * std::numbers::pi * u2);
+  has_spare_ = true;
+  return r * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+double PamRig::quantize(double v, double range, int bits) const noexcept {
+  const double lsb = range / (std::ldexp(1.0, bits) - 1.0);
+  return std::round(std::clamp(v, 0.0, range) / lsb) * lsb;
+}
+
+void PamRig::measure() noexcept {  // P11
+  const auto& se = p_.sensors;
+  const double p_gauge = s_.pressure - p_.air.atmospheric_pressure;
+  p_filtered_ += sensor_alpha_ * (p_gauge - p_filtered_);
+  const double np = gaussian();
+  const double nx = gaussian();
+  out_.time = time();
+  out_.contraction = s_.contraction;
+  out_.velocity = s_.velocity;
+  out_.pressure = p_gauge;
+  out_.pressure_measured =
+      quantize(p_filtered_ + se.pressure_offset + se.pressure_noise * np, se.pressure_range, se.pressure_bits);
+  out_.contraction_measured = quantize(s_.contraction + se.displacement_offset + se.displacement_noise * nx,
+                                       se.displacement_range, se.displacement_bits);
+  out_.ok = ok_;
+}
+
+void PamRig::detect_divergence() noexcept {
+  const auto& sim = p_.simulation;
+  const double top = p_.muscle.max_contraction * p_.muscle.rest_length;
+  if (!std::isfinite(s_.pressure) || !std::isfinite(s_.contraction) || !std::isfinite(s_.velocity) ||
+      !std::isfinite(s_.bouc_wen) || !std::isfinite(s_.creep) || !std::isfinite(s_.regulator_setpoint))
+    fault_reason_ = "non-finite state";
+  else if (s_.pressure > p_.air.supply_pressure * (1.0 + sim.pressure_tolerance))
+    fault_reason_ = "pressure above the supply pressure";
+  else if (s_.pressure <= 0.0)
+    fault_reason_ = "non-positive absolute pressure";
+  else if (s_.contraction < -sim.position_tolerance || s_.contraction > top + sim.position_tolerance)
+    fault_reason_ = "contraction outside the stroke";
+  else
+    return;
+  ok_ = false;
+}
+
+RigOutputs PamRig::step(const RigInputs& in_raw) noexcept {
+  if (!ok_) return out_;
+  // Inputs: non-finite values are faults; hold the previous input.
+  RigInputs in = in_raw;
+  if (!std::isfinite(in.pressure_command)) {
+    in.pressure_command = last_in_.pressure_command;
+    ++input_faults_;
+  }
+  if (!std::isfinite(in.pwm_duty)) {
+    in.pwm_duty = last_in_.pwm_duty;
+    ++input_faults_;
+  }
+  in.pwm_duty = std::clamp(in.pwm_duty, -1.0, 1.0);
+  last_in_ = in;
+
+  const double dt = p_.simulation.dt;
+  const double t0 = time();
+  const double t1 = static_cast<double>(n_ + 1) * dt;
+  const double h_max = dt / substeps_;
+  // Switching valves: latch the duty at every PWM period start within [t0, t1).
+  const double tol = 1e-6 * dt;
+  const bool switching = in.mode == Actuation::switching_valves;
+  while (static_cast<double>(pwm_index_ + 1) * pwm_period_ < t1 - tol) {
+    ++pwm_index_;
+    duty_[static_cast<std::size_t>(pwm_index_ % 3)] = switching ? in.pwm_duty : 0.0;
+  }
+
+  // P9: regulator dead time, then the first-order lag (exact for a held input).
+  const double command = std::clamp(in.pressure_command * 1e6, 0.0, p_.regulator.max_command);
+  double delayed = command;
+  if (!delay_.empty()) {
+    delayed = delay_[delay_pos_];
+    delay_[delay_pos_] = command;
+    delay_pos_ = (delay_pos_ + 1) % delay_.size();
+  }
+  s_.regulator_setpoint += reg_alpha_ * (delayed - s_.regulator_setpoint);
+
+  Flow flow;
+  flow.regulator = !switching;
+  if (!switching) {
+    const int n = substeps_;
+    for (int i = 0; i < n; ++i) integrate(h_max, flow);
+  } else {
+    // Split the step at every valve edge inside (t0, t1) (P12).
+    std::array<double, 12> edges{};
+    std::size_t ne = 0;
+    edges[ne++] = t0;
+    const auto& v = p_.valves;
+    for (std::int64_t k = pwm_index_ - 1; k <= pwm_index_; ++k) {
+      if (k < 0) continue;
+      const double d = std::abs(duty_[static_cast<std::size_t>(k % 3)]);
+      const double base = static_cast<double>(k) * pwm_period_;
+      for (double e : {base, base + v.on_delay, base + d * pwm_period_ + v.off_delay})
+        if (e > t0 + tol && e < t1 - tol && ne < edges.size() - 1) edges[ne++] = e;
+    }
+    std::sort(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(ne));
+    edges[ne++] = t1;
+    for (std::size_t i = 0; i + 1 < ne; ++i) {
+      const double a = edges[i], b = edges[i + 1];
+      if (b - a <= 0.0) continue;
+      const double mid = 0.5 * (a + b);
+      flow.inlet = valve_open(true, mid);
+      flow.exhaust = valve_open(false, mid);
+      const int n = std::max(1, static_cast<int>(std::ceil((b - a) / h_max - 1e-9)));
+      for (int k = 0; k < n; ++k) integrate((b - a) / n, flow);
+    }
+  }
+  ++n_;
+  detect_divergence();
+  measure();
+  out_.inlet_open = switching && valve_open(true, t1 - tol);
+  out_.exhaust_open = switching && valve_open(false, t1 - tol);
+  return out_;
+}
+
+void PamRig::check() const {
+  if (ok_) return;
+  throw Error(fmt::format(
+      "PamRig diverged at t = {:.6f} s ({}): pressure = {:.6g} Pa abs (supply {:.6g}), "
+      "contraction = {:.6g} m (stroke 0..{:.6g}), velocity = {:.6g} m/s, bouc_wen z = {:.6g}, "
+      "creep = {:.6g} m; check the parameters and dt",
+      time(), fault_reason_, s_.pressure, p_.air.supply_pressure, s_.contraction,
+      p_.muscle.max_contraction * p_.muscle.rest_length, s_.velocity, s_.bouc_wen, s_.creep));
+}
+
+}  // namespace hysteron

@@ -1,0 +1,219 @@
+// Parameter validation and JSON I/O of the simulated rig (plant.hpp).
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "hysteron/plant.hpp"
+
+namespace hysteron {
+namespace {
+
+// What a field must satisfy.
+enum class Rule { finite, positive, nonnegative, unit_closed, unit_open, acute_angle, bits };
+
+const char* describe(Rule r) {
+  switch (r) {
+    case Rule::finite: return "a finite number";
+    case Rule::positive: return "a finite number > 0";
+    case Rule::nonnegative: return "a finite number >= 0";
+    case Rule::unit_closed: return "a number in [0, 1]";
+    case Rule::unit_open: return "a number in (0, 1)";
+    case Rule::acute_angle: return "an angle in (0, pi/2) rad";
+    case Rule::bits: return "an integer in [1, 31]";
+  }
+  return "";
+}
+
+bool satisfies(Rule r, double v) {
+  if (!std::isfinite(v)) return false;
+  switch (r) {
+    case Rule::finite: return true;
+    case Rule::positive: return v > 0.0;
+    case Rule::nonnegative: return v >= 0.0;
+    case Rule::unit_closed: return v >= 0.0 && v <= 1.0;
+    case Rule::unit_open: return v > 0.0 && v < 1.0;
+    case Rule::acute_angle: return v > 0.0 && v < std::numbers::pi / 2.0;
+    case Rule::bits: return v >= 1.0 && v <= 31.0 && v == std::floor(v);
+  }
+  return false;
+}
+
+// Calls f(section, name, field&, rule) for every parameter; field is double& or int&.
+// The one table used by validation, JSON reading and JSON writing.
+template <class P, class F>
+void for_each_field(P& p, F&& f) {
+  auto& m = p.muscle;
+  f("muscle", "rest_length", m.rest_length, Rule::positive);
+  f("muscle", "max_contraction", m.max_contraction, Rule::unit_open);
+  f("muscle", "rest_braid_angle", m.rest_braid_angle, Rule::acute_angle);
+  f("muscle", "effective_radius", m.effective_radius, Rule::positive);
+  f("muscle", "dead_volume", m.dead_volume, Rule::nonnegative);
+  f("muscle", "force_620", m.force_620, Rule::positive);
+  f("muscle", "eps_620", m.eps_620, Rule::unit_open);
+  f("muscle", "c0", m.c0, Rule::nonnegative);
+  f("muscle", "c1", m.c1, Rule::nonnegative);
+  f("muscle", "c2", m.c2, Rule::nonnegative);
+  f("muscle", "reference_pressure", m.reference_pressure, Rule::positive);
+  auto& h = p.hysteresis;
+  f("hysteresis", "pressure_band", h.pressure_band, Rule::nonnegative);
+  f("hysteresis", "pressure_band_slope", h.pressure_band_slope, Rule::unit_closed);
+  f("hysteresis", "transition_strain", h.transition_strain, Rule::positive);
+  f("hysteresis", "exponent", h.exponent, Rule::positive);
+  f("hysteresis", "beta", h.beta, Rule::unit_closed);
+  f("hysteresis", "creep_stiffness", h.creep_stiffness, Rule::nonnegative);
+  f("hysteresis", "creep_time", h.creep_time, Rule::positive);
+  auto& a = p.air;
+  f("air", "gas_constant", a.gas_constant, Rule::positive);
+  f("air", "temperature", a.temperature, Rule::positive);
+  f("air", "k_in", a.k_in, Rule::positive);
+  f("air", "k_out", a.k_out, Rule::positive);
+  f("air", "k", a.k, Rule::positive);
+  f("air", "rho0", a.rho0, Rule::positive);
+  f("air", "t0", a.t0, Rule::positive);
+  f("air", "supply_pressure", a.supply_pressure, Rule::positive);
+  f("air", "atmospheric_pressure", a.atmospheric_pressure, Rule::positive);
+  f("air", "linear_ratio", a.linear_ratio, Rule::unit_open);
+  auto& r = p.regulator;
+  f("regulator", "time_constant", r.time_constant, Rule::positive);
+  f("regulator", "dead_time", r.dead_time, Rule::nonnegative);
+  f("regulator", "max_command", r.max_command, Rule::positive);
+  f("regulator", "sonic_conductance", r.sonic_conductance, Rule::positive);
+  f("regulator", "critical_ratio", r.critical_ratio, Rule::unit_open);
+  f("regulator", "proportional_band", r.proportional_band, Rule::positive);
+  auto& v = p.valves;
+  f("valves", "sonic_conductance", v.sonic_conductance, Rule::positive);
+  f("valves", "critical_ratio", v.critical_ratio, Rule::unit_open);
+  f("valves", "pwm_frequency", v.pwm_frequency, Rule::positive);
+  f("valves", "on_delay", v.on_delay, Rule::nonnegative);
+  f("valves", "off_delay", v.off_delay, Rule::nonnegative);
+  f("valves", "min_pulse", v.min_pulse, Rule::nonnegative);
+  auto& l = p.load;
+  f("load", "mass", l.mass, Rule::positive);
+  f("load", "damping", l.damping, Rule::nonnegative);
+  f("load", "gravity", l.gravity, Rule::nonnegative);
+  auto& s = p.sensors;
+  f("sensors", "pressure_noise", s.pressure_noise, Rule::nonnegative);
+  f("sensors", "pressure_offset", s.pressure_offset, Rule::finite);
+  f("sensors", "pressure_range", s.pressure_range, Rule::positive);
+  f("sensors", "pressure_bits", s.pressure_bits, Rule::bits);
+  f("sensors", "pressure_time_constant", s.pressure_time_constant, Rule::nonnegative);
+  f("sensors", "displacement_noise", s.displacement_noise, Rule::nonnegative);
+  f("sensors", "displacement_offset", s.displacement_offset, Rule::finite);
+  f("sensors", "displacement_range", s.displacement_range, Rule::positive);
+  f("sensors", "displacement_bits", s.displacement_bits, Rule::bits);
+  auto& sim = p.simulation;
+  f("simulation", "dt", sim.dt, Rule::positive);
+  f("simulation", "max_substeps", sim.max_substeps, Rule::positive);
+  f("simulation", "pressure_tolerance", sim.pressure_tolerance, Rule::positive);
+  f("simulation", "position_tolerance", sim.position_tolerance, Rule::positive);
+}
+
+constexpr const char* kSections[] = {"muscle", "regulator", "hysteresis", "air",
+                                     "valves", "load", "sensors", "simulation"};
+
+[[noreturn]] void fail(std::string_view where, std::string_view key, double value,
+                       std::string_view expected) {
+  throw Error(fmt::format("{}.{} = {}: must be {}", where, key, value, expected));
+}
+
+}  // namespace
+
+void validate(const PamRigParams& p, std::string_view where) {
+  for_each_field(p, [&](const char* section, const char* name, const auto& value, Rule rule) {
+    const double v = static_cast<double>(value);
+    if (!satisfies(rule, v)) fail(where, fmt::format("{}.{}", section, name), v, describe(rule));
+  });
+  // Relations between fields.
+  if (p.air.supply_pressure <= p.air.atmospheric_pressure)
+    fail(where, "air.supply_pressure", p.air.supply_pressure,
+         fmt::format("> air.atmospheric_pressure = {}", p.air.atmospheric_pressure));
+  if (p.air.linear_ratio <= p.regulator.critical_ratio || p.air.linear_ratio <= p.valves.critical_ratio)
+    fail(where, "air.linear_ratio", p.air.linear_ratio,
+         "> regulator.critical_ratio and > valves.critical_ratio");
+  if (p.simulation.dt > 1e-4 * (1.0 + 1e-12))
+    fail(where, "simulation.dt", p.simulation.dt, "<= 1e-4 s (pam-plant.md)");
+  const double period = 1.0 / p.valves.pwm_frequency;
+  if (p.valves.on_delay >= period)
+    fail(where, "valves.on_delay", p.valves.on_delay, fmt::format("< the PWM period {} s", period));
+  if (p.valves.off_delay >= period)
+    fail(where, "valves.off_delay", p.valves.off_delay, fmt::format("< the PWM period {} s", period));
+  if (p.simulation.dt > 0.5 * period)
+    fail(where, "simulation.dt", p.simulation.dt, fmt::format("<= half the PWM period {} s", period));
+  if (p.muscle.max_contraction * p.muscle.rest_length > p.sensors.displacement_range)
+    fail(where, "sensors.displacement_range", p.sensors.displacement_range,
+         fmt::format(">= the stroke {} m", p.muscle.max_contraction * p.muscle.rest_length));
+}
+
+PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where) {
+  if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
+  PamRigParams p;
+  for (const auto& [section, body] : j.items()) {
+    bool known = false;
+    for (const char* s : kSections) known = known || section == s;
+    if (!known)
+      throw Error(fmt::format("{}: unknown key '{}' (expected one of muscle, hysteresis, air, "
+                              "regulator, valves, load, sensors, simulation)",
+                              where, section));
+    if (!body.is_object())
+      throw Error(fmt::format("{}.{}: expected a JSON object, got {}", where, section, body.type_name()));
+    for (const auto& [key, value] : body.items()) {
+      bool found = false;
+      for_each_field(p, [&](const char* sec, const char* name, auto& field, Rule rule) {
+        if (found || section != sec || key != name) return;
+        found = true;
+        const std::string path = fmt::format("{}.{}.{}", where, sec, name);
+        using F = std::remove_reference_t<decltype(field)>;
+        if constexpr (std::is_same_v<F, int>) {
+          if (!value.is_number_integer())
+            throw Error(fmt::format("{}: expected {}, got {}", path, describe(rule),
+                                    value.is_number() ? value.dump() : value.type_name()));
+          field = value.get<int>();
+        } else {
+          if (!value.is_number())
+            throw Error(fmt::format("{}: expected {}, got {}", path, describe(rule), value.type_name()));
+          field = value.get<double>();
+        }
+        if (!satisfies(rule, static_cast<double>(field)))
+          throw Error(fmt::format("{} = {}: must be {}", path, value.dump(), describe(rule)));
+      });
+      if (!found) throw Error(fmt::format("{}.{}: unknown key '{}'", where, section, key));
+    }
+  }
+  validate(p, where);
+  return p;
+}
+
+nlohmann::json rig_params_to_json(const PamRigParams& params) {
+  nlohmann::json j = nlohmann::json::object();
+  for_each_field(params, [&](const char* section, const char* name, const auto& value, Rule) {
+    j[section][name] = value;
+  });
+  return j;
+}
+
+PamRigParams load_rig_params(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw Error(fmt::format("{}: cannot open for reading", file.string()));
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(fmt::format("{}: invalid JSON at byte {}: {}", file.string(), e.byte, e.what()));
+  }
+  return rig_params_from_json(j, file.string());
+}
+
+void save_rig_params(const PamRigParams& params, const std::filesystem::path& file) {
+  validate(params);
+  std::ofstream out(file);
+  if (!out) throw Error(fmt::format("{}: cannot open for writing", file.string()));
+  out << rig_params_to_json(params).dump(2) << '\n';
+  if (!out) throw Error(fmt::format("{}: write failed", file.string()));
+}
+
+}  // namespace hysteron

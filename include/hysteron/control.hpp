@@ -1,0 +1,108 @@
+#pragma once
+// Feedback building blocks for the rig: a discrete PID (Eq. 17 of
+// ../shared/papers/gpi-lm-feedforward-pid.txt) and a PWM modulator for the
+// switching valves. Like the models: validated Params, a State, and a step()
+// that never allocates, never throws and is deterministic.
+#include <cstddef>
+#include <limits>
+
+namespace hysteron {
+
+enum class AntiWindup {
+  none,                 // plain integration (for comparison only)
+  conditional,          // integrate only if not saturated or the error drives out of saturation
+  back_calculation,     // dI/dt += (u_sat - u) / T_t
+};
+
+// Eq. 17:  u = K_p e + K_i int e dt + K_d de/dt, discretised at sample time T_s:
+//   P_k = K_p (b r_k - y_k)                                      setpoint weight b
+//   D_k = T_f / (T_f + T_s) D_{k-1} + K_d / (T_f + T_s) (d_k - d_{k-1}),
+//         d_k = c r_k - y_k  (backward Euler of K_d s / (T_f s + 1);  c = 0: on measurement)
+//   v_k = P_k + I_k + D_k + u_ff,   u_k = clamp(v_k, u_min, u_max)
+//   I_{k+1} = I_k + K_i T_s e_k  (+ T_s / T_t (u_k - v_k) with back-calculation)
+// Units are the user's: Table 3 of the paper (K_p = 0.05, K_i = 0.01, K_d = 0) maps
+// the error in mm to volts of the 0-10 V / 0-10 bar regulator (1 V = 0.1 MPa),
+// i.e. K_p = 5 MPa/m, K_i = 1 MPa/(m s) with the error in m and u in MPa
+// (gpi_paper_pid()).
+struct PidParams {
+  double kp = 0.0;                 // K_p
+  double ki = 0.0;                 // K_i [1/s]
+  double kd = 0.0;                 // K_d [s]
+  double sample_time = 1e-3;       // T_s [s], > 0
+  double derivative_filter = 0.0;  // T_f [s], >= 0 (0: unfiltered backward difference)
+  double out_min = -std::numeric_limits<double>::infinity();
+  double out_max = std::numeric_limits<double>::infinity();
+  AntiWindup anti_windup = AntiWindup::conditional;
+  double tracking_time = 0.0;      // T_t [s] for back-calculation; 0 selects sqrt(T_i T_d) or T_i
+  double setpoint_weight_p = 1.0;  // b
+  double setpoint_weight_d = 0.0;  // c (0: derivative on measurement, no setpoint kick)
+};
+
+// Table 3 of the GPI paper in SI/MPa units (see above), output limited to
+// [out_min, out_max] MPa.
+PidParams gpi_paper_pid(double sample_time, double out_min = -0.6, double out_max = 0.6);
+
+struct PidState {
+  double integral = 0.0;     // I_k
+  double derivative = 0.0;   // D_k
+  double prev_d_error = 0.0; // d_{k-1}
+  double output = 0.0;       // u_{k-1} (held on a fault)
+  bool initialized = false;  // false until the first finite sample (no derivative kick)
+  bool saturated = false;    // the last output was clamped
+};
+
+class Pid {
+ public:
+  // Throws hysteron::Error naming the field ("pid.sample_time = 0: must be > 0").
+  explicit Pid(const PidParams& params);
+
+  // Zero state; optionally start bumplessly at output u0 (integral = clamp(u0)).
+  void reset(double u0 = 0.0) noexcept;
+  // One sample. A non-finite setpoint, measurement or feedforward holds the last
+  // output, leaves the state unchanged and is counted in faults().
+  double step(double setpoint, double measurement, double feedforward = 0.0) noexcept;
+
+  const PidParams& params() const noexcept { return p_; }
+  const PidState& state() const noexcept { return s_; }
+  double output() const noexcept { return s_.output; }
+  std::size_t faults() const noexcept { return faults_; }
+
+ private:
+  PidParams p_;
+  PidState s_;
+  double a_d_ = 0.0, b_d_ = 0.0;  // derivative filter coefficients
+  double k_t_ = 0.0;              // T_s / T_t
+  std::size_t faults_ = 0;
+};
+
+// Turns a continuous command u (e.g. a PID output) into the PWM duty of the
+// valve pair of PamRig (> 0 inlet, < 0 exhaust):
+//   d = 0                                 if |u| <= deadband
+//   d = sgn(u) min(max_duty, min_duty + gain (|u| - deadband))  otherwise,
+// then rounded to the timer resolution. min_duty compensates the valves'
+// opening delay; the deadband avoids chattering around zero.
+struct PwmParams {
+  double gain = 1.0;        // duty per unit of u, > 0
+  double deadband = 0.0;    // >= 0, in units of u
+  double min_duty = 0.0;    // [0, max_duty]
+  double max_duty = 1.0;    // (0, 1]
+  double resolution = 0.0;  // duty quantum, 0 = continuous, else in (0, 1]
+};
+
+class PwmModulator {
+ public:
+  explicit PwmModulator(const PwmParams& params);  // throws hysteron::Error
+  // Duty in [-max_duty, max_duty]; a non-finite u holds the last duty (counted in faults()).
+  double step(double u) noexcept;
+  void reset() noexcept { duty_ = 0.0; }
+  const PwmParams& params() const noexcept { return p_; }
+  double duty() const noexcept { return duty_; }
+  std::size_t faults() const noexcept { return faults_; }
+
+ private:
+  PwmParams p_;
+  double duty_ = 0.0;
+  std::size_t faults_ = 0;
+};
+
+}  // namespace hysteron

@@ -1,0 +1,127 @@
+// PID and PWM modulator (control.hpp).
+#include "hysteron/control.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+namespace {
+[[noreturn]] void bad(const char* key, double v, const char* expected) {
+  throw Error(fmt::format("{} = {}: must be {}", key, v, expected));
+}
+}  // namespace
+
+PidParams gpi_paper_pid(double sample_time, double out_min, double out_max) {
+  PidParams p;
+  // Table 3: K_p = 0.05 V/mm, K_i = 0.01 V/(mm s); 1 V = 0.1 MPa, 1 mm = 1e-3 m.
+  p.kp = 0.05 * 0.1 / 1e-3;
+  p.ki = 0.01 * 0.1 / 1e-3;
+  p.kd = 0.0;
+  p.sample_time = sample_time;
+  p.out_min = out_min;
+  p.out_max = out_max;
+  return p;
+}
+
+Pid::Pid(const PidParams& p) : p_(p) {
+  auto finite_nonneg = [](const char* key, double v) {
+    if (!std::isfinite(v) || v < 0.0) bad(key, v, "a finite number >= 0");
+  };
+  finite_nonneg("pid.kp", p.kp);
+  finite_nonneg("pid.ki", p.ki);
+  finite_nonneg("pid.kd", p.kd);
+  if (!std::isfinite(p.sample_time) || p.sample_time <= 0.0) bad("pid.sample_time", p.sample_time, "> 0");
+  finite_nonneg("pid.derivative_filter", p.derivative_filter);
+  finite_nonneg("pid.tracking_time", p.tracking_time);
+  if (std::isnan(p.out_min) || std::isnan(p.out_max) || !(p.out_min < p.out_max))
+    throw Error(fmt::format("pid.out_min = {}, pid.out_max = {}: need out_min < out_max", p.out_min, p.out_max));
+  if (!std::isfinite(p.setpoint_weight_p)) bad("pid.setpoint_weight_p", p.setpoint_weight_p, "finite");
+  if (!std::isfinite(p.setpoint_weight_d)) bad("pid.setpoint_weight_d", p.setpoint_weight_d, "finite");
+  if (p.anti_windup == AntiWindup::back_calculation && p.ki <= 0.0)
+    bad("pid.ki", p.ki, "> 0 for back-calculation anti-windup");
+  const double ts = p.sample_time;
+  a_d_ = p.derivative_filter / (p.derivative_filter + ts);
+  b_d_ = p.kd / (p.derivative_filter + ts);
+  if (p.anti_windup == AntiWindup::back_calculation) {
+    double tt = p.tracking_time;
+    if (tt == 0.0) {  // Astrom & Hagglund: T_t = sqrt(T_i T_d), or T_i without D
+      const double ti = p.kp > 0.0 ? p.kp / p.ki : 1.0 / p.ki;
+      const double td = p.kp > 0.0 ? p.kd / p.kp : 0.0;
+      tt = td > 0.0 ? std::sqrt(ti * td) : ti;
+    }
+    k_t_ = std::min(1.0, ts / tt);
+  }
+  reset();
+}
+
+void Pid::reset(double u0) noexcept {
+  s_ = PidState{};
+  if (std::isfinite(u0)) {
+    u0 = std::clamp(u0, p_.out_min, p_.out_max);
+    s_.integral = p_.ki > 0.0 ? u0 : 0.0;
+    s_.output = u0;
+  }
+}
+
+double Pid::step(double r, double y, double ff) noexcept {
+  if (!std::isfinite(r) || !std::isfinite(y) || !std::isfinite(ff)) {
+    ++faults_;
+    return s_.output;
+  }
+  const double e = r - y;
+  const double prop = p_.kp * (p_.setpoint_weight_p * r - y);
+  const double d_err = p_.setpoint_weight_d * r - y;
+  if (!s_.initialized) {
+    s_.prev_d_error = d_err;
+    s_.initialized = true;
+  }
+  s_.derivative = a_d_ * s_.derivative + b_d_ * (d_err - s_.prev_d_error);
+  s_.prev_d_error = d_err;
+  const double v = prop + s_.integral + s_.derivative + ff;
+  const double u = std::clamp(v, p_.out_min, p_.out_max);
+  s_.saturated = u != v;
+  const double di = p_.ki * p_.sample_time * e;
+  switch (p_.anti_windup) {
+    case AntiWindup::none: s_.integral += di; break;
+    case AntiWindup::conditional:
+      // Integrate unless saturated and the error pushes further into saturation.
+      if (!((v > p_.out_max && di > 0.0) || (v < p_.out_min && di < 0.0))) s_.integral += di;
+      break;
+    case AntiWindup::back_calculation: s_.integral += di + k_t_ * (u - v); break;
+  }
+  if (!std::isfinite(s_.integral)) s_.integral = 0.0;  // cannot happen with finite inputs; defensive
+  s_.output = u;
+  return u;
+}
+
+PwmModulator::PwmModulator(const PwmParams& p) : p_(p) {
+  if (!std::isfinite(p.gain) || p.gain <= 0.0) bad("pwm.gain", p.gain, "> 0");
+  if (!std::isfinite(p.deadband) || p.deadband < 0.0) bad("pwm.deadband", p.deadband, ">= 0");
+  if (!std::isfinite(p.max_duty) || p.max_duty <= 0.0 || p.max_duty > 1.0) bad("pwm.max_duty", p.max_duty, "in (0, 1]");
+  if (!std::isfinite(p.min_duty) || p.min_duty < 0.0 || p.min_duty > p.max_duty)
+    bad("pwm.min_duty", p.min_duty, "in [0, max_duty]");
+  if (!std::isfinite(p.resolution) || p.resolution < 0.0 || p.resolution > 1.0)
+    bad("pwm.resolution", p.resolution, "in [0, 1]");
+}
+
+double PwmModulator::step(double u) noexcept {
+  if (!std::isfinite(u)) {
+    ++faults_;
+    return duty_;
+  }
+  const double mag = std::abs(u);
+  double d = 0.0;
+  if (mag > p_.deadband) {
+    d = std::min(p_.max_duty, p_.min_duty + p_.gain * (mag - p_.deadband));
+    if (p_.resolution > 0.0) d = std::min(p_.max_duty, std::round(d / p_.resolution) * p_.resolution);
+    if (u < 0.0) d = -d;
+  }
+  duty_ = d;
+  return d;
+}
+
+}  // namespace hysteron

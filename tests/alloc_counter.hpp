@@ -1,9 +1,10 @@
 #pragma once
-// Counts heap allocations in the test executable (global operator new is
-// replaced once, in test_alloc_counter.cpp), to prove that step() never allocates.
+// Counts heap allocations in the test executable. tests/test_alloc_counter.cpp
+// replaces the global operator new/delete (once per executable) and increments
+// a global atomic counter on every allocation.
 #include <cstddef>
 
 namespace hysteron_test {
-// Number of calls to global operator new since the program started.
+// Number of calls to any global operator new since program start.
 std::size_t allocations() noexcept;
 }  // namespace hysteron_test

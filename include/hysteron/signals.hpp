@@ -50,8 +50,8 @@ double gpi_sinusoid_length(double t, const SinusoidParams& p = {}) noexcept;
 // The same as a contraction x = L0 - y_d [m]: 5..95 mm for L0 = 0.5 m.
 double gpi_sinusoid_contraction(double t, double rest_length = 0.5, const SinusoidParams& p = {}) noexcept;
 // Sampled contraction reference [m] over `duration` seconds.
-std::vector<double> gpi_sinusoid_contraction(double dt, double duration, double rest_length = 0.5,
-                                             const SinusoidParams& p = {});
+std::vector<double> gpi_sinusoid_reference(double dt, double duration, double rest_length = 0.5,
+                                           const SinusoidParams& p = {});
 
 // Asymmetric MPI paper (Fig. 8): contraction references with amplitudes 40, 35,
 // 30 mm from 0. The paper gives no period; we use 5 s per period (0.2 Hz, as the

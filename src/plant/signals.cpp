@@ -77,11 +77,11 @@ double gpi_sinusoid_contraction(double t, double rest_length, const SinusoidPara
   return rest_length - gpi_sinusoid_length(t, p);
 }
 
-std::vector<double> gpi_sinusoid_contraction(double dt, double duration, double rest_length,
+std::vector<double> gpi_sinusoid_reference(double dt, double duration, double rest_length,
                                              const SinusoidParams& p) {
-  check_dt(dt, "gpi_sinusoid_contraction");
+  check_dt(dt, "gpi_sinusoid_reference");
   if (!(duration >= 0.0) || !std::isfinite(duration))
-    throw Error(fmt::format("gpi_sinusoid_contraction: duration = {} must be >= 0", duration));
+    throw Error(fmt::format("gpi_sinusoid_reference: duration = {} must be >= 0", duration));
   const auto n = static_cast<std::size_t>(std::llround(duration / dt));
   std::vector<double> out(n);
   for (std::size_t k = 0; k < n; ++k) out[k] = gpi_sinusoid_contraction(static_cast<double>(k) * dt, rest_length, p);

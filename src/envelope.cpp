@@ -59,7 +59,7 @@ double Envelope::derivative(double x) const noexcept {
     case EnvelopeKind::identity: return 1.0;
     case EnvelopeKind::affine: return c[0];
     case EnvelopeKind::tanh: {
-      const double t = std::tanh(c[1] * x + c[2]);
+      const double t = detail::tanh_fast(c[1] * x + c[2]);
       return c[0] * c[1] * (1.0 - t * t);
     }
     case EnvelopeKind::atan: {
@@ -93,7 +93,7 @@ double Envelope::inverse(double u) const noexcept {
   switch (kind) {
     case EnvelopeKind::identity: return u;
     case EnvelopeKind::affine: return (u - c[1]) / c[0];
-    case EnvelopeKind::tanh: return (std::atanh((u - c[3]) / c[0]) - c[2]) / c[1];
+    case EnvelopeKind::tanh: return (detail::atanh_fast((u - c[3]) / c[0]) - c[2]) / c[1];
     case EnvelopeKind::atan: return (std::tan((u - c[3]) / c[0]) - c[2]) / c[1];
   }
   return u;

@@ -216,15 +216,12 @@ double Inverse::step_analytical(double y) noexcept {
   const std::size_t n = s_.r.size();
   const double v = s_.has_dead_zones ? dead_zone_inverse(y) : y;
   // Eqs. 9-10 on the tentative state.
-  double u = qi_ * v;
   const double* ri = ri_.data();
   const double* pi = pi_.data();
   const double* xi = xi_.data();
   double* sc = scratch_.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    sc[i] = ops::generalized_play<double>(v, ri[i], xi[i]);
-    u += pi[i] * sc[i];
-  }
+  for (std::size_t i = 0; i < n; ++i) sc[i] = ops::generalized_play<double>(v, ri[i], xi[i]);
+  const double u = qi_ * v + weighted_sum<double>(pi, sc, n);
   if (u >= u_lo_ && u <= u_hi_) {
     const double x = env_.inverse(u);
     xi_.swap(scratch_);

@@ -1,0 +1,130 @@
+// ns per sample of step (forward), batch simulate, and inverse step for every
+// model at n = 10, 20, 50 operators. Run: ./build/hysteron-bench --benchmark_filter=Model
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "hysteron/inverse.hpp"
+#include "hysteron/models.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+constexpr std::size_t kSamples = 4096;
+
+std::vector<double> input_signal(double lo, double hi) {
+  // Decaying triangle-ish random walk: reversals of every size, like a rig record.
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(lo, hi);
+  std::vector<double> x;
+  double cur = 0.5 * (lo + hi);
+  while (x.size() < kSamples) {
+    const double t = u(rng);
+    for (int k = 1; k <= 25 && x.size() < kSamples; ++k) x.push_back(cur + (t - cur) * k / 25.0);
+    cur = t;
+  }
+  return x;
+}
+
+ModelParams make_model(int kind, int n) {
+  std::vector<double> r(n), p(n);
+  for (int i = 0; i < n; ++i) {
+    r[i] = 0.6 * (i + 1) / (n + 1);
+    p[i] = 0.5 * std::exp(-3.0 * r[i]) / n * 10;
+  }
+  switch (kind) {
+    case 0: return PiParams{0.5, r, p, {0.0, 1.0}};
+    case 1: {
+      GpiParams g;  // magnitudes like Table 2 of the GPI paper (pressure in MPa)
+      g.envelope = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
+      g.q = 0.8;
+      g.n = n;
+      g.rho = 0.4;
+      g.tau = 5.0;
+      g.alpha = 0.3 / n;
+      g.input_limits = {0.0, 0.6};
+      return g;
+    }
+    case 2: return MpiDeadzoneParams{0.5, r, p, 1.0, {0.2, 0.4, 0.6}, {0.1, 0.2, -0.1}, {0.0, 1.0}};
+    default: {
+      MpiAsymParams a;
+      a.ascending = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
+      a.descending = Envelope::tanh(1.1, 1.8, -0.5, 0.6);
+      a.q = 0.8;
+      a.r = r;
+      a.p = p;
+      a.input_limits = {0.0, 0.6};
+      return a;
+    }
+  }
+}
+
+const char* kNames[] = {"pi", "gpi", "mpi-deadzone", "mpi-asym"};
+
+void BM_ModelStep(benchmark::State& st) {
+  const auto params = make_model(static_cast<int>(st.range(0)), static_cast<int>(st.range(1)));
+  Model m(params);
+  const auto x = input_signal(0.0, 0.6);
+  for (auto _ : st) {
+    for (double xk : x) benchmark::DoNotOptimize(m.step(xk));
+  }
+  st.SetItemsProcessed(st.iterations() * kSamples);
+  st.SetLabel(kNames[st.range(0)]);
+  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_ModelSimulate(benchmark::State& st) {
+  const auto params = make_model(static_cast<int>(st.range(0)), static_cast<int>(st.range(1)));
+  Model m(params);
+  const auto x = input_signal(0.0, 0.6);
+  std::vector<double> y(x.size());
+  for (auto _ : st) {
+    m.simulate(x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  st.SetLabel(kNames[st.range(0)]);
+  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_InverseStep(benchmark::State& st) {
+  const auto params = make_model(static_cast<int>(st.range(0)), static_cast<int>(st.range(1)));
+  Model m(params);
+  const auto yd = m.simulate(input_signal(0.0, 0.6));  // reachable desired outputs
+  Inverse inv(params);
+  for (auto _ : st) {
+    for (double y : yd) benchmark::DoNotOptimize(inv.step(y));
+  }
+  st.SetLabel(kNames[st.range(0)]);
+  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// The real-time budget of the issue: GPI forward + inverse per sample.
+void BM_GpiForwardPlusInverse(benchmark::State& st) {
+  const auto params = make_model(1, static_cast<int>(st.range(0)));
+  Model m(params);
+  const auto yd = Model(params).simulate(input_signal(0.0, 0.6));
+  Inverse inv(params);
+  for (auto _ : st) {
+    for (double y : yd) benchmark::DoNotOptimize(m.step(inv.step(y)));
+  }
+  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void model_args(benchmark::internal::Benchmark* b) {
+  for (int kind = 0; kind < 4; ++kind)
+    for (int n : {10, 20, 50}) b->Args({kind, n});
+}
+
+}  // namespace
+
+BENCHMARK(BM_ModelStep)->Apply(model_args);
+BENCHMARK(BM_ModelSimulate)->Apply(model_args);
+BENCHMARK(BM_InverseStep)->Apply(model_args);
+BENCHMARK(BM_GpiForwardPlusInverse)->Arg(10)->Arg(20)->Arg(50);

@@ -140,7 +140,7 @@ struct SimulationParams {
   int max_substeps = 64;                // cap on automatic sub-steps     [E]
   // Divergence thresholds: pressure above supply by this fraction, contraction
   // outside [0, eps_max L0] by this distance [m].
-  double pressure_tolerance = 0.01;
+  double pressure_tolerance = 0.05;
   double position_tolerance = 1e-3;
 };
 

@@ -170,24 +170,33 @@ void PamRig::derivative(const RigState& s, const Flow& f, double p_set, Deriv& d
   d.creep = (s.contraction - s.creep) / h.creep_time;
 
   // P8-P10: valve mass flows.
+  // Signed flow through an open orifice between a port at p_port and the chamber
+  // (> 0 into the chamber): an open valve passes air both ways.
+  auto port_flow = [&](double conductance, double b, double p_port) {
+    return p_port >= s.pressure
+               ? iso6358_mass_flow(conductance, b, p_port, s.pressure, a.temperature, a)
+               : -iso6358_mass_flow(conductance, b, s.pressure, p_port, a.temperature, a);
+  };
+  double m_net = 0.0;  // scaled so that inflow uses k_in and outflow k_out (P7)
   double m_in = 0.0, m_out = 0.0;
   if (f.regulator) {
     const auto& r = p_.regulator;
     const double opening = std::clamp((p_set - p_gauge) / r.proportional_band, -1.0, 1.0);
     if (opening > 0.0)
-      m_in = opening * iso6358_mass_flow(r.sonic_conductance, r.critical_ratio, a.supply_pressure,
-                                         s.pressure, a.temperature, a);
+      m_net = opening * port_flow(r.sonic_conductance, r.critical_ratio, a.supply_pressure);
     else if (opening < 0.0)
-      m_out = -opening * iso6358_mass_flow(r.sonic_conductance, r.critical_ratio, s.pressure,
-                                           a.atmospheric_pressure, a.temperature, a);
+      m_net = -opening * port_flow(r.sonic_conductance, r.critical_ratio, a.atmospheric_pressure);
+    (m_net >= 0.0 ? m_in : m_out) += std::abs(m_net);
   } else {
     const auto& v = p_.valves;
-    if (f.inlet)
-      m_in = iso6358_mass_flow(v.sonic_conductance, v.critical_ratio, a.supply_pressure, s.pressure,
-                               a.temperature, a);
-    if (f.exhaust)
-      m_out = iso6358_mass_flow(v.sonic_conductance, v.critical_ratio, s.pressure,
-                                a.atmospheric_pressure, a.temperature, a);
+    if (f.inlet) {
+      const double q = port_flow(v.sonic_conductance, v.critical_ratio, a.supply_pressure);
+      (q >= 0.0 ? m_in : m_out) += std::abs(q);
+    }
+    if (f.exhaust) {
+      const double q = port_flow(v.sonic_conductance, v.critical_ratio, a.atmospheric_pressure);
+      (q >= 0.0 ? m_in : m_out) += std::abs(q);
+    }
   }
   // P6-P7: chamber.
   const double vol = muscle_volume(m, eps);

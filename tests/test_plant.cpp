@@ -1,0 +1,312 @@
+// The simulated DMSP-20-500 rig (plant.hpp).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "alloc_counter.hpp"
+#include "hysteron/plant.hpp"
+#include "hysteron/signals.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+// Runs a sampled regulator command [MPa] (one sample per rig step).
+std::vector<RigOutputs> run_regulator(PamRig& rig, const std::vector<double>& u) {
+  std::vector<RigOutputs> out;
+  out.reserve(u.size());
+  for (double c : u) out.push_back(rig.step({c, 0.0, Actuation::regulator}));
+  return out;
+}
+
+// Contraction where the true pressure first crosses p upwards, and last crosses it downwards.
+struct Crossing {
+  double up = NAN, down = NAN;
+};
+Crossing crossings(const std::vector<RigOutputs>& y, double p) {
+  Crossing c;
+  for (std::size_t k = 1; k < y.size(); ++k) {
+    if (std::isnan(c.up) && y[k - 1].pressure < p && y[k].pressure >= p) c.up = y[k].contraction;
+    if (y[k - 1].pressure > p && y[k].pressure <= p) c.down = y[k].contraction;
+  }
+  return c;
+}
+
+std::string error_of(const auto& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(PlantPhysics, ForceMapAndVolume) {
+  const MuscleParams m;
+  EXPECT_NEAR(festo_force(m, 620e3, 0.0), 1326.0, 1e-9);  // P* = 1, e = 0: F = F620
+  EXPECT_EQ(festo_force(m, 0.0, 0.05), 0.0);                // vented: no pull
+  // Hand value: P = 300 kPa, eps = 0.1 -> e = 0.392157.
+  const double e = 0.1 / 0.255;
+  const double f = 1326.0 * (0.2579 * (std::exp(-6.477 * e) - 1.0) + 300.0 / 620.0 * std::exp(-1.321 * e * e));
+  EXPECT_NEAR(festo_force(m, 300e3, 0.1), f, 1e-9);
+  EXPECT_NEAR(f, 208.65, 0.01);
+  // pam-plant.md: about 187 / 292 / 346 cm^3 at eps = 0 / 0.125 / 0.25 (+ dead volume).
+  EXPECT_NEAR((muscle_volume(m, 0.0) - m.dead_volume) * 1e6, 187.0, 1.0);
+  EXPECT_NEAR((muscle_volume(m, 0.125) - m.dead_volume) * 1e6, 292.0, 1.0);
+  EXPECT_NEAR((muscle_volume(m, 0.25) - m.dead_volume) * 1e6, 346.0, 1.0);
+  const double h = 1e-6;
+  EXPECT_NEAR(muscle_volume_derivative(m, 0.1),
+              (muscle_volume(m, 0.1 + h) - muscle_volume(m, 0.1 - h)) / (2 * h), 1e-9);
+}
+
+TEST(PlantPhysics, Iso6358Flow) {
+  const AirParams air;
+  const double C = 4e-9, b = 0.38;
+  const double choked = C * air.rho0 * 7e5;
+  EXPECT_NEAR(iso6358_mass_flow(C, b, 7e5, 1e5, air.temperature, air), choked, 1e-15);
+  EXPECT_EQ(iso6358_mass_flow(C, b, 3e5, 3e5, air.temperature, air), 0.0);
+  EXPECT_EQ(iso6358_mass_flow(C, b, 3e5, 4e5, air.temperature, air), 0.0);
+  const double r = 0.7, q = (r - b) / (1 - b);
+  EXPECT_NEAR(iso6358_mass_flow(C, b, 5e5, r * 5e5, air.temperature, air),
+              C * air.rho0 * 5e5 * std::sqrt(1 - q * q), 1e-15);
+  // Continuous at the switch to the linear law (p2/p1 = 0.999).
+  const double below = iso6358_mass_flow(C, b, 5e5, 0.999 * 5e5 - 1e-6, air.temperature, air);
+  const double above = iso6358_mass_flow(C, b, 5e5, 0.999 * 5e5 + 1e-6, air.temperature, air);
+  EXPECT_NEAR(below, above, 1e-3 * below);
+}
+
+TEST(PlantPhysics, NominalLoadReachesTheGpiSinusoid) {
+  // Eq. 18 / Table 4: contraction 5..95 mm must be reachable within 0..0.6 MPa.
+  const PamRigParams p;
+  EXPECT_EQ(static_contraction(p, 0.0), 0.0);
+  EXPECT_GT(static_contraction(p, 0.6e6, +1.0), 0.095);  // even on the rising branch
+  EXPECT_LT(static_contraction(p, 0.6e6, -1.0), 0.130);
+}
+
+TEST(PamRig, DeterministicPerSeed) {
+  const auto u = gpi_identification_pressure(1e-4);
+  const std::vector<double> part(u.begin(), u.begin() + 20000);  // 2 s
+  PamRig a(PamRigParams{}, 42), b(PamRigParams{}, 42), c(PamRigParams{}, 43);
+  const auto ya = run_regulator(a, part), yb = run_regulator(b, part), yc = run_regulator(c, part);
+  bool differs = false;
+  for (std::size_t k = 0; k < ya.size(); ++k) {
+    ASSERT_EQ(ya[k].contraction_measured, yb[k].contraction_measured) << k;
+    ASSERT_EQ(ya[k].pressure_measured, yb[k].pressure_measured) << k;
+    ASSERT_EQ(ya[k].contraction, yb[k].contraction) << k;
+    differs = differs || ya[k].pressure_measured != yc[k].pressure_measured ||
+              ya[k].contraction_measured != yc[k].contraction_measured;
+    EXPECT_EQ(ya[k].contraction, yc[k].contraction);  // noise does not touch the physics
+  }
+  EXPECT_TRUE(differs);
+  // reset() replays the same series.
+  a.reset();
+  const auto ya2 = run_regulator(a, part);
+  for (std::size_t k = 0; k < ya.size(); k += 997) EXPECT_EQ(ya[k].pressure_measured, ya2[k].pressure_measured);
+}
+
+TEST(PamRig, StaticEquilibriumMatchesForceMap) {
+  PamRig rig(PamRigParams{}, 1);
+  // Ramp to 0.4 MPa in 2 s, then hold for 40 s (creep relaxes with tau_c = 4 s).
+  std::vector<double> u;
+  for (int k = 0; k < 420000; ++k) u.push_back(std::min(0.4, 0.2 * k * 1e-4));
+  const auto y = run_regulator(rig, u);
+  const double p = y.back().pressure;
+  EXPECT_NEAR(p, 0.4e6, 50.0);                  // the regulator holds its setpoint
+  EXPECT_NEAR(rig.state().velocity, 0.0, 1e-6);
+  const double x_eq = static_contraction(rig.params(), p, rig.state().bouc_wen);
+  EXPECT_NEAR(y.back().contraction, x_eq, 1e-5) << "z = " << rig.state().bouc_wen;
+  EXPECT_GT(rig.state().bouc_wen, 0.5);  // reached on the shortening branch
+  // And the force balance itself: F(P - dP_h z, eps) = m g.
+  const auto& prm = rig.params();
+  const double f = festo_force(prm.muscle, p - prm.hysteresis.pressure_band * rig.state().bouc_wen,
+                               y.back().contraction / prm.muscle.rest_length);
+  EXPECT_NEAR(f, prm.load.mass * prm.load.gravity, 0.05);
+}
+
+TEST(PamRig, LengthPressureLoopIsWideAndAsymmetric) {
+  PamRig rig(PamRigParams{}, 7);
+  const auto u = gpi_identification_pressure(1e-4);
+  const std::vector<double> major(u.begin(), u.begin() + 50000);  // 0 -> 0.6 -> 0 MPa, 0.2 Hz
+  const auto y = run_regulator(rig, major);
+  double x_max = 0.0;
+  for (const auto& o : y) x_max = std::max(x_max, o.contraction);
+  EXPECT_GT(x_max, 0.090);
+  EXPECT_LT(x_max, 0.130);
+  std::vector<double> width;
+  for (double p : {0.2e6, 0.3e6, 0.4e6, 0.5e6}) {
+    const auto c = crossings(y, p);
+    ASSERT_FALSE(std::isnan(c.up) || std::isnan(c.down)) << p;
+    width.push_back(c.down - c.up);
+    EXPECT_GT(c.down - c.up, 0.002) << "loop width at " << p << " Pa";
+  }
+  // Asymmetric: a point-symmetric (classical PI) loop has equal widths at pressures
+  // symmetric about its centre (0.3 MPa): here 0.2 vs 0.4 MPa.
+  EXPECT_GT(std::abs(width[0] - width[2]), 0.002);
+  EXPECT_GT(width[1], 1.5 * width[3]);  // loops narrow towards high pressure
+  // Back at 0 MPa the muscle rests on its stop at full length.
+  EXPECT_NEAR(y.back().contraction, 0.0, 1e-3);
+}
+
+TEST(PamRig, ChamberFillsTowardSupplyAndVents) {
+  const PamRigParams prm;
+  const double supply_gauge = prm.air.supply_pressure - prm.air.atmospheric_pressure;
+  PamRig rig(prm, 3);
+  double p_max = 0.0;
+  for (int k = 0; k < 40000; ++k) p_max = std::max(p_max, rig.step({0.0, 1.0, Actuation::switching_valves}).pressure);
+  EXPECT_GT(rig.last_outputs().pressure, 0.97 * supply_gauge);
+  EXPECT_LE(p_max, supply_gauge + 1e3);  // open to the supply: no overshoot beyond rounding
+  EXPECT_TRUE(rig.last_outputs().inlet_open);
+  for (int k = 0; k < 60000; ++k) rig.step({0.0, -1.0, Actuation::switching_valves});
+  EXPECT_LT(rig.last_outputs().pressure, 3e3);
+  EXPECT_GE(rig.last_outputs().pressure, 0.0);
+  EXPECT_TRUE(rig.last_outputs().exhaust_open);
+  // Regulator asked for its full 10 bar range: limited by the 6 bar (gauge) supply.
+  rig.reset();
+  for (int k = 0; k < 40000; ++k) p_max = std::max(p_max, rig.step({1.0, 0.0, Actuation::regulator}).pressure);
+  EXPECT_GT(rig.last_outputs().pressure, 0.97 * supply_gauge);
+  EXPECT_LE(rig.last_outputs().pressure, supply_gauge);
+  // The rebounding load compresses the air momentarily above the supply (the
+  // orifice limits the backflow): a few percent at most.
+  EXPECT_LE(p_max, supply_gauge + 0.03 * prm.air.supply_pressure);
+  rig.check();
+}
+
+TEST(PamRig, ZeroDutyHoldsPressure) {
+  PamRig rig(PamRigParams{}, 5);
+  rig.reset_at_pressure(0.3e6);
+  for (int k = 0; k < 20000; ++k) rig.step({0.0, 0.0, Actuation::switching_valves});
+  EXPECT_NEAR(rig.last_outputs().pressure, 0.3e6, 1.0);
+  EXPECT_FALSE(rig.last_outputs().inlet_open || rig.last_outputs().exhaust_open);
+  // A positive duty raises it, a negative one lowers it.
+  for (int k = 0; k < 2000; ++k) rig.step({0.0, 0.3, Actuation::switching_valves});
+  const double up = rig.last_outputs().pressure;
+  EXPECT_GT(up, 0.31e6);
+  for (int k = 0; k < 2000; ++k) rig.step({0.0, -0.3, Actuation::switching_valves});
+  EXPECT_LT(rig.last_outputs().pressure, up - 10e3);
+}
+
+TEST(PamRig, PwmEdgesInsideTheStepAreExact) {
+  // Edges at odd times (333 Hz, 1.23 / 0.87 ms delays): the step size must not matter.
+  auto run = [](double dt) {
+    PamRigParams p;
+    p.simulation.dt = dt;
+    p.valves.pwm_frequency = 333.0;
+    p.valves.on_delay = 1.23e-3;
+    p.valves.off_delay = 0.87e-3;
+    p.sensors.pressure_noise = 0.0;
+    PamRig rig(p, 1);
+    rig.reset_at_pressure(0.2e6);
+    const auto n = static_cast<int>(std::lround(0.15 / dt));
+    for (int k = 0; k < n; ++k) rig.step({0.0, 0.37, Actuation::switching_valves});
+    return rig.last_outputs().pressure;
+  };
+  const double coarse = run(1e-4), fine = run(1e-5);
+  EXPECT_GT(coarse, 0.23e6);
+  EXPECT_NEAR(coarse, fine, 2e-4 * fine);
+}
+
+TEST(PamRig, NonFiniteInputsAreHeld) {
+  PamRig rig(PamRigParams{}, 1);
+  for (int k = 0; k < 100; ++k) rig.step({0.3, 0.0, Actuation::regulator});
+  rig.step({NAN, NAN, Actuation::regulator});
+  EXPECT_EQ(rig.input_faults(), 2u);
+  EXPECT_TRUE(rig.ok());
+}
+
+TEST(PamRig, DivergenceIsReportedWithTime) {
+  PamRig rig(PamRigParams{}, 1);
+  for (int k = 0; k < 10; ++k) rig.step({0.2, 0.0, Actuation::regulator});
+  RigState s = rig.state();
+  s.pressure = NAN;
+  rig.set_state(s);
+  const auto y = rig.step({0.2, 0.0, Actuation::regulator});
+  EXPECT_FALSE(y.ok);
+  EXPECT_FALSE(rig.ok());
+  const std::string msg = error_of([&] { rig.check(); });
+  EXPECT_NE(msg.find("t = 0.001100 s"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("non-finite"), std::string::npos) << msg;
+  // The rig stays frozen; run() refuses to continue.
+  EXPECT_EQ(rig.step({0.2, 0.0, Actuation::regulator}).time, y.time);
+  EXPECT_THROW(rig.run(1.0, 0.0, [](const RigOutputs&) { return RigInputs{}; }), Error);
+
+  // Pressure above the supply (a corrupted state) is caught inside run().
+  PamRig rig2(PamRigParams{}, 1);
+  RigState s2 = rig2.state();
+  s2.pressure = 5.0 * rig2.params().air.supply_pressure;
+  rig2.set_state(s2);
+  const std::string msg2 = error_of([&] { rig2.run(1.0, 1e-3, [](const RigOutputs&) { return RigInputs{}; }); });
+  EXPECT_NE(msg2.find("pressure above the supply"), std::string::npos) << msg2;
+  EXPECT_NE(msg2.find("t = 0.000100 s"), std::string::npos) << msg2;
+}
+
+TEST(PamRig, ExcessiveStiffnessRejectedAtConstruction) {
+  PamRigParams p;
+  p.valves.sonic_conductance = 1e-3;  // absurd: a pipe the size of a barn door
+  const std::string msg = error_of([&] { PamRig rig(p, 1); });
+  EXPECT_NE(msg.find("max_substeps"), std::string::npos) << msg;
+}
+
+TEST(PamRig, StepAndRunDoNotAllocate) {
+  PamRig rig(PamRigParams{}, 1);
+  const std::size_t before = hysteron_test::allocations();
+  for (int k = 0; k < 5000; ++k) rig.step({0.3, 0.0, Actuation::regulator});
+  for (int k = 0; k < 5000; ++k) rig.step({0.0, 0.5, Actuation::switching_valves});
+  double sum = 0.0;
+  rig.run(0.5, 1e-3, [](const RigOutputs& y) { return RigInputs{0.3 + 0.0 * y.time, 0.0, Actuation::regulator}; },
+          [&](const RigInputs&, const RigOutputs& y) { sum += y.contraction; });
+  EXPECT_EQ(hysteron_test::allocations(), before);
+  EXPECT_GT(sum, 0.0);
+}
+
+TEST(PamRigParams, JsonRoundTripAndErrors) {
+  PamRigParams p;
+  p.load.mass = 12.5;
+  p.sensors.pressure_bits = 10;
+  const auto j = rig_params_to_json(p);
+  const auto q = rig_params_from_json(j, "test");
+  EXPECT_EQ(q.load.mass, 12.5);
+  EXPECT_EQ(q.sensors.pressure_bits, 10);
+  EXPECT_EQ(rig_params_to_json(q), j);
+  // Partial files keep the defaults.
+  EXPECT_EQ(rig_params_from_json(nlohmann::json::parse(R"({"load": {"mass": 3}})"), "x").load.damping,
+            PamRigParams{}.load.damping);
+
+  auto msg = [](const char* text) {
+    return error_of([&] { rig_params_from_json(nlohmann::json::parse(text), "rig.json"); });
+  };
+  EXPECT_NE(msg(R"({"load": {"mas": 3}})").find("unknown key 'mas'"), std::string::npos);
+  EXPECT_NE(msg(R"({"lode": {}})").find("unknown key 'lode'"), std::string::npos);
+  const auto neg = msg(R"({"load": {"mass": -1}})");
+  EXPECT_NE(neg.find("rig.json.load.mass"), std::string::npos) << neg;
+  EXPECT_NE(neg.find("> 0"), std::string::npos) << neg;
+  const auto type = msg(R"({"load": {"mass": "heavy"}})");
+  EXPECT_NE(type.find("load.mass"), std::string::npos) << type;
+  EXPECT_NE(type.find("string"), std::string::npos) << type;
+  EXPECT_NE(msg(R"({"sensors": {"pressure_bits": 12.5}})").find("sensors.pressure_bits"), std::string::npos);
+  EXPECT_NE(msg(R"({"simulation": {"dt": 1e-3}})").find("simulation.dt"), std::string::npos);
+  EXPECT_NE(msg(R"({"air": {"supply_pressure": 5e4}})").find("air.supply_pressure"), std::string::npos);
+  EXPECT_NE(msg(R"([1, 2])").find("expected a JSON object"), std::string::npos);
+  nlohmann::json nan_json;
+  nan_json["load"]["mass"] = NAN;
+  EXPECT_NE(error_of([&] { rig_params_from_json(nan_json, "n"); }).find("n.load.mass"), std::string::npos);
+
+  // Files.
+  const auto path = std::filesystem::temp_directory_path() / "hysteron_test_rig.json";
+  save_rig_params(p, path);
+  EXPECT_EQ(load_rig_params(path).load.mass, 12.5);
+  {
+    std::ofstream(path) << "{ \"load\": { \"mass\": 1, } }";
+  }
+  EXPECT_NE(error_of([&] { load_rig_params(path); }).find(path.string()), std::string::npos);
+  std::filesystem::remove(path);
+  EXPECT_THROW(load_rig_params(path), Error);
+}

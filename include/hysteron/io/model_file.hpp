@@ -1,0 +1,49 @@
+#pragma once
+// Model files: one hysteresis model as a JSON object whose keys are the papers'
+// symbols (schema in docs/model-files.md). Example (GPI, Eqs. 5-8):
+//
+//   {"schema": 1, "model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0, 0],
+//    "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05,
+//    "input_limits": [0, 0.6], "units": {"input": "MPa", "output": "mm"}}
+//
+// Reading is strict: unknown keys, missing keys, wrong types, wrong array
+// lengths and non-finite numbers are errors, and every accepted file is checked
+// by constructing hysteron::Model. Every error is a hysteron::Error whose message
+// starts with the file (or `where`) and names the key and what was expected.
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <string_view>
+
+#include "hysteron/models.hpp"
+
+namespace hysteron::io {
+
+// Current (and only) schema version written to and accepted in "schema".
+inline constexpr int model_schema_version = 1;
+
+// Reads and validates a model file. Throws hysteron::Error naming `path`,
+// the line/column of a JSON syntax error, or the offending key.
+ModelParams read_model_file(const std::string& path);
+
+// Parses and validates a model from JSON; `where` (e.g. the file name) starts
+// every error message. Free-form keys "units", "note" and "metadata" are
+// accepted and ignored here (see model_extra()).
+ModelParams model_from_json(const nlohmann::json& j, std::string_view where);
+
+// The free-form keys ("units", "note", "metadata") of a model JSON object, as an
+// object (empty if none). Lets a caller keep them on a read-modify-write.
+nlohmann::json model_extra(const nlohmann::json& j);
+
+// Model as JSON (with "schema"). model_from_json(model_to_json(p)) reproduces p
+// exactly: doubles are written with 17 significant digits. A gpi with free
+// weights (non-empty r) is written as r/p, without n/rho/tau/alpha.
+nlohmann::json model_to_json(const ModelParams& params);
+
+// Writes model_to_json(params) merged with `extra` (an object whose keys may only
+// be "units", "note", "metadata") to `path`, atomically: a temporary file in the
+// same directory is renamed over `path`; on failure `path` is left untouched.
+// The parameters are validated first. Path "-" writes to stdout.
+void write_model_file(const std::string& path, const ModelParams& params, const nlohmann::json& extra = {});
+
+}  // namespace hysteron::io

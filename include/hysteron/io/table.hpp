@@ -1,0 +1,81 @@
+#pragma once
+// Numeric data tables: CSV-like text files and MATLAB .mat files (via matio).
+//
+// Text files (any extension but .mat):
+//  - optional header: the first non-empty line is a header if any of its fields
+//    is not a number ("nan"/"inf" count as numbers, and are then refused);
+//  - one separator per file, detected from the first non-empty line: tab if it
+//    has one, else ';', else ',', else runs of blanks;
+//  - a UTF-8 BOM, CRLF line endings, blank lines and lines starting with '#' are
+//    ignored; fields are trimmed of blanks and of one pair of double quotes;
+//  - a column that is empty in every row (e.g. the leading "," of every line)
+//    is allowed and reads as empty; selecting it is an error; any other empty
+//    field is an error;
+//  - NaN, infinity, out-of-range and malformed numbers are refused with
+//    "file:line:column (column "name"): ..." (line 1-based, column = 1-based
+//    field number); rows with a different number of fields name their line.
+// .mat files (extension .mat, any case): a column is a variable: a real numeric
+// vector (1xN or Nx1) of class double, single or any integer class.
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hysteron::io {
+
+enum class HeaderMode { autodetect, present, absent };
+
+struct ReadOptions {
+  // Column to read: a header name (or .mat variable name), else a 0-based index.
+  // Empty: the file's only non-empty column (an error if it has several).
+  std::string column_spec;
+  // Field separator: 0 = autodetect, else ',', ';', '\t' or ' ' (runs of blanks).
+  char separator = 0;
+  HeaderMode header = HeaderMode::autodetect;
+};
+
+// All columns of a file. columns[i] has num_rows() values, or none if the
+// column is empty in every row.
+struct Table {
+  std::string source;                         // file path, for messages
+  std::vector<std::string> names;             // header names (or .mat variables); "" if no header
+  std::vector<std::vector<double>> columns;
+
+  std::size_t num_columns() const noexcept { return columns.size(); }
+  std::size_t num_rows() const noexcept;
+  // Index of a column by name, else by 0-based index; empty spec = the only
+  // non-empty column. Throws hysteron::Error listing the columns that exist.
+  std::size_t column_index(std::string_view spec) const;
+  // The column's values; throws hysteron::Error as column_index() does, and if
+  // the column is empty in every row.
+  const std::vector<double>& column(std::string_view spec) const;
+};
+
+// Reads a whole text table (or every numeric vector variable of a .mat file,
+// which must then all have the same length). Throws hysteron::Error.
+Table read_table(const std::string& path, const ReadOptions& options = {});
+
+// One column of a text file or one variable of a .mat file (options.column_spec
+// is then the variable name; empty = the file's only variable).
+std::vector<double> read_column(const std::string& path, const ReadOptions& options);
+std::vector<double> read_column(const std::string& path, const std::string& column);
+
+// Writes equal-length columns with a header line of `names` as CSV (values
+// printed with %.17g, so they read back exactly) or, for a .mat path, as Nx1
+// double variables (MAT v5, compressed; names must be MATLAB identifiers).
+// Atomic: see write_file_atomically. Path "-" writes CSV to stdout.
+// Non-finite values, unequal lengths and bad names are refused before any file
+// is created.
+void write_columns(const std::string& path, const std::vector<std::string>& names,
+                   const std::vector<std::vector<double>>& columns);
+
+// Creates a new temporary file in the directory of `path`, calls
+// write(temp_path) to fill it, then renames it over `path`. If write throws or
+// anything fails, the temporary file is removed, `path` is left as it was and a
+// hysteron::Error naming `path` is thrown.
+void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write);
+// write_file_atomically with a text body; path "-" writes to stdout.
+void write_text_file(const std::string& path, std::string_view text);
+
+}  // namespace hysteron::io

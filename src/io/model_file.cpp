@@ -1,0 +1,404 @@
+#include "hysteron/io/model_file.hpp"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <sstream>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/table.hpp"
+
+namespace hysteron::io {
+
+namespace {
+
+using nlohmann::json;
+
+constexpr std::array<std::string_view, 3> kFreeKeys = {"units", "note", "metadata"};
+
+std::string type_name(const json& v) {
+  switch (v.type()) {
+    case json::value_t::null: return "null";
+    case json::value_t::boolean: return "boolean";
+    case json::value_t::string: return "string";
+    case json::value_t::array: return "array";
+    case json::value_t::object: return "object";
+    case json::value_t::binary: return "binary";
+    case json::value_t::discarded: return "discarded";
+    default: return "number";
+  }
+}
+
+template <class Keys>
+std::string join(const Keys& keys) {
+  std::string s;
+  for (std::string_view k : keys) {
+    if (!s.empty()) s += ", ";
+    s += '"';
+    s += k;
+    s += '"';
+  }
+  return s;
+}
+
+// Reads keys of one JSON object with a common message prefix, e.g.
+// "m.json: gpi: key \"tau\": expected a number, got string".
+class Reader {
+ public:
+  Reader(const json& obj, std::string prefix) : obj_(obj), prefix_(std::move(prefix)) {}
+
+  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
+    throw Error(fmt::format("{}: key \"{}\": {}", prefix_, key, what));
+  }
+  [[noreturn]] void fail(std::string_view what) const { throw Error(fmt::format("{}: {}", prefix_, what)); }
+
+  bool has(std::string_view key) const { return obj_.contains(key); }
+  const json& at(std::string_view key) const {
+    auto it = obj_.find(key);
+    if (it == obj_.end()) fail(key, "missing (required)");
+    return *it;
+  }
+
+  void only(std::initializer_list<std::string_view> allowed, bool free_keys) const {
+    for (auto it = obj_.begin(); it != obj_.end(); ++it) {
+      bool ok = false;
+      for (std::string_view a : allowed) ok = ok || it.key() == a;
+      if (free_keys)
+        for (std::string_view a : kFreeKeys) ok = ok || it.key() == a;
+      if (!ok)
+        fail(it.key(), fmt::format("unknown key; allowed keys are {}{}", join(allowed),
+                                   free_keys ? ", " + join(kFreeKeys) : std::string()));
+    }
+  }
+
+  double number(std::string_view key, const json& v) const {
+    if (!v.is_number())
+      fail(key, fmt::format("expected a number, got {}", type_name(v)));
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) fail(key, fmt::format("expected a finite number, got {}", d));
+    return d;
+  }
+  double number(std::string_view key) const { return number(key, at(key)); }
+  double number_or(std::string_view key, double def) const { return has(key) ? number(key) : def; }
+
+  int integer(std::string_view key) const {
+    const json& v = at(key);
+    if (v.is_number_integer() || v.is_number_unsigned()) {
+      if (v.is_number_unsigned() ? v.get<std::uint64_t>() > static_cast<std::uint64_t>(std::numeric_limits<int>::max())
+                                 : (v.get<std::int64_t>() > std::numeric_limits<int>::max() ||
+                                    v.get<std::int64_t>() < std::numeric_limits<int>::min()))
+        fail(key, fmt::format("expected an integer, got {} (out of range)", v.dump()));
+      return static_cast<int>(v.get<std::int64_t>());
+    }
+    if (v.is_number_float()) {
+      const double d = v.get<double>();
+      if (std::isfinite(d) && d == std::floor(d) && std::abs(d) <= 1e9) return static_cast<int>(d);
+      fail(key, fmt::format("expected an integer, got {}", v.dump()));
+    }
+    fail(key, fmt::format("expected an integer, got {}", type_name(v)));
+  }
+
+  std::string string(std::string_view key) const {
+    const json& v = at(key);
+    if (!v.is_string()) fail(key, fmt::format("expected a string, got {}", type_name(v)));
+    return v.get<std::string>();
+  }
+
+  // Array of finite numbers; `expected_size` < 0 means any length.
+  std::vector<double> numbers(std::string_view key, long expected_size = -1) const {
+    const json& v = at(key);
+    if (!v.is_array()) fail(key, fmt::format("expected an array of numbers, got {}", type_name(v)));
+    if (expected_size >= 0 && v.size() != static_cast<std::size_t>(expected_size))
+      fail(key, fmt::format("expected an array of {} numbers, got {}", expected_size, v.size()));
+    std::vector<double> out;
+    out.reserve(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) out.push_back(number(fmt::format("{}[{}]", key, i), v[i]));
+    return out;
+  }
+
+  Limits limits() const {
+    Limits l;
+    if (!has("input_limits")) return l;
+    const json& v = at("input_limits");
+    if (!v.is_array() || v.size() != 2)
+      fail("input_limits", fmt::format("expected an array [lo, hi] of 2 numbers (null = unbounded), got {}",
+                                       v.is_array() ? fmt::format("{} entries", v.size()) : type_name(v)));
+    if (!v[0].is_null()) l.lo = number("input_limits[0]", v[0]);
+    if (!v[1].is_null()) l.hi = number("input_limits[1]", v[1]);
+    return l;
+  }
+
+  Envelope envelope(std::string_view kind_key, std::string_view c_key, EnvelopeKind def) const {
+    Envelope e;
+    e.kind = def;
+    if (has(kind_key)) {
+      const std::string name = string(kind_key);
+      try {
+        e.kind = envelope_kind_from_name(name, fmt::format("{}: key \"{}\"", prefix_, kind_key));
+      } catch (const Error&) {
+        fail(kind_key, fmt::format("expected \"tanh\", \"atan\", \"affine\" or \"identity\", got \"{}\"", name));
+      }
+    }
+    const std::size_t nc = envelope_num_coefficients(e.kind);
+    e.c = {1.0, 0.0, 0.0, 0.0};
+    if (nc == 0) {
+      if (has(c_key) && !(at(c_key).is_array() && at(c_key).empty()))
+        fail(c_key, fmt::format("envelope \"{}\" has no coefficients; omit \"{}\" or give []",
+                                envelope_name(e.kind), c_key));
+      return e;
+    }
+    const std::vector<double> c = numbers(c_key, static_cast<long>(nc));
+    e.c = {0.0, 0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i < nc; ++i) e.c[i] = c[i];
+    return e;
+  }
+
+  const std::string& prefix() const { return prefix_; }
+
+ private:
+  const json& obj_;
+  std::string prefix_;
+};
+
+Envelope sub_envelope(const Reader& parent, const json& j, std::string_view key) {
+  if (!j.is_object()) parent.fail(key, fmt::format("expected an object {{\"envelope\": ..., \"c\": [...]}}, got {}", type_name(j)));
+  Reader r(j, fmt::format("{}: key \"{}\"", parent.prefix(), key));
+  r.only({"envelope", "c"}, false);
+  if (!r.has("envelope")) r.fail("envelope", "missing (required)");
+  return r.envelope("envelope", "c", EnvelopeKind::identity);
+}
+
+json number_array(const std::vector<double>& v) {
+  json a = json::array();
+  for (double d : v) a.push_back(d);
+  return a;
+}
+
+json envelope_coefficients(const Envelope& e) {
+  json a = json::array();
+  for (std::size_t i = 0; i < envelope_num_coefficients(e.kind); ++i) a.push_back(e.c[i]);
+  return a;
+}
+
+json envelope_object(const Envelope& e) {
+  json o = json::object();
+  o["envelope"] = std::string(envelope_name(e.kind));
+  o["c"] = envelope_coefficients(e);
+  return o;
+}
+
+void put_limits(json& j, const Limits& l) {
+  if (l == Limits{}) return;
+  json a = json::array();
+  if (std::isfinite(l.lo)) a.push_back(l.lo); else a.push_back(nullptr);
+  if (std::isfinite(l.hi)) a.push_back(l.hi); else a.push_back(nullptr);
+  j["input_limits"] = a;
+}
+
+struct ToJson {
+  json operator()(const PiParams& m) const {
+    json j;
+    j["q"] = m.q;
+    j["r"] = number_array(m.r);
+    j["p"] = number_array(m.p);
+    put_limits(j, m.input_limits);
+    return j;
+  }
+  json operator()(const GpiParams& m) const {
+    json j;
+    j["envelope"] = std::string(envelope_name(m.envelope.kind));
+    if (m.envelope.kind != EnvelopeKind::identity) j["c"] = envelope_coefficients(m.envelope);
+    j["q"] = m.q;
+    if (!m.r.empty()) {
+      j["r"] = number_array(m.r);
+      j["p"] = number_array(m.p);
+    } else {
+      j["n"] = m.n;
+      j["rho"] = m.rho;
+      j["tau"] = m.tau;
+      j["alpha"] = m.alpha;
+    }
+    put_limits(j, m.input_limits);
+    return j;
+  }
+  json operator()(const MpiDeadzoneParams& m) const {
+    json j;
+    j["q"] = m.q;
+    j["r"] = number_array(m.r);
+    j["p"] = number_array(m.p);
+    j["g0"] = m.g0;
+    j["z"] = number_array(m.z);
+    j["g"] = number_array(m.g);
+    put_limits(j, m.input_limits);
+    return j;
+  }
+  json operator()(const MpiAsymParams& m) const {
+    json j;
+    j["q"] = m.q;
+    j["r"] = number_array(m.r);
+    j["p"] = number_array(m.p);
+    j["ascending"] = envelope_object(m.ascending);
+    j["descending"] = envelope_object(m.descending);
+    put_limits(j, m.input_limits);
+    return j;
+  }
+};
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("{}: cannot open model file", path));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw Error(fmt::format("{}: read error", path));
+  return ss.str();
+}
+
+}  // namespace
+
+ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
+  if (!j.is_object())
+    throw Error(fmt::format("{}: expected a JSON object {{\"model\": ...}}, got {}", where, type_name(j)));
+  Reader top(j, std::string(where));
+  if (top.has("schema")) {
+    const json& s = j["schema"];
+    if (!s.is_number_integer() && !s.is_number_unsigned())
+      top.fail("schema", fmt::format("expected the integer {}, got {}", model_schema_version, s.dump()));
+    if (s.get<std::int64_t>() != model_schema_version)
+      top.fail("schema", fmt::format("unsupported schema version {}; this hysteron reads version {}",
+                                     s.get<std::int64_t>(), model_schema_version));
+  }
+  const std::string model = top.string("model");
+  Reader r(j, fmt::format("{}: {}", where, model));
+  ModelParams params;
+  if (model == "pi") {
+    r.only({"schema", "model", "q", "r", "p", "input_limits"}, true);
+    PiParams m;
+    m.q = r.number_or("q", 0.0);
+    m.r = r.numbers("r");
+    m.p = r.numbers("p", static_cast<long>(m.r.size()));
+    m.input_limits = r.limits();
+    params = std::move(m);
+  } else if (model == "gpi") {
+    GpiParams m;
+    if (r.has("r") || r.has("p")) {
+      r.only({"schema", "model", "envelope", "c", "q", "r", "p", "input_limits"}, true);
+      m.r = r.numbers("r");
+      if (m.r.empty()) r.fail("r", "expected a non-empty array (or give n, rho, tau, alpha instead of r, p)");
+      m.p = r.numbers("p", static_cast<long>(m.r.size()));
+    } else {
+      r.only({"schema", "model", "envelope", "c", "q", "n", "rho", "tau", "alpha", "input_limits"}, true);
+      m.n = r.integer("n");
+      m.rho = r.number("rho");
+      m.tau = r.number("tau");
+      m.alpha = r.number("alpha");
+    }
+    m.envelope = r.envelope("envelope", "c", EnvelopeKind::tanh);
+    m.q = r.number_or("q", 1.0);
+    m.input_limits = r.limits();
+    params = std::move(m);
+  } else if (model == "mpi-deadzone") {
+    r.only({"schema", "model", "q", "r", "p", "g0", "z", "g", "input_limits"}, true);
+    MpiDeadzoneParams m;
+    m.q = r.number_or("q", 1.0);
+    m.r = r.numbers("r");
+    m.p = r.numbers("p", static_cast<long>(m.r.size()));
+    m.g0 = r.number_or("g0", 1.0);
+    m.z = r.numbers("z");
+    m.g = r.numbers("g", static_cast<long>(m.z.size()));
+    m.input_limits = r.limits();
+    params = std::move(m);
+  } else if (model == "mpi-asym") {
+    r.only({"schema", "model", "q", "r", "p", "ascending", "descending", "input_limits"}, true);
+    MpiAsymParams m;
+    m.q = r.number_or("q", 1.0);
+    m.r = r.numbers("r");
+    m.p = r.numbers("p", static_cast<long>(m.r.size()));
+    m.ascending = sub_envelope(r, r.at("ascending"), "ascending");
+    m.descending = sub_envelope(r, r.at("descending"), "descending");
+    m.input_limits = r.limits();
+    params = std::move(m);
+  } else {
+    top.fail("model", fmt::format("expected \"pi\", \"gpi\", \"mpi-deadzone\" or \"mpi-asym\", got \"{}\"", model));
+  }
+  if (j.contains("units")) {
+    const json& u = j["units"];
+    if (!u.is_object()) top.fail("units", fmt::format("expected an object {{\"input\": \"...\", \"output\": \"...\"}}, got {}", type_name(u)));
+    for (auto it = u.begin(); it != u.end(); ++it)
+      if (!it.value().is_string())
+        top.fail(fmt::format("units.{}", it.key()), fmt::format("expected a string, got {}", type_name(it.value())));
+  }
+  if (j.contains("note") && !j["note"].is_string())
+    top.fail("note", fmt::format("expected a string, got {}", type_name(j["note"])));
+  try {
+    Model check(params);  // the model's own validation (names the key)
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", where, e.what()));
+  }
+  return params;
+}
+
+nlohmann::json model_extra(const nlohmann::json& j) {
+  json out = json::object();
+  if (!j.is_object()) return out;
+  for (std::string_view k : kFreeKeys)
+    if (j.contains(k)) out[std::string(k)] = j.at(std::string(k));
+  return out;
+}
+
+nlohmann::json model_to_json(const ModelParams& params) {
+  json body = std::visit(ToJson{}, params);
+  json j = json::object();
+  j["schema"] = model_schema_version;
+  j["model"] = std::string(model_name(params));
+  for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();
+  return j;
+}
+
+ModelParams read_model_file(const std::string& path) {
+  const std::string text = read_text(path);
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // e.what() is "[json.exception.parse_error.101] parse error at line 3, column 7: ..."
+    std::string msg = e.what();
+    const auto pos = msg.find("] ");
+    if (pos != std::string::npos) msg = msg.substr(pos + 2);
+    throw Error(fmt::format("{}: not valid JSON: {}", path, msg));
+  } catch (const json::exception& e) {
+    std::string msg = e.what();
+    const auto pos = msg.find("] ");
+    if (pos != std::string::npos) msg = msg.substr(pos + 2);
+    throw Error(fmt::format("{}: not valid JSON: {}", path, msg));
+  }
+  return model_from_json(j, path);
+}
+
+void write_model_file(const std::string& path, const ModelParams& params, const nlohmann::json& extra) {
+  try {
+    Model check(params);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: refusing to write an invalid model: {}", path, e.what()));
+  }
+  json j = model_to_json(params);
+  if (!extra.is_null()) {
+    if (!extra.is_object()) throw Error(fmt::format("{}: extra model-file keys must be a JSON object", path));
+    for (auto it = extra.begin(); it != extra.end(); ++it) {
+      bool ok = false;
+      for (std::string_view k : kFreeKeys) ok = ok || it.key() == k;
+      if (!ok)
+        throw Error(fmt::format("{}: extra key \"{}\" is not allowed in a model file; allowed: {}", path, it.key(),
+                                join(kFreeKeys)));
+      j[it.key()] = it.value();
+    }
+  }
+  const std::string text = j.dump(2) + "\n";
+  write_text_file(path, text);
+}
+
+}  // namespace hysteron::io

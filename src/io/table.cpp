@@ -1,0 +1,565 @@
+#include "hysteron/io/table.hpp"
+
+#include <fcntl.h>
+#include <matio.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron::io {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_mat_path(std::string_view path) {
+  if (path.size() < 4) return false;
+  std::string ext(path.substr(path.size() - 4));
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".mat";
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+std::string_view unquote(std::string_view s) {
+  s = trim(s);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = trim(s.substr(1, s.size() - 2));
+  return s;
+}
+
+std::vector<std::string_view> split(std::string_view line, char sep) {
+  std::vector<std::string_view> out;
+  if (sep == ' ') {
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      if (i >= line.size()) break;
+      std::size_t j = i;
+      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+      out.push_back(line.substr(i, j - i));
+      i = j;
+    }
+    return out;
+  }
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t pos = line.find(sep, start);
+    if (pos == std::string_view::npos) {
+      out.push_back(unquote(line.substr(start)));
+      return out;
+    }
+    out.push_back(unquote(line.substr(start, pos - start)));
+    start = pos + 1;
+  }
+}
+
+enum class Parse { ok, empty, malformed, non_finite, out_of_range };
+
+Parse parse_number(std::string_view s, double& out) {
+  s = unquote(s);
+  if (s.empty()) return Parse::empty;
+  if (s.front() == '+') s.remove_prefix(1);
+  if (s.empty() || s.front() == '+') return Parse::malformed;
+  const auto res = std::from_chars(s.data(), s.data() + s.size(), out);
+  if (res.ptr != s.data() + s.size()) return Parse::malformed;
+  if (res.ec == std::errc::result_out_of_range) {
+    // from_chars also reports underflow (denormal/zero) as out of range; only overflow is an error
+    errno = 0;
+    const std::string tmp(s);
+    out = std::strtod(tmp.c_str(), nullptr);
+    if (!std::isfinite(out)) return Parse::out_of_range;
+    return Parse::ok;
+  }
+  if (res.ec != std::errc()) return Parse::malformed;
+  if (!std::isfinite(out)) return Parse::non_finite;
+  return Parse::ok;
+}
+
+bool looks_numeric(std::string_view s) {
+  double d = 0.0;
+  const Parse p = parse_number(s, d);
+  return p != Parse::malformed;  // empty fields and nan/inf do not make a header
+}
+
+std::string column_label(const std::vector<std::string>& names, std::size_t i) {
+  if (i < names.size() && !names[i].empty()) return fmt::format(" (column \"{}\")", names[i]);
+  return std::string();
+}
+
+std::string read_file(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a data file", path));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("{}: cannot open data file ({})", path, std::strerror(errno)));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw Error(fmt::format("{}: read error", path));
+  return ss.str();
+}
+
+Table read_text_table(const std::string& path, const ReadOptions& opt) {
+  const std::string text = read_file(path);
+  std::string_view all(text);
+  if (all.substr(0, 3) == "\xEF\xBB\xBF") all.remove_prefix(3);
+
+  Table t;
+  t.source = path;
+  char sep = opt.separator;
+  if (sep != 0 && sep != ',' && sep != ';' && sep != '\t' && sep != ' ')
+    throw Error(fmt::format("{}: unsupported separator '{}' (use ',', ';', tab or ' ')", path, sep));
+  bool first = true;
+  bool have_header = false;
+  std::size_t nfields = 0;
+  std::size_t first_line = 0;
+  std::vector<std::size_t> filled;  // number of non-empty fields per column
+  std::size_t rows = 0;
+  std::size_t lineno = 0;
+  std::vector<std::vector<double>> cols;
+  // first empty field per column (line number), reported if the column is not all-empty
+  std::vector<std::size_t> first_empty_line;
+
+  std::size_t pos = 0;
+  while (pos <= all.size()) {
+    std::size_t nl = all.find('\n', pos);
+    if (nl == std::string_view::npos) nl = all.size();
+    std::string_view line = all.substr(pos, nl - pos);
+    pos = nl + 1;
+    ++lineno;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    const std::string_view tl = trim(line);
+    if (tl.empty() || tl.front() == '#') {
+      if (nl == all.size()) break;
+      continue;
+    }
+    if (first) {
+      if (sep == 0) {
+        if (line.find('\t') != std::string_view::npos) sep = '\t';
+        else if (line.find(';') != std::string_view::npos) sep = ';';
+        else if (line.find(',') != std::string_view::npos) sep = ',';
+        else sep = ' ';
+      }
+      const auto fields = split(line, sep);
+      nfields = fields.size();
+      first_line = lineno;
+      if (opt.header == HeaderMode::present) have_header = true;
+      else if (opt.header == HeaderMode::autodetect)
+        have_header = std::any_of(fields.begin(), fields.end(), [](std::string_view f) { return !looks_numeric(f); });
+      cols.assign(nfields, {});
+      filled.assign(nfields, 0);
+      first_empty_line.assign(nfields, 0);
+      first = false;
+      if (have_header) {
+        for (auto f : fields) t.names.emplace_back(unquote(f));
+        if (nl == all.size()) break;
+        continue;
+      }
+      t.names.assign(nfields, std::string());
+    }
+    const auto fields = split(line, sep);
+    if (fields.size() != nfields)
+      throw Error(fmt::format("{}:{}: row has {} fields, expected {} (as on line {})", path, lineno, fields.size(),
+                              nfields, first_line));
+    for (std::size_t c = 0; c < nfields; ++c) {
+      double v = 0.0;
+      switch (parse_number(fields[c], v)) {
+        case Parse::ok:
+          if (filled[c] != rows) {
+            throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path,
+                                    first_empty_line[c], c + 1, column_label(t.names, c)));
+          }
+          cols[c].push_back(v);
+          ++filled[c];
+          break;
+        case Parse::empty:
+          if (filled[c] != 0)
+            throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path, lineno,
+                                    c + 1, column_label(t.names, c)));
+          if (first_empty_line[c] == 0) first_empty_line[c] = lineno;
+          break;
+        case Parse::malformed:
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number", path, lineno, c + 1, column_label(t.names, c),
+                                  fields[c]));
+        case Parse::non_finite:
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a finite number (NaN and infinity are refused)", path,
+                                  lineno, c + 1, column_label(t.names, c), fields[c]));
+        case Parse::out_of_range:
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is out of the range of a double", path, lineno, c + 1,
+                                  column_label(t.names, c), fields[c]));
+      }
+    }
+    ++rows;
+    if (nl == all.size()) break;
+  }
+  if (first) throw Error(fmt::format("{}: no data (the file is empty)", path));
+  t.columns = std::move(cols);
+  return t;
+}
+
+// ---- .mat --------------------------------------------------------------------
+
+struct MatCloser {
+  void operator()(mat_t* m) const {
+    if (m) Mat_Close(m);
+  }
+};
+struct VarFreer {
+  void operator()(matvar_t* v) const {
+    if (v) Mat_VarFree(v);
+  }
+};
+using MatPtr = std::unique_ptr<mat_t, MatCloser>;
+using VarPtr = std::unique_ptr<matvar_t, VarFreer>;
+
+void quiet_matio_log(int, char*) {}
+
+void init_matio_log() {
+  static const bool once = [] {
+    Mat_LogInitFunc("hysteron", &quiet_matio_log);
+    return true;
+  }();
+  (void)once;
+}
+
+MatPtr open_mat(const std::string& path) {
+  init_matio_log();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(fmt::format("{}: no such file", path));
+  if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a .mat file", path));
+  MatPtr m(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
+  if (!m) throw Error(fmt::format("{}: cannot open as a MATLAB .mat file (not a MAT v4/v5/v7.3 file?)", path));
+  return m;
+}
+
+std::vector<std::string> mat_variable_names(const std::string& path) {
+  MatPtr m = open_mat(path);
+  std::vector<std::string> names;
+  for (;;) {
+    VarPtr v(Mat_VarReadNextInfo(m.get()));
+    if (!v) break;
+    if (v->name) names.emplace_back(v->name);
+  }
+  return names;
+}
+
+std::string list_names(const std::vector<std::string>& names) {
+  if (names.empty()) return "none";
+  std::string s;
+  for (const auto& n : names) {
+    if (!s.empty()) s += ", ";
+    s += '"' + n + '"';
+  }
+  return s;
+}
+
+template <class T>
+void copy_data(const void* data, std::size_t n, std::vector<double>& out) {
+  const T* p = static_cast<const T*>(data);
+  out.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
+}
+
+std::vector<double> read_mat_variable(const std::string& path, const std::string& name_in) {
+  std::string name = name_in;
+  if (name.empty()) {
+    const auto names = mat_variable_names(path);
+    if (names.size() != 1)
+      throw Error(fmt::format("{}: has {} variables ({}); choose one by name", path, names.size(), list_names(names)));
+    name = names[0];
+  }
+  MatPtr m = open_mat(path);
+  VarPtr v(Mat_VarRead(m.get(), name.c_str()));
+  if (!v) {
+    m.reset();
+    throw Error(fmt::format("{}: no variable \"{}\"; the file has {}", path, name, list_names(mat_variable_names(path))));
+  }
+  const std::string where = fmt::format("{}: variable \"{}\"", path, name);
+  if (v->isComplex) throw Error(fmt::format("{}: is complex; expected a real numeric vector", where));
+  if (v->rank != 2 || (v->dims[0] != 1 && v->dims[1] != 1)) {
+    std::string dims;
+    for (int i = 0; i < v->rank; ++i) dims += fmt::format("{}{}", i ? "x" : "", v->dims[i]);
+    throw Error(fmt::format("{}: has size {}; expected a vector (1xN or Nx1)", where, dims));
+  }
+  const std::size_t n = v->dims[0] * v->dims[1];
+  std::vector<double> out;
+  if (n > 0 && !v->data) throw Error(fmt::format("{}: has no data", where));
+  switch (v->class_type) {
+    case MAT_C_DOUBLE: case MAT_C_SINGLE: case MAT_C_INT8: case MAT_C_UINT8: case MAT_C_INT16:
+    case MAT_C_UINT16: case MAT_C_INT32: case MAT_C_UINT32: case MAT_C_INT64: case MAT_C_UINT64: break;
+    default: throw Error(fmt::format("{}: is not a numeric array (class {}); expected double, single or an integer class",
+                                     where, static_cast<int>(v->class_type)));
+  }
+  if (n > 0) {
+    switch (v->data_type) {
+      case MAT_T_DOUBLE: copy_data<double>(v->data, n, out); break;
+      case MAT_T_SINGLE: copy_data<float>(v->data, n, out); break;
+      case MAT_T_INT8: copy_data<std::int8_t>(v->data, n, out); break;
+      case MAT_T_UINT8: copy_data<std::uint8_t>(v->data, n, out); break;
+      case MAT_T_INT16: copy_data<std::int16_t>(v->data, n, out); break;
+      case MAT_T_UINT16: copy_data<std::uint16_t>(v->data, n, out); break;
+      case MAT_T_INT32: copy_data<std::int32_t>(v->data, n, out); break;
+      case MAT_T_UINT32: copy_data<std::uint32_t>(v->data, n, out); break;
+      case MAT_T_INT64: copy_data<std::int64_t>(v->data, n, out); break;
+      case MAT_T_UINT64: copy_data<std::uint64_t>(v->data, n, out); break;
+      default: throw Error(fmt::format("{}: unsupported data type {}", where, static_cast<int>(v->data_type)));
+    }
+  }
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (!std::isfinite(out[i]))
+      throw Error(fmt::format("{}: element {} (1-based) is not a finite number (NaN and infinity are refused)", where,
+                              i + 1));
+  return out;
+}
+
+bool is_matlab_identifier(std::string_view s) {
+  if (s.empty() || s.size() > 63 || !std::isalpha(static_cast<unsigned char>(s[0]))) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+void write_mat(const std::string& tmp, const std::vector<std::string>& names,
+               const std::vector<std::vector<double>>& columns) {
+  init_matio_log();
+  MatPtr m(Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5));
+  if (!m) throw Error("cannot create the .mat file");
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    size_t dims[2] = {columns[i].size(), 1};
+    // matio takes a non-const pointer; with MAT_F_DONT_COPY_DATA it neither copies nor frees nor writes to it
+    VarPtr v(Mat_VarCreate(names[i].c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims,
+                           const_cast<double*>(columns[i].data()), MAT_F_DONT_COPY_DATA));
+    if (!v) throw Error(fmt::format("cannot create .mat variable \"{}\"", names[i]));
+    if (Mat_VarWrite(m.get(), v.get(), MAT_COMPRESSION_ZLIB) != 0)
+      throw Error(fmt::format("cannot write .mat variable \"{}\"", names[i]));
+  }
+  if (Mat_Close(m.release()) != 0) throw Error("cannot close the .mat file");
+}
+
+std::string csv_text(const std::vector<std::string>& names, const std::vector<std::vector<double>>& columns) {
+  fmt::memory_buffer buf;
+  for (std::size_t i = 0; i < names.size(); ++i) fmt::format_to(std::back_inserter(buf), "{}{}", i ? "," : "", names[i]);
+  buf.push_back('\n');
+  const std::size_t rows = columns.empty() ? 0 : columns[0].size();
+  char num[40];
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      if (c) buf.push_back(',');
+      const int len = std::snprintf(num, sizeof num, "%.17g", columns[c][r]);
+      buf.append(num, num + len);
+    }
+    buf.push_back('\n');
+  }
+  return std::string(buf.data(), buf.size());
+}
+
+void write_all(int fd, std::string_view text, const std::string& where) {
+  while (!text.empty()) {
+    const ssize_t w = ::write(fd, text.data(), text.size());
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
+    }
+    text.remove_prefix(static_cast<std::size_t>(w));
+  }
+}
+
+std::atomic<unsigned> temp_counter{0};
+
+}  // namespace
+
+// ---- Table ---------------------------------------------------------------------
+
+std::size_t Table::num_rows() const noexcept {
+  std::size_t n = 0;
+  for (const auto& c : columns) n = std::max(n, c.size());
+  return n;
+}
+
+std::size_t Table::column_index(std::string_view spec) const {
+  auto describe = [&] {
+    std::string s;
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      if (!s.empty()) s += ", ";
+      s += std::to_string(i);
+      if (i < names.size() && !names[i].empty()) s += fmt::format(" \"{}\"", names[i]);
+      if (columns[i].empty()) s += " (empty)";
+    }
+    return s;
+  };
+  if (spec.empty()) {
+    std::size_t found = columns.size(), count = 0;
+    for (std::size_t i = 0; i < columns.size(); ++i)
+      if (!columns[i].empty()) {
+        found = i;
+        ++count;
+      }
+    if (count != 1)
+      throw Error(fmt::format("{}: has {} non-empty columns ({}); choose one (by name or 0-based index)", source,
+                              count, describe()));
+    return found;
+  }
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == spec) return i;
+  std::size_t idx = 0;
+  const auto res = std::from_chars(spec.data(), spec.data() + spec.size(), idx);
+  if (res.ec == std::errc() && res.ptr == spec.data() + spec.size()) {
+    if (idx >= columns.size())
+      throw Error(fmt::format("{}: column index {} is out of range; the file has {} columns: {}", source, idx,
+                              columns.size(), describe()));
+    return idx;
+  }
+  throw Error(fmt::format("{}: no column named \"{}\"; columns are: {}", source, spec, describe()));
+}
+
+const std::vector<double>& Table::column(std::string_view spec) const {
+  const std::size_t i = column_index(spec);
+  if (columns[i].empty() && num_rows() > 0)
+    throw Error(fmt::format("{}: column {}{} is empty in every row", source, i,
+                            i < names.size() && !names[i].empty() ? fmt::format(" \"{}\"", names[i]) : std::string()));
+  if (columns[i].empty()) throw Error(fmt::format("{}: column {} has no data", source, i));
+  return columns[i];
+}
+
+Table read_table(const std::string& path, const ReadOptions& options) {
+  if (!is_mat_path(path)) return read_text_table(path, options);
+  Table t;
+  t.source = path;
+  for (const auto& name : mat_variable_names(path)) {
+    std::vector<double> v;
+    try {
+      v = read_mat_variable(path, name);
+    } catch (const Error&) {
+      continue;  // not a numeric vector: not a column
+    }
+    if (!t.columns.empty() && v.size() != t.columns[0].size())
+      throw Error(fmt::format("{}: variable \"{}\" has {} elements but \"{}\" has {}; read them one by one", path,
+                              name, v.size(), t.names[0], t.columns[0].size()));
+    t.names.push_back(name);
+    t.columns.push_back(std::move(v));
+  }
+  return t;
+}
+
+std::vector<double> read_column(const std::string& path, const ReadOptions& options) {
+  if (is_mat_path(path)) return read_mat_variable(path, options.column_spec);
+  const Table t = read_text_table(path, options);
+  return t.column(options.column_spec);
+}
+
+std::vector<double> read_column(const std::string& path, const std::string& column) {
+  ReadOptions o;
+  o.column_spec = column;
+  return read_column(path, o);
+}
+
+// ---- writing --------------------------------------------------------------------
+
+void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write) {
+  if (path.empty()) throw Error("output path is empty");
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(fmt::format("{}: directory {} does not exist", path, dir.string()));
+  if (target.has_filename() == false || fs::is_directory(target, ec))
+    throw Error(fmt::format("{}: is a directory; expected a file name", path));
+  std::string tmp;
+  int fd = -1;
+  std::random_device rd;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    tmp = (dir / fmt::format(".{}.tmp-{}-{}-{:08x}", target.filename().string(), ::getpid(), temp_counter++, rd()))
+              .string();
+    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0 && errno != EEXIST)
+      throw Error(fmt::format("{}: cannot create a temporary file in {}: {}", path, dir.string(), std::strerror(errno)));
+  }
+  if (fd < 0) throw Error(fmt::format("{}: cannot create a temporary file in {}", path, dir.string()));
+  ::close(fd);
+  try {
+    write(tmp);
+    // flush to disk before the rename, so a crash leaves the old or the new file, never a torn one
+    const int sfd = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+    if (sfd >= 0) {
+      ::fsync(sfd);
+      ::close(sfd);
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0)
+      throw Error(fmt::format("{}: cannot rename the temporary file into place: {}", path, std::strerror(errno)));
+  } catch (const Error& e) {
+    ::unlink(tmp.c_str());
+    const std::string msg = e.what();
+    if (msg.rfind(path, 0) == 0) throw;
+    throw Error(fmt::format("{}: {}", path, msg));
+  } catch (...) {
+    ::unlink(tmp.c_str());
+    throw;
+  }
+}
+
+void write_text_file(const std::string& path, std::string_view text) {
+  if (path == "-") {
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) throw Error("writing to stdout failed");
+    return;
+  }
+  write_file_atomically(path, [&](const std::string& tmp) {
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+    if (fd < 0) throw Error(fmt::format("cannot open the temporary file: {}", std::strerror(errno)));
+    try {
+      write_all(fd, text, path);
+    } catch (...) {
+      ::close(fd);
+      throw;
+    }
+    if (::close(fd) != 0) throw Error(fmt::format("write failed: {}", std::strerror(errno)));
+  });
+}
+
+void write_columns(const std::string& path, const std::vector<std::string>& names,
+                   const std::vector<std::vector<double>>& columns) {
+  const bool mat = path != "-" && is_mat_path(path);
+  if (names.size() != columns.size())
+    throw Error(fmt::format("{}: {} column names for {} columns", path, names.size(), columns.size()));
+  if (columns.empty()) throw Error(fmt::format("{}: no columns to write", path));
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (mat && !is_matlab_identifier(names[i]))
+      throw Error(fmt::format("{}: \"{}\" is not a valid MATLAB variable name (a letter, then letters, digits, _)",
+                              path, names[i]));
+    if (!mat && (names[i].empty() || names[i].find_first_of(",;\t\"\r\n") != std::string::npos ||
+                 names[i] != trim(names[i]) || looks_numeric(names[i])))
+      throw Error(fmt::format("{}: \"{}\" is not a usable CSV column name (non-empty, not a number, no separators, "
+                              "quotes or surrounding blanks)",
+                              path, names[i]));
+    for (std::size_t k = 0; k < i; ++k)
+      if (names[k] == names[i]) throw Error(fmt::format("{}: column name \"{}\" given twice", path, names[i]));
+    if (columns[i].size() != columns[0].size())
+      throw Error(fmt::format("{}: column \"{}\" has {} values but \"{}\" has {} (columns must have equal length)",
+                              path, names[i], columns[i].size(), names[0], columns[0].size()));
+    for (std::size_t r = 0; r < columns[i].size(); ++r)
+      if (!std::isfinite(columns[i][r]))
+        throw Error(fmt::format("{}: column \"{}\" row {} is not finite ({})", path, names[i], r, columns[i][r]));
+  }
+  if (!mat) {
+    write_text_file(path, csv_text(names, columns));
+    return;
+  }
+  write_file_atomically(path, [&](const std::string& tmp) { write_mat(tmp, names, columns); });
+}
+
+}  // namespace hysteron::io

@@ -1,0 +1,251 @@
+#pragma once
+// Identification of hysteresis models from measured input/output records.
+// Equation numbers refer to ../shared/papers/gpi-lm-feedforward-pid.txt.
+//
+// Three tools, shaped like Ceres (options with defaults and validation, a
+// report with a status; no exception on the solve path):
+//
+//  * fit()          Levenberg-Marquardt on the output error of Eq. 12, summed
+//                   over the simulated record, with exact derivatives by
+//                   automatic differentiation through the operator recursion
+//                   (Ceres, dense QR), bounds of Eq. 13, optional Huber loss,
+//                   multi-start from data-derived initial guesses.
+//  * fit_weights()  constrained linear least squares for the weights of a model
+//                   whose thresholds and envelopes are fixed (the output is then
+//                   linear in q and p_i); invertibility constraints kept.
+//  * Rls            recursive least squares with forgetting for the same
+//                   weights, allocation-free per sample (a running controller).
+//
+// Metrics are computed on index ranges of a record simulated from its start,
+// so that a validation range has the right hysteresis memory.
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "hysteron/models.hpp"
+
+namespace hysteron {
+
+// Which model family fit() identifies.
+//   gpi          tanh envelope + n plays, r_i = alpha i, p_i = rho exp(-tau r_i):
+//                Theta = [c0, c1, c2, c3, q, rho, tau, alpha] (Eqs. 5-8, 13).
+//   pi           q + plays with fixed thresholds r_i = i span(x) / (2n),
+//                i = 1..n-1 (n weights counting q); linear -> fit_weights().
+//   mpi-deadzone pi weights + dead-zone weights with thresholds spread over the
+//                output range (Kuhnen); seeded by linear LS, refined by LM.
+//   mpi-asym     two tanh envelopes (ascending, descending: 8 coefficients),
+//                q and n weights on fixed thresholds, all refined by LM.
+enum class FitModel { gpi, pi, mpi_deadzone, mpi_asym };
+
+// "gpi", "pi", "mpi-deadzone", "mpi-asym".
+std::string_view fit_model_name(FitModel model) noexcept;
+// Throws hysteron::Error on an unknown name.
+FitModel fit_model_from_name(std::string_view name);
+
+// How the model state starts at sample 0.
+//   virgin   y_i0 = 0 (Eq. 2; the first sample clamps the operators): right for
+//            a record that starts at rest.
+//   relaxed  y_i0 = gamma(x[0]) (Model::reset_relaxed).
+enum class InitialState { virgin, relaxed };
+
+// Half-open sample index range [begin, end); end = npos means "to the end".
+struct IndexRange {
+  static constexpr std::size_t npos = std::numeric_limits<std::size_t>::max();
+  std::size_t begin = 0;
+  std::size_t end = npos;
+  // The range clipped to a record of n samples (end = npos -> n).
+  IndexRange resolved(std::size_t n) const noexcept { return {begin, end == npos ? n : end}; }
+  std::size_t size(std::size_t n) const noexcept {
+    const IndexRange r = resolved(n);
+    return r.end > r.begin ? r.end - r.begin : 0;
+  }
+};
+
+// Error metrics of a model output against a measured output.
+struct FitMetrics {
+  double rms = 0.0;               // sqrt(mean e^2)
+  double max = 0.0;               // max |e|
+  double mae = 0.0;               // mean |e|
+  double rms_percent_span = 0.0;  // 100 rms / (max y - min y) over the range
+  double r2 = 0.0;                // 1 - SSE / SST
+  std::size_t n = 0;              // number of samples
+};
+
+// Metrics of `predicted` against `measured` (equal lengths, else hysteron::Error).
+FitMetrics compute_metrics(std::span<const double> measured, std::span<const double> predicted);
+// Simulates `params` over the whole record x from its start (initial state
+// `initial`) and computes the metrics on `range` only. Throws hysteron::Error on
+// unequal lengths, non-finite data or a range outside the record.
+FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                    IndexRange range = {}, InitialState initial = InitialState::virgin);
+// Model output over the whole record (same start convention as fit()).
+std::vector<double> simulate_record(const ModelParams& params, std::span<const double> x,
+                                    InitialState initial = InitialState::virgin);
+
+// Options of fit(). Every field has a sensible default; is_valid() checks them.
+struct FitOptions {
+  FitModel model = FitModel::gpi;
+  // Number of operators n (gpi: plays of Eq. 6; pi: weights counting q;
+  // mpi-deadzone and mpi-asym: plays). 1..200.
+  int num_operators = 10;
+  // mpi-deadzone: number of dead zones, spread over the output range (>= 0).
+  int num_dead_zones = 4;
+  InitialState initial_state = InitialState::virgin;
+  // Samples whose error enters the cost (the model is still simulated from sample 0).
+  IndexRange train{};
+  // > 0: Huber loss with this threshold (output units) on each residual;
+  // 0: plain least squares (Eq. 12).
+  double huber_delta = 0.0;
+  // Number of data-derived initial guesses refined by LM; the best is kept.
+  // (A larger grid of candidates is screened by cost first; this many are refined.)
+  int num_starts = 3;
+  // Seed of the jitter added to the candidate grid (reproducible).
+  unsigned seed = 0;
+  // Levenberg-Marquardt limits and tolerances (Ceres semantics).
+  int max_iterations = 100;
+  double function_tolerance = 1e-10;
+  double gradient_tolerance = 1e-12;
+  double parameter_tolerance = 1e-10;
+  // gpi only: the 8 parameters of Eq. 13 have an exact scale symmetry
+  //   (c0, c3, alpha, q, rho, tau) -> (k c0, k c3, k alpha, q/k, rho/k, tau/k)
+  // that leaves the output unchanged, so the Jacobian is rank 7. With true
+  // (default) c0 is held at its data-derived initial value (std error 0) and
+  // the other 7 are estimated; with false all 8 are free (LM still converges
+  // thanks to its damping, but the covariance is singular).
+  bool gpi_fix_scale = true;
+  // Compute standard errors (ceres::Covariance).
+  bool compute_covariance = true;
+  // Minimum of q and of the partial sums q + p_1 + ... + p_i (relative to the
+  // data scale), keeping fitted PI-type models invertible; also the lower
+  // bound of the positive gpi parameters (relative to their initial value).
+  double positivity_margin = 1e-6;
+  // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
+  std::function<void(int, int, double)> progress;
+
+  // False (with a reason in *error) if a field is out of range.
+  bool is_valid(std::string* error) const;
+};
+
+enum class FitStatus {
+  not_run,         // fit() has not run
+  converged,       // a Ceres convergence tolerance was met
+  no_convergence,  // iteration limit reached; the best model so far is reported
+  failed,          // the solver failed (e.g. the cost became non-finite)
+  invalid_input,   // the data or the options were rejected (see message)
+};
+std::string_view fit_status_name(FitStatus status) noexcept;
+
+struct FitParameter {
+  std::string name;
+  double value = 0.0;
+  // Standard error sqrt(diag(cov)) with cov = s^2 (J^T J)^-1, s^2 = SSE/(m - p);
+  // NaN if not computed (see FitReport::covariance_note); 0 for a held parameter.
+  double std_error = std::numeric_limits<double>::quiet_NaN();
+  bool held = false;  // held constant during the fit
+};
+
+struct FitReport {
+  FitStatus status = FitStatus::not_run;
+  std::string message;
+  FitModel model_kind = FitModel::gpi;
+  double initial_cost = 0.0;  // 0.5 sum r^2 of the best start, before LM
+  double final_cost = 0.0;    // 0.5 sum r^2 after LM (with Huber: 0.5 sum rho(r^2))
+  int iterations = 0;         // LM iterations of the best start
+  int total_iterations = 0;   // over all starts
+  int num_starts = 0;         // starts refined by LM
+  double time_s = 0.0;        // wall time of fit()
+  ModelParams model;          // the fitted model
+  std::vector<FitParameter> parameters;
+  std::string covariance_note;  // why standard errors are missing, if they are
+  FitMetrics train;             // metrics on the training range
+
+  bool ok() const noexcept { return status == FitStatus::converged; }
+  // One-line summary; multi-line report with the parameter table.
+  std::string brief_report() const;
+  std::string full_report() const;
+};
+
+// Levenberg-Marquardt identification (see FitModel). Never throws on bad data:
+// the report has status invalid_input and a message instead (too few samples:
+// fewer than 10x the number of parameters in the training range; a constant
+// input or output; NaN or infinity; unequal lengths; a range outside the data).
+FitReport fit(std::span<const double> x, std::span<const double> y, const FitOptions& options = {});
+
+// Thresholds used by fit() for the pi/mpi models: r_i = i span(x) / (2n), i = 1..n-1.
+std::vector<double> default_thresholds(std::span<const double> x, int n);
+
+// ---- constrained linear least squares -------------------------------------------
+
+struct WeightFitOptions {
+  InitialState initial_state = InitialState::virgin;
+  IndexRange train{};
+  // q and every partial sum q + p_1 + ... + p_i are kept >= margin * scale,
+  // where scale = span(y) / span(u) (keeps the model invertible). For
+  // mpi-deadzone also the cumulative dead-zone slopes on each side.
+  double margin = 1e-6;
+};
+
+// Weights of a model whose thresholds and envelopes are fixed, by bounded
+// least squares (active-set NNLS on the cumulative slopes s_i = q + p_1 + ... + p_i,
+// which turns the invertibility constraints into simple bounds).
+//   pi, mpi-asym, gpi with free weights (r non-empty): q and p from the output
+//     error directly (the output is linear in them).
+//   gpi in Eq. 7-8 form: converted to free weights on r_i = alpha i first.
+//   mpi-deadzone: the dead-zone thresholds z of `model` are taken in output
+//     units; Kuhnen's equation error  q x + sum p_i F_{r_i}[x] = S'[y]  (with
+//     S' the inverse dead-zone map, g'0 = 1) is solved and S' inverted
+//     exactly into the forward dead zones (g0, z, g).
+// Throws hysteron::Error on invalid data or parameters.
+ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std::span<const double> y,
+                        const WeightFitOptions& options = {});
+
+// ---- recursive least squares -----------------------------------------------------
+
+// RLS with forgetting factor lambda for theta = [q, p_1..p_n] of a model whose
+// output is linear in them (pi, mpi-asym, gpi with free weights; the regressor
+// is [u_m, y_1..y_n]; see models.hpp):
+//   e = y - theta^T phi,  K = P phi / (lambda + phi^T P phi),
+//   theta += K e,  P = (P - K phi^T P) / lambda.
+// All storage is allocated at construction; step() never allocates.
+class Rls {
+ public:
+  // `model` fixes thresholds/envelopes and gives the initial weights.
+  // Throws hysteron::Error for mpi-deadzone (not linear in its weights), for
+  // lambda outside (0, 1] or p0 <= 0.
+  explicit Rls(const ModelParams& model, double lambda = 1.0, double p0 = 1e6);
+
+  // One sample: updates the operator state with x, then the weights with the
+  // measured y. Returns the a-priori prediction theta^T phi. Non-finite x or y:
+  // no update, returns the last prediction. Never allocates.
+  double step(double x, double y) noexcept;
+  // Restart the operator state (virgin or relaxed at x0) keeping the weights.
+  void reset_state(InitialState initial = InitialState::virgin, double x0 = 0.0) noexcept;
+
+  const Eigen::VectorXd& theta() const noexcept { return theta_; }
+  const Eigen::MatrixXd& covariance() const noexcept { return P_; }
+  double lambda() const noexcept { return lambda_; }
+  // The model with the current weights (allocates).
+  ModelParams params() const;
+
+ private:
+  ModelParams model_;
+  Structure<double> s_;
+  std::vector<double> y_;
+  Eigen::VectorXd theta_, phi_, Pphi_, K_;
+  Eigen::MatrixXd P_;
+  double lambda_;
+  double last_ = 0.0;
+};
+
+// Batch helper: runs Rls over the record `passes` times (the operator state
+// restarts at each pass) and returns the model with the final weights.
+ModelParams rls_fit(const ModelParams& model, std::span<const double> x, std::span<const double> y,
+                    double lambda = 1.0, int passes = 1, InitialState initial = InitialState::virgin);
+
+}  // namespace hysteron

@@ -1,0 +1,34 @@
+#pragma once
+// Internal helpers shared by the identification sources (not installed).
+#include <Eigen/Core>
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "hysteron/identify.hpp"
+
+namespace hysteron::detail {
+
+// Throws hysteron::Error if x and y differ in length, are empty or hold a non-finite value.
+void check_record(std::span<const double> x, std::span<const double> y, std::string_view what);
+// Throws if the range is empty or reaches past n.
+IndexRange check_range(IndexRange range, std::size_t n, std::string_view what);
+
+// Regressor matrix of a structure with fixed thresholds and envelopes: row k is
+// [u_m(k), y_1(k), ..., y_n(k)] after sample k (rows [0, rows) of the record are
+// simulated, only rows in `range` are stored).
+Eigen::MatrixXd regressors(const Structure<double>& s, std::span<const double> x, IndexRange range,
+                           InitialState initial);
+
+// Nonnegative least squares min ||A t - b||, t >= 0 (Lawson-Hanson active set on
+// the column-scaled normal equations).
+Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b);
+
+// The model `model` with canonical thresholds s.r and the weights q, p.
+ModelParams with_weights(const ModelParams& model, const Structure<double>& s, double q,
+                         const std::vector<double>& p);
+
+double span_of(std::span<const double> v);
+
+}  // namespace hysteron::detail

@@ -1,0 +1,80 @@
+// Error metrics, record simulation and input checks of the identification tools.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+
+namespace detail {
+
+void check_record(std::span<const double> x, std::span<const double> y, std::string_view what) {
+  if (x.size() != y.size())
+    throw Error(fmt::format("{}: input has {} samples but output has {} (they must be equal)", what, x.size(), y.size()));
+  if (x.empty()) throw Error(fmt::format("{}: the record is empty", what));
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!std::isfinite(x[k])) throw Error(fmt::format("{}: input sample {} is not finite ({})", what, k, x[k]));
+    if (!std::isfinite(y[k])) throw Error(fmt::format("{}: output sample {} is not finite ({})", what, k, y[k]));
+  }
+}
+
+IndexRange check_range(IndexRange range, std::size_t n, std::string_view what) {
+  const IndexRange r = range.resolved(n);
+  if (r.end > n || r.begin >= r.end)
+    throw Error(fmt::format("{}: sample range [{}, {}) is empty or outside the record of {} samples", what, r.begin,
+                            range.end == IndexRange::npos ? n : range.end, n));
+  return r;
+}
+
+double span_of(std::span<const double> v) {
+  if (v.empty()) return 0.0;
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  return *hi - *lo;
+}
+
+}  // namespace detail
+
+FitMetrics compute_metrics(std::span<const double> measured, std::span<const double> predicted) {
+  if (measured.size() != predicted.size())
+    throw Error(fmt::format("metrics: measured has {} samples but predicted has {}", measured.size(), predicted.size()));
+  FitMetrics m;
+  m.n = measured.size();
+  if (m.n == 0) return m;
+  double sse = 0.0, sae = 0.0, mean = 0.0;
+  for (std::size_t k = 0; k < m.n; ++k) {
+    const double e = measured[k] - predicted[k];
+    sse += e * e;
+    sae += std::abs(e);
+    m.max = std::max(m.max, std::abs(e));
+    mean += measured[k];
+  }
+  mean /= static_cast<double>(m.n);
+  double sst = 0.0;
+  for (double v : measured) sst += (v - mean) * (v - mean);
+  m.rms = std::sqrt(sse / static_cast<double>(m.n));
+  m.mae = sae / static_cast<double>(m.n);
+  const double span = detail::span_of(measured);
+  m.rms_percent_span = span > 0 ? 100.0 * m.rms / span : std::numeric_limits<double>::quiet_NaN();
+  m.r2 = sst > 0 ? 1.0 - sse / sst : std::numeric_limits<double>::quiet_NaN();
+  return m;
+}
+
+std::vector<double> simulate_record(const ModelParams& params, std::span<const double> x, InitialState initial) {
+  Model model(params);
+  if (initial == InitialState::relaxed && !x.empty()) model.reset_relaxed(x[0]);
+  return model.simulate(x);
+}
+
+FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::span<const double> y, IndexRange range,
+                    InitialState initial) {
+  detail::check_record(x, y, "evaluate");
+  const IndexRange r = detail::check_range(range, x.size(), "evaluate");
+  const std::vector<double> yp = simulate_record(params, x, initial);
+  return compute_metrics(y.subspan(r.begin, r.end - r.begin),
+                         std::span<const double>(yp).subspan(r.begin, r.end - r.begin));
+}
+
+}  // namespace hysteron

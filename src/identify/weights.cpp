@@ -1,0 +1,341 @@
+// Constrained linear least squares and recursive least squares for the weights
+// of models with fixed thresholds and envelopes.
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+
+namespace detail {
+
+namespace {
+
+// Envelope values (u_a, u_m) of a structure at x.
+inline void envelopes(const Structure<double>& s, double x, double& u_a, double& u_d) {
+  u_a = envelope_value<double>(s.asc_kind, s.asc_c.data(), x);
+  u_d = s.asymmetric ? envelope_value<double>(s.desc_kind, s.desc_c.data(), x) : u_a;
+}
+
+// One operator update; returns u_m.
+inline double operators_step(const Structure<double>& s, double x, double* y) {
+  double u_a, u_d;
+  envelopes(s, x, u_a, u_d);
+  const std::size_t n = s.r.size();
+  if (!s.asymmetric) {
+    for (std::size_t i = 0; i < n; ++i) y[i] = ops::generalized_play<double>(u_a, s.r[i], y[i]);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) y[i] = ops::asymmetric_play<double>(u_a, u_d, s.r[i], y[i]);
+  }
+  return 0.5 * (u_a + u_d);
+}
+
+void initial_operator_state(const Structure<double>& s, InitialState initial, double x0, std::vector<double>& y) {
+  double v = 0.0;
+  if (initial == InitialState::relaxed) v = envelope_value<double>(s.asc_kind, s.asc_c.data(), x0);
+  if (!std::isfinite(v)) v = 0.0;
+  std::fill(y.begin(), y.end(), v);
+}
+
+}  // namespace
+
+Eigen::MatrixXd regressors(const Structure<double>& s, std::span<const double> x, IndexRange range,
+                           InitialState initial) {
+  const std::size_t n = s.r.size();
+  Eigen::MatrixXd phi(static_cast<Eigen::Index>(range.end - range.begin), static_cast<Eigen::Index>(n + 1));
+  std::vector<double> y(n);
+  initial_operator_state(s, initial, x.empty() ? 0.0 : x[0], y);
+  for (std::size_t k = 0; k < range.end; ++k) {
+    const double um = operators_step(s, x[k], y.data());
+    if (k >= range.begin) {
+      const auto row = static_cast<Eigen::Index>(k - range.begin);
+      phi(row, 0) = um;
+      for (std::size_t i = 0; i < n; ++i) phi(row, static_cast<Eigen::Index>(i + 1)) = y[i];
+    }
+  }
+  return phi;
+}
+
+Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+  const Eigen::Index n = A.cols();
+  Eigen::VectorXd d = A.colwise().norm().transpose();
+  const double dmax = n > 0 ? d.maxCoeff() : 0.0;
+  std::vector<bool> usable(static_cast<std::size_t>(n));
+  for (Eigen::Index j = 0; j < n; ++j) {
+    usable[static_cast<std::size_t>(j)] = d(j) > 1e-12 * dmax && d(j) > 0;
+    if (!usable[static_cast<std::size_t>(j)]) d(j) = 1.0;
+  }
+  const Eigen::MatrixXd As = A * d.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd G = As.transpose() * As;
+  const Eigen::VectorXd h = As.transpose() * b;
+  Eigen::VectorXd t = Eigen::VectorXd::Zero(n);
+  std::vector<bool> passive(static_cast<std::size_t>(n), false);
+  const double tol = 1e-12 * std::max(1.0, h.cwiseAbs().maxCoeff());
+  auto solve_passive = [&](Eigen::VectorXd& z) {
+    std::vector<Eigen::Index> idx;
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (passive[static_cast<std::size_t>(j)]) idx.push_back(j);
+    const auto m = static_cast<Eigen::Index>(idx.size());
+    Eigen::MatrixXd Gp(m, m);
+    Eigen::VectorXd hp(m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      hp(a) = h(idx[static_cast<std::size_t>(a)]);
+      for (Eigen::Index c = 0; c < m; ++c) Gp(a, c) = G(idx[static_cast<std::size_t>(a)], idx[static_cast<std::size_t>(c)]);
+    }
+    // tiny ridge for numerically collinear operator columns
+    Gp.diagonal().array() += 1e-13;
+    const Eigen::VectorXd zp = Gp.ldlt().solve(hp);
+    z.setZero(n);
+    for (Eigen::Index a = 0; a < m; ++a) z(idx[static_cast<std::size_t>(a)]) = zp(a);
+  };
+  Eigen::VectorXd z(n);
+  for (int outer = 0; outer < 3 * static_cast<int>(n) + 10; ++outer) {
+    const Eigen::VectorXd w = h - G * t;
+    Eigen::Index jmax = -1;
+    double wmax = tol;
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (usable[static_cast<std::size_t>(j)] && !passive[static_cast<std::size_t>(j)] && w(j) > wmax) {
+        wmax = w(j);
+        jmax = j;
+      }
+    if (jmax < 0) break;
+    passive[static_cast<std::size_t>(jmax)] = true;
+    for (int inner = 0; inner < 3 * static_cast<int>(n) + 10; ++inner) {
+      solve_passive(z);
+      bool feasible = true;
+      for (Eigen::Index j = 0; j < n; ++j)
+        if (passive[static_cast<std::size_t>(j)] && z(j) <= 0) feasible = false;
+      if (feasible) {
+        t = z;
+        break;
+      }
+      double alpha = 1.0;
+      for (Eigen::Index j = 0; j < n; ++j)
+        if (passive[static_cast<std::size_t>(j)] && z(j) <= 0) alpha = std::min(alpha, t(j) / (t(j) - z(j)));
+      t += alpha * (z - t);
+      for (Eigen::Index j = 0; j < n; ++j)
+        if (passive[static_cast<std::size_t>(j)] && t(j) <= 1e-15) {
+          passive[static_cast<std::size_t>(j)] = false;
+          t(j) = 0.0;
+        }
+    }
+  }
+  return t.cwiseQuotient(d);
+}
+
+ModelParams with_weights(const ModelParams& model, const Structure<double>& s, double q, const std::vector<double>& p) {
+  return std::visit(
+      [&](const auto& m) -> ModelParams {
+        auto out = m;
+        out.q = q;
+        out.r = s.r;
+        out.p = p;
+        return out;
+      },
+      model);
+}
+
+}  // namespace detail
+
+namespace {
+
+// Cumulative-slope solution s (s_0 = q, s_i = q + p_1 + ... + p_i) -> q, p.
+// Operators whose transformed column vanished on the data get p_i = 0.
+void slopes_to_weights(const Eigen::VectorXd& sl, const Eigen::MatrixXd& A, double& q, std::vector<double>& p) {
+  Eigen::VectorXd s = sl;
+  const double amax = A.colwise().norm().maxCoeff();
+  for (Eigen::Index i = 1; i < s.size(); ++i)
+    if (A.col(i).norm() <= 1e-12 * amax) s(i) = s(i - 1);
+  q = s(0);
+  p.resize(static_cast<std::size_t>(s.size() - 1));
+  for (Eigen::Index i = 1; i < s.size(); ++i) p[static_cast<std::size_t>(i - 1)] = s(i) - s(i - 1);
+}
+
+// Columns for cumulative slopes: a_i = phi_i - phi_{i+1}, a_n = phi_n.
+Eigen::MatrixXd slope_columns(const Eigen::MatrixXd& phi) {
+  Eigen::MatrixXd A = phi;
+  for (Eigen::Index i = 0; i + 1 < phi.cols(); ++i) A.col(i) -= phi.col(i + 1);
+  return A;
+}
+
+double dead_zone_value(double v, double z) { return ops::dead_zone<double>(v, z); }
+
+// Forward dead zones from the inverse map S'(y) = y + sum g'_k S_{z'_k}(y), given on one
+// side by its breakpoints zs (ordered away from 0) and cumulative slopes c_1..c_J (c_0 = 1).
+void invert_side(const std::vector<double>& zs, const std::vector<double>& c, std::vector<double>& z_out,
+                 std::vector<double>& g_out) {
+  double value = 0.0, prev_z = 0.0, prev_c = 1.0;
+  for (std::size_t j = 0; j < zs.size(); ++j) {
+    value += prev_c * (zs[j] - prev_z);  // S'(z'_j)
+    z_out.push_back(value);
+    g_out.push_back(1.0 / c[j] - 1.0 / prev_c);
+    prev_z = zs[j];
+    prev_c = c[j];
+  }
+}
+
+ModelParams fit_deadzone_weights(const MpiDeadzoneParams& m, std::span<const double> x, std::span<const double> y,
+                                 const WeightFitOptions& o, IndexRange r) {
+  MpiDeadzoneParams pi_part = m;
+  pi_part.z.clear();
+  pi_part.g.clear();
+  const Structure<double> s = canonical_structure(pi_part);
+  const Eigen::MatrixXd phi = detail::regressors(s, x, r, o.initial_state);
+  const Eigen::Index rows = phi.rows();
+  // Inverse dead-zone thresholds in output units, reached by the data only.
+  const auto [ylo, yhi] = std::minmax_element(y.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                                              y.begin() + static_cast<std::ptrdiff_t>(r.end));
+  std::vector<double> zp, zn;
+  for (double z : m.z) {
+    if (!std::isfinite(z)) throw Error("fit_weights: mpi-deadzone z must be finite");
+    if (z > 0 && z < *yhi) zp.push_back(z);
+    if (z < 0 && z > *ylo) zn.push_back(z);
+  }
+  std::sort(zp.begin(), zp.end());
+  zp.erase(std::unique(zp.begin(), zp.end()), zp.end());
+  std::sort(zn.begin(), zn.end(), std::greater<>());
+  zn.erase(std::unique(zn.begin(), zn.end()), zn.end());
+  const Eigen::Index npi = phi.cols();
+  const auto nz = static_cast<Eigen::Index>(zp.size() + zn.size());
+  Eigen::MatrixXd A(rows, npi + nz);
+  A.leftCols(npi) = slope_columns(phi);
+  Eigen::VectorXd rhs(rows);
+  for (Eigen::Index k = 0; k < rows; ++k) {
+    const double yk = y[r.begin + static_cast<std::size_t>(k)];
+    double b = yk;
+    Eigen::Index col = npi;
+    for (const std::vector<double>* side : {&zp, &zn}) {
+      const std::vector<double>& zs = *side;
+      for (std::size_t j = 0; j < zs.size(); ++j) {
+        const double sj = dead_zone_value(yk, zs[j]);
+        const double sj1 = j + 1 < zs.size() ? dead_zone_value(yk, zs[j + 1]) : 0.0;
+        A(k, col++) = -(sj - sj1);
+        if (j == 0) b -= sj;
+      }
+    }
+    rhs(k) = b;
+  }
+  const double uspan = std::max(phi.col(0).maxCoeff() - phi.col(0).minCoeff(), 1e-300);
+  const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
+  Eigen::VectorXd lo(npi + nz);
+  lo.head(npi).setConstant(o.margin * scale);
+  lo.tail(nz).setConstant(std::max(o.margin, 1e-9));
+  const Eigen::VectorXd t = detail::nnls(A, rhs - A * lo);
+  const Eigen::VectorXd sol = lo + t;
+  double q;
+  std::vector<double> p;
+  slopes_to_weights(sol.head(npi), A.leftCols(npi), q, p);
+  MpiDeadzoneParams out = m;
+  out.q = q;
+  out.r = s.r;
+  out.p = p;
+  out.g0 = 1.0;
+  out.z.clear();
+  out.g.clear();
+  std::vector<double> cp(sol.data() + npi, sol.data() + npi + static_cast<Eigen::Index>(zp.size()));
+  std::vector<double> cn(sol.data() + npi + static_cast<Eigen::Index>(zp.size()), sol.data() + npi + nz);
+  invert_side(zp, cp, out.z, out.g);
+  invert_side(zn, cn, out.z, out.g);
+  return out;
+}
+
+}  // namespace
+
+ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std::span<const double> y,
+                        const WeightFitOptions& options) {
+  detail::check_record(x, y, "fit_weights");
+  const IndexRange r = detail::check_range(options.train, x.size(), "fit_weights");
+  if (!(options.margin >= 0) || !std::isfinite(options.margin)) throw Error("fit_weights: margin must be >= 0");
+  if (const auto* dz = std::get_if<MpiDeadzoneParams>(&model)) return fit_deadzone_weights(*dz, x, y, options, r);
+  const Structure<double> s = canonical_structure(model);
+  const Eigen::MatrixXd phi = detail::regressors(s, x, r, options.initial_state);
+  const Eigen::MatrixXd A = slope_columns(phi);
+  Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, static_cast<Eigen::Index>(r.end - r.begin));
+  const double uspan = std::max(phi.col(0).maxCoeff() - phi.col(0).minCoeff(), 1e-300);
+  const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(A.cols(), options.margin * scale);
+  const Eigen::VectorXd sol = lo + detail::nnls(A, b - A * lo);
+  double q;
+  std::vector<double> p;
+  slopes_to_weights(sol, A, q, p);
+  return detail::with_weights(model, s, q, p);
+}
+
+// ---- Rls ------------------------------------------------------------------------
+
+Rls::Rls(const ModelParams& model, double lambda, double p0)
+    : model_(model), s_(canonical_structure(model)), lambda_(lambda) {
+  if (s_.has_dead_zones)
+    throw Error("rls: mpi-deadzone is not linear in its weights (use fit_weights or fit)");
+  if (!(lambda > 0 && lambda <= 1)) throw Error(fmt::format("rls: lambda must be in (0, 1], got {}", lambda));
+  if (!(p0 > 0) || !std::isfinite(p0)) throw Error(fmt::format("rls: p0 must be > 0, got {}", p0));
+  const std::size_t n = s_.r.size();
+  const auto m = static_cast<Eigen::Index>(n + 1);
+  y_.assign(n, 0.0);
+  theta_.resize(m);
+  theta_(0) = s_.q;
+  for (std::size_t i = 0; i < n; ++i) theta_(static_cast<Eigen::Index>(i + 1)) = s_.p[i];
+  phi_ = Eigen::VectorXd::Zero(m);
+  Pphi_ = Eigen::VectorXd::Zero(m);
+  K_ = Eigen::VectorXd::Zero(m);
+  P_ = Eigen::MatrixXd::Identity(m, m) * p0;
+}
+
+void Rls::reset_state(InitialState initial, double x0) noexcept {
+  double v = 0.0;
+  if (initial == InitialState::relaxed) v = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x0);
+  if (!std::isfinite(v)) v = 0.0;
+  std::fill(y_.begin(), y_.end(), v);
+}
+
+double Rls::step(double x, double y) noexcept {
+  if (!std::isfinite(x) || !std::isfinite(y)) return last_;
+  double u_a = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
+  double u_d = s_.asymmetric ? envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x) : u_a;
+  const std::size_t n = y_.size();
+  phi_(0) = 0.5 * (u_a + u_d);
+  for (std::size_t i = 0; i < n; ++i) {
+    y_[i] = s_.asymmetric ? ops::asymmetric_play<double>(u_a, u_d, s_.r[i], y_[i])
+                          : ops::generalized_play<double>(u_a, s_.r[i], y_[i]);
+    phi_(static_cast<Eigen::Index>(i + 1)) = y_[i];
+  }
+  const double pred = theta_.dot(phi_);
+  const double e = y - pred;
+  Pphi_.noalias() = P_ * phi_;
+  const double denom = lambda_ + phi_.dot(Pphi_);
+  if (!(denom > 0) || !std::isfinite(denom)) return last_ = pred;
+  K_ = Pphi_ / denom;
+  theta_ += K_ * e;
+  P_.noalias() -= K_ * Pphi_.transpose();
+  P_ /= lambda_;
+  const Eigen::Index m = P_.rows();
+  for (Eigen::Index i = 0; i < m; ++i)
+    for (Eigen::Index j = i + 1; j < m; ++j) P_(i, j) = P_(j, i) = 0.5 * (P_(i, j) + P_(j, i));
+  return last_ = pred;
+}
+
+ModelParams Rls::params() const {
+  std::vector<double> p(static_cast<std::size_t>(theta_.size() - 1));
+  for (std::size_t i = 0; i < p.size(); ++i) p[i] = theta_(static_cast<Eigen::Index>(i + 1));
+  return detail::with_weights(model_, s_, theta_(0), p);
+}
+
+ModelParams rls_fit(const ModelParams& model, std::span<const double> x, std::span<const double> y, double lambda,
+                    int passes, InitialState initial) {
+  detail::check_record(x, y, "rls_fit");
+  if (passes < 1) throw Error(fmt::format("rls_fit: passes must be >= 1, got {}", passes));
+  Rls rls(model, lambda);
+  for (int pass = 0; pass < passes; ++pass) {
+    rls.reset_state(initial, x[0]);
+    for (std::size_t k = 0; k < x.size(); ++k) rls.step(x[k], y[k]);
+  }
+  return rls.params();
+}
+
+}  // namespace hysteron

@@ -1,0 +1,500 @@
+// Model files (JSON), CSV/.mat tables and atomic writes.
+#include <gtest/gtest.h>
+#include <matio.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/table.hpp"
+#include "hysteron/models.hpp"
+
+namespace fs = std::filesystem;
+using hysteron::Error;
+using nlohmann::json;
+namespace io = hysteron::io;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "hysteron-io-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(file(name), std::ios::binary) << text;
+    return file(name);
+  }
+  std::vector<std::string> entries() const {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(path_)) out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Expects `f` to throw hysteron::Error whose message contains every one of `parts`.
+template <class F>
+void expect_error(F&& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "message: " << msg << "\nmissing: " << p;
+    return;
+  }
+  ADD_FAILURE() << "no hysteron::Error thrown";
+}
+
+std::vector<double> test_signal() {
+  std::vector<double> x;
+  for (int k = 0; k < 400; ++k) x.push_back(0.9 * std::sin(0.037 * k) * std::exp(-k / 300.0) + 0.1 * std::sin(0.31 * k));
+  return x;
+}
+
+void expect_same_envelope(const hysteron::Envelope& a, const hysteron::Envelope& b) {
+  EXPECT_EQ(a.kind, b.kind);
+  for (std::size_t i = 0; i < hysteron::envelope_num_coefficients(a.kind); ++i) EXPECT_EQ(a.c[i], b.c[i]) << i;
+}
+
+void expect_same(const hysteron::ModelParams& a, const hysteron::ModelParams& b) {
+  ASSERT_EQ(a.index(), b.index());
+  EXPECT_EQ(hysteron::input_limits(a), hysteron::input_limits(b));
+  if (auto* m = std::get_if<hysteron::PiParams>(&a)) {
+    const auto& n = std::get<hysteron::PiParams>(b);
+    EXPECT_EQ(m->q, n.q);
+    EXPECT_EQ(m->r, n.r);
+    EXPECT_EQ(m->p, n.p);
+  } else if (auto* g = std::get_if<hysteron::GpiParams>(&a)) {
+    const auto& h = std::get<hysteron::GpiParams>(b);
+    expect_same_envelope(g->envelope, h.envelope);
+    EXPECT_EQ(g->q, h.q);
+    EXPECT_EQ(g->r, h.r);
+    EXPECT_EQ(g->p, h.p);
+    if (g->r.empty()) {
+      EXPECT_EQ(g->n, h.n);
+      EXPECT_EQ(g->rho, h.rho);
+      EXPECT_EQ(g->tau, h.tau);
+      EXPECT_EQ(g->alpha, h.alpha);
+    }
+  } else if (auto* d = std::get_if<hysteron::MpiDeadzoneParams>(&a)) {
+    const auto& e = std::get<hysteron::MpiDeadzoneParams>(b);
+    EXPECT_EQ(d->q, e.q);
+    EXPECT_EQ(d->r, e.r);
+    EXPECT_EQ(d->p, e.p);
+    EXPECT_EQ(d->g0, e.g0);
+    EXPECT_EQ(d->z, e.z);
+    EXPECT_EQ(d->g, e.g);
+  } else {
+    const auto& s = std::get<hysteron::MpiAsymParams>(a);
+    const auto& t = std::get<hysteron::MpiAsymParams>(b);
+    expect_same_envelope(s.ascending, t.ascending);
+    expect_same_envelope(s.descending, t.descending);
+    EXPECT_EQ(s.q, t.q);
+    EXPECT_EQ(s.r, t.r);
+    EXPECT_EQ(s.p, t.p);
+  }
+  // identical simulated outputs, bit for bit
+  hysteron::Model ma(a), mb(b);
+  const auto x = test_signal();
+  EXPECT_EQ(ma.simulate(x), mb.simulate(x));
+}
+
+std::vector<hysteron::ModelParams> all_model_kinds() {
+  std::vector<hysteron::ModelParams> out;
+  hysteron::PiParams pi;
+  pi.q = 0.1 + 0.2;
+  pi.r = {0.0, 1.0 / 3.0, 2.0 / 3.0, 0.9};
+  pi.p = {0.7, 0.2 / 3.0, -0.01, 0.125};
+  pi.input_limits = {-1.0 / 7.0, 1.0 / 7.0};
+  out.push_back(pi);
+
+  hysteron::GpiParams gpi;
+  gpi.envelope = hysteron::Envelope::tanh(1.2, 0.8, 0.1 / 3.0, std::exp(-1.0));
+  gpi.q = std::sqrt(2.0) / 3.0;
+  gpi.n = 12;
+  gpi.rho = 0.3 / 7.0;
+  gpi.tau = 1.5;
+  gpi.alpha = 0.05 / 3.0;
+  gpi.input_limits.hi = 0.6;  // one-sided: lo stays -inf
+  out.push_back(gpi);
+
+  hysteron::GpiParams free_w;
+  free_w.envelope = hysteron::Envelope::atan(0.9, 1.1, -0.2, 1e-17);
+  free_w.q = 0.4;
+  free_w.r = {0.05, 0.1, 0.3};
+  free_w.p = {0.2, 0.1 / 3.0, 0.05};
+  out.push_back(free_w);
+
+  hysteron::GpiParams affine = free_w;
+  affine.envelope = hysteron::Envelope::affine(2.0 / 3.0, -0.25);
+  out.push_back(affine);
+
+  hysteron::GpiParams ident = free_w;
+  ident.envelope = hysteron::Envelope::identity();
+  out.push_back(ident);
+
+  hysteron::MpiDeadzoneParams dz;
+  dz.q = 0.8;
+  dz.r = {0.1, 0.2};
+  dz.p = {0.3, 0.1 / 9.0};
+  dz.g0 = 1.0 / 3.0;
+  dz.z = {-0.5, 0.25};
+  dz.g = {0.2, 0.7 / 3.0};
+  out.push_back(dz);
+
+  hysteron::MpiAsymParams as;
+  as.ascending = hysteron::Envelope::tanh(1.0, 1.3, 0.05, 0.01);
+  as.descending = hysteron::Envelope::affine(0.9, 1.0 / 3.0);
+  as.q = 0.6;
+  as.r = {0.05, 0.15};
+  as.p = {0.2, 0.1 / 3.0};
+  out.push_back(as);
+  return out;
+}
+
+}  // namespace
+
+// ---- model files -------------------------------------------------------------------
+
+TEST(ModelFile, JsonRoundTripEveryModelKindIsExact) {
+  for (const auto& params : all_model_kinds()) {
+    SCOPED_TRACE(std::string(hysteron::model_name(params)));
+    const json j = io::model_to_json(params);
+    EXPECT_EQ(j.at("schema"), 1);
+    EXPECT_EQ(j.at("model"), std::string(hysteron::model_name(params)));
+    // through text, as on disk
+    const json back = json::parse(j.dump(2));
+    expect_same(params, io::model_from_json(back, "mem"));
+  }
+}
+
+TEST(ModelFile, WriteAndReadFileRoundTripKeepsUnitsAndNote) {
+  TempDir dir;
+  for (const auto& params : all_model_kinds()) {
+    const std::string path = dir.file("m.json");
+    io::write_model_file(path, params, {{"units", {{"input", "MPa"}, {"output", "mm"}}}, {"note", "fitted"}});
+    expect_same(params, io::read_model_file(path));
+    const json extra = io::model_extra(json::parse(slurp(path)));
+    EXPECT_EQ(extra.at("units").at("input"), "MPa");
+    EXPECT_EQ(extra.at("note"), "fitted");
+  }
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"m.json"});  // no temporary files left
+}
+
+TEST(ModelFile, ExampleFromDocsReads) {
+  const json j = json::parse(R"({"schema": 1, "model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0, 0],
+    "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05, "input_limits": [0, 0.6],
+    "units": {"input": "MPa", "output": "mm"}})");
+  const auto p = io::model_from_json(j, "doc");
+  const auto& g = std::get<hysteron::GpiParams>(p);
+  EXPECT_EQ(g.n, 10);
+  EXPECT_EQ(g.tau, 1.5);
+  EXPECT_EQ(g.input_limits.lo, 0.0);
+  EXPECT_EQ(g.input_limits.hi, 0.6);
+  // pi: q optional (default 0)
+  const auto pi = io::model_from_json(json::parse(R"({"model":"pi","r":[0,0.1],"p":[1,0.5]})"), "doc");
+  EXPECT_EQ(std::get<hysteron::PiParams>(pi).q, 0.0);
+}
+
+TEST(ModelFile, NotJsonNamesFileLineAndColumn) {
+  TempDir dir;
+  const std::string path = dir.write("bad.json", "{\"model\": \"pi\",\n  \"r\": [0.1, ],\n}");
+  expect_error([&] { io::read_model_file(path); }, {path, "line 2", "column"});
+  expect_error([&] { io::read_model_file(dir.file("missing.json")); }, {"missing.json", "cannot open"});
+  const std::string huge = dir.write("huge.json", R"({"model":"pi","r":[1e400],"p":[1]})");
+  expect_error([&] { io::read_model_file(huge); }, {huge, "1e400"});
+}
+
+TEST(ModelFile, EachClassOfInvalidFileNamesTheKey) {
+  auto bad = [](const char* text, std::initializer_list<std::string> parts) {
+    SCOPED_TRACE(text);
+    expect_error([&] { io::model_from_json(json::parse(text), "m.json"); }, parts);
+  };
+  const char* gpi_tail = R"("c":[1,1,0,0],"q":1,"n":5,"rho":0.5,"tau":1,"alpha":0.1)";
+  // missing key
+  bad(R"({"r":[1],"p":[1]})", {"m.json", "\"model\"", "missing"});
+  bad(R"({"model":"pi","r":[0.1]})", {"m.json", "pi", "\"p\"", "missing"});
+  bad(R"({"model":"gpi","c":[1,1,0,0],"q":1,"n":5,"rho":0.5,"alpha":0.1})", {"gpi", "\"tau\"", "missing"});
+  // wrong type
+  bad(R"({"model":"gpi","c":[1,1,0,0],"q":1,"n":5,"rho":0.5,"tau":"1","alpha":0.1})",
+      {"m.json: gpi: key \"tau\": expected a number, got string"});
+  bad(R"({"model":"gpi","c":[1,1,0,0],"q":1,"n":5.5,"rho":0.5,"tau":1,"alpha":0.1})", {"\"n\"", "integer"});
+  bad(R"({"model":"pi","r":[0.1,"a"],"p":[1,1]})", {"\"r[1]\"", "expected a number, got string"});
+  bad(R"({"model":"pi","r":0.1,"p":[1]})", {"\"r\"", "expected an array"});
+  bad(R"({"model":3})", {"\"model\"", "expected a string"});
+  bad(R"([1,2])", {"m.json", "expected a JSON object"});
+  // unknown key: says which are allowed
+  bad((std::string(R"({"model":"gpi","beta":1,)") + gpi_tail + "}").c_str(),
+      {"\"beta\"", "unknown key", "\"alpha\"", "\"rho\""});
+  bad(R"({"model":"pi","r":[0.1],"p":[1],"n":3})", {"\"n\"", "unknown key"});
+  bad(R"({"model":"mpi-asym","r":[0.1],"p":[1],"ascending":{"envelope":"tanh","c":[1,1,0,0],"x":1},
+        "descending":{"envelope":"identity"}})", {"ascending", "\"x\"", "unknown key"});
+  // mixing the parametric and free-weight gpi
+  bad((std::string(R"({"model":"gpi","r":[0.1],"p":[1],)") + gpi_tail + "}").c_str(), {"unknown key"});
+  // wrong array length
+  bad(R"({"model":"gpi","c":[1,1,0],"q":1,"n":5,"rho":0.5,"tau":1,"alpha":0.1})", {"\"c\"", "4 numbers", "got 3"});
+  bad(R"({"model":"gpi","envelope":"affine","c":[1,1,0,0],"q":1,"r":[0.1],"p":[1]})", {"\"c\"", "2 numbers"});
+  bad(R"({"model":"pi","r":[0.1,0.2],"p":[1]})", {"\"p\"", "2 numbers", "got 1"});
+  bad(R"({"model":"pi","r":[0.1],"p":[1],"input_limits":[0]})", {"\"input_limits\"", "[lo, hi]"});
+  // unknown names
+  bad(R"({"model":"prandtl","r":[0.1],"p":[1]})", {"\"model\"", "\"prandtl\"", "\"gpi\""});
+  bad(R"({"model":"gpi","envelope":"sigmoid","c":[1,1,0,0],"q":1,"r":[0.1],"p":[1]})", {"\"envelope\"", "sigmoid"});
+  // schema version
+  bad(R"({"schema":2,"model":"pi","r":[0.1],"p":[1]})", {"\"schema\"", "version 2"});
+  // the model's own validation, prefixed with the file
+  bad(R"({"model":"gpi","c":[1,1,0,0],"q":1,"n":5,"rho":0.5,"tau":1,"alpha":-0.1})", {"m.json", "alpha"});
+  bad(R"({"model":"pi","r":[-0.1],"p":[1]})", {"m.json", "r[0]"});
+  bad(R"({"model":"pi","r":[0.1],"p":[1],"input_limits":[1,0]})", {"m.json", "input_limits"});
+  bad(R"({"model":"pi","r":[0.1],"p":[1],"units":"mm"})", {"\"units\"", "object"});
+  // non-finite numbers (not expressible in JSON text, but in a json value)
+  json j = json::parse(R"({"model":"pi","r":[0.1],"p":[1]})");
+  j["q"] = std::numeric_limits<double>::quiet_NaN();
+  expect_error([&] { io::model_from_json(j, "mem"); }, {"\"q\"", "finite"});
+  j["q"] = 1.0;
+  j["p"][0] = std::numeric_limits<double>::infinity();
+  expect_error([&] { io::model_from_json(j, "mem"); }, {"\"p[0]\"", "finite"});
+}
+
+TEST(ModelFile, WriteRefusesInvalidModelAndBadExtraLeavingFileIntact) {
+  TempDir dir;
+  const std::string path = dir.write("m.json", "old");
+  hysteron::PiParams bad;
+  bad.r = {0.1};
+  bad.p = {1.0, 2.0};
+  EXPECT_THROW(io::write_model_file(path, bad), Error);
+  hysteron::PiParams good;
+  good.r = {0.1};
+  good.p = {1.0};
+  EXPECT_THROW(io::write_model_file(path, good, {{"fit", 1}}), Error);
+  EXPECT_EQ(slurp(path), "old");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"m.json"});
+}
+
+// ---- CSV reading --------------------------------------------------------------------
+
+TEST(Csv, HeaderAndNoHeader) {
+  TempDir dir;
+  const auto h = dir.write("h.csv", "time,x\n0,1.5\n1,-2.5e-3\n");
+  EXPECT_EQ(io::read_column(h, "x"), (std::vector<double>{1.5, -2.5e-3}));
+  EXPECT_EQ(io::read_column(h, "1"), (std::vector<double>{1.5, -2.5e-3}));
+  EXPECT_EQ(io::read_column(h, "time"), (std::vector<double>{0, 1}));
+  const auto n = dir.write("n.csv", "0,1.5\n1,-2.5e-3\n");
+  EXPECT_EQ(io::read_column(n, "1"), (std::vector<double>{1.5, -2.5e-3}));
+  const auto t = io::read_table(h);
+  EXPECT_EQ(t.names, (std::vector<std::string>{"time", "x"}));
+  EXPECT_EQ(t.num_rows(), 2u);
+  const auto t2 = io::read_table(n);
+  EXPECT_EQ(t2.names, (std::vector<std::string>{"", ""}));
+  // one column, no spec needed
+  const auto one = dir.write("one.csv", "3\n+4\n5e0\n");
+  EXPECT_EQ(io::read_column(one, ""), (std::vector<double>{3, 4, 5}));
+  // forced header mode
+  io::ReadOptions o;
+  o.header = io::HeaderMode::present;
+  o.column_spec = "7";
+  EXPECT_EQ(io::read_column(dir.write("num_header.csv", "7\n1\n2\n"), o), (std::vector<double>{1, 2}));
+}
+
+TEST(Csv, EverySeparatorCrlfBomBlankLinesAndComments) {
+  TempDir dir;
+  const std::vector<double> expect{1.25, -3, 4e-5};
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"comma.csv", "a,b\n0,1.25\n1,-3\n2,4e-5\n"},
+      {"tab.tsv", "a\tb\n0\t1.25\n1\t-3\n2\t4e-5\n"},
+      {"semi.csv", "a;b\n0;1.25\n1;-3\n2;4e-5\n"},
+      {"space.txt", "  a   b\n0  1.25\n 1\t-3  \n2 4e-5"},
+      {"crlf.csv", "a,b\r\n0,1.25\r\n1,-3\r\n2,4e-5\r\n"},
+      {"bom.csv", "\xEF\xBB\xBF" "a,b\n0,1.25\n1,-3\n2,4e-5\n"},
+      {"blank.csv", "\n\n# comment\na, b\n\n0, 1.25\n   \n1 ,-3\r\n\n2,4e-5\n\n"},
+      {"quoted.csv", "\"a\",\"b\"\n0,1.25\n1,-3\n2,4e-5\n"},
+  };
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    const auto path = dir.write(name, text);
+    EXPECT_EQ(io::read_column(path, "b"), expect);
+    EXPECT_EQ(io::read_column(path, "1"), expect);
+  }
+}
+
+TEST(Csv, AllEmptyLeadingColumnLikeThePiezoFile) {
+  TempDir dir;
+  const auto path = dir.write("piezo.csv", ",0,-1.6174316,0\n,0.000200010001,-1.7242432,0\n");
+  const auto t = io::read_table(path);
+  ASSERT_EQ(t.num_columns(), 4u);
+  EXPECT_TRUE(t.columns[0].empty());
+  EXPECT_EQ(t.num_rows(), 2u);
+  EXPECT_EQ(io::read_column(path, "2"), (std::vector<double>{-1.6174316, -1.7242432}));
+  expect_error([&] { io::read_column(path, "0"); }, {path, "column 0", "empty in every row"});
+  // partly empty column: an error naming the line and column
+  const auto partly = dir.write("partly.csv", "1,2\n3,\n5,6\n");
+  expect_error([&] { io::read_column(partly, "0"); }, {partly + ":2:2", "empty field"});
+  const auto partly2 = dir.write("partly2.csv", ",2\n3,4\n");
+  expect_error([&] { io::read_column(partly2, "1"); }, {partly2 + ":1:1", "empty field"});
+}
+
+TEST(Csv, RealPiezoFileIfPresent) {
+  const std::string path = std::string(HYSTERON_SOURCE_DIR) + "/../shared/data/piezo-sine/piezo_150V_1Hz.csv";
+  if (!fs::exists(path)) GTEST_SKIP() << "shared data not present: " << path;
+  const auto v = io::read_column(path, "3");
+  EXPECT_EQ(v.size(), 50001u);
+  EXPECT_THROW(io::read_column(path, "0"), Error);
+}
+
+TEST(Csv, BadNumberNamesFileLineColumnAndHeader) {
+  TempDir dir;
+  const auto path = dir.write("bad.csv", "time,disp\n0,1\n\n1,1.2.3\n");
+  expect_error([&] { io::read_column(path, "disp"); }, {path + ":4:2", "\"disp\"", "\"1.2.3\"", "not a number"});
+  const auto noh = dir.write("noh.csv", "0,1\n1,abc\n");
+  // the second line is data, so "abc" is a bad number, not a header
+  expect_error([&] { io::read_column(noh, "1"); }, {noh + ":2:2", "\"abc\""});
+  const auto comma = dir.write("decimal_comma.csv", "a;b\n1;2,5\n");
+  expect_error([&] { io::read_column(comma, "b"); }, {comma + ":2:2", "2,5"});
+  const auto big = dir.write("big.csv", "1\n1e999\n");
+  expect_error([&] { io::read_column(big, ""); }, {big + ":2:1", "range"});
+}
+
+TEST(Csv, NanAndInfinityRefused) {
+  TempDir dir;
+  for (const char* bad : {"nan", "NaN", "-inf", "Infinity", "+inf"}) {
+    SCOPED_TRACE(bad);
+    const auto path = dir.write("nan.csv", std::string("x,y\n0,1\n1,") + bad + "\n");
+    expect_error([&] { io::read_column(path, "y"); }, {path + ":3:2", "\"y\"", "finite"});
+    // even on the first line (which must not be taken for a header)
+    const auto first = dir.write("nan1.csv", std::string(bad) + "\n1\n");
+    expect_error([&] { io::read_column(first, ""); }, {first + ":1:1", "finite"});
+  }
+}
+
+TEST(Csv, ColumnSelectionErrorsAndRaggedRows) {
+  TempDir dir;
+  const auto path = dir.write("t.csv", "a,b\n1,2\n3,4\n");
+  expect_error([&] { io::read_column(path, "5"); }, {path, "index 5", "out of range", "\"a\"", "\"b\""});
+  expect_error([&] { io::read_column(path, "c"); }, {path, "no column named \"c\"", "\"a\"", "\"b\""});
+  expect_error([&] { io::read_column(path, ""); }, {path, "2 non-empty columns"});
+  const auto ragged = dir.write("r.csv", "a,b\n1,2\n3,4,5\n");
+  expect_error([&] { io::read_column(ragged, "a"); }, {ragged + ":3", "3 fields", "expected 2"});
+  expect_error([&] { io::read_column(dir.write("empty.csv", "\n\n"), ""); }, {"empty"});
+  expect_error([&] { io::read_column(dir.file("nope.csv"), "a"); }, {"nope.csv", "cannot open"});
+}
+
+// ---- writing ------------------------------------------------------------------------
+
+TEST(Write, CsvRoundTripIsExact) {
+  TempDir dir;
+  const std::vector<double> a{0.1, 1.0 / 3.0, -2.5e-310, 1e300, -0.0, 123456789.123456789};
+  const std::vector<double> b{1, 2, 3, 4, 5, 6};
+  const auto path = dir.file("out.csv");
+  io::write_columns(path, {"input", "output"}, {a, b});
+  EXPECT_EQ(slurp(path).substr(0, 13), "input,output\n");
+  EXPECT_EQ(io::read_column(path, "input"), a);
+  EXPECT_EQ(io::read_column(path, "output"), b);
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"out.csv"});
+}
+
+TEST(Write, FailuresLeaveExistingFileIntactAndNoTempFiles) {
+  TempDir dir;
+  const auto path = dir.write("keep.csv", "precious\n");
+  const auto mat = dir.write("keep.mat", "precious\n");
+  EXPECT_THROW(io::write_columns(path, {"a", "b"}, {{1, 2}, {1}}), Error);            // unequal length
+  EXPECT_THROW(io::write_columns(path, {"a"}, {{1, NAN}}), Error);                     // non-finite
+  EXPECT_THROW(io::write_columns(path, {"a", "b"}, {{1}}), Error);                     // names vs columns
+  EXPECT_THROW(io::write_columns(path, {"a,b"}, {{1}}), Error);                        // bad CSV name
+  EXPECT_THROW(io::write_columns(mat, {"2x"}, {{1}}), Error);                          // bad MATLAB name
+  expect_error([&] { io::write_columns(dir.file("no/such/dir/x.csv"), {"a"}, {{1}}); }, {"no/such/dir", "does not exist"});
+  expect_error([&] { io::write_columns(dir.path().string(), {"a"}, {{1}}); }, {"directory"});
+  // a writer that fails half way: the temporary file is removed, the target untouched
+  expect_error(
+      [&] {
+        io::write_file_atomically(path, [](const std::string& tmp) {
+          std::ofstream(tmp) << "half-written";
+          throw Error("disk full (simulated)");
+        });
+      },
+      {path, "disk full"});
+  EXPECT_THROW(io::write_file_atomically(path, [](const std::string&) { throw std::runtime_error("boom"); }),
+               std::runtime_error);
+  EXPECT_EQ(slurp(path), "precious\n");
+  EXPECT_EQ(slurp(mat), "precious\n");
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"keep.csv", "keep.mat"}));
+  // a successful write replaces the file
+  io::write_columns(path, {"a"}, {{1, 2}});
+  EXPECT_EQ(slurp(path), "a\n1\n2\n");
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"keep.csv", "keep.mat"}));
+}
+
+// ---- .mat ---------------------------------------------------------------------------
+
+TEST(Mat, RoundTripAndMissingVariable) {
+  TempDir dir;
+  const std::vector<double> x{0.1, 1.0 / 3.0, -2.0, 1e-300};
+  const std::vector<double> y{1, 2, 3, 4};
+  const auto path = dir.file("data.mat");
+  io::write_columns(path, {"input", "output"}, {x, y});
+  EXPECT_EQ(io::read_column(path, "input"), x);
+  EXPECT_EQ(io::read_column(path, "output"), y);
+  const auto t = io::read_table(path);
+  EXPECT_EQ(t.names, (std::vector<std::string>{"input", "output"}));
+  EXPECT_EQ(t.column("output"), y);
+  expect_error([&] { io::read_column(path, "u"); }, {path, "no variable \"u\"", "\"input\"", "\"output\""});
+  expect_error([&] { io::read_column(path, ""); }, {path, "2 variables"});
+  // extension is case-insensitive
+  const auto upper = dir.file("DATA.MAT");
+  io::write_columns(upper, {"v"}, {x});
+  EXPECT_EQ(io::read_column(upper, ""), x);
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"DATA.MAT", "data.mat"}));
+  // not a .mat file
+  expect_error([&] { io::read_column(dir.write("fake.mat", "hello"), "x"); }, {"fake.mat", ".mat"});
+}
+
+TEST(Mat, ReadsSingleIntegerRowVectorsAndRefusesMatrices) {
+  TempDir dir;
+  const auto path = dir.file("classes.mat");
+  mat_t* m = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  ASSERT_NE(m, nullptr);
+  float f[3] = {0.5f, -1.25f, 2.0f};
+  std::int16_t s[3] = {-3, 0, 7};
+  double mat2x2[4] = {1, 2, 3, 4};
+  double nan_v[2] = {1, NAN};
+  size_t row[2] = {1, 3}, sq[2] = {2, 2}, two[2] = {2, 1};
+  auto write = [&](const char* name, matio_classes c, matio_types t, size_t* dims, void* data) {
+    matvar_t* v = Mat_VarCreate(name, c, t, 2, dims, data, MAT_F_DONT_COPY_DATA);
+    ASSERT_NE(v, nullptr);
+    ASSERT_EQ(Mat_VarWrite(m, v, MAT_COMPRESSION_NONE), 0);
+    Mat_VarFree(v);
+  };
+  write("f", MAT_C_SINGLE, MAT_T_SINGLE, row, f);
+  write("s", MAT_C_INT16, MAT_T_INT16, row, s);
+  write("M", MAT_C_DOUBLE, MAT_T_DOUBLE, sq, mat2x2);
+  write("bad", MAT_C_DOUBLE, MAT_T_DOUBLE, two, nan_v);
+  Mat_Close(m);
+  EXPECT_EQ(io::read_column(path, "f"), (std::vector<double>{0.5, -1.25, 2.0}));
+  EXPECT_EQ(io::read_column(path, "s"), (std::vector<double>{-3, 0, 7}));
+  expect_error([&] { io::read_column(path, "M"); }, {"\"M\"", "2x2", "vector"});
+  expect_error([&] { io::read_column(path, "bad"); }, {"\"bad\"", "element 2", "finite"});
+}

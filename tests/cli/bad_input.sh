@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# Bad model files and data: non-zero exit, a message naming file/line/column/key,
+# and no output file created or overwritten.
+# Usage: bash bad_input.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+
+# expect_fail <description> <substring expected in stderr> -- command...
+expect_fail() {
+  local what=$1 needle=$2
+  shift 3
+  "$@" > "$T/stdout" 2> "$T/stderr"
+  local rc=$?
+  if [ $rc -eq 0 ]; then
+    echo "FAIL: $what: exit 0"; fails=$((fails + 1)); return
+  fi
+  if ! grep -qF -- "$needle" "$T/stderr"; then
+    echo "FAIL: $what: stderr lacks '$needle':"; cat "$T/stderr"; fails=$((fails + 1)); return
+  fi
+  echo "ok: $what (exit $rc): $(head -1 "$T/stderr")"
+}
+
+cat > "$T/good.json" <<'JSON'
+{"model": "gpi", "c": [1, 1, 0, 0], "q": 0.5, "n": 5, "rho": 0.3, "tau": 1.5, "alpha": 0.05}
+JSON
+printf 'x\n0\n0.1\n0.2\n' > "$T/x.csv"
+mkdir "$T/out"
+echo "precious" > "$T/out/keep.csv"
+
+# malformed model files
+printf '{"model": "gpi", "c": [1, 1, 0, 0], "q": 0.5, "n": 5, "rho": 0.3, "tau": "fast", "alpha": 0.05}' > "$T/type.json"
+expect_fail "wrong type" 'key "tau": expected a number, got string' -- \
+  "$BIN" simulate --model "$T/type.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+printf '{"model": "gpi", "c": [1, 1, 0, 0], "q": 0.5, "n": 5, "rho": 0.3, "alpha": 0.05}' > "$T/missing.json"
+expect_fail "missing key" 'key "tau": missing' -- \
+  "$BIN" simulate --model "$T/missing.json" --input "$T/x.csv" --output "$T/out/new.csv"
+printf '{"model": "pi", "r": [0.1], "p": [1], "gain": 2}' > "$T/unknown.json"
+expect_fail "unknown key" 'key "gain": unknown key; allowed keys are' -- \
+  "$BIN" invert --model "$T/unknown.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+printf '{"model": "pi",\n  "r": [0.1,, 0.2], "p": [1, 1]}' > "$T/syntax.json"
+expect_fail "not JSON" 'syntax.json: not valid JSON: parse error at line 2, column' -- \
+  "$BIN" simulate --model "$T/syntax.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+printf '{"model": "gpi", "c": [1, 1, 0], "q": 0.5, "n": 5, "rho": 0.3, "tau": 1.5, "alpha": 0.05}' > "$T/len.json"
+expect_fail "array length" 'key "c": expected an array of 4 numbers, got 3' -- \
+  "$BIN" simulate --model "$T/len.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+printf '{"model": "gpi", "c": [1, 1, 0, 0], "q": 0.5, "n": 5, "rho": 0.3, "tau": 1.5, "alpha": -1}' > "$T/val.json"
+expect_fail "model validation" 'val.json: gpi: alpha must be > 0' -- \
+  "$BIN" simulate --model "$T/val.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+printf '{"schema": 7, "model": "pi", "r": [0.1], "p": [1]}' > "$T/schema.json"
+expect_fail "schema version" 'unsupported schema version 7' -- \
+  "$BIN" simulate --model "$T/schema.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+expect_fail "no model file" 'nope.json: cannot open' -- \
+  "$BIN" simulate --model "$T/nope.json" --input "$T/x.csv" --output "$T/out/keep.csv"
+
+# bad data
+printf 'x\n0\n0.1\nNaN\n0.3\n' > "$T/nan.csv"
+expect_fail "NaN in CSV" 'nan.csv:4:1 (column "x"): "NaN" is not a finite number' -- \
+  "$BIN" simulate --model "$T/good.json" --input "$T/nan.csv" --output "$T/out/keep.csv"
+printf 't,x\n0,0\n1,0.1x\n' > "$T/num.csv"
+expect_fail "bad number" 'num.csv:3:2 (column "x"): "0.1x" is not a number' -- \
+  "$BIN" invert --model "$T/good.json" --input "$T/num.csv" --column x --output "$T/out/new.csv"
+printf 't,x\n0,0\n1,0.1,5\n' > "$T/ragged.csv"
+expect_fail "ragged row" 'ragged.csv:3: row has 3 fields, expected 2' -- \
+  "$BIN" simulate --model "$T/good.json" --input "$T/ragged.csv" --column x --output "$T/out/new.csv"
+expect_fail "unknown column" 'no column named "y"' -- \
+  "$BIN" simulate --model "$T/good.json" --input "$T/x.csv" --column y --output "$T/out/new.csv"
+expect_fail "bad limits" '--limits' -- \
+  "$BIN" invert --model "$T/good.json" --input "$T/x.csv" --limits=1,0 --output "$T/out/new.csv"
+expect_fail "missing option" 'model' -- \
+  "$BIN" simulate --input "$T/x.csv" --output "$T/out/new.csv"
+expect_fail "output directory missing" 'does not exist' -- \
+  "$BIN" simulate --model "$T/good.json" --input "$T/x.csv" --output "$T/nodir/y.csv"
+
+# nothing was created or overwritten, and no temporary file is left behind
+if [ "$(cat "$T/out/keep.csv")" != "precious" ]; then echo "FAIL: keep.csv was modified"; fails=$((fails + 1)); fi
+if [ "$(ls -A "$T/out")" != "keep.csv" ]; then echo "FAIL: stray files in out/: $(ls -A "$T/out")"; fails=$((fails + 1)); fi
+[ -e "$T/nodir" ] && { echo "FAIL: nodir created"; fails=$((fails + 1)); }
+
+# and a good run does replace the file
+"$BIN" simulate --model "$T/good.json" --input "$T/x.csv" --output "$T/out/keep.csv" || { echo "FAIL: good run"; fails=$((fails + 1)); }
+[ "$(wc -l < "$T/out/keep.csv")" -eq 4 ] || { echo "FAIL: good run output"; fails=$((fails + 1)); }
+
+if [ $fails -ne 0 ]; then echo "bad_input: $fails failures"; exit 1; fi
+echo "bad_input: ok"

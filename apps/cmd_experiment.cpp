@@ -1,6 +1,78 @@
-// Placeholder: the experiment subcommand is not implemented yet (registers nothing).
+// hysteron experiment gpi-pid | mpi-openloop | mpi-pwm  and  hysteron demo.
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
 #include "commands.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
 
 namespace hysteron::cli {
-void add_experiment(CLI::App&, Action&) {}
+
+namespace {
+
+struct ExperimentArgs {
+  std::string name;
+  std::string plant;
+  std::uint64_t seed = 1;
+  bool json = false;
+  std::string out;
+};
+
+ExperimentOptions options_from(const ExperimentArgs& a) {
+  ExperimentOptions o;
+  o.name = a.name;
+  o.seed = a.seed;
+  if (!a.plant.empty()) o.rig = load_rig_params(a.plant);
+  return o;
+}
+
+}  // namespace
+
+void add_experiment(CLI::App& app, Action& action) {
+  auto args = std::make_shared<ExperimentArgs>();
+  auto* cmd = app.add_subcommand("experiment", "Run one of the papers' experiments end to end on the simulated rig");
+  cmd->add_option("name", args->name, "gpi-pid | mpi-openloop | mpi-pwm")
+      ->required()
+      ->check(CLI::IsMember({"gpi-pid", "mpi-openloop", "mpi-pwm"}));
+  cmd->add_option("--plant", args->plant, "Rig parameters (JSON; unknown keys are an error)");
+  cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)");
+  cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");
+  cmd->add_option("--out", args->out, "Directory for the time series (CSV), models and result.json");
+  cmd->callback([args, &action] {
+    action = [args] {
+      const ExperimentResult r = run_experiment(options_from(*args));
+      if (!args->out.empty()) r.write(args->out);
+      if (args->json)
+        fmt::print("{}\n", r.to_json().dump(2));
+      else
+        fmt::print("{}", r.table());
+      return 0;
+    };
+  });
+
+  auto dargs = std::make_shared<ExperimentArgs>();
+  auto* demo = app.add_subcommand("demo", "The main job: the three experiments beside the papers' figures");
+  demo->add_option("--plant", dargs->plant, "Rig parameters (JSON)");
+  demo->add_option("--seed", dargs->seed, "Seed of the rig's noise (default 1)");
+  demo->add_option("--out", dargs->out, "Directory for every experiment's outputs (default out/demo)")
+      ->default_val("out/demo");
+  demo->callback([dargs, &action] {
+    action = [dargs] {
+      for (const auto& name : experiment_names()) {
+        ExperimentArgs a = *dargs;
+        a.name = name;
+        const ExperimentResult r = run_experiment(options_from(a));
+        const std::string dir = dargs->out + "/" + name;
+        r.write(dir);
+        fmt::print("{}  outputs: {}/\n\n", r.table(), dir);
+        std::fflush(stdout);
+      }
+      return 0;
+    };
+  });
+}
+
 }  // namespace hysteron::cli

@@ -1,0 +1,110 @@
+#pragma once
+// Hysteresis-compensating controllers for the muscle rig, built from an exact
+// inverse model (inverse.hpp) and the PID of control.hpp. Units at the
+// interface: positions in metres, pressures in MPa gauge; the model maps
+// pressure [MPa] to contraction in model units (model_scale per metre, 1000
+// for models fitted in mm). Every step() is allocation-free, noexcept and
+// deterministic; every pressure command is clamped to the pressure limits.
+#include <cstddef>
+
+#include "hysteron/control.hpp"
+#include "hysteron/inverse.hpp"
+#include "hysteron/models.hpp"
+
+namespace hysteron {
+
+// Inverse-model feedforward with optional compensation of a first-order lag
+// (tau) of the pressure actuator: p_cmd = p + tau dp/dt, dp/dt by a backward
+// difference at the sample time (the reference is smooth and known ahead, so
+// the dead time is best handled by feeding a previewed reference).
+struct FeedforwardParams {
+  Limits pressure_limits{0.0, 0.6};  // [MPa]
+  double model_scale = 1000.0;       // model output units per metre
+  double lag_time_constant = 0.0;    // tau [s] to compensate, >= 0
+  double sample_time = 1e-3;         // [s], > 0
+  void validate() const;             // throws hysteron::Error
+};
+
+class InverseFeedforward {
+ public:
+  InverseFeedforward(const ModelParams& model, const FeedforwardParams& params);
+  // Pressure [MPa] that makes the model reach desired_m [m] (within limits).
+  double step(double desired_m) noexcept;
+  void reset() noexcept;
+  bool saturated() const noexcept { return inverse_.saturated(); }
+  const FeedforwardParams& params() const noexcept { return p_; }
+
+ private:
+  FeedforwardParams p_;
+  Inverse inverse_;
+  double prev_ = 0.0;
+  bool started_ = false;
+};
+
+// GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)), with the PID's
+// anti-windup aware of the total command (the feedforward enters the PID as
+// its feedforward term, so the clamp and the integrator agree).
+class FeedforwardPidController {
+ public:
+  FeedforwardPidController(const ModelParams& model, const FeedforwardParams& ff, const PidParams& pid);
+  // reference_m: y_d(t); preview_m: the reference fed to the inverse (y_d(t + lead)
+  // for a known reference, else reference_m); measured_m: sensor. Returns MPa.
+  double step(double reference_m, double preview_m, double measured_m) noexcept;
+  void reset() noexcept;
+
+ private:
+  InverseFeedforward ff_;
+  Pid pid_;
+  Limits lim_;
+};
+
+// Asymmetric-MPI paper (Fig. 6): open-loop inverse compensation with a
+// proportional pressure loop, p_cmd = p_d + k_p (p_d - p_meas); optionally
+// (hysteron's variant) a slow PI position correction added to p_d.
+struct OpenLoopParams {
+  FeedforwardParams feedforward;
+  double pressure_gain = 0.5;        // k_p [-] of the pressure loop, >= 0
+  PidParams position;                // kp = ki = 0: pure open loop (as published)
+};
+
+class OpenLoopController {
+ public:
+  OpenLoopController(const ModelParams& model, const OpenLoopParams& params);
+  double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
+  void reset() noexcept;
+
+ private:
+  OpenLoopParams p_;
+  InverseFeedforward ff_;
+  Pid position_;
+  bool use_position_;
+};
+
+// Dead-zone MPI paper: cascade with fast switching valves. Outer loop: desired
+// pressure p_d = clamp(FF(y_d) + PID_x(y_d - y)); inner loop: a PI on the
+// pressure error plus a duty feedforward, modulated to a PWM duty in [-1, 1].
+struct CascadeParams {
+  FeedforwardParams feedforward;
+  PidParams position;        // outer loop, output in MPa
+  PidParams pressure;        // inner loop: error in MPa -> duty (limits [-1, 1])
+  PwmParams pwm;             // duty shaping (dead band, minimum pulse)
+};
+
+class CascadePwmController {
+ public:
+  CascadePwmController(const ModelParams& model, const CascadeParams& params);
+  // Returns the PWM duty in [-1, 1]; desired_pressure() is the outer loop's output.
+  double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
+  void reset() noexcept;
+  double desired_pressure() const noexcept { return p_d_; }
+
+ private:
+  CascadeParams p_;
+  InverseFeedforward ff_;
+  Pid position_;
+  Pid pressure_;
+  PwmModulator pwm_;
+  double p_d_ = 0.0;
+};
+
+}  // namespace hysteron

@@ -1,0 +1,86 @@
+#pragma once
+// The three papers' experiments, end to end on the simulated rig: an
+// identification run, the fit of the paper's model, validation on the minor
+// loops, and tracking runs with
+//   faithful    - the paper's scheme as published (its structure and gains),
+//   compensated - hysteron's best variant of it,
+//   baseline    - the same loop without hysteresis compensation (the inverse
+//                 model replaced by a straight line fitted to the same data).
+//
+//   gpi-pid      gpi-lm-feedforward-pid.txt: GPI (n = 10) fitted by LM on the
+//                major loop of the Fig. 4 input; inverse feedforward + PID of
+//                Table 3 (Fig. 10) tracking Eq. 18 / Table 4; published Table 5.
+//   mpi-openloop mpi-asymmetric-openloop.txt: asymmetric MPI (20 operators)
+//                on the 0.5..0.3 MPa input; open-loop inverse + proportional
+//                pressure loop; triangle and sine references 40/35/30 mm;
+//                published maximum errors 1.29 mm (triangle), 1.38 mm (sine).
+//   mpi-pwm      mpi-deadzone-switching-valves.txt: dead-zone MPI by LM;
+//                cascade with fast switching valves (outer position loop with
+//                inverse feedforward, inner pressure loop driving PWM). The
+//                paper's text is truncated before its results: no published figures.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hysteron/identify.hpp"
+#include "hysteron/plant.hpp"
+
+namespace hysteron {
+
+struct ExperimentOptions {
+  std::string name = "gpi-pid";  // gpi-pid | mpi-openloop | mpi-pwm
+  PamRigParams rig{};            // the simulated rig (defaults: nominal, with sensor noise)
+  std::uint64_t seed = 1;        // rig noise seed; a run is reproducible bit for bit
+  double control_period = 1e-3;  // controller and logging period [s]
+  void validate() const;         // throws hysteron::Error
+};
+
+struct TrackingErrors {
+  double max_error_mm = 0.0;
+  double mae_mm = 0.0;
+  double rms_error_mm = 0.0;
+};
+
+// One tracking run, logged at the control period.
+struct TrackingRun {
+  std::string variant;    // faithful | compensated | baseline
+  std::string reference;  // e.g. "sine", "triangle"
+  std::string description;
+  std::vector<double> t, reference_mm, measured_mm, actual_mm, pressure_command_mpa, pressure_mpa, duty;
+  TrackingErrors errors;  // reference vs measured contraction
+  std::size_t saturated = 0;  // control samples with the command at a pressure limit
+};
+
+struct ExperimentResult {
+  std::string name;
+  std::string title;
+  std::uint64_t seed = 0;
+  // identification run (logged at the control period)
+  std::vector<double> id_t, id_pressure_command_mpa, id_pressure_mpa, id_contraction_mm;
+  std::size_t id_train_end = 0;   // samples [0, id_train_end) are the major loop
+  FitReport fit;                  // the paper's model, fitted on the major loop
+  FitMetrics validation;          // ... on the minor loops
+  FitReport best_fit;             // hysteron's model for the compensated variant
+  FitMetrics best_validation;     // on a second identification run (other seed)
+  ModelParams baseline_model;     // the straight line of the baseline
+  std::vector<TrackingRun> runs;
+  nlohmann::json published;       // the paper's figures (null where it gives none)
+  double wall_time_s = 0.0;
+
+  // Summary as in the CLI's --json: compensated/faithful/baseline objects with
+  // max_error_mm, mae_mm, rms_error_mm (keyed by reference where there are several).
+  nlohmann::json to_json() const;
+  // Writes identification.csv, tracking_<variant>_<reference>.csv, the models and
+  // result.json into dir (created if needed), each file atomically.
+  void write(const std::string& dir) const;
+  // Human-readable table beside the paper's figures.
+  std::string table() const;
+};
+
+std::vector<std::string> experiment_names();
+// Throws hysteron::Error on invalid options or a diverging rig.
+ExperimentResult run_experiment(const ExperimentOptions& options);
+
+}  // namespace hysteron

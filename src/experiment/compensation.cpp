@@ -1,0 +1,133 @@
+#include "hysteron/compensation.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+
+void FeedforwardParams::validate() const {
+  if (!(pressure_limits.lo < pressure_limits.hi) || !std::isfinite(pressure_limits.lo) ||
+      !std::isfinite(pressure_limits.hi))
+    throw Error(fmt::format("feedforward: pressure_limits must be finite with lo < hi, got [{}, {}]",
+                            pressure_limits.lo, pressure_limits.hi));
+  if (!(model_scale > 0) || !std::isfinite(model_scale))
+    throw Error(fmt::format("feedforward: model_scale must be > 0, got {}", model_scale));
+  if (!(lag_time_constant >= 0) || !std::isfinite(lag_time_constant))
+    throw Error(fmt::format("feedforward: lag_time_constant must be >= 0, got {}", lag_time_constant));
+  if (!(sample_time > 0) || !std::isfinite(sample_time))
+    throw Error(fmt::format("feedforward: sample_time must be > 0, got {}", sample_time));
+}
+
+namespace {
+InverseOptions inverse_options(const FeedforwardParams& p) {
+  p.validate();
+  InverseOptions o;
+  o.input_limits = p.pressure_limits;
+  return o;
+}
+}  // namespace
+
+InverseFeedforward::InverseFeedforward(const ModelParams& model, const FeedforwardParams& params)
+    : p_(params), inverse_(model, inverse_options(params)) {}
+
+void InverseFeedforward::reset() noexcept {
+  inverse_.reset();
+  started_ = false;
+  prev_ = 0.0;
+}
+
+double InverseFeedforward::step(double desired_m) noexcept {
+  const double p = inverse_.step(desired_m * p_.model_scale);
+  double cmd = p;
+  if (started_ && p_.lag_time_constant > 0) cmd = p + p_.lag_time_constant * (p - prev_) / p_.sample_time;
+  prev_ = p;
+  started_ = true;
+  return std::clamp(cmd, p_.pressure_limits.lo, p_.pressure_limits.hi);
+}
+
+FeedforwardPidController::FeedforwardPidController(const ModelParams& model, const FeedforwardParams& ff,
+                                                   const PidParams& pid)
+    : ff_(model, ff), pid_([&] {
+        PidParams q = pid;
+        q.out_min = std::max(q.out_min, ff.pressure_limits.lo);
+        q.out_max = std::min(q.out_max, ff.pressure_limits.hi);
+        return q;
+      }()),
+      lim_(ff.pressure_limits) {}
+
+void FeedforwardPidController::reset() noexcept {
+  ff_.reset();
+  pid_.reset();
+}
+
+double FeedforwardPidController::step(double reference_m, double preview_m, double measured_m) noexcept {
+  const double u_ff = ff_.step(preview_m);
+  const double u = pid_.step(reference_m, measured_m, u_ff);
+  return std::clamp(std::isfinite(u) ? u : u_ff, lim_.lo, lim_.hi);
+}
+
+OpenLoopController::OpenLoopController(const ModelParams& model, const OpenLoopParams& params)
+    : p_(params), ff_(model, params.feedforward), position_([&] {
+        PidParams q = params.position;
+        const double span = params.feedforward.pressure_limits.hi - params.feedforward.pressure_limits.lo;
+        q.out_min = std::max(q.out_min, -span);
+        q.out_max = std::min(q.out_max, span);
+        return q;
+      }()),
+      use_position_(params.position.kp != 0.0 || params.position.ki != 0.0 || params.position.kd != 0.0) {
+  if (!(params.pressure_gain >= 0) || !std::isfinite(params.pressure_gain))
+    throw Error(fmt::format("open-loop controller: pressure_gain must be >= 0, got {}", params.pressure_gain));
+}
+
+void OpenLoopController::reset() noexcept {
+  ff_.reset();
+  position_.reset();
+}
+
+double OpenLoopController::step(double reference_m, double preview_m, double measured_m,
+                                double pressure_mpa) noexcept {
+  const Limits& lim = p_.feedforward.pressure_limits;
+  double p_d = ff_.step(preview_m);
+  if (use_position_) p_d = std::clamp(p_d + position_.step(reference_m, measured_m), lim.lo, lim.hi);
+  double cmd = p_d;
+  if (std::isfinite(pressure_mpa)) cmd = p_d + p_.pressure_gain * (p_d - pressure_mpa);
+  return std::clamp(cmd, lim.lo, lim.hi);
+}
+
+CascadePwmController::CascadePwmController(const ModelParams& model, const CascadeParams& params)
+    : p_(params), ff_(model, params.feedforward), position_([&] {
+        PidParams q = params.position;
+        q.out_min = std::max(q.out_min, params.feedforward.pressure_limits.lo);
+        q.out_max = std::min(q.out_max, params.feedforward.pressure_limits.hi);
+        return q;
+      }()),
+      pressure_([&] {
+        PidParams q = params.pressure;
+        q.out_min = std::max(q.out_min, -1.0);
+        q.out_max = std::min(q.out_max, 1.0);
+        return q;
+      }()),
+      pwm_(params.pwm) {}
+
+void CascadePwmController::reset() noexcept {
+  ff_.reset();
+  position_.reset();
+  pressure_.reset();
+  pwm_.reset();
+  p_d_ = 0.0;
+}
+
+double CascadePwmController::step(double reference_m, double preview_m, double measured_m,
+                                  double pressure_mpa) noexcept {
+  const Limits& lim = p_.feedforward.pressure_limits;
+  const double u_ff = ff_.step(preview_m);
+  p_d_ = std::clamp(position_.step(reference_m, measured_m, u_ff), lim.lo, lim.hi);
+  const double u = pressure_.step(p_d_, pressure_mpa);
+  return std::clamp(pwm_.step(u), -1.0, 1.0);
+}
+
+}  // namespace hysteron

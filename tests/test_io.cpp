@@ -339,6 +339,8 @@ TEST(Csv, EverySeparatorCrlfBomBlankLinesAndComments) {
     const auto path = dir.write(name, text);
     EXPECT_EQ(io::read_column(path, "b"), expect);
     EXPECT_EQ(io::read_column(path, "1"), expect);
+    EXPECT_EQ(io::read_column(path, "a"), (std::vector<double>{0, 1, 2}));
+    EXPECT_EQ(io::read_table(path).names, (std::vector<std::string>{"a", "b"}));
   }
 }
 

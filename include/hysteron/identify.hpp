@@ -104,14 +104,14 @@ struct FitOptions {
   double huber_delta = 0.0;
   // Number of data-derived initial guesses refined by LM; the best is kept.
   // (A larger grid of candidates is screened by cost first; this many are refined.)
-  int num_starts = 3;
+  int num_starts = 2;
   // Seed of the jitter added to the candidate grid (reproducible).
   unsigned seed = 0;
   // Levenberg-Marquardt limits and tolerances (Ceres semantics).
   int max_iterations = 100;
-  double function_tolerance = 1e-10;
-  double gradient_tolerance = 1e-12;
-  double parameter_tolerance = 1e-10;
+  double function_tolerance = 1e-7;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
   // gpi only: the 8 parameters of Eq. 13 have an exact scale symmetry
   //   (c0, c3, alpha, q, rho, tau) -> (k c0, k c3, k alpha, q/k, rho/k, tau/k)
   // that leaves the output unchanged, so the Jacobian is rank 7. With true
@@ -160,7 +160,7 @@ struct FitReport {
   int total_iterations = 0;   // over all starts
   int num_starts = 0;         // starts refined by LM
   double time_s = 0.0;        // wall time of fit()
-  ModelParams model;          // the fitted model
+  ModelParams model;          // the fitted model (input_limits = training input range)
   std::vector<FitParameter> parameters;
   std::string covariance_note;  // why standard errors are missing, if they are
   FitMetrics train;             // metrics on the training range

@@ -1,5 +1,6 @@
 // Levenberg-Marquardt identification through Ceres with automatic
 // differentiation through the operator recursion (Eqs. 12-16).
+#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
@@ -302,6 +303,29 @@ void standard_errors(FitModel kind, const Data& d, int n, const SlopeLayout* lay
   ceres::Covariance cov(co);
   std::vector<std::pair<const double*, const double*>> blocks{{theta.data(), theta.data()}};
   const auto p = static_cast<Eigen::Index>(theta.size());
+  // Rank check first (ceres::Covariance would log an error for a singular problem).
+  {
+    ceres::CRSMatrix crs;
+    double cost = 0;
+    problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, &crs);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int r = 0; r < crs.num_rows; ++r)
+      for (int k = crs.rows[static_cast<std::size_t>(r)]; k < crs.rows[static_cast<std::size_t>(r) + 1]; ++k)
+        J(r, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    std::vector<Eigen::Index> keep;
+    for (Eigen::Index c = 0; c < J.cols(); ++c)
+      if (std::find(held.begin(), held.end(), static_cast<int>(c)) == held.end()) keep.push_back(c);
+    Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(keep.size()));
+    for (std::size_t c = 0; c < keep.size(); ++c) Jf.col(static_cast<Eigen::Index>(c)) = J.col(keep[c]);
+    const Eigen::MatrixXd JtJ = Jf.transpose() * Jf;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(JtJ, Eigen::EigenvaluesOnly);
+    const double lmax = es.eigenvalues().maxCoeff(), lmin = es.eigenvalues().minCoeff();
+    if (!(lmax > 0) || !(lmin > 1e-22 * lmax)) {
+      rep.covariance_note =
+          "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
+      return;
+    }
+  }
   if (!cov.Compute(blocks, problem.get())) {
     rep.covariance_note =
         "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
@@ -419,7 +443,7 @@ std::vector<std::vector<double>> gpi_starts(const Data& d, int n, const FitOptio
       const double f_w = std::clamp(2.0 * (h / K) / uhalf, 0.05, 2.0);
       for (double f : {f_w, 0.5, 1.0}) {
         const double alpha = j(f) * uhalf / n;
-        for (double tr : {0.5, 2.5}) {
+        for (double tr : {0.05, 0.5, 2.5}) {
           std::vector<double> th{c0, c1, c2, c3, 1.0, 1.0, tr / (alpha * n), alpha};
           const double sse = gpi_linear_seed(d, n, th.data(), lb_rel * K, lb_rel * K);
           if (std::isfinite(sse)) cands.push_back({sse, th});
@@ -730,6 +754,10 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     }
   } catch (const Error& e) {
     return invalid(e.what(), o.model, t0);
+  }
+  if (rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence) {
+    // The model is identified on the training input range: the inverse saturates there.
+    std::visit([&](auto& fitted) { fitted.input_limits = Limits{rg.xlo, rg.xhi}; }, rep.model);
   }
   if (rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence)
     rep.train = evaluate(rep.model, x, y, tr, o.initial_state);

@@ -1,7 +1,7 @@
 // hysteron fit: identify a model from measured input/output columns.
 //
 //   hysteron fit --model gpi|pi|mpi-deadzone|mpi-asym --data D.csv --input COL --output COL
-//                [--n N] [--dead-zones J] [--train A:B] [--validate C:D] [--validate-data V.csv]
+//                [--n N] [--dead-zones J] [--train A:B] [--validate C:D] [--validate-data V.csv ...]
 //                [--time-column COL]  (ranges in seconds with a suffix s: --train 0s:20s)
 //                --out model.json [--report fit.json] [--json] [--huber DELTA] [--seed S]
 //                [--starts K] [--relaxed] [--force]
@@ -31,7 +31,8 @@ namespace hysteron::cli {
 namespace {
 
 struct FitCliOptions {
-  std::string model = "gpi", data, input, output, train, validate, validate_data, time_column, out, report;
+  std::string model = "gpi", data, input, output, train, validate, time_column, out, report;
+  std::vector<std::string> validate_data;
   int n = 10, dead_zones = 4, starts = 2;
   double huber = 0.0;
   unsigned seed = 0;
@@ -103,9 +104,9 @@ int run_fit(const FitCliOptions& c) {
   o.train = train;
   std::optional<IndexRange> validate;
   if (!c.validate.empty()) {
-    const std::size_t nv = c.validate_data.empty() ? x.size() : io::read_column(c.validate_data, c.input).size();
+    const std::size_t nv = c.validate_data.empty() ? x.size() : io::read_column(c.validate_data.front(), c.input).size();
     std::optional<std::vector<double>> vtime;
-    if (!c.validate_data.empty() && time) vtime = io::read_column(c.validate_data, c.time_column);
+    if (!c.validate_data.empty() && time) vtime = io::read_column(c.validate_data.front(), c.time_column);
     validate = parse_range(c.validate, "--validate", c.validate_data.empty() ? (time ? &*time : nullptr) : (vtime ? &*vtime : nullptr), nv);
   }
   if (isatty(fileno(stderr)))
@@ -116,12 +117,16 @@ int run_fit(const FitCliOptions& c) {
 
   // validation: a range of the same record (simulated from its start), or another record
   std::optional<FitMetrics> val;
+  std::vector<std::pair<std::string, FitMetrics>> vals;
   const bool fitted = rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence;
   if (fitted) {
     if (!c.validate_data.empty()) {
-      const std::vector<double> xv = io::read_column(c.validate_data, c.input);
-      const std::vector<double> yv = io::read_column(c.validate_data, c.output);
-      val = evaluate(rep.model, xv, yv, validate.value_or(IndexRange{}), o.initial_state);
+      for (const auto& file : c.validate_data) {
+        const std::vector<double> xv = io::read_column(file, c.input);
+        const std::vector<double> yv = io::read_column(file, c.output);
+        vals.emplace_back(file, evaluate(rep.model, xv, yv, validate.value_or(IndexRange{}), o.initial_state));
+      }
+      val = vals.front().second;
     } else if (validate) {
       val = evaluate(rep.model, x, y, *validate, o.initial_state);
     } else if (train.end < x.size()) {
@@ -141,6 +146,14 @@ int run_fit(const FitCliOptions& c) {
   j["train"] = metrics_json(rep.train);
   j["train"]["range"] = {train.begin, train.end};
   j["validate"] = val ? metrics_json(*val) : nlohmann::json(nullptr);
+  if (!vals.empty()) {
+    j["validate_files"] = nlohmann::json::array();
+    for (const auto& [file, m] : vals) {
+      auto e = metrics_json(m);
+      e["file"] = file;
+      j["validate_files"].push_back(e);
+    }
+  }
   nlohmann::json params = nlohmann::json::array();
   for (const auto& p : rep.parameters)
     params.push_back({{"name", p.name},
@@ -159,7 +172,11 @@ int run_fit(const FitCliOptions& c) {
     fmt::print("{}\n", j.dump(2));
   } else {
     std::string text = rep.full_report();
-    if (val) text += metrics_text("validate:", *val);
+    if (vals.size() > 1) {
+      for (const auto& [file, m] : vals) text += metrics_text("validate:", m) + fmt::format("          ({})\n", file);
+    } else if (val) {
+      text += metrics_text("validate:", *val);
+    }
     text += write ? fmt::format("model written to {}\n", c.out)
                   : fmt::format("model NOT written ({}; use --force to write it anyway)\n", fit_status_name(rep.status));
     fmt::print("{}", text);
@@ -180,7 +197,7 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones (default 4)");
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");
   sub->add_option("--validate", c->validate, "validation range C:D (of --validate-data if given)");
-  sub->add_option("--validate-data", c->validate_data, "another record (same columns) to validate on");
+  sub->add_option("--validate-data", c->validate_data, "other records (same columns) to validate on (repeatable)");
   sub->add_option("--time-column", c->time_column, "time column, for ranges in seconds");
   sub->add_option("--out,-o", c->out, "model file to write (JSON)")->required();
   sub->add_option("--report", c->report, "also write the JSON report to this file");

@@ -320,7 +320,7 @@ void standard_errors(FitModel kind, const Data& d, int n, const SlopeLayout* lay
     const Eigen::MatrixXd JtJ = Jf.transpose() * Jf;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(JtJ, Eigen::EigenvaluesOnly);
     const double lmax = es.eigenvalues().maxCoeff(), lmin = es.eigenvalues().minCoeff();
-    if (!(lmax > 0) || !(lmin > 1e-22 * lmax)) {
+    if (!(lmax > 0) || !(lmin > 1e-13 * lmax)) {
       rep.covariance_note =
           "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
       return;

@@ -1,0 +1,150 @@
+#pragma once
+// Plots (through gnuplot) and self-contained HTML reports of fits and experiments.
+//
+// Plots: every function renders one figure with gnuplot, run as a child process
+// on a generated script with the data inline ($data << EOD blocks); nothing is
+// left in the temporary directory. The format follows the output path's
+// extension: .svg (vector, embeddable in HTML) or .png (pngcairo). Every axis
+// has a label with its unit, every figure a title and a legend. Long series are
+// decimated to max_points per series, keeping each bucket's minimum and maximum
+// (so error peaks survive). Throws hysteron::Error if a figure has no finite
+// data, if a label is empty, if the gnuplot binary cannot be run (the binary is
+// "gnuplot" on PATH, or $HYSTERON_GNUPLOT) or if gnuplot fails.
+//
+// Reports: one HTML file, no external resources (the plots are inline SVG), with
+// the tables of parameters and errors beside the paper's published figures, the
+// command line that made it, the hysteron version and the date. Written atomically.
+#include <cstddef>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hysteron/experiment.hpp"
+#include "hysteron/identify.hpp"
+
+namespace hysteron::report {
+
+// Version string shown in reports (kept equal to the CMake project version).
+inline constexpr std::string_view hysteron_version = "0.1.0";
+
+// ---- plots ---------------------------------------------------------------------
+
+struct Axis {
+  std::string label;  // e.g. "Pressure" (required)
+  std::string unit;   // e.g. "MPa" (empty for dimensionless quantities)
+};
+
+struct Labels {
+  std::string title;  // required
+  Axis x;
+  Axis y;
+};
+
+// One curve. style: "lines", "points" or "linespoints".
+struct Series {
+  std::string label;  // legend entry (required)
+  std::vector<double> x, y;
+  std::string style = "lines";
+  std::string color;  // "#rrggbb"; empty = gnuplot's default sequence
+  bool dashed = false;
+};
+
+struct PlotSpec {
+  Labels labels;
+  std::vector<Series> series;
+  int width = 900;                // pixels
+  int height = 520;
+  std::size_t max_points = 4000;  // per series, after decimation (>= 16)
+  bool equal_axes = false;        // same range on x and y (desired vs actual)
+};
+
+// Renders to path (.svg or .png). Throws hysteron::Error (see above).
+void plot(const PlotSpec& spec, const std::string& path);
+// Renders and returns the file's bytes: an SVG document ("svg") or a PNG ("png").
+std::string render(const PlotSpec& spec, std::string_view format);
+
+// Fig. 5 / Fig. 9: output against input. measured (and model, if non-empty)
+// against input; samples [0, major_end) are drawn as the major loop, the rest
+// as minor loops (major_end = 0: no split).
+void plot_hysteresis_loops(std::span<const double> input, std::span<const double> measured,
+                           std::span<const double> model, const Labels& labels, const std::string& path,
+                           std::size_t major_end = 0);
+// Fig. 4: the identification input against time: the command, and the
+// measured input if non-empty.
+void plot_identification_input(std::span<const double> t, std::span<const double> command,
+                               std::span<const double> measured, const Labels& labels, const std::string& path);
+// Fig. 11: desired and actual output against time.
+void plot_tracking(std::span<const double> t, std::span<const double> desired, std::span<const double> actual,
+                   const Labels& labels, const std::string& path);
+// Fig. 12: tracking error (desired - actual) against time.
+void plot_tracking_error(std::span<const double> t, std::span<const double> desired,
+                         std::span<const double> actual, const Labels& labels, const std::string& path);
+// Fig. 13: actual against desired output, with the ideal line y = x.
+void plot_desired_vs_actual(std::span<const double> desired, std::span<const double> actual, const Labels& labels,
+                            const std::string& path);
+// Fit residuals (measured - model) against x (time or sample index).
+void plot_fit_residuals(std::span<const double> x, std::span<const double> measured,
+                        std::span<const double> model, const Labels& labels, const std::string& path);
+
+// ---- reports -------------------------------------------------------------------
+
+// What write_fit_report needs besides the FitReport: the data and their meaning.
+struct FitData {
+  std::vector<double> x, y;            // the record fit() saw (input, measured output)
+  std::vector<double> t;               // optional time axis (else the sample index)
+  Axis input{"Input", ""};
+  Axis output{"Output", ""};
+  std::string source;                  // e.g. "data.csv (columns pressure, length)"
+  InitialState initial_state = InitialState::virgin;
+  IndexRange train{};                  // the training range of the fit
+};
+
+// HTML report of an experiment (what `hysteron experiment NAME --out DIR` computed).
+void write_experiment_report(const ExperimentResult& result, const std::string& html_path,
+                             const std::string& command_line);
+// HTML report of a fit: parameters with standard errors, metrics (training and,
+// if the training range is not the whole record, validation), measured vs model
+// loops, residuals.
+void write_fit_report(const FitReport& fit, const FitData& data, const std::string& html_path,
+                      const std::string& command_line);
+
+// Reads a directory written by ExperimentResult::write (result.json,
+// identification.csv, tracking_<variant>_<reference>.csv, model.json,
+// best_model.json). Throws hysteron::Error naming the missing or malformed file.
+ExperimentResult read_experiment_dir(const std::string& dir);
+
+// Fit report JSON ("hysteron fit --report fit.json"):
+//   {"format": "hysteron-fit-report", "schema": 1, "status", "message", "model_kind",
+//    "initial_cost", "final_cost", "iterations", "total_iterations", "num_starts",
+//    "time_s", "covariance_note", "model": <model file JSON>,
+//    "parameters": [{"name", "value", "std_error" (null if NaN), "held"}],
+//    "train": {"rms", "max", "mae", "rms_percent_span", "r2", "n"},
+//    "data": {"input": {"file", "column"}, "output": {"file", "column"},
+//             "input_axis": {"label", "unit"}, "output_axis": {"label", "unit"},
+//             "initial_state": "virgin" | "relaxed", "train": [begin, end|null]}}
+// Data file paths are stored as given; relative paths are resolved against the
+// JSON file's directory first, then the current directory.
+inline constexpr int fit_report_schema = 1;
+struct FitDataSource {
+  std::string input_file, input_column, output_file, output_column;
+};
+nlohmann::json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source);
+// Parses such a file and loads its data. Throws hysteron::Error naming the file
+// (malformed JSON, other format or schema, missing keys, unreadable data).
+struct LoadedFit {
+  FitReport fit;
+  FitData data;
+};
+LoadedFit read_fit_report_json(const std::string& path);
+
+// `hysteron report INPUT --out report.html`: INPUT is an experiment directory or
+// a fit report JSON file.
+void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line);
+
+// HTML-escapes text (&, <, >, ", ').
+std::string html_escape(std::string_view text);
+
+}  // namespace hysteron::report

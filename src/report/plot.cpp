@@ -1,0 +1,332 @@
+// Plots through gnuplot: a generated script with inline data, run as a child
+// process in a private temporary directory that is always removed.
+#include <fcntl.h>
+#include <spawn.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/table.hpp"
+#include "hysteron/report.hpp"
+
+extern char** environ;
+
+namespace hysteron::report {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A private temporary directory, removed with everything in it on scope exit.
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "hysteron-plot-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) == nullptr)
+      throw Error(fmt::format("plot: cannot create a temporary directory: {}", std::strerror(errno)));
+    path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// gnuplot single-quoted string: '' stands for '.
+std::string quote(std::string_view s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') out += "''";
+    else if (c == '\n' || c == '\r') out += ' ';
+    else out += c;
+  }
+  return out + "'";
+}
+
+std::string axis_text(const Axis& a) { return a.unit.empty() ? a.label : fmt::format("{} [{}]", a.label, a.unit); }
+
+// Min/max bucket decimation keeping the order of the samples.
+std::vector<std::size_t> decimate(const Series& s, std::size_t max_points) {
+  const std::size_t n = s.x.size();
+  std::vector<std::size_t> idx;
+  if (n <= max_points) {
+    idx.resize(n);
+    for (std::size_t i = 0; i < n; ++i) idx[i] = i;
+    return idx;
+  }
+  const std::size_t buckets = max_points / 2;
+  idx.reserve(max_points + 2);
+  for (std::size_t b = 0; b < buckets; ++b) {
+    const std::size_t lo = b * n / buckets, hi = (b + 1) * n / buckets;
+    std::size_t imin = lo, imax = lo;
+    for (std::size_t i = lo; i < hi; ++i) {
+      if (!std::isfinite(s.y[i])) {  // keep gaps visible
+        imin = imax = i;
+        break;
+      }
+      if (s.y[i] < s.y[imin]) imin = i;
+      if (s.y[i] > s.y[imax]) imax = i;
+    }
+    idx.push_back(std::min(imin, imax));
+    if (imin != imax) idx.push_back(std::max(imin, imax));
+  }
+  return idx;
+}
+
+std::string script(const PlotSpec& spec, std::string_view format, const std::string& out) {
+  const Labels& l = spec.labels;
+  if (l.title.empty()) throw Error("plot: the title is empty");
+  if (l.x.label.empty() || l.y.label.empty())
+    throw Error(fmt::format("plot '{}': every axis needs a label", l.title));
+  if (spec.series.empty()) throw Error(fmt::format("plot '{}': no data (no series)", l.title));
+  if (spec.width < 100 || spec.height < 100 || spec.max_points < 16)
+    throw Error(fmt::format("plot '{}': size below 100 px or max_points below 16", l.title));
+  std::size_t finite = 0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Series& s : spec.series) {
+    if (s.label.empty()) throw Error(fmt::format("plot '{}': a series has no legend label", l.title));
+    if (s.x.size() != s.y.size())
+      throw Error(fmt::format("plot '{}': series '{}' has {} x and {} y values", l.title, s.label, s.x.size(),
+                              s.y.size()));
+    for (std::size_t i = 0; i < s.x.size(); ++i)
+      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+        ++finite;
+        lo = std::min({lo, s.x[i], s.y[i]});
+        hi = std::max({hi, s.x[i], s.y[i]});
+      }
+  }
+  if (finite == 0) throw Error(fmt::format("plot '{}': no finite data to plot (empty or all NaN)", l.title));
+
+  std::string g;
+  if (format == "svg")
+    g += fmt::format("set terminal svg size {},{} enhanced font 'Helvetica,13' background '#ffffff'\n", spec.width,
+                     spec.height);
+  else
+    g += fmt::format("set terminal pngcairo size {},{} enhanced font 'Sans,10' background '#ffffff'\n", spec.width,
+                     spec.height);
+  g += fmt::format("set output {}\n", quote(out));
+  g += fmt::format("set title {} noenhanced\n", quote(l.title));
+  g += fmt::format("set xlabel {} noenhanced\n", quote(axis_text(l.x)));
+  g += fmt::format("set ylabel {} noenhanced\n", quote(axis_text(l.y)));
+  g += "set grid lc rgb '#dddddd'\nset key top left box opaque noenhanced samplen 2\nset border lw 1\n";
+  if (spec.equal_axes && hi > lo) {
+    const double pad = 0.03 * (hi - lo);
+    g += fmt::format("set xrange [{:.9g}:{:.9g}]\nset yrange [{:.9g}:{:.9g}]\nset size ratio -1\n", lo - pad,
+                     hi + pad, lo - pad, hi + pad);
+  }
+  for (std::size_t k = 0; k < spec.series.size(); ++k) {
+    const Series& s = spec.series[k];
+    g += fmt::format("$d{} << EOD\n", k);
+    bool any = false;
+    for (std::size_t i : decimate(s, spec.max_points)) {
+      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+        g += fmt::format("{:.9g} {:.9g}\n", s.x[i], s.y[i]);
+        any = true;
+      } else {
+        g += "\n";
+      }
+    }
+    if (!any) g += "NaN NaN\n";  // an empty block would be an error; a NaN point plots nothing
+    g += "EOD\n";
+  }
+  g += "plot ";
+  for (std::size_t k = 0; k < spec.series.size(); ++k) {
+    const Series& s = spec.series[k];
+    std::string with;
+    if (s.style == "points") with = "points pt 7 ps 0.35";
+    else if (s.style == "linespoints") with = "linespoints pt 7 ps 0.4 lw 1.5";
+    else if (s.style == "lines") with = "lines lw 1.5";
+    else throw Error(fmt::format("plot '{}': unknown style '{}' (lines, points, linespoints)", l.title, s.style));
+    if (!s.color.empty()) with += fmt::format(" lc rgb {}", quote(s.color));
+    if (s.dashed) with += " dt 2";
+    g += fmt::format("{}$d{} using 1:2 with {} title {}", k ? ", \\\n     " : "", k, with, quote(s.label));
+  }
+  g += "\nunset output\n";
+  return g;
+}
+
+std::string gnuplot_binary() {
+  const char* env = std::getenv("HYSTERON_GNUPLOT");
+  return env && *env ? env : "gnuplot";
+}
+
+}  // namespace
+
+std::string render(const PlotSpec& spec, std::string_view format) {
+  if (format != "svg" && format != "png")
+    throw Error(fmt::format("plot: unknown format '{}' (svg or png)", format));
+  TempDir tmp;
+  const fs::path out = tmp.path() / fmt::format("plot.{}", format);
+  const fs::path gp = tmp.path() / "plot.gp";
+  const fs::path log = tmp.path() / "gnuplot.log";
+  {
+    std::ofstream f(gp, std::ios::binary);
+    f << script(spec, format, out.string());
+    if (!f) throw Error(fmt::format("plot: cannot write the gnuplot script in {}", tmp.path().string()));
+  }
+  const std::string bin = gnuplot_binary();
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  std::string arg0 = bin, arg1 = gp.string();
+  char* argv[] = {arg0.data(), arg1.data(), nullptr};
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, bin.c_str(), &fa, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0)
+    throw Error(fmt::format("plot '{}': cannot run the gnuplot binary '{}': {} (install gnuplot, e.g. "
+                            "apt-get install gnuplot-nox, or set HYSTERON_GNUPLOT to its path)",
+                            spec.labels.title, bin, std::strerror(rc)));
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) throw Error(fmt::format("plot: waiting for gnuplot failed: {}", std::strerror(errno)));
+  std::string messages = read_file(log);
+  while (!messages.empty() && (messages.back() == '\n' || messages.back() == ' ')) messages.pop_back();
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+      throw Error(fmt::format("plot '{}': the gnuplot binary '{}' was not found (install gnuplot, e.g. apt-get "
+                              "install gnuplot-nox, or set HYSTERON_GNUPLOT)",
+                              spec.labels.title, bin));
+    throw Error(fmt::format("plot '{}': gnuplot failed (status {}): {}", spec.labels.title,
+                            WIFEXITED(status) ? WEXITSTATUS(status) : -1, messages));
+  }
+  std::string bytes = read_file(out);
+  if (bytes.empty())
+    throw Error(fmt::format("plot '{}': gnuplot wrote no output{}{}", spec.labels.title, messages.empty() ? "" : ": ",
+                            messages));
+  return bytes;
+}
+
+void plot(const PlotSpec& spec, const std::string& path) {
+  const std::string ext = fs::path(path).extension().string();
+  std::string format;
+  if (ext == ".svg" || ext == ".SVG") format = "svg";
+  else if (ext == ".png" || ext == ".PNG") format = "png";
+  else throw Error(fmt::format("{}: unknown plot format '{}' (use .svg or .png)", path, ext));
+  io::write_text_file(path, render(spec, format));
+}
+
+namespace {
+
+std::vector<double> vec(std::span<const double> s) { return {s.begin(), s.end()}; }
+
+std::vector<double> index_axis(std::size_t n) {
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<double>(i);
+  return v;
+}
+
+void same_length(std::span<const double> a, std::span<const double> b, const Labels& l, const char* what) {
+  if (a.size() != b.size())
+    throw Error(fmt::format("plot '{}': {} have different lengths ({} and {})", l.title, what, a.size(), b.size()));
+}
+
+}  // namespace
+
+void plot_hysteresis_loops(std::span<const double> input, std::span<const double> measured,
+                           std::span<const double> model, const Labels& labels, const std::string& path,
+                           std::size_t major_end) {
+  same_length(input, measured, labels, "input and measured output");
+  if (!model.empty()) same_length(input, model, labels, "input and model output");
+  PlotSpec spec{labels, {}};
+  const std::size_t n = input.size();
+  const std::size_t split = major_end > 0 && major_end < n ? major_end : n;
+  auto part = [&](std::span<const double> y, std::size_t b, std::size_t e, std::string label, std::string color,
+                  bool dashed) {
+    Series s{std::move(label), vec(input.subspan(b, e - b)), vec(y.subspan(b, e - b)), "lines", std::move(color),
+             dashed};
+    spec.series.push_back(std::move(s));
+  };
+  const bool split_loops = split < n;
+  part(measured, 0, split, split_loops ? "measured, major loop" : "measured", "#d62728", false);
+  if (split_loops) part(measured, split, n, "measured, minor loops", "#ff9896", false);
+  if (!model.empty()) {
+    part(model, 0, split, split_loops ? "model, major loop" : "model", "#1f77b4", true);
+    if (split_loops) part(model, split, n, "model, minor loops", "#17becf", true);
+  }
+  plot(spec, path);
+}
+
+void plot_identification_input(std::span<const double> t, std::span<const double> command,
+                               std::span<const double> measured, const Labels& labels, const std::string& path) {
+  same_length(t, command, labels, "time and command");
+  PlotSpec spec{labels, {{"command", vec(t), vec(command), "lines", "#1f77b4", false}}};
+  if (!measured.empty()) {
+    same_length(t, measured, labels, "time and measured input");
+    spec.series.push_back({"measured", vec(t), vec(measured), "lines", "#d62728", false});
+  }
+  plot(spec, path);
+}
+
+void plot_tracking(std::span<const double> t, std::span<const double> desired, std::span<const double> actual,
+                   const Labels& labels, const std::string& path) {
+  same_length(t, desired, labels, "time and desired output");
+  same_length(t, actual, labels, "time and actual output");
+  plot({labels,
+        {{"desired", vec(t), vec(desired), "lines", "#222222", true},
+         {"actual", vec(t), vec(actual), "lines", "#d62728", false}}},
+       path);
+}
+
+void plot_tracking_error(std::span<const double> t, std::span<const double> desired,
+                         std::span<const double> actual, const Labels& labels, const std::string& path) {
+  same_length(t, desired, labels, "time and desired output");
+  same_length(t, actual, labels, "time and actual output");
+  std::vector<double> e(t.size());
+  for (std::size_t i = 0; i < e.size(); ++i) e[i] = desired[i] - actual[i];
+  plot({labels, {{"error (desired - actual)", vec(t), std::move(e), "lines", "#1f77b4", false}}}, path);
+}
+
+void plot_desired_vs_actual(std::span<const double> desired, std::span<const double> actual, const Labels& labels,
+                            const std::string& path) {
+  same_length(desired, actual, labels, "desired and actual output");
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (double v : desired)
+    if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+  PlotSpec spec{labels, {{"actual", vec(desired), vec(actual), "points", "#d62728", false}}};
+  if (hi >= lo) spec.series.push_back({"ideal (actual = desired)", {lo, hi}, {lo, hi}, "lines", "#222222", true});
+  spec.equal_axes = true;
+  spec.width = 640;
+  spec.height = 600;
+  plot(spec, path);
+}
+
+void plot_fit_residuals(std::span<const double> x, std::span<const double> measured,
+                        std::span<const double> model, const Labels& labels, const std::string& path) {
+  same_length(measured, model, labels, "measured and model output");
+  std::vector<double> xs = x.empty() ? index_axis(measured.size()) : vec(x);
+  if (xs.size() != measured.size())
+    throw Error(fmt::format("plot '{}': x and residuals have different lengths ({} and {})", labels.title,
+                            xs.size(), measured.size()));
+  std::vector<double> r(measured.size());
+  for (std::size_t i = 0; i < r.size(); ++i) r[i] = measured[i] - model[i];
+  plot({labels, {{"residual (measured - model)", std::move(xs), std::move(r), "lines", "#2ca02c", false}}}, path);
+}
+
+}  // namespace hysteron::report

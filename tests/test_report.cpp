@@ -1,0 +1,259 @@
+// Plots (gnuplot) and HTML reports.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/table.hpp"
+#include "hysteron/report.hpp"
+
+namespace fs = std::filesystem;
+using namespace hysteron;
+using namespace hysteron::report;
+
+namespace {
+
+struct Tmp {
+  fs::path dir;
+  Tmp() {
+    std::string t = (fs::temp_directory_path() / "hysteron-report-test-XXXXXX").string();
+    if (!::mkdtemp(t.data())) throw std::runtime_error("mkdtemp");
+    dir = t;
+  }
+  ~Tmp() { fs::remove_all(dir); }
+  std::string operator/(const std::string& name) const { return (dir / name).string(); }
+};
+
+std::string slurp(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::size_t count(const std::string& s, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+  return n;
+}
+
+std::size_t plot_temp_dirs() {
+  std::size_t n = 0;
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path()))
+    if (e.path().filename().string().starts_with("hysteron-plot-")) ++n;
+  return n;
+}
+
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+GpiParams test_gpi() {
+  GpiParams g;
+  g.envelope = Envelope::tanh(40.0, 3.0, 0.0, 0.0);
+  g.q = 1.0;
+  g.n = 5;
+  g.rho = 0.4;
+  g.tau = 2.0;
+  g.alpha = 3.0;
+  return g;
+}
+
+std::vector<double> test_input(std::size_t n) {
+  std::vector<double> x(n);
+  for (std::size_t i = 0; i < n; ++i)
+    x[i] = 0.3 + 0.3 * std::sin(0.02 * static_cast<double>(i)) * std::exp(-static_cast<double>(i) / 1500.0);
+  return x;
+}
+
+const Labels kLabels{"Tracking", {"Time", "s"}, {"Contraction", "mm"}};
+
+}  // namespace
+
+TEST(Plot, SvgAndPngWithLabelsAndNoTempFilesLeft) {
+  Tmp tmp;
+  const std::size_t before = plot_temp_dirs();
+  std::vector<double> t(20000), d(20000), a(20000);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    t[i] = 1e-3 * static_cast<double>(i);
+    d[i] = 45 * std::sin(t[i]);
+    a[i] = d[i] + (i == 12345 ? 7.5 : 0.1);
+  }
+  plot_tracking(t, d, a, kLabels, tmp / "a.svg");
+  const std::string svg = slurp(tmp / "a.svg");
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  EXPECT_NE(svg.find("Contraction [mm]"), std::string::npos);
+  EXPECT_NE(svg.find("Time [s]"), std::string::npos);
+  EXPECT_NE(svg.find("Tracking"), std::string::npos);
+  EXPECT_NE(svg.find("desired"), std::string::npos);
+  EXPECT_LT(svg.size(), 800'000u);  // decimated
+  plot_tracking_error(t, d, a, {"Error", {"Time", "s"}, {"Error", "mm"}}, tmp / "e.png");
+  EXPECT_EQ(slurp(tmp / "e.png").substr(0, 4), "\x89PNG");
+  plot_desired_vs_actual(d, a, {"DvA", {"Desired", "mm"}, {"Actual", "mm"}}, tmp / "d.svg");
+  plot_fit_residuals({}, d, a, {"Res", {"Sample", ""}, {"Residual", "mm"}}, tmp / "r.svg");
+  plot_identification_input(t, d, a, {"Input", {"Time", "s"}, {"Pressure", "MPa"}}, tmp / "i.svg");
+  plot_hysteresis_loops(d, a, d, {"Loops", {"Pressure", "MPa"}, {"Contraction", "mm"}}, tmp / "l.svg", 5000);
+  EXPECT_NE(slurp(tmp / "l.svg").find("minor loops"), std::string::npos);
+  EXPECT_EQ(plot_temp_dirs(), before);
+}
+
+TEST(Plot, NoDataIsAClearError) {
+  Tmp tmp;
+  const std::vector<double> none;
+  EXPECT_NE(error_of([&] { plot_tracking(none, none, none, kLabels, tmp / "x.svg"); }).find("no finite data"),
+            std::string::npos);
+  const std::vector<double> nan(10, std::nan(""));
+  EXPECT_NE(error_of([&] { plot_tracking(nan, nan, nan, kLabels, tmp / "x.svg"); }).find("no finite data"),
+            std::string::npos);
+  const std::vector<double> one{1.0, 2.0};
+  EXPECT_NE(error_of([&] { plot_tracking(one, one, one, {"T", {"", ""}, {"y", ""}}, tmp / "x.svg"); }).find("label"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { plot_tracking(one, one, one, kLabels, tmp / "x.pdf"); }).find("unknown plot format"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp / "x.svg"));
+}
+
+TEST(Plot, MissingGnuplotIsAClearError) {
+  Tmp tmp;
+  ::setenv("HYSTERON_GNUPLOT", "/nonexistent/gnuplot", 1);
+  const std::vector<double> one{1.0, 2.0};
+  const std::string e = error_of([&] { plot_tracking(one, one, one, kLabels, tmp / "x.svg"); });
+  ::unsetenv("HYSTERON_GNUPLOT");
+  EXPECT_NE(e.find("gnuplot"), std::string::npos) << e;
+  EXPECT_NE(e.find("/nonexistent/gnuplot"), std::string::npos) << e;
+}
+
+TEST(Report, FitJsonRoundTripAndHtml) {
+  Tmp tmp;
+  const std::vector<double> x = test_input(1500);
+  const ModelParams model = test_gpi();
+  std::vector<double> y = simulate_record(model, x);
+  for (std::size_t i = 0; i < y.size(); ++i) y[i] += 0.01 * std::sin(1.7 * static_cast<double>(i));
+  io::write_columns(tmp / "data.csv", {"pressure", "length"}, {x, y});
+  FitReport f;
+  f.status = FitStatus::converged;
+  f.message = "function tolerance reached";
+  f.model_kind = FitModel::gpi;
+  f.model = model;
+  f.parameters = {{"c0", 40.0, 0.0, true}, {"q", 1.0, 0.01, false}, {"rho", 0.4, std::nan(""), false}};
+  f.train = compute_metrics(y, simulate_record(model, x));
+  FitData data;
+  data.input = {"Pressure", "MPa"};
+  data.output = {"Contraction", "mm"};
+  data.train = {0, 1000};
+  const nlohmann::json j = fit_report_to_json(f, data, {"data.csv", "pressure", "data.csv", "length"});
+  io::write_text_file(tmp / "fit.json", j.dump(2));
+  const LoadedFit lf = read_fit_report_json(tmp / "fit.json");  // data path resolved beside the JSON
+  EXPECT_EQ(lf.data.x, x);
+  EXPECT_EQ(lf.data.y, y);
+  EXPECT_EQ(lf.data.train.end, 1000u);
+  EXPECT_EQ(lf.fit.parameters.size(), 3u);
+  EXPECT_TRUE(std::isnan(lf.fit.parameters[2].std_error));
+  EXPECT_EQ(lf.data.output.unit, "mm");
+  write_report_from(tmp / "fit.json", tmp / "fit.html", "hysteron report fit.json --out fit.html");
+  const std::string html = slurp(tmp / "fit.html");
+  EXPECT_EQ(count(html, "<svg"), 3u);
+  EXPECT_NE(html.find("after training (validation)"), std::string::npos);
+  EXPECT_NE(html.find("hysteron report fit.json --out fit.html"), std::string::npos);
+  EXPECT_NE(html.find(std::string(hysteron_version)), std::string::npos);
+  EXPECT_NE(html.find("Pressure [MPa]"), std::string::npos);
+
+  // other schema, other format, malformed JSON, missing data: errors naming the file
+  nlohmann::json bad = j;
+  bad["schema"] = 99;
+  io::write_text_file(tmp / "bad.json", bad.dump());
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "bad.json", tmp / "x.html", ""); }).find("bad.json: unsupported"),
+            std::string::npos);
+  io::write_text_file(tmp / "other.json", R"({"model": "pi"})");
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "other.json", tmp / "x.html", ""); })
+                .find("other.json: not a hysteron fit report"),
+            std::string::npos);
+  io::write_text_file(tmp / "broken.json", R"({"format": )");
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "broken.json", tmp / "x.html", ""); })
+                .find("broken.json: malformed JSON"),
+            std::string::npos);
+  bad = j;
+  bad["data"]["input"]["file"] = "nope.csv";
+  io::write_text_file(tmp / "nodata.json", bad.dump());
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "nodata.json", tmp / "x.html", ""); }).find("nope.csv"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp / "x.html"));
+}
+
+TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
+  Tmp tmp;
+  ExperimentResult r;
+  r.name = "gpi-pid";
+  r.title = "test experiment";
+  r.seed = 3;
+  const std::size_t n = 800;
+  r.id_pressure_mpa = test_input(n);
+  r.fit.model_kind = FitModel::gpi;
+  r.fit.status = FitStatus::converged;
+  r.fit.model = test_gpi();
+  r.best_fit = r.fit;
+  r.id_contraction_mm = simulate_record(r.fit.model, r.id_pressure_mpa);
+  r.id_pressure_command_mpa = r.id_pressure_mpa;
+  for (std::size_t i = 0; i < n; ++i) r.id_t.push_back(0.01 * static_cast<double>(i));
+  r.id_train_end = 500;
+  r.published = {{"source", "paper, Table 5"}, {"max_error_mm", 2.659}, {"mae_mm", 0.7358}, {"rms_error_mm", 0.8701}};
+  for (const char* variant : {"compensated", "faithful", "baseline"}) {
+    TrackingRun run;
+    run.variant = variant;
+    run.reference = "sine";
+    run.description = std::string("the ") + variant + " loop";
+    for (std::size_t i = 0; i < 300; ++i) {
+      const double t = 0.01 * static_cast<double>(i);
+      run.t.push_back(t);
+      run.reference_mm.push_back(45 + 40 * std::sin(t));
+      run.measured_mm.push_back(run.reference_mm.back() + 0.5 * std::cos(3 * t));
+      run.actual_mm.push_back(run.measured_mm.back());
+      run.pressure_command_mpa.push_back(0.3);
+      run.pressure_mpa.push_back(0.3);
+      run.duty.push_back(0.0);
+    }
+    run.errors = {0.5, 0.3, 0.35};
+    r.runs.push_back(run);
+  }
+  const std::string dir = tmp / "exp";
+  r.write(dir);
+  const ExperimentResult back = read_experiment_dir(dir);
+  EXPECT_EQ(back.name, "gpi-pid");
+  EXPECT_EQ(back.runs.size(), 3u);
+  EXPECT_EQ(back.runs[0].reference, "sine");
+  EXPECT_EQ(back.id_contraction_mm, r.id_contraction_mm);
+  write_report_from(dir, tmp / "exp.html", "hysteron report exp --out exp.html");
+  const std::string html = slurp(tmp / "exp.html");
+  EXPECT_EQ(count(html, "<svg"), 6u);  // Fig. 4, loops, residuals, Figs. 11, 12, 13
+  EXPECT_NE(html.find("2.659"), std::string::npos);  // published figure
+  EXPECT_NE(html.find("the faithful loop"), std::string::npos);
+
+  // write_experiment_report directly gives the same figures
+  write_experiment_report(r, tmp / "direct.html", "experiment");
+  EXPECT_EQ(count(slurp(tmp / "direct.html"), "<svg"), 6u);
+
+  // broken directories name the file
+  fs::remove(dir + "/tracking_faithful_sine.csv");
+  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("tracking_faithful_*.csv: missing file"),
+            std::string::npos);
+  fs::remove(dir + "/model.json");
+  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("model.json: missing file"), std::string::npos);
+  io::write_text_file(dir + "/result.json", "{\"experiment\": ");
+  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("result.json: malformed JSON"), std::string::npos);
+  io::write_text_file(dir + "/result.json", R"({"schema": 7, "experiment": "x", "identification": {}})");
+  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("result.json: unsupported schema 7"), std::string::npos);
+  fs::remove(dir + "/result.json");
+  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("result.json: missing file"), std::string::npos);
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "nothing", tmp / "x.html", ""); }).find("no such file"),
+            std::string::npos);
+}

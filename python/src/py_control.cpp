@@ -1,0 +1,119 @@
+// Bindings of the PID, the inverse feedforward and the feedforward + PID controller.
+#include <limits>
+
+#include "hysteron/compensation.hpp"
+#include "hysteron/control.hpp"
+#include "more.hpp"
+
+namespace hysteron::python {
+
+namespace {
+
+AntiWindup anti_windup_from(const std::string& s) {
+  if (s == "none") return AntiWindup::none;
+  if (s == "conditional") return AntiWindup::conditional;
+  if (s == "back_calculation") return AntiWindup::back_calculation;
+  throw py::value_error("anti_windup must be 'none', 'conditional' or 'back_calculation'");
+}
+const char* anti_windup_name(AntiWindup a) {
+  return a == AntiWindup::none ? "none" : a == AntiWindup::conditional ? "conditional" : "back_calculation";
+}
+
+py::dict pid_dict(const PidParams& p) {
+  py::dict d;
+  d["kp"] = p.kp;
+  d["ki"] = p.ki;
+  d["kd"] = p.kd;
+  d["sample_time"] = p.sample_time;
+  d["derivative_filter"] = p.derivative_filter;
+  d["out_min"] = p.out_min;
+  d["out_max"] = p.out_max;
+  d["anti_windup"] = anti_windup_name(p.anti_windup);
+  d["tracking_time"] = p.tracking_time;
+  d["setpoint_weight_p"] = p.setpoint_weight_p;
+  d["setpoint_weight_d"] = p.setpoint_weight_d;
+  return d;
+}
+
+FeedforwardParams ff_params(std::pair<double, double> limits, double model_scale, double lag, double ts) {
+  FeedforwardParams f;
+  f.pressure_limits = {limits.first, limits.second};
+  f.model_scale = model_scale;
+  f.lag_time_constant = lag;
+  f.sample_time = ts;
+  return f;
+}
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+void bind_control(py::module_& m) {
+  py::class_<Pid>(m, "Pid", R"doc(
+Discrete PID (Eq. 17 of the GPI paper) with output limits, anti-windup
+("none", "conditional", "back_calculation"), derivative filter and setpoint
+weights. step() never allocates; a non-finite input holds the last output.)doc")
+      .def(py::init([](double kp, double ki, double kd, double sample_time, double derivative_filter, double out_min,
+                       double out_max, const std::string& anti_windup, double tracking_time, double b, double c) {
+             PidParams p;
+             p.kp = kp;
+             p.ki = ki;
+             p.kd = kd;
+             p.sample_time = sample_time;
+             p.derivative_filter = derivative_filter;
+             p.out_min = out_min;
+             p.out_max = out_max;
+             p.anti_windup = anti_windup_from(anti_windup);
+             p.tracking_time = tracking_time;
+             p.setpoint_weight_p = b;
+             p.setpoint_weight_d = c;
+             return Pid(p);
+           }),
+           py::arg("kp") = 0.0, py::arg("ki") = 0.0, py::arg("kd") = 0.0, py::arg("sample_time") = 1e-3,
+           py::arg("derivative_filter") = 0.0, py::arg("out_min") = -inf, py::arg("out_max") = inf,
+           py::arg("anti_windup") = "conditional", py::arg("tracking_time") = 0.0, py::arg("setpoint_weight_p") = 1.0,
+           py::arg("setpoint_weight_d") = 0.0)
+      .def_static(
+          "gpi_paper", [](double ts, double lo, double hi) { return Pid(gpi_paper_pid(ts, lo, hi)); },
+          py::arg("sample_time") = 1e-3, py::arg("out_min") = -0.6, py::arg("out_max") = 0.6,
+          "Table 3 of the GPI paper in SI/MPa units (K_p = 5 MPa/m, K_i = 1 MPa/(m s)).")
+      .def("step", &Pid::step, py::arg("setpoint"), py::arg("measurement"), py::arg("feedforward") = 0.0,
+           "One sample; returns the clamped output.")
+      .def("reset", &Pid::reset, py::arg("u0") = 0.0, "Zero state, optionally starting bumplessly at output u0.")
+      .def_property_readonly("output", &Pid::output)
+      .def_property_readonly("integral", [](const Pid& p) { return p.state().integral; })
+      .def_property_readonly("saturated", [](const Pid& p) { return p.state().saturated; },
+                             "True if the last output was clamped.")
+      .def_property_readonly("faults", &Pid::faults, "Number of non-finite inputs ignored.")
+      .def_property_readonly("params", [](const Pid& p) { return pid_dict(p.params()); });
+
+  py::class_<InverseFeedforward>(m, "InverseFeedforward", R"doc(
+Inverse-model feedforward: desired contraction [m] -> pressure command [MPa],
+clamped to pressure_limits; model output units are model_scale per metre (1000
+for a model fitted in mm); optional compensation of a first-order lag.)doc")
+      .def(py::init([](const py::object& model, std::pair<double, double> limits, double scale, double lag,
+                       double ts) { return InverseFeedforward(model_spec(model), ff_params(limits, scale, lag, ts)); }),
+           py::arg("model"), py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
+           py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
+      .def("step", &InverseFeedforward::step, py::arg("desired_m"), "Pressure [MPa] for the desired contraction [m].")
+      .def("reset", &InverseFeedforward::reset)
+      .def_property_readonly("saturated", &InverseFeedforward::saturated);
+
+  py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
+GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)) [MPa], the PID's
+anti-windup aware of the total command. pid: a hysteron.Pid (its parameters
+are used; default: Pid.gpi_paper()).)doc")
+      .def(py::init([](const py::object& model, const py::object& pid, std::pair<double, double> limits, double scale,
+                       double lag, double ts) {
+             const PidParams pp = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
+                                                : pid.cast<const Pid&>().params();
+             return FeedforwardPidController(model_spec(model), ff_params(limits, scale, lag, ts), pp);
+           }),
+           py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
+           py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
+      .def("step", &FeedforwardPidController::step, py::arg("reference_m"), py::arg("preview_m"),
+           py::arg("measured_m"), "One control sample; returns the pressure command [MPa].")
+      .def("reset", &FeedforwardPidController::reset);
+}
+
+}  // namespace hysteron::python

@@ -1,0 +1,188 @@
+// Bindings of the papers' experiments, the plots and the HTML reports.
+#include <fmt/format.h>
+
+#include "hysteron/experiment.hpp"
+#include "hysteron/plant.hpp"
+#include "hysteron/report.hpp"
+#include "more.hpp"
+
+namespace hysteron::python {
+
+namespace {
+
+std::vector<double> vec(const DoubleArray& a) {
+  const auto s = as_span(a);
+  return {s.begin(), s.end()};
+}
+
+report::Labels labels(const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
+                      const std::string& yu) {
+  return {title, {xl, xu}, {yl, yu}};
+}
+
+// Keyword arguments shared by the plot functions.
+#define HYSTERON_PLOT_ARGS(title, xl, xu, yl, yu)                                                            \
+  py::arg("path"), py::arg("title") = title, py::arg("x_label") = xl, py::arg("x_unit") = xu,                \
+      py::arg("y_label") = yl, py::arg("y_unit") = yu
+
+}  // namespace
+
+void bind_experiment(py::module_& m) {
+  m.def("experiment_names", &experiment_names, "Names of the papers' experiments.");
+  m.def(
+      "run_experiment",
+      [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
+         const std::string& report_path) {
+        ExperimentOptions o;
+        o.name = name;
+        o.seed = seed;
+        if (!plant.is_none())
+          o.rig = py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
+                                                 : rig_params_from_json(to_json(plant), "plant");
+        ExperimentResult r;
+        {
+          py::gil_scoped_release release;
+          r = run_experiment(o);
+        }
+        if (!out.empty()) r.write(out);
+        if (!report_path.empty())
+          report::write_experiment_report(r, report_path,
+                                          fmt::format("hysteron.run_experiment('{}', seed={})", name, seed));
+        py::dict d;
+        d["summary"] = from_json(r.to_json());
+        d["table"] = r.table();
+        py::dict id;
+        id["t"] = to_numpy(r.id_t);
+        id["pressure_command_mpa"] = to_numpy(r.id_pressure_command_mpa);
+        id["pressure_mpa"] = to_numpy(r.id_pressure_mpa);
+        id["contraction_mm"] = to_numpy(r.id_contraction_mm);
+        id["train_end"] = r.id_train_end;
+        d["identification"] = id;
+        d["fit"] = fit_dict(r.fit);
+        d["validation"] = metrics_dict(r.validation);
+        d["best_fit"] = fit_dict(r.best_fit);
+        d["best_validation"] = metrics_dict(r.best_validation);
+        py::list runs;
+        for (const auto& run : r.runs) {
+          py::dict x;
+          x["variant"] = run.variant;
+          x["reference"] = run.reference;
+          x["description"] = run.description;
+          x["max_error_mm"] = run.errors.max_error_mm;
+          x["mae_mm"] = run.errors.mae_mm;
+          x["rms_error_mm"] = run.errors.rms_error_mm;
+          x["saturated"] = run.saturated;
+          x["t"] = to_numpy(run.t);
+          x["reference_mm"] = to_numpy(run.reference_mm);
+          x["measured_mm"] = to_numpy(run.measured_mm);
+          x["actual_mm"] = to_numpy(run.actual_mm);
+          x["pressure_command_mpa"] = to_numpy(run.pressure_command_mpa);
+          x["pressure_mpa"] = to_numpy(run.pressure_mpa);
+          x["duty"] = to_numpy(run.duty);
+          runs.append(x);
+        }
+        d["runs"] = runs;
+        d["published"] = from_json(r.published);
+        return d;
+      },
+      py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
+      py::arg("report") = "",
+      R"doc(Run one of the papers' experiments ("gpi-pid", "mpi-openloop", "mpi-pwm") on the
+simulated rig. plant: rig parameter dict or JSON path (None: defaults).
+out: directory for the CSV/JSON outputs (as `hysteron experiment --out`);
+report: path of an HTML report. Returns a dict: "summary" (the CLI's --json
+object), "table" (text), "identification" (numpy series + train_end), "fit",
+"validation", "best_fit", "best_validation", "runs" (list of dicts with the
+errors and numpy time series) and "published".)doc");
+
+  m.def(
+      "write_report",
+      [](const std::string& input, const std::string& out) {
+        report::write_report_from(input, out, fmt::format("hysteron.write_report('{}', '{}')", input, out));
+      },
+      py::arg("input"), py::arg("out"),
+      "HTML report from an experiment output directory or a fit report JSON file (as `hysteron report`).");
+
+  m.def(
+      "plot",
+      [](const py::list& series, const std::string& path, const std::string& title, const std::string& xl,
+         const std::string& xu, const std::string& yl, const std::string& yu) {
+        report::PlotSpec spec{labels(title, xl, xu, yl, yu), {}};
+        for (const auto& s : series) {
+          const auto d = s.cast<py::dict>();
+          report::Series r;
+          r.label = d["label"].cast<std::string>();
+          r.x = vec(d["x"].cast<DoubleArray>());
+          r.y = vec(d["y"].cast<DoubleArray>());
+          if (d.contains("style")) r.style = d["style"].cast<std::string>();
+          if (d.contains("color")) r.color = d["color"].cast<std::string>();
+          if (d.contains("dashed")) r.dashed = d["dashed"].cast<bool>();
+          spec.series.push_back(std::move(r));
+        }
+        report::plot(spec, path);
+      },
+      py::arg("series"), HYSTERON_PLOT_ARGS("hysteron plot", "x", "", "y", ""),
+      "Generic plot (gnuplot) to .svg or .png; series: dicts {label, x, y, style, color, dashed}.");
+  m.def(
+      "plot_hysteresis_loops",
+      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const std::string& path,
+         const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
+         const std::string& yu, std::size_t major_end) {
+        report::plot_hysteresis_loops(as_span(x), as_span(y), as_span(model), labels(title, xl, xu, yl, yu), path,
+                                      major_end);
+      },
+      py::arg("input"), py::arg("measured"), py::arg("model"),
+      HYSTERON_PLOT_ARGS("Hysteresis loops", "Pressure", "MPa", "Contraction", "mm"), py::arg("major_end") = 0,
+      "Measured (and model, if non-empty) output against input; [0, major_end) drawn as the major loop.");
+  m.def(
+      "plot_identification_input",
+      [](const DoubleArray& t, const DoubleArray& cmd, const DoubleArray& meas, const std::string& path,
+         const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
+         const std::string& yu) {
+        report::plot_identification_input(as_span(t), as_span(cmd), as_span(meas), labels(title, xl, xu, yl, yu),
+                                          path);
+      },
+      py::arg("t"), py::arg("command"), py::arg("measured"),
+      HYSTERON_PLOT_ARGS("Identification input", "Time", "s", "Pressure", "MPa"),
+      "Identification input against time (Fig. 4).");
+  m.def(
+      "plot_tracking",
+      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const std::string& path,
+         const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
+         const std::string& yu) {
+        report::plot_tracking(as_span(t), as_span(d), as_span(a), labels(title, xl, xu, yl, yu), path);
+      },
+      py::arg("t"), py::arg("desired"), py::arg("actual"),
+      HYSTERON_PLOT_ARGS("Trajectory tracking", "Time", "s", "Contraction", "mm"),
+      "Desired and actual output against time (Fig. 11).");
+  m.def(
+      "plot_tracking_error",
+      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const std::string& path,
+         const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
+         const std::string& yu) {
+        report::plot_tracking_error(as_span(t), as_span(d), as_span(a), labels(title, xl, xu, yl, yu), path);
+      },
+      py::arg("t"), py::arg("desired"), py::arg("actual"),
+      HYSTERON_PLOT_ARGS("Tracking error", "Time", "s", "Error", "mm"), "Tracking error against time (Fig. 12).");
+  m.def(
+      "plot_desired_vs_actual",
+      [](const DoubleArray& d, const DoubleArray& a, const std::string& path, const std::string& title,
+         const std::string& xl, const std::string& xu, const std::string& yl, const std::string& yu) {
+        report::plot_desired_vs_actual(as_span(d), as_span(a), labels(title, xl, xu, yl, yu), path);
+      },
+      py::arg("desired"), py::arg("actual"),
+      HYSTERON_PLOT_ARGS("Desired vs actual", "Desired contraction", "mm", "Actual contraction", "mm"),
+      "Actual against desired output with the line y = x (Fig. 13).");
+  m.def(
+      "plot_fit_residuals",
+      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const std::string& path,
+         const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
+         const std::string& yu) {
+        report::plot_fit_residuals(as_span(x), as_span(y), as_span(model), labels(title, xl, xu, yl, yu), path);
+      },
+      py::arg("x"), py::arg("measured"), py::arg("model"),
+      HYSTERON_PLOT_ARGS("Fit residuals", "Sample", "", "Residual", "mm"),
+      "Residuals (measured - model) against x (time or sample index; empty: index).");
+}
+
+}  // namespace hysteron::python

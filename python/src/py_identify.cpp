@@ -1,0 +1,153 @@
+// Bindings of identification: fit, evaluate, simulate_record, metrics, RLS.
+#include <fmt/format.h>
+
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/report.hpp"
+#include "more.hpp"
+
+namespace hysteron::python {
+
+namespace {
+
+IndexRange range_from(const py::object& r) {
+  if (r.is_none()) return {};
+  auto t = r.cast<std::pair<py::object, py::object>>();
+  IndexRange out;
+  out.begin = t.first.is_none() ? 0 : t.first.cast<std::size_t>();
+  out.end = t.second.is_none() ? IndexRange::npos : t.second.cast<std::size_t>();
+  return out;
+}
+
+}  // namespace
+
+void bind_identify(py::module_& m) {
+  m.def(
+      "fit",
+      [](const DoubleArray& x, const DoubleArray& y, const std::string& model, int num_operators, int num_dead_zones,
+         const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
+         int max_iterations, bool fix_scale, bool compute_covariance, const std::string& report,
+         std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis) {
+        FitOptions o;
+        o.model = fit_model_from_name(model);
+        o.num_operators = num_operators;
+        o.num_dead_zones = num_dead_zones;
+        o.initial_state = initial_state_from(initial_state);
+        o.train = range_from(train);
+        o.huber_delta = huber_delta;
+        o.num_starts = num_starts;
+        o.seed = seed;
+        o.max_iterations = max_iterations;
+        o.gpi_fix_scale = fix_scale;
+        o.compute_covariance = compute_covariance;
+        const auto xs = as_span(x), ys = as_span(y);
+        FitReport r;
+        {
+          py::gil_scoped_release release;
+          r = fit(xs, ys, o);
+        }
+        if (!report.empty()) {
+          report::FitData data;
+          data.x.assign(xs.begin(), xs.end());
+          data.y.assign(ys.begin(), ys.end());
+          data.input = {input_axis.first, input_axis.second};
+          data.output = {output_axis.first, output_axis.second};
+          data.initial_state = o.initial_state;
+          data.train = o.train;
+          data.source = "numpy arrays (Python)";
+          report::write_fit_report(r, data, report, fmt::format("hysteron.fit(x, y, model='{}', num_operators={})",
+                                                                model, num_operators));
+        }
+        return fit_dict(r);
+      },
+      py::arg("x"), py::arg("y"), py::arg("model") = "gpi", py::arg("num_operators") = 10,
+      py::arg("num_dead_zones") = 4, py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
+      py::arg("huber_delta") = 0.0, py::arg("num_starts") = 2, py::arg("seed") = 0u, py::arg("max_iterations") = 100,
+      py::arg("fix_scale") = true, py::arg("compute_covariance") = true, py::arg("report") = "",
+      py::arg("input_axis") = std::make_pair(std::string("Input"), std::string()),
+      py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()),
+      R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
+
+x, y: input and measured output (1-D arrays of equal length).
+model: "gpi", "pi", "mpi-deadzone" or "mpi-asym"; num_operators: n.
+train: (begin, end) sample range entering the cost (None = all; end None = to the end).
+report: if given, path of a self-contained HTML report (plots, parameters,
+errors), with input_axis/output_axis = (label, unit) for its plots.
+
+Never raises on bad data: returns a dict with "status" ("converged",
+"no_convergence", "failed", "invalid_input"), "ok", "message", "model" (a
+model dict usable by hysteron.Model), "parameters" (list of {name, value,
+std_error, held}), "train" metrics, costs, iterations and "report" (text).)doc");
+
+  m.def(
+      "evaluate",
+      [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const py::object& range,
+         const std::string& initial_state) {
+        return metrics_dict(
+            evaluate(model_spec(model), as_span(x), as_span(y), range_from(range), initial_state_from(initial_state)));
+      },
+      py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),
+      py::arg("initial_state") = "virgin",
+      R"doc(Simulate `model` (dict, file path or Model) over x from its start and return the
+error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
+((begin, end) or None for all samples).)doc");
+
+  m.def(
+      "simulate_record",
+      [](const py::object& model, const DoubleArray& x, const std::string& initial_state) {
+        return to_numpy(simulate_record(model_spec(model), as_span(x), initial_state_from(initial_state)));
+      },
+      py::arg("model"), py::arg("x"), py::arg("initial_state") = "virgin",
+      "Model output over a whole record, starting as fit() does (virgin or relaxed).");
+
+  m.def(
+      "compute_metrics",
+      [](const DoubleArray& measured, const DoubleArray& predicted) {
+        return metrics_dict(compute_metrics(as_span(measured), as_span(predicted)));
+      },
+      py::arg("measured"), py::arg("predicted"), "Error metrics of predicted against measured (equal lengths).");
+
+  py::class_<Rls>(m, "Rls", R"doc(
+Recursive least squares with forgetting factor lam for the weights [q, p_1..p_n]
+of a model whose output is linear in them (pi, mpi-asym, gpi with free weights).
+Rls(model, lam=1.0, p0=1e6): model (dict, file path or Model) fixes thresholds
+and envelopes and gives the initial weights.)doc")
+      .def(py::init([](const py::object& model, double lam, double p0) { return Rls(model_spec(model), lam, p0); }),
+           py::arg("model"), py::arg("lam") = 1.0, py::arg("p0") = 1e6)
+      .def("step", &Rls::step, py::arg("x"), py::arg("y"),
+           "One sample: update with input x and measured y; returns the a-priori prediction.")
+      .def(
+          "reset_state",
+          [](Rls& r, const std::string& initial, double x0) { r.reset_state(initial_state_from(initial), x0); },
+          py::arg("initial_state") = "virgin", py::arg("x0") = 0.0, "Restart the operator state, keeping the weights.")
+      .def_property_readonly(
+          "theta", [](const Rls& r) { return to_numpy(std::vector<double>(r.theta().begin(), r.theta().end())); },
+          "Current weights [q, p_1..p_n].")
+      .def_property_readonly("lam", &Rls::lambda, "Forgetting factor.")
+      .def(
+          "params", [](const Rls& r) { return from_json(io::model_to_json(r.params())); },
+          "The model with the current weights, as a model dict.");
+
+  m.def(
+      "rls_fit",
+      [](const py::object& model, const DoubleArray& x, const DoubleArray& y, double lam, int passes,
+         const std::string& initial_state) {
+        return from_json(io::model_to_json(
+            rls_fit(model_spec(model), as_span(x), as_span(y), lam, passes, initial_state_from(initial_state))));
+      },
+      py::arg("model"), py::arg("x"), py::arg("y"), py::arg("lam") = 1.0, py::arg("passes") = 1,
+      py::arg("initial_state") = "virgin", "Run Rls over the record `passes` times; returns the model dict.");
+
+  m.def(
+      "fit_weights",
+      [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const std::string& initial_state,
+         const py::object& train) {
+        WeightFitOptions o;
+        o.initial_state = initial_state_from(initial_state);
+        o.train = range_from(train);
+        return from_json(io::model_to_json(fit_weights(model_spec(model), as_span(x), as_span(y), o)));
+      },
+      py::arg("model"), py::arg("x"), py::arg("y"), py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
+      "Constrained linear least squares for the weights of a model with fixed thresholds/envelopes.");
+}
+
+}  // namespace hysteron::python

@@ -1,0 +1,170 @@
+// Bindings of the simulated muscle rig and the papers' signals.
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "hysteron/plant.hpp"
+#include "hysteron/signals.hpp"
+#include "more.hpp"
+
+namespace hysteron::python {
+
+namespace {
+
+PamRigParams rig_params_from(const py::object& params) {
+  if (params.is_none()) return {};
+  if (py::isinstance<py::str>(params)) return load_rig_params(params.cast<std::string>());
+  return rig_params_from_json(to_json(params), "params");
+}
+
+py::dict outputs_dict(const RigOutputs& o) {
+  py::dict d;
+  d["time"] = o.time;
+  d["contraction"] = o.contraction;
+  d["contraction_measured"] = o.contraction_measured;
+  d["velocity"] = o.velocity;
+  d["pressure"] = o.pressure;
+  d["pressure_measured"] = o.pressure_measured;
+  d["inlet_open"] = o.inlet_open;
+  d["exhaust_open"] = o.exhaust_open;
+  d["ok"] = o.ok;
+  return d;
+}
+
+std::vector<WaveSegment> segments_from(const py::list& segs) {
+  std::vector<WaveSegment> out;
+  for (const auto& s : segs) {
+    const auto d = s.cast<py::dict>();
+    WaveSegment w;
+    const std::string wf = d.contains("waveform") ? d["waveform"].cast<std::string>() : "triangle";
+    if (wf == "triangle") w.waveform = Waveform::triangle;
+    else if (wf == "sine") w.waveform = Waveform::sine;
+    else throw py::value_error("waveform must be 'triangle' or 'sine'");
+    if (d.contains("amplitude")) w.amplitude = d["amplitude"].cast<double>();
+    if (d.contains("period")) w.period = d["period"].cast<double>();
+    if (d.contains("periods")) w.periods = d["periods"].cast<int>();
+    if (d.contains("offset")) w.offset = d["offset"].cast<double>();
+    out.push_back(w);
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_rig(py::module_& m) {
+  m.def(
+      "rig_params", [](const py::object& params) { return from_json(rig_params_to_json(rig_params_from(params))); },
+      py::arg("params") = py::none(),
+      "Complete rig parameter dict (defaults filled in) from a partial dict, a JSON file path or None.");
+
+  py::class_<PamRig>(m, "PamRig", R"doc(
+Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass, fed
+by a proportional pressure regulator or by PWM switching valves (docs/plant.md).
+
+PamRig(params=None, seed=1): params is a dict with optional sections "muscle",
+"hysteresis", "air", "regulator", "valves", "load", "sensors", "simulation"
+(see hysteron.rig_params()), or the path of such a JSON file. SI units inside;
+run_pressure takes and returns MPa and mm. Runs are reproducible bit for bit
+for a given seed.)doc")
+      .def(py::init([](const py::object& params, std::uint64_t seed) { return PamRig(rig_params_from(params), seed); }),
+           py::arg("params") = py::none(), py::arg("seed") = 1)
+      .def("reset", &PamRig::reset, "Vented muscle at rest, t = 0, RNG re-seeded.")
+      .def("reset_at_pressure", &PamRig::reset_at_pressure, py::arg("p_gauge"),
+           "Static equilibrium at gauge pressure p_gauge [Pa].")
+      .def(
+          "step",
+          [](PamRig& r, double pressure_command, double pwm_duty, const std::string& mode) {
+            RigInputs in;
+            in.pressure_command = pressure_command;
+            in.pwm_duty = pwm_duty;
+            if (mode == "regulator") in.mode = Actuation::regulator;
+            else if (mode == "switching_valves") in.mode = Actuation::switching_valves;
+            else throw py::value_error("mode must be 'regulator' or 'switching_valves'");
+            return outputs_dict(r.step(in));
+          },
+          py::arg("pressure_command") = 0.0, py::arg("pwm_duty") = 0.0, py::arg("mode") = "regulator",
+          "One rig step of dt: pressure_command [MPa gauge] (regulator) or pwm_duty in [-1, 1] "
+          "(switching_valves). Returns the outputs (SI units: m, Pa gauge).")
+      .def(
+          "run_pressure",
+          [](PamRig& r, const DoubleArray& profile, double control_period) {
+            const auto p = as_span(profile);
+            if (!(control_period > 0)) throw py::value_error("control_period must be > 0");
+            const auto every = std::max<long>(1, std::lround(control_period / r.dt()));
+            std::vector<double> t, cmd, pr, x, xm;
+            for (auto* v : {&t, &cmd, &pr, &x, &xm}) v->reserve(p.size());
+            {
+              py::gil_scoped_release release;
+              RigInputs in;
+              for (double u : p) {
+                in.pressure_command = u;
+                RigOutputs o;
+                for (long k = 0; k < every; ++k) o = r.step(in);
+                t.push_back(o.time);
+                cmd.push_back(u);
+                pr.push_back(o.pressure_measured * 1e-6);
+                x.push_back(o.contraction * 1e3);
+                xm.push_back(o.contraction_measured * 1e3);
+              }
+            }
+            r.check();
+            py::dict d;
+            d["t"] = to_numpy(t);
+            d["pressure_command_mpa"] = to_numpy(cmd);
+            d["pressure_mpa"] = to_numpy(pr);
+            d["contraction_mm"] = to_numpy(x);
+            d["contraction_measured_mm"] = to_numpy(xm);
+            return d;
+          },
+          py::arg("profile"), py::arg("control_period") = 1e-3,
+          R"doc(Drive the regulator with a pressure profile [MPa], one value per control_period [s].
+Returns numpy arrays logged at the end of each period: t [s], pressure_command_mpa,
+pressure_mpa (measured), contraction_mm (true), contraction_measured_mm.
+Raises hysteron.Error if the simulation diverges.)doc")
+      .def_property_readonly("time", &PamRig::time, "Simulated time [s].")
+      .def_property_readonly("dt", &PamRig::dt, "Rig step [s].")
+      .def_property_readonly("seed", &PamRig::seed)
+      .def_property_readonly("ok", &PamRig::ok, "False once the simulation diverged.")
+      .def_property_readonly(
+          "params", [](const PamRig& r) { return from_json(rig_params_to_json(r.params())); }, "Parameter dict.")
+      .def_property_readonly(
+          "state",
+          [](const PamRig& r) {
+            const RigState& s = r.state();
+            py::dict d;
+            d["pressure"] = s.pressure;
+            d["contraction"] = s.contraction;
+            d["velocity"] = s.velocity;
+            d["bouc_wen"] = s.bouc_wen;
+            d["creep"] = s.creep;
+            d["regulator_setpoint"] = s.regulator_setpoint;
+            return d;
+          },
+          "The continuous state (SI units, pressure absolute).");
+
+  m.def(
+      "wave_sequence", [](const py::list& segments, double dt) { return to_numpy(wave_sequence(segments_from(segments), dt)); },
+      py::arg("segments"), py::arg("dt"),
+      "Concatenated waves sampled at dt; segments: dicts {waveform: 'triangle'|'sine', amplitude, period, periods, offset}.");
+  m.def(
+      "gpi_identification_pressure", [](double dt) { return to_numpy(gpi_identification_pressure(dt)); },
+      py::arg("dt"), "GPI paper Fig. 4: 0.2 Hz triangles, amplitude 0.6 down to 0.1 MPa [MPa].");
+  m.def(
+      "mpi_identification_pressure", [](double dt) { return to_numpy(mpi_identification_pressure(dt)); },
+      py::arg("dt"), "Asymmetric-MPI paper identification input [MPa].");
+  m.def(
+      "gpi_sinusoid_reference",
+      [](double dt, double duration, double rest_length) {
+        return to_numpy(gpi_sinusoid_reference(dt, duration, rest_length));
+      },
+      py::arg("dt"), py::arg("duration"), py::arg("rest_length") = 0.5,
+      "GPI paper Eq. 18 / Table 4 reference as a contraction [m].");
+  m.def(
+      "mpi_triangle_contraction", [](double dt, int n) { return to_numpy(mpi_triangle_contraction(dt, n)); },
+      py::arg("dt"), py::arg("periods_each") = 1, "Asymmetric-MPI paper triangle references 40/35/30 mm [m].");
+  m.def(
+      "mpi_sine_contraction", [](double dt, int n) { return to_numpy(mpi_sine_contraction(dt, n)); }, py::arg("dt"),
+      py::arg("periods_each") = 1, "Asymmetric-MPI paper sine references 40/35/30 mm [m].");
+}
+
+}  // namespace hysteron::python

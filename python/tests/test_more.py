@@ -1,0 +1,146 @@
+"""Tests of the identification, rig, controller, experiment and report bindings."""
+import math
+import os
+import re
+import tempfile
+
+import numpy as np
+import pytest
+
+import hysteron
+
+TRUE_GPI = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rho": 0.4, "tau": 0.1,
+            "alpha": 2.0}
+
+
+def decaying_triangles():
+    """The GPI paper's Fig. 4 input shape: triangles of amplitude 0.6 down to 0.1 MPa."""
+    return np.concatenate([np.interp(np.linspace(0, 1, 400), [0, 0.5, 1], [0, a, 0])
+                           for a in (0.6, 0.5, 0.4, 0.3, 0.2, 0.1)])
+
+
+def scale_free(model):
+    """Combinations of the GPI parameters that the exact scale symmetry leaves unchanged."""
+    c0, c1, c2, _ = model["c"]
+    return np.array([c1, c2, model["q"] * c0, model["rho"] * c0, model["tau"] * model["alpha"]])
+
+
+def test_fit_recovers_simulated_gpi():
+    x = decaying_triangles()
+    y = hysteron.simulate_record(TRUE_GPI, x)
+    r = hysteron.fit(x, y, model="gpi", num_operators=10)
+    assert r["status"] == "converged" and r["ok"], r["message"]
+    assert r["train"]["rms"] < 1e-6 * (y.max() - y.min())
+    np.testing.assert_allclose(scale_free(r["model"]), scale_free(TRUE_GPI), rtol=1e-4)
+    names = [p["name"] for p in r["parameters"]]
+    assert "q" in names and all("std_error" in p for p in r["parameters"])
+    # the fitted model dict drives a Model directly
+    np.testing.assert_allclose(hysteron.Model(r["model"]).simulate(x), y, atol=1e-6)
+    m = hysteron.evaluate(r["model"], x, y, range=(1200, None))
+    assert m["n"] == len(x) - 1200 and m["rms"] < 1e-6
+
+
+def test_fit_reports_invalid_input_without_raising():
+    r = hysteron.fit(np.zeros(500), np.zeros(500))
+    assert r["status"] == "invalid_input" and not r["ok"] and r["message"]
+
+
+def test_fit_html_report():
+    x = decaying_triangles()
+    y = hysteron.simulate_record(TRUE_GPI, x) + 0.01 * np.sin(np.arange(len(x)))
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "fit.html")
+        hysteron.fit(x, y, report=path, input_axis=("Pressure", "MPa"), output_axis=("Contraction", "mm"))
+        html = open(path).read()
+        assert html.count("<svg") == 3 and "Pressure [MPa]" in html
+
+
+def test_rls_converges_to_pi_weights():
+    true = {"model": "pi", "q": 0.5, "r": [0.1, 0.2, 0.3], "p": [0.3, 0.2, 0.1]}
+    x = decaying_triangles()
+    y = hysteron.simulate_record(true, x)
+    start = {"model": "pi", "q": 1.0, "r": [0.1, 0.2, 0.3], "p": [0.0, 0.0, 0.0]}
+    fitted = hysteron.rls_fit(start, x, y, passes=2)
+    np.testing.assert_allclose([fitted["q"]] + fitted["p"], [0.5, 0.3, 0.2, 0.1], atol=1e-6)
+    rls = hysteron.Rls(start)
+    for a, b in zip(x, y):
+        rls.step(a, b)
+    assert rls.theta.shape == (4,)
+
+
+def test_rig_is_deterministic_and_seeded():
+    profile = np.full(300, 0.3)
+    a = hysteron.PamRig(seed=3).run_pressure(profile)
+    b = hysteron.PamRig(seed=3).run_pressure(profile)
+    c = hysteron.PamRig(seed=4).run_pressure(profile)
+    for k in ("t", "pressure_mpa", "contraction_mm", "contraction_measured_mm"):
+        np.testing.assert_array_equal(a[k], b[k])
+    assert not np.array_equal(a["pressure_mpa"], c["pressure_mpa"])  # sensor noise differs
+    assert a["t"][-1] == pytest.approx(0.3)
+    assert a["contraction_mm"][-1] > 5.0  # the muscle contracts under 0.3 MPa
+
+
+def test_rig_params_from_dict_and_errors():
+    rig = hysteron.PamRig({"load": {"mass": 10.0}}, seed=1)
+    assert rig.params["load"]["mass"] == 10.0
+    with pytest.raises(hysteron.Error, match="mass"):
+        hysteron.PamRig({"load": {"mass": -1.0}})
+    with pytest.raises(hysteron.Error, match="nonsense"):
+        hysteron.PamRig({"load": {"nonsense": 1.0}})
+
+
+def test_pid_limits_and_antiwindup():
+    pid = hysteron.Pid(kp=100.0, ki=10.0, out_min=-1.0, out_max=2.0)
+    assert pid.step(10.0, 0.0) == 2.0 and pid.saturated
+    for _ in range(100):
+        pid.step(10.0, 0.0)
+    assert pid.integral <= 2.0 + 1e-12  # conditional integration stops at the limit
+    assert pid.step(-10.0, 0.0) == -1.0
+    assert pid.step(float("nan"), 0.0) == -1.0 and pid.faults == 1
+    gp = hysteron.Pid.gpi_paper()
+    assert gp.params["kp"] == pytest.approx(5.0) and gp.params["out_max"] == pytest.approx(0.6)
+
+
+def test_inverse_feedforward_round_trip():
+    model = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rho": 0.4, "tau": 0.1,
+             "alpha": 2.0, "input_limits": [0.0, 0.6]}
+    ff = hysteron.InverseFeedforward(model)
+    fwd = hysteron.Model(model)
+    for d_mm in np.linspace(5.0, 40.0, 30):
+        p = ff.step(d_mm / 1000.0)
+        assert 0.0 <= p <= 0.6
+        assert fwd.step(p) == pytest.approx(d_mm, abs=1e-9)
+    ctl = hysteron.FeedforwardPidController(model, hysteron.Pid.gpi_paper())
+    assert 0.0 <= ctl.step(0.02, 0.02, 0.0) <= 0.6
+
+
+def test_signals():
+    p = hysteron.gpi_identification_pressure(0.01)
+    assert p.max() == pytest.approx(0.6, abs=1e-9) and p.min() >= 0.0
+    w = hysteron.wave_sequence([{"waveform": "sine", "amplitude": 1.0, "period": 1.0}], 0.01)
+    assert len(w) >= 100
+
+
+def test_plot_errors():
+    with tempfile.TemporaryDirectory() as d:
+        with pytest.raises(hysteron.Error, match="no finite data"):
+            hysteron.plot_tracking([], [], [], os.path.join(d, "x.svg"))
+        hysteron.plot_tracking([0, 1, 2], [0, 1, 2], [0, 1.1, 2], os.path.join(d, "x.png"))
+        assert open(os.path.join(d, "x.png"), "rb").read(4) == b"\x89PNG"
+
+
+@pytest.mark.skipif(os.environ.get("HYSTERON_SKIP_SLOW") == "1", reason="slow")
+def test_experiment_summary_keys():
+    with tempfile.TemporaryDirectory() as d:
+        r = hysteron.run_experiment("gpi-pid", seed=1, out=os.path.join(d, "out"), report=os.path.join(d, "r.html"))
+        s = r["summary"]
+        for k in ("experiment", "compensated", "faithful", "baseline", "published", "identification"):
+            assert k in s, k
+        for v in ("compensated", "faithful", "baseline"):
+            assert set(s[v]) >= {"max_error_mm", "mae_mm", "rms_error_mm"}
+        assert s["published"]["max_error_mm"] == pytest.approx(2.659)
+        assert len(r["runs"]) == 3 and r["runs"][0]["t"].shape == r["runs"][0]["measured_mm"].shape
+        assert r["identification"]["train_end"] > 0
+        assert open(os.path.join(d, "r.html")).read().count("<svg") == 6
+        hysteron.write_report(os.path.join(d, "out"), os.path.join(d, "r2.html"))
+        assert os.path.getsize(os.path.join(d, "r2.html")) > 10000

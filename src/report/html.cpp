@@ -276,8 +276,10 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
 
   // identification
   page.heading("Identification");
-  page.para(fmt::format("The paper's model ({}) fitted on the major loop (samples 0..{} of {}): status {}{}{}.",
-                        fit_model_name(r.fit.model_kind), r.id_train_end, r.id_t.size(),
+  page.para(fmt::format("The paper's model ({}) fitted on the major loop ({}): status {}{}{}.",
+                        fit_model_name(r.fit.model_kind),
+                        r.id_train_end > 0 ? fmt::format("samples 0..{} of {}", r.id_train_end, r.id_t.size())
+                                           : std::string("training range not recorded"),
                         fit_status_name(r.fit.status), r.fit.message.empty() ? "" : ", ", r.fit.message));
   page.table(metric_header, {metric_cells("major loop (training) [mm]", r.fit.train),
                              metric_cells("minor loops (validation) [mm]", r.validation),

@@ -14,6 +14,7 @@ namespace {
 struct ReportArgs {
   std::string input;
   std::string out = "report.html";
+  report::FitDataSource data;
 };
 }  // namespace
 
@@ -24,10 +25,16 @@ void add_report(CLI::App& app, Action& action) {
                 "`experiment --out DIR` or `fit --report FILE.json`");
   cmd->add_option("input", args->input, "Experiment output directory or fit report JSON file")->required();
   cmd->add_option("-o,--out", args->out, "HTML file to write (atomically)")->capture_default_str();
+  cmd->add_option("--data,-d", args->data.input_file, "Fit reports: the data file (.csv or .mat) the fit used");
+  cmd->add_option("--input,-i", args->data.input_column, "Fit reports: input column (name or 0-based index)");
+  cmd->add_option("--output,-y", args->data.output_column, "Fit reports: output column (name or 0-based index)");
   cmd->callback([args, &action] {
     action = [args] {
-      const std::string command_line = fmt::format("hysteron report {} --out {}", args->input, args->out);
-      report::write_report_from(args->input, args->out, command_line);
+      std::string command_line = fmt::format("hysteron report {} --out {}", args->input, args->out);
+      if (!args->data.input_file.empty())
+        command_line += fmt::format(" --data {} --input {} --output {}", args->data.input_file,
+                                    args->data.input_column, args->data.output_column);
+      report::write_report_from(args->input, args->out, command_line, args->data);
       fmt::print(stderr, "report: wrote {}\n", args->out);
       return 0;
     };

@@ -132,17 +132,21 @@ struct FitDataSource {
   std::string input_file, input_column, output_file, output_column;
 };
 nlohmann::json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source);
-// Parses such a file and loads its data. Throws hysteron::Error naming the file
-// (malformed JSON, other format or schema, missing keys, unreadable data).
+// Parses such a file and loads its data. Also reads the JSON written by
+// `hysteron fit --report` (no "format" key, no "data": the data then come from
+// data_override; non-empty data_override.input_file always overrides "data";
+// an empty output_file means the input file). Throws hysteron::Error naming the
+// file (malformed JSON, other format or schema, missing keys, unreadable data).
 struct LoadedFit {
   FitReport fit;
   FitData data;
 };
-LoadedFit read_fit_report_json(const std::string& path);
+LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& data_override = {});
 
 // `hysteron report INPUT --out report.html`: INPUT is an experiment directory or
-// a fit report JSON file.
-void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line);
+// a fit report JSON file (data_override: see read_fit_report_json).
+void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line,
+                       const FitDataSource& data_override = {});
 
 // HTML-escapes text (&, <, >, ", ').
 std::string html_escape(std::string_view text);

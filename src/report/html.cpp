@@ -576,14 +576,21 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
             {"train", train_range}}}};
 }
 
-LoadedFit read_fit_report_json(const std::string& path) {
+LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& data_override) {
   const json j = parse_json_file(path);
-  if (!j.is_object() || j.value("format", std::string()) != "hysteron-fit-report")
-    throw Error(fmt::format("{}: not a hysteron fit report (expected \"format\": \"hysteron-fit-report\"; write one "
-                            "with `hysteron fit ... --report FILE.json`)", path));
-  if (!j.contains("schema") || j["schema"] != fit_report_schema)
+  // two dialects: this file's ("format": "hysteron-fit-report", with "data"), and the
+  // report of `hysteron fit --report` (no "format"; the data come from data_override)
+  const bool ours = j.is_object() && j.value("format", std::string()) == "hysteron-fit-report";
+  const bool cli = j.is_object() && !j.contains("format") && j.contains("status") && j.contains("model_kind") &&
+                   j.contains("parameters") && j.contains("model");
+  if (!ours && !cli)
+    throw Error(fmt::format("{}: not a hysteron fit report (expected the output of `hysteron fit ... --report "
+                            "FILE.json`)", path));
+  if ((ours || j.contains("schema")) && (!j.contains("schema") || j["schema"] != fit_report_schema))
     throw Error(fmt::format("{}: unsupported fit report schema {} (this hysteron reads schema {})", path,
                             j.value("schema", json()).dump(), fit_report_schema));
+  if (j["model"].is_null())
+    throw Error(fmt::format("{}: the fit produced no model (status {})", path, j.value("status", std::string("?"))));
   LoadedFit out;
   FitReport& f = out.fit;
   f.status = status_from(get<std::string>(j, "status", path), path);
@@ -593,7 +600,7 @@ LoadedFit read_fit_report_json(const std::string& path) {
   f.final_cost = j.value("final_cost", 0.0);
   f.iterations = j.value("iterations", 0);
   f.total_iterations = j.value("total_iterations", 0);
-  f.num_starts = j.value("num_starts", 0);
+  f.num_starts = j.value("num_starts", j.value("starts", 0));
   f.time_s = j.value("time_s", 0.0);
   f.covariance_note = j.value("covariance_note", std::string());
   f.model = io::model_from_json(need(j, "model", path), path + ": model");
@@ -608,7 +615,16 @@ LoadedFit read_fit_report_json(const std::string& path) {
   }
   if (j.contains("train")) f.train = metrics_from(j["train"], path + ": train");
 
-  const json& d = need(j, "data", path);
+  json d = j.value("data", json::object());
+  if (!data_override.input_file.empty()) {
+    d["input"] = {{"file", data_override.input_file}, {"column", data_override.input_column}};
+    d["output"] = {{"file", data_override.output_file.empty() ? data_override.input_file : data_override.output_file},
+                   {"column", data_override.output_column}};
+  }
+  if (!d.contains("input") || !d.contains("output"))
+    throw Error(fmt::format("{}: the report does not name its data: pass them (hysteron report {} --data FILE "
+                            "--input COLUMN --output COLUMN)", path, path));
+  if (!d.contains("train") && j.contains("train") && j["train"].contains("range")) d["train"] = j["train"]["range"];
   const std::string dw = path + ": data";
   auto resolve = [&](const std::string& file) {
     if (file.empty()) throw Error(fmt::format("{}: empty data file name", dw));
@@ -651,11 +667,12 @@ LoadedFit read_fit_report_json(const std::string& path) {
   return out;
 }
 
-void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line) {
+void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line,
+                       const FitDataSource& data_override) {
   if (fs::is_directory(input)) {
     write_experiment_report(read_experiment_dir(input), html_path, command_line);
   } else if (fs::is_regular_file(input)) {
-    const LoadedFit f = read_fit_report_json(input);
+    const LoadedFit f = read_fit_report_json(input, data_override);
     write_fit_report(f.fit, f.data, html_path, command_line);
   } else {
     throw Error(fmt::format("{}: no such file or directory (expected an experiment output directory or a fit "

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# hysteron fit --report fit.json, then hysteron report fit.json --data ...: an
+# HTML report with the three fit plots; without the data: a clear error.
+# Usage: bash report_fit.sh <hysteron-binary> <source-dir>
+set -euo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+cat > "$T/gpi.json" <<'JSON'
+{"model": "gpi", "c": [60, 4, -0.5, 30], "q": 0.8, "n": 10, "rho": 0.4, "tau": 0.1, "alpha": 2}
+JSON
+/usr/bin/python3 - "$T/x.csv" <<'PYEOF'
+import sys
+with open(sys.argv[1], "w") as f:
+    f.write("pressure\n")
+    for a in (0.6, 0.5, 0.4, 0.3, 0.2, 0.1):
+        for k in range(300):
+            f.write(f"{a * (1 - abs(2 * k / 300 - 1))!r}\n")
+PYEOF
+"$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/data.csv"
+"$BIN" fit --data "$T/data.csv" --input input --output output --train 0:1200 --out "$T/m.json" --report "$T/fit.json" > /dev/null
+if "$BIN" report "$T/fit.json" --out "$T/r.html" 2> "$T/err"; then
+  echo "report without data should fail"; exit 1
+fi
+grep -q "fit.json: the report does not name its data" "$T/err"
+"$BIN" report "$T/fit.json" --data "$T/data.csv" --input input --output output --out "$T/r.html"
+[ "$(grep -o '<svg' "$T/r.html" | wc -l)" -eq 3 ]
+grep -q "after training (validation)" "$T/r.html"
+# malformed JSON names the file
+echo '{"status": ' > "$T/bad.json"
+if "$BIN" report "$T/bad.json" --out "$T/x.html" 2> "$T/err"; then exit 1; fi
+grep -q "bad.json: malformed JSON" "$T/err"
+[ ! -e "$T/x.html" ]
+echo "report_fit: ok"

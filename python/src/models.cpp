@@ -1,0 +1,81 @@
+// Bindings of the core models and inverses.
+#include <fmt/format.h>
+
+#include "bindings.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/inverse.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/models.hpp"
+
+namespace hysteron::python {
+
+nlohmann::json to_json(const py::handle& obj) {
+  const auto dumps = py::module_::import("json").attr("dumps");
+  return nlohmann::json::parse(dumps(obj).cast<std::string>());
+}
+
+py::object from_json(const nlohmann::json& j) {
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+namespace {
+
+ModelParams params_from(const py::handle& spec) {
+  if (py::isinstance<py::str>(spec)) return io::read_model_file(spec.cast<std::string>());
+  return io::model_from_json(to_json(spec), "model");
+}
+
+}  // namespace
+
+void bind_models(py::module_& m) {
+  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+
+  py::class_<Model>(m, "Model", R"doc(
+A hysteresis model (pi, gpi, mpi-deadzone, mpi-asym) run sample by sample.
+
+Model(spec) takes a dict with the model-file keys, e.g.
+``{"model": "gpi", "n": 10, "c": [c0, c1, c2, c3], "q": q, "rho": rho, "tau": tau, "alpha": alpha}``,
+or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
+      .def(py::init([](const py::object& spec) { return Model(params_from(spec)); }), py::arg("spec"))
+      .def_property_readonly("name", [](const Model& s) { return std::string(s.name()); })
+      .def_property_readonly("num_operators", &Model::num_operators)
+      .def("step", &Model::step, py::arg("x"), "One sample: the output for input x (updates the state).")
+      .def(
+          "simulate",
+          [](Model& s, const DoubleArray& x) { return to_numpy(s.simulate(as_span(x))); }, py::arg("x"),
+          "Outputs for an input array, continuing from the current state.")
+      .def("reset", py::overload_cast<>(&Model::reset), "Back to the virgin state.")
+      .def("reset_relaxed", &Model::reset_relaxed, py::arg("x0"), "Start at rest at input x0.")
+      .def_property_readonly("state", [](const Model& s) { return to_numpy(s.state().y); },
+                             "Operator outputs y_i.")
+      .def("to_dict", [](const Model& s) { return from_json(io::model_to_json(s.params())); })
+      .def("save", [](const Model& s, const std::string& path) { io::write_model_file(path, s.params()); },
+           py::arg("path"));
+
+  py::class_<Inverse>(m, "Inverse", R"doc(
+Exact inverse of a model: desired output -> input. Analytical for pi, gpi and
+mpi-deadzone (Eqs. 9-11), exact per-sample bracketing for mpi-asym.
+Outputs beyond reach saturate at the input limits (lo, hi).)doc")
+      .def(py::init([](const py::object& spec, py::object limits) {
+             InverseOptions opt;
+             if (!limits.is_none()) {
+               auto l = limits.cast<std::pair<double, double>>();
+               opt.input_limits = {l.first, l.second};
+             }
+             return Inverse(params_from(spec), opt);
+           }),
+           py::arg("spec"), py::arg("limits") = py::none())
+      .def("step", &Inverse::step, py::arg("y_desired"))
+      .def(
+          "simulate",
+          [](Inverse& s, const DoubleArray& y) { return to_numpy(s.simulate(as_span(y))); }, py::arg("y"))
+      .def("reset", py::overload_cast<>(&Inverse::reset))
+      .def(
+          "start_from",
+          [](Inverse& s, const Model& model) { s.reset(model.state()); }, py::arg("model"),
+          "Start consistently from a forward model's current state.")
+      .def_property_readonly("saturated", &Inverse::saturated, "True if the last step hit an input limit.")
+      .def_property_readonly("limits", [](const Inverse& s) { return std::make_pair(s.limits().lo, s.limits().hi); });
+}
+
+}  // namespace hysteron::python

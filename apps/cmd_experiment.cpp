@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
+#include "hysteron/report.hpp"
 
 namespace hysteron::cli {
 
@@ -29,7 +30,17 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   return o;
 }
 
+std::string command_line(int argc, char** argv) {
+  std::string s;
+  for (int i = 0; i < argc; ++i) s += (i ? " " : "") + std::string(argv[i]);
+  return s;
+}
+
+std::string g_command;  // the command line, shown in reports
+
 }  // namespace
+
+void set_command_line(int argc, char** argv) { g_command = command_line(argc, argv); }
 
 void add_experiment(CLI::App& app, Action& action) {
   auto args = std::make_shared<ExperimentArgs>();
@@ -44,7 +55,10 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->callback([args, &action] {
     action = [args] {
       const ExperimentResult r = run_experiment(options_from(*args));
-      if (!args->out.empty()) r.write(args->out);
+      if (!args->out.empty()) {
+        r.write(args->out);
+        report::write_experiment_report(r, args->out + "/report.html", g_command);
+      }
       if (args->json)
         fmt::print("{}\n", r.to_json().dump(2));
       else
@@ -67,7 +81,8 @@ void add_experiment(CLI::App& app, Action& action) {
         const ExperimentResult r = run_experiment(options_from(a));
         const std::string dir = dargs->out + "/" + name;
         r.write(dir);
-        fmt::print("{}  outputs: {}/\n\n", r.table(), dir);
+        report::write_experiment_report(r, dir + "/report.html", g_command);
+        fmt::print("{}  outputs: {}/   report: {}/report.html\n\n", r.table(), dir, dir);
         std::fflush(stdout);
       }
       return 0;

@@ -14,5 +14,6 @@ void add_simulate_invert(CLI::App& app, Action& action);  // cmd_simulate.cpp: s
 void add_fit(CLI::App& app, Action& action);              // cmd_fit.cpp: fit
 void add_experiment(CLI::App& app, Action& action);       // cmd_experiment.cpp: experiment, demo
 void add_report(CLI::App& app, Action& action);           // cmd_report.cpp: report
+void set_command_line(int argc, char** argv);             // recorded in reports
 
 }  // namespace hysteron::cli

@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   CLI::App app{"hysteron: hysteresis models, exact inverses, identification and control of pneumatic muscles"};
   app.require_subcommand(1);
   hysteron::cli::Action action;
+  hysteron::cli::set_command_line(argc, argv);
   hysteron::cli::add_simulate_invert(app, action);
   hysteron::cli::add_fit(app, action);
   hysteron::cli::add_experiment(app, action);

@@ -1,4 +1,5 @@
 #pragma once
+#include "hysteron/version.hpp"
 // Plots (through gnuplot) and self-contained HTML reports of fits and experiments.
 //
 // Plots: every function renders one figure with gnuplot, run as a child process
@@ -28,7 +29,7 @@
 namespace hysteron::report {
 
 // Version string shown in reports (kept equal to the CMake project version).
-inline constexpr std::string_view hysteron_version = "0.1.0";
+inline constexpr std::string_view hysteron_version = hysteron::version;
 
 // ---- plots ---------------------------------------------------------------------
 

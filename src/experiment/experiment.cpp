@@ -425,6 +425,7 @@ nlohmann::json ExperimentResult::to_json() const {
   }
   j["published"] = published;
   j["identification"] = {{"model", std::string(fit_model_name(fit.model_kind))},
+                         {"train_end", id_train_end},
                          {"status", std::string(fit_status_name(fit.status))},
                          {"train", metrics_json(fit.train)},
                          {"validate", metrics_json(validation)},

@@ -44,9 +44,8 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     throw Error(fmt::format("{}: not invertible: q (plus the weights of zero-threshold operators) = {} must be > 0, "
                             "otherwise the output is flat after every reversal",
                             name, s_.q));
-  {
-    // Partial sums q + p_1 + ... + p_i must stay positive (Eq. 11: the loading
-    // curve after any reversal is strictly increasing).
+  if (!s_.asymmetric) {
+    // Eq. 11: partial sums q + p_1 + ... + p_i must stay positive.
     double sum = s_.q;
     for (std::size_t i = 0; i < n; ++i) {
       sum += s_.p[i];
@@ -55,8 +54,6 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
                                 "curve must be strictly increasing)",
                                 name, i + 1, sum));
     }
-  }
-  if (!s_.asymmetric) {
     qi_ = 1.0 / s_.q;
     ri_.resize(n);
     pi_.resize(n);
@@ -114,6 +111,10 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     dev_.assign(n, 0.0);
     y_.assign(n, 0.0);
   } else {
+    for (std::size_t i = 0; i < n; ++i)
+      if (s_.p[i] < 0)
+        throw Error(fmt::format("{}: not invertible: the numerical inverse needs p_i >= 0, got p[{}] = {}", name, i,
+                                s_.p[i]));
     if (!lim_.bounded())
       throw Error(fmt::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));
     y_.assign(n, 0.0);

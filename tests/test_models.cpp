@@ -421,8 +421,8 @@ TEST(Inverse, RejectsNonInvertibleParameters) {
   MpiAsymParams a;
   a.descending = Envelope::affine(1.5, 0.0);
   a.r = {0.1};
-  a.p = {-1.5};
-  expect_error(a, "q + p_1 + ... + p_1");
+  a.p = {-0.1};
+  expect_error(a, "p_i >= 0");
   MpiAsymParams b;
   b.ascending = Envelope::tanh(1, 1, 0, 0);
   b.r = {0.1};

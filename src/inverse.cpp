@@ -113,7 +113,9 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   } else {
     for (std::size_t i = 0; i < n; ++i)
       if (s_.p[i] < 0)
-        throw Error(fmt::format("{}: not invertible: the numerical inverse needs p_i >= 0, got p[{}] = {}", name, i,
+        throw Error(fmt::format("{}: not invertible: the numerical inverse of mpi-asym needs every weight p_i >= 0 "
+                                "(then the output is strictly increasing in the input for every state; negative "
+                                "weights make it fold back and the inverse jump), got p[{}] = {}", name, i,
                                 s_.p[i]));
     if (!lim_.bounded())
       throw Error(fmt::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));

@@ -108,10 +108,10 @@ struct FitOptions {
   // Seed of the jitter added to the candidate grid (reproducible).
   unsigned seed = 0;
   // Levenberg-Marquardt limits and tolerances (Ceres semantics).
-  int max_iterations = 100;
-  double function_tolerance = 1e-7;
+  int max_iterations = 200;
+  double function_tolerance = 1e-10;
   double gradient_tolerance = 1e-10;
-  double parameter_tolerance = 1e-8;
+  double parameter_tolerance = 1e-10;
   // gpi only: the 8 parameters of Eq. 13 have an exact scale symmetry
   //   (c0, c3, alpha, q, rho, tau) -> (k c0, k c3, k alpha, q/k, rho/k, tau/k)
   // that leaves the output unchanged, so the Jacobian is rank 7. With true
@@ -176,6 +176,15 @@ struct FitReport {
 // fewer than 10x the number of parameters in the training range; a constant
 // input or output; NaN or infinity; unequal lengths; a range outside the data).
 FitReport fit(std::span<const double> x, std::span<const double> y, const FitOptions& options = {});
+
+// Residuals of Eq. 12 (plus the Huber map when huber > 0) of the gpi with
+// Theta = [c0, c1, c2, c3, q, rho, tau, alpha] and n operators over `train`, and
+// their m x 8 Jacobian: analytic forward-mode sensitivities (what fit() uses) or,
+// with autodiff = true, automatic differentiation through structure_step<Jet>
+// (the test oracle). Throws hysteron::Error on invalid data or range.
+void gpi_residuals(std::span<const double> theta, int n, std::span<const double> x, std::span<const double> y,
+                   IndexRange train, InitialState initial, double huber, bool autodiff, Eigen::VectorXd& residuals,
+                   Eigen::MatrixXd& jacobian);
 
 // Thresholds used by fit() for the pi/mpi models: r_i = i span(x) / (2n), i = 1..n-1.
 std::vector<double> default_thresholds(std::span<const double> x, int n);

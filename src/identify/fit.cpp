@@ -87,6 +87,99 @@ struct GpiFunctor {
   }
 };
 
+// Residuals (and, if J != nullptr, their row-major m x 8 Jacobian) of the gpi in
+// one pass with plain doubles: forward-mode sensitivities through the recursion.
+// Each play output is either held (its derivative is carried from the previous
+// sample) or equals u - r_i / u + r_i (derivative of the envelope and of r_i =
+// alpha i). The branch tests are those of ops::generalized_play, so this is the
+// derivative the Jets of GpiFunctor compute (tested to 1e-10).
+void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J) {
+  const double c0 = th[0], c1 = th[1], c2 = th[2], c3 = th[3], q = th[4], rho = th[5], tau = th[6], alpha = th[7];
+  const auto nn = static_cast<std::size_t>(n);
+  std::vector<double> r(nn), e(nn), p(nn), y(nn, 0.0), g(5 * nn, 0.0);  // g: dy_i/d(c0..c3, alpha)
+  for (std::size_t i = 0; i < nn; ++i) {
+    r[i] = alpha * static_cast<double>(i + 1);
+    e[i] = std::exp(-tau * r[i]);
+    p[i] = rho * e[i];
+  }
+  double du[4];
+  auto env = [&](double x) {
+    const double t = detail::tanh_fast(c1 * x + c2);
+    const double sl = c0 * (1.0 - t * t);
+    du[0] = t;
+    du[1] = sl * x;
+    du[2] = sl;
+    du[3] = 1.0;
+    return c0 * t + c3;
+  };
+  if (d.initial == InitialState::relaxed) {
+    const double u0 = env(d.x[0]);
+    for (std::size_t i = 0; i < nn; ++i) {
+      y[i] = u0;
+      std::copy(du, du + 4, &g[5 * i]);
+    }
+  }
+  for (std::size_t k = 0; k < d.train.end; ++k) {
+    const double u = env(d.x[k]);
+    double out = q * u;
+    double dc0 = q * du[0], dc1 = q * du[1], dc2 = q * du[2], dc3 = q;
+    double dal = 0, drho = 0, dtau = 0;
+    for (std::size_t i = 0; i < nn; ++i) {
+      double* gi = &g[5 * i];
+      const double hi = u + r[i], lo = u - r[i];
+      const double ii = static_cast<double>(i + 1);
+      if (!(y[i] < hi)) {  // hmin(u + r, y)
+        y[i] = hi;
+        gi[0] = du[0], gi[1] = du[1], gi[2] = du[2], gi[3] = 1.0, gi[4] = ii;
+      }
+      if (!(lo < y[i])) {  // hmax(u - r, .)
+        y[i] = lo;
+        gi[0] = du[0], gi[1] = du[1], gi[2] = du[2], gi[3] = 1.0, gi[4] = -ii;
+      }
+      const double py = p[i] * y[i];
+      out += py;
+      dc0 += p[i] * gi[0];
+      dc1 += p[i] * gi[1];
+      dc2 += p[i] * gi[2];
+      dc3 += p[i] * gi[3];
+      dal += p[i] * gi[4] - tau * ii * py;
+      drho += e[i] * y[i];
+      dtau -= r[i] * py;
+    }
+    if (k < d.train.begin) continue;
+    const double rr = d.y[k] - out;
+    double f = rr, df = 1.0;
+    if (d.huber > 0 && !(rr < d.huber && -d.huber < rr)) {
+      f = std::sqrt(2.0 * d.huber * std::abs(rr) - d.huber * d.huber);
+      df = d.huber / f;
+      if (rr < 0) f = -f;
+    }
+    const std::size_t row = k - d.train.begin;
+    res[row] = f;
+    if (J) {
+      double* jr = J + kGpi * row;
+      jr[0] = -df * dc0, jr[1] = -df * dc1, jr[2] = -df * dc2, jr[3] = -df * dc3;
+      jr[4] = -df * u, jr[5] = -df * drho, jr[6] = -df * dtau, jr[7] = -df * dal;
+    }
+  }
+}
+
+class GpiCost final : public ceres::CostFunction {
+ public:
+  GpiCost(const Data& d, int n) : d_(d), n_(n) {
+    set_num_residuals(static_cast<int>(d.train.end - d.train.begin));
+    mutable_parameter_block_sizes()->push_back(kGpi);
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    gpi_evaluate(d_, n_, params[0], residuals, jacobians ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  Data d_;
+  int n_;
+};
+
 GpiParams gpi_params(const double* th, int n) {
   GpiParams g;
   g.envelope = Envelope::tanh(th[0], th[1], th[2], th[3]);
@@ -246,7 +339,7 @@ std::unique_ptr<ceres::Problem> make_problem(FitModel kind, const Data& d, int n
   const int m = static_cast<int>(d.train.end - d.train.begin);
   ceres::CostFunction* cost = nullptr;
   if (kind == FitModel::gpi) {
-    cost = new ceres::AutoDiffCostFunction<GpiFunctor, ceres::DYNAMIC, kGpi>(new GpiFunctor{d, n}, m);
+    cost = new GpiCost(d, n);
   } else {
     auto* dyn = new ceres::DynamicAutoDiffCostFunction<SlopeFunctor, 10>(new SlopeFunctor{d, layout});
     dyn->AddParameterBlock(static_cast<int>(theta.size()));
@@ -270,7 +363,7 @@ Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, std
   ceres::Solver::Options so;
   so.minimizer_type = ceres::TRUST_REGION;
   so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  so.linear_solver_type = ceres::DENSE_QR;
+  so.linear_solver_type = kind == FitModel::gpi ? ceres::DENSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = o.function_tolerance;
   so.gradient_tolerance = o.gradient_tolerance;
@@ -360,32 +453,6 @@ Ranges ranges_of(const Data& d) {
   return {*xl, *xh, *yl, *yh};
 }
 
-// Half the vertical gap between the falling and rising branches, median over
-// input bins (the loop half-height), in output units.
-double loop_half_height(const Data& d, const Ranges& rg) {
-  constexpr int kBins = 20;
-  std::vector<double> su(kBins, 0), sd(kBins, 0), nu(kBins, 0), nd(kBins, 0);
-  for (std::size_t k = d.train.begin + 1; k < d.train.end; ++k) {
-    const double dx = d.x[k] - d.x[k - 1];
-    if (dx == 0) continue;
-    int b = static_cast<int>((d.x[k] - rg.xlo) / rg.xspan() * kBins);
-    b = std::clamp(b, 0, kBins - 1);
-    if (dx > 0) {
-      su[static_cast<std::size_t>(b)] += d.y[k];
-      nu[static_cast<std::size_t>(b)] += 1;
-    } else {
-      sd[static_cast<std::size_t>(b)] += d.y[k];
-      nd[static_cast<std::size_t>(b)] += 1;
-    }
-  }
-  std::vector<double> gaps;
-  for (std::size_t b = 0; b < kBins; ++b)
-    if (nu[b] > 0 && nd[b] > 0) gaps.push_back(std::abs(sd[b] / nd[b] - su[b] / nu[b]) / 2);
-  if (gaps.empty()) return 0.05 * rg.yspan();
-  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
-  return std::max(gaps[gaps.size() / 2], 1e-3 * rg.yspan());
-}
-
 // For fixed envelope, alpha and tau the gpi output is linear in (q, rho): solve
 // them by NNLS and return the sum of squared errors.
 double gpi_linear_seed(const Data& d, int n, double* th, double lower_q, double lower_rho) {
@@ -419,11 +486,191 @@ double gpi_linear_seed(const Data& d, int n, double* th, double lower_q, double 
   return (A * t - b).squaredNorm();
 }
 
+// ---- branches of the loop and envelope fits ------------------------------------
+
+// Points (input, output) of a curve, one per input bin.
+struct Curve {
+  std::vector<double> x, y;
+};
+
+// Ascending and descending branches and the centre line of the loop: each sample
+// is classified by the direction of the input (a turning point is declared when
+// the input moves back by more than 1 % of its span, so noise does not flip it);
+// per input bin, the mean input and output of each branch; the centre line is the
+// average of both branches in the bins where both exist (the anhysteretic curve).
+struct Branches {
+  Curve asc, desc, centre;
+};
+
+Branches loop_branches(const Data& d, const Ranges& rg) {
+  constexpr int kBins = 32;
+  const double eps = 0.01 * rg.xspan();
+  std::vector<double> sx[2], sy[2], cnt[2];
+  for (int b = 0; b < 2; ++b) sx[b].assign(kBins, 0.0), sy[b].assign(kBins, 0.0), cnt[b].assign(kBins, 0.0);
+  int dir = 0;  // +1 rising, -1 falling, 0 not yet known
+  double ext = d.x[d.train.begin], lo = ext, hi = ext;
+  for (std::size_t k = d.train.begin; k < d.train.end; ++k) {
+    const double xk = d.x[k];
+    if (dir == 0) {
+      lo = std::min(lo, xk), hi = std::max(hi, xk);
+      if (xk > lo + eps) dir = 1, ext = xk;
+      else if (xk < hi - eps) dir = -1, ext = xk;
+    } else if (dir == 1) {
+      if (xk > ext) ext = xk;
+      else if (xk < ext - eps) dir = -1, ext = xk;
+    } else {
+      if (xk < ext) ext = xk;
+      else if (xk > ext + eps) dir = 1, ext = xk;
+    }
+    if (dir == 0) continue;
+    const int side = dir > 0 ? 0 : 1;
+    const int b = std::clamp(static_cast<int>((xk - rg.xlo) / rg.xspan() * kBins), 0, kBins - 1);
+    const auto bi = static_cast<std::size_t>(b);
+    sx[side][bi] += xk;
+    sy[side][bi] += d.y[k];
+    cnt[side][bi] += 1;
+  }
+  Branches out;
+  for (std::size_t b = 0; b < kBins; ++b) {
+    const bool has[2] = {cnt[0][b] > 0, cnt[1][b] > 0};
+    if (has[0]) out.asc.x.push_back(sx[0][b] / cnt[0][b]), out.asc.y.push_back(sy[0][b] / cnt[0][b]);
+    if (has[1]) out.desc.x.push_back(sx[1][b] / cnt[1][b]), out.desc.y.push_back(sy[1][b] / cnt[1][b]);
+    if (has[0] && has[1]) {
+      out.centre.x.push_back(0.5 * (sx[0][b] / cnt[0][b] + sx[1][b] / cnt[1][b]));
+      out.centre.y.push_back(0.5 * (sy[0][b] / cnt[0][b] + sy[1][b] / cnt[1][b]));
+    }
+  }
+  return out;
+}
+
+// c0 tanh(c1 x + c2) + c3 fitted to a curve (c0, c1 > 0): grid over the slope
+// a = c1 xs and the shift b, (c0, c3) by linear least squares, then a few
+// Gauss-Newton steps on all four. Falls back to a line through the ranges.
+std::array<double, 4> fit_tanh(const Curve& c, const Ranges& rg, double a_fixed = 0.0) {
+  const double xc = 0.5 * (rg.xlo + rg.xhi), xs = 0.5 * rg.xspan();
+  const double ys = 0.5 * rg.yspan(), yc = 0.5 * (rg.ylo + rg.yhi);
+  std::array<double, 4> best{ys / std::tanh(0.1), 0.1 / xs, -0.1 * xc / xs, yc};
+  const std::size_t m = c.x.size();
+  if (m < 4) return best;
+  auto sse_of = [&](const std::array<double, 4>& t) {
+    double s = 0;
+    for (std::size_t k = 0; k < m; ++k) {
+      const double e = c.y[k] - (t[0] * std::tanh(t[1] * c.x[k] + t[2]) + t[3]);
+      s += e * e;
+    }
+    return s;
+  };
+  double best_sse = std::numeric_limits<double>::infinity();
+  for (int ia = 0; ia < (a_fixed > 0 ? 1 : 24); ++ia) {
+    const double a = a_fixed > 0 ? a_fixed : 0.05 * std::pow(100.0, ia / 23.0);  // 0.05 .. 5
+    for (int ib = -24; ib <= 24; ++ib) {
+      const double b = 0.125 * ib;
+      double st = 0, sy = 0, stt = 0, sty = 0;
+      for (std::size_t k = 0; k < m; ++k) {
+        const double t = std::tanh(a * (c.x[k] - xc) / xs + b);
+        st += t, sy += c.y[k], stt += t * t, sty += t * c.y[k];
+      }
+      const double mm = static_cast<double>(m);
+      const double det = mm * stt - st * st;
+      if (!(det > 1e-14 * mm * mm)) continue;
+      const double c0 = (mm * sty - st * sy) / det;
+      if (!(c0 > 0)) continue;
+      const std::array<double, 4> t{c0, a / xs, b - a * xc / xs, (sy - c0 * st) / mm};
+      const double e = sse_of(t);
+      if (e < best_sse) best_sse = e, best = t;
+    }
+  }
+  // Gauss-Newton with step halving on the 4 coefficients.
+  for (int it = 0; it < 20 && std::isfinite(best_sse) && !(a_fixed > 0); ++it) {
+    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d g = Eigen::Vector4d::Zero();
+    for (std::size_t k = 0; k < m; ++k) {
+      const double t = std::tanh(best[1] * c.x[k] + best[2]);
+      const double sl = best[0] * (1 - t * t);
+      const Eigen::Vector4d jr(t, sl * c.x[k], sl, 1.0);
+      const double e = c.y[k] - (best[0] * t + best[3]);
+      A += jr * jr.transpose();
+      g += jr * e;
+    }
+    A.diagonal() *= 1.0 + 1e-9;
+    const Eigen::Vector4d step = A.ldlt().solve(g);
+    bool improved = false;
+    for (double h = 1.0; h > 1e-3; h *= 0.5) {
+      std::array<double, 4> t = best;
+      for (int i = 0; i < 4; ++i) t[static_cast<std::size_t>(i)] += h * step(i);
+      if (!(t[0] > 0 && t[1] > 0)) continue;
+      const double e = sse_of(t);
+      if (e < best_sse) {
+        improved = best_sse - e > 1e-12 * best_sse;
+        best_sse = e, best = t;
+        break;
+      }
+    }
+    if (!improved) break;
+  }
+  return best;
+}
+
+// Envelope output span over the input range.
+double envelope_span(const std::array<double, 4>& c, const Ranges& rg) {
+  return std::abs(c[0] * (std::tanh(c[1] * rg.xhi + c[2]) - std::tanh(c[1] * rg.xlo + c[2])));
+}
+
+// Weights of a PI on envelope output u with thresholds r (cumulative slopes >= margin), by NNLS.
+// Returns the SSE; q and p receive the weights.
+double cls_weights(const Data& d, const Structure<double>& s, double margin, double& q, std::vector<double>& p,
+                   Eigen::MatrixXd* phi_out = nullptr) {
+  const IndexRange tr = d.train;
+  const Eigen::MatrixXd phi = detail::regressors(s, d.x, tr, d.initial);
+  const auto m = phi.rows();
+  const auto k = phi.cols();
+  // cumulative slopes: a_i = phi_i - phi_{i+1}, a_n = phi_n
+  Eigen::MatrixXd A = phi;
+  for (Eigen::Index i = 0; i + 1 < k; ++i) A.col(i) -= phi.col(i + 1);
+  Eigen::VectorXd b(m);
+  for (Eigen::Index j = 0; j < m; ++j) b(j) = d.y[tr.begin + static_cast<std::size_t>(j)];
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(k, margin);
+  const Eigen::VectorXd sl = lo + detail::nnls(A, b - A * lo);
+  q = sl(0);
+  p.resize(static_cast<std::size_t>(k - 1));
+  for (Eigen::Index i = 1; i < k; ++i) p[static_cast<std::size_t>(i - 1)] = sl(i) - sl(i - 1);
+  if (phi_out) *phi_out = phi;
+  return (A * sl - b).squaredNorm();
+}
+
+// rho, tau of Eq. 8 from free weights on r_i: weighted log-linear fit
+// log p_i = log rho - tau r_i over the positive weights (weights p_i).
+double fit_tau(const std::vector<double>& r, const std::vector<double>& p) {
+  double pmax = 0;
+  for (double v : p) pmax = std::max(pmax, v);
+  double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!(p[i] > 1e-6 * pmax)) continue;
+    const double w = p[i], ly = std::log(p[i]);
+    sw += w, sx += w * r[i], sy += w * ly, sxx += w * r[i] * r[i], sxy += w * r[i] * ly;
+  }
+  const double det = sw * sxx - sx * sx;
+  if (!(sw > 0) || !(det > 1e-14 * sw * sxx)) return std::numeric_limits<double>::quiet_NaN();
+  return -(sw * sxy - sx * sy) / det;
+}
+
+// Data-derived gpi starts: the envelope from a tanh fit of the loop's centre line;
+// with it fixed the output is linear in (q, p_i) for fixed thresholds r_i = alpha i,
+// so for a log grid of alpha over (0, half the envelope-output span)/n the weights
+// are solved by constrained LS, (rho, tau) fitted to them log-linearly, (q, rho)
+// re-solved by NNLS for the exponential law and the candidates ranked by SSE.
 std::vector<std::vector<double>> gpi_starts(const Data& d, int n, const FitOptions& o, double lb_rel) {
   const Ranges rg = ranges_of(d);
-  const double xc = 0.5 * (rg.xlo + rg.xhi), xs = 0.5 * rg.xspan();
-  const double c0 = 0.5 * rg.yspan();
-  const double h = loop_half_height(d, rg);
+  const Branches br = loop_branches(d, rg);
+  Curve centre = br.centre;
+  if (centre.x.size() < 4) {
+    centre = Curve{};
+    for (std::size_t k = d.train.begin; k < d.train.end; ++k) centre.x.push_back(d.x[k]), centre.y.push_back(d.y[k]);
+  }
+  // envelopes: the free tanh fit of the centre line, and fits with a fixed
+  // curvature c1 xs (multi-start over the envelope shape)
+  std::vector<std::array<double, 4>> envs{fit_tanh(centre, rg)};
+  for (double a : {0.25, 0.6, 1.2, 2.5}) envs.push_back(fit_tanh(centre, rg, a));
   std::mt19937 rng(o.seed);
   std::uniform_real_distribution<double> jit(-0.1, 0.1);
   auto j = [&](double v) { return o.seed == 0 ? v : v * (1.0 + jit(rng)); };
@@ -432,32 +679,122 @@ std::vector<std::vector<double>> gpi_starts(const Data& d, int n, const FitOptio
     std::vector<double> th;
   };
   std::vector<Cand> cands;
-  for (double a : {0.4, 1.0, 2.0}) {
-    for (double bshift : {-0.5, 0.0, 0.5}) {
-      const double aa = j(a);
-      const double c1 = aa / xs, c2 = -aa * xc / xs + bshift;
-      const double g_lo = c0 * std::tanh(-aa + bshift), g_hi = c0 * std::tanh(aa + bshift);
-      const double K = rg.yspan() / (g_hi - g_lo);
-      const double c3 = rg.ylo / K - g_lo;
-      const double uhalf = 0.5 * (g_hi - g_lo);
-      const double f_w = std::clamp(2.0 * (h / K) / uhalf, 0.05, 2.0);
-      for (double f : {f_w, 0.5, 1.0}) {
-        const double alpha = j(f) * uhalf / n;
-        for (double tr : {0.05, 0.5, 2.5}) {
-          std::vector<double> th{c0, c1, c2, c3, 1.0, 1.0, tr / (alpha * n), alpha};
-          const double sse = gpi_linear_seed(d, n, th.data(), lb_rel * K, lb_rel * K);
-          if (std::isfinite(sse)) cands.push_back({sse, th});
-        }
-      }
+  constexpr int kAlphas = 14;
+  const double margin = lb_rel;
+  for (const auto& env : envs)
+  for (int ia = 0; ia < kAlphas; ++ia) {
+    const double U = envelope_span(env, rg);
+    const double f = 0.01 * std::pow(250.0, ia / (kAlphas - 1.0));  // 0.01 .. 2.5
+    const double alpha = j(f) * 0.5 * U / n;
+    Structure<double> s;
+    s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
+    s.asc_c = s.desc_c = {env[0], env[1], env[2], env[3]};
+    for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
+    s.p.assign(s.r.size(), 0.0);
+    double q = 1;
+    std::vector<double> p;
+    cls_weights(d, s, margin, q, p);
+    const double tf = fit_tau(s.r, p);
+    std::vector<double> taus{1e-3 / (alpha * n), 1.0 / (alpha * n), 5.0 / (alpha * n)};
+    if (std::isfinite(tf)) taus.push_back(std::max(tf, 1e-3 / (alpha * n)));
+    for (double tau : taus) {
+      std::vector<double> th{env[0], env[1], env[2], env[3], 1.0, 1.0, tau, alpha};
+      const double sse = gpi_linear_seed(d, n, th.data(), margin, margin);
+      if (std::isfinite(sse)) cands.push_back({sse, th});
     }
   }
   std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) { return a.sse < b.sse; });
   std::vector<std::vector<double>> out;
   for (const Cand& c : cands) {
     if (static_cast<int>(out.size()) >= o.num_starts) break;
-    out.push_back(c.th);
+    // distinct alphas only
+    bool dup = false;
+    for (const auto& t : out) dup = dup || std::abs(t[7] - c.th[7]) < 1e-9 * std::abs(c.th[7]);
+    if (!dup) out.push_back(c.th);
   }
   return out;
+}
+
+// Slope vector [s_0..s_n] of weights q, p.
+std::vector<double> slopes(double q, const std::vector<double>& p) {
+  std::vector<double> s{q};
+  for (double pi : p) s.push_back(s.back() + pi);
+  return s;
+}
+
+// Lower bounds of a slope-parametrized start: cumulative slopes >= margin * scale
+// (invertibility), dead-zone slopes >= margin, envelope c0, c1 > 0.
+std::vector<double> slope_lower(const SlopeLayout& layout, const std::vector<double>& th, const Ranges& rg,
+                                double margin) {
+  std::vector<double> lower(static_cast<std::size_t>(layout.size()), -std::numeric_limits<double>::infinity());
+  Structure<double> s0;
+  layout.build(th.data(), s0);
+  double uspan = rg.xspan();
+  if (layout.env == 8) {
+    uspan = std::abs(envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xhi) -
+                     envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xlo));
+    for (int i : {0, 1, 4, 5}) lower[static_cast<std::size_t>(i)] = margin * std::abs(th[static_cast<std::size_t>(i)]);
+  }
+  const double scale = rg.yspan() / std::max(uspan, 1e-300);
+  const auto env = static_cast<std::size_t>(layout.env);
+  for (std::size_t i = env; i < env + layout.r.size() + 1; ++i) lower[i] = margin * scale;
+  for (std::size_t i = env + layout.r.size() + 1; i < lower.size(); ++i) lower[i] = margin;
+  return lower;
+}
+
+// mpi-asym starts: envelope pairs (ascending/descending branch fits; the centre
+// line for both), thresholds r_i = alpha i on the alpha grid of gpi_starts, weights
+// by constrained LS; the best num_starts by SSE.
+void asym_starts(const Data& d, int n, const FitOptions& o, double margin, std::vector<SlopeLayout>& layouts,
+                 std::vector<std::vector<double>>& starts) {
+  const Ranges rg = ranges_of(d);
+  const Branches br = loop_branches(d, rg);
+  Curve all;
+  for (std::size_t k = d.train.begin; k < d.train.end; ++k) all.x.push_back(d.x[k]), all.y.push_back(d.y[k]);
+  const auto ce = fit_tanh(br.centre.x.size() >= 4 ? br.centre : all, rg);
+  const auto ea = br.asc.x.size() >= 4 ? fit_tanh(br.asc, rg) : ce;
+  const auto ed = br.desc.x.size() >= 4 ? fit_tanh(br.desc, rg) : ce;
+  struct Cand {
+    double sse;
+    SlopeLayout layout;
+    std::vector<double> th;
+  };
+  std::vector<Cand> cands;
+  const std::pair<std::array<double, 4>, std::array<double, 4>> pairs[2] = {{ea, ed}, {ce, ce}};
+  for (const auto& [a, b] : pairs) {
+    const double U = 0.5 * (envelope_span(a, rg) + envelope_span(b, rg));
+    const double scale = rg.yspan() / std::max(U, 1e-300);
+    constexpr int kAlphas = 14;
+    for (int ia = 0; ia < kAlphas; ++ia) {
+      const double alpha = 0.01 * std::pow(100.0, ia / (kAlphas - 1.0)) * 0.5 * U / n;
+      Structure<double> s;
+      s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
+      s.asymmetric = true;
+      s.asc_c = {a[0], a[1], a[2], a[3]};
+      s.desc_c = {b[0], b[1], b[2], b[3]};
+      for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
+      s.p.assign(s.r.size(), 0.0);
+      double q = 1;
+      std::vector<double> p;
+      const double sse = cls_weights(d, s, margin * scale, q, p);
+      if (!std::isfinite(sse)) continue;
+      Cand c{sse, {}, {}};
+      c.layout.kind = FitModel::mpi_asym;
+      c.layout.env = 8;
+      c.layout.r = s.r;
+      c.th.assign(a.begin(), a.end());
+      c.th.insert(c.th.end(), b.begin(), b.end());
+      const auto sl = slopes(q, p);
+      c.th.insert(c.th.end(), sl.begin(), sl.end());
+      cands.push_back(std::move(c));
+    }
+  }
+  std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) { return x.sse < y.sse; });
+  for (std::size_t k = 0; k < cands.size() && static_cast<int>(k) < o.num_starts; ++k) {
+    layouts.push_back(cands[k].layout);
+    starts.push_back(cands[k].th);
+  }
+  if (starts.empty()) throw Error("fit: mpi-asym: no usable start");
 }
 
 int num_parameters(const FitOptions& o) {
@@ -490,16 +827,18 @@ void finish_status(FitReport& rep, const Solved& best) {
 }
 
 // Runs LM on several slope-parametrized starts and fills the report.
-void fit_slopes(const Data& d, const SlopeLayout& layout, const std::vector<std::vector<double>>& starts,
-                const std::vector<double>& lower, const FitOptions& o, FitReport& rep) {
+void fit_slopes(const Data& d, const std::vector<SlopeLayout>& layouts, const std::vector<std::vector<double>>& starts,
+                const std::vector<std::vector<double>>& lowers, const FitOptions& o, FitReport& rep) {
   Solved best;
   best.final_cost = std::numeric_limits<double>::infinity();
-  int k = 0;
-  for (const auto& th : starts) {
-    Solved s = solve(o.model, d, 0, &layout, th, lower, {}, o, k++);
+  std::size_t kbest = 0;
+  for (std::size_t k = 0; k < starts.size(); ++k) {
+    Solved s = solve(o.model, d, 0, &layouts[k], starts[k], lowers[k], {}, o, static_cast<int>(k));
     rep.total_iterations += std::max(0, s.iterations);
-    if (s.usable && s.final_cost < best.final_cost) best = std::move(s);
+    if (s.usable && s.final_cost < best.final_cost) best = std::move(s), kbest = k;
   }
+  const SlopeLayout& layout = layouts[kbest];
+  const std::vector<double>& lower = lowers[kbest];
   rep.num_starts = static_cast<int>(starts.size());
   if (!best.usable) {
     rep.status = FitStatus::failed;
@@ -521,13 +860,6 @@ void fit_slopes(const Data& d, const SlopeLayout& layout, const std::vector<std:
     for (std::size_t j = d.train.begin; j < d.train.end; ++j) sse += (d.y[j] - yp[j]) * (d.y[j] - yp[j]);
     standard_errors(o.model, d, 0, &layout, best.theta, lower, {}, M, sse, rep);
   }
-}
-
-// Slope vector [s_0..s_n] of weights q, p.
-std::vector<double> slopes(double q, const std::vector<double>& p) {
-  std::vector<double> s{q};
-  for (double pi : p) s.push_back(s.back() + pi);
-  return s;
 }
 
 }  // namespace
@@ -574,6 +906,28 @@ bool FitOptions::is_valid(std::string* error) const {
   if (!(positivity_margin >= 0 && positivity_margin < 0.1))
     return fail(fmt::format("positivity_margin must be in [0, 0.1), got {}", positivity_margin));
   return true;
+}
+
+void gpi_residuals(std::span<const double> theta, int n, std::span<const double> x, std::span<const double> y,
+                   IndexRange train, InitialState initial, double huber, bool autodiff, Eigen::VectorXd& residuals,
+                   Eigen::MatrixXd& jacobian) {
+  if (theta.size() != static_cast<std::size_t>(kGpi)) throw Error("gpi_residuals: theta must have 8 entries");
+  if (n < 1) throw Error("gpi_residuals: n must be >= 1");
+  detail::check_record(x, y, "gpi_residuals");
+  const IndexRange tr = detail::check_range(train, x.size(), "gpi_residuals: train");
+  const Data d{x, y, tr, initial, huber};
+  const auto m = static_cast<Eigen::Index>(tr.end - tr.begin);
+  residuals.resize(m);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, kGpi);
+  if (autodiff) {
+    ceres::AutoDiffCostFunction<GpiFunctor, ceres::DYNAMIC, kGpi> cost(new GpiFunctor{d, n}, static_cast<int>(m));
+    const double* params[1] = {theta.data()};
+    double* jacs[1] = {J.data()};
+    cost.Evaluate(params, residuals.data(), jacs);
+  } else {
+    gpi_evaluate(d, n, theta.data(), residuals.data(), J.data());
+  }
+  jacobian = J;
 }
 
 std::vector<double> default_thresholds(std::span<const double> x, int n) {
@@ -662,6 +1016,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     } else {
       SlopeLayout layout;
       layout.kind = o.model;
+      std::vector<SlopeLayout> layouts;  // one per start (mpi-asym), else `layout` for all
       std::vector<std::vector<double>> starts;
       const double margin = std::max(o.positivity_margin, 1e-12);
       WeightFitOptions wo;
@@ -711,46 +1066,13 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
         seedB.resize(seedA.size(), 1.0);
         if (canonical_structure(fp).r.size() == layout.r.size()) starts.push_back(seedB);
         starts.push_back(seedA);
-      } else {  // mpi-asym: start from the gpi fit (exactly representable)
-        FitOptions go = o;
-        go.model = FitModel::gpi;
-        go.compute_covariance = false;
-        const FitReport g = fit(x, y, go);
-        if (g.status != FitStatus::converged && g.status != FitStatus::no_convergence) {
-          rep = g;
-          rep.model_kind = o.model;
-          rep.message = "mpi-asym: the gpi seed fit failed: " + g.message;
-          rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
-          return rep;
-        }
-        const auto& gp = std::get<GpiParams>(g.model);
-        const Structure<double> s = canonical_structure(gp);
-        layout.env = 8;
-        layout.r = s.r;
-        std::vector<double> th(gp.envelope.c.begin(), gp.envelope.c.end());
-        th.insert(th.end(), gp.envelope.c.begin(), gp.envelope.c.end());
-        const auto sl = slopes(s.q, s.p);
-        th.insert(th.end(), sl.begin(), sl.end());
-        starts.push_back(th);
-        rep.total_iterations += g.total_iterations;
+      } else {  // mpi-asym: two envelopes (branch fits or the centre line) + CLS weights
+        asym_starts(d, n, o, margin, layouts, starts);
       }
-      std::vector<double> lower(static_cast<std::size_t>(layout.size()), -std::numeric_limits<double>::infinity());
-      // weights: invertibility (cumulative slopes >= margin * scale); envelopes: c0, c1 > 0
-      const Structure<double> s0 = [&] {
-        Structure<double> s;
-        layout.build(starts.front().data(), s);
-        return s;
-      }();
-      double uspan = rg.xspan();
-      if (layout.env == 8) {
-        uspan = std::abs(envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xhi) -
-                         envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xlo));
-        for (int i : {0, 1, 4, 5}) lower[static_cast<std::size_t>(i)] = margin * std::abs(starts.front()[static_cast<std::size_t>(i)]);
-      }
-      const double scale = rg.yspan() / std::max(uspan, 1e-300);
-      for (std::size_t i = static_cast<std::size_t>(layout.env); i < layout.env + layout.r.size() + 1; ++i) lower[i] = margin * scale;
-      for (std::size_t i = layout.env + layout.r.size() + 1; i < lower.size(); ++i) lower[i] = margin;
-      fit_slopes(d, layout, starts, lower, o, rep);
+      if (layouts.empty()) layouts.assign(starts.size(), layout);
+      std::vector<std::vector<double>> lowers;
+      for (std::size_t k = 0; k < starts.size(); ++k) lowers.push_back(slope_lower(layouts[k], starts[k], rg, margin));
+      fit_slopes(d, layouts, starts, lowers, o, rep);
     }
   } catch (const Error& e) {
     return invalid(e.what(), o.model, t0);

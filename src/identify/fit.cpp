@@ -654,12 +654,34 @@ double fit_tau(const std::vector<double>& r, const std::vector<double>& p) {
   return -(sw * sxy - sx * sy) / det;
 }
 
+// The record decimated to about 2500 samples (every s-th sample from the start)
+// for the screening of start candidates; the operators are rate independent, so
+// the ranking is nearly that of the full record at 1/s of the cost.
+struct Decimated {
+  std::vector<double> x, y;
+  Data d;
+};
+Decimated decimate(const Data& d) {
+  const std::size_t m = d.train.end - d.train.begin;
+  const std::size_t st = std::max<std::size_t>(1, m / 2500);
+  Decimated out;
+  for (std::size_t k = 0; k < d.train.end; k += st) out.x.push_back(d.x[k]), out.y.push_back(d.y[k]);
+  out.d = d;
+  out.d.x = out.x;
+  out.d.y = out.y;
+  out.d.train = {(d.train.begin + st - 1) / st, out.x.size()};
+  out.d.huber = 0;
+  return out;
+}
+
 // Data-derived gpi starts: the envelope from a tanh fit of the loop's centre line;
 // with it fixed the output is linear in (q, p_i) for fixed thresholds r_i = alpha i,
 // so for a log grid of alpha over (0, half the envelope-output span)/n the weights
 // are solved by constrained LS, (rho, tau) fitted to them log-linearly, (q, rho)
 // re-solved by NNLS for the exponential law and the candidates ranked by SSE.
-std::vector<std::vector<double>> gpi_starts(const Data& d, int n, const FitOptions& o, double lb_rel) {
+std::vector<std::vector<double>> gpi_starts(const Data& full, int n, const FitOptions& o, double lb_rel) {
+  const Decimated dec = decimate(full);
+  const Data& d = dec.d;
   const Ranges rg = ranges_of(d);
   const Branches br = loop_branches(d, rg);
   Curve centre = br.centre;
@@ -695,7 +717,7 @@ std::vector<std::vector<double>> gpi_starts(const Data& d, int n, const FitOptio
     std::vector<double> p;
     cls_weights(d, s, margin, q, p);
     const double tf = fit_tau(s.r, p);
-    std::vector<double> taus{1e-3 / (alpha * n), 1.0 / (alpha * n), 5.0 / (alpha * n)};
+    std::vector<double> taus{1e-3 / (alpha * n), 1.0 / (alpha * n)};
     if (std::isfinite(tf)) taus.push_back(std::max(tf, 1e-3 / (alpha * n)));
     for (double tau : taus) {
       std::vector<double> th{env[0], env[1], env[2], env[3], 1.0, 1.0, tau, alpha};
@@ -745,8 +767,10 @@ std::vector<double> slope_lower(const SlopeLayout& layout, const std::vector<dou
 // mpi-asym starts: envelope pairs (ascending/descending branch fits; the centre
 // line for both), thresholds r_i = alpha i on the alpha grid of gpi_starts, weights
 // by constrained LS; the best num_starts by SSE.
-void asym_starts(const Data& d, int n, const FitOptions& o, double margin, std::vector<SlopeLayout>& layouts,
+void asym_starts(const Data& full, int n, const FitOptions& o, double margin, std::vector<SlopeLayout>& layouts,
                  std::vector<std::vector<double>>& starts) {
+  const Decimated dec = decimate(full);
+  const Data& d = dec.d;
   const Ranges rg = ranges_of(d);
   const Branches br = loop_branches(d, rg);
   Curve all;

@@ -65,6 +65,7 @@ struct ExperimentResult {
   FitReport best_fit;             // hysteron's model for the compensated variant
   FitMetrics best_validation;     // on a second identification run (other seed)
   ModelParams baseline_model;     // the straight line of the baseline
+  double lead_s = 0.0;            // preview of the compensated variants (identified)
   std::vector<TrackingRun> runs;
   nlohmann::json published;       // the paper's figures (null where it gives none)
   double wall_time_s = 0.0;

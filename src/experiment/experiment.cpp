@@ -168,6 +168,29 @@ FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what)
   return rep;
 }
 
+// Lead [samples] that best aligns the model driven by the COMMANDED pressure with
+// the measured contraction: x(t) ~ M(p_cmd(t - lead)). It lumps the regulator's
+// dead time and lag and the load's dynamics; the compensated variants feed the
+// inverse with the reference `lead` ahead (the reference is known in advance).
+std::size_t estimate_lead(const ModelParams& model, const IdRecord& r, double tc) {
+  const auto max_lead = static_cast<std::size_t>(std::lround(0.3 / tc));
+  const auto step = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(0.002 / tc)));
+  std::size_t best = 0;
+  double best_sse = std::numeric_limits<double>::infinity();
+  std::vector<double> shifted(r.p_cmd.size());
+  for (std::size_t lead = 0; lead <= max_lead; lead += step) {
+    for (std::size_t k = 0; k < shifted.size(); ++k) shifted[k] = r.p_cmd[k >= lead ? k - lead : 0];
+    const std::vector<double> y = simulate_record(model, shifted);
+    double sse = 0;
+    for (std::size_t k = max_lead; k < y.size(); ++k) sse += (y[k] - r.x_mm[k]) * (y[k] - r.x_mm[k]);
+    if (sse < best_sse) {
+      best_sse = sse;
+      best = lead;
+    }
+  }
+  return best;
+}
+
 struct Setup {
   std::string title;
   FitModel model;
@@ -302,8 +325,9 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
 
   // 3. tracking
   const PamRigParams& rp = o.rig;
-  const double lag = rp.regulator.time_constant;
-  const auto dead = static_cast<std::size_t>(std::lround(rp.regulator.dead_time / tc));
+  (void)rp;
+  const std::size_t lead = estimate_lead(res.best_fit.model, id, tc);
+  res.lead_s = static_cast<double>(lead) * tc;
   const std::uint64_t track_seed = o.seed + 104729;
   for (const auto& [ref_name, ref] : su.references) {
     auto add = [&](const std::string& variant, const std::string& desc, std::size_t lead, const Law& law) {
@@ -315,20 +339,20 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     };
     FeedforwardParams ff_plain;
     ff_plain.sample_time = tc;
-    FeedforwardParams ff_lag = ff_plain;
-    ff_lag.lag_time_constant = lag;
+    const FeedforwardParams& ff_lag = ff_plain;
 
     if (o.name == "gpi-pid") {
       const PidParams paper = gpi_paper_pid(tc, -kPressureMax, kPressureMax);
       PidParams tuned = paper;
-      tuned.kp = 4.0;    // MPa/m
+      tuned.kp = 8.0;    // MPa/m (stability limit ~12 with the regulator lag and the load)
       tuned.ki = 40.0;   // MPa/(m s)
       auto faithful = std::make_shared<FeedforwardPidController>(res.fit.model, ff_plain, paper);
       add("faithful", "inverse GPI feedforward + PID of Table 3 (Kp = 0.05 V/mm, Ki = 0.01 V/(mm s))", 0,
           [faithful](const Sample& s) { return regulator(faithful->step(s.reference_m, s.preview_m, s.measured_m)); });
       auto best = std::make_shared<FeedforwardPidController>(res.best_fit.model, ff_lag, tuned);
-      add("compensated", "best inverse model, regulator lag and dead time compensated, PI tuned (Kp = 4 MPa/m, Ki = 40 MPa/(m s))",
-          dead, [best](const Sample& s) { return regulator(best->step(s.reference_m, s.preview_m, s.measured_m)); });
+      add("compensated", fmt::format("best inverse model fed {:.0f} ms ahead (lead identified from the identification run), "
+                      "PI tuned (Kp = 8 MPa/m, Ki = 40 MPa/(m s))", res.lead_s * 1e3),
+          lead, [best](const Sample& s) { return regulator(best->step(s.reference_m, s.preview_m, s.measured_m)); });
       auto base = std::make_shared<FeedforwardPidController>(res.baseline_model, ff_plain, paper);
       add("baseline", "straight-line feedforward (no hysteresis) + PID of Table 3", 0,
           [base](const Sample& s) { return regulator(base->step(s.reference_m, s.preview_m, s.measured_m)); });
@@ -347,8 +371,9 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       best_p.position.kp = 4.0;
       best_p.position.ki = 40.0;
       auto best = std::make_shared<OpenLoopController>(res.best_fit.model, best_p);
-      add("compensated", "best inverse model, lag and dead time compensated, pressure loop + PI position correction",
-          dead, [best](const Sample& s) {
+      add("compensated", fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop + PI position correction",
+                      res.lead_s * 1e3),
+          lead, [best](const Sample& s) {
             return regulator(best->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa));
           });
       auto base = std::make_shared<OpenLoopController>(res.baseline_model, faithful_p);

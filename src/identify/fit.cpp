@@ -193,7 +193,7 @@ GpiParams gpi_params(const double* th, int n) {
 
 // ---- models linear in their weights: cumulative-slope parametrization ---------------
 // theta = [envelope coefficients (mpi-asym: 4 ascending + 4 descending)],
-//         s_0..s_n (s_0 = q, s_i = q + p_1 + ... + p_i),
+//         s_0..s_n (s_0 = q, s_i = q + p_1 + ... + p_i; mpi-asym: q, p_1..p_n, all >= 0),
 //         mpi-deadzone: d_1..d_J (positive side, z ascending), then the negative side
 //         (z descending): cumulative output slopes g0 + g_1 + ... + g_j, with g0 = 1.
 struct SlopeLayout {
@@ -218,7 +218,10 @@ struct SlopeLayout {
     s.p.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       s.r[i] = T(r[i]);
-      s.p[i] = sl[i + 1] - sl[i];
+      // mpi-asym: weights directly (bounded >= 0 so that the output is strictly
+      // increasing in the input for every state: its numerical inverse needs it);
+      // the others: cumulative slopes (partial sums > 0, Eq. 11).
+      s.p[i] = kind == FitModel::mpi_asym ? sl[i + 1] : sl[i + 1] - sl[i];
     }
     if (kind == FitModel::mpi_deadzone) {
       s.has_dead_zones = true;
@@ -808,8 +811,8 @@ void asym_starts(const Data& full, int n, const FitOptions& o, double margin, st
       c.layout.r = s.r;
       c.th.assign(a.begin(), a.end());
       c.th.insert(c.th.end(), b.begin(), b.end());
-      const auto sl = slopes(q, p);
-      c.th.insert(c.th.end(), sl.begin(), sl.end());
+      c.th.push_back(q);  // mpi-asym layout: q, then the weights themselves, >= 0
+      for (double pi : p) c.th.push_back(std::max(pi, 0.0));
       cands.push_back(std::move(c));
     }
   }

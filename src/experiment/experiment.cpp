@@ -346,12 +346,14 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       PidParams tuned = paper;
       tuned.kp = 8.0;    // MPa/m (stability limit ~12 with the regulator lag and the load)
       tuned.ki = 40.0;   // MPa/(m s)
+      tuned.kd = 0.2;    // MPa s/m: damps the load's ~3 Hz mode
+      tuned.derivative_filter = 0.01;  // s
       auto faithful = std::make_shared<FeedforwardPidController>(res.fit.model, ff_plain, paper);
       add("faithful", "inverse GPI feedforward + PID of Table 3 (Kp = 0.05 V/mm, Ki = 0.01 V/(mm s))", 0,
           [faithful](const Sample& s) { return regulator(faithful->step(s.reference_m, s.preview_m, s.measured_m)); });
       auto best = std::make_shared<FeedforwardPidController>(res.best_fit.model, ff_lag, tuned);
       add("compensated", fmt::format("best inverse model fed {:.0f} ms ahead (lead identified from the identification run), "
-                      "PI tuned (Kp = 8 MPa/m, Ki = 40 MPa/(m s))", res.lead_s * 1e3),
+                      "PID tuned (Kp = 8 MPa/m, Ki = 40 MPa/(m s), Kd = 0.2 MPa s/m, 10 ms filter)", res.lead_s * 1e3),
           lead, [best](const Sample& s) { return regulator(best->step(s.reference_m, s.preview_m, s.measured_m)); });
       auto base = std::make_shared<FeedforwardPidController>(res.baseline_model, ff_plain, paper);
       add("baseline", "straight-line feedforward (no hysteresis) + PID of Table 3", 0,
@@ -368,8 +370,10 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       OpenLoopParams best_p = faithful_p;
       best_p.feedforward = ff_lag;
       best_p.position = gpi_paper_pid(tc);
-      best_p.position.kp = 4.0;
-      best_p.position.ki = 40.0;
+      best_p.position.kp = 6.0;   // MPa/m (x 1.5 through the pressure loop)
+      best_p.position.ki = 40.0;  // MPa/(m s)
+      best_p.position.kd = 0.2;   // MPa s/m
+      best_p.position.derivative_filter = 0.01;
       auto best = std::make_shared<OpenLoopController>(res.best_fit.model, best_p);
       add("compensated", fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop + PI position correction",
                       res.lead_s * 1e3),

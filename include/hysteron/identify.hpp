@@ -186,6 +186,18 @@ void gpi_residuals(std::span<const double> theta, int n, std::span<const double>
                    IndexRange train, InitialState initial, double huber, bool autodiff, Eigen::VectorXd& residuals,
                    Eigen::MatrixXd& jacobian);
 
+// The same for the parametrization fit() uses for pi / mpi-deadzone / mpi-asym with
+// fixed thresholds r (ascending) and, for mpi-deadzone, fixed forward dead-zone
+// thresholds zp (positive side, ascending) and zn (negative side, descending):
+// theta = [mpi-asym: 4 ascending + 4 descending tanh coefficients], then
+// pi / mpi-deadzone: cumulative slopes s_0..s_n (s_0 = q, s_i = q + p_1 + ... + p_i),
+// mpi-asym: q, p_1..p_n; mpi-deadzone: then per side the cumulative dead-zone
+// slopes 1 + g_1 + ... + g_j. The Jacobian is m x theta.size().
+void slope_residuals(FitModel model, std::span<const double> theta, std::span<const double> r,
+                     std::span<const double> zp, std::span<const double> zn, std::span<const double> x,
+                     std::span<const double> y, IndexRange train, InitialState initial, double huber, bool autodiff,
+                     Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian);
+
 // Thresholds used by fit() for the pi/mpi models: r_i = i span(x) / (2n), i = 1..n-1.
 std::vector<double> default_thresholds(std::span<const double> x, int n);
 

@@ -305,6 +305,136 @@ struct SlopeFunctor {
   }
 };
 
+// Residuals (and, if J != nullptr, their row-major m x size() Jacobian) of a
+// slope-parametrized model in one pass with plain doubles (forward-mode
+// sensitivities; the branch tests are those of ops::asymmetric_play / dead_zone, so
+// this is the derivative the Jets of SlopeFunctor compute, tested to 1e-10).
+// pi / mpi-deadzone: the play outputs do not depend on theta (identity envelope,
+// fixed thresholds): dv/ds_j = y_{j-1} - y_j (y_0 = x); dead zones: out =
+// v + sum g_k S_k(v), d out/dv = 1 + sum of the active g_k, d out/dD_j = S_j - S_{j+1}.
+// mpi-asym: each play output is held (keeps its 8-vector of envelope derivatives)
+// or equals u_a - r_i (ascending coefficients) or u_d + r_i (descending ones).
+void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, double* res, double* J) {
+  const std::size_t n = L.r.size();
+  const std::size_t P = static_cast<std::size_t>(L.size());
+  const std::size_t env = static_cast<std::size_t>(L.env);
+  const bool asym = L.env == 8;
+  const double* sl = th + env;
+  // g: d y_i / d(4 coefficients of the envelope eside[i]: 0 ascending, 1 descending)
+  std::vector<double> p(n), y(n, 0.0), g(asym ? 4 * n : 0, 0.0);
+  std::vector<unsigned char> eside(n, 0);
+  for (std::size_t i = 0; i < n; ++i) p[i] = asym ? sl[i + 1] : sl[i + 1] - sl[i];
+  // dead zones: thresholds and slopes g_k = D_k - D_{k-1} (D_0 = 1 per side)
+  const std::size_t nz = L.zp.size() + L.zn.size();
+  std::vector<double> z, gz, S(nz);
+  std::vector<std::size_t> side_end;  // one past the last index of each side
+  {
+    const double* dz = sl + n + 1;
+    for (const std::vector<double>* side : {&L.zp, &L.zn}) {
+      double prev = 1.0;
+      for (double zz : *side) {
+        z.push_back(zz);
+        gz.push_back(*dz - prev);
+        prev = *dz++;
+      }
+      side_end.push_back(z.size());
+    }
+  }
+  const double *ca = th, *cd = th + 4;
+  auto tanh_env = [](const double* c, double x, double* du) {
+    const double t = detail::tanh_fast(c[1] * x + c[2]);
+    const double s = c[0] * (1.0 - t * t);
+    du[0] = t, du[1] = s * x, du[2] = s, du[3] = 1.0;
+    return c[0] * t + c[3];
+  };
+  double dua[4] = {0, 0, 0, 0}, dud[4] = {0, 0, 0, 0};
+  if (d.initial == InitialState::relaxed) {
+    const double u0 = asym ? tanh_env(ca, d.x[0], dua) : d.x[0];
+    for (std::size_t i = 0; i < n; ++i) {
+      y[i] = u0;
+      if (asym) std::copy(dua, dua + 4, &g[4 * i]);
+    }
+  }
+  const double q = sl[0];
+  for (std::size_t k = 0; k < d.train.end; ++k) {
+    const double x = d.x[k];
+    double ua = x, ud = x;
+    if (asym) ua = tanh_env(ca, x, dua), ud = tanh_env(cd, x, dud);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double hi = ud + L.r[i], lo = ua - L.r[i];
+      if (!(y[i] < hi)) {  // hmin(u_d + r, y)
+        y[i] = hi;
+        if (asym) std::copy(dud, dud + 4, &g[4 * i]), eside[i] = 1;
+      }
+      if (!(lo < y[i])) {  // hmax(u_a - r, .)
+        y[i] = lo;
+        if (asym) std::copy(dua, dua + 4, &g[4 * i]), eside[i] = 0;
+      }
+    }
+    const double u = asym ? 0.5 * (ua + ud) : ua;
+    double v = q * u;
+    for (std::size_t i = 0; i < n; ++i) v += p[i] * y[i];
+    double out = v, dv = 1.0;
+    for (std::size_t j = 0; j < nz; ++j) {
+      // ops::dead_zone: z > 0: max{v - z, 0}; z < 0: min{v - z, 0}; z = 0: v
+      bool on = true;
+      if (0.0 < z[j]) on = !(v - z[j] < 0.0);
+      else if (z[j] < 0.0) on = !(0.0 < v - z[j]);
+      S[j] = on ? v - z[j] : 0.0;
+      out += gz[j] * S[j];
+      if (on) dv += gz[j];
+    }
+    if (k < d.train.begin) continue;
+    const double rr = d.y[k] - out;
+    double f = rr, df = 1.0;
+    if (d.huber > 0 && !(rr < d.huber && -d.huber < rr)) {
+      f = std::sqrt(2.0 * d.huber * std::abs(rr) - d.huber * d.huber);
+      df = d.huber / f;
+      if (rr < 0) f = -f;
+    }
+    const std::size_t rix = k - d.train.begin;
+    res[rix] = f;
+    if (!J) continue;
+    double* jr = J + P * rix;
+    const double a = -df * dv;  // d f / d v
+    if (asym) {
+      for (int c = 0; c < 4; ++c) jr[c] = 0.5 * q * dua[c], jr[4 + c] = 0.5 * q * dud[c];
+      for (std::size_t i = 0; i < n; ++i) {
+        const double* gi = &g[4 * i];
+        double* ji = jr + 4 * eside[i];
+        for (int c = 0; c < 4; ++c) ji[c] += p[i] * gi[c];
+      }
+      for (int c = 0; c < 8; ++c) jr[c] *= a;
+      jr[env] = a * u;
+      for (std::size_t i = 0; i < n; ++i) jr[env + 1 + i] = a * y[i];
+    } else {
+      // v = s_0 u + sum_i (s_{i+1} - s_i) y_i
+      for (std::size_t j = 0; j <= n; ++j) jr[j] = a * ((j == 0 ? u : y[j - 1]) - (j < n ? y[j] : 0.0));
+      std::size_t j0 = 0;
+      for (std::size_t e : side_end) {
+        for (std::size_t j = j0; j < e; ++j) jr[n + 1 + j] = -df * (S[j] - (j + 1 < e ? S[j + 1] : 0.0));
+        j0 = e;
+      }
+    }
+  }
+}
+
+class SlopeCost final : public ceres::CostFunction {
+ public:
+  SlopeCost(const Data& d, const SlopeLayout* layout) : d_(d), layout_(layout) {
+    set_num_residuals(static_cast<int>(d.train.end - d.train.begin));
+    mutable_parameter_block_sizes()->push_back(layout->size());
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    slope_evaluate(d_, *layout_, params[0], residuals, jacobians ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  Data d_;
+  const SlopeLayout* layout_;
+};
+
 // ---- solving ------------------------------------------------------------------
 
 class Progress : public ceres::IterationCallback {
@@ -339,15 +469,11 @@ std::unique_ptr<ceres::Problem> make_problem(FitModel kind, const Data& d, int n
                                              std::vector<double>& theta, const std::vector<double>& lower,
                                              const std::vector<int>& held) {
   auto problem = std::make_unique<ceres::Problem>();
-  const int m = static_cast<int>(d.train.end - d.train.begin);
   ceres::CostFunction* cost = nullptr;
   if (kind == FitModel::gpi) {
     cost = new GpiCost(d, n);
   } else {
-    auto* dyn = new ceres::DynamicAutoDiffCostFunction<SlopeFunctor, 10>(new SlopeFunctor{d, layout});
-    dyn->AddParameterBlock(static_cast<int>(theta.size()));
-    dyn->SetNumResiduals(m);
-    cost = dyn;
+    cost = new SlopeCost(d, layout);
   }
   problem->AddResidualBlock(cost, nullptr, theta.data());
   for (std::size_t i = 0; i < lower.size(); ++i)
@@ -366,7 +492,7 @@ Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, std
   ceres::Solver::Options so;
   so.minimizer_type = ceres::TRUST_REGION;
   so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  so.linear_solver_type = kind == FitModel::gpi ? ceres::DENSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
+  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = o.function_tolerance;
   so.gradient_tolerance = o.gradient_tolerance;
@@ -621,22 +747,24 @@ double envelope_span(const std::array<double, 4>& c, const Ranges& rg) {
 
 // Weights of a PI on envelope output u with thresholds r (cumulative slopes >= margin), by NNLS.
 // Returns the SSE; q and p receive the weights.
+// With `direct`, q and every p_i themselves are kept >= margin (the mpi-asym layout).
 double cls_weights(const Data& d, const Structure<double>& s, double margin, double& q, std::vector<double>& p,
-                   Eigen::MatrixXd* phi_out = nullptr) {
+                   Eigen::MatrixXd* phi_out = nullptr, bool direct = false) {
   const IndexRange tr = d.train;
   const Eigen::MatrixXd phi = detail::regressors(s, d.x, tr, d.initial);
   const auto m = phi.rows();
   const auto k = phi.cols();
   // cumulative slopes: a_i = phi_i - phi_{i+1}, a_n = phi_n
   Eigen::MatrixXd A = phi;
-  for (Eigen::Index i = 0; i + 1 < k; ++i) A.col(i) -= phi.col(i + 1);
+  if (!direct)
+    for (Eigen::Index i = 0; i + 1 < k; ++i) A.col(i) -= phi.col(i + 1);
   Eigen::VectorXd b(m);
   for (Eigen::Index j = 0; j < m; ++j) b(j) = d.y[tr.begin + static_cast<std::size_t>(j)];
   const Eigen::VectorXd lo = Eigen::VectorXd::Constant(k, margin);
   const Eigen::VectorXd sl = lo + detail::nnls(A, b - A * lo);
   q = sl(0);
   p.resize(static_cast<std::size_t>(k - 1));
-  for (Eigen::Index i = 1; i < k; ++i) p[static_cast<std::size_t>(i - 1)] = sl(i) - sl(i - 1);
+  for (Eigen::Index i = 1; i < k; ++i) p[static_cast<std::size_t>(i - 1)] = direct ? sl(i) : sl(i) - sl(i - 1);
   if (phi_out) *phi_out = phi;
   return (A * sl - b).squaredNorm();
 }
@@ -953,6 +1081,37 @@ void gpi_residuals(std::span<const double> theta, int n, std::span<const double>
     cost.Evaluate(params, residuals.data(), jacs);
   } else {
     gpi_evaluate(d, n, theta.data(), residuals.data(), J.data());
+  }
+  jacobian = J;
+}
+
+void slope_residuals(FitModel model, std::span<const double> theta, std::span<const double> r,
+                     std::span<const double> zp, std::span<const double> zn, std::span<const double> x,
+                     std::span<const double> y, IndexRange train, InitialState initial, double huber, bool autodiff,
+                     Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian) {
+  if (model == FitModel::gpi) throw Error("slope_residuals: not for the gpi (use gpi_residuals)");
+  SlopeLayout L;
+  L.kind = model;
+  L.env = model == FitModel::mpi_asym ? 8 : 0;
+  L.r.assign(r.begin(), r.end());
+  if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
+  if (theta.size() != static_cast<std::size_t>(L.size()))
+    throw Error(fmt::format("slope_residuals: theta must have {} entries, got {}", L.size(), theta.size()));
+  detail::check_record(x, y, "slope_residuals");
+  const IndexRange tr = detail::check_range(train, x.size(), "slope_residuals: train");
+  const Data d{x, y, tr, initial, huber};
+  const auto m = static_cast<Eigen::Index>(tr.end - tr.begin);
+  residuals.resize(m);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, L.size());
+  if (autodiff) {
+    ceres::DynamicAutoDiffCostFunction<SlopeFunctor, 10> cost(new SlopeFunctor{d, &L});
+    cost.AddParameterBlock(L.size());
+    cost.SetNumResiduals(static_cast<int>(m));
+    const double* params[1] = {theta.data()};
+    double* jacs[1] = {J.data()};
+    cost.Evaluate(params, residuals.data(), jacs);
+  } else {
+    slope_evaluate(d, L, theta.data(), residuals.data(), J.data());
   }
   jacobian = J;
 }

@@ -125,6 +125,12 @@ struct FitOptions {
   // data scale), keeping fitted PI-type models invertible; also the lower
   // bound of the positive gpi parameters (relative to their initial value).
   double positivity_margin = 1e-6;
+  // mpi-deadzone only: mild ridge penalty mu m (span(x) p_i)^2 on the play weights p_i
+  // (m training samples) added to the least-squares cost. Without it a record that
+  // does not excite the plays separately (e.g. one major loop) admits large
+  // cancelling weights (p_7 = 159, p_8 = -151 on the rig record) that fit the
+  // training loop but extrapolate badly to minor loops. 0 disables it.
+  double weight_regularization = 1e-4;
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
   std::function<void(int, int, double)> progress;
 

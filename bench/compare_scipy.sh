@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# Peer comparison: hysteron's LM (Ceres, automatic differentiation) against
+# Peer comparison: hysteron's LM (Ceres, analytic forward-sensitivity Jacobian) against
 # scipy.optimize.least_squares ('trf', finite differences) on the same GPI
 # (8 parameters, n = 10) and the same 10,001 samples of the piezo record:
 # ../shared/data/piezo-sine/piezo_150V_1Hz.csv rows 0, 5, 10, ..., 50000
 # (every 5th row from the first), input = column 3 [V], output = column 2 [um].
 #
 # Usage: bench/compare_scipy.sh [HYSTERON_CLI]   (default: build/hysteron)
+# The scipy half takes 7-12 min on a loaded 2-core machine.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cli="${1:-$root/build/hysteron}"

@@ -246,8 +246,7 @@ Setup setup_for(const ExperimentOptions& o) {
     s.references.push_back({"triangle", mpi_triangle_contraction(tc, 1), 0});
     s.published = nullptr;  // the text we have ends before the paper's results
   } else {
-    throw Error(fmt::format("experiment: unknown experiment \"{}\" (expected gpi-pid, mpi-openloop or mpi-pwm)",
-                            o.name));
+    throw Error(fmt::format("experiment: unknown experiment \"{}\"", o.name));  // validate() lists the names
   }
   return s;
 }
@@ -321,8 +320,6 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.baseline_model = straight_line(id);
 
   // 3. tracking
-  const PamRigParams& rp = o.rig;
-  (void)rp;
   const std::size_t lead = estimate_lead(res.best_fit.model, id, tc);
   res.lead_s = static_cast<double>(lead) * tc;
   const std::uint64_t track_seed = o.seed + 104729;
@@ -336,7 +333,6 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     };
     FeedforwardParams ff_plain;
     ff_plain.sample_time = tc;
-    const FeedforwardParams& ff_lag = ff_plain;
 
     if (o.name == "gpi-pid") {
       const PidParams paper = gpi_paper_pid(tc, -kPressureMax, kPressureMax);
@@ -348,7 +344,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       auto faithful = std::make_shared<FeedforwardPidController>(res.fit.model, ff_plain, paper);
       add("faithful", "inverse GPI feedforward + PID of Table 3 (Kp = 0.05 V/mm, Ki = 0.01 V/(mm s))", 0,
           [faithful](const Sample& s) { return regulator(faithful->step(s.reference_m, s.preview_m, s.measured_m)); });
-      auto best = std::make_shared<FeedforwardPidController>(res.best_fit.model, ff_lag, tuned);
+      auto best = std::make_shared<FeedforwardPidController>(res.best_fit.model, ff_plain, tuned);
       add("compensated", fmt::format("best inverse model fed {:.0f} ms ahead (lead identified from the identification run), "
                       "PID tuned (Kp = 8 MPa/m, Ki = 40 MPa/(m s), Kd = 0.2 MPa s/m, 10 ms filter)", res.lead_s * 1e3),
           lead, [best](const Sample& s) { return regulator(best->step(s.reference_m, s.preview_m, s.measured_m)); });
@@ -365,7 +361,6 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
             return regulator(faithful->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa));
           });
       OpenLoopParams best_p = faithful_p;
-      best_p.feedforward = ff_lag;
       best_p.position = gpi_paper_pid(tc);
       best_p.position.kp = 6.0;   // MPa/m (x 1.5 through the pressure loop)
       best_p.position.ki = 40.0;  // MPa/(m s)

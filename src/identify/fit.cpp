@@ -41,6 +41,13 @@ inline T robust_residual(const T& r, double d) {
   return r < T(0) ? T(-f) : f;
 }
 
+// robust_residual for the hand-written Jacobians, with its slope df/dr.
+inline double robust_residual_with_slope(double r, double d, double& slope) {
+  const double f = robust_residual<double>(r, d);
+  slope = f == r ? 1.0 : d / std::abs(f);  // d/dr sqrt(2 d |r| - d^2) = d / |f|
+  return f;
+}
+
 // Simulates the structure over [0, train.end) and writes the residuals of the train range.
 template <class T>
 void residuals_of(const Structure<T>& s, const Data& d, T* res) {
@@ -148,12 +155,8 @@ void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J
     }
     if (k < d.train.begin) continue;
     const double rr = d.y[k] - out;
-    double f = rr, df = 1.0;
-    if (d.huber > 0 && !(rr < d.huber && -d.huber < rr)) {
-      f = std::sqrt(2.0 * d.huber * std::abs(rr) - d.huber * d.huber);
-      df = d.huber / f;
-      if (rr < 0) f = -f;
-    }
+    double df = 1.0;
+    const double f = robust_residual_with_slope(rr, d.huber, df);
     const std::size_t row = k - d.train.begin;
     res[row] = f;
     if (J) {
@@ -387,12 +390,8 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
     }
     if (k < d.train.begin) continue;
     const double rr = d.y[k] - out;
-    double f = rr, df = 1.0;
-    if (d.huber > 0 && !(rr < d.huber && -d.huber < rr)) {
-      f = std::sqrt(2.0 * d.huber * std::abs(rr) - d.huber * d.huber);
-      df = d.huber / f;
-      if (rr < 0) f = -f;
-    }
+    double df = 1.0;
+    const double f = robust_residual_with_slope(rr, d.huber, df);
     const std::size_t rix = k - d.train.begin;
     res[rix] = f;
     if (!J) continue;

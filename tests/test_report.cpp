@@ -41,9 +41,11 @@ std::size_t count(const std::string& s, const std::string& what) {
   return n;
 }
 
-std::size_t plot_temp_dirs() {
+// Counts the plotter's temporary directories in `where`. Tests point TMPDIR at a private
+// directory first: the shared /tmp also holds those of plot tests running in parallel.
+std::size_t plot_temp_dirs(const fs::path& where) {
   std::size_t n = 0;
-  for (const auto& e : fs::directory_iterator(fs::temp_directory_path()))
+  for (const auto& e : fs::directory_iterator(where))
     if (e.path().filename().string().starts_with("hysteron-plot-")) ++n;
   return n;
 }
@@ -82,7 +84,11 @@ const Labels kLabels{"Tracking", {"Time", "s"}, {"Contraction", "mm"}};
 
 TEST(Plot, SvgAndPngWithLabelsAndNoTempFilesLeft) {
   Tmp tmp;
-  const std::size_t before = plot_temp_dirs();
+  Tmp private_tmp;
+  const char* old_tmpdir = std::getenv("TMPDIR");
+  const std::string saved = old_tmpdir ? old_tmpdir : "";
+  ::setenv("TMPDIR", private_tmp.dir.c_str(), 1);
+  ASSERT_EQ(fs::temp_directory_path(), private_tmp.dir);
   std::vector<double> t(20000), d(20000), a(20000);
   for (std::size_t i = 0; i < t.size(); ++i) {
     t[i] = 1e-3 * static_cast<double>(i);
@@ -104,7 +110,9 @@ TEST(Plot, SvgAndPngWithLabelsAndNoTempFilesLeft) {
   plot_identification_input(t, d, a, {"Input", {"Time", "s"}, {"Pressure", "MPa"}}, tmp / "i.svg");
   plot_hysteresis_loops(d, a, d, {"Loops", {"Pressure", "MPa"}, {"Contraction", "mm"}}, tmp / "l.svg", 5000);
   EXPECT_NE(slurp(tmp / "l.svg").find("minor loops"), std::string::npos);
-  EXPECT_EQ(plot_temp_dirs(), before);
+  EXPECT_EQ(plot_temp_dirs(private_tmp.dir), 0u);
+  if (old_tmpdir) ::setenv("TMPDIR", saved.c_str(), 1);
+  else ::unsetenv("TMPDIR");
 }
 
 TEST(Plot, NoDataIsAClearError) {

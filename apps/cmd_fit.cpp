@@ -159,7 +159,8 @@ int run_fit(const FitCliOptions& c) {
     params.push_back({{"name", p.name},
                       {"value", p.value},
                       {"std_error", std::isfinite(p.std_error) ? nlohmann::json(p.std_error) : nlohmann::json(nullptr)},
-                      {"held", p.held}});
+                      {"held", p.held},
+                      {"at_bound", p.at_bound}});
   j["parameters"] = params;
   j["covariance_note"] = rep.covariance_note;
   j["model"] = fitted ? io::model_to_json(rep.model) : nlohmann::json(nullptr);

@@ -153,7 +153,8 @@ struct FitParameter {
   // Standard error sqrt(diag(cov)) with cov = s^2 (J^T J)^-1, s^2 = SSE/(m - p);
   // NaN if not computed (see FitReport::covariance_note); 0 for a held parameter.
   double std_error = std::numeric_limits<double>::quiet_NaN();
-  bool held = false;  // held constant during the fit
+  bool held = false;      // held constant during the fit
+  bool at_bound = false;  // ended on its lower bound (Eq. 13) and held there; std_error 0
 };
 
 struct FitReport {

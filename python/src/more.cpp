@@ -42,6 +42,7 @@ py::dict fit_dict(const FitReport& r) {
     q["value"] = p.value;
     q["std_error"] = p.std_error;
     q["held"] = p.held;
+    q["at_bound"] = p.at_bound;
     params.append(q);
   }
   d["parameters"] = params;

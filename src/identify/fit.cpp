@@ -27,6 +27,7 @@ struct Data {
   IndexRange train;  // resolved
   InitialState initial = InitialState::virgin;
   double huber = 0.0;
+  double xc = 0.0, xs = 1.0;  // gpi: centre and half-span of the training input (GpiChart)
 };
 
 // Residual of Eq. 12, optionally mapped so that its square is the Huber loss:
@@ -167,20 +168,65 @@ void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J
   }
 }
 
-class GpiCost final : public ceres::CostFunction {
+// LM chart of the gpi (the fit runs in phi, reports Eq. 13's theta):
+//   phi = [S, a, b, m, q, rho, tau, alpha],  xn = (x - xc) / xs,
+//   u = (S / a) tanh(a xn + b) + m - (S / a) tanh(b)          (Eq. 5 rewritten)
+//   c0 = S / a, c1 = a / xs, c2 = b - a xc / xs, c3 = m - (S / a) tanh(b).
+// a is the dimensionless curvature over the input range, S the slope scale
+// (u'(xc) xs = S sech^2 b) and m = u(xc). With c0 as the gauge of the scale symmetry
+// (Eq. 13) a nearly linear envelope (the piezo record: c1 xs ~ 0.03) lies at the end of a
+// curved valley (c1 -> 0 with q, rho, alpha rescaling) along which LM crawls for hundreds of
+// iterations; with S held instead, the curvature a moves at a fixed slope scale.
+struct GpiChart {
+  double xc = 0.0, xs = 1.0;
+  std::array<double, kGpi> theta(const double* phi) const {
+    const double S = phi[0], a = phi[1], b = phi[2], m = phi[3];
+    return {S / a, a / xs, b - a * xc / xs, m - S / a * std::tanh(b), phi[4], phi[5], phi[6], phi[7]};
+  }
+  std::array<double, kGpi> phi(const double* th) const {
+    const double a = th[1] * xs, b = th[2] + th[1] * xc;
+    return {th[0] * a, a, b, th[3] + th[0] * std::tanh(b), th[4], th[5], th[6], th[7]};
+  }
+  // d theta / d phi (row-major 8 x 8)
+  Eigen::Matrix<double, kGpi, kGpi> jacobian(const double* phi) const {
+    const double S = phi[0], a = phi[1], b = phi[2], t = std::tanh(b);
+    Eigen::Matrix<double, kGpi, kGpi> T = Eigen::Matrix<double, kGpi, kGpi>::Identity();
+    T(0, 0) = 1.0 / a, T(0, 1) = -S / (a * a);
+    T(1, 1) = 1.0 / xs;
+    T(2, 1) = -xc / xs, T(2, 2) = 1.0;
+    T(3, 0) = -t / a, T(3, 1) = S * t / (a * a), T(3, 2) = -S / a * (1.0 - t * t), T(3, 3) = 1.0;
+    return T;
+  }
+};
+
+// The gpi cost in the chart: residuals from theta(phi), J_phi = J_theta dtheta/dphi.
+class GpiChartCost final : public ceres::CostFunction {
  public:
-  GpiCost(const Data& d, int n) : d_(d), n_(n) {
+  GpiChartCost(const Data& d, int n) : d_(d), n_(n), chart_{d.xc, d.xs} {
     set_num_residuals(static_cast<int>(d.train.end - d.train.begin));
     mutable_parameter_block_sizes()->push_back(kGpi);
   }
   bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
-    gpi_evaluate(d_, n_, params[0], residuals, jacobians ? jacobians[0] : nullptr);
+    const auto th = chart_.theta(params[0]);
+    for (double v : th)
+      if (!std::isfinite(v)) return false;
+    if (!jacobians || !jacobians[0]) {
+      gpi_evaluate(d_, n_, th.data(), residuals, nullptr);
+      return true;
+    }
+    const auto m = static_cast<Eigen::Index>(d_.train.end - d_.train.begin);
+    Jt_.resize(m, kGpi);
+    gpi_evaluate(d_, n_, th.data(), residuals, Jt_.data());
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor>>(jacobians[0], m, kGpi).noalias() =
+        Jt_ * chart_.jacobian(params[0]);
     return true;
   }
 
  private:
   Data d_;
   int n_;
+  GpiChart chart_;
+  mutable Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor> Jt_;
 };
 
 GpiParams gpi_params(const double* th, int n) {
@@ -489,6 +535,7 @@ struct Solved {
   ceres::TerminationType termination = ceres::FAILURE;
   std::string message;
   bool usable = false;
+  std::vector<int> at_bound;  // parameters held on their lower bound (see solve)
 };
 
 // Builds the problem for one start; `theta` must outlive it (it is the parameter block).
@@ -498,7 +545,7 @@ std::unique_ptr<ceres::Problem> make_problem(FitModel kind, const Data& d, int n
   auto problem = std::make_unique<ceres::Problem>();
   ceres::CostFunction* cost = nullptr;
   if (kind == FitModel::gpi) {
-    cost = new GpiCost(d, n);
+    cost = new GpiChartCost(d, n);
   } else {
     cost = new SlopeCost(d, layout);
   }
@@ -512,8 +559,9 @@ std::unique_ptr<ceres::Problem> make_problem(FitModel kind, const Data& d, int n
   return problem;
 }
 
-Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, std::vector<double> theta,
-             const std::vector<double>& lower, const std::vector<int>& held, const FitOptions& o, int start) {
+Solved solve_once(FitModel kind, const Data& d, int n, const SlopeLayout* layout, std::vector<double> theta,
+                  const std::vector<double>& lower, const std::vector<int>& held, const FitOptions& o, int start,
+                  int max_iterations) {
   Solved out;
   for (std::size_t i = 0; i < lower.size(); ++i)
     if (std::isfinite(lower[i])) theta[i] = std::max(theta[i], lower[i]);
@@ -522,7 +570,7 @@ Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, std
   so.minimizer_type = ceres::TRUST_REGION;
   so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  so.max_num_iterations = o.max_iterations;
+  so.max_num_iterations = max_iterations;
   so.function_tolerance = o.function_tolerance;
   so.gradient_tolerance = o.gradient_tolerance;
   so.parameter_tolerance = o.parameter_tolerance;
@@ -540,6 +588,44 @@ Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, std
   out.termination = summary.termination_type;
   out.message = summary.message;
   out.usable = summary.IsSolutionUsable() && std::isfinite(summary.final_cost);
+  return out;
+}
+
+// LM with an active-set step for the lower bounds. Ceres projects steps onto the
+// bounds, and LM crawls along an active bound (piezo gpi: tau -> 0, 200 iterations
+// without convergence). So LM runs first for at most kProbe iterations; parameters
+// that end on their bound (within 1e-4 of their scale) are then held there and LM
+// solves the others, unconstrained in the interior; otherwise LM continues. The
+// better solution is kept; `at_bound` lists the parameters held on a bound.
+Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, const std::vector<double>& theta,
+             const std::vector<double>& lower, const std::vector<int>& held, const FitOptions& o, int start) {
+  // Only the gpi: on the slope models (p_i >= 0 bounds of mpi-asym) weights touch the
+  // bound and leave it again as the envelopes move, and holding them costs accuracy
+  // (mpi-openloop experiment: compensated max error 2.5 -> 4.1 mm).
+  if (kind != FitModel::gpi) return solve_once(kind, d, n, layout, theta, lower, held, o, start, o.max_iterations);
+  constexpr int kProbe = 40;
+  const int first = std::min(o.max_iterations, kProbe);
+  Solved out = solve_once(kind, d, n, layout, theta, lower, held, o, start, first);
+  const int left = o.max_iterations - std::max(0, out.iterations);
+  if (!out.usable || left <= 0) return out;
+  std::vector<int> active = held;
+  for (std::size_t i = 0; i < lower.size(); ++i) {
+    if (!std::isfinite(lower[i]) || std::find(held.begin(), held.end(), static_cast<int>(i)) != held.end()) continue;
+    const double scale = std::max(std::abs(theta[i]), std::abs(lower[i]));
+    if (out.theta[i] - lower[i] <= 1e-4 * scale) active.push_back(static_cast<int>(i));
+  }
+  const bool bound = active.size() > held.size() && active.size() < theta.size();
+  if (!bound && out.termination != ceres::NO_CONVERGENCE) return out;
+  std::vector<double> at = out.theta;
+  for (std::size_t k = held.size(); k < active.size(); ++k)
+    at[static_cast<std::size_t>(active[k])] = lower[static_cast<std::size_t>(active[k])];
+  Solved again = solve_once(kind, d, n, layout, at, lower, bound ? active : held, o, start, left);
+  if (again.usable && again.final_cost <= out.final_cost) {
+    again.initial_cost = out.initial_cost;
+    again.iterations += out.iterations;
+    if (bound) again.at_bound.assign(active.begin() + static_cast<std::ptrdiff_t>(held.size()), active.end());
+    return again;
+  }
   return out;
 }
 
@@ -568,10 +654,11 @@ void standard_errors(FitModel kind, const Data& d, int n, const SlopeLayout* lay
       if (std::find(held.begin(), held.end(), static_cast<int>(c)) == held.end()) keep.push_back(c);
     Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(keep.size()));
     for (std::size_t c = 0; c < keep.size(); ++c) Jf.col(static_cast<Eigen::Index>(c)) = J.col(keep[c]);
-    const Eigen::MatrixXd JtJ = Jf.transpose() * Jf;
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(JtJ, Eigen::EigenvaluesOnly);
-    const double lmax = es.eigenvalues().maxCoeff(), lmin = es.eigenvalues().minCoeff();
-    if (!(lmax > 0) || !(lmin > 1e-13 * lmax)) {
+    // Ceres (DENSE_SVD) refuses when (s_min / s_max)^2 of J < 1e-14; the singular values
+    // of J itself (not eigenvalues of J^T J, which lose half the digits) with a margin.
+    const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(Jf).singularValues();
+    const double smax = sv.size() ? sv.maxCoeff() : 0.0, smin = sv.size() ? sv.minCoeff() : 0.0;
+    if (!(smax > 0) || !(smin * smin > 1e-12 * smax * smax)) {
       rep.covariance_note =
           "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
       return;
@@ -590,7 +677,7 @@ void standard_errors(FitModel kind, const Data& d, int n, const SlopeLayout* lay
   const Eigen::MatrixXd Cr = s2 * (M * C * M.transpose());
   for (std::size_t i = 0; i < rep.parameters.size(); ++i) {
     const double v = Cr(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
-    rep.parameters[i].std_error = rep.parameters[i].held ? 0.0 : std::sqrt(std::max(0.0, v));
+    rep.parameters[i].std_error = rep.parameters[i].held || rep.parameters[i].at_bound ? 0.0 : std::sqrt(std::max(0.0, v));
   }
   if (d.huber > 0) rep.covariance_note = "standard errors are approximate with the Huber loss";
 }
@@ -1042,7 +1129,11 @@ void fit_slopes(const Data& d, const std::vector<SlopeLayout>& layouts, const st
     const std::vector<double> yp = simulate_record(rep.model, d.x.subspan(0, d.train.end), d.initial);
     double sse = 0;
     for (std::size_t j = d.train.begin; j < d.train.end; ++j) sse += (d.y[j] - yp[j]) * (d.y[j] - yp[j]);
-    standard_errors(o.model, d, 0, &layout, best.theta, lower, {}, M, sse, rep);
+    standard_errors(o.model, d, 0, &layout, best.theta, lower, best.at_bound, M, sse, rep);
+    if (!best.at_bound.empty())
+      rep.covariance_note += fmt::format("{}{} cumulative slope(s) q + p_1 + ... + p_i ended on the invertibility bound "
+                                         "and were held there (their uncertainty is not included)",
+                                         rep.covariance_note.empty() ? "" : "; ", best.at_bound.size());
   }
 }
 
@@ -1172,6 +1263,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
                    o.model, t0);
   Data d{x, y, tr, o.initial_state, o.huber_delta};
   const Ranges rg = ranges_of(d);
+  d.xc = 0.5 * (rg.xlo + rg.xhi);
+  d.xs = std::max(0.5 * rg.xspan(), std::numeric_limits<double>::min());
   if (!(rg.xspan() > 0)) return invalid("fit: the input is constant over the training range", o.model, t0);
   if (!(rg.yspan() > 0)) return invalid("fit: the output is constant over the training range", o.model, t0);
 
@@ -1188,13 +1281,20 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
       std::vector<int> held;
       std::vector<double> best_lower;
       int k = 0;
+      const GpiChart chart{d.xc, d.xs};
       for (const auto& th : starts) {
-        // bounds of Eq. 13 plus q, alpha > 0, relative to the start's scale
+        // LM runs in the chart phi = [S, a, b, m, q, rho, tau, alpha] (GpiChart). Bounds of
+        // Eq. 13 (c0, c1 > 0 <=> S, a > 0; rho, tau > 0) plus q, alpha > 0, relative to the
+        // start's scale; the curvature a >= 1e-3 (tanh(a xn) is then linear to 3e-7, and
+        // c0 = S / a stays small enough for c3 to keep its digits).
+        const auto ph = chart.phi(th.data());
+        std::vector<double> phi(ph.begin(), ph.end());
         lower.assign(kGpi, -std::numeric_limits<double>::infinity());
-        for (int i : {0, 1, 4, 5, 6, 7}) lower[static_cast<std::size_t>(i)] = lb * std::abs(th[static_cast<std::size_t>(i)]);
+        for (int i : {0, 4, 5, 6, 7}) lower[static_cast<std::size_t>(i)] = lb * std::abs(phi[static_cast<std::size_t>(i)]);
+        lower[1] = 1e-3;
         held.clear();
         if (o.gpi_fix_scale) held.push_back(0);
-        Solved s = solve(FitModel::gpi, d, n, nullptr, th, lower, held, o, k++);
+        Solved s = solve(FitModel::gpi, d, n, nullptr, phi, lower, held, o, k++);
         rep.total_iterations += std::max(0, s.iterations);
         if (s.usable && s.final_cost < best.final_cost) {
           best = std::move(s);
@@ -1210,22 +1310,31 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
         rep.initial_cost = best.initial_cost;
         rep.final_cost = best.final_cost;
         rep.iterations = best.iterations;
-        rep.model = gpi_params(best.theta.data(), n);
+        const auto theta = chart.theta(best.theta.data());
+        rep.model = gpi_params(theta.data(), n);
         static const char* names[kGpi] = {"c0", "c1", "c2", "c3", "q", "rho", "tau", "alpha"};
-        for (int i = 0; i < kGpi; ++i)
-          rep.parameters.push_back({names[i], best.theta[static_cast<std::size_t>(i)],
-                                    std::numeric_limits<double>::quiet_NaN(), o.gpi_fix_scale && i == 0});
+        std::vector<int> fixed;
+        if (o.gpi_fix_scale) fixed.push_back(0);
+        fixed.insert(fixed.end(), best.at_bound.begin(), best.at_bound.end());
+        // chart index i maps to Eq. 13 index i for the bounded parameters (a -> c1, S -> c0)
+        for (int i = 0; i < kGpi; ++i) {
+          const bool on_bound = std::find(best.at_bound.begin(), best.at_bound.end(), i) != best.at_bound.end();
+          rep.parameters.push_back({names[i], theta[static_cast<std::size_t>(i)],
+                                    std::numeric_limits<double>::quiet_NaN(), false, on_bound});
+        }
         if (o.gpi_fix_scale)
-          rep.covariance_note =
-              "c0 held at its data-derived value: Eq. 13 has the exact scale symmetry (c0,c3,alpha,q,rho,tau) -> "
-              "(k c0,k c3,k alpha,q/k,rho/k,tau/k)";
+          rep.covariance_note = fmt::format(
+              "scale gauge: Eq. 13 has the exact symmetry (c0,c3,alpha,q,rho,tau) -> (k c0,k c3,k alpha,q/k,rho/k,tau/k); "
+              "it is fixed by holding S = c0 c1 xs = {:.6g} (xs = {:.6g}, half the training input span) at its "
+              "data-derived value, and the standard errors are those of this gauge",
+              best.theta[0], d.xs);
         if (o.compute_covariance) {
           const std::vector<double> yp = simulate_record(rep.model, x.subspan(0, tr.end), o.initial_state);
           double sse = 0;
           for (std::size_t j = tr.begin; j < tr.end; ++j) sse += (y[j] - yp[j]) * (y[j] - yp[j]);
           const std::string note = rep.covariance_note;
-          standard_errors(FitModel::gpi, d, n, nullptr, best.theta, best_lower, o.gpi_fix_scale ? std::vector<int>{0} : std::vector<int>{},
-                          Eigen::MatrixXd::Identity(kGpi, kGpi), sse, rep);
+          standard_errors(FitModel::gpi, d, n, nullptr, best.theta, best_lower, fixed,
+                          chart.jacobian(best.theta.data()), sse, rep);
           if (!note.empty() && rep.covariance_note != note)
             rep.covariance_note = rep.covariance_note.empty() ? note : note + "; " + rep.covariance_note;
         }
@@ -1345,7 +1454,7 @@ std::string FitReport::full_report() const {
   out += fmt::format("{:<10} {:>16} {:>14}\n", "parameter", "value", "std error");
   for (const auto& p : parameters)
     out += fmt::format("{:<10} {:>16.8g} {:>14}\n", p.name, p.value,
-                       p.held ? std::string("held") : (std::isnan(p.std_error) ? std::string("-") : fmt::format("{:.4g}", p.std_error)));
+                       p.held ? std::string("held") : p.at_bound ? std::string("at bound") : (std::isnan(p.std_error) ? std::string("-") : fmt::format("{:.4g}", p.std_error)));
   if (!covariance_note.empty()) out += fmt::format("note: {}\n", covariance_note);
   out += fmt::format("train: rms {:.6g}  max {:.6g}  mae {:.6g}  rms {:.4g}% of span  r2 {:.6f}  n {}\n", train.rms,
                      train.max, train.mae, train.rms_percent_span, train.r2, train.n);

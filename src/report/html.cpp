@@ -154,8 +154,8 @@ void parameter_table(Page& page, const FitReport& fit) {
   if (fit.parameters.empty()) return;
   std::vector<std::vector<std::string>> rows;
   for (const auto& p : fit.parameters)
-    rows.push_back({html_escape(p.name), num(p.value, 7), p.held ? "held" : num(p.std_error, 3),
-                    std::isfinite(p.std_error) && p.value != 0 && !p.held
+    rows.push_back({html_escape(p.name), num(p.value, 7), p.held ? "held" : p.at_bound ? "at bound" : num(p.std_error, 3),
+                    std::isfinite(p.std_error) && p.value != 0 && !p.held && !p.at_bound
                         ? num(100.0 * p.std_error / std::abs(p.value), 3) : "&ndash;"});
   page.table({"parameter", "value", "std. error", "rel. error [%]"}, rows);
   if (!fit.covariance_note.empty()) page.para("Standard errors: " + fit.covariance_note);
@@ -550,7 +550,8 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
   json params = json::array();
   for (const auto& p : fit.parameters)
     params.push_back({{"name", p.name}, {"value", p.value},
-                      {"std_error", std::isfinite(p.std_error) ? json(p.std_error) : json()}, {"held", p.held}});
+                      {"std_error", std::isfinite(p.std_error) ? json(p.std_error) : json()}, {"held", p.held},
+                      {"at_bound", p.at_bound}});
   json train_range = json::array({data.train.begin, data.train.end == IndexRange::npos ? json() : json(data.train.end)});
   return {{"format", "hysteron-fit-report"},
           {"schema", fit_report_schema},
@@ -611,6 +612,7 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
     fp.std_error = p.contains("std_error") && p["std_error"].is_number() ? p["std_error"].get<double>()
                                                                         : std::numeric_limits<double>::quiet_NaN();
     fp.held = p.value("held", false);
+    fp.at_bound = p.value("at_bound", false);
     f.parameters.push_back(fp);
   }
   if (j.contains("train")) f.train = metrics_from(j["train"], path + ": train");

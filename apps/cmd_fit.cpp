@@ -4,7 +4,7 @@
 //                [--n N] [--dead-zones J] [--train A:B] [--validate C:D] [--validate-data V.csv ...]
 //                [--time-column COL]  (ranges in seconds with a suffix s: --train 0s:20s)
 //                --out model.json [--report fit.json] [--json] [--huber DELTA] [--seed S]
-//                [--starts K] [--relaxed] [--force]
+//                [--starts K] [--relaxed] [--free-weights] [--force]
 //
 // Exit codes: 0 converged (model written); 1 bad input (hysteron::Error);
 // 2 not converged (model not written unless --force).
@@ -36,7 +36,7 @@ struct FitCliOptions {
   int n = 10, dead_zones = 4, starts = 2;
   double huber = 0.0;
   unsigned seed = 0;
-  bool json = false, relaxed = false, force = false;
+  bool json = false, relaxed = false, force = false, free_weights = false;
 };
 
 double parse_number(std::string_view s, std::string_view what) {
@@ -100,6 +100,7 @@ int run_fit(const FitCliOptions& c) {
   o.huber_delta = c.huber;
   o.seed = c.seed;
   o.initial_state = c.relaxed ? InitialState::relaxed : InitialState::virgin;
+  o.gpi_free_weights = c.free_weights;
   const IndexRange train = c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
   o.train = train;
   std::optional<IndexRange> validate;
@@ -207,6 +208,8 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)");
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
+  sub->add_flag("--free-weights", c->free_weights,
+                "gpi: the free-weight variant (tanh envelope, q and n free weights) instead of Eq. 8's exponential law");
   sub->add_flag("--force", c->force, "write the model even if the fit did not converge");
   sub->callback([c, &action] { action = [c] { return run_fit(*c); }; });
 }

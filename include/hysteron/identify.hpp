@@ -119,6 +119,10 @@ struct FitOptions {
   // the other 7 are estimated; with false all 8 are free (LM still converges
   // thanks to its damping, but the covariance is singular).
   bool gpi_fix_scale = true;
+  // gpi only: fit the free-weight variant instead of Eq. 8's law: the tanh envelope
+  // (c0..c3), q and n free weights p_i on thresholds r_i = alpha i (alpha from the
+  // start grid, then fixed); the partial sums q + p_1 + ... + p_i stay > 0 (Eq. 11).
+  bool gpi_free_weights = false;
   // Compute standard errors (ceres::Covariance).
   bool compute_covariance = true;
   // Minimum of q and of the partial sums q + p_1 + ... + p_i (relative to the
@@ -196,8 +200,9 @@ void gpi_residuals(std::span<const double> theta, int n, std::span<const double>
 // The same for the parametrization fit() uses for pi / mpi-deadzone / mpi-asym with
 // fixed thresholds r (ascending) and, for mpi-deadzone, fixed forward dead-zone
 // thresholds zp (positive side, ascending) and zn (negative side, descending):
-// theta = [mpi-asym: 4 ascending + 4 descending tanh coefficients], then
-// pi / mpi-deadzone: cumulative slopes s_0..s_n (s_0 = q, s_i = q + p_1 + ... + p_i),
+// The gpi here is its free-weight variant (FitOptions::gpi_free_weights).
+// theta = [mpi-asym: 4 ascending + 4 descending tanh coefficients; gpi: 4], then
+// pi / mpi-deadzone / gpi: cumulative slopes s_0..s_n (s_0 = q, s_i = q + p_1 + ... + p_i),
 // mpi-asym: q, p_1..p_n; mpi-deadzone: then per side the cumulative dead-zone
 // slopes 1 + g_1 + ... + g_j. The Jacobian is m x theta.size().
 void slope_residuals(FitModel model, std::span<const double> theta, std::span<const double> r,

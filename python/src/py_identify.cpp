@@ -25,7 +25,7 @@ void bind_identify(py::module_& m) {
       "fit",
       [](const DoubleArray& x, const DoubleArray& y, const std::string& model, int num_operators, int num_dead_zones,
          const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
-         int max_iterations, bool fix_scale, bool compute_covariance, const std::string& report,
+         int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const std::string& report,
          std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis) {
         FitOptions o;
         o.model = fit_model_from_name(model);
@@ -38,6 +38,7 @@ void bind_identify(py::module_& m) {
         o.seed = seed;
         o.max_iterations = max_iterations;
         o.gpi_fix_scale = fix_scale;
+        o.gpi_free_weights = free_weights;
         o.compute_covariance = compute_covariance;
         const auto xs = as_span(x), ys = as_span(y);
         FitReport r;
@@ -62,7 +63,7 @@ void bind_identify(py::module_& m) {
       py::arg("x"), py::arg("y"), py::arg("model") = "gpi", py::arg("num_operators") = 10,
       py::arg("num_dead_zones") = 4, py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
       py::arg("huber_delta") = 0.0, py::arg("num_starts") = 2, py::arg("seed") = 0u, py::arg("max_iterations") = 100,
-      py::arg("fix_scale") = true, py::arg("compute_covariance") = true, py::arg("report") = "",
+      py::arg("fix_scale") = true, py::arg("free_weights") = false, py::arg("compute_covariance") = true, py::arg("report") = "",
       py::arg("input_axis") = std::make_pair(std::string("Input"), std::string()),
       py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()),
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).

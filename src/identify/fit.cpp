@@ -241,7 +241,7 @@ GpiParams gpi_params(const double* th, int n) {
 }
 
 // ---- models linear in their weights: cumulative-slope parametrization ---------------
-// theta = [envelope coefficients (mpi-asym: 4 ascending + 4 descending)],
+// theta = [envelope coefficients (gpi with free weights: 4; mpi-asym: 4 ascending + 4 descending)],
 //         s_0..s_n (s_0 = q, s_i = q + p_1 + ... + p_i; mpi-asym: q, p_1..p_n, all >= 0),
 //         mpi-deadzone: d_1..d_J (positive side, z ascending), then the negative side
 //         (z descending): cumulative output slopes g0 + g_1 + ... + g_j, with g0 = 1.
@@ -249,7 +249,7 @@ struct SlopeLayout {
   FitModel kind = FitModel::pi;
   std::vector<double> r;       // fixed thresholds (ascending)
   std::vector<double> zp, zn;  // fixed forward dead-zone thresholds (v units)
-  int env = 0;                 // number of envelope coefficients (0 or 8)
+  int env = 0;                 // number of envelope coefficients (0, 4: one tanh, 8: two)
   double ridge = 0.0;          // > 0: extra residuals ridge * p_i (cumulative-slope layouts only)
   int size() const { return env + static_cast<int>(r.size() + 1 + zp.size() + zn.size()); }
 
@@ -260,6 +260,11 @@ struct SlopeLayout {
       s.asc_c = {th[0], th[1], th[2], th[3]};
       s.desc_c = {th[4], th[5], th[6], th[7]};
       s.asymmetric = true;
+    } else if (env == 4) {
+      s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
+      s.asc_c = {th[0], th[1], th[2], th[3]};
+      s.desc_c = s.asc_c;
+      s.asymmetric = false;
     }
     const T* sl = th + env;
     const std::size_t n = r.size();
@@ -295,6 +300,15 @@ struct SlopeLayout {
     build(th, s);
     switch (kind) {
       case FitModel::pi: return PiParams{s.q, s.r, s.p, {}};
+      case FitModel::gpi: {  // the free-weight variant (thresholds r_i, weights p_i)
+        GpiParams g;
+        g.envelope = Envelope::tanh(th[0], th[1], th[2], th[3]);
+        g.q = s.q;
+        g.n = static_cast<int>(s.r.size());
+        g.r = s.r;
+        g.p = s.p;
+        return g;
+      }
       case FitModel::mpi_asym: {
         MpiAsymParams m;
         m.ascending = Envelope::tanh(th[0], th[1], th[2], th[3]);
@@ -323,6 +337,8 @@ struct SlopeLayout {
     if (env == 8) {
       for (int i = 0; i < 4; ++i) out.push_back(fmt::format("asc.c{}", i));
       for (int i = 0; i < 4; ++i) out.push_back(fmt::format("desc.c{}", i));
+    } else if (env == 4) {
+      for (int i = 0; i < 4; ++i) out.push_back(fmt::format("c{}", i));
     }
     out.push_back("q");
     for (std::size_t i = 0; i < r.size(); ++i) out.push_back(fmt::format("p{}", i + 1));
@@ -368,10 +384,10 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
   const std::size_t n = L.r.size();
   const std::size_t P = static_cast<std::size_t>(L.size());
   const std::size_t env = static_cast<std::size_t>(L.env);
-  const bool asym = L.env == 8;
+  const bool asym = L.env == 8, sym = L.env == 4, enveloped = asym || sym;
   const double* sl = th + env;
   // g: d y_i / d(4 coefficients of the envelope eside[i]: 0 ascending, 1 descending)
-  std::vector<double> p(n), y(n, 0.0), g(asym ? 4 * n : 0, 0.0);
+  std::vector<double> p(n), y(n, 0.0), g(enveloped ? 4 * n : 0, 0.0);
   std::vector<unsigned char> eside(n, 0);
   for (std::size_t i = 0; i < n; ++i) p[i] = asym ? sl[i + 1] : sl[i + 1] - sl[i];
   // dead zones: thresholds and slopes g_k = D_k - D_{k-1} (D_0 = 1 per side)
@@ -399,10 +415,10 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
   };
   double dua[4] = {0, 0, 0, 0}, dud[4] = {0, 0, 0, 0};
   if (d.initial == InitialState::relaxed) {
-    const double u0 = asym ? tanh_env(ca, d.x[0], dua) : d.x[0];
+    const double u0 = enveloped ? tanh_env(ca, d.x[0], dua) : d.x[0];
     for (std::size_t i = 0; i < n; ++i) {
       y[i] = u0;
-      if (asym) std::copy(dua, dua + 4, &g[4 * i]);
+      if (enveloped) std::copy(dua, dua + 4, &g[4 * i]);
     }
   }
   const double q = sl[0];
@@ -410,15 +426,16 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
     const double x = d.x[k];
     double ua = x, ud = x;
     if (asym) ua = tanh_env(ca, x, dua), ud = tanh_env(cd, x, dud);
+    if (sym) ua = ud = tanh_env(ca, x, dua), std::copy(dua, dua + 4, dud);
     for (std::size_t i = 0; i < n; ++i) {
       const double hi = ud + L.r[i], lo = ua - L.r[i];
       if (!(y[i] < hi)) {  // hmin(u_d + r, y)
         y[i] = hi;
-        if (asym) std::copy(dud, dud + 4, &g[4 * i]), eside[i] = 1;
+        if (enveloped) std::copy(dud, dud + 4, &g[4 * i]), eside[i] = asym ? 1 : 0;
       }
       if (!(lo < y[i])) {  // hmax(u_a - r, .)
         y[i] = lo;
-        if (asym) std::copy(dua, dua + 4, &g[4 * i]), eside[i] = 0;
+        if (enveloped) std::copy(dua, dua + 4, &g[4 * i]), eside[i] = 0;
       }
     }
     const double u = asym ? 0.5 * (ua + ud) : ua;
@@ -454,6 +471,13 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
       jr[env] = a * u;
       for (std::size_t i = 0; i < n; ++i) jr[env + 1 + i] = a * y[i];
     } else {
+      if (sym) {  // d v / d c = q du + sum_i p_i dy_i
+        for (int c = 0; c < 4; ++c) jr[c] = q * dua[c];
+        for (std::size_t i = 0; i < n; ++i)
+          for (int c = 0; c < 4; ++c) jr[c] += p[i] * g[4 * i + static_cast<std::size_t>(c)];
+        for (int c = 0; c < 4; ++c) jr[c] *= a;
+        jr += 4;
+      }
       // v = s_0 u + sum_i (s_{i+1} - s_i) y_i
       for (std::size_t j = 0; j <= n; ++j) jr[j] = a * ((j == 0 ? u : y[j - 1]) - (j < n ? y[j] : 0.0));
       std::size_t j0 = 0;
@@ -539,12 +563,12 @@ struct Solved {
 };
 
 // Builds the problem for one start; `theta` must outlive it (it is the parameter block).
-std::unique_ptr<ceres::Problem> make_problem(FitModel kind, const Data& d, int n, const SlopeLayout* layout,
+std::unique_ptr<ceres::Problem> make_problem(FitModel /*kind*/, const Data& d, int n, const SlopeLayout* layout,
                                              std::vector<double>& theta, const std::vector<double>& lower,
                                              const std::vector<int>& held) {
   auto problem = std::make_unique<ceres::Problem>();
   ceres::CostFunction* cost = nullptr;
-  if (kind == FitModel::gpi) {
+  if (layout == nullptr) {  // the gpi of Eqs. 6-8
     cost = new GpiChartCost(d, n);
   } else {
     cost = new SlopeCost(d, layout);
@@ -599,10 +623,10 @@ Solved solve_once(FitModel kind, const Data& d, int n, const SlopeLayout* layout
 // better solution is kept; `at_bound` lists the parameters held on a bound.
 Solved solve(FitModel kind, const Data& d, int n, const SlopeLayout* layout, const std::vector<double>& theta,
              const std::vector<double>& lower, const std::vector<int>& held, const FitOptions& o, int start) {
-  // Only the gpi: on the slope models (p_i >= 0 bounds of mpi-asym) weights touch the
+  // Only the gpi of Eqs. 6-8: on the slope models (p_i >= 0 bounds of mpi-asym) weights touch the
   // bound and leave it again as the envelopes move, and holding them costs accuracy
   // (mpi-openloop experiment: compensated max error 2.5 -> 4.1 mm).
-  if (kind != FitModel::gpi) return solve_once(kind, d, n, layout, theta, lower, held, o, start, o.max_iterations);
+  if (layout != nullptr) return solve_once(kind, d, n, layout, theta, lower, held, o, start, o.max_iterations);
   constexpr int kProbe = 40;
   const int first = std::min(o.max_iterations, kProbe);
   Solved out = solve_once(kind, d, n, layout, theta, lower, held, o, start, first);
@@ -921,6 +945,20 @@ Decimated decimate(const Data& d) {
   return out;
 }
 
+// Envelopes: the free tanh fit of the loop's centre line, and fits with a fixed
+// curvature c1 xs (multi-start over the envelope shape).
+std::vector<std::array<double, 4>> gpi_envelopes(const Data& d, const Ranges& rg) {
+  const Branches br = loop_branches(d, rg);
+  Curve centre = br.centre;
+  if (centre.x.size() < 4) {
+    centre = Curve{};
+    for (std::size_t k = d.train.begin; k < d.train.end; ++k) centre.x.push_back(d.x[k]), centre.y.push_back(d.y[k]);
+  }
+  std::vector<std::array<double, 4>> envs{fit_tanh(centre, rg)};
+  for (double a : {0.25, 0.6, 1.2, 2.5}) envs.push_back(fit_tanh(centre, rg, a));
+  return envs;
+}
+
 // Data-derived gpi starts: the envelope from a tanh fit of the loop's centre line;
 // with it fixed the output is linear in (q, p_i) for fixed thresholds r_i = alpha i,
 // so for a log grid of alpha over (0, half the envelope-output span)/n the weights
@@ -930,16 +968,7 @@ std::vector<std::vector<double>> gpi_starts(const Data& full, int n, const FitOp
   const Decimated dec = decimate(full);
   const Data& d = dec.d;
   const Ranges rg = ranges_of(d);
-  const Branches br = loop_branches(d, rg);
-  Curve centre = br.centre;
-  if (centre.x.size() < 4) {
-    centre = Curve{};
-    for (std::size_t k = d.train.begin; k < d.train.end; ++k) centre.x.push_back(d.x[k]), centre.y.push_back(d.y[k]);
-  }
-  // envelopes: the free tanh fit of the centre line, and fits with a fixed
-  // curvature c1 xs (multi-start over the envelope shape)
-  std::vector<std::array<double, 4>> envs{fit_tanh(centre, rg)};
-  for (double a : {0.25, 0.6, 1.2, 2.5}) envs.push_back(fit_tanh(centre, rg, a));
+  const auto envs = gpi_envelopes(d, rg);
   std::mt19937 rng(o.seed);
   std::uniform_real_distribution<double> jit(-0.1, 0.1);
   auto j = [&](double v) { return o.seed == 0 ? v : v * (1.0 + jit(rng)); };
@@ -999,10 +1028,11 @@ std::vector<double> slope_lower(const SlopeLayout& layout, const std::vector<dou
   Structure<double> s0;
   layout.build(th.data(), s0);
   double uspan = rg.xspan();
-  if (layout.env == 8) {
+  if (layout.env > 0) {
     uspan = std::abs(envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xhi) -
                      envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xlo));
-    for (int i : {0, 1, 4, 5}) lower[static_cast<std::size_t>(i)] = margin * std::abs(th[static_cast<std::size_t>(i)]);
+    for (int i : {0, 1, 4, 5})
+      if (i < layout.env) lower[static_cast<std::size_t>(i)] = margin * std::abs(th[static_cast<std::size_t>(i)]);
   }
   const double scale = rg.yspan() / std::max(uspan, 1e-300);
   const auto env = static_cast<std::size_t>(layout.env);
@@ -1068,10 +1098,57 @@ void asym_starts(const Data& full, int n, const FitOptions& o, double margin, st
   if (starts.empty()) throw Error("fit: mpi-asym: no usable start");
 }
 
+// Free-weight gpi starts: the envelopes of gpi_starts (centre-line tanh fits) with
+// thresholds r_i = alpha i on its alpha grid and cumulative slopes by constrained LS;
+// the best num_starts by SSE.
+void gpi_free_starts(const Data& full, int n, const FitOptions& o, double margin, std::vector<SlopeLayout>& layouts,
+                     std::vector<std::vector<double>>& starts) {
+  const Decimated dec = decimate(full);
+  const Data& d = dec.d;
+  const Ranges rg = ranges_of(d);
+  struct Cand {
+    double sse;
+    SlopeLayout layout;
+    std::vector<double> th;
+  };
+  std::vector<Cand> cands;
+  for (const auto& env : gpi_envelopes(d, rg)) {
+    const double U = envelope_span(env, rg);
+    const double scale = rg.yspan() / std::max(U, 1e-300);
+    constexpr int kAlphas = 14;
+    for (int ia = 0; ia < kAlphas; ++ia) {
+      const double alpha = 0.01 * std::pow(250.0, ia / (kAlphas - 1.0)) * 0.5 * U / n;
+      Structure<double> s;
+      s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
+      s.asc_c = s.desc_c = {env[0], env[1], env[2], env[3]};
+      for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
+      s.p.assign(s.r.size(), 0.0);
+      double q = 1;
+      std::vector<double> p;
+      const double sse = cls_weights(d, s, margin * scale, q, p);
+      if (!std::isfinite(sse)) continue;
+      Cand c{sse, {}, {}};
+      c.layout.kind = FitModel::gpi;
+      c.layout.env = 4;
+      c.layout.r = s.r;
+      c.th.assign(env.begin(), env.end());
+      const auto sl = slopes(q, p);
+      c.th.insert(c.th.end(), sl.begin(), sl.end());
+      cands.push_back(std::move(c));
+    }
+  }
+  std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) { return x.sse < y.sse; });
+  for (std::size_t k = 0; k < cands.size() && static_cast<int>(k) < o.num_starts; ++k) {
+    layouts.push_back(cands[k].layout);
+    starts.push_back(cands[k].th);
+  }
+  if (starts.empty()) throw Error("fit: gpi (free weights): no usable start");
+}
+
 int num_parameters(const FitOptions& o) {
   const int n = o.num_operators;
   switch (o.model) {
-    case FitModel::gpi: return kGpi;
+    case FitModel::gpi: return o.gpi_free_weights ? 4 + n + 1 : kGpi;
     case FitModel::pi: return n;
     case FitModel::mpi_deadzone: return n + 1 + o.num_dead_zones;
     case FitModel::mpi_asym: return 8 + n + 1;
@@ -1211,10 +1288,9 @@ void slope_residuals(FitModel model, std::span<const double> theta, std::span<co
                      std::span<const double> zp, std::span<const double> zn, std::span<const double> x,
                      std::span<const double> y, IndexRange train, InitialState initial, double huber, bool autodiff,
                      Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian) {
-  if (model == FitModel::gpi) throw Error("slope_residuals: not for the gpi (use gpi_residuals)");
   SlopeLayout L;
   L.kind = model;
-  L.env = model == FitModel::mpi_asym ? 8 : 0;
+  L.env = model == FitModel::mpi_asym ? 8 : model == FitModel::gpi ? 4 : 0;
   L.r.assign(r.begin(), r.end());
   if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
   if (theta.size() != static_cast<std::size_t>(L.size()))
@@ -1272,7 +1348,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   rep.model_kind = o.model;
   const int n = o.num_operators;
   try {
-    if (o.model == FitModel::gpi) {
+    if (o.model == FitModel::gpi && !o.gpi_free_weights) {
       const double lb = std::max(o.positivity_margin, 1e-12);
       const auto starts = gpi_starts(d, n, o, lb);
       Solved best;
@@ -1421,6 +1497,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
         if (canonical_structure(fp).r.size() == layout.r.size()) starts.push_back(seedB);
         starts.push_back(seedA);
         layout.ridge = std::sqrt(o.weight_regularization * static_cast<double>(m)) * rg.xspan();
+      } else if (o.model == FitModel::gpi) {  // free weights: one envelope + CLS cumulative slopes
+        gpi_free_starts(d, n, o, margin, layouts, starts);
       } else {  // mpi-asym: two envelopes (branch fits or the centre line) + CLS weights
         asym_starts(d, n, o, margin, layouts, starts);
       }

@@ -90,13 +90,7 @@ double Envelope::inverse(double u) const noexcept {
   if (std::isnan(u)) return u;
   if (u <= range_lo()) return -kInf;
   if (u >= range_hi()) return kInf;
-  switch (kind) {
-    case EnvelopeKind::identity: return u;
-    case EnvelopeKind::affine: return (u - c[1]) / c[0];
-    case EnvelopeKind::tanh: return (detail::atanh_fast((u - c[3]) / c[0]) - c[2]) / c[1];
-    case EnvelopeKind::atan: return (std::tan((u - c[3]) / c[0]) - c[2]) / c[1];
-  }
-  return u;
+  return FastEnvelope(*this).inverse(u);  // the same arithmetic as Inverse::step
 }
 
 double Envelope::inverse_checked(double u, std::string_view where) const {

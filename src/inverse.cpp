@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "hysteron/error.hpp"
+#include "play_kernel.hpp"
 
 namespace hysteron {
 
@@ -100,6 +101,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     }
     // Saturating envelopes with no limit: stop 1e-9 of the range short of the asymptote.
     env_ = Envelope{s_.asc_kind, s_.asc_c};
+    fenv_ = FastEnvelope(env_);
     const Envelope& env = env_;
     const double span = env.range_hi() - env.range_lo();
     if (std::isinf(lim_.lo) && std::isfinite(span)) lim_.lo = env.inverse(env.range_lo() + 1e-9 * span);
@@ -218,18 +220,14 @@ double Inverse::step_analytical(double y) noexcept {
   const std::size_t n = s_.r.size();
   const double v = s_.has_dead_zones ? dead_zone_inverse(y) : y;
   // Eqs. 9-10 on the tentative state.
-  const double* ri = ri_.data();
   const double* pi = pi_.data();
-  const double* xi = xi_.data();
   double* sc = scratch_.data();
-  for (std::size_t i = 0; i < n; ++i) sc[i] = ops::generalized_play<double>(v, ri[i], xi[i]);
-  const double u = qi_ * v + weighted_sum<double>(pi, sc, n);
+  const double u = qi_ * v + detail::play_weighted_sum(v, ri_.data(), pi, xi_.data(), sc, n);
   if (u >= u_lo_ && u <= u_hi_) {
-    const double x = env_.inverse(u);
     xi_.swap(scratch_);
     v_prev_ = v;
     saturated_ = false;
-    x_ = std::clamp(x, lim_.lo, lim_.hi);
+    x_ = std::clamp(fenv_.inverse(u), lim_.lo, lim_.hi);  // gamma^-1, finite on [u_lo, u_hi]
     return x_;
   }
   // Saturated: drive the forward model with the limit and re-derive the inverse state.

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "hysteron/error.hpp"
+#include "play_kernel.hpp"
 
 namespace hysteron {
 
@@ -153,7 +154,8 @@ const Limits& input_limits(const ModelParams& params) noexcept {
 
 Structure<double> canonical_structure(const ModelParams& params) { return std::visit(CanonicalVisitor{}, params); }
 
-Model::Model(ModelParams params) : params_(std::move(params)), s_(canonical_structure(params_)) {
+Model::Model(ModelParams params)
+    : params_(std::move(params)), s_(canonical_structure(params_)), env_(Envelope{s_.asc_kind, s_.asc_c}) {
   state_.y.assign(s_.r.size(), 0.0);
 }
 
@@ -186,12 +188,21 @@ void Model::reset_relaxed(double x0) noexcept {
   out_ = 0.0;
 }
 
+// structure_step<double> for one shared envelope (pi, gpi, mpi-deadzone), with
+// the plays and their weighted sum in one vectorised pass (Eqs. 4, 6).
+inline double Model::step_symmetric(double x, double* y) noexcept {
+  const double u = env_.value(x);
+  state_.u = u;
+  const double v = s_.q * u + detail::play_weighted_sum(u, s_.r.data(), s_.p.data(), y, y, s_.r.size());
+  return s_.has_dead_zones ? dead_zone_map(s_, v) : v;
+}
+
 double Model::step(double x) noexcept {
   if (!std::isfinite(x)) {
     ++faults_;
     return out_;
   }
-  out_ = structure_step<double>(s_, x, state_.y.data(), &state_.u);
+  out_ = s_.asymmetric ? structure_step<double>(s_, x, state_.y.data(), &state_.u) : step_symmetric(x, state_.y.data());
   return out_;
 }
 
@@ -201,11 +212,13 @@ void Model::simulate(std::span<const double> x, std::span<double> y) {
   for (std::size_t k = 0; k < x.size(); ++k)
     if (!std::isfinite(x[k])) throw Error(fmt::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
   double* yi = state_.y.data();
-  for (std::size_t k = 0; k < x.size(); ++k) y[k] = structure_step<double>(s_, x[k], yi);
-  if (!x.empty()) {
-    out_ = y.back();
-    state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x.back());
+  if (s_.asymmetric) {
+    for (std::size_t k = 0; k < x.size(); ++k) y[k] = structure_step<double>(s_, x[k], yi);
+    if (!x.empty()) state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x.back());
+  } else {
+    for (std::size_t k = 0; k < x.size(); ++k) y[k] = step_symmetric(x[k], yi);
   }
+  if (!x.empty()) out_ = y.back();
 }
 
 std::vector<double> Model::simulate(std::span<const double> x) {

@@ -193,6 +193,51 @@ TEST(Envelopes, ValueDerivativeInverse) {
   }
 }
 
+// The hand-written tanh and atanh of the per-sample paths against long double
+// references: a few ulp everywhere, odd symmetry, saturation, NaN propagation.
+TEST(Envelopes, FastTanhAndAtanhAreAccurateToAFewUlp) {
+  auto ulps = [](double got, long double ref) {
+    const long double r = static_cast<long double>(static_cast<double>(ref));  // ref rounded to double
+    const double ulp = std::nextafter(static_cast<double>(std::abs(r)), INFINITY) - static_cast<double>(std::abs(r));
+    return static_cast<double>(std::abs(static_cast<long double>(got) - ref) / (ulp > 0 ? ulp : 1e-300));
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> expo(-300.0, 1.5), unit(0.0, 1.0);
+  double worst_tanh = 0, worst_atanh = 0;
+  for (int k = 0; k < 200000; ++k) {
+    const double z = std::pow(10.0, expo(rng)) * (k % 2 ? -1.0 : 1.0);  // |z| from 1e-300 to 31.6
+    const double t = detail::tanh_fast(z);
+    worst_tanh = std::max(worst_tanh, ulps(t, std::tanh(static_cast<long double>(z))));
+    ASSERT_EQ(detail::tanh_fast(-z), -t) << "odd symmetry at z=" << z;
+    // atanh(d / c0) for d inside (-c0, c0), including d next to the edges
+    const double c0 = 0.1 + 2.0 * unit(rng);
+    const double d = (k % 3 == 0 ? 1.0 - std::pow(10.0, -15.0 * unit(rng)) : unit(rng)) * c0 * (k % 2 ? -1.0 : 1.0);
+    const double a = detail::atanh_ratio(d, c0);
+    // reference atanh(w) = log1p(2w / (1 - w)) / 2 with c0 - |d| exact: d / c0 itself, even in
+    // long double, would lose the digits that matter next to the edge
+    const long double ad = std::abs(static_cast<long double>(d));
+    const long double ref = std::copysign(0.5L * std::log1p(2.0L * ad / (static_cast<long double>(c0) - ad)), d);
+    worst_atanh = std::max(worst_atanh, ulps(a, ref));
+    ASSERT_EQ(detail::atanh_ratio(-d, c0), -a) << "odd symmetry at d=" << d;
+  }
+  EXPECT_LE(worst_tanh, 3.0);
+  EXPECT_LE(worst_atanh, 4.0);
+  EXPECT_EQ(detail::tanh_fast(25.0), 1.0);
+  EXPECT_EQ(detail::tanh_fast(-1e300), -1.0);
+  EXPECT_EQ(std::signbit(detail::tanh_fast(-0.0)), true);
+  EXPECT_TRUE(std::isnan(detail::tanh_fast(NAN)));
+  EXPECT_TRUE(std::isnan(detail::atanh_ratio(NAN, 1.0)));
+  EXPECT_TRUE(std::isfinite(detail::atanh_ratio(1.0, 1.0)));  // the edge is finite, not inf
+  EXPECT_GT(detail::atanh_ratio(1.0, 1.0), 300.0);
+  // the double Envelope and FastEnvelope agree bit for bit on value()
+  const auto e = Envelope::tanh(0.9, 0.418, -0.604, 0.637);
+  const FastEnvelope f(e);
+  for (double x = -3; x <= 3; x += 0.001) ASSERT_EQ(f.value(x), e.value(x)) << x;
+  RecordProperty("worst_tanh_ulp", std::to_string(worst_tanh));
+  RecordProperty("worst_atanh_ulp", std::to_string(worst_atanh));
+  std::printf("worst tanh %.2f ulp, atanh %.2f ulp\n", worst_tanh, worst_atanh);
+}
+
 // ---- models against their definitions -------------------------------------------
 
 TEST(Models, GpiMatchesDirectEvaluationOfEqs4to8) {

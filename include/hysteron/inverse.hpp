@@ -74,7 +74,8 @@ class Inverse {
   ModelParams params_;
   Structure<double> s_;
   Limits lim_;
-  Envelope env_;  // gamma (symmetric models)
+  Envelope env_;       // gamma (symmetric models)
+  FastEnvelope fenv_;  // the same, for step()
   double u_lo_ = 0.0, u_hi_ = 0.0;  // envelope values at the limits
   // analytical inverse: inverse-PI parameters and state (Eqs. 9-11)
   double qi_ = 1.0;

@@ -210,8 +210,11 @@ class Model {
   std::size_t faults() const noexcept { return faults_; }
 
  private:
+  double step_symmetric(double x, double* y) noexcept;
+
   ModelParams params_;
   Structure<double> s_;
+  FastEnvelope env_;  // gamma of the symmetric models (all but mpi-asym)
   ModelState state_;
   double out_ = 0.0;
   std::size_t faults_ = 0;

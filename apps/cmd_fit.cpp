@@ -4,7 +4,7 @@
 //                [--n N] [--dead-zones J] [--train A:B] [--validate C:D] [--validate-data V.csv ...]
 //                [--time-column COL]  (ranges in seconds with a suffix s: --train 0s:20s)
 //                --out model.json [--report fit.json] [--json] [--huber DELTA] [--seed S]
-//                [--starts K] [--relaxed] [--free-weights] [--force]
+//                [--starts K] [--threads T] [--relaxed] [--free-weights] [--force]
 //
 // Exit codes: 0 converged (model written); 1 bad input (hysteron::Error);
 // 2 not converged (model not written unless --force).
@@ -33,7 +33,7 @@ namespace {
 struct FitCliOptions {
   std::string model = "gpi", data, input, output, train, validate, time_column, out, report;
   std::vector<std::string> validate_data;
-  int n = 10, dead_zones = 4, starts = 2;
+  int n = 10, dead_zones = 4, starts = 2, threads = 0;
   double huber = 0.0;
   unsigned seed = 0;
   bool json = false, relaxed = false, force = false, free_weights = false;
@@ -97,6 +97,7 @@ int run_fit(const FitCliOptions& c) {
   o.num_operators = c.n;
   o.num_dead_zones = c.dead_zones;
   o.num_starts = c.starts;
+  o.num_threads = c.threads;
   o.huber_delta = c.huber;
   o.seed = c.seed;
   o.initial_state = c.relaxed ? InitialState::relaxed : InitialState::virgin;
@@ -207,6 +208,9 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
   sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)");
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
+  sub->add_option("--threads", c->threads,
+                  "threads refining the starts concurrently (default 0: one per hardware thread; 1: sequential; "
+                  "the result does not depend on it)");
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
   sub->add_flag("--free-weights", c->free_weights,
                 "gpi: the free-weight variant (tanh envelope, q and n free weights) instead of Eq. 8's exponential law");

@@ -6,7 +6,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <atomic>
+#include <chrono>
+#include <mutex>
 #include <random>
+#include <set>
+#include <thread>
 #include <sstream>
 
 #include "alloc_counter.hpp"
@@ -278,6 +283,55 @@ TEST(IdentifyAll, EveryModelFitsAndIsInvertible) {
     }
   }
   EXPECT_LT(rms_gpi, rms_pi);
+}
+
+// Starts refined on worker threads give the result of the sequential run, bit for bit,
+// and every start reports its progress.
+TEST(IdentifyAll, ResultDoesNotDependOnTheThreadCount) {
+  const auto x = decaying_triangle({6, 4, 2}, 100);
+  const auto y = with_noise(simulate_record(true_gpi(), x), 0.005, 5);
+  for (FitModel m : {FitModel::pi, FitModel::gpi, FitModel::mpi_deadzone, FitModel::mpi_asym}) {
+    FitOptions o;
+    o.model = m;
+    o.num_starts = 3;
+    o.max_iterations = 60;
+    o.num_threads = 1;
+    const FitReport seq = fit(x, y, o);
+    std::mutex mu;
+    std::set<int> seen;
+    std::atomic<int> inside{0}, concurrent{0};
+    o.num_threads = 3;
+    o.progress = [&](int start, int, double) {
+      const int now = ++inside;  // the library serialises the calls: never 2 at once
+      if (now > concurrent) concurrent = now;
+      std::this_thread::sleep_for(std::chrono::microseconds(20));
+      --inside;
+      const std::lock_guard<std::mutex> lock(mu);
+      seen.insert(start);
+    };
+    const FitReport par = fit(x, y, o);
+    SCOPED_TRACE(fit_model_name(m));
+    ASSERT_NE(seq.status, FitStatus::invalid_input) << seq.message;
+    EXPECT_EQ(par.status, seq.status);
+    EXPECT_EQ(par.final_cost, seq.final_cost);
+    EXPECT_EQ(par.total_iterations, seq.total_iterations);
+    EXPECT_EQ(par.num_starts, seq.num_starts);
+    ASSERT_EQ(par.parameters.size(), seq.parameters.size());
+    for (std::size_t i = 0; i < seq.parameters.size(); ++i) {
+      EXPECT_EQ(par.parameters[i].value, seq.parameters[i].value) << seq.parameters[i].name;
+      EXPECT_EQ(std::isnan(par.parameters[i].std_error), std::isnan(seq.parameters[i].std_error));
+      if (!std::isnan(seq.parameters[i].std_error)) {
+        EXPECT_EQ(par.parameters[i].std_error, seq.parameters[i].std_error);
+      }
+    }
+    EXPECT_EQ(static_cast<int>(seen.size()), par.num_starts);
+    EXPECT_EQ(concurrent, 1);
+  }
+  FitOptions bad;
+  bad.num_threads = -1;
+  const FitReport r = fit(x, y, bad);
+  EXPECT_EQ(r.status, FitStatus::invalid_input);
+  EXPECT_NE(r.message.find("num_threads"), std::string::npos) << r.message;
 }
 
 TEST(IdentifyDeadzone, FitWeightsInvertsTheDeadZoneMap) {

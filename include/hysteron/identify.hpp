@@ -105,6 +105,9 @@ struct FitOptions {
   // Number of data-derived initial guesses refined by LM; the best is kept.
   // (A larger grid of candidates is screened by cost first; this many are refined.)
   int num_starts = 2;
+  // Threads that refine the starts concurrently (each start on one thread; the
+  // result does not depend on it). 0: one per hardware thread; 1: sequential.
+  int num_threads = 0;
   // Seed of the jitter added to the candidate grid (reproducible).
   unsigned seed = 0;
   // Levenberg-Marquardt limits and tolerances (Ceres semantics).
@@ -136,6 +139,7 @@ struct FitOptions {
   // training loop but extrapolate badly to minor loops. 0 disables it.
   double weight_regularization = 1e-4;
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
+  // With num_threads != 1 it is called from worker threads, one call at a time.
   std::function<void(int, int, double)> progress;
 
   // False (with a reason in *error) if a field is out of range.

@@ -26,7 +26,8 @@ void bind_identify(py::module_& m) {
       [](const DoubleArray& x, const DoubleArray& y, const std::string& model, int num_operators, int num_dead_zones,
          const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
          int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const std::string& report,
-         std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis) {
+         std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
+         int num_threads) {
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = num_operators;
@@ -40,6 +41,7 @@ void bind_identify(py::module_& m) {
         o.gpi_fix_scale = fix_scale;
         o.gpi_free_weights = free_weights;
         o.compute_covariance = compute_covariance;
+        o.num_threads = num_threads;
         const auto xs = as_span(x), ys = as_span(y);
         FitReport r;
         {
@@ -62,15 +64,18 @@ void bind_identify(py::module_& m) {
       },
       py::arg("x"), py::arg("y"), py::arg("model") = "gpi", py::arg("num_operators") = 10,
       py::arg("num_dead_zones") = 4, py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
-      py::arg("huber_delta") = 0.0, py::arg("num_starts") = 2, py::arg("seed") = 0u, py::arg("max_iterations") = 100,
+      py::arg("huber_delta") = 0.0, py::arg("num_starts") = 2, py::arg("seed") = 0u, py::arg("max_iterations") = 200,
       py::arg("fix_scale") = true, py::arg("free_weights") = false, py::arg("compute_covariance") = true, py::arg("report") = "",
       py::arg("input_axis") = std::make_pair(std::string("Input"), std::string()),
-      py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()),
+      py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()), py::arg("num_threads") = 0,
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
 
 x, y: input and measured output (1-D arrays of equal length).
 model: "gpi", "pi", "mpi-deadzone" or "mpi-asym"; num_operators: n.
 train: (begin, end) sample range entering the cost (None = all; end None = to the end).
+num_starts: initial guesses refined by LM, on up to num_threads threads (0: one per
+hardware thread, 1: sequential; the result does not depend on it). max_iterations:
+LM iterations per start (as the C++ default, 200).
 report: if given, path of a self-contained HTML report (plots, parameters,
 errors), with input_axis/output_axis = (label, unit) for its plots.
 

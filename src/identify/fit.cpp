@@ -7,9 +7,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <atomic>
+#include <exception>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <random>
+#include <thread>
 
 #include "detail.hpp"
 #include "hysteron/error.hpp"
@@ -538,7 +542,11 @@ class Progress : public ceres::IterationCallback {
  public:
   Progress(const FitOptions& o, int start) : o_(o), start_(start) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (o_.progress) o_.progress(start_, s.iteration, s.cost);
+    if (o_.progress) {
+      static std::mutex m;  // starts may run on several threads: one call at a time
+      const std::lock_guard<std::mutex> lock(m);
+      o_.progress(start_, s.iteration, s.cost);
+    }
     return ceres::SOLVER_CONTINUE;
   }
 
@@ -546,6 +554,45 @@ class Progress : public ceres::IterationCallback {
   const FitOptions& o_;
   int start_;
 };
+
+// Runs fn(k) for k = 0..count-1, the k spread over up to `threads` threads (0: one per
+// hardware thread; 1: in order on this thread). Each k is independent, so the
+// results do not depend on the thread count. The first exception (lowest k) thrown
+// by a task is rethrown once all have finished. If a thread cannot be created the
+// work runs on the threads that exist.
+template <class Fn>
+void for_each_start(std::size_t count, int threads, Fn&& fn) {
+  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
+  t = std::min(t, count);
+  if (t <= 1) {
+    for (std::size_t k = 0; k < count; ++k) fn(k);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::vector<std::exception_ptr> errors(count);
+  auto work = [&] {
+    for (std::size_t k; (k = next.fetch_add(1)) < count;) {
+      try {
+        fn(k);
+      } catch (...) {
+        errors[k] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(t - 1);
+  for (std::size_t i = 0; i + 1 < t; ++i) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;
+    }
+  }
+  work();
+  for (auto& th : pool) th.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
 
 struct Problem {
   std::unique_ptr<ceres::Problem> problem;
@@ -1180,8 +1227,12 @@ void fit_slopes(const Data& d, const std::vector<SlopeLayout>& layouts, const st
   Solved best;
   best.final_cost = std::numeric_limits<double>::infinity();
   std::size_t kbest = 0;
+  std::vector<Solved> solved(starts.size());
+  for_each_start(starts.size(), o.num_threads, [&](std::size_t k) {
+    solved[k] = solve(o.model, d, 0, &layouts[k], starts[k], lowers[k], {}, o, static_cast<int>(k));
+  });
   for (std::size_t k = 0; k < starts.size(); ++k) {
-    Solved s = solve(o.model, d, 0, &layouts[k], starts[k], lowers[k], {}, o, static_cast<int>(k));
+    Solved& s = solved[k];
     rep.total_iterations += std::max(0, s.iterations);
     if (s.usable && s.final_cost < best.final_cost) best = std::move(s), kbest = k;
   }
@@ -1253,6 +1304,7 @@ bool FitOptions::is_valid(std::string* error) const {
   if (!(huber_delta >= 0) || !std::isfinite(huber_delta)) return fail(fmt::format("huber_delta must be >= 0, got {}", huber_delta));
   if (num_starts < 1 || num_starts > 54) return fail(fmt::format("num_starts must be in 1..54, got {}", num_starts));
   if (max_iterations < 1) return fail(fmt::format("max_iterations must be >= 1, got {}", max_iterations));
+  if (num_threads < 0 || num_threads > 256) return fail(fmt::format("num_threads must be in 0..256, got {}", num_threads));
   if (!(function_tolerance >= 0) || !(gradient_tolerance >= 0) || !(parameter_tolerance >= 0))
     return fail("tolerances must be >= 0");
   if (!(weight_regularization >= 0) || !std::isfinite(weight_regularization))
@@ -1353,28 +1405,31 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
       const auto starts = gpi_starts(d, n, o, lb);
       Solved best;
       best.final_cost = std::numeric_limits<double>::infinity();
-      std::vector<double> lower;
-      std::vector<int> held;
       std::vector<double> best_lower;
-      int k = 0;
       const GpiChart chart{d.xc, d.xs};
-      for (const auto& th : starts) {
+      std::vector<Solved> solved(starts.size());
+      std::vector<std::vector<double>> lowers(starts.size());
+      for_each_start(starts.size(), o.num_threads, [&](std::size_t k) {
         // LM runs in the chart phi = [S, a, b, m, q, rho, tau, alpha] (GpiChart). Bounds of
         // Eq. 13 (c0, c1 > 0 <=> S, a > 0; rho, tau > 0) plus q, alpha > 0, relative to the
         // start's scale; the curvature a >= 1e-3 (tanh(a xn) is then linear to 3e-7, and
         // c0 = S / a stays small enough for c3 to keep its digits).
-        const auto ph = chart.phi(th.data());
+        const auto ph = chart.phi(starts[k].data());
         std::vector<double> phi(ph.begin(), ph.end());
+        std::vector<double>& lower = lowers[k];
         lower.assign(kGpi, -std::numeric_limits<double>::infinity());
         for (int i : {0, 4, 5, 6, 7}) lower[static_cast<std::size_t>(i)] = lb * std::abs(phi[static_cast<std::size_t>(i)]);
         lower[1] = 1e-3;
-        held.clear();
+        std::vector<int> held;
         if (o.gpi_fix_scale) held.push_back(0);
-        Solved s = solve(FitModel::gpi, d, n, nullptr, phi, lower, held, o, k++);
+        solved[k] = solve(FitModel::gpi, d, n, nullptr, phi, lower, held, o, static_cast<int>(k));
+      });
+      for (std::size_t k = 0; k < starts.size(); ++k) {
+        Solved& s = solved[k];
         rep.total_iterations += std::max(0, s.iterations);
         if (s.usable && s.final_cost < best.final_cost) {
           best = std::move(s);
-          best_lower = lower;
+          best_lower = lowers[k];
         }
       }
       rep.num_starts = static_cast<int>(starts.size());
@@ -1391,7 +1446,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
         static const char* names[kGpi] = {"c0", "c1", "c2", "c3", "q", "rho", "tau", "alpha"};
         std::vector<int> fixed;
         if (o.gpi_fix_scale) fixed.push_back(0);
-        fixed.insert(fixed.end(), best.at_bound.begin(), best.at_bound.end());
+        for (int i : best.at_bound) fixed.push_back(i);  // (not insert: g++ 12 -Warray-bounds false positive)
         // chart index i maps to Eq. 13 index i for the bounded parameters (a -> c1, S -> c0)
         for (int i = 0; i < kGpi; ++i) {
           const bool on_bound = std::find(best.at_bound.begin(), best.at_bound.end(), i) != best.at_bound.end();

@@ -334,6 +334,39 @@ TEST(IdentifyAll, ResultDoesNotDependOnTheThreadCount) {
   EXPECT_NE(r.message.find("num_threads"), std::string::npos) << r.message;
 }
 
+// The stationarity test ends LM as converged once the cost's relative decrease over
+// the last stall_iterations iterations is at most stall_tolerance.
+TEST(IdentifyAll, StationaryCostEndsTheFitAsConverged) {
+  const auto x = decaying_triangle({6, 4, 2}, 100);
+  const auto y = with_noise(simulate_record(true_gpi(), x), 0.005, 5);
+  FitOptions o;
+  o.model = FitModel::mpi_asym;
+  o.num_starts = 1;
+  o.max_iterations = 3;
+  o.compute_covariance = false;
+  const FitReport limited = fit(x, y, o);  // window 25 > 3 iterations: the limit ends it
+  EXPECT_EQ(limited.status, FitStatus::no_convergence) << limited.full_report();
+  o.max_iterations = 200;
+  o.stall_iterations = 3;
+  o.stall_tolerance = 1e300;  // (decrease relative to the current cost) any decrease passes: ends after 3
+  const FitReport stalled = fit(x, y, o);
+  EXPECT_EQ(stalled.status, FitStatus::converged) << stalled.full_report();
+  EXPECT_EQ(stalled.total_iterations, 3) << stalled.full_report();
+  EXPECT_NE(stalled.message.find("stationary"), std::string::npos) << stalled.message;
+  o.stall_tolerance = 0.0;  // disabled: Ceres' own tolerances decide
+  const FitReport plain = fit(x, y, o);
+  EXPECT_GT(plain.total_iterations, 3);
+  EXPECT_EQ(plain.message.find("stationary"), std::string::npos) << plain.message;
+  for (auto [it, tol] : {std::pair{0, 1e-5}, std::pair{25, -1.0}, std::pair{25, std::nan("")}}) {
+    FitOptions bad;
+    bad.stall_iterations = it;
+    bad.stall_tolerance = tol;
+    const FitReport r = fit(x, y, bad);
+    EXPECT_EQ(r.status, FitStatus::invalid_input);
+    EXPECT_NE(r.message.find("stall_"), std::string::npos) << r.message;
+  }
+}
+
 TEST(IdentifyDeadzone, FitWeightsInvertsTheDeadZoneMap) {
   // Forward mpi-deadzone data; fit_weights with thresholds in output units.
   const auto x = decaying_triangle({10, 7, 9, 3, 6, 1}, 100);

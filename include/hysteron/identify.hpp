@@ -115,6 +115,10 @@ struct FitOptions {
   double function_tolerance = 1e-10;
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-10;
+  // Also converged when the cost is stationary: its relative decrease over the last
+  // stall_iterations iterations is at most stall_tolerance (0 disables the test).
+  int stall_iterations = 25;
+  double stall_tolerance = 1e-5;
   // gpi only: the 8 parameters of Eq. 13 have an exact scale symmetry
   //   (c0, c3, alpha, q, rho, tau) -> (k c0, k c3, k alpha, q/k, rho/k, tau/k)
   // that leaves the output unchanged, so the Jacobian is rank 7. With true

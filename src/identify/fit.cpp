@@ -594,6 +594,33 @@ void for_each_start(std::size_t count, int threads, Fn&& fn) {
     if (e) std::rethrow_exception(e);
 }
 
+// Stops LM when the cost is stationary: its relative decrease over the last `window`
+// iterations is at most `tol` (FitOptions::stall_iterations / stall_tolerance). LM on a
+// flat valley (bounded weights of mpi-asym on the piezo record) otherwise crawls to the
+// iteration limit at 1e-7 per iteration, which Eq. 12's per-iteration test (1e-10) never stops.
+class Stall : public ceres::IterationCallback {
+ public:
+  Stall(int window, double tol) : window_(static_cast<std::size_t>(window)), tol_(tol), costs_(window_ + 1) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    costs_[seen_ % costs_.size()] = s.cost;
+    ++seen_;
+    if (seen_ <= window_) return ceres::SOLVER_CONTINUE;
+    const double old = costs_[seen_ % costs_.size()];  // the cost `window` iterations ago
+    const double drop = (old - s.cost) / std::max(s.cost, std::numeric_limits<double>::min());
+    if (!(drop <= tol_)) return ceres::SOLVER_CONTINUE;
+    decrease_ = drop;
+    return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+  }
+  double decrease() const { return decrease_; }
+
+ private:
+  std::size_t window_;
+  double tol_;
+  std::vector<double> costs_;
+  std::size_t seen_ = 0;
+  double decrease_ = 0.0;
+};
+
 struct Problem {
   std::unique_ptr<ceres::Problem> problem;
   std::vector<double> theta;
@@ -650,6 +677,8 @@ Solved solve_once(FitModel kind, const Data& d, int n, const SlopeLayout* layout
   so.minimizer_progress_to_stdout = false;
   Progress cb(o, start);
   if (o.progress) so.callbacks.push_back(&cb);
+  Stall stall(o.stall_iterations, o.stall_tolerance);
+  if (o.stall_tolerance > 0) so.callbacks.push_back(&stall);
   ceres::Solver::Summary summary;
   ceres::Solve(so, problem.get(), &summary);
   out.theta = theta;
@@ -658,6 +687,11 @@ Solved solve_once(FitModel kind, const Data& d, int n, const SlopeLayout* layout
   out.iterations = static_cast<int>(summary.iterations.size()) - 1;
   out.termination = summary.termination_type;
   out.message = summary.message;
+  if (summary.termination_type == ceres::USER_SUCCESS) {
+    out.termination = ceres::CONVERGENCE;
+    out.message = fmt::format("Cost stationary: relative decrease {:.3e} over the last {} iterations <= {:.1e}",
+                              stall.decrease(), o.stall_iterations, o.stall_tolerance);
+  }
   out.usable = summary.IsSolutionUsable() && std::isfinite(summary.final_cost);
   return out;
 }
@@ -1304,6 +1338,10 @@ bool FitOptions::is_valid(std::string* error) const {
   if (!(huber_delta >= 0) || !std::isfinite(huber_delta)) return fail(fmt::format("huber_delta must be >= 0, got {}", huber_delta));
   if (num_starts < 1 || num_starts > 54) return fail(fmt::format("num_starts must be in 1..54, got {}", num_starts));
   if (max_iterations < 1) return fail(fmt::format("max_iterations must be >= 1, got {}", max_iterations));
+  if (stall_iterations < 1 || stall_iterations > 100000)
+    return fail(fmt::format("stall_iterations must be in 1..100000, got {}", stall_iterations));
+  if (!(stall_tolerance >= 0) || !std::isfinite(stall_tolerance))
+    return fail(fmt::format("stall_tolerance must be >= 0, got {}", stall_tolerance));
   if (num_threads < 0 || num_threads > 256) return fail(fmt::format("num_threads must be in 0..256, got {}", num_threads));
   if (!(function_tolerance >= 0) || !(gradient_tolerance >= 0) || !(parameter_tolerance >= 0))
     return fail("tolerances must be >= 0");

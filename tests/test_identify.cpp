@@ -3,16 +3,16 @@
 // allocation), input validation, and fits of the measured records in ../shared/data.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <atomic>
-#include <chrono>
 #include <mutex>
 #include <random>
 #include <set>
-#include <thread>
 #include <sstream>
+#include <thread>
 
 #include "alloc_counter.hpp"
 #include "hysteron/error.hpp"

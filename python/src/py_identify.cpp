@@ -27,7 +27,7 @@ void bind_identify(py::module_& m) {
          const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
          int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const std::string& report,
          std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
-         int num_threads) {
+         int num_threads, int stall_iterations, double stall_tolerance) {
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = num_operators;
@@ -42,6 +42,8 @@ void bind_identify(py::module_& m) {
         o.gpi_free_weights = free_weights;
         o.compute_covariance = compute_covariance;
         o.num_threads = num_threads;
+        o.stall_iterations = stall_iterations;
+        o.stall_tolerance = stall_tolerance;
         const auto xs = as_span(x), ys = as_span(y);
         FitReport r;
         {
@@ -68,6 +70,7 @@ void bind_identify(py::module_& m) {
       py::arg("fix_scale") = true, py::arg("free_weights") = false, py::arg("compute_covariance") = true, py::arg("report") = "",
       py::arg("input_axis") = std::make_pair(std::string("Input"), std::string()),
       py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()), py::arg("num_threads") = 0,
+      py::arg("stall_iterations") = 25, py::arg("stall_tolerance") = 1e-5,
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
 
 x, y: input and measured output (1-D arrays of equal length).
@@ -75,7 +78,9 @@ model: "gpi", "pi", "mpi-deadzone" or "mpi-asym"; num_operators: n.
 train: (begin, end) sample range entering the cost (None = all; end None = to the end).
 num_starts: initial guesses refined by LM, on up to num_threads threads (0: one per
 hardware thread, 1: sequential; the result does not depend on it). max_iterations:
-LM iterations per start (as the C++ default, 200).
+LM iterations per start (as the C++ default, 200). stall_iterations, stall_tolerance:
+LM also ends as converged when the cost falls by at most stall_tolerance (relative)
+over the last stall_iterations iterations (0 disables it).
 report: if given, path of a self-contained HTML report (plots, parameters,
 errors), with input_axis/output_axis = (label, unit) for its plots.
 

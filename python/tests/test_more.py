@@ -45,6 +45,19 @@ def test_fit_reports_invalid_input_without_raising():
     assert r["status"] == "invalid_input" and not r["ok"] and r["message"]
 
 
+def test_fit_threads_and_stationarity_options():
+    x = decaying_triangles()
+    y = hysteron.simulate_record(TRUE_GPI, x) + 0.01 * np.sin(np.arange(len(x)))
+    seq = hysteron.fit(x, y, model="mpi-asym", num_starts=2, num_threads=1)
+    par = hysteron.fit(x, y, model="mpi-asym", num_starts=2, num_threads=2)
+    assert par["final_cost"] == seq["final_cost"] and par["total_iterations"] == seq["total_iterations"]
+    # any decrease passes a huge tolerance: each start ends after stall_iterations iterations
+    r = hysteron.fit(x, y, model="mpi-asym", num_starts=1, stall_iterations=3, stall_tolerance=1e300)
+    assert r["status"] == "converged" and r["total_iterations"] == 3 and "stationary" in r["message"]
+    bad = hysteron.fit(x, y, stall_tolerance=-1.0)
+    assert bad["status"] == "invalid_input" and "stall_tolerance" in bad["message"]
+
+
 def test_fit_html_report():
     x = decaying_triangles()
     y = hysteron.simulate_record(TRUE_GPI, x) + 0.01 * np.sin(np.arange(len(x)))

@@ -5,9 +5,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <atomic>
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -542,11 +542,7 @@ class Progress : public ceres::IterationCallback {
  public:
   Progress(const FitOptions& o, int start) : o_(o), start_(start) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (o_.progress) {
-      static std::mutex m;  // starts may run on several threads: one call at a time
-      const std::lock_guard<std::mutex> lock(m);
-      o_.progress(start_, s.iteration, s.cost);
-    }
+    if (o_.progress) o_.progress(start_, s.iteration, s.cost);
     return ceres::SOLVER_CONTINUE;
   }
 
@@ -600,11 +596,11 @@ void for_each_start(std::size_t count, int threads, Fn&& fn) {
 // iteration limit at 1e-7 per iteration, which Eq. 12's per-iteration test (1e-10) never stops.
 class Stall : public ceres::IterationCallback {
  public:
-  Stall(int window, double tol) : window_(static_cast<std::size_t>(window)), tol_(tol), costs_(window_ + 1) {}
+  Stall(int window, double tol) : tol_(tol), costs_(static_cast<std::size_t>(window) + 1) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    costs_[seen_ % costs_.size()] = s.cost;
+    costs_[seen_ % costs_.size()] = s.cost;  // ring of the last window + 1 costs
     ++seen_;
-    if (seen_ <= window_) return ceres::SOLVER_CONTINUE;
+    if (seen_ < costs_.size()) return ceres::SOLVER_CONTINUE;
     const double old = costs_[seen_ % costs_.size()];  // the cost `window` iterations ago
     const double drop = (old - s.cost) / std::max(s.cost, std::numeric_limits<double>::min());
     if (!(drop <= tol_)) return ceres::SOLVER_CONTINUE;
@@ -614,7 +610,6 @@ class Stall : public ceres::IterationCallback {
   double decrease() const { return decrease_; }
 
  private:
-  std::size_t window_;
   double tol_;
   std::vector<double> costs_;
   std::size_t seen_ = 0;
@@ -1255,29 +1250,41 @@ void finish_status(FitReport& rep, const Solved& best) {
   rep.message = best.message;
 }
 
+// Refines every start by LM, concurrently on FitOptions::num_threads threads (layouts:
+// one per start for the slope models, nullptr for the gpi); adds their iterations to
+// rep.total_iterations, sets rep.num_starts and returns the solutions with the index of
+// the usable one of lowest cost (the first on ties; npos if none is usable).
+std::pair<std::vector<Solved>, std::size_t> solve_starts(FitModel kind, const Data& d, int n,
+                                                         const std::vector<SlopeLayout>* layouts,
+                                                         const std::vector<std::vector<double>>& starts,
+                                                         const std::vector<std::vector<double>>& lowers,
+                                                         const std::vector<int>& held, const FitOptions& o,
+                                                         FitReport& rep) {
+  std::vector<Solved> solved(starts.size());
+  for_each_start(starts.size(), o.num_threads, [&](std::size_t k) {
+    solved[k] = solve(kind, d, n, layouts ? &(*layouts)[k] : nullptr, starts[k], lowers[k], held, o, static_cast<int>(k));
+  });
+  std::size_t best = std::string::npos;
+  for (std::size_t k = 0; k < solved.size(); ++k) {
+    rep.total_iterations += std::max(0, solved[k].iterations);
+    if (solved[k].usable && (best == std::string::npos || solved[k].final_cost < solved[best].final_cost)) best = k;
+  }
+  rep.num_starts = static_cast<int>(starts.size());
+  return {std::move(solved), best};
+}
+
 // Runs LM on several slope-parametrized starts and fills the report.
 void fit_slopes(const Data& d, const std::vector<SlopeLayout>& layouts, const std::vector<std::vector<double>>& starts,
                 const std::vector<std::vector<double>>& lowers, const FitOptions& o, FitReport& rep) {
-  Solved best;
-  best.final_cost = std::numeric_limits<double>::infinity();
-  std::size_t kbest = 0;
-  std::vector<Solved> solved(starts.size());
-  for_each_start(starts.size(), o.num_threads, [&](std::size_t k) {
-    solved[k] = solve(o.model, d, 0, &layouts[k], starts[k], lowers[k], {}, o, static_cast<int>(k));
-  });
-  for (std::size_t k = 0; k < starts.size(); ++k) {
-    Solved& s = solved[k];
-    rep.total_iterations += std::max(0, s.iterations);
-    if (s.usable && s.final_cost < best.final_cost) best = std::move(s), kbest = k;
-  }
-  const SlopeLayout& layout = layouts[kbest];
-  const std::vector<double>& lower = lowers[kbest];
-  rep.num_starts = static_cast<int>(starts.size());
-  if (!best.usable) {
+  auto [solved, kbest] = solve_starts(o.model, d, 0, &layouts, starts, lowers, {}, o, rep);
+  if (kbest == std::string::npos) {
     rep.status = FitStatus::failed;
     rep.message = "no start gave a usable solution";
     return;
   }
+  const Solved& best = solved[kbest];
+  const SlopeLayout& layout = layouts[kbest];
+  const std::vector<double>& lower = lowers[kbest];
   finish_status(rep, best);
   rep.initial_cost = best.initial_cost;
   rep.final_cost = best.final_cost;
@@ -1411,8 +1418,17 @@ std::vector<double> default_thresholds(std::span<const double> x, int n) {
   return r;
 }
 
-FitReport fit(std::span<const double> x, std::span<const double> y, const FitOptions& o) {
+FitReport fit(std::span<const double> x, std::span<const double> y, const FitOptions& options) {
   const auto t0 = Clock::now();
+  // The starts may run on several threads: the caller's progress callback is called
+  // one call at a time (a mutex per fit).
+  std::mutex progress_mutex;
+  FitOptions o = options;
+  if (options.progress)
+    o.progress = [&progress_mutex, &f = options.progress](int start, int iteration, double cost) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      f(start, iteration, cost);
+    };
   std::string why;
   if (!o.is_valid(&why)) return invalid("invalid options: " + why, o.model, t0);
   IndexRange tr;
@@ -1441,36 +1457,28 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     if (o.model == FitModel::gpi && !o.gpi_free_weights) {
       const double lb = std::max(o.positivity_margin, 1e-12);
       const auto starts = gpi_starts(d, n, o, lb);
-      Solved best;
-      best.final_cost = std::numeric_limits<double>::infinity();
-      std::vector<double> best_lower;
       const GpiChart chart{d.xc, d.xs};
-      std::vector<Solved> solved(starts.size());
-      std::vector<std::vector<double>> lowers(starts.size());
-      for_each_start(starts.size(), o.num_threads, [&](std::size_t k) {
+      std::vector<std::vector<double>> phis, lowers;
+      for (const auto& th : starts) {
         // LM runs in the chart phi = [S, a, b, m, q, rho, tau, alpha] (GpiChart). Bounds of
         // Eq. 13 (c0, c1 > 0 <=> S, a > 0; rho, tau > 0) plus q, alpha > 0, relative to the
         // start's scale; the curvature a >= 1e-3 (tanh(a xn) is then linear to 3e-7, and
         // c0 = S / a stays small enough for c3 to keep its digits).
-        const auto ph = chart.phi(starts[k].data());
-        std::vector<double> phi(ph.begin(), ph.end());
-        std::vector<double>& lower = lowers[k];
-        lower.assign(kGpi, -std::numeric_limits<double>::infinity());
-        for (int i : {0, 4, 5, 6, 7}) lower[static_cast<std::size_t>(i)] = lb * std::abs(phi[static_cast<std::size_t>(i)]);
+        const auto ph = chart.phi(th.data());
+        std::vector<double>& lower = lowers.emplace_back(kGpi, -std::numeric_limits<double>::infinity());
+        for (int i : {0, 4, 5, 6, 7}) lower[static_cast<std::size_t>(i)] = lb * std::abs(ph[static_cast<std::size_t>(i)]);
         lower[1] = 1e-3;
-        std::vector<int> held;
-        if (o.gpi_fix_scale) held.push_back(0);
-        solved[k] = solve(FitModel::gpi, d, n, nullptr, phi, lower, held, o, static_cast<int>(k));
-      });
-      for (std::size_t k = 0; k < starts.size(); ++k) {
-        Solved& s = solved[k];
-        rep.total_iterations += std::max(0, s.iterations);
-        if (s.usable && s.final_cost < best.final_cost) {
-          best = std::move(s);
-          best_lower = lowers[k];
-        }
+        phis.emplace_back(ph.begin(), ph.end());
       }
-      rep.num_starts = static_cast<int>(starts.size());
+      std::vector<int> held;
+      if (o.gpi_fix_scale) held.push_back(0);
+      auto [solved, kbest] = solve_starts(FitModel::gpi, d, n, nullptr, phis, lowers, held, o, rep);
+      Solved best;
+      std::vector<double> best_lower;
+      if (kbest != std::string::npos) {
+        best = std::move(solved[kbest]);
+        best_lower = lowers[kbest];
+      }
       if (!best.usable) {
         rep.status = FitStatus::failed;
         rep.message = "no start gave a usable solution";

@@ -39,6 +39,10 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   lim_.hi = std::isinf(options.input_limits.hi) ? ml.hi : options.input_limits.hi;
   if (std::isnan(lim_.lo) || std::isnan(lim_.hi) || !(lim_.lo < lim_.hi))
     throw Error(fmt::format("{}: inverse input limits must satisfy lo < hi, got [{}, {}]", name, lim_.lo, lim_.hi));
+  // From here on lim_ is in model coordinates (input_scale > 0 keeps the order).
+  const UnitsMap& um = s_.units;
+  const Limits raw = lim_;
+  lim_ = Limits{std::isinf(lim_.lo) ? lim_.lo : um.to_model(lim_.lo), std::isinf(lim_.hi) ? lim_.hi : um.to_model(lim_.hi)};
 
   const std::size_t n = s_.r.size();
   if (!(s_.q > 0))
@@ -123,6 +127,9 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
       throw Error(fmt::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));
     y_.assign(n, 0.0);
   }
+  // Raw limits: the caller's where given (a command never leaves them by rounding).
+  lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : std::isinf(lim_.lo) ? lim_.lo : um.from_model(lim_.lo),
+                    std::isfinite(raw.hi) ? raw.hi : std::isinf(lim_.hi) ? lim_.hi : um.from_model(lim_.hi)};
   reset();
 }
 
@@ -211,9 +218,11 @@ double Inverse::dead_zone_inverse(double y) const noexcept {
 double Inverse::step(double y) noexcept {
   if (!std::isfinite(y)) {
     ++faults_;
-    return x_;
+    return input();
   }
-  return s_.asymmetric ? step_numerical(y) : step_analytical(y);
+  const double ym = s_.units.model_output(y);
+  const double xm = s_.asymmetric ? step_numerical(ym) : step_analytical(ym);
+  return std::clamp(s_.units.from_model(xm), lim_raw_.lo, lim_raw_.hi);
 }
 
 double Inverse::step_analytical(double y) noexcept {

@@ -55,6 +55,15 @@ void add_operators(Structure<double>& s, const std::vector<double>& r, const std
   }
 }
 
+void check_units(const UnitsMap& u, std::string_view model) {
+  require_finite(u.input_origin, model, "input_origin");
+  require_finite(u.output_offset, model, "output_offset");
+  require_finite(u.input_scale, model, "input_scale");
+  require_finite(u.output_gain, model, "output_gain");
+  if (!(u.input_scale > 0)) throw Error(fmt::format("{}: input_scale must be > 0, got {}", model, u.input_scale));
+  if (u.output_gain == 0.0) throw Error(fmt::format("{}: output_gain must be != 0 (the output would be constant)", model));
+}
+
 void set_envelope(std::array<double, 4>& c, EnvelopeKind& kind, const Envelope& e) {
   kind = e.kind;
   c = e.c;
@@ -152,7 +161,20 @@ const Limits& input_limits(const ModelParams& params) noexcept {
   return std::visit([](const auto& m) -> const Limits& { return m.input_limits; }, params);
 }
 
-Structure<double> canonical_structure(const ModelParams& params) { return std::visit(CanonicalVisitor{}, params); }
+const UnitsMap& units_map(const ModelParams& params) noexcept {
+  return std::visit([](const auto& m) -> const UnitsMap& { return m.units; }, params);
+}
+
+UnitsMap& units_map(ModelParams& params) noexcept {
+  return std::visit([](auto& m) -> UnitsMap& { return m.units; }, params);
+}
+
+Structure<double> canonical_structure(const ModelParams& params) {
+  Structure<double> s = std::visit(CanonicalVisitor{}, params);
+  check_units(units_map(params), model_name(params));
+  s.units = units_map(params);
+  return s;
+}
 
 Model::Model(ModelParams params)
     : params_(std::move(params)), s_(canonical_structure(params_)), env_(Envelope{s_.asc_kind, s_.asc_c}) {
@@ -180,7 +202,7 @@ void Model::reset(const ModelState& state) {
 }
 
 void Model::reset_relaxed(double x0) noexcept {
-  const double u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x0);
+  const double u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), s_.units.to_model(x0));
   if (!std::isfinite(u)) return;
   std::fill(state_.y.begin(), state_.y.end(), u);
   state_.u = u;
@@ -202,7 +224,9 @@ double Model::step(double x) noexcept {
     ++faults_;
     return out_;
   }
-  out_ = s_.asymmetric ? structure_step<double>(s_, x, state_.y.data(), &state_.u) : step_symmetric(x, state_.y.data());
+  const double xm = s_.units.to_model(x);
+  const double m = s_.asymmetric ? structure_step<double>(s_, xm, state_.y.data(), &state_.u) : step_symmetric(xm, state_.y.data());
+  out_ = s_.units.output(m);
   return out_;
 }
 
@@ -212,11 +236,12 @@ void Model::simulate(std::span<const double> x, std::span<double> y) {
   for (std::size_t k = 0; k < x.size(); ++k)
     if (!std::isfinite(x[k])) throw Error(fmt::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
   double* yi = state_.y.data();
+  const UnitsMap& um = s_.units;
   if (s_.asymmetric) {
-    for (std::size_t k = 0; k < x.size(); ++k) y[k] = structure_step<double>(s_, x[k], yi);
-    if (!x.empty()) state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x.back());
+    for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(structure_step<double>(s_, um.to_model(x[k]), yi));
+    if (!x.empty()) state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), um.to_model(x.back()));
   } else {
-    for (std::size_t k = 0; k < x.size(); ++k) y[k] = step_symmetric(x[k], yi);
+    for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(step_symmetric(um.to_model(x[k]), yi));
   }
   if (!x.empty()) out_ = y.back();
 }

@@ -308,8 +308,8 @@ TEST(Models, AsymmetricModelBreaksPointSymmetryOfPiLoops) {
 }
 
 TEST(Models, ZeroThresholdsFoldIntoQAndOrderDoesNotMatter) {
-  PiParams a{0.1, {0.3, 0.0, 0.1}, {0.2, 0.5, 0.4}, {}};
-  PiParams b{0.6, {0.1, 0.3}, {0.4, 0.2}, {}};
+  PiParams a{0.1, {0.3, 0.0, 0.1}, {0.2, 0.5, 0.4}, {}, {}};
+  PiParams b{0.6, {0.1, 0.3}, {0.4, 0.2}, {}, {}};
   Model ma(a), mb(b);
   std::mt19937_64 rng(1);
   for (double x : random_walk(rng, 500, -1, 1)) ASSERT_NEAR(ma.step(x), mb.step(x), 1e-15);
@@ -459,10 +459,10 @@ TEST(Inverse, RejectsNonInvertibleParameters) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  expect_error(PiParams{0.5, {0.1, 0.2}, {-0.2, -0.4}, {}}, "q + p_1 + ... + p_2");
-  expect_error(PiParams{0.0, {0.1}, {1.0}, {}}, "q (plus the weights");
-  expect_error(MpiDeadzoneParams{1.0, {0.1}, {0.1}, 1.0, {0.5}, {-1.5}, {}}, "dead zones in (0, 0.5]");
-  expect_error(MpiDeadzoneParams{1.0, {0.1}, {0.1}, -1.0, {}, {}, {}}, "g0");
+  expect_error(PiParams{0.5, {0.1, 0.2}, {-0.2, -0.4}, {}, {}}, "q + p_1 + ... + p_2");
+  expect_error(PiParams{0.0, {0.1}, {1.0}, {}, {}}, "q (plus the weights");
+  expect_error(MpiDeadzoneParams{1.0, {0.1}, {0.1}, 1.0, {0.5}, {-1.5}, {}, {}}, "dead zones in (0, 0.5]");
+  expect_error(MpiDeadzoneParams{1.0, {0.1}, {0.1}, -1.0, {}, {}, {}, {}}, "g0");
   MpiAsymParams a;
   a.descending = Envelope::affine(1.5, 0.0);
   a.r = {0.1};
@@ -481,7 +481,7 @@ TEST(Inverse, RejectsNonInvertibleParameters) {
 }
 
 TEST(Inverse, RejectsUnreachableStartState) {
-  PiParams p{1.0, {0.1, 0.2}, {0.5, 0.5}, {}};
+  PiParams p{1.0, {0.1, 0.2}, {0.5, 0.5}, {}, {}};
   Inverse inv(p);
   EXPECT_THROW(inv.reset(ModelState{{0.0, 0.5}, 0.0}), Error);  // |d_2| = 0.5 > r_2
   EXPECT_THROW(inv.reset(ModelState{{0.0}, 0.0}), Error);       // wrong size
@@ -497,9 +497,9 @@ TEST(Models, RejectInvalidParametersNamingTheKey) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  expect_error(PiParams{0.5, {0.1, -0.2}, {0.2, 0.4}, {}}, "r[1]");
-  expect_error(PiParams{0.5, {0.1, 0.2}, {0.2}, {}}, "p has 1");
-  expect_error(PiParams{std::nan(""), {0.1}, {0.2}, {}}, "q must be a finite");
+  expect_error(PiParams{0.5, {0.1, -0.2}, {0.2, 0.4}, {}, {}}, "r[1]");
+  expect_error(PiParams{0.5, {0.1, 0.2}, {0.2}, {}, {}}, "p has 1");
+  expect_error(PiParams{std::nan(""), {0.1}, {0.2}, {}, {}}, "q must be a finite");
   GpiParams g;
   g.alpha = -1;
   g.rho = 1;

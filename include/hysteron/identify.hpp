@@ -41,9 +41,14 @@ namespace hysteron {
 //                output range (Kuhnen); seeded by linear LS, refined by LM.
 //   mpi-asym     two tanh envelopes (ascending, descending: 8 coefficients),
 //                q and n weights on fixed thresholds, all refined by LM.
-enum class FitModel { gpi, pi, mpi_deadzone, mpi_asym };
+//   automatic    every kind above is fitted on the first part of the training range and
+//                scored on its last part (the hold-out, FitOptions::holdout_fraction); the
+//                kind with the lowest hold-out RMS is refitted on the whole training
+//                range and returned (FitReport::model_kind is that kind, the table of
+//                every candidate is FitReport::candidates).
+enum class FitModel { gpi, pi, mpi_deadzone, mpi_asym, automatic };
 
-// "gpi", "pi", "mpi-deadzone", "mpi-asym".
+// "gpi", "pi", "mpi-deadzone", "mpi-asym", "auto".
 std::string_view fit_model_name(FitModel model) noexcept;
 // Throws hysteron::Error on an unknown name.
 FitModel fit_model_from_name(std::string_view name);
@@ -142,6 +147,18 @@ struct FitOptions {
   // cancelling weights (p_7 = 159, p_8 = -151 on the rig record) that fit the
   // training loop but extrapolate badly to minor loops. 0 disables it.
   double weight_regularization = 1e-4;
+  // Minimum slope of every fitted model relative to the data's mean slope
+  // span(y) / span(x) over the training range (pi, mpi-deadzone, mpi-asym, gpi with free
+  // weights: a lower bound on q and on every cumulative slope q + p_1 + ... + p_i, and on
+  // the dead-zone slopes). Bounds the inverse slope by span(x) / (min_slope span(y)) so
+  // that the inverse cannot jump at a reversal. 0 < min_slope < 1.
+  double min_slope = 0.02;
+  // automatic: the last holdout_fraction of the training range scores the candidates.
+  double holdout_fraction = 0.2;
+  // A fit whose training RMS exceeds poor_fit_ratio x that of the reference PI
+  // (reference_pi) on the same range, or whose training R^2 < 0, ends as poor_fit.
+  // 0 disables the reference comparison.
+  double poor_fit_ratio = 1.05;
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
   // With num_threads != 1 it is called from worker threads, one call at a time.
   std::function<void(int, int, double)> progress;
@@ -155,6 +172,8 @@ enum class FitStatus {
   converged,       // a Ceres convergence tolerance was met
   no_convergence,  // iteration limit reached; the best model so far is reported
   failed,          // the solver failed (e.g. the cost became non-finite)
+  poor_fit,        // the solver finished, but the model is useless or worse than the
+                   // reference PI (R^2 < 0 or RMS > poor_fit_ratio x reference); see message
   invalid_input,   // the data or the options were rejected (see message)
 };
 std::string_view fit_status_name(FitStatus status) noexcept;
@@ -167,6 +186,31 @@ struct FitParameter {
   double std_error = std::numeric_limits<double>::quiet_NaN();
   bool held = false;      // held constant during the fit
   bool at_bound = false;  // ended on its lower bound (Eq. 13) and held there; std_error 0
+};
+
+// One candidate of FitModel::automatic: its kind fitted on the first part of the
+// training range and scored on the hold-out (the rest of the training range).
+struct FitCandidate {
+  FitModel kind = FitModel::gpi;
+  FitStatus status = FitStatus::not_run;
+  std::string message;
+  FitMetrics train;    // on the first part of the training range
+  FitMetrics holdout;  // on the hold-out part
+  double time_s = 0.0;
+  bool chosen = false;
+  ModelParams model;   // the candidate's model (fitted on the first part only)
+};
+
+// What the fitted model means for a controller that inverts it (see fit()).
+struct InverseCheck {
+  // Largest |dx/dy| of the model's inverse over the training input range, input units per
+  // output unit (1 / the smallest local slope of the model); inf if not invertible.
+  double max_slope = 0.0;
+  // Largest |x[k] - x[k-1]| of the inverse driven by the measured training output
+  // (what an inverse feedforward would command), and the same of the measured input.
+  double max_jump = 0.0;
+  double max_input_step = 0.0;
+  bool increasing = true;  // false: the model decreases (negative output gain)
 };
 
 struct FitReport {
@@ -183,6 +227,10 @@ struct FitReport {
   std::vector<FitParameter> parameters;
   std::string covariance_note;  // why standard errors are missing, if they are
   FitMetrics train;             // metrics on the training range
+  FitMetrics reference;         // the reference PI (reference_pi) on the training range
+  InverseCheck inverse;         // slope and jump of the fitted model's inverse
+  std::vector<std::string> warnings;     // bounds hit, poor-fit reasons, ...
+  std::vector<FitCandidate> candidates;  // FitModel::automatic only
 
   bool ok() const noexcept { return status == FitStatus::converged; }
   // One-line summary; multi-line report with the parameter table.
@@ -218,6 +266,16 @@ void slope_residuals(FitModel model, std::span<const double> theta, std::span<co
                      std::span<const double> y, IndexRange train, InitialState initial, double huber, bool autodiff,
                      Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian);
 
+// The reference every fit is compared with (a plain script's PI): a classical PI with
+// `num_operators` plays whose thresholds are evenly spaced over half the training input
+// span (r_i = i span / (2 n), i = 1..n), started relaxed at the first sample (the
+// model's input_origin = x[0]), a free linear term q, an output offset, and weights
+// p_i >= 0 by non-negative least squares over `train`. Throws hysteron::Error on
+// invalid data. Not necessarily invertible (q may be negative). A decreasing record is
+// fitted with output_gain = -1 (the weights stay >= 0).
+PiParams reference_pi(std::span<const double> x, std::span<const double> y, IndexRange train = {},
+                      int num_operators = 10);
+
 // Thresholds used by fit() for the pi/mpi models: r_i = i span(x) / (2n), i = 1..n-1.
 std::vector<double> default_thresholds(std::span<const double> x, int n);
 
@@ -230,6 +288,9 @@ struct WeightFitOptions {
   // where scale = span(y) / span(u) (keeps the model invertible). For
   // mpi-deadzone also the cumulative dead-zone slopes on each side.
   double margin = 1e-6;
+  // Also fit a free output offset (returned in the model's units map, output_offset);
+  // not for mpi-deadzone. Without it the model's output is 0 at rest at its input origin.
+  bool free_offset = false;
 };
 
 // Weights of a model whose thresholds and envelopes are fixed, by bounded
@@ -275,6 +336,8 @@ class Rls {
   ModelParams params() const;
 
  private:
+  double step_model(double x, double y) noexcept;  // in model coordinates
+
   ModelParams model_;
   Structure<double> s_;
   std::vector<double> y_;

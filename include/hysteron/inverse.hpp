@@ -17,6 +17,7 @@
 // Starting state: an inverse can be started from any forward state that a
 // forward model reaches from its virgin state (reset(const ModelState&)), so
 // that Inverse(forward(x)) == x sample by sample.
+#include <algorithm>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -39,8 +40,8 @@ class Inverse {
   explicit Inverse(ModelParams params, InverseOptions options = {});
 
   const Structure<double>& structure() const noexcept { return s_; }
-  // The input limits the inverse saturates at.
-  const Limits& limits() const noexcept { return lim_; }
+  // The input limits the inverse saturates at (raw input units).
+  const Limits& limits() const noexcept { return lim_raw_; }
   bool analytical() const noexcept { return !s_.asymmetric; }
 
   // Virgin state (matches Model::reset()).
@@ -50,7 +51,8 @@ class Inverse {
   // (operator outputs whose spread breaks |d_i - d_j| <= r_j - r_i).
   void reset(const ModelState& forward_state);
 
-  // One sample: the input that makes the model output y_desired. Never
+  // One sample: the (raw) input that makes the model output y_desired. A model with a
+  // negative output_gain is decreasing; its inverse is exact all the same. Never
   // allocates, never throws; a non-finite y_desired holds the last input and
   // is counted in faults().
   double step(double y_desired) noexcept;
@@ -60,7 +62,7 @@ class Inverse {
 
   // True if the last step saturated at an input limit.
   bool saturated() const noexcept { return saturated_; }
-  double input() const noexcept { return x_; }
+  double input() const noexcept { return std::clamp(s_.units.from_model(x_), lim_raw_.lo, lim_raw_.hi); }
   std::size_t faults() const noexcept { return faults_; }
   // The equivalent forward-model state after the last step.
   ModelState forward_state() const;
@@ -73,7 +75,8 @@ class Inverse {
 
   ModelParams params_;
   Structure<double> s_;
-  Limits lim_;
+  Limits lim_;      // in model coordinates (see UnitsMap)
+  Limits lim_raw_;  // the same in raw input units
   Envelope env_;       // gamma (symmetric models)
   FastEnvelope fenv_;  // the same, for step()
   double u_lo_ = 0.0, u_hi_ = 0.0;  // envelope values at the limits

@@ -50,6 +50,29 @@ struct Limits {
   bool operator==(const Limits&) const = default;
 };
 
+// The map between the user's raw units and the model's own coordinates, shared by
+// every model kind (docs/model-files.md, "Units map"):
+//   x_m = (x - input_origin) / input_scale              model input
+//   y   = output_offset + output_gain * M(x_m)          raw output
+// where M is the kind's model below (its virgin state is "at rest at x = input_origin").
+// fit() writes it so that one fit is equivariant to offsets, scales and the output's
+// sign: a negative output_gain gives a decreasing model. Identity by default (old model
+// files have none); input_limits stay in raw input units.
+struct UnitsMap {
+  double input_origin = 0.0;
+  double input_scale = 1.0;  // > 0
+  double output_offset = 0.0;
+  double output_gain = 1.0;  // != 0
+  bool identity() const noexcept {
+    return input_origin == 0.0 && input_scale == 1.0 && output_offset == 0.0 && output_gain == 1.0;
+  }
+  double to_model(double x) const noexcept { return (x - input_origin) / input_scale; }
+  double from_model(double xm) const noexcept { return input_origin + input_scale * xm; }
+  double output(double m) const noexcept { return output_offset + output_gain * m; }
+  double model_output(double y) const noexcept { return (y - output_offset) / output_gain; }
+  bool operator==(const UnitsMap&) const = default;
+};
+
 // Classical PI, Eq. 3 plus an optional direct term:  y = q x + sum_i p_i F_{r_i}[x].
 // Free thresholds r_i >= 0 and weights p_i (any sign). Eq. 3 is q = 0.
 struct PiParams {
@@ -57,6 +80,7 @@ struct PiParams {
   std::vector<double> r;
   std::vector<double> p;
   Limits input_limits;  // saturation limits of the inverse (optional)
+  UnitsMap units;
 };
 
 // Generalized PI, Eq. 6:  y = q gamma(x) + sum_{i=1..n} p(r_i) y_i,  with
@@ -73,6 +97,7 @@ struct GpiParams {
   std::vector<double> r;
   std::vector<double> p;
   Limits input_limits;
+  UnitsMap units;
 };
 
 // Modified PI with one-sided dead zones (Kuhnen; mpi-deadzone-switching-valves.txt):
@@ -85,6 +110,7 @@ struct MpiDeadzoneParams {
   std::vector<double> z;
   std::vector<double> g;
   Limits input_limits;
+  UnitsMap units;
 };
 
 // Modified PI with asymmetric ascending/descending operators (see above):
@@ -96,6 +122,7 @@ struct MpiAsymParams {
   std::vector<double> r;
   std::vector<double> p;
   Limits input_limits;
+  UnitsMap units;
 };
 
 using ModelParams = std::variant<PiParams, GpiParams, MpiDeadzoneParams, MpiAsymParams>;
@@ -103,6 +130,8 @@ using ModelParams = std::variant<PiParams, GpiParams, MpiDeadzoneParams, MpiAsym
 // "pi", "gpi", "mpi-deadzone", "mpi-asym".
 std::string_view model_name(const ModelParams& params) noexcept;
 const Limits& input_limits(const ModelParams& params) noexcept;
+const UnitsMap& units_map(const ModelParams& params) noexcept;
+UnitsMap& units_map(ModelParams& params) noexcept;
 
 // The canonical structure every model reduces to (see the top of this file),
 // templated on the scalar so identification can differentiate through it.
@@ -122,6 +151,9 @@ struct Structure {
   T g0 = T(1);
   std::vector<T> z;
   std::vector<T> g;
+  // Raw units <-> model coordinates (applied by Model, Inverse and Rls around the
+  // structure; structure_step works in model coordinates).
+  UnitsMap units;
 };
 
 // Dead-zone output map  g0 v + sum_k g_k S_{z_k}(v).
@@ -195,7 +227,7 @@ class Model {
   void reset() noexcept;
   // Explicit initial state; throws hysteron::Error on a size mismatch or a non-finite value.
   void reset(const ModelState& state);
-  // Initial state relaxed at input x0: y_i = gamma(x0), as if x0 had been held forever.
+  // Initial state relaxed at (raw) input x0: y_i = gamma(x0), as if x0 had been held forever.
   void reset_relaxed(double x0) noexcept;
 
   // One sample. Never allocates, never throws. A non-finite input leaves the

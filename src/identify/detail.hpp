@@ -31,4 +31,12 @@ ModelParams with_weights(const ModelParams& model, const Structure<double>& s, d
 
 double span_of(std::span<const double> v);
 
+// The Levenberg-Marquardt identification of fit() on data already in model
+// coordinates (fit() normalises the record, calls this, and maps the model back to
+// raw units). With free_offset, the slope models (not the gpi of Eq. 8, whose c3 is
+// its offset; not with the Huber loss) get a free output offset by variable
+// projection, returned in the model's units map.
+FitReport fit_core(std::span<const double> x, std::span<const double> y, const FitOptions& options,
+                   bool free_offset);
+
 }  // namespace hysteron::detail

@@ -32,7 +32,22 @@ struct Data {
   InitialState initial = InitialState::virgin;
   double huber = 0.0;
   double xc = 0.0, xs = 1.0;  // gpi: centre and half-span of the training input (GpiChart)
+  // Free output offset by variable projection (slope models, least squares only): the
+  // residuals and the Jacobian columns are centred over the training range, which
+  // minimises over the offset exactly; the offset is then the mean residual.
+  bool free_offset = false;
 };
+
+// Centres the m residuals and the columns of the row-major m x p Jacobian (free offset).
+void project_offset(int m, int p, double* res, double* J) {
+  if (m <= 0) return;
+  Eigen::Map<Eigen::VectorXd> r(res, m);
+  r.array() -= r.mean();
+  if (!J) return;
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jm(J, m, p);
+  const Eigen::RowVectorXd mean = Jm.colwise().mean();
+  Jm.rowwise() -= mean;
+}
 
 // Residual of Eq. 12, optionally mapped so that its square is the Huber loss:
 // f = r for |r| <= d, f = sign(r) sqrt(2 d |r| - d^2) beyond.
@@ -303,7 +318,7 @@ struct SlopeLayout {
     Structure<double> s;
     build(th, s);
     switch (kind) {
-      case FitModel::pi: return PiParams{s.q, s.r, s.p, {}};
+      case FitModel::pi: return PiParams{s.q, s.r, s.p, {}, {}};
       case FitModel::gpi: {  // the free-weight variant (thresholds r_i, weights p_i)
         GpiParams g;
         g.envelope = Envelope::tanh(th[0], th[1], th[2], th[3]);
@@ -528,6 +543,8 @@ class SlopeCost final : public ceres::CostFunction {
   }
   bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
     slope_evaluate(d_, *layout_, params[0], residuals, jacobians ? jacobians[0] : nullptr);
+    if (d_.free_offset)
+      project_offset(num_residuals(), layout_->size(), residuals, jacobians ? jacobians[0] : nullptr);
     return true;
   }
 
@@ -1099,7 +1116,7 @@ std::vector<double> slopes(double q, const std::vector<double>& p) {
 // Lower bounds of a slope-parametrized start: cumulative slopes >= margin * scale
 // (invertibility), dead-zone slopes >= margin, envelope c0, c1 > 0.
 std::vector<double> slope_lower(const SlopeLayout& layout, const std::vector<double>& th, const Ranges& rg,
-                                double margin) {
+                                double margin, double min_slope) {
   std::vector<double> lower(static_cast<std::size_t>(layout.size()), -std::numeric_limits<double>::infinity());
   Structure<double> s0;
   layout.build(th.data(), s0);
@@ -1112,8 +1129,11 @@ std::vector<double> slope_lower(const SlopeLayout& layout, const std::vector<dou
   }
   const double scale = rg.yspan() / std::max(uspan, 1e-300);
   const auto env = static_cast<std::size_t>(layout.env);
-  for (std::size_t i = env; i < env + layout.r.size() + 1; ++i) lower[i] = margin * scale;
-  for (std::size_t i = env + layout.r.size() + 1; i < lower.size(); ++i) lower[i] = margin;
+  // Cumulative slopes (q for mpi-asym, whose p_i >= 0 keep every later slope above q)
+  // >= min_slope * scale: the inverse slope is bounded (FitOptions::min_slope).
+  for (std::size_t i = env; i < env + layout.r.size() + 1; ++i)
+    lower[i] = (layout.kind == FitModel::mpi_asym && i > env ? margin : min_slope) * scale;
+  for (std::size_t i = env + layout.r.size() + 1; i < lower.size(); ++i) lower[i] = min_slope;
   return lower;
 }
 
@@ -1228,6 +1248,7 @@ int num_parameters(const FitOptions& o) {
     case FitModel::pi: return n;
     case FitModel::mpi_deadzone: return n + 1 + o.num_dead_zones;
     case FitModel::mpi_asym: return 8 + n + 1;
+    case FitModel::automatic: return n;
   }
   return n;
 }
@@ -1290,6 +1311,12 @@ void fit_slopes(const Data& d, const std::vector<SlopeLayout>& layouts, const st
   rep.final_cost = best.final_cost;
   rep.iterations = best.iterations;
   rep.model = layout.params(best.theta.data());
+  if (d.free_offset) {  // the offset eliminated by the projection: the mean residual
+    const std::vector<double> yp = simulate_record(rep.model, d.x.subspan(0, d.train.end), d.initial);
+    double c = 0;
+    for (std::size_t j = d.train.begin; j < d.train.end; ++j) c += d.y[j] - yp[j];
+    units_map(rep.model).output_offset = c / static_cast<double>(d.train.end - d.train.begin);
+  }
   const Eigen::MatrixXd M = layout.report_map();
   const Eigen::VectorXd v = M * Eigen::Map<const Eigen::VectorXd>(best.theta.data(), static_cast<Eigen::Index>(best.theta.size()));
   const auto names = layout.names();
@@ -1314,14 +1341,15 @@ std::string_view fit_model_name(FitModel model) noexcept {
     case FitModel::pi: return "pi";
     case FitModel::mpi_deadzone: return "mpi-deadzone";
     case FitModel::mpi_asym: return "mpi-asym";
+    case FitModel::automatic: return "auto";
   }
   return "gpi";
 }
 
 FitModel fit_model_from_name(std::string_view name) {
-  for (FitModel m : {FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym})
+  for (FitModel m : {FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym, FitModel::automatic})
     if (fit_model_name(m) == name) return m;
-  throw Error(fmt::format("unknown model '{}' (expected gpi, pi, mpi-deadzone or mpi-asym)", name));
+  throw Error(fmt::format("unknown model '{}' (expected gpi, pi, mpi-deadzone, mpi-asym or auto)", name));
 }
 
 std::string_view fit_status_name(FitStatus status) noexcept {
@@ -1331,6 +1359,7 @@ std::string_view fit_status_name(FitStatus status) noexcept {
     case FitStatus::no_convergence: return "no_convergence";
     case FitStatus::failed: return "failed";
     case FitStatus::invalid_input: return "invalid_input";
+    case FitStatus::poor_fit: return "poor_fit";
   }
   return "not_run";
 }
@@ -1356,6 +1385,11 @@ bool FitOptions::is_valid(std::string* error) const {
     return fail(fmt::format("weight_regularization must be >= 0, got {}", weight_regularization));
   if (!(positivity_margin >= 0 && positivity_margin < 0.1))
     return fail(fmt::format("positivity_margin must be in [0, 0.1), got {}", positivity_margin));
+  if (!(min_slope > 0 && min_slope < 1)) return fail(fmt::format("min_slope must be in (0, 1), got {}", min_slope));
+  if (!(holdout_fraction >= 0.05 && holdout_fraction <= 0.5))
+    return fail(fmt::format("holdout_fraction must be in [0.05, 0.5], got {}", holdout_fraction));
+  if (!(poor_fit_ratio == 0 || (poor_fit_ratio >= 1 && std::isfinite(poor_fit_ratio))))
+    return fail(fmt::format("poor_fit_ratio must be 0 (off) or >= 1, got {}", poor_fit_ratio));
   return true;
 }
 
@@ -1418,7 +1452,8 @@ std::vector<double> default_thresholds(std::span<const double> x, int n) {
   return r;
 }
 
-FitReport fit(std::span<const double> x, std::span<const double> y, const FitOptions& options) {
+FitReport detail::fit_core(std::span<const double> x, std::span<const double> y, const FitOptions& options,
+                           bool free_offset) {
   const auto t0 = Clock::now();
   // The starts may run on several threads: the caller's progress callback is called
   // one call at a time (a mutex per fit).
@@ -1444,6 +1479,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     return invalid(fmt::format("fit: {} training samples are too few for {} parameters (need at least {})", m, np, 10 * np),
                    o.model, t0);
   Data d{x, y, tr, o.initial_state, o.huber_delta};
+  d.free_offset = free_offset && o.huber_delta == 0.0 && !(o.model == FitModel::gpi && !o.gpi_free_weights);
   const Ranges rg = ranges_of(d);
   d.xc = 0.5 * (rg.xlo + rg.xhi);
   d.xs = std::max(0.5 * rg.xspan(), std::numeric_limits<double>::min());
@@ -1525,7 +1561,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
       WeightFitOptions wo;
       wo.initial_state = o.initial_state;
       wo.train = tr;
-      wo.margin = margin;
+      wo.margin = o.min_slope;
+      wo.free_offset = d.free_offset;
       const auto xs = x.subspan(tr.begin, tr.end - tr.begin);
       if (o.model == FitModel::pi) {
         PiParams pi;
@@ -1605,7 +1642,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
       }
       if (layouts.empty()) layouts.assign(starts.size(), layout);
       std::vector<std::vector<double>> lowers;
-      for (std::size_t k = 0; k < starts.size(); ++k) lowers.push_back(slope_lower(layouts[k], starts[k], rg, margin));
+      for (std::size_t k = 0; k < starts.size(); ++k)
+        lowers.push_back(slope_lower(layouts[k], starts[k], rg, margin, o.min_slope));
       fit_slopes(d, layouts, starts, lowers, o, rep);
     }
   } catch (const Error& e) {

@@ -252,19 +252,44 @@ ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std
   detail::check_record(x, y, "fit_weights");
   const IndexRange r = detail::check_range(options.train, x.size(), "fit_weights");
   if (!(options.margin >= 0) || !std::isfinite(options.margin)) throw Error("fit_weights: margin must be >= 0");
+  const UnitsMap um = units_map(model);
+  if (!um.identity()) {
+    // Work in model coordinates and keep the units map (models.hpp).
+    std::vector<double> xm(x.size()), ym(y.size());
+    for (std::size_t k = 0; k < x.size(); ++k) xm[k] = um.to_model(x[k]), ym[k] = um.model_output(y[k]);
+    ModelParams core = model;
+    units_map(core) = UnitsMap{};
+    ModelParams out = fit_weights(core, xm, ym, options);
+    const double c = units_map(out).output_offset;  // the free offset, in model output units
+    units_map(out) = um;
+    units_map(out).output_offset = um.output(c);
+    return out;
+  }
   if (const auto* dz = std::get_if<MpiDeadzoneParams>(&model)) return fit_deadzone_weights(*dz, x, y, options, r);
   const Structure<double> s = canonical_structure(model);
   const Eigen::MatrixXd phi = detail::regressors(s, x, r, options.initial_state);
-  const Eigen::MatrixXd A = slope_columns(phi);
+  Eigen::MatrixXd A = slope_columns(phi);
   Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, static_cast<Eigen::Index>(r.end - r.begin));
   const double uspan = std::max(phi.col(0).maxCoeff() - phi.col(0).minCoeff(), 1e-300);
   const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
   const Eigen::VectorXd lo = Eigen::VectorXd::Constant(A.cols(), options.margin * scale);
-  const Eigen::VectorXd sol = lo + detail::nnls(A, b - A * lo);
+  // Free output offset: eliminated exactly by centring the columns and the target
+  // (the least-squares offset of any slopes is the mean residual).
+  Eigen::RowVectorXd amean = Eigen::RowVectorXd::Zero(A.cols());
+  double bmean = 0.0;
+  if (options.free_offset) {
+    amean = A.colwise().mean();
+    bmean = b.mean();
+  }
+  const Eigen::MatrixXd Ac = A.rowwise() - amean;
+  const Eigen::VectorXd bc = b.array() - bmean;
+  const Eigen::VectorXd sol = lo + detail::nnls(Ac, bc - Ac * lo);
   double q;
   std::vector<double> p;
   slopes_to_weights(sol, A, q, p);
-  return detail::with_weights(model, s, q, p);
+  ModelParams out = detail::with_weights(model, s, q, p);
+  if (options.free_offset) units_map(out).output_offset = bmean - amean.dot(sol);
+  return out;
 }
 
 // ---- Rls ------------------------------------------------------------------------
@@ -289,13 +314,18 @@ Rls::Rls(const ModelParams& model, double lambda, double p0)
 
 void Rls::reset_state(InitialState initial, double x0) noexcept {
   double v = 0.0;
-  if (initial == InitialState::relaxed) v = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x0);
+  if (initial == InitialState::relaxed) v = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), s_.units.to_model(x0));
   if (!std::isfinite(v)) v = 0.0;
   std::fill(y_.begin(), y_.end(), v);
 }
 
 double Rls::step(double x, double y) noexcept {
   if (!std::isfinite(x) || !std::isfinite(y)) return last_;
+  const double pr = step_model(s_.units.to_model(x), s_.units.model_output(y));
+  return last_ = s_.units.output(pr);
+}
+
+double Rls::step_model(double x, double y) noexcept {
   double u_a = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
   double u_d = s_.asymmetric ? envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x) : u_a;
   const std::size_t n = y_.size();
@@ -309,7 +339,7 @@ double Rls::step(double x, double y) noexcept {
   const double e = y - pred;
   Pphi_.noalias() = P_ * phi_;
   const double denom = lambda_ + phi_.dot(Pphi_);
-  if (!(denom > 0) || !std::isfinite(denom)) return last_ = pred;
+  if (!(denom > 0) || !std::isfinite(denom)) return pred;
   K_ = Pphi_ / denom;
   theta_ += K_ * e;
   P_.noalias() -= K_ * Pphi_.transpose();
@@ -317,7 +347,7 @@ double Rls::step(double x, double y) noexcept {
   const Eigen::Index m = P_.rows();
   for (Eigen::Index i = 0; i < m; ++i)
     for (Eigen::Index j = i + 1; j < m; ++j) P_(i, j) = P_(j, i) = 0.5 * (P_(i, j) + P_(j, i));
-  return last_ = pred;
+  return pred;
 }
 
 ModelParams Rls::params() const {

@@ -200,6 +200,25 @@ void put_limits(json& j, const Limits& l) {
   j["input_limits"] = a;
 }
 
+UnitsMap units_of(const Reader& r) {
+  UnitsMap u;
+  u.input_origin = r.number_or("input_origin", 0.0);
+  u.input_scale = r.number_or("input_scale", 1.0);
+  u.output_offset = r.number_or("output_offset", 0.0);
+  u.output_gain = r.number_or("output_gain", 1.0);
+  if (!(u.input_scale > 0)) r.fail("input_scale", fmt::format("expected a number > 0, got {}", u.input_scale));
+  if (u.output_gain == 0.0) r.fail("output_gain", "expected a non-zero number (0 makes the output constant)");
+  return u;
+}
+
+// The units map (models.hpp): four optional numbers, written only when not the identity.
+void put_units(json& j, const UnitsMap& u) {
+  if (u.input_origin != 0.0) j["input_origin"] = u.input_origin;
+  if (u.input_scale != 1.0) j["input_scale"] = u.input_scale;
+  if (u.output_offset != 0.0) j["output_offset"] = u.output_offset;
+  if (u.output_gain != 1.0) j["output_gain"] = u.output_gain;
+}
+
 struct ToJson {
   json operator()(const PiParams& m) const {
     json j;
@@ -207,6 +226,7 @@ struct ToJson {
     j["r"] = number_array(m.r);
     j["p"] = number_array(m.p);
     put_limits(j, m.input_limits);
+    put_units(j, m.units);
     return j;
   }
   json operator()(const GpiParams& m) const {
@@ -224,6 +244,7 @@ struct ToJson {
       j["alpha"] = m.alpha;
     }
     put_limits(j, m.input_limits);
+    put_units(j, m.units);
     return j;
   }
   json operator()(const MpiDeadzoneParams& m) const {
@@ -235,6 +256,7 @@ struct ToJson {
     j["z"] = number_array(m.z);
     j["g"] = number_array(m.g);
     put_limits(j, m.input_limits);
+    put_units(j, m.units);
     return j;
   }
   json operator()(const MpiAsymParams& m) const {
@@ -245,6 +267,7 @@ struct ToJson {
     j["ascending"] = envelope_object(m.ascending);
     j["descending"] = envelope_object(m.descending);
     put_limits(j, m.input_limits);
+    put_units(j, m.units);
     return j;
   }
 };
@@ -276,22 +299,23 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
   Reader r(j, fmt::format("{}: {}", where, model));
   ModelParams params;
   if (model == "pi") {
-    r.only({"schema", "model", "q", "r", "p", "input_limits"}, true);
+    r.only({"schema", "model", "q", "r", "p", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
     PiParams m;
     m.q = r.number_or("q", 0.0);
     m.r = r.numbers("r");
     m.p = r.numbers("p", static_cast<long>(m.r.size()));
     m.input_limits = r.limits();
+    m.units = units_of(r);
     params = std::move(m);
   } else if (model == "gpi") {
     GpiParams m;
     if (r.has("r") || r.has("p")) {
-      r.only({"schema", "model", "envelope", "c", "q", "r", "p", "input_limits"}, true);
+      r.only({"schema", "model", "envelope", "c", "q", "r", "p", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
       m.r = r.numbers("r");
       if (m.r.empty()) r.fail("r", "expected a non-empty array (or give n, rho, tau, alpha instead of r, p)");
       m.p = r.numbers("p", static_cast<long>(m.r.size()));
     } else {
-      r.only({"schema", "model", "envelope", "c", "q", "n", "rho", "tau", "alpha", "input_limits"}, true);
+      r.only({"schema", "model", "envelope", "c", "q", "n", "rho", "tau", "alpha", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
       m.n = r.integer("n");
       m.rho = r.number("rho");
       m.tau = r.number("tau");
@@ -300,9 +324,10 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
     m.envelope = r.envelope("envelope", "c", EnvelopeKind::tanh);
     m.q = r.number_or("q", 1.0);
     m.input_limits = r.limits();
+    m.units = units_of(r);
     params = std::move(m);
   } else if (model == "mpi-deadzone") {
-    r.only({"schema", "model", "q", "r", "p", "g0", "z", "g", "input_limits"}, true);
+    r.only({"schema", "model", "q", "r", "p", "g0", "z", "g", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
     MpiDeadzoneParams m;
     m.q = r.number_or("q", 1.0);
     m.r = r.numbers("r");
@@ -311,9 +336,10 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
     m.z = r.numbers("z");
     m.g = r.numbers("g", static_cast<long>(m.z.size()));
     m.input_limits = r.limits();
+    m.units = units_of(r);
     params = std::move(m);
   } else if (model == "mpi-asym") {
-    r.only({"schema", "model", "q", "r", "p", "ascending", "descending", "input_limits"}, true);
+    r.only({"schema", "model", "q", "r", "p", "ascending", "descending", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
     MpiAsymParams m;
     m.q = r.number_or("q", 1.0);
     m.r = r.numbers("r");
@@ -321,6 +347,7 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
     m.ascending = sub_envelope(r, r.at("ascending"), "ascending");
     m.descending = sub_envelope(r, r.at("descending"), "descending");
     m.input_limits = r.limits();
+    m.units = units_of(r);
     params = std::move(m);
   } else {
     top.fail("model", fmt::format("expected \"pi\", \"gpi\", \"mpi-deadzone\" or \"mpi-asym\", got \"{}\"", model));

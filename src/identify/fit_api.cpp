@@ -1,0 +1,326 @@
+// The public fit(): the record in raw units is normalised, identified by
+// detail::fit_core (Levenberg-Marquardt, fit.cpp), and the model mapped back to raw
+// units through its units map (models.hpp); then the honest checks every fit gets:
+// the reference PI, the inverse's slope and jump, and the poor-fit status.
+// FitModel::automatic fits every kind and chooses on a hold-out.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <atomic>
+#include <exception>
+#include <limits>
+#include <thread>
+
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/inverse.hpp"
+
+namespace hysteron {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Number of grid points on which the envelope slope is sampled for the minimum slope.
+constexpr int kSlopeGrid = 256;
+// The kinds FitModel::automatic tries, in the order of its table.
+constexpr FitModel kAutoKinds[] = {FitModel::pi, FitModel::gpi, FitModel::mpi_deadzone, FitModel::mpi_asym};
+
+FitReport invalid(std::string msg, FitModel kind, Clock::time_point t0) {
+  FitReport rep;
+  rep.status = FitStatus::invalid_input;
+  rep.model_kind = kind;
+  rep.message = std::move(msg);
+  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return rep;
+}
+
+bool fitted(FitStatus s) {
+  return s == FitStatus::converged || s == FitStatus::no_convergence || s == FitStatus::poor_fit;
+}
+
+// The smallest local slope d(out)/d(x_m) of a model in model coordinates over
+// [lo, hi] (before the output gain): smallest cumulative slope (PI part, Eq. 11) times
+// the smallest envelope slope times the smallest dead-zone slope.
+double min_model_slope(const Structure<double>& s, double lo, double hi) {
+  double smin = s.q, sum = s.q;
+  for (double p : s.p) smin = std::min(smin, sum += p);
+  const Envelope ea{s.asc_kind, s.asc_c}, ed{s.desc_kind, s.desc_c};
+  double dmin = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= kSlopeGrid; ++k) {
+    const double x = lo + (hi - lo) * k / kSlopeGrid;
+    const double da = ea.derivative(x);
+    // mpi-asym: q (gamma_a' + gamma_d') / 2 right after a reversal, plus p_i gamma' >= 0 later
+    dmin = std::min(dmin, s.asymmetric ? 0.5 * (da + ed.derivative(x)) : da);
+  }
+  double zmin = 1.0;
+  if (s.has_dead_zones) {
+    // slope pieces on each side of v = 0: g0 plus the g_k of the zones already passed
+    double pos = s.g0, neg = s.g0;
+    zmin = s.g0;
+    std::vector<std::pair<double, double>> zs;
+    for (std::size_t k = 0; k < s.z.size(); ++k) zs.push_back({s.z[k], s.g[k]});
+    std::sort(zs.begin(), zs.end());
+    for (const auto& [z, g] : zs)
+      if (z > 0) zmin = std::min(zmin, pos += g);
+    for (auto it = zs.rbegin(); it != zs.rend(); ++it)
+      if (it->first < 0) zmin = std::min(zmin, neg += it->second);
+  }
+  return smin * dmin * zmin;
+}
+
+InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, std::span<const double> y,
+                           IndexRange tr) {
+  InverseCheck c;
+  const UnitsMap& um = units_map(model);
+  c.increasing = um.output_gain > 0;
+  const Limits& lim = input_limits(model);
+  const Structure<double> s = canonical_structure(model);
+  const double slope = min_model_slope(s, um.to_model(lim.lo), um.to_model(lim.hi)) * std::abs(um.output_gain) / um.input_scale;
+  c.max_slope = slope > 0 ? 1.0 / slope : std::numeric_limits<double>::infinity();
+  for (std::size_t k = tr.begin + 1; k < tr.end; ++k) c.max_input_step = std::max(c.max_input_step, std::abs(x[k] - x[k - 1]));
+  try {
+    Inverse inv(model);
+    double prev = inv.step(y[0]);
+    for (std::size_t k = 1; k < tr.end; ++k) {
+      const double xk = inv.step(y[k]);
+      if (k > tr.begin) c.max_jump = std::max(c.max_jump, std::abs(xk - prev));
+      prev = xk;
+    }
+  } catch (const Error&) {
+    c.max_jump = std::numeric_limits<double>::infinity();
+    c.max_slope = std::numeric_limits<double>::infinity();
+  }
+  return c;
+}
+
+// The units-map parameters appended to the report's table (they are part of the model).
+void add_units_parameters(FitReport& rep) {
+  const UnitsMap& u = units_map(rep.model);
+  rep.parameters.push_back({"input_origin", u.input_origin, 0.0, true, false});
+  rep.parameters.push_back({"input_scale", u.input_scale, 0.0, true, false});
+  rep.parameters.push_back({"output_offset", u.output_offset, std::numeric_limits<double>::quiet_NaN(), false, false});
+  rep.parameters.push_back({"output_gain", u.output_gain, 0.0, true, false});
+}
+
+FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, Clock::time_point t0) {
+  IndexRange tr;
+  try {
+    detail::check_record(x, y, "fit");
+    tr = detail::check_range(o.train, x.size(), "fit: train");
+  } catch (const Error& e) {
+    return invalid(e.what(), o.model, t0);
+  }
+  // Normalisation: x_m = (x - x[0]) / span(x), y_m = sign (y - y[0]) / span(y) over the
+  // training range, sign that of the least-squares line of y on x. Every constant here
+  // moves with an offset, a scale or a sign flip of the data, so the fit is equivariant.
+  const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
+  const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
+  const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
+  const double sx = *xh - *xl, sy = *yh - *yl;
+  if (!(sx > 0)) return invalid("fit: the input is constant over the training range", o.model, t0);
+  if (!(sy > 0)) return invalid("fit: the output is constant over the training range", o.model, t0);
+  if (!std::isfinite(sx) || !std::isfinite(sy) || !std::isnormal(sx) || !std::isnormal(sy))
+    return invalid(fmt::format("fit: the training spans (input {}, output {}) are not representable after normalisation",
+                               sx, sy),
+                   o.model, t0);
+  double mx = 0, my = 0;
+  for (std::size_t k = 0; k < xt.size(); ++k) mx += (xt[k] - x[0]) / sx, my += (yt[k] - y[0]) / sy;
+  mx /= static_cast<double>(xt.size());
+  my /= static_cast<double>(xt.size());
+  double cov = 0;
+  for (std::size_t k = 0; k < xt.size(); ++k) cov += ((xt[k] - x[0]) / sx - mx) * ((yt[k] - y[0]) / sy - my);
+  const double sign = cov < 0 ? -1.0 : 1.0;
+  std::vector<double> xn(x.size()), yn(y.size());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    xn[k] = (x[k] - x[0]) / sx;
+    yn[k] = sign * (y[k] - y[0]) / sy;
+  }
+  FitOptions on = o;
+  on.huber_delta = o.huber_delta / sy;
+  FitReport rep = detail::fit_core(xn, yn, on, true);
+  if (o.model == FitModel::mpi_deadzone && fitted(rep.status)) {
+    // The classical PI is the mpi-deadzone without dead zones: if the dead zones do not
+    // improve on it (a record without the saturation they describe), keep the PI. The
+    // dead-zone LM starts from a threshold scale chosen for extrapolation to minor loops
+    // and is ridge-regularised, so it can end above the PI on the training range.
+    FitOptions op = on;
+    op.model = FitModel::pi;
+    const FitReport rp = detail::fit_core(xn, yn, op, true);
+    if (fitted(rp.status)) {
+      const auto& pp = std::get<PiParams>(rp.model);
+      MpiDeadzoneParams dz;
+      dz.q = pp.q;
+      dz.r = pp.r;
+      dz.p = pp.p;
+      dz.units = pp.units;
+      dz.input_limits = pp.input_limits;
+      const double e_dz = evaluate(rep.model, xn, yn, tr, o.initial_state).rms;
+      const double e_pi = evaluate(dz, xn, yn, tr, o.initial_state).rms;
+      if (e_pi < e_dz) {
+        rep.status = rp.status;
+        rep.message = rp.message;
+        rep.parameters = rp.parameters;
+        rep.covariance_note = rp.covariance_note;
+        rep.iterations = rp.iterations;
+        rep.total_iterations += rp.total_iterations;
+        rep.initial_cost = rp.initial_cost;
+        rep.final_cost = rp.final_cost;
+        rep.model = dz;
+        rep.warnings.push_back(fmt::format(
+            "the dead zones did not improve on the plain PI on the training range (RMS {:.4g} vs {:.4g} in normalised "
+            "units): the model has none",
+            e_dz, e_pi));
+      }
+    }
+  }
+  rep.time_s = 0;
+  if (!fitted(rep.status)) {
+    rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    return rep;
+  }
+  // Back to raw units: y = y[0] + sign sy (c + M(x_m)), x_m = (x - x[0]) / sx.
+  UnitsMap& um = units_map(rep.model);
+  const double c = um.output_offset;
+  um = UnitsMap{x[0], sx, y[0] + sign * sy * c, sign * sy};
+  std::visit([&](auto& m) { m.input_limits = Limits{*xl, *xh}; }, rep.model);
+  rep.initial_cost *= sy * sy;
+  rep.final_cost *= sy * sy;
+  add_units_parameters(rep);
+  rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
+  if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
+
+  // The reference PI (a plain NNLS script's fit) on the same range.
+  try {
+    rep.reference = evaluate(reference_pi(x, y, tr, 10), x, y, tr, InitialState::virgin);
+  } catch (const Error& e) {
+    rep.warnings.push_back(fmt::format("reference PI not computed: {}", e.what()));
+  }
+  rep.inverse = check_inverse(rep.model, x, y, tr);
+  // The minimum-slope bound (slope kinds; the mean slope is 1 in model coordinates).
+  if (!(o.model == FitModel::gpi && !o.gpi_free_weights)) {
+    const Structure<double> s = canonical_structure(rep.model);
+    const Envelope e{s.asc_kind, s.asc_c};
+    const double uspan = std::abs(e.value((*xh - x[0]) / sx) - e.value((*xl - x[0]) / sx));
+    double smin = s.q, sum = s.q;
+    if (!s.asymmetric)
+      for (double p : s.p) smin = std::min(smin, sum += p);
+    if (uspan > 0 && smin <= o.min_slope / uspan * (1 + 1e-6))
+      rep.warnings.push_back(fmt::format(
+          "the minimum-slope bound is active (min_slope = {}): the fit wanted a flatter branch after a reversal; the "
+          "inverse slope is capped at {:.4g} input units per output unit",
+          o.min_slope, rep.inverse.max_slope));
+  }
+  for (const auto& p : rep.parameters)
+    if (p.at_bound) rep.warnings.push_back(fmt::format("parameter {} ended on its lower bound", p.name));
+  if (rep.inverse.max_input_step > 0 && rep.inverse.max_jump > 10 * rep.inverse.max_input_step)
+    rep.warnings.push_back(fmt::format("the inverse driven by the measured output jumps by up to {:.4g} per sample "
+                                       "({:.3g}x the largest step of the measured input)",
+                                       rep.inverse.max_jump, rep.inverse.max_jump / rep.inverse.max_input_step));
+
+  // Honest status: useless or worse than the reference is never plain `converged`.
+  std::string poor;
+  if (!(rep.train.r2 >= 0))
+    poor = fmt::format("training R^2 = {:.4g} < 0: worse than a constant", rep.train.r2);
+  else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms)
+    poor = fmt::format("training RMS {:.6g} is {:.3g}x that of the reference PI ({:.6g}; limit {:.3g}x)", rep.train.rms,
+                       rep.train.rms / rep.reference.rms, rep.reference.rms, o.poor_fit_ratio);
+  if (!poor.empty()) {
+    rep.message = fmt::format("poor fit: {} (solver: {}: {})", poor, fit_status_name(rep.status), rep.message);
+    rep.status = FitStatus::poor_fit;
+  }
+  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return rep;
+}
+
+// Runs fn(k) for k = 0..count-1 on up to `threads` threads (0: hardware threads).
+template <class Fn>
+void parallel_for(std::size_t count, int threads, Fn&& fn) {
+  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
+  t = std::min(t, count);
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t k; (k = next++) < count;) fn(k);
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t i = 1; i < t; ++i) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::exception&) {
+      break;
+    }
+  }
+  work();
+  for (auto& th : pool) th.join();
+}
+
+FitReport fit_auto(std::span<const double> x, std::span<const double> y, const FitOptions& o, Clock::time_point t0) {
+  IndexRange tr;
+  try {
+    detail::check_record(x, y, "fit");
+    tr = detail::check_range(o.train, x.size(), "fit: train");
+  } catch (const Error& e) {
+    return invalid(e.what(), o.model, t0);
+  }
+  const std::size_t m = tr.end - tr.begin;
+  const std::size_t hb = tr.begin + static_cast<std::size_t>(std::llround((1.0 - o.holdout_fraction) * static_cast<double>(m)));
+  if (hb <= tr.begin || hb >= tr.end)
+    return invalid("fit: auto: the training range is too short to split off a hold-out", o.model, t0);
+  const IndexRange first{tr.begin, hb}, hold{hb, tr.end};
+  constexpr std::size_t nk = std::size(kAutoKinds);
+  std::vector<FitCandidate> cands(nk);
+  parallel_for(nk, o.num_threads, [&](std::size_t k) {
+    FitOptions oc = o;
+    oc.model = kAutoKinds[k];
+    oc.train = first;
+    oc.num_threads = 1;
+    oc.progress = nullptr;
+    FitCandidate& c = cands[k];
+    c.kind = oc.model;
+    const FitReport r = fit_one(x, y, oc, Clock::now());
+    c.status = r.status;
+    c.message = r.message;
+    c.time_s = r.time_s;
+    c.train = r.train;
+    if (fitted(r.status)) {
+      c.model = r.model;
+      c.holdout = evaluate(r.model, x, y, hold, o.initial_state);
+    }
+  });
+  std::size_t best = nk;
+  for (std::size_t k = 0; k < nk; ++k)
+    if (fitted(cands[k].status) && std::isfinite(cands[k].holdout.rms) &&
+        (best == nk || cands[k].holdout.rms < cands[best].holdout.rms))
+      best = k;
+  if (best == nk) {
+    FitReport rep = invalid("fit: auto: no model kind could be fitted", o.model, t0);
+    rep.status = FitStatus::failed;
+    for (const auto& c : cands) rep.message += fmt::format("; {}: {}", fit_model_name(c.kind), c.message);
+    rep.candidates = std::move(cands);
+    return rep;
+  }
+  cands[best].chosen = true;
+  FitOptions of = o;
+  of.model = cands[best].kind;
+  FitReport rep = fit_one(x, y, of, t0);
+  rep.candidates = std::move(cands);
+  rep.message = fmt::format("auto: {} chosen (hold-out RMS {:.6g}, the last {:.0f}% of the training range); {}",
+                            fit_model_name(of.model), rep.candidates[best].holdout.rms, 100 * o.holdout_fraction,
+                            rep.message);
+  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return rep;
+}
+
+}  // namespace
+
+FitReport fit(std::span<const double> x, std::span<const double> y, const FitOptions& options) {
+  const auto t0 = Clock::now();
+  std::string why;
+  if (!options.is_valid(&why)) return invalid("invalid options: " + why, options.model, t0);
+  if (options.model == FitModel::automatic) return fit_auto(x, y, options, t0);
+  return fit_one(x, y, options, t0);
+}
+
+}  // namespace hysteron

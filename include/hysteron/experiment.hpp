@@ -19,6 +19,7 @@
 //                inverse feedforward, inner pressure loop driving PWM). The
 //                paper's text is truncated before its results: no published figures.
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,24 @@ struct TrackingRun {
   std::size_t saturated = 0;  // control samples with the command at a pressure limit
 };
 
+// A paper's published tracking errors for one reference (NaN where it gives none).
+struct PublishedErrors {
+  std::string reference;  // "" when the experiment has a single reference
+  double max_error_mm = std::numeric_limits<double>::quiet_NaN();
+  double mae_mm = std::numeric_limits<double>::quiet_NaN();
+  double rms_error_mm = std::numeric_limits<double>::quiet_NaN();
+  bool operator==(const PublishedErrors&) const = default;
+};
+
+// The paper's figures; errors empty where the paper gives none.
+struct PublishedFigures {
+  std::string source;  // e.g. "gpi-lm-feedforward-pid.txt, Table 5"
+  std::vector<PublishedErrors> errors;
+  bool empty() const noexcept { return errors.empty(); }
+  // The figures for `reference` (or the single reference's), nullptr if none.
+  const PublishedErrors* find(const std::string& reference) const noexcept;
+};
+
 struct ExperimentResult {
   std::string name;
   std::string title;
@@ -67,11 +86,12 @@ struct ExperimentResult {
   ModelParams baseline_model;     // the straight line of the baseline
   double lead_s = 0.0;            // preview of the compensated variants (identified)
   std::vector<TrackingRun> runs;
-  nlohmann::json published;       // the paper's figures (null where it gives none)
+  PublishedFigures published;     // the paper's figures (empty where it gives none)
   double wall_time_s = 0.0;
 
   // Summary as in the CLI's --json: compensated/faithful/baseline objects with
   // max_error_mm, mae_mm, rms_error_mm (keyed by reference where there are several).
+  // The same as io::to_json(result) (hysteron/io/results.hpp, where it is defined).
   nlohmann::json to_json() const;
   // Writes identification.csv, tracking_<variant>_<reference>.csv, the models and
   // result.json into dir (created if needed), each file atomically.

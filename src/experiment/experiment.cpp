@@ -12,6 +12,7 @@
 #include "hysteron/compensation.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/signals.hpp"
 
@@ -203,7 +204,7 @@ struct Setup {
   // away from the vented muscle, so its first period is a warm-up; the papers'
   // 40/35/30 mm references start at 0 and are scored whole.
   std::vector<std::tuple<std::string, std::vector<double>, std::size_t>> references;
-  nlohmann::json published;
+  PublishedFigures published;
 };
 
 Setup setup_for(const ExperimentOptions& o) {
@@ -219,10 +220,7 @@ Setup setup_for(const ExperimentOptions& o) {
     s.train_end = major;
     // Eq. 18 / Table 4, one warm-up period then three scored periods.
     s.references.push_back({"sine", gpi_sinusoid_reference(tc, 20.0), major});
-    s.published = {{"source", "gpi-lm-feedforward-pid.txt, Table 5"},
-                   {"max_error_mm", 2.659},
-                   {"mae_mm", 0.7358},
-                   {"rms_error_mm", 0.8701}};
+    s.published = {"gpi-lm-feedforward-pid.txt, Table 5", {{"", 2.659, 0.7358, 0.8701}}};
   } else if (o.name == "mpi-openloop") {
     s.title = "Asymmetric MPI + open-loop inverse + proportional pressure loop (mpi-asymmetric-openloop.txt, Fig. 6)";
     s.model = FitModel::mpi_asym;
@@ -232,9 +230,7 @@ Setup setup_for(const ExperimentOptions& o) {
     s.train_end = major;
     s.references.push_back({"triangle", mpi_triangle_contraction(tc, 1), 0});
     s.references.push_back({"sine", mpi_sine_contraction(tc, 1), 0});
-    s.published = {{"source", "mpi-asymmetric-openloop.txt, Results"},
-                   {"triangle", {{"max_error_mm", 1.29}}},
-                   {"sine", {{"max_error_mm", 1.38}}}};
+    s.published = {"mpi-asymmetric-openloop.txt, Results", {{"triangle", 1.29}, {"sine", 1.38}}};
   } else if (o.name == "mpi-pwm") {
     s.title = "Dead-zone MPI + cascade control with fast switching valves (mpi-deadzone-switching-valves.txt)";
     s.model = FitModel::mpi_deadzone;
@@ -244,7 +240,7 @@ Setup setup_for(const ExperimentOptions& o) {
     s.train_end = major;
     s.references.push_back({"sine", gpi_sinusoid_reference(tc, 20.0), major});
     s.references.push_back({"triangle", mpi_triangle_contraction(tc, 1), 0});
-    s.published = nullptr;  // the text we have ends before the paper's results
+    s.published = {};  // the text we have ends before the paper's results
   } else {
     throw Error(fmt::format("experiment: unknown experiment \"{}\"", o.name));  // validate() lists the names
   }
@@ -412,54 +408,6 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   return res;
 }
 
-namespace {
-
-nlohmann::json errors_json(const TrackingErrors& e) {
-  return {{"max_error_mm", e.max_error_mm}, {"mae_mm", e.mae_mm}, {"rms_error_mm", e.rms_error_mm}};
-}
-
-nlohmann::json metrics_json(const FitMetrics& m) {
-  return {{"rms", m.rms}, {"max", m.max}, {"mae", m.mae}, {"rms_percent_span", m.rms_percent_span}, {"r2", m.r2},
-          {"n", m.n}};
-}
-
-}  // namespace
-
-nlohmann::json ExperimentResult::to_json() const {
-  nlohmann::json j;
-  j["experiment"] = name;
-  j["title"] = title;
-  j["seed"] = seed;
-  std::vector<std::string> refs;
-  for (const auto& r : runs)
-    if (std::find(refs.begin(), refs.end(), r.reference) == refs.end()) refs.push_back(r.reference);
-  for (const char* variant : {"compensated", "faithful", "baseline"}) {
-    nlohmann::json v = nlohmann::json::object();
-    for (const auto& r : runs) {
-      if (r.variant != variant) continue;
-      nlohmann::json e = errors_json(r.errors);
-      e["description"] = r.description;
-      e["saturated_samples"] = r.saturated;
-      if (refs.size() == 1) v = e; else v[r.reference] = e;
-    }
-    j[variant] = v;
-  }
-  j["published"] = published;
-  j["identification"] = {{"model", std::string(fit_model_name(fit.model_kind))},
-                         {"train_end", id_train_end},
-                         {"status", std::string(fit_status_name(fit.status))},
-                         {"train", metrics_json(fit.train)},
-                         {"validate", metrics_json(validation)},
-                         {"fit_time_s", fit.time_s},
-                         {"parameters", io::model_to_json(fit.model)}};
-  j["best_model"] = {{"model", std::string(fit_model_name(best_fit.model_kind))},
-                     {"validate_second_run", metrics_json(best_validation)},
-                     {"parameters", io::model_to_json(best_fit.model)}};
-  j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
-  j["wall_time_s"] = wall_time_s;
-  return j;
-}
-
 void ExperimentResult::write(const std::string& dir) const {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -476,7 +424,7 @@ void ExperimentResult::write(const std::string& dir) const {
                        r.duty});
   io::write_model_file((d / "model.json").string(), fit.model);
   io::write_model_file((d / "best_model.json").string(), best_fit.model);
-  io::write_text_file((d / "result.json").string(), to_json().dump(2) + "\n");
+  io::write_text_file((d / "result.json").string(), io::to_json(*this).dump(2) + "\n");
 }
 
 std::string ExperimentResult::table() const {
@@ -489,15 +437,13 @@ std::string ExperimentResult::table() const {
   for (const auto& r : runs)
     s += fmt::format("  {:<10} {:<12} {:>9.3f} {:>9.4f} {:>9.4f}\n", r.reference, r.variant, r.errors.max_error_mm,
                      r.errors.mae_mm, r.errors.rms_error_mm);
-  if (!published.is_null()) {
-    if (published.contains("max_error_mm"))
-      s += fmt::format("  {:<10} {:<12} {:>9.3f} {:>9.4f} {:>9.4f}\n", "paper", "published",
-                       published["max_error_mm"].get<double>(), published["mae_mm"].get<double>(),
-                       published["rms_error_mm"].get<double>());
-    for (const char* ref : {"triangle", "sine"})
-      if (published.contains(ref))
-        s += fmt::format("  {:<10} {:<12} {:>9.3f} {:>9} {:>9}\n", ref, "published",
-                         published[ref]["max_error_mm"].get<double>(), "-", "-");
+  if (!published.empty()) {
+    auto cell = [](double v, int digits) {
+      return std::isfinite(v) ? fmt::format("{:>9.{}f}", v, digits) : fmt::format("{:>9}", "-");
+    };
+    for (const auto& e : published.errors)
+      s += fmt::format("  {:<10} {:<12} {} {} {}\n", e.reference.empty() ? "paper" : e.reference, "published",
+                       cell(e.max_error_mm, 3), cell(e.mae_mm, 4), cell(e.rms_error_mm, 4));
   } else {
     s += "  (the paper's text ends before its results: no published figures)\n";
   }

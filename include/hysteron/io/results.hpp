@@ -1,0 +1,143 @@
+#pragma once
+// One serialization layer for every result type: to_json / from_json pairs, side by
+// side, for the fit metrics, parameters, inverse check, candidates, fit reports, the
+// documents `hysteron fit --report/--json` and `hysteron evaluate` write, and the
+// experiment result. The CLI, the HTML report and the Python module use only these.
+//
+// Conventions (every writer here):
+//  - keys are snake_case; enums are written by name (fit_status_name, fit_model_name,
+//    "virgin" / "relaxed");
+//  - a non-finite number is written as null; null reads back as NaN, except where a
+//    field documents otherwise (InverseCheck::max_slope: null = +inf, "not invertible");
+//  - a model is the model-file object of io::model_to_json (null when there is none:
+//    status not_run, invalid_input or failed);
+//  - an index range is [begin, end] with end null for "to the end".
+// Reading is strict about what it needs (missing keys and wrong types are a
+// hysteron::Error naming `where` and the key) and tolerant of keys it does not know.
+//
+// from_json(j, where) -> T is spelled io::from_json<T>(j, where).
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hysteron/experiment.hpp"
+#include "hysteron/identify.hpp"
+
+namespace hysteron::io {
+
+// Schema of the fit and evaluation documents ("schema" key); the reader refuses others.
+inline constexpr int results_schema_version = 1;
+inline constexpr std::string_view fit_document_format = "hysteron-fit-report";
+inline constexpr std::string_view evaluation_document_format = "hysteron-evaluation";
+
+// Names of the enums (the inverse of fit_status_name / fit_model_name). Throw hysteron::Error.
+FitStatus fit_status_from_name(std::string_view name, std::string_view where);
+std::string_view initial_state_name(InitialState s) noexcept;
+InitialState initial_state_from_name(std::string_view name, std::string_view where);
+
+// ---- what a fit or an evaluation was run on -------------------------------------
+
+// Where the data came from and what they mean (files as given on the command line).
+struct DataDescription {
+  std::string input_file, input_column;
+  std::string output_file, output_column;  // output_file empty: the input file
+  std::string time_column;                 // empty: no time axis
+  std::string input_label = "Input", input_unit;
+  std::string output_label = "Output", output_unit;
+  InitialState initial_state = InitialState::virgin;
+  IndexRange train{};  // fit: the training range; evaluate: the evaluated range
+};
+
+// A model checked on (a range of) a record.
+struct Evaluation {
+  std::string file;      // the record ("" = the fit's own record)
+  IndexRange range{};    // samples scored (resolved: end is a sample index)
+  FitMetrics metrics;
+};
+
+// The document of `hysteron fit --report FILE.json` and `--json`.
+struct FitDocument {
+  FitReport fit;
+  DataDescription data;
+  // Validation sets: a range of the fit's record, or each --validate-data file.
+  std::vector<Evaluation> validation;
+  // FitModel::automatic: candidate_validation[i][k] = metrics of fit.candidates[i]'s
+  // model on validation[k] (empty if not computed).
+  std::vector<std::vector<FitMetrics>> candidate_validation;
+  bool model_written = false;
+  std::string model_file;
+};
+
+// The document of `hysteron evaluate --json / --report FILE.json`.
+struct EvaluationDocument {
+  std::string model_file;
+  ModelParams model;
+  DataDescription data;  // data.train = the evaluated range
+  Evaluation result;
+};
+
+// ---- to_json / from_json pairs ----------------------------------------------------
+
+nlohmann::json to_json(const FitMetrics& m);
+void from_json(const nlohmann::json& j, FitMetrics& m, std::string_view where);
+
+nlohmann::json to_json(const FitParameter& p);
+void from_json(const nlohmann::json& j, FitParameter& p, std::string_view where);
+
+nlohmann::json to_json(const InverseCheck& c);
+void from_json(const nlohmann::json& j, InverseCheck& c, std::string_view where);
+
+nlohmann::json to_json(const FitCandidate& c);
+void from_json(const nlohmann::json& j, FitCandidate& c, std::string_view where);
+
+// Every field of FitReport (the model through model_to_json / model_from_json).
+nlohmann::json to_json(const FitReport& r);
+void from_json(const nlohmann::json& j, FitReport& r, std::string_view where);
+
+nlohmann::json to_json(const IndexRange& r);
+void from_json(const nlohmann::json& j, IndexRange& r, std::string_view where);
+
+nlohmann::json to_json(const DataDescription& d);
+void from_json(const nlohmann::json& j, DataDescription& d, std::string_view where);
+
+nlohmann::json to_json(const Evaluation& e);
+void from_json(const nlohmann::json& j, Evaluation& e, std::string_view where);
+
+// to_json(fit) plus "format", "schema", "data", "validate" (the first validation set's
+// metrics or null), "validate_files" (every set, with "file" and "range"),
+// "model_written", "model_file"; each candidate gets "validate": [metrics per set].
+// from_json also reads the older CLI report (no "format", "starts" for "num_starts").
+nlohmann::json to_json(const FitDocument& d);
+void from_json(const nlohmann::json& j, FitDocument& d, std::string_view where);
+
+nlohmann::json to_json(const EvaluationDocument& d);
+void from_json(const nlohmann::json& j, EvaluationDocument& d, std::string_view where);
+
+nlohmann::json to_json(const TrackingErrors& e);
+void from_json(const nlohmann::json& j, TrackingErrors& e, std::string_view where);
+
+// null if the paper gives no figures; {"source", "max_error_mm", ...} for one reference;
+// {"source", "<reference>": {"max_error_mm", ...}, ...} for several.
+nlohmann::json to_json(const PublishedFigures& p);
+void from_json(const nlohmann::json& j, PublishedFigures& p, std::string_view where);
+
+// The experiment summary (result.json, `experiment --json`): every field but the time
+// series (identification.csv, tracking_*.csv) and the fits' parameter tables; the
+// fitted models are included. from_json fills the runs without their series.
+nlohmann::json to_json(const ExperimentResult& r);
+void from_json(const nlohmann::json& j, ExperimentResult& r, std::string_view where);
+
+template <class T>
+T from_json(const nlohmann::json& j, std::string_view where) {
+  T out{};
+  from_json(j, out, where);
+  return out;
+}
+
+// Parses a JSON text (e.g. a file's contents); errors name `where` and the line/column.
+nlohmann::json parse_json(std::string_view text, std::string_view where);
+
+}  // namespace hysteron::io

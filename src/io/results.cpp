@@ -1,0 +1,587 @@
+// The to_json / from_json pairs of every result type (see hysteron/io/results.hpp).
+#include "hysteron/io/results.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"
+
+namespace hysteron::io {
+
+namespace {
+
+using nlohmann::json;
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+std::string key_where(std::string_view where, std::string_view key) { return fmt::format("{}.{}", where, key); }
+
+const json& need(const json& j, std::string_view key, std::string_view where) {
+  if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
+  const auto it = j.find(key);
+  if (it == j.end()) throw Error(fmt::format("{}: missing key \"{}\"", where, key));
+  return *it;
+}
+
+[[noreturn]] void wrong_type(const json& v, std::string_view key, std::string_view where, std::string_view expected) {
+  throw Error(fmt::format("{}: key \"{}\": expected {}, got {}", where, key, expected, v.type_name()));
+}
+
+double as_double(const json& v, std::string_view key, std::string_view where, double null_value = nan) {
+  if (v.is_null()) return null_value;
+  if (!v.is_number()) wrong_type(v, key, where, "a number or null");
+  return v.get<double>();
+}
+double get_double(const json& j, std::string_view key, std::string_view where, double null_value = nan) {
+  return as_double(need(j, key, where), key, where, null_value);
+}
+double opt_double(const json& j, std::string_view key, std::string_view where, double def) {
+  return j.contains(key) ? get_double(j, key, where) : def;
+}
+std::size_t as_size(const json& v, std::string_view key, std::string_view where) {
+  if (!v.is_number_unsigned() && !(v.is_number_integer() && v.get<long long>() >= 0))
+    wrong_type(v, key, where, "a non-negative integer");
+  return v.get<std::size_t>();
+}
+std::size_t get_size(const json& j, std::string_view key, std::string_view where) {
+  return as_size(need(j, key, where), key, where);
+}
+int get_int(const json& j, std::string_view key, std::string_view where) {
+  const json& v = need(j, key, where);
+  if (!v.is_number_integer()) wrong_type(v, key, where, "an integer");
+  return v.get<int>();
+}
+int opt_int(const json& j, std::string_view key, std::string_view where, int def) {
+  return j.contains(key) ? get_int(j, key, where) : def;
+}
+bool get_bool(const json& j, std::string_view key, std::string_view where) {
+  const json& v = need(j, key, where);
+  if (!v.is_boolean()) wrong_type(v, key, where, "true or false");
+  return v.get<bool>();
+}
+bool opt_bool(const json& j, std::string_view key, std::string_view where, bool def) {
+  return j.contains(key) ? get_bool(j, key, where) : def;
+}
+std::string get_string(const json& j, std::string_view key, std::string_view where) {
+  const json& v = need(j, key, where);
+  if (!v.is_string()) wrong_type(v, key, where, "a string");
+  return v.get<std::string>();
+}
+std::string opt_string(const json& j, std::string_view key, std::string_view where, std::string def = {}) {
+  return j.contains(key) ? get_string(j, key, where) : def;
+}
+const json& get_array(const json& j, std::string_view key, std::string_view where) {
+  const json& v = need(j, key, where);
+  if (!v.is_array()) wrong_type(v, key, where, "an array");
+  return v;
+}
+
+// A model (null when there is none).
+bool has_model(FitStatus s) {
+  return s != FitStatus::not_run && s != FitStatus::invalid_input && s != FitStatus::failed;
+}
+json model_or_null(FitStatus s, const ModelParams& m) { return has_model(s) ? model_to_json(m) : json(nullptr); }
+// A model that may not have been set (e.g. an experiment's baseline): null unless valid.
+json valid_model_or_null(const ModelParams& m) {
+  try {
+    (void)Model(m);
+  } catch (const Error&) {
+    return nullptr;
+  }
+  return model_to_json(m);
+}
+void read_model(const json& j, std::string_view key, std::string_view where, ModelParams& m) {
+  const json& v = need(j, key, where);
+  if (v.is_null()) return;
+  m = model_from_json(v, key_where(where, key));
+}
+
+FitModel model_kind_from(const json& j, std::string_view key, std::string_view where) {
+  const std::string name = get_string(j, key, where);
+  try {
+    return fit_model_from_name(name);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: key \"{}\": {}", where, key, e.what()));
+  }
+}
+
+}  // namespace
+
+// ---- names ---------------------------------------------------------------------
+
+FitStatus fit_status_from_name(std::string_view name, std::string_view where) {
+  for (FitStatus s : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
+                      FitStatus::poor_fit, FitStatus::invalid_input})
+    if (fit_status_name(s) == name) return s;
+  throw Error(fmt::format("{}: unknown fit status \"{}\"", where, name));
+}
+
+std::string_view initial_state_name(InitialState s) noexcept {
+  return s == InitialState::relaxed ? "relaxed" : "virgin";
+}
+
+InitialState initial_state_from_name(std::string_view name, std::string_view where) {
+  if (name == "virgin") return InitialState::virgin;
+  if (name == "relaxed") return InitialState::relaxed;
+  throw Error(fmt::format("{}: unknown initial state \"{}\" (expected virgin or relaxed)", where, name));
+}
+
+json parse_json(std::string_view text, std::string_view where) {
+  try {
+    return json::parse(text);
+  } catch (const json::exception& e) {
+    std::string msg = e.what();
+    const auto pos = msg.find("] ");
+    if (pos != std::string::npos) msg = msg.substr(pos + 2);
+    throw Error(fmt::format("{}: malformed JSON: {}", where, msg));
+  }
+}
+
+// ---- FitMetrics ------------------------------------------------------------------
+
+json to_json(const FitMetrics& m) {
+  return {{"rms", number(m.rms)}, {"max", number(m.max)}, {"mae", number(m.mae)},
+          {"rms_percent_span", number(m.rms_percent_span)}, {"r2", number(m.r2)}, {"n", m.n}};
+}
+
+void from_json(const json& j, FitMetrics& m, std::string_view where) {
+  m.rms = get_double(j, "rms", where);
+  m.max = get_double(j, "max", where);
+  m.mae = get_double(j, "mae", where);
+  m.rms_percent_span = get_double(j, "rms_percent_span", where);
+  m.r2 = get_double(j, "r2", where);
+  m.n = get_size(j, "n", where);
+}
+
+// ---- FitParameter ----------------------------------------------------------------
+
+json to_json(const FitParameter& p) {
+  return {{"name", p.name}, {"value", number(p.value)}, {"std_error", number(p.std_error)}, {"held", p.held},
+          {"at_bound", p.at_bound}};
+}
+
+void from_json(const json& j, FitParameter& p, std::string_view where) {
+  p.name = get_string(j, "name", where);
+  p.value = get_double(j, "value", where);
+  p.std_error = j.contains("std_error") ? get_double(j, "std_error", where) : nan;
+  p.held = opt_bool(j, "held", where, false);
+  p.at_bound = opt_bool(j, "at_bound", where, false);
+}
+
+// ---- InverseCheck ----------------------------------------------------------------
+
+json to_json(const InverseCheck& c) {
+  return {{"max_slope", number(c.max_slope)}, {"max_jump", number(c.max_jump)},
+          {"max_input_step", number(c.max_input_step)}, {"increasing", c.increasing}};
+}
+
+void from_json(const json& j, InverseCheck& c, std::string_view where) {
+  c.max_slope = get_double(j, "max_slope", where, std::numeric_limits<double>::infinity());
+  c.max_jump = get_double(j, "max_jump", where);
+  c.max_input_step = get_double(j, "max_input_step", where);
+  c.increasing = get_bool(j, "increasing", where);
+}
+
+// ---- FitCandidate ----------------------------------------------------------------
+
+json to_json(const FitCandidate& c) {
+  return {{"kind", std::string(fit_model_name(c.kind))},
+          {"status", std::string(fit_status_name(c.status))},
+          {"message", c.message},
+          {"train", to_json(c.train)},
+          {"holdout", to_json(c.holdout)},
+          {"time_s", number(c.time_s)},
+          {"chosen", c.chosen},
+          {"model", model_or_null(c.status, c.model)}};
+}
+
+void from_json(const json& j, FitCandidate& c, std::string_view where) {
+  c.kind = model_kind_from(j, "kind", where);
+  c.status = fit_status_from_name(get_string(j, "status", where), key_where(where, "status"));
+  c.message = opt_string(j, "message", where);
+  from_json(need(j, "train", where), c.train, key_where(where, "train"));
+  from_json(need(j, "holdout", where), c.holdout, key_where(where, "holdout"));
+  c.time_s = get_double(j, "time_s", where);
+  c.chosen = get_bool(j, "chosen", where);
+  c.model = ModelParams{};
+  read_model(j, "model", where, c.model);
+}
+
+// ---- FitReport -------------------------------------------------------------------
+
+json to_json(const FitReport& r) {
+  json params = json::array();
+  for (const auto& p : r.parameters) params.push_back(to_json(p));
+  json candidates = json::array();
+  for (const auto& c : r.candidates) candidates.push_back(to_json(c));
+  return {{"status", std::string(fit_status_name(r.status))},
+          {"message", r.message},
+          {"model_kind", std::string(fit_model_name(r.model_kind))},
+          {"initial_cost", number(r.initial_cost)},
+          {"final_cost", number(r.final_cost)},
+          {"iterations", r.iterations},
+          {"total_iterations", r.total_iterations},
+          {"num_starts", r.num_starts},
+          {"time_s", number(r.time_s)},
+          {"model", model_or_null(r.status, r.model)},
+          {"parameters", params},
+          {"covariance_note", r.covariance_note},
+          {"train", to_json(r.train)},
+          {"reference", to_json(r.reference)},
+          {"inverse", to_json(r.inverse)},
+          {"warnings", r.warnings},
+          {"candidates", candidates}};
+}
+
+void from_json(const json& j, FitReport& r, std::string_view where) {
+  r = FitReport{};
+  r.status = fit_status_from_name(get_string(j, "status", where), key_where(where, "status"));
+  r.message = opt_string(j, "message", where);
+  r.model_kind = model_kind_from(j, "model_kind", where);
+  r.initial_cost = opt_double(j, "initial_cost", where, 0.0);
+  r.final_cost = opt_double(j, "final_cost", where, 0.0);
+  r.iterations = opt_int(j, "iterations", where, 0);
+  r.total_iterations = opt_int(j, "total_iterations", where, 0);
+  r.num_starts = j.contains("num_starts") ? get_int(j, "num_starts", where) : opt_int(j, "starts", where, 0);
+  r.time_s = opt_double(j, "time_s", where, 0.0);
+  read_model(j, "model", where, r.model);
+  if (j.contains("parameters")) {
+    const json& ps = get_array(j, "parameters", where);
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      r.parameters.push_back(from_json<FitParameter>(ps[i], fmt::format("{}.parameters[{}]", where, i)));
+  }
+  r.covariance_note = opt_string(j, "covariance_note", where);
+  if (j.contains("train")) from_json(j["train"], r.train, key_where(where, "train"));
+  if (j.contains("reference")) from_json(j["reference"], r.reference, key_where(where, "reference"));
+  if (j.contains("inverse")) from_json(j["inverse"], r.inverse, key_where(where, "inverse"));
+  if (j.contains("warnings")) {
+    const json& w = get_array(j, "warnings", where);
+    for (std::size_t i = 0; i < w.size(); ++i) {
+      if (!w[i].is_string()) wrong_type(w[i], fmt::format("warnings[{}]", i), where, "a string");
+      r.warnings.push_back(w[i].get<std::string>());
+    }
+  }
+  if (j.contains("candidates")) {
+    const json& cs = get_array(j, "candidates", where);
+    for (std::size_t i = 0; i < cs.size(); ++i)
+      r.candidates.push_back(from_json<FitCandidate>(cs[i], fmt::format("{}.candidates[{}]", where, i)));
+  }
+}
+
+// ---- ranges, data, evaluations -----------------------------------------------------
+
+json to_json(const IndexRange& r) {
+  return json::array({r.begin, r.end == IndexRange::npos ? json(nullptr) : json(r.end)});
+}
+
+void from_json(const json& j, IndexRange& r, std::string_view where) {
+  if (!j.is_array() || j.size() != 2)
+    throw Error(fmt::format("{}: expected a range [begin, end] (end null: to the end), got {}", where, j.dump()));
+  r.begin = j[0].is_null() ? 0 : as_size(j[0], "[0]", where);
+  r.end = j[1].is_null() ? IndexRange::npos : as_size(j[1], "[1]", where);
+}
+
+json to_json(const DataDescription& d) {
+  json j = {{"input", {{"file", d.input_file}, {"column", d.input_column}}},
+            {"output", {{"file", d.output_file.empty() ? d.input_file : d.output_file}, {"column", d.output_column}}},
+            {"input_axis", {{"label", d.input_label}, {"unit", d.input_unit}}},
+            {"output_axis", {{"label", d.output_label}, {"unit", d.output_unit}}},
+            {"initial_state", std::string(initial_state_name(d.initial_state))},
+            {"train", to_json(d.train)}};
+  if (!d.time_column.empty()) j["time_column"] = d.time_column;
+  return j;
+}
+
+void from_json(const json& j, DataDescription& d, std::string_view where) {
+  d = DataDescription{};
+  const json& in = need(j, "input", where);
+  d.input_file = get_string(in, "file", key_where(where, "input"));
+  d.input_column = opt_string(in, "column", key_where(where, "input"));
+  const json& out = need(j, "output", where);
+  d.output_file = get_string(out, "file", key_where(where, "output"));
+  d.output_column = opt_string(out, "column", key_where(where, "output"));
+  d.time_column = opt_string(j, "time_column", where);
+  if (j.contains("input_axis")) {
+    d.input_label = opt_string(j["input_axis"], "label", key_where(where, "input_axis"), d.input_label);
+    d.input_unit = opt_string(j["input_axis"], "unit", key_where(where, "input_axis"));
+  }
+  if (j.contains("output_axis")) {
+    d.output_label = opt_string(j["output_axis"], "label", key_where(where, "output_axis"), d.output_label);
+    d.output_unit = opt_string(j["output_axis"], "unit", key_where(where, "output_axis"));
+  }
+  if (d.input_label.empty()) d.input_label = "Input";
+  if (d.output_label.empty()) d.output_label = "Output";
+  d.initial_state = initial_state_from_name(opt_string(j, "initial_state", where, "virgin"),
+                                            key_where(where, "initial_state"));
+  if (j.contains("train")) from_json(j["train"], d.train, key_where(where, "train"));
+}
+
+json to_json(const Evaluation& e) {
+  json j = to_json(e.metrics);
+  j["file"] = e.file;
+  j["range"] = to_json(e.range);
+  return j;
+}
+
+void from_json(const json& j, Evaluation& e, std::string_view where) {
+  from_json(j, e.metrics, where);
+  e.file = opt_string(j, "file", where);
+  e.range = {};
+  if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
+}
+
+// ---- documents -------------------------------------------------------------------
+
+json to_json(const FitDocument& d) {
+  json j = {{"format", std::string(fit_document_format)}, {"schema", results_schema_version}};
+  j.update(to_json(d.fit));
+  for (std::size_t i = 0; i < d.candidate_validation.size() && i < d.fit.candidates.size(); ++i) {
+    json v = json::array();
+    for (const auto& m : d.candidate_validation[i]) v.push_back(to_json(m));
+    j["candidates"][i]["validate"] = v;
+  }
+  j["data"] = to_json(d.data);
+  j["validate"] = d.validation.empty() ? json(nullptr) : to_json(d.validation.front().metrics);
+  json files = json::array();
+  for (const auto& e : d.validation) files.push_back(to_json(e));
+  j["validate_files"] = files;
+  j["model_written"] = d.model_written;
+  j["model_file"] = d.model_file;
+  return j;
+}
+
+void from_json(const json& j, FitDocument& d, std::string_view where) {
+  if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
+  if (j.contains("format") && j["format"] != std::string(fit_document_format))
+    throw Error(fmt::format("{}: not a hysteron fit report (format {})", where, j["format"].dump()));
+  if (j.contains("schema") && j["schema"] != results_schema_version)
+    throw Error(fmt::format("{}: unsupported fit report schema {} (this hysteron reads schema {})", where,
+                            j["schema"].dump(), results_schema_version));
+  d = FitDocument{};
+  from_json(j, d.fit, where);
+  if (j.contains("candidates")) {
+    bool any = false;
+    for (const auto& c : j["candidates"]) any = any || c.contains("validate");
+    if (any) {
+      const json& cs = j["candidates"];
+      for (std::size_t i = 0; i < cs.size(); ++i) {
+        std::vector<FitMetrics> v;
+        if (cs[i].contains("validate")) {
+          const std::string w = fmt::format("{}.candidates[{}].validate", where, i);
+          const json& a = cs[i]["validate"];
+          if (!a.is_array()) throw Error(fmt::format("{}: expected an array, got {}", w, a.type_name()));
+          for (std::size_t k = 0; k < a.size(); ++k)
+            v.push_back(from_json<FitMetrics>(a[k], fmt::format("{}[{}]", w, k)));
+        }
+        d.candidate_validation.push_back(std::move(v));
+      }
+    }
+  }
+  if (j.contains("data")) from_json(j["data"], d.data, key_where(where, "data"));
+  if (j.contains("validate_files")) {
+    const json& a = get_array(j, "validate_files", where);
+    for (std::size_t i = 0; i < a.size(); ++i)
+      d.validation.push_back(from_json<Evaluation>(a[i], fmt::format("{}.validate_files[{}]", where, i)));
+  } else if (j.contains("validate") && !j["validate"].is_null()) {
+    d.validation.push_back({"", {}, from_json<FitMetrics>(j["validate"], key_where(where, "validate"))});
+  }
+  d.model_written = opt_bool(j, "model_written", where, false);
+  d.model_file = opt_string(j, "model_file", where);
+}
+
+json to_json(const EvaluationDocument& d) {
+  json j = {{"format", std::string(evaluation_document_format)},
+            {"schema", results_schema_version},
+            {"model_file", d.model_file},
+            {"model_kind", std::string(model_name(d.model))},
+            {"model", model_to_json(d.model)},
+            {"data", to_json(d.data)}};
+  j["metrics"] = to_json(d.result);
+  return j;
+}
+
+void from_json(const json& j, EvaluationDocument& d, std::string_view where) {
+  if (!j.is_object() || j.value("format", std::string()) != evaluation_document_format)
+    throw Error(fmt::format("{}: not a hysteron evaluation (expected \"format\": \"{}\")", where,
+                            evaluation_document_format));
+  if (j.value("schema", 0) != results_schema_version)
+    throw Error(fmt::format("{}: unsupported evaluation schema {}", where, j.value("schema", json()).dump()));
+  d = EvaluationDocument{};
+  d.model_file = opt_string(j, "model_file", where);
+  d.model = model_from_json(need(j, "model", where), key_where(where, "model"));
+  from_json(need(j, "data", where), d.data, key_where(where, "data"));
+  from_json(need(j, "metrics", where), d.result, key_where(where, "metrics"));
+}
+
+// ---- experiment ------------------------------------------------------------------
+
+json to_json(const TrackingErrors& e) {
+  return {{"max_error_mm", number(e.max_error_mm)}, {"mae_mm", number(e.mae_mm)},
+          {"rms_error_mm", number(e.rms_error_mm)}};
+}
+
+void from_json(const json& j, TrackingErrors& e, std::string_view where) {
+  e.max_error_mm = get_double(j, "max_error_mm", where);
+  e.mae_mm = get_double(j, "mae_mm", where);
+  e.rms_error_mm = get_double(j, "rms_error_mm", where);
+}
+
+namespace {
+json published_errors(const PublishedErrors& e) {
+  json j = json::object();
+  if (std::isfinite(e.max_error_mm)) j["max_error_mm"] = e.max_error_mm;
+  if (std::isfinite(e.mae_mm)) j["mae_mm"] = e.mae_mm;
+  if (std::isfinite(e.rms_error_mm)) j["rms_error_mm"] = e.rms_error_mm;
+  return j;
+}
+PublishedErrors published_errors_from(const json& j, std::string reference, std::string_view where) {
+  PublishedErrors e;
+  e.reference = std::move(reference);
+  e.max_error_mm = opt_double(j, "max_error_mm", where, nan);
+  e.mae_mm = opt_double(j, "mae_mm", where, nan);
+  e.rms_error_mm = opt_double(j, "rms_error_mm", where, nan);
+  return e;
+}
+}  // namespace
+
+json to_json(const PublishedFigures& p) {
+  if (p.errors.empty()) return nullptr;
+  json j = {{"source", p.source}};
+  if (p.errors.size() == 1 && p.errors.front().reference.empty()) {
+    j.update(published_errors(p.errors.front()));
+  } else {
+    for (const auto& e : p.errors) j[e.reference] = published_errors(e);
+  }
+  return j;
+}
+
+void from_json(const json& j, PublishedFigures& p, std::string_view where) {
+  p = PublishedFigures{};
+  if (j.is_null()) return;
+  if (!j.is_object()) throw Error(fmt::format("{}: expected an object or null, got {}", where, j.type_name()));
+  p.source = opt_string(j, "source", where);
+  if (j.contains("max_error_mm")) {
+    p.errors.push_back(published_errors_from(j, "", where));
+    return;
+  }
+  for (const auto& [key, v] : j.items())
+    if (v.is_object()) p.errors.push_back(published_errors_from(v, key, key_where(where, key)));
+}
+
+json to_json(const ExperimentResult& r) {
+  json j;
+  j["schema"] = 1;
+  j["experiment"] = r.name;
+  j["title"] = r.title;
+  j["seed"] = r.seed;
+  std::vector<std::string> refs;
+  for (const auto& run : r.runs)
+    if (std::find(refs.begin(), refs.end(), run.reference) == refs.end()) refs.push_back(run.reference);
+  for (const char* variant : {"compensated", "faithful", "baseline"}) {
+    json v = json::object();
+    for (const auto& run : r.runs) {
+      if (run.variant != variant) continue;
+      json e = to_json(run.errors);
+      e["reference"] = run.reference;
+      e["description"] = run.description;
+      e["saturated_samples"] = run.saturated;
+      if (refs.size() == 1) v = e; else v[run.reference] = e;
+    }
+    j[variant] = v;
+  }
+  j["published"] = to_json(r.published);
+  j["identification"] = {{"model", std::string(fit_model_name(r.fit.model_kind))},
+                         {"train_end", r.id_train_end},
+                         {"status", std::string(fit_status_name(r.fit.status))},
+                         {"message", r.fit.message},
+                         {"train", to_json(r.fit.train)},
+                         {"validate", to_json(r.validation)},
+                         {"fit_time_s", number(r.fit.time_s)},
+                         {"parameters", model_or_null(r.fit.status, r.fit.model)}};
+  j["best_model"] = {{"model", std::string(fit_model_name(r.best_fit.model_kind))},
+                     {"status", std::string(fit_status_name(r.best_fit.status))},
+                     {"validate_second_run", to_json(r.best_validation)},
+                     {"parameters", model_or_null(r.best_fit.status, r.best_fit.model)}};
+  j["baseline_model"] = valid_model_or_null(r.baseline_model);
+  j["lead_s"] = number(r.lead_s);
+  j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
+  j["wall_time_s"] = number(r.wall_time_s);
+  return j;
+}
+
+void from_json(const json& j, ExperimentResult& r, std::string_view where) {
+  if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
+  if (j.contains("schema") && j["schema"] != 1)
+    throw Error(fmt::format("{}: unsupported schema {} (this hysteron reads schema 1)", where, j["schema"].dump()));
+  if (!j.contains("experiment") || !j.contains("identification"))
+    throw Error(fmt::format("{}: not an experiment result (no \"experiment\"/\"identification\" keys)", where));
+  r = ExperimentResult{};
+  r.name = get_string(j, "experiment", where);
+  r.title = get_string(j, "title", where);
+  r.seed = need(j, "seed", where).get<std::uint64_t>();
+  if (j.contains("published")) from_json(j["published"], r.published, key_where(where, "published"));
+  r.wall_time_s = opt_double(j, "wall_time_s", where, 0.0);
+  r.lead_s = opt_double(j, "lead_s", where, 0.0);
+
+  const json& id = need(j, "identification", where);
+  const std::string idw = key_where(where, "identification");
+  r.fit.model_kind = model_kind_from(id, "model", idw);
+  r.fit.status = fit_status_from_name(get_string(id, "status", idw), key_where(idw, "status"));
+  r.fit.message = opt_string(id, "message", idw);
+  from_json(need(id, "train", idw), r.fit.train, key_where(idw, "train"));
+  from_json(need(id, "validate", idw), r.validation, key_where(idw, "validate"));
+  r.fit.time_s = opt_double(id, "fit_time_s", idw, 0.0);
+  r.id_train_end = id.contains("train_end") ? get_size(id, "train_end", idw) : 0;
+  if (id.contains("parameters")) read_model(id, "parameters", idw, r.fit.model);
+  if (j.contains("best_model")) {
+    const json& b = j["best_model"];
+    const std::string bw = key_where(where, "best_model");
+    r.best_fit.model_kind = model_kind_from(b, "model", bw);
+    r.best_fit.status = fit_status_from_name(opt_string(b, "status", bw, "converged"), key_where(bw, "status"));
+    if (b.contains("validate_second_run"))
+      from_json(b["validate_second_run"], r.best_validation, key_where(bw, "validate_second_run"));
+    if (b.contains("parameters")) read_model(b, "parameters", bw, r.best_fit.model);
+  }
+  if (j.contains("baseline_model") && !j["baseline_model"].is_null())
+    r.baseline_model = model_from_json(j["baseline_model"], key_where(where, "baseline_model"));
+
+  for (const char* variant : {"compensated", "faithful", "baseline"}) {
+    if (!j.contains(variant)) continue;
+    const json& v = j[variant];
+    const std::string vw = key_where(where, variant);
+    auto add = [&](const json& e, const std::string& reference, const std::string& w) {
+      TrackingRun run;
+      run.variant = variant;
+      run.reference = opt_string(e, "reference", w, reference);
+      run.description = opt_string(e, "description", w);
+      run.saturated = e.contains("saturated_samples") ? get_size(e, "saturated_samples", w) : 0;
+      from_json(e, run.errors, w);
+      r.runs.push_back(std::move(run));
+    };
+    if (v.contains("max_error_mm")) {
+      add(v, "", vw);
+    } else {
+      for (const auto& [key, e] : v.items())
+        if (e.is_object()) add(e, key, key_where(vw, key));
+    }
+  }
+}
+
+}  // namespace hysteron::io
+
+namespace hysteron {
+
+nlohmann::json ExperimentResult::to_json() const { return io::to_json(*this); }
+
+const PublishedErrors* PublishedFigures::find(const std::string& reference) const noexcept {
+  for (const auto& e : errors)
+    if (e.reference == reference || (errors.size() == 1 && e.reference.empty())) return &e;
+  return nullptr;
+}
+
+}  // namespace hysteron

@@ -1,0 +1,408 @@
+// Round trips of the one serialization layer (hysteron/io/results.hpp): every result
+// type is written to JSON text, parsed back, read with from_json and compared field by
+// field with what was written.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+constexpr double nan_v = std::numeric_limits<double>::quiet_NaN();
+constexpr double inf_v = std::numeric_limits<double>::infinity();
+
+// to_json -> text -> parse -> from_json.
+template <class T>
+T round_trip(const T& value) {
+  const std::string text = io::to_json(value).dump(2);
+  return io::from_json<T>(nlohmann::json::parse(text), "test");
+}
+
+// Equal, with NaN == NaN (a NaN is written as null and read back as NaN).
+void expect_same(double a, double b, const char* what) {
+  if (std::isnan(a)) {
+    EXPECT_TRUE(std::isnan(b)) << what << ": " << b;
+  } else {
+    EXPECT_EQ(a, b) << what;  // exact: doubles are written with round-trip precision
+  }
+}
+
+void expect_same(const FitMetrics& a, const FitMetrics& b) {
+  expect_same(a.rms, b.rms, "rms");
+  expect_same(a.max, b.max, "max");
+  expect_same(a.mae, b.mae, "mae");
+  expect_same(a.rms_percent_span, b.rms_percent_span, "rms_percent_span");
+  expect_same(a.r2, b.r2, "r2");
+  EXPECT_EQ(a.n, b.n);
+}
+
+void expect_same(const ModelParams& a, const ModelParams& b) {
+  EXPECT_EQ(io::model_to_json(a), io::model_to_json(b));
+}
+
+void expect_same(const FitParameter& a, const FitParameter& b) {
+  EXPECT_EQ(a.name, b.name);
+  expect_same(a.value, b.value, "value");
+  expect_same(a.std_error, b.std_error, "std_error");
+  EXPECT_EQ(a.held, b.held);
+  EXPECT_EQ(a.at_bound, b.at_bound);
+}
+
+void expect_same(const InverseCheck& a, const InverseCheck& b) {
+  EXPECT_EQ(a.max_slope, b.max_slope);
+  expect_same(a.max_jump, b.max_jump, "max_jump");
+  expect_same(a.max_input_step, b.max_input_step, "max_input_step");
+  EXPECT_EQ(a.increasing, b.increasing);
+}
+
+void expect_same(const FitCandidate& a, const FitCandidate& b) {
+  EXPECT_EQ(a.kind, b.kind);
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.message, b.message);
+  expect_same(a.train, b.train);
+  expect_same(a.holdout, b.holdout);
+  expect_same(a.time_s, b.time_s, "time_s");
+  EXPECT_EQ(a.chosen, b.chosen);
+  expect_same(a.model, b.model);
+}
+
+void expect_same(const FitReport& a, const FitReport& b) {
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.message, b.message);
+  EXPECT_EQ(a.model_kind, b.model_kind);
+  expect_same(a.initial_cost, b.initial_cost, "initial_cost");
+  expect_same(a.final_cost, b.final_cost, "final_cost");
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.total_iterations, b.total_iterations);
+  EXPECT_EQ(a.num_starts, b.num_starts);
+  expect_same(a.time_s, b.time_s, "time_s");
+  expect_same(a.model, b.model);
+  ASSERT_EQ(a.parameters.size(), b.parameters.size());
+  for (std::size_t i = 0; i < a.parameters.size(); ++i) expect_same(a.parameters[i], b.parameters[i]);
+  EXPECT_EQ(a.covariance_note, b.covariance_note);
+  expect_same(a.train, b.train);
+  expect_same(a.reference, b.reference);
+  expect_same(a.inverse, b.inverse);
+  EXPECT_EQ(a.warnings, b.warnings);
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (std::size_t i = 0; i < a.candidates.size(); ++i) expect_same(a.candidates[i], b.candidates[i]);
+}
+
+FitMetrics metrics(double rms, std::size_t n) {
+  FitMetrics m;
+  m.rms = rms;
+  m.max = 3.25 * rms;
+  m.mae = 0.7 * rms + 1e-17;
+  m.rms_percent_span = 100.0 * rms / 7.0;
+  m.r2 = 1.0 - rms / 3.0;
+  m.n = n;
+  return m;
+}
+
+GpiParams test_gpi() {
+  GpiParams g;
+  g.envelope = Envelope::tanh(1.2, 0.8, 0.0, 0.1);
+  g.units = {0.1, 0.5, 2.0, -3.0};  // a decreasing model in raw units
+  g.q = 0.5;
+  g.n = 10;
+  g.rho = 0.3;
+  g.tau = 1.5;
+  g.alpha = 0.05;
+  return g;
+}
+
+PiParams test_pi() {
+  PiParams p;
+  p.q = 0.7;
+  p.r = {0.1, 0.2, 0.30000000000000004};
+  p.p = {0.25, 0.125, 1.0 / 3.0};
+  return p;
+}
+
+FitReport test_report() {
+  FitReport r;
+  r.status = FitStatus::poor_fit;
+  r.message = "worse than the reference PI: \"rms\" 1.2 > 1.05 x 1.1";
+  r.model_kind = FitModel::pi;
+  r.initial_cost = 123.456789012345678;
+  r.final_cost = 0.1 + 0.2;
+  r.iterations = 17;
+  r.total_iterations = 40;
+  r.num_starts = 3;
+  r.time_s = 0.0123;
+  r.model = test_pi();
+  r.parameters = {{"q", 0.7, 0.01, false, false}, {"p1", 0.25, nan_v, false, true}, {"p2", 0.125, 0.0, true, false}};
+  r.covariance_note = "singular J^T J";
+  r.train = metrics(0.031, 1200);
+  r.reference = metrics(0.029, 1200);
+  r.inverse = {inf_v, 0.062, 0.004, false};
+  r.warnings = {"q + p1 on its lower bound", "tau at bound"};
+  FitCandidate c1;
+  c1.kind = FitModel::gpi;
+  c1.status = FitStatus::converged;
+  c1.message = "ok";
+  c1.train = metrics(0.02, 960);
+  c1.holdout = metrics(0.05, 240);
+  c1.time_s = 0.5;
+  c1.chosen = true;
+  c1.model = test_gpi();
+  FitCandidate c2;
+  c2.kind = FitModel::mpi_deadzone;
+  c2.status = FitStatus::failed;  // no model: written as null, read back as the default
+  c2.message = "cost became non-finite";
+  c2.train = metrics(nan_v, 960);
+  c2.holdout = metrics(nan_v, 240);
+  c2.time_s = 0.25;
+  r.candidates = {c1, c2};
+  return r;
+}
+
+}  // namespace
+
+TEST(Results, MetricsParameterInverseRoundTrip) {
+  expect_same(round_trip(metrics(0.1234567890123456789, 42)), metrics(0.1234567890123456789, 42));
+  FitMetrics with_nan = metrics(0.5, 7);
+  with_nan.r2 = nan_v;
+  expect_same(round_trip(with_nan), with_nan);
+  const FitParameter p{"asc.c0", -1.5e-300, nan_v, false, true};
+  expect_same(round_trip(p), p);
+  const InverseCheck finite{12.5, 0.03, 0.004, true};
+  expect_same(round_trip(finite), finite);
+  const InverseCheck not_invertible{inf_v, 1.0, 0.004, false};
+  expect_same(round_trip(not_invertible), not_invertible);  // null max_slope reads back as +inf
+  // the JSON is plain: NaN and infinity are written as null
+  EXPECT_TRUE(io::to_json(p)["std_error"].is_null());
+  EXPECT_TRUE(io::to_json(not_invertible)["max_slope"].is_null());
+}
+
+TEST(Results, CandidateAndFitReportRoundTrip) {
+  const FitReport r = test_report();
+  for (const auto& c : r.candidates) expect_same(round_trip(c), c);
+  const FitReport back = round_trip(r);
+  expect_same(back, r);
+  // names, not numbers, for the enums
+  const nlohmann::json j = io::to_json(r);
+  EXPECT_EQ(j["status"], "poor_fit");
+  EXPECT_EQ(j["model_kind"], "pi");
+  EXPECT_EQ(j["candidates"][1]["kind"], "mpi-deadzone");
+  EXPECT_TRUE(j["candidates"][1]["model"].is_null());
+  // every status name reads back
+  for (FitStatus s : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
+                      FitStatus::poor_fit, FitStatus::invalid_input})
+    EXPECT_EQ(io::fit_status_from_name(fit_status_name(s), "test"), s);
+}
+
+TEST(Results, FitDocumentRoundTrip) {
+  io::FitDocument d;
+  d.fit = test_report();
+  d.data.input_file = "rig.csv";
+  d.data.input_column = "pressure_kpa";
+  d.data.output_file = "rig.csv";
+  d.data.output_column = "force";
+  d.data.time_column = "t_s";
+  d.data.input_label = "Pressure";
+  d.data.input_unit = "kPa";
+  d.data.output_label = "Force";
+  d.data.output_unit = "N";
+  d.data.initial_state = InitialState::relaxed;
+  d.data.train = {10, 1200};
+  d.validation = {{"", {1200, 1800}, metrics(0.04, 600)}, {"other.csv", {0, 900}, metrics(0.05, 900)}};
+  d.candidate_validation = {{metrics(0.041, 600), metrics(0.051, 900)}, {metrics(nan_v, 600), metrics(nan_v, 900)}};
+  d.model_written = true;
+  d.model_file = "model.json";
+  const io::FitDocument back = round_trip(d);
+  expect_same(back.fit, d.fit);
+  EXPECT_EQ(back.data.input_file, d.data.input_file);
+  EXPECT_EQ(back.data.input_column, d.data.input_column);
+  EXPECT_EQ(back.data.output_file, d.data.output_file);
+  EXPECT_EQ(back.data.output_column, d.data.output_column);
+  EXPECT_EQ(back.data.time_column, d.data.time_column);
+  EXPECT_EQ(back.data.input_label, d.data.input_label);
+  EXPECT_EQ(back.data.input_unit, d.data.input_unit);
+  EXPECT_EQ(back.data.output_label, d.data.output_label);
+  EXPECT_EQ(back.data.output_unit, d.data.output_unit);
+  EXPECT_EQ(back.data.initial_state, d.data.initial_state);
+  EXPECT_EQ(back.data.train.begin, d.data.train.begin);
+  EXPECT_EQ(back.data.train.end, d.data.train.end);
+  ASSERT_EQ(back.validation.size(), d.validation.size());
+  for (std::size_t i = 0; i < d.validation.size(); ++i) {
+    EXPECT_EQ(back.validation[i].file, d.validation[i].file);
+    EXPECT_EQ(back.validation[i].range.begin, d.validation[i].range.begin);
+    EXPECT_EQ(back.validation[i].range.end, d.validation[i].range.end);
+    expect_same(back.validation[i].metrics, d.validation[i].metrics);
+  }
+  ASSERT_EQ(back.candidate_validation.size(), d.candidate_validation.size());
+  for (std::size_t i = 0; i < d.candidate_validation.size(); ++i) {
+    ASSERT_EQ(back.candidate_validation[i].size(), d.candidate_validation[i].size());
+    for (std::size_t k = 0; k < d.candidate_validation[i].size(); ++k)
+      expect_same(back.candidate_validation[i][k], d.candidate_validation[i][k]);
+  }
+  EXPECT_EQ(back.model_written, d.model_written);
+  EXPECT_EQ(back.model_file, d.model_file);
+  // an open range (end = to the end) survives as null
+  io::FitDocument open = d;
+  open.data.train = {5, IndexRange::npos};
+  EXPECT_EQ(round_trip(open).data.train.end, IndexRange::npos);
+  // the document says what it is; another schema is refused, naming where
+  const nlohmann::json j = io::to_json(d);
+  EXPECT_EQ(j["format"], "hysteron-fit-report");
+  EXPECT_EQ(j["validate"]["n"], 600u);
+  nlohmann::json bad = j;
+  bad["schema"] = 9;
+  try {
+    (void)io::from_json<io::FitDocument>(bad, "fit.json");
+    FAIL() << "schema 9 accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fit.json: unsupported fit report schema 9"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Results, EvaluationDocumentRoundTrip) {
+  io::EvaluationDocument d;
+  d.model_file = "gpi.json";
+  d.model = test_gpi();
+  d.data.input_file = d.data.output_file = "today.csv";
+  d.data.input_column = "p";
+  d.data.output_column = "y";
+  d.data.train = {100, 900};
+  d.result = {"today.csv", {100, 900}, metrics(0.07, 800)};
+  const io::EvaluationDocument back = round_trip(d);
+  EXPECT_EQ(back.model_file, d.model_file);
+  expect_same(back.model, d.model);
+  EXPECT_EQ(back.data.input_file, d.data.input_file);
+  EXPECT_EQ(back.data.input_column, d.data.input_column);
+  EXPECT_EQ(back.data.output_column, d.data.output_column);
+  EXPECT_EQ(back.data.train.begin, 100u);
+  EXPECT_EQ(back.data.train.end, 900u);
+  EXPECT_EQ(back.result.file, d.result.file);
+  EXPECT_EQ(back.result.range.begin, 100u);
+  EXPECT_EQ(back.result.range.end, 900u);
+  expect_same(back.result.metrics, d.result.metrics);
+}
+
+TEST(Results, ExperimentResultRoundTrip) {
+  ExperimentResult r;
+  r.name = "mpi-openloop";
+  r.title = "test \"experiment\"";
+  r.seed = 18446744073709551615ull;
+  r.id_train_end = 5000;
+  r.fit.model_kind = FitModel::mpi_asym;
+  r.fit.status = FitStatus::no_convergence;
+  r.fit.message = "iteration limit";
+  r.fit.train = metrics(0.3, 5000);
+  r.fit.time_s = 1.25;
+  r.fit.model = test_pi();
+  r.validation = metrics(0.5, 10000);
+  r.best_fit.model_kind = FitModel::gpi;
+  r.best_fit.status = FitStatus::converged;
+  r.best_fit.model = test_gpi();
+  r.best_validation = metrics(0.4, 15000);
+  r.baseline_model = test_pi();
+  r.lead_s = 0.057;
+  r.wall_time_s = 12.5;
+  r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
+  for (const char* variant : {"compensated", "faithful", "baseline"})
+    for (const char* ref : {"triangle", "sine"}) {
+      TrackingRun run;
+      run.variant = variant;
+      run.reference = ref;
+      run.description = std::string(variant) + " on " + ref;
+      run.errors = {1.5 + run.description.size(), 0.25, 0.5};
+      run.saturated = run.description.size();
+      r.runs.push_back(run);
+    }
+  const ExperimentResult back = round_trip(r);
+  EXPECT_EQ(back.name, r.name);
+  EXPECT_EQ(back.title, r.title);
+  EXPECT_EQ(back.seed, r.seed);
+  EXPECT_EQ(back.id_train_end, r.id_train_end);
+  EXPECT_EQ(back.fit.model_kind, r.fit.model_kind);
+  EXPECT_EQ(back.fit.status, r.fit.status);
+  EXPECT_EQ(back.fit.message, r.fit.message);
+  expect_same(back.fit.train, r.fit.train);
+  EXPECT_EQ(back.fit.time_s, r.fit.time_s);
+  expect_same(back.fit.model, r.fit.model);
+  expect_same(back.validation, r.validation);
+  EXPECT_EQ(back.best_fit.model_kind, r.best_fit.model_kind);
+  EXPECT_EQ(back.best_fit.status, r.best_fit.status);
+  expect_same(back.best_fit.model, r.best_fit.model);
+  expect_same(back.best_validation, r.best_validation);
+  expect_same(back.baseline_model, r.baseline_model);
+  EXPECT_EQ(back.lead_s, r.lead_s);
+  EXPECT_EQ(back.wall_time_s, r.wall_time_s);
+  EXPECT_EQ(back.published.source, r.published.source);
+  ASSERT_EQ(back.published.errors.size(), 2u);
+  for (const auto& e : r.published.errors) {
+    const PublishedErrors* b = back.published.find(e.reference);
+    ASSERT_NE(b, nullptr) << e.reference;
+    expect_same(b->max_error_mm, e.max_error_mm, "max_error_mm");
+    expect_same(b->mae_mm, e.mae_mm, "mae_mm");
+    expect_same(b->rms_error_mm, e.rms_error_mm, "rms_error_mm");
+  }
+  // runs are grouped by variant in the JSON: match them by (variant, reference)
+  ASSERT_EQ(back.runs.size(), r.runs.size());
+  for (const auto& run : r.runs) {
+    bool found = false;
+    for (const auto& b : back.runs) {
+      if (b.variant != run.variant || b.reference != run.reference) continue;
+      found = true;
+      EXPECT_EQ(b.description, run.description);
+      EXPECT_EQ(b.errors.max_error_mm, run.errors.max_error_mm);
+      EXPECT_EQ(b.errors.mae_mm, run.errors.mae_mm);
+      EXPECT_EQ(b.errors.rms_error_mm, run.errors.rms_error_mm);
+      EXPECT_EQ(b.saturated, run.saturated);
+    }
+    EXPECT_TRUE(found) << run.variant << " " << run.reference;
+  }
+  // one reference: the published figures and the runs are flat objects (the CLI's --json shape)
+  ExperimentResult one = r;
+  one.published = {"Table 5", {{"", 2.659, 0.7358, 0.8701}}};
+  one.runs.resize(1);
+  const nlohmann::json j = io::to_json(one);
+  EXPECT_EQ(j["published"]["rms_error_mm"], 0.8701);
+  EXPECT_EQ(j["compensated"]["reference"], "triangle");
+  const ExperimentResult one_back = round_trip(one);
+  ASSERT_EQ(one_back.published.errors.size(), 1u);
+  EXPECT_EQ(one_back.published.errors[0].mae_mm, 0.7358);
+  ASSERT_EQ(one_back.runs.size(), 1u);
+  EXPECT_EQ(one_back.runs[0].reference, "triangle");
+  // no published figures: null
+  ExperimentResult none = r;
+  none.published = {};
+  EXPECT_TRUE(io::to_json(none)["published"].is_null());
+  EXPECT_TRUE(round_trip(none).published.empty());
+  // the member function is the same writer
+  EXPECT_EQ(r.to_json(), io::to_json(r));
+}
+
+TEST(Results, ErrorsNameWhereAndKey) {
+  nlohmann::json j = io::to_json(test_report());
+  j["train"].erase("rms");
+  try {
+    (void)io::from_json<FitReport>(j, "fit.json");
+    FAIL() << "missing key accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "fit.json.train: missing key \"rms\"");
+  }
+  j = io::to_json(test_report());
+  j["candidates"][0]["chosen"] = "yes";
+  try {
+    (void)io::from_json<FitReport>(j, "fit.json");
+    FAIL() << "wrong type accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fit.json.candidates[0]: key \"chosen\": expected true or false"),
+              std::string::npos)
+        << e.what();
+  }
+  j = io::to_json(test_report());
+  j["status"] = "great";
+  EXPECT_THROW((void)io::from_json<FitReport>(j, "fit.json"), Error);
+  EXPECT_THROW((void)io::parse_json("{\"a\": ", "x.json"), Error);
+}

@@ -92,6 +92,14 @@ void plot_fit_residuals(std::span<const double> x, std::span<const double> measu
 
 // ---- reports -------------------------------------------------------------------
 
+// A validation set shown in a fit report: another record (x, y, optional t), or a
+// range of the fit's own record (x empty).
+struct ValidationData {
+  std::string name;              // e.g. the file name; "" = the fit's record
+  std::vector<double> x, y, t;   // empty x: the fit's record
+  IndexRange range{};            // the samples scored
+};
+
 // What write_fit_report needs besides the FitReport: the data and their meaning.
 struct FitData {
   std::vector<double> x, y;            // the record fit() saw (input, measured output)
@@ -101,31 +109,34 @@ struct FitData {
   std::string source;                  // e.g. "data.csv (columns pressure, length)"
   InitialState initial_state = InitialState::virgin;
   IndexRange train{};                  // the training range of the fit
+  std::vector<ValidationData> validation;  // shown with their metrics, loops and residuals
 };
 
 // HTML report of an experiment (what `hysteron experiment NAME --out DIR` computed).
 void write_experiment_report(const ExperimentResult& result, const std::string& html_path,
                              const std::string& command_line);
-// HTML report of a fit: parameters with standard errors, metrics (training and,
-// if the training range is not the whole record, validation), measured vs model
-// loops, residuals.
+// HTML report of a fit: status, warnings, the reference PI and the inverse check,
+// the candidates of FitModel::automatic (with their validation RMS on every
+// validation set), parameters with standard errors, metrics (training and, if the
+// training range is not the whole record, validation; every validation set), measured
+// vs model loops, residuals (against time if data.t is given).
 void write_fit_report(const FitReport& fit, const FitData& data, const std::string& html_path,
                       const std::string& command_line);
+// HTML report of `hysteron evaluate`: a saved model against a record (data.train is
+// the evaluated range): metrics, loops, output over the record, residuals.
+void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
+                             const std::string& html_path, const std::string& command_line);
 
 // Reads a directory written by ExperimentResult::write (result.json,
 // identification.csv, tracking_<variant>_<reference>.csv, model.json,
 // best_model.json). Throws hysteron::Error naming the missing or malformed file.
 ExperimentResult read_experiment_dir(const std::string& dir);
 
-// Fit report JSON ("hysteron fit --report fit.json"):
-//   {"format": "hysteron-fit-report", "schema": 1, "status", "message", "model_kind",
-//    "initial_cost", "final_cost", "iterations", "total_iterations", "num_starts",
-//    "time_s", "covariance_note", "model": <model file JSON>,
-//    "parameters": [{"name", "value", "std_error" (null if NaN), "held"}],
-//    "train": {"rms", "max", "mae", "rms_percent_span", "r2", "n"},
-//    "data": {"input": {"file", "column"}, "output": {"file", "column"},
-//             "input_axis": {"label", "unit"}, "output_axis": {"label", "unit"},
-//             "initial_state": "virgin" | "relaxed", "train": [begin, end|null]}}
+// Fit report JSON ("hysteron fit --report fit.json"): io::to_json(io::FitDocument), see
+// hysteron/io/results.hpp; the "data" object names the files and columns:
+//   "data": {"input": {"file", "column"}, "output": {"file", "column"},
+//            "input_axis": {"label", "unit"}, "output_axis": {"label", "unit"},
+//            "time_column" (optional), "initial_state": "virgin" | "relaxed", "train": [begin, end|null]}
 // Data file paths are stored as given; relative paths are resolved against the
 // JSON file's directory first, then the current directory.
 inline constexpr int fit_report_schema = 1;
@@ -133,9 +144,9 @@ struct FitDataSource {
   std::string input_file, input_column, output_file, output_column;
 };
 nlohmann::json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source);
-// Parses such a file and loads its data. Also reads the JSON written by
-// `hysteron fit --report` (no "format" key, no "data": the data then come from
-// data_override; non-empty data_override.input_file always overrides "data";
+// Parses such a file and loads its data (and its validation files). Also reads the JSON
+// of older versions of `hysteron fit --report` (no "format", no "data": the data then
+// come from data_override; non-empty data_override.input_file always overrides "data";
 // an empty output_file means the input file). Throws hysteron::Error naming the
 // file (malformed JSON, other format or schema, missing keys, unreadable data).
 struct LoadedFit {

@@ -6,10 +6,12 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 
@@ -179,49 +181,7 @@ json parse_json_file(const std::string& path) {
   if (!in) throw Error(fmt::format("{}: cannot open the file", path));
   std::stringstream ss;
   ss << in.rdbuf();
-  try {
-    return json::parse(ss.str());
-  } catch (const json::parse_error& e) {
-    throw Error(fmt::format("{}: malformed JSON: {}", path, e.what()));
-  }
-}
-
-// j[key] with a clear error naming the file and the key path.
-const json& need(const json& j, const std::string& key, const std::string& where) {
-  if (!j.is_object() || !j.contains(key)) throw Error(fmt::format("{}: missing key \"{}\"", where, key));
-  return j.at(key);
-}
-template <class T>
-T get(const json& j, const std::string& key, const std::string& where) {
-  const json& v = need(j, key, where);
-  try {
-    return v.get<T>();
-  } catch (const json::exception&) {
-    throw Error(fmt::format("{}: key \"{}\" has the wrong type ({})", where, key, v.type_name()));
-  }
-}
-
-FitMetrics metrics_from(const json& j, const std::string& where) {
-  FitMetrics m;
-  m.rms = get<double>(j, "rms", where);
-  m.max = get<double>(j, "max", where);
-  m.mae = get<double>(j, "mae", where);
-  m.rms_percent_span = get<double>(j, "rms_percent_span", where);
-  m.r2 = get<double>(j, "r2", where);
-  m.n = get<std::size_t>(j, "n", where);
-  return m;
-}
-
-json metrics_to(const FitMetrics& m) {
-  return {{"rms", m.rms}, {"max", m.max}, {"mae", m.mae}, {"rms_percent_span", m.rms_percent_span}, {"r2", m.r2},
-          {"n", m.n}};
-}
-
-FitStatus status_from(const std::string& name, const std::string& where) {
-  for (FitStatus s : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
-                      FitStatus::invalid_input})
-    if (fit_status_name(s) == name) return s;
-  throw Error(fmt::format("{}: unknown fit status \"{}\"", where, name));
+  return io::parse_json(ss.str(), path);
 }
 
 std::vector<double> column(const io::Table& t, const std::string& name, const std::string& where) {
@@ -253,26 +213,16 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
                     "<span style=\"text-align:left\">" + html_escape(run.description) + "</span>"});
     classes.emplace_back();
   }
-  const json& pub = r.published;
-  if (pub.is_object()) {
-    auto val = [](const json& o, const char* k) {
-      return o.contains(k) && o[k].is_number() ? num(o[k].get<double>()) : std::string("&ndash;");
-    };
-    if (pub.contains("max_error_mm")) {
-      rows.push_back({"paper", "published", val(pub, "max_error_mm"), val(pub, "mae_mm"), val(pub, "rms_error_mm"),
-                      "&ndash;", html_escape(pub.value("source", std::string("published")))});
-      classes.emplace_back("published");
-    }
-    for (const auto& [key, o] : pub.items())
-      if (o.is_object() && o.contains("max_error_mm")) {
-        rows.push_back({html_escape(key), "published", val(o, "max_error_mm"), val(o, "mae_mm"),
-                        val(o, "rms_error_mm"), "&ndash;", html_escape(pub.value("source", std::string("published")))});
-        classes.emplace_back("published");
-      }
+  for (const auto& e : r.published.errors) {
+    rows.push_back({html_escape(e.reference.empty() ? std::string("paper") : e.reference), "published",
+                    num(e.max_error_mm), num(e.mae_mm), num(e.rms_error_mm), "&ndash;",
+                    html_escape(r.published.source.empty() ? std::string("published") : r.published.source)});
+    classes.emplace_back("published");
   }
   page.table({"reference", "variant", "max [mm]", "MAE [mm]", "RMS [mm]", "saturated samples", "description"}, rows,
              classes);
-  if (pub.is_null()) page.para("The paper's text ends before its results: there are no published figures to compare.");
+  if (r.published.empty())
+    page.para("The paper's text ends before its results: there are no published figures to compare.");
 
   // identification
   page.heading("Identification");
@@ -371,32 +321,8 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
   const std::string rj = (d / "result.json").string();
   if (!fs::exists(rj)) throw Error(fmt::format("{}: missing file (is {} the output of `hysteron experiment "
                                                "NAME --out DIR`?)", rj, dir));
-  const json j = parse_json_file(rj);
-  if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object", rj));
-  if (j.contains("schema") && j["schema"] != 1)
-    throw Error(fmt::format("{}: unsupported schema {} (this hysteron reads schema 1)", rj, j["schema"].dump()));
-  if (!j.contains("experiment") || !j.contains("identification"))
-    throw Error(fmt::format("{}: not an experiment result (no \"experiment\"/\"identification\" keys)", rj));
-  ExperimentResult r;
-  r.name = get<std::string>(j, "experiment", rj);
-  r.title = get<std::string>(j, "title", rj);
-  r.seed = get<std::uint64_t>(j, "seed", rj);
-  r.published = j.value("published", json());
-  r.wall_time_s = j.value("wall_time_s", 0.0);
-  const json& id = need(j, "identification", rj);
-  const std::string idw = rj + ": identification";
-  r.fit.model_kind = fit_model_from_name(get<std::string>(id, "model", idw));
-  r.fit.status = status_from(get<std::string>(id, "status", idw), idw);
-  r.fit.train = metrics_from(need(id, "train", idw), idw + ".train");
-  r.validation = metrics_from(need(id, "validate", idw), idw + ".validate");
-  r.fit.time_s = id.value("fit_time_s", 0.0);
-  r.id_train_end = id.value("train_end", std::size_t{0});
-  if (j.contains("best_model")) {
-    const json& b = j["best_model"];
-    r.best_fit.model_kind = fit_model_from_name(get<std::string>(b, "model", rj + ": best_model"));
-    if (b.contains("validate_second_run"))
-      r.best_validation = metrics_from(b["validate_second_run"], rj + ": best_model.validate_second_run");
-  }
+  // the summary (io::from_json), then the models and series from their files
+  ExperimentResult r = io::from_json<ExperimentResult>(parse_json_file(rj), rj);
   auto need_file = [&](const char* name) {
     const std::string p = (d / name).string();
     if (!fs::exists(p)) throw Error(fmt::format("{}: missing file in the experiment directory", p));
@@ -418,55 +344,60 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
     if (f.starts_with("tracking_") && f.ends_with(".csv")) files.push_back(e.path());
   }
   std::sort(files.begin(), files.end());
-  for (const char* variant : {"compensated", "faithful", "baseline"}) {
-    const json v = j.value(variant, json::object());
-    for (const auto& p : files) {
-      const std::string f = p.filename().string();
+  std::vector<bool> used(files.size(), false);
+  auto load_series = [&](TrackingRun& run, const fs::path& p) {
+    const std::string ps = p.string();
+    const io::Table tt = io::read_table(ps);
+    run.t = column(tt, "t_s", ps);
+    run.reference_mm = column(tt, "reference_mm", ps);
+    run.measured_mm = column(tt, "measured_mm", ps);
+    run.actual_mm = column(tt, "actual_mm", ps);
+    run.pressure_command_mpa = column(tt, "pressure_command_mpa", ps);
+    run.pressure_mpa = column(tt, "pressure_mpa", ps);
+    run.duty = column(tt, "pwm_duty", ps);
+  };
+  // the runs the summary lists: each needs its series (a summary without the reference
+  // name, from an older hysteron, takes the variant's only file)
+  for (auto& run : r.runs) {
+    const std::string prefix = fmt::format("tracking_{}_", run.variant);
+    std::size_t found = files.size();
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      const std::string f = files[i].filename().string();
+      if (!f.starts_with(prefix)) continue;
+      const std::string ref = f.substr(prefix.size(), f.size() - prefix.size() - 4);
+      if (run.reference.empty() ? !used[i] : ref == run.reference) {
+        found = i;
+        if (run.reference.empty()) run.reference = ref;
+        break;
+      }
+    }
+    if (found == files.size())
+      throw Error(fmt::format("{}: missing file (result.json lists a {} run{})",
+                              (d / fmt::format("tracking_{}_{}.csv", run.variant,
+                                               run.reference.empty() ? "*" : run.reference)).string(),
+                              run.variant, run.reference.empty() ? "" : " for the " + run.reference + " reference"));
+    used[found] = true;
+    load_series(run, files[found]);
+  }
+  // series the summary does not list: errors recomputed from the series
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (used[i]) continue;
+    const std::string f = files[i].filename().string();
+    for (const char* variant : {"compensated", "faithful", "baseline"}) {
       const std::string prefix = fmt::format("tracking_{}_", variant);
       if (!f.starts_with(prefix)) continue;
       TrackingRun run;
       run.variant = variant;
       run.reference = f.substr(prefix.size(), f.size() - prefix.size() - 4);
-      const json& e = v.contains("max_error_mm") ? v : v.value(run.reference, json::object());
-      run.description = e.value("description", std::string());
-      run.saturated = e.value("saturated_samples", std::size_t{0});
-      const std::string ps = p.string();
-      const io::Table tt = io::read_table(ps);
-      run.t = column(tt, "t_s", ps);
-      run.reference_mm = column(tt, "reference_mm", ps);
-      run.measured_mm = column(tt, "measured_mm", ps);
-      run.actual_mm = column(tt, "actual_mm", ps);
-      run.pressure_command_mpa = column(tt, "pressure_command_mpa", ps);
-      run.pressure_mpa = column(tt, "pressure_mpa", ps);
-      run.duty = column(tt, "pwm_duty", ps);
-      if (e.contains("max_error_mm")) {
-        run.errors.max_error_mm = e["max_error_mm"].get<double>();
-        run.errors.mae_mm = e.value("mae_mm", 0.0);
-        run.errors.rms_error_mm = e.value("rms_error_mm", 0.0);
-      } else {  // recompute from the series
-        double sa = 0, s2 = 0, mx = 0;
-        for (std::size_t i = 0; i < run.t.size(); ++i) {
-          const double er = std::abs(run.reference_mm[i] - run.measured_mm[i]);
-          sa += er, s2 += er * er, mx = std::max(mx, er);
-        }
-        const double n = std::max<double>(1.0, static_cast<double>(run.t.size()));
-        run.errors = {mx, sa / n, std::sqrt(s2 / n)};
+      load_series(run, files[i]);
+      double sa = 0, s2 = 0, mx = 0;
+      for (std::size_t k = 0; k < run.t.size(); ++k) {
+        const double er = std::abs(run.reference_mm[k] - run.measured_mm[k]);
+        sa += er, s2 += er * er, mx = std::max(mx, er);
       }
+      const double n = std::max<double>(1.0, static_cast<double>(run.t.size()));
+      run.errors = {mx, sa / n, std::sqrt(s2 / n)};
       r.runs.push_back(std::move(run));
-    }
-    // the summary names a run whose series is missing
-    for (const auto& [key, e] : v.items()) {
-      const bool single = v.contains("max_error_mm");
-      if (!single && !e.is_object()) continue;
-      const std::string ref = single ? std::string() : key;
-      const bool found = std::any_of(r.runs.begin(), r.runs.end(), [&](const TrackingRun& x) {
-        return x.variant == variant && (single || x.reference == ref);
-      });
-      if (!found)
-        throw Error(fmt::format("{}: missing file (result.json lists a {} run{})",
-                                (d / fmt::format("tracking_{}_{}.csv", variant, single ? "*" : ref)).string(),
-                                variant, single ? "" : " for the " + ref + " reference"));
-      if (single) break;
     }
   }
   if (r.runs.empty())
@@ -475,6 +406,65 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
 }
 
 // ---- fit -------------------------------------------------------------------------
+
+namespace {
+
+// Errors, loops, output over the record and residuals of `model` on one record.
+struct RecordView {
+  std::string name;  // caption suffix, e.g. "validation: b.csv"; "" for the main record
+  std::span<const double> x, y, t;
+};
+
+std::vector<double> sample_axis(std::size_t n) {
+  std::vector<double> t(n);
+  for (std::size_t i = 0; i < n; ++i) t[i] = static_cast<double>(i);
+  return t;
+}
+
+// Simulates `model` on the record; empty (and a warning on the page) if it cannot.
+std::vector<double> try_simulate(Page& page, const ModelParams& model, std::span<const double> x,
+                                 InitialState initial, const std::string& what) {
+  try {
+    return simulate_record(model, x, initial);
+  } catch (const Error& e) {
+    page.para(fmt::format("The model cannot be simulated on {}: {}", what, e.what()), "warn");
+    return {};
+  }
+}
+
+// Figures of one record: loops (output against input), output over the record, residuals.
+void record_figures(Page& page, const RecordView& v, std::span<const double> model, const std::string& kind,
+                    const FitData& data, const std::string& range_note, bool with_series = true) {
+  const std::size_t n = std::min(v.x.size(), v.y.size());
+  const std::string suffix = v.name.empty() ? "" : fmt::format(" ({})", v.name);
+  std::vector<double> xs(v.x.begin(), v.x.begin() + static_cast<std::ptrdiff_t>(n));
+  std::vector<double> ys(v.y.begin(), v.y.begin() + static_cast<std::ptrdiff_t>(n));
+  const bool has_model = model.size() == n;
+  PlotSpec loops{{"Hysteresis loops: measured and model" + suffix, data.input, data.output},
+                 {{"measured", xs, ys, "lines", "#d62728", false}}};
+  if (has_model)
+    loops.series.push_back({fmt::format("{} model", kind), xs, std::vector<double>(model.begin(), model.end()),
+                            "lines", "#1f77b4", true});
+  page.figure(loops, fmt::format("{} against {}: measured and model{}.", data.output.label, data.input.label, suffix));
+  const bool has_t = v.t.size() == n;
+  const std::vector<double> t = has_t ? std::vector<double>(v.t.begin(), v.t.end()) : sample_axis(n);
+  const Axis ta = has_t ? Axis{"Time", "s"} : Axis{"Sample", ""};
+  if (with_series) {
+    PlotSpec ts{{"Output over the record" + suffix, ta, data.output}, {{"measured", t, ys, "lines", "#d62728", false}}};
+    if (has_model) ts.series.push_back({"model", t, std::vector<double>(model.begin(), model.end()), "lines",
+                                        "#1f77b4", true});
+    page.figure(ts, "Measured and model output over the record" + suffix + ".");
+  }
+  if (has_model)
+    page.figure({{"Residuals" + suffix, ta, {"Residual (measured - model)", data.output.unit}},
+                 {{"residual", t, difference(ys, std::vector<double>(model.begin(), model.end())), "lines", "#2ca02c",
+                   false}}},
+                fmt::format("Residuals{}; {}.", suffix, range_note));
+}
+
+std::string validation_name(const ValidationData& v) { return v.name.empty() ? std::string("this record") : v.name; }
+
+}  // namespace
 
 void write_fit_report(const FitReport& fit, const FitData& data, const std::string& html_path,
                       const std::string& command_line) {
@@ -485,148 +475,223 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
              {{html_escape(fit_status_name(fit.status)), html_escape(fit.message),
                fmt::format("{} ({})", fit.iterations, fit.total_iterations), fmt::format("{}", fit.num_starts),
                num(fit.initial_cost, 6), num(fit.final_cost, 6), num(fit.time_s, 3)}});
-  if (!fit.ok()) page.para(fmt::format("The fit did not converge ({}).", fit_status_name(fit.status)), "warn");
-  parameter_table(page, fit);
-  page.raw("<h3>Model file</h3>\n");
-  page.table({"key", "value"}, model_rows(fit.model));
+  if (fit.status == FitStatus::poor_fit)
+    page.para(fmt::format("Poor fit: {}", fit.message), "warn");
+  else if (!fit.ok())
+    page.para(fmt::format("The fit did not converge ({}).", fit_status_name(fit.status)), "warn");
+  if (!fit.warnings.empty()) {
+    std::string list = "<ul class=\"warn\" id=\"warnings\">\n";
+    for (const auto& w : fit.warnings) list += fmt::format("<li>{}</li>\n", html_escape(w));
+    page.raw(list + "</ul>\n");
+  }
+  const std::string yu = data.output.unit.empty() ? "" : fmt::format(" [{}]", data.output.unit);
+  const std::string xu = data.input.unit.empty() ? "" : fmt::format(" [{}]", data.input.unit);
+
+  // reference PI and the inverse's slope and jumps
+  if (fit.status != FitStatus::invalid_input && fit.status != FitStatus::not_run) {
+    page.raw("<h3>Reference PI and inverse</h3>\n");
+    page.table({"quantity", "value"},
+               {{"reference PI, training RMS" + html_escape(yu), num(fit.reference.rms, 6)},
+                {"reference PI, training RMS [% of span]", num(fit.reference.rms_percent_span, 4)},
+                {html_escape(fmt::format("inverse: max slope [{} per {}]",
+                                         data.input.unit.empty() ? "input unit" : data.input.unit,
+                                         data.output.unit.empty() ? "output unit" : data.output.unit)),
+                 num(fit.inverse.max_slope, 6)},
+                {"inverse: max jump per sample" + html_escape(xu), num(fit.inverse.max_jump, 6)},
+                {"measured input: max step per sample" + html_escape(xu), num(fit.inverse.max_input_step, 6)},
+                {"model increasing", fit.inverse.increasing ? "yes" : "no (decreasing)"}});
+  }
 
   const std::size_t n = std::min(data.x.size(), data.y.size());
-  std::vector<double> model;
-  if (fit.status != FitStatus::invalid_input && n > 0) {
-    try {
-      model = simulate_record(fit.model, data.x, data.initial_state);
-    } catch (const Error& e) {
-      page.para(fmt::format("The model cannot be simulated on the data: {}", e.what()), "warn");
-    }
+  const bool can_simulate = fit.status != FitStatus::invalid_input && fit.status != FitStatus::not_run &&
+                            fit.status != FitStatus::failed;
+  // validation sets: their records and the fitted model on them
+  struct Val {
+    const ValidationData* v;
+    std::span<const double> x, y, t;
+    IndexRange range;
+  };
+  std::vector<Val> vals;
+  for (const auto& v : data.validation) {
+    const bool own = v.x.empty();
+    Val e{&v, own ? std::span<const double>(data.x) : std::span<const double>(v.x),
+          own ? std::span<const double>(data.y) : std::span<const double>(v.y),
+          own ? std::span<const double>(data.t) : std::span<const double>(v.t), {}};
+    e.range = v.range.resolved(std::min(e.x.size(), e.y.size()));
+    vals.push_back(e);
   }
+  auto metrics_on = [&](const ModelParams& m, const Val& v) -> std::optional<FitMetrics> {
+    try {
+      return evaluate(m, v.x, v.y, v.range, data.initial_state);
+    } catch (const Error&) {
+      return std::nullopt;
+    }
+  };
+
+  if (!fit.candidates.empty()) {
+    page.raw("<h3>Candidates (--model auto)</h3>\n");
+    std::vector<std::string> header = {"kind", "status", "train RMS" + yu, "hold-out RMS" + yu,
+                                       "hold-out RMS [% of span]"};
+    for (const auto& v : vals) header.push_back(fmt::format("validation RMS{} ({})", yu, validation_name(*v.v)));
+    header.insert(header.end(), {"time [s]", "chosen"});
+    std::vector<std::vector<std::string>> rows;
+    std::vector<std::string> classes;
+    for (const auto& c : fit.candidates) {
+      std::vector<std::string> row = {html_escape(fit_model_name(c.kind)), html_escape(fit_status_name(c.status)),
+                                      num(c.train.rms, 5), num(c.holdout.rms, 5), num(c.holdout.rms_percent_span, 4)};
+      const bool usable = c.status != FitStatus::failed && c.status != FitStatus::invalid_input &&
+                          c.status != FitStatus::not_run;
+      for (const auto& v : vals) {
+        const auto m = usable ? metrics_on(c.model, v) : std::nullopt;
+        row.push_back(m ? num(m->rms, 5) : "&ndash;");
+      }
+      row.push_back(num(c.time_s, 3));
+      row.push_back(c.chosen ? "<b>chosen</b>" : "");
+      rows.push_back(std::move(row));
+      classes.emplace_back(c.chosen ? "chosen" : "");
+    }
+    page.table(header, rows, classes);
+    page.para("The kind with the lowest hold-out RMS (the last part of the training range) is chosen and refitted "
+              "on the whole training range; validation data never enter the choice.");
+  }
+
+  parameter_table(page, fit);
+  if (can_simulate) {
+    page.raw("<h3>Model file</h3>\n");
+    page.table({"key", "value"}, model_rows(fit.model));
+  }
+
+  std::vector<double> model;
+  if (can_simulate && n > 0) model = try_simulate(page, fit.model, std::span(data.x).first(n), data.initial_state, "the data");
   const IndexRange tr = data.train.resolved(n);
   page.heading("Errors");
   std::vector<std::vector<std::string>> rows;
-  const std::string unit = data.output.unit.empty() ? "" : fmt::format(" [{}]", data.output.unit);
   if (model.size() == n && n > 0) {
     auto metrics = [&](std::size_t b, std::size_t e) {
       return compute_metrics(std::span(data.y).subspan(b, e - b), std::span(model).subspan(b, e - b));
     };
-    if (tr.end > tr.begin && tr.end <= n) rows.push_back(metric_cells("training" + unit, metrics(tr.begin, tr.end)));
+    if (tr.end > tr.begin && tr.end <= n) rows.push_back(metric_cells("training" + yu, metrics(tr.begin, tr.end)));
     if (tr.begin > 0 || tr.end < n) {
-      if (tr.end < n) rows.push_back(metric_cells("after training (validation)" + unit, metrics(tr.end, n)));
-      if (tr.begin > 0) rows.push_back(metric_cells("before training" + unit, metrics(0, tr.begin)));
-      rows.push_back(metric_cells("whole record" + unit, metrics(0, n)));
+      if (tr.end < n) rows.push_back(metric_cells("after training (validation)" + yu, metrics(tr.end, n)));
+      if (tr.begin > 0) rows.push_back(metric_cells("before training" + yu, metrics(0, tr.begin)));
+      rows.push_back(metric_cells("whole record" + yu, metrics(0, n)));
     }
   } else {
-    rows.push_back(metric_cells("training (from the fit)" + unit, fit.train));
+    rows.push_back(metric_cells("training (from the fit)" + yu, fit.train));
   }
+  if (can_simulate)
+    for (const auto& v : vals) {
+      const auto m = metrics_on(fit.model, v);
+      if (m)
+        rows.push_back(metric_cells(fmt::format("validation: {}, samples {}..{}{}", validation_name(*v.v),
+                                                v.range.begin, v.range.end, yu), *m));
+      else
+        page.para(fmt::format("The model cannot be evaluated on {}.", validation_name(*v.v)), "warn");
+    }
   page.table(metric_header, rows);
 
   page.heading("Figures");
   if (n == 0) {
     page.para("No data were given: no figures.", "warn");
   } else {
-    std::vector<double> xs(data.x.begin(), data.x.begin() + static_cast<std::ptrdiff_t>(n));
-    std::vector<double> ys(data.y.begin(), data.y.begin() + static_cast<std::ptrdiff_t>(n));
-    PlotSpec loops{{"Hysteresis loops: measured and model", data.input, data.output},
-                   {{"measured", xs, ys, "lines", "#d62728", false}}};
-    if (model.size() == n)
-      loops.series.push_back({fmt::format("{} model", fit_model_name(fit.model_kind)), xs, model, "lines", "#1f77b4",
-                              true});
-    page.figure(loops, "Output against input: measured and fitted model.");
-    const bool has_t = data.t.size() == n;
-    std::vector<double> t = has_t ? data.t : std::vector<double>(n);
-    if (!has_t)
-      for (std::size_t i = 0; i < n; ++i) t[i] = static_cast<double>(i);
-    const Axis ta = has_t ? Axis{"Time", "s"} : Axis{"Sample", ""};
-    PlotSpec ts{{"Output over the record", ta, data.output}, {{"measured", t, ys, "lines", "#d62728", false}}};
-    if (model.size() == n) ts.series.push_back({"model", t, model, "lines", "#1f77b4", true});
-    page.figure(ts, "Measured and model output over the record.");
-    if (model.size() == n)
-      page.figure({{"Fit residuals", ta, {"Residual (measured - model)", data.output.unit}},
-                   {{"residual", t, difference(ys, model), "lines", "#2ca02c", false}}},
-                  fmt::format("Residuals; training samples {}..{} of {}.", tr.begin, tr.end, n));
+    record_figures(page, {"", std::span(data.x).first(n), std::span(data.y).first(n), data.t}, model,
+                   std::string(fit_model_name(fit.model_kind)), data,
+                   fmt::format("training samples {}..{} of {}", tr.begin, tr.end, n));
+    for (const auto& v : vals) {
+      if (v.v->x.empty() || !can_simulate) continue;  // a range of the record above: already shown
+      const std::vector<double> vm = try_simulate(page, fit.model, v.x, data.initial_state, v.v->name);
+      record_figures(page, {"validation: " + v.v->name, v.x, v.y, v.t}, vm, std::string(fit_model_name(fit.model_kind)),
+                     data, fmt::format("scored samples {}..{}", v.range.begin, v.range.end), false);
+    }
   }
   io::write_text_file(html_path, page.finish());
 }
 
+void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
+                             const std::string& html_path, const std::string& command_line) {
+  Page page(fmt::format("hysteron evaluate: {} model", model_name(model)), command_line);
+  page.para(fmt::format("Model: {}", model_file));
+  if (!data.source.empty()) page.para("Data: " + data.source);
+  const std::size_t n = std::min(data.x.size(), data.y.size());
+  const IndexRange range = data.train.resolved(n);
+  const std::vector<double> y = try_simulate(page, model, std::span(data.x).first(n), data.initial_state, "the data");
+  const std::string yu = data.output.unit.empty() ? "" : fmt::format(" [{}]", data.output.unit);
+  page.heading("Errors");
+  if (y.size() == n && range.end <= n && range.begin < range.end) {
+    std::vector<std::vector<std::string>> rows = {
+        metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu),
+                     compute_metrics(std::span(data.y).subspan(range.begin, range.end - range.begin),
+                                     std::span(y).subspan(range.begin, range.end - range.begin)))};
+    if (range.begin > 0 || range.end < n) rows.push_back(metric_cells("whole record" + yu, compute_metrics(std::span(data.y).first(n), y)));
+    page.table(metric_header, rows);
+  }
+  page.raw("<h3>Model file</h3>\n");
+  page.table({"key", "value"}, model_rows(model));
+  page.heading("Figures");
+  record_figures(page, {"", std::span(data.x).first(n), std::span(data.y).first(n), data.t}, y,
+                 std::string(model_name(model)), data, fmt::format("scored samples {}..{} of {}", range.begin, range.end, n));
+  io::write_text_file(html_path, page.finish());
+}
+
 json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source) {
-  json params = json::array();
-  for (const auto& p : fit.parameters)
-    params.push_back({{"name", p.name}, {"value", p.value},
-                      {"std_error", std::isfinite(p.std_error) ? json(p.std_error) : json()}, {"held", p.held},
-                      {"at_bound", p.at_bound}});
-  json train_range = json::array({data.train.begin, data.train.end == IndexRange::npos ? json() : json(data.train.end)});
-  return {{"format", "hysteron-fit-report"},
-          {"schema", fit_report_schema},
-          {"status", std::string(fit_status_name(fit.status))},
-          {"message", fit.message},
-          {"model_kind", std::string(fit_model_name(fit.model_kind))},
-          {"initial_cost", fit.initial_cost},
-          {"final_cost", fit.final_cost},
-          {"iterations", fit.iterations},
-          {"total_iterations", fit.total_iterations},
-          {"num_starts", fit.num_starts},
-          {"time_s", fit.time_s},
-          {"covariance_note", fit.covariance_note},
-          {"model", io::model_to_json(fit.model)},
-          {"parameters", params},
-          {"train", metrics_to(fit.train)},
-          {"data",
-           {{"input", {{"file", source.input_file}, {"column", source.input_column}}},
-            {"output", {{"file", source.output_file}, {"column", source.output_column}}},
-            {"input_axis", {{"label", data.input.label}, {"unit", data.input.unit}}},
-            {"output_axis", {{"label", data.output.label}, {"unit", data.output.unit}}},
-            {"initial_state", data.initial_state == InitialState::virgin ? "virgin" : "relaxed"},
-            {"train", train_range}}}};
+  io::FitDocument d;
+  d.fit = fit;
+  d.data.input_file = source.input_file;
+  d.data.input_column = source.input_column;
+  d.data.output_file = source.output_file;
+  d.data.output_column = source.output_column;
+  d.data.input_label = data.input.label;
+  d.data.input_unit = data.input.unit;
+  d.data.output_label = data.output.label;
+  d.data.output_unit = data.output.unit;
+  d.data.initial_state = data.initial_state;
+  d.data.train = data.train;
+  for (const auto& v : data.validation) {
+    io::Evaluation e;
+    e.file = v.name;
+    e.range = v.range;
+    if (fit.status != FitStatus::invalid_input) {
+      try {
+        e.metrics = evaluate(fit.model, v.x.empty() ? data.x : v.x, v.x.empty() ? data.y : v.y, v.range,
+                             data.initial_state);
+      } catch (const Error&) {
+      }
+    }
+    d.validation.push_back(e);
+  }
+  return io::to_json(d);
 }
 
 LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& data_override) {
   const json j = parse_json_file(path);
-  // two dialects: this file's ("format": "hysteron-fit-report", with "data"), and the
-  // report of `hysteron fit --report` (no "format"; the data come from data_override)
-  const bool ours = j.is_object() && j.value("format", std::string()) == "hysteron-fit-report";
-  const bool cli = j.is_object() && !j.contains("format") && j.contains("status") && j.contains("model_kind") &&
-                   j.contains("parameters") && j.contains("model");
-  if (!ours && !cli)
+  // the document of `hysteron fit --report` ("format": "hysteron-fit-report"), or the
+  // report of older versions (no "format"; the data then come from data_override)
+  const bool ours = j.is_object() && j.value("format", std::string()) == io::fit_document_format;
+  const bool old_cli = j.is_object() && !j.contains("format") && j.contains("status") && j.contains("model_kind") &&
+                       j.contains("parameters") && j.contains("model");
+  if (!ours && !old_cli)
     throw Error(fmt::format("{}: not a hysteron fit report (expected the output of `hysteron fit ... --report "
                             "FILE.json`)", path));
-  if ((ours || j.contains("schema")) && (!j.contains("schema") || j["schema"] != fit_report_schema))
+  if (ours && (!j.contains("schema") || j["schema"] != fit_report_schema))
     throw Error(fmt::format("{}: unsupported fit report schema {} (this hysteron reads schema {})", path,
                             j.value("schema", json()).dump(), fit_report_schema));
   if (j["model"].is_null())
     throw Error(fmt::format("{}: the fit produced no model (status {})", path, j.value("status", std::string("?"))));
+  io::FitDocument doc = io::from_json<io::FitDocument>(j, path);
   LoadedFit out;
-  FitReport& f = out.fit;
-  f.status = status_from(get<std::string>(j, "status", path), path);
-  f.message = j.value("message", std::string());
-  f.model_kind = fit_model_from_name(get<std::string>(j, "model_kind", path));
-  f.initial_cost = j.value("initial_cost", 0.0);
-  f.final_cost = j.value("final_cost", 0.0);
-  f.iterations = j.value("iterations", 0);
-  f.total_iterations = j.value("total_iterations", 0);
-  f.num_starts = j.value("num_starts", j.value("starts", 0));
-  f.time_s = j.value("time_s", 0.0);
-  f.covariance_note = j.value("covariance_note", std::string());
-  f.model = io::model_from_json(need(j, "model", path), path + ": model");
-  for (const auto& p : j.value("parameters", json::array())) {
-    FitParameter fp;
-    fp.name = get<std::string>(p, "name", path + ": parameters");
-    fp.value = get<double>(p, "value", path + ": parameters");
-    fp.std_error = p.contains("std_error") && p["std_error"].is_number() ? p["std_error"].get<double>()
-                                                                        : std::numeric_limits<double>::quiet_NaN();
-    fp.held = p.value("held", false);
-    fp.at_bound = p.value("at_bound", false);
-    f.parameters.push_back(fp);
-  }
-  if (j.contains("train")) f.train = metrics_from(j["train"], path + ": train");
-
-  json d = j.value("data", json::object());
+  out.fit = doc.fit;
+  io::DataDescription& d = doc.data;
   if (!data_override.input_file.empty()) {
-    d["input"] = {{"file", data_override.input_file}, {"column", data_override.input_column}};
-    d["output"] = {{"file", data_override.output_file.empty() ? data_override.input_file : data_override.output_file},
-                   {"column", data_override.output_column}};
+    d.input_file = data_override.input_file;
+    d.input_column = data_override.input_column;
+    d.output_file = data_override.output_file.empty() ? data_override.input_file : data_override.output_file;
+    d.output_column = data_override.output_column;
   }
-  if (!d.contains("input") || !d.contains("output"))
+  if (d.input_file.empty())
     throw Error(fmt::format("{}: the report does not name its data: pass them (hysteron report {} --data FILE "
                             "--input COLUMN --output COLUMN)", path, path));
-  if (!d.contains("train") && j.contains("train") && j["train"].contains("range")) d["train"] = j["train"]["range"];
+  if (!j.contains("data") && j.contains("train") && j["train"].contains("range"))
+    io::from_json(j["train"]["range"], d.train, path + ": train.range");
   const std::string dw = path + ": data";
   auto resolve = [&](const std::string& file) {
     if (file.empty()) throw Error(fmt::format("{}: empty data file name", dw));
@@ -639,32 +704,36 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
                                                 "directory)", dw, file, path));
     return file;
   };
-  auto load = [&](const char* key) {
-    const json& s = need(d, key, dw);
-    const std::string file = resolve(get<std::string>(s, "file", dw + "." + key));
-    const std::string col = s.value("column", std::string());
-    return std::make_pair(io::read_column(file, col), fmt::format("{} (column {})", file, col.empty() ? "-" : col));
-  };
-  auto [x, xs] = load("input");
-  auto [y, ys] = load("output");
+  const std::string xf = resolve(d.input_file);
+  const std::string yf = resolve(d.output_file.empty() ? d.input_file : d.output_file);
+  std::vector<double> x = io::read_column(xf, d.input_column);
+  std::vector<double> y = io::read_column(yf, d.output_column);
   if (x.size() != y.size())
     throw Error(fmt::format("{}: input and output have different lengths ({} and {})", dw, x.size(), y.size()));
   out.data.x = std::move(x);
   out.data.y = std::move(y);
-  out.data.source = fmt::format("input {}, output {}", xs, ys);
-  auto axis = [&](const char* key, Axis def) {
-    if (!d.contains(key)) return def;
-    return Axis{d[key].value("label", def.label), d[key].value("unit", def.unit)};
-  };
-  out.data.input = axis("input_axis", {"Input", ""});
-  out.data.output = axis("output_axis", {"Output", ""});
-  if (out.data.input.label.empty()) out.data.input.label = "Input";
-  if (out.data.output.label.empty()) out.data.output.label = "Output";
-  out.data.initial_state = d.value("initial_state", std::string("virgin")) == "relaxed" ? InitialState::relaxed
-                                                                                        : InitialState::virgin;
-  if (d.contains("train") && d["train"].is_array() && d["train"].size() == 2) {
-    out.data.train.begin = d["train"][0].is_number() ? d["train"][0].get<std::size_t>() : 0;
-    out.data.train.end = d["train"][1].is_number() ? d["train"][1].get<std::size_t>() : IndexRange::npos;
+  if (!d.time_column.empty()) {
+    out.data.t = io::read_column(xf, d.time_column);
+    if (out.data.t.size() != out.data.x.size()) out.data.t.clear();
+  }
+  out.data.source = fmt::format("input {} (column {}), output {} (column {})", xf,
+                                d.input_column.empty() ? "-" : d.input_column, yf,
+                                d.output_column.empty() ? "-" : d.output_column);
+  out.data.input = {d.input_label, d.input_unit};
+  out.data.output = {d.output_label, d.output_unit};
+  out.data.initial_state = d.initial_state;
+  out.data.train = d.train;
+  for (const auto& e : doc.validation) {
+    ValidationData v;
+    v.name = e.file;
+    v.range = e.range;
+    if (!e.file.empty()) {
+      const std::string vf = resolve(e.file);
+      v.x = io::read_column(vf, d.input_column);
+      v.y = io::read_column(vf, d.output_column);
+      if (!d.time_column.empty()) v.t = io::read_column(vf, d.time_column);
+    }
+    out.data.validation.push_back(std::move(v));
   }
   return out;
 }

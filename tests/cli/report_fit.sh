@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# hysteron fit --report fit.json, then hysteron report fit.json --data ...: an
-# HTML report with the three fit plots; without the data: a clear error.
+# hysteron fit --report fit.json, then hysteron report fit.json (the report names its
+# data) and hysteron report fit.json --data ...: an HTML report with the three fit
+# plots; a report that does not name its data and no --data: a clear error.
 # Usage: bash report_fit.sh <hysteron-binary> <source-dir>
 set -euo pipefail
 BIN=$1
@@ -19,10 +20,18 @@ with open(sys.argv[1], "w") as f:
 PYEOF
 "$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/data.csv"
 "$BIN" fit --data "$T/data.csv" --input input --output output --train 0:1200 --out "$T/m.json" --report "$T/fit.json" > /dev/null
-if "$BIN" report "$T/fit.json" --out "$T/r.html" 2> "$T/err"; then
+"$BIN" report "$T/fit.json" --out "$T/r0.html"
+[ "$(grep -o '<svg' "$T/r0.html" | wc -l)" -eq 3 ]
+/usr/bin/python3 - "$T/fit.json" "$T/nodata.json" <<'PYEOF'
+import json, sys
+d = json.load(open(sys.argv[1]))
+del d["data"], d["format"], d["schema"]
+json.dump(d, open(sys.argv[2], "w"))
+PYEOF
+if "$BIN" report "$T/nodata.json" --out "$T/r.html" 2> "$T/err"; then
   echo "report without data should fail"; exit 1
 fi
-grep -q "fit.json: the report does not name its data" "$T/err"
+grep -q "nodata.json: the report does not name its data" "$T/err"
 "$BIN" report "$T/fit.json" --data "$T/data.csv" --input input --output output --out "$T/r.html"
 [ "$(grep -o '<svg' "$T/r.html" | wc -l)" -eq 3 ]
 grep -q "after training (validation)" "$T/r.html"

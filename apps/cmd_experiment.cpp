@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/report.hpp"
 
 namespace hysteron::cli {
@@ -30,7 +31,7 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   return o;
 }
 
-std::string command_line(int argc, char** argv) {
+std::string join_args(int argc, char** argv) {
   std::string s;
   for (int i = 0; i < argc; ++i) s += (i ? " " : "") + std::string(argv[i]);
   return s;
@@ -40,7 +41,8 @@ std::string g_command;  // the command line, shown in reports
 
 }  // namespace
 
-void set_command_line(int argc, char** argv) { g_command = command_line(argc, argv); }
+void set_command_line(int argc, char** argv) { g_command = join_args(argc, argv); }
+const std::string& command_line() { return g_command; }
 
 void add_experiment(CLI::App& app, Action& action) {
   auto args = std::make_shared<ExperimentArgs>();
@@ -60,7 +62,7 @@ void add_experiment(CLI::App& app, Action& action) {
         report::write_experiment_report(r, args->out + "/report.html", g_command);
       }
       if (args->json)
-        fmt::print("{}\n", r.to_json().dump(2));
+        fmt::print("{}\n", io::to_json(r).dump(2));
       else
         fmt::print("{}", r.table());
       return 0;

@@ -1,17 +1,24 @@
 // hysteron fit: identify a model from measured input/output columns.
 //
-//   hysteron fit --model gpi|pi|mpi-deadzone|mpi-asym --data D.csv --input COL --output COL
+//   hysteron fit --model auto|gpi|pi|mpi-deadzone|mpi-asym --data D.csv --input COL --output COL
 //                [--n N] [--dead-zones J] [--train A:B] [--validate C:D] [--validate-data V.csv ...]
-//                [--time-column COL]  (ranges in seconds with a suffix s: --train 0s:20s)
-//                --out model.json [--report fit.json] [--json] [--huber DELTA] [--seed S]
-//                [--starts K] [--threads T] [--relaxed] [--free-weights] [--force]
+//                [--time-column COL]  (ranges in seconds with a suffix s: --train 0s:20s; both sides
+//                                      of a range in the same unit)
+//                --out model.json|- [--report fit.json|fit.html] [--json] [--huber DELTA] [--seed S]
+//                [--starts K] [--threads T] [--max-iterations M] [--min-slope S] [--relaxed]
+//                [--free-weights] [--force] [--input-label "Pressure [kPa]"] [--output-label "..."]
 //
-// Exit codes: 0 converged (model written); 1 bad input (hysteron::Error);
-// 2 not converged (model not written unless --force).
+// --out - prints only the model JSON on stdout (the summary goes to stderr); --json prints
+// exactly one JSON document on stdout (the report, as --report FILE.json writes it). The
+// report is HTML if its name ends in .html or .htm, else JSON.
+//
+// Exit codes: 0 converged (model written); 1 error: bad input, bad usage (CLI11 parse
+// errors too), unreadable or unwritable files (hysteron::Error); 2 no_convergence or
+// failed (model not written unless --force); 3 poor_fit (the model is useless or worse
+// than the reference PI; not written unless --force); 4 internal error.
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -24,167 +31,241 @@
 #include "hysteron/error.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
+#include "hysteron/report.hpp"
 
 namespace hysteron::cli {
 
 namespace {
 
 struct FitCliOptions {
-  std::string model = "gpi", data, input, output, train, validate, time_column, out, report;
+  std::string model = "gpi", data, input, output, train, validate, time_column, out, report, input_label,
+              output_label;
   std::vector<std::string> validate_data;
-  int n = 10, dead_zones = 4, starts = 2, threads = 0;
-  double huber = 0.0;
+  int n = 10, dead_zones = 4, starts = 2, threads = 0, max_iterations = 200;
+  double huber = 0.0, min_slope = FitOptions{}.min_slope;
   unsigned seed = 0;
   bool json = false, relaxed = false, force = false, free_weights = false;
 };
 
-double parse_number(std::string_view s, std::string_view what) {
-  double v = 0.0;
-  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
-    throw Error(fmt::format("{}: \"{}\" is not a number", what, s));
-  return v;
+std::vector<std::string> model_names() {
+  std::vector<std::string> names;
+  for (FitModel m : {FitModel::automatic, FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym})
+    names.emplace_back(fit_model_name(m));
+  return names;
 }
 
-// "A:B" (sample indices, half-open; either side may be empty) or "As:Bs" (seconds, needs the time column).
-IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n) {
-  const auto colon = text.find(':');
-  if (colon == std::string::npos)
-    throw Error(fmt::format("{}: expected A:B (sample indices) or As:Bs (seconds), got \"{}\"", opt, text));
-  IndexRange r{0, n};
-  auto side = [&](std::string_view s, bool is_end) {
-    if (s.empty()) return;
-    std::size_t idx = 0;
-    if (s.back() == 's') {
-      if (!time) throw Error(fmt::format("{}: a range in seconds (\"{}\") needs --time-column", opt, text));
-      const double t = parse_number(s.substr(0, s.size() - 1), opt);
-      if (t < time->front() || t > time->back())
-        throw Error(fmt::format("{}: time {} s is outside the record ({} s .. {} s)", opt, t, time->front(), time->back()));
-      idx = static_cast<std::size_t>(std::lower_bound(time->begin(), time->end(), t) - time->begin());
-    } else {
-      const double v = parse_number(s, opt);
-      if (v < 0 || v != std::floor(v)) throw Error(fmt::format("{}: \"{}\" is not a sample index", opt, s));
-      idx = static_cast<std::size_t>(v);
-    }
-    (is_end ? r.end : r.begin) = idx;
-  };
-  side(std::string_view(text).substr(0, colon), false);
-  side(std::string_view(text).substr(colon + 1), true);
-  if (r.end > n || r.begin >= r.end)
-    throw Error(fmt::format("{}: range [{}, {}) is empty or outside the data ({} samples)", opt, r.begin, r.end, n));
-  return r;
-}
-
-nlohmann::json metrics_json(const FitMetrics& m) {
-  return {{"rms", m.rms}, {"max", m.max}, {"mae", m.mae}, {"rms_percent_span", m.rms_percent_span}, {"r2", m.r2}, {"n", m.n}};
+std::string join(const std::vector<std::string>& v, std::string_view sep) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? std::string(sep) : "") + v[i];
+  return s;
 }
 
 std::string metrics_text(std::string_view name, const FitMetrics& m) {
-  return fmt::format("{:<9} rms {:.6g}  max {:.6g}  mae {:.6g}  rms {:.4g}% of span  r2 {:.6f}  ({} samples)\n", name, m.rms,
-                     m.max, m.mae, m.rms_percent_span, m.r2, m.n);
+  return fmt::format("{:<9} rms {:.6g}  max {:.6g}  mae {:.6g}  rms {:.4g}% of span  r2 {:.6f}  ({} samples)", name,
+                     m.rms, m.max, m.mae, m.rms_percent_span, m.r2, m.n);
 }
 
+std::string rms_cell(const std::optional<FitMetrics>& m) {
+  return m && std::isfinite(m->rms) ? fmt::format("{:.6g}", m->rms) : "-";
+}
+
+bool has_model(FitStatus s) {
+  return s == FitStatus::converged || s == FitStatus::no_convergence || s == FitStatus::poor_fit;
+}
+
+// One validation set: its record (a range of the fit's record when x is empty).
+struct ValidationSet {
+  std::string file;  // "" = the fit's record
+  std::vector<double> x, y, t;
+  IndexRange range;
+};
+
 int run_fit(const FitCliOptions& c) {
+  if (c.out == "-" && c.json)
+    throw Error("--out - and --json both write to standard output: choose one (e.g. --json with --out FILE, or "
+                "--out - with --report FILE.json)");
+  if (c.report == "-" && (c.out == "-" || c.json))
+    throw Error("--report - and --out - / --json would both write to standard output: choose one");
   const std::vector<double> x = io::read_column(c.data, c.input);
   const std::vector<double> y = io::read_column(c.data, c.output);
   if (x.size() != y.size())
     throw Error(fmt::format("{}: input column has {} values, output column {}", c.data, x.size(), y.size()));
   std::optional<std::vector<double>> time;
-  if (!c.time_column.empty()) time = io::read_column(c.data, c.time_column);
+  if (!c.time_column.empty()) {
+    time = io::read_column(c.data, c.time_column);
+    if (time->size() != x.size())
+      throw Error(fmt::format("{}: time column has {} values, input column {}", c.data, time->size(), x.size()));
+  }
   FitOptions o;
   o.model = fit_model_from_name(c.model);
   o.num_operators = c.n;
   o.num_dead_zones = c.dead_zones;
   o.num_starts = c.starts;
   o.num_threads = c.threads;
+  o.max_iterations = c.max_iterations;
+  o.min_slope = c.min_slope;
   o.huber_delta = c.huber;
   o.seed = c.seed;
   o.initial_state = c.relaxed ? InitialState::relaxed : InitialState::virgin;
   o.gpi_free_weights = c.free_weights;
-  const IndexRange train = c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
+  const IndexRange train =
+      c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
   o.train = train;
-  std::optional<IndexRange> validate;
-  if (!c.validate.empty()) {
-    const std::size_t nv = c.validate_data.empty() ? x.size() : io::read_column(c.validate_data.front(), c.input).size();
-    std::optional<std::vector<double>> vtime;
-    if (!c.validate_data.empty() && time) vtime = io::read_column(c.validate_data.front(), c.time_column);
-    validate = parse_range(c.validate, "--validate", c.validate_data.empty() ? (time ? &*time : nullptr) : (vtime ? &*vtime : nullptr), nv);
-  }
-  if (isatty(fileno(stderr)))
-    o.progress = [](int start, int it, double cost) { fmt::print(stderr, "\rstart {} iteration {:3d} cost {:.6g}   ", start, it, cost); };
-  const FitReport rep = fit(x, y, o);
-  if (o.progress) fmt::print(stderr, "\n");
-  if (rep.status == FitStatus::invalid_input) throw Error(rep.message);
+  std::string why;
+  if (!o.is_valid(&why)) throw Error(fmt::format("fit options: {}", why));
 
-  // validation: a range of the same record (simulated from its start), or another record
-  std::optional<FitMetrics> val;
-  std::vector<std::pair<std::string, FitMetrics>> vals;
-  const bool fitted = rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence;
-  if (fitted) {
-    if (!c.validate_data.empty()) {
-      for (const auto& file : c.validate_data) {
-        const std::vector<double> xv = io::read_column(file, c.input);
-        const std::vector<double> yv = io::read_column(file, c.output);
-        vals.emplace_back(file, evaluate(rep.model, xv, yv, validate.value_or(IndexRange{}), o.initial_state));
+  // validation sets: each --validate-data file (range --validate of each), or a range of this record
+  std::vector<ValidationSet> sets;
+  for (const auto& file : c.validate_data) {
+    ValidationSet v;
+    v.file = file;
+    v.x = io::read_column(file, c.input);
+    v.y = io::read_column(file, c.output);
+    if (v.x.size() != v.y.size())
+      throw Error(fmt::format("{}: input column has {} values, output column {}", file, v.x.size(), v.y.size()));
+    if (time) v.t = io::read_column(file, c.time_column);
+    v.range = c.validate.empty() ? IndexRange{0, v.x.size()}
+                                 : parse_range(c.validate, fmt::format("--validate (on {})", file),
+                                               time ? &v.t : nullptr, v.x.size());
+    sets.push_back(std::move(v));
+  }
+  if (c.validate_data.empty()) {
+    if (!c.validate.empty())
+      sets.push_back({"", {}, {}, {}, parse_range(c.validate, "--validate", time ? &*time : nullptr, x.size())});
+    else if (train.end < x.size())
+      sets.push_back({"", {}, {}, {}, IndexRange{train.end, x.size()}});
+  }
+
+  if (isatty(fileno(stderr)))
+    o.progress = [](int start, int it, double cost) {
+      fmt::print(stderr, "\rstart {} iteration {:3d} cost {:.6g}   ", start, it, cost);
+    };
+  const FitReport rep = fit(x, y, o);
+  if (o.progress) fmt::print(stderr, "\r{:60}\r", "");
+  if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.data, rep.message));
+
+  auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v) -> std::optional<FitMetrics> {
+    try {
+      return v.file.empty() ? evaluate(m, x, y, v.range, o.initial_state) : evaluate(m, v.x, v.y, v.range, o.initial_state);
+    } catch (const Error&) {
+      return std::nullopt;
+    }
+  };
+
+  io::FitDocument doc;
+  doc.fit = rep;
+  const report::Axis in_axis = parse_axis(c.input_label, c.input), out_axis = parse_axis(c.output_label, c.output);
+  doc.data.input_file = c.data;
+  doc.data.input_column = c.input;
+  doc.data.output_file = c.data;
+  doc.data.output_column = c.output;
+  doc.data.time_column = c.time_column;
+  doc.data.input_label = in_axis.label;
+  doc.data.input_unit = in_axis.unit;
+  doc.data.output_label = out_axis.label;
+  doc.data.output_unit = out_axis.unit;
+  doc.data.initial_state = o.initial_state;
+  doc.data.train = train;
+  const bool fitted = has_model(rep.status);
+  if (fitted)
+    for (const auto& v : sets)
+      if (const auto m = evaluate_on(rep.model, v)) doc.validation.push_back({v.file, v.range, *m});
+  if (!sets.empty())
+    for (const auto& cand : rep.candidates) {
+      std::vector<FitMetrics> row;
+      for (const auto& v : sets) {
+        const auto m = has_model(cand.status) ? evaluate_on(cand.model, v) : std::nullopt;
+        FitMetrics none;
+        none.rms = none.max = none.mae = none.rms_percent_span = none.r2 = std::nan("");
+        row.push_back(m.value_or(none));
       }
-      val = vals.front().second;
-    } else if (validate) {
-      val = evaluate(rep.model, x, y, *validate, o.initial_state);
-    } else if (train.end < x.size()) {
-      val = evaluate(rep.model, x, y, IndexRange{train.end, x.size()}, o.initial_state);
+      doc.candidate_validation.push_back(std::move(row));
     }
-  }
-  nlohmann::json j;
-  j["status"] = std::string(fit_status_name(rep.status));
-  j["message"] = rep.message;
-  j["model_kind"] = std::string(fit_model_name(rep.model_kind));
-  j["iterations"] = rep.iterations;
-  j["total_iterations"] = rep.total_iterations;
-  j["starts"] = rep.num_starts;
-  j["time_s"] = rep.time_s;
-  j["initial_cost"] = rep.initial_cost;
-  j["final_cost"] = rep.final_cost;
-  j["train"] = metrics_json(rep.train);
-  j["train"]["range"] = {train.begin, train.end};
-  j["validate"] = val ? metrics_json(*val) : nlohmann::json(nullptr);
-  if (!vals.empty()) {
-    j["validate_files"] = nlohmann::json::array();
-    for (const auto& [file, m] : vals) {
-      auto e = metrics_json(m);
-      e["file"] = file;
-      j["validate_files"].push_back(e);
-    }
-  }
-  nlohmann::json params = nlohmann::json::array();
-  for (const auto& p : rep.parameters)
-    params.push_back({{"name", p.name},
-                      {"value", p.value},
-                      {"std_error", std::isfinite(p.std_error) ? nlohmann::json(p.std_error) : nlohmann::json(nullptr)},
-                      {"held", p.held},
-                      {"at_bound", p.at_bound}});
-  j["parameters"] = params;
-  j["covariance_note"] = rep.covariance_note;
-  j["model"] = fitted ? io::model_to_json(rep.model) : nlohmann::json(nullptr);
 
   const bool write = rep.status == FitStatus::converged || (fitted && c.force);
-  if (write) io::write_model_file(c.out, rep.model, {{"note", fmt::format("hysteron fit --model {} on {}", c.model, c.data)}});
-  j["model_written"] = write;
-  if (!c.report.empty()) io::write_text_file(c.report, j.dump(2) + "\n");
-  if (c.json) {
-    fmt::print("{}\n", j.dump(2));
-  } else {
-    std::string text = rep.full_report();
-    if (vals.size() > 1) {
-      for (const auto& [file, m] : vals) text += metrics_text("validate:", m) + fmt::format("          ({})\n", file);
-    } else if (val) {
-      text += metrics_text("validate:", *val);
-    }
-    text += write ? fmt::format("model written to {}\n", c.out)
-                  : fmt::format("model NOT written ({}; use --force to write it anyway)\n", fit_status_name(rep.status));
-    fmt::print("{}", text);
+  if (write) {
+    const std::string note = o.model == FitModel::automatic
+                                 ? fmt::format("hysteron fit --model auto (chose {}) on {}",
+                                               fit_model_name(rep.model_kind), c.data)
+                                 : fmt::format("hysteron fit --model {} on {}", c.model, c.data);
+    io::write_model_file(c.out, rep.model, {{"note", note}});
   }
-  return rep.status == FitStatus::converged ? 0 : 2;
+  doc.model_written = write;
+  doc.model_file = write ? c.out : std::string();
+
+  if (!c.report.empty()) {
+    if (is_html_path(c.report)) {
+      report::FitData data;
+      data.x = x;
+      data.y = y;
+      if (time) data.t = *time;
+      data.input = in_axis;
+      data.output = out_axis;
+      data.source = fmt::format("{} (input column {}, output column {})", c.data, c.input, c.output);
+      data.initial_state = o.initial_state;
+      data.train = train;
+      for (const auto& v : sets) data.validation.push_back({v.file, v.x, v.y, v.t, v.range});
+      report::write_fit_report(rep, data, c.report, command_line());
+    } else {
+      io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");
+    }
+  }
+
+  const int code = rep.status == FitStatus::converged  ? exit_ok
+                   : rep.status == FitStatus::poor_fit ? exit_poor_fit
+                                                       : exit_not_converged;
+  if (c.json) {
+    fmt::print("{}\n", io::to_json(doc).dump(2));
+    return code;
+  }
+  // the text report: on stdout, or on stderr when stdout carries the model (--out -)
+  std::string text = rep.full_report();
+  if (!text.empty() && text.back() != '\n') text += '\n';
+  const std::string xu = in_axis.unit.empty() ? "input units" : in_axis.unit;
+  const std::string yu = out_axis.unit.empty() ? "output unit" : out_axis.unit;
+  if (fitted) {
+    text += fmt::format("reference PI: rms {:.6g}  ({:.4g}% of span) on the training range; the fit's rms {:.6g}\n",
+                        rep.reference.rms, rep.reference.rms_percent_span, rep.train.rms);
+    text += fmt::format("inverse: max slope {:.6g} {} per {}; max jump per sample {:.6g} (measured input: max step "
+                        "{:.6g}){}\n",
+                        rep.inverse.max_slope, xu, yu, rep.inverse.max_jump, rep.inverse.max_input_step,
+                        rep.inverse.increasing ? "" : "; the model is decreasing");
+  }
+  for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
+  if (!rep.candidates.empty()) {
+    text += "candidates (chosen by hold-out RMS on the last part of the training range):\n";
+    std::string head = fmt::format("  {:<13} {:<15} {:>12} {:>12}", "kind", "status", "train RMS", "hold-out RMS");
+    for (const auto& v : sets) head += fmt::format(" {:>14}", v.file.empty() ? std::string("validate RMS") : "validate RMS");
+    text += head + fmt::format(" {:>9}\n", "time [s]");
+    for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
+      const auto& cand = rep.candidates[i];
+      std::string line = fmt::format("  {:<13} {:<15} {:>12.6g} {:>12.6g}", fit_model_name(cand.kind),
+                                     fit_status_name(cand.status), cand.train.rms, cand.holdout.rms);
+      for (std::size_t k = 0; k < sets.size(); ++k) {
+        const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();
+        line += fmt::format(" {:>14}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");
+      }
+      text += line + fmt::format(" {:>9.3f}{}\n", cand.time_s, cand.chosen ? "  <- chosen" : "");
+    }
+    if (sets.size() > 1) {
+      text += "  validate RMS columns:";
+      for (const auto& v : sets) text += " " + (v.file.empty() ? std::string("this record") : v.file);
+      text += "\n";
+    }
+  }
+  for (const auto& e : doc.validation)
+    text += metrics_text("validate:", e.metrics) +
+            fmt::format("  [{}, samples {}..{}]\n", e.file.empty() ? c.data : e.file, e.range.begin, e.range.end);
+  if (write && c.out != "-")
+    text += fmt::format("model written to {}\n", c.out);
+  else if (!write)
+    text += fmt::format("model NOT written ({}{})\n", fit_status_name(rep.status),
+                        fitted ? "; use --force to write it anyway" : "");
+  if (!c.report.empty() && c.report != "-") text += fmt::format("report written to {}\n", c.report);
+  std::fputs(text.c_str(), c.out == "-" || c.report == "-" ? stderr : stdout);
+  return code;
 }
 
 }  // namespace
@@ -192,29 +273,38 @@ int run_fit(const FitCliOptions& c) {
 void add_fit(CLI::App& app, Action& action) {
   auto c = std::make_shared<FitCliOptions>();
   CLI::App* sub = app.add_subcommand("fit", "identify a hysteresis model from measured input/output data");
-  sub->add_option("--model,-m", c->model, "gpi | pi | mpi-deadzone | mpi-asym")->check(CLI::IsMember({"gpi", "pi", "mpi-deadzone", "mpi-asym"}));
+  const std::vector<std::string> names = model_names();
+  sub->add_option("--model,-m", c->model,
+                  fmt::format("{} (auto: fit every kind, choose by hold-out RMS; default gpi)", join(names, " | ")))
+      ->check(CLI::IsMember(names));
   sub->add_option("--data,-d", c->data, "data file (.csv or .mat)")->required();
   sub->add_option("--input,-i", c->input, "input column (header name or 0-based index)")->required();
   sub->add_option("--output,-y", c->output, "output column (header name or 0-based index)")->required();
   sub->add_option("--n", c->n, "number of operators (default 10)");
   sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones (default 4)");
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");
-  sub->add_option("--validate", c->validate, "validation range C:D (of --validate-data if given)");
+  sub->add_option("--validate", c->validate, "validation range C:D (of each --validate-data file if given)");
   sub->add_option("--validate-data", c->validate_data, "other records (same columns) to validate on (repeatable)");
-  sub->add_option("--time-column", c->time_column, "time column, for ranges in seconds");
-  sub->add_option("--out,-o", c->out, "model file to write (JSON)")->required();
-  sub->add_option("--report", c->report, "also write the JSON report to this file");
-  sub->add_flag("--json", c->json, "print the report as JSON");
+  sub->add_option("--time-column", c->time_column, "time column: ranges in seconds, time axis of the HTML report");
+  sub->add_option("--out,-o", c->out, "model file to write (JSON); - prints the model JSON on stdout")->required();
+  sub->add_option("--report", c->report, "also write the report: HTML if the name ends in .html/.htm, else JSON");
+  sub->add_flag("--json", c->json, "print the report as one JSON document");
+  sub->add_option("--input-label", c->input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
+  sub->add_option("--output-label", c->output_label, "output axis label with unit, e.g. \"Force [N]\"");
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
   sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)");
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
   sub->add_option("--threads", c->threads,
                   "threads refining the starts concurrently (default 0: one per hardware thread; 1: sequential; "
                   "the result does not depend on it)");
+  sub->add_option("--max-iterations", c->max_iterations, "LM iterations per start (default 200)");
+  sub->add_option("--min-slope", c->min_slope,
+                  fmt::format("minimum slope of the model relative to span(y)/span(x), bounds the inverse's slope "
+                              "(default {})", FitOptions{}.min_slope));
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
   sub->add_flag("--free-weights", c->free_weights,
                 "gpi: the free-weight variant (tanh envelope, q and n free weights) instead of Eq. 8's exponential law");
-  sub->add_flag("--force", c->force, "write the model even if the fit did not converge");
+  sub->add_flag("--force", c->force, "write the model even if the fit did not converge or is a poor fit");
   sub->callback([c, &action] { action = [c] { return run_fit(*c); }; });
 }
 

@@ -3,6 +3,7 @@
 //
 //   hysteron simulate --model M.json --input X.csv [--column C] --output Y.csv [--relaxed]
 //   hysteron invert   --model M.json --input Y.csv [--column C] --output X.csv [--limits LO,HI] [--relaxed]
+// --model - reads the model JSON from stdin (e.g. hysteron fit ... --out - | hysteron simulate --model - ...).
 #include <fmt/format.h>
 
 #include <charconv>
@@ -97,7 +98,7 @@ double relaxed_input_for(const ModelParams& params, const Limits& lim, double y0
 }
 
 int run_simulate(const Options& o) {
-  const ModelParams params = io::read_model_file(o.model);
+  const ModelParams params = read_model_source(o.model);
   const std::vector<double> x = read_input(o.input, o.column, "input");
   Model model(params);
   if (o.relaxed && !x.empty()) model.reset_relaxed(x.front());
@@ -107,7 +108,7 @@ int run_simulate(const Options& o) {
 }
 
 int run_invert(const Options& o) {
-  const ModelParams params = io::read_model_file(o.model);
+  const ModelParams params = read_model_source(o.model);
   const std::vector<double> y = read_input(o.input, o.column, "output");
   InverseOptions opt;
   if (!o.limits.empty()) opt.input_limits = parse_limits(o.limits);
@@ -132,7 +133,7 @@ int run_invert(const Options& o) {
 }
 
 void add_common(CLI::App* sub, Options& o, const char* input_help) {
-  sub->add_option("--model,-m", o.model, "model file (JSON, see docs/model-files.md)")->required();
+  sub->add_option("--model,-m", o.model, "model file (JSON, see docs/model-files.md); - reads it from stdin")->required();
   sub->add_option("--input,-i", o.input, input_help)->required();
   sub->add_option("--column,-c", o.column, "column of the input file: header name or 0-based index (.mat: variable)");
   sub->add_option("--output,-o", o.output, "output file: .csv, .mat, or - for CSV on stdout")->required();

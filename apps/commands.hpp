@@ -5,6 +5,13 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hysteron/identify.hpp"
+#include "hysteron/models.hpp"
+#include "hysteron/report.hpp"
 
 namespace hysteron::cli {
 
@@ -14,6 +21,25 @@ void add_simulate_invert(CLI::App& app, Action& action);  // cmd_simulate.cpp: s
 void add_fit(CLI::App& app, Action& action);              // cmd_fit.cpp: fit
 void add_experiment(CLI::App& app, Action& action);       // cmd_experiment.cpp: experiment, demo
 void add_report(CLI::App& app, Action& action);           // cmd_report.cpp: report
+void add_evaluate(CLI::App& app, Action& action);         // cmd_evaluate.cpp: evaluate
 void set_command_line(int argc, char** argv);             // recorded in reports
+const std::string& command_line();                        // the recorded command line
+
+// ---- shared by the subcommands (common.cpp) --------------------------------------
+
+// Exit codes of the CLI (README, "Command line"): 0 success; 1 error (bad input or
+// usage, a hysteron::Error, a CLI11 parse error); fit: 2 no_convergence or failed,
+// 3 poor_fit (model not written unless --force); 4 internal error.
+inline constexpr int exit_ok = 0, exit_error = 1, exit_not_converged = 2, exit_poor_fit = 3, exit_internal = 4;
+
+// A model file, or the model JSON on stdin for "-". Throws hysteron::Error.
+ModelParams read_model_source(const std::string& path);
+// "A:B" (sample indices, half-open; either side may be empty) or "As:Bs" (seconds, needs
+// `time`); both sides in the same unit. Throws hysteron::Error naming `opt`.
+IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n);
+// "Pressure [kPa]" -> {"Pressure", "kPa"}; "" -> {fallback, ""}.
+report::Axis parse_axis(const std::string& text, const std::string& fallback);
+// Reports: a path ending in .html or .htm (any case) is HTML, anything else JSON.
+bool is_html_path(const std::string& path);
 
 }  // namespace hysteron::cli

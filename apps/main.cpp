@@ -1,5 +1,10 @@
-// hysteron command-line tool: simulate, invert, fit, experiment, report, demo.
+// hysteron command-line tool: simulate, invert, fit, evaluate, experiment, report, demo.
+//
+// Exit codes (README, "Command line"): 0 success; 1 error: bad input, bad usage (CLI11's
+// parse errors, which CLI11 itself would report as 105-109, are mapped to 1), unreadable
+// or unwritable files; fit: 2 no_convergence or failed, 3 poor_fit; 4 internal error.
 #include <fmt/format.h>
+#include <glog/logging.h>
 
 #include <cstdio>
 #include <exception>
@@ -8,26 +13,36 @@
 #include "hysteron/error.hpp"
 
 int main(int argc, char** argv) {
+  // Ceres logs through glog; its lines (e.g. "W0102 12:00:00 ... covariance.cc") must never
+  // reach the user's terminal: hysteron reports what matters itself. Only FATAL is kept.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  FLAGS_logtostderr = false;
+  FLAGS_stderrthreshold = google::GLOG_FATAL;
+
   CLI::App app{"hysteron: hysteresis models, exact inverses, identification and control of pneumatic muscles"};
   app.require_subcommand(1);
   hysteron::cli::Action action;
   hysteron::cli::set_command_line(argc, argv);
   hysteron::cli::add_simulate_invert(app, action);
   hysteron::cli::add_fit(app, action);
+  hysteron::cli::add_evaluate(app, action);
   hysteron::cli::add_experiment(app, action);
   hysteron::cli::add_report(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help / --version: CLI11 prints them and returns 0; every other parse error
+    // (unknown option, missing or invalid value, ...) is a usage error: exit 1.
+    const int rc = app.exit(e);
+    return rc == 0 ? hysteron::cli::exit_ok : hysteron::cli::exit_error;
   }
   try {
-    return action ? action() : 0;
+    return action ? action() : hysteron::cli::exit_ok;
   } catch (const hysteron::Error& e) {
     fmt::print(stderr, "hysteron: error: {}\n", e.what());
-    return 1;
+    return hysteron::cli::exit_error;
   } catch (const std::exception& e) {
     fmt::print(stderr, "hysteron: internal error: {}\n", e.what());
-    return 2;
+    return hysteron::cli::exit_internal;
   }
 }

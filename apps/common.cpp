@@ -1,0 +1,98 @@
+// Helpers shared by the subcommands (see commands.hpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <iostream>
+#include <iterator>
+#include <string>
+
+#include "commands.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
+
+namespace hysteron::cli {
+
+namespace {
+
+double parse_number(std::string_view s, std::string_view what) {
+  double v = 0.0;
+  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
+    throw Error(fmt::format("{}: \"{}\" is not a number", what, s));
+  return v;
+}
+
+std::string trim(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return std::string(s);
+}
+
+}  // namespace
+
+ModelParams read_model_source(const std::string& path) {
+  if (path != "-") return io::read_model_file(path);
+  const std::string text{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+  if (trim(text).empty()) throw Error("--model -: standard input is empty (expected a model file's JSON)");
+  return io::model_from_json(io::parse_json(text, "<stdin>"), "<stdin>");
+}
+
+IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos)
+    throw Error(fmt::format("{}: expected A:B (sample indices) or As:Bs (seconds), got \"{}\"", opt, text));
+  const std::string_view a = std::string_view(text).substr(0, colon), b = std::string_view(text).substr(colon + 1);
+  const bool a_s = !a.empty() && a.back() == 's', b_s = !b.empty() && b.back() == 's';
+  if (!a.empty() && !b.empty() && a_s != b_s)
+    throw Error(fmt::format("{}: \"{}\" mixes seconds and sample indices; write both sides in seconds (As:Bs) or "
+                            "both as sample indices (A:B)", opt, text));
+  IndexRange r{0, n};
+  auto side = [&](std::string_view s, bool is_end) {
+    if (s.empty()) return;
+    std::size_t idx = 0;
+    if (s.back() == 's') {
+      if (!time) throw Error(fmt::format("{}: a range in seconds (\"{}\") needs --time-column", opt, text));
+      if (time->empty()) throw Error(fmt::format("{}: the time column is empty", opt));
+      const double t = parse_number(s.substr(0, s.size() - 1), opt);
+      if (t < time->front() || t > time->back())
+        throw Error(fmt::format("{}: time {} s is outside the record ({} s .. {} s)", opt, t, time->front(),
+                                time->back()));
+      idx = static_cast<std::size_t>(std::lower_bound(time->begin(), time->end(), t) - time->begin());
+    } else {
+      const double v = parse_number(s, opt);
+      if (v < 0 || v != std::floor(v)) throw Error(fmt::format("{}: \"{}\" is not a sample index", opt, s));
+      idx = static_cast<std::size_t>(v);
+    }
+    (is_end ? r.end : r.begin) = idx;
+  };
+  side(a, false);
+  side(b, true);
+  if (r.end > n || r.begin >= r.end)
+    throw Error(fmt::format("{}: range [{}, {}) is empty or outside the data ({} samples)", opt, r.begin, r.end, n));
+  return r;
+}
+
+report::Axis parse_axis(const std::string& text, const std::string& fallback) {
+  const std::string t = trim(text);
+  if (t.empty()) return {fallback.empty() ? std::string("value") : fallback, ""};
+  const auto open = t.rfind('[');
+  if (open != std::string::npos && t.back() == ']') {
+    std::string label = trim(std::string_view(t).substr(0, open));
+    const std::string unit = trim(std::string_view(t).substr(open + 1, t.size() - open - 2));
+    if (label.empty()) label = fallback.empty() ? std::string("value") : fallback;
+    return {label, unit};
+  }
+  return {t, ""};
+}
+
+bool is_html_path(const std::string& path) {
+  std::string lower = path;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return lower.ends_with(".html") || lower.ends_with(".htm");
+}
+
+}  // namespace hysteron::cli

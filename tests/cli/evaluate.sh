@@ -1,0 +1,128 @@
+#!/usr/bin/env bash
+# hysteron evaluate: fit a model, then score it on the same and on new data. Checks that
+# evaluate reproduces the fit's own validation numbers, that a model scores far worse on
+# a record of another actuator, --model - (stdin), --json (one document), the HTML/JSON
+# reports, and the exit codes (0 evaluated, 1 bad input or usage).
+# Usage: bash evaluate.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+PY=/usr/bin/python3
+
+cat > "$T/gpi.json" <<'JSON'
+{"model": "gpi", "c": [60, 4, -0.5, 30], "q": 0.8, "n": 10, "rho": 0.4, "tau": 0.1, "alpha": 2}
+JSON
+cat > "$T/other.json" <<'JSON'
+{"model": "gpi", "c": [40, 6, -0.3, 20], "q": 1.5, "n": 10, "rho": 0.1, "tau": 0.5, "alpha": 3}
+JSON
+$PY - "$T/x.csv" <<'PYEOF'
+import sys
+with open(sys.argv[1], "w") as f:
+    f.write("pressure\n")
+    for a in (0.6, 0.5, 0.4, 0.3, 0.2, 0.1):
+        for k in range(300):
+            f.write(f"{a * (1 - abs(2 * k / 300 - 1))!r}\n")
+PYEOF
+"$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/data.csv" || fail "simulate"
+"$BIN" simulate --model "$T/other.json" --input "$T/x.csv" --output "$T/new.csv" || fail "simulate other"
+# a time column (10 ms samples) for the seconds ranges
+$PY - "$T/data.csv" "$T/data_t.csv" <<'PYEOF'
+import sys
+rows = open(sys.argv[1]).read().split("\n")[1:]
+with open(sys.argv[2], "w") as f:
+    f.write("t_s,input,output\n")
+    for i, r in enumerate(x for x in rows if x):
+        f.write(f"{i * 0.01!r},{r}\n")
+PYEOF
+
+"$BIN" fit --model gpi --data "$T/data.csv" --input input --output output --train 0:1200 --threads 1 \
+  --out "$T/m.json" --report "$T/fit.json" > "$T/fit.txt"
+rc=$?
+[ $rc -eq 0 ] || fail "fit exit $rc"
+[ -s "$T/m.json" ] || fail "fit wrote no model"
+
+# 1. evaluate on the validation range reproduces the fit's validation metrics
+"$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output --range 1200:1800 --json \
+  > "$T/ev.json"
+rc=$?
+[ $rc -eq 0 ] || fail "evaluate exit $rc"
+$PY - "$T/fit.json" "$T/ev.json" <<'PYEOF' || fail "evaluate numbers differ from the fit's validation"
+import json, sys
+fit = json.load(open(sys.argv[1]))
+ev = json.load(open(sys.argv[2]))   # --json: exactly one document
+assert ev["format"] == "hysteron-evaluation", ev.get("format")
+v = fit["validate"]
+m = ev["metrics"]
+assert m["n"] == 600 == v["n"], (m["n"], v["n"])
+for k in ("rms", "max", "mae", "rms_percent_span", "r2"):
+    assert abs(m[k] - v[k]) <= 1e-12 * max(1.0, abs(v[k])), (k, m[k], v[k])
+assert m["range"] == [1200, 1800], m["range"]
+# a good model: below 0.5 % of the span on data it has not seen
+assert m["rms_percent_span"] < 0.5, m
+print("evaluate == fit validation: rms", m["rms"])
+PYEOF
+
+# 2. the same model on another actuator's record is much worse (the numbers are real)
+"$BIN" evaluate --model "$T/m.json" --data "$T/new.csv" --input input --output output --json > "$T/ev_new.json" \
+  || fail "evaluate on new data"
+$PY - "$T/ev.json" "$T/ev_new.json" <<'PYEOF' || fail "a wrong model does not score worse"
+import json, sys
+good = json.load(open(sys.argv[1]))["metrics"]
+bad = json.load(open(sys.argv[2]))["metrics"]
+assert bad["n"] == 1800, bad["n"]
+assert bad["rms"] > 20 * good["rms"], (bad["rms"], good["rms"])
+PYEOF
+
+# 3. --model - reads the model from stdin; the text summary names the range and the numbers
+"$BIN" evaluate --model - --data "$T/data.csv" --input input --output output --train 1200:1800 \
+  < "$T/m.json" > "$T/ev.txt" || fail "evaluate --model -"
+grep -q "^evaluate: rms " "$T/ev.txt" || fail "no evaluate: line"
+grep -q "samples 1200..1800" "$T/ev.txt" || fail "range not named"
+# fit --out - | evaluate --model -: a pipe of model JSON only
+"$BIN" fit --model pi --data "$T/data.csv" --input input --output output --train 0:1200 --threads 1 --force \
+  --out - 2> "$T/pipe.err" | "$BIN" evaluate --model - --data "$T/data.csv" --input input --output output > "$T/pipe.txt"
+grep -q "^evaluate: rms " "$T/pipe.txt" || fail "fit --out - | evaluate --model -: $(cat "$T/pipe.txt")"
+grep -q "pi fit" "$T/pipe.err" || fail "fit --out -: the summary is not on stderr"
+
+# 4. reports: HTML by extension (loops, output, residuals against time), JSON otherwise
+"$BIN" evaluate --model "$T/m.json" --data "$T/data_t.csv" --input input --output output --time-column t_s \
+  --range 12s:17s --report "$T/ev.html" --input-label "Pressure [MPa]" --output-label "Contraction [mm]" > /dev/null \
+  || fail "evaluate --report html"
+[ "$(grep -o '<svg' "$T/ev.html" 2>/dev/null | wc -l)" -eq 3 ] || fail "evaluate html: expected 3 figures"
+grep -q "Pressure \[MPa\]" "$T/ev.html" || fail "evaluate html: input label"
+grep -q "Time \[s\]" "$T/ev.html" || fail "evaluate html: time axis"
+grep -q "samples 1200..1700" "$T/ev.html" || fail "evaluate html: 12s:17s is samples 1200..1700"
+"$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output --report "$T/ev2.json" \
+  > /dev/null || fail "evaluate --report json"
+$PY -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['metrics']['n'] == 1800" "$T/ev2.json" \
+  || fail "evaluate json report"
+
+# 5. errors: exit 1 with a message naming what and where; no report left behind
+expect_rc1() {
+  local what=$1 needle=$2
+  shift 2
+  "$@" > "$T/out" 2> "$T/err"
+  local rc=$?
+  if [ $rc -ne 1 ]; then fail "$what: exit $rc (expected 1)"; return; fi
+  grep -qF -- "$needle" "$T/err" || fail "$what: stderr lacks '$needle': $(cat "$T/err")"
+}
+expect_rc1 "missing model file" "nope.json" \
+  "$BIN" evaluate --model "$T/nope.json" --data "$T/data.csv" --input input --output output --report "$T/x.html"
+[ -e "$T/x.html" ] && fail "a report was written for a failed evaluate"
+expect_rc1 "unknown column" "no column named" \
+  "$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output force
+expect_rc1 "mixed units in a range" "mixes seconds and sample indices" \
+  "$BIN" evaluate --model "$T/m.json" --data "$T/data_t.csv" --input input --output output --time-column t_s --range 0s:10
+expect_rc1 "empty stdin" "standard input is empty" \
+  "$BIN" evaluate --model - --data "$T/data.csv" --input input --output output < /dev/null
+expect_rc1 "usage error (CLI11)" "--bogus" \
+  "$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output --bogus
+expect_rc1 "missing required option (CLI11)" "--data" \
+  "$BIN" evaluate --model "$T/m.json" --input input --output output
+"$BIN" evaluate --help > /dev/null 2>&1 || fail "evaluate --help exits non-zero"
+
+if [ $fails -ne 0 ]; then echo "evaluate: $fails failures"; exit 1; fi
+echo "evaluate: ok"

@@ -1,0 +1,169 @@
+#!/usr/bin/env bash
+# hysteron fit, as a new user would try it: --report x.html writes HTML (labels from
+# --input-label/--output-label, time on the x axis with --time-column, every
+# --validate-data file shown), each validate: line names its file, --model auto prints
+# and writes the candidates, --out - prints only the model JSON, --json prints exactly one
+# JSON document, --max-iterations, --train 0s:10 is an error, exit codes follow the
+# documented table (0 converged, 1 error/usage, 2 no_convergence/failed, 3 poor_fit),
+# and no Ceres/glog log line reaches the terminal.
+# Usage: bash fit_cli.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+PY=/usr/bin/python3
+
+cat > "$T/gpi.json" <<'JSON'
+{"model": "gpi", "c": [60, 4, -0.5, 30], "q": 0.8, "n": 10, "rho": 0.4, "tau": 0.1, "alpha": 2}
+JSON
+# two records of the same actuator (different amplitudes), with a time column (10 ms)
+$PY - "$T" <<'PYEOF'
+import sys
+for name, amps in (("a", (0.6, 0.5, 0.4, 0.3, 0.2, 0.1)), ("b", (0.55, 0.35, 0.45, 0.15))):
+    with open(f"{sys.argv[1]}/{name}_x.csv", "w") as f:
+        f.write("pressure\n")
+        for a in amps:
+            for k in range(300):
+                f.write(f"{a * (1 - abs(2 * k / 300 - 1))!r}\n")
+PYEOF
+for r in a b; do
+  "$BIN" simulate --model "$T/gpi.json" --input "$T/${r}_x.csv" --output "$T/${r}_raw.csv" || fail "simulate $r"
+  $PY - "$T/${r}_raw.csv" "$T/$r.csv" <<'PYEOF'
+import sys
+rows = [x for x in open(sys.argv[1]).read().split("\n")[1:] if x]
+with open(sys.argv[2], "w") as f:
+    f.write("t_s,p,y\n")
+    for i, r in enumerate(rows):
+        f.write(f"{i * 0.01!r},{r}\n")
+PYEOF
+done
+glog_lines() { grep -E '^[IWEF][0-9]{4} [0-9:.]+ ' "$1"; }
+
+# 1. HTML report by extension, labels, time axis, every validation file; validate: lines name their file
+"$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --time-column t_s --train 0s:12s \
+  --validate-data "$T/a.csv" --validate-data "$T/b.csv" --threads 1 --input-label "Pressure [MPa]" \
+  --output-label "Contraction [mm]" --out "$T/m.json" --report "$T/fit.html" > "$T/fit.txt" 2> "$T/fit.err"
+rc=$?
+[ $rc -eq 0 ] || fail "fit exit $rc: $(cat "$T/fit.err")"
+head -c 15 "$T/fit.html" | grep -q "<!DOCTYPE html>" || fail "--report fit.html is not HTML"
+grep -q "Pressure \[MPa\]" "$T/fit.html" || fail "html: input label"
+grep -q "Contraction \[mm\]" "$T/fit.html" || fail "html: output label"
+grep -q "Time \[s\]" "$T/fit.html" || fail "html: no time axis with --time-column"
+grep -q "validation: $T/b.csv" "$T/fit.html" || fail "html: the second --validate-data file is not shown"
+grep -q "validation: $T/a.csv" "$T/fit.html" || fail "html: the first --validate-data file is not shown"
+[ "$(grep -c "^validate: .*\[$T/a.csv" "$T/fit.txt")" -eq 1 ] || fail "no validate: line naming a.csv"
+[ "$(grep -c "^validate: .*\[$T/b.csv" "$T/fit.txt")" -eq 1 ] || fail "no validate: line naming b.csv"
+grep -q "^reference PI: rms" "$T/fit.txt" || fail "no reference PI line"
+grep -q "^inverse: max slope .* max jump per sample" "$T/fit.txt" || fail "no inverse line"
+glog_lines "$T/fit.err" && fail "glog lines on stderr"
+
+# 2. JSON report by extension; --json is exactly one document and matches it
+"$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --train 0:1200 --threads 1 --out "$T/m2.json" \
+  --report "$T/fit.json" --json > "$T/fit_stdout.json" 2> "$T/json.err" || fail "fit --json"
+$PY - "$T/fit.json" "$T/fit_stdout.json" "$T/m2.json" <<'PYEOF' || fail "JSON report / --json"
+import json, sys
+report = json.load(open(sys.argv[1]))
+stdout = json.load(open(sys.argv[2]))   # json.load fails on a second document or trailing text
+assert report["format"] == "hysteron-fit-report" and report["schema"] == 1
+assert report["status"] == stdout["status"] == "converged"
+assert report["train"] == stdout["train"]
+for k in ("reference", "inverse", "warnings", "candidates", "data", "validate", "model_written"):
+    assert k in report, k
+assert report["model_written"] and report["model_file"].endswith("m2.json")
+assert report["validate"]["n"] == 600, report["validate"]
+assert json.load(open(sys.argv[3]))["model"] == "gpi"
+PYEOF
+[ -s "$T/json.err" ] && glog_lines "$T/json.err" && fail "glog lines on stderr (--json)"
+
+# 3. --out -: only the model JSON on stdout, the summary on stderr
+"$BIN" fit --model pi --data "$T/a.csv" --input p --output y --train 0:1200 --threads 1 --force --out - \
+  > "$T/model_stdout.json" 2> "$T/summary.txt"
+rc=$?
+[ $rc -le 3 ] || fail "--out -: exit $rc"
+$PY -c "import json,sys; m=json.load(open(sys.argv[1])); assert m['model']=='pi'" "$T/model_stdout.json" \
+  || fail "--out -: stdout is not one model JSON: $(head -3 "$T/model_stdout.json")"
+grep -q "pi fit" "$T/summary.txt" || fail "--out -: no summary on stderr"
+"$BIN" fit --data "$T/a.csv" --input p --output y --out - --json > /dev/null 2> "$T/err"
+[ $? -eq 1 ] || fail "--out - with --json must be an error (two documents on stdout)"
+
+# 4. --model auto: candidates in text and JSON, chosen kind in model_kind, validation RMS per candidate
+"$BIN" fit --model auto --data "$T/a.csv" --input p --output y --train 0:1200 --validate-data "$T/b.csv" \
+  --threads 1 --out "$T/auto.json" --report "$T/auto_report.json" > "$T/auto.txt" 2> "$T/auto.err"
+rc=$?
+$PY - "$T/auto_report.json" "$T/auto.txt" $rc <<'PYEOF' || fail "--model auto"
+import json, sys
+r = json.load(open(sys.argv[1]))
+text = open(sys.argv[2]).read()
+rc = int(sys.argv[3])
+kinds = sorted(c["kind"] for c in r["candidates"])
+assert kinds == ["gpi", "mpi-asym", "mpi-deadzone", "pi"], kinds
+chosen = [c["kind"] for c in r["candidates"] if c["chosen"]]
+assert chosen == [r["model_kind"]], (chosen, r["model_kind"])
+for c in r["candidates"]:
+    assert len(c["validate"]) == 1, c.get("validate")   # one --validate-data file
+    assert c["kind"] in text
+assert "candidates" in text and "<- chosen" in text
+assert rc == {"converged": 0, "no_convergence": 2, "failed": 2, "poor_fit": 3}[r["status"]], (rc, r["status"])
+PYEOF
+
+# 5. exit codes: no convergence (2, model not written; --force writes it), errors and usage (1)
+"$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --max-iterations 1 --starts 1 --threads 1 \
+  --out "$T/nc.json" > "$T/nc.txt" 2>&1
+rc=$?
+[ $rc -eq 2 ] || fail "--max-iterations 1: exit $rc (expected 2): $(cat "$T/nc.txt")"
+[ -e "$T/nc.json" ] && fail "a model was written without convergence"
+grep -q "model NOT written (no_convergence" "$T/nc.txt" || fail "no 'model NOT written' line"
+"$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --max-iterations 1 --starts 1 --threads 1 --force \
+  --out "$T/nc.json" > /dev/null 2>&1
+rc=$?
+[ $rc -eq 2 ] || fail "--force: exit $rc (expected 2)"
+[ -s "$T/nc.json" ] || fail "--force did not write the model"
+expect_rc1() {
+  local what=$1 needle=$2
+  shift 2
+  "$@" > "$T/out" 2> "$T/err"
+  local rc=$?
+  if [ $rc -ne 1 ]; then fail "$what: exit $rc (expected 1)"; return; fi
+  grep -qF -- "$needle" "$T/err" || fail "$what: stderr lacks '$needle': $(cat "$T/err")"
+}
+expect_rc1 "mixed units in --train" "mixes seconds and sample indices" \
+  "$BIN" fit --data "$T/a.csv" --input p --output y --time-column t_s --train 0s:10 --out "$T/x.json"
+expect_rc1 "unknown option" "--frobnicate" "$BIN" fit --data "$T/a.csv" --input p --output y --out "$T/x.json" --frobnicate
+expect_rc1 "unknown model kind" "--model" "$BIN" fit --model spline --data "$T/a.csv" --input p --output y --out "$T/x.json"
+expect_rc1 "not a number" "--max-iterations" \
+  "$BIN" fit --data "$T/a.csv" --input p --output y --out "$T/x.json" --max-iterations many
+expect_rc1 "no subcommand" "subcommand" "$BIN"
+expect_rc1 "missing data file" "nope.csv" "$BIN" fit --data "$T/nope.csv" --input p --output y --out "$T/x.json"
+[ -e "$T/x.json" ] && fail "a model was written by a failed fit"
+"$BIN" fit --help > /dev/null 2>&1 || fail "fit --help exits non-zero"
+
+# 6. poor fit: a record whose output is noise. Whatever the status, the exit code follows it.
+$PY - "$T/noise.csv" <<'PYEOF'
+import random, sys
+random.seed(1)
+with open(sys.argv[1], "w") as f:
+    f.write("x,y\n")
+    for i in range(2000):
+        x = (i % 200) / 200 if (i // 200) % 2 == 0 else 1 - (i % 200) / 200
+        f.write(f"{x!r},{random.gauss(0, 1)!r}\n")
+PYEOF
+for m in pi gpi; do
+  "$BIN" fit --model $m --data "$T/noise.csv" --input x --output y --threads 1 --out "$T/noise_$m.json" --json \
+    > "$T/noise_$m.txt" 2> "$T/noise.err"
+  rc=$?
+  $PY - "$T/noise_$m.txt" $rc "$T/noise_$m.json" <<'PYEOF' || fail "noise ($m): exit code does not follow the status"
+import json, os, sys
+r = json.load(open(sys.argv[1]))
+rc = int(sys.argv[2])
+expected = {"converged": 0, "no_convergence": 2, "failed": 2, "poor_fit": 3}[r["status"]]
+assert rc == expected, (r["status"], rc)
+assert os.path.exists(sys.argv[3]) == (r["status"] == "converged"), "model written iff converged"
+print(f"noise: {r['status']} exit {rc} r2 {r['train']['r2']}")
+PYEOF
+  glog_lines "$T/noise.err" && fail "glog lines on stderr (noise)"
+done
+
+if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
+echo "fit_cli: ok"

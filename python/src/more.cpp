@@ -2,6 +2,7 @@
 #include "more.hpp"
 
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
 
 namespace hysteron::python {
 
@@ -17,43 +18,13 @@ InitialState initial_state_from(const std::string& name) {
   throw py::value_error("initial_state must be 'virgin' or 'relaxed', not '" + name + "'");
 }
 
-py::dict metrics_dict(const FitMetrics& m) {
-  py::dict d;
-  d["rms"] = m.rms;
-  d["max"] = m.max;
-  d["mae"] = m.mae;
-  d["rms_percent_span"] = m.rms_percent_span;
-  d["r2"] = m.r2;
-  d["n"] = m.n;
-  return d;
-}
+// Results go to Python through the one serialization layer (hysteron/io/results.hpp):
+// the dicts have the keys and values of the CLI's JSON (NaN and infinity become None).
+py::dict metrics_dict(const FitMetrics& m) { return from_json(io::to_json(m)); }
 
 py::dict fit_dict(const FitReport& r) {
-  py::dict d;
-  d["status"] = std::string(fit_status_name(r.status));
+  py::dict d = from_json(io::to_json(r));
   d["ok"] = r.ok();
-  d["message"] = r.message;
-  d["model_kind"] = std::string(fit_model_name(r.model_kind));
-  d["model"] = r.status == FitStatus::invalid_input ? py::object(py::none()) : from_json(io::model_to_json(r.model));
-  py::list params;
-  for (const auto& p : r.parameters) {
-    py::dict q;
-    q["name"] = p.name;
-    q["value"] = p.value;
-    q["std_error"] = p.std_error;
-    q["held"] = p.held;
-    q["at_bound"] = p.at_bound;
-    params.append(q);
-  }
-  d["parameters"] = params;
-  d["train"] = metrics_dict(r.train);
-  d["initial_cost"] = r.initial_cost;
-  d["final_cost"] = r.final_cost;
-  d["iterations"] = r.iterations;
-  d["total_iterations"] = r.total_iterations;
-  d["num_starts"] = r.num_starts;
-  d["time_s"] = r.time_s;
-  d["covariance_note"] = r.covariance_note;
   d["report"] = r.full_report();
   return d;
 }

@@ -4,6 +4,7 @@
 #include "hysteron/experiment.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/report.hpp"
+#include "hysteron/io/results.hpp"
 #include "more.hpp"
 
 namespace hysteron::python {
@@ -49,7 +50,7 @@ void bind_experiment(py::module_& m) {
           report::write_experiment_report(r, report_path,
                                           fmt::format("hysteron.run_experiment('{}', seed={})", name, seed));
         py::dict d;
-        d["summary"] = from_json(r.to_json());
+        d["summary"] = from_json(io::to_json(r));
         d["table"] = r.table();
         py::dict id;
         id["t"] = to_numpy(r.id_t);
@@ -68,9 +69,7 @@ void bind_experiment(py::module_& m) {
           x["variant"] = run.variant;
           x["reference"] = run.reference;
           x["description"] = run.description;
-          x["max_error_mm"] = run.errors.max_error_mm;
-          x["mae_mm"] = run.errors.mae_mm;
-          x["rms_error_mm"] = run.errors.rms_error_mm;
+          x.attr("update")(from_json(io::to_json(run.errors)));  // max_error_mm, mae_mm, rms_error_mm
           x["saturated"] = run.saturated;
           x["t"] = to_numpy(run.t);
           x["reference_mm"] = to_numpy(run.reference_mm);
@@ -82,7 +81,7 @@ void bind_experiment(py::module_& m) {
           runs.append(x);
         }
         d["runs"] = runs;
-        d["published"] = from_json(r.published);
+        d["published"] = from_json(io::to_json(r.published));
         return d;
       },
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",

@@ -27,7 +27,7 @@ void bind_identify(py::module_& m) {
          const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
          int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const std::string& report,
          std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
-         int num_threads, int stall_iterations, double stall_tolerance) {
+         int num_threads, int stall_iterations, double stall_tolerance, double min_slope) {
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = num_operators;
@@ -44,6 +44,7 @@ void bind_identify(py::module_& m) {
         o.num_threads = num_threads;
         o.stall_iterations = stall_iterations;
         o.stall_tolerance = stall_tolerance;
+        o.min_slope = min_slope;
         const auto xs = as_span(x), ys = as_span(y);
         FitReport r;
         {
@@ -71,10 +72,15 @@ void bind_identify(py::module_& m) {
       py::arg("input_axis") = std::make_pair(std::string("Input"), std::string()),
       py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()), py::arg("num_threads") = 0,
       py::arg("stall_iterations") = 25, py::arg("stall_tolerance") = 1e-5,
+      py::arg("min_slope") = FitOptions{}.min_slope,
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
 
 x, y: input and measured output (1-D arrays of equal length).
-model: "gpi", "pi", "mpi-deadzone" or "mpi-asym"; num_operators: n.
+model: "gpi", "pi", "mpi-deadzone", "mpi-asym" or "auto" (every kind fitted, the one
+with the lowest RMS on the last part of the training range chosen; the table is in
+"candidates"); num_operators: n.
+min_slope: minimum slope of the model relative to span(y)/span(x) over the training
+range (bounds the inverse's slope).
 train: (begin, end) sample range entering the cost (None = all; end None = to the end).
 num_starts: initial guesses refined by LM, on up to num_threads threads (0: one per
 hardware thread, 1: sequential; the result does not depend on it). max_iterations:
@@ -84,10 +90,45 @@ over the last stall_iterations iterations (0 disables it).
 report: if given, path of a self-contained HTML report (plots, parameters,
 errors), with input_axis/output_axis = (label, unit) for its plots.
 
-Never raises on bad data: returns a dict with "status" ("converged",
-"no_convergence", "failed", "invalid_input"), "ok", "message", "model" (a
+Never raises on bad data: returns a dict (the JSON of `hysteron fit --json`, NaN as
+None) with "status" (one of hysteron.fit_statuses: "converged", "no_convergence",
+"failed", "poor_fit", "invalid_input"), "ok", "message", "model_kind", "model" (a
 model dict usable by hysteron.Model), "parameters" (list of {name, value,
-std_error, held}), "train" metrics, costs, iterations and "report" (text).)doc");
+std_error, held, at_bound}), "train" and "reference" metrics (the reference PI on the
+training range), "inverse" ({max_slope, max_jump, max_input_step, increasing}),
+"warnings" (list of str), "candidates" (model="auto": list of {kind, status,
+message, train, holdout, time_s, chosen, model}), costs, iterations and "report" (text).
+Invalid options give the status "invalid_input" with the reason in "message".)doc");
+
+  m.def(
+      "reference_pi",
+      [](const DoubleArray& x, const DoubleArray& y, const py::object& train, int num_operators) {
+        PiParams p;
+        {
+          const auto xs = as_span(x), ys = as_span(y);
+          const IndexRange r = range_from(train);
+          py::gil_scoped_release release;
+          p = reference_pi(xs, ys, r, num_operators);
+        }
+        return from_json(io::model_to_json(ModelParams{p}));
+      },
+      py::arg("x"), py::arg("y"), py::arg("train") = py::none(), py::arg("num_operators") = 10,
+      R"doc(The reference every fit is compared with: a classical PI with num_operators plays
+on thresholds evenly spaced over half the training input span, started relaxed at
+the first sample, a free linear term and an output offset, weights >= 0 by
+non-negative least squares over train ((begin, end) or None). Returns a model dict
+usable by hysteron.Model (it may not be invertible).)doc");
+
+  {
+    py::list statuses, models;
+    for (FitStatus st : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
+                         FitStatus::poor_fit, FitStatus::invalid_input})
+      statuses.append(std::string(fit_status_name(st)));
+    for (FitModel k : {FitModel::automatic, FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym})
+      models.append(std::string(fit_model_name(k)));
+    m.attr("fit_statuses") = py::tuple(statuses);
+    m.attr("fit_models") = py::tuple(models);
+  }
 
   m.def(
       "evaluate",

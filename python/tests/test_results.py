@@ -1,0 +1,100 @@
+"""fit(..., model="auto"), reference_pi, the report fields of issue 10 (reference,
+inverse, warnings, candidates, poor_fit) and the dicts' agreement with the CLI's JSON."""
+import json
+import os
+import subprocess
+import tempfile
+
+import numpy as np
+import pytest
+
+import hysteron
+
+TRUE_GPI = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rho": 0.4, "tau": 0.1,
+            "alpha": 2.0}
+REPORT_KEYS = {"status", "ok", "message", "model_kind", "model", "parameters", "train", "reference", "inverse",
+               "warnings", "candidates", "initial_cost", "final_cost", "iterations", "total_iterations",
+               "num_starts", "time_s", "covariance_note", "report"}
+METRIC_KEYS = {"rms", "max", "mae", "rms_percent_span", "r2", "n"}
+
+
+def record():
+    x = np.concatenate([np.interp(np.linspace(0, 1, 300), [0, 0.5, 1], [0, a, 0])
+                        for a in (0.6, 0.5, 0.4, 0.3, 0.2, 0.1)])
+    return x, hysteron.simulate_record(TRUE_GPI, x)
+
+
+def test_names_include_poor_fit_and_auto():
+    assert "poor_fit" in hysteron.fit_statuses
+    assert {"auto", "gpi", "pi", "mpi-deadzone", "mpi-asym"} == set(hysteron.fit_models)
+
+
+def test_fit_report_fields():
+    x, y = record()
+    r = hysteron.fit(x, y, model="gpi", train=(0, 1200), min_slope=0.01)
+    assert set(r) == REPORT_KEYS
+    assert r["status"] in hysteron.fit_statuses
+    assert set(r["train"]) == METRIC_KEYS and set(r["reference"]) == METRIC_KEYS
+    assert r["reference"]["n"] == r["train"]["n"] == 1200
+    assert set(r["inverse"]) == {"max_slope", "max_jump", "max_input_step", "increasing"}
+    assert isinstance(r["warnings"], list) and all(isinstance(w, str) for w in r["warnings"])
+    assert r["candidates"] == []  # only with model="auto"
+    # metrics dicts come from the same writer as the fit's
+    m = hysteron.evaluate(r["model"], x, y, range=(0, 1200))
+    assert set(m) == METRIC_KEYS
+
+
+def test_min_slope_is_validated():
+    x, y = record()
+    bad = hysteron.fit(x, y, model="pi", min_slope=-1.0)
+    assert bad["status"] == "invalid_input" and "min_slope" in bad["message"], bad["message"]
+    assert bad["model"] is None
+
+
+def test_fit_auto_lists_every_candidate():
+    x, y = record()
+    r = hysteron.fit(x, y, model="auto", train=(0, 1200))
+    kinds = [c["kind"] for c in r["candidates"]]
+    assert set(kinds) == {"gpi", "pi", "mpi-deadzone", "mpi-asym"}
+    chosen = [c for c in r["candidates"] if c["chosen"]]
+    assert len(chosen) == 1
+    assert r["model_kind"] == chosen[0]["kind"] and r["model_kind"] != "auto"
+    for c in r["candidates"]:
+        assert set(c["train"]) == METRIC_KEYS and set(c["holdout"]) == METRIC_KEYS
+        assert c["time_s"] >= 0 and c["status"] in hysteron.fit_statuses
+    # the chosen kind has the lowest hold-out RMS among the candidates that have one
+    scored = [c for c in r["candidates"] if c["holdout"]["rms"] is not None and c["model"] is not None]
+    assert chosen[0]["holdout"]["rms"] == min(c["holdout"]["rms"] for c in scored)
+    assert r["model"] is not None and hysteron.Model(r["model"]).simulate(x).shape == x.shape
+
+
+def test_reference_pi_is_a_model():
+    x, y = record()
+    ref = hysteron.reference_pi(x, y, train=(0, 1200), num_operators=10)
+    assert ref["model"] == "pi"
+    yr = hysteron.Model(ref).simulate(x)
+    assert yr.shape == x.shape and np.all(np.isfinite(yr))
+    # it fits the record: far better than the mean
+    e = hysteron.compute_metrics(y[:1200], yr[:1200])
+    assert e["r2"] > 0.9, e
+
+
+@pytest.mark.skipif(not os.environ.get("HYSTERON_CLI"), reason="needs the CLI (HYSTERON_CLI)")
+def test_python_dict_equals_cli_json():
+    """The CLI's --json and Python's fit() come from the same to_json: same keys, same values."""
+    x, y = record()
+    with tempfile.TemporaryDirectory() as d:
+        data = os.path.join(d, "data.csv")
+        np.savetxt(data, np.column_stack([x, y]), delimiter=",", header="input,output", comments="", fmt="%.17g")
+        out = subprocess.run([os.environ["HYSTERON_CLI"], "fit", "--model", "pi", "--data", data, "--input", "input",
+                              "--output", "output", "--train", "0:1200", "--threads", "1", "--out",
+                              os.path.join(d, "m.json"), "--json", "--force"], capture_output=True, text=True)
+        assert out.returncode in (0, 2, 3), out.stderr
+        cli = json.loads(out.stdout)  # exactly one JSON document
+    r = hysteron.fit(x, y, model="pi", train=(0, 1200), num_threads=1)
+    assert cli["status"] == r["status"]
+    assert cli["model_kind"] == r["model_kind"]
+    assert cli["train"] == pytest.approx(r["train"])
+    assert cli["reference"] == pytest.approx(r["reference"])
+    assert [p["name"] for p in cli["parameters"]] == [p["name"] for p in r["parameters"]]
+    assert set(r) - {"ok", "report"} <= set(cli)

@@ -39,7 +39,8 @@ with open(sys.argv[2], "w") as f:
         f.write(f"{i * 0.01!r},{r}\n")
 PYEOF
 done
-glog_lines() { grep -E '^[IWEF][0-9]{4} [0-9:.]+ ' "$1"; }
+# glog's line format (MMDD or YYYYMMDD) and its "logging before InitGoogleLogging" notice
+glog_lines() { grep -E '^[IWEF][0-9]{4,8} [0-9:.]+ |InitGoogleLogging' "$1"; }
 
 # 1. HTML report by extension, labels, time axis, every validation file; validate: lines name their file
 "$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --time-column t_s --train 0s:12s \
@@ -164,6 +165,11 @@ print(f"noise: {r['status']} exit {rc} r2 {r['train']['r2']}")
 PYEOF
   glog_lines "$T/noise.err" && fail "glog lines on stderr (noise)"
 done
+
+# 7. even with glog asked to be verbose (Ceres then logs every iteration), nothing reaches stderr
+GLOG_v=10 GLOG_logtostderr=1 GLOG_minloglevel=0 "$BIN" fit --model gpi --data "$T/a.csv" --input p --output y \
+  --threads 1 --out "$T/v.json" > /dev/null 2> "$T/verbose.err" || fail "verbose glog fit"
+glog_lines "$T/verbose.err" > /dev/null && fail "glog lines on stderr with GLOG_v=10: $(head -2 "$T/verbose.err")"
 
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

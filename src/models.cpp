@@ -169,6 +169,65 @@ UnitsMap& units_map(ModelParams& params) noexcept {
   return std::visit([](auto& m) -> UnitsMap& { return m.units; }, params);
 }
 
+namespace {
+
+// gamma(x) -> b gamma(x / a)
+Envelope scaled_envelope(const Envelope& e, double a, double b) {
+  switch (e.kind) {
+    case EnvelopeKind::identity: return Envelope::affine(b / a, 0.0);
+    case EnvelopeKind::affine: return Envelope::affine(b * e.c[0] / a, b * e.c[1]);
+    case EnvelopeKind::tanh: return Envelope::tanh(b * e.c[0], e.c[1] / a, e.c[2], b * e.c[3]);
+    case EnvelopeKind::atan: return Envelope::atan(b * e.c[0], e.c[1] / a, e.c[2], b * e.c[3]);
+  }
+  return e;
+}
+
+void scale_all(std::vector<double>& v, double f) {
+  for (double& x : v) x *= f;
+}
+
+struct AbsorbVisitor {
+  double a, b;
+  ModelParams operator()(PiParams m) const {
+    m.q *= b / a;
+    scale_all(m.p, b / a);
+    scale_all(m.r, a);
+    return m;
+  }
+  ModelParams operator()(MpiDeadzoneParams m) const {
+    m.q *= b / a;
+    scale_all(m.p, b / a);
+    scale_all(m.r, a);
+    scale_all(m.z, b);
+    return m;
+  }
+  ModelParams operator()(GpiParams m) const {
+    m.envelope = scaled_envelope(m.envelope, a, b);
+    m.alpha *= b;
+    m.tau /= b;
+    scale_all(m.r, b);
+    return m;
+  }
+  ModelParams operator()(MpiAsymParams m) const {
+    m.ascending = scaled_envelope(m.ascending, a, b);
+    m.descending = scaled_envelope(m.descending, a, b);
+    scale_all(m.r, b);
+    return m;
+  }
+};
+
+}  // namespace
+
+ModelParams absorb_scales(const ModelParams& params) {
+  const UnitsMap u = units_map(params);
+  const double a = u.input_scale, b = std::abs(u.output_gain);
+  if (a == 1.0 && b == 1.0) return params;
+  ModelParams out = std::visit(AbsorbVisitor{a, b}, params);
+  units_map(out).input_scale = 1.0;
+  units_map(out).output_gain = u.output_gain < 0 ? -1.0 : 1.0;
+  return out;
+}
+
 Structure<double> canonical_structure(const ModelParams& params) {
   Structure<double> s = std::visit(CanonicalVisitor{}, params);
   check_units(units_map(params), model_name(params));

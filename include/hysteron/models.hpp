@@ -133,6 +133,15 @@ const Limits& input_limits(const ModelParams& params) noexcept;
 const UnitsMap& units_map(const ModelParams& params) noexcept;
 UnitsMap& units_map(ModelParams& params) noexcept;
 
+// The same model with input_scale = 1 and output_gain = +-1: the scales are absorbed
+// into the kind's own parameters, so that they read in the user's units
+//   identity envelope (pi, mpi-deadzone):  r -> a r,  q, p -> (b / a) q, p,  z -> b z
+//   other envelopes (gpi, mpi-asym):       gamma(x) -> b gamma(x / a),  r -> b r,
+//                                          alpha -> b alpha,  tau -> tau / b
+// with a = input_scale, b = |output_gain| (an identity envelope of gpi/mpi-asym becomes
+// affine). input_origin and output_offset stay. Exact up to rounding.
+ModelParams absorb_scales(const ModelParams& params);
+
 // The canonical structure every model reduces to (see the top of this file),
 // templated on the scalar so identification can differentiate through it.
 // Thresholds are strictly increasing and positive: operators with r = 0 are

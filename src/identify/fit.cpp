@@ -231,11 +231,13 @@ class GpiChartCost final : public ceres::CostFunction {
       if (!std::isfinite(v)) return false;
     if (!jacobians || !jacobians[0]) {
       gpi_evaluate(d_, n_, th.data(), residuals, nullptr);
+      if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, nullptr);
       return true;
     }
     const auto m = static_cast<Eigen::Index>(d_.train.end - d_.train.begin);
     Jt_.resize(m, kGpi);
     gpi_evaluate(d_, n_, th.data(), residuals, Jt_.data());
+    if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, Jt_.data());
     Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor>>(jacobians[0], m, kGpi).noalias() =
         Jt_ * chart_.jacobian(params[0]);
     return true;
@@ -817,6 +819,22 @@ Ranges ranges_of(const Data& d) {
 
 // For fixed envelope, alpha and tau the gpi output is linear in (q, rho): solve
 // them by NNLS and return the sum of squared errors.
+// Bounded least squares t >= lo for A t ~ b, with a free offset when `centre` (columns
+// and target centred: the offset is eliminated exactly). Returns t; *sse the residual.
+Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo, bool centre,
+                           double* sse) {
+  if (!centre) {
+    const Eigen::VectorXd t = lo + detail::nnls(A, b - A * lo);
+    *sse = (A * t - b).squaredNorm();
+    return t;
+  }
+  const Eigen::MatrixXd Ac = A.rowwise() - A.colwise().mean();
+  const Eigen::VectorXd bc = b.array() - b.mean();
+  const Eigen::VectorXd t = lo + detail::nnls(Ac, bc - Ac * lo);
+  *sse = (Ac * t - bc).squaredNorm();
+  return t;
+}
+
 double gpi_linear_seed(const Data& d, int n, double* th, double lower_q, double lower_rho) {
   Structure<double> s;
   th[4] = 1.0;
@@ -842,10 +860,11 @@ double gpi_linear_seed(const Data& d, int n, double* th, double lower_q, double 
     }
   }
   const Eigen::Vector2d lo(lower_q, lower_rho);
-  const Eigen::VectorXd t = lo + detail::nnls(A, b - A * lo);
+  double sse = 0;
+  const Eigen::VectorXd t = bounded_ls(A, b, lo, d.free_offset, &sse);
   th[4] = t(0);
   th[5] = t(1);
-  return (A * t - b).squaredNorm();
+  return sse;
 }
 
 // ---- branches of the loop and envelope fits ------------------------------------
@@ -994,12 +1013,13 @@ double cls_weights(const Data& d, const Structure<double>& s, double margin, dou
   Eigen::VectorXd b(m);
   for (Eigen::Index j = 0; j < m; ++j) b(j) = d.y[tr.begin + static_cast<std::size_t>(j)];
   const Eigen::VectorXd lo = Eigen::VectorXd::Constant(k, margin);
-  const Eigen::VectorXd sl = lo + detail::nnls(A, b - A * lo);
+  double sse = 0;
+  const Eigen::VectorXd sl = bounded_ls(A, b, lo, d.free_offset, &sse);
   q = sl(0);
   p.resize(static_cast<std::size_t>(k - 1));
   for (Eigen::Index i = 1; i < k; ++i) p[static_cast<std::size_t>(i - 1)] = direct ? sl(i) : sl(i) - sl(i - 1);
   if (phi_out) *phi_out = phi;
-  return (A * sl - b).squaredNorm();
+  return sse;
 }
 
 // rho, tau of Eq. 8 from free weights on r_i: weighted log-linear fit
@@ -1479,7 +1499,7 @@ FitReport detail::fit_core(std::span<const double> x, std::span<const double> y,
     return invalid(fmt::format("fit: {} training samples are too few for {} parameters (need at least {})", m, np, 10 * np),
                    o.model, t0);
   Data d{x, y, tr, o.initial_state, o.huber_delta};
-  d.free_offset = free_offset && o.huber_delta == 0.0 && !(o.model == FitModel::gpi && !o.gpi_free_weights);
+  d.free_offset = free_offset && o.huber_delta == 0.0;
   const Ranges rg = ranges_of(d);
   d.xc = 0.5 * (rg.xlo + rg.xhi);
   d.xs = std::max(0.5 * rg.xspan(), std::numeric_limits<double>::min());
@@ -1525,6 +1545,12 @@ FitReport detail::fit_core(std::span<const double> x, std::span<const double> y,
         rep.iterations = best.iterations;
         const auto theta = chart.theta(best.theta.data());
         rep.model = gpi_params(theta.data(), n);
+        if (d.free_offset) {  // the offset eliminated by the projection: the mean residual
+          const std::vector<double> yp = simulate_record(rep.model, x.subspan(0, tr.end), o.initial_state);
+          double c = 0;
+          for (std::size_t j = tr.begin; j < tr.end; ++j) c += y[j] - yp[j];
+          units_map(rep.model).output_offset = c / static_cast<double>(m);
+        }
         static const char* names[kGpi] = {"c0", "c1", "c2", "c3", "q", "rho", "tau", "alpha"};
         std::vector<int> fixed;
         if (o.gpi_fix_scale) fixed.push_back(0);

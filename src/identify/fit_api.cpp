@@ -96,6 +96,31 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
   return c;
 }
 
+// The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|).
+double absorbed_factor(FitModel kind, const std::string& name, double a, double b) {
+  auto is = [&](std::initializer_list<const char*> names) {
+    for (const char* n : names)
+      if (name == n) return true;
+    return false;
+  };
+  switch (kind) {
+    case FitModel::pi:
+    case FitModel::mpi_deadzone:
+      return name == "q" || (name.size() > 1 && name[0] == 'p') ? b / a : 1.0;
+    case FitModel::gpi:
+      if (is({"c0", "c3", "alpha"})) return b;
+      if (is({"c1"})) return 1.0 / a;
+      if (is({"tau"})) return 1.0 / b;
+      return 1.0;
+    case FitModel::mpi_asym:
+      if (is({"asc.c0", "asc.c3", "desc.c0", "desc.c3"})) return b;
+      if (is({"asc.c1", "desc.c1"})) return 1.0 / a;
+      return 1.0;
+    case FitModel::automatic: break;
+  }
+  return 1.0;
+}
+
 // The units-map parameters appended to the report's table (they are part of the model).
 void add_units_parameters(FitReport& rep) {
   const UnitsMap& u = units_map(rep.model);
@@ -140,8 +165,34 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   }
   FitOptions on = o;
   on.huber_delta = o.huber_delta / sy;
-  FitReport rep = detail::fit_core(xn, yn, on, true);
-  if (o.model == FitModel::mpi_deadzone && fitted(rep.status)) {
+  FitReport rep;
+  if (o.huber_delta > 0) {
+    // Huber loss: the offset cannot be projected out of a robust cost. A least-squares
+    // fit gives the model, the median of its residuals the offset (robust to the
+    // outliers), and the Huber fit then runs on the record shifted by it.
+    FitOptions ol = on;
+    ol.huber_delta = 0;
+    ol.compute_covariance = false;
+    ol.progress = nullptr;
+    const FitReport rl = detail::fit_core(xn, yn, ol, true);
+    double c_med = 0;
+    if (fitted(rl.status)) {
+      ModelParams core = rl.model;
+      units_map(core).output_offset = 0;
+      const std::vector<double> yp = simulate_record(core, std::span<const double>(xn).subspan(0, tr.end), o.initial_state);
+      std::vector<double> e;
+      for (std::size_t k = tr.begin; k < tr.end; ++k) e.push_back(yn[k] - yp[k]);
+      std::nth_element(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2), e.end());
+      c_med = e[e.size() / 2];
+    }
+    std::vector<double> ys(yn.size());
+    for (std::size_t k = 0; k < yn.size(); ++k) ys[k] = yn[k] - c_med;
+    rep = detail::fit_core(xn, ys, on, false);
+    if (fitted(rep.status)) units_map(rep.model).output_offset += c_med;
+  } else {
+    rep = detail::fit_core(xn, yn, on, true);
+  }
+  if (o.model == FitModel::mpi_deadzone && o.huber_delta == 0 && fitted(rep.status)) {
     // The classical PI is the mpi-deadzone without dead zones: if the dead zones do not
     // improve on it (a record without the saturation they describe), keep the PI. The
     // dead-zone LM starts from a threshold scale chosen for extrapolation to minor loops
@@ -186,6 +237,13 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   const double c = um.output_offset;
   um = UnitsMap{x[0], sx, y[0] + sign * sy * c, sign * sy};
   std::visit([&](auto& m) { m.input_limits = Limits{*xl, *xh}; }, rep.model);
+  // The scales go into the kind's parameters (they then read in the user's units).
+  rep.model = absorb_scales(rep.model);
+  for (auto& p : rep.parameters) {
+    const double f = absorbed_factor(o.model, p.name, sx, sy);
+    p.value *= f;
+    if (std::isfinite(p.std_error)) p.std_error *= std::abs(f);
+  }
   rep.initial_cost *= sy * sy;
   rep.final_cost *= sy * sy;
   add_units_parameters(rep);

@@ -36,7 +36,7 @@ ModelParams make_model(int kind, int n) {
     p[i] = 0.5 * std::exp(-3.0 * r[i]) / n * 10;
   }
   switch (kind) {
-    case 0: return PiParams{0.5, r, p, {0.0, 1.0}};
+    case 0: return PiParams{0.5, r, p, {0.0, 1.0}, {}};
     case 1: {
       GpiParams g;  // magnitudes like Table 2 of the GPI paper (pressure in MPa)
       g.envelope = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
@@ -48,7 +48,7 @@ ModelParams make_model(int kind, int n) {
       g.input_limits = {0.0, 0.6};
       return g;
     }
-    case 2: return MpiDeadzoneParams{0.5, r, p, 1.0, {0.2, 0.4, 0.6}, {0.1, 0.2, -0.1}, {0.0, 1.0}};
+    case 2: return MpiDeadzoneParams{0.5, r, p, 1.0, {0.2, 0.4, 0.6}, {0.1, 0.2, -0.1}, {0.0, 1.0}, {}};
     default: {
       MpiAsymParams a;
       a.ascending = Envelope::tanh(1.0, 2.0, -0.6, 0.6);

@@ -1524,6 +1524,10 @@ FitReport detail::fit_core(std::span<const double> x, std::span<const double> y,
         std::vector<double>& lower = lowers.emplace_back(kGpi, -std::numeric_limits<double>::infinity());
         for (int i : {0, 4, 5, 6, 7}) lower[static_cast<std::size_t>(i)] = lb * std::abs(ph[static_cast<std::size_t>(i)]);
         lower[1] = 1e-3;
+        // Minimum slope after a reversal (FitOptions::min_slope): dy/du = q >= min_slope
+        // times the mean dy/du of the start's envelope over the training range.
+        const double uspan = envelope_span({th[0], th[1], th[2], th[3]}, rg);
+        if (uspan > 0) lower[4] = std::max(lower[4], o.min_slope * rg.yspan() / uspan);
         phis.emplace_back(ph.begin(), ph.end());
       }
       std::vector<int> held;

@@ -96,6 +96,24 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
   return c;
 }
 
+// A fit that removes less than 1 % of the residual variance of the least-squares
+// straight line explains no hysteresis (e.g. an output that is noise): a poor fit.
+// (Any model kind contains a line; a hysteretic record leaves a line far more.)
+constexpr double kLineRatio = 0.99498743710662;  // sqrt(0.99)
+
+// RMS of the least-squares line y = a x + b over the range.
+double straight_line_rms(std::span<const double> x, std::span<const double> y, IndexRange tr) {
+  const double m = static_cast<double>(tr.end - tr.begin);
+  double mx = 0, my = 0;
+  for (std::size_t k = tr.begin; k < tr.end; ++k) mx += x[k], my += y[k];
+  mx /= m, my /= m;
+  double sxx = 0, sxy = 0, syy = 0;
+  for (std::size_t k = tr.begin; k < tr.end; ++k)
+    sxx += (x[k] - mx) * (x[k] - mx), sxy += (x[k] - mx) * (y[k] - my), syy += (y[k] - my) * (y[k] - my);
+  const double sse = sxx > 0 ? std::max(0.0, syy - sxy * sxy / sxx) : syy;
+  return std::sqrt(sse / m);
+}
+
 // The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|).
 double absorbed_factor(FitModel kind, const std::string& name, double a, double b) {
   auto is = [&](std::initializer_list<const char*> names) {
@@ -257,18 +275,20 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     rep.warnings.push_back(fmt::format("reference PI not computed: {}", e.what()));
   }
   rep.inverse = check_inverse(rep.model, x, y, tr);
-  // The minimum-slope bound (slope kinds; the mean slope is 1 in model coordinates).
-  if (!(o.model == FitModel::gpi && !o.gpi_free_weights)) {
+  // The minimum-slope bound: the smallest cumulative slope dy/du against min_slope times
+  // the mean dy/du of the data over the training range (raw units, scales absorbed).
+  {
     const Structure<double> s = canonical_structure(rep.model);
     const Envelope e{s.asc_kind, s.asc_c};
-    const double uspan = std::abs(e.value((*xh - x[0]) / sx) - e.value((*xl - x[0]) / sx));
+    const UnitsMap& u = s.units;
+    const double uspan = std::abs(e.value(u.to_model(*xh)) - e.value(u.to_model(*xl)));
     double smin = s.q, sum = s.q;
-    if (!s.asymmetric)
-      for (double p : s.p) smin = std::min(smin, sum += p);
-    if (uspan > 0 && smin <= o.min_slope / uspan * (1 + 1e-6))
+    for (double p : s.p) smin = std::min(smin, sum += p);
+    const double bound = o.min_slope * sy / (std::abs(u.output_gain) * uspan);
+    if (uspan > 0 && smin <= bound * (1 + 1e-6))
       rep.warnings.push_back(fmt::format(
           "the minimum-slope bound is active (min_slope = {}): the fit wanted a flatter branch after a reversal; the "
-          "inverse slope is capped at {:.4g} input units per output unit",
+          "inverse slope is capped near {:.4g} input units per output unit",
           o.min_slope, rep.inverse.max_slope));
   }
   for (const auto& p : rep.parameters)
@@ -280,8 +300,13 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
 
   // Honest status: useless or worse than the reference is never plain `converged`.
   std::string poor;
+  const double line = straight_line_rms(x, y, tr);
   if (!(rep.train.r2 >= 0))
     poor = fmt::format("training R^2 = {:.4g} < 0: worse than a constant", rep.train.r2);
+  else if (rep.train.rms >= kLineRatio * line)
+    poor = fmt::format("training RMS {:.6g} removes less than 1 % of the variance a straight line leaves (line RMS {:.6g}): "
+                       "the model explains no hysteresis",
+                       rep.train.rms, line);
   else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms)
     poor = fmt::format("training RMS {:.6g} is {:.3g}x that of the reference PI ({:.6g}; limit {:.3g}x)", rep.train.rms,
                        rep.train.rms / rep.reference.rms, rep.reference.rms, o.poor_fit_ratio);

@@ -41,8 +41,9 @@ namespace hysteron {
 //                output range (Kuhnen); seeded by linear LS, refined by LM.
 //   mpi-asym     two tanh envelopes (ascending, descending: 8 coefficients),
 //                q and n weights on fixed thresholds, all refined by LM.
-//   automatic    every kind above is fitted on the first part of the training range and
-//                scored on its last part (the hold-out, FitOptions::holdout_fraction); the
+//   automatic    every kind above is scored on a hold-out of the training range: fitted
+//                without its last holdout_fraction and scored there, and fitted without its
+//                first holdout_fraction and scored there (two folds, errors pooled); the
 //                kind with the lowest hold-out RMS is refitted on the whole training
 //                range and returned (FitReport::model_kind is that kind, the table of
 //                every candidate is FitReport::candidates).
@@ -153,7 +154,7 @@ struct FitOptions {
   // the dead-zone slopes). Bounds the inverse slope by span(x) / (min_slope span(y)) so
   // that the inverse cannot jump at a reversal. 0 < min_slope < 1.
   double min_slope = 0.02;
-  // automatic: the last holdout_fraction of the training range scores the candidates.
+  // automatic: the first and the last holdout_fraction of the training range score the candidates.
   double holdout_fraction = 0.2;
   // A fit whose training RMS exceeds poor_fit_ratio x that of the reference PI
   // (reference_pi) on the same range, or whose training R^2 < 0, ends as poor_fit.
@@ -188,17 +189,17 @@ struct FitParameter {
   bool at_bound = false;  // ended on its lower bound (Eq. 13) and held there; std_error 0
 };
 
-// One candidate of FitModel::automatic: its kind fitted on the first part of the
-// training range and scored on the hold-out (the rest of the training range).
+// One candidate of FitModel::automatic: its kind fitted without the last part of the
+// training range (train metrics, model) and scored on the hold-outs of both folds.
 struct FitCandidate {
   FitModel kind = FitModel::gpi;
   FitStatus status = FitStatus::not_run;
   std::string message;
-  FitMetrics train;    // on the first part of the training range
-  FitMetrics holdout;  // on the hold-out part
-  double time_s = 0.0;
+  FitMetrics train;    // fold 0: on the training range without its last part
+  FitMetrics holdout;  // pooled over both folds' hold-outs (r2 not computed: NaN)
+  double time_s = 0.0;  // both folds
   bool chosen = false;
-  ModelParams model;   // the candidate's model (fitted on the first part only)
+  ModelParams model;   // the candidate's model of fold 0
 };
 
 // What the fitted model means for a controller that inverts it (see fit()).

@@ -77,7 +77,7 @@ void bind_identify(py::module_& m) {
 
 x, y: input and measured output (1-D arrays of equal length).
 model: "gpi", "pi", "mpi-deadzone", "mpi-asym" or "auto" (every kind fitted, the one
-with the lowest RMS on the last part of the training range chosen; the table is in
+with the lowest hold-out RMS (pooled over the first and the last part of the training range, each predicted by a fit on the rest) chosen; the table is in
 "candidates"); num_operators: n.
 min_slope: minimum slope of the model relative to span(y)/span(x) over the training
 range (bounds the inverse's slope).

@@ -347,31 +347,58 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   } catch (const Error& e) {
     return invalid(e.what(), o.model, t0);
   }
+  // Two folds, so that a hold-out that happens to be quiet (a record that ends holding
+  // one input) cannot decide alone: fold 0 holds out the last holdout_fraction of the
+  // training range, fold 1 the first; a candidate's hold-out error pools both.
   const std::size_t m = tr.end - tr.begin;
-  const std::size_t hb = tr.begin + static_cast<std::size_t>(std::llround((1.0 - o.holdout_fraction) * static_cast<double>(m)));
-  if (hb <= tr.begin || hb >= tr.end)
+  const auto h = static_cast<std::size_t>(std::llround(o.holdout_fraction * static_cast<double>(m)));
+  if (h < 1 || h >= m)
     return invalid("fit: auto: the training range is too short to split off a hold-out", o.model, t0);
-  const IndexRange first{tr.begin, hb}, hold{hb, tr.end};
+  const IndexRange fit_range[2] = {{tr.begin, tr.end - h}, {tr.begin + h, tr.end}};
+  const IndexRange hold_range[2] = {{tr.end - h, tr.end}, {tr.begin, tr.begin + h}};
   constexpr std::size_t nk = std::size(kAutoKinds);
-  std::vector<FitCandidate> cands(nk);
-  parallel_for(nk, o.num_threads, [&](std::size_t k) {
+  std::vector<FitReport> runs(2 * nk);
+  std::vector<FitMetrics> held(2 * nk);
+  parallel_for(2 * nk, o.num_threads, [&](std::size_t j) {
+    const std::size_t k = j / 2, fold = j % 2;
     FitOptions oc = o;
     oc.model = kAutoKinds[k];
-    oc.train = first;
+    oc.train = fit_range[fold];
     oc.num_threads = 1;
     oc.progress = nullptr;
+    runs[j] = fit_one(x, y, oc, Clock::now());
+    if (fitted(runs[j].status)) held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
+  });
+  const auto yt = y.subspan(tr.begin, m);
+  const auto [ylo, yhi] = std::minmax_element(yt.begin(), yt.end());
+  std::vector<FitCandidate> cands(nk);
+  for (std::size_t k = 0; k < nk; ++k) {
     FitCandidate& c = cands[k];
-    c.kind = oc.model;
-    const FitReport r = fit_one(x, y, oc, Clock::now());
+    const FitReport& r = runs[2 * k];
+    c.kind = kAutoKinds[k];
     c.status = r.status;
     c.message = r.message;
-    c.time_s = r.time_s;
+    c.time_s = r.time_s + runs[2 * k + 1].time_s;
     c.train = r.train;
-    if (fitted(r.status)) {
-      c.model = r.model;
-      c.holdout = evaluate(r.model, x, y, hold, o.initial_state);
+    if (!fitted(r.status)) continue;
+    c.model = r.model;
+    FitMetrics pooled;
+    double sse = 0, sae = 0;
+    for (std::size_t fold = 0; fold < 2; ++fold) {
+      const FitMetrics& f = held[2 * k + fold];
+      if (!fitted(runs[2 * k + fold].status)) continue;
+      sse += f.rms * f.rms * static_cast<double>(f.n);
+      sae += f.mae * static_cast<double>(f.n);
+      pooled.n += f.n;
+      pooled.max = std::max(pooled.max, f.max);
     }
-  });
+    const double nn = static_cast<double>(std::max<std::size_t>(pooled.n, 1));
+    pooled.rms = std::sqrt(sse / nn);
+    pooled.mae = sae / nn;
+    pooled.rms_percent_span = 100 * pooled.rms / (*yhi - *ylo);
+    pooled.r2 = std::numeric_limits<double>::quiet_NaN();
+    c.holdout = pooled;
+  }
   std::size_t best = nk;
   for (std::size_t k = 0; k < nk; ++k)
     if (fitted(cands[k].status) && std::isfinite(cands[k].holdout.rms) &&
@@ -389,9 +416,10 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   of.model = cands[best].kind;
   FitReport rep = fit_one(x, y, of, t0);
   rep.candidates = std::move(cands);
-  rep.message = fmt::format("auto: {} chosen (hold-out RMS {:.6g}, the last {:.0f}% of the training range); {}",
-                            fit_model_name(of.model), rep.candidates[best].holdout.rms, 100 * o.holdout_fraction,
-                            rep.message);
+  rep.message = fmt::format(
+      "auto: {} chosen (hold-out RMS {:.6g}, pooled over the first and the last {:.0f}% of the training range, each "
+      "predicted by a fit on the rest); {}",
+      fit_model_name(of.model), rep.candidates[best].holdout.rms, 100 * o.holdout_fraction, rep.message);
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return rep;
 }

@@ -551,7 +551,8 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
       classes.emplace_back(c.chosen ? "chosen" : "");
     }
     page.table(header, rows, classes);
-    page.para("The kind with the lowest hold-out RMS (the last part of the training range) is chosen and refitted "
+    page.para("The kind with the lowest hold-out RMS (pooled over the first and the last part of the training range, each "
+              "predicted by a fit on the rest) is chosen and refitted "
               "on the whole training range; validation data never enter the choice.");
   }
 

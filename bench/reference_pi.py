@@ -3,7 +3,9 @@
 (numpy + scipy.optimize.nnls), independent of hysteron's C++ reference_pi:
 a classical PI with N play operators, thresholds r_i = i span / (2 N), i = 1..N
 (evenly spaced over half the training input span), operators relaxed at the first
-sample, a free linear term and an output offset, weights >= 0 by NNLS.
+sample, a free linear term and an output offset, weights >= 0 by NNLS. Like the C++
+reference_pi (and every fit), a decreasing record is fitted as -y (the sign of the
+least-squares line), so that a flipped sensor does not change the reference.
 
 Usage: reference_pi.py TRAIN.csv IN OUT [--train A:B] [--validate C:D] [--validate-data V.csv ...]
 Prints one JSON object: train and validation RMS in % of the measured span.
@@ -51,10 +53,12 @@ def main():
     r = np.arange(1, a.n + 1) * np.ptp(x[tr]) / (2 * a.n)
     x0 = x[0]
     A = regressors(x[: tr.stop] - x0, r)[tr]
-    Am, bm = A.mean(axis=0), y[tr].mean()  # the free offset, eliminated by centring
-    t, _ = nnls(A - Am, y[tr] - bm)
+    sign = -1.0 if np.cov(x[tr], y[tr])[0, 1] < 0 else 1.0
+    b = sign * y[tr]
+    Am, bm = A.mean(axis=0), b.mean()  # the free offset, eliminated by centring
+    t, _ = nnls(A - Am, b - bm)
     c = bm - Am @ t
-    predict = lambda xs: regressors(xs - x0, r) @ t + c
+    predict = lambda xs: sign * (regressors(xs - x0, r) @ t + c)
     res = {"train": pct(y, predict(x), tr), "validate": []}
     if a.validate_data:
         for f in a.validate_data:

@@ -105,8 +105,8 @@ void add_evaluate(CLI::App& app, Action& action) {
                                                  "loops and residuals in the report)");
   sub->add_option("--model,-m", c->model, "model file (JSON); - reads it from stdin")->required();
   sub->add_option("--data,-d", c->data, "data file (.csv or .mat)")->required();
-  sub->add_option("--input,-i", c->input, "input column (header name or 0-based index)")->required();
-  sub->add_option("--output,-y", c->output, "output column (header name or 0-based index)")->required();
+  sub->add_option("--input,-i", c->input, "input column: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) of the matrix NAME")->required();
+  sub->add_option("--output,-y", c->output, "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a matrix)")->required();
   sub->add_option("--range,--train", c->range,
                   "samples scored: A:B (sample indices, half-open) or As:Bs (seconds); default: the whole record");
   sub->add_option("--time-column", c->time_column, "time column: ranges in seconds, time axis of the HTML report");

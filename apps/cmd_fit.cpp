@@ -278,8 +278,8 @@ void add_fit(CLI::App& app, Action& action) {
                   fmt::format("{} (auto: fit every kind, choose by hold-out RMS; default gpi)", join(names, " | ")))
       ->check(CLI::IsMember(names));
   sub->add_option("--data,-d", c->data, "data file (.csv or .mat)")->required();
-  sub->add_option("--input,-i", c->input, "input column (header name or 0-based index)")->required();
-  sub->add_option("--output,-y", c->output, "output column (header name or 0-based index)")->required();
+  sub->add_option("--input,-i", c->input, "input column: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) of the matrix NAME")->required();
+  sub->add_option("--output,-y", c->output, "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a matrix)")->required();
   sub->add_option("--n", c->n, "number of operators (default 10)");
   sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones (default 4)");
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");

@@ -26,7 +26,7 @@ void add_report(CLI::App& app, Action& action) {
   cmd->add_option("input", args->input, "Experiment output directory or fit report JSON file")->required();
   cmd->add_option("-o,--out", args->out, "HTML file to write (atomically)")->capture_default_str();
   cmd->add_option("--data,-d", args->data.input_file, "Fit reports: the data file (.csv or .mat) the fit used");
-  cmd->add_option("--input,-i", args->data.input_column, "Fit reports: input column (name or 0-based index)");
+  cmd->add_option("--input,-i", args->data.input_column, "Fit reports: input column (name or 0-based index; .mat: NAME:INDEX for a matrix column)");
   cmd->add_option("--output,-y", args->data.output_column, "Fit reports: output column (name or 0-based index)");
   cmd->callback([args, &action] {
     action = [args] {

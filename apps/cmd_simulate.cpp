@@ -135,7 +135,7 @@ int run_invert(const Options& o) {
 void add_common(CLI::App* sub, Options& o, const char* input_help) {
   sub->add_option("--model,-m", o.model, "model file (JSON, see docs/model-files.md); - reads it from stdin")->required();
   sub->add_option("--input,-i", o.input, input_help)->required();
-  sub->add_option("--column,-c", o.column, "column of the input file: header name or 0-based index (.mat: variable)");
+  sub->add_option("--column,-c", o.column, "column of the input file: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) of the matrix NAME");
   sub->add_option("--output,-o", o.output, "output file: .csv, .mat, or - for CSV on stdout")->required();
   sub->add_flag("--relaxed", o.relaxed, "start from rest at the first sample instead of the virgin state");
 }

@@ -474,7 +474,7 @@ TEST(Mat, RoundTripAndMissingVariable) {
   expect_error([&] { io::read_column(dir.write("fake.mat", "hello"), "x"); }, {"fake.mat", ".mat"});
 }
 
-TEST(Mat, ReadsSingleIntegerRowVectorsAndRefusesMatrices) {
+TEST(Mat, ReadsSingleIntegerRowVectorsAndMatrixNeedsAColumn) {
   TempDir dir;
   const auto path = dir.file("classes.mat");
   mat_t* m = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
@@ -497,6 +497,136 @@ TEST(Mat, ReadsSingleIntegerRowVectorsAndRefusesMatrices) {
   Mat_Close(m);
   EXPECT_EQ(io::read_column(path, "f"), (std::vector<double>{0.5, -1.25, 2.0}));
   EXPECT_EQ(io::read_column(path, "s"), (std::vector<double>{-3, 0, 7}));
-  expect_error([&] { io::read_column(path, "M"); }, {"\"M\"", "2x2", "vector"});
+  // a matrix named without a column index: the size and how to choose a column
+  expect_error([&] { io::read_column(path, "M"); }, {"\"M\"", "2x2", "\"M:0\" .. \"M:1\"", "0-based"});
   expect_error([&] { io::read_column(path, "bad"); }, {"\"bad\"", "element 2", "finite"});
+}
+
+// A matrix variable's columns: NAME:INDEX (0-based); vectors (N x 1, 1 x N) with or without
+// ":0"; errors naming the file, the variable and what is wrong with it.
+TEST(Mat, MatrixColumnsByIndex) {
+  TempDir dir;
+  const auto path = dir.file("matrix.mat");
+  mat_t* m = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  ASSERT_NE(m, nullptr);
+  // data: 4 samples x 3 columns, column-major as MATLAB stores it: data(:,j+1) = 10*j + (1..4)
+  double data[12] = {1, 2, 3, 4, 11, 12, 13, 14, 21, 22, 23, 24};
+  std::int32_t ints[8] = {-1, -2, -3, -4, 5, 6, 7, 8};                  // 4x2 int32
+  double col[4] = {0.5, 1.5, 2.5, 3.5}, row[4] = {9, 8, 7, 6};          // 4x1 and 1x4
+  double nanm[6] = {1, 2, 3, 4, NAN, 6};                                // 3x2, NaN in column 1
+  double re[4] = {1, 2, 3, 4}, im[4] = {0, 0, 1, 0};
+  mat_complex_split_t cplx{re, im};
+  double cube[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+  char text[5] = {'h', 'e', 'l', 'l', 'o'};
+  // sparse 3x2 [1 0; 0 0; 0 2]
+  mat_uint32_t ir[2] = {0, 2}, jc[3] = {0, 1, 2};
+  double sdata[2] = {1, 2};
+  mat_sparse_t sparse{};
+  sparse.nzmax = 2;
+  sparse.ir = ir;
+  sparse.nir = 2;
+  sparse.jc = jc;
+  sparse.njc = 3;
+  sparse.ndata = 2;
+  sparse.data = sdata;
+  size_t d43[2] = {4, 3}, d42[2] = {4, 2}, d41[2] = {4, 1}, d14[2] = {1, 4}, d32[2] = {3, 2}, d22[2] = {2, 2},
+         d222[3] = {2, 2, 2}, d15[2] = {1, 5};
+  auto write = [&](const char* name, matio_classes c, matio_types t, int rank, size_t* dims, void* values, int opt) {
+    matvar_t* v = Mat_VarCreate(name, c, t, rank, dims, values, MAT_F_DONT_COPY_DATA | opt);
+    ASSERT_NE(v, nullptr) << name;
+    ASSERT_EQ(Mat_VarWrite(m, v, MAT_COMPRESSION_NONE), 0) << name;
+    Mat_VarFree(v);
+  };
+  write("data", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d43, data, 0);
+  write("ints", MAT_C_INT32, MAT_T_INT32, 2, d42, ints, 0);
+  write("col", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d41, col, 0);
+  write("row", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d14, row, 0);
+  write("nanm", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d32, nanm, 0);
+  write("cplx", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d22, &cplx, MAT_F_COMPLEX);
+  write("cube", MAT_C_DOUBLE, MAT_T_DOUBLE, 3, d222, cube, 0);
+  write("text", MAT_C_CHAR, MAT_T_UINT8, 2, d15, text, 0);
+  write("sp", MAT_C_SPARSE, MAT_T_DOUBLE, 2, d32, &sparse, 0);
+  Mat_Close(m);
+
+  // columns of a matrix, 0-based
+  EXPECT_EQ(io::read_column(path, "data:0"), (std::vector<double>{1, 2, 3, 4}));
+  EXPECT_EQ(io::read_column(path, "data:1"), (std::vector<double>{11, 12, 13, 14}));
+  EXPECT_EQ(io::read_column(path, "data:2"), (std::vector<double>{21, 22, 23, 24}));
+  EXPECT_EQ(io::read_column(path, "ints:1"), (std::vector<double>{5, 6, 7, 8}));
+  // N x 1 and 1 x N are vectors: by name, or as their only column 0
+  EXPECT_EQ(io::read_column(path, "col"), (std::vector<double>{0.5, 1.5, 2.5, 3.5}));
+  EXPECT_EQ(io::read_column(path, "col:0"), (std::vector<double>{0.5, 1.5, 2.5, 3.5}));
+  EXPECT_EQ(io::read_column(path, "row"), (std::vector<double>{9, 8, 7, 6}));
+  EXPECT_EQ(io::read_column(path, "row:0"), (std::vector<double>{9, 8, 7, 6}));
+  // a NaN in another column does not matter; in the column read it is refused with its place
+  EXPECT_EQ(io::read_column(path, "nanm:0"), (std::vector<double>{1, 2, 3}));
+  expect_error([&] { io::read_column(path, "nanm:1"); }, {path, "\"nanm\"", "row 2, column 1", "finite"});
+
+  // index out of range: the matrix size
+  expect_error([&] { io::read_column(path, "data:3"); },
+               {path, "variable \"data\"", "column index 3 is out of range", "4x3", "3 columns", "0..2"});
+  expect_error([&] { io::read_column(path, "row:1"); }, {path, "\"row\"", "column index 1", "vector", "1x4"});
+  // a matrix without an index
+  expect_error([&] { io::read_column(path, "data"); }, {path, "\"data\"", "4x3", "\"data:0\" .. \"data:2\""});
+  // missing variable, with or without an index: the file's variables
+  expect_error([&] { io::read_column(path, "nope:1"); }, {path, "no variable \"nope\"", "\"data\"", "\"ints\"", "\"sp\""});
+  expect_error([&] { io::read_column(path, "nope"); }, {path, "no variable \"nope\"", "\"data\"", "\"cube\""});
+  // malformed index
+  for (const char* bad : {"data:x", "data:-1", "data:", ":1", "data:1.5", "data: 1"})
+    expect_error([&] { io::read_column(path, bad); }, {path, std::string("\"") + bad + "\"", "NAME:INDEX", "\"data\""});
+  // complex, N-D, non-numeric, sparse
+  expect_error([&] { io::read_column(path, "cplx:0"); }, {path, "\"cplx\"", "complex", "2x2"});
+  expect_error([&] { io::read_column(path, "cube:0"); }, {path, "\"cube\"", "3-D array", "2x2x2"});
+  expect_error([&] { io::read_column(path, "cube"); }, {path, "\"cube\"", "3-D array"});
+  expect_error([&] { io::read_column(path, "text:0"); }, {path, "\"text\"", "not numeric", "char"});
+  expect_error([&] { io::read_column(path, "sp:1"); }, {path, "\"sp\"", "sparse", "3x2", "full()"});
+
+  // the whole table: vectors first, then the columns of the matrices with as many rows
+  const auto t = io::read_table(path);
+  EXPECT_EQ(t.names, (std::vector<std::string>{"col", "row", "data:0", "data:1", "data:2", "ints:0", "ints:1"}));
+  EXPECT_EQ(t.column("data:2"), (std::vector<double>{21, 22, 23, 24}));
+  EXPECT_EQ(t.column("ints:0"), (std::vector<double>{-1, -2, -3, -4}));
+}
+
+// A variable named exactly like the spec wins over NAME:INDEX (matio reads names MATLAB
+// cannot write); a matrix that is the file's only variable still needs a column.
+TEST(Mat, ExactNameWinsAndOnlyMatrixNeedsAColumn) {
+  TempDir dir;
+  const auto path = dir.file("odd.mat");
+  mat_t* m = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  ASSERT_NE(m, nullptr);
+  double v[3] = {7, 8, 9}, w[4] = {1, 2, 3, 4};
+  size_t d31[2] = {3, 1}, d22[2] = {2, 2};
+  matvar_t* a = Mat_VarCreate("a:1", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d31, v, MAT_F_DONT_COPY_DATA);
+  ASSERT_NE(a, nullptr);
+  ASSERT_EQ(Mat_VarWrite(m, a, MAT_COMPRESSION_NONE), 0);
+  Mat_VarFree(a);
+  Mat_Close(m);
+  EXPECT_EQ(io::read_column(path, "a:1"), (std::vector<double>{7, 8, 9}));
+  expect_error([&] { io::read_column(path, "a:0"); }, {path, "no variable \"a\"", "\"a:1\""});
+
+  const auto only = dir.file("only.mat");
+  m = Mat_CreateVer(only.c_str(), nullptr, MAT_FT_MAT5);
+  ASSERT_NE(m, nullptr);
+  matvar_t* mm = Mat_VarCreate("M", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d22, w, MAT_F_DONT_COPY_DATA);
+  ASSERT_NE(mm, nullptr);
+  ASSERT_EQ(Mat_VarWrite(m, mm, MAT_COMPRESSION_ZLIB), 0);
+  Mat_VarFree(mm);
+  Mat_Close(m);
+  expect_error([&] { io::read_column(only, ""); }, {only, "\"M\"", "2x2", "\"M:0\" .. \"M:1\""});
+  EXPECT_EQ(io::read_column(only, "M:1"), (std::vector<double>{3, 4}));
+  EXPECT_EQ(io::read_table(only).names, (std::vector<std::string>{"M:0", "M:1"}));
+}
+
+// In a CSV file a colon is part of a header name: a header match wins, and NAME:INDEX is not
+// a column selector there (the error says so).
+TEST(Table, ColonInCsvHeaderIsAName) {
+  TempDir dir;
+  const auto path = dir.write("colon.csv", "a:b,c,data\n1,2,3\n4,5,6\n");
+  EXPECT_EQ(io::read_column(path, "a:b"), (std::vector<double>{1, 4}));
+  EXPECT_EQ(io::read_column(path, "0"), (std::vector<double>{1, 4}));
+  EXPECT_EQ(io::read_column(path, "data"), (std::vector<double>{3, 6}));
+  expect_error([&] { io::read_column(path, "data:0"); },
+               {path, "no column named \"data:0\"", ".mat file only", "\"a:b\""});
+  expect_error([&] { io::read_column(path, "x"); }, {path, "no column named \"x\""});
 }

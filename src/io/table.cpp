@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -278,37 +279,63 @@ void copy_data(const void* data, std::size_t n, std::vector<double>& out) {
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
 }
 
-std::vector<double> read_mat_variable(const std::string& path, const std::string& name_in) {
-  std::string name = name_in;
-  if (name.empty()) {
-    const auto names = mat_variable_names(path);
-    if (names.size() != 1)
-      throw Error(fmt::format("{}: has {} variables ({}); choose one by name", path, names.size(), list_names(names)));
-    name = names[0];
+const char* class_name(matio_classes c) {
+  switch (c) {
+    case MAT_C_CELL: return "cell";
+    case MAT_C_STRUCT: return "struct";
+    case MAT_C_OBJECT: return "object";
+    case MAT_C_CHAR: return "char";
+    case MAT_C_SPARSE: return "sparse";
+    case MAT_C_FUNCTION: return "function handle";
+    case MAT_C_OPAQUE: return "opaque (e.g. a table, string or datetime object)";
+    default: return "unknown";
   }
+}
+
+std::string dims_text(const matvar_t& v) {
+  std::string dims;
+  for (int i = 0; i < v.rank; ++i) dims += fmt::format("{}{}", i ? "x" : "", v.dims[i]);
+  return dims;
+}
+
+// A real, full, numeric 2-D variable: values in column-major order (MATLAB's).
+struct MatArray {
+  std::string name;
+  std::string where;  // "path: variable \"name\"", for messages
+  std::size_t rows = 0, cols = 0;
+  std::vector<double> values;
+  bool is_vector() const noexcept { return rows <= 1 || cols <= 1; }  // empty counts as a vector
+  std::string size_text() const { return fmt::format("{}x{}", rows, cols); }
+};
+
+MatArray read_mat_array(const std::string& path, const std::string& name) {
   MatPtr m = open_mat(path);
   VarPtr v(Mat_VarRead(m.get(), name.c_str()));
   if (!v) {
     m.reset();
     throw Error(fmt::format("{}: no variable \"{}\"; the file has {}", path, name, list_names(mat_variable_names(path))));
   }
-  const std::string where = fmt::format("{}: variable \"{}\"", path, name);
-  if (v->isComplex) throw Error(fmt::format("{}: is complex; expected a real numeric vector", where));
-  if (v->rank != 2 || (v->dims[0] != 1 && v->dims[1] != 1)) {
-    std::string dims;
-    for (int i = 0; i < v->rank; ++i) dims += fmt::format("{}{}", i ? "x" : "", v->dims[i]);
-    throw Error(fmt::format("{}: has size {}; expected a vector (1xN or Nx1)", where, dims));
-  }
-  const std::size_t n = v->dims[0] * v->dims[1];
-  std::vector<double> out;
-  if (n > 0 && !v->data) throw Error(fmt::format("{}: has no data", where));
+  MatArray a;
+  a.name = name;
+  a.where = fmt::format("{}: variable \"{}\"", path, name);
+  const std::string expected = "expected a real numeric vector or 2-D matrix (double, single or an integer class)";
+  if (v->class_type == MAT_C_SPARSE)
+    throw Error(fmt::format("{}: is a sparse matrix (size {}); {}: convert it with full() before saving", a.where,
+                            dims_text(*v), expected));
   switch (v->class_type) {
     case MAT_C_DOUBLE: case MAT_C_SINGLE: case MAT_C_INT8: case MAT_C_UINT8: case MAT_C_INT16:
     case MAT_C_UINT16: case MAT_C_INT32: case MAT_C_UINT32: case MAT_C_INT64: case MAT_C_UINT64: break;
-    default: throw Error(fmt::format("{}: is not a numeric array (class {}); expected double, single or an integer class",
-                                     where, static_cast<int>(v->class_type)));
+    default: throw Error(fmt::format("{}: is not numeric (class {}); {}", a.where, class_name(v->class_type), expected));
   }
+  if (v->isComplex) throw Error(fmt::format("{}: is complex (size {}); {}", a.where, dims_text(*v), expected));
+  if (v->rank != 2)
+    throw Error(fmt::format("{}: is a {}-D array (size {}); {}", a.where, v->rank, dims_text(*v), expected));
+  a.rows = v->dims[0];
+  a.cols = v->dims[1];
+  const std::size_t n = a.rows * a.cols;
+  if (n > 0 && !v->data) throw Error(fmt::format("{}: has no data", a.where));
   if (n > 0) {
+    auto& out = a.values;
     switch (v->data_type) {
       case MAT_T_DOUBLE: copy_data<double>(v->data, n, out); break;
       case MAT_T_SINGLE: copy_data<float>(v->data, n, out); break;
@@ -320,14 +347,85 @@ std::vector<double> read_mat_variable(const std::string& path, const std::string
       case MAT_T_UINT32: copy_data<std::uint32_t>(v->data, n, out); break;
       case MAT_T_INT64: copy_data<std::int64_t>(v->data, n, out); break;
       case MAT_T_UINT64: copy_data<std::uint64_t>(v->data, n, out); break;
-      default: throw Error(fmt::format("{}: unsupported data type {}", where, static_cast<int>(v->data_type)));
+      default: throw Error(fmt::format("{}: unsupported data type {}", a.where, static_cast<int>(v->data_type)));
     }
   }
+  return a;
+}
+
+// Column `col` of a matrix, or the whole vector (col = npos); refuses NaN/infinity in what is read.
+std::vector<double> mat_column(const MatArray& a, std::size_t col) {
+  std::vector<double> out;
+  if (a.is_vector()) {
+    out = a.values;
+    for (std::size_t i = 0; i < out.size(); ++i)
+      if (!std::isfinite(out[i]))
+        throw Error(fmt::format("{}: element {} (1-based) is not a finite number (NaN and infinity are refused)",
+                                a.where, i + 1));
+    return out;
+  }
+  out.assign(a.values.begin() + static_cast<std::ptrdiff_t>(col * a.rows),
+             a.values.begin() + static_cast<std::ptrdiff_t>((col + 1) * a.rows));
   for (std::size_t i = 0; i < out.size(); ++i)
     if (!std::isfinite(out[i]))
-      throw Error(fmt::format("{}: element {} (1-based) is not a finite number (NaN and infinity are refused)", where,
-                              i + 1));
+      throw Error(fmt::format("{}: row {}, column {} (0-based column; row 1-based) is not a finite number (NaN and "
+                              "infinity are refused)",
+                              a.where, i + 1, col));
   return out;
+}
+
+std::string choose_column_hint(const std::string& name, const MatArray& a) {
+  return fmt::format("is a {} matrix ({} rows = samples, {} columns); choose a column with \"{}:0\" .. \"{}:{}\" "
+                     "(0-based column index)",
+                     a.size_text(), a.rows, a.cols, name, name, a.cols - 1);
+}
+
+// A .mat column spec: "" (the file's only variable), a variable name (a vector, or an N x 1 /
+// 1 x N matrix), or NAME:INDEX (column INDEX, 0-based, of the 2-D matrix NAME). A variable whose
+// name is the whole spec wins over the NAME:INDEX reading (MATLAB names cannot hold ':', but
+// other writers' files may).
+std::vector<double> read_mat_variable(const std::string& path, const std::string& spec) {
+  std::string name = spec;
+  std::optional<std::size_t> col;
+  if (name.empty()) {
+    const auto names = mat_variable_names(path);
+    if (names.size() != 1)
+      throw Error(fmt::format("{}: has {} variables ({}); choose one by name (NAME:INDEX for a column of a matrix)",
+                              path, names.size(), list_names(names)));
+    name = names[0];
+  } else if (const auto colon = spec.rfind(':'); colon != std::string::npos) {
+    const auto names = mat_variable_names(path);
+    if (std::find(names.begin(), names.end(), spec) == names.end()) {
+      name = spec.substr(0, colon);
+      const std::string_view idx = std::string_view(spec).substr(colon + 1);
+      std::size_t k = 0;
+      const auto res = std::from_chars(idx.data(), idx.data() + idx.size(), k);
+      if (name.empty() || idx.empty() || res.ec != std::errc() || res.ptr != idx.data() + idx.size())
+        throw Error(fmt::format("{}: \"{}\" is not a column of the file: expected a variable name or NAME:INDEX "
+                                "(INDEX = 0-based column of the matrix NAME); the file has {}",
+                                path, spec, list_names(names)));
+      if (std::find(names.begin(), names.end(), name) == names.end())
+        throw Error(fmt::format("{}: no variable \"{}\" (in \"{}\"); the file has {}", path, name, spec,
+                                list_names(names)));
+      col = k;
+    }
+  }
+  const MatArray a = read_mat_array(path, name);
+  if (!col) {
+    if (!a.is_vector()) throw Error(fmt::format("{}: {}", a.where, choose_column_hint(name, a)));
+    return mat_column(a, 0);
+  }
+  const std::size_t ncols = a.is_vector() ? 1 : a.cols;
+  if (*col >= ncols) {
+    if (a.is_vector())
+      throw Error(fmt::format("{}: column index {} is out of range: the variable is a vector (size {}), a single "
+                              "column: use \"{}\" or \"{}:0\"",
+                              a.where, *col, a.size_text(), name, name));
+    throw Error(fmt::format("{}: column index {} is out of range: the variable is a {} matrix ({} columns, indices "
+                            "0..{})",
+                            a.where, *col, a.size_text(), a.cols, a.cols - 1));
+  }
+  return mat_column(a, *col);
 }
 
 bool is_matlab_identifier(std::string_view s) {
@@ -425,7 +523,13 @@ std::size_t Table::column_index(std::string_view spec) const {
                               columns.size(), describe()));
     return idx;
   }
-  throw Error(fmt::format("{}: no column named \"{}\"; columns are: {}", source, spec, describe()));
+  // NAME:INDEX selects a column of a .mat matrix variable (read_column); in a text file a colon is
+  // an ordinary character of a header name
+  const std::string hint = spec.find(':') != std::string_view::npos && !is_mat_path(source)
+                               ? " (NAME:INDEX selects a column of a matrix in a .mat file only; in a text file, "
+                                 "name the column by its header or its 0-based index)"
+                               : std::string();
+  throw Error(fmt::format("{}: no column named \"{}\"{}; columns are: {}", source, spec, hint, describe()));
 }
 
 const std::vector<double>& Table::column(std::string_view spec) const {
@@ -441,18 +545,40 @@ Table read_table(const std::string& path, const ReadOptions& options) {
   if (!is_mat_path(path)) return read_text_table(path, options);
   Table t;
   t.source = path;
+  // vectors first (in file order), then the columns "NAME:0", "NAME:1", ... of the 2-D matrices
+  // with as many rows as the vectors have elements (or as the first such matrix, if no vector)
+  std::vector<MatArray> matrices;
   for (const auto& name : mat_variable_names(path)) {
+    MatArray a;
     std::vector<double> v;
     try {
-      v = read_mat_variable(path, name);
+      a = read_mat_array(path, name);
+      if (!a.is_vector()) {
+        matrices.push_back(std::move(a));
+        continue;
+      }
+      v = mat_column(a, 0);
     } catch (const Error&) {
-      continue;  // not a numeric vector: not a column
+      continue;  // not a real numeric vector or matrix (or not finite): not a column
     }
     if (!t.columns.empty() && v.size() != t.columns[0].size())
       throw Error(fmt::format("{}: variable \"{}\" has {} elements but \"{}\" has {}; read them one by one", path,
                               name, v.size(), t.names[0], t.columns[0].size()));
     t.names.push_back(name);
     t.columns.push_back(std::move(v));
+  }
+  for (const auto& a : matrices) {
+    if (!t.columns.empty() && a.rows != t.columns[0].size()) continue;
+    for (std::size_t j = 0; j < a.cols; ++j) {
+      std::vector<double> v;
+      try {
+        v = mat_column(a, j);
+      } catch (const Error&) {
+        continue;
+      }
+      t.names.push_back(fmt::format("{}:{}", a.name, j));
+      t.columns.push_back(std::move(v));
+    }
   }
   return t;
 }

@@ -15,7 +15,15 @@
 //    "file:line:column (column "name"): ..." (line 1-based, column = 1-based
 //    field number); rows with a different number of fields name their line.
 // .mat files (extension .mat, any case): a column is a variable: a real numeric
-// vector (1xN or Nx1) of class double, single or any integer class.
+// vector (1xN or Nx1) of class double, single or any integer class, or one column of
+// such a 2-D matrix, named NAME:INDEX (INDEX 0-based, as CSV column indices; rows are
+// samples): "data:2" is MATLAB's data(:,3). An N x 1 or 1 x N matrix is a vector ("v" or
+// "v:0"). A variable named exactly like the spec wins over the NAME:INDEX reading.
+// Errors name the file and variable: a missing variable (listing the file's variables),
+// an index out of range (with the matrix size), a matrix named without an index, and
+// sparse, complex, non-numeric (char, cell, struct, ...) and N-D (rank > 2) variables.
+// In text files a colon has no special meaning: "a:b" is a header name (a header match
+// always wins; an index is a plain 0-based number).
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -27,7 +35,8 @@ namespace hysteron::io {
 enum class HeaderMode { autodetect, present, absent };
 
 struct ReadOptions {
-  // Column to read: a header name (or .mat variable name), else a 0-based index.
+  // Column to read: a header name (or .mat variable name, or NAME:INDEX for column
+  // INDEX, 0-based, of a .mat matrix), else a 0-based index.
   // Empty: the file's only non-empty column (an error if it has several).
   std::string column_spec;
   // Field separator: 0 = autodetect, else ',', ';', '\t' or ' ' (runs of blanks).
@@ -53,11 +62,13 @@ struct Table {
 };
 
 // Reads a whole text table (or every numeric vector variable of a .mat file,
-// which must then all have the same length). Throws hysteron::Error.
+// which must then all have the same length, followed by the columns "NAME:0",
+// "NAME:1", ... of each 2-D matrix with that many rows; other matrices, and variables
+// that are not real numeric or hold NaN/infinity, are left out). Throws hysteron::Error.
 Table read_table(const std::string& path, const ReadOptions& options = {});
 
-// One column of a text file or one variable of a .mat file (options.column_spec
-// is then the variable name; empty = the file's only variable).
+// One column of a text file or one variable (or matrix column NAME:INDEX) of a .mat
+// file (options.column_spec; empty = the file's only variable, which must be a vector).
 std::vector<double> read_column(const std::string& path, const ReadOptions& options);
 std::vector<double> read_column(const std::string& path, const std::string& column);
 

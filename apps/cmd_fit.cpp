@@ -235,7 +235,7 @@ int run_fit(const FitCliOptions& c) {
   }
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {
-    text += "candidates (chosen by hold-out RMS on the last part of the training range):\n";
+    text += "candidates (chosen by the hold-out RMS pooled over the first and the last part of the training range):\n";
     std::string head = fmt::format("  {:<13} {:<15} {:>12} {:>12}", "kind", "status", "train RMS", "hold-out RMS");
     for (const auto& v : sets) head += fmt::format(" {:>14}", v.file.empty() ? std::string("validate RMS") : "validate RMS");
     text += head + fmt::format(" {:>9}\n", "time [s]");

@@ -96,14 +96,14 @@ TEST(IdentifyGpi, RecoversParametersWithinStandardErrors) {
   ASSERT_EQ(r.status, FitStatus::converged) << r.full_report();
   EXPECT_NEAR(r.train.rms, sigma, 0.1 * sigma) << r.full_report();
   // Compare gauge invariants (c0 is held, see FitOptions::gpi_fix_scale): k = c0_fit / c0_true.
-  const double k = param(r, "c0").value / truth.envelope.c[0];
+  const double k = param(r, "c[0]").value / truth.envelope.c[0];
   struct Check {
     const char* name;
     double truth;
     double scale;  // fitted value * scale is comparable with truth
   };
-  const Check checks[] = {{"c1", truth.envelope.c[1], 1.0}, {"c2", truth.envelope.c[2], 1.0},
-                          {"c3", truth.envelope.c[3], 1.0 / k}, {"q", truth.q, k},
+  const Check checks[] = {{"c[1]", truth.envelope.c[1], 1.0}, {"c[2]", truth.envelope.c[2], 1.0},
+                          {"c[3]", truth.envelope.c[3], 1.0 / k}, {"q", truth.q, k},
                           {"rho", truth.rho, k},             {"tau", truth.tau, k},
                           {"alpha", truth.alpha, 1.0 / k}};
   for (const auto& c : checks) {

@@ -114,7 +114,8 @@ double straight_line_rms(std::span<const double> x, std::span<const double> y, I
   return std::sqrt(sse / m);
 }
 
-// The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|).
+// The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|); the
+// names are the model file's keys (kind_*.cpp).
 double absorbed_factor(FitModel kind, const std::string& name, double a, double b) {
   auto is = [&](std::initializer_list<const char*> names) {
     for (const char* n : names)
@@ -124,15 +125,15 @@ double absorbed_factor(FitModel kind, const std::string& name, double a, double 
   switch (kind) {
     case FitModel::pi:
     case FitModel::mpi_deadzone:
-      return name == "q" || (name.size() > 1 && name[0] == 'p') ? b / a : 1.0;
+      return name == "q" || name.starts_with("p[") ? b / a : 1.0;
     case FitModel::gpi:
-      if (is({"c0", "c3", "alpha"})) return b;
-      if (is({"c1"})) return 1.0 / a;
+      if (is({"c[0]", "c[3]", "alpha"})) return b;
+      if (is({"c[1]"})) return 1.0 / a;
       if (is({"tau"})) return 1.0 / b;
       return 1.0;
     case FitModel::mpi_asym:
-      if (is({"asc.c0", "asc.c3", "desc.c0", "desc.c3"})) return b;
-      if (is({"asc.c1", "desc.c1"})) return 1.0 / a;
+      if (is({"ascending.c[0]", "ascending.c[3]", "descending.c[0]", "descending.c[3]"})) return b;
+      if (is({"ascending.c[1]", "descending.c[1]"})) return 1.0 / a;
       return 1.0;
     case FitModel::automatic: break;
   }

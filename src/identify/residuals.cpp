@@ -1,0 +1,430 @@
+// Residuals of Eq. 12 and their analytic Jacobians (forward-mode sensitivities through
+// the operator recursion) for the gpi of Eqs. 6-8 and for the slope-parametrized models,
+// as Ceres cost functions; the autodiff functors they are tested against.
+#include <Eigen/Core>
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "fit_internal.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+namespace fitting {
+
+namespace {
+
+// Centres the m residuals and the columns of the row-major m x p Jacobian (free offset).
+void project_offset(int m, int p, double* res, double* J) {
+  if (m <= 0) return;
+  Eigen::Map<Eigen::VectorXd> r(res, m);
+  r.array() -= r.mean();
+  if (!J) return;
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jm(J, m, p);
+  const Eigen::RowVectorXd mean = Jm.colwise().mean();
+  Jm.rowwise() -= mean;
+}
+
+// Residual of Eq. 12, optionally mapped so that its square is the Huber loss:
+// f = r for |r| <= d, f = sign(r) sqrt(2 d |r| - d^2) beyond.
+template <class T>
+inline T robust_residual(const T& r, double d) {
+  if (d <= 0) return r;
+  if (r < T(d) && T(-d) < r) return r;
+  using std::sqrt;
+  const T a = r < T(0) ? T(-r) : r;
+  const T f = sqrt(T(2.0 * d) * a - T(d * d));
+  return r < T(0) ? T(-f) : f;
+}
+
+// robust_residual for the hand-written Jacobians, with its slope df/dr.
+inline double robust_residual_with_slope(double r, double d, double& slope) {
+  const double f = robust_residual<double>(r, d);
+  slope = f == r ? 1.0 : d / std::abs(f);  // d/dr sqrt(2 d |r| - d^2) = d / |f|
+  return f;
+}
+
+// Simulates the structure over [0, train.end) and writes the residuals of the train range.
+template <class T>
+void residuals_of(const Structure<T>& s, const Data& d, T* res) {
+  std::vector<T> y(s.r.size(), T(0));
+  if (d.initial == InitialState::relaxed) {
+    const T u0 = envelope_value<T>(s.asc_kind, s.asc_c.data(), d.x[0]);
+    std::fill(y.begin(), y.end(), u0);
+  }
+  for (std::size_t k = 0; k < d.train.end; ++k) {
+    const T out = structure_step<T>(s, d.x[k], y.data());
+    if (k >= d.train.begin) res[k - d.train.begin] = robust_residual<T>(T(d.y[k]) - out, d.huber);
+  }
+}
+
+struct GpiFunctor {
+  Data d;
+  int n;
+  template <class T>
+  bool operator()(const T* th, T* res) const {
+    Structure<T> s;
+    build_gpi(th, n, s);
+    residuals_of(s, d, res);
+    return true;
+  }
+};
+
+}  // namespace
+
+// Residuals (and, if J != nullptr, their row-major m x 8 Jacobian) of the gpi in
+// one pass with plain doubles: forward-mode sensitivities through the recursion.
+// Each play output is either held (its derivative is carried from the previous
+// sample) or equals u - r_i / u + r_i (derivative of the envelope and of r_i =
+// alpha i). The branch tests are those of ops::generalized_play, so this is the
+// derivative the Jets of GpiFunctor compute (tested to 1e-10).
+void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J) {
+  const double c0 = th[0], c1 = th[1], c2 = th[2], c3 = th[3], q = th[4], rho = th[5], tau = th[6], alpha = th[7];
+  const auto nn = static_cast<std::size_t>(n);
+  std::vector<double> r(nn), e(nn), p(nn), y(nn, 0.0), g(5 * nn, 0.0);  // g: dy_i/d(c0..c3, alpha)
+  for (std::size_t i = 0; i < nn; ++i) {
+    r[i] = alpha * static_cast<double>(i + 1);
+    e[i] = std::exp(-tau * r[i]);
+    p[i] = rho * e[i];
+  }
+  double du[4];
+  auto env = [&](double x) {
+    const double t = detail::tanh_fast(c1 * x + c2);
+    const double sl = c0 * (1.0 - t * t);
+    du[0] = t;
+    du[1] = sl * x;
+    du[2] = sl;
+    du[3] = 1.0;
+    return c0 * t + c3;
+  };
+  if (d.initial == InitialState::relaxed) {
+    const double u0 = env(d.x[0]);
+    for (std::size_t i = 0; i < nn; ++i) {
+      y[i] = u0;
+      std::copy(du, du + 4, &g[5 * i]);
+    }
+  }
+  for (std::size_t k = 0; k < d.train.end; ++k) {
+    const double u = env(d.x[k]);
+    double out = q * u;
+    double dc0 = q * du[0], dc1 = q * du[1], dc2 = q * du[2], dc3 = q;
+    double dal = 0, drho = 0, dtau = 0;
+    for (std::size_t i = 0; i < nn; ++i) {
+      double* gi = &g[5 * i];
+      const double hi = u + r[i], lo = u - r[i];
+      const double ii = static_cast<double>(i + 1);
+      if (!(y[i] < hi)) {  // hmin(u + r, y)
+        y[i] = hi;
+        gi[0] = du[0], gi[1] = du[1], gi[2] = du[2], gi[3] = 1.0, gi[4] = ii;
+      }
+      if (!(lo < y[i])) {  // hmax(u - r, .)
+        y[i] = lo;
+        gi[0] = du[0], gi[1] = du[1], gi[2] = du[2], gi[3] = 1.0, gi[4] = -ii;
+      }
+      const double py = p[i] * y[i];
+      out += py;
+      dc0 += p[i] * gi[0];
+      dc1 += p[i] * gi[1];
+      dc2 += p[i] * gi[2];
+      dc3 += p[i] * gi[3];
+      dal += p[i] * gi[4] - tau * ii * py;
+      drho += e[i] * y[i];
+      dtau -= r[i] * py;
+    }
+    if (k < d.train.begin) continue;
+    const double rr = d.y[k] - out;
+    double df = 1.0;
+    const double f = robust_residual_with_slope(rr, d.huber, df);
+    const std::size_t row = k - d.train.begin;
+    res[row] = f;
+    if (J) {
+      double* jr = J + kGpi * row;
+      jr[0] = -df * dc0, jr[1] = -df * dc1, jr[2] = -df * dc2, jr[3] = -df * dc3;
+      jr[4] = -df * u, jr[5] = -df * drho, jr[6] = -df * dtau, jr[7] = -df * dal;
+    }
+  }
+}
+
+namespace {
+
+// The gpi cost in the chart: residuals from theta(phi), J_phi = J_theta dtheta/dphi.
+class GpiChartCost final : public ceres::CostFunction {
+ public:
+  GpiChartCost(const Data& d, int n) : d_(d), n_(n), chart_{d.xc, d.xs} {
+    set_num_residuals(static_cast<int>(d.train.end - d.train.begin));
+    mutable_parameter_block_sizes()->push_back(kGpi);
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const auto th = chart_.theta(params[0]);
+    for (double v : th)
+      if (!std::isfinite(v)) return false;
+    if (!jacobians || !jacobians[0]) {
+      gpi_evaluate(d_, n_, th.data(), residuals, nullptr);
+      if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, nullptr);
+      return true;
+    }
+    const auto m = static_cast<Eigen::Index>(d_.train.end - d_.train.begin);
+    Jt_.resize(m, kGpi);
+    gpi_evaluate(d_, n_, th.data(), residuals, Jt_.data());
+    if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, Jt_.data());
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor>>(jacobians[0], m, kGpi).noalias() =
+        Jt_ * chart_.jacobian(params[0]);
+    return true;
+  }
+
+ private:
+  Data d_;
+  int n_;
+  GpiChart chart_;
+  mutable Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor> Jt_;
+};
+
+struct SlopeFunctor {
+  Data d;
+  const SlopeLayout* layout;
+  template <class T>
+  bool operator()(T const* const* th, T* res) const {
+    Structure<T> s;
+    layout->build(th[0], s);
+    residuals_of(s, d, res);
+    return true;
+  }
+};
+
+}  // namespace
+
+
+// Residuals (and, if J != nullptr, their row-major m x size() Jacobian) of a
+// slope-parametrized model in one pass with plain doubles (forward-mode
+// sensitivities; the branch tests are those of ops::asymmetric_play / dead_zone, so
+// this is the derivative the Jets of SlopeFunctor compute, tested to 1e-10).
+// pi / mpi-deadzone: the play outputs do not depend on theta (identity envelope,
+// fixed thresholds): dv/ds_j = y_{j-1} - y_j (y_0 = x); dead zones: out =
+// v + sum g_k S_k(v), d out/dv = 1 + sum of the active g_k, d out/dD_j = S_j - S_{j+1}.
+// mpi-asym: each play output is held (keeps its 8-vector of envelope derivatives)
+// or equals u_a - r_i (ascending coefficients) or u_d + r_i (descending ones).
+void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, double* res, double* J) {
+  const std::size_t n = L.r.size();
+  const std::size_t P = static_cast<std::size_t>(L.size());
+  const std::size_t env = static_cast<std::size_t>(L.env);
+  const bool asym = L.env == 8, sym = L.env == 4, enveloped = asym || sym;
+  const double* sl = th + env;
+  // g: d y_i / d(4 coefficients of the envelope eside[i]: 0 ascending, 1 descending)
+  std::vector<double> p(n), y(n, 0.0), g(enveloped ? 4 * n : 0, 0.0);
+  std::vector<unsigned char> eside(n, 0);
+  for (std::size_t i = 0; i < n; ++i) p[i] = asym ? sl[i + 1] : sl[i + 1] - sl[i];
+  // dead zones: thresholds and slopes g_k = D_k - D_{k-1} (D_0 = 1 per side)
+  const std::size_t nz = L.zp.size() + L.zn.size();
+  std::vector<double> z, gz, S(nz);
+  std::vector<std::size_t> side_end;  // one past the last index of each side
+  {
+    const double* dz = sl + n + 1;
+    for (const std::vector<double>* side : {&L.zp, &L.zn}) {
+      double prev = 1.0;
+      for (double zz : *side) {
+        z.push_back(zz);
+        gz.push_back(*dz - prev);
+        prev = *dz++;
+      }
+      side_end.push_back(z.size());
+    }
+  }
+  const double *ca = th, *cd = th + 4;
+  auto tanh_env = [](const double* c, double x, double* du) {
+    const double t = detail::tanh_fast(c[1] * x + c[2]);
+    const double s = c[0] * (1.0 - t * t);
+    du[0] = t, du[1] = s * x, du[2] = s, du[3] = 1.0;
+    return c[0] * t + c[3];
+  };
+  double dua[4] = {0, 0, 0, 0}, dud[4] = {0, 0, 0, 0};
+  if (d.initial == InitialState::relaxed) {
+    const double u0 = enveloped ? tanh_env(ca, d.x[0], dua) : d.x[0];
+    for (std::size_t i = 0; i < n; ++i) {
+      y[i] = u0;
+      if (enveloped) std::copy(dua, dua + 4, &g[4 * i]);
+    }
+  }
+  const double q = sl[0];
+  for (std::size_t k = 0; k < d.train.end; ++k) {
+    const double x = d.x[k];
+    double ua = x, ud = x;
+    if (asym) ua = tanh_env(ca, x, dua), ud = tanh_env(cd, x, dud);
+    if (sym) ua = ud = tanh_env(ca, x, dua), std::copy(dua, dua + 4, dud);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double hi = ud + L.r[i], lo = ua - L.r[i];
+      if (!(y[i] < hi)) {  // hmin(u_d + r, y)
+        y[i] = hi;
+        if (enveloped) std::copy(dud, dud + 4, &g[4 * i]), eside[i] = asym ? 1 : 0;
+      }
+      if (!(lo < y[i])) {  // hmax(u_a - r, .)
+        y[i] = lo;
+        if (enveloped) std::copy(dua, dua + 4, &g[4 * i]), eside[i] = 0;
+      }
+    }
+    const double u = asym ? 0.5 * (ua + ud) : ua;
+    double v = q * u;
+    for (std::size_t i = 0; i < n; ++i) v += p[i] * y[i];
+    double out = v, dv = 1.0;
+    for (std::size_t j = 0; j < nz; ++j) {
+      // ops::dead_zone: z > 0: max{v - z, 0}; z < 0: min{v - z, 0}; z = 0: v
+      bool on = true;
+      if (0.0 < z[j]) on = !(v - z[j] < 0.0);
+      else if (z[j] < 0.0) on = !(0.0 < v - z[j]);
+      S[j] = on ? v - z[j] : 0.0;
+      out += gz[j] * S[j];
+      if (on) dv += gz[j];
+    }
+    if (k < d.train.begin) continue;
+    const double rr = d.y[k] - out;
+    double df = 1.0;
+    const double f = robust_residual_with_slope(rr, d.huber, df);
+    const std::size_t rix = k - d.train.begin;
+    res[rix] = f;
+    if (!J) continue;
+    double* jr = J + P * rix;
+    const double a = -df * dv;  // d f / d v
+    if (asym) {
+      for (int c = 0; c < 4; ++c) jr[c] = 0.5 * q * dua[c], jr[4 + c] = 0.5 * q * dud[c];
+      for (std::size_t i = 0; i < n; ++i) {
+        const double* gi = &g[4 * i];
+        double* ji = jr + 4 * eside[i];
+        for (int c = 0; c < 4; ++c) ji[c] += p[i] * gi[c];
+      }
+      for (int c = 0; c < 8; ++c) jr[c] *= a;
+      jr[env] = a * u;
+      for (std::size_t i = 0; i < n; ++i) jr[env + 1 + i] = a * y[i];
+    } else {
+      if (sym) {  // d v / d c = q du + sum_i p_i dy_i
+        for (int c = 0; c < 4; ++c) jr[c] = q * dua[c];
+        for (std::size_t i = 0; i < n; ++i)
+          for (int c = 0; c < 4; ++c) jr[c] += p[i] * g[4 * i + static_cast<std::size_t>(c)];
+        for (int c = 0; c < 4; ++c) jr[c] *= a;
+        jr += 4;
+      }
+      // v = s_0 u + sum_i (s_{i+1} - s_i) y_i
+      for (std::size_t j = 0; j <= n; ++j) jr[j] = a * ((j == 0 ? u : y[j - 1]) - (j < n ? y[j] : 0.0));
+      std::size_t j0 = 0;
+      for (std::size_t e : side_end) {
+        for (std::size_t j = j0; j < e; ++j) jr[n + 1 + j] = -df * (S[j] - (j + 1 < e ? S[j + 1] : 0.0));
+        j0 = e;
+      }
+    }
+  }
+}
+
+
+namespace {
+
+// Ridge residuals w p_i = w (s_i - s_{i-1}), i = 1..n, of a cumulative-slope layout.
+class RidgeCost final : public ceres::CostFunction {
+ public:
+  explicit RidgeCost(const SlopeLayout* layout) : layout_(layout) {
+    set_num_residuals(static_cast<int>(layout->r.size()));
+    mutable_parameter_block_sizes()->push_back(layout->size());
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const std::size_t n = layout_->r.size(), P = static_cast<std::size_t>(layout_->size());
+    const double w = layout_->ridge;
+    const double* sl = params[0] + layout_->env;
+    for (std::size_t i = 0; i < n; ++i) residuals[i] = w * (sl[i + 1] - sl[i]);
+    if (jacobians && jacobians[0]) {
+      std::fill(jacobians[0], jacobians[0] + n * P, 0.0);
+      for (std::size_t i = 0; i < n; ++i) {
+        double* jr = jacobians[0] + i * P + static_cast<std::size_t>(layout_->env);
+        jr[i] = -w;
+        jr[i + 1] = w;
+      }
+    }
+    return true;
+  }
+
+ private:
+  const SlopeLayout* layout_;
+};
+
+class SlopeCost final : public ceres::CostFunction {
+ public:
+  SlopeCost(const Data& d, const SlopeLayout* layout) : d_(d), layout_(layout) {
+    set_num_residuals(static_cast<int>(d.train.end - d.train.begin));
+    mutable_parameter_block_sizes()->push_back(layout->size());
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    slope_evaluate(d_, *layout_, params[0], residuals, jacobians ? jacobians[0] : nullptr);
+    if (d_.free_offset)
+      project_offset(num_residuals(), layout_->size(), residuals, jacobians ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  Data d_;
+  const SlopeLayout* layout_;
+};
+}  // namespace
+
+ceres::CostFunction* make_gpi_chart_cost(const Data& d, int n) { return new GpiChartCost(d, n); }
+ceres::CostFunction* make_slope_cost(const Data& d, const SlopeLayout* layout) { return new SlopeCost(d, layout); }
+ceres::CostFunction* make_ridge_cost(const SlopeLayout* layout) { return new RidgeCost(layout); }
+
+}  // namespace fitting
+
+using fitting::Data;
+using fitting::GpiFunctor;
+using fitting::kGpi;
+using fitting::SlopeFunctor;
+using fitting::SlopeLayout;
+
+void gpi_residuals(std::span<const double> theta, int n, std::span<const double> x, std::span<const double> y,
+                   IndexRange train, InitialState initial, double huber, bool autodiff, Eigen::VectorXd& residuals,
+                   Eigen::MatrixXd& jacobian) {
+  if (theta.size() != static_cast<std::size_t>(kGpi)) throw Error("gpi_residuals: theta must have 8 entries");
+  if (n < 1) throw Error("gpi_residuals: n must be >= 1");
+  detail::check_record(x, y, "gpi_residuals");
+  const IndexRange tr = detail::check_range(train, x.size(), "gpi_residuals: train");
+  const Data d{x, y, tr, initial, huber};
+  const auto m = static_cast<Eigen::Index>(tr.end - tr.begin);
+  residuals.resize(m);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, kGpi);
+  if (autodiff) {
+    ceres::AutoDiffCostFunction<GpiFunctor, ceres::DYNAMIC, kGpi> cost(new GpiFunctor{d, n}, static_cast<int>(m));
+    const double* params[1] = {theta.data()};
+    double* jacs[1] = {J.data()};
+    cost.Evaluate(params, residuals.data(), jacs);
+  } else {
+    gpi_evaluate(d, n, theta.data(), residuals.data(), J.data());
+  }
+  jacobian = J;
+}
+
+void slope_residuals(FitModel model, std::span<const double> theta, std::span<const double> r,
+                     std::span<const double> zp, std::span<const double> zn, std::span<const double> x,
+                     std::span<const double> y, IndexRange train, InitialState initial, double huber, bool autodiff,
+                     Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian) {
+  SlopeLayout L;
+  L.kind = model;
+  L.env = model == FitModel::mpi_asym ? 8 : model == FitModel::gpi ? 4 : 0;
+  L.r.assign(r.begin(), r.end());
+  if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
+  if (theta.size() != static_cast<std::size_t>(L.size()))
+    throw Error(fmt::format("slope_residuals: theta must have {} entries, got {}", L.size(), theta.size()));
+  detail::check_record(x, y, "slope_residuals");
+  const IndexRange tr = detail::check_range(train, x.size(), "slope_residuals: train");
+  const Data d{x, y, tr, initial, huber};
+  const auto m = static_cast<Eigen::Index>(tr.end - tr.begin);
+  residuals.resize(m);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(m, L.size());
+  if (autodiff) {
+    ceres::DynamicAutoDiffCostFunction<SlopeFunctor, 10> cost(new SlopeFunctor{d, &L});
+    cost.AddParameterBlock(L.size());
+    cost.SetNumResiduals(static_cast<int>(m));
+    const double* params[1] = {theta.data()};
+    double* jacs[1] = {J.data()};
+    cost.Evaluate(params, residuals.data(), jacs);
+  } else {
+    slope_evaluate(d, L, theta.data(), residuals.data(), J.data());
+  }
+  jacobian = J;
+}
+
+}  // namespace hysteron

@@ -325,6 +325,23 @@ std::vector<std::array<double, 4>> gpi_envelopes(const Data& d, const Ranges& rg
   return envs;
 }
 
+// A candidate start of a slope layout, ranked by the SSE of its constrained LS weights.
+struct SlopeCand {
+  double sse;
+  SlopeLayout layout;
+  std::vector<double> th;
+};
+
+// The best num_starts candidates (lowest SSE first) appended to layouts and starts.
+void take_best(std::vector<SlopeCand>& cands, const FitOptions& o, std::vector<SlopeLayout>& layouts,
+               std::vector<std::vector<double>>& starts) {
+  std::sort(cands.begin(), cands.end(), [](const SlopeCand& x, const SlopeCand& y) { return x.sse < y.sse; });
+  for (std::size_t k = 0; k < cands.size() && static_cast<int>(k) < o.num_starts; ++k) {
+    layouts.push_back(cands[k].layout);
+    starts.push_back(cands[k].th);
+  }
+}
+
 }  // namespace
 
 // Data-derived gpi starts: the envelope from a tanh fit of the loop's centre line;
@@ -393,12 +410,7 @@ void asym_starts(const Data& full, int n, const FitOptions& o, double margin, st
   const auto ce = fit_tanh(br.centre.x.size() >= 4 ? br.centre : all, rg);
   const auto ea = br.asc.x.size() >= 4 ? fit_tanh(br.asc, rg) : ce;
   const auto ed = br.desc.x.size() >= 4 ? fit_tanh(br.desc, rg) : ce;
-  struct Cand {
-    double sse;
-    SlopeLayout layout;
-    std::vector<double> th;
-  };
-  std::vector<Cand> cands;
+  std::vector<SlopeCand> cands;
   const std::pair<std::array<double, 4>, std::array<double, 4>> pairs[2] = {{ea, ed}, {ce, ce}};
   for (const auto& [a, b] : pairs) {
     const double U = 0.5 * (envelope_span(a, rg) + envelope_span(b, rg));
@@ -416,7 +428,7 @@ void asym_starts(const Data& full, int n, const FitOptions& o, double margin, st
       std::vector<double> p;
       const double sse = cls_weights(d, s, margin * scale, q, p);
       if (!std::isfinite(sse)) continue;
-      Cand c{sse, {}, {}};
+      SlopeCand c{sse, {}, {}};
       c.layout.kind = FitModel::mpi_asym;
       c.layout.env = 8;
       c.layout.r = s.r;
@@ -427,11 +439,7 @@ void asym_starts(const Data& full, int n, const FitOptions& o, double margin, st
       cands.push_back(std::move(c));
     }
   }
-  std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) { return x.sse < y.sse; });
-  for (std::size_t k = 0; k < cands.size() && static_cast<int>(k) < o.num_starts; ++k) {
-    layouts.push_back(cands[k].layout);
-    starts.push_back(cands[k].th);
-  }
+  take_best(cands, o, layouts, starts);
   if (starts.empty()) throw Error("fit: mpi-asym: no usable start");
 }
 
@@ -443,12 +451,7 @@ void gpi_free_starts(const Data& full, int n, const FitOptions& o, double margin
   const Decimated dec = decimate(full);
   const Data& d = dec.d;
   const Ranges rg = ranges_of(d);
-  struct Cand {
-    double sse;
-    SlopeLayout layout;
-    std::vector<double> th;
-  };
-  std::vector<Cand> cands;
+  std::vector<SlopeCand> cands;
   for (const auto& env : gpi_envelopes(d, rg)) {
     const double U = envelope_span(env, rg);
     const double scale = rg.yspan() / std::max(U, 1e-300);
@@ -463,7 +466,7 @@ void gpi_free_starts(const Data& full, int n, const FitOptions& o, double margin
       std::vector<double> p;
       const double sse = cls_weights(d, s, margin * scale, q, p);
       if (!std::isfinite(sse)) continue;
-      Cand c{sse, {}, {}};
+      SlopeCand c{sse, {}, {}};
       c.layout.kind = FitModel::gpi;
       c.layout.env = 4;
       c.layout.r = s.r;
@@ -473,11 +476,7 @@ void gpi_free_starts(const Data& full, int n, const FitOptions& o, double margin
       cands.push_back(std::move(c));
     }
   }
-  std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) { return x.sse < y.sse; });
-  for (std::size_t k = 0; k < cands.size() && static_cast<int>(k) < o.num_starts; ++k) {
-    layouts.push_back(cands[k].layout);
-    starts.push_back(cands[k].th);
-  }
+  take_best(cands, o, layouts, starts);
   if (starts.empty()) throw Error("fit: gpi (free weights): no usable start");
 }
 

@@ -16,6 +16,7 @@
 #include "detail.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/inverse.hpp"
+#include "kinds.hpp"
 
 namespace hysteron {
 
@@ -114,30 +115,11 @@ double straight_line_rms(std::span<const double> x, std::span<const double> y, I
   return std::sqrt(sse / m);
 }
 
-// The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|); the
-// names are the model file's keys (kind_*.cpp).
-double absorbed_factor(FitModel kind, const std::string& name, double a, double b) {
-  auto is = [&](std::initializer_list<const char*> names) {
-    for (const char* n : names)
-      if (name == n) return true;
-    return false;
-  };
-  switch (kind) {
-    case FitModel::pi:
-    case FitModel::mpi_deadzone:
-      return name == "q" || name.starts_with("p[") ? b / a : 1.0;
-    case FitModel::gpi:
-      if (is({"c[0]", "c[3]", "alpha"})) return b;
-      if (is({"c[1]"})) return 1.0 / a;
-      if (is({"tau"})) return 1.0 / b;
-      return 1.0;
-    case FitModel::mpi_asym:
-      if (is({"ascending.c[0]", "ascending.c[3]", "descending.c[0]", "descending.c[3]"})) return b;
-      if (is({"ascending.c[1]", "descending.c[1]"})) return 1.0 / a;
-      return 1.0;
-    case FitModel::automatic: break;
-  }
-  return 1.0;
+// The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|);
+// the names are the model file's keys, the factors the kind's (kind_*.cpp).
+double absorbed_factor(const FitOptions& o, const std::string& name, double a, double b) {
+  const fitting::Parametrization* kind = fitting::find_parametrization(o);
+  return kind ? kind->absorbed_factor(name, a, b) : 1.0;
 }
 
 // The units-map parameters appended to the report's table (they are part of the model).
@@ -259,7 +241,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   // The scales go into the kind's parameters (they then read in the user's units).
   rep.model = absorb_scales(rep.model);
   for (auto& p : rep.parameters) {
-    const double f = absorbed_factor(o.model, p.name, sx, sy);
+    const double f = absorbed_factor(o, p.name, sx, sy);
     p.value *= f;
     if (std::isfinite(p.std_error)) p.std_error *= std::abs(f);
   }

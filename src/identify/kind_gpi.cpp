@@ -21,6 +21,13 @@ class GpiKind final : public Parametrization {
  public:
   bool handles(const FitOptions& o) const override { return o.model == FitModel::gpi && !o.gpi_free_weights; }
   int num_parameters(const FitOptions&) const override { return kGpi; }
+  // The envelope, alpha (output units) and tau (their inverse) take the scales.
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    if (const double f = tanh_absorbed_factor(name, "", a, b); f != 0.0) return f;
+    if (name == "alpha") return b;
+    if (name == "tau") return 1.0 / b;
+    return 1.0;
+  }
 
   void fit(const Data& d, const Ranges& rg, const FitOptions& o, FitReport& rep) const override {
     const int n = o.num_operators;

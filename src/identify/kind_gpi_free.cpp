@@ -11,6 +11,11 @@ class GpiFreeKind final : public SlopeParametrization {
  public:
   bool handles(const FitOptions& o) const override { return o.model == FitModel::gpi && o.gpi_free_weights; }
   int num_parameters(const FitOptions& o) const override { return 4 + o.num_operators + 1; }
+  // The envelope takes the scales; q and the p_i are unitless.
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    const double f = tanh_absorbed_factor(name, "", a, b);
+    return f != 0.0 ? f : 1.0;
+  }
 
  protected:
   Starts starts(const Data& d, const Ranges&, const FitOptions& o) const override {

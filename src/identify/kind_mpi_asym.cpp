@@ -12,6 +12,12 @@ class MpiAsymKind final : public SlopeParametrization {
  public:
   bool handles(const FitOptions& o) const override { return o.model == FitModel::mpi_asym; }
   int num_parameters(const FitOptions& o) const override { return 8 + o.num_operators + 1; }
+  // The envelopes take the scales; q and the p_i are unitless.
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    for (const char* side : {"ascending.", "descending."})
+      if (const double f = tanh_absorbed_factor(name, side, a, b); f != 0.0) return f;
+    return 1.0;
+  }
 
  protected:
   Starts starts(const Data& d, const Ranges&, const FitOptions& o) const override {

@@ -22,6 +22,11 @@ class MpiDeadzoneKind final : public SlopeParametrization {
  public:
   bool handles(const FitOptions& o) const override { return o.model == FitModel::mpi_deadzone; }
   int num_parameters(const FitOptions& o) const override { return o.num_operators + 1 + o.num_dead_zones; }
+  // q and the p_i scale with b / a (absorb_scales), the thresholds with a
+  // (the dead-zone slopes g_j are unitless).
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    return name == "q" || name.starts_with("p[") ? b / a : 1.0;
+  }
 
  protected:
   Starts starts(const Data& d, const Ranges& rg, const FitOptions& o) const override {

@@ -10,6 +10,10 @@ class PiKind final : public SlopeParametrization {
  public:
   bool handles(const FitOptions& o) const override { return o.model == FitModel::pi; }
   int num_parameters(const FitOptions& o) const override { return o.num_operators; }
+  // q and the p_i scale with b / a (absorb_scales), the thresholds with a.
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    return name == "q" || name.starts_with("p[") ? b / a : 1.0;
+  }
 
  protected:
   Starts starts(const Data& d, const Ranges&, const FitOptions& o) const override {

@@ -23,6 +23,9 @@ class Parametrization {
   // costs, iterations, starts, model (in the coordinates of d) and parameters (named as
   // the keys of the model file, see io::model_to_json) with their standard errors.
   virtual void fit(const Data& d, const Ranges& rg, const FitOptions& o, FitReport& rep) const = 0;
+  // The factor by which absorb_scales multiplies the reported parameter `name` (a =
+  // input_scale, b = |output_gain|), so that the report reads as the model file.
+  virtual double absorbed_factor(std::string_view name, double a, double b) const = 0;
 };
 
 // The kinds linear in their weights (cumulative-slope layout, residuals.cpp): LM from
@@ -48,6 +51,9 @@ class SlopeParametrization : public Parametrization {
 
 // "key[i]": the i-th entry of the model file's array "key".
 std::string indexed(std::string_view key, std::size_t i);
+// absorbed_factor of a tanh envelope's coefficients "<prefix>c[i]": c[0], c[3] times b,
+// c[1] over a; 0 if `name` is not one of them.
+double tanh_absorbed_factor(std::string_view name, std::string_view prefix, double a, double b);
 // The report map of cumulative slopes s_0..s_n (and the dead-zone slopes per side):
 // q = s_0, p_i = s_i - s_{i-1}, g_j = D_j - D_{j-1} (within a side).
 Eigen::MatrixXd cumulative_report_map(const SlopeLayout& L);

@@ -8,6 +8,15 @@ namespace hysteron::fitting {
 
 std::string indexed(std::string_view key, std::size_t i) { return fmt::format("{}[{}]", key, i); }
 
+double tanh_absorbed_factor(std::string_view name, std::string_view prefix, double a, double b) {
+  if (!name.starts_with(prefix)) return 0.0;
+  name.remove_prefix(prefix.size());
+  if (name == "c[0]" || name == "c[3]") return b;
+  if (name == "c[1]") return 1.0 / a;
+  if (name == "c[2]") return 1.0;
+  return 0.0;
+}
+
 Eigen::MatrixXd cumulative_report_map(const SlopeLayout& L) {
   const int m = L.size();
   Eigen::MatrixXd M = Eigen::MatrixXd::Identity(m, m);

@@ -36,47 +36,21 @@ struct EvaluateOptions {
 int run_evaluate(const EvaluateOptions& c) {
   if (c.json && c.report == "-") throw Error("--report - and --json both write to standard output: choose one");
   const ModelParams model = read_model_source(c.model);
-  const std::vector<double> x = io::read_column(c.data, c.input);
-  const std::vector<double> y = io::read_column(c.data, c.output);
-  if (x.size() != y.size())
-    throw Error(fmt::format("{}: input column has {} values, output column {}", c.data, x.size(), y.size()));
-  std::optional<std::vector<double>> time;
-  if (!c.time_column.empty()) {
-    time = io::read_column(c.data, c.time_column);
-    if (time->size() != x.size())
-      throw Error(fmt::format("{}: time column has {} values, input column {}", c.data, time->size(), x.size()));
-  }
-  const IndexRange range =
-      c.range.empty() ? IndexRange{0, x.size()} : parse_range(c.range, "--range", time ? &*time : nullptr, x.size());
+  const DataSelection sel{c.data, c.input, c.output, c.time_column, c.input_label, c.output_label};
+  const DataColumns rec = read_data_columns(c.data, sel);
+  const IndexRange range = c.range.empty() ? IndexRange{0, rec.x.size()}
+                                           : parse_range(c.range, "--range", rec.t ? &*rec.t : nullptr, rec.x.size());
   const InitialState initial = c.relaxed ? InitialState::relaxed : InitialState::virgin;
-  const report::Axis in_axis = parse_axis(c.input_label, c.input), out_axis = parse_axis(c.output_label, c.output);
 
   io::EvaluationDocument doc;
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
   doc.model = model;
-  doc.data.input_file = doc.data.output_file = c.data;
-  doc.data.input_column = c.input;
-  doc.data.output_column = c.output;
-  doc.data.time_column = c.time_column;
-  doc.data.input_label = in_axis.label;
-  doc.data.input_unit = in_axis.unit;
-  doc.data.output_label = out_axis.label;
-  doc.data.output_unit = out_axis.unit;
-  doc.data.initial_state = initial;
-  doc.data.train = range;
-  doc.result = {c.data, range, evaluate(model, x, y, range, initial)};
+  doc.data = describe_data(sel, initial, range);
+  doc.result = {c.data, range, evaluate(model, rec.x, rec.y, range, initial)};
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {
-      report::FitData data;
-      data.x = x;
-      data.y = y;
-      if (time) data.t = *time;
-      data.input = in_axis;
-      data.output = out_axis;
-      data.source = fmt::format("{} (input column {}, output column {})", c.data, c.input, c.output);
-      data.initial_state = initial;
-      data.train = range;
+      const report::FitData data = plot_data(sel, rec, initial, range);
       report::write_evaluation_report(model, doc.model_file, data, c.report, command_line());
     } else {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");
@@ -87,7 +61,7 @@ int run_evaluate(const EvaluateOptions& c) {
     return exit_ok;
   }
   const FitMetrics& m = doc.result.metrics;
-  const std::string yu = out_axis.unit.empty() ? "" : " " + out_axis.unit;
+  const std::string yu = doc.data.output_unit.empty() ? "" : " " + doc.data.output_unit;
   std::string text = fmt::format("model {} ({}) on {}, samples {}..{} ({} start)\n", doc.model_file, model_name(model),
                                  c.data, range.begin, range.end, c.relaxed ? "relaxed" : "virgin");
   text += fmt::format("evaluate: rms {:.6g}{}  max {:.6g}{}  mae {:.6g}{}  rms {:.4g}% of span  r2 {:.6f}  ({} samples)\n",

@@ -71,10 +71,6 @@ std::string rms_cell(const std::optional<FitMetrics>& m) {
   return m && std::isfinite(m->rms) ? fmt::format("{:.6g}", m->rms) : "-";
 }
 
-bool has_model(FitStatus s) {
-  return s == FitStatus::converged || s == FitStatus::no_convergence || s == FitStatus::poor_fit;
-}
-
 // One validation set: its record (a range of the fit's record when x is empty).
 struct ValidationSet {
   std::string file;  // "" = the fit's record
@@ -88,16 +84,11 @@ int run_fit(const FitCliOptions& c) {
                 "--out - with --report FILE.json)");
   if (c.report == "-" && (c.out == "-" || c.json))
     throw Error("--report - and --out - / --json would both write to standard output: choose one");
-  const std::vector<double> x = io::read_column(c.data, c.input);
-  const std::vector<double> y = io::read_column(c.data, c.output);
-  if (x.size() != y.size())
-    throw Error(fmt::format("{}: input column has {} values, output column {}", c.data, x.size(), y.size()));
-  std::optional<std::vector<double>> time;
-  if (!c.time_column.empty()) {
-    time = io::read_column(c.data, c.time_column);
-    if (time->size() != x.size())
-      throw Error(fmt::format("{}: time column has {} values, input column {}", c.data, time->size(), x.size()));
-  }
+  const DataSelection sel{c.data, c.input, c.output, c.time_column, c.input_label, c.output_label};
+  const DataColumns rec = read_data_columns(c.data, sel);
+  const std::vector<double>& x = rec.x;
+  const std::vector<double>& y = rec.y;
+  const std::optional<std::vector<double>>& time = rec.t;
   FitOptions o;
   o.model = fit_model_from_name(c.model);
   o.num_operators = c.n;
@@ -121,11 +112,10 @@ int run_fit(const FitCliOptions& c) {
   for (const auto& file : c.validate_data) {
     ValidationSet v;
     v.file = file;
-    v.x = io::read_column(file, c.input);
-    v.y = io::read_column(file, c.output);
-    if (v.x.size() != v.y.size())
-      throw Error(fmt::format("{}: input column has {} values, output column {}", file, v.x.size(), v.y.size()));
-    if (time) v.t = io::read_column(file, c.time_column);
+    DataColumns d = read_data_columns(file, sel);
+    v.x = std::move(d.x);
+    v.y = std::move(d.y);
+    if (d.t) v.t = std::move(*d.t);
     v.range = c.validate.empty() ? IndexRange{0, v.x.size()}
                                  : parse_range(c.validate, fmt::format("--validate (on {})", file),
                                                time ? &v.t : nullptr, v.x.size());
@@ -156,18 +146,7 @@ int run_fit(const FitCliOptions& c) {
 
   io::FitDocument doc;
   doc.fit = rep;
-  const report::Axis in_axis = parse_axis(c.input_label, c.input), out_axis = parse_axis(c.output_label, c.output);
-  doc.data.input_file = c.data;
-  doc.data.input_column = c.input;
-  doc.data.output_file = c.data;
-  doc.data.output_column = c.output;
-  doc.data.time_column = c.time_column;
-  doc.data.input_label = in_axis.label;
-  doc.data.input_unit = in_axis.unit;
-  doc.data.output_label = out_axis.label;
-  doc.data.output_unit = out_axis.unit;
-  doc.data.initial_state = o.initial_state;
-  doc.data.train = train;
+  doc.data = describe_data(sel, o.initial_state, train);
   const bool fitted = has_model(rep.status);
   if (fitted)
     for (const auto& v : sets)
@@ -197,15 +176,7 @@ int run_fit(const FitCliOptions& c) {
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {
-      report::FitData data;
-      data.x = x;
-      data.y = y;
-      if (time) data.t = *time;
-      data.input = in_axis;
-      data.output = out_axis;
-      data.source = fmt::format("{} (input column {}, output column {})", c.data, c.input, c.output);
-      data.initial_state = o.initial_state;
-      data.train = train;
+      report::FitData data = plot_data(sel, rec, o.initial_state, train);
       for (const auto& v : sets) data.validation.push_back({v.file, v.x, v.y, v.t, v.range});
       report::write_fit_report(rep, data, c.report, command_line());
     } else {
@@ -223,8 +194,8 @@ int run_fit(const FitCliOptions& c) {
   // the text report: on stdout, or on stderr when stdout carries the model (--out -)
   std::string text = rep.full_report();
   if (!text.empty() && text.back() != '\n') text += '\n';
-  const std::string xu = in_axis.unit.empty() ? "input units" : in_axis.unit;
-  const std::string yu = out_axis.unit.empty() ? "output unit" : out_axis.unit;
+  const std::string xu = doc.data.input_unit.empty() ? "input units" : doc.data.input_unit;
+  const std::string yu = doc.data.output_unit.empty() ? "output unit" : doc.data.output_unit;
   if (fitted) {
     text += fmt::format("reference PI: rms {:.6g}  ({:.4g}% of span) on the training range; the fit's rms {:.6g}\n",
                         rep.reference.rms, rep.reference.rms_percent_span, rep.train.rms);

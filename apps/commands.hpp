@@ -9,7 +9,10 @@
 #include <string_view>
 #include <vector>
 
+#include <optional>
+
 #include "hysteron/identify.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/models.hpp"
 #include "hysteron/report.hpp"
 
@@ -41,5 +44,21 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
 report::Axis parse_axis(const std::string& text, const std::string& fallback);
 // Reports: a path ending in .html or .htm (any case) is HTML, anything else JSON.
 bool is_html_path(const std::string& path);
+
+// What fit and evaluate read from a data file and how the reports describe it.
+struct DataSelection {
+  std::string file, input, output, time_column;  // time_column empty: no time axis
+  std::string input_label, output_label;         // "Pressure [kPa]"; empty: the column name
+};
+struct DataColumns {
+  std::vector<double> x, y;
+  std::optional<std::vector<double>> t;
+};
+// The input, output and (if named) time columns of `file`, of equal lengths; throws
+// hysteron::Error naming the file otherwise.
+DataColumns read_data_columns(const std::string& file, const DataSelection& sel);
+// The data section of a fit/evaluation document and the plot data of its HTML report.
+io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range);
+report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range);
 
 }  // namespace hysteron::cli

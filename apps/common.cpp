@@ -13,6 +13,7 @@
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/io/table.hpp"
 
 namespace hysteron::cli {
 
@@ -93,6 +94,49 @@ bool is_html_path(const std::string& path) {
   std::string lower = path;
   std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
   return lower.ends_with(".html") || lower.ends_with(".htm");
+}
+
+DataColumns read_data_columns(const std::string& file, const DataSelection& sel) {
+  DataColumns d;
+  d.x = io::read_column(file, sel.input);
+  d.y = io::read_column(file, sel.output);
+  if (d.x.size() != d.y.size())
+    throw Error(fmt::format("{}: input column has {} values, output column {}", file, d.x.size(), d.y.size()));
+  if (!sel.time_column.empty()) {
+    d.t = io::read_column(file, sel.time_column);
+    if (d.t->size() != d.x.size())
+      throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));
+  }
+  return d;
+}
+
+io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range) {
+  const report::Axis in = parse_axis(sel.input_label, sel.input), out = parse_axis(sel.output_label, sel.output);
+  io::DataDescription d;
+  d.input_file = d.output_file = sel.file;
+  d.input_column = sel.input;
+  d.output_column = sel.output;
+  d.time_column = sel.time_column;
+  d.input_label = in.label;
+  d.input_unit = in.unit;
+  d.output_label = out.label;
+  d.output_unit = out.unit;
+  d.initial_state = initial;
+  d.train = range;
+  return d;
+}
+
+report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range) {
+  report::FitData data;
+  data.x = d.x;
+  data.y = d.y;
+  if (d.t) data.t = *d.t;
+  data.input = parse_axis(sel.input_label, sel.input);
+  data.output = parse_axis(sel.output_label, sel.output);
+  data.source = fmt::format("{} (input column {}, output column {})", sel.file, sel.input, sel.output);
+  data.initial_state = initial;
+  data.train = range;
+  return data;
 }
 
 }  // namespace hysteron::cli

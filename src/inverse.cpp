@@ -220,7 +220,7 @@ double Inverse::step(double y) noexcept {
     ++faults_;
     return input();
   }
-  const double ym = s_.units.model_output(y);
+  const double ym = s_.model_output(y);
   const double xm = s_.asymmetric ? step_numerical(ym) : step_analytical(ym);
   return std::clamp(s_.units.from_model(xm), lim_raw_.lo, lim_raw_.hi);
 }

@@ -232,6 +232,8 @@ Structure<double> canonical_structure(const ModelParams& params) {
   Structure<double> s = std::visit(CanonicalVisitor{}, params);
   check_units(units_map(params), model_name(params));
   s.units = units_map(params);
+  s.inv_input_scale = 1.0 / s.units.input_scale;
+  s.inv_output_gain = 1.0 / s.units.output_gain;
   return s;
 }
 
@@ -283,7 +285,7 @@ double Model::step(double x) noexcept {
     ++faults_;
     return out_;
   }
-  const double xm = s_.units.to_model(x);
+  const double xm = s_.to_model(x);
   const double m = s_.asymmetric ? structure_step<double>(s_, xm, state_.y.data(), &state_.u) : step_symmetric(xm, state_.y.data());
   out_ = s_.units.output(m);
   return out_;
@@ -297,10 +299,10 @@ void Model::simulate(std::span<const double> x, std::span<double> y) {
   double* yi = state_.y.data();
   const UnitsMap& um = s_.units;
   if (s_.asymmetric) {
-    for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(structure_step<double>(s_, um.to_model(x[k]), yi));
-    if (!x.empty()) state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), um.to_model(x.back()));
+    for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(structure_step<double>(s_, s_.to_model(x[k]), yi));
+    if (!x.empty()) state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), s_.to_model(x.back()));
   } else {
-    for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(step_symmetric(um.to_model(x[k]), yi));
+    for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(step_symmetric(s_.to_model(x[k]), yi));
   }
   if (!x.empty()) out_ = y.back();
 }

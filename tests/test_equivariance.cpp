@@ -5,15 +5,14 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <random>
-#include <sstream>
 
 #include "hysteron/error.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
 
 using namespace hysteron;
@@ -119,31 +118,14 @@ double validation_error(FitModel kind, const Record& train, const Record& val, I
   return evaluate(r.model, val.x, val.y, val_range).rms_percent_span;
 }
 
-std::vector<std::vector<double>> read_csv(const std::filesystem::path& path) {
-  std::vector<std::vector<double>> cols;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string cell;
-    std::size_t c = 0;
-    while (std::getline(ss, cell, ',')) {
-      if (cols.size() <= c) cols.resize(c + 1);
-      cols[c].push_back(cell.empty() ? std::nan("") : std::stod(cell));
-      ++c;
-    }
-  }
-  return cols;
-}
-
 std::filesystem::path shared_data() { return std::filesystem::path(HYSTERON_SOURCE_DIR) / ".." / "shared" / "data"; }
 
-// Every `step`-th row of columns (in, out) of a shared record.
-Record shared_record(const std::filesystem::path& file, std::size_t in, std::size_t out, std::size_t step,
-                     std::size_t begin = 0) {
-  const auto cols = read_csv(file);
+// Every `step`-th row of columns (in, out) of a shared record (read by hysteron's CSV reader).
+Record shared_record(const std::filesystem::path& file, std::size_t in, std::size_t out, std::size_t step) {
+  const std::vector<double> x = io::read_column(file.string(), std::to_string(in));
+  const std::vector<double> y = io::read_column(file.string(), std::to_string(out));
   Record r;
-  for (std::size_t k = begin; k < cols[in].size(); k += step) r.x.push_back(cols[in][k]), r.y.push_back(cols[out][k]);
+  for (std::size_t k = 0; k < x.size(); k += step) r.x.push_back(x[k]), r.y.push_back(y[k]);
   return r;
 }
 

@@ -178,6 +178,8 @@ enum class FitStatus {
   invalid_input,   // the data or the options were rejected (see message)
 };
 std::string_view fit_status_name(FitStatus status) noexcept;
+// True for the statuses that come with a model (converged, no_convergence, poor_fit).
+bool has_model(FitStatus status) noexcept;
 
 struct FitParameter {
   std::string name;

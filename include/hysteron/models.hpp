@@ -161,8 +161,14 @@ struct Structure {
   std::vector<T> z;
   std::vector<T> g;
   // Raw units <-> model coordinates (applied by Model, Inverse and Rls around the
-  // structure; structure_step works in model coordinates).
+  // structure; structure_step works in model coordinates). The per-sample steps
+  // multiply by the reciprocals (set with `units` by canonical_structure; exact for
+  // the identity map and for the +-1 gains fit() writes).
   UnitsMap units;
+  double inv_input_scale = 1.0;  // 1 / units.input_scale
+  double inv_output_gain = 1.0;  // 1 / units.output_gain
+  double to_model(double x) const noexcept { return (x - units.input_origin) * inv_input_scale; }
+  double model_output(double y) const noexcept { return (y - units.output_offset) * inv_output_gain; }
 };
 
 // Dead-zone output map  g0 v + sum_k g_k S_{z_k}(v).

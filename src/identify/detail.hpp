@@ -2,6 +2,8 @@
 // Internal helpers shared by the identification sources (not installed).
 #include <Eigen/Core>
 
+#include <chrono>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,11 +27,34 @@ Eigen::MatrixXd regressors(const Structure<double>& s, std::span<const double> x
 // the column-scaled normal equations).
 Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b);
 
+// Bounded least squares min ||A t + c - b||, t >= lo. With `offset` != nullptr the
+// offset c is free: it is eliminated exactly by centring the columns and the target,
+// and *offset receives its least-squares value (the mean residual); otherwise c = 0.
+// *sse (if given) receives the residual sum of squares.
+Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo,
+                           double* offset, double* sse = nullptr);
+
 // The model `model` with canonical thresholds s.r and the weights q, p.
 ModelParams with_weights(const ModelParams& model, const Structure<double>& s, double q,
                          const std::vector<double>& p);
 
 double span_of(std::span<const double> v);
+
+// Runs fn(k) for k = 0..count-1, spread over up to `threads` threads (0: one per
+// hardware thread; 1: in order on this thread). Each k must be independent, so the
+// results do not depend on the thread count. The first exception (lowest k) is
+// rethrown once all have finished. (lm.cpp)
+void parallel_for(std::size_t count, int threads, const std::function<void(std::size_t)>& fn);
+
+// A report with status invalid_input, the message, and the time since t0.
+FitReport invalid_report(std::string message, FitModel kind, std::chrono::steady_clock::time_point t0);
+
+// The least-squares line y = a x + b over a range: slope a and residual RMS.
+struct LineFit {
+  double slope = 0.0;
+  double rms = 0.0;
+};
+LineFit straight_line(std::span<const double> x, std::span<const double> y, IndexRange range);
 
 // The Levenberg-Marquardt identification of fit() on data already in model
 // coordinates (fit() normalises the record, calls this, and maps the model back to

@@ -22,12 +22,7 @@ namespace {
 using fitting::Clock;
 
 FitReport invalid(std::string msg, FitModel kind, Clock::time_point t0) {
-  FitReport rep;
-  rep.status = FitStatus::invalid_input;
-  rep.model_kind = kind;
-  rep.message = std::move(msg);
-  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  return rep;
+  return detail::invalid_report(std::move(msg), kind, t0);
 }
 
 }  // namespace
@@ -47,6 +42,10 @@ FitModel fit_model_from_name(std::string_view name) {
   for (FitModel m : {FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym, FitModel::automatic})
     if (fit_model_name(m) == name) return m;
   throw Error(fmt::format("unknown model '{}' (expected gpi, pi, mpi-deadzone, mpi-asym or auto)", name));
+}
+
+bool has_model(FitStatus s) noexcept {
+  return s == FitStatus::converged || s == FitStatus::no_convergence || s == FitStatus::poor_fit;
 }
 
 std::string_view fit_status_name(FitStatus status) noexcept {

@@ -30,24 +30,21 @@ constexpr int kSlopeGrid = 256;
 constexpr FitModel kAutoKinds[] = {FitModel::pi, FitModel::gpi, FitModel::mpi_deadzone, FitModel::mpi_asym};
 
 FitReport invalid(std::string msg, FitModel kind, Clock::time_point t0) {
-  FitReport rep;
-  rep.status = FitStatus::invalid_input;
-  rep.model_kind = kind;
-  rep.message = std::move(msg);
-  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  return rep;
+  return detail::invalid_report(std::move(msg), kind, t0);
 }
 
-bool fitted(FitStatus s) {
-  return s == FitStatus::converged || s == FitStatus::no_convergence || s == FitStatus::poor_fit;
+// The smallest cumulative slope q + p_1 + ... + p_i (i = 0..n) of the PI part (Eq. 11).
+double min_cumulative_slope(const Structure<double>& s) {
+  double smin = s.q, sum = s.q;
+  for (double p : s.p) smin = std::min(smin, sum += p);
+  return smin;
 }
 
 // The smallest local slope d(out)/d(x_m) of a model in model coordinates over
 // [lo, hi] (before the output gain): smallest cumulative slope (PI part, Eq. 11) times
 // the smallest envelope slope times the smallest dead-zone slope.
 double min_model_slope(const Structure<double>& s, double lo, double hi) {
-  double smin = s.q, sum = s.q;
-  for (double p : s.p) smin = std::min(smin, sum += p);
+  const double smin = min_cumulative_slope(s);
   const Envelope ea{s.asc_kind, s.asc_c}, ed{s.desc_kind, s.desc_c};
   double dmin = std::numeric_limits<double>::infinity();
   for (int k = 0; k <= kSlopeGrid; ++k) {
@@ -102,19 +99,6 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
 // (Any model kind contains a line; a hysteretic record leaves a line far more.)
 constexpr double kLineRatio = 0.99498743710662;  // sqrt(0.99)
 
-// RMS of the least-squares line y = a x + b over the range.
-double straight_line_rms(std::span<const double> x, std::span<const double> y, IndexRange tr) {
-  const double m = static_cast<double>(tr.end - tr.begin);
-  double mx = 0, my = 0;
-  for (std::size_t k = tr.begin; k < tr.end; ++k) mx += x[k], my += y[k];
-  mx /= m, my /= m;
-  double sxx = 0, sxy = 0, syy = 0;
-  for (std::size_t k = tr.begin; k < tr.end; ++k)
-    sxx += (x[k] - mx) * (x[k] - mx), sxy += (x[k] - mx) * (y[k] - my), syy += (y[k] - my) * (y[k] - my);
-  const double sse = sxx > 0 ? std::max(0.0, syy - sxy * sxy / sxx) : syy;
-  return std::sqrt(sse / m);
-}
-
 // The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|);
 // the names are the model file's keys, the factors the kind's (kind_*.cpp).
 double absorbed_factor(const FitOptions& o, const std::string& name, double a, double b) {
@@ -131,14 +115,9 @@ void add_units_parameters(FitReport& rep) {
   rep.parameters.push_back({"output_gain", u.output_gain, 0.0, true, false});
 }
 
-FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, Clock::time_point t0) {
-  IndexRange tr;
-  try {
-    detail::check_record(x, y, "fit");
-    tr = detail::check_range(o.train, x.size(), "fit: train");
-  } catch (const Error& e) {
-    return invalid(e.what(), o.model, t0);
-  }
+// One kind on a record already checked by fit(); tr = o.train resolved.
+FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
+                  Clock::time_point t0) {
   // Normalisation: x_m = (x - x[0]) / span(x), y_m = sign (y - y[0]) / span(y) over the
   // training range, sign that of the least-squares line of y on x. Every constant here
   // moves with an offset, a scale or a sign flip of the data, so the fit is equivariant.
@@ -152,18 +131,15 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     return invalid(fmt::format("fit: the training spans (input {}, output {}) are not representable after normalisation",
                                sx, sy),
                    o.model, t0);
-  double mx = 0, my = 0;
-  for (std::size_t k = 0; k < xt.size(); ++k) mx += (xt[k] - x[0]) / sx, my += (yt[k] - y[0]) / sy;
-  mx /= static_cast<double>(xt.size());
-  my /= static_cast<double>(xt.size());
-  double cov = 0;
-  for (std::size_t k = 0; k < xt.size(); ++k) cov += ((xt[k] - x[0]) / sx - mx) * ((yt[k] - y[0]) / sy - my);
-  const double sign = cov < 0 ? -1.0 : 1.0;
   std::vector<double> xn(x.size()), yn(y.size());
   for (std::size_t k = 0; k < x.size(); ++k) {
     xn[k] = (x[k] - x[0]) / sx;
-    yn[k] = sign * (y[k] - y[0]) / sy;
+    yn[k] = (y[k] - y[0]) / sy;
   }
+  const detail::LineFit line = detail::straight_line(xn, yn, tr);  // normalised: no overflow
+  const double sign = line.slope < 0 ? -1.0 : 1.0;
+  if (sign < 0)
+    for (double& v : yn) v = -v;
   FitOptions on = o;
   on.huber_delta = o.huber_delta / sy;
   FitReport rep;
@@ -177,7 +153,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     ol.progress = nullptr;
     const FitReport rl = detail::fit_core(xn, yn, ol, true);
     double c_med = 0;
-    if (fitted(rl.status)) {
+    if (has_model(rl.status)) {
       ModelParams core = rl.model;
       units_map(core).output_offset = 0;
       const std::vector<double> yp = simulate_record(core, std::span<const double>(xn).subspan(0, tr.end), o.initial_state);
@@ -189,11 +165,11 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     std::vector<double> ys(yn.size());
     for (std::size_t k = 0; k < yn.size(); ++k) ys[k] = yn[k] - c_med;
     rep = detail::fit_core(xn, ys, on, false);
-    if (fitted(rep.status)) units_map(rep.model).output_offset += c_med;
+    if (has_model(rep.status)) units_map(rep.model).output_offset += c_med;
   } else {
     rep = detail::fit_core(xn, yn, on, true);
   }
-  if (o.model == FitModel::mpi_deadzone && o.huber_delta == 0 && fitted(rep.status)) {
+  if (o.model == FitModel::mpi_deadzone && o.huber_delta == 0 && has_model(rep.status)) {
     // The classical PI is the mpi-deadzone without dead zones: if the dead zones do not
     // improve on it (a record without the saturation they describe), keep the PI. The
     // dead-zone LM starts from a threshold scale chosen for extrapolation to minor loops
@@ -201,7 +177,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     FitOptions op = on;
     op.model = FitModel::pi;
     const FitReport rp = detail::fit_core(xn, yn, op, true);
-    if (fitted(rp.status)) {
+    if (has_model(rp.status)) {
       const auto& pp = std::get<PiParams>(rp.model);
       MpiDeadzoneParams dz;
       dz.q = pp.q;
@@ -229,7 +205,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     }
   }
   rep.time_s = 0;
-  if (!fitted(rep.status)) {
+  if (!has_model(rep.status)) {
     rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
     return rep;
   }
@@ -265,8 +241,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     const Envelope e{s.asc_kind, s.asc_c};
     const UnitsMap& u = s.units;
     const double uspan = std::abs(e.value(u.to_model(*xh)) - e.value(u.to_model(*xl)));
-    double smin = s.q, sum = s.q;
-    for (double p : s.p) smin = std::min(smin, sum += p);
+    const double smin = min_cumulative_slope(s);
     const double bound = o.min_slope * sy / (std::abs(u.output_gain) * uspan);
     if (uspan > 0 && smin <= bound * (1 + 1e-6))
       rep.warnings.push_back(fmt::format(
@@ -283,13 +258,13 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
 
   // Honest status: useless or worse than the reference is never plain `converged`.
   std::string poor;
-  const double line = straight_line_rms(x, y, tr);
+  const double line_rms = line.rms * sy;
   if (!(rep.train.r2 >= 0))
     poor = fmt::format("training R^2 = {:.4g} < 0: worse than a constant", rep.train.r2);
-  else if (rep.train.rms >= kLineRatio * line)
+  else if (rep.train.rms >= kLineRatio * line_rms)
     poor = fmt::format("training RMS {:.6g} removes less than 1 % of the variance a straight line leaves (line RMS {:.6g}): "
                        "the model explains no hysteresis",
-                       rep.train.rms, line);
+                       rep.train.rms, line_rms);
   else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms)
     poor = fmt::format("training RMS {:.6g} is {:.3g}x that of the reference PI ({:.6g}; limit {:.3g}x)", rep.train.rms,
                        rep.train.rms / rep.reference.rms, rep.reference.rms, o.poor_fit_ratio);
@@ -301,35 +276,8 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   return rep;
 }
 
-// Runs fn(k) for k = 0..count-1 on up to `threads` threads (0: hardware threads).
-template <class Fn>
-void parallel_for(std::size_t count, int threads, Fn&& fn) {
-  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
-  t = std::min(t, count);
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t k; (k = next++) < count;) fn(k);
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t i = 1; i < t; ++i) {
-    try {
-      pool.emplace_back(work);
-    } catch (const std::exception&) {
-      break;
-    }
-  }
-  work();
-  for (auto& th : pool) th.join();
-}
-
-FitReport fit_auto(std::span<const double> x, std::span<const double> y, const FitOptions& o, Clock::time_point t0) {
-  IndexRange tr;
-  try {
-    detail::check_record(x, y, "fit");
-    tr = detail::check_range(o.train, x.size(), "fit: train");
-  } catch (const Error& e) {
-    return invalid(e.what(), o.model, t0);
-  }
+FitReport fit_auto(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
+                   Clock::time_point t0) {
   // Two folds, so that a hold-out that happens to be quiet (a record that ends holding
   // one input) cannot decide alone: fold 0 holds out the last holdout_fraction of the
   // training range, fold 1 the first; a candidate's hold-out error pools both.
@@ -342,15 +290,15 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   constexpr std::size_t nk = std::size(kAutoKinds);
   std::vector<FitReport> runs(2 * nk);
   std::vector<FitMetrics> held(2 * nk);
-  parallel_for(2 * nk, o.num_threads, [&](std::size_t j) {
+  detail::parallel_for(2 * nk, o.num_threads, [&](std::size_t j) {
     const std::size_t k = j / 2, fold = j % 2;
     FitOptions oc = o;
     oc.model = kAutoKinds[k];
     oc.train = fit_range[fold];
     oc.num_threads = 1;
     oc.progress = nullptr;
-    runs[j] = fit_one(x, y, oc, Clock::now());
-    if (fitted(runs[j].status)) held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
+    runs[j] = fit_one(x, y, oc, fit_range[fold], Clock::now());
+    if (has_model(runs[j].status)) held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
   });
   const auto yt = y.subspan(tr.begin, m);
   const auto [ylo, yhi] = std::minmax_element(yt.begin(), yt.end());
@@ -363,13 +311,13 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
     c.message = r.message;
     c.time_s = r.time_s + runs[2 * k + 1].time_s;
     c.train = r.train;
-    if (!fitted(r.status)) continue;
+    if (!has_model(r.status)) continue;
     c.model = r.model;
     FitMetrics pooled;
     double sse = 0, sae = 0;
     for (std::size_t fold = 0; fold < 2; ++fold) {
       const FitMetrics& f = held[2 * k + fold];
-      if (!fitted(runs[2 * k + fold].status)) continue;
+      if (!has_model(runs[2 * k + fold].status)) continue;
       sse += f.rms * f.rms * static_cast<double>(f.n);
       sae += f.mae * static_cast<double>(f.n);
       pooled.n += f.n;
@@ -384,7 +332,7 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   }
   std::size_t best = nk;
   for (std::size_t k = 0; k < nk; ++k)
-    if (fitted(cands[k].status) && std::isfinite(cands[k].holdout.rms) &&
+    if (has_model(cands[k].status) && std::isfinite(cands[k].holdout.rms) &&
         (best == nk || cands[k].holdout.rms < cands[best].holdout.rms))
       best = k;
   if (best == nk) {
@@ -397,7 +345,7 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   cands[best].chosen = true;
   FitOptions of = o;
   of.model = cands[best].kind;
-  FitReport rep = fit_one(x, y, of, t0);
+  FitReport rep = fit_one(x, y, of, tr, t0);
   rep.candidates = std::move(cands);
   rep.message = fmt::format(
       "auto: {} chosen (hold-out RMS {:.6g}, pooled over the first and the last {:.0f}% of the training range, each "
@@ -413,8 +361,15 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   const auto t0 = Clock::now();
   std::string why;
   if (!options.is_valid(&why)) return invalid("invalid options: " + why, options.model, t0);
-  if (options.model == FitModel::automatic) return fit_auto(x, y, options, t0);
-  return fit_one(x, y, options, t0);
+  IndexRange tr;
+  try {
+    detail::check_record(x, y, "fit");
+    tr = detail::check_range(options.train, x.size(), "fit: train");
+  } catch (const Error& e) {
+    return invalid(e.what(), options.model, t0);
+  }
+  if (options.model == FitModel::automatic) return fit_auto(x, y, options, tr, t0);
+  return fit_one(x, y, options, tr, t0);
 }
 
 }  // namespace hysteron

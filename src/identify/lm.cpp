@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <thread>
@@ -41,45 +42,6 @@ class Progress : public ceres::IterationCallback {
   const FitOptions& o_;
   int start_;
 };
-
-// Runs fn(k) for k = 0..count-1, the k spread over up to `threads` threads (0: one per
-// hardware thread; 1: in order on this thread). Each k is independent, so the
-// results do not depend on the thread count. The first exception (lowest k) thrown
-// by a task is rethrown once all have finished. If a thread cannot be created the
-// work runs on the threads that exist.
-template <class Fn>
-void for_each_start(std::size_t count, int threads, Fn&& fn) {
-  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
-  t = std::min(t, count);
-  if (t <= 1) {
-    for (std::size_t k = 0; k < count; ++k) fn(k);
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  std::vector<std::exception_ptr> errors(count);
-  auto work = [&] {
-    for (std::size_t k; (k = next.fetch_add(1)) < count;) {
-      try {
-        fn(k);
-      } catch (...) {
-        errors[k] = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(t - 1);
-  for (std::size_t i = 0; i + 1 < t; ++i) {
-    try {
-      pool.emplace_back(work);
-    } catch (const std::system_error&) {
-      break;
-    }
-  }
-  work();
-  for (auto& th : pool) th.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
-}
 
 // Stops LM when the cost is stationary: its relative decrease over the last `window`
 // iterations is at most `tol` (FitOptions::stall_iterations / stall_tolerance). LM on a
@@ -272,7 +234,7 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
                                                          const std::vector<int>& held, const FitOptions& o,
                                                          FitReport& rep) {
   std::vector<Solved> solved(starts.size());
-  for_each_start(starts.size(), o.num_threads, [&](std::size_t k) {
+  detail::parallel_for(starts.size(), o.num_threads, [&](std::size_t k) {
     solved[k] = solve(*problems[k], d, starts[k], lowers[k], held, o, static_cast<int>(k));
   });
   std::size_t best = std::string::npos;
@@ -299,3 +261,45 @@ double model_sse(const ModelParams& model, const Data& d) {
 }
 
 }  // namespace hysteron::fitting
+
+namespace hysteron::detail {
+
+// Runs fn(k) for k = 0..count-1, the k spread over up to `threads` threads (0: one per
+// hardware thread; 1: in order on this thread). Each k is independent, so the
+// results do not depend on the thread count. The first exception (lowest k) thrown
+// by a task is rethrown once all have finished. If a thread cannot be created the
+// work runs on the threads that exist.
+void parallel_for(std::size_t count, int threads, const std::function<void(std::size_t)>& fn) {
+  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
+  t = std::min(t, count);
+  if (t <= 1) {
+    for (std::size_t k = 0; k < count; ++k) fn(k);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::vector<std::exception_ptr> errors(count);
+  auto work = [&] {
+    for (std::size_t k; (k = next.fetch_add(1)) < count;) {
+      try {
+        fn(k);
+      } catch (...) {
+        errors[k] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(t - 1);
+  for (std::size_t i = 0; i + 1 < t; ++i) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;
+    }
+  }
+  work();
+  for (auto& th : pool) th.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+}  // namespace hysteron::detail

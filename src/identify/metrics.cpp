@@ -35,6 +35,29 @@ double span_of(std::span<const double> v) {
   return *hi - *lo;
 }
 
+FitReport invalid_report(std::string message, FitModel kind, std::chrono::steady_clock::time_point t0) {
+  FitReport rep;
+  rep.status = FitStatus::invalid_input;
+  rep.model_kind = kind;
+  rep.message = std::move(message);
+  rep.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return rep;
+}
+
+LineFit straight_line(std::span<const double> x, std::span<const double> y, IndexRange r) {
+  const double m = static_cast<double>(r.end - r.begin);
+  double mx = 0, my = 0;
+  for (std::size_t k = r.begin; k < r.end; ++k) mx += x[k], my += y[k];
+  mx /= m, my /= m;
+  double sxx = 0, sxy = 0, syy = 0;
+  for (std::size_t k = r.begin; k < r.end; ++k)
+    sxx += (x[k] - mx) * (x[k] - mx), sxy += (x[k] - mx) * (y[k] - my), syy += (y[k] - my) * (y[k] - my);
+  LineFit f;
+  f.slope = sxx > 0 ? sxy / sxx : 0.0;
+  f.rms = std::sqrt((sxx > 0 ? std::max(0.0, syy - sxy * sxy / sxx) : syy) / m);
+  return f;
+}
+
 }  // namespace detail
 
 FitMetrics compute_metrics(std::span<const double> measured, std::span<const double> predicted) {

@@ -40,19 +40,14 @@ PiParams reference_pi(std::span<const double> x, std::span<const double> y, Inde
   A.rightCols(cols - 1) = phi.rightCols(cols - 1);
   // The output's sign (that of the least-squares line of y on x): a decreasing record
   // is fitted as -y with a negative output gain, so the reference is sign-equivariant.
-  Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, m);
-  const Eigen::VectorXd xc = phi.col(0).array() - phi.col(0).mean();
-  const double sign = xc.dot((b.array() - b.mean()).matrix()) < 0 ? -1.0 : 1.0;
-  b *= sign;
-  // Free output offset, eliminated by centring (its least-squares value is the mean residual).
-  const Eigen::RowVectorXd amean = A.colwise().mean();
-  const double bmean = b.mean();
-  const Eigen::MatrixXd Ac = A.rowwise() - amean;
-  const Eigen::VectorXd t = detail::nnls(Ac, b.array() - bmean);
+  const double sign = detail::straight_line(x, y, r).slope < 0 ? -1.0 : 1.0;
+  const Eigen::VectorXd b = sign * Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, m);
+  double offset = 0.0;  // the free output offset
+  const Eigen::VectorXd t = detail::bounded_ls(A, b, Eigen::VectorXd::Zero(A.cols()), &offset);
   pi.q = t(0) - t(1);
   for (std::size_t i = 0; i < n; ++i) pi.p[i] = t(static_cast<Eigen::Index>(i + 2));
   pi.units.input_origin = x0;
-  pi.units.output_offset = sign * (bmean - amean.dot(t));
+  pi.units.output_offset = sign * offset;
   pi.units.output_gain = sign;
   pi.input_limits = Limits{*lo, *hi};
   if (pi.q == 0.0 && std::all_of(pi.p.begin(), pi.p.end(), [](double v) { return v == 0.0; }))

@@ -64,27 +64,11 @@ Ranges ranges_of(const Data& d) {
   return {*xl, *xh, *yl, *yh};
 }
 
-// For fixed envelope, alpha and tau the gpi output is linear in (q, rho): solve
-
 namespace {
 
-// them by NNLS and return the sum of squared errors.
-// Bounded least squares t >= lo for A t ~ b, with a free offset when `centre` (columns
-// and target centred: the offset is eliminated exactly). Returns t; *sse the residual.
-Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo, bool centre,
-                           double* sse) {
-  if (!centre) {
-    const Eigen::VectorXd t = lo + detail::nnls(A, b - A * lo);
-    *sse = (A * t - b).squaredNorm();
-    return t;
-  }
-  const Eigen::MatrixXd Ac = A.rowwise() - A.colwise().mean();
-  const Eigen::VectorXd bc = b.array() - b.mean();
-  const Eigen::VectorXd t = lo + detail::nnls(Ac, bc - Ac * lo);
-  *sse = (Ac * t - bc).squaredNorm();
-  return t;
-}
-
+// For fixed envelope, alpha and tau the gpi output is linear in (q, rho): solve
+// them by NNLS (with the free offset when d.free_offset) and return the sum of
+// squared errors.
 double gpi_linear_seed(const Data& d, int n, double* th, double lower_q, double lower_rho) {
   Structure<double> s;
   th[4] = 1.0;
@@ -110,8 +94,8 @@ double gpi_linear_seed(const Data& d, int n, double* th, double lower_q, double 
     }
   }
   const Eigen::Vector2d lo(lower_q, lower_rho);
-  double sse = 0;
-  const Eigen::VectorXd t = bounded_ls(A, b, lo, d.free_offset, &sse);
+  double sse = 0, offset = 0;
+  const Eigen::VectorXd t = detail::bounded_ls(A, b, lo, d.free_offset ? &offset : nullptr, &sse);
   th[4] = t(0);
   th[5] = t(1);
   return sse;
@@ -266,8 +250,8 @@ double cls_weights(const Data& d, const Structure<double>& s, double margin, dou
   Eigen::VectorXd b(m);
   for (Eigen::Index j = 0; j < m; ++j) b(j) = d.y[tr.begin + static_cast<std::size_t>(j)];
   const Eigen::VectorXd lo = Eigen::VectorXd::Constant(k, margin);
-  double sse = 0;
-  const Eigen::VectorXd sl = bounded_ls(A, b, lo, d.free_offset, &sse);
+  double sse = 0, offset = 0;
+  const Eigen::VectorXd sl = detail::bounded_ls(A, b, lo, d.free_offset ? &offset : nullptr, &sse);
   q = sl(0);
   p.resize(static_cast<std::size_t>(k - 1));
   for (Eigen::Index i = 1; i < k; ++i) p[static_cast<std::size_t>(i - 1)] = direct ? sl(i) : sl(i) - sl(i - 1);

@@ -129,6 +129,23 @@ Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
   return t.cwiseQuotient(d);
 }
 
+Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo,
+                           double* offset, double* sse) {
+  if (!offset) {
+    const Eigen::VectorXd t = lo + nnls(A, b - A * lo);
+    if (sse) *sse = (A * t - b).squaredNorm();
+    return t;
+  }
+  const Eigen::RowVectorXd amean = A.colwise().mean();
+  const double bmean = b.mean();
+  const Eigen::MatrixXd Ac = A.rowwise() - amean;
+  const Eigen::VectorXd bc = b.array() - bmean;
+  const Eigen::VectorXd t = lo + nnls(Ac, bc - Ac * lo);
+  *offset = bmean - amean.dot(t);
+  if (sse) *sse = (Ac * t - bc).squaredNorm();
+  return t;
+}
+
 ModelParams with_weights(const ModelParams& model, const Structure<double>& s, double q, const std::vector<double>& p) {
   return std::visit(
       [&](const auto& m) -> ModelParams {
@@ -268,27 +285,18 @@ ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std
   if (const auto* dz = std::get_if<MpiDeadzoneParams>(&model)) return fit_deadzone_weights(*dz, x, y, options, r);
   const Structure<double> s = canonical_structure(model);
   const Eigen::MatrixXd phi = detail::regressors(s, x, r, options.initial_state);
-  Eigen::MatrixXd A = slope_columns(phi);
-  Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, static_cast<Eigen::Index>(r.end - r.begin));
+  const Eigen::MatrixXd A = slope_columns(phi);
+  const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, static_cast<Eigen::Index>(r.end - r.begin));
   const double uspan = std::max(phi.col(0).maxCoeff() - phi.col(0).minCoeff(), 1e-300);
   const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
   const Eigen::VectorXd lo = Eigen::VectorXd::Constant(A.cols(), options.margin * scale);
-  // Free output offset: eliminated exactly by centring the columns and the target
-  // (the least-squares offset of any slopes is the mean residual).
-  Eigen::RowVectorXd amean = Eigen::RowVectorXd::Zero(A.cols());
-  double bmean = 0.0;
-  if (options.free_offset) {
-    amean = A.colwise().mean();
-    bmean = b.mean();
-  }
-  const Eigen::MatrixXd Ac = A.rowwise() - amean;
-  const Eigen::VectorXd bc = b.array() - bmean;
-  const Eigen::VectorXd sol = lo + detail::nnls(Ac, bc - Ac * lo);
+  double offset = 0.0;
+  const Eigen::VectorXd sol = detail::bounded_ls(A, b, lo, options.free_offset ? &offset : nullptr);
   double q;
   std::vector<double> p;
   slopes_to_weights(sol, A, q, p);
   ModelParams out = detail::with_weights(model, s, q, p);
-  if (options.free_offset) units_map(out).output_offset = bmean - amean.dot(sol);
+  units_map(out).output_offset = offset;
   return out;
 }
 
@@ -321,7 +329,7 @@ void Rls::reset_state(InitialState initial, double x0) noexcept {
 
 double Rls::step(double x, double y) noexcept {
   if (!std::isfinite(x) || !std::isfinite(y)) return last_;
-  const double pr = step_model(s_.units.to_model(x), s_.units.model_output(y));
+  const double pr = step_model(s_.to_model(x), s_.model_output(y));
   return last_ = s_.units.output(pr);
 }
 

@@ -82,9 +82,6 @@ const json& get_array(const json& j, std::string_view key, std::string_view wher
 }
 
 // A model (null when there is none).
-bool has_model(FitStatus s) {
-  return s != FitStatus::not_run && s != FitStatus::invalid_input && s != FitStatus::failed;
-}
 json model_or_null(FitStatus s, const ModelParams& m) { return has_model(s) ? model_to_json(m) : json(nullptr); }
 // A model that may not have been set (e.g. an experiment's baseline): null unless valid.
 json valid_model_or_null(const ModelParams& m) {

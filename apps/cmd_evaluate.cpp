@@ -29,15 +29,16 @@ namespace hysteron::cli {
 namespace {
 
 struct EvaluateOptions {
-  std::string model, data, input, output, range, time_column, report, input_label, output_label;
+  std::string model, range, report;
+  DataSelection sel;
   bool json = false, relaxed = false;
 };
 
 int run_evaluate(const EvaluateOptions& c) {
   if (c.json && c.report == "-") throw Error("--report - and --json both write to standard output: choose one");
   const ModelParams model = read_model_source(c.model);
-  const DataSelection sel{c.data, c.input, c.output, c.time_column, c.input_label, c.output_label};
-  const DataColumns rec = read_data_columns(c.data, sel);
+  const DataSelection& sel = c.sel;
+  const DataColumns rec = read_data_columns(c.sel.file, sel);
   const IndexRange range = c.range.empty() ? IndexRange{0, rec.x.size()}
                                            : parse_range(c.range, "--range", rec.t ? &*rec.t : nullptr, rec.x.size());
   const InitialState initial = c.relaxed ? InitialState::relaxed : InitialState::virgin;
@@ -46,7 +47,7 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
   doc.model = model;
   doc.data = describe_data(sel, initial, range);
-  doc.result = {c.data, range, evaluate(model, rec.x, rec.y, range, initial)};
+  doc.result = {c.sel.file, range, evaluate(model, rec.x, rec.y, range, initial)};
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {
@@ -63,7 +64,7 @@ int run_evaluate(const EvaluateOptions& c) {
   const FitMetrics& m = doc.result.metrics;
   const std::string yu = doc.data.output_unit.empty() ? "" : " " + doc.data.output_unit;
   std::string text = fmt::format("model {} ({}) on {}, samples {}..{} ({} start)\n", doc.model_file, model_name(model),
-                                 c.data, range.begin, range.end, c.relaxed ? "relaxed" : "virgin");
+                                 c.sel.file, range.begin, range.end, c.relaxed ? "relaxed" : "virgin");
   text += fmt::format("evaluate: rms {:.6g}{}  max {:.6g}{}  mae {:.6g}{}  rms {:.4g}% of span  r2 {:.6f}  ({} samples)\n",
                       m.rms, yu, m.max, yu, m.mae, yu, m.rms_percent_span, m.r2, m.n);
   if (!c.report.empty() && c.report != "-") text += fmt::format("report written to {}\n", c.report);
@@ -78,17 +79,12 @@ void add_evaluate(CLI::App& app, Action& action) {
   CLI::App* sub = app.add_subcommand("evaluate", "score a saved model on measured input/output data (metrics, "
                                                  "loops and residuals in the report)");
   sub->add_option("--model,-m", c->model, "model file (JSON); - reads it from stdin")->required();
-  sub->add_option("--data,-d", c->data, "data file (.csv or .mat)")->required();
-  sub->add_option("--input,-i", c->input, "input column: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) of the matrix NAME")->required();
-  sub->add_option("--output,-y", c->output, "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a matrix)")->required();
+  add_data_options(sub, c->sel);
   sub->add_option("--range,--train", c->range,
                   "samples scored: A:B (sample indices, half-open) or As:Bs (seconds); default: the whole record");
-  sub->add_option("--time-column", c->time_column, "time column: ranges in seconds, time axis of the HTML report");
   sub->add_option("--report", c->report, "write a report: HTML if the name ends in .html/.htm, else JSON");
   sub->add_flag("--json", c->json, "print the result as one JSON document");
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
-  sub->add_option("--input-label", c->input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
-  sub->add_option("--output-label", c->output_label, "output axis label with unit");
   sub->callback([c, &action] { action = [c] { return run_evaluate(*c); }; });
 }
 

@@ -40,8 +40,8 @@ namespace hysteron::cli {
 namespace {
 
 struct FitCliOptions {
-  std::string model = "gpi", data, input, output, train, validate, time_column, out, report, input_label,
-              output_label;
+  std::string model = "gpi", train, validate, out, report;
+  DataSelection sel;
   std::vector<std::string> validate_data;
   int n = 10, dead_zones = 4, starts = 2, threads = 0, max_iterations = 200;
   double huber = 0.0, min_slope = FitOptions{}.min_slope;
@@ -84,8 +84,8 @@ int run_fit(const FitCliOptions& c) {
                 "--out - with --report FILE.json)");
   if (c.report == "-" && (c.out == "-" || c.json))
     throw Error("--report - and --out - / --json would both write to standard output: choose one");
-  const DataSelection sel{c.data, c.input, c.output, c.time_column, c.input_label, c.output_label};
-  const DataColumns rec = read_data_columns(c.data, sel);
+  const DataSelection& sel = c.sel;
+  const DataColumns rec = read_data_columns(c.sel.file, sel);
   const std::vector<double>& x = rec.x;
   const std::vector<double>& y = rec.y;
   const std::optional<std::vector<double>>& time = rec.t;
@@ -134,7 +134,7 @@ int run_fit(const FitCliOptions& c) {
     };
   const FitReport rep = fit(x, y, o);
   if (o.progress) fmt::print(stderr, "\r{:60}\r", "");
-  if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.data, rep.message));
+  if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 
   auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v) -> std::optional<FitMetrics> {
     try {
@@ -167,8 +167,8 @@ int run_fit(const FitCliOptions& c) {
   if (write) {
     const std::string note = o.model == FitModel::automatic
                                  ? fmt::format("hysteron fit --model auto (chose {}) on {}",
-                                               fit_model_name(rep.model_kind), c.data)
-                                 : fmt::format("hysteron fit --model {} on {}", c.model, c.data);
+                                               fit_model_name(rep.model_kind), c.sel.file)
+                                 : fmt::format("hysteron fit --model {} on {}", c.model, c.sel.file);
     io::write_model_file(c.out, rep.model, {{"note", note}});
   }
   doc.model_written = write;
@@ -228,7 +228,7 @@ int run_fit(const FitCliOptions& c) {
   }
   for (const auto& e : doc.validation)
     text += metrics_text("validate:", e.metrics) +
-            fmt::format("  [{}, samples {}..{}]\n", e.file.empty() ? c.data : e.file, e.range.begin, e.range.end);
+            fmt::format("  [{}, samples {}..{}]\n", e.file.empty() ? c.sel.file : e.file, e.range.begin, e.range.end);
   if (write && c.out != "-")
     text += fmt::format("model written to {}\n", c.out);
   else if (!write)
@@ -248,20 +248,15 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--model,-m", c->model,
                   fmt::format("{} (auto: fit every kind, choose by hold-out RMS; default gpi)", join(names, " | ")))
       ->check(CLI::IsMember(names));
-  sub->add_option("--data,-d", c->data, "data file (.csv or .mat)")->required();
-  sub->add_option("--input,-i", c->input, "input column: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) of the matrix NAME")->required();
-  sub->add_option("--output,-y", c->output, "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a matrix)")->required();
+  add_data_options(sub, c->sel);
   sub->add_option("--n", c->n, "number of operators (default 10)");
   sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones (default 4)");
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");
   sub->add_option("--validate", c->validate, "validation range C:D (of each --validate-data file if given)");
   sub->add_option("--validate-data", c->validate_data, "other records (same columns) to validate on (repeatable)");
-  sub->add_option("--time-column", c->time_column, "time column: ranges in seconds, time axis of the HTML report");
   sub->add_option("--out,-o", c->out, "model file to write (JSON); - prints the model JSON on stdout")->required();
   sub->add_option("--report", c->report, "also write the report: HTML if the name ends in .html/.htm, else JSON");
   sub->add_flag("--json", c->json, "print the report as one JSON document");
-  sub->add_option("--input-label", c->input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
-  sub->add_option("--output-label", c->output_label, "output axis label with unit, e.g. \"Force [N]\"");
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
   sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)");
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");

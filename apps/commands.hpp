@@ -54,6 +54,8 @@ struct DataColumns {
   std::vector<double> x, y;
   std::optional<std::vector<double>> t;
 };
+// Registers --data, --input, --output, --time-column, --input-label, --output-label.
+void add_data_options(CLI::App* sub, DataSelection& sel);
 // The input, output and (if named) time columns of `file`, of equal lengths; throws
 // hysteron::Error naming the file otherwise.
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel);

@@ -96,6 +96,21 @@ bool is_html_path(const std::string& path) {
   return lower.ends_with(".html") || lower.ends_with(".htm");
 }
 
+void add_data_options(CLI::App* sub, DataSelection& sel) {
+  sub->add_option("--data,-d", sel.file, "data file (.csv or .mat)")->required();
+  sub->add_option("--input,-i", sel.input,
+                  "input column: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) "
+                  "of the matrix NAME")
+      ->required();
+  sub->add_option("--output,-y", sel.output,
+                  "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a "
+                  "matrix)")
+      ->required();
+  sub->add_option("--time-column", sel.time_column, "time column: ranges in seconds, time axis of the HTML report");
+  sub->add_option("--input-label", sel.input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
+  sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");
+}
+
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel) {
   DataColumns d;
   d.x = io::read_column(file, sel.input);

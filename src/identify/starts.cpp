@@ -66,6 +66,20 @@ Ranges ranges_of(const Data& d) {
 
 namespace {
 
+// A start candidate's structure: tanh envelopes (ascending a, descending b; the same
+// for a symmetric model), thresholds r_i = alpha i (i = 1..n), weights to be solved.
+Structure<double> candidate_structure(const std::array<double, 4>& a, const std::array<double, 4>& b, bool asymmetric,
+                                      double alpha, int n) {
+  Structure<double> s;
+  s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
+  s.asymmetric = asymmetric;
+  s.asc_c = a;
+  s.desc_c = b;
+  for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
+  s.p.assign(s.r.size(), 0.0);
+  return s;
+}
+
 // For fixed envelope, alpha and tau the gpi output is linear in (q, rho): solve
 // them by NNLS (with the free offset when d.free_offset) and return the sum of
 // squared errors.
@@ -352,11 +366,7 @@ std::vector<std::vector<double>> gpi_starts(const Data& full, int n, const FitOp
     const double U = envelope_span(env, rg);
     const double f = kAlphaLow * std::pow(kAlphaRatio, ia / (kAlphas - 1.0));  // 0.01 .. 2.5
     const double alpha = j(f) * 0.5 * U / n;
-    Structure<double> s;
-    s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
-    s.asc_c = s.desc_c = {env[0], env[1], env[2], env[3]};
-    for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
-    s.p.assign(s.r.size(), 0.0);
+    const Structure<double> s = candidate_structure(env, env, false, alpha, n);
     double q = 1;
     std::vector<double> p;
     cls_weights(d, s, margin, q, p);
@@ -401,13 +411,7 @@ void asym_starts(const Data& full, int n, const FitOptions& o, double margin, st
     const double scale = rg.yspan() / std::max(U, 1e-300);
     for (int ia = 0; ia < kAlphas; ++ia) {
       const double alpha = kAlphaLow * std::pow(kAsymAlphaRatio, ia / (kAlphas - 1.0)) * 0.5 * U / n;
-      Structure<double> s;
-      s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
-      s.asymmetric = true;
-      s.asc_c = {a[0], a[1], a[2], a[3]};
-      s.desc_c = {b[0], b[1], b[2], b[3]};
-      for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
-      s.p.assign(s.r.size(), 0.0);
+      const Structure<double> s = candidate_structure(a, b, true, alpha, n);
       double q = 1;
       std::vector<double> p;
       const double sse = cls_weights(d, s, margin * scale, q, p);
@@ -441,11 +445,7 @@ void gpi_free_starts(const Data& full, int n, const FitOptions& o, double margin
     const double scale = rg.yspan() / std::max(U, 1e-300);
     for (int ia = 0; ia < kAlphas; ++ia) {
       const double alpha = kAlphaLow * std::pow(kAlphaRatio, ia / (kAlphas - 1.0)) * 0.5 * U / n;
-      Structure<double> s;
-      s.asc_kind = s.desc_kind = EnvelopeKind::tanh;
-      s.asc_c = s.desc_c = {env[0], env[1], env[2], env[3]};
-      for (int i = 1; i <= n; ++i) s.r.push_back(alpha * i);
-      s.p.assign(s.r.size(), 0.0);
+      const Structure<double> s = candidate_structure(env, env, false, alpha, n);
       double q = 1;
       std::vector<double> p;
       const double sse = cls_weights(d, s, margin * scale, q, p);

@@ -8,7 +8,7 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=$(PYTHON) -DPYTHON_
 # Debian packages the build and the tests need (never downloaded from anywhere else).
 APT_PACKAGES := cmake make g++ pkg-config libeigen3-dev libceres-dev libcli11-dev nlohmann-json3-dev \
   libfmt-dev libgtest-dev libbenchmark-dev pybind11-dev python3-dev python3-numpy python3-scipy \
-  python3-pytest libmatio-dev gnuplot-nox chromium
+  python3-pytest libmatio-dev gnuplot-nox chromium octave liboctave-dev
 
 .PHONY: all deps configure build demo test test-asan bench clean
 
@@ -43,7 +43,8 @@ test: build
 # The same tests once under AddressSanitizer + UndefinedBehaviorSanitizer (Python module off).
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHYSTERON_SANITIZE=ON \
-	  -DHYSTERON_BUILD_PYTHON=OFF -DHYSTERON_BUILD_BENCH=OFF -DHYSTERON_BUILD_EXAMPLES=OFF
+	  -DHYSTERON_BUILD_PYTHON=OFF -DHYSTERON_BUILD_BENCH=OFF -DHYSTERON_BUILD_EXAMPLES=OFF \
+	  -DHYSTERON_BUILD_MATLAB=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -j $(JOBS) -E 'install_consumer'
 

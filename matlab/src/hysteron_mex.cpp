@@ -489,10 +489,11 @@ void run(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[], std::string
   silence_glog();
   if (nrhs < 1 || !mxIsChar(prhs[0]))
     throw MexError(id_bad_argument, fmt::format("usage: hysteron_mex(command, ...) with a command among {}", command_list()));
-  command = get_string(prhs[0], "command");
-  const auto it = commands().find(command);
+  const std::string name = get_string(prhs[0], "command");
+  const auto it = commands().find(name);
   if (it == commands().end())
-    throw MexError(id_bad_argument, fmt::format("unknown command '{}'; the commands are {}", command, command_list()));
+    throw MexError(id_bad_argument, fmt::format("unknown command '{}'; the commands are {}", name, command_list()));
+  command = name;
   it->second(nlhs, plhs, nrhs, prhs);
 }
 

@@ -1,0 +1,217 @@
+/*
+ * hysteron C ABI: load a hysteresis model, run it forwards, run its exact inverse,
+ * and run the inverse-feedforward + PID controller, from C, LabVIEW, Simulink,
+ * ROS, Python ctypes or anything else that can call a C function.
+ *
+ * Plain C99; the library (libhysteron_c.so / libhysteron_c.a) is C++ inside.
+ * Usage and examples: docs/deploy.md.
+ *
+ * Conventions
+ * - Every function except hysteron_last_error(), hysteron_status_name() and
+ *   hysteron_version_string() returns a hysteron_status; HYSTERON_OK (0) is success.
+ *   No C++ exception ever leaves the library (std::bad_alloc included).
+ * - On failure, hysteron_last_error() returns a message for the calling thread
+ *   that names the function, the argument and, for model files, the file and key.
+ *   Successful calls leave it unchanged.
+ * - Objects are opaque handles created by *_create / hysteron_params_from_*, and
+ *   released by the matching *_free (NULL is accepted and ignored). A handle may be
+ *   used from any thread, but from one thread at a time; distinct handles are
+ *   independent.
+ * - Out-pointers are written only on success, except that the per-sample step
+ *   functions also write the held (previous) value when an input is not finite.
+ * - The per-sample functions (hysteron_model_step, hysteron_inverse_step,
+ *   hysteron_ff_pid_step) never allocate memory, never block and take a bounded
+ *   time: they are meant for a real-time loop. Loading and creating allocate.
+ *
+ * Units: a model maps the actuator input x in the model file's input units
+ * (e.g. MPa of pressure, V of a piezo amplifier) to the output y in its output
+ * units (e.g. mm of contraction); see docs/model-files.md. The controller
+ * (hysteron_ff_pid_*) works in metres and MPa, like the C++ FeedforwardPidController.
+ */
+#ifndef HYSTERON_H
+#define HYSTERON_H
+
+#include <stddef.h>
+
+#if defined(_WIN32) || defined(__CYGWIN__)
+#  if defined(HYSTERON_C_BUILD)
+#    define HYSTERON_C_API __declspec(dllexport)
+#  elif defined(HYSTERON_C_STATIC)
+#    define HYSTERON_C_API
+#  else
+#    define HYSTERON_C_API __declspec(dllimport)
+#  endif
+#elif defined(__GNUC__) || defined(__clang__)
+#  define HYSTERON_C_API __attribute__((visibility("default")))
+#else
+#  define HYSTERON_C_API
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Version of this header's ABI: functions and structs only get added (major 1). */
+#define HYSTERON_C_ABI_VERSION 1
+
+/* ---- status codes --------------------------------------------------------- */
+typedef enum hysteron_status {
+  HYSTERON_OK = 0,
+  HYSTERON_ERROR_NULL_POINTER = 1,     /* a required pointer argument is NULL */
+  HYSTERON_ERROR_INVALID_ARGUMENT = 2, /* NaN or infinite number, wrong array size, bad option */
+  HYSTERON_ERROR_PARSE = 3,            /* the model text is not valid JSON (line and column in the message) */
+  HYSTERON_ERROR_MODEL = 4,            /* valid JSON, but not a valid or not an invertible model (key named) */
+  HYSTERON_ERROR_IO = 5,               /* a file cannot be opened or read */
+  HYSTERON_ERROR_OUT_OF_MEMORY = 6,    /* allocation failed */
+  HYSTERON_ERROR_INTERNAL = 7          /* a bug: please report it with the message */
+} hysteron_status;
+
+/* Message of the last failed call in the calling thread ("" if none). The
+ * pointer stays valid until the next failing call in the same thread. Never NULL. */
+HYSTERON_C_API const char* hysteron_last_error(void);
+
+/* Name of a status code, e.g. "HYSTERON_ERROR_PARSE" (static string, never NULL). */
+HYSTERON_C_API const char* hysteron_status_name(hysteron_status status);
+
+/* Library version, e.g. "0.1.0" (static string). */
+HYSTERON_C_API const char* hysteron_version_string(void);
+/* Library version as numbers; any pointer may be NULL. */
+HYSTERON_C_API hysteron_status hysteron_version(int* major, int* minor, int* patch);
+
+/* ---- model parameters (a validated model file) --------------------------- */
+typedef struct hysteron_params hysteron_params;
+
+/* Parses a model from a NUL-terminated JSON text (schema: docs/model-files.md).
+ * HYSTERON_ERROR_PARSE for a syntax error, HYSTERON_ERROR_MODEL for a missing,
+ * unknown or invalid key. *out receives a new handle (free with hysteron_params_free). */
+HYSTERON_C_API hysteron_status hysteron_params_from_json(const char* json, hysteron_params** out);
+/* The same from a file; HYSTERON_ERROR_IO if it cannot be read. */
+HYSTERON_C_API hysteron_status hysteron_params_from_file(const char* path, hysteron_params** out);
+HYSTERON_C_API hysteron_status hysteron_params_free(hysteron_params* params);
+
+/* Model kind: "pi", "gpi", "mpi-deadzone" or "mpi-asym" (valid as long as params). */
+HYSTERON_C_API hysteron_status hysteron_params_kind(const hysteron_params* params, const char** kind);
+/* Number of play operators n (the length of a state vector, see *_reset_state). */
+HYSTERON_C_API hysteron_status hysteron_params_num_operators(const hysteron_params* params, size_t* n);
+/* The model file's "input_limits" in input units; -HUGE_VAL / +HUGE_VAL for an unbounded side. */
+HYSTERON_C_API hysteron_status hysteron_params_input_limits(const hysteron_params* params, double* lo, double* hi);
+
+/* ---- forward model: input x -> output y ----------------------------------- */
+typedef struct hysteron_model hysteron_model;
+
+/* A model in its virgin state (all operator outputs 0). */
+HYSTERON_C_API hysteron_status hysteron_model_create(const hysteron_params* params, hysteron_model** out);
+HYSTERON_C_API hysteron_status hysteron_model_free(hysteron_model* model);
+
+/* Virgin state: operator outputs 0 (the model at rest at its input_origin). */
+HYSTERON_C_API hysteron_status hysteron_model_reset(hysteron_model* model);
+/* At rest at input x0 [input units], as if x0 had been held forever. x0 finite. */
+HYSTERON_C_API hysteron_status hysteron_model_reset_relaxed(hysteron_model* model, double x0);
+/* Explicit state: n operator outputs y[0..n) (n = hysteron_params_num_operators) and the
+ * envelope value u of the last input, all finite, in model coordinates (as returned by
+ * hysteron_model_get_state). HYSTERON_ERROR_INVALID_ARGUMENT on a wrong n. */
+HYSTERON_C_API hysteron_status hysteron_model_reset_state(hysteron_model* model, const double* y, size_t n, double u);
+/* Copies the current state out (y: array of n; u may be NULL). */
+HYSTERON_C_API hysteron_status hysteron_model_get_state(const hysteron_model* model, double* y, size_t n, double* u);
+
+/* One sample: *y = model output [output units] for input x [input units]. A non-finite
+ * x returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the
+ * previous output to *y. Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_model_step(hysteron_model* model, double x, double* y);
+/* Batch: y[k] = step(x[k]) for k < n_x; n_y must equal n_x (y may be x). Every x[k] is
+ * checked first: on a non-finite one nothing is stepped and the index is in the message. */
+HYSTERON_C_API hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, size_t n_x, double* y,
+                                                      size_t n_y);
+
+/* ---- exact inverse: desired output y -> input x ---------------------------- */
+typedef struct hysteron_inverse hysteron_inverse;
+
+/* An inverse in the virgin state. lo, hi [input units]: limits to saturate at;
+ * -HUGE_VAL / +HUGE_VAL (C99 <math.h>, or -INFINITY / INFINITY) take the model file's
+ * input_limits, and for a saturating envelope with no limit at all the envelope's own
+ * range (see docs/models.md). NaN, or lo >= hi, is HYSTERON_ERROR_INVALID_ARGUMENT; a
+ * model that cannot be inverted (e.g. mpi-asym without finite limits) is
+ * HYSTERON_ERROR_MODEL. */
+HYSTERON_C_API hysteron_status hysteron_inverse_create(const hysteron_params* params, double lo, double hi,
+                                                      hysteron_inverse** out);
+HYSTERON_C_API hysteron_status hysteron_inverse_free(hysteron_inverse* inverse);
+
+/* The limits the inverse saturates at [input units] (possibly infinite). */
+HYSTERON_C_API hysteron_status hysteron_inverse_limits(const hysteron_inverse* inverse, double* lo, double* hi);
+
+/* Virgin state (matches hysteron_model_reset). */
+HYSTERON_C_API hysteron_status hysteron_inverse_reset(hysteron_inverse* inverse);
+/* Start as a forward model at rest at input x0 [input units] (hysteron_model_reset_relaxed). */
+HYSTERON_C_API hysteron_status hysteron_inverse_reset_relaxed(hysteron_inverse* inverse, double x0);
+/* Start from a forward model's state (y[0..n), u as from hysteron_model_get_state), so that
+ * the inverse continues exactly where that model is. HYSTERON_ERROR_INVALID_ARGUMENT on a
+ * wrong n, a non-finite value, or a state the model cannot reach. */
+HYSTERON_C_API hysteron_status hysteron_inverse_reset_state(hysteron_inverse* inverse, const double* y, size_t n,
+                                                           double u);
+/* The equivalent forward-model state after the last step (y: array of n; u may be NULL). */
+HYSTERON_C_API hysteron_status hysteron_inverse_get_state(const hysteron_inverse* inverse, double* y, size_t n,
+                                                         double* u);
+
+/* One sample: *x = the input [input units] that makes the model output y_desired
+ * [output units], clamped to the limits. *saturated (may be NULL) = 1 if it was clamped,
+ * else 0. A non-finite y_desired returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the
+ * state unchanged and writes the previous input to *x. Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_inverse_step(hysteron_inverse* inverse, double y_desired, double* x,
+                                                    int* saturated);
+/* Batch: x[k] = step(y[k]) for k < n_y; n_x must equal n_y (x may be y). *n_saturated (may
+ * be NULL) = number of clamped samples. Every y[k] is checked first (nothing stepped on error). */
+HYSTERON_C_API hysteron_status hysteron_inverse_invert(hysteron_inverse* inverse, const double* y, size_t n_y,
+                                                      double* x, size_t n_x, size_t* n_saturated);
+
+/* ---- inverse feedforward + PID (GPI paper, Fig. 10) ------------------------ */
+/* pressure_cmd = clamp(FF(preview) + PID(reference - measured), pressure_min, pressure_max),
+ * FF = the exact inverse of the model applied to preview * model_scale (optionally with
+ * a first-order lag compensation), the PID (Eq. 17) with anti-windup that knows the total
+ * command. Positions in metres, pressures in MPa (the C++ FeedforwardPidController). */
+typedef enum hysteron_anti_windup {
+  HYSTERON_ANTI_WINDUP_NONE = 0,
+  HYSTERON_ANTI_WINDUP_CONDITIONAL = 1,     /* integrate only when it does not push further into the limit */
+  HYSTERON_ANTI_WINDUP_BACK_CALCULATION = 2 /* dI/dt += (u_sat - u) / T_t */
+} hysteron_anti_windup;
+
+/* Fill with hysteron_ff_pid_default_params(), then change what you need. */
+typedef struct hysteron_ff_pid_params {
+  double sample_time;       /* T_s [s], > 0 (default 1e-3) */
+  double pressure_min;      /* command limits [MPa], finite, min < max (default 0) */
+  double pressure_max;      /*   (default 0.6); also the inverse's saturation limits */
+  double model_scale;       /* model output units per metre (default 1000: model in mm) */
+  double lag_time_constant; /* tau [s] >= 0 of the actuator lag to compensate (default 0) */
+  double kp;                /* K_p [MPa/m] (default 0) */
+  double ki;                /* K_i [MPa/(m s)] (default 0) */
+  double kd;                /* K_d [MPa s/m] (default 0) */
+  double derivative_filter; /* T_f [s] >= 0 of the derivative's first-order filter (default 0) */
+  double tracking_time;     /* T_t [s] for back-calculation; 0 selects one from T_i, T_d (default 0) */
+  double setpoint_weight_p; /* b: P acts on b r - y (default 1) */
+  double setpoint_weight_d; /* c: D acts on c r - y (default 0: on the measurement) */
+  int anti_windup;          /* a hysteron_anti_windup (default CONDITIONAL) */
+} hysteron_ff_pid_params;
+
+typedef struct hysteron_ff_pid hysteron_ff_pid;
+
+HYSTERON_C_API hysteron_status hysteron_ff_pid_default_params(hysteron_ff_pid_params* params);
+/* A controller for the model `params` (copied: params may be freed afterwards). Invalid
+ * controller parameters are HYSTERON_ERROR_INVALID_ARGUMENT (the field is named). */
+HYSTERON_C_API hysteron_status hysteron_ff_pid_create(const hysteron_params* params,
+                                                     const hysteron_ff_pid_params* controller,
+                                                     hysteron_ff_pid** out);
+HYSTERON_C_API hysteron_status hysteron_ff_pid_free(hysteron_ff_pid* controller);
+/* Zero PID state, virgin inverse. */
+HYSTERON_C_API hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller);
+/* One sample. reference_m: y_d(t) [m]; preview_m: the reference fed to the inverse [m]
+ * (y_d(t + lead) for a known reference, else reference_m); measured_m: sensor [m].
+ * *pressure_mpa: the command [MPa]. A non-finite argument returns
+ * HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the previous
+ * command. Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double reference_m, double preview_m,
+                                                   double measured_m, double* pressure_mpa);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* HYSTERON_H */

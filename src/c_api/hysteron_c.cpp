@@ -1,0 +1,551 @@
+// The C ABI (include/hysteron/hysteron.h) over the C++ core and model files.
+//
+// Every exported function runs its body inside guard(): no exception crosses the
+// boundary (hysteron::Error, JSON errors, std::bad_alloc, anything else), each
+// becomes a status code and a message in a thread-local buffer. The message buffer
+// is a fixed char array, so setting it never allocates (the per-sample functions
+// stay allocation-free on their error path too).
+#include "hysteron/hysteron.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <limits>
+#include <new>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hysteron/compensation.hpp"
+#include "hysteron/control.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/inverse.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/models.hpp"
+#include "hysteron/version.hpp"
+
+// The opaque handles.
+struct hysteron_params {
+  hysteron::ModelParams params;
+  std::string kind;  // "gpi", ... (NUL-terminated for hysteron_params_kind)
+  std::size_t num_operators = 0;
+};
+
+struct hysteron_model {
+  hysteron::Model model;
+};
+
+struct hysteron_inverse {
+  hysteron::ModelParams params;  // for reset_relaxed
+  hysteron::Inverse inverse;
+  std::size_t num_operators = 0;
+};
+
+struct hysteron_ff_pid {
+  hysteron::FeedforwardPidController controller;
+  double last = 0.0;  // the last command (held on a non-finite argument)
+};
+
+namespace {
+
+constexpr std::size_t message_size = 1024;
+thread_local char t_message[message_size] = "";
+
+// An error with its status, thrown inside guard() by the argument checks.
+struct CError {
+  hysteron_status status;
+  char text[message_size];
+};
+
+// "fn: text", truncated to the buffer.
+void set_message(const char* fn, const char* text) noexcept {
+  std::size_t i = 0;
+  const auto put = [&i](const char* s) {
+    while (*s != '\0' && i + 1 < message_size) t_message[i++] = *s++;
+  };
+  put(fn);
+  put(": ");
+  put(text);
+  t_message[i] = '\0';
+}
+
+[[noreturn]] void fail(hysteron_status status, const char* format, ...) {
+  CError e;
+  e.status = status;
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(e.text, message_size, format, args);
+  va_end(args);
+  throw e;
+}
+
+// Strips nlohmann's "[json.exception.parse_error.101] " prefix.
+std::string json_message(const char* what) {
+  std::string msg = what;
+  const auto pos = msg.find("] ");
+  if (pos != std::string::npos) msg = msg.substr(pos + 2);
+  return msg;
+}
+
+// Runs body(); maps every exception to a status. `error_status` is the status of a
+// hysteron::Error thrown by the C++ library for this function.
+template <class F>
+hysteron_status guard(const char* fn, hysteron_status error_status, F&& body) noexcept {
+  try {
+    body();
+    return HYSTERON_OK;
+  } catch (const CError& e) {
+    set_message(fn, e.text);
+    return e.status;
+  } catch (const hysteron::Error& e) {
+    set_message(fn, e.what());
+    return error_status;
+  } catch (const nlohmann::json::parse_error& e) {
+    set_message(fn, json_message(e.what()).c_str());
+    return HYSTERON_ERROR_PARSE;
+  } catch (const std::bad_alloc&) {
+    set_message(fn, "out of memory");
+    return HYSTERON_ERROR_OUT_OF_MEMORY;
+  } catch (const std::exception& e) {
+    char text[message_size];
+    std::snprintf(text, sizeof text, "internal error (please report): %s", e.what());
+    set_message(fn, text);
+    return HYSTERON_ERROR_INTERNAL;
+  } catch (...) {
+    set_message(fn, "internal error (please report): unknown exception");
+    return HYSTERON_ERROR_INTERNAL;
+  }
+}
+
+#define HYSTERON_REQUIRE(ptr)                                                         \
+  do {                                                                                \
+    if ((ptr) == nullptr) fail(HYSTERON_ERROR_NULL_POINTER, "argument %s is NULL", #ptr); \
+  } while (0)
+
+void require_finite(double v, const char* name) {
+  if (!std::isfinite(v)) fail(HYSTERON_ERROR_INVALID_ARGUMENT, "argument %s = %g is not finite", name, v);
+}
+
+void require_finite_array(const double* v, std::size_t n, const char* name) {
+  for (std::size_t k = 0; k < n; ++k)
+    if (!std::isfinite(v[k]))
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s[%zu] = %g is not finite (nothing was changed)", name, k, v[k]);
+}
+
+void require_state_size(std::size_t n, std::size_t expected) {
+  if (n != expected)
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "state size n = %zu, but the model has %zu operators", n, expected);
+}
+
+hysteron_params* make_params(hysteron::ModelParams p) {
+  auto* h = new hysteron_params{std::move(p), {}, 0};
+  h->kind = std::string(hysteron::model_name(h->params));
+  try {
+    h->num_operators = hysteron::Model(h->params).num_operators();
+  } catch (...) {
+    delete h;
+    throw;
+  }
+  return h;
+}
+
+hysteron::ModelParams parse_model(const std::string& text, const std::string& where) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    fail(HYSTERON_ERROR_PARSE, "%s: not valid JSON: %s", where.c_str(), json_message(e.what()).c_str());
+  }
+  return hysteron::io::model_from_json(j, where);
+}
+
+void copy_state(const hysteron::ModelState& s, double* y, std::size_t n, double* u) {
+  require_state_size(n, s.y.size());
+  for (std::size_t i = 0; i < n; ++i) y[i] = s.y[i];
+  if (u) *u = s.u;
+}
+
+hysteron::ModelState make_state(const double* y, std::size_t n, double u) {
+  require_finite_array(y, n, "y");
+  require_finite(u, "u");
+  hysteron::ModelState s;
+  s.y.assign(y, y + n);
+  s.u = u;
+  return s;
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* hysteron_last_error(void) { return t_message; }
+
+const char* hysteron_status_name(hysteron_status status) {
+  switch (status) {
+    case HYSTERON_OK: return "HYSTERON_OK";
+    case HYSTERON_ERROR_NULL_POINTER: return "HYSTERON_ERROR_NULL_POINTER";
+    case HYSTERON_ERROR_INVALID_ARGUMENT: return "HYSTERON_ERROR_INVALID_ARGUMENT";
+    case HYSTERON_ERROR_PARSE: return "HYSTERON_ERROR_PARSE";
+    case HYSTERON_ERROR_MODEL: return "HYSTERON_ERROR_MODEL";
+    case HYSTERON_ERROR_IO: return "HYSTERON_ERROR_IO";
+    case HYSTERON_ERROR_OUT_OF_MEMORY: return "HYSTERON_ERROR_OUT_OF_MEMORY";
+    case HYSTERON_ERROR_INTERNAL: return "HYSTERON_ERROR_INTERNAL";
+  }
+  return "unknown hysteron_status";
+}
+
+const char* hysteron_version_string(void) {
+  return hysteron::version.data();  // a string literal: NUL-terminated
+}
+
+hysteron_status hysteron_version(int* major, int* minor, int* patch) {
+  if (major) *major = hysteron::version_major;
+  if (minor) *minor = hysteron::version_minor;
+  if (patch) *patch = hysteron::version_patch;
+  return HYSTERON_OK;
+}
+
+// ---- params -------------------------------------------------------------------
+
+hysteron_status hysteron_params_from_json(const char* json, hysteron_params** out) {
+  return guard("hysteron_params_from_json", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(json);
+    HYSTERON_REQUIRE(out);
+    *out = make_params(parse_model(json, "model JSON"));
+  });
+}
+
+hysteron_status hysteron_params_from_file(const char* path, hysteron_params** out) {
+  return guard("hysteron_params_from_file", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(path);
+    HYSTERON_REQUIRE(out);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(HYSTERON_ERROR_IO, "%s: cannot open model file: %s", path, std::strerror(errno));
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) fail(HYSTERON_ERROR_IO, "%s: read error", path);
+    *out = make_params(parse_model(ss.str(), path));
+  });
+}
+
+hysteron_status hysteron_params_free(hysteron_params* params) {
+  delete params;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_params_kind(const hysteron_params* params, const char** kind) {
+  return guard("hysteron_params_kind", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(kind);
+    *kind = params->kind.c_str();
+  });
+}
+
+hysteron_status hysteron_params_num_operators(const hysteron_params* params, size_t* n) {
+  return guard("hysteron_params_num_operators", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(n);
+    *n = params->num_operators;
+  });
+}
+
+hysteron_status hysteron_params_input_limits(const hysteron_params* params, double* lo, double* hi) {
+  return guard("hysteron_params_input_limits", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(lo);
+    HYSTERON_REQUIRE(hi);
+    const hysteron::Limits& l = hysteron::input_limits(params->params);
+    *lo = l.lo;
+    *hi = l.hi;
+  });
+}
+
+// ---- forward model --------------------------------------------------------------
+
+hysteron_status hysteron_model_create(const hysteron_params* params, hysteron_model** out) {
+  return guard("hysteron_model_create", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(out);
+    *out = new hysteron_model{hysteron::Model(params->params)};
+  });
+}
+
+hysteron_status hysteron_model_free(hysteron_model* model) {
+  delete model;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_model_reset(hysteron_model* model) {
+  return guard("hysteron_model_reset", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(model);
+    model->model.reset();
+  });
+}
+
+hysteron_status hysteron_model_reset_relaxed(hysteron_model* model, double x0) {
+  return guard("hysteron_model_reset_relaxed", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(model);
+    require_finite(x0, "x0");
+    model->model.reset_relaxed(x0);
+  });
+}
+
+hysteron_status hysteron_model_reset_state(hysteron_model* model, const double* y, size_t n, double u) {
+  return guard("hysteron_model_reset_state", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(model);
+    if (n > 0) HYSTERON_REQUIRE(y);
+    require_state_size(n, model->model.num_operators());
+    model->model.reset(make_state(y, n, u));
+  });
+}
+
+hysteron_status hysteron_model_get_state(const hysteron_model* model, double* y, size_t n, double* u) {
+  return guard("hysteron_model_get_state", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(model);
+    if (n > 0) HYSTERON_REQUIRE(y);
+    copy_state(model->model.state(), y, n, u);
+  });
+}
+
+hysteron_status hysteron_model_step(hysteron_model* model, double x, double* y) {
+  if (model == nullptr || y == nullptr) {
+    set_message("hysteron_model_step", model == nullptr ? "argument model is NULL" : "argument y is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  if (!std::isfinite(x)) {
+    *y = model->model.output();
+    char text[128];
+    std::snprintf(text, sizeof text, "argument x = %g is not finite (state unchanged, previous output held)", x);
+    set_message("hysteron_model_step", text);
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  *y = model->model.step(x);
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, size_t n_x, double* y, size_t n_y) {
+  return guard("hysteron_model_simulate", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(model);
+    if (n_x != n_y) fail(HYSTERON_ERROR_INVALID_ARGUMENT, "n_x = %zu and n_y = %zu differ", n_x, n_y);
+    if (n_x == 0) return;
+    HYSTERON_REQUIRE(x);
+    HYSTERON_REQUIRE(y);
+    require_finite_array(x, n_x, "x");
+    for (std::size_t k = 0; k < n_x; ++k) y[k] = model->model.step(x[k]);
+  });
+}
+
+// ---- inverse ----------------------------------------------------------------------
+
+hysteron_status hysteron_inverse_create(const hysteron_params* params, double lo, double hi, hysteron_inverse** out) {
+  return guard("hysteron_inverse_create", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(out);
+    if (std::isnan(lo) || std::isnan(hi) || lo == std::numeric_limits<double>::infinity() ||
+        hi == -std::numeric_limits<double>::infinity() || !(lo < hi))
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT,
+           "limits lo = %g, hi = %g: need lo < hi, no NaN (-HUGE_VAL / +HUGE_VAL for the model's limits)", lo, hi);
+    hysteron::InverseOptions o;
+    o.input_limits = {lo, hi};
+    auto* h = new hysteron_inverse{params->params, hysteron::Inverse(params->params, o), params->num_operators};
+    *out = h;
+  });
+}
+
+hysteron_status hysteron_inverse_free(hysteron_inverse* inverse) {
+  delete inverse;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_inverse_limits(const hysteron_inverse* inverse, double* lo, double* hi) {
+  return guard("hysteron_inverse_limits", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(inverse);
+    HYSTERON_REQUIRE(lo);
+    HYSTERON_REQUIRE(hi);
+    *lo = inverse->inverse.limits().lo;
+    *hi = inverse->inverse.limits().hi;
+  });
+}
+
+hysteron_status hysteron_inverse_reset(hysteron_inverse* inverse) {
+  return guard("hysteron_inverse_reset", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(inverse);
+    inverse->inverse.reset();
+  });
+}
+
+hysteron_status hysteron_inverse_reset_relaxed(hysteron_inverse* inverse, double x0) {
+  return guard("hysteron_inverse_reset_relaxed", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(inverse);
+    require_finite(x0, "x0");
+    hysteron::Model m(inverse->params);
+    m.reset_relaxed(x0);
+    inverse->inverse.reset(m.state());
+  });
+}
+
+hysteron_status hysteron_inverse_reset_state(hysteron_inverse* inverse, const double* y, size_t n, double u) {
+  return guard("hysteron_inverse_reset_state", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(inverse);
+    if (n > 0) HYSTERON_REQUIRE(y);
+    require_state_size(n, inverse->num_operators);
+    inverse->inverse.reset(make_state(y, n, u));
+  });
+}
+
+hysteron_status hysteron_inverse_get_state(const hysteron_inverse* inverse, double* y, size_t n, double* u) {
+  return guard("hysteron_inverse_get_state", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(inverse);
+    if (n > 0) HYSTERON_REQUIRE(y);
+    require_state_size(n, inverse->num_operators);
+    copy_state(inverse->inverse.forward_state(), y, n, u);
+  });
+}
+
+hysteron_status hysteron_inverse_step(hysteron_inverse* inverse, double y_desired, double* x, int* saturated) {
+  if (inverse == nullptr || x == nullptr) {
+    set_message("hysteron_inverse_step", inverse == nullptr ? "argument inverse is NULL" : "argument x is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  if (!std::isfinite(y_desired)) {
+    *x = inverse->inverse.input();
+    if (saturated) *saturated = inverse->inverse.saturated() ? 1 : 0;
+    char text[128];
+    std::snprintf(text, sizeof text, "argument y_desired = %g is not finite (state unchanged, previous input held)",
+                  y_desired);
+    set_message("hysteron_inverse_step", text);
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  *x = inverse->inverse.step(y_desired);
+  if (saturated) *saturated = inverse->inverse.saturated() ? 1 : 0;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_inverse_invert(hysteron_inverse* inverse, const double* y, size_t n_y, double* x, size_t n_x,
+                                        size_t* n_saturated) {
+  return guard("hysteron_inverse_invert", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(inverse);
+    if (n_x != n_y) fail(HYSTERON_ERROR_INVALID_ARGUMENT, "n_y = %zu and n_x = %zu differ", n_y, n_x);
+    std::size_t sat = 0;
+    if (n_y > 0) {
+      HYSTERON_REQUIRE(y);
+      HYSTERON_REQUIRE(x);
+      require_finite_array(y, n_y, "y");
+      for (std::size_t k = 0; k < n_y; ++k) {
+        x[k] = inverse->inverse.step(y[k]);
+        sat += inverse->inverse.saturated() ? 1 : 0;
+      }
+    }
+    if (n_saturated) *n_saturated = sat;
+  });
+}
+
+// ---- feedforward + PID --------------------------------------------------------------
+
+hysteron_status hysteron_ff_pid_default_params(hysteron_ff_pid_params* params) {
+  return guard("hysteron_ff_pid_default_params", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    const hysteron::FeedforwardParams ff;
+    const hysteron::PidParams pid;
+    params->sample_time = ff.sample_time;
+    params->pressure_min = ff.pressure_limits.lo;
+    params->pressure_max = ff.pressure_limits.hi;
+    params->model_scale = ff.model_scale;
+    params->lag_time_constant = ff.lag_time_constant;
+    params->kp = pid.kp;
+    params->ki = pid.ki;
+    params->kd = pid.kd;
+    params->derivative_filter = pid.derivative_filter;
+    params->tracking_time = pid.tracking_time;
+    params->setpoint_weight_p = pid.setpoint_weight_p;
+    params->setpoint_weight_d = pid.setpoint_weight_d;
+    params->anti_windup = HYSTERON_ANTI_WINDUP_CONDITIONAL;
+  });
+}
+
+hysteron_status hysteron_ff_pid_create(const hysteron_params* params, const hysteron_ff_pid_params* controller,
+                                       hysteron_ff_pid** out) {
+  return guard("hysteron_ff_pid_create", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(controller);
+    HYSTERON_REQUIRE(out);
+    const hysteron_ff_pid_params& c = *controller;
+    hysteron::FeedforwardParams ff;
+    ff.pressure_limits = {c.pressure_min, c.pressure_max};
+    ff.model_scale = c.model_scale;
+    ff.lag_time_constant = c.lag_time_constant;
+    ff.sample_time = c.sample_time;
+    hysteron::PidParams pid;
+    pid.kp = c.kp;
+    pid.ki = c.ki;
+    pid.kd = c.kd;
+    pid.sample_time = c.sample_time;
+    pid.derivative_filter = c.derivative_filter;
+    pid.tracking_time = c.tracking_time;
+    pid.setpoint_weight_p = c.setpoint_weight_p;
+    pid.setpoint_weight_d = c.setpoint_weight_d;
+    switch (c.anti_windup) {
+      case HYSTERON_ANTI_WINDUP_NONE: pid.anti_windup = hysteron::AntiWindup::none; break;
+      case HYSTERON_ANTI_WINDUP_CONDITIONAL: pid.anti_windup = hysteron::AntiWindup::conditional; break;
+      case HYSTERON_ANTI_WINDUP_BACK_CALCULATION: pid.anti_windup = hysteron::AntiWindup::back_calculation; break;
+      default:
+        fail(HYSTERON_ERROR_INVALID_ARGUMENT, "anti_windup = %d: expected 0 (none), 1 (conditional) or 2 (back_calculation)",
+             c.anti_windup);
+    }
+    pid.out_min = ff.pressure_limits.lo;  // the controller clamps to the pressure limits anyway
+    pid.out_max = ff.pressure_limits.hi;
+    // Controller parameters first (their errors are the caller's arguments), then the model.
+    try {
+      ff.validate();
+      hysteron::Pid check(pid);
+    } catch (const hysteron::Error& e) {
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s", e.what());
+    }
+    *out = new hysteron_ff_pid{hysteron::FeedforwardPidController(params->params, ff, pid), 0.0};
+  });
+}
+
+hysteron_status hysteron_ff_pid_free(hysteron_ff_pid* controller) {
+  delete controller;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller) {
+  return guard("hysteron_ff_pid_reset", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(controller);
+    controller->controller.reset();
+    controller->last = 0.0;
+  });
+}
+
+hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double reference_m, double preview_m,
+                                     double measured_m, double* pressure_mpa) {
+  if (controller == nullptr || pressure_mpa == nullptr) {
+    set_message("hysteron_ff_pid_step",
+                controller == nullptr ? "argument controller is NULL" : "argument pressure_mpa is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  if (!std::isfinite(reference_m) || !std::isfinite(preview_m) || !std::isfinite(measured_m)) {
+    *pressure_mpa = controller->last;
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "arguments reference_m = %g, preview_m = %g, measured_m = %g: not all finite (state unchanged, "
+                  "previous command held)",
+                  reference_m, preview_m, measured_m);
+    set_message("hysteron_ff_pid_step", text);
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  controller->last = controller->controller.step(reference_m, preview_m, measured_m);
+  *pressure_mpa = controller->last;
+  return HYSTERON_OK;
+}
+
+}  // extern "C"

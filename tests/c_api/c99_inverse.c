@@ -1,0 +1,387 @@
+/* The C ABI from strict C99 (compiled with -std=c99 -pedantic -Wall -Wextra -Werror).
+ *
+ *   hysteron_c_test selftest MODEL.json
+ *       loads the model file, runs the model and its inverse over a trajectory (virgin,
+ *       relaxed, from a saved state; batch and per sample), runs the feedforward + PID
+ *       controller, and checks the error paths (bad JSON, unknown key, missing file,
+ *       NULL, NaN, wrong sizes, bad limits and controller parameters): status and message.
+ *   hysteron_c_test invert MODEL.json Y.txt X.txt
+ *       inverts the desired outputs of Y.txt (one number per line) from the virgin state
+ *       and writes the inputs to X.txt, one per line with 17 significant digits
+ *       (compared with `hysteron invert` by tests/c_api/cli_equal.sh).
+ * Exit status 0 if every check passed, 1 otherwise.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hysteron/hysteron.h"
+
+static int failures = 0;
+
+#define CHECK(cond, ...)                                       \
+  do {                                                         \
+    if (!(cond)) {                                             \
+      ++failures;                                              \
+      fprintf(stderr, "FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond); \
+      fprintf(stderr, __VA_ARGS__);                            \
+      fprintf(stderr, "\n");                                   \
+    }                                                          \
+  } while (0)
+
+/* A call that must succeed; prints the library's message otherwise. */
+#define OK(call)                                                                          \
+  do {                                                                                    \
+    hysteron_status st_ = (call);                                                         \
+    if (st_ != HYSTERON_OK) {                                                             \
+      ++failures;                                                                         \
+      fprintf(stderr, "FAIL %s:%d: %s -> %s: %s\n", __FILE__, __LINE__, #call,            \
+              hysteron_status_name(st_), hysteron_last_error());                          \
+    }                                                                                     \
+  } while (0)
+
+/* A call that must fail with `expected` and a message containing `needle`. */
+static void expect_error(const char* what, hysteron_status got, hysteron_status expected, const char* needle) {
+  const char* msg = hysteron_last_error();
+  if (got != expected) {
+    ++failures;
+    fprintf(stderr, "FAIL %s: got %s, expected %s (message: %s)\n", what, hysteron_status_name(got),
+            hysteron_status_name(expected), msg);
+    return;
+  }
+  if (msg == NULL || msg[0] == '\0' || strstr(msg, needle) == NULL) {
+    ++failures;
+    fprintf(stderr, "FAIL %s: message \"%s\" does not contain \"%s\"\n", what, msg ? msg : "(null)", needle);
+    return;
+  }
+  printf("ok   %s: %s: %s\n", what, hysteron_status_name(got), msg);
+}
+
+static double max_abs_diff(const double* a, const double* b, size_t n) {
+  double m = 0.0;
+  size_t k;
+  for (k = 0; k < n; ++k) {
+    const double d = fabs(a[k] - b[k]);
+    if (d > m || d != d) m = d;
+  }
+  return m;
+}
+
+#define N 2000
+
+static void check_errors(const hysteron_params* params, hysteron_model* model, hysteron_inverse* inverse) {
+  hysteron_params* p = NULL;
+  hysteron_model* m = NULL;
+  hysteron_inverse* inv = NULL;
+  hysteron_ff_pid* c = NULL;
+  hysteron_ff_pid_params cp;
+  double x[8] = {0.1, 0.2, 0.3, 0.4, 0.5, 0.4, 0.3, 0.2};
+  double y[8], y_ref[8], state[64];
+  double held = 0.0, v = 0.0, u = 0.0;
+  int sat = -1;
+  size_t n = 0;
+  hysteron_status st;
+
+  /* model loading */
+  expect_error("bad JSON", hysteron_params_from_json("{\"model\": \"gpi\", ", &p), HYSTERON_ERROR_PARSE,
+               "not valid JSON");
+  CHECK(p == NULL, "no handle on failure");
+  expect_error("unknown key", hysteron_params_from_json("{\"model\": \"pi\", \"r\": [0.1], \"p\": [1], \"gain\": 2}", &p),
+               HYSTERON_ERROR_MODEL, "gain");
+  expect_error("invalid value",
+               hysteron_params_from_json("{\"model\": \"gpi\", \"c\": [1,1,0,0], \"n\": 3, \"rho\": 1, \"tau\": 1, "
+                                         "\"alpha\": -1}", &p),
+               HYSTERON_ERROR_MODEL, "alpha");
+  expect_error("missing file", hysteron_params_from_file("/nonexistent/dir/m.json", &p), HYSTERON_ERROR_IO,
+               "/nonexistent/dir/m.json");
+  expect_error("NULL json", hysteron_params_from_json(NULL, &p), HYSTERON_ERROR_NULL_POINTER, "json");
+  expect_error("NULL out", hysteron_params_from_json("{}", NULL), HYSTERON_ERROR_NULL_POINTER, "out");
+  expect_error("NULL path", hysteron_params_from_file(NULL, &p), HYSTERON_ERROR_NULL_POINTER, "path");
+  CHECK(p == NULL, "no handle on failure");
+  OK(hysteron_params_free(NULL));
+
+  /* an mpi-asym inverse needs finite limits */
+  OK(hysteron_params_from_json("{\"model\": \"mpi-asym\", \"r\": [0.1], \"p\": [0.2], "
+                               "\"ascending\": {\"envelope\": \"identity\"}, "
+                               "\"descending\": {\"envelope\": \"affine\", \"c\": [1, 0.1]}}", &p));
+  expect_error("mpi-asym without limits", hysteron_inverse_create(p, -HUGE_VAL, HUGE_VAL, &inv), HYSTERON_ERROR_MODEL,
+               "limit");
+  CHECK(inv == NULL, "no handle on failure");
+  OK(hysteron_inverse_create(p, -1.0, 1.0, &inv));
+  OK(hysteron_inverse_free(inv));
+  inv = NULL;
+  OK(hysteron_params_free(p));
+
+  /* create */
+  expect_error("model_create NULL params", hysteron_model_create(NULL, &m), HYSTERON_ERROR_NULL_POINTER, "params");
+  expect_error("inverse NaN limit", hysteron_inverse_create(params, NAN, 1.0, &inv), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "lo = nan");
+  expect_error("inverse lo > hi", hysteron_inverse_create(params, 1.0, 0.0, &inv), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "need lo < hi");
+  CHECK(inv == NULL && m == NULL, "no handles on failure");
+
+  /* per-sample steps: NULL and NaN */
+  expect_error("model_step NULL model", hysteron_model_step(NULL, 0.1, &v), HYSTERON_ERROR_NULL_POINTER, "model");
+  expect_error("model_step NULL y", hysteron_model_step(model, 0.1, NULL), HYSTERON_ERROR_NULL_POINTER, "y");
+  expect_error("inverse_step NULL x", hysteron_inverse_step(inverse, 0.1, NULL, NULL), HYSTERON_ERROR_NULL_POINTER,
+               "x is NULL");
+  OK(hysteron_inverse_reset(inverse));
+  OK(hysteron_inverse_step(inverse, 0.05, &held, &sat));
+  CHECK(sat == 0 || sat == 1, "saturated flag %d", sat);
+  v = -1.0;
+  st = hysteron_inverse_step(inverse, NAN, &v, &sat);
+  expect_error("inverse_step NaN", st, HYSTERON_ERROR_INVALID_ARGUMENT, "y_desired = nan");
+  CHECK(v == held, "NaN holds the previous input: %.17g vs %.17g", v, held);
+  st = hysteron_inverse_step(inverse, HUGE_VAL, &v, NULL);
+  expect_error("inverse_step inf", st, HYSTERON_ERROR_INVALID_ARGUMENT, "y_desired = inf");
+  OK(hysteron_model_reset(model));
+  OK(hysteron_model_step(model, 0.3, &held));
+  st = hysteron_model_step(model, NAN, &v);
+  expect_error("model_step NaN", st, HYSTERON_ERROR_INVALID_ARGUMENT, "x = nan");
+  CHECK(v == held, "NaN holds the previous output");
+
+  /* batch: wrong sizes, NaN inside (nothing stepped), NULL arrays */
+  expect_error("simulate sizes", hysteron_model_simulate(model, x, 8, y, 7), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "n_x = 8 and n_y = 7 differ");
+  expect_error("invert sizes", hysteron_inverse_invert(inverse, x, 8, y, 9, NULL), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "n_y = 8 and n_x = 9 differ");
+  expect_error("simulate NULL x", hysteron_model_simulate(model, NULL, 8, y, 8), HYSTERON_ERROR_NULL_POINTER, "x");
+  OK(hysteron_model_simulate(model, NULL, 0, NULL, 0));
+  OK(hysteron_model_reset(model));
+  OK(hysteron_model_simulate(model, x, 8, y_ref, 8));
+  OK(hysteron_model_reset(model));
+  x[3] = NAN;
+  expect_error("simulate NaN", hysteron_model_simulate(model, x, 8, y, 8), HYSTERON_ERROR_INVALID_ARGUMENT, "x[3] = nan");
+  x[3] = 0.4;
+  OK(hysteron_model_simulate(model, x, 8, y, 8)); /* the failed call stepped nothing */
+  CHECK(max_abs_diff(y, y_ref, 8) == 0.0, "state unchanged by a failed batch");
+  y[5] = -HUGE_VAL;
+  expect_error("invert inf", hysteron_inverse_invert(inverse, y, 8, y, 8, &n), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "y[5] = -inf");
+
+  /* states */
+  OK(hysteron_params_num_operators(params, &n));
+  CHECK(n < 64, "test buffer too small for %lu operators", (unsigned long)n);
+  OK(hysteron_model_get_state(model, state, n, &u));
+  expect_error("reset_state size", hysteron_model_reset_state(model, state, n + 1, u), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "operators");
+  expect_error("get_state size", hysteron_inverse_get_state(inverse, state, n + 2, &u),
+               HYSTERON_ERROR_INVALID_ARGUMENT, "operators");
+  expect_error("reset_state NaN u", hysteron_inverse_reset_state(inverse, state, n, NAN),
+               HYSTERON_ERROR_INVALID_ARGUMENT, "u = nan");
+  if (n > 0) {
+    state[0] = NAN;
+    expect_error("reset_state NaN y", hysteron_model_reset_state(model, state, n, 0.0),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "y[0] = nan");
+    expect_error("reset_state NULL y", hysteron_model_reset_state(model, NULL, n, 0.0), HYSTERON_ERROR_NULL_POINTER,
+                 "y");
+  }
+  expect_error("reset_relaxed NaN", hysteron_inverse_reset_relaxed(inverse, NAN), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "x0 = nan");
+
+  /* controller */
+  OK(hysteron_ff_pid_default_params(&cp));
+  cp.sample_time = 0.0;
+  expect_error("ff_pid sample_time 0", hysteron_ff_pid_create(params, &cp, &c), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "sample_time");
+  OK(hysteron_ff_pid_default_params(&cp));
+  cp.anti_windup = 7;
+  expect_error("ff_pid anti_windup 7", hysteron_ff_pid_create(params, &cp, &c), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "anti_windup = 7");
+  OK(hysteron_ff_pid_default_params(&cp));
+  cp.pressure_max = NAN;
+  expect_error("ff_pid NaN limit", hysteron_ff_pid_create(params, &cp, &c), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "pressure_limits");
+  CHECK(c == NULL, "no handle on failure");
+  expect_error("ff_pid_step NULL", hysteron_ff_pid_step(NULL, 0, 0, 0, &v), HYSTERON_ERROR_NULL_POINTER, "controller");
+}
+
+static int selftest(const char* path) {
+  static double x[N], y[N], y2[N], xi[N], xi2[N];
+  hysteron_params* params = NULL;
+  hysteron_model* model = NULL;
+  hysteron_inverse* inverse = NULL;
+  hysteron_ff_pid* ctl = NULL;
+  hysteron_ff_pid_params cp;
+  const char* kind = NULL;
+  double lo = 0, hi = 0, ilo = 0, ihi = 0, u = 0, err;
+  double state[64];
+  size_t n = 0, sat = 0, k;
+  int major = -1, minor = -1, patch = -1;
+  char version[64];
+
+  OK(hysteron_version(&major, &minor, &patch));
+  sprintf(version, "%d.%d.%d", major, minor, patch);
+  CHECK(strcmp(version, hysteron_version_string()) == 0, "version %s vs %s", version, hysteron_version_string());
+  printf("hysteron C ABI %s (header ABI %d)\n", hysteron_version_string(), HYSTERON_C_ABI_VERSION);
+
+  if (hysteron_params_from_file(path, &params) != HYSTERON_OK) {
+    fprintf(stderr, "FAIL loading %s: %s\n", path, hysteron_last_error());
+    return 1;
+  }
+  OK(hysteron_params_kind(params, &kind));
+  OK(hysteron_params_num_operators(params, &n));
+  OK(hysteron_params_input_limits(params, &lo, &hi));
+  printf("%s: %s, %lu operators, input limits [%g, %g]\n", path, kind, (unsigned long)n, lo, hi);
+  CHECK(n < 64, "too many operators for the test");
+
+  /* trajectory inside the limits: a decaying sine with minor loops (as tests/cli/simulate_invert.sh) */
+  for (k = 0; k < N; ++k)
+    x[k] = 0.8 * sin(0.013 * (double)k) * exp(-(double)k / 1500.0) + 0.15 * sin(0.17 * (double)k);
+
+  OK(hysteron_model_create(params, &model));
+  OK(hysteron_inverse_create(params, -HUGE_VAL, HUGE_VAL, &inverse));
+  OK(hysteron_inverse_limits(inverse, &ilo, &ihi));
+  printf("inverse limits [%g, %g]\n", ilo, ihi);
+
+  /* forward: batch == per sample */
+  OK(hysteron_model_simulate(model, x, N, y, N));
+  OK(hysteron_model_reset(model));
+  for (k = 0; k < N; ++k) OK(hysteron_model_step(model, x[k], &y2[k]));
+  CHECK(max_abs_diff(y, y2, N) == 0.0, "batch and per-sample forward differ");
+
+  /* inverse: round trip, batch == per sample, nothing saturated */
+  OK(hysteron_inverse_invert(inverse, y, N, xi, N, &sat));
+  err = max_abs_diff(x, xi, N);
+  printf("virgin round trip: max |x - inverse(model(x))| = %.3g, %lu saturated\n", err, (unsigned long)sat);
+  CHECK(err <= 1e-12, "round trip error %.3g", err);
+  CHECK(sat == 0, "%lu samples saturated", (unsigned long)sat);
+  OK(hysteron_inverse_reset(inverse));
+  for (k = 0; k < N; ++k) {
+    int s = -1;
+    OK(hysteron_inverse_step(inverse, y[k], &xi2[k], &s));
+    CHECK(s == 0, "sample %lu saturated", (unsigned long)k);
+  }
+  CHECK(max_abs_diff(xi, xi2, N) == 0.0, "batch and per-sample inverse differ");
+
+  /* relaxed start at x[0] on both sides */
+  OK(hysteron_model_reset_relaxed(model, x[0] + 0.1));
+  OK(hysteron_model_simulate(model, x, N, y2, N));
+  OK(hysteron_inverse_reset_relaxed(inverse, x[0] + 0.1));
+  OK(hysteron_inverse_invert(inverse, y2, N, xi2, N, NULL));
+  err = max_abs_diff(x, xi2, N);
+  printf("relaxed round trip: %.3g\n", err);
+  CHECK(err <= 1e-12, "relaxed round trip error %.3g", err);
+
+  /* from a saved state: the forward model after N/2 samples -> the inverse goes on from there */
+  OK(hysteron_model_reset(model));
+  OK(hysteron_model_simulate(model, x, N / 2, y2, N / 2));
+  OK(hysteron_model_get_state(model, state, n, &u));
+  OK(hysteron_inverse_reset_state(inverse, state, n, u));
+  OK(hysteron_inverse_invert(inverse, y + N / 2, N / 2, xi2, N / 2, NULL));
+  err = max_abs_diff(x + N / 2, xi2, N / 2);
+  printf("from a saved state: %.3g\n", err);
+  CHECK(err <= 1e-12, "round trip from a saved state %.3g", err);
+  /* and the inverse's own state round-trips into a model */
+  OK(hysteron_inverse_get_state(inverse, state, n, &u));
+  OK(hysteron_model_reset_state(model, state, n, u));
+
+  /* feedforward + PID. Without gains the command is the inverse's output (the reference
+   * in metres, the model in mm); with gains, on the model as plant, it tracks closely. */
+  OK(hysteron_ff_pid_default_params(&cp));
+  cp.pressure_min = ilo > -10 ? ilo : -1.0;
+  cp.pressure_max = ihi < 10 ? ihi : 1.0;
+  OK(hysteron_ff_pid_create(params, &cp, &ctl));
+  if (ctl != NULL) {
+    double p = 0.0;
+    for (k = 0; k < N; ++k) OK(hysteron_ff_pid_step(ctl, y[k] / 1000.0, y[k] / 1000.0, y[k] / 1000.0, &xi2[k]));
+    err = max_abs_diff(x, xi2, N);
+    printf("ff+pid without gains = the inverse: %.3g\n", err);
+    CHECK(err <= 1e-9, "ff+pid without gains vs the trajectory: %.3g", err);
+    OK(hysteron_ff_pid_free(ctl));
+    ctl = NULL;
+    cp.kp = 5.0;
+    cp.ki = 1.0;
+    OK(hysteron_ff_pid_create(params, &cp, &ctl));
+    if (ctl != NULL) {
+      double measured = 0.0, worst = 0.0, span = 0.0;
+      OK(hysteron_model_reset(model));
+      for (k = 0; k < N; ++k) {
+        const double ref = y[k] / 1000.0;
+        OK(hysteron_ff_pid_step(ctl, ref, ref, measured, &p));
+        CHECK(p >= cp.pressure_min && p <= cp.pressure_max, "command %g outside the limits", p);
+        OK(hysteron_model_step(model, p, &measured));
+        measured /= 1000.0;
+        if (fabs(measured - ref) > worst) worst = fabs(measured - ref);
+        if (fabs(ref) > span) span = fabs(ref);
+      }
+      printf("ff+pid on the model: max tracking error %.3g m (reference up to %.3g m)\n", worst, span);
+      CHECK(worst < 0.01 * span, "tracking error %.3g m", worst);
+      {
+        double q = -1.0;
+        expect_error("ff_pid_step NaN", hysteron_ff_pid_step(ctl, NAN, 0, 0, &q), HYSTERON_ERROR_INVALID_ARGUMENT,
+                     "reference_m = nan");
+        CHECK(q == p, "NaN holds the previous command");
+      }
+      OK(hysteron_ff_pid_reset(ctl));
+    }
+  }
+
+  check_errors(params, model, inverse);
+
+  OK(hysteron_ff_pid_free(ctl));
+  OK(hysteron_inverse_free(inverse));
+  OK(hysteron_model_free(model));
+  OK(hysteron_params_free(params));
+  printf("%s: %d failure(s)\n", path, failures);
+  return failures == 0 ? 0 : 1;
+}
+
+static int invert_file(const char* model_path, const char* in_path, const char* out_path) {
+  hysteron_params* params = NULL;
+  hysteron_inverse* inverse = NULL;
+  double* y = NULL;
+  double* x = NULL;
+  size_t n = 0, cap = 0, sat = 0, k;
+  double v;
+  FILE* in;
+  FILE* out;
+  hysteron_status st;
+
+  if (hysteron_params_from_file(model_path, &params) != HYSTERON_OK ||
+      hysteron_inverse_create(params, -HUGE_VAL, HUGE_VAL, &inverse) != HYSTERON_OK) {
+    fprintf(stderr, "%s\n", hysteron_last_error());
+    return 1;
+  }
+  in = fopen(in_path, "r");
+  if (!in) {
+    fprintf(stderr, "%s: cannot open\n", in_path);
+    return 1;
+  }
+  while (fscanf(in, "%lf", &v) == 1) {
+    if (n == cap) {
+      double* grown;
+      cap = cap ? 2 * cap : 1024;
+      grown = (double*)realloc(y, cap * sizeof *y);
+      if (!grown) return 1;
+      y = grown;
+    }
+    y[n++] = v;
+  }
+  fclose(in);
+  x = (double*)malloc((n ? n : 1) * sizeof *x);
+  if (!x) return 1;
+  st = hysteron_inverse_invert(inverse, y, n, x, n, &sat);
+  if (st != HYSTERON_OK) {
+    fprintf(stderr, "%s: %s\n", hysteron_status_name(st), hysteron_last_error());
+    return 1;
+  }
+  out = fopen(out_path, "w");
+  if (!out) return 1;
+  for (k = 0; k < n; ++k) fprintf(out, "%.17g\n", x[k]);
+  if (fclose(out) != 0) return 1;
+  printf("inverted %lu samples of %s (%lu saturated)\n", (unsigned long)n, in_path, (unsigned long)sat);
+  free(x);
+  free(y);
+  hysteron_inverse_free(inverse);
+  hysteron_params_free(params);
+  return 0;
+}
+
+int main(int argc, char** argv) {
+  if (argc == 3 && strcmp(argv[1], "selftest") == 0) return selftest(argv[2]);
+  if (argc == 5 && strcmp(argv[1], "invert") == 0) return invert_file(argv[2], argv[3], argv[4]);
+  fprintf(stderr, "usage: %s selftest MODEL.json | invert MODEL.json Y.txt X.txt\n", argv[0]);
+  return 2;
+}

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Install hysteron into a temporary prefix; then (1) compile a C99 program with plain gcc
+# against the installed header and shared library, (2) build the same with CMake through
+# find_package(hysteron) and hysteron::c / hysteron::c_static; run all three.
+# Usage: bash install_c.sh <build-dir> <tests/c_api dir>
+set -euo pipefail
+build_dir=$1; dir=$2
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+cmake --install "$build_dir" --prefix "$tmp/prefix" > "$tmp/install.log" 2>&1 || { cat "$tmp/install.log"; exit 1; }
+inc="$tmp/prefix/include"; lib=$(dirname "$(find "$tmp/prefix" -name 'libhysteron_c.so' | head -1)")
+[ -f "$inc/hysteron/hysteron.h" ] || { echo "install_c: hysteron.h not installed"; exit 1; }
+[ -f "$lib/libhysteron_c.a" ] || { echo "install_c: libhysteron_c.a not installed"; exit 1; }
+gcc -std=c99 -pedantic -Wall -Wextra -Werror "$dir/consumer/main.c" -I"$inc" -L"$lib" -lhysteron_c -lm \
+    -Wl,-rpath,"$lib" -o "$tmp/plain"
+"$tmp/plain"
+cmake -S "$dir/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_BUILD_TYPE=Release \
+    > "$tmp/cfg.log" 2>&1 || { cat "$tmp/cfg.log"; exit 1; }
+cmake --build "$tmp/build" > "$tmp/build.log" 2>&1 || { cat "$tmp/build.log"; exit 1; }
+"$tmp/build/consumer_shared" "$dir/gpi.json"
+"$tmp/build/consumer_static" "$dir/gpi.json"
+echo "install_c: ok"

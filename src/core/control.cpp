@@ -4,14 +4,14 @@
 #include <algorithm>
 #include <cmath>
 
-#include <fmt/format.h>
+#include "format.hpp"
 
 #include "hysteron/error.hpp"
 
 namespace hysteron {
 namespace {
 [[noreturn]] void bad(const char* key, double v, const char* expected) {
-  throw Error(fmt::format("{} = {}: must be {}", key, v, expected));
+  throw Error(detail::format("{} = {}: must be {}", key, v, expected));
 }
 }  // namespace
 
@@ -38,7 +38,7 @@ Pid::Pid(const PidParams& p) : p_(p) {
   finite_nonneg("pid.derivative_filter", p.derivative_filter);
   finite_nonneg("pid.tracking_time", p.tracking_time);
   if (std::isnan(p.out_min) || std::isnan(p.out_max) || !(p.out_min < p.out_max))
-    throw Error(fmt::format("pid.out_min = {}, pid.out_max = {}: need out_min < out_max", p.out_min, p.out_max));
+    throw Error(detail::format("pid.out_min = {}, pid.out_max = {}: need out_min < out_max", p.out_min, p.out_max));
   if (!std::isfinite(p.setpoint_weight_p)) bad("pid.setpoint_weight_p", p.setpoint_weight_p, "finite");
   if (!std::isfinite(p.setpoint_weight_d)) bad("pid.setpoint_weight_d", p.setpoint_weight_d, "finite");
   if (p.anti_windup == AntiWindup::back_calculation && p.ki <= 0.0)

@@ -1,6 +1,6 @@
 #include "hysteron/inverse.hpp"
 
-#include <fmt/format.h>
+#include "format.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -38,7 +38,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   lim_.lo = std::isinf(options.input_limits.lo) ? ml.lo : options.input_limits.lo;
   lim_.hi = std::isinf(options.input_limits.hi) ? ml.hi : options.input_limits.hi;
   if (std::isnan(lim_.lo) || std::isnan(lim_.hi) || !(lim_.lo < lim_.hi))
-    throw Error(fmt::format("{}: inverse input limits must satisfy lo < hi, got [{}, {}]", name, lim_.lo, lim_.hi));
+    throw Error(detail::format("{}: inverse input limits must satisfy lo < hi, got [{}, {}]", name, lim_.lo, lim_.hi));
   // From here on lim_ is in model coordinates (input_scale > 0 keeps the order).
   const UnitsMap& um = s_.units;
   const Limits raw = lim_;
@@ -46,7 +46,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
 
   const std::size_t n = s_.r.size();
   if (!(s_.q > 0))
-    throw Error(fmt::format("{}: not invertible: q (plus the weights of zero-threshold operators) = {} must be > 0, "
+    throw Error(detail::format("{}: not invertible: q (plus the weights of zero-threshold operators) = {} must be > 0, "
                             "otherwise the output is flat after every reversal",
                             name, s_.q));
   if (!s_.asymmetric) {
@@ -55,7 +55,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     for (std::size_t i = 0; i < n; ++i) {
       sum += s_.p[i];
       if (!(sum > 0))
-        throw Error(fmt::format("{}: not invertible: q + p_1 + ... + p_{} = {} must be > 0 (Eq. 11; the loading "
+        throw Error(detail::format("{}: not invertible: q + p_1 + ... + p_{} = {} must be > 0 (Eq. 11; the loading "
                                 "curve must be strictly increasing)",
                                 name, i + 1, sum));
     }
@@ -73,7 +73,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     }
     if (s_.has_dead_zones) {
       if (!(s_.g0 > 0))
-        throw Error(fmt::format("{}: not invertible: g0 (plus weights of zero dead zones) = {} must be > 0", name, s_.g0));
+        throw Error(detail::format("{}: not invertible: g0 (plus weights of zero dead zones) = {} must be > 0", name, s_.g0));
       // Positive side: breakpoints 0 < z_1 < z_2 ..., slope after z_k = g0 + sum g_j (z_j in (0, z_k]).
       zp_ = {0.0};
       dp_ = {0.0};
@@ -85,7 +85,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
         zp_.push_back(s_.z[k]);
         sp_.push_back(sp_.back() + s_.g[k]);
         if (!(sp_.back() > 0))
-          throw Error(fmt::format("{}: not invertible: g0 + weights of dead zones in (0, {}] = {} must be > 0", name,
+          throw Error(detail::format("{}: not invertible: g0 + weights of dead zones in (0, {}] = {} must be > 0", name,
                                   s_.z[k], sp_.back()));
       }
       // Negative side: 0 > z_1 > z_2 ... (walk z from the largest negative down).
@@ -99,7 +99,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
         zn_.push_back(s_.z[kk]);
         sn_.push_back(sn_.back() + s_.g[kk]);
         if (!(sn_.back() > 0))
-          throw Error(fmt::format("{}: not invertible: g0 + weights of dead zones in [{}, 0) = {} must be > 0", name,
+          throw Error(detail::format("{}: not invertible: g0 + weights of dead zones in [{}, 0) = {} must be > 0", name,
                                   s_.z[kk], sn_.back()));
       }
     }
@@ -119,12 +119,12 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   } else {
     for (std::size_t i = 0; i < n; ++i)
       if (s_.p[i] < 0)
-        throw Error(fmt::format("{}: not invertible: the numerical inverse of mpi-asym needs every weight p_i >= 0 "
+        throw Error(detail::format("{}: not invertible: the numerical inverse of mpi-asym needs every weight p_i >= 0 "
                                 "(then the output is strictly increasing in the input for every state; negative "
                                 "weights make it fold back and the inverse jump), got p[{}] = {}", name, i,
                                 s_.p[i]));
     if (!lim_.bounded())
-      throw Error(fmt::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));
+      throw Error(detail::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));
     y_.assign(n, 0.0);
   }
   // Raw limits: the caller's where given (a command never leaves them by rounding).
@@ -146,10 +146,10 @@ void Inverse::reset(const ModelState& fs) {
   const std::string_view name = model_name(params_);
   const std::size_t n = s_.r.size();
   if (fs.y.size() != n)
-    throw Error(fmt::format("{}: inverse start state has {} operator outputs, the model has {}", name, fs.y.size(), n));
-  if (!std::isfinite(fs.u)) throw Error(fmt::format("{}: inverse start state u is not finite", name));
+    throw Error(detail::format("{}: inverse start state has {} operator outputs, the model has {}", name, fs.y.size(), n));
+  if (!std::isfinite(fs.u)) throw Error(detail::format("{}: inverse start state u is not finite", name));
   for (std::size_t i = 0; i < n; ++i)
-    if (!std::isfinite(fs.y[i])) throw Error(fmt::format("{}: inverse start state y[{}] is not finite", name, i));
+    if (!std::isfinite(fs.y[i])) throw Error(detail::format("{}: inverse start state y[{}] is not finite", name, i));
   saturated_ = false;
   faults_ = 0;
   if (s_.asymmetric) {
@@ -167,7 +167,7 @@ void Inverse::reset(const ModelState& fs) {
   for (std::size_t i = 0; i < n; ++i) {
     dev_[i] = fs.u - fs.y[i];
     if (std::abs(dev_[i] - d_prev) > s_.r[i] - r_prev + tol)
-      throw Error(fmt::format("{}: inverse start state is not reachable by the model: operator {} (r = {}) deviates by "
+      throw Error(detail::format("{}: inverse start state is not reachable by the model: operator {} (r = {}) deviates by "
                               "{} from the input, operator {} by {}",
                               name, i + 1, s_.r[i], dev_[i], i, d_prev));
     d_prev = dev_[i];
@@ -326,10 +326,10 @@ double Inverse::step_numerical(double y) noexcept {
 void Inverse::simulate(std::span<const double> y, std::span<double> x) {
   const std::string_view name = model_name(params_);
   if (x.size() != y.size())
-    throw Error(fmt::format("{}: inverse simulate: {} desired outputs but room for {} inputs", name, y.size(), x.size()));
+    throw Error(detail::format("{}: inverse simulate: {} desired outputs but room for {} inputs", name, y.size(), x.size()));
   for (std::size_t k = 0; k < y.size(); ++k)
     if (!std::isfinite(y[k]))
-      throw Error(fmt::format("{}: inverse simulate: desired output sample {} is not finite ({})", name, k, y[k]));
+      throw Error(detail::format("{}: inverse simulate: desired output sample {} is not finite ({})", name, k, y[k]));
   for (std::size_t k = 0; k < y.size(); ++k) x[k] = step(y[k]);
 }
 

@@ -1,6 +1,6 @@
 #include "hysteron/models.hpp"
 
-#include <fmt/format.h>
+#include "format.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -21,12 +21,12 @@ struct NameVisitor {
 };
 
 void require_finite(double v, std::string_view model, std::string_view key) {
-  if (!std::isfinite(v)) throw Error(fmt::format("{}: {} must be a finite number, got {}", model, key, v));
+  if (!std::isfinite(v)) throw Error(detail::format("{}: {} must be a finite number, got {}", model, key, v));
 }
 
 void check_limits(const Limits& l, std::string_view model) {
   if (std::isnan(l.lo) || std::isnan(l.hi) || !(l.lo < l.hi))
-    throw Error(fmt::format("{}: input_limits must satisfy lo < hi, got [{}, {}]", model, l.lo, l.hi));
+    throw Error(detail::format("{}: input_limits must satisfy lo < hi, got [{}, {}]", model, l.lo, l.hi));
 }
 
 // Thresholds and weights of the operators: equal lengths, finite, r >= 0.
@@ -34,13 +34,13 @@ void check_limits(const Limits& l, std::string_view model) {
 void add_operators(Structure<double>& s, const std::vector<double>& r, const std::vector<double>& p,
                    std::string_view model) {
   if (r.size() != p.size())
-    throw Error(fmt::format("{}: r has {} entries but p has {} (one weight per threshold)", model, r.size(), p.size()));
+    throw Error(detail::format("{}: r has {} entries but p has {} (one weight per threshold)", model, r.size(), p.size()));
   std::vector<std::size_t> idx(r.size());
   std::iota(idx.begin(), idx.end(), 0);
   for (std::size_t i = 0; i < r.size(); ++i) {
-    require_finite(r[i], model, fmt::format("r[{}]", i));
-    require_finite(p[i], model, fmt::format("p[{}]", i));
-    if (r[i] < 0) throw Error(fmt::format("{}: r[{}] = {} must be >= 0 (play thresholds are half-widths)", model, i, r[i]));
+    require_finite(r[i], model, detail::format("r[{}]", i));
+    require_finite(p[i], model, detail::format("p[{}]", i));
+    if (r[i] < 0) throw Error(detail::format("{}: r[{}] = {} must be >= 0 (play thresholds are half-widths)", model, i, r[i]));
   }
   std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return r[a] < r[b]; });
   for (std::size_t k : idx) {
@@ -60,8 +60,8 @@ void check_units(const UnitsMap& u, std::string_view model) {
   require_finite(u.output_offset, model, "output_offset");
   require_finite(u.input_scale, model, "input_scale");
   require_finite(u.output_gain, model, "output_gain");
-  if (!(u.input_scale > 0)) throw Error(fmt::format("{}: input_scale must be > 0, got {}", model, u.input_scale));
-  if (u.output_gain == 0.0) throw Error(fmt::format("{}: output_gain must be != 0 (the output would be constant)", model));
+  if (!(u.input_scale > 0)) throw Error(detail::format("{}: input_scale must be > 0, got {}", model, u.input_scale));
+  if (u.output_gain == 0.0) throw Error(detail::format("{}: output_gain must be != 0 (the output would be constant)", model));
 }
 
 void set_envelope(std::array<double, 4>& c, EnvelopeKind& kind, const Envelope& e) {
@@ -84,21 +84,21 @@ struct CanonicalVisitor {
     m.envelope.validate("gpi: c");
     check_limits(m.input_limits, "gpi");
     require_finite(m.q, "gpi", "q");
-    if (!(m.q > 0)) throw Error(fmt::format("gpi: q must be > 0 (Eq. 6), got {}", m.q));
+    if (!(m.q > 0)) throw Error(detail::format("gpi: q must be > 0 (Eq. 6), got {}", m.q));
     set_envelope(s.asc_c, s.asc_kind, m.envelope);
     set_envelope(s.desc_c, s.desc_kind, m.envelope);
     s.q = m.q;
     if (!m.r.empty() || !m.p.empty()) {
       add_operators(s, m.r, m.p, "gpi");
     } else {
-      if (m.n < 0 || m.n > 100000) throw Error(fmt::format("gpi: n must be in 0..100000, got {}", m.n));
+      if (m.n < 0 || m.n > 100000) throw Error(detail::format("gpi: n must be in 0..100000, got {}", m.n));
       require_finite(m.rho, "gpi", "rho");
       require_finite(m.tau, "gpi", "tau");
       require_finite(m.alpha, "gpi", "alpha");
       if (m.n > 0) {
-        if (!(m.alpha > 0)) throw Error(fmt::format("gpi: alpha must be > 0 (Eq. 7, r_i = alpha i), got {}", m.alpha));
-        if (!(m.rho > 0)) throw Error(fmt::format("gpi: rho must be > 0 (Eq. 8), got {}", m.rho));
-        if (!(m.tau > 0)) throw Error(fmt::format("gpi: tau must be > 0 (Eq. 8), got {}", m.tau));
+        if (!(m.alpha > 0)) throw Error(detail::format("gpi: alpha must be > 0 (Eq. 7, r_i = alpha i), got {}", m.alpha));
+        if (!(m.rho > 0)) throw Error(detail::format("gpi: rho must be > 0 (Eq. 8), got {}", m.rho));
+        if (!(m.tau > 0)) throw Error(detail::format("gpi: tau must be > 0 (Eq. 8), got {}", m.tau));
       }
       for (int i = 1; i <= m.n; ++i) {
         const double ri = m.alpha * i;                  // Eq. 7
@@ -116,14 +116,14 @@ struct CanonicalVisitor {
     s.q = m.q;
     add_operators(s, m.r, m.p, "mpi-deadzone");
     if (m.z.size() != m.g.size())
-      throw Error(fmt::format("mpi-deadzone: z has {} entries but g has {} (one weight per dead zone)", m.z.size(), m.g.size()));
+      throw Error(detail::format("mpi-deadzone: z has {} entries but g has {} (one weight per dead zone)", m.z.size(), m.g.size()));
     s.has_dead_zones = true;
     s.g0 = m.g0;
     std::vector<std::size_t> idx(m.z.size());
     std::iota(idx.begin(), idx.end(), 0);
     for (std::size_t i = 0; i < m.z.size(); ++i) {
-      require_finite(m.z[i], "mpi-deadzone", fmt::format("z[{}]", i));
-      require_finite(m.g[i], "mpi-deadzone", fmt::format("g[{}]", i));
+      require_finite(m.z[i], "mpi-deadzone", detail::format("z[{}]", i));
+      require_finite(m.g[i], "mpi-deadzone", detail::format("g[{}]", i));
     }
     std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return m.z[a] < m.z[b]; });
     for (std::size_t k : idx) {
@@ -251,11 +251,11 @@ void Model::reset() noexcept {
 
 void Model::reset(const ModelState& state) {
   if (state.y.size() != s_.r.size())
-    throw Error(fmt::format("{}: initial state has {} operator outputs, the model has {} operators", name(),
+    throw Error(detail::format("{}: initial state has {} operator outputs, the model has {} operators", name(),
                             state.y.size(), s_.r.size()));
   for (std::size_t i = 0; i < state.y.size(); ++i)
-    if (!std::isfinite(state.y[i])) throw Error(fmt::format("{}: initial state y[{}] is not finite", name(), i));
-  if (!std::isfinite(state.u)) throw Error(fmt::format("{}: initial state u is not finite", name()));
+    if (!std::isfinite(state.y[i])) throw Error(detail::format("{}: initial state y[{}] is not finite", name(), i));
+  if (!std::isfinite(state.u)) throw Error(detail::format("{}: initial state u is not finite", name()));
   std::copy(state.y.begin(), state.y.end(), state_.y.begin());
   state_.u = state.u;
   out_ = 0.0;
@@ -293,9 +293,9 @@ double Model::step(double x) noexcept {
 
 void Model::simulate(std::span<const double> x, std::span<double> y) {
   if (x.size() != y.size())
-    throw Error(fmt::format("{}: simulate: input has {} samples but output has room for {}", name(), x.size(), y.size()));
+    throw Error(detail::format("{}: simulate: input has {} samples but output has room for {}", name(), x.size(), y.size()));
   for (std::size_t k = 0; k < x.size(); ++k)
-    if (!std::isfinite(x[k])) throw Error(fmt::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
+    if (!std::isfinite(x[k])) throw Error(detail::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
   double* yi = state_.y.data();
   const UnitsMap& um = s_.units;
   if (s_.asymmetric) {

@@ -1,6 +1,6 @@
 #include "hysteron/compensation.hpp"
 
-#include <fmt/format.h>
+#include "format.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,14 +12,14 @@ namespace hysteron {
 void FeedforwardParams::validate() const {
   if (!(pressure_limits.lo < pressure_limits.hi) || !std::isfinite(pressure_limits.lo) ||
       !std::isfinite(pressure_limits.hi))
-    throw Error(fmt::format("feedforward: pressure_limits must be finite with lo < hi, got [{}, {}]",
+    throw Error(detail::format("feedforward: pressure_limits must be finite with lo < hi, got [{}, {}]",
                             pressure_limits.lo, pressure_limits.hi));
   if (!(model_scale > 0) || !std::isfinite(model_scale))
-    throw Error(fmt::format("feedforward: model_scale must be > 0, got {}", model_scale));
+    throw Error(detail::format("feedforward: model_scale must be > 0, got {}", model_scale));
   if (!(lag_time_constant >= 0) || !std::isfinite(lag_time_constant))
-    throw Error(fmt::format("feedforward: lag_time_constant must be >= 0, got {}", lag_time_constant));
+    throw Error(detail::format("feedforward: lag_time_constant must be >= 0, got {}", lag_time_constant));
   if (!(sample_time > 0) || !std::isfinite(sample_time))
-    throw Error(fmt::format("feedforward: sample_time must be > 0, got {}", sample_time));
+    throw Error(detail::format("feedforward: sample_time must be > 0, got {}", sample_time));
 }
 
 namespace {
@@ -80,7 +80,7 @@ OpenLoopController::OpenLoopController(const ModelParams& model, const OpenLoopP
       }()),
       use_position_(params.position.kp != 0.0 || params.position.ki != 0.0 || params.position.kd != 0.0) {
   if (!(params.pressure_gain >= 0) || !std::isfinite(params.pressure_gain))
-    throw Error(fmt::format("open-loop controller: pressure_gain must be >= 0, got {}", params.pressure_gain));
+    throw Error(detail::format("open-loop controller: pressure_gain must be >= 0, got {}", params.pressure_gain));
 }
 
 void OpenLoopController::reset() noexcept {

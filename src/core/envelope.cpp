@@ -1,6 +1,6 @@
 #include "hysteron/envelope.hpp"
 
-#include <fmt/format.h>
+#include "format.hpp"
 
 #include <limits>
 #include <numbers>
@@ -26,7 +26,7 @@ std::string_view envelope_name(EnvelopeKind kind) noexcept {
 EnvelopeKind envelope_kind_from_name(std::string_view name, std::string_view where) {
   for (auto k : {EnvelopeKind::identity, EnvelopeKind::affine, EnvelopeKind::tanh, EnvelopeKind::atan})
     if (envelope_name(k) == name) return k;
-  throw Error(fmt::format("{}: unknown envelope \"{}\" (expected identity, affine, tanh or atan)", where, name));
+  throw Error(detail::format("{}: unknown envelope \"{}\" (expected identity, affine, tanh or atan)", where, name));
 }
 
 std::size_t envelope_num_coefficients(EnvelopeKind kind) noexcept {
@@ -43,14 +43,14 @@ void Envelope::validate(std::string_view where) const {
   const std::size_t m = envelope_num_coefficients(kind);
   for (std::size_t i = 0; i < m; ++i)
     if (!std::isfinite(c[i]))
-      throw Error(fmt::format("{}: envelope coefficient c{} is not finite", where, i));
+      throw Error(detail::format("{}: envelope coefficient c{} is not finite", where, i));
   if (kind == EnvelopeKind::affine && !(c[0] > 0))
-    throw Error(fmt::format("{}: affine envelope needs c0 > 0 (strictly increasing), got {}", where, c[0]));
+    throw Error(detail::format("{}: affine envelope needs c0 > 0 (strictly increasing), got {}", where, c[0]));
   if (kind == EnvelopeKind::tanh || kind == EnvelopeKind::atan) {
     if (!(c[0] > 0))
-      throw Error(fmt::format("{}: {} envelope needs c0 > 0, got {}", where, envelope_name(kind), c[0]));
+      throw Error(detail::format("{}: {} envelope needs c0 > 0, got {}", where, envelope_name(kind), c[0]));
     if (!(c[1] > 0))
-      throw Error(fmt::format("{}: {} envelope needs c1 > 0, got {}", where, envelope_name(kind), c[1]));
+      throw Error(detail::format("{}: {} envelope needs c1 > 0, got {}", where, envelope_name(kind), c[1]));
   }
 }
 
@@ -95,7 +95,7 @@ double Envelope::inverse(double u) const noexcept {
 
 double Envelope::inverse_checked(double u, std::string_view where) const {
   if (!in_range(u))
-    throw Error(fmt::format("{}: value {} is outside the range ({}, {}) of the {} envelope", where, u,
+    throw Error(detail::format("{}: value {} is outside the range ({}, {}) of the {} envelope", where, u,
                             range_lo(), range_hi(), envelope_name(kind)));
   return inverse(u);
 }

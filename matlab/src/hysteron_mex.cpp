@@ -29,6 +29,7 @@
 #include <glog/logging.h>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -514,8 +515,8 @@ void mexFunction(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   char message[8192];
   bool failed = true;
   {
-    std::string command = "hysteron_mex";
-    std::string prefix;
+    std::string command = "hysteron_mex";  // the command once it is known
+    std::string prefix;                     // the message without the command
     try {
       run(nlhs, plhs, nrhs, prhs, command);
       failed = false;
@@ -536,8 +537,12 @@ void mexFunction(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
       prefix = "internal error (a bug, please report it): unknown exception";
     }
     if (failed) {
-      const std::string text = command == "hysteron_mex" ? "hysteron: " + prefix : "hysteron " + command + ": " + prefix;
-      copy_text(message, sizeof message, text);
+      try {
+        copy_text(message, sizeof message,
+                  command == "hysteron_mex" ? "hysteron: " + prefix : "hysteron " + command + ": " + prefix);
+      } catch (...) {
+        copy_text(message, sizeof message, prefix);
+      }
     }
   }
   if (failed) mexErrMsgIdAndTxt(id, "%s", message);

@@ -137,6 +137,39 @@ TEST(Pid, OutputWithinLimitsAndFaultsHeld) {
   }
 }
 
+// Issue 13: Pid(kd=1e308).step() returned NaN through the output clamp.
+TEST(Pid, OverflowingGainsRefusedOrHeld) {
+  // kd / (T_f + T_s) overflows: refused at construction, naming the field.
+  try {
+    Pid pid(PidParams{.kp = 1.0, .kd = 1e308, .sample_time = 1e-3, .out_min = -1.0, .out_max = 1.0});
+    FAIL() << "kd = 1e308 accepted";
+  } catch (const hysteron::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pid.kd"), std::string::npos) << e.what();
+  }
+  // Valid but huge gains on huge errors: kp e overflows to inf, and inf - inf = NaN
+  // when the setpoint weight and the integral cancel. The output stays finite and
+  // in the limits, the state unchanged, and each such sample is a fault.
+  for (auto aw : {AntiWindup::none, AntiWindup::conditional, AntiWindup::back_calculation}) {
+    Pid pid(PidParams{.kp = 1e300, .ki = 1e300, .kd = 1e300, .sample_time = 1e-3, .derivative_filter = 1.0,
+                      .out_min = -0.1, .out_max = 0.6, .anti_windup = aw});
+    double u = pid.step(0.5, 0.0);
+    ASSERT_TRUE(std::isfinite(u) && u >= -0.1 && u <= 0.6) << u;
+    for (double r : {1e300, -1e300, 1e308, -1e308, 1e300}) {
+      const auto before = pid.state();
+      const auto faults = pid.faults();
+      u = pid.step(r, -r);
+      ASSERT_TRUE(std::isfinite(u) && u >= -0.1 && u <= 0.6) << r << " -> " << u;
+      if (pid.faults() > faults) {
+        EXPECT_EQ(u, before.output);
+        EXPECT_EQ(pid.state().integral, before.integral);
+      }
+      EXPECT_TRUE(std::isfinite(pid.state().integral));
+      EXPECT_TRUE(std::isfinite(pid.state().derivative));
+    }
+    EXPECT_GT(pid.faults(), 0u) << "no overflow reached: the test does not exercise the guard";
+  }
+}
+
 TEST(Pid, Deterministic) {
   auto run = [] {
     Pid pid(PidParams{.kp = 1.0, .ki = 5.0, .kd = 0.01, .sample_time = 1e-3, .derivative_filter = 5e-3});

@@ -53,13 +53,16 @@ struct PidState {
 
 class Pid {
  public:
-  // Throws hysteron::Error naming the field ("pid.sample_time = 0: must be > 0").
+  // Throws hysteron::Error naming the field ("pid.sample_time = 0: must be > 0"),
+  // also for gains whose discrete coefficients overflow (kd / (T_f + T_s)).
   explicit Pid(const PidParams& params);
 
   // Zero state; optionally start bumplessly at output u0 (integral = clamp(u0)).
   void reset(double u0 = 0.0) noexcept;
-  // One sample. A non-finite setpoint, measurement or feedforward holds the last
-  // output, leaves the state unchanged and is counted in faults().
+  // One sample. A non-finite setpoint, measurement or feedforward, or a
+  // non-finite intermediate (an overflow of large gains on a large error), holds
+  // the last output, leaves the state unchanged and is counted in faults():
+  // the output is always finite and inside [out_min, out_max].
   double step(double setpoint, double measurement, double feedforward = 0.0) noexcept;
 
   const PidParams& params() const noexcept { return p_; }

@@ -55,6 +55,11 @@ Pid::Pid(const PidParams& p) : p_(p) {
     }
     k_t_ = std::min(1.0, ts / tt);
   }
+  // Gains that overflow once combined (kd = 1e308 with a small T_s) are refused
+  // here rather than producing inf * 0 = NaN in step().
+  if (!std::isfinite(b_d_)) bad("pid.kd", p.kd, "such that kd / (derivative_filter + sample_time) is finite");
+  if (!std::isfinite(p.ki * ts)) bad("pid.ki", p.ki, "such that ki * sample_time is finite");
+  if (!std::isfinite(k_t_)) bad("pid.tracking_time", p.tracking_time, "a time giving a finite tracking gain");
   reset();
 }
 
@@ -75,25 +80,32 @@ double Pid::step(double r, double y, double ff) noexcept {
   const double e = r - y;
   const double prop = p_.kp * (p_.setpoint_weight_p * r - y);
   const double d_err = p_.setpoint_weight_d * r - y;
-  if (!s_.initialized) {
-    s_.prev_d_error = d_err;
-    s_.initialized = true;
-  }
-  s_.derivative = a_d_ * s_.derivative + b_d_ * (d_err - s_.prev_d_error);
-  s_.prev_d_error = d_err;
-  const double v = prop + s_.integral + s_.derivative + ff;
+  const double prev_d_error = s_.initialized ? s_.prev_d_error : d_err;  // no derivative kick
+  // Candidate state; committed only if every intermediate is finite (large but
+  // valid gains can still overflow on a large error): otherwise the last output
+  // is held, the state is left unchanged and the sample is counted as a fault.
+  const double derivative = a_d_ * s_.derivative + b_d_ * (d_err - prev_d_error);
+  const double v = prop + s_.integral + derivative + ff;
   const double u = std::clamp(v, p_.out_min, p_.out_max);
-  s_.saturated = u != v;
   const double di = p_.ki * p_.sample_time * e;
+  double integral = s_.integral;
   switch (p_.anti_windup) {
-    case AntiWindup::none: s_.integral += di; break;
+    case AntiWindup::none: integral += di; break;
     case AntiWindup::conditional:
       // Integrate unless saturated and the error pushes further into saturation.
-      if (!((v > p_.out_max && di > 0.0) || (v < p_.out_min && di < 0.0))) s_.integral += di;
+      if (!((v > p_.out_max && di > 0.0) || (v < p_.out_min && di < 0.0))) integral += di;
       break;
-    case AntiWindup::back_calculation: s_.integral += di + k_t_ * (u - v); break;
+    case AntiWindup::back_calculation: integral += di + k_t_ * (u - v); break;
   }
-  if (!std::isfinite(s_.integral)) s_.integral = 0.0;  // cannot happen with finite inputs; defensive
+  if (!std::isfinite(v) || !std::isfinite(derivative) || !std::isfinite(integral)) {
+    ++faults_;
+    return s_.output;
+  }
+  s_.initialized = true;
+  s_.derivative = derivative;
+  s_.prev_d_error = d_err;
+  s_.integral = integral;
+  s_.saturated = u != v;
   s_.output = u;
   return u;
 }

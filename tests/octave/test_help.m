@@ -2,6 +2,7 @@ function test_help()
 %TEST_HELP `help hysteron_xxx` prints each wrapper's help text (usage and options).
   fails = 0;
   expect = {
+    'hysteron',            {'hysteron_fit', 'hysteron_invert', 'hysteron_rig', 'hysteron:*'}
     'hysteron_fit',        {'Identify a hysteresis model', 'num_operators', 'hysteron:fitInvalidInput'}
     'hysteron_simulate',   {'forwards', 'relaxed'}
     'hysteron_invert',     {'Exact inverse', 'limits', 'SATURATED'}
@@ -20,6 +21,7 @@ function test_help()
                             expect{i, 1}, expect{i, 2}{k}, text);
     end
   end
+  fails = fails + check(strcmp(hysteron(), hysteron_mex('version')), 'hysteron() returns the version');
   fails = fails + check(~isempty(regexp(hysteron_mex('version'), '^\d+\.\d+\.\d+$', 'once')), 'version');
   if fails > 0
     error('test_help: %d check(s) failed', fails);

@@ -1,4 +1,6 @@
-% hysteron: hysteresis models of pneumatic muscles for MATLAB and Octave.
+function v = hysteron()
+%HYSTERON Hysteresis models of pneumatic muscles for MATLAB and Octave (docs/matlab.md).
+%   HYSTERON prints this list and the version; V = HYSTERON returns the version.
 %
 % Models, exact inverses and identification (docs/matlab.md)
 %   hysteron_fit         - Identify a model (gpi, pi, mpi-deadzone, mpi-asym, auto) from data.
@@ -18,3 +20,13 @@
 %
 % Gateway
 %   hysteron_mex         - The MEX file behind these functions (hysteron_mex('version')).
+%
+% A model argument is a model struct, the JSON text of a model file or a model file
+% name; errors have identifiers hysteron:* (see docs/matlab.md).
+  if nargout > 0
+    v = hysteron_mex('version');
+  else
+    help('hysteron');
+    fprintf('hysteron %s\n', hysteron_mex('version'));
+  end
+end

@@ -394,7 +394,11 @@ void cmd_fit(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   rep["report"] = r.full_report();
   plhs[0] = has_model(r.status) ? model_struct({r.model, nlohmann::json::object()})
                                 : mxCreateDoubleMatrix(0, 0, mxREAL);
-  if (nlhs > 1) plhs[1] = to_mx(rep);
+  if (nlhs > 1) {
+    plhs[1] = to_mx(rep);
+    // a list of texts is a cell array, also when it is empty
+    if (r.warnings.empty()) mxSetField(plhs[1], 0, "warnings", mxCreateCellMatrix(1, 0));
+  }
 }
 
 PamRigParams rig_params_option(const mxArray* a, const std::string& what) {

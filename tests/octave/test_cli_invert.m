@@ -1,8 +1,11 @@
-function test_cli_invert(cli)
+function test_cli_invert(cli, c_api_dir)
 %TEST_CLI_INVERT hysteron_invert on a model file gives the same inverse trajectory as
 % the command line `hysteron invert --model FILE` (bit for bit, or within 1e-12
 % relative), for every model kind, with and without --limits; hysteron_simulate the
 % same as `hysteron simulate`. CLI: the hysteron executable (skipped if absent).
+% C_API_DIR (optional): the model files the C ABI's tests use (tests/c_api/{gpi,pi,dz,
+% asym}.json): the same comparison on them, with the input of tests/c_api/cli_equal.sh,
+% so that the C program, the ctypes script and Octave are checked on the same files.
   if nargin < 1 || isempty(cli) || ~exist(cli, 'file')
     fprintf('SKIP: the hysteron command line (%s) is not built\n', cli);
     exit(77);
@@ -28,10 +31,37 @@ function test_cli_invert(cli)
                            'ascending', struct('envelope', 'tanh', 'c', [1 2 0 0]), ...
                            'descending', struct('envelope', 'affine', 'c', [0.8 0]), 'input_limits', [0 0.6]);
   names = fieldnames(models);
-  limits = {[], [0.01 0.5]};
+  files = cellfun(@(n) fullfile(dir, [n '.json']), names, 'UniformOutput', false);
   for i = 1:numel(names)
-    file = fullfile(dir, [names{i} '.json']);
-    hysteron_save_model(file, models.(names{i}));
+    hysteron_save_model(files{i}, models.(names{i}));
+  end
+  limits = {[], [0.01 0.5]};
+  fails = fails + compare_all(cli, dir, names, files, x, limits);
+  % the C ABI tests' model files, on their input signal
+  if nargin >= 2 && ~isempty(c_api_dir)
+    shared = {'gpi', 'pi', 'dz', 'asym'};
+    shared_files = cellfun(@(n) fullfile(c_api_dir, [n '.json']), shared, 'UniformOutput', false);
+    present = cellfun(@(f) exist(f, 'file') == 2, shared_files);
+    if any(present)
+      k = (0:4999)';
+      xs = 0.8 * sin(0.013 * k) .* exp(-k / 3000) + 0.15 * sin(0.17 * k) + 0.02 * sin(1.3 * k);
+      fails = fails + compare_all(cli, dir, strcat('c_api/', shared(present)), shared_files(present), xs, {[]});
+    else
+      fprintf('note: no model files in %s (the C ABI tests'' files): not compared\n', c_api_dir);
+    end
+  end
+  if fails > 0
+    error('test_cli_invert: %d comparison(s) failed', fails);
+  end
+  fprintf('test_cli_invert: hysteron_invert and hysteron_simulate match the CLI\n');
+end
+
+% simulate x and invert the outputs (plus some beyond reach) with the CLI and the MEX on
+% the same model files; the number of comparisons that failed.
+function fails = compare_all(cli, dir, names, files, x, limits)
+  fails = 0;
+  for i = 1:numel(names)
+    file = files{i};
     % forward: the CLI and the MEX on the same file
     write_column(fullfile(dir, 'x.csv'), 'input', x);
     run_cli(cli, sprintf('simulate --model "%s" --input "%s" --column input --output "%s"', file, ...
@@ -56,10 +86,6 @@ function test_cli_invert(cli)
       fails = fails + compare(sprintf('%s invert%s', names{i}, args), x_mex, x_cli);
     end
   end
-  if fails > 0
-    error('test_cli_invert: %d comparison(s) failed', fails);
-  end
-  fprintf('test_cli_invert: hysteron_invert and hysteron_simulate match the CLI for %d model kinds\n', numel(names));
 end
 
 function failed = compare(what, a, b)

@@ -19,6 +19,9 @@ function [model, report] = hysteron_fit(x, y, varargin)
 %     min_slope           minimum slope relative to span(y)/span(x) (default 0.02)
 %     fix_scale, free_weights, compute_covariance, stall_iterations,
 %     stall_tolerance, holdout_fraction, poor_fit_ratio   (docs/identification.md)
+%     report              name of a self-contained HTML report to write (plots,
+%                         parameters, errors), with
+%     input_axis, output_axis   {label, unit} of its plots, e.g. {'Pressure', 'kPa'}
 %   An options struct may be given instead of the pairs.
 %
 %   MODEL is the fitted model struct (the model-file keys, docs/model-files.md), [] if

@@ -16,7 +16,8 @@
 //   simulate    spec, x, opts        -> y                     opts: relaxed
 //   invert      spec, y, opts        -> [x, saturated]        opts: limits
 //   evaluate    spec, x, y, opts     -> metrics struct        opts: range, initial_state
-//   fit         x, y, opts           -> [model, report]       opts: see fit_options()
+//   fit         x, y, opts           -> [model, report]       opts: see fit_options(), and report
+//                                                              (HTML file), input_axis, output_axis
 //   rig         pressure_mpa, opts   -> struct of columns     opts: params, seed, control_period
 //   rig_params  params               -> complete rig parameter struct
 //
@@ -52,6 +53,7 @@
 #include "hysteron/io/results.hpp"
 #include "hysteron/models.hpp"
 #include "hysteron/plant.hpp"
+#include "hysteron/report.hpp"
 #include "hysteron/version.hpp"
 #include "mx_json.hpp"
 
@@ -324,7 +326,7 @@ const std::vector<std::string> fit_option_names = {
     "model",        "num_operators",    "num_dead_zones", "initial_state",      "train",
     "huber_delta",  "num_starts",       "num_threads",    "seed",               "max_iterations",
     "fix_scale",    "free_weights",     "compute_covariance", "min_slope",      "stall_iterations",
-    "stall_tolerance", "holdout_fraction", "poor_fit_ratio"};
+    "stall_tolerance", "holdout_fraction", "poor_fit_ratio", "report", "input_axis", "output_axis"};
 
 FitOptions fit_options(const Options& opt) {
   FitOptions o;
@@ -376,15 +378,38 @@ FitOptions fit_options(const Options& opt) {
   return o;
 }
 
+// {label, unit}: a cell of two texts (or one text: the label).
+report::Axis axis_option(const mxArray* a, const std::string& what) {
+  if (mxIsChar(a)) return {get_string(a, what), ""};
+  if (!mxIsCell(a) || mxGetNumberOfElements(a) != 2)
+    throw MexError(id_bad_argument, fmt::format("{}: expected {{label, unit}}, e.g. {{'Pressure', 'kPa'}}", what));
+  return {get_string(mxGetCell(a, 0), what + " label"), get_string(mxGetCell(a, 1), what + " unit")};
+}
+
 void cmd_fit(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   require_args(nrhs, 3, 4, "x, y, options");
   const std::vector<double> x = get_vector(prhs[1], "x"), y = get_vector(prhs[2], "y");
   require_finite(x, "x");
   require_finite(y, "y");
   equal_lengths(x, y);
-  const FitOptions o = fit_options(Options(arg(nrhs, prhs, 3), "fit options", fit_option_names));
+  const Options opt(arg(nrhs, prhs, 3), "fit options", fit_option_names);
+  const FitOptions o = fit_options(opt);
+  report::FitData data;
+  const std::string html = opt.get("report") ? get_string(opt.get("report"), opt.where("report")) : std::string();
+  if (const mxArray* v = opt.get("input_axis")) data.input = axis_option(v, opt.where("input_axis"));
+  if (const mxArray* v = opt.get("output_axis")) data.output = axis_option(v, opt.where("output_axis"));
   const FitReport r = fit(x, y, o);
   if (r.status == FitStatus::invalid_input) throw MexError(id_fit_input, r.message);
+  if (!html.empty()) {
+    data.x = x;
+    data.y = y;
+    data.initial_state = o.initial_state;
+    data.train = o.train;
+    data.source = "MATLAB/Octave vectors (hysteron_fit)";
+    report::write_fit_report(r, data, html,
+                             fmt::format("hysteron_fit(x, y, 'model', '{}', 'num_operators', {})",
+                                         fit_model_name(o.model), o.num_operators));
+  }
   nlohmann::json rep = io::to_json(r);
   limits_to_infinite(rep["model"]);
   if (auto it = rep.find("candidates"); it != rep.end() && it->is_array())

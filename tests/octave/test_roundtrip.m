@@ -70,6 +70,15 @@ function test_roundtrip()
   % empty input
   fails = fails + check(isempty(hysteron_simulate(g, zeros(0, 1))), 'empty input');
 
+  % a fit that writes its HTML report
+  html = fullfile(dir, 'fit.html');
+  [mfit, rfit] = hysteron_fit(x, hysteron_simulate(g, x), 'model', 'pi', 'report', html, ...
+                              'input_axis', {'Pressure', 'MPa'}, 'output_axis', {'Contraction', 'mm'});
+  text = fileread(html);
+  fails = fails + check(strncmp(text, '<!DOCTYPE html>', 15) && ~isempty(strfind(text, 'Contraction')), ...
+                        'the HTML report of hysteron_fit');
+  fails = fails + check(strcmp(mfit.model, 'pi') && rfit.train.r2 > 0.9, 'pi fit of the gpi output: r2 %g', rfit.train.r2);
+
   if fails > 0
     error('test_roundtrip: %d check(s) failed', fails);
   end

@@ -18,6 +18,7 @@
 // Without --model it uses a GPI with 10 operators (tanh envelope), input limits
 // [-0.9, 0.9]. Figures depend on the machine and on its load: no test asserts them.
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
@@ -106,6 +107,12 @@ void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc
 
 // ---- timing ---------------------------------------------------------------------------
 namespace {
+
+// Involuntary context switches of this thread so far (preemptions by other processes).
+long preemptions() noexcept {
+  rusage u;
+  return getrusage(RUSAGE_THREAD, &u) == 0 ? u.ru_nivcsw : -1;
+}
 
 inline std::int64_t now_ns() noexcept {
   timespec t;
@@ -248,6 +255,7 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < warmup; ++k) hysteron_inverse_step(inverse, y_ref[k % period] * 1000.0, &x, &sat);
   hysteron_inverse_reset(inverse);
   std::size_t a0 = g_allocations.load();
+  long c0 = preemptions();
   for (std::size_t k = 0; k < calls; ++k) {
     const double y = y_ref[k % period] * 1000.0;
     const std::int64_t t0 = now_ns();
@@ -258,6 +266,7 @@ int main(int argc, char** argv) {
     sink += x;
   }
   const std::size_t inv_alloc = g_allocations.load() - a0;
+  const long inv_preempt = preemptions() - c0;
 
   // 3. feedforward + PID in a closed loop with the model as plant
   std::size_t ctl_fail = 0;
@@ -271,6 +280,7 @@ int main(int argc, char** argv) {
   hysteron_model_reset(plant);
   measured = 0;
   a0 = g_allocations.load();
+  c0 = preemptions();
   for (std::size_t k = 0; k < calls; ++k) {
     const double r = y_ref[k % period];
     const std::int64_t t0 = now_ns();
@@ -283,14 +293,17 @@ int main(int argc, char** argv) {
     sink += p;
   }
   const std::size_t ctl_alloc = g_allocations.load() - a0;
+  const long ctl_preempt = preemptions() - c0;
 
   std::printf("%-38s %8s %8s %8s %8s %8s %9s %12s %9s\n", "latency per call [ns]", "median", "p99", "p99.9", "p99.99",
               "max", "mean", "allocations", "failures");
   print_row("timer overhead (two clock_gettime)", timer, 0, 0);
   print_row("hysteron_inverse_step", inv_h, inv_alloc, inv_fail);
   print_row("hysteron_ff_pid_step (inverse + PID)", ctl_h, ctl_alloc, ctl_fail);
-  std::printf("calls above 1 ms: inverse %llu, ff+pid %llu; (checksum %.6g)\n",
-              static_cast<unsigned long long>(inv_h.overflow), static_cast<unsigned long long>(ctl_h.overflow), sink);
+  std::printf("calls above 1 ms: inverse %llu, ff+pid %llu; involuntary context switches during the timed loops "
+              "(preemptions, each can make one call's max): inverse %ld, ff+pid %ld; (checksum %.6g)\n",
+              static_cast<unsigned long long>(inv_h.overflow), static_cast<unsigned long long>(ctl_h.overflow),
+              inv_preempt, ctl_preempt, sink);
 
   hysteron_ff_pid_free(ctl);
   hysteron_model_free(plant);

@@ -87,12 +87,10 @@ void set_message(const char* fn, const char* text) noexcept {
   throw e;
 }
 
-// Strips nlohmann's "[json.exception.parse_error.101] " prefix.
-std::string json_message(const char* what) {
-  std::string msg = what;
-  const auto pos = msg.find("] ");
-  if (pos != std::string::npos) msg = msg.substr(pos + 2);
-  return msg;
+// nlohmann's message without its "[json.exception.parse_error.101] " prefix (no allocation).
+const char* json_message(const char* what) noexcept {
+  const char* end = std::strstr(what, "] ");
+  return end != nullptr ? end + 2 : what;
 }
 
 // Runs body(); maps every exception to a status. `error_status` is the status of a
@@ -109,7 +107,7 @@ hysteron_status guard(const char* fn, hysteron_status error_status, F&& body) no
     set_message(fn, e.what());
     return error_status;
   } catch (const nlohmann::json::parse_error& e) {
-    set_message(fn, json_message(e.what()).c_str());
+    set_message(fn, json_message(e.what()));
     return HYSTERON_ERROR_PARSE;
   } catch (const std::bad_alloc&) {
     set_message(fn, "out of memory");
@@ -162,7 +160,7 @@ hysteron::ModelParams parse_model(const std::string& text, const std::string& wh
   try {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    fail(HYSTERON_ERROR_PARSE, "%s: not valid JSON: %s", where.c_str(), json_message(e.what()).c_str());
+    fail(HYSTERON_ERROR_PARSE, "%s: not valid JSON: %s", where.c_str(), json_message(e.what()));
   }
   return hysteron::io::model_from_json(j, where);
 }

@@ -231,6 +231,32 @@ TEST(ModelFile, NotJsonNamesFileLineAndColumn) {
   expect_error([&] { io::read_model_file(huge); }, {huge, "1e400"});
 }
 
+// Issue 13: duplicate keys (last one won: this loaded a PI) and bytes after a NUL
+// were accepted silently.
+TEST(ModelFile, DuplicateKeysAndNulBytesRefused) {
+  auto expect_error = [](const std::string& text, const std::string& needle) {
+    try {
+      io::parse_json(text, "m.json");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("m.json"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+    }
+  };
+  expect_error(R"({"model": "gpi", "model": "pi", "r": [0], "p": [1]})", R"(key "model" appears twice in the object at the top level)");
+  expect_error(R"({"a": {"b": 1, "c": {"d": 1, "d": 2}}})", "at /a/c");
+  expect_error(R"({"a": [{"x": 1}, {"x": 1, "x": 2}]})", R"("x" appears twice)");
+  const std::string good = R"({"model": "pi", "r": [0], "p": [1]})";
+  expect_error(good + std::string(1, '\0') + "garbage", "NUL byte at offset " + std::to_string(good.size()));
+  // The same key in sibling and nested objects is fine.
+  const auto ok = io::parse_json(R"({"a": {"x": 1}, "b": {"x": 2, "a": {"x": 3}}, "x": [ {"x": 1}, {"x": 2} ]})", "m.json");
+  EXPECT_EQ(ok["b"]["a"]["x"], 3);
+  // Through the file reader, too.
+  TempDir dir;
+  EXPECT_THROW(io::read_model_file(dir.write("dup.json", R"({"model": "gpi", "model": "pi", "r": [0], "p": [1]})")), Error);
+}
+
 TEST(ModelFile, EachClassOfInvalidFileNamesTheKey) {
   auto bad = [](const char* text, std::initializer_list<std::string> parts) {
     SCOPED_TRACE(text);

@@ -9,9 +9,26 @@
 
 namespace hysteron::python {
 
+// A Python dict/list (numpy scalars and arrays included, via their tolist())
+// as JSON. NaN, infinities and objects JSON cannot hold are hysteron.Error.
 nlohmann::json to_json(const py::handle& obj) {
+  using namespace pybind11::literals;
   const auto dumps = py::module_::import("json").attr("dumps");
-  return nlohmann::json::parse(dumps(obj).cast<std::string>());
+  const py::cpp_function numpy_to_python([](py::handle o) -> py::object {
+    if (py::hasattr(o, "tolist")) return o.attr("tolist")();
+    throw py::type_error(fmt::format("a {} is not a number, string, list or dict",
+                                     py::str(o.get_type().attr("__name__")).cast<std::string>()));
+  });
+  std::string text;
+  try {
+    text = dumps(obj, "default"_a = numpy_to_python, "allow_nan"_a = false).cast<std::string>();
+  } catch (py::error_already_set& e) {
+    const std::string what = e.what();
+    if (what.find("Out of range float") != std::string::npos)
+      throw Error("Python object: a value is NaN or infinite (JSON and model files hold finite numbers only)");
+    throw Error(fmt::format("Python object: cannot convert to JSON: {}", what));
+  }
+  return io::parse_json(text, "Python object");
 }
 
 py::object from_json(const nlohmann::json& j) {

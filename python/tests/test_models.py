@@ -64,3 +64,19 @@ def test_bad_parameters_raise_with_key():
 def test_nan_input_rejected():
     with pytest.raises(hysteron.Error, match="sample 1"):
         hysteron.Model(GPI).simulate(np.array([0.1, np.nan]))
+
+
+def test_model_dict_with_nan_is_hysteron_error():
+    # Issue 13: NaN in a dict raised nlohmann's RuntimeError, not hysteron.Error.
+    bad = dict(GPI, q=float("nan"))
+    with pytest.raises(hysteron.Error, match="NaN or infinite"):
+        hysteron.Model(bad)
+
+
+def test_model_dict_accepts_numpy_scalars_and_arrays():
+    # Issue 13: numpy integers in dicts were refused.
+    spec = dict(GPI, n=np.int64(10), q=np.float64(0.8), c=np.array([1.0, 2.0, -0.6, 0.6]))
+    x = np.linspace(0.0, 0.5, 50)
+    np.testing.assert_array_equal(hysteron.Model(spec).simulate(x), hysteron.Model(GPI).simulate(x))
+    with pytest.raises(hysteron.Error, match="cannot convert"):
+        hysteron.Model(dict(GPI, q=object()))

@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <limits>
 #include <sstream>
+#include <unordered_set>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/table.hpp"
@@ -283,6 +284,49 @@ std::string read_text(const std::string& path) {
 
 }  // namespace
 
+json parse_json(std::string_view text, std::string_view where) {
+  if (const auto nul = text.find('\0'); nul != std::string_view::npos)
+    throw Error(fmt::format("{}: not valid JSON: a NUL byte at offset {} (of {} bytes)", where, nul, text.size()));
+  // One set of keys per open object; the JSON pointer of the object for the message.
+  std::vector<std::unordered_set<std::string>> keys;
+  std::vector<std::string> path;
+  std::string last_key;
+  auto callback = [&](int depth, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+        keys.emplace_back();
+        path.push_back(depth > 0 ? last_key : std::string());
+        break;
+      case json::parse_event_t::object_end:
+        keys.pop_back();
+        path.pop_back();
+        break;
+      case json::parse_event_t::array_start: last_key.clear(); break;
+      case json::parse_event_t::key: {
+        last_key = parsed.get<std::string>();
+        if (!keys.back().insert(last_key).second) {
+          std::string at;
+          for (std::size_t i = 1; i < path.size(); ++i) at += "/" + (path[i].empty() ? std::string("[]") : path[i]);
+          throw Error(fmt::format("{}: not valid here: key \"{}\" appears twice in the object at {}", where, last_key,
+                                  at.empty() ? std::string("the top level") : at));
+        }
+        break;
+      }
+      default: break;
+    }
+    return true;
+  };
+  try {
+    return json::parse(text, callback);
+  } catch (const json::exception& e) {
+    // e.what() is "[json.exception.parse_error.101] parse error at line 3, column 7: ..."
+    std::string msg = e.what();
+    const auto pos = msg.find("] ");
+    if (pos != std::string::npos) msg = msg.substr(pos + 2);
+    throw Error(fmt::format("{}: not valid JSON: {}", where, msg));
+  }
+}
+
 ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
   if (!j.is_object())
     throw Error(fmt::format("{}: expected a JSON object {{\"model\": ...}}, got {}", where, type_name(j)));
@@ -387,22 +431,7 @@ nlohmann::json model_to_json(const ModelParams& params) {
 }
 
 ModelParams read_model_file(const std::string& path) {
-  const std::string text = read_text(path);
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    // e.what() is "[json.exception.parse_error.101] parse error at line 3, column 7: ..."
-    std::string msg = e.what();
-    const auto pos = msg.find("] ");
-    if (pos != std::string::npos) msg = msg.substr(pos + 2);
-    throw Error(fmt::format("{}: not valid JSON: {}", path, msg));
-  } catch (const json::exception& e) {
-    std::string msg = e.what();
-    const auto pos = msg.find("] ");
-    if (pos != std::string::npos) msg = msg.substr(pos + 2);
-    throw Error(fmt::format("{}: not valid JSON: {}", path, msg));
-  }
+  const json j = parse_json(read_text(path), path);
   return model_from_json(j, path);
 }
 

@@ -128,17 +128,6 @@ InitialState initial_state_from_name(std::string_view name, std::string_view whe
   throw Error(fmt::format("{}: unknown initial state \"{}\" (expected virgin or relaxed)", where, name));
 }
 
-json parse_json(std::string_view text, std::string_view where) {
-  try {
-    return json::parse(text);
-  } catch (const json::exception& e) {
-    std::string msg = e.what();
-    const auto pos = msg.find("] ");
-    if (pos != std::string::npos) msg = msg.substr(pos + 2);
-    throw Error(fmt::format("{}: malformed JSON: {}", where, msg));
-  }
-}
-
 // ---- FitMetrics ------------------------------------------------------------------
 
 json to_json(const FitMetrics& m) {

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "hysteron/io/model_file.hpp"
 #include "hysteron/plant.hpp"
 
 namespace hysteron {
@@ -197,14 +198,12 @@ nlohmann::json rig_params_to_json(const PamRigParams& params) {
 }
 
 PamRigParams load_rig_params(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw Error(fmt::format("{}: cannot open for reading", file.string()));
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw Error(fmt::format("{}: invalid JSON at byte {}: {}", file.string(), e.byte, e.what()));
-  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw Error(fmt::format("{}: read error", file.string()));
+  const nlohmann::json j = io::parse_json(text.str(), file.string());
   return rig_params_from_json(j, file.string());
 }
 

@@ -19,6 +19,13 @@
 
 namespace hysteron::io {
 
+// Parses a JSON text (a file's contents); errors name `where` and the line and
+// column. Stricter than JSON itself where leniency would mislead: a key repeated
+// in one object (`{"model": "gpi", "model": "pi"}` would silently load a PI) and
+// a NUL byte anywhere in the text are errors. Every JSON input of hysteron
+// (model files, rig parameters, reports) is read through this function.
+nlohmann::json parse_json(std::string_view text, std::string_view where);
+
 // Current (and only) schema version written to and accepted in "schema".
 inline constexpr int model_schema_version = 1;
 

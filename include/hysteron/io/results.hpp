@@ -25,6 +25,7 @@
 
 #include "hysteron/experiment.hpp"
 #include "hysteron/identify.hpp"
+#include "hysteron/io/model_file.hpp"  // parse_json
 
 namespace hysteron::io {
 
@@ -136,8 +137,5 @@ T from_json(const nlohmann::json& j, std::string_view where) {
   from_json(j, out, where);
   return out;
 }
-
-// Parses a JSON text (e.g. a file's contents); errors name `where` and the line/column.
-nlohmann::json parse_json(std::string_view text, std::string_view where);
 
 }  // namespace hysteron::io

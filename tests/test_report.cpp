@@ -188,7 +188,7 @@ TEST(Report, FitJsonRoundTripAndHtml) {
             std::string::npos);
   io::write_text_file(tmp / "broken.json", R"({"format": )");
   EXPECT_NE(error_of([&] { write_report_from(tmp / "broken.json", tmp / "x.html", ""); })
-                .find("broken.json: malformed JSON"),
+                .find("broken.json: not valid JSON"),
             std::string::npos);
   bad = j;
   bad["data"]["input"]["file"] = "nope.csv";
@@ -257,7 +257,7 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   fs::remove(dir + "/model.json");
   EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("model.json: missing file"), std::string::npos);
   io::write_text_file(dir + "/result.json", "{\"experiment\": ");
-  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("result.json: malformed JSON"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("result.json: not valid JSON"), std::string::npos);
   io::write_text_file(dir + "/result.json", R"({"schema": 7, "experiment": "x", "identification": {}})");
   EXPECT_NE(error_of([&] { read_experiment_dir(dir); }).find("result.json: unsupported schema 7"), std::string::npos);
   fs::remove(dir + "/result.json");

@@ -38,6 +38,6 @@ grep -q "after training (validation)" "$T/r.html"
 # malformed JSON names the file
 echo '{"status": ' > "$T/bad.json"
 if "$BIN" report "$T/bad.json" --out "$T/x.html" 2> "$T/err"; then exit 1; fi
-grep -q "bad.json: malformed JSON" "$T/err"
+grep -q "bad.json: not valid JSON" "$T/err"
 [ ! -e "$T/x.html" ]
 echo "report_fit: ok"

@@ -25,6 +25,7 @@ void add_fit(CLI::App& app, Action& action);              // cmd_fit.cpp: fit
 void add_experiment(CLI::App& app, Action& action);       // cmd_experiment.cpp: experiment, demo
 void add_report(CLI::App& app, Action& action);           // cmd_report.cpp: report
 void add_evaluate(CLI::App& app, Action& action);         // cmd_evaluate.cpp: evaluate
+void add_export(CLI::App& app, Action& action);           // cmd_export.cpp: export (generated C)
 void set_command_line(int argc, char** argv);             // recorded in reports
 const std::string& command_line();                        // the recorded command line
 

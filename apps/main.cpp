@@ -1,4 +1,4 @@
-// hysteron command-line tool: simulate, invert, fit, evaluate, experiment, report, demo.
+// hysteron command-line tool: simulate, invert, fit, evaluate, experiment, report, demo, export.
 //
 // Exit codes (README, "Command line"): 0 success; 1 error: bad input, bad usage (CLI11's
 // parse errors, which CLI11 itself would report as 105-109, are mapped to 1), unreadable
@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   hysteron::cli::add_evaluate(app, action);
   hysteron::cli::add_experiment(app, action);
   hysteron::cli::add_report(app, action);
+  hysteron::cli::add_export(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

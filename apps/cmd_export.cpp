@@ -1,0 +1,105 @@
+// hysteron export: a model file as one self-contained C99 file (docs/export.md).
+//
+//   hysteron export --model M.json --out compensator.c [--header compensator.h] [--prefix NAME] [--limits=LO,HI]
+// --model - reads the model JSON from stdin; --out - writes the C file to stdout (not with --header).
+#include <fmt/format.h>
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/io/export_c.hpp"
+#include "hysteron/io/table.hpp"
+
+namespace hysteron::cli {
+
+namespace {
+
+struct Options {
+  std::string model, out, header, prefix, limits;
+};
+
+double parse_limit(std::string_view s, std::string_view what) {
+  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+  while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+  double v = 0.0;
+  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
+    throw Error(fmt::format("--limits: {} \"{}\" is not a finite number (expected LO,HI, e.g. --limits=0,0.6)", what, s));
+  return v;
+}
+
+Limits parse_limits(const std::string& text) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos)
+    throw Error(fmt::format("--limits: expected LO,HI (e.g. --limits=0,0.6), got \"{}\"", text));
+  Limits l;
+  l.lo = parse_limit(std::string_view(text).substr(0, comma), "LO");
+  l.hi = parse_limit(std::string_view(text).substr(comma + 1), "HI");
+  if (!(l.lo < l.hi)) throw Error(fmt::format("--limits: LO = {} must be < HI = {}", l.lo, l.hi));
+  return l;
+}
+
+// Default prefix: the output file's stem with every other character as '_'
+// ("my-comp.c" -> "my_comp"), or "hysteron_model" if that is no C identifier.
+std::string default_prefix(const std::string& out) {
+  if (out == "-") return "hysteron_model";
+  std::string stem = std::filesystem::path(out).stem().string();
+  for (char& c : stem)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80) c = '_';
+  return io::valid_c_prefix(stem) ? stem : std::string("hysteron_model");
+}
+
+int run_export(const Options& o) {
+  if (o.out == "-" && !o.header.empty()) throw Error("--header needs --out to name a file (not -)");
+  if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
+  const ModelParams params = read_model_source(o.model);
+  io::ExportOptions e;
+  e.prefix = o.prefix.empty() ? default_prefix(o.out) : o.prefix;
+  if (!io::valid_c_prefix(e.prefix))
+    throw Error(fmt::format("--prefix: \"{}\" is not usable: it must be a C identifier (letters, digits, '_'; not "
+                            "starting with a digit or '_'), at most 40 characters",
+                            e.prefix));
+  e.source_name = o.model == "-" ? std::string("<stdin>") : std::filesystem::path(o.model).filename().string();
+  if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();
+  if (!o.limits.empty()) e.inverse_limits = parse_limits(o.limits);
+  e.command_line = command_line();
+  io::GeneratedC c;
+  try {
+    c = io::generate_c(params, e);  // every error before any file is written
+  } catch (const Error& err) {
+    throw Error(fmt::format("{}: cannot export: {}", o.model == "-" ? std::string("<stdin>") : o.model, err.what()));
+  }
+  if (!o.header.empty()) io::write_text_file(o.header, c.header);
+  io::write_text_file(o.out, c.source);
+  if (o.out != "-")
+    fmt::print(stderr, "export: {} model -> {}{} (prefix {})\n", model_name(params), o.out,
+               o.header.empty() ? std::string() : fmt::format(" + {}", o.header), e.prefix);
+  return exit_ok;
+}
+
+}  // namespace
+
+void add_export(CLI::App& app, Action& action) {
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = app.add_subcommand(
+      "export", "write a model and its exact inverse as one self-contained C99 file (docs/export.md)");
+  sub->add_option("--model,-m", o->model, "model file (JSON, see docs/model-files.md); - reads it from stdin")->required();
+  sub->add_option("--out,-o", o->out, "C file to write (- for stdout)")->required();
+  sub->add_option("--header", o->header,
+                  "also write the declarations to this header (the C file #includes it by its file name)");
+  sub->add_option("--prefix", o->prefix,
+                  "prefix of the C names (default: the --out file's stem, e.g. compensator -> compensator_model_step)");
+  sub->add_option("--limits", o->limits,
+                  "input limits LO,HI the inverse saturates at (default: the model's input_limits; write "
+                  "--limits=LO,HI if LO < 0)");
+  sub->callback([o, &action] { action = [o] { return run_export(*o); }; });
+}
+
+}  // namespace hysteron::cli

@@ -1,0 +1,51 @@
+#pragma once
+// Generated C: one self-contained C99 file per model, with the model's constants
+// baked in (docs/export.md). The generated code is the library's per-sample
+// arithmetic transcribed operation by operation (the same tanh/atanh kernels, the
+// same summation order, the same saturation of the inverse), so on the same
+// machine it returns the same numbers as Model::step and Inverse::step; it needs
+// only <math.h> and <stdint.h>, never allocates and has no global state.
+//
+//   hysteron::io::ExportOptions o;
+//   o.prefix = "comp";                 // comp_model, comp_model_step(), comp_inverse_step(), ...
+//   o.source_name = "gpi.json";        // shown in the file's comments
+//   hysteron::io::GeneratedC c = hysteron::io::generate_c(params, o);
+//   hysteron::io::write_text_file("comp.c", c.source);
+#include <string>
+
+#include "hysteron/models.hpp"
+
+namespace hysteron::io {
+
+struct ExportOptions {
+  // Prefix of every public C name (types, functions, macros in upper case):
+  // a C identifier, not starting with an underscore, at most 40 characters.
+  std::string prefix = "hysteron_model";
+  // Where the model came from (a file name), written in the comments; empty: not said.
+  std::string source_name;
+  // When non-empty, the declarations go to a separate header (GeneratedC::header)
+  // that the source #includes by this name (e.g. "compensator.h"). Empty: one .c
+  // file with the declarations at its top, which also works when #included.
+  std::string header_name;
+  // Input limits the inverse saturates at; unset (infinite) fields fall back to the
+  // model's input_limits, exactly as InverseOptions::input_limits.
+  Limits inverse_limits;
+  // The command line shown in the comments (how to regenerate the file); empty: none.
+  std::string command_line;
+};
+
+struct GeneratedC {
+  std::string source;  // the .c file
+  std::string header;  // the .h file; empty unless ExportOptions::header_name is set
+};
+
+// Validates the model (canonical_structure) and its inverse (hysteron::Inverse with
+// options.inverse_limits) and writes the C code. Throws hysteron::Error naming the
+// failed condition (e.g. a non-invertible model, mpi-asym without finite limits, a
+// bad prefix).
+GeneratedC generate_c(const ModelParams& params, const ExportOptions& options = {});
+
+// True if `name` can be used as ExportOptions::prefix.
+bool valid_c_prefix(const std::string& name) noexcept;
+
+}  // namespace hysteron::io

@@ -35,7 +35,8 @@ namespace {
 namespace fs = std::filesystem;
 using namespace hysteron;
 
-bool have_gcc() { return std::system("gcc --version > /dev/null 2>&1") == 0; }
+bool have(const char* compiler) { return std::system(fmt::format("{} --version > /dev/null 2>&1", compiler).c_str()) == 0; }
+bool have_gcc() { return have("gcc"); }
 
 struct Case {
   std::string name;
@@ -326,10 +327,10 @@ std::string read(const fs::path& p) {
 const std::string kFlags = "-std=c99 -pedantic -Wall -Wextra -Werror -O2";
 
 // Compiles driver.c with the generated files in `dir`; returns "" or the compiler's messages.
-std::string compile(const fs::path& dir, bool single, const std::string& flags = kFlags) {
+std::string compile(const fs::path& dir, bool single, const std::string& flags = kFlags, const std::string& cc = "gcc") {
   const std::string driver = std::string(HYSTERON_SOURCE_DIR) + "/tests/export/driver.c";
   const std::string cmd =
-      fmt::format("gcc {} {} -I'{}' '{}' {} -o '{}' -lm > '{}' 2>&1", flags, single ? "-DHM_SINGLE" : "", dir.string(),
+      fmt::format("{} {} {} -I'{}' '{}' {} -o '{}' -lm > '{}' 2>&1", cc, flags, single ? "-DHM_SINGLE" : "", dir.string(),
                   driver, single ? "" : "'" + (dir / "model.c").string() + "'", (dir / "driver").string(),
                   (dir / "gcc.log").string());
   if (std::system(cmd.c_str()) != 0) return cmd + "\n" + read(dir / "gcc.log");
@@ -410,9 +411,8 @@ TEST(ExportCheck, PerturbedConstantIsDetected) {
   }
 }
 
-// Other compilers' flags: C89-style declarations are not required, but the file must
-// also compile as C11 and without optimisation, with -Wshadow -Wconversion -Wdouble-promotion
-// off by default (documented), and as a header + source pair.
+// Other flags and compilers: -O0, -O3, C11, -Wshadow -Wstrict-prototypes
+// -Wmissing-prototypes, and clang where it is installed.
 TEST(ExportCheck, CompilesWithOtherFlags) {
   if (!have_gcc()) GTEST_SKIP() << "gcc not found";
   for (const Case& c : cases()) {
@@ -423,6 +423,9 @@ TEST(ExportCheck, CompilesWithOtherFlags) {
     for (const char* flags : {"-std=c99 -pedantic -Wall -Wextra -Werror -O0", "-std=c11 -pedantic -Wall -Wextra -Werror -O3",
                               "-std=c99 -pedantic -Wall -Wextra -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Werror -O2"})
       EXPECT_EQ(compile(dir.path, false, flags), "") << c.name << " with " << flags;
+    if (have("clang")) {
+      EXPECT_EQ(compile(dir.path, true, "-std=c99 -pedantic -Wall -Wextra -Werror -O2", "clang"), "") << c.name << " with clang";
+    }
   }
 }
 

@@ -542,7 +542,7 @@ static double $P_gamma_inverse(double u)
 /* gamma{}^-1(u); -+HUGE_VAL at or beyond the edges of gamma's range (Envelope::inverse). */
 static double $P_gamma_inverse_checked(double u)
 {{
-  if (u != u) return u;
+  if (isnan(u)) return u;
   if (u <= {}) return -HUGE_VAL;
   if (u >= {}) return HUGE_VAL;
   return $P_gamma_inverse(u);

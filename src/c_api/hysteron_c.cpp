@@ -155,12 +155,13 @@ hysteron_params* make_params(hysteron::ModelParams p) {
   return h;
 }
 
+// io::parse_json (strict: also a repeated key or a NUL byte is a parse error), then the model.
 hysteron::ModelParams parse_model(const std::string& text, const std::string& where) {
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    fail(HYSTERON_ERROR_PARSE, "%s: not valid JSON: %s", where.c_str(), json_message(e.what()));
+    j = hysteron::io::parse_json(text, where);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_PARSE, "%s", e.what());
   }
   return hysteron::io::model_from_json(j, where);
 }

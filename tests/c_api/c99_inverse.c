@@ -87,6 +87,9 @@ static void check_errors(const hysteron_params* params, hysteron_model* model, h
   expect_error("bad JSON", hysteron_params_from_json("{\"model\": \"gpi\", ", &p), HYSTERON_ERROR_PARSE,
                "not valid JSON");
   CHECK(p == NULL, "no handle on failure");
+  expect_error("repeated key", hysteron_params_from_json("{\"model\": \"gpi\", \"model\": \"pi\", \"r\": [0.1], "
+                                                         "\"p\": [1]}", &p),
+               HYSTERON_ERROR_PARSE, "appears twice");
   expect_error("unknown key", hysteron_params_from_json("{\"model\": \"pi\", \"r\": [0.1], \"p\": [1], \"gain\": 2}", &p),
                HYSTERON_ERROR_MODEL, "gain");
   expect_error("invalid value",

@@ -6,13 +6,37 @@
 #include <fmt/format.h>
 #include <glog/logging.h>
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
 #include "commands.hpp"
 #include "hysteron/error.hpp"
+#include "hysteron/io/table.hpp"
+
+namespace {
+// SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
+// the signal (default action, re-raised) so that the exit status says so.
+extern "C" void on_fatal_signal(int sig) {
+  hysteron::io::remove_temporary_files();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void install_signal_handlers() {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;  // e.g. nohup: keep ignoring
+    struct sigaction sa {};
+    sa.sa_handler = on_fatal_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(sig, &sa, nullptr);
+  }
+}
+}  // namespace
 
 int main(int argc, char** argv) {
+  install_signal_handlers();
   // Ceres logs through glog; its lines (e.g. "W0102 12:00:00 ... covariance.cc") must never
   // reach the user's terminal: hysteron reports what matters itself. Only FATAL is kept.
   FLAGS_minloglevel = google::GLOG_FATAL;

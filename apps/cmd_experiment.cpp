@@ -2,13 +2,16 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 
 namespace hysteron::cli {
@@ -39,6 +42,21 @@ std::string join_args(int argc, char** argv) {
 
 std::string g_command;  // the command line, shown in reports
 
+// The files an experiment writes into `dir` (those that exist), as outputs of --out: the rig
+// parameters (--plant) must not be one of them.
+void check_plant_not_output(const std::string& plant, const std::string& dir) {
+  if (plant.empty() || dir.empty()) return;
+  std::vector<io::NamedPath> outputs;
+  for (const char* f : {"identification.csv", "model.json", "best_model.json", "result.json", "report.html"})
+    outputs.push_back({"--out", (std::filesystem::path(dir) / f).string()});
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string f = e.path().filename().string();
+    if (f.starts_with("tracking_") && f.ends_with(".csv")) outputs.push_back({"--out", e.path().string()});
+  }
+  for (const auto& o : outputs) io::check_outputs_distinct({o}, {{"--plant", plant}});
+}
+
 }  // namespace
 
 void set_command_line(int argc, char** argv) { g_command = join_args(argc, argv); }
@@ -56,6 +74,7 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->add_option("--out", args->out, "Directory for the time series (CSV), models and result.json");
   cmd->callback([args, &action] {
     action = [args] {
+      check_plant_not_output(args->plant, args->out);
       const ExperimentResult r = run_experiment(options_from(*args));
       if (!args->out.empty()) {
         r.write(args->out);
@@ -77,6 +96,7 @@ void add_experiment(CLI::App& app, Action& action) {
       ->default_val("out/demo");
   demo->callback([dargs, &action] {
     action = [dargs] {
+      for (const auto& name : experiment_names()) check_plant_not_output(dargs->plant, dargs->out + "/" + name);
       for (const auto& name : experiment_names()) {
         ExperimentArgs a = *dargs;
         a.name = name;

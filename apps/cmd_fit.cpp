@@ -84,6 +84,11 @@ int run_fit(const FitCliOptions& c) {
                 "--out - with --report FILE.json)");
   if (c.report == "-" && (c.out == "-" || c.json))
     throw Error("--report - and --out - / --json would both write to standard output: choose one");
+  {
+    std::vector<io::NamedPath> inputs{{"--data", c.sel.file}};
+    for (const auto& f : c.validate_data) inputs.push_back({"--validate-data", f});
+    io::check_outputs_distinct({{"--out", c.out}, {"--report", c.report}}, inputs);
+  }
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);
   const std::vector<double>& x = rec.x;

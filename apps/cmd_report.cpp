@@ -2,10 +2,13 @@
 // output of `experiment --out DIR` (a directory) or `fit --report FILE.json`.
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 
 namespace hysteron::cli {
@@ -34,6 +37,14 @@ void add_report(CLI::App& app, Action& action) {
       if (!args->data.input_file.empty())
         command_line += fmt::format(" --data {} --input {} --output {}", args->data.input_file,
                                     args->data.input_column, args->data.output_column);
+      {
+        std::vector<io::NamedPath> inputs{{"INPUT", args->input}, {"--data", args->data.input_file}};
+        std::error_code ec;
+        if (std::filesystem::is_directory(args->input, ec))  // an experiment directory: every file in it
+          for (const auto& e : std::filesystem::directory_iterator(args->input, ec))
+            inputs.push_back({"INPUT", e.path().string()});
+        io::check_outputs_distinct({{"--out", args->out}}, inputs);
+      }
       report::write_report_from(args->input, args->out, command_line, args->data);
       fmt::print(stderr, "report: wrote {}\n", args->out);
       return 0;

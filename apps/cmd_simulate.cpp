@@ -98,6 +98,7 @@ double relaxed_input_for(const ModelParams& params, const Limits& lim, double y0
 }
 
 int run_simulate(const Options& o) {
+  io::check_outputs_distinct({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
   const std::vector<double> x = read_input(o.input, o.column, "input");
   Model model(params);
@@ -108,6 +109,7 @@ int run_simulate(const Options& o) {
 }
 
 int run_invert(const Options& o) {
+  io::check_outputs_distinct({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
   const std::vector<double> y = read_input(o.input, o.column, "output");
   InverseOptions opt;

@@ -2,10 +2,16 @@
 
 #include <fcntl.h>
 #include <matio.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
+#include <zlib.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
+
+#include <csignal>
+#include <cstdint>
+#include <limits>
 
 #include <algorithm>
 #include <atomic>
@@ -251,6 +257,250 @@ MatPtr open_mat(const std::string& path) {
   return m;
 }
 
+// ---- .mat structure check (before matio allocates anything) -------------------------
+//
+// matio trusts the sizes in a file: a truncated file is read with garbage or zeros at the end,
+// and a small file that declares a huge array makes it allocate that much. check_mat_file walks
+// the file's structure first, with bounds from the file size: every variable must lie inside the
+// file, its declared element count must match its data, and a compressed variable must inflate
+// to exactly the size it declares (read in bounded chunks; the declared count is capped by what
+// its compressed bytes could hold).
+
+struct Bytes {
+  const unsigned char* p;
+  std::size_t n;      // extent: sizes are checked against it
+  std::size_t avail;  // bytes readable at p (less than n for the head of a compressed variable)
+};
+
+// a * b, saturated at 2^62 (sizes beyond it cannot be in a file)
+std::uint64_t mul_sat(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t r = 0;
+  constexpr std::uint64_t cap = std::uint64_t{1} << 62;
+  return __builtin_mul_overflow(a, b, &r) || r > cap ? cap : r;
+}
+
+std::uint32_t get32(const unsigned char* p, bool swap) {
+  std::uint32_t v;
+  std::memcpy(&v, p, 4);
+  return swap ? __builtin_bswap32(v) : v;
+}
+
+std::size_t mat5_type_size(std::uint32_t t) {
+  switch (t) {
+    case 1: case 2: return 1;    // miINT8, miUINT8
+    case 3: case 4: return 2;    // miINT16, miUINT16
+    case 5: case 6: case 7: return 4;  // miINT32, miUINT32, miSINGLE
+    case 9: case 12: case 13: return 8;  // miDOUBLE, miINT64, miUINT64
+    case 16: case 17: return 1;  // miUTF8, miUTF16 (byte counts only)
+    default: return 0;
+  }
+}
+
+// A sub-element tag at s[pos]: type and byte count, small-data format included; returns the
+// offset of the data and advances pos past the (padded) element. Throws `bad` on overrun.
+struct SubElement {
+  std::uint32_t type;
+  std::size_t bytes, data;
+};
+
+SubElement next_sub(Bytes s, std::size_t& pos, bool swap, const std::string& where, std::string_view what) {
+  if (pos + 8 > s.n)
+    throw Error(fmt::format("{}: truncated or inconsistent: the {} ends after the variable ({} of {} bytes)", where,
+                            what, s.n, pos + 8));
+  if (pos + 8 > s.avail)
+    throw Error(fmt::format("{}: unsupported: the {} starts after byte {} of a compressed variable", where, what,
+                            s.avail));
+  const std::uint32_t w0 = get32(s.p + pos, swap);
+  SubElement e{};
+  if ((w0 >> 16) != 0) {  // small data element: bytes in the upper half, data in the next 4 bytes
+    e.type = w0 & 0xffff;
+    e.bytes = w0 >> 16;
+    e.data = pos + 4;
+    if (e.bytes > 4)
+      throw Error(fmt::format("{}: inconsistent: a small {} of {} bytes (at most 4)", where, what, e.bytes));
+    pos += 8;
+    return e;
+  }
+  e.type = w0;
+  e.bytes = get32(s.p + pos + 4, swap);
+  e.data = pos + 8;
+  if (e.bytes > s.n - e.data)
+    throw Error(fmt::format("{}: truncated or inconsistent: its {} declares {} bytes, the variable has {} left", where,
+                            what, e.bytes, s.n - e.data));
+  pos = e.data + ((e.bytes + 7) / 8) * 8;
+  return e;
+}
+
+// The inside of a miMATRIX element (s = its data, without the 8-byte tag). Only numeric classes
+// are checked in detail (the ones hysteron reads); names are reported in messages.
+void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t index, std::string* name_out) {
+  std::string where = fmt::format("{}: variable #{}", path, index + 1);
+  std::size_t pos = 0;
+  const SubElement flags = next_sub(s, pos, swap, where, "array flags");
+  if (flags.bytes < 8 || flags.data + 8 > s.avail) throw Error(fmt::format("{}: inconsistent: array flags of {} bytes", where, flags.bytes));
+  const std::uint32_t f = get32(s.p + flags.data, swap);
+  const unsigned cls = f & 0xff;
+  const bool complex = (f & 0x800) != 0;
+  const SubElement dims = next_sub(s, pos, swap, where, "dimensions");
+  if (dims.data + dims.bytes > s.avail) throw Error(fmt::format("{}: unsupported: too many dimensions", where));
+  if (dims.type != 5 || dims.bytes % 4 != 0 || dims.bytes < 8)
+    throw Error(fmt::format("{}: inconsistent: bad dimensions element (type {}, {} bytes)", where, dims.type,
+                            dims.bytes));
+  const SubElement nm = next_sub(s, pos, swap, where, "name");
+  if (nm.data + nm.bytes > s.avail) throw Error(fmt::format("{}: unsupported: a name of {} bytes", where, nm.bytes));
+  std::string name(reinterpret_cast<const char*>(s.p + nm.data), nm.bytes);
+  name = name.substr(0, name.find('\0'));
+  if (!name.empty()) where = fmt::format("{}: variable \"{}\"", path, name);
+  if (name_out) *name_out = name;
+  // numel with overflow check; every dimension must be non-negative
+  std::uint64_t numel = 1;
+  std::string dims_txt;
+  for (std::size_t k = 0; k < dims.bytes / 4; ++k) {
+    const std::uint32_t d = get32(s.p + dims.data + 4 * k, swap);
+    if (d > 0x7fffffffu) throw Error(fmt::format("{}: inconsistent: negative dimension", where));
+    numel = mul_sat(numel, d);
+    dims_txt += fmt::format("{}{}", k ? "x" : "", d);
+  }
+  if (cls < 6 || cls > 15) return;  // cell, struct, char, sparse, ...: matio reads them, hysteron refuses them
+  for (int part = 0; part < (complex ? 2 : 1); ++part) {
+    const SubElement data = next_sub(s, pos, swap, where, part ? "imaginary part" : "data");
+    const std::size_t sz = mat5_type_size(data.type);
+    if (sz == 0 || data.type >= 16)
+      throw Error(fmt::format("{}: inconsistent: data of unknown type {}", where, data.type));
+    if (data.bytes != mul_sat(numel, sz))
+      throw Error(fmt::format("{}: truncated or inconsistent: size {} ({} elements) needs {} bytes of data, the file "
+                              "has {}",
+                              where, dims_txt, numel, mul_sat(numel, sz), data.bytes));
+  }
+}
+
+// Inflates a miCOMPRESSED element (at most `limit` bytes of output) and checks its inside.
+void check_mat5_compressed(Bytes z, bool swap, const std::string& path, std::size_t index) {
+  const std::string where = fmt::format("{}: variable #{}", path, index + 1);
+  // zlib expands at most ~1032:1: a larger declared size cannot be real data
+  const std::size_t limit = z.n * 1032 + 1024;
+  z_stream zs{};
+  if (inflateInit(&zs) != Z_OK) throw Error(fmt::format("{}: cannot initialise zlib", where));
+  struct End {
+    z_stream* s;
+    ~End() { inflateEnd(s); }
+  } end{&zs};
+  zs.next_in = const_cast<Bytef*>(z.p);
+  zs.avail_in = static_cast<uInt>(std::min<std::size_t>(z.n, std::numeric_limits<uInt>::max()));
+  // the head (tag, flags, dims, name, data tag) is kept; the rest is only counted
+  std::vector<unsigned char> head(4096), chunk(1 << 16);
+  std::size_t head_len = 0;
+  int rc = Z_OK;
+  while (rc != Z_STREAM_END) {
+    unsigned char* out = head_len < head.size() ? head.data() + head_len : chunk.data();
+    const std::size_t room = head_len < head.size() ? head.size() - head_len : chunk.size();
+    zs.next_out = out;
+    zs.avail_out = static_cast<uInt>(room);
+    rc = inflate(&zs, Z_NO_FLUSH);
+    if (head_len < head.size()) head_len += room - zs.avail_out;
+    if (rc == Z_STREAM_END) break;
+    if (rc != Z_OK || (zs.avail_in == 0 && zs.avail_out != 0))
+      throw Error(fmt::format("{}: truncated or corrupt compressed data ({})", where,
+                              zs.msg ? zs.msg : "the compressed stream ends early"));
+    if (zs.total_out > limit) throw Error(fmt::format("{}: corrupt compressed data (expands without bound)", where));
+  }
+  if (head_len < 8) throw Error(fmt::format("{}: corrupt compressed variable (no matrix inside)", where));
+  const std::uint32_t type = get32(head.data(), swap);
+  const std::size_t bytes = get32(head.data() + 4, swap);
+  if (type != 14) throw Error(fmt::format("{}: corrupt compressed variable (type {} inside, not a matrix)", where, type));
+  if (8 + bytes != zs.total_out)
+    throw Error(fmt::format("{}: truncated or inconsistent: declares {} bytes, its compressed data holds {}", where,
+                            bytes, zs.total_out - 8));
+  // the head holds the tags up to the data tag of any sane variable; the data is only counted
+  check_mat5_matrix(Bytes{head.data() + 8, bytes, head_len - 8}, swap, path, index, nullptr);
+}
+
+void check_mat4(Bytes f, const std::string& path) {
+  std::size_t pos = 0;
+  for (std::size_t index = 0; pos < f.n; ++index) {
+    const std::string where = fmt::format("{}: variable #{}", path, index + 1);
+    if (f.n - pos < 20)
+      throw Error(fmt::format("{}: truncated: {} bytes left where a MAT v4 header needs 20", where, f.n - pos));
+    std::uint32_t h[5];
+    std::memcpy(h, f.p + pos, 20);
+    if (h[0] > 9999) {  // the other byte order
+      for (auto& v : h) v = __builtin_bswap32(v);
+    }
+    const std::uint32_t type = h[0], rows = h[1], cols = h[2], imag = h[3], namelen = h[4];
+    const unsigned M = type / 1000, O = (type / 100) % 10, P = (type / 10) % 10, T = type % 10;
+    static constexpr std::size_t kSize[6] = {8, 4, 4, 2, 2, 1};
+    if (M > 4 || O != 0 || P > 5 || T > 2 || imag > 1 || rows > 0x7fffffffu || cols > 0x7fffffffu ||
+        namelen == 0 || namelen > 4096)
+      throw Error(fmt::format("{}: inconsistent MAT v4 header (type {}, {}x{}, name length {})", where, type, rows,
+                              cols, namelen));
+    if (namelen > f.n - pos - 20)
+      throw Error(fmt::format("{}: truncated: the name ({} bytes) ends after the file", where, namelen));
+    std::string name(reinterpret_cast<const char*>(f.p + pos + 20), namelen);
+    name = name.substr(0, name.find('\0'));
+    const std::string w = fmt::format("{}: variable \"{}\"", path, name);
+    const std::uint64_t need = mul_sat(mul_sat(rows, cols), kSize[P] * (imag ? 2u : 1u));
+    const std::size_t left = f.n - pos - 20 - namelen;
+    if (need > left)
+      throw Error(fmt::format("{}: truncated or inconsistent: size {}x{} needs {} bytes of data, the file has {}", w,
+                              rows, cols, need, left));
+    pos += 20 + namelen + static_cast<std::size_t>(need);
+  }
+}
+
+// Throws hysteron::Error naming the file and the variable if the file is truncated or its sizes
+// are inconsistent. MAT v7.3 (HDF5) files are left to matio.
+void check_mat_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;  // open_mat reports it
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size == 0) {
+    ::close(fd);
+    return;
+  }
+  const std::size_t n = static_cast<std::size_t>(st.st_size);
+  void* map = ::mmap(nullptr, n, PROT_READ, MAP_PRIVATE, fd, 0);
+  ::close(fd);
+  if (map == MAP_FAILED) throw Error(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+  struct Unmap {
+    void* p;
+    std::size_t n;
+    ~Unmap() { ::munmap(p, n); }
+  } unmap{map, n};
+  const Bytes f{static_cast<const unsigned char*>(map), n, n};
+  const bool v5 = n >= 128 && ((f.p[126] == 'I' && f.p[127] == 'M') || (f.p[126] == 'M' && f.p[127] == 'I'));
+  if (!v5) {
+    check_mat4(f, path);
+    return;
+  }
+  const bool swap = f.p[126] == 'M';
+  const unsigned version = swap ? (f.p[124] << 8 | f.p[125]) : (f.p[125] << 8 | f.p[124]);
+  if (version == 0x0200) return;  // v7.3 (HDF5)
+  std::size_t pos = 128;
+  for (std::size_t index = 0; pos < n; ++index) {
+    if (n - pos < 8)
+      throw Error(fmt::format("{}: variable #{}: truncated: {} bytes left where a tag needs 8", path, index + 1,
+                              n - pos));
+    const std::uint32_t type = get32(f.p + pos, swap);
+    const std::size_t bytes = get32(f.p + pos + 4, swap);
+    const std::size_t data = pos + 8;
+    std::string name;
+    if (type == 14 || type == 15) {
+      if (bytes > n - data)
+        throw Error(fmt::format("{}: variable #{}: truncated: declares {} bytes, the file has {} left (of {})", path,
+                                index + 1, bytes, n - data, n));
+      if (type == 14)
+        check_mat5_matrix(Bytes{f.p + data, bytes, bytes}, swap, path, index, &name);
+      else
+        check_mat5_compressed(Bytes{f.p + data, bytes, bytes}, swap, path, index);
+    } else if (bytes > n - data) {
+      throw Error(fmt::format("{}: element #{}: truncated: declares {} bytes, the file has {} left", path, index + 1,
+                              bytes, n - data));
+    }
+    pos = data + bytes;
+    if (type != 15) pos = std::min(n, data + ((bytes + 7) / 8) * 8);
+  }
+}
+
 std::vector<std::string> mat_variable_names(const std::string& path) {
   MatPtr m = open_mat(path);
   std::vector<std::string> names;
@@ -313,7 +563,11 @@ MatArray read_mat_array(const std::string& path, const std::string& name) {
   VarPtr v(Mat_VarRead(m.get(), name.c_str()));
   if (!v) {
     m.reset();
-    throw Error(fmt::format("{}: no variable \"{}\"; the file has {}", path, name, list_names(mat_variable_names(path))));
+    const auto names = mat_variable_names(path);
+    if (std::find(names.begin(), names.end(), name) != names.end())
+      throw Error(fmt::format("{}: variable \"{}\" cannot be read (corrupt, truncated or of an unsupported kind)", path,
+                              name));
+    throw Error(fmt::format("{}: no variable \"{}\"; the file has {}", path, name, list_names(names)));
   }
   MatArray a;
   a.name = name;
@@ -385,6 +639,7 @@ std::string choose_column_hint(const std::string& name, const MatArray& a) {
 // name is the whole spec wins over the NAME:INDEX reading (MATLAB names cannot hold ':', but
 // other writers' files may).
 std::vector<double> read_mat_variable(const std::string& path, const std::string& spec) {
+  check_mat_file(path);
   std::string name = spec;
   std::optional<std::size_t> col;
   if (name.empty()) {
@@ -447,7 +702,17 @@ void write_mat(const std::string& tmp, const std::vector<std::string>& names,
     if (Mat_VarWrite(m.get(), v.get(), MAT_COMPRESSION_ZLIB) != 0)
       throw Error(fmt::format("cannot write .mat variable \"{}\"", names[i]));
   }
-  if (Mat_Close(m.release()) != 0) throw Error("cannot close the .mat file");
+  if (Mat_Close(m.release()) != 0) throw Error("cannot close the .mat file (disk full?)");
+  // matio does not report every failed write (a full disk can lose buffered data silently):
+  // the file written must have the structure and the sizes of what was written
+  struct stat st {};
+  if (::stat(tmp.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;  // a device or a FIFO: nothing to re-read
+  try {
+    check_mat_file(tmp);
+    if (mat_variable_names(tmp) != names) throw Error("variables missing");
+  } catch (const Error& e) {
+    throw Error(fmt::format("the .mat file was not written completely (disk full?): {}", e.what()));
+  }
 }
 
 std::string csv_text(const std::vector<std::string>& names, const std::vector<std::vector<double>>& columns) {
@@ -543,6 +808,7 @@ const std::vector<double>& Table::column(std::string_view spec) const {
 
 Table read_table(const std::string& path, const ReadOptions& options) {
   if (!is_mat_path(path)) return read_text_table(path, options);
+  check_mat_file(path);
   Table t;
   t.source = path;
   // vectors first (in file order), then the columns "NAME:0", "NAME:1", ... of the 2-D matrices
@@ -597,56 +863,213 @@ std::vector<double> read_column(const std::string& path, const std::string& colu
 
 // ---- writing --------------------------------------------------------------------
 
-void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write) {
-  if (path.empty()) throw Error("output path is empty");
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw Error(fmt::format("{}: directory {} does not exist", path, dir.string()));
-  if (target.has_filename() == false || fs::is_directory(target, ec))
-    throw Error(fmt::format("{}: is a directory; expected a file name", path));
-  std::string tmp;
-  int fd = -1;
-  std::random_device rd;
-  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
-    tmp = (dir / fmt::format(".{}.tmp-{}-{}-{:08x}", target.filename().string(), ::getpid(), temp_counter++, rd()))
-              .string();
-    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0 && errno != EEXIST)
-      throw Error(fmt::format("{}: cannot create a temporary file in {}: {}", path, dir.string(), std::strerror(errno)));
-  }
-  if (fd < 0) throw Error(fmt::format("{}: cannot create a temporary file in {}", path, dir.string()));
-  ::close(fd);
-  try {
-    write(tmp);
-    // flush to disk before the rename, so a crash leaves the old or the new file, never a torn one
-    const int sfd = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
-    if (sfd >= 0) {
-      ::fsync(sfd);
-      ::close(sfd);
+namespace {
+
+// Temporary files being written, for remove_temporary_files() (called from signal handlers):
+// fixed storage, no allocation; a slot is claimed (1), filled, then published (2).
+constexpr std::size_t kTempSlots = 64, kTempPathMax = 4096;
+struct TempSlot {
+  std::atomic<int> state{0};
+  char path[kTempPathMax];
+};
+TempSlot g_temp_slots[kTempSlots];
+static_assert(std::atomic<int>::is_always_lock_free);
+
+int register_temp(const std::string& p) {
+  if (p.size() >= kTempPathMax) return -1;
+  for (std::size_t i = 0; i < kTempSlots; ++i) {
+    int expected = 0;
+    if (g_temp_slots[i].state.compare_exchange_strong(expected, 1)) {
+      std::memcpy(g_temp_slots[i].path, p.c_str(), p.size() + 1);
+      g_temp_slots[i].state.store(2);
+      return static_cast<int>(i);
     }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-      throw Error(fmt::format("{}: cannot rename the temporary file into place: {}", path, std::strerror(errno)));
+  }
+  return -1;  // more than 64 writes at once: this one is only removed on errors, not on signals
+}
+
+void unregister_temp(int slot) {
+  if (slot >= 0) g_temp_slots[slot].state.store(0);
+}
+
+// A live temporary file: removed (and unregistered) unless released after the rename.
+class TempFile {
+ public:
+  explicit TempFile(std::string p) : path_(std::move(p)), slot_(register_temp(path_)) {}
+  ~TempFile() {
+    if (!path_.empty()) ::unlink(path_.c_str());
+    unregister_temp(slot_);
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const std::string& path() const { return path_; }
+  void release() {
+    unregister_temp(slot_);
+    slot_ = -1;
+    path_.clear();
+  }
+
+ private:
+  std::string path_;
+  int slot_;
+};
+
+// Follows symbolic links (a chain of at most 40) to the file they name; the last target may not exist.
+std::string resolve_symlinks(const std::string& path) {
+  fs::path p(path);
+  for (int hops = 0;; ++hops) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
+    if (hops >= 40) throw Error(fmt::format("{}: too many levels of symbolic links", path));
+    std::error_code ec;
+    fs::path target = fs::read_symlink(p, ec);
+    if (ec) throw Error(fmt::format("{}: cannot read the symbolic link: {}", path, ec.message()));
+    p = target.is_absolute() ? target : (p.has_parent_path() ? p.parent_path() / target : target);
+  }
+}
+
+void fsync_path(const std::string& p, const std::string& where) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(fmt::format("{}: cannot reopen the temporary file: {}", where, std::strerror(errno)));
+  const int rc = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (rc != 0 && err != EINVAL && err != EROFS) throw Error(fmt::format("{}: write failed: {}", where, std::strerror(err)));
+}
+
+// Copies the finished temporary file into the existing inode of `target` (kept hard links).
+void copy_into(const std::string& tmp, const std::string& target, const std::string& where) {
+  const int in = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+  if (in < 0) throw Error(fmt::format("{}: cannot reopen the temporary file: {}", where, std::strerror(errno)));
+  const int out = ::open(target.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (out < 0) {
+    const int err = errno;
+    ::close(in);
+    throw Error(fmt::format("{}: cannot open for writing: {}", where, std::strerror(err)));
+  }
+  std::vector<char> buf(1 << 16);
+  try {
+    for (;;) {
+      const ssize_t r = ::read(in, buf.data(), buf.size());
+      if (r < 0 && errno == EINTR) continue;
+      if (r < 0) throw Error(fmt::format("{}: cannot read the temporary file: {}", where, std::strerror(errno)));
+      if (r == 0) break;
+      write_all(out, std::string_view(buf.data(), static_cast<std::size_t>(r)), where);
+    }
+    if (::fsync(out) != 0 && errno != EINVAL) throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
+  } catch (...) {
+    ::close(in);
+    ::close(out);
+    throw;
+  }
+  ::close(in);
+  if (::close(out) != 0) throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
+}
+
+[[noreturn]] void rethrow_named(const std::string& path) {
+  try {
+    throw;
   } catch (const Error& e) {
-    ::unlink(tmp.c_str());
     const std::string msg = e.what();
     if (msg.rfind(path, 0) == 0) throw;
     throw Error(fmt::format("{}: {}", path, msg));
-  } catch (...) {
-    ::unlink(tmp.c_str());
-    throw;
+  }
+}
+
+}  // namespace
+
+void remove_temporary_files() noexcept {
+  for (auto& slot : g_temp_slots)
+    if (slot.state.load() == 2) ::unlink(slot.path);
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write) {
+  if (path.empty()) throw Error("output path is empty");
+  if (path == "-") {  // standard output: written directly
+    write("/dev/stdout");
+    return;
+  }
+  if (path == "/dev/stdout" || path == "/dev/stderr" || path.starts_with("/dev/fd/") ||
+      path.starts_with("/proc/self/fd/")) {  // a descriptor of this process, whatever it is open on
+    write(path);
+    return;
+  }
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw Error(fmt::format("{}: is a directory; expected a file name", path));
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    // a device, FIFO or socket (/dev/null, /dev/stdout, ...): written in place (renaming a file
+    // over it would replace it)
+    try {
+      write(path);
+    } catch (...) {
+      rethrow_named(path);
+    }
+    return;
+  }
+  const std::string real = resolve_symlinks(path);  // a symlink's target is replaced, the link stays
+  const bool exists = ::stat(real.c_str(), &st) == 0;
+  const fs::path target(real);
+  if (!target.has_filename()) throw Error(fmt::format("{}: is a directory; expected a file name", path));
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(fmt::format("{}: directory {} does not exist", path, dir.string()));
+  if (exists) {
+    if ((st.st_mode & 0222) == 0)
+      throw Error(fmt::format("{}: is read-only (mode {:03o}); not replacing it (make it writable or choose another "
+                              "output file)",
+                              path, st.st_mode & 07777));
+    if (::access(real.c_str(), W_OK) != 0)
+      throw Error(fmt::format("{}: not writable ({}); not replacing it", path, std::strerror(errno)));
+  }
+  std::optional<TempFile> tmp;
+  int fd = -1;
+  std::random_device rd;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    tmp.emplace((dir / fmt::format(".{}.tmp-{}-{}-{:08x}", target.filename().string(), ::getpid(), temp_counter++,
+                                   rd()))
+                    .string());
+    fd = ::open(tmp->path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) {
+      const int err = errno;
+      tmp->release();  // not ours
+      if (err != EEXIST)
+        throw Error(fmt::format("{}: cannot create a temporary file in {}: {}", path, dir.string(), std::strerror(err)));
+    }
+  }
+  if (fd < 0) throw Error(fmt::format("{}: cannot create a temporary file in {}", path, dir.string()));
+  if (exists) {
+    // keep the existing file's permission bits (and, where allowed, its owner)
+    (void)::fchmod(fd, st.st_mode & 07777);
+    if (::geteuid() == 0) (void)::fchown(fd, st.st_uid, st.st_gid);
+  }
+  ::close(fd);
+  try {
+    write(tmp->path());
+    // flush to disk before the rename, so a crash leaves the old or the new file, never a torn one
+    fsync_path(tmp->path(), path);
+    if (exists && st.st_nlink > 1) {
+      // hard links: the new content goes into the same inode (not atomic: see the header)
+      copy_into(tmp->path(), real, path);
+      return;  // ~TempFile removes the temporary file
+    }
+    if (std::rename(tmp->path().c_str(), real.c_str()) != 0)
+      throw Error(fmt::format("{}: cannot rename the temporary file into place: {}", path, std::strerror(errno)));
+    tmp->release();
+  } catch (const Error&) {
+    rethrow_named(path);
   }
 }
 
 void write_text_file(const std::string& path, std::string_view text) {
-  if (path == "-") {
+  if (path == "-" || path == "/dev/stdout") {
     std::fwrite(text.data(), 1, text.size(), stdout);
     if (std::fflush(stdout) != 0 || std::ferror(stdout)) throw Error("writing to stdout failed");
     return;
   }
   write_file_atomically(path, [&](const std::string& tmp) {
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-    if (fd < 0) throw Error(fmt::format("cannot open the temporary file: {}", std::strerror(errno)));
+    if (fd < 0) throw Error(fmt::format("cannot open for writing: {}", std::strerror(errno)));
     try {
       write_all(fd, text, path);
     } catch (...) {
@@ -655,6 +1078,44 @@ void write_text_file(const std::string& path, std::string_view text) {
     }
     if (::close(fd) != 0) throw Error(fmt::format("write failed: {}", std::strerror(errno)));
   });
+}
+
+namespace {
+// The file a path names (through symlinks), if it exists and is a regular file.
+std::optional<std::pair<dev_t, ino_t>> file_id(const std::string& path) {
+  struct stat st {};
+  if (path.empty() || path == "-" || ::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
+  return std::pair<dev_t, ino_t>{st.st_dev, st.st_ino};
+}
+
+std::string same_file_name(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  return ec ? path : p.string();
+}
+}  // namespace
+
+void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
+  auto refuse = [](const NamedPath& out, const NamedPath& other, std::string_view what) {
+    throw Error(fmt::format("{} {} and {} {} are the same file; refusing to overwrite {} (choose another output file)",
+                            out.option, out.path, other.option, other.path, what));
+  };
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const auto id = file_id(outputs[i].path);
+    if (id)
+      for (const auto& in : inputs)
+        if (file_id(in.path) == id) refuse(outputs[i], in, "an input");
+    for (std::size_t k = 0; k < i; ++k) {
+      if (outputs[i].path.empty() || outputs[k].path.empty() || outputs[i].path == "-" || outputs[k].path == "-")
+        continue;
+      const auto other = file_id(outputs[k].path);
+      struct stat st {};
+      const bool special = ::stat(outputs[i].path.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
+      if ((id && other && *id == *other) || (!id && !other && !special &&
+                                             same_file_name(outputs[i].path) == same_file_name(outputs[k].path)))
+        refuse(outputs[i], outputs[k], "another output");
+    }
+  }
 }
 
 void write_columns(const std::string& path, const std::vector<std::string>& names,

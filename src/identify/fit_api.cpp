@@ -229,7 +229,13 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
 
   // The reference PI (a plain NNLS script's fit) on the same range.
   try {
-    rep.reference = evaluate(reference_pi(x, y, tr, 10), x, y, tr, InitialState::virgin);
+    // Fitted on the normalised record (no underflow at 1e-300 scales), then mapped
+    // to raw units like the model: y = y[0] + sign sy (off + g core((x_m - o) / s)).
+    ModelParams ref = reference_pi(xn, yn, tr, 10);
+    UnitsMap& ru = units_map(ref);
+    ru = UnitsMap{x[0] + sx * ru.input_origin, sx * ru.input_scale, y[0] + sign * sy * ru.output_offset,
+                  sign * sy * ru.output_gain};
+    rep.reference = evaluate(ref, x, y, tr, InitialState::virgin);
   } catch (const Error& e) {
     rep.warnings.push_back(fmt::format("reference PI not computed: {}", e.what()));
   }

@@ -226,7 +226,7 @@ void standard_errors(const LmProblem& lm, const Data& d, std::vector<double> the
                      const std::vector<int>& held, const Eigen::MatrixXd& M, double sse, FitReport& rep);
 
 // Status and message of the report from the best solution.
-void finish_status(FitReport& rep, const Solved& best);
+void finish_status(FitReport& rep, const Solved& best, bool start_is_minimum);
 
 // The output offset eliminated by the projection (d.free_offset): the mean residual of the model.
 double projected_offset(const ModelParams& model, const Data& d);

@@ -65,7 +65,7 @@ class GpiKind final : public Parametrization {
       rep.message = "no start gave a usable solution";
       return;
     }
-    finish_status(rep, best);
+    finish_status(rep, best, /*start_is_minimum=*/false);
     rep.initial_cost = best.initial_cost;
     rep.final_cost = best.final_cost;
     rep.iterations = best.iterations;

@@ -219,13 +219,24 @@ void standard_errors(const LmProblem& lm, const Data& d, std::vector<double> the
   if (d.huber > 0) rep.covariance_note = "standard errors are approximate with the Huber loss";
 }
 
-void finish_status(FitReport& rep, const Solved& best) {
+void finish_status(FitReport& rep, const Solved& best, bool start_is_minimum) {
   switch (best.termination) {
     case ceres::CONVERGENCE: rep.status = FitStatus::converged; break;
     case ceres::NO_CONVERGENCE: rep.status = FitStatus::no_convergence; break;
     default: rep.status = best.usable ? FitStatus::no_convergence : FitStatus::failed; break;
   }
   rep.message = best.message;
+  // A solver that never moved from a start that is not a minimum by construction
+  // (start_is_minimum: the least-squares weights of the slope kinds, without Huber)
+  // has not shown convergence unless the start already fits to rounding: it stopped
+  // because a tolerance was met at the start (a cost scaled to nothing).
+  constexpr double rounding_cost = 1e-20;  // 0.5 sum r^2 of 1e6 residuals of 1e-13
+  if (!start_is_minimum && rep.status == FitStatus::converged && best.iterations <= 0 &&
+      best.final_cost > rounding_cost) {
+    rep.status = FitStatus::no_convergence;
+    rep.message = fmt::format("the solver did not move from its start ({}); the fit is not known to be a minimum",
+                              best.message);
+  }
 }
 
 std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const LmProblem*>& problems, const Data& d,

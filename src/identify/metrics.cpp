@@ -66,22 +66,38 @@ FitMetrics compute_metrics(std::span<const double> measured, std::span<const dou
   FitMetrics m;
   m.n = measured.size();
   if (m.n == 0) return m;
-  double sse = 0.0, sae = 0.0, mean = 0.0;
+  // Sums of squares are taken of values divided by their largest magnitude, so
+  // records around 1e-300 or 1e300 give the same metrics (times the scale) as
+  // unit-scaled ones instead of underflowing to 0 or overflowing to inf.
+  const double nn = static_cast<double>(m.n);
+  double y_scale = 0.0;
   for (std::size_t k = 0; k < m.n; ++k) {
     const double e = measured[k] - predicted[k];
-    sse += e * e;
-    sae += std::abs(e);
     m.max = std::max(m.max, std::abs(e));
-    mean += measured[k];
+    y_scale = std::max(y_scale, std::abs(measured[k]));
   }
-  mean /= static_cast<double>(m.n);
-  double sst = 0.0;
-  for (double v : measured) sst += (v - mean) * (v - mean);
-  m.rms = std::sqrt(sse / static_cast<double>(m.n));
-  m.mae = sae / static_cast<double>(m.n);
+  double mean = 0.0;  // of measured / y_scale
+  if (y_scale > 0)
+    for (double v : measured) mean += (v / y_scale) / nn;
+  double sse = 0.0, sae = 0.0, sst = 0.0;  // of e / max, |e| / max, (y - mean) / y_scale
+  const double e_scale = m.max;
+  for (std::size_t k = 0; k < m.n; ++k) {
+    if (e_scale > 0) {
+      const double e = (measured[k] - predicted[k]) / e_scale;
+      sse += e * e;
+      sae += std::abs(e);
+    }
+    if (y_scale > 0) {
+      const double d = measured[k] / y_scale - mean;
+      sst += d * d;
+    }
+  }
+  m.rms = e_scale * std::sqrt(sse / nn);
+  m.mae = e_scale * (sae / nn);
   const double span = detail::span_of(measured);
-  m.rms_percent_span = span > 0 ? 100.0 * m.rms / span : std::numeric_limits<double>::quiet_NaN();
-  m.r2 = sst > 0 ? 1.0 - sse / sst : std::numeric_limits<double>::quiet_NaN();
+  m.rms_percent_span = span > 0 ? 100.0 * (m.rms / span) : std::numeric_limits<double>::quiet_NaN();
+  // 1 - SSE / SST with SSE = e_scale^2 sse and SST = y_scale^2 sst.
+  m.r2 = sst > 0 ? 1.0 - (e_scale / y_scale) * (e_scale / y_scale) * (sse / sst) : std::numeric_limits<double>::quiet_NaN();
   return m;
 }
 

@@ -32,17 +32,24 @@ void project_offset(int m, int p, double* res, double* J) {
 template <class T>
 inline T robust_residual(const T& r, double d) {
   if (d <= 0) return r;
-  if (r < T(d) && T(-d) < r) return r;
+  // Divided by sqrt(d) when d < 1 (the record is normalised to a unit span): the
+  // minimiser is the same, but a tiny d (1e-300) no longer scales the cost and its
+  // gradient down to below the solver's absolute gradient tolerance (a "converged"
+  // fit after 0 iterations).
+  const double w = d < 1.0 ? 1.0 / std::sqrt(d) : 1.0;
+  if (r < T(d) && T(-d) < r) return T(w) * r;
   using std::sqrt;
   const T a = r < T(0) ? T(-r) : r;
-  const T f = sqrt(T(2.0 * d) * a - T(d * d));
+  const T f = d < 1.0 ? sqrt(T(2.0) * a - T(d)) : sqrt(T(2.0 * d) * a - T(d * d));
   return r < T(0) ? T(-f) : f;
 }
 
 // robust_residual for the hand-written Jacobians, with its slope df/dr.
 inline double robust_residual_with_slope(double r, double d, double& slope) {
   const double f = robust_residual<double>(r, d);
-  slope = f == r ? 1.0 : d / std::abs(f);  // d/dr sqrt(2 d |r| - d^2) = d / |f|
+  const double w = d > 0 && d < 1.0 ? 1.0 / std::sqrt(d) : 1.0;
+  // inside: f = w r; outside: f = w sgn(r) sqrt(2 d |r| - d^2), df/dr = w^2 d / |f|
+  slope = d <= 0 || std::abs(r) < d ? w : w * w * d / std::abs(f);
   return f;
 }
 

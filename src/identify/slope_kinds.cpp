@@ -51,7 +51,7 @@ void SlopeParametrization::fit(const Data& d, const Ranges& rg, const FitOptions
   const Solved& best = solved[kbest];
   const SlopeLayout& layout = layouts[kbest];
   const std::vector<double>& lower = lowers[kbest];
-  finish_status(rep, best);
+  finish_status(rep, best, /*start_is_minimum=*/d.huber == 0);
   rep.initial_cost = best.initial_cost;
   rep.final_cost = best.final_cost;
   rep.iterations = best.iterations;

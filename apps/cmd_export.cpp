@@ -47,13 +47,13 @@ Limits parse_limits(const std::string& text) {
 }
 
 // Default prefix: the output file's stem with every other character as '_'
-// ("my-comp.c" -> "my_comp"), or "hysteron_model" if that is no C identifier.
+// ("my-comp.c" -> "my_comp"), or "compensator" if that is not a usable prefix.
 std::string default_prefix(const std::string& out) {
-  if (out == "-") return "hysteron_model";
+  if (out == "-") return "compensator";
   std::string stem = std::filesystem::path(out).stem().string();
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80) c = '_';
-  return io::valid_c_prefix(stem) ? stem : std::string("hysteron_model");
+  return io::valid_c_prefix(stem) ? stem : std::string("compensator");
 }
 
 int run_export(const Options& o) {
@@ -64,7 +64,7 @@ int run_export(const Options& o) {
   e.prefix = o.prefix.empty() ? default_prefix(o.out) : o.prefix;
   if (!io::valid_c_prefix(e.prefix))
     throw Error(fmt::format("--prefix: \"{}\" is not usable: it must be a C identifier (letters, digits, '_'; not "
-                            "starting with a digit or '_'), at most 40 characters",
+                            "starting with a digit or '_'), at most 40 characters, not \"hysteron\" (the C ABI's prefix)",
                             e.prefix));
   e.source_name = o.model == "-" ? std::string("<stdin>") : std::filesystem::path(o.model).filename().string();
   if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();

@@ -438,7 +438,7 @@ TEST(ExportCheck, CompilesWithOtherFlags) {
 TEST(ExportCheck, BadOptionsAndModelsAreRefused) {
   const ModelParams pi = io::model_from_json(io::parse_json(R"({"model": "pi", "q": 0.4, "r": [0.1], "p": [0.3]})", "pi"), "pi");
   io::ExportOptions o;
-  for (const char* bad : {"", "1abc", "_x", "a-b", "a b", "a.b"}) {
+  for (const char* bad : {"", "1abc", "_x", "a-b", "a b", "a.b", "hysteron"}) {
     o.prefix = bad;
     EXPECT_THROW(io::generate_c(pi, o), hysteron::Error) << bad;
   }

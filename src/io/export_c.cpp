@@ -926,6 +926,7 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
 
 bool valid_c_prefix(const std::string& name) noexcept {
   if (name.empty() || name.size() > 40 || name.front() == '_') return false;
+  if (name == "hysteron") return false;  // the C ABI's names (include/hysteron/hysteron.h)
   if (std::isdigit(static_cast<unsigned char>(name.front()))) return false;
   for (char c : name)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80) return false;
@@ -935,7 +936,7 @@ bool valid_c_prefix(const std::string& name) noexcept {
 GeneratedC generate_c(const ModelParams& params, const ExportOptions& options) {
   if (!valid_c_prefix(options.prefix))
     throw Error(fmt::format("export: prefix \"{}\" is not usable: it must be a C identifier (letters, digits, '_'; "
-                            "not starting with a digit or '_'), at most 40 characters",
+                            "not starting with a digit or '_'), at most 40 characters, not \"hysteron\" (the C ABI's prefix)",
                             options.prefix));
   if (options.header_name.find_first_of("\"\\\n\r") != std::string::npos)
     throw Error(fmt::format("export: header name \"{}\" cannot be #included (it contains a quote, backslash or newline)",

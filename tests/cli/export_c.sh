@@ -124,6 +124,8 @@ done
 "$BIN" export --model "$T/asym.json" --out "$T/lim.c" --prefix hm --limits=-1.5,1.25 2> /dev/null || fail "export --limits"
 grep -q 'hm_lim_raw_lo = -1.5, hm_lim_raw_hi = 1.25' "$T/lim.c" || fail "--limits not in the C file"
 "$BIN" export --model - --out - --prefix hm < "$T/gpi.json" > "$T/stdout.c" || fail "export --model - --out -"
+"$BIN" export --model "$T/gpi.json" --out "$T/hysteron.c" 2> /dev/null || fail "export to hysteron.c"
+grep -q 'compensator_model_step' "$T/hysteron.c" || fail "hysteron.c: the default prefix is not compensator"
 grep -q 'hm_inverse_step' "$T/stdout.c" || fail "--out - printed no C"
 grep -q 'from the model file "<stdin>"' "$T/stdout.c" || fail "--model - not named <stdin>"
 
@@ -143,6 +145,8 @@ expect_fail "mpi-asym without limits" 1 'nolim.json: cannot export: mpi-asym: th
   "$BIN" export --model "$T/nolim.json" --out "$T/out/new.c"
 expect_fail "bad prefix" 1 '--prefix: "9lives" is not usable' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix 9lives
+expect_fail "C ABI prefix" 1 '--prefix: "hysteron" is not usable' -- \
+  "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix hysteron
 expect_fail "bad limits" 1 '--limits: LO = 2 must be < HI = 1' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --limits 2,1
 expect_fail "missing model file" 1 'nope.json: cannot open' -- "$BIN" export --model "$T/nope.json" --out "$T/out/new.c"

@@ -19,8 +19,9 @@ namespace hysteron::io {
 
 struct ExportOptions {
   // Prefix of every public C name (types, functions, macros in upper case):
-  // a C identifier, not starting with an underscore, at most 40 characters.
-  std::string prefix = "hysteron_model";
+  // a C identifier, not starting with an underscore, at most 40 characters, not
+  // "hysteron" (the names of the C ABI, include/hysteron/hysteron.h).
+  std::string prefix = "compensator";
   // Where the model came from (a file name), written in the comments; empty: not said.
   std::string source_name;
   // When non-empty, the declarations go to a separate header (GeneratedC::header)

@@ -59,6 +59,7 @@ std::string default_prefix(const std::string& out) {
 int run_export(const Options& o) {
   if (o.out == "-" && !o.header.empty()) throw Error("--header needs --out to name a file (not -)");
   if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
+  io::check_outputs_distinct({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}});
   const ModelParams params = read_model_source(o.model);
   io::ExportOptions e;
   e.prefix = o.prefix.empty() ? default_prefix(o.out) : o.prefix;

@@ -4,11 +4,17 @@
 // parse errors, which CLI11 itself would report as 105-109, are mapped to 1), unreadable
 // or unwritable files; fit: 2 no_convergence or failed, 3 poor_fit; 4 internal error.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "commands.hpp"
 #include "hysteron/error.hpp"
@@ -21,6 +27,75 @@ extern "C" void on_fatal_signal(int sig) {
   hysteron::io::remove_temporary_files();
   std::signal(sig, SIG_DFL);
   std::raise(sig);
+}
+
+// Edit distance (insertions, deletions, substitutions, adjacent swaps), for "did you mean".
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i)
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+// " (did you mean X?)" for the closest candidate within a third of the word's length.
+std::string suggestion(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::max<std::size_t>(1, word.size() / 3) + 1;
+  for (const std::string& c : candidates) {
+    const std::size_t dist = edit_distance(word, c);
+    if (dist < best_d) best_d = dist, best = c;
+  }
+  return best.empty() ? std::string() : fmt::format(" (did you mean {}?)", best);
+}
+
+bool is_number(std::string_view s) {
+  const std::string t(s);
+  char* end = nullptr;
+  std::strtod(t.c_str(), &end);
+  return end != t.c_str() && *end == '\0';
+}
+
+// Unknown subcommands and options are reported before CLI11 parses, so that
+// `simulate --foo` says "unknown option --foo" (not "--model is required"), with
+// the closest known name. Returns an exit code, or -1 to go on.
+int check_names(CLI::App& app, int argc, char** argv) {
+  if (argc < 2) return -1;
+  const std::string_view first = argv[1];
+  if (first.empty() || first[0] == '-') return -1;  // --help, --version: CLI11's
+  std::vector<std::string> commands;
+  CLI::App* sub = nullptr;
+  for (CLI::App* s : app.get_subcommands({})) {
+    commands.push_back(s->get_name());
+    if (s->get_name() == first) sub = s;
+  }
+  if (!sub) {
+    fmt::print(stderr, "hysteron: unknown command \"{}\"{}; commands: {}\n", first, suggestion(first, commands),
+               fmt::join(commands, ", "));
+    return hysteron::cli::exit_error;
+  }
+  std::vector<std::string> names;
+  for (const CLI::Option* o : sub->get_options()) {
+    for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+    for (const std::string& n : o->get_snames()) names.push_back("-" + n);
+  }
+  for (CLI::App* s : sub->get_subcommands({})) names.push_back(s->get_name());
+  for (int i = 2; i < argc; ++i) {
+    std::string_view a = argv[i];
+    if (a == "--") break;
+    if (a.size() < 2 || a[0] != '-' || is_number(a)) continue;
+    if (a.substr(0, 2) == "--") a = a.substr(0, a.find('='));
+    else a = a.substr(0, 2);  // -xVALUE
+    if (std::find(names.begin(), names.end(), a) != names.end()) continue;
+    fmt::print(stderr, "hysteron {}: unknown option {}{}; see hysteron {} --help\n", first, a, suggestion(a, names),
+               first);
+    return hysteron::cli::exit_error;
+  }
+  return -1;
 }
 
 void install_signal_handlers() {
@@ -53,6 +128,7 @@ int main(int argc, char** argv) {
   hysteron::cli::add_experiment(app, action);
   hysteron::cli::add_report(app, action);
   hysteron::cli::add_export(app, action);
+  if (const int rc = check_names(app, argc, argv); rc >= 0) return rc;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -152,6 +152,9 @@ expect_fail "bad limits" 1 '--limits: LO = 2 must be < HI = 1' -- \
 expect_fail "missing model file" 1 'nope.json: cannot open' -- "$BIN" export --model "$T/nope.json" --out "$T/out/new.c"
 expect_fail "header and out the same" 1 'name the same file' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/keep.c" --header "$T/out/keep.c"
+cp "$T/gpi.json" "$T/out/m.json"
+expect_fail "out over the model file" 1 'out/m.json' -- "$BIN" export --model "$T/out/m.json" --out "$T/out/m.json"
+rm "$T/out/m.json"
 expect_fail "header with --out -" 1 '--header needs --out' -- "$BIN" export --model "$T/gpi.json" --out - --header "$T/out/new.h"
 expect_fail "no --out" 1 '--out is required' -- "$BIN" export --model "$T/gpi.json"
 expect_fail "unwritable directory" 1 'nodir/new.c' -- "$BIN" export --model "$T/gpi.json" --out "$T/nodir/new.c"

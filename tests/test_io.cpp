@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 #include <matio.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -655,4 +658,134 @@ TEST(Table, ColonInCsvHeaderIsAName) {
   expect_error([&] { io::read_column(path, "data:0"); },
                {path, "no column named \"data:0\"", ".mat file only", "\"a:b\""});
   expect_error([&] { io::read_column(path, "x"); }, {path, "no column named \"x\""});
+}
+
+// ---- corrupt and hostile .mat input (issue 13, item 2) ---------------------------------------
+
+namespace {
+
+std::string read_bytes(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+void write_bytes(const std::string& p, const std::string& b) { std::ofstream(p, std::ios::binary) << b; }
+
+std::uint32_t u32(const std::string& b, std::size_t at) {
+  std::uint32_t v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+void set_u32(std::string& b, std::size_t at, std::uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
+
+// One N x 1 double variable written by matio, uncompressed, in MAT v5 or v4.
+std::string matio_file(const TempDir& dir, const std::string& name, mat_ft version, const std::string& var,
+                       std::size_t n) {
+  const auto path = dir.file(name);
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = 0.5 + static_cast<double>(i);
+  mat_t* m = Mat_CreateVer(path.c_str(), nullptr, version);
+  if (!m) throw std::runtime_error("Mat_CreateVer failed");
+  size_t dims[2] = {n, 1};
+  matvar_t* mv = Mat_VarCreate(var.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, v.data(), MAT_F_DONT_COPY_DATA);
+  Mat_VarWrite(m, mv, MAT_COMPRESSION_NONE);
+  Mat_VarFree(mv);
+  Mat_Close(m);
+  return path;
+}
+
+}  // namespace
+
+// The issue's cases: a library-written (compressed v5) .mat cut by one byte was read with its
+// last value as 2.19e-304, cut in half as 13 values then zeros, both without an error.
+TEST(MatCorrupt, TruncatedCompressedFilesAreRefused) {
+  TempDir dir;
+  std::vector<double> x(26);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 1.0 + 0.25 * static_cast<double>(i);
+  const auto good = dir.file("good.mat");
+  io::write_columns(good, {"input", "output"}, {x, x});
+  ASSERT_EQ(io::read_column(good, "input"), x);
+  const std::string bytes = read_bytes(good);
+  const auto cut1 = dir.file("cut1.mat"), half = dir.file("half.mat");
+  write_bytes(cut1, bytes.substr(0, bytes.size() - 1));
+  write_bytes(half, bytes.substr(0, bytes.size() / 2));
+  for (const auto& p : {cut1, half}) {
+    expect_error([&] { io::read_column(p, "input"); }, {p, "variable #", "truncated"});
+    expect_error([&] { io::read_column(p, "output"); }, {p, "truncated"});
+    expect_error([&] { io::read_table(p); }, {p, "truncated"});
+  }
+}
+
+// Uncompressed v5: a cut file, and a 607-byte file whose dimensions claim 1.7e9 elements (matio
+// allocated 11 GB for it): refused from the sizes, before any allocation.
+TEST(MatCorrupt, UncompressedV5SizesAreCheckedAgainstTheFile) {
+  TempDir dir;
+  const auto path = matio_file(dir, "v5.mat", MAT_FT_MAT5, "input", 58);
+  ASSERT_EQ(io::read_column(path, "input").size(), 58u);
+  std::string b = read_bytes(path);
+  const auto cut = dir.file("cut.mat");
+  write_bytes(cut, b.substr(0, b.size() - 1));
+  expect_error([&] { io::read_column(cut, "input"); }, {cut, "truncated"});
+  // dims: after the 8-byte tag, the 16-byte array flags and the 8-byte dims tag
+  ASSERT_EQ(u32(b, 128), 14u);   // miMATRIX
+  ASSERT_EQ(u32(b, 152), 5u);    // miINT32 dims
+  ASSERT_EQ(u32(b, 160), 58u);   // rows
+  set_u32(b, 160, 1700000000u);  // 1.7e9 elements claimed
+  const auto huge = dir.file("huge.mat");
+  write_bytes(huge, b);
+  EXPECT_LT(b.size(), 700u);
+  expect_error([&] { io::read_column(huge, "input"); },
+               {huge, "variable \"input\"", "1700000000x1", "13600000000 bytes of data", "464"});
+  expect_error([&] { io::read_table(huge); }, {huge, "\"input\"", "inconsistent"});
+
+  // the same claim inside a compressed variable (what the library writes)
+  std::string element = b.substr(128);
+  uLongf zlen = compressBound(static_cast<uLong>(element.size()));
+  std::string z(zlen, '\0');
+  ASSERT_EQ(compress(reinterpret_cast<Bytef*>(z.data()), &zlen, reinterpret_cast<const Bytef*>(element.data()),
+                     static_cast<uLong>(element.size())),
+            Z_OK);
+  z.resize(zlen);
+  std::string c = b.substr(0, 128) + std::string(8, '\0') + z;
+  set_u32(c, 128, 15u);  // miCOMPRESSED
+  set_u32(c, 132, static_cast<std::uint32_t>(z.size()));
+  const auto hugez = dir.file("hugez.mat");
+  write_bytes(hugez, c);
+  expect_error([&] { io::read_column(hugez, "input"); }, {hugez, "\"input\"", "1700000000x1", "inconsistent"});
+  // a compressed variable whose stream is corrupt
+  std::string bad = c;
+  for (std::size_t i = 140; i < bad.size(); ++i) bad[i] = static_cast<char>(bad[i] ^ 0x5a);
+  const auto badz = dir.file("badz.mat");
+  write_bytes(badz, bad);
+  expect_error([&] { io::read_column(badz, "input"); }, {badz, "variable #1", "compressed"});
+}
+
+// MAT v4 (written by matio): truncated, and a header that claims more than the file holds. The
+// old message for a truncated v4 file was `no variable "input"; the file has "input"`.
+TEST(MatCorrupt, V4SizesAreCheckedAgainstTheFile) {
+  TempDir dir;
+  const auto path = matio_file(dir, "v4.mat", MAT_FT_MAT4, "input", 40);
+  ASSERT_EQ(io::read_column(path, "input").size(), 40u);
+  const std::string b = read_bytes(path);
+  ASSERT_EQ(b.size(), 20u + 6u + 40u * 8u);
+  const auto cut = dir.file("cut4.mat");
+  write_bytes(cut, b.substr(0, b.size() - 1));
+  expect_error([&] { io::read_column(cut, "input"); },
+               {cut, "variable \"input\"", "truncated", "40x1 needs 320 bytes of data, the file has 319"});
+  try {
+    io::read_column(cut, "input");
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find("the file has \"input\""), std::string::npos) << e.what();
+  }
+  std::string h = b;
+  set_u32(h, 4, 1700000000u);  // mrows
+  const auto huge = dir.file("huge4.mat");
+  write_bytes(huge, h);
+  expect_error([&] { io::read_column(huge, "input"); }, {huge, "\"input\"", "1700000000x1", "13600000000 bytes"});
+  std::string name = b;
+  set_u32(name, 16, 100000u);  // name length beyond the file
+  const auto badname = dir.file("name4.mat");
+  write_bytes(badname, name);
+  expect_error([&] { io::read_column(badname, "input"); }, {badname, "variable #1"});
 }

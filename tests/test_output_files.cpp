@@ -1,0 +1,250 @@
+// Output files (issue 13, item 1): devices, FIFOs, symlinks, modes, read-only files, hard
+// links, outputs that are inputs, full disks, temporary files removed on errors.
+#include <gtest/gtest.h>
+#include <sys/mount.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/table.hpp"
+
+namespace fs = std::filesystem;
+namespace io = hysteron::io;
+using hysteron::Error;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "hysteron-out-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string slurp(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void put(const std::string& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+// Files in dir whose names contain ".tmp-" (the temporary files of write_file_atomically).
+std::vector<std::string> temp_files(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) out.push_back(e.path().string());
+  return out;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+TEST(OutputFiles, DeviceNodeIsWrittenNotReplaced) {
+  if (::geteuid() != 0) GTEST_SKIP() << "mknod needs root: device-node case not tested";
+  TempDir d;
+  const std::string dev = d.file("null");
+  ASSERT_EQ(::mknod(dev.c_str(), S_IFCHR | 0666, ::makedev(1, 3)), 0) << "mknod /dev/null twin failed";
+  io::write_columns(dev, {"a", "b"}, {{1, 2, 3}, {4, 5, 6}});
+  io::write_text_file(dev, "text\n");
+  io::write_columns(d.file("null") , {"a"}, {{1.0}});
+  struct stat st {};
+  ASSERT_EQ(::lstat(dev.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device node was replaced";
+  EXPECT_EQ(::major(st.st_rdev), 1u);
+  EXPECT_EQ(::minor(st.st_rdev), 3u);
+  EXPECT_TRUE(temp_files(d.path()).empty());
+  // /dev/null itself, as the issue reported
+  io::write_text_file("/dev/null", "x\n");
+  ASSERT_EQ(::lstat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode));
+}
+
+TEST(OutputFiles, FifoIsWrittenDirectly) {
+  TempDir d;
+  const std::string fifo = d.file("pipe.csv");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string got;
+  std::thread reader([&] { got = slurp(fifo); });
+  io::write_columns(fifo, {"x", "y"}, {{1, 2}, {3, 4}});
+  reader.join();
+  EXPECT_EQ(got, "x,y\n1,3\n2,4\n");
+  struct stat st {};
+  ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_TRUE(temp_files(d.path()).empty());
+}
+
+TEST(OutputFiles, SymlinkTargetIsReplacedLinkStays) {
+  TempDir d;
+  fs::create_directory(d.path() / "real");
+  put(d.file("real/data.csv"), "old\n");
+  fs::create_symlink("real/data.csv", d.path() / "link.csv");
+  io::write_text_file(d.file("link.csv"), "new\n");
+  EXPECT_TRUE(fs::is_symlink(d.path() / "link.csv"));
+  EXPECT_EQ(slurp(d.file("real/data.csv")), "new\n");
+  EXPECT_TRUE(temp_files(d.path() / "real").empty());
+  // a dangling link: its target is created
+  fs::create_symlink("real/new.csv", d.path() / "dangling.csv");
+  io::write_text_file(d.file("dangling.csv"), "created\n");
+  EXPECT_TRUE(fs::is_symlink(d.path() / "dangling.csv"));
+  EXPECT_EQ(slurp(d.file("real/new.csv")), "created\n");
+}
+
+TEST(OutputFiles, ModeIsKept) {
+  TempDir d;
+  const std::string f = d.file("secret.csv");
+  put(f, "old\n");
+  ASSERT_EQ(::chmod(f.c_str(), 0600), 0);
+  io::write_columns(f, {"a"}, {{1.0}});
+  struct stat st {};
+  ASSERT_EQ(::stat(f.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
+  const std::string m = d.file("secret.mat");
+  io::write_columns(m, {"a"}, {{1.0}});
+  ASSERT_EQ(::chmod(m.c_str(), 0640), 0);
+  io::write_columns(m, {"a"}, {{2.0}});
+  ASSERT_EQ(::stat(m.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0640u);
+}
+
+TEST(OutputFiles, ReadOnlyFileIsRefusedAndUntouched) {
+  TempDir d;
+  const std::string f = d.file("ro.csv");
+  put(f, "keep me\n");
+  ASSERT_EQ(::chmod(f.c_str(), 0444), 0);
+  const std::string e = error_of([&] { io::write_columns(f, {"a"}, {{1.0}}); });
+  EXPECT_NE(e.find(f), std::string::npos) << e;
+  EXPECT_NE(e.find("read-only (mode 444)"), std::string::npos) << e;
+  EXPECT_EQ(slurp(f), "keep me\n");
+  EXPECT_TRUE(temp_files(d.path()).empty());
+}
+
+TEST(OutputFiles, HardLinksAreKept) {
+  TempDir d;
+  const std::string f = d.file("a.csv"), g = d.file("b.csv");
+  put(f, "old\n");
+  fs::create_hard_link(f, g);
+  io::write_columns(f, {"x"}, {{1.5}});
+  EXPECT_EQ(fs::hard_link_count(f), 2u);
+  EXPECT_EQ(slurp(g), "x\n1.5\n");
+  EXPECT_TRUE(temp_files(d.path()).empty());
+}
+
+TEST(OutputFiles, ErrorsLeaveNoTemporaryFileAndTheOldFile) {
+  TempDir d;
+  const std::string f = d.file("out.csv");
+  put(f, "old\n");
+  EXPECT_THROW(io::write_file_atomically(f, [](const std::string&) { throw Error("boom"); }), Error);
+  EXPECT_THROW(io::write_file_atomically(f, [](const std::string&) { throw std::runtime_error("boom"); }),
+               std::runtime_error);
+  EXPECT_EQ(slurp(f), "old\n");
+  EXPECT_TRUE(temp_files(d.path()).empty());
+}
+
+TEST(OutputFiles, RemoveTemporaryFilesRemovesLiveOnes) {
+  TempDir d;
+  const std::string f = d.file("out.csv");
+  std::string seen;
+  io::write_file_atomically(f, [&](const std::string& tmp) {
+    put(tmp, "partial");
+    seen = tmp;
+    ASSERT_TRUE(fs::exists(tmp));
+    io::remove_temporary_files();  // what the CLI's signal handler does
+    EXPECT_FALSE(fs::exists(tmp));
+    put(tmp, "done\n");  // (recreated so that this write can finish)
+  });
+  EXPECT_EQ(slurp(f), "done\n");
+  EXPECT_NE(seen.find("/.out.csv.tmp-"), std::string::npos) << seen;
+}
+
+TEST(OutputFiles, FullDeviceFailsDirectWrites) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string e = error_of([] { io::write_text_file("/dev/full", std::string(100000, 'x')); });
+  EXPECT_NE(e.find("/dev/full"), std::string::npos) << e;
+  EXPECT_NE(e.find("No space left"), std::string::npos) << e;
+  EXPECT_NE(error_of([] { io::write_columns("/dev/full", {"a"}, {std::vector<double>(100000, 1.0)}); }),
+            "(no error)");
+}
+
+// A small tmpfs holding an existing output: a write that does not fit fails and the old file
+// stays byte-identical (root only; skipped if mount fails).
+TEST(OutputFiles, FullFilesystemKeepsTheOldFile) {
+  TempDir d;
+  const std::string mnt = d.file("small");
+  fs::create_directory(mnt);
+  if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=64k") != 0)
+    GTEST_SKIP() << "cannot mount a 64 KiB tmpfs (" << std::strerror(errno) << "): full-disk case not tested";
+  struct Unmount {
+    std::string p;
+    ~Unmount() { ::umount2(p.c_str(), MNT_DETACH); }
+  } unmount{mnt};
+  const std::string csv = mnt + "/out.csv", mat = mnt + "/out.mat";
+  io::write_columns(csv, {"a"}, {{1, 2, 3}});
+  io::write_columns(mat, {"a"}, {{1, 2, 3}});
+  const std::string old_csv = slurp(csv), old_mat = slurp(mat);
+  std::vector<double> big(20000);
+  for (std::size_t i = 0; i < big.size(); ++i) big[i] = 1.0 / (static_cast<double>(i) + 3.0);  // incompressible-ish
+  const std::string e1 = error_of([&] { io::write_columns(csv, {"a"}, {big}); });
+  EXPECT_NE(e1.find(csv), std::string::npos) << e1;
+  const std::string e2 = error_of([&] { io::write_columns(mat, {"a", "b"}, {big, big}); });
+  EXPECT_NE(e2.find(mat), std::string::npos) << e2;
+  EXPECT_EQ(slurp(csv), old_csv);
+  EXPECT_EQ(slurp(mat), old_mat);
+  EXPECT_TRUE(temp_files(mnt).empty());
+}
+
+TEST(OutputFiles, OutputThatIsAnInputIsRefused) {
+  TempDir d;
+  const std::string data = d.file("d.csv");
+  put(data, "x,y\n1,2\n");
+  fs::create_symlink(data, d.path() / "link.csv");
+  fs::create_hard_link(data, d.path() / "hard.csv");
+  for (const std::string& out : {data, d.file("link.csv"), d.file("hard.csv"), d.file("./d.csv")}) {
+    const std::string e = error_of([&] { io::check_outputs_distinct({{"--out", out}}, {{"--data", data}}); });
+    EXPECT_NE(e.find("--out " + out + " and --data " + data + " are the same file"), std::string::npos) << e;
+  }
+  // outputs: the same existing file, or the same new path
+  EXPECT_NE(error_of([&] { io::check_outputs_distinct({{"--out", data}, {"--report", d.file("hard.csv")}}, {}); }),
+            "(no error)");
+  EXPECT_NE(error_of([&] {
+              io::check_outputs_distinct({{"--out", d.file("new.json")}, {"--report", d.file("./new.json")}}, {});
+            }),
+            "(no error)");
+  // distinct files, "-", empty paths and devices pass
+  io::check_outputs_distinct({{"--out", d.file("m.json")}, {"--report", ""}}, {{"--data", data}, {"--model", "-"}});
+  io::check_outputs_distinct({{"--out", "/dev/null"}, {"--report", "/dev/null"}}, {{"--data", "/dev/null"}});
+  EXPECT_EQ(slurp(data), "x,y\n1,2\n");
+}

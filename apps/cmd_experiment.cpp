@@ -69,7 +69,8 @@ void add_experiment(CLI::App& app, Action& action) {
       ->required()
       ->check(CLI::IsMember({"gpi-pid", "mpi-openloop", "mpi-pwm"}));
   cmd->add_option("--plant", args->plant, "Rig parameters (JSON; unknown keys are an error)");
-  cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)");
+  cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)")
+      ->check(non_negative_integer());
   cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");
   cmd->add_option("--out", args->out, "Directory for the time series (CSV), models and result.json");
   cmd->callback([args, &action] {
@@ -91,7 +92,8 @@ void add_experiment(CLI::App& app, Action& action) {
   auto dargs = std::make_shared<ExperimentArgs>();
   auto* demo = app.add_subcommand("demo", "The main job: the three experiments beside the papers' figures");
   demo->add_option("--plant", dargs->plant, "Rig parameters (JSON)");
-  demo->add_option("--seed", dargs->seed, "Seed of the rig's noise (default 1)");
+  demo->add_option("--seed", dargs->seed, "Seed of the rig's noise (default 1)")
+      ->check(non_negative_integer());
   demo->add_option("--out", dargs->out, "Directory for every experiment's outputs (default out/demo)")
       ->default_val("out/demo");
   demo->callback([dargs, &action] {

@@ -27,6 +27,8 @@ void add_report(CLI::App& app, Action& action);           // cmd_report.cpp: rep
 void add_evaluate(CLI::App& app, Action& action);         // cmd_evaluate.cpp: evaluate
 void add_export(CLI::App& app, Action& action);           // cmd_export.cpp: export (generated C)
 void set_command_line(int argc, char** argv);             // recorded in reports
+// CLI11 validator: a decimal integer >= 0 ("-1" would wrap to 2^64 - 1 in an unsigned).
+const CLI::Validator& non_negative_integer();
 const std::string& command_line();                        // the recorded command line
 
 // ---- shared by the subcommands (common.cpp) --------------------------------------

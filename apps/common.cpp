@@ -42,6 +42,17 @@ ModelParams read_model_source(const std::string& path) {
   return io::model_from_json(io::parse_json(text, "<stdin>"), "<stdin>");
 }
 
+const CLI::Validator& non_negative_integer() {
+  static const CLI::Validator v(
+      [](std::string& text) -> std::string {
+        const bool digits = !text.empty() && text.size() <= 19 &&
+                            std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
+        return digits ? std::string() : fmt::format("{} is not an integer in 0..9999999999999999999", text);
+      },
+      "INT>=0");
+  return v;
+}
+
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n) {
   const auto colon = text.find(':');
   if (colon == std::string::npos)

@@ -8,6 +8,7 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -87,7 +88,9 @@ int check_names(CLI::App& app, int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     std::string_view a = argv[i];
     if (a == "--") break;
-    if (a.size() < 2 || a[0] != '-' || is_number(a)) continue;
+    // values: "-", numbers, "-1,1" (a negative first number of a list)
+    if (a.size() < 2 || a[0] != '-' || is_number(a) || std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.')
+      continue;
     if (a.substr(0, 2) == "--") a = a.substr(0, a.find('='));
     else a = a.substr(0, 2);  // -xVALUE
     if (std::find(names.begin(), names.end(), a) != names.end()) continue;

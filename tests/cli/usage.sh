@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Usage errors (issue 13 item 7): exit code 1 as documented, the unknown name
+# reported (not a later "--model is required"), a close match suggested, and
+# strict integers (--seed -1 used to become 2^64 - 1).
+# Usage: bash usage.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+
+# expect <description> <exit code> <substring of stderr> -- command...
+expect() {
+  local what=$1 code=$2 needle=$3
+  shift 4
+  "$@" > "$T/stdout" 2> "$T/stderr"
+  local rc=$?
+  if [ $rc -ne "$code" ]; then
+    echo "FAIL: $what: exit $rc, expected $code"; cat "$T/stderr"; fails=$((fails + 1)); return
+  fi
+  if ! grep -qF -- "$needle" "$T/stderr"; then
+    echo "FAIL: $what: stderr lacks '$needle':"; cat "$T/stderr"; fails=$((fails + 1)); return
+  fi
+  echo "ok: $what"
+}
+
+expect "unknown option before missing required" 1 "unknown option --foo" -- "$BIN" simulate --foo
+expect "mistyped option suggested" 1 "did you mean --model?" -- "$BIN" simulate --modle m.json --input x.csv
+expect "mistyped option with =value" 1 "did you mean --output?" -- "$BIN" fit --outptu=x.csv
+expect "mistyped command suggested" 1 'unknown command "fitt" (did you mean fit?)' -- "$BIN" fitt
+expect "unrelated command lists the commands" 1 "commands: simulate, invert, fit" -- "$BIN" frobnicate
+expect "negative seed refused" 1 "--seed: -1 is not an integer" -- "$BIN" experiment gpi-pid --seed -1
+expect "fractional seed refused" 1 "--seed: 1.5 is not an integer" -- "$BIN" fit --seed=1.5
+expect "missing value is a usage error (1, not CLI11's 10x)" 1 "--model" -- "$BIN" simulate --model
+expect "no command" 1 "" -- "$BIN"
+# Negative numbers and "-" are values, not options.
+printf 'x\n0\n0.1\n0.2\n' > "$T/x.csv"
+cat > "$T/pi.json" <<'JSON'
+{"model": "pi", "r": [0, 0.1], "p": [1, 0.5]}
+JSON
+if "$BIN" invert --model "$T/pi.json" --input "$T/x.csv" --limits=-1,1 --output - > "$T/y.csv" 2> "$T/err" &&
+   "$BIN" simulate --model - --input "$T/x.csv" --output - < "$T/pi.json" > "$T/y.csv" 2> "$T/err"; then
+  echo "ok: negative number as a value"
+else
+  echo "FAIL: negative number as a value:"; cat "$T/err"; fails=$((fails + 1))
+fi
+"$BIN" fit --help > /dev/null 2>&1 || { echo "FAIL: --help exits non-zero"; fails=$((fails + 1)); }
+[ $fails -eq 0 ] || { echo "$fails failure(s)"; exit 1; }
+echo "all usage checks passed"

@@ -106,7 +106,10 @@ cat "$T/fifo.csv" > "$T/fifo.got" &
 wait
 [ -p "$T/fifo.csv" ] || fail "the FIFO was replaced"
 [ "$(wc -l < "$T/fifo.got")" -eq 501 ] || fail "the FIFO reader got $(wc -l < "$T/fifo.got") lines"
-"$BIN" "${SIM[@]}" -o /dev/stdout | head -1 | grep -qx 'input,output'
+"$BIN" "${SIM[@]}" -o /dev/stdout > "$T/stdout.csv"  # a regular file behind /dev/stdout: written, not replaced
+[ "$(head -1 "$T/stdout.csv")" = "input,output" ] && [ "$(wc -l < "$T/stdout.csv")" -eq 501 ] || fail "/dev/stdout"
+"$BIN" "${SIM[@]}" -o /dev/stdout | cat > "$T/piped.csv"
+[ "$(wc -l < "$T/piped.csv")" -eq 501 ] || fail "/dev/stdout into a pipe"
 echo "FIFO and /dev/stdout: ok"
 
 # ---- symlinks, modes, read-only files, hard links -------------------------------------------

@@ -12,7 +12,7 @@
 #include <unordered_set>
 
 #include "hysteron/error.hpp"
-#include "hysteron/io/table.hpp"
+#include "hysteron/io/files.hpp"
 
 namespace hysteron::io {
 
@@ -306,7 +306,10 @@ json parse_json(std::string_view text, std::string_view where) {
         last_key = parsed.get<std::string>();
         if (!keys.back().insert(last_key).second) {
           std::string at;
-          for (std::size_t i = 1; i < path.size(); ++i) at += "/" + (path[i].empty() ? std::string("[]") : path[i]);
+          for (std::size_t i = 1; i < path.size(); ++i) {
+            at += '/';
+            at += path[i].empty() ? std::string_view("[]") : std::string_view(path[i]);
+          }
           throw Error(fmt::format("{}: not valid here: key \"{}\" appears twice in the object at {}", where, last_key,
                                   at.empty() ? std::string("the top level") : at));
         }

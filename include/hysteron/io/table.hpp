@@ -28,6 +28,8 @@
 #include <functional>
 #include <string>
 #include <string_view>
+
+#include "hysteron/io/files.hpp"  // write_file_atomically, write_text_file, check_outputs_distinct
 #include <vector>
 
 namespace hysteron::io {
@@ -80,41 +82,5 @@ std::vector<double> read_column(const std::string& path, const std::string& colu
 // is created.
 void write_columns(const std::string& path, const std::vector<std::string>& names,
                    const std::vector<std::vector<double>>& columns);
-
-// Writes `path` through write(file), which fills the file it is given:
-//  - a new path or an existing regular file: a new temporary file ".NAME.tmp-..." in the
-//    same directory is filled, flushed to disk, then renamed over `path` (atomic: readers see
-//    the old or the new file, never a torn one). The existing file's permission bits (and, as
-//    root, its owner) are kept. A symbolic link is followed: its target is replaced, the link
-//    stays. A file without any write permission bit (e.g. mode 444), or one the caller cannot
-//    write, is refused and left untouched. A file with several hard links (st_nlink > 1) keeps
-//    them: once the temporary file is complete, its content is copied into the same inode;
-//    that copy is NOT atomic (a crash during it leaves a partly written file).
-//  - "-": write("/dev/stdout"); an existing device, FIFO or socket (/dev/null, /dev/stdout, a
-//    named pipe): written directly, never replaced.
-// If write throws or any write, flush or close fails, the temporary file is removed, `path` is
-// left as it was and a hysteron::Error naming `path` is thrown. Temporary files alive when the
-// process is killed by a signal are removed by remove_temporary_files(), if the program's
-// handler calls it (the hysteron CLI does, for SIGINT, SIGTERM and SIGHUP).
-void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write);
-// write_file_atomically with a text body; path "-" writes to stdout.
-void write_text_file(const std::string& path, std::string_view text);
-
-// Removes the temporary files of the writes in progress (at most 64 at once are tracked).
-// Async-signal-safe (no allocation, unlink(2) only): meant for a program's signal handler,
-// which should then restore the default action and re-raise the signal. The library installs
-// no handler itself (a host program such as Python keeps its own).
-void remove_temporary_files() noexcept;
-
-// A file named on the command line and the option that named it, e.g. {"--out", "m.json"}.
-struct NamedPath {
-  std::string option;
-  std::string path;
-};
-// Throws hysteron::Error naming both options and files if an output is the same file as an
-// input (same device and inode: through symbolic and hard links), or if two outputs are the
-// same file (an existing one, or the same new path). Empty paths, "-" and non-regular files
-// (devices, FIFOs) are never "the same file". Call it before reading any input.
-void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
 
 }  // namespace hysteron::io

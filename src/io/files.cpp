@@ -1,0 +1,303 @@
+// Output files (files.hpp): atomic replacement of regular files, direct writes to
+// devices and FIFOs, temporary files removed on signals, and the same-file check of
+// outputs against inputs. No matio here: the model-file writer (and so the C ABI)
+// needs these without the data-table code.
+#include "hysteron/io/files.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron::io {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_all(int fd, std::string_view text, const std::string& where) {
+  while (!text.empty()) {
+    const ssize_t w = ::write(fd, text.data(), text.size());
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
+    }
+    text.remove_prefix(static_cast<std::size_t>(w));
+  }
+}
+
+std::atomic<unsigned> temp_counter{0};
+
+}  // namespace
+
+// ---- writing --------------------------------------------------------------------
+
+namespace {
+
+// Temporary files being written, for remove_temporary_files() (called from signal handlers):
+// fixed storage, no allocation; a slot is claimed (1), filled, then published (2).
+constexpr std::size_t kTempSlots = 64, kTempPathMax = 4096;
+struct TempSlot {
+  std::atomic<int> state{0};
+  char path[kTempPathMax];
+};
+TempSlot g_temp_slots[kTempSlots];
+static_assert(std::atomic<int>::is_always_lock_free);
+
+int register_temp(const std::string& p) {
+  if (p.size() >= kTempPathMax) return -1;
+  for (std::size_t i = 0; i < kTempSlots; ++i) {
+    int expected = 0;
+    if (g_temp_slots[i].state.compare_exchange_strong(expected, 1)) {
+      std::memcpy(g_temp_slots[i].path, p.c_str(), p.size() + 1);
+      g_temp_slots[i].state.store(2);
+      return static_cast<int>(i);
+    }
+  }
+  return -1;  // more than 64 writes at once: this one is only removed on errors, not on signals
+}
+
+void unregister_temp(int slot) {
+  if (slot >= 0) g_temp_slots[slot].state.store(0);
+}
+
+// A live temporary file: removed (and unregistered) unless released after the rename.
+class TempFile {
+ public:
+  explicit TempFile(std::string p) : path_(std::move(p)), slot_(register_temp(path_)) {}
+  ~TempFile() {
+    if (!path_.empty()) ::unlink(path_.c_str());
+    unregister_temp(slot_);
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const std::string& path() const { return path_; }
+  void release() {
+    unregister_temp(slot_);
+    slot_ = -1;
+    path_.clear();
+  }
+
+ private:
+  std::string path_;
+  int slot_;
+};
+
+// Follows symbolic links (a chain of at most 40) to the file they name; the last target may not exist.
+std::string resolve_symlinks(const std::string& path) {
+  fs::path p(path);
+  for (int hops = 0;; ++hops) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
+    if (hops >= 40) throw Error(fmt::format("{}: too many levels of symbolic links", path));
+    std::error_code ec;
+    fs::path target = fs::read_symlink(p, ec);
+    if (ec) throw Error(fmt::format("{}: cannot read the symbolic link: {}", path, ec.message()));
+    p = target.is_absolute() ? target : (p.has_parent_path() ? p.parent_path() / target : target);
+  }
+}
+
+void fsync_path(const std::string& p, const std::string& where) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(fmt::format("{}: cannot reopen the temporary file: {}", where, std::strerror(errno)));
+  const int rc = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (rc != 0 && err != EINVAL && err != EROFS) throw Error(fmt::format("{}: write failed: {}", where, std::strerror(err)));
+}
+
+// Copies the finished temporary file into the existing inode of `target` (kept hard links).
+void copy_into(const std::string& tmp, const std::string& target, const std::string& where) {
+  const int in = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+  if (in < 0) throw Error(fmt::format("{}: cannot reopen the temporary file: {}", where, std::strerror(errno)));
+  const int out = ::open(target.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (out < 0) {
+    const int err = errno;
+    ::close(in);
+    throw Error(fmt::format("{}: cannot open for writing: {}", where, std::strerror(err)));
+  }
+  std::vector<char> buf(1 << 16);
+  try {
+    for (;;) {
+      const ssize_t r = ::read(in, buf.data(), buf.size());
+      if (r < 0 && errno == EINTR) continue;
+      if (r < 0) throw Error(fmt::format("{}: cannot read the temporary file: {}", where, std::strerror(errno)));
+      if (r == 0) break;
+      write_all(out, std::string_view(buf.data(), static_cast<std::size_t>(r)), where);
+    }
+    if (::fsync(out) != 0 && errno != EINVAL) throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
+  } catch (...) {
+    ::close(in);
+    ::close(out);
+    throw;
+  }
+  ::close(in);
+  if (::close(out) != 0) throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
+}
+
+[[noreturn]] void rethrow_named(const std::string& path) {
+  try {
+    throw;
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    if (msg.rfind(path, 0) == 0) throw;
+    throw Error(fmt::format("{}: {}", path, msg));
+  }
+}
+
+}  // namespace
+
+void remove_temporary_files() noexcept {
+  for (auto& slot : g_temp_slots)
+    if (slot.state.load() == 2) ::unlink(slot.path);
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write) {
+  if (path.empty()) throw Error("output path is empty");
+  if (path == "-") {  // standard output: written directly
+    write("/dev/stdout");
+    return;
+  }
+  if (path == "/dev/stdout" || path == "/dev/stderr" || path.starts_with("/dev/fd/") ||
+      path.starts_with("/proc/self/fd/")) {  // a descriptor of this process, whatever it is open on
+    write(path);
+    return;
+  }
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw Error(fmt::format("{}: is a directory; expected a file name", path));
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    // a device, FIFO or socket (/dev/null, /dev/stdout, ...): written in place (renaming a file
+    // over it would replace it)
+    try {
+      write(path);
+    } catch (...) {
+      rethrow_named(path);
+    }
+    return;
+  }
+  const std::string real = resolve_symlinks(path);  // a symlink's target is replaced, the link stays
+  const bool exists = ::stat(real.c_str(), &st) == 0;
+  const fs::path target(real);
+  if (!target.has_filename()) throw Error(fmt::format("{}: is a directory; expected a file name", path));
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(fmt::format("{}: directory {} does not exist", path, dir.string()));
+  if (exists) {
+    if ((st.st_mode & 0222) == 0)
+      throw Error(fmt::format("{}: is read-only (mode {:03o}); not replacing it (make it writable or choose another "
+                              "output file)",
+                              path, st.st_mode & 07777));
+    if (::access(real.c_str(), W_OK) != 0)
+      throw Error(fmt::format("{}: not writable ({}); not replacing it", path, std::strerror(errno)));
+  }
+  std::optional<TempFile> tmp;
+  int fd = -1;
+  std::random_device rd;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    tmp.emplace((dir / fmt::format(".{}.tmp-{}-{}-{:08x}", target.filename().string(), ::getpid(), temp_counter++,
+                                   rd()))
+                    .string());
+    fd = ::open(tmp->path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) {
+      const int err = errno;
+      tmp->release();  // not ours
+      if (err != EEXIST)
+        throw Error(fmt::format("{}: cannot create a temporary file in {}: {}", path, dir.string(), std::strerror(err)));
+    }
+  }
+  if (fd < 0) throw Error(fmt::format("{}: cannot create a temporary file in {}", path, dir.string()));
+  if (exists) {
+    // keep the existing file's permission bits (and, where allowed, its owner)
+    (void)::fchmod(fd, st.st_mode & 07777);
+    if (::geteuid() == 0) (void)::fchown(fd, st.st_uid, st.st_gid);
+  }
+  ::close(fd);
+  try {
+    write(tmp->path());
+    // flush to disk before the rename, so a crash leaves the old or the new file, never a torn one
+    fsync_path(tmp->path(), path);
+    if (exists && st.st_nlink > 1) {
+      // hard links: the new content goes into the same inode (not atomic: see the header)
+      copy_into(tmp->path(), real, path);
+      return;  // ~TempFile removes the temporary file
+    }
+    if (std::rename(tmp->path().c_str(), real.c_str()) != 0)
+      throw Error(fmt::format("{}: cannot rename the temporary file into place: {}", path, std::strerror(errno)));
+    tmp->release();
+  } catch (const Error&) {
+    rethrow_named(path);
+  }
+}
+
+void write_text_file(const std::string& path, std::string_view text) {
+  if (path == "-" || path == "/dev/stdout") {
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) throw Error("writing to stdout failed");
+    return;
+  }
+  write_file_atomically(path, [&](const std::string& tmp) {
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+    if (fd < 0) throw Error(fmt::format("cannot open for writing: {}", std::strerror(errno)));
+    try {
+      write_all(fd, text, path);
+    } catch (...) {
+      ::close(fd);
+      throw;
+    }
+    if (::close(fd) != 0) throw Error(fmt::format("write failed: {}", std::strerror(errno)));
+  });
+}
+
+namespace {
+// The file a path names (through symlinks), if it exists and is a regular file.
+std::optional<std::pair<dev_t, ino_t>> file_id(const std::string& path) {
+  struct stat st {};
+  if (path.empty() || path == "-" || ::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
+  return std::pair<dev_t, ino_t>{st.st_dev, st.st_ino};
+}
+
+std::string same_file_name(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  return ec ? path : p.string();
+}
+}  // namespace
+
+void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
+  auto refuse = [](const NamedPath& out, const NamedPath& other, std::string_view what) {
+    throw Error(fmt::format("{} {} and {} {} are the same file; refusing to overwrite {} (choose another output file)",
+                            out.option, out.path, other.option, other.path, what));
+  };
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const auto id = file_id(outputs[i].path);
+    if (id)
+      for (const auto& in : inputs)
+        if (file_id(in.path) == id) refuse(outputs[i], in, "an input");
+    for (std::size_t k = 0; k < i; ++k) {
+      if (outputs[i].path.empty() || outputs[k].path.empty() || outputs[i].path == "-" || outputs[k].path == "-")
+        continue;
+      const auto other = file_id(outputs[k].path);
+      struct stat st {};
+      const bool special = ::stat(outputs[i].path.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
+      if ((id && other && *id == *other) || (!id && !other && !special &&
+                                             same_file_name(outputs[i].path) == same_file_name(outputs[k].path)))
+        refuse(outputs[i], outputs[k], "another output");
+    }
+  }
+}
+
+}  // namespace hysteron::io

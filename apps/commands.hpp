@@ -29,6 +29,8 @@ void add_export(CLI::App& app, Action& action);           // cmd_export.cpp: exp
 void set_command_line(int argc, char** argv);             // recorded in reports
 // CLI11 validator: a decimal integer >= 0 ("-1" would wrap to 2^64 - 1 in an unsigned).
 const CLI::Validator& non_negative_integer();
+// --limits LO,HI (simulate/invert, export): finite numbers with LO < HI, else hysteron::Error.
+Limits parse_limits(const std::string& text);
 const std::string& command_line();                        // the recorded command line
 
 // ---- shared by the subcommands (common.cpp) --------------------------------------

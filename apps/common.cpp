@@ -42,6 +42,30 @@ ModelParams read_model_source(const std::string& path) {
   return io::model_from_json(io::parse_json(text, "<stdin>"), "<stdin>");
 }
 
+namespace {
+double parse_limit(std::string_view s, std::string_view what) {
+  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+  while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+  double v = 0.0;
+  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
+    throw Error(fmt::format("--limits: {} \"{}\" is not a finite number (expected LO,HI, e.g. --limits=0,0.6)", what, s));
+  return v;
+}
+
+}  // namespace
+
+Limits parse_limits(const std::string& text) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos)
+    throw Error(fmt::format("--limits: expected LO,HI (e.g. --limits=0,0.6), got \"{}\"", text));
+  Limits l;
+  l.lo = parse_limit(std::string_view(text).substr(0, comma), "LO");
+  l.hi = parse_limit(std::string_view(text).substr(comma + 1), "HI");
+  if (!(l.lo < l.hi)) throw Error(fmt::format("--limits: LO = {} must be < HI = {}", l.lo, l.hi));
+  return l;
+}
+
 const CLI::Validator& non_negative_integer() {
   static const CLI::Validator v(
       [](std::string& text) -> std::string {

@@ -434,6 +434,32 @@ TEST(Csv, ColumnSelectionErrorsAndRaggedRows) {
   expect_error([&] { io::read_column(dir.file("nope.csv"), "a"); }, {"nope.csv", "cannot open"});
 }
 
+// Issue 13: a header naming two columns alike selected the first one silently.
+TEST(Csv, DuplicateHeaderNamesRefused) {
+  TempDir dir;
+  const auto path = dir.write("d.csv", "# comment\nt,x,y,x\n0,1,2,3\n");
+  expect_error([&] { io::read_column(path, "y"); }, {path + ":2", "column name \"x\" appears twice", "columns 2 and 4"});
+  // Empty names (a leading index column without a header) may repeat.
+  const auto ok = dir.write("e.csv", ",,x\n1,2,3\n");
+  EXPECT_EQ(io::read_column(ok, "x"), std::vector<double>{3.0});
+}
+
+// Issue 13: a model with 10^7 operators was accepted with no cap.
+TEST(ModelFile, OperatorCountIsCapped) {
+  hysteron::PiParams pi;
+  pi.r.assign(hysteron::max_operators + 1, 0.5);
+  pi.p.assign(hysteron::max_operators + 1, 1.0);
+  expect_error([&] { hysteron::Model m(pi); }, {"r has 100001 entries", "at most 100000"});
+  pi.r.resize(hysteron::max_operators);
+  pi.p.resize(hysteron::max_operators);
+  EXPECT_NO_THROW(hysteron::Model m(pi));
+  hysteron::MpiDeadzoneParams dz;
+  dz.z.assign(hysteron::max_operators + 1, 0.5);
+  dz.g.assign(hysteron::max_operators + 1, 0.1);
+  dz.q = 1.0;
+  expect_error([&] { hysteron::Model m(dz); }, {"z has 100001 entries"});
+}
+
 // ---- writing ------------------------------------------------------------------------
 
 TEST(Write, CsvRoundTripIsExact) {

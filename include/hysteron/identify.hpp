@@ -350,8 +350,8 @@ class Rls {
   double last_ = 0.0;
 };
 
-// Batch helper: runs Rls over the record `passes` times (the operator state
-// restarts at each pass) and returns the model with the final weights.
+// Batch helper: runs Rls over the record `passes` times (1..10000; the operator
+// state restarts at each pass) and returns the model with the final weights.
 ModelParams rls_fit(const ModelParams& model, std::span<const double> x, std::span<const double> y,
                     double lambda = 1.0, int passes = 1, InitialState initial = InitialState::virgin);
 

@@ -50,6 +50,10 @@ struct Limits {
   bool operator==(const Limits&) const = default;
 };
 
+// Largest number of operators (plays, or dead zones) of one model: a model file
+// with more is refused at load (a 10^7-operator file used to be accepted).
+inline constexpr std::size_t max_operators = 100000;
+
 // The map between the user's raw units and the model's own coordinates, shared by
 // every model kind (docs/model-files.md, "Units map"):
 //   x_m = (x - input_origin) / input_scale              model input

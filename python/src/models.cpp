@@ -65,9 +65,15 @@ or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
       .def("reset_relaxed", &Model::reset_relaxed, py::arg("x0"), "Start at rest at input x0.")
       .def_property_readonly("state", [](const Model& s) { return to_numpy(s.state().y); },
                              "Operator outputs y_i.")
-      .def("to_dict", [](const Model& s) { return from_json(io::model_to_json(s.params())); })
+      .def("to_dict", [](const Model& s) { return from_json(io::model_to_json(s.params())); },
+           "The model's parameters as a dict with the model-file keys (docs/model-files.md); "
+           "Model(m.to_dict()) is the same model.")
       .def("save", [](const Model& s, const std::string& path) { io::write_model_file(path, s.params()); },
-           py::arg("path"));
+           py::arg("path"),
+           "Write the model file (JSON) to path, atomically: on an error the old file is left as it was.")
+      .def("__repr__", [](const Model& s) {
+        return fmt::format("<hysteron.Model {} with {} operators>", s.name(), s.num_operators());
+      });
 
   py::class_<Inverse>(m, "Inverse", R"doc(
 Exact inverse of a model: desired output -> input. Analytical for pi, gpi and
@@ -82,17 +88,24 @@ Outputs beyond reach saturate at the input limits (lo, hi).)doc")
              return Inverse(params_from(spec), opt);
            }),
            py::arg("spec"), py::arg("limits") = py::none())
-      .def("step", &Inverse::step, py::arg("y_desired"))
+      .def("step", &Inverse::step, py::arg("y_desired"),
+           "One sample: the input that makes the model reach y_desired (clamped to the limits; "
+           "updates the state). A NaN holds the previous input.")
       .def(
           "simulate",
-          [](Inverse& s, const DoubleArray& y) { return to_numpy(s.simulate(as_span(y))); }, py::arg("y"))
-      .def("reset", py::overload_cast<>(&Inverse::reset))
+          [](Inverse& s, const DoubleArray& y) { return to_numpy(s.simulate(as_span(y))); }, py::arg("y"),
+          "Inputs for an array of desired outputs, continuing from the current state.")
+      .def("reset", py::overload_cast<>(&Inverse::reset), "Back to the virgin state.")
       .def(
           "start_from",
           [](Inverse& s, const Model& model) { s.reset(model.state()); }, py::arg("model"),
           "Start consistently from a forward model's current state.")
       .def_property_readonly("saturated", &Inverse::saturated, "True if the last step hit an input limit.")
-      .def_property_readonly("limits", [](const Inverse& s) { return std::make_pair(s.limits().lo, s.limits().hi); });
+      .def_property_readonly("limits", [](const Inverse& s) { return std::make_pair(s.limits().lo, s.limits().hi); },
+                             "Input limits (lo, hi) the inverse saturates at.")
+      .def("__repr__", [](const Inverse& s) {
+        return fmt::format("<hysteron.Inverse limits=({}, {})>", s.limits().lo, s.limits().hi);
+      });
 }
 
 }  // namespace hysteron::python

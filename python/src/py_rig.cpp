@@ -1,8 +1,10 @@
 // Bindings of the simulated muscle rig and the papers' signals.
 #include <cmath>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "hysteron/error.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/signals.hpp"
 #include "more.hpp"
@@ -89,17 +91,31 @@ for a given seed.)doc")
           "run_pressure",
           [](PamRig& r, const DoubleArray& profile, double control_period) {
             const auto p = as_span(profile);
-            if (!(control_period > 0)) throw py::value_error("control_period must be > 0");
-            const auto every = std::max<long>(1, std::lround(control_period / r.dt()));
+            // A period that is not a whole number of rig steps was rounded silently.
+            const double ratio = control_period / r.dt();
+            const long every = std::isfinite(ratio) && ratio < 1e12 ? std::lround(ratio) : 0;
+            if (!(control_period > 0) || every < 1 || std::abs(ratio - static_cast<double>(every)) > 1e-9 * ratio)
+              throw Error(fmt::format("run_pressure: control_period = {} s must be a whole multiple (1..1e12) of the "
+                                      "rig step dt = {} s",
+                                      control_period, r.dt()));
             std::vector<double> t, cmd, pr, x, xm;
             for (auto* v : {&t, &cmd, &pr, &x, &xm}) v->reserve(p.size());
             {
               py::gil_scoped_release release;
               RigInputs in;
+              long steps = 0;
               for (double u : p) {
                 in.pressure_command = u;
                 RigOutputs o;
-                for (long k = 0; k < every; ++k) o = r.step(in);
+                for (long k = 0; k < every; ++k) {
+                  o = r.step(in);
+                  // Ctrl-C: Python's signal handlers run when the GIL is taken back
+                  // (every 2^14 rig steps, ~1 ms of work).
+                  if ((++steps & 0x3fff) == 0) {
+                    py::gil_scoped_acquire gil;
+                    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+                  }
+                }
                 t.push_back(o.time);
                 cmd.push_back(u);
                 pr.push_back(o.pressure_measured * 1e-6);

@@ -80,3 +80,15 @@ def test_model_dict_accepts_numpy_scalars_and_arrays():
     np.testing.assert_array_equal(hysteron.Model(spec).simulate(x), hysteron.Model(GPI).simulate(x))
     with pytest.raises(hysteron.Error, match="cannot convert"):
         hysteron.Model(dict(GPI, q=object()))
+
+
+def test_public_methods_have_docstrings_and_repr():
+    # Issue 13: Inverse.simulate, Inverse.step, Model.save and Model.to_dict had none.
+    # pybind11 writes the signature on the first line; a docstring follows after a blank line.
+    for cls, names in ((hysteron.Model, ("step", "simulate", "reset", "save", "to_dict")),
+                       (hysteron.Inverse, ("step", "simulate", "reset"))):
+        for name in names:
+            lines = [l for l in (getattr(cls, name).__doc__ or "").splitlines() if l.strip()]
+            assert len(lines) >= 2, f"{cls.__name__}.{name} has no docstring: {lines}"
+    assert repr(hysteron.Model(GPI)) == "<hysteron.Model gpi with 10 operators>"
+    assert repr(hysteron.Inverse(GPI)).startswith("<hysteron.Inverse limits=(0")

@@ -35,6 +35,8 @@ void add_operators(Structure<double>& s, const std::vector<double>& r, const std
                    std::string_view model) {
   if (r.size() != p.size())
     throw Error(detail::format("{}: r has {} entries but p has {} (one weight per threshold)", model, r.size(), p.size()));
+  if (r.size() > max_operators)
+    throw Error(detail::format("{}: r has {} entries; at most {} operators are supported", model, r.size(), max_operators));
   std::vector<std::size_t> idx(r.size());
   std::iota(idx.begin(), idx.end(), 0);
   for (std::size_t i = 0; i < r.size(); ++i) {
@@ -91,7 +93,8 @@ struct CanonicalVisitor {
     if (!m.r.empty() || !m.p.empty()) {
       add_operators(s, m.r, m.p, "gpi");
     } else {
-      if (m.n < 0 || m.n > 100000) throw Error(detail::format("gpi: n must be in 0..100000, got {}", m.n));
+      if (m.n < 0 || static_cast<std::size_t>(m.n) > max_operators)
+        throw Error(detail::format("gpi: n must be in 0..{}, got {}", max_operators, m.n));
       require_finite(m.rho, "gpi", "rho");
       require_finite(m.tau, "gpi", "tau");
       require_finite(m.alpha, "gpi", "alpha");
@@ -115,6 +118,8 @@ struct CanonicalVisitor {
     check_limits(m.input_limits, "mpi-deadzone");
     s.q = m.q;
     add_operators(s, m.r, m.p, "mpi-deadzone");
+    if (m.z.size() > max_operators)
+      throw Error(detail::format("mpi-deadzone: z has {} entries; at most {} dead zones are supported", m.z.size(), max_operators));
     if (m.z.size() != m.g.size())
       throw Error(detail::format("mpi-deadzone: z has {} entries but g has {} (one weight per dead zone)", m.z.size(), m.g.size()));
     s.has_dead_zones = true;

@@ -367,7 +367,7 @@ ModelParams Rls::params() const {
 ModelParams rls_fit(const ModelParams& model, std::span<const double> x, std::span<const double> y, double lambda,
                     int passes, InitialState initial) {
   detail::check_record(x, y, "rls_fit");
-  if (passes < 1) throw Error(fmt::format("rls_fit: passes must be >= 1, got {}", passes));
+  if (passes < 1 || passes > 10000) throw Error(fmt::format("rls_fit: passes must be in 1..10000, got {}", passes));
   Rls rls(model, lambda);
   for (int pass = 0; pass < passes; ++pass) {
     rls.reset_state(initial, x[0]);

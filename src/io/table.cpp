@@ -177,6 +177,12 @@ Table read_text_table(const std::string& path, const ReadOptions& opt) {
       first = false;
       if (have_header) {
         for (auto f : fields) t.names.emplace_back(unquote(f));
+        // A name given twice would select the first column silently.
+        for (std::size_t i = 0; i < t.names.size(); ++i)
+          for (std::size_t k = 0; k < i; ++k)
+            if (!t.names[i].empty() && t.names[i] == t.names[k])
+              throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one",
+                                      path, lineno, t.names[i], k + 1, i + 1));
         if (nl == all.size()) break;
         continue;
       }

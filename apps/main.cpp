@@ -131,6 +131,7 @@ int main(int argc, char** argv) {
   hysteron::cli::add_experiment(app, action);
   hysteron::cli::add_report(app, action);
   hysteron::cli::add_export(app, action);
+  hysteron::cli::add_sweep(app, action);
   if (const int rc = check_names(app, argc, argv); rc >= 0) return rc;
   try {
     app.parse(argc, argv);

@@ -1,0 +1,143 @@
+// hysteron sweep EXPERIMENT... --vary PATH=V1,V2 ... | --grid FILE | --set documented:
+// the papers' experiments over plant variants, on all cores (docs/plant.md, "Plant variants").
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
+#include "hysteron/io/files.hpp"
+#include "hysteron/sweep.hpp"
+
+namespace hysteron::cli {
+
+namespace {
+
+struct SweepArgs {
+  std::vector<std::string> experiments;
+  std::vector<std::string> vary;
+  std::string grid;
+  std::string set;
+  std::string plant;
+  std::uint64_t seed = 1;
+  unsigned jobs = 0;
+  std::string out;
+  std::string report;
+  bool json = false;
+};
+
+// Progress on stderr: a bar redrawn in place on a terminal, else one line per finished run.
+class Progress {
+ public:
+  Progress() : tty_(::isatty(STDERR_FILENO) == 1), start_(std::chrono::steady_clock::now()) {}
+  void operator()(const SweepProgress& p) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const std::string status = p.ok ? "ok" : "FAILED";
+    if (!tty_) {
+      fmt::print(stderr, "sweep: {}/{} {} {}: {} ({:.1f} s)\n", p.done, p.total, p.experiment, p.variant, status,
+                 p.wall_time_s);
+      return;
+    }
+    constexpr std::size_t width = 30;
+    const std::size_t filled = p.total ? width * p.done / p.total : width;
+    const double eta = p.done ? elapsed * static_cast<double>(p.total - p.done) / static_cast<double>(p.done) : 0.0;
+    fmt::print(stderr, "\r\033[K[{}{}] {}/{} {:.0f} s, ~{:.0f} s left  {} {}: {}", std::string(filled, '#'),
+               std::string(width - filled, '-'), p.done, p.total, elapsed, eta, p.experiment, p.variant, status);
+    if (p.done == p.total) fmt::print(stderr, "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool tty_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+int run_sweep_command(const SweepArgs& a) {
+  // outputs must not be inputs; nothing is read before this check
+  std::vector<io::NamedPath> outputs, inputs;
+  if (!a.out.empty()) outputs.push_back({"--out", a.out});
+  if (!a.report.empty()) outputs.push_back({"--report", a.report});
+  if (!a.grid.empty()) inputs.push_back({"--grid", a.grid});
+  if (!a.plant.empty()) inputs.push_back({"--plant", a.plant});
+  io::check_outputs_distinct(outputs, inputs);
+  if (a.json && a.out == "-") throw Error("--json and --out - both write to stdout: choose one");
+  if (a.report == "-") throw Error("--report -: the HTML page needs a file name");
+
+  SweepOptions o;
+  o.seed = a.seed;
+  o.jobs = a.jobs;
+  for (const auto& e : a.experiments) {
+    if (e == "all") {
+      for (const auto& n : experiment_names()) o.experiments.push_back(n);
+    } else {
+      o.experiments.push_back(e);
+    }
+  }
+  if (!a.plant.empty()) o.base = load_rig_params(a.plant);
+  if (a.vary.empty() && a.grid.empty() && a.set.empty())
+    throw Error(fmt::format("sweep: no variants: give --vary PATH=V1,V2,..., --grid FILE.json or --set {}",
+                            documented_set_name));
+  if (!a.set.empty()) {
+    if (a.set != documented_set_name)
+      throw Error(fmt::format("--set {}: unknown set (the one built-in set is '{}')", a.set, documented_set_name));
+    for (auto& v : documented_variants()) o.variants.push_back(std::move(v));
+  }
+  for (const auto& spec : a.vary)
+    for (auto& v : parse_vary(spec)) o.variants.push_back(std::move(v));
+  if (!a.grid.empty())
+    for (auto& v : read_variant_grid(a.grid)) o.variants.push_back(std::move(v));
+
+  Progress progress;
+  o.progress = [&progress](const SweepProgress& p) { progress(p); };
+  const SweepResult r = run_sweep(o);
+
+  // the page first (gnuplot may fail), then the files, each written atomically
+  std::string html;
+  if (!a.report.empty()) html = report::sweep_report_html(r, command_line());
+  if (!a.out.empty()) io::write_text_file(a.out, r.csv());
+  if (!a.report.empty()) io::write_text_file(a.report, html);
+  if (a.json)
+    fmt::print("{}\n", r.to_json().dump(2));
+  else if (a.out != "-")
+    fmt::print("{}", r.text());
+  if (r.failures() > 0) {
+    fmt::print(stderr, "hysteron sweep: {} of {} run(s) failed (see the table)\n", r.failures(), r.runs.size());
+    return exit_not_converged;  // 2: a run failed (README, Command line; docs/plant.md)
+  }
+  return exit_ok;
+}
+
+}  // namespace
+
+void add_sweep(CLI::App& app, Action& action) {
+  auto args = std::make_shared<SweepArgs>();
+  auto* cmd = app.add_subcommand("sweep", "Run experiments over plant variants on all cores (docs/plant.md)");
+  std::string names;
+  for (const auto& n : experiment_names()) { names += (names.empty() ? "" : " | "); names += n; }
+  cmd->add_option("experiments", args->experiments, fmt::format("{} | all (one or more)", names))->required();
+  cmd->add_option("--vary", args->vary,
+                  "PATH=V1,V2,...: one variant per value, everything else nominal (e.g. load.mass=10,20,35, "
+                  "muscle.force_620=-15%,+15%; P1/P2=A1/A2,B1/B2 varies two parameters together); repeatable")
+      ->allow_extra_args(false);
+  cmd->add_option("--grid", args->grid, "JSON file listing explicit variants (docs/plant.md)");
+  cmd->add_option("--set", args->set, fmt::format("built-in set of variants: {} (issue 11's list, docs/plant.md)",
+                                                  documented_set_name));
+  cmd->add_option("--plant", args->plant, "Base rig parameters (JSON; default: the nominal rig)");
+  cmd->add_option("--seed", args->seed, "Seed of the rig's noise in every run (default 1)")
+      ->check(non_negative_integer());
+  cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
+      ->check(non_negative_integer())
+      ->check(CLI::Range(1u, 1024u));
+  cmd->add_option("--out", args->out, "The table (CSV): one row per experiment, variant, reference and kind");
+  cmd->add_option("--report", args->report, "HTML page: every error, target misses, RMS against each parameter");
+  cmd->add_flag("--json", args->json, "Print one JSON document instead of the text table");
+  cmd->callback([args, &action] { action = [args] { return run_sweep_command(*args); }; });
+}
+
+}  // namespace hysteron::cli

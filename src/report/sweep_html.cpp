@@ -1,0 +1,268 @@
+// The HTML page of a plant-variant sweep (sweep.hpp): the errors of every variant
+// and variant kind, the misses of issue 11's targets, and the RMS error against
+// each parameter varied one at a time (inline SVG through gnuplot, as html.cpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <limits>
+#include <map>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/files.hpp"
+#include "hysteron/report.hpp"
+#include "hysteron/sweep.hpp"
+
+namespace hysteron::report {
+
+namespace {
+
+std::string now_utc() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", &tm);
+  return buf;
+}
+
+std::string num(double v, int digits = 4) {
+  if (!std::isfinite(v)) return "&ndash;";
+  return fmt::format("{:.{}g}", v, digits);
+}
+
+const char* kind_color(const std::string& k) {
+  if (k == "compensated") return "#d62728";
+  if (k == "faithful") return "#1f77b4";
+  if (k == "baseline") return "#7f7f7f";
+  if (k == "learning") return "#2ca02c";
+  if (k == "adaptive") return "#9467bd";
+  return "";
+}
+
+// The unit of a rig parameter in its JSON form (SI), for the plots' axes.
+std::string unit_of(const std::string& path) {
+  static const std::map<std::string, std::string> units = {
+      {"load.mass", "kg"},          {"load.damping", "N s/m"},           {"load.gravity", "m/s^2"},
+      {"muscle.force_620", "N"},    {"muscle.rest_length", "m"},         {"muscle.effective_radius", "m"},
+      {"muscle.dead_volume", "m^3"}, {"muscle.reference_pressure", "Pa"}, {"muscle.rest_braid_angle", "rad"},
+      {"hysteresis.pressure_band", "Pa"}, {"hysteresis.creep_stiffness", "N/m"}, {"hysteresis.creep_time", "s"},
+      {"regulator.time_constant", "s"}, {"regulator.dead_time", "s"},     {"regulator.max_command", "Pa"},
+      {"regulator.proportional_band", "Pa"}, {"valves.pwm_frequency", "Hz"}, {"valves.on_delay", "s"},
+      {"valves.off_delay", "s"},    {"valves.min_pulse", "s"},           {"air.supply_pressure", "Pa"},
+      {"sensors.pressure_noise", "Pa"}, {"sensors.displacement_noise", "m"}};
+  const auto it = units.find(path);
+  return it == units.end() ? std::string() : it->second;
+}
+
+template <class T>
+void add_unique(std::vector<T>& v, const T& x) {
+  if (std::find(v.begin(), v.end(), x) == v.end()) v.push_back(x);
+}
+
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+std::string sweep_report_html(const SweepResult& r, const std::string& command_line) {
+  std::string names;
+  for (const auto& e : r.experiments) { names += (names.empty() ? "" : ", "); names += e; }
+  const std::string title = fmt::format("hysteron sweep: {} over {} rigs", names, r.variants.size());
+  std::string h = fmt::format(R"(<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="generator" content="hysteron {ver}">
+<title>{title}</title>
+<style>
+body {{ font-family: Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; background: #fff; }}
+h1 {{ font-size: 1.6em; margin-bottom: 0.2em; }}
+h2 {{ font-size: 1.25em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 1.8em; }}
+.meta {{ color: #555; font-size: 0.9em; }}
+code {{ background: #f4f4f4; padding: 0.1em 0.3em; border-radius: 3px; font-size: 0.9em; }}
+table {{ border-collapse: collapse; margin: 0.8em 0; font-size: 0.88em; }}
+th, td {{ border: 1px solid #ccc; padding: 0.25em 0.5em; text-align: right; }}
+th {{ background: #eef2f7; }}
+td.l, th.l {{ text-align: left; }}
+td.miss {{ background: #fde0e0; color: #a40000; font-weight: bold; }}
+tr.nominal td {{ background: #f3f8ee; }}
+tr.failed td {{ background: #fde0e0; }}
+figure.plot {{ margin: 1.2em 0; }}
+figure.plot svg {{ max-width: 100%; height: auto; border: 1px solid #e4e4e4; }}
+figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
+.warn {{ color: #a40000; }}
+</style>
+</head>
+<body>
+<h1>{title}</h1>
+<p class="meta">hysteron {ver} &middot; generated {date}<br>command: <code>{cmd}</code></p>
+)",
+                              fmt::arg("ver", hysteron_version), fmt::arg("title", html_escape(title)),
+                              fmt::arg("date", now_utc()), fmt::arg("cmd", html_escape(command_line)));
+  h += fmt::format(
+      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig, rig noise seed {}, {} at a "
+      "time: {:.1f} s of wall time for {} runs. Errors are contraction tracking errors in mm (reference against the "
+      "displacement sensor); the command range is the minimum and maximum pressure command in MPa over every variant "
+      "kind. <i>comp/nom</i>: the compensated RMS over its value on the nominal rig; <i>comp/base</i>: over the "
+      "baseline's RMS on the same rig. Cells in red miss issue 11's targets: compensated RMS at most the variant's "
+      "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0..0.6 "
+      "MPa.</p>\n",
+      r.seed, r.jobs, r.wall_time_s, r.runs.size());
+
+  // the variants
+  h += "<h2>Rigs</h2>\n<table>\n<tr><th class=\"l\">variant</th><th class=\"l\">overrides (values on the rig)</th>"
+       "<th class=\"l\">varied parameter</th><th>RMS limit [x nominal]</th></tr>\n";
+  for (const auto& v : r.variants) {
+    std::string ov;
+    for (std::size_t i = 0; i < v.variant.overrides.size(); ++i) {
+      const auto& o = v.variant.overrides[i];
+      { ov += (ov.empty() ? "" : "<br>"); ov += html_escape(to_string(o)); }
+      if (o.percent && i < v.values.size()) ov += fmt::format(" ({})", num(v.values[i], 6));
+    }
+    h += fmt::format("<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td></tr>\n",
+                     html_escape(v.variant.name), ov.empty() ? "&ndash; (base rig)" : ov,
+                     html_escape(v.variant.group), v.variant.overrides.empty() ? "&ndash;" : num(v.variant.rms_ratio_limit));
+  }
+  h += "</table>\n";
+  for (const auto& n : r.notes) h += fmt::format("<p>Note: {}</p>\n", html_escape(n));
+
+  // target misses
+  const auto misses = r.target_misses();
+  h += "<h2>Issue 11's targets</h2>\n";
+  if (misses.empty()) {
+    h += "<p>Every run met the targets.</p>\n";
+  } else {
+    h += fmt::format("<p class=\"warn\">{} miss(es):</p>\n<ul>\n", misses.size());
+    for (const auto& m : misses) h += fmt::format("<li>{}</li>\n", html_escape(m));
+    h += "</ul>\n";
+  }
+
+  // the kinds present
+  std::vector<std::string> kinds;
+  for (const auto& run : r.runs)
+    for (const auto& e : run.runs) add_unique(kinds, e.kind);
+
+  for (std::size_t e = 0; e < r.experiments.size(); ++e) {
+    std::vector<std::string> refs;
+    for (std::size_t v = 0; v < r.variants.size(); ++v)
+      for (const auto& x : r.run(e, v).runs) add_unique(refs, x.reference);
+    h += fmt::format("<h2>{}</h2>\n<table>\n<tr><th class=\"l\">variant</th><th class=\"l\">reference</th>",
+                     html_escape(r.experiments[e]));
+    for (const auto& k : kinds) h += fmt::format("<th>{0} RMS</th><th>{0} max</th>", html_escape(k));
+    h += "<th>comp/nom</th><th>comp/base</th><th>command [MPa]</th><th>wall [s]</th></tr>\n";
+    const std::size_t ncols = 2 + 2 * kinds.size() + 4;
+    for (std::size_t v = 0; v < r.variants.size(); ++v) {
+      const SweepRun& run = r.run(e, v);
+      const std::string& vn = r.variants[v].variant.name;
+      if (!run.ok) {
+        h += fmt::format("<tr class=\"failed\"><td class=\"l\">{}</td><td class=\"l\" colspan=\"{}\">failed: {}</td></tr>\n",
+                         html_escape(vn), ncols - 1, html_escape(run.error));
+        continue;
+      }
+      for (const auto& ref : refs) {
+        h += fmt::format("<tr{}><td class=\"l\">{}</td><td class=\"l\">{}</td>", v == 0 ? " class=\"nominal\"" : "",
+                         html_escape(vn), html_escape(ref));
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const auto& k : kinds) {
+          const SweepRunErrors* x = r.find(e, v, ref, k);
+          bool miss = false;
+          if (x && k == "compensated") {
+            const SweepRunErrors* n = r.find(e, 0, ref, k);
+            const SweepRunErrors* b = r.find(e, v, ref, "baseline");
+            miss = (v > 0 && n && x->errors.rms_error_mm > r.variants[v].variant.rms_ratio_limit * n->errors.rms_error_mm) ||
+                   (b && !(x->errors.rms_error_mm < b->errors.rms_error_mm));
+          }
+          h += x ? fmt::format("<td{}>{}</td><td>{}</td>", miss ? " class=\"miss\"" : "", num(x->errors.rms_error_mm),
+                               num(x->errors.max_error_mm))
+                 : std::string("<td>&ndash;</td><td>&ndash;</td>");
+          if (x && std::isfinite(x->min_command_mpa)) lo = std::min(lo, x->min_command_mpa), hi = std::max(hi, x->max_command_mpa);
+        }
+        const SweepRunErrors* c = r.find(e, v, ref, "compensated");
+        const SweepRunErrors* n = r.find(e, 0, ref, "compensated");
+        const SweepRunErrors* b = r.find(e, v, ref, "baseline");
+        const double rn = c && n && n->errors.rms_error_mm > 0 ? c->errors.rms_error_mm / n->errors.rms_error_mm : nan;
+        const double rb = c && b && b->errors.rms_error_mm > 0 ? c->errors.rms_error_mm / b->errors.rms_error_mm : nan;
+        const bool cmd_miss = std::isfinite(lo) && (lo < 0.0 || hi > 0.6);
+        h += fmt::format("<td>{}</td><td>{}</td><td{}>{}</td><td>{:.1f}</td></tr>\n", num(rn, 3), num(rb, 3),
+                         cmd_miss ? " class=\"miss\"" : "",
+                         std::isfinite(lo) ? fmt::format("{:.3f}..{:.3f}", lo, hi) : std::string("&ndash;"),
+                         run.wall_time_s);
+      }
+    }
+    h += "</table>\n";
+  }
+
+  // RMS against each parameter varied one at a time (the nominal rig at the base value)
+  std::vector<std::string> groups;
+  for (const auto& v : r.variants)
+    if (!v.variant.group.empty()) add_unique(groups, v.variant.group);
+  if (!groups.empty()) h += "<h2>RMS error against each varied parameter</h2>\n";
+  int figure = 0;
+  for (const auto& g : groups) {
+    // the x value of each variant of the group: its first override's value on the rig
+    std::vector<std::pair<double, std::size_t>> points;
+    std::string first_path;
+    for (std::size_t v = 1; v < r.variants.size(); ++v) {
+      const auto& sv = r.variants[v];
+      if (sv.variant.group != g || sv.values.empty()) continue;
+      if (first_path.empty()) first_path = sv.variant.overrides[0].path;
+      if (sv.variant.overrides[0].path != first_path) continue;
+      points.emplace_back(sv.values[0], v);
+    }
+    if (points.empty()) continue;
+    std::string pointer = "/" + first_path;
+    std::replace(pointer.begin(), pointer.end(), '.', '/');
+    const double nominal_x = rig_params_to_json(r.variants[0].rig).at(nlohmann::json::json_pointer(pointer)).get<double>();
+    points.emplace_back(nominal_x, 0);
+    std::sort(points.begin(), points.end());
+    for (std::size_t e = 0; e < r.experiments.size(); ++e) {
+      std::vector<std::string> refs;
+      for (const auto& [x, v] : points)
+        for (const auto& t : r.run(e, v).runs) add_unique(refs, t.reference);
+      PlotSpec spec{{fmt::format("{}: RMS error against {}", r.experiments[e], g), {first_path, unit_of(first_path)},
+                     {"RMS tracking error", "mm"}},
+                    {}};
+      spec.height = 420;
+      std::size_t failed = 0;
+      for (const auto& [x, v] : points) failed += r.run(e, v).ok ? 0 : 1;
+      for (const auto& k : kinds)
+        for (std::size_t ri = 0; ri < refs.size(); ++ri) {
+          Series s;
+          s.label = refs.size() > 1 ? fmt::format("{}, {}", k, refs[ri]) : k;
+          s.style = "linespoints";
+          s.color = kind_color(k);
+          s.dashed = ri > 0;
+          for (const auto& [x, v] : points)
+            if (const SweepRunErrors* t = r.find(e, v, refs[ri], k)) {
+              s.x.push_back(x);
+              s.y.push_back(t->errors.rms_error_mm);
+            }
+          if (!s.x.empty()) spec.series.push_back(std::move(s));
+        }
+      if (spec.series.empty()) {
+        h += fmt::format("<p class=\"warn\">{}: every run varying {} failed; no plot.</p>\n",
+                         html_escape(r.experiments[e]), html_escape(g));
+        continue;
+      }
+      const std::string svg = render(spec, "svg");
+      const auto start = svg.find("<svg");
+      if (start == std::string::npos) throw Error(fmt::format("plot '{}': gnuplot wrote no SVG", spec.labels.title));
+      std::string caption = fmt::format("{}: RMS error of every variant kind against {} (the nominal rig at {}{}{})",
+                                        r.experiments[e], first_path, num(nominal_x, 6),
+                                        unit_of(first_path).empty() ? "" : " ", unit_of(first_path));
+      if (g != first_path) caption += fmt::format("; varied together: {}", g);
+      if (failed) caption += fmt::format("; {} failed run(s) left out", failed);
+      h += fmt::format("<figure class=\"plot\" id=\"fig-{}\">\n{}\n<figcaption>{}.</figcaption>\n</figure>\n", ++figure,
+                       svg.substr(start), html_escape(caption));
+    }
+  }
+  return h + "</body>\n</html>\n";
+}
+
+void write_sweep_report(const SweepResult& result, const std::string& html_path, const std::string& command_line) {
+  const std::string html = sweep_report_html(result, command_line);
+  io::write_text_file(html_path, html);
+}
+
+}  // namespace hysteron::report

@@ -1,0 +1,73 @@
+#pragma once
+// Iterative learning control (ILC) for periodic references: a P-type update with
+// a phase lead and a zero-phase binomial Q-filter, run on top of a closed loop
+// by modifying the loop's reference (docs/control.md):
+//
+//   r'_j(k)     = r(k) + c_j(k)                              modified reference
+//   c_{j+1}(k)  = sum_{m=-h..h} q_m [ c_j(k+m) + L e_j(k+m+d) ]   (indices mod N)
+//   q_m         = binom(2h, m+h) / 2^(2h)                    |Q(w)| = cos^(2h)(w/2)
+//
+// j the period, N samples per period, e = r - y the tracking error, L the
+// learning gain, d the phase lead [samples]. With T(z) the closed loop from r'
+// to y, the correction converges monotonically (in the 2-norm over a period)
+// when  sup_w |Q(w) (1 - L e^{i w d} T(e^{i w}))| < 1  (learning_contraction()).
+//
+// step() never allocates, never throws and is deterministic; its cost is
+// O(h) per sample (the update of c_{j+1} is computed progressively, d + h
+// samples behind the errors it needs, instead of in one burst per period).
+#include <complex>
+#include <cstddef>
+#include <limits>
+#include <span>
+#include <vector>
+
+namespace hysteron {
+
+struct LearningParams {
+  std::size_t period = 0;       // N [samples], >= 2
+  double gain = 0.5;            // L, in (0, 2)
+  std::size_t lead = 0;         // d [samples]
+  std::size_t half_width = 0;   // h: binomial Q-filter of order 2h (0: no filter)
+  std::size_t lookahead = 0;    // largest `ahead` of correction() (e.g. the loop's preview)
+  double max_correction = std::numeric_limits<double>::infinity();  // |c| limit, > 0
+  // Throws hysteron::Error naming the field; also when lead + half_width + lookahead >= period.
+  void validate() const;
+};
+
+// Frequency response of the binomial Q-filter of half-width h at w [rad/sample]: cos^(2h)(w/2).
+double binomial_response(std::size_t half_width, double w) noexcept;
+
+// sup over the grid of |Q(w_l)(1 - L e^{i w_l d} T_l)| for a closed loop sampled at
+// w_l in (0, pi] (T_l = T(e^{i w_l})). < 1: the update contracts at every frequency.
+double learning_contraction(const LearningParams& p, std::span<const double> w,
+                            std::span<const std::complex<double>> T) noexcept;
+
+class IterativeLearning {
+ public:
+  explicit IterativeLearning(const LearningParams& params);  // allocates O(N)
+
+  // Correction to add to the reference `ahead` samples after the current one
+  // (ahead <= params.lookahead). Call before step() for the current sample.
+  double correction(std::size_t ahead = 0) const noexcept;
+  // Records the tracking error e = r - y of the current sample and advances one
+  // sample. A non-finite error is recorded as 0 and counted.
+  void step(double error) noexcept;
+  // Zero corrections, back to phase 0 of period 0.
+  void reset() noexcept;
+
+  std::size_t phase() const noexcept { return k_; }
+  std::size_t iteration() const noexcept { return j_; }  // completed periods
+  std::size_t faults() const noexcept { return faults_; }
+  const LearningParams& params() const noexcept { return p_; }
+
+ private:
+  double update_at(std::size_t i, const double* c, bool tail) const noexcept;
+
+  LearningParams p_;
+  std::vector<double> q_;                 // 2h + 1 filter taps
+  std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
+  std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}
+  std::size_t k_ = 0, j_ = 0, faults_ = 0;
+};
+
+}  // namespace hysteron

@@ -1,0 +1,127 @@
+// Iterative learning control (learning.hpp).
+#include "hysteron/learning.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "format.hpp"
+
+#include "hysteron/error.hpp"
+
+namespace hysteron {
+
+void LearningParams::validate() const {
+  if (period < 2) throw Error(detail::format("learning.period = {}: must be >= 2 samples", period));
+  if (!(gain > 0.0 && gain < 2.0)) throw Error(detail::format("learning.gain = {}: must be in (0, 2)", gain));
+  if (!(max_correction > 0.0))
+    throw Error(detail::format("learning.max_correction = {}: must be > 0", max_correction));
+  if (half_width > 10000) throw Error(detail::format("learning.half_width = {}: must be <= 10000", half_width));
+  if (lead >= period || half_width >= period || lookahead >= period ||
+      lead + half_width + lookahead >= period)
+    throw Error(detail::format("learning: lead + half_width + lookahead = {} + {} + {} must be < period = {} samples",
+                               lead, half_width, lookahead, period));
+}
+
+double binomial_response(std::size_t half_width, double w) noexcept {
+  const double c = std::cos(0.5 * w);
+  return std::pow(c * c, static_cast<double>(half_width));
+}
+
+double learning_contraction(const LearningParams& p, std::span<const double> w,
+                            std::span<const std::complex<double>> T) noexcept {
+  double worst = 0.0;
+  const std::size_t n = std::min(w.size(), T.size());
+  for (std::size_t l = 0; l < n; ++l) {
+    const std::complex<double> shift = std::polar(1.0, w[l] * static_cast<double>(p.lead));
+    const double rho = binomial_response(p.half_width, w[l]) * std::abs(1.0 - p.gain * shift * T[l]);
+    if (!(rho <= worst)) worst = rho;  // NaN propagates as "not contracting"
+  }
+  return worst;
+}
+
+IterativeLearning::IterativeLearning(const LearningParams& params) : p_(params) {
+  p_.validate();
+  const std::size_t taps = 2 * p_.half_width + 1;
+  q_.assign(taps, 0.0);
+  // binomial coefficients / 2^(2h) by the recurrence q <- (q + shifted q) / 2, which keeps
+  // the sum at 1 at every step (C(2h, h) itself overflows a double for h > ~510)
+  q_[0] = 1.0;
+  for (std::size_t n = 1; n < taps; ++n) {
+    for (std::size_t m = n; m > 0; --m) q_[m] = 0.5 * (q_[m] + q_[m - 1]);
+    q_[0] *= 0.5;
+  }
+  double s = 0.0;
+  for (double v : q_) s += v;
+  for (double& v : q_) v /= s;
+  c_cur_.assign(p_.period, 0.0);
+  c_next_.assign(p_.period, 0.0);
+  e_cur_.assign(p_.period, 0.0);
+  e_prev_.assign(p_.period, 0.0);
+}
+
+void IterativeLearning::reset() noexcept {
+  std::fill(c_cur_.begin(), c_cur_.end(), 0.0);
+  std::fill(c_next_.begin(), c_next_.end(), 0.0);
+  std::fill(e_cur_.begin(), e_cur_.end(), 0.0);
+  std::fill(e_prev_.begin(), e_prev_.end(), 0.0);
+  k_ = j_ = faults_ = 0;
+}
+
+double IterativeLearning::correction(std::size_t ahead) const noexcept {
+  ahead = std::min(ahead, p_.lookahead);
+  const std::size_t p = k_ + ahead;
+  return p < p_.period ? c_cur_[p] : c_next_[p - p_.period];
+}
+
+// c_{new}(i) = sum_m q_m [c(i+m) + L e(i+m+d)]. `c` is the previous generation; the
+// errors come from e_cur_ (this period, indices already measured) or e_prev_ (the
+// period before) as documented in step().
+double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) const noexcept {
+  const auto N = static_cast<std::ptrdiff_t>(p_.period);
+  const auto h = static_cast<std::ptrdiff_t>(p_.half_width);
+  const auto d = static_cast<std::ptrdiff_t>(p_.lead);
+  const auto ii = static_cast<std::ptrdiff_t>(i);
+  double acc = 0.0;
+  for (std::ptrdiff_t m = -h; m <= h; ++m) {
+    std::ptrdiff_t ci = ii + m;
+    if (ci < 0) ci += N;
+    if (ci >= N) ci -= N;
+    const std::ptrdiff_t t = ii + m + d;
+    double e;
+    if (tail) {  // i in [N - d - h, N): t >= N is this period's error at t - N
+      e = t >= N ? e_cur_[static_cast<std::size_t>(t - N)] : e_prev_[static_cast<std::size_t>(t)];
+    } else {     // t <= the current phase; t < 0 is the previous period's
+      e = t < 0 ? e_prev_[static_cast<std::size_t>(t + N)] : e_cur_[static_cast<std::size_t>(t)];
+    }
+    acc += q_[static_cast<std::size_t>(m + h)] * (c[ci] + p_.gain * e);
+  }
+  return std::clamp(acc, -p_.max_correction, p_.max_correction);
+}
+
+// At phase k of period j, after recording e_j(k):
+//   body: c_{j+1}(i) for i = k - d - h (every error it needs is measured);
+//   tail: for j >= 1 and k < d + h, c_j(i) for i = N + k - d - h, the end of this
+//         period, which needed errors of this period's start (c_{j-1} is still in
+//         c_next_ there: the body starts overwriting it only at k = d + h).
+void IterativeLearning::step(double error) noexcept {
+  if (!std::isfinite(error)) {
+    error = 0.0;
+    ++faults_;
+  }
+  const std::size_t N = p_.period, dh = p_.lead + p_.half_width;
+  e_cur_[k_] = error;
+  if (k_ >= dh) {
+    c_next_[k_ - dh] = update_at(k_ - dh, c_cur_.data(), false);
+  } else if (j_ >= 1) {
+    c_cur_[N + k_ - dh] = update_at(N + k_ - dh, c_next_.data(), true);
+  }
+  if (++k_ == N) {
+    std::swap(c_cur_, c_next_);
+    std::swap(e_cur_, e_prev_);
+    k_ = 0;
+    ++j_;
+  }
+}
+
+}  // namespace hysteron

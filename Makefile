@@ -1,6 +1,9 @@
 # hysteron — the two commands: `make demo` (main job) and `make test` (every test).
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := csv model_file mat rig_params
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
 PYTHON     := /usr/bin/python3
 CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=$(PYTHON) -DPYTHON_EXECUTABLE=$(PYTHON)
@@ -8,9 +11,10 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=$(PYTHON) -DPYTHON_
 # Debian packages the build and the tests need (never downloaded from anywhere else).
 APT_PACKAGES := cmake make g++ pkg-config libeigen3-dev libceres-dev libcli11-dev nlohmann-json3-dev \
   libfmt-dev libgtest-dev libbenchmark-dev pybind11-dev python3-dev python3-numpy python3-scipy \
-  python3-pytest libmatio-dev gnuplot-nox chromium octave liboctave-dev zlib1g-dev
+  python3-pytest libmatio-dev gnuplot-nox chromium octave liboctave-dev zlib1g-dev \
+  clang libclang-rt-dev
 
-.PHONY: all deps configure build demo test test-asan bench clean
+.PHONY: all deps configure build demo test test-asan fuzz fuzz-build bench clean
 
 all: build
 
@@ -48,8 +52,31 @@ test-asan: deps
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -j $(JOBS) -E 'install_consumer'
 
+# libFuzzer targets (fuzz/) under ASan + UBSan, built with clang in their own directory (core and
+# io only). `make fuzz FUZZ_SECONDS=N` runs each for N seconds from its seed corpus
+# (fuzz/corpus/<target>, plus the past findings in fuzz/regressions/<target>; new inputs go to
+# $(FUZZ_BUILD)/corpus, crashes to $(FUZZ_BUILD)/artifacts) and fails on the first finding.
+fuzz-build: deps
+	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DHYSTERON_FUZZ=ON \
+	  -DHYSTERON_BUILD_TESTS=OFF -DHYSTERON_BUILD_APPS=OFF -DHYSTERON_BUILD_PYTHON=OFF -DHYSTERON_BUILD_BENCH=OFF \
+	  -DHYSTERON_BUILD_EXAMPLES=OFF -DHYSTERON_BUILD_MATLAB=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_targets
+
+fuzz: fuzz-build
+	@mkdir -p $(FUZZ_BUILD)/artifacts
+	@set -e; for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
+	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
+	  ASAN_OPTIONS=detect_leaks=1 ./$(FUZZ_BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 \
+	    -rss_limit_mb=2048 -malloc_limit_mb=512 -print_final_stats=1 \
+	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- $(FUZZ_BUILD)/corpus/$$t fuzz/corpus/$$t \
+	    $$([ -d fuzz/regressions/$$t ] && echo fuzz/regressions/$$t) \
+	    > $(FUZZ_BUILD)/fuzz_$$t.log 2>&1 || { tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
+	  grep -E '^Done|stat::number_of_executed_units' $(FUZZ_BUILD)/fuzz_$$t.log; \
+	done
+
 bench: build
 	./$(BUILD)/hysteron-bench
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

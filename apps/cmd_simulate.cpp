@@ -1,16 +1,26 @@
 // hysteron simulate / invert: run a model file forwards or its exact inverse on
 // a column of a CSV or .mat file.
 //
-//   hysteron simulate --model M.json --input X.csv [--column C] --output Y.csv [--relaxed]
+//   hysteron simulate --model M.json --input X.csv [--column C] --output Y.csv [--relaxed] [--compress]
 //   hysteron invert   --model M.json --input Y.csv [--column C] --output X.csv [--limits LO,HI] [--relaxed]
 // --model - reads the model JSON from stdin (e.g. hysteron fit ... --out - | hysteron simulate --model - ...).
+// A CSV output to a regular file (or a new path) is streamed: the input is read in chunks, run in
+// blocks and written through a fixed buffer into the temporary file, so memory stays bounded
+// whatever the record's length; an error on a later input line leaves no output behind.
+#include <sys/stat.h>
+
 #include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
 
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <array>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,19 +37,45 @@ namespace {
 
 struct Options {
   std::string model, input, column, output, limits;
-  bool relaxed = false;
+  bool relaxed = false, compress = false;
 };
 
 // The chosen column; without --column: the file's only column, else the one named `preferred`.
-std::vector<double> read_input(const std::string& path, const std::string& column, const std::string& preferred) {
-  if (!column.empty()) return io::read_column(path, column);
-  const io::Table t = io::read_table(path);
-  std::size_t nonempty = 0;
-  for (const auto& c : t.columns) nonempty += c.empty() ? 0 : 1;
-  if (nonempty != 1)
-    for (const auto& n : t.names)
-      if (n == preferred) return t.column(preferred);
-  return t.column("");  // the only non-empty column, or an error listing the columns
+io::ReadOptions input_options(const std::string& column, const std::string& preferred) {
+  io::ReadOptions r;
+  r.column_spec = column;
+  r.preferred_column = preferred;
+  return r;
+}
+
+bool is_mat(const std::string& path) {
+  std::string lower = path;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return lower.ends_with(".mat");
+}
+
+// A CSV output written through a temporary file (a regular file or a new path): streamed.
+// Devices, FIFOs and stdout get the whole result at once, after the input was read and checked.
+bool streamed_output(const std::string& path) {
+  if (path == "-" || is_mat(path) || path.starts_with("/dev/") || path.starts_with("/proc/")) return false;
+  struct stat st {};
+  return ::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode);
+}
+
+// Runs f on blocks of at most 8192 input samples of the chosen column (bounded memory).
+template <class F>
+void for_each_block(const std::string& path, const io::ReadOptions& ro, F&& f) {
+  constexpr std::size_t kBlock = 8192;
+  std::vector<double> block;
+  block.reserve(kBlock);
+  io::for_each_value(path, ro, [&](double v) {
+    block.push_back(v);
+    if (block.size() == kBlock) {
+      f(std::span<const double>(block));
+      block.clear();
+    }
+  });
+  if (!block.empty()) f(std::span<const double>(block));
 }
 
 // Output of a model started relaxed at x0 and driven by x0.
@@ -79,36 +115,76 @@ double relaxed_input_for(const ModelParams& params, const Limits& lim, double y0
 int run_simulate(const Options& o) {
   io::check_outputs_distinct({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
-  const std::vector<double> x = read_input(o.input, o.column, "input");
+  const io::ReadOptions ro = input_options(o.column, "input");
   Model model(params);
+  if (streamed_output(o.output)) {
+    io::write_csv_rows(o.output, {"input", "output"}, [&](io::CsvRowWriter& w) {
+      std::vector<double> y(8192);
+      bool first = true;
+      for_each_block(o.input, ro, [&](std::span<const double> x) {
+        if (first && o.relaxed) model.reset_relaxed(x.front());
+        first = false;
+        model.simulate(x, std::span<double>(y.data(), x.size()));
+        for (std::size_t k = 0; k < x.size(); ++k) w.row(std::array<double, 2>{x[k], y[k]});
+      });
+    });
+    return 0;
+  }
+  const std::vector<double> x = io::read_column(o.input, ro);
   if (o.relaxed && !x.empty()) model.reset_relaxed(x.front());
   const std::vector<double> y = model.simulate(x);
-  io::write_columns(o.output, {"input", "output"}, {x, y});
+  io::WriteOptions wo;
+  wo.compress_mat = o.compress;
+  io::write_columns(o.output, {"input", "output"}, {x, y}, wo);
   return 0;
 }
 
 int run_invert(const Options& o) {
   io::check_outputs_distinct({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
-  const std::vector<double> y = read_input(o.input, o.column, "output");
+  const io::ReadOptions ro = input_options(o.column, "output");
   InverseOptions opt;
   if (!o.limits.empty()) opt.input_limits = parse_limits(o.limits);
   Inverse inv(params, opt);
-  if (o.relaxed && !y.empty()) {
-    Model start(params);
-    start.reset_relaxed(relaxed_input_for(params, inv.limits(), y.front()));
-    inv.reset(start.state());
+  std::size_t saturated = 0, samples = 0;
+  bool first = true;
+  // x = inverse(y), sample by sample; the relaxed start needs the first desired output
+  auto run = [&](std::span<const double> y, double* x) {
+    if (first && o.relaxed && !y.empty()) {
+      Model start(params);
+      start.reset_relaxed(relaxed_input_for(params, inv.limits(), y.front()));
+      inv.reset(start.state());
+    }
+    first = false;
+    for (std::size_t k = 0; k < y.size(); ++k) {
+      x[k] = inv.step(y[k]);
+      if (inv.saturated()) ++saturated;
+    }
+    samples += y.size();
+  };
+  auto check_faults = [&] {
+    if (inv.faults() != 0) throw Error(fmt::format("{}: {} samples could not be inverted", o.input, inv.faults()));
+  };
+  if (streamed_output(o.output)) {
+    io::write_csv_rows(o.output, {"output", "input"}, [&](io::CsvRowWriter& w) {
+      std::vector<double> x(8192);
+      for_each_block(o.input, ro, [&](std::span<const double> y) {
+        run(y, x.data());
+        for (std::size_t k = 0; k < y.size(); ++k) w.row(std::array<double, 2>{y[k], x[k]});
+      });
+      check_faults();
+    });
+  } else {
+    const std::vector<double> y = io::read_column(o.input, ro);
+    std::vector<double> x(y.size());
+    run(y, x.data());
+    check_faults();
+    io::WriteOptions wo;
+    wo.compress_mat = o.compress;
+    io::write_columns(o.output, {"output", "input"}, {y, x}, wo);
   }
-  std::vector<double> x(y.size());
-  std::size_t saturated = 0;
-  for (std::size_t k = 0; k < y.size(); ++k) {
-    x[k] = inv.step(y[k]);
-    if (inv.saturated()) ++saturated;
-  }
-  if (inv.faults() != 0) throw Error(fmt::format("{}: {} samples could not be inverted", o.input, inv.faults()));
-  io::write_columns(o.output, {"output", "input"}, {y, x});
   const Limits& l = inv.limits();
-  fmt::print(stderr, "invert: {} of {} samples saturated at the input limits [{}, {}]\n", saturated, y.size(), l.lo,
+  fmt::print(stderr, "invert: {} of {} samples saturated at the input limits [{}, {}]\n", saturated, samples, l.lo,
              l.hi);
   return 0;
 }
@@ -119,6 +195,7 @@ void add_common(CLI::App* sub, Options& o, const char* input_help) {
   sub->add_option("--column,-c", o.column, "column of the input file: header name or 0-based index; .mat: variable, or NAME:INDEX = column INDEX (0-based) of the matrix NAME");
   sub->add_option("--output,-o", o.output, "output file: .csv, .mat, or - for CSV on stdout")->required();
   sub->add_flag("--relaxed", o.relaxed, "start from rest at the first sample instead of the virgin state");
+  sub->add_flag("--compress", o.compress, ".mat output: zlib-compressed variables (smaller, slower to write)");
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "temp_dir.hpp"
+#include "test_util.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/table.hpp"
@@ -28,13 +29,7 @@ namespace io = hysteron::io;
 namespace {
 
 using hysteron::test::TempDir;
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using hysteron::test::slurp;
 
 // Expects `f` to throw hysteron::Error whose message contains every one of `parts`.
 template <class F>

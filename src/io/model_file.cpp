@@ -381,6 +381,10 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
     m.p = r.numbers("p", static_cast<long>(m.r.size()));
     m.g0 = r.number_or("g0", 1.0);
     m.z = r.numbers("z");
+    for (std::size_t i = 0; i < m.z.size(); ++i)  // docs/model-files.md: z_k != 0
+      if (m.z[i] == 0.0)
+        r.fail(fmt::format("z[{}]", i), "a dead-zone threshold must be non-zero (a zone at 0 is the linear term: add "
+                                        "its weight to g0)");
     m.g = r.numbers("g", static_cast<long>(m.z.size()));
     m.input_limits = r.limits();
     m.units = units_of(r);
@@ -441,6 +445,9 @@ ModelParams read_model_file(const std::string& path) {
 void write_model_file(const std::string& path, const ModelParams& params, const nlohmann::json& extra) {
   try {
     Model check(params);
+    if (const auto* dz = std::get_if<MpiDeadzoneParams>(&params))
+      for (std::size_t i = 0; i < dz->z.size(); ++i)
+        if (dz->z[i] == 0.0) throw Error(fmt::format("mpi-deadzone: z[{}] = 0 (a dead-zone threshold must be non-zero)", i));
   } catch (const Error& e) {
     throw Error(fmt::format("{}: refusing to write an invalid model: {}", path, e.what()));
   }

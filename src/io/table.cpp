@@ -22,6 +22,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <exception>
 #include <memory>
 #include <optional>
 #include <random>
@@ -54,11 +55,27 @@ std::string_view unquote(std::string_view s) {
   return s;
 }
 
-std::vector<std::string_view> split(std::string_view line, char sep) {
-  std::vector<std::string_view> out;
+// Printable, bounded form of a field or name for messages: at most 40 characters, control
+// bytes as \xNN (a CR-only file or a binary file must not put raw bytes in a message).
+std::string shown(std::string_view s) {
+  std::string out;
+  const std::size_t n = std::min<std::size_t>(s.size(), 40);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c < 0x20 || c == 0x7f) out += fmt::format("\\x{:02X}", c);
+    else out += static_cast<char>(c);
+  }
+  if (s.size() > n) out += fmt::format("... ({} bytes)", s.size());
+  return out;
+}
+
+// Splits `line` into `out` (cleared, its capacity reused: no allocation per line once warm).
+// Stops after max_text_columns + 1 fields (the caller reports the cap).
+void split(std::string_view line, char sep, std::vector<std::string_view>& out) {
+  out.clear();
   if (sep == ' ') {
     std::size_t i = 0;
-    while (i < line.size()) {
+    while (i < line.size() && out.size() <= max_text_columns) {
       while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
       if (i >= line.size()) break;
       std::size_t j = i;
@@ -66,14 +83,14 @@ std::vector<std::string_view> split(std::string_view line, char sep) {
       out.push_back(line.substr(i, j - i));
       i = j;
     }
-    return out;
+    return;
   }
   std::size_t start = 0;
-  for (;;) {
+  while (out.size() <= max_text_columns) {
     const std::size_t pos = line.find(sep, start);
     if (pos == std::string_view::npos) {
       out.push_back(unquote(line.substr(start)));
-      return out;
+      return;
     }
     out.push_back(unquote(line.substr(start, pos - start)));
     start = pos + 1;
@@ -91,9 +108,11 @@ Parse parse_number(std::string_view s, double& out) {
   if (res.ptr != s.data() + s.size()) return Parse::malformed;
   if (res.ec == std::errc::result_out_of_range) {
     // from_chars also reports underflow (denormal/zero) as out of range; only overflow is an error
-    errno = 0;
-    const std::string tmp(s);
-    out = std::strtod(tmp.c_str(), nullptr);
+    if (s.size() > 4096) return Parse::out_of_range;
+    char tmp[4100];
+    std::memcpy(tmp, s.data(), s.size());
+    tmp[s.size()] = '\0';
+    out = std::strtod(tmp, nullptr);
     if (!std::isfinite(out)) return Parse::out_of_range;
     return Parse::ok;
   }
@@ -109,123 +128,282 @@ bool looks_numeric(std::string_view s) {
 }
 
 std::string column_label(const std::vector<std::string>& names, std::size_t i) {
-  if (i < names.size() && !names[i].empty()) return fmt::format(" (column \"{}\")", names[i]);
+  if (i < names.size() && !names[i].empty()) return fmt::format(" (column \"{}\")", shown(names[i]));
   return std::string();
 }
 
-std::string read_file(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a data file", path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open data file ({})", path, std::strerror(errno)));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error(fmt::format("{}: read error", path));
-  return ss.str();
+// The next line of `avail` (ends: "\n", "\r\n" or a lone "\r"). Returns false if more input is
+// needed to know where the line ends (no end yet, or a final '\r' that may start "\r\n").
+bool take_line(std::string_view avail, bool at_eof, std::string_view& line, std::size_t& consumed) {
+  const std::size_t e = avail.find_first_of("\r\n");
+  if (e == std::string_view::npos) {
+    if (!at_eof) return false;
+    line = avail;
+    consumed = avail.size();
+    return true;
+  }
+  if (avail[e] == '\r' && e + 1 == avail.size() && !at_eof) return false;
+  line = avail.substr(0, e);
+  consumed = e + 1 + (avail[e] == '\r' && e + 1 < avail.size() && avail[e + 1] == '\n' ? 1 : 0);
+  return true;
+}
+
+[[noreturn]] void line_too_long(const std::string& path, std::size_t lineno) {
+  throw Error(fmt::format("{}:{}: line longer than {} bytes (the limit of a text data file's line; is this a "
+                          "binary file?)",
+                          path, lineno, max_text_line_bytes));
+}
+
+// Lines of a text held in memory.
+class MemoryLines {
+ public:
+  MemoryLines(std::string_view text, const std::string& path) : rest_(text), path_(path) {
+    if (rest_.substr(0, 3) == "\xEF\xBB\xBF") rest_.remove_prefix(3);
+  }
+  // The next line (false at the end); a file that ends with a line end has no empty last line.
+  bool next(std::string_view& line) {
+    if (rest_.empty()) return false;
+    std::size_t used = 0;
+    take_line(rest_, true, line, used);
+    rest_.remove_prefix(used);
+    if (line.size() > max_text_line_bytes) line_too_long(path_, lineno_ + 1);
+    ++lineno_;
+    return true;
+  }
+
+ private:
+  std::string_view rest_;
+  const std::string& path_;
+  std::size_t lineno_ = 0;
+};
+
+// Lines of a file read in chunks through one fixed buffer (bounded memory for any file size).
+class FileLines {
+ public:
+  explicit FileLines(const std::string& path) : path_(path) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a data file", path));
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) throw Error(fmt::format("{}: cannot open data file ({})", path, std::strerror(errno)));
+    buf_.reset(new char[kSize]);
+  }
+  ~FileLines() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FileLines(const FileLines&) = delete;
+  FileLines& operator=(const FileLines&) = delete;
+
+  bool next(std::string_view& line) {
+    for (;;) {
+      const std::string_view avail(buf_.get() + begin_, end_ - begin_);
+      std::size_t used = 0;
+      if ((eof_ && avail.empty())) return false;
+      if (take_line(avail, eof_, line, used)) {
+        begin_ += used;
+        if (line.size() > max_text_line_bytes) line_too_long(path_, lineno_ + 1);
+        ++lineno_;
+        return true;
+      }
+      if (avail.size() > max_text_line_bytes + 1) line_too_long(path_, lineno_ + 1);
+      fill();
+    }
+  }
+
+ private:
+  static constexpr std::size_t kSize = max_text_line_bytes + (std::size_t{1} << 20);
+
+  void fill() {
+    if (begin_ > 0) {
+      std::memmove(buf_.get(), buf_.get() + begin_, end_ - begin_);
+      end_ -= begin_;
+      begin_ = 0;
+    }
+    while (end_ < kSize) {
+      const ssize_t r = ::read(fd_, buf_.get() + end_, kSize - end_);
+      if (r < 0 && errno == EINTR) continue;
+      if (r < 0) throw Error(fmt::format("{}: read error ({})", path_, std::strerror(errno)));
+      if (r == 0) {
+        eof_ = true;
+        break;
+      }
+      end_ += static_cast<std::size_t>(r);
+      if (end_ - begin_ >= (std::size_t{1} << 16)) break;  // enough for a few lines
+    }
+    if (first_) {
+      first_ = false;
+      if (end_ >= 3 && std::memcmp(buf_.get(), "\xEF\xBB\xBF", 3) == 0) begin_ = 3;
+    }
+  }
+
+  const std::string& path_;
+  int fd_ = -1;
+  std::unique_ptr<char[]> buf_;
+  std::size_t begin_ = 0, end_ = 0, lineno_ = 0;
+  bool eof_ = false, first_ = true;
+};
+
+// The rules of a text table (table.hpp), one line at a time. After parse() returns true, the
+// row's fields are in values() (present(c) false for an empty field).
+class TextParser {
+ public:
+  TextParser(const std::string& path, const ReadOptions& opt) : path_(path), opt_(opt), sep_(opt.separator) {
+    if (sep_ != 0 && sep_ != ',' && sep_ != ';' && sep_ != '\t' && sep_ != ' ')
+      throw Error(fmt::format("{}: unsupported separator '{}' (use ',', ';', tab or ' ')", path, shown({&sep_, 1})));
+  }
+
+  // One line, without its line end. True if it is a data row.
+  bool parse(std::string_view line) {
+    ++lineno_;
+    const std::string_view tl = trim(line);
+    if (tl.empty() || tl.front() == '#') return false;
+    if (first_) return first_line(line);
+    split(line, sep_, fields_);
+    if (fields_.size() != nfields_) {
+      if (fields_.size() > max_text_columns) too_many_columns();
+      throw Error(fmt::format("{}:{}: row has {} fields, expected {} (as on line {})", path_, lineno_, fields_.size(),
+                              nfields_, first_line_));
+    }
+    for (std::size_t c = 0; c < nfields_; ++c) {
+      double v = 0.0;
+      switch (parse_number(fields_[c], v)) {
+        case Parse::ok:
+          if (filled_[c] != rows_) {
+            throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path_,
+                                    first_empty_line_[c], c + 1, column_label(names_, c)));
+          }
+          values_[c] = v;
+          present_[c] = 1;
+          ++filled_[c];
+          break;
+        case Parse::empty:
+          if (filled_[c] != 0)
+            throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path_, lineno_,
+                                    c + 1, column_label(names_, c)));
+          if (first_empty_line_[c] == 0) first_empty_line_[c] = lineno_;
+          present_[c] = 0;
+          break;
+        case Parse::malformed:
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number", path_, lineno_, c + 1,
+                                  column_label(names_, c), shown(fields_[c])));
+        case Parse::non_finite:
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a finite number (NaN and infinity are refused)", path_,
+                                  lineno_, c + 1, column_label(names_, c), shown(fields_[c])));
+        case Parse::out_of_range:
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is out of the range of a double", path_, lineno_, c + 1,
+                                  column_label(names_, c), shown(fields_[c])));
+      }
+    }
+    ++rows_;
+    return true;
+  }
+
+  // Throws if the file had no non-empty line.
+  void finish() const {
+    if (first_) throw Error(fmt::format("{}: no data (the file is empty)", path_));
+  }
+
+  std::size_t num_fields() const { return nfields_; }
+  std::size_t rows() const { return rows_; }
+  const std::vector<std::string>& names() const { return names_; }
+  double value(std::size_t c) const { return values_[c]; }
+  bool present(std::size_t c) const { return present_[c] != 0; }
+
+ private:
+  [[noreturn]] void too_many_columns() const {
+    throw Error(fmt::format("{}:{}: more than {} fields (the limit of a text data file's columns)", path_, lineno_,
+                            max_text_columns));
+  }
+
+  bool first_line(std::string_view line) {
+    if (sep_ == 0) {
+      if (line.find('\t') != std::string_view::npos) sep_ = '\t';
+      else if (line.find(';') != std::string_view::npos) sep_ = ';';
+      else if (line.find(',') != std::string_view::npos) sep_ = ',';
+      else sep_ = ' ';
+    }
+    split(line, sep_, fields_);
+    if (fields_.size() > max_text_columns) too_many_columns();
+    nfields_ = fields_.size();
+    first_line_ = lineno_;
+    first_ = false;
+    bool header = opt_.header == HeaderMode::present;
+    if (opt_.header == HeaderMode::autodetect)
+      header = std::any_of(fields_.begin(), fields_.end(), [](std::string_view f) { return !looks_numeric(f); });
+    filled_.assign(nfields_, 0);
+    first_empty_line_.assign(nfields_, 0);
+    values_.assign(nfields_, 0.0);
+    present_.assign(nfields_, 0);
+    if (!header) {
+      names_.assign(nfields_, std::string());
+      return parse_again(line);
+    }
+    for (auto f : fields_) names_.emplace_back(unquote(f));
+    // A name given twice would select the first column silently.
+    std::vector<std::size_t> order(names_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return names_[a] < names_[b]; });
+    for (std::size_t i = 1; i < order.size(); ++i) {
+      const std::size_t k = order[i - 1], m = order[i];
+      if (!names_[m].empty() && names_[m] == names_[k])
+        throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
+                                lineno_, shown(names_[m]), k + 1, m + 1));
+    }
+    return false;
+  }
+
+  // The first line is a data row: parse it as one.
+  bool parse_again(std::string_view line) {
+    --lineno_;
+    return parse(line);
+  }
+
+  const std::string& path_;
+  const ReadOptions& opt_;
+  char sep_;
+  bool first_ = true;
+  std::size_t nfields_ = 0, first_line_ = 0, rows_ = 0, lineno_ = 0;
+  std::vector<std::string> names_;
+  std::vector<std::string_view> fields_;
+  std::vector<std::size_t> filled_, first_empty_line_;  // non-empty fields per column; first empty one's line
+  std::vector<double> values_;
+  std::vector<char> present_;
+};
+
+template <class Lines>
+Table read_text_lines(Lines& lines, const std::string& path, const ReadOptions& opt) {
+  TextParser parser(path, opt);
+  std::vector<std::vector<double>> cols;
+  std::string_view line;
+  while (lines.next(line)) {
+    if (!parser.parse(line)) continue;
+    if (cols.size() != parser.num_fields()) cols.resize(parser.num_fields());
+    for (std::size_t c = 0; c < cols.size(); ++c)
+      if (parser.present(c)) cols[c].push_back(parser.value(c));
+  }
+  parser.finish();
+  Table t;
+  t.source = path;
+  t.names = parser.names();
+  cols.resize(parser.num_fields());
+  t.columns = std::move(cols);
+  return t;
 }
 
 Table read_text_table(const std::string& path, const ReadOptions& opt) {
-  const std::string text = read_file(path);
-  std::string_view all(text);
-  if (all.substr(0, 3) == "\xEF\xBB\xBF") all.remove_prefix(3);
+  FileLines lines(path);
+  return read_text_lines(lines, path, opt);
+}
 
-  Table t;
-  t.source = path;
-  char sep = opt.separator;
-  if (sep != 0 && sep != ',' && sep != ';' && sep != '\t' && sep != ' ')
-    throw Error(fmt::format("{}: unsupported separator '{}' (use ',', ';', tab or ' ')", path, sep));
-  bool first = true;
-  bool have_header = false;
-  std::size_t nfields = 0;
-  std::size_t first_line = 0;
-  std::vector<std::size_t> filled;  // number of non-empty fields per column
-  std::size_t rows = 0;
-  std::size_t lineno = 0;
-  std::vector<std::vector<double>> cols;
-  // first empty field per column (line number), reported if the column is not all-empty
-  std::vector<std::size_t> first_empty_line;
-
-  std::size_t pos = 0;
-  while (pos <= all.size()) {
-    std::size_t nl = all.find('\n', pos);
-    if (nl == std::string_view::npos) nl = all.size();
-    std::string_view line = all.substr(pos, nl - pos);
-    pos = nl + 1;
-    ++lineno;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    const std::string_view tl = trim(line);
-    if (tl.empty() || tl.front() == '#') {
-      if (nl == all.size()) break;
-      continue;
-    }
-    if (first) {
-      if (sep == 0) {
-        if (line.find('\t') != std::string_view::npos) sep = '\t';
-        else if (line.find(';') != std::string_view::npos) sep = ';';
-        else if (line.find(',') != std::string_view::npos) sep = ',';
-        else sep = ' ';
-      }
-      const auto fields = split(line, sep);
-      nfields = fields.size();
-      first_line = lineno;
-      if (opt.header == HeaderMode::present) have_header = true;
-      else if (opt.header == HeaderMode::autodetect)
-        have_header = std::any_of(fields.begin(), fields.end(), [](std::string_view f) { return !looks_numeric(f); });
-      cols.assign(nfields, {});
-      filled.assign(nfields, 0);
-      first_empty_line.assign(nfields, 0);
-      first = false;
-      if (have_header) {
-        for (auto f : fields) t.names.emplace_back(unquote(f));
-        // A name given twice would select the first column silently.
-        for (std::size_t i = 0; i < t.names.size(); ++i)
-          for (std::size_t k = 0; k < i; ++k)
-            if (!t.names[i].empty() && t.names[i] == t.names[k])
-              throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one",
-                                      path, lineno, t.names[i], k + 1, i + 1));
-        if (nl == all.size()) break;
-        continue;
-      }
-      t.names.assign(nfields, std::string());
-    }
-    const auto fields = split(line, sep);
-    if (fields.size() != nfields)
-      throw Error(fmt::format("{}:{}: row has {} fields, expected {} (as on line {})", path, lineno, fields.size(),
-                              nfields, first_line));
-    for (std::size_t c = 0; c < nfields; ++c) {
-      double v = 0.0;
-      switch (parse_number(fields[c], v)) {
-        case Parse::ok:
-          if (filled[c] != rows) {
-            throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path,
-                                    first_empty_line[c], c + 1, column_label(t.names, c)));
-          }
-          cols[c].push_back(v);
-          ++filled[c];
-          break;
-        case Parse::empty:
-          if (filled[c] != 0)
-            throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path, lineno,
-                                    c + 1, column_label(t.names, c)));
-          if (first_empty_line[c] == 0) first_empty_line[c] = lineno;
-          break;
-        case Parse::malformed:
-          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number", path, lineno, c + 1, column_label(t.names, c),
-                                  fields[c]));
-        case Parse::non_finite:
-          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a finite number (NaN and infinity are refused)", path,
-                                  lineno, c + 1, column_label(t.names, c), fields[c]));
-        case Parse::out_of_range:
-          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is out of the range of a double", path, lineno, c + 1,
-                                  column_label(t.names, c), fields[c]));
-      }
-    }
-    ++rows;
-    if (nl == all.size()) break;
+// The column ReadOptions selects in `t` (preferred_column included).
+std::size_t select_column(const Table& t, const ReadOptions& opt) {
+  if (opt.column_spec.empty() && !opt.preferred_column.empty()) {
+    std::size_t nonempty = 0;
+    for (const auto& c : t.columns) nonempty += c.empty() ? 0 : 1;
+    if (nonempty != 1)
+      for (std::size_t i = 0; i < t.names.size(); ++i)
+        if (t.names[i] == opt.preferred_column) return i;
   }
-  if (first) throw Error(fmt::format("{}: no data (the file is empty)", path));
-  t.columns = std::move(cols);
-  return t;
+  return t.column_index(opt.column_spec);
 }
 
 // ---- .mat --------------------------------------------------------------------
@@ -337,53 +515,116 @@ SubElement next_sub(Bytes s, std::size_t& pos, bool swap, const std::string& whe
   return e;
 }
 
-// The inside of a miMATRIX element (s = its data, without the 8-byte tag). Only numeric classes
-// are checked in detail (the ones hysteron reads); names are reported in messages.
-void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t index, std::string* name_out) {
+// The inside of a miMATRIX element (s = its data, without the 8-byte tag), every class matio
+// reads: whatever matio would allocate from the sizes in it must be backed by bytes of the file
+// (numeric and char data exactly numel x the stored size; a cell's or a struct's elements each a
+// nested miMATRIX, checked the same way, at most 16 levels deep; a sparse matrix's nzmax and
+// columns bounded by its bytes). Names are reported in messages.
+void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t index, std::string* name_out,
+                       int depth = 0) {
   std::string where = fmt::format("{}: variable #{}", path, index + 1);
+  if (depth > 16) throw Error(fmt::format("{}: unsupported: cells or structs nested more than 16 levels deep", where));
   std::size_t pos = 0;
   const SubElement flags = next_sub(s, pos, swap, where, "array flags");
   if (flags.bytes < 8 || flags.data + 8 > s.avail) throw Error(fmt::format("{}: inconsistent: array flags of {} bytes", where, flags.bytes));
   const std::uint32_t f = get32(s.p + flags.data, swap);
+  const std::uint32_t nzmax = get32(s.p + flags.data + 4, swap);
   const unsigned cls = f & 0xff;
   const bool complex = (f & 0x800) != 0;
   const SubElement dims = next_sub(s, pos, swap, where, "dimensions");
   if (dims.data + dims.bytes > s.avail) throw Error(fmt::format("{}: unsupported: too many dimensions", where));
-  if (dims.type != 5 || dims.bytes % 4 != 0 || dims.bytes < 8)
+  if (dims.type != 5 || dims.bytes % 4 != 0 || dims.bytes < 8 || dims.bytes > 4 * 32)
     throw Error(fmt::format("{}: inconsistent: bad dimensions element (type {}, {} bytes)", where, dims.type,
                             dims.bytes));
   const SubElement nm = next_sub(s, pos, swap, where, "name");
   if (nm.data + nm.bytes > s.avail) throw Error(fmt::format("{}: unsupported: a name of {} bytes", where, nm.bytes));
   std::string name(reinterpret_cast<const char*>(s.p + nm.data), nm.bytes);
   name = name.substr(0, name.find('\0'));
-  if (!name.empty()) where = fmt::format("{}: variable \"{}\"", path, name);
+  if (!name.empty()) where = fmt::format("{}: variable \"{}\"", path, shown(name));
   if (name_out) *name_out = name;
   // numel with overflow check; every dimension must be non-negative
   std::uint64_t numel = 1;
   std::string dims_txt;
+  std::uint32_t ncols = 0;
   for (std::size_t k = 0; k < dims.bytes / 4; ++k) {
     const std::uint32_t d = get32(s.p + dims.data + 4 * k, swap);
     if (d > 0x7fffffffu) throw Error(fmt::format("{}: inconsistent: negative dimension", where));
+    if (k == 1) ncols = d;
     numel = mul_sat(numel, d);
     dims_txt += fmt::format("{}{}", k ? "x" : "", d);
   }
-  if (cls < 6 || cls > 15) return;  // cell, struct, char, sparse, ...: matio reads them, hysteron refuses them
-  for (int part = 0; part < (complex ? 2 : 1); ++part) {
-    const SubElement data = next_sub(s, pos, swap, where, part ? "imaginary part" : "data");
+  auto data_part = [&](std::string_view what, bool numeric) {
+    const SubElement data = next_sub(s, pos, swap, where, what);
     const std::size_t sz = mat5_type_size(data.type);
-    if (sz == 0 || data.type >= 16)
+    if (sz == 0 || (numeric && data.type >= 16))
       throw Error(fmt::format("{}: inconsistent: data of unknown type {}", where, data.type));
     if (data.bytes != mul_sat(numel, sz))
       throw Error(fmt::format("{}: truncated or inconsistent: size {} ({} elements) needs {} bytes of data, the file "
                               "has {}",
                               where, dims_txt, numel, mul_sat(numel, sz), data.bytes));
+  };
+  // `count` nested miMATRIX elements (cells, struct fields), each inside this one
+  auto nested = [&](std::uint64_t count) {
+    if (count > (s.n - std::min(pos, s.n)) / 8)
+      throw Error(fmt::format("{}: truncated or inconsistent: size {} needs {} elements, the variable has room for {}",
+                              where, dims_txt, count, (s.n - std::min(pos, s.n)) / 8));
+    for (std::uint64_t k = 0; k < count; ++k) {
+      const SubElement e = next_sub(s, pos, swap, where, "element of a cell or struct");
+      if (e.type != 14)
+        throw Error(fmt::format("{}: inconsistent: an element of a cell or struct of type {} (not a matrix)", where,
+                                e.type));
+      if (e.data + e.bytes > s.avail)
+        throw Error(fmt::format("{}: unsupported: an element of a cell or struct past byte {} of a compressed variable",
+                                where, s.avail));
+      if (e.bytes > 0) check_mat5_matrix(Bytes{s.p + e.data, e.bytes, e.bytes}, swap, path, index, nullptr, depth + 1);
+    }
+  };
+  switch (cls) {
+    case 6: case 7: case 8: case 9: case 10: case 11: case 12: case 13: case 14: case 15:  // numeric
+      data_part("data", true);
+      if (complex) data_part("imaginary part", true);
+      return;
+    case 4:  // char
+      data_part("data", false);
+      return;
+    case 1:  // cell
+      nested(numel);
+      return;
+    case 2: case 3: {  // struct, object (an object starts with its class name)
+      if (cls == 3) (void)next_sub(s, pos, swap, where, "class name");
+      const SubElement len = next_sub(s, pos, swap, where, "field name length");
+      if (len.type != 5 || len.bytes != 4 || len.data + 4 > s.avail)
+        throw Error(fmt::format("{}: inconsistent: bad field name length element", where));
+      const std::uint32_t L = get32(s.p + len.data, swap);
+      const SubElement names = next_sub(s, pos, swap, where, "field names");
+      if (L == 0 || L > 4096 || names.bytes % L != 0)
+        throw Error(fmt::format("{}: inconsistent: field names of {} bytes in slots of {}", where, names.bytes, L));
+      nested(mul_sat(numel, names.bytes / L));
+      return;
+    }
+    case 5: {  // sparse: row indices, column starts, values (and imaginary values)
+      const std::uint64_t room = s.n / 4;
+      if (nzmax > room || std::uint64_t{ncols} + 1 > room)
+        throw Error(fmt::format("{}: truncated or inconsistent: a sparse matrix of size {} with nzmax {} in {} bytes",
+                                where, dims_txt, nzmax, s.n));
+      const SubElement ir = next_sub(s, pos, swap, where, "row indices");
+      const SubElement jc = next_sub(s, pos, swap, where, "column starts");
+      if (mat5_type_size(ir.type) == 0 || mat5_type_size(jc.type) == 0 || ir.bytes / mat5_type_size(ir.type) > nzmax ||
+          jc.bytes / mat5_type_size(jc.type) != std::uint64_t{ncols} + 1)
+        throw Error(fmt::format("{}: inconsistent: sparse index arrays of {} and {} bytes for size {}, nzmax {}", where,
+                                ir.bytes, jc.bytes, dims_txt, nzmax));
+      return;
+    }
+    default:  // function handles, opaque objects (tables, strings): matio does not read their data
+      return;
   }
 }
 
-// Inflates a miCOMPRESSED element (at most `limit` bytes of output) and checks its inside.
+// Inflates a miCOMPRESSED element (at most 1032 bytes out per byte in, zlib's maximum ratio) and
+// checks its inside as an uncompressed variable. The whole variable is inflated (matio needs as
+// much to read it); a declared size that does not match what inflates is an error.
 void check_mat5_compressed(Bytes z, bool swap, const std::string& path, std::size_t index) {
   const std::string where = fmt::format("{}: variable #{}", path, index + 1);
-  // zlib expands at most ~1032:1: a larger declared size cannot be real data
   const std::size_t limit = z.n * 1032 + 1024;
   z_stream zs{};
   if (inflateInit(&zs) != Z_OK) throw Error(fmt::format("{}: cannot initialise zlib", where));
@@ -393,32 +634,31 @@ void check_mat5_compressed(Bytes z, bool swap, const std::string& path, std::siz
   } end{&zs};
   zs.next_in = const_cast<Bytef*>(z.p);
   zs.avail_in = static_cast<uInt>(std::min<std::size_t>(z.n, std::numeric_limits<uInt>::max()));
-  // the head (tag, flags, dims, name, data tag) is kept; the rest is only counted
-  std::vector<unsigned char> head(4096), chunk(1 << 16);
-  std::size_t head_len = 0;
+  std::vector<unsigned char> out(std::min<std::size_t>(limit, 1 << 16));
   int rc = Z_OK;
   while (rc != Z_STREAM_END) {
-    unsigned char* out = head_len < head.size() ? head.data() + head_len : chunk.data();
-    const std::size_t room = head_len < head.size() ? head.size() - head_len : chunk.size();
-    zs.next_out = out;
-    zs.avail_out = static_cast<uInt>(room);
+    if (zs.total_out == out.size()) {
+      if (out.size() >= limit) throw Error(fmt::format("{}: corrupt compressed data (expands without bound)", where));
+      out.resize(std::min(limit, out.size() * 2));
+    }
+    zs.next_out = out.data() + zs.total_out;
+    zs.avail_out = static_cast<uInt>(out.size() - zs.total_out);
     rc = inflate(&zs, Z_NO_FLUSH);
-    if (head_len < head.size()) head_len += room - zs.avail_out;
     if (rc == Z_STREAM_END) break;
+    if (rc == Z_BUF_ERROR && zs.avail_out == 0) continue;  // output full: grow
     if (rc != Z_OK || (zs.avail_in == 0 && zs.avail_out != 0))
       throw Error(fmt::format("{}: truncated or corrupt compressed data ({})", where,
                               zs.msg ? zs.msg : "the compressed stream ends early"));
-    if (zs.total_out > limit) throw Error(fmt::format("{}: corrupt compressed data (expands without bound)", where));
   }
-  if (head_len < 8) throw Error(fmt::format("{}: corrupt compressed variable (no matrix inside)", where));
-  const std::uint32_t type = get32(head.data(), swap);
-  const std::size_t bytes = get32(head.data() + 4, swap);
+  const std::size_t total = zs.total_out;
+  if (total < 8) throw Error(fmt::format("{}: corrupt compressed variable (no matrix inside)", where));
+  const std::uint32_t type = get32(out.data(), swap);
+  const std::size_t bytes = get32(out.data() + 4, swap);
   if (type != 14) throw Error(fmt::format("{}: corrupt compressed variable (type {} inside, not a matrix)", where, type));
-  if (8 + bytes != zs.total_out)
+  if (8 + bytes != total)
     throw Error(fmt::format("{}: truncated or inconsistent: declares {} bytes, its compressed data holds {}", where,
-                            bytes, zs.total_out - 8));
-  // the head holds the tags up to the data tag of any sane variable; the data is only counted
-  check_mat5_matrix(Bytes{head.data() + 8, bytes, head_len - 8}, swap, path, index, nullptr);
+                            bytes, total - 8));
+  check_mat5_matrix(Bytes{out.data() + 8, bytes, bytes}, swap, path, index, nullptr);
 }
 
 void check_mat4(Bytes f, const std::string& path) {
@@ -443,7 +683,11 @@ void check_mat4(Bytes f, const std::string& path) {
       throw Error(fmt::format("{}: truncated: the name ({} bytes) ends after the file", where, namelen));
     std::string name(reinterpret_cast<const char*>(f.p + pos + 20), namelen);
     name = name.substr(0, name.find('\0'));
-    const std::string w = fmt::format("{}: variable \"{}\"", path, name);
+    const std::string w = fmt::format("{}: variable \"{}\"", path, shown(name));
+    // a sparse matrix is stored as an N x 3 (real) or N x 4 (complex) array: matio sizes it by N
+    if (T == 2 && (rows == 0 || (cols != 3 && cols != 4)))
+      throw Error(fmt::format("{}: inconsistent: a sparse MAT v4 matrix stored as {}x{} (expected N x 3 or N x 4)", w,
+                              rows, cols));
     const std::uint64_t need = mul_sat(mul_sat(rows, cols), kSize[P] * (imag ? 2u : 1u));
     const std::size_t left = f.n - pos - 20 - namelen;
     if (need > left)
@@ -695,7 +939,7 @@ bool is_matlab_identifier(std::string_view s) {
 }
 
 void write_mat(const std::string& tmp, const std::vector<std::string>& names,
-               const std::vector<std::vector<double>>& columns) {
+               const std::vector<std::vector<double>>& columns, bool compress) {
   init_matio_log();
   MatPtr m(Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5));
   if (!m) throw Error("cannot create the .mat file");
@@ -705,7 +949,7 @@ void write_mat(const std::string& tmp, const std::vector<std::string>& names,
     VarPtr v(Mat_VarCreate(names[i].c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims,
                            const_cast<double*>(columns[i].data()), MAT_F_DONT_COPY_DATA));
     if (!v) throw Error(fmt::format("cannot create .mat variable \"{}\"", names[i]));
-    if (Mat_VarWrite(m.get(), v.get(), MAT_COMPRESSION_ZLIB) != 0)
+    if (Mat_VarWrite(m.get(), v.get(), compress ? MAT_COMPRESSION_ZLIB : MAT_COMPRESSION_NONE) != 0)
       throw Error(fmt::format("cannot write .mat variable \"{}\"", names[i]));
   }
   if (Mat_Close(m.release()) != 0) throw Error("cannot close the .mat file (disk full?)");
@@ -721,21 +965,43 @@ void write_mat(const std::string& tmp, const std::vector<std::string>& names,
   }
 }
 
-std::string csv_text(const std::vector<std::string>& names, const std::vector<std::vector<double>>& columns) {
-  fmt::memory_buffer buf;
-  for (std::size_t i = 0; i < names.size(); ++i) fmt::format_to(std::back_inserter(buf), "{}{}", i ? "," : "", names[i]);
-  buf.push_back('\n');
-  const std::size_t rows = columns.empty() ? 0 : columns[0].size();
-  char num[40];
-  for (std::size_t r = 0; r < rows; ++r) {
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-      if (c) buf.push_back(',');
-      const int len = std::snprintf(num, sizeof num, "%.17g", columns[c][r]);
-      buf.append(num, num + len);
+void write_all(int fd, const char* p, std::size_t n, const std::string& where) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw Error(fmt::format("{}: write failed: {}", where, std::strerror(errno)));
     }
-    buf.push_back('\n');
+    p += w;
+    n -= static_cast<std::size_t>(w);
   }
-  return std::string(buf.data(), buf.size());
+}
+
+// Why a CSV column name cannot be written (empty string: it can).
+bool usable_csv_name(const std::string& name) {
+  return !name.empty() && name.find_first_of(",;\t\"\r\n") == std::string::npos && name == trim(name) &&
+         !looks_numeric(name);
+}
+
+void check_csv_names(const std::string& path, const std::vector<std::string>& names) {
+  if (names.empty()) throw Error(fmt::format("{}: no columns to write", path));
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (!usable_csv_name(names[i]))
+      throw Error(fmt::format("{}: \"{}\" is not a usable CSV column name (non-empty, not a number, no separators, "
+                              "quotes or surrounding blanks)",
+                              path, names[i]));
+    for (std::size_t k = 0; k < i; ++k)
+      if (names[k] == names[i]) throw Error(fmt::format("{}: column name \"{}\" given twice", path, names[i]));
+  }
+}
+
+// An empty column (in every row) or a column of no data: the error Table::column gives.
+void check_column_has_data(const Table& t, std::size_t i) {
+  if (!t.columns[i].empty()) return;
+  const std::string name =
+      i < t.names.size() && !t.names[i].empty() ? fmt::format(" \"{}\"", shown(t.names[i])) : std::string();
+  if (t.num_rows() > 0) throw Error(fmt::format("{}: column {}{} is empty in every row", t.source, i, name));
+  throw Error(fmt::format("{}: column {} has no data", t.source, i));
 }
 
 }  // namespace
@@ -792,11 +1058,13 @@ std::size_t Table::column_index(std::string_view spec) const {
 
 const std::vector<double>& Table::column(std::string_view spec) const {
   const std::size_t i = column_index(spec);
-  if (columns[i].empty() && num_rows() > 0)
-    throw Error(fmt::format("{}: column {}{} is empty in every row", source, i,
-                            i < names.size() && !names[i].empty() ? fmt::format(" \"{}\"", names[i]) : std::string()));
-  if (columns[i].empty()) throw Error(fmt::format("{}: column {} has no data", source, i));
+  check_column_has_data(*this, i);
   return columns[i];
+}
+
+Table parse_text_table(std::string_view text, const std::string& source, const ReadOptions& options) {
+  MemoryLines lines(text, source);
+  return read_text_lines(lines, source, options);
 }
 
 Table read_table(const std::string& path, const ReadOptions& options) {
@@ -844,8 +1112,10 @@ Table read_table(const std::string& path, const ReadOptions& options) {
 
 std::vector<double> read_column(const std::string& path, const ReadOptions& options) {
   if (is_mat_path(path)) return read_mat_variable(path, options.column_spec);
-  const Table t = read_text_table(path, options);
-  return t.column(options.column_spec);
+  Table t = read_text_table(path, options);
+  const std::size_t i = select_column(t, options);
+  check_column_has_data(t, i);
+  return std::move(t.columns[i]);
 }
 
 std::vector<double> read_column(const std::string& path, const std::string& column) {
@@ -854,20 +1124,48 @@ std::vector<double> read_column(const std::string& path, const std::string& colu
   return read_column(path, o);
 }
 
+void for_each_value(const std::string& path, const ReadOptions& options, const std::function<void(double)>& on_value) {
+  if (is_mat_path(path)) {
+    for (const double v : read_column(path, options)) on_value(v);
+    return;
+  }
+  FileLines lines(path);
+  TextParser parser(path, options);
+  // The column is chosen at the first data row: a column empty there is empty in every row
+  // (else the parser stops at the first row that has a value in it).
+  auto choose = [&] {
+    Table probe;
+    probe.source = path;
+    probe.names = parser.names();
+    probe.columns.resize(parser.num_fields());
+    for (std::size_t c = 0; c < probe.columns.size() && parser.rows() > 0; ++c)
+      if (parser.present(c)) probe.columns[c].push_back(parser.value(c));
+    const std::size_t i = select_column(probe, options);
+    check_column_has_data(probe, i);
+    return i;
+  };
+  constexpr std::size_t none = static_cast<std::size_t>(-1);
+  std::size_t col = none;
+  std::string_view line;
+  while (lines.next(line)) {
+    if (!parser.parse(line)) continue;
+    if (col == none) col = choose();
+    on_value(parser.value(col));
+  }
+  parser.finish();
+  if (col == none) choose();  // no data row: the error of read_column
+}
+
 void write_columns(const std::string& path, const std::vector<std::string>& names,
-                   const std::vector<std::vector<double>>& columns) {
+                   const std::vector<std::vector<double>>& columns, const WriteOptions& options) {
   const bool mat = path != "-" && is_mat_path(path);
   if (names.size() != columns.size())
     throw Error(fmt::format("{}: {} column names for {} columns", path, names.size(), columns.size()));
   if (columns.empty()) throw Error(fmt::format("{}: no columns to write", path));
+  if (!mat) check_csv_names(path, names);
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (mat && !is_matlab_identifier(names[i]))
       throw Error(fmt::format("{}: \"{}\" is not a valid MATLAB variable name (a letter, then letters, digits, _)",
-                              path, names[i]));
-    if (!mat && (names[i].empty() || names[i].find_first_of(",;\t\"\r\n") != std::string::npos ||
-                 names[i] != trim(names[i]) || looks_numeric(names[i])))
-      throw Error(fmt::format("{}: \"{}\" is not a usable CSV column name (non-empty, not a number, no separators, "
-                              "quotes or surrounding blanks)",
                               path, names[i]));
     for (std::size_t k = 0; k < i; ++k)
       if (names[k] == names[i]) throw Error(fmt::format("{}: column name \"{}\" given twice", path, names[i]));
@@ -879,10 +1177,100 @@ void write_columns(const std::string& path, const std::vector<std::string>& name
         throw Error(fmt::format("{}: column \"{}\" row {} is not finite ({})", path, names[i], r, columns[i][r]));
   }
   if (!mat) {
-    write_text_file(path, csv_text(names, columns));
+    write_csv_rows(path, names, [&](CsvRowWriter& w) {
+      std::vector<double> row(columns.size());
+      for (std::size_t r = 0; r < columns[0].size(); ++r) {
+        for (std::size_t c = 0; c < columns.size(); ++c) row[c] = columns[c][r];
+        w.row(row);
+      }
+    });
     return;
   }
-  write_file_atomically(path, [&](const std::string& tmp) { write_mat(tmp, names, columns); });
+  write_file_atomically(path, [&](const std::string& tmp) { write_mat(tmp, names, columns, options.compress_mat); });
+}
+
+// ---- streamed CSV output -----------------------------------------------------------
+
+namespace {
+constexpr std::size_t kCsvNumberMax = 32;  // std::to_chars of a double: at most 24 characters
+}
+
+CsvRowWriter::CsvRowWriter(int fd, std::string where, std::vector<std::string> names)
+    : fd_(fd), where_(std::move(where)), names_(std::move(names)) {
+  std::string header;
+  for (std::size_t i = 0; i < names_.size(); ++i) {
+    if (i) header += ',';
+    header += names_[i];
+  }
+  header += '\n';
+  write_all(fd_, header.data(), header.size(), where_);
+  buf_.reset(new char[capacity()]);
+}
+
+CsvRowWriter::~CsvRowWriter() = default;
+
+std::size_t CsvRowWriter::capacity() const noexcept {
+  return std::max<std::size_t>(std::size_t{1} << 20, names_.size() * (kCsvNumberMax + 1) * 2);
+}
+
+void CsvRowWriter::row(std::span<const double> values) {
+  if (values.size() != names_.size())
+    throw Error(fmt::format("{}: a row of {} values for {} columns", where_, values.size(), names_.size()));
+  if (capacity() - used_ < values.size() * (kCsvNumberMax + 1) + 1) flush();
+  char* p = buf_.get() + used_;
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    if (!std::isfinite(values[c]))
+      throw Error(fmt::format("{}: column \"{}\" row {} is not finite ({})", where_, names_[c], rows_, values[c]));
+    if (c) *p++ = ',';
+    p = std::to_chars(p, p + kCsvNumberMax, values[c]).ptr;
+  }
+  *p++ = '\n';
+  used_ = static_cast<std::size_t>(p - buf_.get());
+  ++rows_;
+}
+
+void CsvRowWriter::flush() {
+  write_all(fd_, buf_.get(), used_, where_);
+  used_ = 0;
+}
+
+void write_csv_rows(const std::string& path, const std::vector<std::string>& names,
+                    const std::function<void(CsvRowWriter&)>& fill) {
+  check_csv_names(path, names);
+  // an error of fill (e.g. a bad line of the input being streamed) is passed on as it is, not
+  // renamed after the output file
+  std::exception_ptr fill_error;
+  try {
+    write_file_atomically(path, [&](const std::string& target) {
+    const bool to_stdout = target == "/dev/stdout";
+    int fd = STDOUT_FILENO;
+    if (to_stdout) {
+      if (std::fflush(stdout) != 0) throw Error("writing to stdout failed");
+    } else {
+      fd = ::open(target.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+      if (fd < 0) throw Error(fmt::format("cannot open for writing: {}", std::strerror(errno)));
+    }
+    struct Closer {
+      int fd;
+      ~Closer() {
+        if (fd >= 0) ::close(fd);
+      }
+    } closer{to_stdout ? -1 : fd};
+    CsvRowWriter w(fd, to_stdout ? std::string("stdout") : path, names);
+    try {
+      fill(w);
+    } catch (...) {
+      fill_error = std::current_exception();
+      throw Error("stopped");
+    }
+    w.flush();
+    closer.fd = -1;
+    if (!to_stdout && ::close(fd) != 0) throw Error(fmt::format("write failed: {}", std::strerror(errno)));
+    });
+  } catch (...) {
+    if (fill_error) std::rethrow_exception(fill_error);
+    throw;
+  }
 }
 
 }  // namespace hysteron::io

@@ -1,5 +1,7 @@
 // Parameter validation and JSON I/O of the simulated rig (plant.hpp).
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <numbers>
 #include <sstream>
@@ -153,7 +155,10 @@ void validate(const PamRigParams& p, std::string_view where) {
 PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where) {
   if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
   PamRigParams p;
-  for (const auto& [section, body] : j.items()) {
+  // iterators, not structured bindings: clang 14 (the fuzz build) cannot capture bindings in lambdas
+  for (auto sec_it = j.begin(); sec_it != j.end(); ++sec_it) {
+    const std::string& section = sec_it.key();
+    const nlohmann::json& body = sec_it.value();
     bool known = false;
     for (const char* s : kSections) known = known || section == s;
     if (!known)
@@ -162,7 +167,9 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
                               where, section));
     if (!body.is_object())
       throw Error(fmt::format("{}.{}: expected a JSON object, got {}", where, section, body.type_name()));
-    for (const auto& [key, value] : body.items()) {
+    for (auto key_it = body.begin(); key_it != body.end(); ++key_it) {
+      const std::string& key = key_it.key();
+      const nlohmann::json& value = key_it.value();
       bool found = false;
       for_each_field(p, [&](const char* sec, const char* name, auto& field, Rule rule) {
         if (found || section != sec || key != name) return;
@@ -173,7 +180,11 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
           if (!value.is_number_integer())
             throw Error(fmt::format("{}: expected {}, got {}", path, describe(rule),
                                     value.is_number() ? value.dump() : value.type_name()));
-          field = value.get<int>();
+          // outside int: refused, not wrapped (2^32 + 12 bits would read as 12)
+          if (value.is_number_unsigned() ? value.get<std::uint64_t>() > std::uint64_t{INT_MAX}
+                                         : (value.get<std::int64_t>() > INT_MAX || value.get<std::int64_t>() < INT_MIN))
+            throw Error(fmt::format("{} = {}: must be {}", path, value.dump(), describe(rule)));
+          field = static_cast<int>(value.get<std::int64_t>());
         } else {
           if (!value.is_number())
             throw Error(fmt::format("{}: expected {}, got {}", path, describe(rule), value.type_name()));

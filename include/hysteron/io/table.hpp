@@ -6,14 +6,16 @@
 //    is not a number ("nan"/"inf" count as numbers, and are then refused);
 //  - one separator per file, detected from the first non-empty line: tab if it
 //    has one, else ';', else ',', else runs of blanks;
-//  - a UTF-8 BOM, CRLF line endings, blank lines and lines starting with '#' are
-//    ignored; fields are trimmed of blanks and of one pair of double quotes;
+//  - a UTF-8 BOM, blank lines and lines starting with '#' are ignored; lines end with
+//    LF, CRLF or a lone CR; fields are trimmed of blanks and of one pair of double quotes;
 //  - a column that is empty in every row (e.g. the leading "," of every line)
 //    is allowed and reads as empty; selecting it is an error; any other empty
 //    field is an error;
 //  - NaN, infinity, out-of-range and malformed numbers are refused with
 //    "file:line:column (column "name"): ..." (line 1-based, column = 1-based
-//    field number); rows with a different number of fields name their line.
+//    field number); rows with a different number of fields name their line;
+//  - at most max_text_columns fields per line and max_text_line_bytes bytes per line
+//    (errors name the line); a file is read in chunks, never held whole.
 // .mat files (extension .mat, any case): a column is a variable: a real numeric
 // vector (1xN or Nx1) of class double, single or any integer class, or one column of
 // such a 2-D matrix, named NAME:INDEX (INDEX 0-based, as CSV column indices; rows are
@@ -26,13 +28,19 @@
 // always wins; an index is a plain 0-based number).
 #include <cstddef>
 #include <functional>
+#include <memory>
+#include <span>
 #include <string>
 #include <string_view>
-
-#include "hysteron/io/files.hpp"  // write_file_atomically, write_text_file, check_outputs_distinct
 #include <vector>
 
+#include "hysteron/io/files.hpp"  // write_file_atomically, write_text_file, check_outputs_distinct
+
 namespace hysteron::io {
+
+// Caps of a text data file (hostile or binary input gives a clear error, not a huge allocation).
+inline constexpr std::size_t max_text_columns = 10000;
+inline constexpr std::size_t max_text_line_bytes = std::size_t{1} << 20;  // 1 MiB
 
 enum class HeaderMode { autodetect, present, absent };
 
@@ -44,6 +52,9 @@ struct ReadOptions {
   // Field separator: 0 = autodetect, else ',', ';', '\t' or ' ' (runs of blanks).
   char separator = 0;
   HeaderMode header = HeaderMode::autodetect;
+  // With an empty column_spec and a file of several non-empty columns: the column with this
+  // header name, if there is one (e.g. "input" for `hysteron simulate`).
+  std::string preferred_column;
 };
 
 // All columns of a file. columns[i] has num_rows() values, or none if the
@@ -63,6 +74,9 @@ struct Table {
   const std::vector<double>& column(std::string_view spec) const;
 };
 
+// A text table held in memory (the rules above); `source` names it in errors.
+Table parse_text_table(std::string_view text, const std::string& source, const ReadOptions& options = {});
+
 // Reads a whole text table (or every numeric vector variable of a .mat file,
 // which must then all have the same length, followed by the columns "NAME:0",
 // "NAME:1", ... of each 2-D matrix with that many rows; other matrices, and variables
@@ -74,13 +88,53 @@ Table read_table(const std::string& path, const ReadOptions& options = {});
 std::vector<double> read_column(const std::string& path, const ReadOptions& options);
 std::vector<double> read_column(const std::string& path, const std::string& column);
 
-// Writes equal-length columns with a header line of `names` as CSV (values
-// printed with %.17g, so they read back exactly) or, for a .mat path, as Nx1
-// double variables (MAT v5, compressed; names must be MATLAB identifiers).
+// Streams one column (selected as read_column does, preferred_column included) of a text file:
+// on_value(v) for each row in order, in bounded memory (the file is read in chunks). The whole
+// file is checked as read_column checks it, so an error can come after earlier values were
+// delivered. A .mat file is read whole, then delivered the same way.
+void for_each_value(const std::string& path, const ReadOptions& options, const std::function<void(double)>& on_value);
+
+struct WriteOptions {
+  bool compress_mat = false;  // .mat: zlib-compressed variables (smaller, several times slower)
+};
+
+// Writes equal-length columns with a header line of `names` as CSV (values in the shortest
+// form that reads back exactly, std::to_chars) or, for a .mat path, as Nx1 double variables
+// (MAT v5, uncompressed unless options.compress_mat; names must be MATLAB identifiers).
 // Atomic: see write_file_atomically. Path "-" writes CSV to stdout.
 // Non-finite values, unequal lengths and bad names are refused before any file
 // is created.
 void write_columns(const std::string& path, const std::vector<std::string>& names,
-                   const std::vector<std::vector<double>>& columns);
+                   const std::vector<std::vector<double>>& columns, const WriteOptions& options = {});
+
+// CSV rows written through a fixed buffer (no allocation per row), numbers as write_columns
+// writes them. Made by write_csv_rows.
+class CsvRowWriter {
+ public:
+  // One row of names().size() values; a non-finite value is an error naming its column and row.
+  void row(std::span<const double> values);
+  std::size_t rows() const noexcept { return rows_; }
+  ~CsvRowWriter();
+  CsvRowWriter(const CsvRowWriter&) = delete;
+  CsvRowWriter& operator=(const CsvRowWriter&) = delete;
+
+ private:
+  friend void write_csv_rows(const std::string&, const std::vector<std::string>&,
+                             const std::function<void(CsvRowWriter&)>&);
+  CsvRowWriter(int fd, std::string where, std::vector<std::string> names);
+  void flush();
+  std::size_t capacity() const noexcept;
+  int fd_;
+  std::string where_;
+  std::vector<std::string> names_;
+  std::unique_ptr<char[]> buf_;
+  std::size_t used_ = 0, rows_ = 0;
+};
+
+// Writes a CSV file (header `names`) whose rows fill(writer) produces, atomically as
+// write_columns does (path "-": stdout). If fill throws, nothing is left at `path` (a regular
+// file keeps its old content; a device or FIFO may have received part of the rows).
+void write_csv_rows(const std::string& path, const std::vector<std::string>& names,
+                    const std::function<void(CsvRowWriter&)>& fill);
 
 }  // namespace hysteron::io

@@ -18,6 +18,8 @@
 #include <vector>
 
 #include "temp_dir.hpp"
+#include "test_util.hpp"
+#include "hysteron/plant.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/table.hpp"
 
@@ -29,12 +31,7 @@ namespace {
 
 using hysteron::test::TempDir;
 
-std::string slurp(const std::string& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using hysteron::test::slurp;
 
 void put(const std::string& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
@@ -232,4 +229,33 @@ TEST(OutputFiles, OutputThatIsAnInputIsRefused) {
   io::check_outputs_distinct({{"--out", d.file("m.json")}, {"--report", ""}}, {{"--data", data}, {"--model", "-"}});
   io::check_outputs_distinct({{"--out", "/dev/null"}, {"--report", "/dev/null"}}, {{"--data", "/dev/null"}});
   EXPECT_EQ(slurp(data), "x,y\n1,2\n");
+}
+
+// save_rig_params goes through the same writer (it used a plain std::ofstream: as root it wrote
+// into a read-only file, replaced nothing atomically and followed no rules for devices).
+TEST(OutputFiles, RigParametersAreWrittenThroughTheSafeWriter) {
+  TempDir dir;
+  hysteron::PamRigParams p;
+  p.load.mass = 12.5;
+  const std::string ro = dir.file("ro.json");
+  put(ro, "precious\n");
+  ::chmod(ro.c_str(), 0444);
+  const std::string msg = hysteron::test::error_of([&] { hysteron::save_rig_params(p, ro); });
+  EXPECT_TRUE(hysteron::test::has(msg, "is read-only")) << msg;
+  EXPECT_EQ(slurp(ro), "precious\n");
+  // invalid parameters: refused, named after the file, nothing created
+  hysteron::PamRigParams bad = p;
+  bad.load.mass = -1;
+  const std::string msg2 = hysteron::test::error_of([&] { hysteron::save_rig_params(bad, dir.file("bad.json")); });
+  EXPECT_TRUE(hysteron::test::has(msg2, "bad.json.load.mass")) << msg2;
+  // a mode-600 file stays 600 and reads back
+  const std::string ok = dir.file("ok.json");
+  put(ok, "{}");
+  ::chmod(ok.c_str(), 0600);
+  hysteron::save_rig_params(p, ok);
+  struct stat st {};
+  ASSERT_EQ(::stat(ok.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
+  EXPECT_EQ(hysteron::load_rig_params(ok).load.mass, 12.5);
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"ok.json", "ro.json"}));
 }

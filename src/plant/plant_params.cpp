@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/plant.hpp"
 
@@ -219,11 +220,9 @@ PamRigParams load_rig_params(const std::filesystem::path& file) {
 }
 
 void save_rig_params(const PamRigParams& params, const std::filesystem::path& file) {
-  validate(params);
-  std::ofstream out(file);
-  if (!out) throw Error(fmt::format("{}: cannot open for writing", file.string()));
-  out << rig_params_to_json(params).dump(2) << '\n';
-  if (!out) throw Error(fmt::format("{}: write failed", file.string()));
+  validate(params, file.string());
+  // atomic, mode and links kept, devices written in place, "-" = stdout (io/files.hpp)
+  io::write_text_file(file.string(), rig_params_to_json(params).dump(2) + "\n");
 }
 
 }  // namespace hysteron

@@ -57,7 +57,9 @@ bool is_mat(const std::string& path) {
 // A CSV output written through a temporary file (a regular file or a new path): streamed.
 // Devices, FIFOs and stdout get the whole result at once, after the input was read and checked.
 bool streamed_output(const std::string& path) {
-  if (path == "-" || is_mat(path) || path.starts_with("/dev/") || path.starts_with("/proc/")) return false;
+  if (path == "-" || is_mat(path) || path == "/dev/stdout" || path == "/dev/stderr" || path.starts_with("/dev/fd/") ||
+      path.starts_with("/proc/self/fd/"))
+    return false;
   struct stat st {};
   return ::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode);
 }

@@ -135,7 +135,19 @@ std::string column_label(const std::vector<std::string>& names, std::size_t i) {
 // The next line of `avail` (ends: "\n", "\r\n" or a lone "\r"). Returns false if more input is
 // needed to know where the line ends (no end yet, or a final '\r' that may start "\r\n").
 bool take_line(std::string_view avail, bool at_eof, std::string_view& line, std::size_t& consumed) {
-  const std::size_t e = avail.find_first_of("\r\n");
+  // memchr for '\n', then for '\r' inside the line only (find_first_of("\r\n") tests each byte
+  // against the set: several times slower on long buffers)
+  if (avail.empty()) {
+    line = avail;
+    consumed = 0;
+    return at_eof;
+  }
+  const void* lf = std::memchr(avail.data(), '\n', avail.size());
+  std::size_t e = lf ? static_cast<std::size_t>(static_cast<const char*>(lf) - avail.data()) : avail.size();
+  if (const void* cr = std::memchr(avail.data(), '\r', e))
+    e = static_cast<std::size_t>(static_cast<const char*>(cr) - avail.data());
+  else if (!lf)
+    e = std::string_view::npos;
   if (e == std::string_view::npos) {
     if (!at_eof) return false;
     line = avail;

@@ -197,7 +197,7 @@ class FileLines {
     if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a data file", path));
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) throw Error(fmt::format("{}: cannot open data file ({})", path, std::strerror(errno)));
-    buf_.reset(new char[kSize]);
+    buf_.reset(new char[cap_]);
   }
   ~FileLines() {
     if (fd_ >= 0) ::close(fd_);
@@ -222,6 +222,7 @@ class FileLines {
   }
 
  private:
+  // the buffer starts at 256 KiB and grows (up to a line's cap and a chunk) only for long lines
   static constexpr std::size_t kSize = max_text_line_bytes + (std::size_t{1} << 20);
 
   void fill() {
@@ -230,8 +231,15 @@ class FileLines {
       end_ -= begin_;
       begin_ = 0;
     }
-    while (end_ < kSize) {
-      const ssize_t r = ::read(fd_, buf_.get() + end_, kSize - end_);
+    if (end_ == cap_ && cap_ < kSize) {
+      const std::size_t cap = std::min(kSize, cap_ * 2);
+      std::unique_ptr<char[]> bigger(new char[cap]);
+      std::memcpy(bigger.get(), buf_.get(), end_);
+      buf_ = std::move(bigger);
+      cap_ = cap;
+    }
+    while (end_ < cap_) {
+      const ssize_t r = ::read(fd_, buf_.get() + end_, cap_ - end_);
       if (r < 0 && errno == EINTR) continue;
       if (r < 0) throw Error(fmt::format("{}: read error ({})", path_, std::strerror(errno)));
       if (r == 0) {
@@ -250,7 +258,7 @@ class FileLines {
   const std::string& path_;
   int fd_ = -1;
   std::unique_ptr<char[]> buf_;
-  std::size_t begin_ = 0, end_ = 0, lineno_ = 0;
+  std::size_t begin_ = 0, end_ = 0, lineno_ = 0, cap_ = std::size_t{1} << 18;
   bool eof_ = false, first_ = true;
 };
 

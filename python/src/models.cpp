@@ -46,6 +46,9 @@ ModelParams params_from(const py::handle& spec) {
 
 void bind_models(py::module_& m) {
   py::register_exception<Error>(m, "Error", PyExc_ValueError);
+  m.attr("Error").attr("__doc__") =
+      "Every error of hysteron (bad input, bad parameters, unreadable or unwritable files), with the C++ message "
+      "naming what and where. A subclass of ValueError.";
 
   py::class_<Model>(m, "Model", R"doc(
 A hysteresis model (pi, gpi, mpi-deadzone, mpi-asym) run sample by sample.
@@ -54,8 +57,9 @@ Model(spec) takes a dict with the model-file keys, e.g.
 ``{"model": "gpi", "n": 10, "c": [c0, c1, c2, c3], "q": q, "rho": rho, "tau": tau, "alpha": alpha}``,
 or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
       .def(py::init([](const py::object& spec) { return Model(params_from(spec)); }), py::arg("spec"))
-      .def_property_readonly("name", [](const Model& s) { return std::string(s.name()); })
-      .def_property_readonly("num_operators", &Model::num_operators)
+      .def_property_readonly("name", [](const Model& s) { return std::string(s.name()); },
+                             "The model kind: 'pi', 'gpi', 'mpi-deadzone' or 'mpi-asym'.")
+      .def_property_readonly("num_operators", &Model::num_operators, "Number of play operators.")
       .def("step", &Model::step, py::arg("x"), "One sample: the output for input x (updates the state).")
       .def(
           "simulate",

@@ -1,4 +1,6 @@
 // Bindings of the PID, the inverse feedforward and the feedforward + PID controller.
+#include <fmt/format.h>
+
 #include <limits>
 
 #include "hysteron/compensation.hpp"
@@ -80,12 +82,19 @@ weights. step() never allocates; a non-finite input holds the last output.)doc")
       .def("step", &Pid::step, py::arg("setpoint"), py::arg("measurement"), py::arg("feedforward") = 0.0,
            "One sample; returns the clamped output.")
       .def("reset", &Pid::reset, py::arg("u0") = 0.0, "Zero state, optionally starting bumplessly at output u0.")
-      .def_property_readonly("output", &Pid::output)
-      .def_property_readonly("integral", [](const Pid& p) { return p.state().integral; })
+      .def_property_readonly("output", &Pid::output, "The last (clamped) output.")
+      .def_property_readonly("integral", [](const Pid& p) { return p.state().integral; },
+                             "The integrator's state (in output units).")
       .def_property_readonly("saturated", [](const Pid& p) { return p.state().saturated; },
                              "True if the last output was clamped.")
       .def_property_readonly("faults", &Pid::faults, "Number of non-finite inputs ignored.")
-      .def_property_readonly("params", [](const Pid& p) { return pid_dict(p.params()); });
+      .def_property_readonly("params", [](const Pid& p) { return pid_dict(p.params()); },
+                             "The parameters as a dict (the constructor's keyword arguments).")
+      .def("__repr__", [](const Pid& p) {
+        const PidParams& q = p.params();
+        return fmt::format("Pid(kp={}, ki={}, kd={}, sample_time={}, out_min={}, out_max={}, anti_windup='{}')", q.kp,
+                           q.ki, q.kd, q.sample_time, q.out_min, q.out_max, anti_windup_name(q.anti_windup));
+      });
 
   py::class_<InverseFeedforward>(m, "InverseFeedforward", R"doc(
 Inverse-model feedforward: desired contraction [m] -> pressure command [MPa],
@@ -96,8 +105,16 @@ for a model fitted in mm); optional compensation of a first-order lag.)doc")
            py::arg("model"), py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
            py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &InverseFeedforward::step, py::arg("desired_m"), "Pressure [MPa] for the desired contraction [m].")
-      .def("reset", &InverseFeedforward::reset)
-      .def_property_readonly("saturated", &InverseFeedforward::saturated);
+      .def("reset", &InverseFeedforward::reset, "Back to the virgin state of the inverse (and no lag history).")
+      .def_property_readonly("saturated", &InverseFeedforward::saturated,
+                             "True if the last command was clamped to pressure_limits.")
+      .def("__repr__", [](const InverseFeedforward& f) {
+        const FeedforwardParams& q = f.params();
+        return fmt::format("InverseFeedforward(pressure_limits=({}, {}), model_scale={}, lag_time_constant={}, "
+                           "sample_time={})",
+                           q.pressure_limits.lo, q.pressure_limits.hi, q.model_scale, q.lag_time_constant,
+                           q.sample_time);
+      });
 
   py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
 GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)) [MPa], the PID's
@@ -113,7 +130,10 @@ are used; default: Pid.gpi_paper()).)doc")
            py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &FeedforwardPidController::step, py::arg("reference_m"), py::arg("preview_m"),
            py::arg("measured_m"), "One control sample; returns the pressure command [MPa].")
-      .def("reset", &FeedforwardPidController::reset);
+      .def("reset", &FeedforwardPidController::reset, "Back to the virgin state (inverse, lag history and PID).")
+      .def("__repr__", [](const FeedforwardPidController&) {
+        return std::string("FeedforwardPidController(inverse feedforward + PID, GPI paper Fig. 10)");
+      });
 }
 
 }  // namespace hysteron::python

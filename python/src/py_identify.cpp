@@ -177,7 +177,10 @@ and envelopes and gives the initial weights.)doc")
       .def_property_readonly("lam", &Rls::lambda, "Forgetting factor.")
       .def(
           "params", [](const Rls& r) { return from_json(io::model_to_json(r.params())); },
-          "The model with the current weights, as a model dict.");
+          "The model with the current weights, as a model dict.")
+      .def("__repr__", [](const Rls& r) {
+        return fmt::format("Rls(model='{}', weights={}, lam={})", model_name(r.params()), r.theta().size(), r.lambda());
+      });
 
   m.def(
       "rls_fit",

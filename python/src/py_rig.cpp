@@ -139,7 +139,7 @@ pressure_mpa (measured), contraction_mm (true), contraction_measured_mm.
 Raises hysteron.Error if the simulation diverges.)doc")
       .def_property_readonly("time", &PamRig::time, "Simulated time [s].")
       .def_property_readonly("dt", &PamRig::dt, "Rig step [s].")
-      .def_property_readonly("seed", &PamRig::seed)
+      .def_property_readonly("seed", &PamRig::seed, "Seed of the sensor-noise generator.")
       .def_property_readonly("ok", &PamRig::ok, "False once the simulation diverged.")
       .def_property_readonly(
           "params", [](const PamRig& r) { return from_json(rig_params_to_json(r.params())); }, "Parameter dict.")
@@ -156,7 +156,10 @@ Raises hysteron.Error if the simulation diverges.)doc")
             d["regulator_setpoint"] = s.regulator_setpoint;
             return d;
           },
-          "The continuous state (SI units, pressure absolute).");
+          "The continuous state (SI units, pressure absolute).")
+      .def("__repr__", [](const PamRig& r) {
+        return fmt::format("PamRig(seed={}, dt={}, time={}, ok={})", r.seed(), r.dt(), r.time(), r.ok() ? "True" : "False");
+      });
 
   m.def(
       "wave_sequence", [](const py::list& segments, double dt) { return to_numpy(wave_sequence(segments_from(segments), dt)); },

@@ -103,6 +103,9 @@ struct SweepOptions {
   std::uint64_t seed = 1;                 // rig noise seed of every run
   unsigned jobs = 0;                      // threads; 0 = std::thread::hardware_concurrency()
   std::function<void(const SweepProgress&)> progress;  // optional
+  // What runs one experiment: run_experiment when empty (a test may pass a cheaper one;
+  // it is called from several threads at once).
+  std::function<ExperimentResult(const ExperimentOptions&)> runner;
 };
 
 // One tracking run of one (experiment, variant): a reference and a variant kind

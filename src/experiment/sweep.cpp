@@ -331,32 +331,32 @@ std::vector<PlantVariant> read_variant_grid(const std::string& path) {
 }
 
 std::vector<PlantVariant> documented_variants() {
-  auto one = [](std::string group, std::vector<ParameterOverride> o) {
+  auto one = [](std::string name, std::string group, std::vector<ParameterOverride> o) {
     PlantVariant v;
     v.overrides = std::move(o);
-    v.name = variant_name(v.overrides);
+    v.name = std::move(name);
     v.group = std::move(group);
     return v;
   };
   const std::string reg = "regulator.time_constant/regulator.dead_time";
   std::vector<PlantVariant> out = {
-      one("load.mass", {{"load.mass", 10.0, false}}),
-      one("load.mass", {{"load.mass", 35.0, false}}),
-      one("hysteresis.pressure_band", {{"hysteresis.pressure_band", 10e3, false}}),
-      one("hysteresis.pressure_band", {{"hysteresis.pressure_band", 25e3, false}}),
-      one("muscle.force_620", {{"muscle.force_620", -15.0, true}}),
-      one("muscle.force_620", {{"muscle.force_620", 15.0, true}}),
-      one(reg, {{"regulator.time_constant", 0.03, false}, {"regulator.dead_time", 0.005, false}}),
-      one(reg, {{"regulator.time_constant", 0.1, false}, {"regulator.dead_time", 0.012, false}}),
-      one("load.damping", {{"load.damping", 200.0, false}}),
-      one("load.damping", {{"load.damping", 800.0, false}}),
+      one("load 10 kg", "load.mass", {{"load.mass", 10.0, false}}),
+      one("load 35 kg", "load.mass", {{"load.mass", 35.0, false}}),
+      one("band 10 kPa", "hysteresis.pressure_band", {{"hysteresis.pressure_band", 10e3, false}}),
+      one("band 25 kPa", "hysteresis.pressure_band", {{"hysteresis.pressure_band", 25e3, false}}),
+      one("force map -15%", "muscle.force_620", {{"muscle.force_620", -15.0, true}}),
+      one("force map +15%", "muscle.force_620", {{"muscle.force_620", 15.0, true}}),
+      one("regulator 30/5 ms", reg, {{"regulator.time_constant", 0.03, false}, {"regulator.dead_time", 0.005, false}}),
+      one("regulator 100/12 ms", reg, {{"regulator.time_constant", 0.1, false}, {"regulator.dead_time", 0.012, false}}),
+      one("damping 200 N s/m", "load.damping", {{"load.damping", 200.0, false}}),
+      one("damping 800 N s/m", "load.damping", {{"load.damping", 800.0, false}}),
   };
-  PlantVariant worst = one("", {{"load.mass", 35.0, false},
-                                {"hysteresis.pressure_band", 25e3, false},
-                                {"muscle.force_620", -15.0, true},
-                                {"regulator.time_constant", 0.1, false},
-                                {"regulator.dead_time", 0.012, false},
-                                {"load.damping", 200.0, false}});
+  PlantVariant worst = one("worst", "", {{"load.mass", 35.0, false},
+                                         {"hysteresis.pressure_band", 25e3, false},
+                                         {"muscle.force_620", -15.0, true},
+                                         {"regulator.time_constant", 0.1, false},
+                                         {"regulator.dead_time", 0.012, false},
+                                         {"load.damping", 200.0, false}});
   worst.name = "worst";
   worst.rms_ratio_limit = 2.0;
   out.push_back(std::move(worst));
@@ -398,6 +398,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   nominal.rig = options.base;
   r.variants.push_back(std::move(nominal));
   std::set<std::string> names = {"nominal"};
+  std::vector<json> rigs;  // of r.variants[1...]
   for (const auto& v : options.variants) {
     const std::string where = fmt::format("variant '{}'", v.name);
     if (v.name.empty()) throw Error("sweep: a variant without a name");
@@ -413,6 +414,13 @@ SweepResult run_sweep(const SweepOptions& options) {
       r.notes.push_back(fmt::format("variant '{}' is the nominal rig: its results are the nominal row", v.name));
       continue;
     }
+    const auto same = std::find(rigs.begin(), rigs.end(), j);
+    if (same != rigs.end()) {
+      r.notes.push_back(fmt::format("variant '{}' is the rig of variant '{}': not run twice", v.name,
+                                    r.variants[static_cast<std::size_t>(same - rigs.begin()) + 1].variant.name));
+      continue;
+    }
+    rigs.push_back(std::move(j));
     r.variants.push_back(std::move(sv));
   }
 
@@ -438,7 +446,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.name = run.experiment;
         eo.rig = r.variants[run.variant].rig;
         eo.seed = options.seed;
-        const ExperimentResult er = run_experiment(eo);
+        const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
         for (const auto& tr : er.runs) {
           SweepRunErrors e;
           e.reference = tr.reference;

@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# hysteron sweep: bad input (unknown parameter paths with the closest names, bad values,
+# unknown experiments and sets, grid files, outputs equal to inputs) is exit 1 with nothing
+# written; a tiny sweep (gpi-pid on the nominal rig and 35 kg, plus a regulator whose air
+# dynamics need more sub-steps than allowed, which fails at once) writes the CSV table, the
+# HTML page and one JSON document, records the failure and exits 2; a sweep whose only
+# variant is the nominal rig exits 0.
+# Usage: bash sweep.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+PY=/usr/bin/python3
+
+# expect_error "what" "part of the message" command...: exit 1, the message on stderr
+expect_error() {
+  local what=$1 part=$2
+  shift 2
+  "$@" > "$T/out.txt" 2> "$T/err.txt"
+  local rc=$?
+  [ $rc -eq 1 ] || fail "$what: exit $rc, expected 1 ($(cat "$T/err.txt"))"
+  grep -qF -- "$part" "$T/err.txt" || fail "$what: stderr lacks '$part': $(cat "$T/err.txt")"
+}
+
+expect_error "typo in a path" "unknown rig parameter 'load.mas' (did you mean load.mass?)" \
+  "$BIN" sweep gpi-pid --vary load.mas=10,35 --out "$T/bad.csv"
+expect_error "bare key" "load.mass" "$BIN" sweep gpi-pid --vary mass=10
+expect_error "NaN value" "load.mass: 'nan' is not a finite number" "$BIN" sweep gpi-pid --vary load.mass=nan
+expect_error "value with a unit" "'35kg' is not a finite number" "$BIN" sweep gpi-pid --vary load.mass=35kg
+expect_error "empty value" "an empty value" "$BIN" sweep gpi-pid --vary load.mass=10,,35
+expect_error "value the rig refuses" "load.mass = -5" "$BIN" sweep gpi-pid --vary load.mass=-5
+expect_error "pair with one value" "1 value(s) for 2 parameter(s)" \
+  "$BIN" sweep gpi-pid --vary regulator.time_constant/regulator.dead_time=0.1
+expect_error "unknown experiment" "unknown experiment 'gpi-pd' (did you mean gpi-pid?)" \
+  "$BIN" sweep gpi-pd --vary load.mass=35
+expect_error "no variants" "no variants" "$BIN" sweep gpi-pid
+expect_error "unknown set" "--set worst: unknown set" "$BIN" sweep gpi-pid --set worst
+expect_error "jobs 0" "--jobs" "$BIN" sweep gpi-pid --vary load.mass=35 --jobs 0
+expect_error "jobs -1" "--jobs" "$BIN" sweep gpi-pid --vary load.mass=35 --jobs -1
+expect_error "mistyped option" "unknown option --vray (did you mean --vary?)" "$BIN" sweep gpi-pid --vray load.mass=35
+cat > "$T/grid_bad.json" <<'JSON'
+{"variants": [{"name": "heavy", "set": {"load.mass": 35}}, {"set": {"load.damping": 200}, "nmae": "x"}]}
+JSON
+expect_error "grid: unknown key" "grid_bad.json.variants[1]: unknown key 'nmae'" "$BIN" sweep gpi-pid --grid "$T/grid_bad.json"
+cat > "$T/grid_bad2.json" <<'JSON'
+{"variants": [{"set": {"load.mass": 35}}, {"set": {"loads.damping": 200}}]}
+JSON
+expect_error "grid: unknown path" "unknown rig parameter 'loads.damping' (did you mean load.damping?)" \
+  "$BIN" sweep gpi-pid --grid "$T/grid_bad2.json"
+printf '{"variants": [{"set": {"load.mass": 35, "load.mass": 10}}]}\n' > "$T/grid_bad3.json"
+expect_error "grid: repeated key" "load.mass" "$BIN" sweep gpi-pid --grid "$T/grid_bad3.json"
+expect_error "output is the grid" "--grid" "$BIN" sweep gpi-pid --grid "$T/grid_bad.json" --out "$T/grid_bad.json"
+grep -q nmae "$T/grid_bad.json" || fail "the grid file was overwritten"
+[ ! -e "$T/bad.csv" ] || fail "a failed sweep wrote its table"
+ls -A "$T" | grep -q '^\.' && fail "temporary files left: $(ls -A "$T")"
+
+# the tiny sweep: 2 rigs run (nominal, 35 kg), one variant fails at construction
+printf '{"simulation": {"max_substeps": 1}}\n' > "$T/base.json"
+"$BIN" sweep gpi-pid --plant "$T/base.json" --vary load.mass=35 --vary regulator.sonic_conductance=1e-5 \
+  --jobs 2 --out "$T/sweep.csv" --report "$T/sweep.html" --json > "$T/sweep.json" 2> "$T/sweep.err"
+rc=$?
+[ $rc -eq 2 ] || fail "sweep with a failing variant: exit $rc, expected 2 ($(cat "$T/sweep.err"))"
+grep -q "1 of 3 run(s) failed" "$T/sweep.err" || fail "no failure summary on stderr: $(cat "$T/sweep.err")"
+[ "$(grep -c '^sweep: [123]/3 gpi-pid' "$T/sweep.err")" -eq 3 ] || fail "not one progress line per run: $(cat "$T/sweep.err")"
+grep -q $'\r' "$T/sweep.err" && fail "a progress bar was drawn on a non-terminal"
+$PY - "$T/sweep.csv" "$T/sweep.json" <<'PYEOF' || fail "table or JSON"
+import csv, json, math, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+doc = json.load(open(sys.argv[2]))
+assert doc["failures"] == 1, doc["failures"]
+assert [v["name"] for v in doc["variants"]] == ["nominal", "load.mass=35", "regulator.sonic_conductance=1e-05"]
+failed = [r for r in rows if r["status"] == "failed"]
+assert len(failed) == 1 and "max_substeps" in failed[0]["error"], failed
+ok = [r for r in rows if r["status"] == "ok"]
+kinds = {r["kind"] for r in ok}
+assert {"faithful", "compensated", "baseline"} <= kinds, kinds
+nominal = {(r["reference"], r["kind"]): r for r in ok if r["variant"] == "nominal"}
+heavy = {(r["reference"], r["kind"]): r for r in ok if r["variant"] == "load.mass=35"}
+assert nominal.keys() == heavy.keys() and len(nominal) >= 3
+for k, r in heavy.items():
+    n = nominal[k]
+    assert float(n["rms_vs_nominal"]) == 1.0
+    ratio = float(r["rms_mm"]) / float(n["rms_mm"])
+    assert math.isclose(float(r["rms_vs_nominal"]), ratio, rel_tol=1e-12), (r, ratio)
+    assert r["rms_mm"] != n["rms_mm"], k
+    assert float(r["max_mm"]) >= float(r["rms_mm"]) >= float(r["mae_mm"]) > 0, r
+    assert 0.0 <= float(r["min_command_mpa"]) <= float(r["max_command_mpa"]) <= 0.6 + 1e-12, r
+# the JSON holds the same numbers as the table
+runs = {run["variant"]: run for run in doc["runs"]}
+for t in runs["load.mass=35"]["tracking"]:
+    assert t["rms_error_mm"] == float(heavy[(t["reference"], t["kind"])]["rms_mm"])
+PYEOF
+grep -q "<svg" "$T/sweep.html" || fail "no plot in the page"
+grep -q "RMS error against load.mass" "$T/sweep.html" || fail "no RMS-against-load.mass plot"
+grep -q "failed: rig: the air dynamics" "$T/sweep.html" || fail "the failure is not on the page"
+grep -q "hysteron sweep gpi-pid" "$T/sweep.html" || fail "the command line is not on the page"
+
+# only the nominal rig (a variant equal to it is the nominal row): exit 0, the text table
+printf '{"variants": [{"name": "same", "set": {"load.mass": 20}}]}\n' > "$T/grid_nominal.json"
+"$BIN" sweep gpi-pid --grid "$T/grid_nominal.json" --jobs 1 > "$T/nominal.txt" 2> "$T/nominal.err"
+rc=$?
+[ $rc -eq 0 ] || fail "nominal-only sweep: exit $rc ($(cat "$T/nominal.err"))"
+grep -q "variant 'same' is the nominal rig" "$T/nominal.txt" || fail "no note for the nominal repeat: $(cat "$T/nominal.txt")"
+grep -qE '^nominal +sine' "$T/nominal.txt" || fail "no nominal row: $(cat "$T/nominal.txt")"
+
+if [ $fails -ne 0 ]; then
+  echo "$fails failure(s)"
+  exit 1
+fi
+echo "sweep.sh: all checks passed"

@@ -1,0 +1,614 @@
+// Plant variants (sweep.hpp): the override parser, the documented set, grid files,
+// and one small sweep run serially and in parallel (bit-for-bit equal, a failing
+// variant recorded, a heavier load changing the errors).
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+#include <cstring>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hysteron/error.hpp"
+#include "hysteron/sweep.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+// The message of the hysteron::Error thrown by f ("" if none is thrown).
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+// Splits one CSV line (double quotes, "" inside quotes).
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') out.back() += '"', ++i;
+      else if (c == '"') quoted = false;
+      else out.back() += c;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  return out;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+}  // namespace
+
+// ---- overrides ---------------------------------------------------------------------
+
+TEST(SweepOverride, ParsesPathsAbsoluteAndPercentValues) {
+  ParameterOverride o = parse_override("load.mass=35", "test");
+  EXPECT_EQ(o.path, "load.mass");
+  EXPECT_EQ(o.value, 35.0);
+  EXPECT_FALSE(o.percent);
+  o = parse_override(" hysteresis.pressure_band = 2.5e4 ", "test");
+  EXPECT_EQ(o.path, "hysteresis.pressure_band");
+  EXPECT_EQ(o.value, 25000.0);
+  o = parse_override("muscle.force_620=-15%", "test");
+  EXPECT_EQ(o.path, "muscle.force_620");
+  EXPECT_EQ(o.value, -15.0);
+  EXPECT_TRUE(o.percent);
+  EXPECT_EQ(to_string(o), "muscle.force_620=-15%");
+  EXPECT_EQ(to_string(parse_override("muscle.force_620=+15%", "test")), "muscle.force_620=+15%");
+  EXPECT_EQ(to_string(parse_override("regulator.dead_time=0.012", "test")), "regulator.dead_time=0.012");
+}
+
+TEST(SweepOverride, EveryRigParameterHasAPath) {
+  const std::vector<std::string> paths = rig_parameter_paths();
+  const std::set<std::string> unique(paths.begin(), paths.end());
+  EXPECT_EQ(unique.size(), paths.size());
+  // the parameters docs/plant.md lists, one per section at least
+  for (const char* p : {"muscle.force_620", "hysteresis.pressure_band", "air.supply_pressure",
+                        "regulator.time_constant", "regulator.dead_time", "valves.pwm_frequency", "load.mass",
+                        "load.damping", "sensors.pressure_bits", "simulation.max_substeps"})
+    EXPECT_TRUE(unique.count(p)) << p;
+  for (const auto& p : paths) EXPECT_NO_THROW(check_parameter_path(p, "test")) << p;
+}
+
+TEST(SweepOverride, UnknownPathNamesItAndTheClosestNames) {
+  std::string m = error_of([] { parse_override("load.mas=35", "--vary load.mas=35"); });
+  EXPECT_TRUE(contains(m, "--vary load.mas=35")) << m;
+  EXPECT_TRUE(contains(m, "unknown rig parameter 'load.mas'")) << m;
+  EXPECT_TRUE(contains(m, "did you mean load.mass")) << m;
+  // a bare key: the full path with that key is suggested
+  m = error_of([] { parse_override("mass=35", "x"); });
+  EXPECT_TRUE(contains(m, "'mass'")) << m;
+  EXPECT_TRUE(contains(m, "load.mass")) << m;
+  // the section exists: its keys are listed
+  m = error_of([] { parse_override("regulator.tau=0.1", "x"); });
+  EXPECT_TRUE(contains(m, "time_constant")) << m;
+  EXPECT_TRUE(contains(m, "dead_time")) << m;
+  // an unknown section: the sections are listed
+  m = error_of([] { parse_override("motor.mass=1", "x"); });
+  EXPECT_TRUE(contains(m, "'motor.mass'")) << m;
+  EXPECT_TRUE(contains(m, "hysteresis")) << m;
+  // a section is not a parameter
+  EXPECT_FALSE(error_of([] { parse_override("load=3", "x"); }).empty());
+  EXPECT_FALSE(error_of([] { parse_override("load.mass.x=3", "x"); }).empty());
+}
+
+TEST(SweepOverride, BadValuesAreErrorsNamingThePath) {
+  for (const char* text : {"load.mass=", "load.mass=abc", "load.mass=12kg", "load.mass=nan", "load.mass=NaN",
+                           "load.mass=-nan", "load.mass=inf", "load.mass=-infinity", "load.mass=1e999",
+                           "load.mass=%", "load.mass=10%%", "load.mass=-100%", "load.mass=-150%", "load.mass 35",
+                           "=35"}) {
+    const std::string m = error_of([&] { parse_override(text, "where"); });
+    EXPECT_FALSE(m.empty()) << text;
+    EXPECT_TRUE(contains(m, "where")) << m;
+    if (std::string(text).starts_with("load.mass")) {
+      EXPECT_TRUE(contains(m, "load.mass")) << m;
+    }
+  }
+}
+
+TEST(SweepOverride, ApplyChangesOnlyTheNamedParameters) {
+  const PamRigParams base;
+  PamRigParams r = apply_overrides(base, {parse_override("load.mass=35", "t")}, "t");
+  EXPECT_EQ(r.load.mass, 35.0);
+  r.load.mass = base.load.mass;
+  EXPECT_EQ(rig_params_to_json(r), rig_params_to_json(base));
+  // percent of the base value: docs/plant.md's 1326 N force map, -15 % and +15 %
+  r = apply_overrides(base, {parse_override("muscle.force_620=-15%", "t")}, "t");
+  EXPECT_NEAR(r.muscle.force_620, 1326.0 * 0.85, 1e-9);
+  r = apply_overrides(base, {parse_override("muscle.force_620=+15%", "t")}, "t");
+  EXPECT_NEAR(r.muscle.force_620, 1326.0 * 1.15, 1e-9);
+  // percent of a base that is not the nominal rig
+  PamRigParams heavy;
+  heavy.load.mass = 30.0;
+  EXPECT_NEAR(apply_overrides(heavy, {parse_override("load.mass=+10%", "t")}, "t").load.mass, 33.0, 1e-12);
+  // an integer field takes an integral value
+  r = apply_overrides(base, {parse_override("sensors.pressure_bits=10", "t")}, "t");
+  EXPECT_EQ(r.sensors.pressure_bits, 10);
+  // two overrides of one variant, in order
+  r = apply_overrides(base, {parse_override("regulator.time_constant=0.1", "t"),
+                             parse_override("regulator.dead_time=0.012", "t")}, "t");
+  EXPECT_EQ(r.regulator.time_constant, 0.1);
+  EXPECT_EQ(r.regulator.dead_time, 0.012);
+}
+
+TEST(SweepOverride, ValuesTheRigRefusesAreErrorsNamingTheVariantAndKey) {
+  const PamRigParams base;
+  std::string m = error_of([&] { apply_overrides(base, {parse_override("load.mass=-5", "t")}, "variant 'light'"); });
+  EXPECT_TRUE(contains(m, "variant 'light'")) << m;
+  EXPECT_TRUE(contains(m, "load.mass")) << m;
+  m = error_of([&] { apply_overrides(base, {parse_override("sensors.pressure_bits=12.5", "t")}, "v"); });
+  EXPECT_TRUE(contains(m, "sensors.pressure_bits")) << m;
+  m = error_of([&] { apply_overrides(base, {parse_override("hysteresis.beta=1.5", "t")}, "v"); });
+  EXPECT_TRUE(contains(m, "hysteresis.beta")) << m;
+  // a relation between fields: the on-delay must stay below the 5 ms PWM period
+  m = error_of([&] { apply_overrides(base, {parse_override("valves.on_delay=0.01", "t")}, "v"); });
+  EXPECT_TRUE(contains(m, "valves.on_delay")) << m;
+}
+
+TEST(SweepVary, OneVariantPerValueAndPairsVariedTogether) {
+  auto v = parse_vary("load.mass=10,20,35");
+  ASSERT_EQ(v.size(), 3u);
+  EXPECT_EQ(v[0].name, "load.mass=10");
+  EXPECT_EQ(v[2].name, "load.mass=35");
+  for (const auto& x : v) {
+    EXPECT_EQ(x.group, "load.mass");
+    ASSERT_EQ(x.overrides.size(), 1u);
+  }
+  EXPECT_EQ(v[1].overrides[0].value, 20.0);
+  v = parse_vary("regulator.time_constant/regulator.dead_time=0.03/0.005,0.1/0.012");
+  ASSERT_EQ(v.size(), 2u);
+  ASSERT_EQ(v[1].overrides.size(), 2u);
+  EXPECT_EQ(v[1].overrides[0].path, "regulator.time_constant");
+  EXPECT_EQ(v[1].overrides[0].value, 0.1);
+  EXPECT_EQ(v[1].overrides[1].path, "regulator.dead_time");
+  EXPECT_EQ(v[1].overrides[1].value, 0.012);
+  v = parse_vary("muscle.force_620=-15%,+15%");
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_TRUE(v[0].overrides[0].percent);
+  for (const char* bad : {"load.mass", "load.mass=10,,35", "load.mass=10,", "load.mas=10",
+                          "regulator.time_constant/regulator.dead_time=0.03", "load.mass=10/20", "load.mass=x"})
+    EXPECT_TRUE(contains(error_of([&] { parse_vary(bad); }), "--vary")) << bad;
+}
+
+TEST(SweepGrid, ExplicitVariantsAndStrictKeys) {
+  const auto j = nlohmann::json::parse(R"({"variants": [
+      {"name": "heavy", "set": {"load.mass": 35}},
+      {"set": {"load.mass": 35, "muscle.force_620": "-15%"}, "rms_ratio_limit": 2}]})");
+  const auto v = variant_grid_from_json(j, "grid.json");
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_EQ(v[0].name, "heavy");
+  EXPECT_EQ(v[0].group, "load.mass");
+  EXPECT_EQ(v[0].rms_ratio_limit, 1.5);
+  EXPECT_EQ(v[1].group, "");
+  EXPECT_EQ(v[1].rms_ratio_limit, 2.0);
+  ASSERT_EQ(v[1].overrides.size(), 2u);
+  EXPECT_TRUE(v[1].overrides[1].percent);
+  EXPECT_FALSE(v[1].name.empty());
+
+  auto err = [](const char* text) { return error_of([&] { variant_grid_from_json(nlohmann::json::parse(text), "g.json"); }); };
+  std::string m = err(R"({"variants": [{"set": {"load.mass": 35}}, {"set": {"load.mas": 35}}]})");
+  EXPECT_TRUE(contains(m, "g.json.variants[1]")) << m;
+  EXPECT_TRUE(contains(m, "load.mass")) << m;
+  m = err(R"({"variants": [{"set": {"load.mass": 35}, "nmae": "x"}]})");
+  EXPECT_TRUE(contains(m, "unknown key 'nmae'")) << m;
+  m = err(R"({"variant": []})");
+  EXPECT_TRUE(contains(m, "g.json")) << m;
+  m = err(R"({"variants": [{"set": {"load.mass": "heavy"}}]})");
+  EXPECT_TRUE(contains(m, "load.mass")) << m;
+  m = err(R"({"variants": [{"set": {"load.mass": null}}]})");
+  EXPECT_TRUE(contains(m, "load.mass")) << m;
+  EXPECT_FALSE(err(R"({"variants": [{"name": "x"}]})").empty());
+  EXPECT_FALSE(err(R"({"variants": []})").empty());
+  EXPECT_FALSE(err(R"([1, 2])").empty());
+  EXPECT_FALSE(error_of([] { read_variant_grid("/nonexistent/grid.json"); }).empty());
+}
+
+// The list of issue 11, item 4 (values from the issue, not from the code).
+TEST(SweepDocumented, IsTheIssuesListAndItsWorstCombination) {
+  const PamRigParams nominal;
+  std::set<double> mass, band, force, damping;
+  std::set<std::pair<double, double>> regulator;
+  const PlantVariant* worst = nullptr;
+  const auto variants = documented_variants();
+  std::set<std::string> names;
+  for (const auto& v : variants) {
+    EXPECT_TRUE(names.insert(v.name).second) << v.name;
+    if (v.group.empty()) {
+      worst = &v;
+      continue;
+    }
+    const PamRigParams r = apply_overrides(nominal, v.overrides, v.name);
+    if (v.group == "load.mass") mass.insert(r.load.mass);
+    else if (v.group == "hysteresis.pressure_band") band.insert(r.hysteresis.pressure_band);
+    else if (v.group == "muscle.force_620") force.insert(std::round(r.muscle.force_620 / 1326.0 * 100.0));
+    else if (v.group == "load.damping") damping.insert(r.load.damping);
+    else if (v.group == "regulator.time_constant/regulator.dead_time")
+      regulator.insert({r.regulator.time_constant, r.regulator.dead_time});
+    else
+      ADD_FAILURE() << "unexpected group " << v.group;
+  }
+  // the nominal values (20 kg, 15 kPa, 100 %, 50 ms / 7 ms, 400 N s/m) are the nominal rig
+  EXPECT_EQ(mass, (std::set<double>{10.0, 35.0}));
+  EXPECT_EQ(band, (std::set<double>{10e3, 25e3}));
+  EXPECT_EQ(force, (std::set<double>{85.0, 115.0}));
+  EXPECT_EQ(regulator, (std::set<std::pair<double, double>>{{0.03, 0.005}, {0.1, 0.012}}));
+  EXPECT_EQ(damping, (std::set<double>{200.0, 800.0}));
+  EXPECT_EQ(nominal.load.mass, 20.0);
+  EXPECT_EQ(nominal.hysteresis.pressure_band, 15e3);
+  EXPECT_EQ(nominal.regulator.time_constant, 0.05);
+  EXPECT_EQ(nominal.regulator.dead_time, 0.007);
+  EXPECT_EQ(nominal.load.damping, 400.0);
+  // worst: heaviest load, widest band, weakest force map, slowest regulator, lowest damping
+  ASSERT_NE(worst, nullptr);
+  EXPECT_EQ(worst->rms_ratio_limit, 2.0);
+  const PamRigParams w = apply_overrides(nominal, worst->overrides, "worst");
+  EXPECT_EQ(w.load.mass, 35.0);
+  EXPECT_EQ(w.hysteresis.pressure_band, 25e3);
+  EXPECT_NEAR(w.muscle.force_620, 1326.0 * 0.85, 1e-9);
+  EXPECT_EQ(w.regulator.time_constant, 0.1);
+  EXPECT_EQ(w.regulator.dead_time, 0.012);
+  EXPECT_EQ(w.load.damping, 200.0);
+  EXPECT_EQ(variants.size(), 11u);
+}
+
+// A cheap stand-in for run_experiment: errors that depend on the rig and the experiment,
+// kinds beyond the papers' (any name must be handled), a finish order unlike the start
+// order, and failures (a hysteron::Error and another exception).
+ExperimentResult fake_experiment(const ExperimentOptions& o) {
+  const double m = o.rig.load.mass, c = o.rig.load.damping;
+  if (m > 100.0) throw std::runtime_error(fmt::format("fake: mass {} too heavy", m));
+  if (c == 0.0) throw Error("fake: no damping");
+  std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int>(m * 37) % 3000));
+  ExperimentResult r;
+  r.name = o.name;
+  for (const char* ref : {"sine", "triangle"})
+    for (const char* kind : {"faithful", "compensated", "adaptive", "future-kind", "baseline"}) {
+      TrackingRun t;
+      t.reference = ref;
+      t.variant = kind;
+      const double k = static_cast<double>(std::strlen(kind)) + (ref[0] == 's' ? 0.5 : 0.0) + static_cast<double>(o.name.size());
+      t.errors.rms_error_mm = 0.01 * k * m + 1e-4 * c;
+      t.errors.max_error_mm = 3.0 * t.errors.rms_error_mm;
+      t.errors.mae_mm = 0.8 * t.errors.rms_error_mm;
+      t.pressure_command_mpa = {0.1, 0.001 * m, 0.05};
+      r.runs.push_back(std::move(t));
+    }
+  return r;
+}
+
+TEST(SweepRun, ThreadPoolResultsDoNotDependOnTheNumberOfThreads) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid", "mpi-pwm"};
+  o.variants = parse_vary("load.mass=5,10,15,25,30,40,45,50,150,55,60");
+  for (auto& v : parse_vary("load.damping=0,100,700")) o.variants.push_back(v);
+  o.runner = fake_experiment;
+  std::vector<SweepResult> results;
+  for (unsigned jobs : {1u, 2u, 3u, 8u}) {
+    o.jobs = jobs;
+    std::size_t calls = 0, last = 0;
+    o.progress = [&](const SweepProgress& p) {
+      ++calls;
+      EXPECT_EQ(p.done, last + 1);
+      last = p.done;
+      EXPECT_EQ(p.total, 2u * 15u);
+    };
+    results.push_back(run_sweep(o));
+    EXPECT_EQ(calls, 30u);
+    EXPECT_EQ(results.back().jobs, jobs);
+  }
+  const SweepResult& a = results[0];
+  ASSERT_EQ(a.variants.size(), 15u);
+  ASSERT_EQ(a.runs.size(), 30u);
+  for (const auto& b : results) {
+    for (std::size_t k = 0; k < a.runs.size(); ++k) {
+      EXPECT_EQ(a.runs[k].experiment, b.runs[k].experiment);
+      EXPECT_EQ(a.runs[k].variant, b.runs[k].variant);
+      EXPECT_EQ(a.runs[k].ok, b.runs[k].ok);
+      EXPECT_EQ(a.runs[k].error, b.runs[k].error);
+      ASSERT_EQ(a.runs[k].runs.size(), b.runs[k].runs.size());
+      for (std::size_t i = 0; i < a.runs[k].runs.size(); ++i)
+        EXPECT_TRUE(same_bits(a.runs[k].runs[i].errors.rms_error_mm, b.runs[k].runs[i].errors.rms_error_mm));
+    }
+  }
+  // slots: experiment-major, variants in order, each with its own rig
+  for (std::size_t e = 0; e < 2; ++e)
+    for (std::size_t v = 0; v < a.variants.size(); ++v) {
+      const SweepRun& run = a.run(e, v);
+      EXPECT_EQ(run.experiment, o.experiments[e]);
+      EXPECT_EQ(run.variant, v);
+      const double m = a.variants[v].rig.load.mass, c = a.variants[v].rig.load.damping;
+      EXPECT_EQ(run.ok, m <= 100.0 && c != 0.0) << a.variants[v].variant.name;
+      if (!run.ok) continue;
+      const SweepRunErrors* x = a.find(e, v, "sine", "future-kind");
+      ASSERT_NE(x, nullptr);
+      EXPECT_NEAR(x->errors.rms_error_mm, 0.01 * (11.0 + 0.5 + o.experiments[e].size()) * m + 1e-4 * c, 1e-12);
+      EXPECT_EQ(x->min_command_mpa, std::min(0.05, 0.001 * m));
+      EXPECT_EQ(x->max_command_mpa, std::max(0.1, 0.001 * m));
+    }
+  // the failures and their messages, whatever the exception type
+  EXPECT_EQ(a.failures(), 4u);
+  EXPECT_TRUE(contains(a.run(0, 9).error, "fake: mass 150 too heavy")) << a.run(0, 9).error;
+  EXPECT_TRUE(contains(a.run(1, 12).error, "fake: no damping")) << a.run(1, 12).error;
+  // every kind reaches the table, the text and the JSON
+  const std::string csv = a.csv(), text = a.text();
+  for (const char* kind : {"adaptive", "future-kind"}) {
+    EXPECT_TRUE(contains(csv, std::string(",") + kind + ",")) << kind;
+    EXPECT_TRUE(contains(text, kind)) << kind;
+  }
+  // ratios: 40 kg against the nominal 20 kg (the fake's error grows with the mass)
+  const SweepRunErrors* heavy = a.find(0, 6, "triangle", "compensated");
+  const SweepRunErrors* nominal = a.find(0, 0, "triangle", "compensated");
+  ASSERT_NE(heavy, nullptr);
+  ASSERT_NE(nominal, nullptr);
+  const double ratio = heavy->errors.rms_error_mm / nominal->errors.rms_error_mm;
+  EXPECT_GT(ratio, 1.9);
+  bool listed = false;
+  for (const auto& m : a.target_misses()) listed = listed || contains(m, "gpi-pid load.mass=40 triangle compensated");
+  EXPECT_TRUE(listed);
+  const auto j = a.to_json();
+  EXPECT_EQ(j.at("runs").size(), 30u);
+  EXPECT_NEAR(j.at("runs").at(6).at("tracking").at(6).at("rms_vs_nominal").get<double>(), ratio, 1e-12);
+}
+
+TEST(SweepRun, ARigIsRunOnce) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.runner = fake_experiment;
+  o.variants = variant_grid_from_json(nlohmann::json::parse(R"({"variants": [
+      {"name": "heavy", "set": {"load.mass": 35}},
+      {"name": "heavy again", "set": {"load.mass": 35}},
+      {"name": "nominal again", "set": {"load.damping": 400}},
+      {"name": "heavy by percent", "set": {"load.mass": "+75%"}}]})"), "grid");
+  const SweepResult r = run_sweep(o);
+  ASSERT_EQ(r.variants.size(), 2u);
+  EXPECT_EQ(r.variants[1].variant.name, "heavy");
+  ASSERT_EQ(r.notes.size(), 3u);
+  EXPECT_TRUE(contains(r.notes[0], "'heavy again' is the rig of variant 'heavy'")) << r.notes[0];
+  EXPECT_TRUE(contains(r.notes[1], "'nominal again' is the nominal rig")) << r.notes[1];
+  EXPECT_TRUE(contains(r.notes[2], "'heavy by percent' is the rig of variant 'heavy'")) << r.notes[2];
+  EXPECT_EQ(r.runs.size(), 2u);
+}
+
+TEST(SweepRun, InvalidOptionsThrowBeforeRunning) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.variants = parse_vary("load.mass=35");
+  int calls = 0;
+  o.progress = [&](const SweepProgress&) { ++calls; };
+  SweepOptions bad = o;
+  bad.experiments = {"gpi-pd"};
+  std::string m = error_of([&] { run_sweep(bad); });
+  EXPECT_TRUE(contains(m, "gpi-pd")) << m;
+  EXPECT_TRUE(contains(m, "gpi-pid")) << m;
+  bad = o;
+  bad.experiments = {};
+  EXPECT_FALSE(error_of([&] { run_sweep(bad); }).empty());
+  bad = o;
+  bad.experiments = {"gpi-pid", "gpi-pid"};
+  EXPECT_FALSE(error_of([&] { run_sweep(bad); }).empty());
+  bad = o;
+  bad.variants.push_back(bad.variants[0]);  // the same name twice
+  EXPECT_TRUE(contains(error_of([&] { run_sweep(bad); }), "load.mass=35"));
+  bad = o;
+  bad.variants[0].name = "nominal";
+  EXPECT_TRUE(contains(error_of([&] { run_sweep(bad); }), "nominal"));
+  bad = o;
+  bad.variants.push_back({"light", {parse_override("load.mass=-1", "t")}, "", 1.5});
+  m = error_of([&] { run_sweep(bad); });
+  EXPECT_TRUE(contains(m, "light")) << m;
+  EXPECT_TRUE(contains(m, "load.mass")) << m;
+  EXPECT_EQ(calls, 0);
+}
+
+// One small real sweep: gpi-pid on a base rig allowed one sub-step (the nominal rig needs
+// one): the nominal rig alone on one thread; then, on two threads, the nominal rig, 35 kg,
+// a repeat of the nominal value (dropped) and a regulator whose air dynamics need more
+// sub-steps (its run throws at once). Three experiment runs in all; one test (ctest runs
+// each test in its own process), the checks are the functions below.
+namespace {
+void check_NominalRepeatDroppedAndVariantsInOrder(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)parallel_;
+  (void)progress_;
+  const SweepResult& r = *parallel_;
+  ASSERT_EQ(r.variants.size(), 3u);
+  EXPECT_EQ(r.variants[0].variant.name, "nominal");
+  EXPECT_EQ(r.variants[1].variant.name, "load.mass=35");
+  EXPECT_EQ(r.variants[1].rig.load.mass, 35.0);
+  ASSERT_EQ(r.variants[1].values.size(), 1u);
+  EXPECT_EQ(r.variants[1].values[0], 35.0);
+  EXPECT_EQ(r.variants[2].variant.name, "regulator.sonic_conductance=1e-05");
+  ASSERT_EQ(r.notes.size(), 1u);
+  EXPECT_TRUE(contains(r.notes[0], "load.mass=20")) << r.notes[0];
+  EXPECT_EQ(r.runs.size(), 3u);
+  EXPECT_EQ(r.jobs, 2u);
+}
+
+void check_ParallelEqualsSerialBitForBit(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)parallel_;
+  (void)progress_;
+  // the nominal run, alone on one thread and beside the 35 kg run on another
+  const SweepResult &a = *serial_, &b = *parallel_;
+  ASSERT_EQ(a.runs.size(), 1u);
+  EXPECT_EQ(a.jobs, 1u);
+  for (std::size_t k = 0; k < a.runs.size(); ++k) {
+    const SweepRun &x = a.runs[k], &y = b.runs[k];
+    EXPECT_EQ(x.experiment, y.experiment);
+    EXPECT_EQ(x.variant, y.variant);
+    EXPECT_EQ(x.ok, y.ok);
+    EXPECT_EQ(x.error, y.error);
+    ASSERT_EQ(x.runs.size(), y.runs.size());
+    for (std::size_t i = 0; i < x.runs.size(); ++i) {
+      const SweepRunErrors &p = x.runs[i], &q = y.runs[i];
+      EXPECT_EQ(p.reference, q.reference);
+      EXPECT_EQ(p.kind, q.kind);
+      EXPECT_TRUE(same_bits(p.errors.max_error_mm, q.errors.max_error_mm));
+      EXPECT_TRUE(same_bits(p.errors.mae_mm, q.errors.mae_mm));
+      EXPECT_TRUE(same_bits(p.errors.rms_error_mm, q.errors.rms_error_mm)) << p.kind;
+      EXPECT_TRUE(same_bits(p.min_command_mpa, q.min_command_mpa));
+      EXPECT_TRUE(same_bits(p.max_command_mpa, q.max_command_mpa));
+      EXPECT_EQ(p.saturated, q.saturated);
+    }
+  }
+}
+
+void check_HeavierLoadChangesTheErrors(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)parallel_;
+  (void)progress_;
+  const SweepResult& r = *parallel_;
+  ASSERT_TRUE(r.run(0, 0).ok) << r.run(0, 0).error;
+  ASSERT_TRUE(r.run(0, 1).ok) << r.run(0, 1).error;
+  ASSERT_FALSE(r.run(0, 0).runs.empty());
+  ASSERT_EQ(r.run(0, 0).runs.size(), r.run(0, 1).runs.size());
+  std::set<std::string> kinds;
+  for (const auto& n : r.run(0, 0).runs) {
+    kinds.insert(n.kind);
+    const SweepRunErrors* h = r.find(0, 1, n.reference, n.kind);
+    ASSERT_NE(h, nullptr) << n.kind;
+    EXPECT_NE(h->errors.rms_error_mm, n.errors.rms_error_mm) << n.kind;
+    EXPECT_GT(n.errors.rms_error_mm, 0.0);
+  }
+  EXPECT_TRUE(kinds.count("compensated"));
+  EXPECT_TRUE(kinds.count("baseline"));
+  // 35 kg needs more pressure for the same contraction: the straight-line inverse of the
+  // baseline, fitted on the heavier rig, cannot hide it and tracks worse
+  EXPECT_GT(r.find(0, 1, "sine", "baseline")->errors.rms_error_mm,
+            r.find(0, 0, "sine", "baseline")->errors.rms_error_mm);
+  EXPECT_GT(r.find(0, 1, "sine", "compensated")->max_command_mpa,
+            r.find(0, 0, "sine", "compensated")->max_command_mpa);
+}
+
+void check_AFailingRunIsRecordedNotThrown(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)parallel_;
+  (void)progress_;
+  const SweepResult& r = *parallel_;
+  const SweepRun& f = r.run(0, 2);
+  EXPECT_FALSE(f.ok);
+  EXPECT_TRUE(contains(f.error, "max_substeps")) << f.error;
+  EXPECT_TRUE(f.runs.empty());
+  EXPECT_EQ(r.failures(), 1u);
+  EXPECT_EQ(r.find(0, 2, "sine", "compensated"), nullptr);
+  bool listed = false;
+  for (const auto& m : r.target_misses()) listed = listed || (contains(m, "failed") && contains(m, "sonic_conductance"));
+  EXPECT_TRUE(listed);
+  EXPECT_TRUE(contains(r.text(), "FAILED"));
+  const auto j = r.to_json();
+  EXPECT_EQ(j.at("failures").get<std::size_t>(), 1u);
+  EXPECT_FALSE(j.at("runs").at(2).at("ok").get<bool>());
+}
+
+void check_ProgressOncePerRun(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)parallel_;
+  (void)progress_;
+  ASSERT_EQ(progress_.size(), 3u);
+  std::set<std::string> variants;
+  for (std::size_t i = 0; i < progress_.size(); ++i) {
+    EXPECT_EQ(progress_[i].done, i + 1);
+    EXPECT_EQ(progress_[i].total, 3u);
+    EXPECT_EQ(progress_[i].experiment, "gpi-pid");
+    variants.insert(progress_[i].variant);
+  }
+  EXPECT_EQ(variants.size(), 3u);
+}
+
+void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)parallel_;
+  (void)progress_;
+  const SweepResult& r = *parallel_;
+  const std::string csv = r.csv();
+  std::vector<std::string> lines;
+  for (std::size_t s = 0, e; s < csv.size(); s = e + 1) {
+    e = csv.find('\n', s);
+    ASSERT_NE(e, std::string::npos) << "the table must end with a newline";
+    lines.push_back(csv.substr(s, e - s));
+  }
+  const auto header = csv_fields(lines.at(0));
+  ASSERT_EQ(header.size(), 16u);
+  EXPECT_EQ(header[0], "experiment");
+  EXPECT_EQ(header[7], "rms_mm");
+  EXPECT_EQ(header[8], "rms_vs_nominal");
+  const std::size_t tracking = r.run(0, 0).runs.size() + r.run(0, 1).runs.size();
+  ASSERT_EQ(lines.size(), 1 + tracking + 1);
+  std::size_t failed = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const auto f = csv_fields(lines[i]);
+    ASSERT_EQ(f.size(), header.size()) << lines[i];
+    if (f[13] == "failed") {
+      ++failed;
+      EXPECT_TRUE(contains(f[14], "max_substeps")) << f[14];
+      continue;
+    }
+    EXPECT_EQ(f[13], "ok");
+    const SweepRunErrors* x = r.find(0, f[1] == "nominal" ? 0 : 1, f[3], f[4]);
+    ASSERT_NE(x, nullptr) << lines[i];
+    EXPECT_EQ(std::stod(f[7]), x->errors.rms_error_mm);  // %.17g reads back exactly
+    if (f[1] == "nominal") {
+      EXPECT_EQ(f[8], "1");
+    }
+  }
+  EXPECT_EQ(failed, 1u);
+}
+}  // namespace
+
+TEST(SweepRun, SmallSweepSerialAndParallel) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.base.simulation.max_substeps = 1;
+  o.jobs = 1;
+  const SweepResult serial = run_sweep(o);  // the nominal rig alone, on this thread
+  o.variants = parse_vary("load.mass=35,20");
+  for (auto& v : parse_vary("regulator.sonic_conductance=1e-5")) o.variants.push_back(v);
+  std::vector<SweepProgress> progress;
+  o.jobs = 2;
+  o.progress = [&](const SweepProgress& p) { progress.push_back(p); };
+  const SweepResult parallel = run_sweep(o);
+  {
+    SCOPED_TRACE("NominalRepeatDroppedAndVariantsInOrder");
+    check_NominalRepeatDroppedAndVariantsInOrder(&serial, &parallel, progress);
+  }
+  {
+    SCOPED_TRACE("ParallelEqualsSerialBitForBit");
+    check_ParallelEqualsSerialBitForBit(&serial, &parallel, progress);
+  }
+  {
+    SCOPED_TRACE("HeavierLoadChangesTheErrors");
+    check_HeavierLoadChangesTheErrors(&serial, &parallel, progress);
+  }
+  {
+    SCOPED_TRACE("AFailingRunIsRecordedNotThrown");
+    check_AFailingRunIsRecordedNotThrown(&serial, &parallel, progress);
+  }
+  {
+    SCOPED_TRACE("ProgressOncePerRun");
+    check_ProgressOncePerRun(&serial, &parallel, progress);
+  }
+  {
+    SCOPED_TRACE("CsvHasOneRowPerTrackingRunAndFailure");
+    check_CsvHasOneRowPerTrackingRunAndFailure(&serial, &parallel, progress);
+  }
+}

@@ -3,7 +3,11 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -32,30 +36,71 @@ struct SweepArgs {
   bool json = false;
 };
 
-// Progress on stderr: a bar redrawn in place on a terminal, else one line per finished run.
+// Progress on stderr: on a terminal, a bar redrawn in place at every finished run and every
+// second (elapsed time); else one line per finished run.
 class Progress {
  public:
-  Progress() : tty_(::isatty(STDERR_FILENO) == 1), start_(std::chrono::steady_clock::now()) {}
+  explicit Progress(std::size_t total)
+      : tty_(::isatty(STDERR_FILENO) == 1), total_(total), start_(std::chrono::steady_clock::now()) {
+    if (!tty_) return;
+    ticker_ = std::thread([this] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      while (!stop_) {
+        wake_.wait_for(lock, std::chrono::seconds(1));
+        if (!stop_) draw();
+      }
+    });
+  }
+  ~Progress() { finish(); }
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
   void operator()(const SweepProgress& p) {
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const std::string status = p.ok ? "ok" : "FAILED";
-    if (!tty_) {
-      fmt::print(stderr, "sweep: {}/{} {} {}: {} ({:.1f} s)\n", p.done, p.total, p.experiment, p.variant, status,
-                 p.wall_time_s);
-      return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = p.done;
+    last_ = fmt::format("{} {}: {}", p.experiment, p.variant, p.ok ? "ok" : "FAILED");
+    if (tty_) {
+      draw();
+    } else {
+      fmt::print(stderr, "sweep: {}/{} {} ({:.1f} s)\n", p.done, p.total, last_, p.wall_time_s);
+      std::fflush(stderr);
     }
-    constexpr std::size_t width = 30;
-    const std::size_t filled = p.total ? width * p.done / p.total : width;
-    const double eta = p.done ? elapsed * static_cast<double>(p.total - p.done) / static_cast<double>(p.done) : 0.0;
-    fmt::print(stderr, "\r\033[K[{}{}] {}/{} {:.0f} s, ~{:.0f} s left  {} {}: {}", std::string(filled, '#'),
-               std::string(width - filled, '-'), p.done, p.total, elapsed, eta, p.experiment, p.variant, status);
-    if (p.done == p.total) fmt::print(stderr, "\n");
+  }
+  // Stops the ticker and ends the bar's line.
+  void finish() {
+    if (!ticker_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    ticker_.join();
+    if (drawn_) fmt::print(stderr, "\n");
     std::fflush(stderr);
   }
 
  private:
+  void draw() {  // with mutex_ held
+    drawn_ = true;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    constexpr std::size_t width = 30;
+    const std::size_t filled = total_ ? width * done_ / total_ : width;
+    std::string eta;
+    if (done_ > 0 && done_ < total_)
+      eta = fmt::format(", ~{:.0f} s left", elapsed * static_cast<double>(total_ - done_) / static_cast<double>(done_));
+    fmt::print(stderr, "\r\033[K[{}{}] {}/{} runs, {:.0f} s{}{}{}", std::string(filled, '#'),
+               std::string(width - filled, '-'), done_, total_, elapsed, eta, last_.empty() ? "" : "  last: ", last_);
+    std::fflush(stderr);
+  }
+
   bool tty_;
+  std::size_t total_, done_ = 0;
+  std::string last_;
   std::chrono::steady_clock::time_point start_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false, drawn_ = false;
+  std::thread ticker_;
 };
 
 int run_sweep_command(const SweepArgs& a) {
@@ -93,9 +138,21 @@ int run_sweep_command(const SweepArgs& a) {
   if (!a.grid.empty())
     for (auto& v : read_variant_grid(a.grid)) o.variants.push_back(std::move(v));
 
-  Progress progress;
-  o.progress = [&progress](const SweepProgress& p) { progress(p); };
-  const SweepResult r = run_sweep(o);
+  // the number of runs: the base rig and every distinct variant rig, for each experiment
+  std::size_t rigs = 1;
+  {
+    std::vector<nlohmann::json> seen = {rig_params_to_json(o.base)};
+    for (const auto& v : o.variants) {
+      nlohmann::json j = rig_params_to_json(apply_overrides(o.base, v.overrides, fmt::format("variant '{}'", v.name)));
+      if (std::find(seen.begin(), seen.end(), j) == seen.end()) seen.push_back(std::move(j)), ++rigs;
+    }
+  }
+  SweepResult r;
+  {
+    Progress progress(rigs * o.experiments.size());
+    o.progress = [&progress](const SweepProgress& p) { progress(p); };
+    r = run_sweep(o);
+  }
 
   // the page first (gnuplot may fail), then the files, each written atomically
   std::string html;

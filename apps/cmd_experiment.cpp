@@ -1,4 +1,4 @@
-// hysteron experiment gpi-pid | mpi-openloop | mpi-pwm  and  hysteron demo.
+// hysteron experiment NAME (the registry's names, experiment.hpp) and hysteron demo.
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -22,6 +22,7 @@ struct ExperimentArgs {
   std::string name;
   std::string plant;
   std::uint64_t seed = 1;
+  int learning_periods = 10;
   bool json = false;
   std::string out;
 };
@@ -30,6 +31,7 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   ExperimentOptions o;
   o.name = a.name;
   o.seed = a.seed;
+  o.learning_periods = a.learning_periods;
   if (!a.plant.empty()) o.rig = load_rig_params(a.plant);
   return o;
 }
@@ -65,9 +67,14 @@ const std::string& command_line() { return g_command; }
 void add_experiment(CLI::App& app, Action& action) {
   auto args = std::make_shared<ExperimentArgs>();
   auto* cmd = app.add_subcommand("experiment", "Run one of the papers' experiments end to end on the simulated rig");
-  cmd->add_option("name", args->name, "gpi-pid | mpi-openloop | mpi-pwm")
+  std::string names_help;
+  for (const auto& e : experiments()) names_help += fmt::format("\n  {:<14}{}", e.name, e.title);
+  cmd->add_option("name", args->name, "The experiment:" + names_help)
       ->required()
-      ->check(CLI::IsMember({"gpi-pid", "mpi-openloop", "mpi-pwm"}));
+      ->check(CLI::IsMember(experiment_names()));
+  cmd->add_option("--learning-periods", args->learning_periods,
+                  "Periods of the learning variant (0: no learning runs; default 10)")
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--plant", args->plant, "Rig parameters (JSON; unknown keys are an error)");
   cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)")
       ->check(non_negative_integer());
@@ -94,6 +101,9 @@ void add_experiment(CLI::App& app, Action& action) {
   demo->add_option("--plant", dargs->plant, "Rig parameters (JSON)");
   demo->add_option("--seed", dargs->seed, "Seed of the rig's noise (default 1)")
       ->check(non_negative_integer());
+  demo->add_option("--learning-periods", dargs->learning_periods,
+                   "Periods of the learning variant (0: no learning runs; default 10)")
+      ->check(CLI::Range(0, 1000));
   demo->add_option("--out", dargs->out, "Directory for every experiment's outputs (default out/demo)")
       ->default_val("out/demo");
   demo->callback([dargs, &action] {

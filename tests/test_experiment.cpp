@@ -143,6 +143,7 @@ TEST(Experiment, GpiPidEndToEnd) {
   ExperimentOptions o;
   o.name = "gpi-pid";
   o.seed = 3;
+  o.learning_periods = 2;
   const ExperimentResult r = run_experiment(o);
   const auto j = r.to_json();
   for (const char* v : {"compensated", "faithful", "baseline"})
@@ -154,6 +155,10 @@ TEST(Experiment, GpiPidEndToEnd) {
   // Hysteresis compensation must beat the same loop without it.
   EXPECT_LT(j["compensated"]["rms_error_mm"].get<double>(), j["baseline"]["rms_error_mm"].get<double>());
   EXPECT_LT(j["faithful"]["rms_error_mm"].get<double>(), j["baseline"]["rms_error_mm"].get<double>());
+  // The variants, in the registry's order, with the learning run's periods.
+  EXPECT_EQ(j["variants"], nlohmann::json({"faithful", "compensated", "learning", "baseline"}));
+  ASSERT_EQ(j["learning"]["periods"].size(), 2u);
+  EXPECT_EQ(experiments().front().variants, std::vector<std::string>({"faithful", "compensated", "learning", "baseline"}));
   // Reproducible bit for bit with the same seed.
   const ExperimentResult r2 = run_experiment(o);
   ASSERT_EQ(r.runs.size(), r2.runs.size());

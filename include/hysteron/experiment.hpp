@@ -3,9 +3,14 @@
 // identification run, the fit of the paper's model, validation on the minor
 // loops, and tracking runs with
 //   faithful    - the paper's scheme as published (its structure and gains),
-//   compensated - hysteron's best variant of it,
+//   compensated - hysteron's best variant of it, every gain and lead derived
+//                 from the identification run of the rig at hand (docs/control.md),
+//   learning    - the compensated loop plus iterative learning control across
+//                 the periods of a periodic reference (docs/control.md),
 //   baseline    - the same loop without hysteresis compensation (the inverse
 //                 model replaced by a straight line fitted to the same data).
+// Each experiment is a spec in its own file under src/experiment/, registered
+// in one place (experiments() lists them with their variants).
 //
 //   gpi-pid      gpi-lm-feedforward-pid.txt: GPI (n = 10) fitted by LM on the
 //                major loop of the Fig. 4 input; inverse feedforward + PID of
@@ -30,12 +35,48 @@
 
 namespace hysteron {
 
+// One registered experiment (names and descriptions for the CLI, Python and reports).
+struct ExperimentInfo {
+  std::string name;                   // e.g. "gpi-pid"
+  std::string title;                  // one line
+  std::string summary;                // a few sentences: model, loop, references
+  std::vector<std::string> variants;  // e.g. faithful, compensated, learning, baseline
+  std::string published_source;       // "" where the paper gives no figures
+};
+const std::vector<ExperimentInfo>& experiments();
+std::vector<std::string> experiment_names();
+
 struct ExperimentOptions {
-  std::string name = "gpi-pid";  // gpi-pid | mpi-openloop | mpi-pwm
+  std::string name = "gpi-pid";  // one of experiment_names()
   PamRigParams rig{};            // the simulated rig (defaults: nominal, with sensor noise)
   std::uint64_t seed = 1;        // rig noise seed; a run is reproducible bit for bit
   double control_period = 1e-3;  // controller and logging period [s]
+  int learning_periods = 10;     // periods of the learning variant (0: no learning runs), 0..1000
   void validate() const;         // throws hysteron::Error
+};
+
+// Dynamics of the rig from the commanded pressure to the measured contraction,
+// identified on the identification run (first order plus dead time around the
+// fitted hysteresis model M, which is rate-independent, so the shift commutes):
+//   x(t) ~ lag_tau[ M(p_cmd) ](t - theta),   tau dz/dt = M(p_cmd) - z
+struct RigDynamics {
+  double dead_time_s = 0.0;    // theta
+  double lag_s = 0.0;          // tau
+  double gain_m_per_mpa = 0.0; // mean slope of the record: contraction span / pressure span
+  double rms_mm = 0.0;         // RMS of the fit of this model to the record
+  // Valve experiments: relay test of the pressure loop (duty +-h around 0.3 MPa):
+  // ultimate gain K_u = 4 h / (pi sqrt(a^2 - eps^2)) [duty/MPa] and period T_u [s]; 0 if not run.
+  double relay_gain = 0.0;
+  double relay_period_s = 0.0;
+  // Relay test of the position loop (pressure p0 +- 0.05 MPa switched on the measured
+  // contraction around its level at p0): ultimate gain [MPa/m] and period [s]. It sees
+  // the load's mode, which the slow identification run does not.
+  double position_relay_gain = 0.0;
+  double position_relay_period_s = 0.0;
+  // The load's mode that puts the relay's point on the FOPDT: G = FOPDT * w_n^2 /
+  // (s^2 + 2 zeta w_n s + w_n^2) with G(i w_u) = -1 / K_u (0: no mode fits).
+  double mode_frequency_hz = 0.0;
+  double mode_damping = 0.0;
 };
 
 struct TrackingErrors {
@@ -50,7 +91,8 @@ struct TrackingRun {
   std::string reference;  // e.g. "sine", "triangle"
   std::string description;
   std::vector<double> t, reference_mm, measured_mm, actual_mm, pressure_command_mpa, pressure_mpa, duty;
-  TrackingErrors errors;  // reference vs measured contraction
+  TrackingErrors errors;  // reference vs measured contraction (the last period of a learning run)
+  std::vector<TrackingErrors> periods;  // learning runs: the errors of each period, in order
   std::size_t saturated = 0;  // control samples with the command at a pressure limit
 };
 
@@ -85,6 +127,8 @@ struct ExperimentResult {
   FitMetrics best_validation;     // on a second identification run (other seed)
   ModelParams baseline_model;     // the straight line of the baseline
   double lead_s = 0.0;            // preview of the compensated variants (identified)
+  RigDynamics dynamics;           // identified from the identification run
+  std::vector<std::string> messages;  // notes of the run (e.g. a candidate model skipped)
   std::vector<TrackingRun> runs;
   PublishedFigures published;     // the paper's figures (empty where it gives none)
   double wall_time_s = 0.0;
@@ -100,7 +144,6 @@ struct ExperimentResult {
   std::string table() const;
 };
 
-std::vector<std::string> experiment_names();
 // Throws hysteron::Error on invalid options or a diverging rig.
 ExperimentResult run_experiment(const ExperimentOptions& options);
 

@@ -465,10 +465,13 @@ json to_json(const ExperimentResult& r) {
   j["experiment"] = r.name;
   j["title"] = r.title;
   j["seed"] = r.seed;
-  std::vector<std::string> refs;
-  for (const auto& run : r.runs)
+  std::vector<std::string> refs, variants;
+  for (const auto& run : r.runs) {
     if (std::find(refs.begin(), refs.end(), run.reference) == refs.end()) refs.push_back(run.reference);
-  for (const char* variant : {"compensated", "faithful", "baseline"}) {
+    if (std::find(variants.begin(), variants.end(), run.variant) == variants.end()) variants.push_back(run.variant);
+  }
+  j["variants"] = variants;
+  for (const auto& variant : variants) {
     json v = json::object();
     for (const auto& run : r.runs) {
       if (run.variant != variant) continue;
@@ -476,6 +479,11 @@ json to_json(const ExperimentResult& r) {
       e["reference"] = run.reference;
       e["description"] = run.description;
       e["saturated_samples"] = run.saturated;
+      if (!run.periods.empty()) {
+        json per = json::array();
+        for (const auto& p : run.periods) per.push_back(to_json(p));
+        e["periods"] = per;
+      }
       if (refs.size() == 1) v = e; else v[run.reference] = e;
     }
     j[variant] = v;
@@ -495,6 +503,15 @@ json to_json(const ExperimentResult& r) {
                      {"parameters", model_or_null(r.best_fit.status, r.best_fit.model)}};
   j["baseline_model"] = valid_model_or_null(r.baseline_model);
   j["lead_s"] = number(r.lead_s);
+  j["dynamics"] = {{"dead_time_s", number(r.dynamics.dead_time_s)},
+                   {"lag_s", number(r.dynamics.lag_s)},
+                   {"gain_m_per_mpa", number(r.dynamics.gain_m_per_mpa)},
+                   {"rms_mm", number(r.dynamics.rms_mm)},
+                   {"position_relay_gain_mpa_per_m", number(r.dynamics.position_relay_gain)},
+                   {"position_relay_period_s", number(r.dynamics.position_relay_period_s)},
+                   {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
+                   {"pressure_relay_period_s", number(r.dynamics.relay_period_s)}};
+  j["messages"] = r.messages;
   j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
   j["wall_time_s"] = number(r.wall_time_s);
   return j;
@@ -536,7 +553,38 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
   if (j.contains("baseline_model") && !j["baseline_model"].is_null())
     r.baseline_model = model_from_json(j["baseline_model"], key_where(where, "baseline_model"));
 
-  for (const char* variant : {"compensated", "faithful", "baseline"}) {
+  if (j.contains("dynamics")) {
+    const json& d = j["dynamics"];
+    const std::string dw = key_where(where, "dynamics");
+    r.dynamics.dead_time_s = opt_double(d, "dead_time_s", dw, 0.0);
+    r.dynamics.lag_s = opt_double(d, "lag_s", dw, 0.0);
+    r.dynamics.gain_m_per_mpa = opt_double(d, "gain_m_per_mpa", dw, 0.0);
+    r.dynamics.rms_mm = opt_double(d, "rms_mm", dw, 0.0);
+    r.dynamics.position_relay_gain = opt_double(d, "position_relay_gain_mpa_per_m", dw, 0.0);
+    r.dynamics.position_relay_period_s = opt_double(d, "position_relay_period_s", dw, 0.0);
+    r.dynamics.relay_gain = opt_double(d, "pressure_relay_gain_per_mpa", dw, 0.0);
+    r.dynamics.relay_period_s = opt_double(d, "pressure_relay_period_s", dw, 0.0);
+  }
+  if (j.contains("messages")) {
+    const json& m = j["messages"];
+    if (!m.is_array()) throw Error(fmt::format("{}: expected an array of strings", key_where(where, "messages")));
+    for (const auto& x : m) {
+      if (!x.is_string()) throw Error(fmt::format("{}: expected an array of strings", key_where(where, "messages")));
+      r.messages.push_back(x.get<std::string>());
+    }
+  }
+  // the variants in the file's order ("variants"; older files: the three of schema 1)
+  std::vector<std::string> variants{"faithful", "compensated", "baseline"};
+  if (j.contains("variants")) {
+    const json& v = j["variants"];
+    if (!v.is_array()) throw Error(fmt::format("{}: expected an array of names", key_where(where, "variants")));
+    variants.clear();
+    for (const auto& x : v) {
+      if (!x.is_string()) throw Error(fmt::format("{}: expected an array of names", key_where(where, "variants")));
+      variants.push_back(x.get<std::string>());
+    }
+  }
+  for (const auto& variant : variants) {
     if (!j.contains(variant)) continue;
     const json& v = j[variant];
     const std::string vw = key_where(where, variant);
@@ -547,6 +595,16 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       run.description = opt_string(e, "description", w);
       run.saturated = e.contains("saturated_samples") ? get_size(e, "saturated_samples", w) : 0;
       from_json(e, run.errors, w);
+      if (e.contains("periods")) {
+        const json& per = e["periods"];
+        const std::string pw = key_where(w, "periods");
+        if (!per.is_array()) throw Error(fmt::format("{}: expected an array", pw));
+        for (std::size_t i = 0; i < per.size(); ++i) {
+          TrackingErrors te;
+          from_json(per[i], te, fmt::format("{}[{}]", pw, i));
+          run.periods.push_back(te);
+        }
+      }
       r.runs.push_back(std::move(run));
     };
     if (v.contains("max_error_mm")) {

@@ -173,6 +173,7 @@ const char* variant_color(const std::string& v) {
   if (v == "compensated") return "#d62728";
   if (v == "faithful") return "#1f77b4";
   if (v == "baseline") return "#7f7f7f";
+  if (v == "learning") return "#9467bd";
   return "#2ca02c";
 }
 
@@ -311,6 +312,22 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
     page.figure(err, fmt::format("Tracking errors, {} reference (paper Fig. 12).", ref));
     page.figure(dva, fmt::format("Measured against desired contraction, {} reference: a straight line means the "
                                  "hysteresis is compensated (paper Fig. 13).", ref));
+    for (const auto& run : r.runs) {
+      if (run.reference != ref || run.periods.empty()) continue;
+      PlotSpec per{{fmt::format("Learning: error of each period, {} reference", ref), {"Period", ""},
+                    {"Error", "mm"}},
+                   {}};
+      std::vector<double> k, rms, mx;
+      for (std::size_t i = 0; i < run.periods.size(); ++i) {
+        k.push_back(static_cast<double>(i + 1));
+        rms.push_back(run.periods[i].rms_error_mm);
+        mx.push_back(run.periods[i].max_error_mm);
+      }
+      per.series.push_back({"RMS", k, rms, "linespoints", variant_color(run.variant), false});
+      per.series.push_back({"max", k, mx, "linespoints", "#7f7f7f", true});
+      page.figure(per, fmt::format("Iterative learning on the {} reference: RMS and maximum error of each period "
+                                   "(the tracking plots above show all {} periods).", ref, run.periods.size()));
+    }
   }
   io::write_text_file(html_path, page.finish());
 }
@@ -383,9 +400,12 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
   for (std::size_t i = 0; i < files.size(); ++i) {
     if (used[i]) continue;
     const std::string f = files[i].filename().string();
-    for (const char* variant : {"compensated", "faithful", "baseline"}) {
+    {
+      // tracking_<variant>_<reference>.csv (neither name has an underscore)
+      const std::size_t us = f.find('_', 9);
+      if (!f.starts_with("tracking_") || us == std::string::npos) continue;
+      const std::string variant = f.substr(9, us - 9);
       const std::string prefix = fmt::format("tracking_{}_", variant);
-      if (!f.starts_with(prefix)) continue;
       TrackingRun run;
       run.variant = variant;
       run.reference = f.substr(prefix.size(), f.size() - prefix.size() - 4);

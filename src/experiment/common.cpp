@@ -1,0 +1,136 @@
+// What the experiments share: rig runs, fits, the tracking loop (detail.hpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron::experiment {
+
+RigInputs regulator(double p) {
+  RigInputs in;
+  in.mode = Actuation::regulator;
+  in.pressure_command = std::clamp(p, 0.0, kPressureMax);
+  return in;
+}
+
+RigInputs valves(double duty, double desired_mpa) {
+  RigInputs in;
+  in.mode = Actuation::switching_valves;
+  in.pwm_duty = std::clamp(duty, -1.0, 1.0);
+  in.pressure_command = desired_mpa;
+  return in;
+}
+
+IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
+                            double tc) {
+  PamRig rig(rp, seed);
+  rig.reset();
+  IdRecord rec;
+  std::size_t k = 0;
+  rig.run(static_cast<double>(pressure.size()) * tc, tc, [&](const RigOutputs& o) {
+    const RigInputs in = regulator(pressure[std::min(k, pressure.size() - 1)]);
+    rec.t.push_back(o.time);
+    rec.p_cmd.push_back(in.pressure_command);
+    rec.p.push_back(o.pressure_measured * 1e-6);
+    rec.x_mm.push_back(o.contraction_measured * 1e3);
+    ++k;
+    return in;
+  });
+  return rec;
+}
+
+IdRecord decimate(const IdRecord& r, std::size_t every) {
+  IdRecord d;
+  for (std::size_t i = 0; i < r.t.size(); i += every) {
+    d.t.push_back(r.t[i]);
+    d.p_cmd.push_back(r.p_cmd[i]);
+    d.p.push_back(r.p[i]);
+    d.x_mm.push_back(r.x_mm[i]);
+  }
+  return d;
+}
+
+// Straight line x = a p + b through the record (least squares): the baseline's
+// "inverse without hysteresis".
+ModelParams straight_line(const IdRecord& r) {
+  const auto n = static_cast<double>(r.p.size());
+  double sp = 0, sx = 0, spp = 0, spx = 0;
+  for (std::size_t i = 0; i < r.p.size(); ++i) {
+    sp += r.p[i];
+    sx += r.x_mm[i];
+    spp += r.p[i] * r.p[i];
+    spx += r.p[i] * r.x_mm[i];
+  }
+  const double den = n * spp - sp * sp;
+  const double a = (n * spx - sp * sx) / den;
+  const double b = (sx - a * sp) / n;
+  if (!(a > 0)) throw Error("experiment: the identification run shows no contraction increasing with pressure");
+  GpiParams g;
+  g.envelope = Envelope::affine(a, b);
+  g.q = 1.0;
+  g.n = 0;
+  g.input_limits = {0.0, kPressureMax};
+  return g;
+}
+
+FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what) {
+  FitReport rep = fit(r.p, r.x_mm, fo);
+  if (rep.status == FitStatus::invalid_input || rep.status == FitStatus::failed)
+    throw Error(fmt::format("experiment: fit of the {} failed: {}", what, rep.message));
+  std::visit([](auto& p) { p.input_limits = {0.0, kPressureMax}; }, rep.model);
+  Inverse check(rep.model);  // throws if the fitted model is not invertible
+  return rep;
+}
+
+TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to) {
+  TrackingErrors e;
+  double s2 = 0, s1 = 0;
+  std::size_t n = 0;
+  for (std::size_t k = from; k < std::min(to, run.t.size()); ++k) {
+    const double d = run.reference_mm[k] - run.measured_mm[k];
+    e.max_error_mm = std::max(e.max_error_mm, std::abs(d));
+    s1 += std::abs(d);
+    s2 += d * d;
+    ++n;
+  }
+  if (n) {
+    e.mae_mm = s1 / static_cast<double>(n);
+    e.rms_error_mm = std::sqrt(s2 / static_cast<double>(n));
+  }
+  return e;
+}
+
+TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
+                  std::size_t lead, bool periodic, const Law& law) {
+  PamRig rig(o.rig, seed);
+  rig.reset();
+  TrackingRun run;
+  const std::size_t n = ref_m.size();
+  for (auto* v : {&run.t, &run.reference_mm, &run.measured_mm, &run.actual_mm, &run.pressure_command_mpa,
+                  &run.pressure_mpa, &run.duty})
+    v->reserve(n);
+  std::size_t k = 0;
+  rig.run(static_cast<double>(n) * o.control_period, o.control_period, [&](const RigOutputs& out) {
+    const std::size_t i = std::min(k, n - 1);
+    const std::size_t ahead = periodic ? (i + lead) % n : std::min(i + lead, n - 1);
+    const Sample s{ref_m[i], ref_m[ahead], out.contraction_measured, out.pressure_measured * 1e-6, k};
+    RigInputs in = law(s);
+    run.t.push_back(out.time);
+    run.reference_mm.push_back(s.reference_m * 1e3);
+    run.measured_mm.push_back(out.contraction_measured * 1e3);
+    run.actual_mm.push_back(out.contraction * 1e3);
+    // With the valves, pressure_command carries the cascade's desired pressure (the rig ignores it).
+    run.pressure_command_mpa.push_back(in.pressure_command);
+    run.pressure_mpa.push_back(out.pressure * 1e-6);
+    run.duty.push_back(in.mode == Actuation::switching_valves ? in.pwm_duty : 0.0);
+    if (in.pressure_command <= 0.0 || in.pressure_command >= kPressureMax) ++run.saturated;
+    ++k;
+    return in;
+  });
+  return run;
+}
+
+}  // namespace hysteron::experiment

@@ -1,0 +1,148 @@
+#pragma once
+// Private to the experiments (src/experiment/): the rig runs, fits and tracking
+// loop every experiment shares, and the spec each experiment registers.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <complex>
+
+#include "hysteron/experiment.hpp"
+#include "hysteron/control.hpp"
+#include "hysteron/inverse.hpp"
+#include "hysteron/learning.hpp"
+
+namespace hysteron::experiment {
+
+inline constexpr double kPressureMax = 0.6;  // [MPa] actuator limit of every experiment
+
+// One identification run (logged at the control period).
+struct IdRecord {
+  std::vector<double> t, p_cmd, p, x_mm;
+};
+
+// What a controller sees each control period and what it commands.
+struct Sample {
+  double reference_m, preview_m, measured_m, pressure_mpa;
+  std::size_t k;  // control sample index since the start of the run
+};
+using Law = std::function<RigInputs(const Sample&)>;
+
+RigInputs regulator(double p_mpa);                     // regulator command, clamped to 0..kPressureMax
+RigInputs valves(double duty, double desired_mpa);     // PWM duty, clamped to [-1, 1]
+
+// A reference of one experiment. `period` > 0 marks a periodic reference: ref_m
+// holds one period, repeated by the learning variant.
+struct Reference {
+  std::string name;
+  std::vector<double> ref_m;  // [m] at the control period
+  std::size_t score_from = 0; // first scored sample
+  std::size_t period = 0;     // samples per period (0: not periodic)
+};
+
+// Everything an experiment's control laws may use: the fitted models and what
+// was identified from the rig at hand (never the nominal rig's values).
+struct Context {
+  const ExperimentOptions& options;
+  const ExperimentResult& result;  // fit, best_fit, baseline_model, lead_s
+  const RigDynamics& dynamics;     // identified from the identification run
+  double tc;                       // control period [s]
+  std::size_t lead;                // preview [samples] of the compensated variants
+  PidParams pressure_loop;         // valve experiments: PI of the pressure loop (relay test)
+  bool learning = false;           // the loop is built for the learning variant (robust PID rule)
+};
+
+// One variant's loop, built fresh for each run.
+struct Loop {
+  Law law;
+  std::string description;
+  PidParams position;  // the position loop's PID (the learning variant's design uses it)
+};
+
+struct Variant {
+  std::string name;  // faithful | compensated | baseline
+  bool preview = false;  // the feedforward is fed Context::lead samples ahead
+  std::function<Loop(const Context&)> make;
+};
+
+struct Spec {
+  std::string name, title, summary;
+  FitModel model = FitModel::gpi;
+  int operators = 10;
+  std::function<std::vector<double>(double tc)> id_pressure;   // paper's identification input
+  std::function<std::vector<double>(double tc)> id2_pressure;  // second run (best model's validation)
+  double train_seconds = 5.0;                                  // the major loop
+  std::function<std::vector<Reference>(double tc)> references;
+  PublishedFigures published;
+  std::vector<Variant> variants;            // run in this order; `learning` after `compensated`
+  std::string learning_on = "compensated";  // the loop the learning variant runs on
+  bool valves = false;                      // run the relay test of the valves' pressure loop
+};
+
+const Spec& gpi_pid_spec();
+const Spec& mpi_openloop_spec();
+const Spec& mpi_pwm_spec();
+const std::vector<const Spec*>& registry();
+const Spec* find_spec(const std::string& name) noexcept;
+
+// ---- shared machinery (common.cpp) ------------------------------------------------
+IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
+                            double tc);
+IdRecord decimate(const IdRecord& r, std::size_t every);
+ModelParams straight_line(const IdRecord& r);
+FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what);
+TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
+// Runs one tracking experiment: `reference` sampled at the control period, the
+// preview `lead` samples ahead (wrapping around for a periodic reference).
+TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
+                  std::size_t lead, bool periodic, const Law& law);
+
+}  // namespace hysteron::experiment
+
+namespace hysteron::experiment {
+
+// ---- tuning from the rig's own data (tuning.cpp, docs/control.md) ----------------
+// First order plus dead time around the fitted model (RigDynamics), by least squares
+// over a grid of (theta, tau) on the identification run at the control period;
+// `lead` receives the best pure delay (tau = 0) [samples], the feedforward's preview.
+RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead);
+// SIMC rule (Skogestad 2003) for the position PI on the FOPDT (K, tau, theta), tight
+// tuning tau_c = theta:  K_c = tau / (K (tau_c + theta)),  T_i = min(tau, 4 (tau_c + theta)).
+PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_max);
+// Closed loop from the (modified) reference to the contraction, on the identified FOPDT
+// with the feedforward fed `lead` samples ahead and the PID `pid` (the inverse model
+// taken as exact): T = G (z^lead + K (K_p + I(z))) / (1 + G K C(z)), at w [rad/sample].
+std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std::size_t lead, double tc, double w);
+// Relay test (Astrom-Hagglund) of the valves' pressure loop: duty +-h switched on the
+// measured pressure around 0.3 MPa with a hysteresis of 3 noise standard deviations
+// (measured first, vented); fills relay_gain and relay_period_s of `d`.
+void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d);
+// Relay test of the position loop through `actuator` (desired pressure [MPa] and the rig's
+// outputs -> the rig's inputs): hold 0.3 MPa until settled, then switch the pressure
+// 0.3 +- 0.05 MPa on the measured contraction around its settled level, with a hysteresis of
+// 3 noise standard deviations; fills position_relay_gain and position_relay_period_s.
+using Actuator = std::function<RigInputs(double desired_mpa, const RigOutputs&)>;
+void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator,
+                         RigDynamics& d);
+// The second-order mode through the relay's point (RigDynamics::mode_*): with F the
+// FOPDT at w_u = 2 pi / T_u and 1/H = (1 - r^2) + 2 i zeta r = -F K_u (r = w_u / w_n):
+//   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).
+void fit_load_mode(RigDynamics& d);
+// PID from the position relay test, derivative filter T_u / 30:
+//   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
+//   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3
+enum class PidRule { classic, some_overshoot };
+PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule);
+// The position PID of a compensated loop in context `c` (classic; some_overshoot when learning).
+PidParams position_pid(const Context& c);
+// Tyreus-Luyben PI from the relay test: K_c = K_u / 3.2, T_i = 2.2 T_u (duty per MPa).
+PidParams tyreus_luyben_pi(const RigDynamics& d, double tc);
+// The learning variant's ILC: the largest gain L of {0.5, 0.3, 0.2}, the phase lead d (<= 0.5 s) and the Q-filter's width
+// chosen on the identified closed loop so that learning_contraction() < 1 with the
+// widest filter band (docs/control.md). Sets `contraction` to that bound.
+LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
+                               double tc, double& contraction);
+
+}  // namespace hysteron::experiment

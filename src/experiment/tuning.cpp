@@ -1,0 +1,330 @@
+// Loops tuned from the identification run of the rig at hand (detail.hpp, docs/control.md).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron::experiment {
+
+namespace {
+
+// ys lagged by tau (backward Euler, a = tc / (tau + tc)) into z.
+void lag(const std::vector<double>& ys, double a, std::vector<double>& z) {
+  double zk = ys.front();
+  for (std::size_t k = 0; k < ys.size(); ++k) {
+    zk += a * (ys[k] - zk);
+    z[k] = zk;
+  }
+}
+
+// SSE of x against z delayed by `delay` samples, from sample `from` on.
+double delayed_sse(const std::vector<double>& z, const std::vector<double>& x, std::size_t delay, std::size_t from) {
+  double sse = 0.0;
+  for (std::size_t k = from; k < x.size(); ++k) {
+    const double d = x[k] - z[k >= delay ? k - delay : 0];
+    sse += d * d;
+  }
+  return sse;
+}
+
+}  // namespace
+
+RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead) {
+  const std::vector<double> ys = simulate_record(model, r.p_cmd);  // [mm]; rate-independent: shifts commute
+  const auto max_delay = static_cast<std::size_t>(std::lround(0.3 / tc));
+  const std::size_t from = std::min(max_delay, r.x_mm.size() / 2);
+  std::vector<double> z(ys.size());
+  auto a_of = [tc](double tau) { return tc / (tau + tc); };
+
+  // pure delay (tau = 0): the feedforward's preview, every sample
+  double best = std::numeric_limits<double>::infinity();
+  lead = 0;
+  for (std::size_t d = 0; d <= max_delay; ++d) {
+    const double sse = delayed_sse(ys, r.x_mm, d, from);
+    if (sse < best) best = sse, lead = d;
+  }
+  // (theta, tau): coarse grid of 5 ms, then 1 ms around the best
+  const auto coarse = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(0.005 / tc)));
+  std::size_t bd = 0, bt = 0;  // delay and tau in samples
+  best = std::numeric_limits<double>::infinity();
+  auto scan = [&](std::size_t d0, std::size_t d1, std::size_t t0, std::size_t t1, std::size_t step) {
+    for (std::size_t ti = t0; ti <= t1; ti += step) {
+      lag(ys, a_of(static_cast<double>(ti) * tc), z);
+      for (std::size_t d = d0; d <= d1; d += step) {
+        const double sse = delayed_sse(z, r.x_mm, d, from);
+        if (sse < best) best = sse, bd = d, bt = ti;
+      }
+    }
+  };
+  scan(0, max_delay, 0, max_delay, coarse);
+  scan(bd > coarse ? bd - coarse : 0, std::min(max_delay, bd + coarse), bt > coarse ? bt - coarse : 0,
+       std::min(max_delay, bt + coarse), 1);
+
+  RigDynamics dyn;
+  dyn.dead_time_s = static_cast<double>(bd) * tc;
+  dyn.lag_s = static_cast<double>(bt) * tc;
+  dyn.rms_mm = std::sqrt(best / static_cast<double>(r.x_mm.size() - from));
+  // K: least-squares slope of contraction on commanded pressure [m/MPa]
+  const auto n = static_cast<double>(r.p_cmd.size());
+  double sp = 0, sx = 0, spp = 0, spx = 0;
+  for (std::size_t i = 0; i < r.p_cmd.size(); ++i) {
+    sp += r.p_cmd[i], sx += r.x_mm[i], spp += r.p_cmd[i] * r.p_cmd[i], spx += r.p_cmd[i] * r.x_mm[i];
+  }
+  dyn.gain_m_per_mpa = (n * spx - sp * sx) / (n * spp - sp * sp) * 1e-3;
+  if (!(dyn.gain_m_per_mpa > 0.0) || !std::isfinite(dyn.rms_mm))
+    throw Error(fmt::format("experiment: cannot identify the rig's dynamics (slope {} m/MPa)", dyn.gain_m_per_mpa));
+  return dyn;
+}
+
+PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_max) {
+  const double theta = std::max(d.dead_time_s, tc);  // at least one sample of delay
+  const double tau = std::max(d.lag_s, tc);
+  const double tau_c = theta;                        // "tight" SIMC
+  PidParams p;
+  p.sample_time = tc;
+  p.kp = tau / (d.gain_m_per_mpa * (tau_c + theta));
+  const double ti = std::min(tau, 4.0 * (tau_c + theta));
+  p.ki = p.kp / ti;
+  p.kd = 0.0;
+  p.out_min = out_min;
+  p.out_max = out_max;
+  return p;
+}
+
+std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std::size_t lead, double tc, double w) {
+  using C = std::complex<double>;
+  const C zi = std::polar(1.0, -w);  // z^-1
+  const double a = tc / (d.lag_s + tc);
+  const auto delay = static_cast<double>(std::lround(d.dead_time_s / tc));
+  C G = std::polar(1.0, -w * delay) * a / (1.0 - (1.0 - a) * zi);
+  if (d.mode_frequency_hz > 0.0) {  // continuous mode at s = i w / tc (w << pi here)
+    const double wn = 2.0 * std::numbers::pi * d.mode_frequency_hz, s_im = w / tc;
+    G *= wn * wn / C(wn * wn - s_im * s_im, 2.0 * d.mode_damping * wn * s_im);
+  }
+  const C I = pid.ki * tc / (1.0 - zi);
+  const double tf = pid.derivative_filter;
+  const C D = pid.kd / (tf + tc) * (1.0 - zi) / (1.0 - tf / (tf + tc) * zi);
+  const double K = d.gain_m_per_mpa;
+  const C lead_z = std::polar(1.0, w * static_cast<double>(lead));
+  return G * (lead_z + K * (pid.kp + I)) / (1.0 + G * K * (pid.kp + I + D));
+}
+
+LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
+                               double tc, double& contraction) {
+  // frequency grid: from the fundamental to Nyquist, log-spaced
+  constexpr std::size_t kGrid = 600;
+  // robust: the identified FOPDT with and without the load mode, and their neighbours
+  // (dead time x1.5, lag x0.67..1.5, slope x0.67..1.5): one contraction bound over all
+  std::vector<double> w0s(kGrid);
+  const double w0 = 2.0 * std::numbers::pi / static_cast<double>(period);
+  for (std::size_t l = 0; l < kGrid; ++l)
+    w0s[l] = w0 * std::pow(std::numbers::pi / w0, static_cast<double>(l) / (kGrid - 1));
+  std::vector<double> w;
+  std::vector<std::complex<double>> T;
+  for (bool mode : {true, false})
+  for (double ft : {1.0, 1.5})
+    for (double fl : {0.67, 1.0, 1.5})
+      for (double fk : {0.67, 1.0, 1.5}) {
+        if (mode && d.mode_frequency_hz == 0.0) continue;
+        RigDynamics dv = d;
+        if (!mode) dv.mode_frequency_hz = 0.0;
+        dv.dead_time_s *= ft;
+        dv.lag_s *= fl;
+        dv.gain_m_per_mpa *= fk;
+        for (std::size_t l = 0; l < kGrid; ++l) {
+          w.push_back(w0s[l]);
+          T.push_back(closed_loop(dv, pid, lead, tc, w0s[l]));
+        }
+      }
+  LearningParams best;
+  best.period = period;
+  best.gain = 0.5;
+  best.lookahead = lead;
+  contraction = std::numeric_limits<double>::infinity();
+  const std::size_t budget = period > lead + 2 ? period - lead - 2 : 0;  // lead + d + h < period
+  const std::size_t max_shift = std::min<std::size_t>(budget / 2, static_cast<std::size_t>(std::lround(0.5 / tc)));
+  bool found = false;
+  // the largest gain of {0.5, 0.3, 0.2} for which some (shift, width) contracts
+  for (double gain : {0.5, 0.3, 0.2}) {
+  if (found) break;
+  best.gain = gain;
+  for (std::size_t shift = 0; shift <= max_shift; ++shift) {
+    LearningParams p = best;
+    p.lead = shift;
+    // smallest half-width (widest band) that contracts with a 2 % margin
+    for (std::size_t h = 0; shift + h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
+      p.half_width = h;
+      const double rho = learning_contraction(p, w, T);
+      if (rho < 0.98) {
+        if (!found || h < best.half_width || (h == best.half_width && rho < contraction)) {
+          best = p;
+          contraction = rho;
+          found = true;
+        }
+        break;
+      }
+      if (found && h >= best.half_width) break;
+    }
+  }
+  }
+  if (!found)
+    throw Error(fmt::format("experiment: no learning filter contracts on the identified loop "
+                            "(theta = {} s, tau = {} s, period {} samples)",
+                            d.dead_time_s, d.lag_s, period));
+  return best;
+}
+
+}  // namespace hysteron::experiment
+
+namespace hysteron::experiment {
+
+void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d) {
+  constexpr double h = 0.5;        // relay amplitude [duty]
+  constexpr double p0 = 0.3;       // [MPa]
+  const auto quiet = static_cast<std::size_t>(std::lround(0.2 / tc));
+  const auto n = static_cast<std::size_t>(std::lround(2.0 / tc));
+  PamRig rig(rp, seed);
+  rig.reset();
+  std::vector<double> p;
+  p.reserve(n);
+  double eps = 0.0;
+  bool up = true;
+  std::size_t k = 0;
+  rig.run(static_cast<double>(n) * tc, tc, [&](const RigOutputs& o) {
+    const double pm = o.pressure_measured * 1e-6;
+    p.push_back(pm);
+    if (k == quiet) {  // noise of the vented reading -> hysteresis of the relay
+      double m = 0, s2 = 0;
+      for (std::size_t i = 0; i < quiet; ++i) m += p[i];
+      m /= static_cast<double>(quiet);
+      for (std::size_t i = 0; i < quiet; ++i) s2 += (p[i] - m) * (p[i] - m);
+      eps = 3.0 * std::sqrt(s2 / static_cast<double>(quiet));
+    }
+    double duty = 0.0;
+    if (k >= quiet) {
+      if (up && pm > p0 + eps) up = false;
+      if (!up && pm < p0 - eps) up = true;
+      duty = up ? h : -h;
+    }
+    ++k;
+    return valves(duty, p0);
+  });
+  // the last second: amplitude and mean period between upward crossings of p0
+  const std::size_t from = n - static_cast<std::size_t>(std::lround(1.0 / tc));
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  std::vector<std::size_t> ups;
+  for (std::size_t i = from; i < p.size(); ++i) {
+    lo = std::min(lo, p[i]), hi = std::max(hi, p[i]);
+    if (i > from && p[i - 1] < p0 && p[i] >= p0) ups.push_back(i);
+  }
+  const double a = 0.5 * (hi - lo);
+  if (ups.size() < 3 || !(a > eps))
+    throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {} MPa "
+                            "(amplitude {} MPa, {} crossings)", p0, a, ups.size()));
+  d.relay_period_s = static_cast<double>(ups.back() - ups.front()) * tc / static_cast<double>(ups.size() - 1);
+  d.relay_gain = 4.0 * h / (std::numbers::pi * std::sqrt(a * a - eps * eps));
+}
+
+PidParams tyreus_luyben_pi(const RigDynamics& d, double tc) {
+  PidParams p;
+  p.sample_time = tc;
+  p.kp = d.relay_gain / 3.2;
+  p.ki = p.kp / (2.2 * d.relay_period_s);
+  p.out_min = -1.0;
+  p.out_max = 1.0;
+  return p;
+}
+
+}  // namespace hysteron::experiment
+
+namespace hysteron::experiment {
+
+void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator,
+                         RigDynamics& d) {
+  constexpr double p0 = 0.3, h = 0.05;  // [MPa]
+  const auto settle = static_cast<std::size_t>(std::lround(1.5 / tc));
+  const auto quiet = static_cast<std::size_t>(std::lround(0.3 / tc));
+  const auto n = settle + static_cast<std::size_t>(std::lround(4.0 / tc));
+  PamRig rig(rp, seed);
+  rig.reset();
+  std::vector<double> x;
+  x.reserve(n);
+  double x0 = 0.0, eps = 0.0;
+  bool up = true;
+  std::size_t k = 0;
+  rig.run(static_cast<double>(n) * tc, tc, [&](const RigOutputs& o) {
+    x.push_back(o.contraction_measured);
+    if (k == settle) {  // level and noise at p0 over the last `quiet` samples
+      double m = 0, s2 = 0;
+      for (std::size_t i = settle - quiet; i < settle; ++i) m += x[i];
+      m /= static_cast<double>(quiet);
+      for (std::size_t i = settle - quiet; i < settle; ++i) s2 += (x[i] - m) * (x[i] - m);
+      x0 = m;
+      eps = 3.0 * std::sqrt(s2 / static_cast<double>(quiet));
+    }
+    double p = p0;
+    if (k >= settle) {
+      const double xm = o.contraction_measured;
+      if (up && xm > x0 + eps) up = false;
+      if (!up && xm < x0 - eps) up = true;
+      p = up ? p0 + h : p0 - h;
+    }
+    ++k;
+    return actuator(p, o);
+  });
+  const std::size_t from = n - static_cast<std::size_t>(std::lround(2.0 / tc));
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  std::vector<std::size_t> ups;
+  for (std::size_t i = from; i < x.size(); ++i) {
+    lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
+    if (i > from && x[i - 1] < x0 && x[i] >= x0) ups.push_back(i);
+  }
+  const double a = 0.5 * (hi - lo);
+  if (ups.size() < 3 || !(a > eps))
+    throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate (amplitude {} mm, "
+                            "{} crossings in 2 s)", a * 1e3, ups.size()));
+  d.position_relay_period_s = static_cast<double>(ups.back() - ups.front()) * tc / static_cast<double>(ups.size() - 1);
+  d.position_relay_gain = 4.0 * h / (std::numbers::pi * std::sqrt(a * a - eps * eps));
+}
+
+PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule) {
+  PidParams p;
+  p.sample_time = tc;
+  const bool classic = rule == PidRule::classic;
+  p.kp = (classic ? 0.6 : 1.0 / 3.0) * d.position_relay_gain;
+  p.ki = p.kp / (0.5 * d.position_relay_period_s);
+  p.kd = p.kp * d.position_relay_period_s / (classic ? 8.0 : 3.0);
+  p.derivative_filter = d.position_relay_period_s / 30.0;
+  p.out_min = out_min;
+  p.out_max = out_max;
+  return p;
+}
+
+}  // namespace hysteron::experiment
+
+namespace hysteron::experiment {
+
+PidParams position_pid(const Context& c) {
+  return relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax,
+                   c.learning ? PidRule::some_overshoot : PidRule::classic);
+}
+
+void fit_load_mode(RigDynamics& d) {
+  d.mode_frequency_hz = d.mode_damping = 0.0;
+  if (!(d.position_relay_gain > 0.0) || !(d.position_relay_period_s > 0.0)) return;
+  using C = std::complex<double>;
+  const double wu = 2.0 * std::numbers::pi / d.position_relay_period_s;
+  const C F = d.gain_m_per_mpa * std::polar(1.0, -wu * d.dead_time_s) / C(1.0, wu * d.lag_s);
+  const C inv_h = -F * d.position_relay_gain;  // 1 / H(i w_u)
+  const double r2 = 1.0 - inv_h.real();
+  if (!(r2 > 0.0) || !(inv_h.imag() > 0.0)) return;  // the FOPDT alone explains the point
+  const double r = std::sqrt(r2);
+  d.mode_frequency_hz = wu / r / (2.0 * std::numbers::pi);
+  d.mode_damping = inv_h.imag() / (2.0 * r);
+}
+
+}  // namespace hysteron::experiment

@@ -1,0 +1,243 @@
+// Iterative learning control (learning.hpp) and the learning variant of the experiments.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
+#include "hysteron/learning.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+// A known loop for the unit tests: y(k) = a y(k-1) + (1 - a) u(k - delay), u = r + c.
+struct LagDelay {
+  double a;
+  std::size_t delay;
+  std::vector<double> buf;
+  double y = 0.0;
+  std::size_t k = 0;
+  LagDelay(double a_, std::size_t d) : a(a_), delay(d), buf(d + 1, 0.0) {}
+  double step(double u) {
+    buf[k % buf.size()] = u;
+    const double ud = buf[(k + buf.size() - delay) % buf.size()];
+    ++k;
+    y = a * y + (1.0 - a) * ud;
+    return y;
+  }
+  std::complex<double> T(double w) const {
+    const std::complex<double> zi = std::polar(1.0, -w);
+    return std::pow(zi, static_cast<double>(delay)) * (1.0 - a) / (1.0 - a * zi);
+  }
+};
+
+double reference(std::size_t k, std::size_t n) {
+  const double t = 2.0 * std::numbers::pi * static_cast<double>(k % n) / static_cast<double>(n);
+  return std::sin(t) + 0.3 * std::sin(2.0 * t + 0.4) + 0.1 * std::cos(3.0 * t);
+}
+
+// Per-period RMS errors of `periods` periods of the loop with the ILC.
+std::vector<double> run_loop(const LearningParams& p, double a, std::size_t delay, int periods) {
+  IterativeLearning ilc(p);
+  LagDelay plant(a, delay);
+  std::vector<double> rms;
+  double y = 0.0;
+  for (int j = 0; j < periods; ++j) {
+    double s2 = 0.0;
+    for (std::size_t k = 0; k < p.period; ++k) {
+      const double r = reference(k, p.period);
+      const double e = r - y;  // the output of the previous sample against this reference
+      s2 += e * e;
+      const double u = r + ilc.correction();
+      ilc.step(e);
+      y = plant.step(u);
+    }
+    rms.push_back(std::sqrt(s2 / static_cast<double>(p.period)));
+  }
+  return rms;
+}
+
+std::vector<double> grid(std::size_t n) {
+  std::vector<double> w;
+  for (std::size_t l = 1; l <= 400; ++l) w.push_back(std::numbers::pi * static_cast<double>(l) / 400.0);
+  (void)n;
+  return w;
+}
+
+}  // namespace
+
+TEST(Learning, InvalidParametersAreRejected) {
+  LearningParams p;
+  EXPECT_THROW(IterativeLearning{p}, Error);  // period 0
+  p.period = 100;
+  p.gain = 2.0;
+  EXPECT_THROW(IterativeLearning{p}, Error);
+  p.gain = std::nan("");
+  EXPECT_THROW(IterativeLearning{p}, Error);
+  p.gain = 0.5;
+  p.lead = 50;
+  p.half_width = 30;
+  p.lookahead = 20;  // 50 + 30 + 20 = 100: not < period
+  EXPECT_THROW(IterativeLearning{p}, Error);
+  p.lookahead = 19;
+  EXPECT_NO_THROW(IterativeLearning{p});
+  p.max_correction = 0.0;
+  EXPECT_THROW(IterativeLearning{p}, Error);
+}
+
+// Q has unit DC gain (sum of taps 1): a constant error e learns c = L e after one period,
+// also for a filter far wider than 2h = 1020 taps, whose binomial coefficients overflow a double.
+TEST(Learning, ConstantErrorLearnsGainTimesErrorWithAWideFilter) {
+  for (std::size_t h : {0u, 3u, 600u}) {
+    LearningParams p;
+    p.period = 2000;
+    p.gain = 0.4;
+    p.lead = 5;
+    p.half_width = h;
+    IterativeLearning ilc(p);
+    for (std::size_t k = 0; k < p.period; ++k) ilc.step(2.0);
+    // away from the period's ends (where the window reaches the errors of the period before
+    // the first, taken as 0) the correction is exactly L e
+    for (std::size_t k = 0; k < p.period; ++k) {
+      if (k >= h + p.lead && k + h + p.lead < p.period)
+        ASSERT_NEAR(ilc.correction(), 0.8, 1e-12) << "h = " << h << ", k = " << k;
+      ASSERT_TRUE(std::isfinite(ilc.correction()));
+      ilc.step(2.0);
+    }
+    EXPECT_EQ(ilc.iteration(), 2u);
+  }
+}
+
+// correction(ahead) at phase k is the correction(0) that phase k + ahead will see, across
+// the period boundary too (the preview of a loop must agree with what it later applies).
+TEST(Learning, LookaheadAgreesWithTheLaterCorrection) {
+  LearningParams p;
+  p.period = 97;
+  p.gain = 0.7;
+  p.lead = 4;
+  p.half_width = 6;
+  p.lookahead = 11;
+  IterativeLearning ilc(p);
+  std::vector<double> seen_ahead, seen_now;
+  for (std::size_t k = 0; k < 6 * p.period; ++k) {
+    seen_now.push_back(ilc.correction(0));
+    seen_ahead.push_back(ilc.correction(p.lookahead));
+    ilc.step(std::sin(0.37 * static_cast<double>(k)) + 0.2);
+  }
+  for (std::size_t k = 0; k + p.lookahead < seen_now.size(); ++k)
+    ASSERT_EQ(seen_ahead[k], seen_now[k + p.lookahead]) << "sample " << k;
+}
+
+// On a loop whose T is known, a design the contraction bound accepts converges
+// monotonically, and one it rejects (no phase lead on a delayed loop) does not.
+TEST(Learning, ContractionBoundPredictsConvergence) {
+  const double a = 0.9;
+  const std::size_t delay = 8;
+  LagDelay plant(a, delay);
+  std::vector<double> w = grid(400);
+  std::vector<std::complex<double>> T;
+  for (double x : w) T.push_back(plant.T(x));
+
+  LearningParams good;
+  good.period = 400;
+  good.gain = 0.5;
+  good.lead = delay + 9;  // dead time + the lag's ~ a / (1 - a) samples
+  good.half_width = 8;
+  ASSERT_LT(learning_contraction(good, w, T), 1.0);
+  const std::vector<double> rms = run_loop(good, a, delay, 25);
+  for (std::size_t j = 1; j < rms.size(); ++j) EXPECT_LE(rms[j], rms[j - 1] * (1.0 + 1e-9)) << "period " << j;
+  EXPECT_LT(rms.back(), 0.05 * rms.front());
+
+  LearningParams bad = good;
+  bad.lead = 0;
+  bad.half_width = 0;
+  bad.gain = 1.0;
+  EXPECT_GT(learning_contraction(bad, w, T), 1.0);
+  const std::vector<double> rb = run_loop(bad, a, delay, 60);
+  EXPECT_GT(rb.back(), rb.front());  // the high frequencies grow
+}
+
+TEST(Learning, NonFiniteErrorsAreCountedNotLearned) {
+  LearningParams p;
+  p.period = 10;
+  IterativeLearning ilc(p);
+  for (int k = 0; k < 10; ++k) ilc.step(k == 3 ? std::nan("") : 0.0);
+  EXPECT_EQ(ilc.faults(), 1u);
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_EQ(ilc.correction(), 0.0);
+    ilc.step(0.0);
+  }
+}
+
+TEST(Learning, StepDoesNotAllocate) {
+  LearningParams p;
+  p.period = 500;
+  p.lead = 10;
+  p.half_width = 40;
+  p.lookahead = 30;
+  IterativeLearning ilc(p);
+  const std::size_t before = hysteron_test::allocations();
+  double acc = 0.0;
+  for (int k = 0; k < 5000; ++k) {
+    acc += ilc.correction(0) + ilc.correction(30);
+    ilc.step(std::sin(0.01 * k));
+  }
+  EXPECT_EQ(hysteron_test::allocations(), before);
+  EXPECT_TRUE(std::isfinite(acc));
+}
+
+// ---- the experiments ---------------------------------------------------------------
+
+namespace {
+
+ExperimentResult run_gpi_pid(const PamRigParams& rig, int periods) {
+  ExperimentOptions o;
+  o.name = "gpi-pid";
+  o.rig = rig;
+  o.learning_periods = periods;
+  return run_experiment(o);
+}
+
+const TrackingRun& find_run(const ExperimentResult& r, const std::string& variant) {
+  for (const auto& run : r.runs)
+    if (run.variant == variant) return run;
+  throw Error("no " + variant + " run");
+}
+
+}  // namespace
+
+// The compensated loop's gains come from the rig at hand: twice the load gives another
+// relay result and other gains (not the nominal rig's constants).
+TEST(ExperimentTuning, GainsComeFromTheIdentification) {
+  PamRigParams heavy;
+  heavy.load.mass *= 2.0;
+  const ExperimentResult a = run_gpi_pid(PamRigParams{}, 0);
+  const ExperimentResult b = run_gpi_pid(heavy, 0);
+  EXPECT_GT(a.dynamics.position_relay_gain, 0.0);
+  EXPECT_GT(b.dynamics.position_relay_gain, 0.0);
+  EXPECT_GT(std::abs(b.dynamics.position_relay_period_s / a.dynamics.position_relay_period_s - 1.0), 0.05);
+  EXPECT_NE(find_run(a, "compensated").description, find_run(b, "compensated").description);
+  for (const auto& run : a.runs) EXPECT_NE(run.variant, "learning");  // learning_periods = 0
+}
+
+// The learning variant reduces the error from period to period, on the nominal rig and on
+// a slow regulator (100 ms lag, 12 ms dead time), up to the sensor-noise floor.
+TEST(ExperimentTuning, LearningReducesTheErrorMonotonically) {
+  PamRigParams slow;
+  slow.regulator.time_constant = 0.1;
+  slow.regulator.dead_time = 0.012;
+  for (const PamRigParams& rig : {PamRigParams{}, slow}) {
+    const ExperimentResult r = run_gpi_pid(rig, 6);
+    const TrackingRun& l = find_run(r, "learning");
+    ASSERT_EQ(l.periods.size(), 6u);
+    for (std::size_t j = 1; j < l.periods.size(); ++j)
+      EXPECT_LE(l.periods[j].rms_error_mm, l.periods[j - 1].rms_error_mm + 0.01) << "period " << j;
+    EXPECT_LT(l.periods.back().rms_error_mm, 0.3 * l.periods.front().rms_error_mm);
+    EXPECT_LT(l.errors.rms_error_mm, find_run(r, "compensated").errors.rms_error_mm);
+  }
+}

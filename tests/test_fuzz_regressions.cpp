@@ -129,3 +129,30 @@ TEST(FuzzRegression, MatNonNumericClassesSizesCheckedAgainstTheFile) {
   const io::Table t = io::read_table(good);
   EXPECT_EQ(t.num_columns(), 0u);
 }
+
+// ---- CSV (fuzz_csv) ------------------------------------------------------------------------
+
+// A 415-byte line of ~400 mostly empty columns: choosing a column (no --column, several
+// non-empty ones) listed every column in the message (unbounded: 3.4 MB for 200,000 columns).
+TEST(FuzzRegression, ColumnChoiceErrorListsAtMost20Columns) {
+  io::ReadOptions o;
+  o.preferred_column = "input";  // as the fuzz input's mode byte 0x8c chose
+  const std::string path = regression("csv/wide-row-error-lists-every-column.csv");
+  std::string text = hysteron::test::slurp(path).substr(1);  // without the fuzzer's mode byte
+  TempDir dir;
+  const std::string file = dir.write("wide.csv", text);
+  const std::string msg = error_of([&] { io::for_each_value(file, o, [](double) {}); });
+  EXPECT_TRUE(has(msg, "non-empty columns")) << msg.substr(0, 300);
+  EXPECT_TRUE(has(msg, "more)")) << msg.substr(0, 300);
+  EXPECT_LT(msg.size(), 1000u);
+  // the same for a 5000-column header naming each column
+  std::string header, row;
+  for (int i = 0; i < 5000; ++i) {
+    header += (i ? ",column_" : "column_") + std::to_string(i);
+    row += i ? ",1" : "1";
+  }
+  const std::string m2 = error_of([&] { io::parse_text_table(header + "\n" + row + "\n", "w.csv").column("nope"); });
+  EXPECT_TRUE(has(m2, "no column named \"nope\"")) << m2.substr(0, 300);
+  EXPECT_TRUE(has(m2, "19 \"column_19\", ... (4980 more)")) << m2.substr(0, 600);
+  EXPECT_LT(m2.size(), 1000u);
+}

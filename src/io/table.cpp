@@ -1035,14 +1035,18 @@ std::size_t Table::num_rows() const noexcept {
 }
 
 std::size_t Table::column_index(std::string_view spec) const {
+  // the columns for a message: at most 20 named, then how many more (a wide file must not give
+  // a message of megabytes)
   auto describe = [&] {
     std::string s;
-    for (std::size_t i = 0; i < columns.size(); ++i) {
+    const std::size_t shown_max = 20;
+    for (std::size_t i = 0; i < columns.size() && i < shown_max; ++i) {
       if (!s.empty()) s += ", ";
       s += std::to_string(i);
-      if (i < names.size() && !names[i].empty()) s += fmt::format(" \"{}\"", names[i]);
+      if (i < names.size() && !names[i].empty()) s += fmt::format(" \"{}\"", shown(names[i]));
       if (columns[i].empty()) s += " (empty)";
     }
+    if (columns.size() > shown_max) s += fmt::format(", ... ({} more)", columns.size() - shown_max);
     return s;
   };
   if (spec.empty()) {

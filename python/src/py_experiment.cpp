@@ -29,14 +29,32 @@ report::Labels labels(const std::string& title, const std::string& xl, const std
 }  // namespace
 
 void bind_experiment(py::module_& m) {
-  m.def("experiment_names", &experiment_names, "Names of the papers' experiments.");
+  m.def("experiment_names", &experiment_names, "Names of the registered experiments (the papers').");
+  m.def(
+      "experiments",
+      [] {
+        py::list l;
+        for (const auto& e : experiments()) {
+          py::dict d;
+          d["name"] = e.name;
+          d["title"] = e.title;
+          d["summary"] = e.summary;
+          d["variants"] = e.variants;
+          d["published_source"] = e.published_source;
+          l.append(d);
+        }
+        return l;
+      },
+      "The registered experiments: a list of dicts with name, title, summary, variants (e.g. faithful, "
+      "compensated, learning, baseline) and published_source (\"\" where the paper gives no figures).");
   m.def(
       "run_experiment",
       [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
-         const std::string& report_path) {
+         const std::string& report_path, int learning_periods) {
         ExperimentOptions o;
         o.name = name;
         o.seed = seed;
+        o.learning_periods = learning_periods;
         if (!plant.is_none())
           o.rig = py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
                                                  : rig_params_from_json(to_json(plant), "plant");
@@ -71,6 +89,9 @@ void bind_experiment(py::module_& m) {
           x["description"] = run.description;
           x.attr("update")(from_json(io::to_json(run.errors)));  // max_error_mm, mae_mm, rms_error_mm
           x["saturated"] = run.saturated;
+          py::list per;
+          for (const auto& e : run.periods) per.append(from_json(io::to_json(e)));
+          x["periods"] = per;
           x["t"] = to_numpy(run.t);
           x["reference_mm"] = to_numpy(run.reference_mm);
           x["measured_mm"] = to_numpy(run.measured_mm);
@@ -85,14 +106,15 @@ void bind_experiment(py::module_& m) {
         return d;
       },
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
-      py::arg("report") = "",
-      R"doc(Run one of the papers' experiments ("gpi-pid", "mpi-openloop", "mpi-pwm") on the
-simulated rig. plant: rig parameter dict or JSON path (None: defaults).
+      py::arg("report") = "", py::arg("learning_periods") = 10,
+      R"doc(Run one of the registered experiments (experiment_names(): "gpi-pid", "mpi-openloop",
+"mpi-pwm") on the simulated rig. plant: rig parameter dict or JSON path (None: defaults).
+learning_periods: periods of the learning variant (0: none; 0..1000).
 out: directory for the CSV/JSON outputs (as `hysteron experiment --out`);
 report: path of an HTML report. Returns a dict: "summary" (the CLI's --json
 object), "table" (text), "identification" (numpy series + train_end), "fit",
 "validation", "best_fit", "best_validation", "runs" (list of dicts with the
-errors and numpy time series) and "published".)doc");
+errors, the per-period errors of a learning run and numpy time series) and "published".)doc");
 
   m.def(
       "write_report",

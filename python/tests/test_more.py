@@ -145,15 +145,31 @@ def test_plot_errors():
 @pytest.mark.skipif(os.environ.get("HYSTERON_SKIP_SLOW") == "1", reason="slow")
 def test_experiment_summary_keys():
     with tempfile.TemporaryDirectory() as d:
-        r = hysteron.run_experiment("gpi-pid", seed=1, out=os.path.join(d, "out"), report=os.path.join(d, "r.html"))
+        r = hysteron.run_experiment("gpi-pid", seed=1, out=os.path.join(d, "out"), report=os.path.join(d, "r.html"),
+                                    learning_periods=2)
         s = r["summary"]
         for k in ("experiment", "compensated", "faithful", "baseline", "published", "identification"):
             assert k in s, k
         for v in ("compensated", "faithful", "baseline"):
             assert set(s[v]) >= {"max_error_mm", "mae_mm", "rms_error_mm"}
         assert s["published"]["max_error_mm"] == pytest.approx(2.659)
-        assert len(r["runs"]) == 3 and r["runs"][0]["t"].shape == r["runs"][0]["measured_mm"].shape
+        assert [x["variant"] for x in r["runs"]] == ["faithful", "compensated", "learning", "baseline"]
+        assert r["runs"][0]["t"].shape == r["runs"][0]["measured_mm"].shape
+        assert len(r["runs"][2]["periods"]) == 2 and r["runs"][0]["periods"] == []
+        assert s["variants"] == ["faithful", "compensated", "learning", "baseline"]
         assert r["identification"]["train_end"] > 0
-        assert open(os.path.join(d, "r.html")).read().count("<svg") == 6
+        assert open(os.path.join(d, "r.html")).read().count("<svg") == 7  # + the learning periods
         hysteron.write_report(os.path.join(d, "out"), os.path.join(d, "r2.html"))
         assert os.path.getsize(os.path.join(d, "r2.html")) > 10000
+
+
+def test_experiment_registry():
+    names = hysteron.experiment_names()
+    infos = hysteron.experiments()
+    assert [e["name"] for e in infos] == names
+    assert set(names) == {"gpi-pid", "mpi-openloop", "mpi-pwm"}
+    for e in infos:
+        assert e["title"] and e["summary"]
+        assert "learning" in e["variants"] and "compensated" in e["variants"]
+    with pytest.raises(hysteron.Error, match="learning_periods"):
+        hysteron.run_experiment("gpi-pid", learning_periods=-1)

@@ -261,3 +261,23 @@ TEST(MatWrite, UncompressedByDefaultCompressedOnRequestBothExact) {
   expect_bits_equal(io::read_column(plain, "x"), x);
   expect_bits_equal(io::read_column(packed, "x"), x);
 }
+
+// A legitimate long line (10000 columns of 49-character numbers: ~500 KB, beyond the reader's first
+// 256 KiB buffer) is read from a file like from memory.
+TEST(CsvStream, LongLinesGrowTheBufferUpToTheCap) {
+  TempDir dir;
+  const std::string num = "0.12345678901234567890123456789012345678901234567";  // 49 characters
+  std::string header, row;
+  for (std::size_t i = 0; i < io::max_text_columns; ++i) {
+    header += (i ? ",c" : "c") + std::to_string(i);
+    row += (i ? "," : "") + (i == 9999 ? std::string("-2.5") : num);
+  }
+  ASSERT_GT(row.size(), std::size_t{262144});  // longer than the first buffer
+  const std::string text = header + "\n" + row + "\n" + row + "\n";
+  const auto path = dir.write("long.csv", text);
+  EXPECT_EQ(io::read_column(path, "c9999"), (std::vector<double>{-2.5, -2.5}));
+  io::ReadOptions o;
+  o.column_spec = "c0";
+  expect_bits_equal(streamed(path, o), std::vector<double>(2, 0.12345678901234567890123456789012345678901234567));
+  EXPECT_EQ(io::parse_text_table(text, "m").column("c9999"), (std::vector<double>{-2.5, -2.5}));
+}

@@ -30,6 +30,7 @@ struct SweepArgs {
   std::string set;
   std::string plant;
   std::uint64_t seed = 1;
+  int learning_periods = ExperimentOptions{}.learning_periods;
   unsigned jobs = 0;
   std::string out;
   std::string report;
@@ -116,6 +117,7 @@ int run_sweep_command(const SweepArgs& a) {
 
   SweepOptions o;
   o.seed = a.seed;
+  o.learning_periods = a.learning_periods;
   o.jobs = a.jobs;
   for (const auto& e : a.experiments) {
     if (e == "all") {
@@ -188,6 +190,9 @@ void add_sweep(CLI::App& app, Action& action) {
   cmd->add_option("--plant", args->plant, "Base rig parameters (JSON; default: the nominal rig)");
   cmd->add_option("--seed", args->seed, "Seed of the rig's noise in every run (default 1)")
       ->check(non_negative_integer());
+  cmd->add_option("--learning-periods", args->learning_periods,
+                  "Periods of the learning variant in every run (0: no learning runs; default as experiment)")
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
       ->check(non_negative_integer())
       ->check(CLI::Range(1u, 1024u));

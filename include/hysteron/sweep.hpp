@@ -101,6 +101,7 @@ struct SweepOptions {
   PamRigParams base{};                    // the nominal rig of the sweep
   std::vector<PlantVariant> variants;     // the base rig itself is always run first, as "nominal"
   std::uint64_t seed = 1;                 // rig noise seed of every run
+  int learning_periods = ExperimentOptions{}.learning_periods;  // of every run (0: no learning runs)
   unsigned jobs = 0;                      // threads; 0 = std::thread::hardware_concurrency()
   std::function<void(const SweepProgress&)> progress;  // optional
   // What runs one experiment: run_experiment when empty (a test may pass a cheaper one;

@@ -385,6 +385,15 @@ SweepResult run_sweep(const SweepOptions& options) {
       throw Error(fmt::format("sweep: experiment '{}' given twice", name));
     r.experiments.push_back(name);
   }
+  {
+    ExperimentOptions eo;
+    eo.learning_periods = options.learning_periods;
+    try {
+      eo.validate();
+    } catch (const Error& e) {
+      throw Error(fmt::format("sweep: {}", e.what()));
+    }
+  }
   try {
     validate(options.base, "base rig");
   } catch (const Error& e) {
@@ -446,6 +455,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.name = run.experiment;
         eo.rig = r.variants[run.variant].rig;
         eo.seed = options.seed;
+        eo.learning_periods = options.learning_periods;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
         for (const auto& tr : er.runs) {
           SweepRunErrors e;

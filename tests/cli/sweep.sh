@@ -4,7 +4,7 @@
 # written; a tiny sweep (gpi-pid on the nominal rig and 35 kg, plus a regulator whose air
 # dynamics need more sub-steps than allowed, which fails at once) writes the CSV table, the
 # HTML page and one JSON document, records the failure and exits 2; a sweep whose only
-# variant is the nominal rig exits 0.
+# variant is the nominal rig exits 0. Learning runs are switched off (--learning-periods 0) for speed.
 # Usage: bash sweep.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 BIN=$1
@@ -39,6 +39,7 @@ expect_error "no variants" "no variants" "$BIN" sweep gpi-pid
 expect_error "unknown set" "--set worst: unknown set" "$BIN" sweep gpi-pid --set worst
 expect_error "jobs 0" "--jobs" "$BIN" sweep gpi-pid --vary load.mass=35 --jobs 0
 expect_error "jobs -1" "--jobs" "$BIN" sweep gpi-pid --vary load.mass=35 --jobs -1
+expect_error "learning periods" "--learning-periods" "$BIN" sweep gpi-pid --vary load.mass=35 --learning-periods 1001
 expect_error "mistyped option" "unknown option --vray (did you mean --vary?)" "$BIN" sweep gpi-pid --vray load.mass=35
 cat > "$T/grid_bad.json" <<'JSON'
 {"variants": [{"name": "heavy", "set": {"load.mass": 35}}, {"set": {"load.damping": 200}, "nmae": "x"}]}
@@ -59,7 +60,7 @@ ls -A "$T" | grep -q '^\.' && fail "temporary files left: $(ls -A "$T")"
 # the tiny sweep: 2 rigs run (nominal, 35 kg), one variant fails at construction
 printf '{"simulation": {"max_substeps": 1}}\n' > "$T/base.json"
 "$BIN" sweep gpi-pid --plant "$T/base.json" --vary load.mass=35 --vary regulator.sonic_conductance=1e-5 \
-  --jobs 2 --out "$T/sweep.csv" --report "$T/sweep.html" --json > "$T/sweep.json" 2> "$T/sweep.err"
+  --jobs 2 --learning-periods 0 --out "$T/sweep.csv" --report "$T/sweep.html" --json > "$T/sweep.json" 2> "$T/sweep.err"
 rc=$?
 [ $rc -eq 2 ] || fail "sweep with a failing variant: exit $rc, expected 2 ($(cat "$T/sweep.err"))"
 grep -q "1 of 3 run(s) failed" "$T/sweep.err" || fail "no failure summary on stderr: $(cat "$T/sweep.err")"
@@ -99,7 +100,7 @@ grep -q "hysteron sweep gpi-pid" "$T/sweep.html" || fail "the command line is no
 
 # only the nominal rig (a variant equal to it is the nominal row): exit 0, the text table
 printf '{"variants": [{"name": "same", "set": {"load.mass": 20}}]}\n' > "$T/grid_nominal.json"
-"$BIN" sweep gpi-pid --grid "$T/grid_nominal.json" --jobs 1 > "$T/nominal.txt" 2> "$T/nominal.err"
+"$BIN" sweep gpi-pid --grid "$T/grid_nominal.json" --jobs 1 --learning-periods 0 > "$T/nominal.txt" 2> "$T/nominal.err"
 rc=$?
 [ $rc -eq 0 ] || fail "nominal-only sweep: exit $rc ($(cat "$T/nominal.err"))"
 grep -q "variant 'same' is the nominal rig" "$T/nominal.txt" || fail "no note for the nominal repeat: $(cat "$T/nominal.txt")"

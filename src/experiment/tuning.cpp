@@ -186,9 +186,9 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   }
   if (found) contraction = learning_contraction(best, w, T);  // the bound as the library computes it
   if (!found)
-    throw Error(fmt::format("experiment: no learning filter contracts on the identified loop "
-                            "(theta = {} s, tau = {} s, period {} samples)",
-                            d.dead_time_s, d.lag_s, period));
+    throw Error(fmt::format("no learning filter contracts on the identified loop and its neighbours "
+                            "(theta = {:.3f} s, tau = {:.3f} s, mode {:.2f} Hz, damping {:.2f}; period {} samples)",
+                            d.dead_time_s, d.lag_s, d.mode_frequency_hz, d.mode_damping, period));
   return best;
 }
 

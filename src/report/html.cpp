@@ -15,7 +15,13 @@
 #include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 
+#include "common.hpp"
+
 namespace hysteron::report {
+
+using detail::now_utc;
+using detail::num;
+using detail::variant_color;
 
 namespace fs = std::filesystem;
 
@@ -38,20 +44,6 @@ std::string html_escape(std::string_view text) {
 namespace {
 
 using nlohmann::json;
-
-std::string now_utc() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[64];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", &tm);
-  return buf;
-}
-
-std::string num(double v, int digits = 4) {
-  if (!std::isfinite(v)) return "&ndash;";
-  return fmt::format("{:.{}g}", v, digits);
-}
 
 // One HTML document under construction.
 class Page {
@@ -167,14 +159,6 @@ std::vector<double> difference(const std::vector<double>& a, const std::vector<d
   std::vector<double> d(std::min(a.size(), b.size()));
   for (std::size_t i = 0; i < d.size(); ++i) d[i] = a[i] - b[i];
   return d;
-}
-
-const char* variant_color(const std::string& v) {
-  if (v == "compensated") return "#d62728";
-  if (v == "faithful") return "#1f77b4";
-  if (v == "baseline") return "#7f7f7f";
-  if (v == "learning") return "#9467bd";
-  return "#2ca02c";
 }
 
 json parse_json_file(const std::string& path) {

@@ -14,32 +14,15 @@
 #include "hysteron/report.hpp"
 #include "hysteron/sweep.hpp"
 
+#include "common.hpp"
+
 namespace hysteron::report {
 
+using detail::now_utc;
+using detail::num;
+using detail::variant_color;
+
 namespace {
-
-std::string now_utc() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[64];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", &tm);
-  return buf;
-}
-
-std::string num(double v, int digits = 4) {
-  if (!std::isfinite(v)) return "&ndash;";
-  return fmt::format("{:.{}g}", v, digits);
-}
-
-const char* kind_color(const std::string& k) {
-  if (k == "compensated") return "#d62728";
-  if (k == "faithful") return "#1f77b4";
-  if (k == "baseline") return "#7f7f7f";
-  if (k == "learning") return "#2ca02c";
-  if (k == "adaptive") return "#9467bd";
-  return "";
-}
 
 // The unit of a rig parameter in its JSON form (SI), for the plots' axes.
 std::string unit_of(const std::string& path) {
@@ -231,7 +214,7 @@ figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
           Series s;
           s.label = refs.size() > 1 ? fmt::format("{}, {}", k, refs[ri]) : k;
           s.style = "linespoints";
-          s.color = kind_color(k);
+          s.color = variant_color(k);
           s.dashed = ri > 0;
           for (const auto& [x, v] : points)
             if (const SweepRunErrors* t = r.find(e, v, refs[ri], k)) {

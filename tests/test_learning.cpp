@@ -81,8 +81,8 @@ TEST(Learning, InvalidParametersAreRejected) {
   EXPECT_THROW(IterativeLearning{p}, Error);
   p.gain = 0.5;
   p.lead = 50;
-  p.half_width = 30;
-  p.lookahead = 20;  // 50 + 30 + 20 = 100: not < period
+  p.half_width = 15;
+  p.lookahead = 20;  // 50 + 2 x 15 + 20 = 100: not < period
   EXPECT_THROW(IterativeLearning{p}, Error);
   p.lookahead = 19;
   EXPECT_NO_THROW(IterativeLearning{p});
@@ -160,6 +160,29 @@ TEST(Learning, ContractionBoundPredictsConvergence) {
   EXPECT_GT(learning_contraction(bad, w, T), 1.0);
   const std::vector<double> rb = run_loop(bad, a, delay, 60);
   EXPECT_GT(rb.back(), rb.front());  // the high frequencies grow
+}
+
+// The widest window the parameters allow (lead + 2h + lookahead = period - 1) wraps around the
+// period once on each side: every correction stays finite and bounded by the errors' bound
+// (L <= 1, |e| <= 1, Q sums to 1: |c| grows by at most L per period). Under ASan this also checks
+// that no index leaves the buffers (a window wider than half the period overflowed them).
+TEST(Learning, WidestWindowStaysInsideThePeriod) {
+  LearningParams p;
+  p.period = 101;
+  p.gain = 0.5;
+  p.lead = 7;
+  p.half_width = 42;
+  p.lookahead = 9;  // 7 + 84 + 9 = 100
+  IterativeLearning ilc(p);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < 12 * p.period; ++k) {
+    const double c0 = ilc.correction(0), c1 = ilc.correction(p.lookahead);
+    ASSERT_TRUE(std::isfinite(c0) && std::isfinite(c1)) << "sample " << k;
+    worst = std::max({worst, std::abs(c0), std::abs(c1)});
+    ilc.step(std::sin(0.9 * static_cast<double>(k)));
+  }
+  EXPECT_LE(worst, 0.5 * 12 + 1e-9);
+  EXPECT_GT(worst, 0.0);
 }
 
 TEST(Learning, NonFiniteErrorsAreCountedNotLearned) {

@@ -30,7 +30,7 @@ struct LearningParams {
   std::size_t half_width = 0;   // h: binomial Q-filter of order 2h (0: no filter)
   std::size_t lookahead = 0;    // largest `ahead` of correction() (e.g. the loop's preview)
   double max_correction = std::numeric_limits<double>::infinity();  // |c| limit, > 0
-  // Throws hysteron::Error naming the field; also when lead + half_width + lookahead >= period.
+  // Throws hysteron::Error naming the field; also when lead + 2 half_width + lookahead >= period.
   void validate() const;
 };
 

@@ -17,10 +17,12 @@ void LearningParams::validate() const {
   if (!(max_correction > 0.0))
     throw Error(detail::format("learning.max_correction = {}: must be > 0", max_correction));
   if (half_width > 10000) throw Error(detail::format("learning.half_width = {}: must be <= 10000", half_width));
+  // the filter's window (2h + 1 samples) plus the lead and the lookahead must fit in one period,
+  // so that every index of the update wraps around at most once
   if (lead >= period || half_width >= period || lookahead >= period ||
-      lead + half_width + lookahead >= period)
-    throw Error(detail::format("learning: lead + half_width + lookahead = {} + {} + {} must be < period = {} samples",
-                               lead, half_width, lookahead, period));
+      lead + 2 * half_width + lookahead >= period)
+    throw Error(detail::format("learning: lead + 2 half_width + lookahead = {} + 2 x {} + {} must be < period = {} "
+                               "samples", lead, half_width, lookahead, period));
 }
 
 double binomial_response(std::size_t half_width, double w) noexcept {

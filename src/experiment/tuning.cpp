@@ -145,7 +145,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   best.gain = 0.5;
   best.lookahead = lead;
   contraction = std::numeric_limits<double>::infinity();
-  const std::size_t budget = period > lead + 2 ? period - lead - 2 : 0;  // lead + d + h < period
+  const std::size_t budget = period > lead + 2 ? period - lead - 2 : 0;  // lead + d + 2h < period
   const std::size_t max_shift = std::min<std::size_t>(budget / 2, static_cast<std::size_t>(std::lround(0.5 / tc)));
   bool found = false;
   // log cos^2(w/2) per grid point: |Q(w)| = exp(h * lc[l])
@@ -167,7 +167,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
         worst[l % kGrid] = std::max(worst[l % kGrid], std::isfinite(a) ? a : 1e300);
       }
       // smallest half-width (widest band) that contracts with a 2 % margin
-      for (std::size_t h = 0; shift + h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
+      for (std::size_t h = 0; shift + 2 * h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
         if (found && h > best.half_width) break;
         double rho = 0.0;
         for (std::size_t l = 0; l < kGrid; ++l)

@@ -77,6 +77,15 @@ TEST(FuzzRegression, MatCharVariableWithCorruptDataSizeIsRefusedBeforeMatioAlloc
   EXPECT_TRUE(has(error_of([&] { io::read_column(path, "x"); }), "variable #3"));
 }
 
+// A function-handle variable (class 16) of size 67108865 x 4 in 48 bytes: matio allocated 32 bytes
+// per element (2 GB) while listing the variables (found by the CI's 25 s fuzz_mat run).
+TEST(FuzzRegression, MatFunctionClassSizedBeyondTheFileIsRefused) {
+  const std::string path = regression("mat/function-class-declares-67M-elements.mat");
+  const std::string msg = error_of([&] { io::read_table(path); });
+  EXPECT_TRUE(has(msg, "variable \"c\": truncated or inconsistent: a variable of class 16 and size 67108865x4")) << msg;
+  EXPECT_TRUE(has(msg, "truncated or inconsistent")) << msg;
+}
+
 // A MAT v4 sparse matrix stored as 855638017 x 0: matio sized it by the rows (3.4 GB).
 TEST(FuzzRegression, MatV4SparseWithoutItsThreeColumnsIsRefused) {
   const std::string path = regression("mat/v4-sparse-0-columns.mat");

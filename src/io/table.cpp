@@ -635,7 +635,11 @@ void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t 
                                 ir.bytes, jc.bytes, dims_txt, nzmax));
       return;
     }
-    default:  // function handles, opaque objects (tables, strings): matio does not read their data
+    default:  // function handles, opaque objects (tables, strings), unknown classes: matio does not
+              // read their data, but sizes some of them by their dimensions (8+ bytes per element)
+      if (numel > s.n / 8)
+        throw Error(fmt::format("{}: truncated or inconsistent: a variable of class {} and size {} in {} bytes", where,
+                                cls, dims_txt, s.n));
       return;
   }
 }

@@ -20,6 +20,7 @@
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/table.hpp"
+#include "hysteron/io/names.hpp"
 
 namespace {
 // SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
@@ -30,25 +31,12 @@ extern "C" void on_fatal_signal(int sig) {
   std::raise(sig);
 }
 
-// Edit distance (insertions, deletions, substitutions, adjacent swaps), for "did you mean".
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i)
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-    }
-  return d[a.size()][b.size()];
-}
-
 // " (did you mean X?)" for the closest candidate within a third of the word's length.
 std::string suggestion(std::string_view word, const std::vector<std::string>& candidates) {
   std::string best;
   std::size_t best_d = std::max<std::size_t>(1, word.size() / 3) + 1;
   for (const std::string& c : candidates) {
-    const std::size_t dist = edit_distance(word, c);
+    const std::size_t dist = hysteron::io::edit_distance(word, c);
     if (dist < best_d) best_d = dist, best = c;
   }
   return best.empty() ? std::string() : fmt::format(" (did you mean {}?)", best);

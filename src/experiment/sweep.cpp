@@ -21,6 +21,7 @@
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/names.hpp"
 
 namespace hysteron {
 
@@ -45,19 +46,6 @@ std::vector<std::string_view> split(std::string_view s, char sep) {
     start = p + 1;
   }
   return out;
-}
-
-// Levenshtein distance with adjacent swaps.
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i)
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-    }
-  return d[a.size()][b.size()];
 }
 
 std::string last_component(std::string_view path) {
@@ -167,7 +155,7 @@ void check_parameter_path(std::string_view path, std::string_view where) {
   const std::size_t limit = std::max<std::size_t>(2, path.size() / 3);
   const std::string leaf = last_component(path);
   for (const auto& p : paths) {
-    const std::size_t d = edit_distance(path, p);
+    const std::size_t d = io::edit_distance(path, p);
     if (d <= limit || last_component(p) == leaf) close.emplace_back(d, p);
   }
   std::sort(close.begin(), close.end());
@@ -378,7 +366,7 @@ SweepResult run_sweep(const SweepOptions& options) {
       for (const auto& k : known) { list += (list.empty() ? "" : ", "); list += k; }
       std::string hint;
       for (const auto& k : known)
-        if (edit_distance(name, k) <= std::max<std::size_t>(2, name.size() / 3)) hint = fmt::format(" (did you mean {}?)", k);
+        if (io::edit_distance(name, k) <= std::max<std::size_t>(2, name.size() / 3)) hint = fmt::format(" (did you mean {}?)", k);
       throw Error(fmt::format("sweep: unknown experiment '{}'{}; experiments: {}", name, hint, list));
     }
     if (std::find(r.experiments.begin(), r.experiments.end(), name) != r.experiments.end())

@@ -9,6 +9,10 @@
 // mpi-asym: no closed form; each sample solves f(x) = y exactly for the
 // current operator state, with f strictly increasing, by safeguarded Newton
 // steps inside a shrinking bracket (to machine precision, not an approximation).
+// preisach, kp, bouc-wen, rate-pi: the same by bracketing on the kernel's output for
+// the next input (Illinois false position with bisection steps, to machine precision).
+// The preisach output jumps where relays switch: an output inside a jump gives the
+// input at the jump (the smallest input whose output reaches it).
 //
 // Saturation: an output beyond the reachable range gives the nearest input
 // limit (never NaN, never outside the limits); the inverse's state then
@@ -42,7 +46,7 @@ class Inverse {
   const Structure<double>& structure() const noexcept { return s_; }
   // The input limits the inverse saturates at (raw input units).
   const Limits& limits() const noexcept { return lim_raw_; }
-  bool analytical() const noexcept { return !s_.asymmetric; }
+  bool analytical() const noexcept { return !s_.asymmetric && !kernel_; }
 
   // Virgin state (matches Model::reset()).
   void reset() noexcept;
@@ -70,6 +74,7 @@ class Inverse {
  private:
   double step_analytical(double y) noexcept;
   double step_numerical(double y) noexcept;
+  double step_kernel(double y) noexcept;
   double dead_zone_inverse(double y) const noexcept;
   double forward_tentative(double x, double* dfdx) const noexcept;
 
@@ -87,7 +92,8 @@ class Inverse {
   double v_prev_ = 0.0;
   // dead-zone inverse tables: breakpoints and slopes (positive and negative side)
   std::vector<double> zp_, dp_, sp_, zn_, dn_, sn_;
-  // numerical inverse: forward operator state
+  // numerical inverse: forward operator state (PI family) or the kind's kernel
+  detail::KernelCopy kernel_;
   std::vector<double> y_;
   double x_ = 0.0;
   bool saturated_ = false;

@@ -30,6 +30,7 @@
 // exactly per sample by monotone bracketing (see inverse.hpp).
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -129,10 +130,91 @@ struct MpiAsymParams {
   UnitsMap units;
 };
 
-using ModelParams = std::variant<PiParams, GpiParams, MpiDeadzoneParams, MpiAsymParams>;
+// ---- kinds beyond the PI family (docs/models.md, "Other model kinds") ----------------
+// They run on their own per-sample kernels (src/core/kernels.cpp); their exact inverse is
+// computed per sample by monotone bracketing (inverse.hpp). Model coordinates as above.
 
-// "pi", "gpi", "mpi-deadzone", "mpi-asym".
+// Preisach (relay hysterons) and Krasnosel'skii-Pokrovskii (ramp hysterons) on a
+// triangular grid over [lo, hi] (Mayergoyz 2003, ch. 1; Krasnosel'skii & Pokrovskii 1989):
+//   t_k = lo + k h,  h = (hi - lo) / levels,  k = 0..levels
+//   hysteron (i, j), 0 <= j <= i < levels: up at alpha_i = t_{i+1}, down at beta_j = t_j
+//   y = q x + sum_{j<=i} w_ij R_ij[x],   w stored row by row: w[i (i + 1) / 2 + j]
+// preisach: R_ij is the relay with outputs 0 / 1; its memory is the staircase of the
+//   Preisach plane (per row alpha_i the number of relays on), i.e. the wiping-out stack
+//   of input extrema quantised to the grid: a step costs O(levels).
+// kp: R_ij is the ramp play  max(s((x - t_i) / h), min(s((x - t_j) / h), R))  with
+//   s = clamp(., 0, 1): the relay with its jump spread over one grid cell (continuous
+//   output). A step costs O(levels^2).
+// Invertible (strictly increasing in x for every state) when q > 0 and every w_ij >= 0.
+struct PreisachGrid {
+  double q = 0.0;
+  double lo = 0.0;
+  double hi = 1.0;
+  int levels = 0;  // 1..max_levels
+  std::vector<double> w;
+  Limits input_limits;
+  UnitsMap units;
+};
+inline constexpr int max_preisach_levels = 200;
+struct PreisachParams : PreisachGrid {};
+struct KpParams : PreisachGrid {};
+
+// Bouc-Wen in its normalised form (Ikhouane & Rodellar 2007), integrated over the input
+// increment of each sample (rate-independent: only the sampled input path matters):
+//   y = kx x + kw w,   dw/dx = rho (1 - (sigma sgn(dx w) + 1 - sigma) |w|^n),  |w| <= 1
+// one explicit step per sample, w clamped to [-1, 1] (the bound of the exact solution).
+// rho > 0, sigma >= 0, 1 <= n <= 20. Invertible when kx > 0 and kw >= 0.
+struct BoucWenParams {
+  double kx = 1.0;
+  double kw = 0.0;
+  double rho = 1.0;
+  double sigma = 0.5;
+  double n = 1.0;
+  Limits input_limits;
+  UnitsMap units;
+};
+
+// Maxwell-slip: a spring k0 in parallel with elasto-slide elements (spring k_i in series
+// with a slider that slips at deflection delta_i; Lampaert et al. 2002):
+//   y = k0 x + sum_i k_i E_{delta_i}[x],   E_d[x] = x - F_d[x]  (stop = input - play)
+// exactly a PI with q = k0 + sum k_i, r_i = delta_i, p_i = -k_i (canonical_structure).
+// k_i >= 0, delta_i >= 0; invertible when k0 > 0.
+struct MaxwellSlipParams {
+  double k0 = 1.0;
+  std::vector<double> k;
+  std::vector<double> delta;
+  Limits input_limits;
+  UnitsMap units;
+};
+
+// Rate-dependent PI: plays whose thresholds grow with the filtered input rate
+// (after Al Janaideh et al. 2009, with a causal rate):
+//   r_i(k) = r_i (1 + c rate(k-1)),  rate(k) = rate(k-1) + dt / (tau + dt) (|x_k - x_{k-1}| / dt - rate(k-1))
+//   y = q x + sum_i p_i F_{r_i(k)}[x]
+// The thresholds of a sample are fixed before its input is known, so each sample is a
+// PI step and the inverse is exact. dt [s] is the sample time the model runs at.
+// c >= 0 [s per input unit], tau >= 0 [s], dt > 0, and c max(r_i) <= (tau + dt) / 2 (a
+// threshold moves slower than the input). Invertible when q > 0 and p_i >= 0.
+struct RatePiParams {
+  double q = 1.0;
+  std::vector<double> r;
+  std::vector<double> p;
+  double c = 0.0;
+  double tau = 0.0;
+  double dt = 1e-3;
+  Limits input_limits;
+  UnitsMap units;
+};
+
+using ModelParams = std::variant<PiParams, GpiParams, MpiDeadzoneParams, MpiAsymParams, PreisachParams, KpParams,
+                                 BoucWenParams, MaxwellSlipParams, RatePiParams>;
+
+// "pi", "gpi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip",
+// "rate-pi".
 std::string_view model_name(const ModelParams& params) noexcept;
+// True for the kinds that reduce to Structure (pi, gpi, mpi-deadzone, mpi-asym,
+// maxwell-slip); the others run on their own kernels.
+bool has_pi_structure(const ModelParams& params) noexcept;
 const Limits& input_limits(const ModelParams& params) noexcept;
 const UnitsMap& units_map(const ModelParams& params) noexcept;
 UnitsMap& units_map(ModelParams& params) noexcept;
@@ -222,7 +304,8 @@ inline T structure_step(const Structure<T>& s, const X& x, T* y, T* u_out = null
 }
 
 // Validates `params` and builds the canonical structure. Throws hysteron::Error
-// with a message naming the offending key (e.g. "gpi: alpha must be > 0").
+// with a message naming the offending key (e.g. "gpi: alpha must be > 0"), and for a
+// kind without PI structure (has_pi_structure false).
 Structure<double> canonical_structure(const ModelParams& params);
 
 // Forward-model state: operator outputs y_i and the envelope value u = gamma(x)
@@ -232,6 +315,26 @@ struct ModelState {
   double u = 0.0;
 };
 
+namespace detail {
+class Kernel;  // per-sample kernel of a kind without PI structure (src/core/kernels.hpp)
+struct KernelCopy {
+  std::unique_ptr<Kernel> p;
+  KernelCopy() = default;
+  explicit KernelCopy(std::unique_ptr<Kernel> k) noexcept;
+  KernelCopy(const KernelCopy& o);
+  KernelCopy(KernelCopy&&) noexcept;
+  KernelCopy& operator=(const KernelCopy& o);
+  KernelCopy& operator=(KernelCopy&&) noexcept;
+  ~KernelCopy();
+  Kernel* get() const noexcept { return p.get(); }
+  explicit operator bool() const noexcept { return static_cast<bool>(p); }
+};
+}  // namespace detail
+
+// Validates any kind's parameters (canonical_structure for the PI family, the kernel's
+// checks for the others). Throws hysteron::Error naming the key.
+void validate_model(const ModelParams& params);
+
 // A hysteresis model ready to run sample by sample.
 class Model {
  public:
@@ -239,6 +342,7 @@ class Model {
 
   const ModelParams& params() const noexcept { return params_; }
   std::string_view name() const noexcept { return model_name(params_); }
+  // The canonical structure (PI family; for the other kinds only `units` is set).
   const Structure<double>& structure() const noexcept { return s_; }
   std::size_t num_operators() const noexcept { return s_.r.size(); }
 
@@ -256,7 +360,10 @@ class Model {
   void simulate(std::span<const double> x, std::span<double> y);
   std::vector<double> simulate(std::span<const double> x);
 
-  const ModelState& state() const noexcept { return state_; }
+  // The state: operator outputs (PI family) or the kernel's state vector (the other
+  // kinds: preisach the relays on per row, kp the ramp outputs, bouc-wen [x, w],
+  // rate-pi [y_1..y_n, x, rate], all in model coordinates), and u.
+  const ModelState& state() const noexcept;
   double output() const noexcept { return out_; }
   std::size_t faults() const noexcept { return faults_; }
 
@@ -266,7 +373,8 @@ class Model {
   ModelParams params_;
   Structure<double> s_;
   FastEnvelope env_;  // gamma of the symmetric models (all but mpi-asym)
-  ModelState state_;
+  detail::KernelCopy kernel_;  // the kinds without PI structure
+  mutable ModelState state_;
   double out_ = 0.0;
   std::size_t faults_ = 0;
 };

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "hysteron/error.hpp"
+#include "kernels.hpp"
 #include "play_kernel.hpp"
 
 namespace hysteron {
@@ -32,7 +33,7 @@ void map_deviations(double q, const std::vector<double>& p, const double* d, dou
 }  // namespace
 
 Inverse::Inverse(ModelParams params, InverseOptions options)
-    : params_(std::move(params)), s_(canonical_structure(params_)) {
+    : params_(std::move(params)), s_(detail::structure_of(params_)), kernel_(detail::make_kernel(params_)) {
   const std::string_view name = model_name(params_);
   const Limits& ml = input_limits(params_);
   lim_.lo = std::isinf(options.input_limits.lo) ? ml.lo : options.input_limits.lo;
@@ -44,6 +45,18 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   const Limits raw = lim_;
   lim_ = Limits{std::isinf(lim_.lo) ? lim_.lo : um.to_model(lim_.lo), std::isinf(lim_.hi) ? lim_.hi : um.to_model(lim_.hi)};
 
+  if (kernel_) {
+    if (const std::string why = kernel_.get()->invertibility(); !why.empty())
+      throw Error(detail::format("{}: not invertible: {}", name, why));
+    if (!lim_.bounded())
+      throw Error(detail::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input (a "
+                                 "fitted model has them: its training input range)",
+                                 name));
+    lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : um.from_model(lim_.lo),
+                      std::isfinite(raw.hi) ? raw.hi : um.from_model(lim_.hi)};
+    reset();
+    return;
+  }
   const std::size_t n = s_.r.size();
   if (!(s_.q > 0))
     throw Error(detail::format("{}: not invertible: q (plus the weights of zero-threshold operators) = {} must be > 0, "
@@ -134,6 +147,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
 }
 
 void Inverse::reset() noexcept {
+  if (kernel_) kernel_.get()->reset();
   std::fill(xi_.begin(), xi_.end(), 0.0);
   std::fill(y_.begin(), y_.end(), 0.0);
   v_prev_ = 0.0;
@@ -144,6 +158,18 @@ void Inverse::reset() noexcept {
 
 void Inverse::reset(const ModelState& fs) {
   const std::string_view name = model_name(params_);
+  if (kernel_) {
+    detail::Kernel& k = *kernel_.get();
+    if (fs.y.size() != k.state_size())
+      throw Error(detail::format("{}: inverse start state has {} entries, the model's state has {}", name, fs.y.size(),
+                                 k.state_size()));
+    if (!std::isfinite(fs.u)) throw Error(detail::format("{}: inverse start state u is not finite", name));
+    k.set_state(fs.y.data());
+    x_ = std::clamp(fs.u, lim_.lo, lim_.hi);
+    saturated_ = false;
+    faults_ = 0;
+    return;
+  }
   const std::size_t n = s_.r.size();
   if (fs.y.size() != n)
     throw Error(detail::format("{}: inverse start state has {} operator outputs, the model has {}", name, fs.y.size(), n));
@@ -185,6 +211,12 @@ void Inverse::reset(const ModelState& fs) {
 
 ModelState Inverse::forward_state() const {
   ModelState fs;
+  if (kernel_) {
+    fs.y.resize(kernel_.get()->state_size());
+    kernel_.get()->get_state(fs.y.data());
+    fs.u = x_;
+    return fs;
+  }
   const std::size_t n = s_.r.size();
   if (s_.asymmetric) {
     fs.y = y_;
@@ -221,7 +253,8 @@ double Inverse::step(double y) noexcept {
     return input();
   }
   const double ym = s_.model_output(y);
-  const double xm = s_.asymmetric ? step_numerical(ym) : step_analytical(ym);
+  const double xm = kernel_ ? step_kernel(ym) : s_.asymmetric ? step_numerical(ym) : step_analytical(ym);
+  if (saturated_) return xm >= lim_.hi ? lim_raw_.hi : lim_raw_.lo;  // the limit itself, not a rounding of it
   return std::clamp(s_.units.from_model(xm), lim_raw_.lo, lim_raw_.hi);
 }
 
@@ -319,6 +352,55 @@ double Inverse::step_numerical(double y) noexcept {
   const double ua = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
   const double ud = envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x);
   for (std::size_t i = 0; i < s_.r.size(); ++i) y_[i] = ops::asymmetric_play<double>(ua, ud, s_.r[i], y_[i]);
+  x_ = x;
+  return x_;
+}
+
+double Inverse::step_kernel(double y) noexcept {
+  detail::Kernel& k = *kernel_.get();
+  double a = lim_.lo, b = lim_.hi;
+  const double fa = k.peek(a), fb = k.peek(b);
+  double x;
+  if (y >= fb) {
+    x = b;
+    saturated_ = y > fb;
+  } else if (y <= fa) {
+    x = a;
+    saturated_ = y < fa;
+  } else {
+    saturated_ = false;
+    // Bracket f(a) < y <= f(b) (f nondecreasing), narrowed first by the last input.
+    double ga = fa - y, gb = fb - y;   // true residuals at a and b
+    double wa = ga, wb = gb;           // Illinois weights
+    const double x0 = std::clamp(x_, a, b);
+    if (x0 > a && x0 < b) {
+      const double g = k.peek(x0) - y;
+      if (g < 0) a = x0, ga = wa = g; else b = x0, gb = wb = g;
+    }
+    int side = 0;
+    for (int it = 0; it < 300 && gb != 0.0; ++it) {
+      if (b - a <= 2 * kEps * std::max(std::abs(a), std::abs(b))) break;
+      double xn = it % 4 == 3 ? 0.5 * (a + b) : b - wb * (b - a) / (wb - wa);  // false position, every 4th a bisection
+      if (!(xn > a && xn < b)) xn = 0.5 * (a + b);
+      if (!(xn > a && xn < b)) break;  // no double between a and b
+      const double g = k.peek(xn) - y;
+      if (g < 0) {
+        a = xn;
+        ga = wa = g;
+        if (side == -1) wb *= 0.5;
+        side = -1;
+      } else {
+        b = xn;
+        gb = wb = g;
+        if (side == 1) wa *= 0.5;
+        side = 1;
+      }
+    }
+    // The smallest input reaching y to the bracket's resolution; a when it is closer
+    // (continuous kinds: both are within rounding of the solution).
+    x = -ga < gb && b - a <= 4 * kEps * std::max({std::abs(a), std::abs(b), 1e-300}) ? a : b;
+  }
+  k.step(x);
   x_ = x;
   return x_;
 }

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <type_traits>
 
 #include "hysteron/error.hpp"
+#include "kernels.hpp"
 #include "play_kernel.hpp"
 
 namespace hysteron {
@@ -18,6 +20,11 @@ struct NameVisitor {
   std::string_view operator()(const GpiParams&) const { return "gpi"; }
   std::string_view operator()(const MpiDeadzoneParams&) const { return "mpi-deadzone"; }
   std::string_view operator()(const MpiAsymParams&) const { return "mpi-asym"; }
+  std::string_view operator()(const PreisachParams&) const { return "preisach"; }
+  std::string_view operator()(const KpParams&) const { return "kp"; }
+  std::string_view operator()(const BoucWenParams&) const { return "bouc-wen"; }
+  std::string_view operator()(const MaxwellSlipParams&) const { return "maxwell-slip"; }
+  std::string_view operator()(const RatePiParams&) const { return "rate-pi"; }
 };
 
 void require_finite(double v, std::string_view model, std::string_view key) {
@@ -156,6 +163,33 @@ struct CanonicalVisitor {
     add_operators(s, m.r, m.p, "mpi-asym");
     return s;
   }
+  // y = k0 x + sum k_i (x - F_{delta_i}[x]):  q = k0 + sum k_i, r_i = delta_i, p_i = -k_i.
+  Structure<double> operator()(const MaxwellSlipParams& m) const {
+    Structure<double> s;
+    require_finite(m.k0, "maxwell-slip", "k0");
+    check_limits(m.input_limits, "maxwell-slip");
+    if (m.k.size() != m.delta.size())
+      throw Error(detail::format("maxwell-slip: k has {} entries but delta has {} (one slip deflection per element)",
+                                 m.k.size(), m.delta.size()));
+    std::vector<double> p(m.k.size());
+    s.q = m.k0;
+    for (std::size_t i = 0; i < m.k.size(); ++i) {
+      require_finite(m.k[i], "maxwell-slip", detail::format("k[{}]", i));
+      if (m.k[i] < 0) throw Error(detail::format("maxwell-slip: k[{}] = {} must be >= 0 (a spring stiffness)", i, m.k[i]));
+      s.q += m.k[i];
+      p[i] = -m.k[i];
+    }
+    for (std::size_t i = 0; i < m.delta.size(); ++i)
+      if (std::isfinite(m.delta[i]) && m.delta[i] < 0)
+        throw Error(detail::format("maxwell-slip: delta[{}] = {} must be >= 0 (a slip deflection)", i, m.delta[i]));
+    add_operators(s, m.delta, p, "maxwell-slip");
+    if (s.r.empty() && s.q == 0.0) throw Error("maxwell-slip: the model has no element and k0 = 0 (output is constant)");
+    return s;
+  }
+  template <class Other>
+  Structure<double> operator()(const Other&) const {
+    return {};  // kinds without PI structure: refused by canonical_structure
+  }
 };
 
 }  // namespace
@@ -219,6 +253,37 @@ struct AbsorbVisitor {
     scale_all(m.r, b);
     return m;
   }
+  // y = q x + sum w R[x] on the grid t_k:  t -> a t,  q -> (b / a) q,  w -> b w.
+  template <class G>
+    requires std::is_base_of_v<PreisachGrid, G>
+  ModelParams operator()(G m) const {
+    m.q *= b / a;
+    m.lo *= a;
+    m.hi *= a;
+    scale_all(m.w, b);
+    return m;
+  }
+  // w is unitless: kx -> (b / a) kx, kw -> b kw, rho -> rho / a.
+  ModelParams operator()(BoucWenParams m) const {
+    m.kx *= b / a;
+    m.kw *= b;
+    m.rho /= a;
+    return m;
+  }
+  ModelParams operator()(MaxwellSlipParams m) const {
+    m.k0 *= b / a;
+    scale_all(m.k, b / a);
+    scale_all(m.delta, a);
+    return m;
+  }
+  // the rate is in input units per second: c -> c / a.
+  ModelParams operator()(RatePiParams m) const {
+    m.q *= b / a;
+    scale_all(m.p, b / a);
+    scale_all(m.r, a);
+    m.c /= a;
+    return m;
+  }
 };
 
 }  // namespace
@@ -233,7 +298,16 @@ ModelParams absorb_scales(const ModelParams& params) {
   return out;
 }
 
+bool has_pi_structure(const ModelParams& params) noexcept {
+  return !(std::holds_alternative<PreisachParams>(params) || std::holds_alternative<KpParams>(params) ||
+           std::holds_alternative<BoucWenParams>(params) || std::holds_alternative<RatePiParams>(params));
+}
+
 Structure<double> canonical_structure(const ModelParams& params) {
+  if (!has_pi_structure(params))
+    throw Error(detail::format("{}: not a model of the Prandtl-Ishlinskii family (it has no play structure); this "
+                               "operation supports pi, gpi, mpi-deadzone, mpi-asym and maxwell-slip",
+                               model_name(params)));
   Structure<double> s = std::visit(CanonicalVisitor{}, params);
   check_units(units_map(params), model_name(params));
   s.units = units_map(params);
@@ -242,25 +316,61 @@ Structure<double> canonical_structure(const ModelParams& params) {
   return s;
 }
 
+namespace detail {
+KernelCopy::KernelCopy(std::unique_ptr<Kernel> k) noexcept : p(std::move(k)) {}
+KernelCopy::KernelCopy(const KernelCopy& o) : p(o.p ? o.p->clone() : nullptr) {}
+KernelCopy::KernelCopy(KernelCopy&&) noexcept = default;
+KernelCopy& KernelCopy::operator=(const KernelCopy& o) {
+  if (this != &o) p = o.p ? o.p->clone() : nullptr;
+  return *this;
+}
+KernelCopy& KernelCopy::operator=(KernelCopy&&) noexcept = default;
+KernelCopy::~KernelCopy() = default;
+}  // namespace detail
+
+Structure<double> detail::structure_of(const ModelParams& params) {
+  if (has_pi_structure(params)) return canonical_structure(params);
+  check_units(units_map(params), model_name(params));
+  Structure<double> s;
+  s.units = units_map(params);
+  s.inv_input_scale = 1.0 / s.units.input_scale;
+  s.inv_output_gain = 1.0 / s.units.output_gain;
+  return s;
+}
+
+void validate_model(const ModelParams& params) {
+  (void)detail::structure_of(params);
+  (void)detail::make_kernel(params);
+}
+
 Model::Model(ModelParams params)
-    : params_(std::move(params)), s_(canonical_structure(params_)), env_(Envelope{s_.asc_kind, s_.asc_c}) {
-  state_.y.assign(s_.r.size(), 0.0);
+    : params_(std::move(params)), s_(detail::structure_of(params_)), env_(Envelope{s_.asc_kind, s_.asc_c}),
+      kernel_(detail::make_kernel(params_)) {
+  state_.y.assign(kernel_ ? kernel_.get()->state_size() : s_.r.size(), 0.0);
+}
+
+const ModelState& Model::state() const noexcept {
+  if (kernel_) kernel_.get()->get_state(state_.y.data());
+  return state_;
 }
 
 void Model::reset() noexcept {
   std::fill(state_.y.begin(), state_.y.end(), 0.0);
+  if (kernel_) kernel_.get()->reset();
   state_.u = 0.0;
   out_ = 0.0;
   faults_ = 0;
 }
 
 void Model::reset(const ModelState& state) {
-  if (state.y.size() != s_.r.size())
-    throw Error(detail::format("{}: initial state has {} operator outputs, the model has {} operators", name(),
-                            state.y.size(), s_.r.size()));
+  const std::size_t n = state_.y.size();
+  if (state.y.size() != n)
+    throw Error(detail::format("{}: initial state has {} {}, the model has {}", name(), state.y.size(),
+                               kernel_ ? "entries" : "operator outputs", n));
   for (std::size_t i = 0; i < state.y.size(); ++i)
     if (!std::isfinite(state.y[i])) throw Error(detail::format("{}: initial state y[{}] is not finite", name(), i));
   if (!std::isfinite(state.u)) throw Error(detail::format("{}: initial state u is not finite", name()));
+  if (kernel_) kernel_.get()->set_state(state.y.data());
   std::copy(state.y.begin(), state.y.end(), state_.y.begin());
   state_.u = state.u;
   out_ = 0.0;
@@ -268,6 +378,15 @@ void Model::reset(const ModelState& state) {
 }
 
 void Model::reset_relaxed(double x0) noexcept {
+  if (kernel_) {
+    const double xm = s_.units.to_model(x0);
+    if (!std::isfinite(xm)) return;
+    kernel_.get()->reset_relaxed(xm);
+    state_.u = xm;
+    faults_ = 0;
+    out_ = 0.0;
+    return;
+  }
   const double u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), s_.units.to_model(x0));
   if (!std::isfinite(u)) return;
   std::fill(state_.y.begin(), state_.y.end(), u);
@@ -291,6 +410,11 @@ double Model::step(double x) noexcept {
     return out_;
   }
   const double xm = s_.to_model(x);
+  if (kernel_) {
+    state_.u = xm;
+    out_ = s_.units.output(kernel_.get()->step(xm));
+    return out_;
+  }
   const double m = s_.asymmetric ? structure_step<double>(s_, xm, state_.y.data(), &state_.u) : step_symmetric(xm, state_.y.data());
   out_ = s_.units.output(m);
   return out_;
@@ -303,7 +427,11 @@ void Model::simulate(std::span<const double> x, std::span<double> y) {
     if (!std::isfinite(x[k])) throw Error(detail::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
   double* yi = state_.y.data();
   const UnitsMap& um = s_.units;
-  if (s_.asymmetric) {
+  if (kernel_) {
+    detail::Kernel& k = *kernel_.get();
+    for (std::size_t i = 0; i < x.size(); ++i) y[i] = um.output(k.step(s_.to_model(x[i])));
+    if (!x.empty()) state_.u = s_.to_model(x.back());
+  } else if (s_.asymmetric) {
     for (std::size_t k = 0; k < x.size(); ++k) y[k] = um.output(structure_step<double>(s_, s_.to_model(x[k]), yi));
     if (!x.empty()) state_.u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), s_.to_model(x.back()));
   } else {

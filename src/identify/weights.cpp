@@ -149,11 +149,29 @@ Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, c
 ModelParams with_weights(const ModelParams& model, const Structure<double>& s, double q, const std::vector<double>& p) {
   return std::visit(
       [&](const auto& m) -> ModelParams {
-        auto out = m;
-        out.q = q;
-        out.r = s.r;
-        out.p = p;
-        return out;
+        using M = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<M, MaxwellSlipParams>) {
+          // q = k0 + sum k_i, p_i = -k_i (models.hpp)
+          auto out = m;
+          out.delta = s.r;
+          out.k.resize(p.size());
+          out.k0 = q;
+          for (std::size_t i = 0; i < p.size(); ++i) {
+            if (p[i] > 0)
+              throw Error(fmt::format("maxwell-slip: weight {} = {} > 0 has no spring (k_i = -p_i >= 0)", i, p[i]));
+            out.k[i] = -p[i];
+            out.k0 += p[i];
+          }
+          return out;
+        } else if constexpr (requires { m.q; m.r; m.p; } && !std::is_same_v<M, RatePiParams>) {
+          auto out = m;
+          out.q = q;
+          out.r = s.r;
+          out.p = p;
+          return out;
+        } else {
+          throw Error(fmt::format("{}: not linear in PI weights", model_name(m)));
+        }
       },
       model);
 }

@@ -271,6 +271,51 @@ struct ToJson {
     put_units(j, m.units);
     return j;
   }
+  json operator()(const PreisachParams& m) const { return grid(m); }
+  json operator()(const KpParams& m) const { return grid(m); }
+  json grid(const PreisachGrid& m) const {
+    json j;
+    j["q"] = m.q;
+    j["lo"] = m.lo;
+    j["hi"] = m.hi;
+    j["levels"] = m.levels;
+    j["w"] = number_array(m.w);
+    put_limits(j, m.input_limits);
+    put_units(j, m.units);
+    return j;
+  }
+  json operator()(const BoucWenParams& m) const {
+    json j;
+    j["kx"] = m.kx;
+    j["kw"] = m.kw;
+    j["rho"] = m.rho;
+    j["sigma"] = m.sigma;
+    j["n"] = m.n;
+    put_limits(j, m.input_limits);
+    put_units(j, m.units);
+    return j;
+  }
+  json operator()(const MaxwellSlipParams& m) const {
+    json j;
+    j["k0"] = m.k0;
+    j["k"] = number_array(m.k);
+    j["delta"] = number_array(m.delta);
+    put_limits(j, m.input_limits);
+    put_units(j, m.units);
+    return j;
+  }
+  json operator()(const RatePiParams& m) const {
+    json j;
+    j["q"] = m.q;
+    j["r"] = number_array(m.r);
+    j["p"] = number_array(m.p);
+    j["c"] = m.c;
+    j["tau"] = m.tau;
+    j["dt"] = m.dt;
+    put_limits(j, m.input_limits);
+    put_units(j, m.units);
+    return j;
+  }
 };
 
 std::string read_text(const std::string& path) {
@@ -400,8 +445,54 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
     m.input_limits = r.limits();
     m.units = units_of(r);
     params = std::move(m);
+  } else if (model == "preisach" || model == "kp") {
+    r.only({"schema", "model", "q", "lo", "hi", "levels", "w", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
+    PreisachGrid g;
+    g.q = r.number_or("q", 0.0);
+    g.lo = r.number("lo");
+    g.hi = r.number("hi");
+    g.levels = r.integer("levels");
+    if (g.levels < 1 || g.levels > max_preisach_levels)
+      r.fail("levels", fmt::format("expected an integer in 1..{}, got {}", max_preisach_levels, g.levels));
+    g.w = r.numbers("w", static_cast<long>(g.levels) * (g.levels + 1) / 2);
+    g.input_limits = r.limits();
+    g.units = units_of(r);
+    if (model == "kp") params = KpParams{g}; else params = PreisachParams{g};
+  } else if (model == "bouc-wen") {
+    r.only({"schema", "model", "kx", "kw", "rho", "sigma", "n", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
+    BoucWenParams m;
+    m.kx = r.number("kx");
+    m.kw = r.number("kw");
+    m.rho = r.number("rho");
+    m.sigma = r.number("sigma");
+    m.n = r.number("n");
+    m.input_limits = r.limits();
+    m.units = units_of(r);
+    params = std::move(m);
+  } else if (model == "maxwell-slip") {
+    r.only({"schema", "model", "k0", "k", "delta", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
+    MaxwellSlipParams m;
+    m.k0 = r.number("k0");
+    m.k = r.numbers("k");
+    m.delta = r.numbers("delta", static_cast<long>(m.k.size()));
+    m.input_limits = r.limits();
+    m.units = units_of(r);
+    params = std::move(m);
+  } else if (model == "rate-pi") {
+    r.only({"schema", "model", "q", "r", "p", "c", "tau", "dt", "input_limits", "input_origin", "input_scale", "output_offset", "output_gain"}, true);
+    RatePiParams m;
+    m.q = r.number("q");
+    m.r = r.numbers("r");
+    m.p = r.numbers("p", static_cast<long>(m.r.size()));
+    m.c = r.number("c");
+    m.tau = r.number("tau");
+    m.dt = r.number("dt");
+    m.input_limits = r.limits();
+    m.units = units_of(r);
+    params = std::move(m);
   } else {
-    top.fail("model", fmt::format("expected \"pi\", \"gpi\", \"mpi-deadzone\" or \"mpi-asym\", got \"{}\"", model));
+    top.fail("model", fmt::format("expected one of \"pi\", \"gpi\", \"mpi-deadzone\", \"mpi-asym\", \"preisach\", "
+                                  "\"kp\", \"bouc-wen\", \"maxwell-slip\", \"rate-pi\", got \"{}\"", model));
   }
   if (j.contains("units")) {
     const json& u = j["units"];

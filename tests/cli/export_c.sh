@@ -133,7 +133,7 @@ grep -q 'from the model file "<stdin>"' "$T/stdout.c" || fail "--model - not nam
 mkdir "$T/out"
 echo "precious" > "$T/out/keep.c"
 printf '{"model": "gpi2", "q": 1}' > "$T/kind.json"
-expect_fail "unknown kind" 1 'kind.json: key "model": expected "pi", "gpi", "mpi-deadzone" or "mpi-asym", got "gpi2"' -- "$BIN" export --model "$T/kind.json" --out "$T/out/new.c"
+expect_fail "unknown kind" 1 'kind.json: key "model": expected one of "pi", "gpi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip", "rate-pi", got "gpi2"' -- "$BIN" export --model "$T/kind.json" --out "$T/out/new.c"
 printf '{"model": "pi",\n  "r": [0.1,, 0.2], "p": [1, 1]}' > "$T/syntax.json"
 expect_fail "malformed JSON" 1 'syntax.json: not valid JSON: parse error at line 2, column' -- \
   "$BIN" export --model "$T/syntax.json" --out "$T/out/keep.c" --header "$T/out/new.h"

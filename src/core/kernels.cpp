@@ -1,0 +1,352 @@
+// Kernels of preisach, kp, bouc-wen and rate-pi (see kernels.hpp, models.hpp).
+#include "kernels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "format.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron::detail {
+
+namespace {
+
+void finite(double v, std::string_view model, std::string_view key) {
+  if (!std::isfinite(v)) throw Error(detail::format("{}: {} must be a finite number, got {}", model, key, v));
+}
+
+void check_limits(const Limits& l, std::string_view model) {
+  if (std::isnan(l.lo) || std::isnan(l.hi) || !(l.lo < l.hi))
+    throw Error(detail::format("{}: input_limits must satisfy lo < hi, got [{}, {}]", model, l.lo, l.hi));
+}
+
+inline double unit_ramp(double s) noexcept { return s <= 0.0 ? 0.0 : s >= 1.0 ? 1.0 : s; }
+
+// ---- Preisach grid (shared by the relay and the ramp kernels) ------------------------
+
+struct Grid {
+  double q = 0.0;
+  int n = 0;               // levels
+  double h = 1.0;          // cell width
+  std::vector<double> t;   // t_0..t_n
+  std::vector<double> w;   // row-major triangle, w[i (i + 1) / 2 + j]
+
+  Grid(const PreisachGrid& g, std::string_view model) {
+    finite(g.q, model, "q");
+    finite(g.lo, model, "lo");
+    finite(g.hi, model, "hi");
+    check_limits(g.input_limits, model);
+    if (g.levels < 1 || g.levels > max_preisach_levels)
+      throw Error(detail::format("{}: levels must be in 1..{}, got {}", model, max_preisach_levels, g.levels));
+    if (!(g.lo < g.hi)) throw Error(detail::format("{}: the grid needs lo < hi, got [{}, {}]", model, g.lo, g.hi));
+    n = g.levels;
+    const std::size_t nw = static_cast<std::size_t>(n) * static_cast<std::size_t>(n + 1) / 2;
+    if (g.w.size() != nw)
+      throw Error(detail::format("{}: w has {} entries; a grid of {} levels has levels (levels + 1) / 2 = {} hysterons",
+                                 model, g.w.size(), n, nw));
+    for (std::size_t k = 0; k < nw; ++k) finite(g.w[k], model, detail::format("w[{}]", k));
+    q = g.q;
+    h = (g.hi - g.lo) / n;
+    if (!(h > 0) || !std::isfinite(h)) throw Error(detail::format("{}: the grid cell (hi - lo) / levels = {} is not usable", model, h));
+    t.resize(static_cast<std::size_t>(n) + 1);
+    for (int k = 0; k <= n; ++k) t[static_cast<std::size_t>(k)] = g.lo + k * h;
+    t.back() = g.hi;
+    w = g.w;
+  }
+  static std::size_t row(int i) { return static_cast<std::size_t>(i) * static_cast<std::size_t>(i + 1) / 2; }
+  std::string invertibility() const {
+    if (!(q > 0)) return detail::format("q = {} must be > 0 (the output must rise between switching thresholds)", q);
+    for (std::size_t k = 0; k < w.size(); ++k)
+      if (w[k] < 0) return detail::format("w[{}] = {} must be >= 0 (a negative hysteron makes the output fall)", k, w[k]);
+    return {};
+  }
+};
+
+// Relays: per row i (alpha_i = t_{i+1}) the number b_i of relays on (those with the
+// lowest beta: a relay with a lower beta is switched off later); prefix sums of the
+// row's weights give the output in O(levels).
+class PreisachKernel final : public Kernel {
+ public:
+  explicit PreisachKernel(const PreisachParams& p) : g_(p, "preisach") {
+    const int n = g_.n;
+    off_.resize(static_cast<std::size_t>(n));
+    std::size_t o = 0;
+    for (int i = 0; i < n; ++i) {
+      off_[static_cast<std::size_t>(i)] = o;
+      o += static_cast<std::size_t>(i) + 2;
+    }
+    c_.assign(o, 0.0);
+    for (int i = 0; i < n; ++i) {
+      double s = 0.0;
+      for (int j = 0; j <= i; ++j) {
+        s += g_.w[Grid::row(i) + static_cast<std::size_t>(j)];
+        c_[off_[static_cast<std::size_t>(i)] + static_cast<std::size_t>(j) + 1] = s;
+      }
+    }
+    b_.assign(static_cast<std::size_t>(n), 0);
+    reset();
+  }
+  std::unique_ptr<Kernel> clone() const override { return std::make_unique<PreisachKernel>(*this); }
+  void reset() noexcept override { reset_relaxed(0.0); }
+  void reset_relaxed(double x) noexcept override {
+    const double* t = g_.t.data();
+    for (int i = 0; i < g_.n; ++i) {
+      if (t[i + 1] <= x) {
+        b_[static_cast<std::size_t>(i)] = i + 1;
+      } else {  // on iff (alpha + beta) / 2 <= x
+        const double v = 2 * x - t[i + 1];
+        b_[static_cast<std::size_t>(i)] = static_cast<int>(std::upper_bound(t, t + i + 1, v) - t);
+      }
+    }
+  }
+  // eval<false> writes nothing: the const_cast only shares the code with step().
+  double peek(double x) const noexcept override { return const_cast<PreisachKernel*>(this)->eval<false>(x); }
+  double step(double x) noexcept override { return eval<true>(x); }
+  std::size_t state_size() const noexcept override { return b_.size(); }
+  void get_state(double* out) const noexcept override {
+    for (std::size_t i = 0; i < b_.size(); ++i) out[i] = b_[i];
+  }
+  void set_state(const double* in) override {
+    for (std::size_t i = 0; i < b_.size(); ++i)
+      if (!(in[i] >= 0 && in[i] <= static_cast<double>(i + 1) && in[i] == std::floor(in[i])))
+        throw Error(detail::format("preisach: state[{}] = {} must be an integer count of relays on in 0..{}", i, in[i], i + 1));
+    for (std::size_t i = 0; i < b_.size(); ++i) b_[i] = static_cast<int>(in[i]);
+  }
+  std::string invertibility() const override { return g_.invertibility(); }
+
+ private:
+  template <bool Commit>
+  double eval(double x) noexcept {
+    const double* t = g_.t.data();
+    const int n = g_.n;
+    // rows with alpha_i = t_{i+1} <= x switch fully on; in the others the relays with
+    // beta_j = t_j >= x switch off (J = number of t_j < x).
+    const int up = static_cast<int>(std::upper_bound(t + 1, t + n + 1, x) - (t + 1));
+    const int lim = static_cast<int>(std::lower_bound(t, t + n, x) - t);
+    double s = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const int b = i < up ? i + 1 : std::min(b_[static_cast<std::size_t>(i)], lim);
+      if constexpr (Commit) b_[static_cast<std::size_t>(i)] = b;
+      s += c_[off_[static_cast<std::size_t>(i)] + static_cast<std::size_t>(b)];
+    }
+    return g_.q * x + s;
+  }
+
+  Grid g_;
+  std::vector<std::size_t> off_;
+  std::vector<double> c_;
+  std::vector<int> b_;
+};
+
+// Ramp hysterons: R_ij = max(s_i, min(s_j, R_ij)), s_k = clamp((x - t_k) / h, 0, 1).
+class KpKernel final : public Kernel {
+ public:
+  explicit KpKernel(const KpParams& p) : g_(p, "kp") {
+    y_.assign(g_.w.size(), 0.0);
+    s_.assign(static_cast<std::size_t>(g_.n), 0.0);
+    reset();
+  }
+  std::unique_ptr<Kernel> clone() const override { return std::make_unique<KpKernel>(*this); }
+  void reset() noexcept override { reset_relaxed(0.0); }
+  void reset_relaxed(double x) noexcept override {
+    const double* t = g_.t.data();
+    for (int i = 0; i < g_.n; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double lo = unit_ramp((x - t[i]) / g_.h), hi = unit_ramp((x - t[j]) / g_.h);
+        const double mid = unit_ramp((x - 0.5 * (t[i] + t[j])) / g_.h + 0.5);
+        y_[Grid::row(i) + static_cast<std::size_t>(j)] = std::clamp(mid, lo, hi);
+      }
+  }
+  // eval<false> writes only the scratch s_ (mutable in effect), never the state.
+  double peek(double x) const noexcept override { return const_cast<KpKernel*>(this)->eval<false>(x); }
+  double step(double x) noexcept override { return eval<true>(x); }
+  std::size_t state_size() const noexcept override { return y_.size(); }
+  void get_state(double* out) const noexcept override { std::copy(y_.begin(), y_.end(), out); }
+  void set_state(const double* in) override {
+    for (std::size_t k = 0; k < y_.size(); ++k)
+      if (!(in[k] >= 0 && in[k] <= 1)) throw Error(detail::format("kp: state[{}] = {} must be in [0, 1]", k, in[k]));
+    std::copy(in, in + y_.size(), y_.begin());
+  }
+  std::string invertibility() const override { return g_.invertibility(); }
+
+ private:
+  template <bool Commit>
+  double eval(double x) noexcept {
+    const double* t = g_.t.data();
+    const int n = g_.n;
+    const double ih = 1.0 / g_.h;
+    for (int k = 0; k < n; ++k) s_[static_cast<std::size_t>(k)] = unit_ramp((x - t[k]) * ih);
+    const double* w = g_.w.data();
+    double* y = y_.data();
+    double sum = 0.0;
+    std::size_t idx = 0;
+    for (int i = 0; i < n; ++i) {
+      const double si = s_[static_cast<std::size_t>(i)];
+      for (int j = 0; j <= i; ++j, ++idx) {
+        const double v = std::max(si, std::min(s_[static_cast<std::size_t>(j)], y[idx]));
+        if constexpr (Commit) y[idx] = v;
+        sum += w[idx] * v;
+      }
+    }
+    return g_.q * x + sum;
+  }
+
+  Grid g_;
+  std::vector<double> y_;
+  mutable std::vector<double> s_;  // scratch: s_k of the last evaluation
+};
+
+// ---- Bouc-Wen ---------------------------------------------------------------------
+
+class BoucWenKernel final : public Kernel {
+ public:
+  explicit BoucWenKernel(const BoucWenParams& p) : p_(p) {
+    for (auto [v, k] : {std::pair{p.kx, "kx"}, {p.kw, "kw"}, {p.rho, "rho"}, {p.sigma, "sigma"}, {p.n, "n"}})
+      finite(v, "bouc-wen", k);
+    check_limits(p.input_limits, "bouc-wen");
+    if (!(p.rho > 0)) throw Error(detail::format("bouc-wen: rho must be > 0, got {}", p.rho));
+    if (!(p.sigma >= 0)) throw Error(detail::format("bouc-wen: sigma must be >= 0 (otherwise w leaves [-1, 1]), got {}", p.sigma));
+    if (!(p.n >= 1 && p.n <= 20)) throw Error(detail::format("bouc-wen: n must be in [1, 20], got {}", p.n));
+  }
+  std::unique_ptr<Kernel> clone() const override { return std::make_unique<BoucWenKernel>(*this); }
+  void reset() noexcept override { reset_relaxed(0.0); }
+  void reset_relaxed(double x) noexcept override {
+    x_ = x;
+    w_ = 0.0;
+  }
+  double peek(double x) const noexcept override { return p_.kx * x + p_.kw * next_w(x); }
+  double step(double x) noexcept override {
+    w_ = next_w(x);
+    x_ = x;
+    return p_.kx * x + p_.kw * w_;
+  }
+  std::size_t state_size() const noexcept override { return 2; }
+  void get_state(double* out) const noexcept override {
+    out[0] = x_;
+    out[1] = w_;
+  }
+  void set_state(const double* in) override {
+    if (!std::isfinite(in[0])) throw Error(detail::format("bouc-wen: state[0] (last input) = {} must be finite", in[0]));
+    if (!(in[1] >= -1 && in[1] <= 1)) throw Error(detail::format("bouc-wen: state[1] = w = {} must be in [-1, 1]", in[1]));
+    x_ = in[0];
+    w_ = in[1];
+  }
+  std::string invertibility() const override {
+    if (!(p_.kx > 0)) return detail::format("kx = {} must be > 0", p_.kx);
+    if (!(p_.kw >= 0)) return detail::format("kw = {} must be >= 0", p_.kw);
+    return {};
+  }
+
+ private:
+  // One explicit step of dw/dx over dx = x - x_prev, clamped to the bound |w| <= 1.
+  double next_w(double x) const noexcept {
+    const double dx = x - x_;
+    const double a = w_ == 0.0 ? 0.0 : std::pow(std::abs(w_), p_.n);
+    const double c = dx * w_ > 0 ? 1.0 : 1.0 - 2.0 * p_.sigma;  // sigma sgn(dx w) + 1 - sigma
+    return std::clamp(w_ + p_.rho * dx * (1.0 - c * a), -1.0, 1.0);
+  }
+
+  BoucWenParams p_;
+  double x_ = 0.0, w_ = 0.0;
+};
+
+// ---- rate-dependent PI -----------------------------------------------------------
+
+class RatePiKernel final : public Kernel {
+ public:
+  explicit RatePiKernel(const RatePiParams& p) : p_(p) {
+    finite(p.q, "rate-pi", "q");
+    for (auto [v, k] : {std::pair{p.c, "c"}, {p.tau, "tau"}, {p.dt, "dt"}}) finite(v, "rate-pi", k);
+    check_limits(p.input_limits, "rate-pi");
+    if (p.r.size() != p.p.size())
+      throw Error(detail::format("rate-pi: r has {} entries but p has {} (one weight per threshold)", p.r.size(), p.p.size()));
+    if (p.r.size() > max_operators)
+      throw Error(detail::format("rate-pi: r has {} entries; at most {} operators are supported", p.r.size(), max_operators));
+    for (std::size_t i = 0; i < p.r.size(); ++i) {
+      finite(p.r[i], "rate-pi", detail::format("r[{}]", i));
+      finite(p.p[i], "rate-pi", detail::format("p[{}]", i));
+      if (p.r[i] < 0) throw Error(detail::format("rate-pi: r[{}] = {} must be >= 0", i, p.r[i]));
+    }
+    if (!(p.c >= 0)) throw Error(detail::format("rate-pi: c must be >= 0 (thresholds grow with the rate), got {}", p.c));
+    if (!(p.tau >= 0)) throw Error(detail::format("rate-pi: tau must be >= 0 [s], got {}", p.tau));
+    if (!(p.dt > 0)) throw Error(detail::format("rate-pi: dt must be > 0 [s], got {}", p.dt));
+    if (p.r.empty() && p.q == 0.0) throw Error("rate-pi: the model has no operator and q = 0 (output is constant)");
+    // A threshold must move slower than the input: r_i c d(rate) <= (tau + dt) / 2 per
+    // unit of input step, otherwise the output depends discontinuously on the past and
+    // an inverse amplifies rounding from sample to sample.
+    const double rmax = p.r.empty() ? 0.0 : *std::max_element(p.r.begin(), p.r.end());
+    if (p.c * rmax > 0.5 * (p.tau + p.dt))
+      throw Error(detail::format("rate-pi: c max(r) = {} must be <= (tau + dt) / 2 = {} (a threshold must move slower "
+                                 "than the input)", p.c * rmax, 0.5 * (p.tau + p.dt)));
+    y_.assign(p.r.size(), 0.0);
+    gain_ = p.dt / (p.tau + p.dt);
+  }
+  std::unique_ptr<Kernel> clone() const override { return std::make_unique<RatePiKernel>(*this); }
+  void reset() noexcept override { reset_relaxed(0.0); }
+  void reset_relaxed(double x) noexcept override {
+    std::fill(y_.begin(), y_.end(), x);
+    x_ = x;
+    rate_ = 0.0;
+  }
+  double peek(double x) const noexcept override {
+    const double f = 1.0 + p_.c * rate_;
+    double s = 0.0;
+    for (std::size_t i = 0; i < y_.size(); ++i) {
+      const double r = p_.r[i] * f;
+      s += p_.p[i] * std::max(x - r, std::min(x + r, y_[i]));
+    }
+    return p_.q * x + s;
+  }
+  double step(double x) noexcept override {
+    const double f = 1.0 + p_.c * rate_;
+    double s = 0.0;
+    for (std::size_t i = 0; i < y_.size(); ++i) {
+      const double r = p_.r[i] * f;
+      y_[i] = std::max(x - r, std::min(x + r, y_[i]));
+      s += p_.p[i] * y_[i];
+    }
+    rate_ += gain_ * (std::abs(x - x_) / p_.dt - rate_);
+    x_ = x;
+    return p_.q * x + s;
+  }
+  std::size_t state_size() const noexcept override { return y_.size() + 2; }
+  void get_state(double* out) const noexcept override {
+    std::copy(y_.begin(), y_.end(), out);
+    out[y_.size()] = x_;
+    out[y_.size() + 1] = rate_;
+  }
+  void set_state(const double* in) override {
+    for (std::size_t i = 0; i < y_.size() + 2; ++i)
+      if (!std::isfinite(in[i])) throw Error(detail::format("rate-pi: state[{}] = {} must be finite", i, in[i]));
+    if (!(in[y_.size() + 1] >= 0)) throw Error(detail::format("rate-pi: the rate state = {} must be >= 0", in[y_.size() + 1]));
+    std::copy(in, in + y_.size(), y_.begin());
+    x_ = in[y_.size()];
+    rate_ = in[y_.size() + 1];
+  }
+  std::string invertibility() const override {
+    if (!(p_.q > 0)) return detail::format("q = {} must be > 0", p_.q);
+    for (std::size_t i = 0; i < p_.p.size(); ++i)
+      if (p_.p[i] < 0)
+        return detail::format("p[{}] = {} must be >= 0 (with thresholds that change from sample to sample only "
+                              "nonnegative weights keep the output increasing)", i, p_.p[i]);
+    return {};
+  }
+
+ private:
+  RatePiParams p_;
+  std::vector<double> y_;
+  double x_ = 0.0, rate_ = 0.0, gain_ = 1.0;
+};
+
+}  // namespace
+
+std::unique_ptr<Kernel> make_kernel(const ModelParams& params) {
+  if (const auto* m = std::get_if<PreisachParams>(&params)) return std::make_unique<PreisachKernel>(*m);
+  if (const auto* m = std::get_if<KpParams>(&params)) return std::make_unique<KpKernel>(*m);
+  if (const auto* m = std::get_if<BoucWenParams>(&params)) return std::make_unique<BoucWenKernel>(*m);
+  if (const auto* m = std::get_if<RatePiParams>(&params)) return std::make_unique<RatePiKernel>(*m);
+  return nullptr;
+}
+
+}  // namespace hysteron::detail

@@ -1,0 +1,325 @@
+// The model kinds beyond the PI family (preisach, kp, bouc-wen, maxwell-slip, rate-pi):
+// each against an independent evaluation of its definition, exact inverses from
+// random states, model files, allocation-free steps, invalid parameters.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "alloc_counter.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/inverse.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/models.hpp"
+#include "temp_dir.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+std::vector<double> random_walk(std::mt19937_64& rng, std::size_t n, double lo, double hi) {
+  std::uniform_real_distribution<double> target(lo, hi);
+  std::uniform_int_distribution<int> len(2, 30);
+  std::vector<double> x;
+  double cur = 0.5 * (lo + hi);
+  while (x.size() < n) {
+    const double t = target(rng);
+    const int m = len(rng);
+    for (int k = 1; k <= m && x.size() < n; ++k) x.push_back(cur + (t - cur) * k / m);
+    cur = t;
+  }
+  return x;
+}
+
+template <class G>
+G random_grid(std::mt19937_64& rng, int levels, double lo, double hi) {
+  G g;
+  g.levels = levels;
+  g.lo = lo;
+  g.hi = hi;
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  g.q = 0.2 + u(rng);
+  g.w.resize(static_cast<std::size_t>(levels * (levels + 1) / 2));
+  for (double& v : g.w) v = u(rng) < 0.3 ? 0.0 : u(rng) / levels;
+  g.input_limits = {lo - 0.5, hi + 0.5};
+  return g;
+}
+
+// Every kind, random but invertible, with a units map that is not the identity.
+std::vector<ModelParams> random_models(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const UnitsMap um{0.3, 0.8, -1.0, -3.0};
+  std::vector<ModelParams> out;
+  auto pre = random_grid<PreisachParams>(rng, 12, -1.0, 1.0);
+  auto kp = random_grid<KpParams>(rng, 9, -1.2, 0.8);
+  BoucWenParams bw{0.4 + u(rng), 0.5 + u(rng), 2.0 + 3 * u(rng), 0.2 + u(rng), 1.0 + 2 * u(rng), {-2.0, 2.0}, {}};
+  MaxwellSlipParams ms;
+  ms.k0 = 0.3 + u(rng);
+  for (int i = 0; i < 6; ++i) {
+    ms.k.push_back(u(rng));
+    ms.delta.push_back(0.05 + 0.5 * u(rng));
+  }
+  ms.input_limits = {-2.0, 2.0};
+  RatePiParams rp;
+  rp.q = 0.3 + u(rng);
+  for (int i = 0; i < 6; ++i) {
+    rp.r.push_back(0.05 + 0.4 * u(rng));
+    rp.p.push_back(u(rng));
+  }
+  rp.tau = 0.01;
+  rp.dt = 1e-3;
+  rp.c = u(rng) * 0.5 * (rp.tau + rp.dt) / *std::max_element(rp.r.begin(), rp.r.end());
+  rp.input_limits = {-2.0, 2.0};
+  out = {pre, kp, bw, ms, rp};
+  for (auto& m : out) {
+    units_map(m) = um;
+    std::visit([](auto& k) { k.input_limits = {-1.5, 1.5}; }, m);  // raw units
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Kinds, NamesAndStructure) {
+  std::mt19937_64 rng(1);
+  const char* names[] = {"preisach", "kp", "bouc-wen", "maxwell-slip", "rate-pi"};
+  const auto models = random_models(rng);
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    EXPECT_EQ(model_name(models[k]), names[k]);
+    EXPECT_EQ(has_pi_structure(models[k]), k == 3) << names[k];
+    if (k != 3) EXPECT_THROW(canonical_structure(models[k]), Error);
+  }
+}
+
+// The staircase kernel against every relay simulated on its own.
+TEST(Kinds, PreisachMatchesRelaysSimulatedOneByOne) {
+  std::mt19937_64 rng(2);
+  auto g = random_grid<PreisachParams>(rng, 10, -1.0, 1.0);
+  Model m(g);
+  const int n = g.levels;
+  const double h = (g.hi - g.lo) / n;
+  std::vector<int> on(g.w.size());
+  // relaxed at 0: on iff (alpha + beta) / 2 <= 0 (and alpha <= 0 -> on)
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) {
+      const double a = g.lo + (i + 1) * h, b = g.lo + j * h;
+      on[static_cast<std::size_t>(i * (i + 1) / 2 + j)] = (a <= 0.0 || 0.5 * (a + b) <= 0.0) ? 1 : 0;
+    }
+  const auto x = random_walk(rng, 3000, -1.3, 1.3);
+  for (double xk : x) {
+    double y = g.q * xk;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double a = g.lo + (i + 1) * h, b = g.lo + j * h;
+        auto& s = on[static_cast<std::size_t>(i * (i + 1) / 2 + j)];
+        if (xk >= a) s = 1;
+        else if (xk <= b) s = 0;
+        y += g.w[static_cast<std::size_t>(i * (i + 1) / 2 + j)] * s;
+      }
+    ASSERT_NEAR(m.step(xk), y, 1e-12);
+  }
+}
+
+// Elasto-slide elements simulated as springs and sliders.
+TEST(Kinds, MaxwellSlipMatchesElastoSlideElements) {
+  std::mt19937_64 rng(3);
+  auto models = random_models(rng);
+  auto ms = std::get<MaxwellSlipParams>(models[3]);
+  ms.units = {};
+  Model m(ms);
+  std::vector<double> slider(ms.k.size(), 0.0);
+  for (double xk : random_walk(rng, 3000, -1.5, 1.5)) {
+    double f = ms.k0 * xk;
+    for (std::size_t i = 0; i < slider.size(); ++i) {
+      const double e = xk - slider[i];
+      if (e > ms.delta[i]) slider[i] = xk - ms.delta[i];
+      if (e < -ms.delta[i]) slider[i] = xk + ms.delta[i];
+      f += ms.k[i] * (xk - slider[i]);
+    }
+    ASSERT_NEAR(m.step(xk), f, 1e-12);
+  }
+}
+
+// One explicit step per sample against the ODE integrated finely (RK4): close when the
+// input moves little per sample, and w never leaves [-1, 1].
+TEST(Kinds, BoucWenFollowsItsDifferentialEquation) {
+  BoucWenParams p{0.5, 1.0, 4.0, 0.7, 1.5, {}, {}};
+  Model m(p);
+  auto dwdx = [&](double w, double dir) {
+    const double a = std::pow(std::abs(w), p.n);
+    const double s = dir * w > 0 ? 1.0 : -1.0;
+    return p.rho * (1.0 - (p.sigma * s + 1.0 - p.sigma) * a);
+  };
+  double w = 0.0, xp = 0.0, worst = 0.0;
+  for (int k = 1; k <= 8000; ++k) {
+    const double x = std::sin(2 * 3.141592653589793 * k / 2000.0);
+    const double dx = x - xp;
+    const int sub = 50;
+    const double hh = dx / sub, dir = dx >= 0 ? 1.0 : -1.0;
+    for (int s = 0; s < sub; ++s) {
+      const double k1 = dwdx(w, dir), k2 = dwdx(w + 0.5 * hh * k1, dir), k3 = dwdx(w + 0.5 * hh * k2, dir),
+                   k4 = dwdx(w + hh * k3, dir);
+      w += hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+    xp = x;
+    const double y = m.step(x);
+    worst = std::max(worst, std::abs(y - (p.kx * x + p.kw * w)));
+    ASSERT_LE(std::abs(m.state().y[1]), 1.0);
+  }
+  EXPECT_LT(worst, 0.01);  // first-order in the step: 0.003 of an input span of 2 per sample
+}
+
+// With c = 0 the rate-dependent PI is the classical PI; with c > 0 a fast cycle has
+// a wider loop than a slow one.
+TEST(Kinds, RatePiReducesToPiAndWidensWithRate) {
+  RatePiParams rp;
+  rp.q = 0.5;
+  rp.r = {0.1, 0.2, 0.3};
+  rp.p = {0.3, 0.2, 0.1};
+  rp.dt = 1e-3;
+  rp.tau = 0.2;
+  Model a(rp), b(PiParams{rp.q, rp.r, rp.p, {}, {}});
+  std::mt19937_64 rng(4);
+  for (double xk : random_walk(rng, 2000, -1, 1)) ASSERT_NEAR(a.step(xk), b.step(xk), 1e-12);
+  rp.c = 0.03;  // thresholds x1.4 at 2 Hz (mean rate 4 / s)
+  auto width = [&](double hz) {  // loop area over the last of 3 periods
+    Model m(rp);
+    double area = 0, xp = 0;
+    const int n = static_cast<int>(3.0 / (hz * rp.dt));
+    for (int k = 0; k < n; ++k) {
+      const double x = std::sin(2 * 3.141592653589793 * hz * k * rp.dt);
+      const double y = m.step(x);
+      if (k >= 2 * n / 3) area += y * (x - xp);
+      xp = x;
+    }
+    return std::abs(area);
+  };
+  EXPECT_GT(width(2.0), 1.05 * width(0.1));
+}
+
+TEST(Kinds, InverseRoundTripsFromRandomStates) {
+  for (int seed = 0; seed < 5; ++seed) {
+    std::mt19937_64 rng(100 + static_cast<unsigned>(seed));
+    for (const ModelParams& mp : random_models(rng)) {
+      SCOPED_TRACE(std::string(model_name(mp)));
+      Model fwd(mp);
+      // random state: drive the model, then start the inverse from its state
+      for (double xk : random_walk(rng, 500, -1.2, 1.4)) fwd.step(xk);
+      Inverse inv(mp);
+      inv.reset(fwd.state());
+      const auto x = random_walk(rng, 2000, -1.2, 1.4);
+      for (std::size_t k = 0; k < x.size(); ++k) {
+        const double y = fwd.step(x[k]);
+        const double xi = inv.step(y);
+        ASSERT_NEAR(xi, x[k], 1e-9) << "sample " << k;
+        ASSERT_FALSE(inv.saturated());
+      }
+      const ModelState a = fwd.state(), b = inv.forward_state();
+      ASSERT_EQ(a.y.size(), b.y.size());
+      for (std::size_t i = 0; i < a.y.size(); ++i) EXPECT_NEAR(a.y[i], b.y[i], 1e-9) << i;
+    }
+  }
+}
+
+TEST(Kinds, InverseSaturatesAtTheLimits) {
+  std::mt19937_64 rng(5);
+  for (const ModelParams& mp : random_models(rng)) {
+    SCOPED_TRACE(std::string(model_name(mp)));
+    Inverse inv(mp);
+    const double up = inv.step(units_map(mp).output_gain > 0 ? 1e6 : -1e6);
+    EXPECT_TRUE(inv.saturated());
+    EXPECT_EQ(up, inv.limits().hi);
+    const double down = inv.step(units_map(mp).output_gain > 0 ? -1e6 : 1e6);
+    EXPECT_EQ(down, inv.limits().lo);
+    EXPECT_EQ(inv.step(std::nan("")), down);
+    EXPECT_EQ(inv.faults(), 1u);
+  }
+}
+
+TEST(Kinds, StepsDoNotAllocate) {
+  std::mt19937_64 rng(6);
+  for (const ModelParams& mp : random_models(rng)) {
+    SCOPED_TRACE(std::string(model_name(mp)));
+    Model m(mp);
+    Inverse inv(mp);
+    const auto x = random_walk(rng, 500, -1, 1);
+    double sink = 0;
+    const std::size_t before = hysteron_test::allocations();
+    for (double xk : x) sink += inv.step(m.step(xk));
+    (void)m.state();
+    EXPECT_EQ(hysteron_test::allocations(), before);
+    EXPECT_TRUE(std::isfinite(sink));
+  }
+}
+
+TEST(Kinds, ModelFilesRoundTrip) {
+  hysteron::test::TempDir dir;
+  std::mt19937_64 rng(7);
+  for (const ModelParams& mp : random_models(rng)) {
+    SCOPED_TRACE(std::string(model_name(mp)));
+    const std::string path = dir.file("m.json");
+    io::write_model_file(path, mp);
+    const ModelParams back = io::read_model_file(path);
+    EXPECT_EQ(model_name(back), model_name(mp));
+    Model a(mp), b(back);
+    for (double xk : random_walk(rng, 400, -1, 1)) ASSERT_EQ(a.step(xk), b.step(xk));
+  }
+}
+
+TEST(Kinds, CopiesAreIndependent) {
+  std::mt19937_64 rng(8);
+  for (const ModelParams& mp : random_models(rng)) {
+    Model a(mp);
+    a.step(0.7);
+    Model b = a;
+    const double ya = a.step(-0.4), yb = b.step(-0.4);
+    EXPECT_EQ(ya, yb);
+    a.step(1.0);
+    EXPECT_NE(a.state().y, b.state().y) << model_name(mp);
+  }
+}
+
+TEST(Kinds, InvalidParametersNameTheKey) {
+  auto msg = [](const ModelParams& p) {
+    try {
+      Model m(p);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  PreisachParams g;
+  g.levels = 3;
+  g.w = {1, 2};
+  EXPECT_NE(msg(g).find("w has 2 entries"), std::string::npos) << msg(g);
+  g.w = {1, 2, 3, 4, 5, std::nan("")};
+  EXPECT_NE(msg(g).find("w[5]"), std::string::npos) << msg(g);
+  EXPECT_NE(msg(BoucWenParams{1, 1, 1, -0.1, 1, {}, {}}).find("sigma"), std::string::npos);
+  EXPECT_NE(msg(BoucWenParams{1, 1, 1, 0.5, 0.5, {}, {}}).find("n must be"), std::string::npos);
+  MaxwellSlipParams ms{1.0, {1.0, -1.0}, {0.1, 0.2}, {}, {}};
+  EXPECT_NE(msg(ms).find("k[1]"), std::string::npos) << msg(ms);
+  RatePiParams rp;
+  rp.r = {0.1};
+  rp.p = {1.0};
+  rp.dt = 0;
+  EXPECT_NE(msg(rp).find("dt must be > 0"), std::string::npos) << msg(rp);
+  rp.dt = 1e-3;
+  rp.c = 10;
+  EXPECT_NE(msg(rp).find("slower than the input"), std::string::npos) << msg(rp);
+  // invertibility: named by the inverse
+  KpParams kp;
+  kp.q = 1;
+  kp.levels = 2;
+  kp.w = {1, -0.5, 1};
+  kp.input_limits = {-1, 1};
+  try {
+    Inverse inv(kp);
+    ADD_FAILURE() << "a negative weight must make the kp inverse refuse";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("w[1]"), std::string::npos) << e.what();
+  }
+  kp.w = {1, 0.5, 1};
+  kp.input_limits = {};
+  EXPECT_THROW(Inverse{kp}, Error);  // no finite limits to bracket in
+}

@@ -71,6 +71,19 @@ class Inverse {
   // The equivalent forward-model state after the last step.
   ModelState forward_state() const;
 
+  // Replaces the weights of the model being inverted, in place (an adaptive inverse,
+  // docs/control.md): q and p_1..p_n of structure(), in its canonical order (thresholds
+  // increasing; the weights of zero-threshold operators are part of q). The forward
+  // operator state (the input history) is kept, so the next step inverts the model with
+  // the new weights from the same memory: the analytical inverse (pi, gpi, mpi-deadzone)
+  // recomputes Eq. 11's q', r'_i, p'_i and re-derives its operator state from the forward
+  // state; mpi-asym brackets with the new weights. Envelopes, thresholds, dead zones and
+  // the units map are unchanged. Never allocates, never throws: returns false and changes
+  // nothing if p has the wrong size, a weight is not finite, or the weights break the
+  // constructor's invertibility conditions (q > 0 and q + p_1 + ... + p_i > 0; mpi-asym:
+  // q > 0 and p_i >= 0), or the model is not of the PI family.
+  bool set_weights(double q, std::span<const double> p) noexcept;
+
  private:
   double step_analytical(double y) noexcept;
   double step_numerical(double y) noexcept;

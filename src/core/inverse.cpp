@@ -422,3 +422,59 @@ std::vector<double> Inverse::simulate(std::span<const double> y) {
 }
 
 }  // namespace hysteron
+
+namespace hysteron {
+
+bool Inverse::set_weights(double q, std::span<const double> p) noexcept {
+  const std::size_t n = s_.r.size();
+  if (!analytical() && !s_.asymmetric) return false;  // not a PI-family model
+  if (p.size() != n || !std::isfinite(q) || !(q > 0)) return false;
+  if (s_.asymmetric) {
+    for (double w : p)
+      if (!std::isfinite(w) || !(w >= 0)) return false;
+    s_.q = q;
+    std::copy(p.begin(), p.end(), s_.p.begin());  // y_ is the forward state already
+    return true;
+  }
+  double sum = q;
+  for (double w : p) {
+    sum += w;
+    if (!std::isfinite(w) || !(sum > 0)) return false;
+  }
+  // The forward state from the inverse's state with the old weights (as in forward_state()):
+  // d'_i = v - x'_i, u = q' v + sum p'_i x'_i, d = map(q', p')(d').
+  double* d = dev_.data();
+  double* sc = scratch_.data();
+  double u = qi_ * v_prev_;
+  for (std::size_t i = 0; i < n; ++i) {
+    d[i] = v_prev_ - xi_[i];
+    u += pi_[i] * xi_[i];
+  }
+  map_deviations(qi_, pi_, d, sc);  // sc = forward deviations u - y_i
+  // Eq. 11 with the new weights, O(n): r'_i = (q + P_{i-1}) r_i - R_{i-1}, with the
+  // running sums P_{i-1} = sum_{j<i} p_j and R_{i-1} = sum_{j<i} p_j r_j.
+  s_.q = q;
+  std::copy(p.begin(), p.end(), s_.p.begin());
+  qi_ = 1.0 / q;
+  double prev = q, rsum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    ri_[i] = prev * s_.r[i] - rsum;
+    const double cur = prev + p[i];
+    pi_[i] = -p[i] / (cur * prev);
+    rsum += p[i] * s_.r[i];
+    prev = cur;
+  }
+  // The inverse's state from the same forward state with the new weights (as in reset(state)):
+  // v = q u + sum p_i y_i, x'_i = v - map(q, p)(d)_i.
+  double v = q * u;
+  for (std::size_t i = 0; i < n; ++i) {
+    d[i] = sc[i];
+    v += p[i] * (u - d[i]);
+  }
+  map_deviations(q, s_.p, d, sc);
+  for (std::size_t i = 0; i < n; ++i) xi_[i] = v - sc[i];
+  v_prev_ = v;
+  return true;
+}
+
+}  // namespace hysteron

@@ -21,6 +21,8 @@ namespace {
 struct ExperimentArgs {
   std::string name;
   std::string plant;
+  std::string tracking_plant;
+  bool no_adaptive = false;
   std::uint64_t seed = 1;
   int learning_periods = 10;
   bool json = false;
@@ -33,6 +35,8 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   o.seed = a.seed;
   o.learning_periods = a.learning_periods;
   if (!a.plant.empty()) o.rig = load_rig_params(a.plant);
+  if (!a.tracking_plant.empty()) o.tracking_rig = load_rig_params(a.tracking_plant);
+  o.adaptive = !a.no_adaptive;
   return o;
 }
 
@@ -76,6 +80,10 @@ void add_experiment(CLI::App& app, Action& action) {
                   "Periods of the learning variant (0: no learning runs; default 10)")
       ->check(CLI::Range(0, 1000));
   cmd->add_option("--plant", args->plant, "Rig parameters (JSON; unknown keys are an error)");
+  cmd->add_option("--tracking-plant", args->tracking_plant,
+                  "Rig parameters of the tracking runs (JSON), if the rig changed after its identification on "
+                  "--plant (default: the same rig)");
+  cmd->add_flag("--no-adaptive", args->no_adaptive, "Do not run the adaptive variant");
   cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)")
       ->check(non_negative_integer());
   cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");
@@ -83,6 +91,7 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->callback([args, &action] {
     action = [args] {
       check_plant_not_output(args->plant, args->out);
+      check_plant_not_output(args->tracking_plant, args->out);
       const ExperimentResult r = run_experiment(options_from(*args));
       if (!args->out.empty()) {
         r.write(args->out);

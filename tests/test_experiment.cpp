@@ -156,9 +156,11 @@ TEST(Experiment, GpiPidEndToEnd) {
   EXPECT_LT(j["compensated"]["rms_error_mm"].get<double>(), j["baseline"]["rms_error_mm"].get<double>());
   EXPECT_LT(j["faithful"]["rms_error_mm"].get<double>(), j["baseline"]["rms_error_mm"].get<double>());
   // The variants, in the registry's order, with the learning run's periods.
-  EXPECT_EQ(j["variants"], nlohmann::json({"faithful", "compensated", "learning", "baseline"}));
+  EXPECT_EQ(j["variants"], nlohmann::json({"faithful", "compensated", "learning", "adaptive", "baseline"}));
   ASSERT_EQ(j["learning"]["periods"].size(), 2u);
-  EXPECT_EQ(experiments().front().variants, std::vector<std::string>({"faithful", "compensated", "learning", "baseline"}));
+  EXPECT_EQ(experiments().front().variants,
+            std::vector<std::string>({"faithful", "compensated", "learning", "adaptive", "baseline"}));
+  for (const char* k : {"max_error_mm", "mae_mm", "rms_error_mm"}) EXPECT_TRUE(j["adaptive"].contains(k)) << k;
   // Reproducible bit for bit with the same seed.
   const ExperimentResult r2 = run_experiment(o);
   ASSERT_EQ(r.runs.size(), r2.runs.size());

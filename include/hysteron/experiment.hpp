@@ -7,6 +7,9 @@
 //                 from the identification run of the rig at hand (docs/control.md),
 //   learning    - the compensated loop plus iterative learning control across
 //                 the periods of a periodic reference (docs/control.md),
+//   adaptive    - the compensated loop with the inverse model's weights
+//                 re-identified online by RLS with forgetting, kept invertible
+//                 (AdaptiveInverse below, docs/control.md),
 //   baseline    - the same loop without hysteresis compensation (the inverse
 //                 model replaced by a straight line fitted to the same data).
 // Each experiment is a spec in its own file under src/experiment/, registered
@@ -23,14 +26,18 @@
 //                cascade with fast switching valves (outer position loop with
 //                inverse feedforward, inner pressure loop driving PWM). The
 //                paper's text is truncated before its results: no published figures.
+#include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "hysteron/identify.hpp"
+#include "hysteron/inverse.hpp"
 #include "hysteron/plant.hpp"
 
 namespace hysteron {
@@ -52,6 +59,10 @@ struct ExperimentOptions {
   std::uint64_t seed = 1;        // rig noise seed; a run is reproducible bit for bit
   double control_period = 1e-3;  // controller and logging period [s]
   int learning_periods = 10;     // periods of the learning variant (0: no learning runs), 0..1000
+  bool adaptive = true;          // run the adaptive variant (where the experiment has one)
+  // The rig of the tracking runs if it differs from the identified one (a rig that changed
+  // after its identification: wear, temperature, another load); unset: the same rig.
+  std::optional<PamRigParams> tracking_rig;
   void validate() const;         // throws hysteron::Error
 };
 
@@ -146,5 +157,110 @@ struct ExperimentResult {
 
 // Throws hysteron::Error on invalid options or a diverging rig.
 ExperimentResult run_experiment(const ExperimentOptions& options);
+
+// The adaptive variant's inverse model (docs/control.md, "Adaptive inverse"): the weights
+// theta = (q, p_1..p_n) of a fitted PI-family model (pi, gpi, mpi-deadzone's PI part,
+// mpi-asym; thresholds, envelopes, dead zones and units map fixed) re-identified online from
+// measured (input, output) pairs by recursive least squares with forgetting,
+//   e = t - theta^T phi,  K = P phi / (lambda + phi^T P phi),  theta += K e,
+//   P = (P - K phi^T P) / lambda,  trace(P) <= trace(P_0)
+// (phi: the direct term and the operator outputs driven by the measured input; t: the
+// measured output in model coordinates, through the inverse of the dead zones), projected
+// after every update onto the invertibility constraints with a margin m > 0
+//   symmetric PI family: every cumulative slope q + p_1 + ... + p_i clipped at >= m,
+//   mpi-asym:            q >= m and p_i >= 0,
+// and handed to an exact inverse updated in place (Inverse::set_weights, no allocation).
+// Guard: the a-priori prediction errors of the adapted and of the fitted weights are
+// averaged with the same forgetting; while the adapted weights predict worse, the inverse
+// uses the fitted ones.
+struct AdaptiveInverseParams {
+  double lambda = 0.9998;  // forgetting factor in (0, 1]: memory about 1 / (1 - lambda) samples
+  // Margin m of the constraints in model units (cumulative slope dv/du); 0: derived from the
+  // prior record by the fit's rule, FitOptions::min_slope x span(v) / span(u), lowered to the
+  // fitted weights' own smallest cumulative slope (mpi-asym: q) so that they are feasible.
+  double margin = 0.0;
+  // Samples by which the output lags the input in the pairs (x_(k-delay), y_k) the RLS learns
+  // from (and in the prior record): the rig's response delay, so that the estimate does not
+  // widen the hysteresis to absorb a lag that the loop's preview compensates already.
+  std::size_t delay = 0;  // at most 100000
+  Limits input_limits;    // the inverse's (unset: the model's)
+  bool frozen = false;    // no update at all: the fitted model's inverse (for comparisons)
+  // Hand the weights to the inverse after every update (commit()); false: only when the
+  // caller calls commit() (the experiments: at the bottom of each loop of the reference).
+  bool commit_every_update = true;
+  void validate() const;  // throws hysteron::Error
+};
+
+class AdaptiveInverse {
+ public:
+  // prior_x, prior_y: the identification record (raw units, from rest) the model was fitted
+  // on. The covariance starts as that of an RLS with the same forgetting run over it,
+  // P_0 = (sum_k lambda^(N-1-k) phi_k phi_k^T + delta I)^-1, the weights at the fitted ones.
+  // Throws hysteron::Error for a model outside the PI family, a non-invertible model,
+  // an empty or non-finite prior record or invalid params.
+  AdaptiveInverse(const ModelParams& model, std::span<const double> prior_x, std::span<const double> prior_y,
+                  const AdaptiveInverseParams& params);
+
+  // One measured pair (raw units): a-priori errors of both weight sets, the RLS update, the
+  // projection, and (commit_every_update) commit(). Never allocates, never throws; a
+  // non-finite pair is ignored and counted in faults().
+  void update(double x, double y) noexcept;
+  // The guard, then the chosen weights (the projected estimate, or the fitted ones while the
+  // estimate predicts worse) into the inverse, in place. Never allocates, never throws.
+  void commit() noexcept;
+  // The inverse (raw units): the input that makes the model in use output y_desired.
+  double step(double y_desired) noexcept { return inverse_.step(y_desired); }
+
+  const Inverse& inverse() const noexcept { return inverse_; }
+  double margin() const noexcept { return margin_; }
+  double lambda() const noexcept { return p_.lambda; }
+  std::size_t delay() const noexcept { return p_.delay; }
+  // (q, p_1..p_n): the projected estimate, and the weights the inverse uses now.
+  std::span<const double> estimate() const noexcept { return theta_; }
+  std::span<const double> weights_in_use() const noexcept { return adapted_ ? theta_ : theta_fixed_; }
+  std::span<const double> fitted_weights() const noexcept { return theta_fixed_; }
+  // The smallest constraint value of the estimate: min_i (q + p_1 + ... + p_i), or for
+  // mpi-asym min(q, min_i p_i + m); >= margin() after every update.
+  double min_constraint() const noexcept;
+  bool adapted_in_use() const noexcept { return adapted_; }
+  // Forgetting sums sum_k lambda^(K-k) e_k^2 of the a-priori prediction errors (raw output units).
+  double adapted_error() const noexcept { return j_adapted_; }
+  double fitted_error() const noexcept { return j_fixed_; }
+  struct Counters {
+    std::size_t updates = 0;    // pairs learned from
+    std::size_t projected = 0;  // updates whose estimate the projection changed
+    std::size_t fallback = 0;   // updates after which the fitted weights were in use
+    std::size_t commits = 0;    // commit() calls
+    std::size_t switches = 0;   // changes between adapted and fitted weights
+    std::size_t rejected = 0;   // weights the inverse refused (0 unless the projection fails)
+  };
+  const Counters& counters() const noexcept { return n_; }
+  std::size_t faults() const noexcept { return faults_; }
+
+ private:
+  double regressor(double x) noexcept;  // fills phi_ (operators driven by x); returns 0
+  double dz(double v) const noexcept;          // dead-zone map (identity without)
+  double dz_inverse(double y) const noexcept;  // its inverse
+  void project() noexcept;
+  double distance(const std::vector<double>& theta) noexcept;
+  static constexpr int kSweeps = 4;  // coordinate sweeps of the projection per sample
+
+  AdaptiveInverseParams p_;
+  Structure<double> s_;
+  Inverse inverse_;
+  std::vector<double> y_;                    // operator outputs
+  // theta_: projected estimate (in use unless the guard says otherwise); theta_hat_: the
+  // unconstrained RLS estimate; P_, R_ = P_^-1: m x m, row-major.
+  std::vector<double> theta_, theta_hat_, theta_fixed_, clip_, w_, phi_, pphi_, P_, R_;
+  std::vector<double> zb_, zv_;              // dead-zone map: breakpoints and values there
+  std::vector<double> xs_;                   // the last delay + 1 inputs (ring)
+  std::size_t xi_ = 0, xn_ = 0;              // next slot, inputs held
+  double lo_slope_ = 1.0, hi_slope_ = 1.0;   // its slopes beyond the first / last breakpoint
+  double margin_ = 0.0, trace0_ = 0.0;
+  double j_adapted_ = 0.0, j_fixed_ = 0.0;
+  bool adapted_ = true;
+  Counters n_;
+  std::size_t faults_ = 0;
+};
 
 }  // namespace hysteron

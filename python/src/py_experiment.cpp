@@ -46,18 +46,23 @@ void bind_experiment(py::module_& m) {
         return l;
       },
       "The registered experiments: a list of dicts with name, title, summary, variants (e.g. faithful, "
-      "compensated, learning, baseline) and published_source (\"\" where the paper gives no figures).");
+      "compensated, learning, adaptive, baseline) and published_source (\"\" where the paper gives no figures).");
   m.def(
       "run_experiment",
       [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
-         const std::string& report_path, int learning_periods) {
+         const std::string& report_path, int learning_periods, bool adaptive, const py::object& tracking_plant) {
         ExperimentOptions o;
         o.name = name;
         o.seed = seed;
         o.learning_periods = learning_periods;
+        o.adaptive = adaptive;
         if (!plant.is_none())
           o.rig = py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
                                                  : rig_params_from_json(to_json(plant), "plant");
+        if (!tracking_plant.is_none())
+          o.tracking_rig = py::isinstance<py::str>(tracking_plant)
+                               ? load_rig_params(tracking_plant.cast<std::string>())
+                               : rig_params_from_json(to_json(tracking_plant), "tracking_plant");
         ExperimentResult r;
         {
           py::gil_scoped_release release;
@@ -106,10 +111,14 @@ void bind_experiment(py::module_& m) {
         return d;
       },
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
-      py::arg("report") = "", py::arg("learning_periods") = 10,
+      py::arg("report") = "", py::arg("learning_periods") = 10, py::arg("adaptive") = true,
+      py::arg("tracking_plant") = py::none(),
       R"doc(Run one of the registered experiments (experiment_names(): "gpi-pid", "mpi-openloop",
 "mpi-pwm") on the simulated rig. plant: rig parameter dict or JSON path (None: defaults).
 learning_periods: periods of the learning variant (0: none; 0..1000).
+adaptive: run the adaptive variant (online RLS of the inverse's weights).
+tracking_plant: rig parameters of the tracking runs if the rig changed after its
+identification (None: the identified rig).
 out: directory for the CSV/JSON outputs (as `hysteron experiment --out`);
 report: path of an HTML report. Returns a dict: "summary" (the CLI's --json
 object), "table" (text), "identification" (numpy series + train_end), "fit",

@@ -105,7 +105,7 @@ TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t t
 
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
                   std::size_t lead, bool periodic, const Law& law) {
-  PamRig rig(o.rig, seed);
+  PamRig rig(o.tracking_rig ? *o.tracking_rig : o.rig, seed);
   rig.reset();
   TrackingRun run;
   const std::size_t n = ref_m.size();

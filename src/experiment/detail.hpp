@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,6 +54,7 @@ struct Context {
   std::size_t lead;                // preview [samples] of the compensated variants
   PidParams pressure_loop;         // valve experiments: PI of the pressure loop (relay test)
   bool learning = false;           // the loop is built for the learning variant (robust PID rule)
+  const Reference* reference = nullptr;  // the reference the loop is built for
 };
 
 // One variant's loop, built fresh for each run.
@@ -59,10 +62,11 @@ struct Loop {
   Law law;
   std::string description;
   PidParams position;  // the position loop's PID (the learning variant's design uses it)
+  std::function<std::string()> note = {};  // after the run: a note for the result's messages ("" for none)
 };
 
 struct Variant {
-  std::string name;  // faithful | compensated | baseline
+  std::string name;  // faithful | compensated | adaptive | baseline
   bool preview = false;  // the feedforward is fed Context::lead samples ahead
   std::function<Loop(const Context&)> make;
 };
@@ -86,6 +90,32 @@ const Spec& mpi_openloop_spec();
 const Spec& mpi_pwm_spec();
 const std::vector<const Spec*>& registry();
 const Spec* find_spec(const std::string& name) noexcept;
+
+// ---- the adaptive variant (adaptive_loop.cpp, docs/control.md) ----------------------
+// The best fitted model as an AdaptiveInverse for the reference of `c`: forgetting factor
+// lambda = 1 - 1 / N with N the samples of one period of the reference (its whole length if
+// it is not periodic), the identification run as the prior, pressure limits 0..kPressureMax.
+// frozen: no adaptation (the compensated loop's inverse, for comparisons).
+std::shared_ptr<AdaptiveInverse> adaptive_inverse(const Context& c, bool frozen = false);
+// The adaptive loops' feedforward: learns from each measured pair (pressure, contraction),
+// hands the weights to the inverse (AdaptiveInverse::commit) at the bottom of each loop of the
+// previewed reference (falling, then not falling), and returns the pressure [MPa] that makes
+// the model in use reach preview_m. Why not every sample: handed over every sample (or every
+// second) the weights follow the branch being tracked and modulate the feedforward within a
+// loop; on the wide-band rig that was worse than the fixed inverse (docs/control.md).
+class AdaptiveFeedforward {
+ public:
+  explicit AdaptiveFeedforward(std::shared_ptr<AdaptiveInverse> a) : a_(std::move(a)) {}
+  double step(const Sample& s) noexcept;
+  const AdaptiveInverse& model() const noexcept { return *a_; }
+
+ private:
+  std::shared_ptr<AdaptiveInverse> a_;
+  double r1_ = std::numeric_limits<double>::quiet_NaN(), r2_ = std::numeric_limits<double>::quiet_NaN();
+};
+// "adaptive (REF): ..." counters and the guard's verdict, for the result's messages.
+std::string adaptive_note(const AdaptiveInverse& a, const std::string& reference);
+std::string adaptive_description(const AdaptiveInverse& a);
 
 // ---- shared machinery (common.cpp) ------------------------------------------------
 IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,

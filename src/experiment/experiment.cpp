@@ -70,6 +70,12 @@ void ExperimentOptions::validate() const {
                             control_period, rig.simulation.dt));
   if (learning_periods < 0 || learning_periods > 1000)
     throw Error(fmt::format("experiment: learning_periods = {} must be within 0..1000", learning_periods));
+  if (tracking_rig) {
+    hysteron::validate(*tracking_rig, "experiment: tracking rig");
+    if (!(control_period >= tracking_rig->simulation.dt))
+      throw Error(fmt::format("experiment: control_period = {} s is shorter than the tracking rig's dt = {} s",
+                              control_period, tracking_rig->simulation.dt));
+  }
   if (!find_spec(name)) {
     std::string list;
     for (const auto& n : experiment_names()) list += (list.empty() ? "" : ", ") + n;
@@ -152,16 +158,28 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // 4. tracking
   const std::uint64_t track_seed = o.seed + 104729;
   for (const Reference& ref : spec.references(tc)) {
+    Context rc = ctx;
+    rc.reference = &ref;
     for (const Variant& v : spec.variants) {
-      const Loop loop = v.make(ctx);
+      if (v.name == "adaptive" && !o.adaptive) continue;
+      Loop loop;
+      try {
+        loop = v.make(rc);
+      } catch (const Error& e) {
+        if (v.name != "adaptive") throw;
+        res.messages.push_back(fmt::format("adaptive ({}) not run: {}", ref.name, e.what()));
+        continue;
+      }
       TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law);
       run.variant = v.name;
       run.reference = ref.name;
       run.description = loop.description;
       run.errors = errors_of(run, ref.score_from, run.t.size());
       res.runs.push_back(std::move(run));
+      if (loop.note)
+        if (std::string note = loop.note(); !note.empty()) res.messages.push_back(std::move(note));
       if (v.name == spec.learning_on && o.learning_periods > 0 && ref.period > 0) {
-        Context lc = ctx;
+        Context lc = rc;
         lc.learning = true;
         try {
           TrackingRun lr = learning_run(o, lc, ref, v.make(lc), track_seed, res.messages);

@@ -3,6 +3,8 @@
 // Table 4; published Table 5.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "detail.hpp"
@@ -20,7 +22,30 @@ Law ff_pid_law(const ModelParams& model, double tc, const PidParams& pid) {
   return [c](const Sample& s) { return regulator(c->step(s.reference_m, s.preview_m, s.measured_m)); };
 }
 
+// The compensated loop (FeedforwardPidController) with the adaptive inverse as its feedforward.
+Loop adaptive_ff_pid(const Context& c, bool frozen) {
+  const PidParams pid = position_pid(c);
+  auto a = adaptive_inverse(c, frozen);
+  auto ff = std::make_shared<AdaptiveFeedforward>(a);
+  PidParams q = pid;
+  q.out_min = std::max(q.out_min, 0.0);
+  q.out_max = std::min(q.out_max, kPressureMax);
+  auto fb = std::make_shared<Pid>(q);
+  Law law = [ff, fb](const Sample& s) {
+    const double u_ff = ff->step(s);
+    const double u = fb->step(s.reference_m, s.measured_m, u_ff);
+    return regulator(std::isfinite(u) ? u : u_ff);
+  };
+  const std::string name = c.reference->name;
+  return Loop{std::move(law),
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID tuned by a relay test (Kp = {:.3g} MPa/m, "
+                          "Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
+                          c.result.lead_s * 1e3, adaptive_description(*a), pid.kp, pid.ki, pid.kd),
+              pid, [a, name] { return adaptive_note(*a, name); }};
+}
+
 }  // namespace
+
 
 const Spec& gpi_pid_spec() {
   static const Spec spec = [] {
@@ -56,6 +81,7 @@ const Spec& gpi_pid_spec() {
                                    c.result.lead_s * 1e3, pid.kp, pid.ki, pid.kd),
                        pid};
          }},
+        {"adaptive", true, [](const Context& c) { return adaptive_ff_pid(c, false); }},
         {"baseline", false,
          [](const Context& c) {
            const PidParams paper = gpi_paper_pid(c.tc, -kPressureMax, kPressureMax);

@@ -3,6 +3,8 @@
 // references 40/35/30 mm; published maximum errors 1.29 mm (triangle), 1.38 mm (sine).
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "detail.hpp"
@@ -29,7 +31,39 @@ OpenLoopParams published(double tc) {
   return p;
 }
 
+// The compensated loop (OpenLoopController with its PID position correction) with the
+// adaptive inverse as its feedforward.
+Loop adaptive_open_loop(const Context& c, bool frozen) {
+  OpenLoopParams p = published(c.tc);
+  if (c.learning) p.pressure_gain = 0.0;
+  p.position = position_pid(c);
+  auto a = adaptive_inverse(c, frozen);
+  auto ff = std::make_shared<AdaptiveFeedforward>(a);
+  PidParams q = p.position;
+  q.out_min = std::max(q.out_min, -kPressureMax);
+  q.out_max = std::min(q.out_max, kPressureMax);
+  auto position = std::make_shared<Pid>(q);
+  const bool use_position = p.position.kp != 0.0 || p.position.ki != 0.0 || p.position.kd != 0.0;
+  const double kp = p.pressure_gain;
+  Law law = [ff, position, use_position, kp](const Sample& s) {
+    double p_d = ff->step(s);
+    if (use_position) p_d = std::clamp(p_d + position->step(s.reference_m, s.measured_m), 0.0, kPressureMax);
+    double cmd = p_d;
+    if (std::isfinite(s.pressure_mpa)) cmd = p_d + kp * (p_d - s.pressure_mpa);
+    return regulator(cmd);
+  };
+  const std::string name = c.reference->name;
+  return Loop{std::move(law),
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; {} + PID position correction tuned by a relay "
+                          "test (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
+                          c.result.lead_s * 1e3, adaptive_description(*a),
+                          p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", p.position.kp, p.position.ki,
+                          p.position.kd),
+              p.position, [a, name] { return adaptive_note(*a, name); }};
+}
+
 }  // namespace
+
 
 const Spec& mpi_openloop_spec() {
   static const Spec spec = [] {
@@ -70,6 +104,7 @@ const Spec& mpi_openloop_spec() {
                                    p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", p.position.kp, p.position.ki, p.position.kd),
                        p.position};
          }},
+        {"adaptive", true, [](const Context& c) { return adaptive_open_loop(c, false); }},
         {"baseline", false,
          [](const Context& c) {
            return Loop{open_loop_law(c.result.baseline_model, published(c.tc)),

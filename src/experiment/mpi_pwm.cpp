@@ -3,6 +3,8 @@
 // loop driving PWM). The paper's text is truncated before its results.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "detail.hpp"
@@ -31,7 +33,40 @@ CascadeParams published(double tc) {
   return p;
 }
 
+// The compensated cascade (CascadePwmController) with the adaptive inverse as its feedforward.
+Loop adaptive_cascade(const Context& c, bool frozen) {
+  CascadeParams p = published(c.tc);
+  p.position = position_pid(c);
+  p.pressure = c.pressure_loop;
+  auto a = adaptive_inverse(c, frozen);
+  auto ff = std::make_shared<AdaptiveFeedforward>(a);
+  PidParams qx = p.position;
+  qx.out_min = std::max(qx.out_min, 0.0);
+  qx.out_max = std::min(qx.out_max, kPressureMax);
+  PidParams qp = p.pressure;
+  qp.out_min = std::max(qp.out_min, -1.0);
+  qp.out_max = std::min(qp.out_max, 1.0);
+  auto position = std::make_shared<Pid>(qx);
+  auto pressure = std::make_shared<Pid>(qp);
+  auto pwm = std::make_shared<PwmModulator>(p.pwm);
+  Law law = [ff, position, pressure, pwm](const Sample& s) {
+    const double u_ff = ff->step(s);
+    const double p_d = std::clamp(position->step(s.reference_m, s.measured_m, u_ff), 0.0, kPressureMax);
+    const double u = pressure->step(p_d, s.pressure_mpa);
+    return valves(std::clamp(pwm->step(u), -1.0, 1.0), p_d);
+  };
+  const std::string name = c.reference->name;
+  return Loop{std::move(law),
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by a relay test (Kp = {:.3g} "
+                          "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
+                          "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
+                          c.result.lead_s * 1e3, adaptive_description(*a), p.position.kp, p.position.ki,
+                          p.position.kd, p.pressure.kp, p.pressure.ki),
+              p.position, [a, name] { return adaptive_note(*a, name); }};
+}
+
 }  // namespace
+
 
 const Spec& mpi_pwm_spec() {
   static const Spec spec = [] {
@@ -75,6 +110,7 @@ const Spec& mpi_pwm_spec() {
                                    p.pressure.ki),
                        p.position};
          }},
+        {"adaptive", true, [](const Context& c) { return adaptive_cascade(c, false); }},
         {"baseline", false,
          [](const Context& c) {
            const CascadeParams p = published(c.tc);

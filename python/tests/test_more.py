@@ -153,10 +153,10 @@ def test_experiment_summary_keys():
         for v in ("compensated", "faithful", "baseline"):
             assert set(s[v]) >= {"max_error_mm", "mae_mm", "rms_error_mm"}
         assert s["published"]["max_error_mm"] == pytest.approx(2.659)
-        assert [x["variant"] for x in r["runs"]] == ["faithful", "compensated", "learning", "baseline"]
+        assert [x["variant"] for x in r["runs"]] == ["faithful", "compensated", "learning", "adaptive", "baseline"]
         assert r["runs"][0]["t"].shape == r["runs"][0]["measured_mm"].shape
         assert len(r["runs"][2]["periods"]) == 2 and r["runs"][0]["periods"] == []
-        assert s["variants"] == ["faithful", "compensated", "learning", "baseline"]
+        assert s["variants"] == ["faithful", "compensated", "learning", "adaptive", "baseline"]
         assert r["identification"]["train_end"] > 0
         assert open(os.path.join(d, "r.html")).read().count("<svg") == 7  # + the learning periods
         hysteron.write_report(os.path.join(d, "out"), os.path.join(d, "r2.html"))

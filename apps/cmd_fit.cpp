@@ -1,6 +1,6 @@
 // hysteron fit: identify a model from measured input/output columns.
 //
-//   hysteron fit --model auto|gpi|pi|mpi-deadzone|mpi-asym --data D.csv --input COL --output COL
+//   hysteron fit --model auto|gpi|pi|mpi-deadzone|mpi-asym|preisach|kp|bouc-wen|maxwell-slip|rate-pi --data D.csv --input COL --output COL
 //                [--n N] [--dead-zones J] [--train A:B] [--validate C:D] [--validate-data V.csv ...]
 //                [--time-column COL]  (ranges in seconds with a suffix s: --train 0s:20s; both sides
 //                                      of a range in the same unit)
@@ -19,6 +19,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -44,15 +45,15 @@ struct FitCliOptions {
   DataSelection sel;
   std::vector<std::string> validate_data;
   int n = 10, dead_zones = 4, starts = 2, threads = 0, max_iterations = 200;
-  double huber = 0.0, min_slope = FitOptions{}.min_slope;
+  double huber = 0.0, min_slope = FitOptions{}.min_slope, sample_time = 0.0;
   unsigned seed = 0;
   bool json = false, relaxed = false, force = false, free_weights = false;
 };
 
 std::vector<std::string> model_names() {
   std::vector<std::string> names;
-  for (FitModel m : {FitModel::automatic, FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym})
-    names.emplace_back(fit_model_name(m));
+  names.emplace_back(fit_model_name(FitModel::automatic));
+  for (FitModel m : fit_model_kinds) names.emplace_back(fit_model_name(m));
   return names;
 }
 
@@ -106,6 +107,17 @@ int run_fit(const FitCliOptions& c) {
   o.seed = c.seed;
   o.initial_state = c.relaxed ? InitialState::relaxed : InitialState::virgin;
   o.gpi_free_weights = c.free_weights;
+  o.sample_time = c.sample_time;
+  if (o.sample_time == 0.0 && time && time->size() > 1) {
+    // rate-pi: the median step of the time column
+    std::vector<double> dts(time->size() - 1);
+    for (std::size_t k = 1; k < time->size(); ++k) dts[k - 1] = (*time)[k] - (*time)[k - 1];
+    std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
+    if (!(dts[dts.size() / 2] > 0))
+      throw Error(fmt::format("{}: the time column {} does not increase (median step {}): no sample time", c.sel.file,
+                              c.sel.time_column, dts[dts.size() / 2]));
+    o.sample_time = dts[dts.size() / 2];
+  }
   const IndexRange train =
       c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
   o.train = train;
@@ -273,6 +285,9 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--min-slope", c->min_slope,
                   fmt::format("minimum slope of the model relative to span(y)/span(x), bounds the inverse's slope "
                               "(default {})", FitOptions{}.min_slope));
+  sub->add_option("--sample-time", c->sample_time,
+                  "rate-pi: sample time of the record in s (default: the median step of --time-column)")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
   sub->add_flag("--free-weights", c->free_weights,
                 "gpi: the free-weight variant (tanh envelope, q and n free weights) instead of Eq. 8's exponential law");

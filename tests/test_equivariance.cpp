@@ -94,13 +94,17 @@ Record apply(const Transform& t, const Record& r) {
   return out;
 }
 
-const FitModel kKinds[] = {FitModel::pi, FitModel::gpi, FitModel::mpi_deadzone, FitModel::mpi_asym};
+// Every kind fit() identifies; the PI family (which must never be worse than the
+// reference PI, itself a PI).
+const auto& kKinds = fit_model_kinds;
+const FitModel kPiFamily[] = {FitModel::pi, FitModel::gpi, FitModel::mpi_deadzone, FitModel::mpi_asym};
 
 FitOptions options_for(FitModel kind) {
   FitOptions o;
   o.model = kind;
   o.compute_covariance = false;
   o.num_threads = 1;
+  o.sample_time = 1e-3;  // rate-pi
   return o;
 }
 
@@ -287,7 +291,7 @@ TEST(ReferencePi, NoKindWorseThanTheReferenceOnSharedRecords) {
     // the reference validated the same way: simulated from the start of its own record
     const PiParams ref = reference_pi(c.train.x, c.train.y, c.range);
     const double ref_val = evaluate(ref, c.val.x, c.val.y, c.val_range).rms_percent_span;
-    for (FitModel kind : kKinds) {
+    for (FitModel kind : kPiFamily) {
       FitStatus status = FitStatus::not_run;
       const double e = validation_error(kind, c.train, c.val, c.range, &status, c.val_range);
       if (std::string(c.name) == "piezo" && kind == FitModel::gpi) {
@@ -316,6 +320,12 @@ TEST(FitChecks, InverseSlopeIsBoundedOnEveryKind) {
   for (std::size_t k = 1; k < r.y.size(); ++k) dy = std::max(dy, std::abs(r.y[k] - r.y[k - 1]));
   for (FitModel kind : kKinds) {
     const FitReport rep = fit(r.x, r.y, options_for(kind));
+    if (kind == FitModel::maxwell_slip) {
+      // elasto-slide elements make clockwise loops only (y = k0 x + sum k_i (x - F[x]),
+      // k_i >= 0): on these counterclockwise loops the fit is honestly poor
+      EXPECT_EQ(rep.status, FitStatus::poor_fit) << rep.full_report();
+      continue;
+    }
     ASSERT_TRUE(rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence) << rep.full_report();
     EXPECT_TRUE(rep.inverse.increasing);
     EXPECT_GT(rep.inverse.max_slope, 0);
@@ -323,7 +333,11 @@ TEST(FitChecks, InverseSlopeIsBoundedOnEveryKind) {
     if (kind == FitModel::pi) {
       EXPECT_LE(rep.inverse.max_slope, sx / (0.02 * sy) * (1 + 1e-6));
     }
-    EXPECT_LE(rep.inverse.max_jump, rep.inverse.max_slope * dy * (1 + 1e-9) + 1e-12) << fit_model_name(kind);
+    // preisach: a relay that switches changes the output at once by its weight, so that
+    // the inverse moves the input by up to max w / q for a small output step (kp, its
+    // continuous form, has no such jump)
+    if (kind != FitModel::preisach)
+      EXPECT_LE(rep.inverse.max_jump, rep.inverse.max_slope * dy * (1 + 1e-9) + 1e-12) << fit_model_name(kind);
     EXPECT_GT(rep.inverse.max_input_step, 0);
   }
   // a flipped output gives a decreasing model with the same bound
@@ -376,7 +390,7 @@ TEST(FitAuto, ChoosesOnTheHoldOutAndValidatesNearTheBestKind) {
   o.num_threads = 0;
   const FitReport rep = fit(train.x, train.y, o);
   ASSERT_TRUE(rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence) << rep.full_report();
-  ASSERT_EQ(rep.candidates.size(), 4u);
+  ASSERT_EQ(rep.candidates.size(), std::size(fit_model_kinds));
   int chosen = 0;
   const FitCandidate* best = nullptr;
   for (const auto& c : rep.candidates) {

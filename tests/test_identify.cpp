@@ -483,7 +483,7 @@ TEST(IdentifyInput, BadInputIsRejected) {
   EXPECT_EQ(status(x, y, o), FitStatus::invalid_input);
   EXPECT_THROW(fit_weights(PiParams{1.0, {1.0}, {0.0}, {}, {}}, x, yn), Error);
   EXPECT_THROW(evaluate(true_gpi(), x, y, {0, x.size() + 1}), Error);
-  EXPECT_THROW(fit_model_from_name("preisach"), Error);
+  EXPECT_THROW(fit_model_from_name("preisach2"), Error);
 }
 
 TEST(IdentifyInput, HuberLossResistsOutliers) {

@@ -47,9 +47,27 @@ namespace hysteron {
 //                kind with the lowest hold-out RMS is refitted on the whole training
 //                range and returned (FitReport::model_kind is that kind, the table of
 //                every candidate is FitReport::candidates).
-enum class FitModel { gpi, pi, mpi_deadzone, mpi_asym, automatic };
+//   preisach     relays on a triangular grid of num_operators levels over the training
+//                input range; q >= min_slope and weights >= 0 by bounded linear least
+//                squares (invertible by construction).
+//   kp           the same with ramp hysterons (Krasnosel'skii-Pokrovskii).
+//   bouc-wen     normalised Bouc-Wen (kx, kw, rho, sigma, n) by LM from a grid of starts;
+//                kx >= min_slope, kw >= 0 (invertible).
+//   maxwell-slip num_operators - 1 elasto-slide elements with slip deflections spread
+//                like the pi's thresholds; k0 >= min_slope, k_i >= 0 by bounded LS.
+//   rate-pi      the pi's thresholds scaled by 1 + c rate (models.hpp); tau from the
+//                record's reversal intervals, c by a golden-section search over its
+//                admissible range with q, p_i >= 0 by bounded LS inside. Needs
+//                FitOptions::sample_time.
+enum class FitModel { gpi, pi, mpi_deadzone, mpi_asym, preisach, kp, bouc_wen, maxwell_slip, rate_pi, automatic };
 
-// "gpi", "pi", "mpi-deadzone", "mpi-asym", "auto".
+// Every kind fit() identifies, automatic excluded, in the order of the auto table.
+inline constexpr FitModel fit_model_kinds[] = {FitModel::pi,       FitModel::gpi,          FitModel::mpi_deadzone,
+                                               FitModel::mpi_asym, FitModel::preisach,     FitModel::kp,
+                                               FitModel::bouc_wen, FitModel::maxwell_slip, FitModel::rate_pi};
+
+// "gpi", "pi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip",
+// "rate-pi", "auto".
 std::string_view fit_model_name(FitModel model) noexcept;
 // Throws hysteron::Error on an unknown name.
 FitModel fit_model_from_name(std::string_view name);
@@ -154,6 +172,9 @@ struct FitOptions {
   // the dead-zone slopes). Bounds the inverse slope by span(x) / (min_slope span(y)) so
   // that the inverse cannot jump at a reversal. 0 < min_slope < 1.
   double min_slope = 0.02;
+  // Sample time of the record [s] (rate-pi only: its rates are per second; 0 = unknown,
+  // then rate-pi is refused). The CLI takes it from the time column or --sample-time.
+  double sample_time = 0.0;
   // automatic: the first and the last holdout_fraction of the training range score the candidates.
   double holdout_fraction = 0.2;
   // A fit whose training RMS exceeds poor_fit_ratio x that of the reference PI

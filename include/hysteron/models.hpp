@@ -162,8 +162,11 @@ struct KpParams : PreisachGrid {};
 // Bouc-Wen in its normalised form (Ikhouane & Rodellar 2007), integrated over the input
 // increment of each sample (rate-independent: only the sampled input path matters):
 //   y = kx x + kw w,   dw/dx = rho (1 - (sigma sgn(dx w) + 1 - sigma) |w|^n),  |w| <= 1
-// one explicit step per sample, w clamped to [-1, 1] (the bound of the exact solution).
-// rho > 0, sigma >= 0, 1 <= n <= 20. Invertible when kx > 0 and kw >= 0.
+// explicit steps of 1 / (2 rho n) per input increment (kernels.hpp: bouc_wen_increment), w
+// clamped to [-1, 1] (the bound of the exact solution).
+// rho > 0, sigma >= 0, 1 <= n <= 20. kw > 0 gives clockwise (elasto-plastic) loops,
+// kw < 0 the counterclockwise loops of actuators (y = d x - h, the piezo form).
+// Invertible when kx + min(kw, 0) rho max(1, 2 sigma) > 0 (dw/dx <= rho max(1, 2 sigma)).
 struct BoucWenParams {
   double kx = 1.0;
   double kw = 0.0;

@@ -53,9 +53,10 @@ def test_min_slope_is_validated():
 
 def test_fit_auto_lists_every_candidate():
     x, y = record()
-    r = hysteron.fit(x, y, model="auto", train=(0, 1200))
+    r = hysteron.fit(x, y, model="auto", train=(0, 1200), sample_time=1e-3)
     kinds = [c["kind"] for c in r["candidates"]]
-    assert set(kinds) == {"gpi", "pi", "mpi-deadzone", "mpi-asym"}
+    assert set(kinds) == {"gpi", "pi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip",
+                          "rate-pi"}
     chosen = [c for c in r["candidates"] if c["chosen"]]
     assert len(chosen) == 1
     assert r["model_kind"] == chosen[0]["kind"] and r["model_kind"] != "auto"

@@ -114,6 +114,13 @@ class PreisachKernel final : public Kernel {
     for (std::size_t i = 0; i < b_.size(); ++i) b_[i] = static_cast<int>(in[i]);
   }
   std::string invertibility() const override { return g_.invertibility(); }
+  std::size_t num_features() const noexcept override { return g_.w.size() + 1; }
+  void features(double x, double* out) const noexcept override {
+    out[0] = x;
+    std::size_t k = 1;
+    for (int i = 0; i < g_.n; ++i)
+      for (int j = 0; j <= i; ++j) out[k++] = j < b_[static_cast<std::size_t>(i)] ? 1.0 : 0.0;
+  }
 
  private:
   template <bool Commit>
@@ -169,6 +176,11 @@ class KpKernel final : public Kernel {
     std::copy(in, in + y_.size(), y_.begin());
   }
   std::string invertibility() const override { return g_.invertibility(); }
+  std::size_t num_features() const noexcept override { return y_.size() + 1; }
+  void features(double x, double* out) const noexcept override {
+    out[0] = x;
+    std::copy(y_.begin(), y_.end(), out + 1);
+  }
 
  private:
   template <bool Commit>
@@ -233,18 +245,17 @@ class BoucWenKernel final : public Kernel {
     w_ = in[1];
   }
   std::string invertibility() const override {
-    if (!(p_.kx > 0)) return detail::format("kx = {} must be > 0", p_.kx);
-    if (!(p_.kw >= 0)) return detail::format("kw = {} must be >= 0", p_.kw);
+    // slope kx + kw dw/dx with dw/dx in [0, rho max(1, 2 sigma)] for |w| <= 1
+    const double smin = p_.kx + std::min(p_.kw, 0.0) * p_.rho * std::max(1.0, 2 * p_.sigma);
+    if (!(smin > 0))
+      return detail::format("kx + min(kw, 0) rho max(1, 2 sigma) = {} must be > 0 (the output must rise with the "
+                            "input on every branch)", smin);
     return {};
   }
 
  private:
-  // One explicit step of dw/dx over dx = x - x_prev, clamped to the bound |w| <= 1.
   double next_w(double x) const noexcept {
-    const double dx = x - x_;
-    const double a = w_ == 0.0 ? 0.0 : std::pow(std::abs(w_), p_.n);
-    const double c = dx * w_ > 0 ? 1.0 : 1.0 - 2.0 * p_.sigma;  // sigma sgn(dx w) + 1 - sigma
-    return std::clamp(w_ + p_.rho * dx * (1.0 - c * a), -1.0, 1.0);
+    return bouc_wen_increment<double>(w_, x - x_, p_.rho, p_.sigma, p_.n, [](double v) { return v; });
   }
 
   BoucWenParams p_;
@@ -331,6 +342,11 @@ class RatePiKernel final : public Kernel {
         return detail::format("p[{}] = {} must be >= 0 (with thresholds that change from sample to sample only "
                               "nonnegative weights keep the output increasing)", i, p_.p[i]);
     return {};
+  }
+  std::size_t num_features() const noexcept override { return y_.size() + 1; }
+  void features(double x, double* out) const noexcept override {
+    out[0] = x;
+    std::copy(y_.begin(), y_.end(), out + 1);
   }
 
  private:

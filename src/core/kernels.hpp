@@ -3,6 +3,7 @@
 // rate-pi; equations in models.hpp and docs/models.md). Internal: Model and Inverse
 // hold one behind detail::KernelCopy. All work in model coordinates (UnitsMap applied
 // outside). step() and peek() never allocate and never throw.
+#include <cmath>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -29,10 +30,43 @@ class Kernel {
   virtual void get_state(double* out) const noexcept = 0;
   // Validates (size checked by the caller) and sets the state; throws hysteron::Error.
   virtual void set_state(const double* in) = 0;
+  // Kinds linear in their weights (identification): the regressors of the state after
+  // the last step, out[0] = x for the direct term and then one per weight (preisach:
+  // relay outputs, kp: ramp outputs, rate-pi: play outputs), num_features() in all.
+  virtual std::size_t num_features() const noexcept { return 0; }
+  virtual void features(double x, double* out) const noexcept { (void)x, (void)out; }
   // Empty if the output is strictly increasing in the input for every state, otherwise
   // the condition that fails (e.g. "w[3] = -0.1 must be >= 0").
   virtual std::string invertibility() const = 0;
 };
+
+// The Bouc-Wen state after an input increment dx (models.hpp), integrated by explicit
+// steps of h = 1 / (2 rho n) (the step map is then increasing in w: stable) and one
+// remainder step, so that w is continuous and nondecreasing in dx for every state (the
+// inverse brackets on it). An increment of more than 1000 steps (500 / n input travels
+// of 1 / rho) saturates w at sgn(dx), where the exact solution is to rounding.
+// `value(t)` returns the plain double of a T (T = double or a ceres::Jet).
+template <class T, class Value>
+T bouc_wen_increment(T w, double dx, const T& rho, const T& sigma, const T& n, Value value) {
+  using std::abs, std::pow;
+  const double h = 0.5 / (value(rho) * value(n));
+  const double steps = std::abs(dx) / h;
+  if (!(steps <= 1000.0)) return T(dx > 0 ? 1.0 : -1.0);
+  const int j = static_cast<int>(steps);
+  const double dir = dx >= 0 ? 1.0 : -1.0;
+  auto step = [&](const T& w0, double d) {
+    const double ws = value(w0);
+    // |w|^n; below 1e-150 it is 0 to rounding (pow's derivative would divide by |w|)
+    const T a = std::abs(ws) < 1e-150 ? T(0.0) : T(pow(abs(w0), n));
+    const T f = d * ws > 0 ? T(1.0) : T(1.0) - 2.0 * sigma;  // sigma sgn(dx w) + 1 - sigma
+    T w1 = w0 + rho * d * (T(1.0) - f * a);
+    if (value(w1) > 1.0) w1 = T(1.0);
+    if (value(w1) < -1.0) w1 = T(-1.0);
+    return w1;
+  };
+  for (int i = 0; i < j; ++i) w = step(w, dir * h);
+  return step(w, dx - dir * h * j);
+}
 
 // Validates the parameters and builds the kernel; nullptr for the kinds with PI
 // structure. Throws hysteron::Error naming the key.

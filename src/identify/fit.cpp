@@ -33,15 +33,24 @@ std::string_view fit_model_name(FitModel model) noexcept {
     case FitModel::pi: return "pi";
     case FitModel::mpi_deadzone: return "mpi-deadzone";
     case FitModel::mpi_asym: return "mpi-asym";
+    case FitModel::preisach: return "preisach";
+    case FitModel::kp: return "kp";
+    case FitModel::bouc_wen: return "bouc-wen";
+    case FitModel::maxwell_slip: return "maxwell-slip";
+    case FitModel::rate_pi: return "rate-pi";
     case FitModel::automatic: return "auto";
   }
   return "gpi";
 }
 
 FitModel fit_model_from_name(std::string_view name) {
-  for (FitModel m : {FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym, FitModel::automatic})
+  std::string names;
+  for (FitModel m : fit_model_kinds) {
     if (fit_model_name(m) == name) return m;
-  throw Error(fmt::format("unknown model '{}' (expected gpi, pi, mpi-deadzone, mpi-asym or auto)", name));
+    names += fmt::format("{}, ", fit_model_name(m));
+  }
+  if (name == "auto") return FitModel::automatic;
+  throw Error(fmt::format("unknown model '{}' (expected {}or auto)", name, names));
 }
 
 bool has_model(FitStatus s) noexcept {
@@ -84,6 +93,8 @@ bool FitOptions::is_valid(std::string* error) const {
   if (!(min_slope > 0 && min_slope < 1)) return fail(fmt::format("min_slope must be in (0, 1), got {}", min_slope));
   if (!(holdout_fraction >= 0.05 && holdout_fraction <= 0.5))
     return fail(fmt::format("holdout_fraction must be in [0.05, 0.5], got {}", holdout_fraction));
+  if (!(sample_time >= 0) || !std::isfinite(sample_time))
+    return fail(fmt::format("sample_time must be >= 0 (0: unknown), got {}", sample_time));
   if (!(poor_fit_ratio == 0 || (poor_fit_ratio >= 1 && std::isfinite(poor_fit_ratio))))
     return fail(fmt::format("poor_fit_ratio must be 0 (off) or >= 1, got {}", poor_fit_ratio));
   return true;

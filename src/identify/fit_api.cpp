@@ -27,7 +27,18 @@ using Clock = std::chrono::steady_clock;
 // Number of grid points on which the envelope slope is sampled for the minimum slope.
 constexpr int kSlopeGrid = 256;
 // The kinds FitModel::automatic tries, in the order of its table.
-constexpr FitModel kAutoKinds[] = {FitModel::pi, FitModel::gpi, FitModel::mpi_deadzone, FitModel::mpi_asym};
+constexpr auto& kAutoKinds = fit_model_kinds;
+
+// The smallest local slope of a kind without PI structure in model coordinates (before
+// the output gain): the direct term, which every hysteron only adds to (models.hpp);
+// bouc-wen: kx + min(kw, 0) rho max(1, 2 sigma) (dw/dx in [0, rho max(1, 2 sigma)]).
+double min_kernel_slope(const ModelParams& m) {
+  if (const auto* g = std::get_if<PreisachParams>(&m)) return g->q;
+  if (const auto* g = std::get_if<KpParams>(&m)) return g->q;
+  if (const auto* b = std::get_if<BoucWenParams>(&m)) return b->kx + std::min(b->kw, 0.0) * b->rho * std::max(1.0, 2 * b->sigma);
+  if (const auto* r = std::get_if<RatePiParams>(&m)) return r->q;
+  return 0.0;
+}
 
 FitReport invalid(std::string msg, FitModel kind, Clock::time_point t0) {
   return detail::invalid_report(std::move(msg), kind, t0);
@@ -75,8 +86,10 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
   const UnitsMap& um = units_map(model);
   c.increasing = um.output_gain > 0;
   const Limits& lim = input_limits(model);
-  const Structure<double> s = canonical_structure(model);
-  const double slope = min_model_slope(s, um.to_model(lim.lo), um.to_model(lim.hi)) * std::abs(um.output_gain) / um.input_scale;
+  const double mslope = has_pi_structure(model)
+                            ? min_model_slope(canonical_structure(model), um.to_model(lim.lo), um.to_model(lim.hi))
+                            : min_kernel_slope(model);
+  const double slope = mslope * std::abs(um.output_gain) / um.input_scale;
   c.max_slope = slope > 0 ? 1.0 / slope : std::numeric_limits<double>::infinity();
   for (std::size_t k = tr.begin + 1; k < tr.end; ++k) c.max_input_step = std::max(c.max_input_step, std::abs(x[k] - x[k - 1]));
   try {
@@ -242,7 +255,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   rep.inverse = check_inverse(rep.model, x, y, tr);
   // The minimum-slope bound: the smallest cumulative slope dy/du against min_slope times
   // the mean dy/du of the data over the training range (raw units, scales absorbed).
-  {
+  if (has_pi_structure(rep.model)) {
     const Structure<double> s = canonical_structure(rep.model);
     const Envelope e{s.asc_kind, s.asc_c};
     const UnitsMap& u = s.units;

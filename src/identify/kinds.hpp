@@ -64,6 +64,11 @@ const Parametrization& gpi_kind();
 const Parametrization& gpi_free_kind();
 const Parametrization& mpi_deadzone_kind();
 const Parametrization& mpi_asym_kind();
+const Parametrization& preisach_kind();      // kind_linear.cpp
+const Parametrization& kp_kind();            // kind_linear.cpp
+const Parametrization& maxwell_slip_kind();  // kind_linear.cpp
+const Parametrization& rate_pi_kind();       // kind_linear.cpp
+const Parametrization& bouc_wen_kind();      // kind_bouc_wen.cpp
 
 // The registry: the parametrization that handles the options, nullptr if none.
 const Parametrization* find_parametrization(const FitOptions& o);

@@ -91,7 +91,7 @@ grep -q "pi fit" "$T/summary.txt" || fail "--out -: no summary on stderr"
 
 # 4. --model auto: candidates in text and JSON, chosen kind in model_kind, validation RMS per candidate
 "$BIN" fit --model auto --data "$T/a.csv" --input p --output y --train 0:1200 --validate-data "$T/b.csv" \
-  --threads 1 --out "$T/auto.json" --report "$T/auto_report.json" > "$T/auto.txt" 2> "$T/auto.err"
+  --sample-time 0.001 --threads 1 --out "$T/auto.json" --report "$T/auto_report.json" > "$T/auto.txt" 2> "$T/auto.err"
 rc=$?
 $PY - "$T/auto_report.json" "$T/auto.txt" $rc <<'PYEOF' || fail "--model auto"
 import json, sys
@@ -99,7 +99,8 @@ r = json.load(open(sys.argv[1]))
 text = open(sys.argv[2]).read()
 rc = int(sys.argv[3])
 kinds = sorted(c["kind"] for c in r["candidates"])
-assert kinds == ["gpi", "mpi-asym", "mpi-deadzone", "pi"], kinds
+assert kinds == sorted(["gpi", "mpi-asym", "mpi-deadzone", "pi", "preisach", "kp", "bouc-wen", "maxwell-slip",
+                        "rate-pi"]), kinds
 chosen = [c["kind"] for c in r["candidates"] if c["chosen"]]
 assert chosen == [r["model_kind"]], (chosen, r["model_kind"])
 for c in r["candidates"]:

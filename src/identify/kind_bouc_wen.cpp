@@ -1,0 +1,165 @@
+// The normalised Bouc-Wen model (FitModel::bouc_wen, models.hpp): kx, kw, rho, sigma, n
+// and the output offset by LM (Ceres, automatic derivatives through the recursion of
+// the kernel: bouc_wen_increment, explicit steps of dw/dx, w clamped to [-1, 1]), from a grid
+// of starts over both loop orientations; the smallest slope over all states >= min_slope
+// keeps it invertible.
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../core/kernels.hpp"
+#include "kinds.hpp"
+
+namespace hysteron::fitting {
+
+namespace {
+
+constexpr int kBw = 6;  // kx, kw, rho, sigma, n, offset
+// Upper bounds of sigma, n and rho (normalised input: span 1): beyond them the loop is a
+// relay-like corner that the sampled record cannot resolve.
+constexpr double kSigmaMax = 20.0, kNMax = 10.0, kRhoMax = 1e4;
+// sigma >= 1/2: unloading then moves w at least at the rate rho (dw/ds = -rho (1 + (2 sigma
+// - 1) |w|^n) for a travel s back); below it, w = +-1 is an unstable rest point of the
+// unloading branch (at sigma = 0 the loop never leaves saturation) and the output's
+// sensitivity to sigma grows like exp(rho n s): the fit would be ill-posed there.
+constexpr double kSigmaMin = 0.5;
+
+inline double scalar(double v) { return v; }
+template <class J>
+double scalar(const J& v) {
+  return v.a;
+}
+
+// theta = [s, kw, rho, sigma, n, offset]: s is the smallest slope of the output over all
+// states (invertible for s > 0, see BoucWenParams), kx = s + max(0, -kw) rho max(1, 2 sigma).
+template <class T>
+T min_slope_to_kx(const T* th) {
+  if (scalar(th[1]) >= 0) return th[0];
+  return th[0] - th[1] * th[2] * (scalar(th[3]) > 0.5 ? T(2.0) * th[3] : T(1.0));
+}
+
+struct BoucWenResiduals {
+  const Data* d;
+  template <class T>
+  bool operator()(const T* th, T* res) const {
+    const T& kw = th[1];
+    const T kx = min_slope_to_kx(th);
+    const T& rho = th[2];
+    const T& sigma = th[3];
+    const T& n = th[4];
+    const T& c = th[5];
+    // virgin = relaxed at 0 (the kernel's reset); relaxed at x[0]
+    double xp = d->initial == InitialState::relaxed ? d->x[0] : 0.0;
+    T w(0.0);
+    for (std::size_t k = 0; k < d->train.end; ++k) {
+      w = detail::bouc_wen_increment<T>(w, d->x[k] - xp, rho, sigma, n, [](const T& v) { return scalar(v); });
+      xp = d->x[k];
+      if (k >= d->train.begin) res[k - d->train.begin] = kx * d->x[k] + kw * w + c - d->y[k];
+    }
+    return true;
+  }
+};
+
+struct BoucWenLm final : LmProblem {
+  void add_costs(ceres::Problem& problem, const Data& d, double* theta) const override {
+    const int m = static_cast<int>(d.train.end - d.train.begin);
+    auto* cost = new ceres::AutoDiffCostFunction<BoucWenResiduals, ceres::DYNAMIC, kBw>(new BoucWenResiduals{&d}, m);
+    problem.AddResidualBlock(cost, d.huber > 0 ? new ceres::HuberLoss(d.huber) : nullptr, theta);
+    problem.SetParameterUpperBound(theta, 2, kRhoMax);
+    problem.SetParameterUpperBound(theta, 3, kSigmaMax);
+    problem.SetParameterUpperBound(theta, 4, kNMax);
+  }
+};
+
+BoucWenParams params_of(const double* th) {
+  return BoucWenParams{min_slope_to_kx(th), th[1], th[2], th[3], th[4], {}, {}};
+}
+
+// d(kx, kw, rho, sigma, n) / d theta (the reported parameters).
+Eigen::MatrixXd report_jacobian(const double* th) {
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(5, kBw);
+  M.block(1, 1, 4, 4).setIdentity();
+  M(0, 0) = 1;
+  if (th[1] < 0) {
+    const double m = th[3] > 0.5 ? 2 * th[3] : 1.0;
+    M(0, 1) = -th[2] * m;
+    M(0, 2) = -th[1] * m;
+    if (th[3] > 0.5) M(0, 3) = -th[1] * th[2] * 2;
+  }
+  return M;
+}
+
+class BoucWenKind final : public Parametrization {
+ public:
+  bool handles(const FitOptions& o) const override { return o.model == FitModel::bouc_wen; }
+  int num_parameters(const FitOptions&) const override { return kBw; }
+  // w is unitless: kx -> (b / a) kx, kw -> b kw, rho -> rho / a.
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    if (name == "kx") return b / a;
+    if (name == "kw") return b;
+    return name == "rho" ? 1.0 / a : 1.0;
+  }
+  void fit(const Data& d, const Ranges& rg, const FitOptions& o, FitReport& rep) const override {
+    // Starts: w saturates after an input travel of about 1 / rho; a loop of height
+    // 2 kw around a line of slope kx. Grid over rho (input spans) and n.
+    double xm = 0, ym = 0;
+    for (std::size_t k = d.train.begin; k < d.train.end; ++k) xm += d.x[k], ym += d.y[k];
+    const double mm = static_cast<double>(d.train.end - d.train.begin);
+    xm /= mm;
+    ym /= mm;
+    const double slope = rg.yspan() / rg.xspan();
+    std::vector<std::vector<double>> starts, lowers;
+    // both loop orientations: kw < 0 (counterclockwise, actuators) and kw > 0
+    for (double sgn : {-1.0, 1.0})
+      for (double n : {1.0, 2.0})
+        for (double rho : {3.0, 10.0}) {
+          const double kw = sgn * 0.15 * rg.yspan(), s = 0.5 * slope;
+          const double th[kBw] = {s, kw, rho / rg.xspan(), 1.0, n, 0.0};
+          const double kx = min_slope_to_kx(th);
+          starts.push_back({s, kw, rho / rg.xspan(), 1.0, n, ym - kx * xm});
+        }
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::vector<double> lower{o.min_slope * slope, -inf, 1e-3 / rg.xspan(), kSigmaMin, 1.0, -inf};
+    lowers.assign(starts.size(), lower);
+    const std::vector<int> held = d.free_offset ? std::vector<int>{} : std::vector<int>{5};
+    if (!d.free_offset)
+      for (auto& s : starts) s[5] = 0.0;
+    BoucWenLm lm;
+    std::vector<const LmProblem*> problems(starts.size(), &lm);
+    auto [solved, kbest] = solve_starts(problems, d, starts, lowers, held, o, rep);
+    if (kbest == std::string::npos) {
+      rep.status = FitStatus::failed;
+      rep.message = "no start gave a usable solution";
+      return;
+    }
+    const Solved& best = solved[kbest];
+    finish_status(rep, best, /*start_is_minimum=*/false);
+    rep.initial_cost = best.initial_cost;
+    rep.final_cost = best.final_cost;
+    rep.iterations = best.iterations;
+    BoucWenParams m = params_of(best.theta.data());
+    m.units.output_offset = best.theta[5];
+    rep.model = m;
+    const char* names[] = {"kx", "kw", "rho", "sigma", "n"};
+    const double values[] = {m.kx, m.kw, m.rho, m.sigma, m.n};
+    for (int i = 0; i < 5; ++i) {
+      FitParameter p{names[i], values[i]};
+      // on a lower bound: the smallest slope (min_slope), sigma (1/2), n (1)
+      p.at_bound = (i == 0 || i >= 3) &&
+                   best.theta[static_cast<std::size_t>(i)] <= lower[static_cast<std::size_t>(i)] * (1 + 1e-9) + 1e-300;
+      rep.parameters.push_back(p);
+    }
+    if (o.compute_covariance) standard_errors(lm, d, best.theta, lower, held, report_jacobian(best.theta.data()), 2 * best.final_cost, rep);
+  }
+};
+
+}  // namespace
+
+const Parametrization& bouc_wen_kind() {
+  static const BoucWenKind k;
+  return k;
+}
+
+}  // namespace hysteron::fitting

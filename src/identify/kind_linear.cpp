@@ -1,0 +1,319 @@
+// The kinds beyond the PI family that are linear in their weights (preisach, kp,
+// maxwell-slip, rate-pi): their hysterons are fixed by a grid or thresholds over the
+// training range, the weights come from bounded linear least squares (Lawson-Hanson)
+// with the bounds that keep the model invertible: the direct slope >= min_slope (of the
+// normalised data's span ratio, 1) and every hysteron weight >= 0. rate-pi adds a
+// golden-section search over its rate coefficient c around the least squares.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "../core/kernels.hpp"
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+#include "kinds.hpp"
+
+namespace hysteron::fitting {
+
+namespace {
+
+// Rows of the training range in the least squares: at most this many, evenly strided
+// (the model is still simulated through every sample; the final cost uses all of them).
+constexpr std::size_t kMaxRows = 6000;
+// Huber loss: iteratively reweighted least squares passes.
+constexpr int kIrlsPasses = 6;
+
+struct Design {
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+};
+
+// Regressors of a kernel model (kernels.hpp: features) through the record from sample 0.
+Design design(const ModelParams& mp, const Data& d) {
+  auto k = detail::make_kernel(mp);
+  if (d.initial == InitialState::relaxed) k->reset_relaxed(d.x[0]); else k->reset();
+  const std::size_t m = d.train.end - d.train.begin;
+  const std::size_t stride = (m + kMaxRows - 1) / kMaxRows;
+  const std::size_t rows = (m + stride - 1) / stride;
+  const std::size_t nf = k->num_features();
+  Design D{Eigen::MatrixXd(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(nf)),
+           Eigen::VectorXd(static_cast<Eigen::Index>(rows))};
+  std::vector<double> f(nf);
+  Eigen::Index row = 0;
+  for (std::size_t i = 0; i < d.train.end; ++i) {
+    k->step(d.x[i]);
+    if (i >= d.train.begin && (i - d.train.begin) % stride == 0) {
+      k->features(d.x[i], f.data());
+      for (std::size_t j = 0; j < nf; ++j) D.A(row, static_cast<Eigen::Index>(j)) = f[j];
+      D.b(row) = d.y[i];
+      ++row;
+    }
+  }
+  return D;
+}
+
+struct Solution {
+  Eigen::VectorXd t;
+  double offset = 0.0;
+  double sse = 0.0;
+};
+
+// min ||A t + c - b|| (Huber: reweighted), t >= lo, offset c free if d.free_offset.
+Solution solve(const Design& D, const Eigen::VectorXd& lo, const Data& d) {
+  Solution s;
+  const bool free = d.free_offset;
+  s.t = detail::bounded_ls(D.A, D.b, lo, free ? &s.offset : nullptr, &s.sse);
+  if (d.huber > 0) {
+    for (int pass = 0; pass < kIrlsPasses; ++pass) {
+      const Eigen::VectorXd r = D.A * s.t + Eigen::VectorXd::Constant(D.b.size(), s.offset) - D.b;
+      Eigen::VectorXd sw(r.size());
+      for (Eigen::Index i = 0; i < r.size(); ++i) sw(i) = std::sqrt(std::min(1.0, d.huber / std::max(std::abs(r(i)), 1e-300)));
+      // the offset column is weighted too: fold it into the design
+      Eigen::MatrixXd Aw = sw.asDiagonal() * D.A;
+      Eigen::VectorXd bw = sw.asDiagonal() * D.b;
+      if (free) {
+        Aw.conservativeResize(Eigen::NoChange, Aw.cols() + 1);
+        Aw.col(Aw.cols() - 1) = sw;
+        Eigen::VectorXd lw(lo.size() + 1);
+        lw << lo, -1e300;
+        const Eigen::VectorXd t = detail::bounded_ls(Aw, bw, lw, nullptr);
+        s.t = t.head(lo.size());
+        s.offset = t(lo.size());
+      } else {
+        s.t = detail::bounded_ls(Aw, bw, lo, nullptr);
+      }
+    }
+    s.sse = (D.A * s.t + Eigen::VectorXd::Constant(D.b.size(), s.offset) - D.b).squaredNorm();
+  }
+  return s;
+}
+
+Eigen::VectorXd lower_bounds(Eigen::Index n, const FitOptions& o) {
+  Eigen::VectorXd lo = Eigen::VectorXd::Zero(n);
+  lo(0) = o.min_slope;  // the direct slope (normalised data: span ratio 1)
+  return lo;
+}
+
+std::span<const double> train_x(const Data& d) { return d.x.subspan(d.train.begin, d.train.end - d.train.begin); }
+
+// Fills the report of a linear kind: status, costs, model, named parameters.
+// The direct slope (first parameter) on its bound min_slope is reported at_bound; weights
+// at 0 are not (most hysterons of a grid are unused by a given record).
+void finish(FitReport& rep, const Data& d, ModelParams model, const std::vector<std::string>& names,
+            const std::vector<double>& values, std::string how, int solves, double min_slope) {
+  if (d.free_offset) {  // exact over all training samples (the LS used a strided subset)
+    units_map(model).output_offset = 0.0;
+    units_map(model).output_offset = projected_offset(model, d);
+  }
+  double ym = 0, s0 = 0;
+  for (std::size_t j = d.train.begin; j < d.train.end; ++j) ym += d.y[j];
+  ym /= static_cast<double>(d.train.end - d.train.begin);
+  for (std::size_t j = d.train.begin; j < d.train.end; ++j) s0 += (d.y[j] - ym) * (d.y[j] - ym);
+  rep.initial_cost = 0.5 * s0;  // the constant model
+  rep.final_cost = 0.5 * model_sse(model, d);
+  rep.iterations = solves;
+  rep.total_iterations += solves;
+  rep.num_starts = 1;
+  rep.model = std::move(model);
+  rep.status = std::isfinite(rep.final_cost) ? FitStatus::converged : FitStatus::failed;
+  rep.message = std::move(how);
+  for (std::size_t i = 0; i < names.size(); ++i)
+    rep.parameters.push_back({names[i], values[i], std::numeric_limits<double>::quiet_NaN(), false,
+                              i == 0 && values[0] <= min_slope * (1 + 1e-9)});
+  rep.covariance_note = "standard errors are not computed for the bounded linear least squares of this kind";
+}
+
+std::string ls_message(const Design& D, std::size_t m) {
+  return fmt::format("bounded linear least squares (Lawson-Hanson) on {} of {} training samples, {} regressors",
+                     D.A.rows(), m, D.A.cols());
+}
+
+// ---- preisach and kp --------------------------------------------------------------
+
+template <class G>
+class GridKind final : public Parametrization {
+ public:
+  explicit GridKind(FitModel kind) : kind_(kind) {}
+  bool handles(const FitOptions& o) const override { return o.model == kind_; }
+  int num_parameters(const FitOptions& o) const override { return o.num_operators * (o.num_operators + 1) / 2 + 1; }
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    return name == "q" ? b / a : name.starts_with("w[") ? b : 1.0;
+  }
+  void fit(const Data& d, const Ranges& rg, const FitOptions& o, FitReport& rep) const override {
+    G g;
+    g.levels = o.num_operators;
+    g.lo = rg.xlo;
+    g.hi = rg.xhi;
+    g.q = 1.0;
+    g.w.assign(static_cast<std::size_t>(g.levels * (g.levels + 1) / 2), 0.0);
+    const Design D = design(g, d);
+    const Solution s = solve(D, lower_bounds(D.A.cols(), o), d);
+    g.q = s.t(0);
+    for (std::size_t k = 0; k < g.w.size(); ++k) g.w[k] = s.t(static_cast<Eigen::Index>(k + 1));
+    g.units.output_offset = s.offset;
+    std::vector<std::string> names{"q"};
+    std::vector<double> values{g.q};
+    for (std::size_t k = 0; k < g.w.size(); ++k) {
+      names.push_back(indexed("w", k));
+      values.push_back(g.w[k]);
+    }
+    finish(rep, d, g, names, values, ls_message(D, d.train.end - d.train.begin), 1, o.min_slope);
+  }
+
+ private:
+  FitModel kind_;
+};
+
+// ---- maxwell-slip -----------------------------------------------------------------
+
+class MaxwellSlipKind final : public Parametrization {
+ public:
+  bool handles(const FitOptions& o) const override { return o.model == FitModel::maxwell_slip; }
+  int num_parameters(const FitOptions& o) const override { return o.num_operators; }
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    return name == "k0" || name.starts_with("k[") ? b / a : 1.0;
+  }
+  void fit(const Data& d, const Ranges&, const FitOptions& o, FitReport& rep) const override {
+    // The play outputs y_i of the slip deflections (rate-pi's kernel with c = 0), then
+    // the columns [x, x - y_i]: y = k0 x + sum k_i (x - y_i).
+    RatePiParams plays;
+    plays.r = default_thresholds(train_x(d), o.num_operators);
+    plays.p.assign(plays.r.size(), 1.0);
+    plays.dt = 1.0;
+    Design D = design(plays, d);
+    for (Eigen::Index j = 1; j < D.A.cols(); ++j) D.A.col(j) = D.A.col(0) - D.A.col(j);
+    const Solution s = solve(D, lower_bounds(D.A.cols(), o), d);
+    MaxwellSlipParams m;
+    m.k0 = s.t(0);
+    m.delta = plays.r;
+    for (std::size_t i = 0; i < plays.r.size(); ++i) m.k.push_back(s.t(static_cast<Eigen::Index>(i + 1)));
+    m.units.output_offset = s.offset;
+    std::vector<std::string> names{"k0"};
+    std::vector<double> values{m.k0};
+    for (std::size_t i = 0; i < m.k.size(); ++i) {
+      names.push_back(indexed("k", i));
+      values.push_back(m.k[i]);
+    }
+    finish(rep, d, m, names, values, ls_message(D, d.train.end - d.train.begin), 1, o.min_slope);
+  }
+};
+
+// ---- rate-pi ----------------------------------------------------------------------
+
+// The rate filter's time constant from the record: a quarter of the shorter half periods
+// (the 10th percentile of the intervals between input reversals, a reversal being a
+// return by 10 % of the training span from the last extremum), so that the filtered
+// rate settles within a half period of the fastest cycles.
+double rate_time_constant(const Data& d, double dt) {
+  const auto x = train_x(d);
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  const double band = 0.1 * (*hi - *lo);
+  std::vector<double> intervals;
+  double ext = x[0];
+  int dir = 0;
+  std::size_t last = 0;
+  bool first = true;
+  for (std::size_t k = 1; k < x.size(); ++k) {
+    if (dir >= 0 && x[k] > ext) ext = x[k], dir = dir == 0 && x[k] > x[0] + band ? 1 : dir;
+    if (dir <= 0 && x[k] < ext) ext = x[k], dir = dir == 0 && x[k] < x[0] - band ? -1 : dir;
+    if (dir == 0) continue;
+    if ((dir > 0 && x[k] < ext - band) || (dir < 0 && x[k] > ext + band)) {
+      if (!first) intervals.push_back(static_cast<double>(k - last));
+      first = false;
+      last = k;
+      dir = -dir;
+      ext = x[k];
+    }
+  }
+  if (intervals.empty()) return 0.25 * static_cast<double>(x.size()) * dt;
+  std::sort(intervals.begin(), intervals.end());
+  return 0.25 * intervals[intervals.size() / 10] * dt;
+}
+
+class RatePiKind final : public Parametrization {
+ public:
+  bool handles(const FitOptions& o) const override { return o.model == FitModel::rate_pi; }
+  int num_parameters(const FitOptions& o) const override { return o.num_operators + 1; }
+  double absorbed_factor(std::string_view name, double a, double b) const override {
+    if (name == "q" || name.starts_with("p[")) return b / a;
+    return name == "c" ? 1.0 / a : 1.0;
+  }
+  void fit(const Data& d, const Ranges&, const FitOptions& o, FitReport& rep) const override {
+    if (!(o.sample_time > 0))
+      throw Error("rate-pi: the sample time is unknown (its rates are per second): give a time column or "
+                  "--sample-time (FitOptions::sample_time)");
+    RatePiParams m;
+    m.dt = o.sample_time;
+    m.r = default_thresholds(train_x(d), o.num_operators);
+    m.p.assign(m.r.size(), 1.0);
+    m.tau = rate_time_constant(d, m.dt);
+    const double rmax = m.r.empty() ? 0.0 : m.r.back();
+    const double cmax = rmax > 0 ? 0.5 * (m.tau + m.dt) / rmax * (1 - 1e-9) : 0.0;
+    int solves = 0;
+    auto at = [&](double c, Solution* out) {
+      RatePiParams t = m;
+      t.c = c;
+      const Design D = design(t, d);
+      Eigen::VectorXd lo = lower_bounds(D.A.cols(), o);
+      Solution s = solve(D, lo, d);
+      ++solves;
+      if (out) *out = s;
+      return s.sse;
+    };
+    // golden section on c in [0, cmax] (the cost is smooth in c; 24 steps: 1e-5 of the range)
+    const double g = 0.5 * (std::sqrt(5.0) - 1);
+    double a = 0, b = cmax, c1 = b - g * (b - a), c2 = a + g * (b - a);
+    double f1 = at(c1, nullptr), f2 = at(c2, nullptr);
+    for (int it = 0; it < 24 && cmax > 0; ++it) {
+      if (f1 <= f2) {
+        b = c2, c2 = c1, f2 = f1, c1 = b - g * (b - a), f1 = at(c1, nullptr);
+      } else {
+        a = c1, c1 = c2, f1 = f2, c2 = a + g * (b - a), f2 = at(c2, nullptr);
+      }
+    }
+    double best_c = f1 <= f2 ? c1 : c2;
+    if (at(0.0, nullptr) <= std::min(f1, f2)) best_c = 0.0;  // the rate-independent end
+    Solution s;
+    at(best_c, &s);
+    m.c = best_c;
+    m.q = s.t(0);
+    for (std::size_t i = 0; i < m.r.size(); ++i) m.p[i] = s.t(static_cast<Eigen::Index>(i + 1));
+    m.units.output_offset = s.offset;
+    std::vector<std::string> names{"q"};
+    std::vector<double> values{m.q};
+    for (std::size_t i = 0; i < m.p.size(); ++i) {
+      names.push_back(indexed("p", i));
+      values.push_back(m.p[i]);
+    }
+    names.insert(names.end(), {"c", "tau"});
+    values.insert(values.end(), {m.c, m.tau});
+    finish(rep, d, m, names, values,
+           fmt::format("golden-section search of c in [0, {:.4g}] (c max(r) <= (tau + dt) / 2, tau = {:.4g} s from the "
+                       "reversal intervals) around bounded linear least squares",
+                       cmax, m.tau),
+           solves, o.min_slope);
+    rep.parameters.back().held = true;  // tau: from the data, not fitted
+  }
+};
+
+}  // namespace
+
+const Parametrization& preisach_kind() {
+  static const GridKind<PreisachParams> k(FitModel::preisach);
+  return k;
+}
+const Parametrization& kp_kind() {
+  static const GridKind<KpParams> k(FitModel::kp);
+  return k;
+}
+const Parametrization& maxwell_slip_kind() {
+  static const MaxwellSlipKind k;
+  return k;
+}
+const Parametrization& rate_pi_kind() {
+  static const RatePiKind k;
+  return k;
+}
+
+}  // namespace hysteron::fitting

@@ -4,4 +4,4 @@
 # Usage: bench/real_data_table.sh [HYSTERON_CLI]   (default: build/hysteron)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-exec /usr/bin/python3 "$root/bench/real_data_table.py" "${1:-$root/build/hysteron}"
+exec /usr/bin/python3 "$root/bench/real_data_table.py" "${1:-$root/build/hysteron}" "${@:2}"

@@ -55,9 +55,10 @@ namespace hysteron {
 //                kx >= min_slope, kw >= 0 (invertible).
 //   maxwell-slip num_operators - 1 elasto-slide elements with slip deflections spread
 //                like the pi's thresholds; k0 >= min_slope, k_i >= 0 by bounded LS.
-//   rate-pi      the pi's thresholds scaled by 1 + c rate (models.hpp); tau from the
-//                record's reversal intervals, c by a golden-section search over its
-//                admissible range with q, p_i >= 0 by bounded LS inside. Needs
+//   rate-pi      the pi's thresholds scaled by 1 + c rate (models.hpp); tau from a grid
+//                around a quarter of the record's shorter reversal intervals, c by a
+//                golden-section search over its admissible range, with q, p_i >= 0 by
+//                bounded LS inside. Needs
 //                FitOptions::sample_time.
 enum class FitModel { gpi, pi, mpi_deadzone, mpi_asym, preisach, kp, bouc_wen, maxwell_slip, rate_pi, automatic };
 

@@ -3,7 +3,8 @@
 // training range, the weights come from bounded linear least squares (Lawson-Hanson)
 // with the bounds that keep the model invertible: the direct slope >= min_slope (of the
 // normalised data's span ratio, 1) and every hysteron weight >= 0. rate-pi adds a
-// golden-section search over its rate coefficient c around the least squares.
+// golden-section search over its rate coefficient c, for four filter time constants tau,
+// around the least squares.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -247,35 +248,48 @@ class RatePiKind final : public Parametrization {
     m.dt = o.sample_time;
     m.r = default_thresholds(train_x(d), o.num_operators);
     m.p.assign(m.r.size(), 1.0);
-    m.tau = rate_time_constant(d, m.dt);
+    // tau: the data's time constant (rate_time_constant) times 1/2, 1, 2, 4; for each, c
+    // by golden section in its admissible range; the pair of least cost is kept.
+    const double tau0 = rate_time_constant(d, m.dt);
     const double rmax = m.r.empty() ? 0.0 : m.r.back();
-    const double cmax = rmax > 0 ? 0.5 * (m.tau + m.dt) / rmax * (1 - 1e-9) : 0.0;
     int solves = 0;
-    auto at = [&](double c, Solution* out) {
+    auto at = [&](double tau, double c, Solution* out) {
       RatePiParams t = m;
+      t.tau = tau;
       t.c = c;
       const Design D = design(t, d);
-      Eigen::VectorXd lo = lower_bounds(D.A.cols(), o);
-      Solution s = solve(D, lo, d);
+      Solution s = solve(D, lower_bounds(D.A.cols(), o), d);
       ++solves;
       if (out) *out = s;
       return s.sse;
     };
-    // golden section on c in [0, cmax] (the cost is smooth in c; 24 steps: 1e-5 of the range)
-    const double g = 0.5 * (std::sqrt(5.0) - 1);
-    double a = 0, b = cmax, c1 = b - g * (b - a), c2 = a + g * (b - a);
-    double f1 = at(c1, nullptr), f2 = at(c2, nullptr);
-    for (int it = 0; it < 24 && cmax > 0; ++it) {
-      if (f1 <= f2) {
-        b = c2, c2 = c1, f2 = f1, c1 = b - g * (b - a), f1 = at(c1, nullptr);
-      } else {
-        a = c1, c1 = c2, f1 = f2, c2 = a + g * (b - a), f2 = at(c2, nullptr);
+    double best_c = 0.0, best_tau = tau0, best_cost = at(tau0, 0.0, nullptr);  // the rate-independent end
+    double cmax = 0.0;
+    for (double f : {0.5, 1.0, 2.0, 4.0}) {
+      const double tau = f * tau0;
+      const double cm = rmax > 0 ? 0.5 * (tau + m.dt) / rmax * (1 - 1e-9) : 0.0;
+      if (!(cm > 0)) continue;
+      // golden section on c in [0, cm] (the cost is smooth in c; 24 steps: 1e-5 of the range)
+      const double g = 0.5 * (std::sqrt(5.0) - 1);
+      double a = 0, b = cm, c1 = b - g * (b - a), c2 = a + g * (b - a);
+      double f1 = at(tau, c1, nullptr), f2 = at(tau, c2, nullptr);
+      for (int it = 0; it < 24; ++it) {
+        if (f1 <= f2) {
+          b = c2, c2 = c1, f2 = f1, c1 = b - g * (b - a), f1 = at(tau, c1, nullptr);
+        } else {
+          a = c1, c1 = c2, f1 = f2, c2 = a + g * (b - a), f2 = at(tau, c2, nullptr);
+        }
+      }
+      if (std::min(f1, f2) < best_cost) {
+        best_cost = std::min(f1, f2);
+        best_c = f1 <= f2 ? c1 : c2;
+        best_tau = tau;
+        cmax = cm;
       }
     }
-    double best_c = f1 <= f2 ? c1 : c2;
-    if (at(0.0, nullptr) <= std::min(f1, f2)) best_c = 0.0;  // the rate-independent end
+    m.tau = best_tau;
     Solution s;
-    at(best_c, &s);
+    at(best_tau, best_c, &s);
     m.c = best_c;
     m.q = s.t(0);
     for (std::size_t i = 0; i < m.r.size(); ++i) m.p[i] = s.t(static_cast<Eigen::Index>(i + 1));
@@ -289,11 +303,11 @@ class RatePiKind final : public Parametrization {
     names.insert(names.end(), {"c", "tau"});
     values.insert(values.end(), {m.c, m.tau});
     finish(rep, d, m, names, values,
-           fmt::format("golden-section search of c in [0, {:.4g}] (c max(r) <= (tau + dt) / 2, tau = {:.4g} s from the "
-                       "reversal intervals) around bounded linear least squares",
-                       cmax, m.tau),
+           fmt::format("golden-section search of c in [0, {:.4g}] (c max(r) <= (tau + dt) / 2) for tau = {:.4g} s (x 1/2, 1, "
+                       "2, 4 of {:.4g} s from the reversal intervals) around bounded linear least squares",
+                       cmax, m.tau, tau0),
            solves, o.min_slope);
-    rep.parameters.back().held = true;  // tau: from the data, not fitted
+    rep.parameters.back().held = true;  // tau: chosen from a grid, no standard error
   }
 };
 

@@ -51,7 +51,8 @@ void bind_models(py::module_& m) {
       "naming what and where. A subclass of ValueError.";
 
   py::class_<Model>(m, "Model", R"doc(
-A hysteresis model (pi, gpi, mpi-deadzone, mpi-asym) run sample by sample.
+A hysteresis model (pi, gpi, mpi-deadzone, mpi-asym, preisach, kp, bouc-wen, maxwell-slip,
+rate-pi) run sample by sample.
 
 Model(spec) takes a dict with the model-file keys, e.g.
 ``{"model": "gpi", "n": 10, "c": [c0, c1, c2, c3], "q": q, "rho": rho, "tau": tau, "alpha": alpha}``,
@@ -76,12 +77,15 @@ or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
            py::arg("path"),
            "Write the model file (JSON) to path, atomically: on an error the old file is left as it was.")
       .def("__repr__", [](const Model& s) {
+        if (!has_pi_structure(s.params()))
+          return fmt::format("<hysteron.Model {} with {} state entries>", s.name(), s.state().y.size());
         return fmt::format("<hysteron.Model {} with {} operators>", s.name(), s.num_operators());
       });
 
   py::class_<Inverse>(m, "Inverse", R"doc(
 Exact inverse of a model: desired output -> input. Analytical for pi, gpi and
-mpi-deadzone (Eqs. 9-11), exact per-sample bracketing for mpi-asym.
+mpi-deadzone, maxwell-slip (Eqs. 9-11), exact per-sample bracketing for mpi-asym,
+preisach, kp, bouc-wen and rate-pi.
 Outputs beyond reach saturate at the input limits (lo, hi).)doc")
       .def(py::init([](const py::object& spec, py::object limits) {
              InverseOptions opt;

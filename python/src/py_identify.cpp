@@ -127,8 +127,8 @@ usable by hysteron.Model (it may not be invertible).)doc");
     for (FitStatus st : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
                          FitStatus::poor_fit, FitStatus::invalid_input})
       statuses.append(std::string(fit_status_name(st)));
-    for (FitModel k : {FitModel::automatic, FitModel::gpi, FitModel::pi, FitModel::mpi_deadzone, FitModel::mpi_asym})
-      models.append(std::string(fit_model_name(k)));
+    models.append(std::string(fit_model_name(FitModel::automatic)));
+    for (FitModel k : fit_model_kinds) models.append(std::string(fit_model_name(k)));
     m.attr("fit_statuses") = py::tuple(statuses);
     m.attr("fit_models") = py::tuple(models);
   }

@@ -26,7 +26,8 @@ def record():
 
 def test_names_include_poor_fit_and_auto():
     assert "poor_fit" in hysteron.fit_statuses
-    assert {"auto", "gpi", "pi", "mpi-deadzone", "mpi-asym"} == set(hysteron.fit_models)
+    assert {"auto", "gpi", "pi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip",
+            "rate-pi"} == set(hysteron.fit_models)
 
 
 def test_fit_report_fields():
@@ -99,3 +100,26 @@ def test_python_dict_equals_cli_json():
     assert cli["reference"] == pytest.approx(r["reference"])
     assert [p["name"] for p in cli["parameters"]] == [p["name"] for p in r["parameters"]]
     assert set(r) - {"ok", "report"} <= set(cli)
+
+
+def test_new_kinds_run_invert_and_fit_from_python():
+    specs = [
+        {"model": "preisach", "q": 0.5, "lo": -1, "hi": 1, "levels": 2, "w": [0.2, 0.1, 0.3], "input_limits": [-1.5, 1.5]},
+        {"model": "kp", "q": 0.5, "lo": -1, "hi": 1, "levels": 2, "w": [0.2, 0.1, 0.3], "input_limits": [-1.5, 1.5]},
+        {"model": "bouc-wen", "kx": 1.0, "kw": -0.05, "rho": 4, "sigma": 1, "n": 1.5, "input_limits": [-1.5, 1.5]},
+        {"model": "maxwell-slip", "k0": 0.4, "k": [0.3, 0.5], "delta": [0.1, 0.25]},
+        {"model": "rate-pi", "q": 0.3, "r": [0.1, 0.2], "p": [0.4, 0.3], "c": 0.12, "tau": 0.1, "dt": 0.001,
+         "input_limits": [-1.5, 1.5]},
+    ]
+    x = np.sin(np.linspace(0, 6 * np.pi, 600)) * np.linspace(0.2, 1.0, 600)
+    for spec in specs:
+        m = hysteron.Model(spec)
+        assert spec["model"] in repr(m)
+        y = m.simulate(x)
+        inv = hysteron.Inverse(spec)
+        assert np.max(np.abs(inv.simulate(y) - x)) < 1e-9, spec["model"]
+        assert hysteron.Model(m.to_dict()).simulate(x).tolist() == y.tolist()
+    r = hysteron.fit(x, hysteron.Model(specs[1]).simulate(x), model="kp", num_operators=4)
+    assert r["status"] == "converged" and r["model"]["model"] == "kp", r["message"]
+    bad = hysteron.fit(x, y, model="rate-pi")
+    assert bad["status"] == "invalid_input" and "sample time" in bad["message"]

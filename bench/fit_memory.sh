@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Peak memory of `hysteron fit` (issue 13, item 8: "fit memory at most a small multiple of the
+# record's size"): maximum RSS (/usr/bin/time -v) and wall time of `fit --model M` on records of
+# R rows (input,output CSV), and the ratio of the peak RSS to the record's raw size (16 bytes a
+# row: two doubles).
+#
+#   bench/fit_memory.sh [HYSTERON_BINARY] [ROWS...]        # defaults: build/hysteron, 1000000
+#   MODELS="pi gpi" FIT_ARGS="--threads 1" bench/fit_memory.sh build/hysteron 1000000 10000000
+#
+# MODELS (default "pi gpi") are the kinds fitted; FIT_ARGS are added to every fit (default: none,
+# i.e. 2 starts on one thread per core). The records (a GPI, n = 10, driven by a slow chirp-like
+# input, plus 0.2 % noise; about 40 bytes a row as CSV) are written in a temporary directory and
+# removed at the end.
+set -euo pipefail
+BIN=${1:-build/hysteron}
+shift || true
+ROWS=("$@")
+[ ${#ROWS[@]} -gt 0 ] || ROWS=(1000000)
+MODELS=${MODELS:-pi gpi}
+FIT_ARGS=${FIT_ARGS:-}
+PY=/usr/bin/python3
+[ -x "$BIN" ] || { echo "no executable $BIN" >&2; exit 1; }
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+
+cat > "$T/gpi.json" <<'JSON'
+{"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05}
+JSON
+
+printf '%-6s %10s %12s %12s %8s %10s %s\n' model rows "record MB" "peak RSS MB" ratio "wall" status
+for n in "${ROWS[@]}"; do
+  $PY - "$T/x.csv" "$n" <<'PYEOF'
+import sys
+import numpy as np
+n = int(sys.argv[2])
+k = np.arange(n)
+# a few hundred cycles whatever the length, amplitude swept between 0.05 and 0.25
+x = 0.3 + (0.15 + 0.1 * np.cos(2 * np.pi * 3 * k / n)) * np.sin(2 * np.pi * 400 * k / n)
+with open(sys.argv[1], "w") as f:
+    f.write("input\n")
+    f.write("\n".join(map(repr, x.tolist())))
+    f.write("\n")
+PYEOF
+  "$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/sim.csv" 2> /dev/null
+  $PY - "$T/sim.csv" "$T/d.csv" <<'PYEOF'
+import sys
+import numpy as np
+d = np.loadtxt(sys.argv[1], delimiter=",", skiprows=1)
+rng = np.random.default_rng(1)
+y = d[:, 1] + 0.002 * (d[:, 1].max() - d[:, 1].min()) * rng.standard_normal(d.shape[0])
+with open(sys.argv[2], "w") as f:
+    f.write("input,output\n")
+    f.write("\n".join(map("{!r},{!r}".format, d[:, 0].tolist(), y.tolist())))
+    f.write("\n")
+PYEOF
+  rm -f "$T/x.csv" "$T/sim.csv"
+  for m in $MODELS; do
+    set +e
+    # shellcheck disable=SC2086
+    /usr/bin/time -v "$BIN" fit --model "$m" --data "$T/d.csv" --input input --output output \
+      --out "$T/m.json" --force $FIT_ARGS > "$T/fit.txt" 2> "$T/time.txt"
+    code=$?
+    set -e
+    rss=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$T/time.txt")
+    wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$T/time.txt")
+    status=$(grep -o -m1 ' fit: [a-z_]*' "$T/fit.txt" | sed 's/ fit: //' || true)
+    awk -v m="$m" -v n="$n" -v rss="$rss" -v wall="$wall" -v st="${status:-exit $code}" 'BEGIN {
+      rec = 16 * n / 1048576; mb = rss / 1024;
+      printf "%-6s %10d %12.1f %12.1f %8.1f %10s %s\n", m, n, rec, mb, mb / rec, wall, st }'
+  done
+done

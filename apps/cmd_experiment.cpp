@@ -27,7 +27,29 @@ struct ExperimentArgs {
   int learning_periods = 10;
   bool json = false;
   std::string out;
+  std::string model = "auto";
 };
+
+// "auto" and every kind fit() identifies (the registry, identify.hpp).
+std::vector<std::string> model_choices() {
+  std::vector<std::string> names{std::string(fit_model_name(FitModel::automatic))};
+  for (FitModel m : fit_model_kinds) names.emplace_back(fit_model_name(m));
+  return names;
+}
+
+std::string model_help() {
+  std::string kinds;
+  for (FitModel m : fit_model_kinds) kinds += (kinds.empty() ? "" : ", ") + std::string(fit_model_name(m));
+  return fmt::format("Kind of hysteron's model, the one the compensated, learning and adaptive variants invert: auto "
+                     "(default: every kind fitted on the identification run, the least RMS on a second run chosen) "
+                     "or one of {} (only that one; an error if it cannot be fitted or inverted). The adaptive "
+                     "variant needs the PI family and is skipped, with a note, for another kind.",
+                     kinds);
+}
+
+void add_model_option(CLI::App* cmd, ExperimentArgs& args) {
+  cmd->add_option("--model", args.model, model_help())->check(CLI::IsMember(model_choices()))->default_val("auto");
+}
 
 ExperimentOptions options_from(const ExperimentArgs& a) {
   ExperimentOptions o;
@@ -37,6 +59,7 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   if (!a.plant.empty()) o.rig = load_rig_params(a.plant);
   if (!a.tracking_plant.empty()) o.tracking_rig = load_rig_params(a.tracking_plant);
   o.adaptive = !a.no_adaptive;
+  o.model = fit_model_from_name(a.model);
   return o;
 }
 
@@ -84,6 +107,7 @@ void add_experiment(CLI::App& app, Action& action) {
                   "Rig parameters of the tracking runs (JSON), if the rig changed after its identification on "
                   "--plant (default: the same rig)");
   cmd->add_flag("--no-adaptive", args->no_adaptive, "Do not run the adaptive variant");
+  add_model_option(cmd, *args);
   cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)")
       ->check(non_negative_integer());
   cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");
@@ -113,6 +137,7 @@ void add_experiment(CLI::App& app, Action& action) {
   demo->add_option("--learning-periods", dargs->learning_periods,
                    "Periods of the learning variant (0: no learning runs; default 10)")
       ->check(CLI::Range(0, 1000));
+  add_model_option(demo, *dargs);
   demo->add_option("--out", dargs->out, "Directory for every experiment's outputs (default out/demo)")
       ->default_val("out/demo");
   demo->callback([dargs, &action] {

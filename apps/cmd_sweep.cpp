@@ -31,6 +31,7 @@ struct SweepArgs {
   std::string plant;
   std::uint64_t seed = 1;
   int learning_periods = ExperimentOptions{}.learning_periods;
+  std::string model = "auto";
   unsigned jobs = 0;
   std::string out;
   std::string report;
@@ -118,6 +119,7 @@ int run_sweep_command(const SweepArgs& a) {
   SweepOptions o;
   o.seed = a.seed;
   o.learning_periods = a.learning_periods;
+  o.model = fit_model_from_name(a.model);
   o.jobs = a.jobs;
   for (const auto& e : a.experiments) {
     if (e == "all") {
@@ -193,6 +195,20 @@ void add_sweep(CLI::App& app, Action& action) {
   cmd->add_option("--learning-periods", args->learning_periods,
                   "Periods of the learning variant in every run (0: no learning runs; default as experiment)")
       ->check(CLI::Range(0, 1000));
+  {
+    std::vector<std::string> choices{std::string(fit_model_name(FitModel::automatic))};
+    std::string kinds;
+    for (FitModel m : fit_model_kinds) {
+      choices.emplace_back(fit_model_name(m));
+      kinds += (kinds.empty() ? "" : ", ") + std::string(fit_model_name(m));
+    }
+    cmd->add_option("--model", args->model,
+                    fmt::format("Kind of hysteron's model in every run: auto (default: each run fits every kind and "
+                                "chooses on its own rig, about 2.5 s more per run) or one of {} (pinned)",
+                                kinds))
+        ->check(CLI::IsMember(choices))
+        ->default_val("auto");
+  }
   cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
       ->check(non_negative_integer())
       ->check(CLI::Range(1u, 1024u));

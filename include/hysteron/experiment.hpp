@@ -63,6 +63,17 @@ struct ExperimentOptions {
   // The rig of the tracking runs if it differs from the identified one (a rig that changed
   // after its identification: wear, temperature, another load); unset: the same rig.
   std::optional<PamRigParams> tracking_rig;
+  // The kind of hysteron's model, the one the compensated, learning and adaptive variants
+  // invert (the faithful variant always uses the paper's model):
+  //   FitModel::automatic (default): every kind of fit_model_kinds is fitted on the
+  //     identification run; the one with the least RMS on a second identification run
+  //     (other seed, other pressure sequence) is used. A kind that cannot be fitted or
+  //     inverted is skipped with a note in ExperimentResult::messages.
+  //   one kind of fit_model_kinds: only that one; run_experiment throws hysteron::Error
+  //     naming the kind if it cannot be fitted or inverted.
+  // The adaptive variant needs the PI family (AdaptiveInverse): for another kind it is
+  // skipped with a note saying so.
+  FitModel model = FitModel::automatic;
   void validate() const;         // throws hysteron::Error
 };
 
@@ -125,6 +136,17 @@ struct PublishedFigures {
   const PublishedErrors* find(const std::string& reference) const noexcept;
 };
 
+// One candidate for hysteron's model (ExperimentResult::candidates).
+struct ModelCandidate {
+  FitModel kind = FitModel::gpi;
+  bool ok = false;          // fitted, invertible and scored on the second identification run
+  FitStatus status = FitStatus::not_run;  // of its fit
+  std::string message;      // why it was skipped (!ok), else the fit's message
+  FitMetrics validation;    // on the second identification run (ok only)
+  double fit_time_s = 0.0;  // wall time of its fit
+  bool chosen = false;      // it is best_fit
+};
+
 struct ExperimentResult {
   std::string name;
   std::string title;
@@ -136,6 +158,12 @@ struct ExperimentResult {
   FitMetrics validation;          // ... on the minor loops
   FitReport best_fit;             // hysteron's model for the compensated variant
   FitMetrics best_validation;     // on a second identification run (other seed)
+  // How best_fit was chosen: ExperimentOptions::model of the run (automatic or the kind
+  // asked for), every candidate tried (in the order fitted; in auto mode the chosen one has
+  // the least validation RMS among those ok), and one line saying which and why.
+  FitModel model_choice = FitModel::automatic;
+  std::vector<ModelCandidate> candidates;
+  std::string model_reason;
   ModelParams baseline_model;     // the straight line of the baseline
   double lead_s = 0.0;            // preview of the compensated variants (identified)
   RigDynamics dynamics;           // identified from the identification run

@@ -102,6 +102,9 @@ struct SweepOptions {
   std::vector<PlantVariant> variants;     // the base rig itself is always run first, as "nominal"
   std::uint64_t seed = 1;                 // rig noise seed of every run
   int learning_periods = ExperimentOptions{}.learning_periods;  // of every run (0: no learning runs)
+  // ExperimentOptions::model of every run: automatic (each run chooses among every kind on
+  // its own rig; fits 9 kinds per run) or one kind pinned for every run.
+  FitModel model = ExperimentOptions{}.model;
   unsigned jobs = 0;                      // threads; 0 = std::thread::hardware_concurrency()
   std::function<void(const SweepProgress&)> progress;  // optional
   // What runs one experiment: run_experiment when empty (a test may pass a cheaper one;
@@ -127,6 +130,10 @@ struct SweepRun {
   std::string error;        // the exception's message when !ok
   double wall_time_s = 0.0;
   std::vector<SweepRunErrors> runs;  // in the order of ExperimentResult::runs
+  // The kind of hysteron's model the run used (ExperimentResult::best_fit), "" if it failed,
+  // and ExperimentResult::model_reason.
+  std::string model;
+  std::string model_reason;
 };
 
 struct SweepVariant {
@@ -142,6 +149,7 @@ struct SweepResult {
   std::vector<std::string> notes; // e.g. a variant dropped because it is the nominal rig
   std::uint64_t seed = 1;
   unsigned jobs = 1;
+  FitModel model = FitModel::automatic;  // SweepOptions::model
   double wall_time_s = 0.0;
 
   std::size_t failures() const noexcept;

@@ -50,8 +50,10 @@ void bind_experiment(py::module_& m) {
   m.def(
       "run_experiment",
       [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
-         const std::string& report_path, int learning_periods, bool adaptive, const py::object& tracking_plant) {
+         const std::string& report_path, int learning_periods, bool adaptive, const py::object& tracking_plant,
+         const std::string& model) {
         ExperimentOptions o;
+        o.model = fit_model_from_name(model);
         o.name = name;
         o.seed = seed;
         o.learning_periods = learning_periods;
@@ -86,6 +88,27 @@ void bind_experiment(py::module_& m) {
         d["validation"] = metrics_dict(r.validation);
         d["best_fit"] = fit_dict(r.best_fit);
         d["best_validation"] = metrics_dict(r.best_validation);
+        {
+          py::dict md;  // which kind the compensated variants invert, and why
+          md["choice"] = std::string(fit_model_name(r.model_choice));
+          md["kind"] = std::string(fit_model_name(r.best_fit.model_kind));
+          md["reason"] = r.model_reason;
+          py::list cands;
+          for (const auto& c : r.candidates) {
+            py::dict x;
+            x["kind"] = std::string(fit_model_name(c.kind));
+            x["ok"] = c.ok;
+            x["status"] = std::string(fit_status_name(c.status));
+            x["message"] = c.message;
+            x["validation"] = metrics_dict(c.validation);
+            x["fit_time_s"] = c.fit_time_s;
+            x["chosen"] = c.chosen;
+            cands.append(x);
+          }
+          md["candidates"] = cands;
+          d["model"] = md;
+        }
+        d["messages"] = r.messages;
         py::list runs;
         for (const auto& run : r.runs) {
           py::dict x;
@@ -112,9 +135,13 @@ void bind_experiment(py::module_& m) {
       },
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
       py::arg("report") = "", py::arg("learning_periods") = 10, py::arg("adaptive") = true,
-      py::arg("tracking_plant") = py::none(),
+      py::arg("tracking_plant") = py::none(), py::arg("model") = "auto",
       R"doc(Run one of the registered experiments (experiment_names(): "gpi-pid", "mpi-openloop",
 "mpi-pwm") on the simulated rig. plant: rig parameter dict or JSON path (None: defaults).
+model: kind of hysteron's model, the one the compensated, learning and adaptive variants
+invert: "auto" (every kind fitted, the least RMS on a second identification run chosen) or
+one kind of fit_models() (hysteron.Error if unknown or if it cannot be fitted or inverted);
+the adaptive variant needs the PI family and is skipped (a note in "messages") otherwise.
 learning_periods: periods of the learning variant (0: none; 0..1000).
 adaptive: run the adaptive variant (online RLS of the inverse's weights).
 tracking_plant: rig parameters of the tracking runs if the rig changed after its
@@ -122,7 +149,8 @@ identification (None: the identified rig).
 out: directory for the CSV/JSON outputs (as `hysteron experiment --out`);
 report: path of an HTML report. Returns a dict: "summary" (the CLI's --json
 object), "table" (text), "identification" (numpy series + train_end), "fit",
-"validation", "best_fit", "best_validation", "runs" (list of dicts with the
+"validation", "best_fit", "best_validation", "model" (choice, kind, reason, candidates: kind,
+ok, status, message, validation, fit_time_s, chosen), "messages", "runs" (list of dicts with the
 errors, the per-period errors of a learning run and numpy time series) and "published".)doc");
 
   m.def(

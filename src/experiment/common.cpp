@@ -76,8 +76,9 @@ ModelParams straight_line(const IdRecord& r) {
   return g;
 }
 
-FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what) {
+FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what, FitStatus* status) {
   FitReport rep = fit(r.p, r.x_mm, fo);
+  if (status) *status = rep.status;
   if (rep.status == FitStatus::invalid_input || rep.status == FitStatus::failed)
     throw Error(fmt::format("experiment: fit of the {} failed: {}", what, rep.message));
   std::visit([](auto& p) { p.input_limits = {0.0, kPressureMax}; }, rep.model);

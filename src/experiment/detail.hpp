@@ -122,7 +122,9 @@ IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const st
                             double tc);
 IdRecord decimate(const IdRecord& r, std::size_t every);
 ModelParams straight_line(const IdRecord& r);
-FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what);
+// fit() with its model checked: a failed fit or a model that cannot be inverted is a
+// hysteron::Error; `status` (if given) receives the fit's status either way.
+FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what, FitStatus* status = nullptr);
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
 // Runs one tracking experiment: `reference` sampled at the control period, the
 // preview `lead` samples ahead (wrapping around for a periodic reference).

@@ -1,6 +1,7 @@
 #include "hysteron/experiment.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -61,9 +62,122 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   return run;
 }
 
+// The kinds a run tries for hysteron's model: the one asked for, or (auto) the paper's
+// kind first, then every other kind in the order of fit_model_kinds.
+std::vector<FitModel> candidate_kinds(const ExperimentOptions& o, const Spec& spec) {
+  if (o.model != FitModel::automatic) return {o.model};
+  std::vector<FitModel> kinds{spec.model};
+  for (FitModel k : fit_model_kinds)
+    if (k != spec.model) kinds.push_back(k);
+  return kinds;
+}
+
+int candidate_operators(FitModel kind, const Spec& spec) {
+  return kind == FitModel::mpi_asym ? 20 : std::max(10, spec.operators);
+}
+
+// A rate-pi fitted at the decimated record's sample period, run at the control period: its
+// rate is per second, so only dt changes (the filter of the rate keeps its time constant).
+// The bound c max(r) <= (tau + dt) / 2 tightens with a shorter dt; c is lowered onto it if
+// needed (said in the messages).
+void to_control_rate(ModelParams& m, double tc, std::vector<std::string>& messages) {
+  auto* r = std::get_if<RatePiParams>(&m);
+  if (!r) return;
+  const double fit_dt = r->dt;
+  r->dt = tc;
+  const double rmax = r->r.empty() ? 0.0 : *std::max_element(r->r.begin(), r->r.end());
+  std::string lowered;
+  if (rmax > 0.0 && r->c * rmax > 0.5 * (r->tau + r->dt)) {
+    const double c = 0.5 * (r->tau + r->dt) / rmax * (1.0 - 1e-12);
+    lowered = fmt::format("; c lowered from {:.6g} to {:.6g} s per input unit to keep c max(r) <= (tau + dt) / 2", r->c, c);
+    r->c = c;
+  }
+  validate_model(m);
+  messages.push_back(fmt::format("rate-pi: fitted at the decimated record's sample time dt = {:g} s, run by the "
+                                 "loops at the control period dt = {:g} s{}",
+                                 fit_dt, tc, lowered));
+}
+
+// Fits the candidates of hysteron's model on `idf` and keeps (res.best_fit) the one with the
+// least RMS on `id2`; fills res.candidates, res.model_choice and res.model_reason.
+void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& idf, const IdRecord& id2,
+                  const FitOptions& fo, double fit_dt, ExperimentResult& res) {
+  const bool automatic = o.model == FitModel::automatic;
+  res.model_choice = o.model;
+  double best_rms = std::numeric_limits<double>::infinity();
+  std::size_t best = 0;
+  for (FitModel kind : candidate_kinds(o, spec)) {
+    FitOptions f2 = fo;
+    f2.model = kind;
+    f2.num_operators = candidate_operators(kind, spec);
+    f2.sample_time = fit_dt;  // rate-pi's rates are per second
+    f2.train = {};
+    ModelCandidate c;
+    c.kind = kind;
+    FitReport rep;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      rep = fit_checked(idf, f2, fmt::format("{} model", fit_model_name(kind)), &c.status);
+      c.validation = evaluate(rep.model, id2.p, id2.x_mm);
+      if (!std::isfinite(c.validation.rms))
+        throw Error(fmt::format("experiment: the {} model's output on the second identification run is not finite",
+                                fit_model_name(kind)));
+      c.ok = true;
+      c.message = rep.message;
+    } catch (const Error& e) {
+      c.message = e.what();
+      if (!automatic)
+        throw Error(fmt::format("experiment {}: the model kind {} (--model) cannot be used for the compensated "
+                                "variants: {}",
+                                spec.name, fit_model_name(kind), e.what()));
+      res.messages.push_back(fmt::format("candidate {} skipped: {}", fit_model_name(kind), e.what()));
+    }
+    c.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (c.ok && c.validation.rms < best_rms) {
+      best_rms = c.validation.rms;
+      best = res.candidates.size();
+      res.best_fit = std::move(rep);
+      res.best_validation = c.validation;
+    }
+    res.candidates.push_back(std::move(c));
+  }
+  if (!std::isfinite(best_rms))
+    throw Error(fmt::format("experiment {}: no model kind could be fitted and inverted for the compensated variants "
+                            "(see the candidates' messages: {})",
+                            spec.name, fmt::join(res.messages, "; ")));
+  res.candidates[best].chosen = true;
+  const ModelCandidate& c = res.candidates[best];
+  if (automatic) {
+    std::size_t ok = 0;
+    double second = std::numeric_limits<double>::infinity();
+    for (const auto& x : res.candidates)
+      if (x.ok) {
+        ++ok;
+        if (!x.chosen) second = std::min(second, x.validation.rms);
+      }
+    res.model_reason = fmt::format(
+        "auto: {} has the least RMS on the second identification run, {:.3f} mm, of the {} of {} kinds that could "
+        "be fitted and inverted{}",
+        fit_model_name(c.kind), c.validation.rms, ok, res.candidates.size(),
+        std::isfinite(second) ? fmt::format(" (next best {:.3f} mm)", second) : std::string());
+  } else {
+    res.model_reason = fmt::format("{} asked for (--model {}); {:.3f} mm RMS on the second identification run",
+                                   fit_model_name(c.kind), fit_model_name(c.kind), c.validation.rms);
+  }
+  if (res.best_fit.status == FitStatus::poor_fit)
+    res.messages.push_back(fmt::format("hysteron's model {}: the fit is poor ({})", fit_model_name(c.kind),
+                                       res.best_fit.message));
+  to_control_rate(res.best_fit.model, o.control_period, res.messages);
+}
+
 }  // namespace
 
 void ExperimentOptions::validate() const {
+  if (model != FitModel::automatic &&
+      std::find(std::begin(fit_model_kinds), std::end(fit_model_kinds), model) == std::end(fit_model_kinds))
+    throw Error(fmt::format("experiment: model = {} is not a model kind (expected auto or one of the kinds of "
+                            "fit_model_kinds)",
+                            static_cast<int>(model)));
   hysteron::validate(rig, "experiment: rig");
   if (!(control_period >= rig.simulation.dt) || !(control_period <= 0.02))
     throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, 0.02 s]",
@@ -115,26 +229,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // 2. hysteron's model: candidates fitted on the whole record, chosen on a second
   //    identification run (other seed, other pressure sequence).
   const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919, spec.id2_pressure(tc), tc), every);
-  double best_rms = std::numeric_limits<double>::infinity();
-  for (FitModel kind : {spec.model, FitModel::gpi, FitModel::mpi_asym}) {
-    FitOptions f2 = fo;
-    f2.model = kind;
-    f2.num_operators = kind == FitModel::mpi_asym ? 20 : std::max(10, spec.operators);
-    f2.train = {};
-    FitReport rep;
-    try {
-      rep = fit_checked(idf, f2, "candidate model");
-    } catch (const Error& e) {
-      res.messages.push_back(fmt::format("candidate {} skipped: {}", fit_model_name(kind), e.what()));
-      continue;
-    }
-    const FitMetrics m = evaluate(rep.model, id2.p, id2.x_mm);
-    if (m.rms < best_rms) {
-      best_rms = m.rms;
-      res.best_fit = std::move(rep);
-      res.best_validation = m;
-    }
-  }
+  choose_model(o, spec, idf, id2, fo, static_cast<double>(every) * tc, res);
   res.baseline_model = straight_line(id);
 
   // 3. the rig's dynamics, from the identification run (and a relay test for the valves)
@@ -162,6 +257,13 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     rc.reference = &ref;
     for (const Variant& v : spec.variants) {
       if (v.name == "adaptive" && !o.adaptive) continue;
+      if (v.name == "adaptive" && !has_pi_structure(res.best_fit.model)) {
+        res.messages.push_back(fmt::format("adaptive ({}) not run: it re-identifies the weights of a PI-family model "
+                                           "(pi, gpi, mpi-deadzone, mpi-asym, maxwell-slip), and hysteron's model is "
+                                           "{}",
+                                           ref.name, fit_model_name(res.best_fit.model_kind)));
+        continue;
+      }
       Loop loop;
       try {
         loop = v.make(rc);
@@ -221,6 +323,15 @@ std::string ExperimentResult::table() const {
                    "on the minor loops; best model {} ({:.3f} mm RMS on a second run)\n",
                    fit_model_name(fit.model_kind), fit.train.rms, validation.rms, validation.rms_percent_span,
                    fit_model_name(best_fit.model_kind), best_validation.rms);
+  if (!model_reason.empty()) s += fmt::format("  model of the compensated variants: {}\n", model_reason);
+  if (candidates.size() > 1) {
+    s += "  candidates (RMS on the second run [mm], fit time [s]):";
+    for (const auto& c : candidates)
+      s += c.ok ? fmt::format(" {}{} {:.3f} ({:.2f} s);", fit_model_name(c.kind), c.chosen ? "*" : "", c.validation.rms,
+                              c.fit_time_s)
+                : fmt::format(" {} skipped;", fit_model_name(c.kind));
+    s.back() = '\n';
+  }
   s += fmt::format("  {:<10} {:<12} {:>9} {:>9} {:>9}\n", "reference", "variant", "max [mm]", "MAE [mm]", "RMS [mm]");
   for (const auto& r : runs)
     s += fmt::format("  {:<10} {:<12} {:>9.3f} {:>9.4f} {:>9.4f}{}\n", r.reference, r.variant, r.errors.max_error_mm,

@@ -358,6 +358,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   const auto start = clock::now();
   SweepResult r;
   r.seed = options.seed;
+  r.model = options.model;
   if (options.experiments.empty()) throw Error("sweep: no experiment given");
   const std::vector<std::string> known = experiment_names();
   for (const auto& name : options.experiments) {
@@ -376,6 +377,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   {
     ExperimentOptions eo;
     eo.learning_periods = options.learning_periods;
+    eo.model = options.model;
     try {
       eo.validate();
     } catch (const Error& e) {
@@ -444,6 +446,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.rig = r.variants[run.variant].rig;
         eo.seed = options.seed;
         eo.learning_periods = options.learning_periods;
+        eo.model = options.model;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
         for (const auto& tr : er.runs) {
           SweepRunErrors e;
@@ -460,10 +463,13 @@ SweepResult run_sweep(const SweepOptions& options) {
           }
           run.runs.push_back(std::move(e));
         }
+        run.model = std::string(fit_model_name(er.best_fit.model_kind));
+        run.model_reason = er.model_reason;
         run.ok = true;
       } catch (const std::exception& e) {
         run.ok = false;
         run.runs.clear();
+        run.model.clear();
         run.error = e.what();
       } catch (...) {
         run.ok = false;
@@ -577,11 +583,14 @@ std::string SweepResult::text() const {
   std::string out = fmt::format("Sweep: {} experiment(s) x {} rig(s), seed {}, {} thread(s), {:.1f} s wall time\n",
                                 experiments.size(), variants.size(), seed, jobs, wall_time_s);
   out += "RMS tracking error [mm] per variant kind; comp/nom = compensated RMS / its nominal value;\n"
-         "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa]\n";
+         "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa];\n";
+  out += fmt::format("model = the kind of hysteron's model the compensated variants invert ({})\n",
+                     model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
+                                                  : fmt::format("--model {}", fit_model_name(model)));
   for (std::size_t e = 0; e < experiments.size(); ++e) {
     out += fmt::format("\n{}\n{:<{}}  {:<9}", experiments[e], "variant", wv, "reference");
     for (const auto& k : kinds) out += fmt::format(" {:>11}", k);
-    out += fmt::format(" {:>9} {:>9} {:>13}\n", "comp/nom", "comp/base", "command");
+    out += fmt::format(" {:>9} {:>9} {:>13}  {}\n", "comp/nom", "comp/base", "command", "model");
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const SweepRun& run = this->run(e, v);
       if (!run.ok) {
@@ -603,7 +612,8 @@ std::string SweepResult::text() const {
         const double rb = c && b ? ratio(c->errors.rms_error_mm, b->errors.rms_error_mm) : nan;
         out += std::isfinite(rn) ? fmt::format(" {:>9.2f}", rn) : fmt::format(" {:>9}", "-");
         out += std::isfinite(rb) ? fmt::format(" {:>9.2f}", rb) : fmt::format(" {:>9}", "-");
-        out += std::isfinite(lo) ? fmt::format(" {:>6.3f}..{:<5.3f}\n", lo, hi) : fmt::format(" {:>13}\n", "-");
+        out += std::isfinite(lo) ? fmt::format(" {:>6.3f}..{:<5.3f}", lo, hi) : fmt::format(" {:>13}", "-");
+        out += fmt::format("  {}\n", run.model);
       }
     }
   }
@@ -622,6 +632,7 @@ json SweepResult::to_json() const {
   j["seed"] = seed;
   j["jobs"] = jobs;
   j["wall_time_s"] = wall_time_s;
+  j["model_choice"] = std::string(fit_model_name(model));
   j["experiments"] = experiments;
   j["failures"] = failures();
   j["variants"] = json::array();
@@ -644,6 +655,7 @@ json SweepResult::to_json() const {
     o["variant"] = variants.at(run.variant).variant.name;
     o["ok"] = run.ok;
     if (!run.ok) o["error"] = run.error;
+    if (run.ok) o["model"] = run.model, o["model_reason"] = run.model_reason;
     o["wall_time_s"] = run.wall_time_s;
     o["tracking"] = json::array();
     const std::size_t e = static_cast<std::size_t>(

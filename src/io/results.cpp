@@ -500,7 +500,18 @@ json to_json(const ExperimentResult& r) {
   j["best_model"] = {{"model", std::string(fit_model_name(r.best_fit.model_kind))},
                      {"status", std::string(fit_status_name(r.best_fit.status))},
                      {"validate_second_run", to_json(r.best_validation)},
+                     {"choice", std::string(fit_model_name(r.model_choice))},
+                     {"reason", r.model_reason},
+                     {"candidates", json::array()},
                      {"parameters", model_or_null(r.best_fit.status, r.best_fit.model)}};
+  for (const auto& c : r.candidates)
+    j["best_model"]["candidates"].push_back({{"model", std::string(fit_model_name(c.kind))},
+                                             {"ok", c.ok},
+                                             {"status", std::string(fit_status_name(c.status))},
+                                             {"message", c.message},
+                                             {"validate_second_run", to_json(c.validation)},
+                                             {"fit_time_s", number(c.fit_time_s)},
+                                             {"chosen", c.chosen}});
   j["baseline_model"] = valid_model_or_null(r.baseline_model);
   j["lead_s"] = number(r.lead_s);
   j["dynamics"] = {{"dead_time_s", number(r.dynamics.dead_time_s)},
@@ -549,6 +560,28 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     if (b.contains("validate_second_run"))
       from_json(b["validate_second_run"], r.best_validation, key_where(bw, "validate_second_run"));
     if (b.contains("parameters")) read_model(b, "parameters", bw, r.best_fit.model);
+    // older files: no choice (the candidates were fixed then), no candidates
+    r.model_choice = b.contains("choice") ? model_kind_from(b, "choice", bw) : FitModel::automatic;
+    r.model_reason = opt_string(b, "reason", bw);
+    if (b.contains("candidates")) {
+      const json& cs = b["candidates"];
+      const std::string cw = key_where(bw, "candidates");
+      if (!cs.is_array()) throw Error(fmt::format("{}: expected an array", cw));
+      for (std::size_t i = 0; i < cs.size(); ++i) {
+        const std::string w = fmt::format("{}[{}]", cw, i);
+        if (!cs[i].is_object()) throw Error(fmt::format("{}: expected an object", w));
+        ModelCandidate c;
+        c.kind = model_kind_from(cs[i], "model", w);
+        c.ok = get_bool(cs[i], "ok", w);
+        c.status = fit_status_from_name(opt_string(cs[i], "status", w, "not_run"), key_where(w, "status"));
+        c.message = opt_string(cs[i], "message", w);
+        if (cs[i].contains("validate_second_run"))
+          from_json(cs[i]["validate_second_run"], c.validation, key_where(w, "validate_second_run"));
+        c.fit_time_s = opt_double(cs[i], "fit_time_s", w, 0.0);
+        c.chosen = opt_bool(cs[i], "chosen", w, false);
+        r.candidates.push_back(std::move(c));
+      }
+    }
   }
   if (j.contains("baseline_model") && !j["baseline_model"].is_null())
     r.baseline_model = model_from_json(j["baseline_model"], key_where(where, "baseline_model"));

@@ -1,0 +1,225 @@
+// The model kind of the compensated variants (ExperimentOptions::model, issue 14 item 7):
+// one kind pinned, auto over every kind (the chosen one has the least validation RMS of
+// the reported candidates), errors for a kind that does not exist, the adaptive variant
+// skipped with a note for a kind outside the PI family, the choice in the table, the JSON
+// (round trip) and the written files, and the controllers' steps allocation-free for
+// every kind.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <sstream>
+
+#include "alloc_counter.hpp"
+#include "hysteron/compensation.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
+#include "hysteron/identify.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
+#include "temp_dir.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+bool contains(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+
+const TrackingRun* find_run(const ExperimentResult& r, const std::string& variant) {
+  for (const auto& run : r.runs)
+    if (run.variant == variant) return &run;
+  return nullptr;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+// --model kp: the compensated variant inverts a kp, the result says so everywhere, and the
+// adaptive variant (PI family only) is skipped with a note naming the reason.
+TEST(ExperimentKinds, PinnedKpIsUsedAndReported) {
+  ExperimentOptions o;
+  o.name = "gpi-pid";
+  o.learning_periods = 0;
+  o.model = FitModel::kp;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_EQ(r.model_choice, FitModel::kp);
+  EXPECT_EQ(r.best_fit.model_kind, FitModel::kp);
+  EXPECT_TRUE(std::holds_alternative<KpParams>(r.best_fit.model));
+  ASSERT_EQ(r.candidates.size(), 1u);
+  EXPECT_EQ(r.candidates[0].kind, FitModel::kp);
+  EXPECT_TRUE(r.candidates[0].ok);
+  EXPECT_TRUE(r.candidates[0].chosen);
+  EXPECT_DOUBLE_EQ(r.candidates[0].validation.rms, r.best_validation.rms);
+  EXPECT_TRUE(contains(r.model_reason, "kp asked for")) << r.model_reason;
+  ASSERT_NE(find_run(r, "compensated"), nullptr);
+  ASSERT_NE(find_run(r, "faithful"), nullptr);
+  ASSERT_NE(find_run(r, "baseline"), nullptr);
+  EXPECT_LT(find_run(r, "compensated")->errors.rms_error_mm, find_run(r, "baseline")->errors.rms_error_mm);
+  // the adaptive variant: skipped, with the reason
+  EXPECT_EQ(find_run(r, "adaptive"), nullptr);
+  bool noted = false;
+  for (const auto& m : r.messages)
+    noted = noted || (m.starts_with("adaptive (sine) not run") && contains(m, "PI-family") && contains(m, "kp"));
+  EXPECT_TRUE(noted);
+  // the table, the JSON and its round trip
+  const std::string table = r.table();
+  EXPECT_TRUE(contains(table, "model of the compensated variants: kp asked for")) << table;
+  const nlohmann::json j = io::to_json(r);
+  EXPECT_EQ(j["best_model"]["model"], "kp");
+  EXPECT_EQ(j["best_model"]["choice"], "kp");
+  ASSERT_EQ(j["best_model"]["candidates"].size(), 1u);
+  EXPECT_EQ(j["best_model"]["candidates"][0]["model"], "kp");
+  EXPECT_EQ(j["best_model"]["candidates"][0]["chosen"], true);
+  const auto back = io::from_json<ExperimentResult>(j, "result.json");
+  EXPECT_EQ(back.model_choice, FitModel::kp);
+  EXPECT_EQ(back.model_reason, r.model_reason);
+  ASSERT_EQ(back.candidates.size(), 1u);
+  EXPECT_EQ(back.candidates[0].kind, FitModel::kp);
+  EXPECT_EQ(back.candidates[0].chosen, true);
+  EXPECT_EQ(back.candidates[0].status, r.candidates[0].status);
+  EXPECT_DOUBLE_EQ(back.candidates[0].validation.rms, r.candidates[0].validation.rms);
+  EXPECT_EQ(io::to_json(back)["best_model"], j["best_model"]);
+  // the files: result.json says which, best_model.json is that kind
+  hysteron::test::TempDir dir;
+  r.write(dir.path().string());
+  std::ifstream in(dir.path() / "result.json");
+  const auto written = nlohmann::json::parse(in);
+  EXPECT_EQ(written["best_model"]["model"], "kp");
+  EXPECT_EQ(written["best_model"]["reason"], r.model_reason);
+  EXPECT_TRUE(std::holds_alternative<KpParams>(io::read_model_file((dir.path() / "best_model.json").string())));
+}
+
+// auto (the default): every kind is a candidate, each reported with its validation RMS and
+// fit time, and the chosen one has the least RMS among those that could be used.
+TEST(ExperimentKinds, AutoTriesEveryKindAndChoosesTheLeastValidationRms) {
+  ExperimentOptions o;
+  EXPECT_EQ(o.model, FitModel::automatic);
+  o.name = "mpi-pwm";
+  o.learning_periods = 0;
+  o.adaptive = false;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_EQ(r.model_choice, FitModel::automatic);
+  ASSERT_EQ(r.candidates.size(), std::size(fit_model_kinds));
+  for (FitModel k : fit_model_kinds)
+    EXPECT_EQ(std::count_if(r.candidates.begin(), r.candidates.end(), [k](const ModelCandidate& c) { return c.kind == k; }),
+              1)
+        << fit_model_name(k);
+  EXPECT_EQ(r.candidates.front().kind, FitModel::mpi_deadzone);  // the paper's kind first
+  const ModelCandidate* chosen = nullptr;
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& c : r.candidates) {
+    if (c.chosen) {
+      EXPECT_EQ(chosen, nullptr) << "two chosen";
+      chosen = &c;
+    }
+    EXPECT_GE(c.fit_time_s, 0.0);
+    if (!c.ok) {
+      EXPECT_FALSE(c.message.empty()) << fit_model_name(c.kind);
+      continue;
+    }
+    EXPECT_TRUE(std::isfinite(c.validation.rms)) << fit_model_name(c.kind);
+    least = std::min(least, c.validation.rms);
+  }
+  ASSERT_NE(chosen, nullptr);
+  EXPECT_TRUE(chosen->ok);
+  EXPECT_EQ(chosen->validation.rms, least);
+  EXPECT_EQ(r.best_fit.model_kind, chosen->kind);
+  EXPECT_EQ(model_name(r.best_fit.model), fit_model_name(chosen->kind));
+  EXPECT_DOUBLE_EQ(r.best_validation.rms, least);
+  EXPECT_TRUE(contains(r.model_reason, fmt::format("auto: {} has the least RMS", fit_model_name(chosen->kind))))
+      << r.model_reason;
+  // every candidate in the table and the JSON
+  const std::string table = r.table();
+  for (FitModel k : fit_model_kinds) EXPECT_TRUE(contains(table, fmt::format(" {}", fit_model_name(k)))) << table;
+  const nlohmann::json j = io::to_json(r);
+  EXPECT_EQ(j["best_model"]["choice"], "auto");
+  ASSERT_EQ(j["best_model"]["candidates"].size(), r.candidates.size());
+  double least_json = std::numeric_limits<double>::infinity();
+  std::string least_kind;
+  for (const auto& c : j["best_model"]["candidates"])
+    if (c["ok"].get<bool>() && c["validate_second_run"]["rms"].get<double>() < least_json)
+      least_json = c["validate_second_run"]["rms"].get<double>(), least_kind = c["model"].get<std::string>();
+  EXPECT_EQ(least_kind, j["best_model"]["model"].get<std::string>());
+  // the cascade with its compensated variant on both references
+  for (const auto& run : r.runs) EXPECT_TRUE(std::isfinite(run.errors.rms_error_mm)) << run.variant;
+}
+
+// Kinds that do not exist: an unknown name, an enum value outside the registry.
+TEST(ExperimentKinds, UnknownKindsAreErrors) {
+  const std::string m = error_of([] { (void)fit_model_from_name("kpp"); });
+  EXPECT_TRUE(contains(m, "kpp")) << m;
+  ExperimentOptions o;
+  o.model = static_cast<FitModel>(99);
+  const std::string v = error_of([&] { o.validate(); });
+  EXPECT_TRUE(contains(v, "model")) << v;
+  EXPECT_THROW(run_experiment(o), Error);
+}
+
+// Every kind fit() identifies drives the three compensating controllers of the experiments
+// (inverse feedforward + PID, open loop with pressure loop, PWM cascade) without allocating
+// or producing a non-finite command: the per-sample step of the compensated variants.
+TEST(ExperimentKinds, CompensatingStepsDoNotAllocateForAnyKind) {
+  // a hysteretic record in MPa -> mm: a GPI driven by decaying triangles at 100 Hz
+  GpiParams g;
+  g.envelope = Envelope::tanh(60.0, 3.0, -0.9, 45.0);
+  g.q = 0.8;
+  g.n = 10;
+  g.alpha = 1.0;
+  g.rho = 0.05;
+  g.tau = 0.1;
+  std::vector<double> x;
+  for (int k = 0; k < 3000; ++k) {
+    const double t = 0.01 * k, a = 0.28 * (1.0 - t / 40.0);
+    x.push_back(0.3 + a * (2.0 / std::numbers::pi) * std::asin(std::sin(2.0 * std::numbers::pi * 0.2 * t)));
+  }
+  const std::vector<double> y = Model(g).simulate(x);
+  for (FitModel kind : fit_model_kinds) {
+    SCOPED_TRACE(std::string(fit_model_name(kind)));
+    FitOptions fo;
+    fo.model = kind;
+    fo.sample_time = 0.01;
+    fo.num_threads = 1;
+    FitReport rep = fit(x, y, fo);
+    ASSERT_TRUE(has_model(rep.status)) << rep.message;
+    std::visit([](auto& p) { p.input_limits = {0.0, 0.6}; }, rep.model);
+    if (auto* rp = std::get_if<RatePiParams>(&rep.model)) {  // run at 1 kHz as the experiments do
+      rp->dt = 1e-3;
+      const double rmax = rp->r.empty() ? 0.0 : *std::max_element(rp->r.begin(), rp->r.end());
+      if (rmax > 0) rp->c = std::min(rp->c, 0.5 * (rp->tau + rp->dt) / rmax * (1 - 1e-12));
+    }
+    FeedforwardParams ff;
+    ff.sample_time = 1e-3;
+    FeedforwardPidController fp(rep.model, ff, gpi_paper_pid(1e-3));
+    OpenLoopParams olp;
+    olp.feedforward = ff;
+    olp.position = gpi_paper_pid(1e-3);
+    OpenLoopController ol(rep.model, olp);
+    CascadeParams cp;
+    cp.feedforward = ff;
+    cp.position = gpi_paper_pid(1e-3);
+    cp.pressure.kp = 20;
+    cp.pressure.sample_time = 1e-3;
+    CascadePwmController cc(rep.model, cp);
+    const std::size_t before = hysteron_test::allocations();
+    double acc = 0;
+    for (int k = 0; k < 4000; ++k) {
+      const double r = 0.045 + 0.035 * std::sin(2.0 * std::numbers::pi * 0.5e-3 * k);
+      acc += fp.step(r, r, r - 0.001) + ol.step(r, r, r, 0.3) + cc.step(r, r, r, 0.3);
+    }
+    EXPECT_EQ(hysteron_test::allocations(), before);
+    EXPECT_TRUE(std::isfinite(acc));
+  }
+}

@@ -279,8 +279,9 @@ void add_fit(CLI::App& app, Action& action) {
       ->check(non_negative_integer());
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
   sub->add_option("--threads", c->threads,
-                  "threads refining the starts concurrently (default 0: one per hardware thread; 1: sequential; "
-                  "the result does not depend on it)");
+                  "threads refining the starts concurrently (default 0: one per hardware thread, fewer on a long "
+                  "record so that the concurrent starts hold at most about 512 MB; 1: sequential; the result does "
+                  "not depend on it)");
   sub->add_option("--max-iterations", c->max_iterations, "LM iterations per start (default 200)");
   sub->add_option("--min-slope", c->min_slope,
                   fmt::format("minimum slope of the model relative to span(y)/span(x), bounds the inverse's slope "

@@ -2,6 +2,8 @@
 // active-set step for lower bounds, many starts on several threads, and the standard
 // errors of the best one.
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
@@ -29,6 +31,11 @@ constexpr double kOnBound = 1e-4;
 // standard_errors(): Ceres (DENSE_SVD) refuses when (s_min / s_max)^2 of J < 1e-14; the
 // rank test uses 1e-12, a margin of 100 over that.
 constexpr double kRankTolerance = 1e-12;
+// solve_starts(): Jacobian-sized buffers one LM start holds (measured with heaptrack: Ceres'
+// DenseSparseMatrix, its evaluation scratch and per-iteration vectors, about 3.6 for the gpi)
+// and the memory the concurrent starts may use together before they run one at a time.
+constexpr double kLmCopies = 4.0;
+constexpr double kLmConcurrentBytes = 512.0 * 1024 * 1024;
 
 class Progress : public ceres::IterationCallback {
  public:
@@ -168,46 +175,126 @@ void SlopeLm::add_costs(ceres::Problem& problem, const Data& d, double* theta) c
     problem.AddResidualBlock(make_ridge_cost(layout), nullptr, theta);
 }
 
+namespace {
+
+// Rows of the Jacobian folded into R per step of the blocked QR below.
+constexpr Eigen::Index kQrBlockRows = 4096;
+
+// The R factor (p x p, upper triangular, R^T R = J^T J) of the Jacobian of every residual
+// block of `problem` at `theta`, restricted to the columns `keep` (the free parameters), by
+// a blocked Householder QR: [R; next rows] -> R, kQrBlockRows rows at a time. Memory: one
+// evaluation of the blocks (what one LM iteration holds) plus (p + kQrBlockRows) x p,
+// instead of the several m x p copies (sparse, dense, SVD work and its thin U) of
+// ceres::Covariance's DENSE_SVD (issue 13: `fit` memory). False if a block cannot be
+// evaluated, has more than one parameter block, or a loss function (the caller then uses
+// ceres::Covariance).
+bool jacobian_r(ceres::Problem& problem, const double* theta, int p, const std::vector<Eigen::Index>& keep,
+                Eigen::MatrixXd& R) {
+  std::vector<ceres::ResidualBlockId> ids;
+  problem.GetResidualBlocks(&ids);
+  const auto f = static_cast<Eigen::Index>(keep.size());
+  R = Eigen::MatrixXd::Zero(0, f);
+  Eigen::MatrixXd stack;
+  std::vector<double> res, jac;
+  for (const ceres::ResidualBlockId id : ids) {
+    const ceres::CostFunction* cost = problem.GetCostFunctionForResidualBlock(id);
+    if (problem.GetLossFunctionForResidualBlock(id) != nullptr) return false;
+    if (cost->parameter_block_sizes().size() != 1 || cost->parameter_block_sizes()[0] != p) return false;
+    const auto m = static_cast<std::size_t>(cost->num_residuals());
+    res.assign(m, 0.0);
+    jac.assign(m * static_cast<std::size_t>(p), 0.0);
+    const double* params[1] = {theta};
+    double* jacs[1] = {jac.data()};
+    if (!cost->Evaluate(params, res.data(), jacs)) return false;
+    std::vector<double>().swap(res);
+    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+        jac.data(), static_cast<Eigen::Index>(m), p);
+    for (Eigen::Index r0 = 0; r0 < J.rows(); r0 += kQrBlockRows) {
+      const Eigen::Index b = std::min(kQrBlockRows, J.rows() - r0);
+      stack.resize(R.rows() + b, f);
+      stack.topRows(R.rows()) = R;
+      for (Eigen::Index c = 0; c < f; ++c) stack.block(R.rows(), c, b, 1) = J.block(r0, keep[static_cast<std::size_t>(c)], b, 1);
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stack);
+      const Eigen::Index k = std::min(stack.rows(), f);
+      R = qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+    }
+  }
+  if (R.rows() < f) {  // fewer residuals than parameters: pad (rank deficient)
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(f, f);
+    P.topRows(R.rows()) = R;
+    R = P;
+  }
+  return true;
+}
+
+}  // namespace
+
 void standard_errors(const LmProblem& lm, const Data& d, std::vector<double> theta, const std::vector<double>& lower,
                      const std::vector<int>& held, const Eigen::MatrixXd& M, double sse, FitReport& rep) {
   auto problem = make_problem(lm, d, theta, lower, held);
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::DENSE_SVD;
-  co.num_threads = 1;
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> blocks{{theta.data(), theta.data()}};
   const auto p = static_cast<Eigen::Index>(theta.size());
-  // Rank check first (ceres::Covariance would log an error for a singular problem).
-  {
-    ceres::CRSMatrix crs;
-    double cost = 0;
-    problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, &crs);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-    for (int r = 0; r < crs.num_rows; ++r)
-      for (int k = crs.rows[static_cast<std::size_t>(r)]; k < crs.rows[static_cast<std::size_t>(r) + 1]; ++k)
-        J(r, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
-    std::vector<Eigen::Index> keep;
-    for (Eigen::Index c = 0; c < J.cols(); ++c)
-      if (std::find(held.begin(), held.end(), static_cast<int>(c)) == held.end()) keep.push_back(c);
-    Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(keep.size()));
-    for (std::size_t c = 0; c < keep.size(); ++c) Jf.col(static_cast<Eigen::Index>(c)) = J.col(keep[c]);
-    // Ceres (DENSE_SVD) refuses when (s_min / s_max)^2 of J < 1e-14; the singular values
-    // of J itself (not eigenvalues of J^T J, which lose half the digits) with a margin.
-    const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(Jf).singularValues();
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index c = 0; c < p; ++c)
+    if (std::find(held.begin(), held.end(), static_cast<int>(c)) == held.end()) keep.push_back(c);
+  const char* rank_deficient =
+      "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
+  // Rank check first (ceres::Covariance would log an error for a singular problem): Ceres
+  // (DENSE_SVD) refuses when (s_min / s_max)^2 of J < 1e-14; the singular values of J itself
+  // (not eigenvalues of J^T J, which lose half the digits: those of R, J = Q R) with a margin.
+  Eigen::MatrixXd R;
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(p, p);
+  if (jacobian_r(*problem, theta.data(), static_cast<int>(p), keep, R)) {
+    // cov = (J^T J)^-1 = V S^-2 V^T from the SVD of R (that of J: R^T R = J^T J), as
+    // ceres::Covariance's DENSE_SVD computes it from J (no truncation: the rank test
+    // above is stricter than its own); held parameters have zero rows and columns.
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullV);
+    const Eigen::VectorXd sv = svd.singularValues();
     const double smax = sv.size() ? sv.maxCoeff() : 0.0, smin = sv.size() ? sv.minCoeff() : 0.0;
     if (!(smax > 0) || !(smin * smin > kRankTolerance * smax * smax)) {
-      rep.covariance_note =
-          "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
+      rep.covariance_note = rank_deficient;
       return;
     }
+    const Eigen::MatrixXd V = svd.matrixV();
+    const Eigen::MatrixXd Cf = V * sv.array().square().inverse().matrix().asDiagonal() * V.transpose();
+    for (std::size_t i = 0; i < keep.size(); ++i)
+      for (std::size_t j = 0; j < keep.size(); ++j)
+        C(keep[i], keep[j]) = Cf(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+  } else {
+    // a loss function (Huber through ceres) or another layout: ceres::Covariance
+    {
+      ceres::CRSMatrix crs;
+      double cost = 0;
+      problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, &crs);
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+      for (int r = 0; r < crs.num_rows; ++r)
+        for (int k = crs.rows[static_cast<std::size_t>(r)]; k < crs.rows[static_cast<std::size_t>(r) + 1]; ++k)
+          J(r, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+      // (with held parameters, the problem's SubsetManifold makes Ceres evaluate the free columns only)
+      Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(keep.size()));
+      if (J.cols() == Jf.cols())
+        Jf = std::move(J);
+      else
+        for (std::size_t c = 0; c < keep.size(); ++c) Jf.col(static_cast<Eigen::Index>(c)) = J.col(keep[c]);
+      const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(Jf).singularValues();
+      const double smax = sv.size() ? sv.maxCoeff() : 0.0, smin = sv.size() ? sv.minCoeff() : 0.0;
+      if (!(smax > 0) || !(smin * smin > kRankTolerance * smax * smax)) {
+        rep.covariance_note = rank_deficient;
+        return;
+      }
+    }
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.num_threads = 1;
+    ceres::Covariance cov(co);
+    std::vector<std::pair<const double*, const double*>> blocks{{theta.data(), theta.data()}};
+    if (!cov.Compute(blocks, problem.get())) {
+      rep.covariance_note = rank_deficient;
+      return;
+    }
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Cr(p, p);
+    cov.GetCovarianceBlock(theta.data(), theta.data(), Cr.data());
+    C = Cr;
   }
-  if (!cov.Compute(blocks, problem.get())) {
-    rep.covariance_note =
-        "covariance not computed: the Jacobian is rank deficient (parameters not identifiable from this record)";
-    return;
-  }
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> C(p, p);
-  cov.GetCovarianceBlock(theta.data(), theta.data(), C.data());
   const double m = static_cast<double>(d.train.end - d.train.begin);
   const double free = static_cast<double>(theta.size() - held.size());
   const double s2 = sse / std::max(1.0, m - free);
@@ -245,7 +332,19 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
                                                          const std::vector<int>& held, const FitOptions& o,
                                                          FitReport& rep) {
   std::vector<Solved> solved(starts.size());
-  detail::parallel_for(starts.size(), o.num_threads, [&](std::size_t k) {
+  // With the default thread count (0: one per hardware thread) the concurrent starts are
+  // capped by memory: each holds about kLmCopies m x p Jacobian-sized buffers (Ceres' dense
+  // Jacobian and its evaluation scratch, residual vectors), so on a long record they run one
+  // after the other instead of multiplying the peak (issue 13: `fit` memory). The result does
+  // not depend on the number of threads; an explicit num_threads is kept.
+  int threads = o.num_threads;
+  if (threads == 0 && !starts.empty()) {
+    const double rows = static_cast<double>(d.train.end);
+    const double per_start = kLmCopies * rows * static_cast<double>(starts.front().size() + 1) * sizeof(double);
+    const auto hw = static_cast<double>(std::max(1u, std::thread::hardware_concurrency()));
+    threads = static_cast<int>(std::clamp(std::floor(kLmConcurrentBytes / per_start), 1.0, hw));
+  }
+  detail::parallel_for(starts.size(), threads, [&](std::size_t k) {
     solved[k] = solve(*problems[k], d, starts[k], lowers[k], held, o, static_cast<int>(k));
   });
   std::size_t best = std::string::npos;

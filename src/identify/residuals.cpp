@@ -172,20 +172,31 @@ class GpiChartCost final : public ceres::CostFunction {
       if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, nullptr);
       return true;
     }
+    // J_theta into Ceres' buffer, then J_phi = J_theta dtheta/dphi in place, kChartRows rows at a
+    // time through a small copy (no m x 8 scratch per cost function: issue 13, `fit` memory).
+    // Each block is a GEMM of at least kChartRows rows (the last one takes the remainder), as the
+    // whole product was: the same sums in the same order, so the same bits.
     const auto m = static_cast<Eigen::Index>(d_.train.end - d_.train.begin);
-    Jt_.resize(m, kGpi);
-    gpi_evaluate(d_, n_, th.data(), residuals, Jt_.data());
-    if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, Jt_.data());
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor>>(jacobians[0], m, kGpi).noalias() =
-        Jt_ * chart_.jacobian(params[0]);
+    gpi_evaluate(d_, n_, th.data(), residuals, jacobians[0]);
+    if (d_.free_offset) project_offset(num_residuals(), kGpi, residuals, jacobians[0]);
+    const Eigen::Matrix<double, kGpi, kGpi> D = chart_.jacobian(params[0]);
+    using Rows = Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor>;
+    Eigen::Map<Rows> J(jacobians[0], m, kGpi);
+    Rows block;
+    for (Eigen::Index r0 = 0; r0 < m;) {
+      const Eigen::Index b = m - r0 < 2 * kChartRows ? m - r0 : kChartRows;
+      block = J.middleRows(r0, b);
+      J.middleRows(r0, b).noalias() = block * D;
+      r0 += b;
+    }
     return true;
   }
 
  private:
+  static constexpr Eigen::Index kChartRows = 4096;
   Data d_;
   int n_;
   GpiChart chart_;
-  mutable Eigen::Matrix<double, Eigen::Dynamic, kGpi, Eigen::RowMajor> Jt_;
 };
 
 struct SlopeFunctor {

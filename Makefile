@@ -54,8 +54,11 @@ test-asan: deps
 
 # libFuzzer targets (fuzz/) under ASan + UBSan, built with clang in their own directory (core and
 # io only). `make fuzz FUZZ_SECONDS=N` runs each for N seconds from its seed corpus
-# (fuzz/corpus/<target>, plus the past findings in fuzz/regressions/<target>; new inputs go to
-# $(FUZZ_BUILD)/corpus, crashes to $(FUZZ_BUILD)/artifacts) and fails on the first finding.
+# (fuzz/corpus/<target>, plus the past findings in fuzz/regressions/<target>: both read only;
+# libFuzzer writes new inputs to the first corpus directory only, $(FUZZ_BUILD)/corpus/<target>,
+# and crash-/leak-/timeout-/oom- files to $(FUZZ_BUILD)/artifacts; the files a target needs a
+# path for go to $(FUZZ_BUILD)/scratch, emptied after each target) and fails on the first
+# finding. The working tree stays clean (`git status` after `make fuzz FUZZ_SECONDS=5`).
 fuzz-build: deps
 	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DHYSTERON_FUZZ=ON \
 	  -DHYSTERON_BUILD_TESTS=OFF -DHYSTERON_BUILD_APPS=OFF -DHYSTERON_BUILD_PYTHON=OFF -DHYSTERON_BUILD_BENCH=OFF \
@@ -63,15 +66,18 @@ fuzz-build: deps
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_targets
 
 fuzz: fuzz-build
-	@mkdir -p $(FUZZ_BUILD)/artifacts
+	@mkdir -p $(FUZZ_BUILD)/artifacts $(FUZZ_BUILD)/scratch
 	@set -e; for t in $(FUZZ_TARGETS); do \
 	  mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
 	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
-	  ASAN_OPTIONS=detect_leaks=1 ./$(FUZZ_BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 \
+	  rc=0; ASAN_OPTIONS=detect_leaks=1 HYSTERON_FUZZ_SCRATCH=$(CURDIR)/$(FUZZ_BUILD)/scratch \
+	    ./$(FUZZ_BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 \
 	    -rss_limit_mb=2048 -malloc_limit_mb=512 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- $(FUZZ_BUILD)/corpus/$$t fuzz/corpus/$$t \
 	    $$([ -d fuzz/regressions/$$t ] && echo fuzz/regressions/$$t) \
-	    > $(FUZZ_BUILD)/fuzz_$$t.log 2>&1 || { tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
+	    > $(FUZZ_BUILD)/fuzz_$$t.log 2>&1 || rc=$$?; \
+	  rm -rf $(FUZZ_BUILD)/scratch/hysteron-fuzz-*; \
+	  [ $$rc = 0 ] || { tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
 	  grep -E '^Done|stat::number_of_executed_units' $(FUZZ_BUILD)/fuzz_$$t.log; \
 	done
 

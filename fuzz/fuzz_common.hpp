@@ -10,12 +10,18 @@
 
 namespace hysteron::fuzz {
 
-// A directory made once per process (in /dev/shm when there is one: no disk writes),
-// removed at exit with the files the target wrote into it.
+// A directory made once per process, removed at exit with the files the target wrote into
+// it. It is made in $HYSTERON_FUZZ_SCRATCH if set (`make fuzz` sets build-fuzz/scratch and
+// empties it after each target: a finding, a timeout or an out-of-memory stop ends the
+// process with _Exit, which runs no atexit handler), else in /dev/shm when there is one (no
+// disk writes), else in /tmp.
 inline const std::string& scratch_dir() {
   static const std::string dir = [] {
-    std::string tmpl = (::access("/dev/shm", W_OK) == 0 ? std::string("/dev/shm") : std::string("/tmp")) +
-                       "/hysteron-fuzz-XXXXXX";
+    const char* env = std::getenv("HYSTERON_FUZZ_SCRATCH");
+    const std::string base = env && *env                          ? std::string(env)
+                             : ::access("/dev/shm", W_OK) == 0 ? std::string("/dev/shm")
+                                                               : std::string("/tmp");
+    std::string tmpl = base + "/hysteron-fuzz-XXXXXX";
     if (!::mkdtemp(tmpl.data())) std::abort();
     return tmpl;
   }();

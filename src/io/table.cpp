@@ -721,8 +721,54 @@ void check_mat4(Bytes f, const std::string& path) {
   }
 }
 
+// MAT v7.3: an HDF5 file after a 512-byte MATLAB header. Its superblock (HDF5 format
+// specification, "Superblock", versions 0-3) must be there, and the file must be as long as the
+// end-of-file address it declares (a cut file otherwise reads as "0 variables" through matio).
+// The variables themselves are left to matio and HDF5.
+void check_mat73(Bytes f, const std::string& path) {
+  static constexpr unsigned char sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+  std::size_t at = 0;
+  for (std::size_t off = 512; off + 8 <= f.n; off *= 2)  // HDF5 looks at 0, 512, 1024, 2048, ...
+    if (std::memcmp(f.p + off, sig, 8) == 0) {
+      at = off;
+      break;
+    }
+  if (at == 0)
+    throw Error(fmt::format("{}: MAT v7.3 header but no HDF5 data after it (no HDF5 signature at byte 512 or "
+                            "beyond; the file has {} bytes): truncated or not a MAT file",
+                            path, f.n));
+  auto need = [&](std::size_t end) {
+    if (end > f.n)
+      throw Error(fmt::format("{}: MAT v7.3 (HDF5) file truncated: its superblock at byte {} is cut ({} bytes)", path,
+                              at, f.n));
+  };
+  need(at + 16);
+  const unsigned version = f.p[at + 8];
+  std::size_t offsets = 0, eof_pos = 0;
+  if (version <= 1) {
+    offsets = f.p[at + 13];
+    eof_pos = at + 24 + (version == 1 ? 4 : 0) + 2 * offsets;  // base, free-space, then end of file
+  } else if (version <= 3) {
+    offsets = f.p[at + 9];
+    eof_pos = at + 12 + 2 * offsets;  // base, superblock extension, then end of file
+  } else {
+    throw Error(fmt::format("{}: MAT v7.3 (HDF5) file with an unknown superblock version {}", path, version));
+  }
+  if (offsets != 2 && offsets != 4 && offsets != 8)
+    throw Error(fmt::format("{}: MAT v7.3 (HDF5) superblock declares {}-byte addresses (2, 4 or 8 expected): damaged",
+                            path, offsets));
+  need(eof_pos + offsets);
+  std::uint64_t eof = 0;
+  for (std::size_t i = offsets; i-- > 0;) eof = eof << 8 | f.p[eof_pos + i];
+  // The end-of-file address counts from the start of the file (the 512-byte MATLAB header
+  // included); read as relative to the HDF5 data it would only be larger.
+  if (eof > f.n)
+    throw Error(fmt::format("{}: MAT v7.3 (HDF5) file truncated: its superblock declares {} bytes, the file has {}",
+                            path, eof, f.n));
+}
+
 // Throws hysteron::Error naming the file and the variable if the file is truncated or its sizes
-// are inconsistent. MAT v7.3 (HDF5) files are left to matio.
+// are inconsistent. MAT v7.3 (HDF5) files: check_mat73, the rest is left to matio and HDF5.
 void check_mat_file(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return;  // open_mat reports it
@@ -748,7 +794,7 @@ void check_mat_file(const std::string& path) {
   }
   const bool swap = f.p[126] == 'M';
   const unsigned version = swap ? (f.p[124] << 8 | f.p[125]) : (f.p[125] << 8 | f.p[124]);
-  if (version == 0x0200) return;  // v7.3 (HDF5)
+  if (version == 0x0200) return check_mat73(f, path);  // v7.3 (HDF5)
   std::size_t pos = 128;
   for (std::size_t index = 0; pos < n; ++index) {
     if (n - pos < 8)

@@ -313,7 +313,11 @@ void ExperimentResult::write(const std::string& dir) const {
                       {r.t, r.reference_mm, r.measured_mm, r.actual_mm, r.pressure_command_mpa, r.pressure_mpa,
                        r.duty});
   io::write_model_file((d / "model.json").string(), fit.model);
-  io::write_model_file((d / "best_model.json").string(), best_fit.model);
+  io::write_model_file((d / "best_model.json").string(), best_fit.model,
+                       model_reason.empty() ? nlohmann::json{}
+                                            : nlohmann::json{{"note", fmt::format("hysteron experiment {}: the model "
+                                                                                  "of the compensated variants; {}",
+                                                                                  name, model_reason)}});
   io::write_text_file((d / "result.json").string(), io::to_json(*this).dump(2) + "\n");
 }
 

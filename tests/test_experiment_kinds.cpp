@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +23,7 @@
 #include "hysteron/identify.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/sweep.hpp"
 #include "temp_dir.hpp"
 
 using namespace hysteron;
@@ -222,4 +224,42 @@ TEST(ExperimentKinds, CompensatingStepsDoNotAllocateForAnyKind) {
     EXPECT_EQ(hysteron_test::allocations(), before);
     EXPECT_TRUE(std::isfinite(acc));
   }
+}
+
+// A sweep pins the kind of every run (SweepOptions::model reaches each run's options) and
+// reports the kind each run used (text column, JSON).
+TEST(ExperimentKinds, SweepPinsTheKindAndReportsIt) {
+  SweepOptions so;
+  so.experiments = {"gpi-pid"};
+  so.variants = parse_vary("load.mass=35");
+  so.model = FitModel::bouc_wen;
+  so.jobs = 2;
+  std::atomic<int> calls{0};
+  so.runner = [&calls](const ExperimentOptions& eo) {
+    ++calls;
+    if (eo.model != FitModel::bouc_wen) throw Error("the sweep did not pass its model");
+    ExperimentResult r;
+    r.name = eo.name;
+    r.best_fit.model_kind = eo.model;
+    r.model_choice = eo.model;
+    r.model_reason = "bouc-wen asked for";
+    TrackingRun t;
+    t.variant = "compensated";
+    t.reference = "sine";
+    r.runs.push_back(t);
+    return r;
+  };
+  const SweepResult s = run_sweep(so);
+  EXPECT_EQ(calls.load(), 2);
+  EXPECT_EQ(s.failures(), 0u);
+  for (const auto& run : s.runs) EXPECT_EQ(run.model, "bouc-wen");
+  const nlohmann::json j = s.to_json();
+  EXPECT_EQ(j["model_choice"], "bouc-wen");
+  for (const auto& run : j["runs"]) EXPECT_EQ(run["model"], "bouc-wen");
+  EXPECT_TRUE(contains(s.text(), "--model bouc-wen")) << s.text();
+  // an invalid kind is refused before anything runs
+  so.model = static_cast<FitModel>(99);
+  calls = 0;
+  EXPECT_THROW(run_sweep(so), Error);
+  EXPECT_EQ(calls.load(), 0);
 }

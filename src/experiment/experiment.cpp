@@ -175,9 +175,12 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
 void ExperimentOptions::validate() const {
   if (model != FitModel::automatic &&
       std::find(std::begin(fit_model_kinds), std::end(fit_model_kinds), model) == std::end(fit_model_kinds))
-    throw Error(fmt::format("experiment: model = {} is not a model kind (expected auto or one of the kinds of "
-                            "fit_model_kinds)",
-                            static_cast<int>(model)));
+  {
+    std::string list;
+    for (FitModel k : fit_model_kinds) list += ", " + std::string(fit_model_name(k));
+    throw Error(fmt::format("experiment: model = {} is not a model kind (expected auto{})", static_cast<int>(model),
+                            list));
+  }
   hysteron::validate(rig, "experiment: rig");
   if (!(control_period >= rig.simulation.dt) || !(control_period <= 0.02))
     throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, 0.02 s]",

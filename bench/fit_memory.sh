@@ -8,7 +8,8 @@
 #   MODELS="pi gpi" FIT_ARGS="--threads 1" bench/fit_memory.sh build/hysteron 1000000 10000000
 #
 # MODELS (default "pi gpi") are the kinds fitted; FIT_ARGS are added to every fit (default: none,
-# i.e. 2 starts on one thread per core). The records (a GPI, n = 10, driven by a slow chirp-like
+# i.e. 2 starts on one thread per core); COMPARE=/path/to/other/hysteron runs every fit with that
+# binary too, on the same record, and says whether the two model files are identical. The records (a GPI, n = 10, driven by a slow chirp-like
 # input, plus 0.2 % noise; about 40 bytes a row as CSV) are written in a temporary directory and
 # removed at the end.
 set -euo pipefail
@@ -27,7 +28,10 @@ cat > "$T/gpi.json" <<'JSON'
 {"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05}
 JSON
 
-printf '%-6s %10s %12s %12s %8s %10s %s\n' model rows "record MB" "peak RSS MB" ratio "wall" status
+COMPARE=${COMPARE:-}
+BINS=("$BIN")
+[ -z "$COMPARE" ] || BINS+=("$COMPARE")
+printf '%-6s %10s %12s %12s %8s %10s %-16s %s\n' model rows "record MB" "peak RSS MB" ratio "wall" status binary
 for n in "${ROWS[@]}"; do
   $PY - "$T/x.csv" "$n" <<'PYEOF'
 import sys
@@ -55,17 +59,27 @@ with open(sys.argv[2], "w") as f:
 PYEOF
   rm -f "$T/x.csv" "$T/sim.csv"
   for m in $MODELS; do
-    set +e
-    # shellcheck disable=SC2086
-    /usr/bin/time -v "$BIN" fit --model "$m" --data "$T/d.csv" --input input --output output \
-      --out "$T/m.json" --force $FIT_ARGS > "$T/fit.txt" 2> "$T/time.txt"
-    code=$?
-    set -e
-    rss=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$T/time.txt")
-    wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$T/time.txt")
-    status=$(grep -o -m1 ' fit: [a-z_]*' "$T/fit.txt" | sed 's/ fit: //' || true)
-    awk -v m="$m" -v n="$n" -v rss="$rss" -v wall="$wall" -v st="${status:-exit $code}" 'BEGIN {
-      rec = 16 * n / 1048576; mb = rss / 1024;
-      printf "%-6s %10d %12.1f %12.1f %8.1f %10s %s\n", m, n, rec, mb, mb / rec, wall, st }'
+    for i in "${!BINS[@]}"; do
+      b=${BINS[$i]}
+      set +e
+      # shellcheck disable=SC2086
+      /usr/bin/time -v "$b" fit --model "$m" --data "$T/d.csv" --input input --output output \
+        --out "$T/m$i.json" --force $FIT_ARGS > "$T/fit.txt" 2> "$T/time.txt"
+      code=$?
+      set -e
+      rss=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$T/time.txt")
+      wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$T/time.txt")
+      status=$(grep -o -m1 ' fit: [a-z_]*' "$T/fit.txt" | sed 's/ fit: //' || true)
+      awk -v m="$m" -v n="$n" -v rss="$rss" -v wall="$wall" -v st="${status:-exit $code}" -v b="$b" 'BEGIN {
+        rec = 16 * n / 1048576; mb = rss / 1024;
+        printf "%-6s %10d %12.1f %12.1f %8.1f %10s %-16s %s\n", m, n, rec, mb, mb / rec, wall, st, b }'
+    done
+    if [ -n "$COMPARE" ]; then
+      if cmp -s <(grep -v '"note"' "$T/m0.json") <(grep -v '"note"' "$T/m1.json"); then
+        echo "       $m: the two model files are identical"
+      else
+        echo "       $m: the two model files DIFFER"
+      fi
+    fi
   done
 done

@@ -80,6 +80,11 @@ fuzz: fuzz-build
 	  [ $$rc = 0 ] || { tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
 	  grep -E '^Done|stat::number_of_executed_units' $(FUZZ_BUILD)/fuzz_$$t.log; \
 	done
+	@# nothing may be left in the working tree: no new file under fuzz/ (seed corpora and past
+	@# findings are read only) and no crash-/leak-/timeout-/oom-/slow-unit- file in the top directory
+	@left=$$( { git status --porcelain --untracked-files=all -- fuzz 2>/dev/null | grep '^??'; \
+	  ls -d crash-* leak-* timeout-* oom-* slow-unit-* 2>/dev/null; } || true); \
+	if [ -n "$$left" ]; then echo "make fuzz left files in the working tree:"; echo "$$left"; exit 1; fi
 
 bench: build
 	./$(BUILD)/hysteron-bench

@@ -14,23 +14,13 @@
 #include "hysteron/models.hpp"
 #include "temp_dir.hpp"
 
+#include "test_util.hpp"
+
 using namespace hysteron;
 
 namespace {
 
-std::vector<double> random_walk(std::mt19937_64& rng, std::size_t n, double lo, double hi) {
-  std::uniform_real_distribution<double> target(lo, hi);
-  std::uniform_int_distribution<int> len(2, 30);
-  std::vector<double> x;
-  double cur = 0.5 * (lo + hi);
-  while (x.size() < n) {
-    const double t = target(rng);
-    const int m = len(rng);
-    for (int k = 1; k <= m && x.size() < n; ++k) x.push_back(cur + (t - cur) * k / m);
-    cur = t;
-  }
-  return x;
-}
+using hysteron::test::random_walk;
 
 template <class G>
 G random_grid(std::mt19937_64& rng, int levels, double lo, double hi) {

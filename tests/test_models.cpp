@@ -12,24 +12,13 @@
 #include "hysteron/inverse.hpp"
 #include "hysteron/models.hpp"
 
+#include "test_util.hpp"
+
 using namespace hysteron;
 
 namespace {
 
-// Random input with reversals of random amplitude inside [lo, hi].
-std::vector<double> random_walk(std::mt19937_64& rng, std::size_t n, double lo, double hi) {
-  std::uniform_real_distribution<double> target(lo, hi);
-  std::uniform_int_distribution<int> len(3, 40);
-  std::vector<double> x;
-  double cur = 0.5 * (lo + hi);
-  while (x.size() < n) {
-    const double t = target(rng);
-    const int m = len(rng);
-    for (int k = 1; k <= m && x.size() < n; ++k) x.push_back(cur + (t - cur) * k / m);
-    cur = t;
-  }
-  return x;
-}
+using hysteron::test::random_walk;
 
 std::vector<double> sorted_thresholds(std::mt19937_64& rng, int n, double rmax) {
   std::uniform_real_distribution<double> u(0.01 * rmax, rmax);

@@ -1,10 +1,14 @@
 #pragma once
-// Small helpers shared by the I/O tests: a file's bytes, and the message of an expected error.
+// Small helpers shared by the tests: a file's bytes, the message of an expected error, and a
+// random input path with reversals.
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "hysteron/error.hpp"
 
@@ -28,6 +32,22 @@ std::string error_of(F&& f) {
   }
   ADD_FAILURE() << "no hysteron::Error thrown";
   return {};
+}
+
+// Random input with reversals of random amplitude inside [lo, hi]: straight segments of
+// 3..40 samples from the middle of the range to uniformly drawn targets.
+inline std::vector<double> random_walk(std::mt19937_64& rng, std::size_t n, double lo, double hi) {
+  std::uniform_real_distribution<double> target(lo, hi);
+  std::uniform_int_distribution<int> len(3, 40);
+  std::vector<double> x;
+  double cur = 0.5 * (lo + hi);
+  while (x.size() < n) {
+    const double t = target(rng);
+    const int m = len(rng);
+    for (int k = 1; k <= m && x.size() < n; ++k) x.push_back(cur + (t - cur) * k / m);
+    cur = t;
+  }
+  return x;
 }
 
 inline bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }

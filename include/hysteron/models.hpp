@@ -167,6 +167,14 @@ struct KpParams : PreisachGrid {};
 // rho > 0, sigma >= 0, 1 <= n <= 20. kw > 0 gives clockwise (elasto-plastic) loops,
 // kw < 0 the counterclockwise loops of actuators (y = d x - h, the piezo form).
 // Invertible when kx + min(kw, 0) rho max(1, 2 sigma) > 0 (dw/dx <= rho max(1, 2 sigma)).
+// The largest dw/dx of the Bouc-Wen state over |w| <= 1 and both directions:
+// rho max(1, 2 sigma). The smallest slope of the output is kx + min(kw, 0) times it.
+// (T = double, or an automatic-differentiation scalar in the fit.)
+template <class T>
+T bouc_wen_max_dwdx(const T& rho, const T& sigma) {
+  return sigma > T(0.5) ? T(2.0) * sigma * rho : rho;
+}
+
 struct BoucWenParams {
   double kx = 1.0;
   double kw = 0.0;

@@ -3,23 +3,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "format.hpp"
 #include "hysteron/error.hpp"
+#include "validate.hpp"
 
 namespace hysteron::detail {
 
 namespace {
-
-void finite(double v, std::string_view model, std::string_view key) {
-  if (!std::isfinite(v)) throw Error(detail::format("{}: {} must be a finite number, got {}", model, key, v));
-}
-
-void check_limits(const Limits& l, std::string_view model) {
-  if (std::isnan(l.lo) || std::isnan(l.hi) || !(l.lo < l.hi))
-    throw Error(detail::format("{}: input_limits must satisfy lo < hi, got [{}, {}]", model, l.lo, l.hi));
-}
 
 inline double unit_ramp(double s) noexcept { return s <= 0.0 ? 0.0 : s >= 1.0 ? 1.0 : s; }
 
@@ -33,9 +27,9 @@ struct Grid {
   std::vector<double> w;   // row-major triangle, w[i (i + 1) / 2 + j]
 
   Grid(const PreisachGrid& g, std::string_view model) {
-    finite(g.q, model, "q");
-    finite(g.lo, model, "lo");
-    finite(g.hi, model, "hi");
+    require_finite(g.q, model, "q");
+    require_finite(g.lo, model, "lo");
+    require_finite(g.hi, model, "hi");
     check_limits(g.input_limits, model);
     if (g.levels < 1 || g.levels > max_preisach_levels)
       throw Error(detail::format("{}: levels must be in 1..{}, got {}", model, max_preisach_levels, g.levels));
@@ -45,7 +39,7 @@ struct Grid {
     if (g.w.size() != nw)
       throw Error(detail::format("{}: w has {} entries; a grid of {} levels has levels (levels + 1) / 2 = {} hysterons",
                                  model, g.w.size(), n, nw));
-    for (std::size_t k = 0; k < nw; ++k) finite(g.w[k], model, detail::format("w[{}]", k));
+    for (std::size_t k = 0; k < nw; ++k) require_finite(g.w[k], model, detail::format("w[{}]", k));
     q = g.q;
     h = (g.hi - g.lo) / n;
     if (!(h > 0) || !std::isfinite(h)) throw Error(detail::format("{}: the grid cell (hi - lo) / levels = {} is not usable", model, h));
@@ -100,9 +94,8 @@ class PreisachKernel final : public Kernel {
       }
     }
   }
-  // eval<false> writes nothing: the const_cast only shares the code with step().
-  double peek(double x) const noexcept override { return const_cast<PreisachKernel*>(this)->eval<false>(x); }
-  double step(double x) noexcept override { return eval<true>(x); }
+  double peek(double x) const noexcept override { return eval<false>(*this, x); }
+  double step(double x) noexcept override { return eval<true>(*this, x); }
   std::size_t state_size() const noexcept override { return b_.size(); }
   void get_state(double* out) const noexcept override {
     for (std::size_t i = 0; i < b_.size(); ++i) out[i] = b_[i];
@@ -114,6 +107,7 @@ class PreisachKernel final : public Kernel {
     for (std::size_t i = 0; i < b_.size(); ++i) b_[i] = static_cast<int>(in[i]);
   }
   std::string invertibility() const override { return g_.invertibility(); }
+  double min_slope() const noexcept override { return g_.q; }
   std::size_t num_features() const noexcept override { return g_.w.size() + 1; }
   void features(double x, double* out) const noexcept override {
     out[0] = x;
@@ -123,21 +117,22 @@ class PreisachKernel final : public Kernel {
   }
 
  private:
-  template <bool Commit>
-  double eval(double x) noexcept {
-    const double* t = g_.t.data();
-    const int n = g_.n;
+  // Self = const PreisachKernel for peek (Commit = false: no write is instantiated).
+  template <bool Commit, class Self>
+  static double eval(Self& k, double x) noexcept {
+    const double* t = k.g_.t.data();
+    const int n = k.g_.n;
     // rows with alpha_i = t_{i+1} <= x switch fully on; in the others the relays with
     // beta_j = t_j >= x switch off (J = number of t_j < x).
     const int up = static_cast<int>(std::upper_bound(t + 1, t + n + 1, x) - (t + 1));
     const int lim = static_cast<int>(std::lower_bound(t, t + n, x) - t);
     double s = 0.0;
     for (int i = 0; i < n; ++i) {
-      const int b = i < up ? i + 1 : std::min(b_[static_cast<std::size_t>(i)], lim);
-      if constexpr (Commit) b_[static_cast<std::size_t>(i)] = b;
-      s += c_[off_[static_cast<std::size_t>(i)] + static_cast<std::size_t>(b)];
+      const int b = i < up ? i + 1 : std::min(k.b_[static_cast<std::size_t>(i)], lim);
+      if constexpr (Commit) k.b_[static_cast<std::size_t>(i)] = b;
+      s += k.c_[k.off_[static_cast<std::size_t>(i)] + static_cast<std::size_t>(b)];
     }
-    return g_.q * x + s;
+    return k.g_.q * x + s;
   }
 
   Grid g_;
@@ -151,7 +146,6 @@ class KpKernel final : public Kernel {
  public:
   explicit KpKernel(const KpParams& p) : g_(p, "kp") {
     y_.assign(g_.w.size(), 0.0);
-    s_.assign(static_cast<std::size_t>(g_.n), 0.0);
     reset();
   }
   std::unique_ptr<Kernel> clone() const override { return std::make_unique<KpKernel>(*this); }
@@ -165,9 +159,8 @@ class KpKernel final : public Kernel {
         y_[Grid::row(i) + static_cast<std::size_t>(j)] = std::clamp(mid, lo, hi);
       }
   }
-  // eval<false> writes only the scratch s_ (mutable in effect), never the state.
-  double peek(double x) const noexcept override { return const_cast<KpKernel*>(this)->eval<false>(x); }
-  double step(double x) noexcept override { return eval<true>(x); }
+  double peek(double x) const noexcept override { return eval<false>(*this, x); }
+  double step(double x) noexcept override { return eval<true>(*this, x); }
   std::size_t state_size() const noexcept override { return y_.size(); }
   void get_state(double* out) const noexcept override { std::copy(y_.begin(), y_.end(), out); }
   void set_state(const double* in) override {
@@ -176,6 +169,7 @@ class KpKernel final : public Kernel {
     std::copy(in, in + y_.size(), y_.begin());
   }
   std::string invertibility() const override { return g_.invertibility(); }
+  double min_slope() const noexcept override { return g_.q; }
   std::size_t num_features() const noexcept override { return y_.size() + 1; }
   void features(double x, double* out) const noexcept override {
     out[0] = x;
@@ -183,30 +177,31 @@ class KpKernel final : public Kernel {
   }
 
  private:
-  template <bool Commit>
-  double eval(double x) noexcept {
-    const double* t = g_.t.data();
-    const int n = g_.n;
-    const double ih = 1.0 / g_.h;
-    for (int k = 0; k < n; ++k) s_[static_cast<std::size_t>(k)] = unit_ramp((x - t[k]) * ih);
-    const double* w = g_.w.data();
-    double* y = y_.data();
+  // Self = const KpKernel for peek (Commit = false: no write is instantiated).
+  template <bool Commit, class Self>
+  static double eval(Self& k, double x) noexcept {
+    const double* t = k.g_.t.data();
+    const int n = k.g_.n;
+    const double ih = 1.0 / k.g_.h;
+    double s[max_preisach_levels];  // s_j = ramp position of threshold t_j (levels <= max, validated)
+    for (int j = 0; j < n; ++j) s[j] = unit_ramp((x - t[j]) * ih);
+    const double* w = k.g_.w.data();
+    auto* y = k.y_.data();
     double sum = 0.0;
     std::size_t idx = 0;
     for (int i = 0; i < n; ++i) {
-      const double si = s_[static_cast<std::size_t>(i)];
+      const double si = s[i];
       for (int j = 0; j <= i; ++j, ++idx) {
-        const double v = std::max(si, std::min(s_[static_cast<std::size_t>(j)], y[idx]));
+        const double v = std::max(si, std::min(s[j], y[idx]));
         if constexpr (Commit) y[idx] = v;
         sum += w[idx] * v;
       }
     }
-    return g_.q * x + sum;
+    return k.g_.q * x + sum;
   }
 
   Grid g_;
   std::vector<double> y_;
-  mutable std::vector<double> s_;  // scratch: s_k of the last evaluation
 };
 
 // ---- Bouc-Wen ---------------------------------------------------------------------
@@ -215,7 +210,7 @@ class BoucWenKernel final : public Kernel {
  public:
   explicit BoucWenKernel(const BoucWenParams& p) : p_(p) {
     for (auto [v, k] : {std::pair{p.kx, "kx"}, {p.kw, "kw"}, {p.rho, "rho"}, {p.sigma, "sigma"}, {p.n, "n"}})
-      finite(v, "bouc-wen", k);
+      require_finite(v, "bouc-wen", k);
     check_limits(p.input_limits, "bouc-wen");
     if (!(p.rho > 0)) throw Error(detail::format("bouc-wen: rho must be > 0, got {}", p.rho));
     if (!(p.sigma >= 0)) throw Error(detail::format("bouc-wen: sigma must be >= 0 (otherwise w leaves [-1, 1]), got {}", p.sigma));
@@ -244,9 +239,10 @@ class BoucWenKernel final : public Kernel {
     x_ = in[0];
     w_ = in[1];
   }
+  // slope kx + kw dw/dx with dw/dx in [0, rho max(1, 2 sigma)] for |w| <= 1
+  double min_slope() const noexcept override { return p_.kx + std::min(p_.kw, 0.0) * bouc_wen_max_dwdx(p_.rho, p_.sigma); }
   std::string invertibility() const override {
-    // slope kx + kw dw/dx with dw/dx in [0, rho max(1, 2 sigma)] for |w| <= 1
-    const double smin = p_.kx + std::min(p_.kw, 0.0) * p_.rho * std::max(1.0, 2 * p_.sigma);
+    const double smin = min_slope();
     if (!(smin > 0))
       return detail::format("kx + min(kw, 0) rho max(1, 2 sigma) = {} must be > 0 (the output must rise with the "
                             "input on every branch)", smin);
@@ -267,16 +263,16 @@ class BoucWenKernel final : public Kernel {
 class RatePiKernel final : public Kernel {
  public:
   explicit RatePiKernel(const RatePiParams& p) : p_(p) {
-    finite(p.q, "rate-pi", "q");
-    for (auto [v, k] : {std::pair{p.c, "c"}, {p.tau, "tau"}, {p.dt, "dt"}}) finite(v, "rate-pi", k);
+    require_finite(p.q, "rate-pi", "q");
+    for (auto [v, k] : {std::pair{p.c, "c"}, {p.tau, "tau"}, {p.dt, "dt"}}) require_finite(v, "rate-pi", k);
     check_limits(p.input_limits, "rate-pi");
     if (p.r.size() != p.p.size())
       throw Error(detail::format("rate-pi: r has {} entries but p has {} (one weight per threshold)", p.r.size(), p.p.size()));
     if (p.r.size() > max_operators)
       throw Error(detail::format("rate-pi: r has {} entries; at most {} operators are supported", p.r.size(), max_operators));
     for (std::size_t i = 0; i < p.r.size(); ++i) {
-      finite(p.r[i], "rate-pi", detail::format("r[{}]", i));
-      finite(p.p[i], "rate-pi", detail::format("p[{}]", i));
+      require_finite(p.r[i], "rate-pi", detail::format("r[{}]", i));
+      require_finite(p.p[i], "rate-pi", detail::format("p[{}]", i));
       if (p.r[i] < 0) throw Error(detail::format("rate-pi: r[{}] = {} must be >= 0", i, p.r[i]));
     }
     if (!(p.c >= 0)) throw Error(detail::format("rate-pi: c must be >= 0 (thresholds grow with the rate), got {}", p.c));
@@ -335,6 +331,7 @@ class RatePiKernel final : public Kernel {
     x_ = in[y_.size()];
     rate_ = in[y_.size() + 1];
   }
+  double min_slope() const noexcept override { return p_.q; }
   std::string invertibility() const override {
     if (!(p_.q > 0)) return detail::format("q = {} must be > 0", p_.q);
     for (std::size_t i = 0; i < p_.p.size(); ++i)
@@ -355,14 +352,27 @@ class RatePiKernel final : public Kernel {
   double x_ = 0.0, rate_ = 0.0, gain_ = 1.0;
 };
 
+// The one map from a kind's parameters to its kernel (void: a kind with PI structure).
+template <class P> struct KernelOf { using type = void; };
+template <> struct KernelOf<PreisachParams> { using type = PreisachKernel; };
+template <> struct KernelOf<KpParams> { using type = KpKernel; };
+template <> struct KernelOf<BoucWenParams> { using type = BoucWenKernel; };
+template <> struct KernelOf<RatePiParams> { using type = RatePiKernel; };
+template <class P> using kernel_of = typename KernelOf<std::decay_t<P>>::type;
+
 }  // namespace
 
 std::unique_ptr<Kernel> make_kernel(const ModelParams& params) {
-  if (const auto* m = std::get_if<PreisachParams>(&params)) return std::make_unique<PreisachKernel>(*m);
-  if (const auto* m = std::get_if<KpParams>(&params)) return std::make_unique<KpKernel>(*m);
-  if (const auto* m = std::get_if<BoucWenParams>(&params)) return std::make_unique<BoucWenKernel>(*m);
-  if (const auto* m = std::get_if<RatePiParams>(&params)) return std::make_unique<RatePiKernel>(*m);
-  return nullptr;
+  return std::visit(
+      [](const auto& m) -> std::unique_ptr<Kernel> {
+        using K = kernel_of<decltype(m)>;
+        if constexpr (std::is_void_v<K>) return nullptr; else return std::make_unique<K>(m);
+      },
+      params);
+}
+
+bool has_kernel(const ModelParams& params) noexcept {
+  return std::visit([](const auto& m) { return !std::is_void_v<kernel_of<decltype(m)>>; }, params);
 }
 
 }  // namespace hysteron::detail

@@ -38,6 +38,10 @@ class Kernel {
   // Empty if the output is strictly increasing in the input for every state, otherwise
   // the condition that fails (e.g. "w[3] = -0.1 must be >= 0").
   virtual std::string invertibility() const = 0;
+  // The smallest local slope dy/dx over every state, in model coordinates (the direct
+  // term, which every hysteron with a weight >= 0 only adds to; bouc-wen: kx + min(kw, 0)
+  // rho max(1, 2 sigma)). The fit reports the inverse's largest slope from it.
+  virtual double min_slope() const noexcept = 0;
 };
 
 // The Bouc-Wen state after an input increment dx (models.hpp), integrated by explicit
@@ -71,6 +75,8 @@ T bouc_wen_increment(T w, double dx, const T& rho, const T& sigma, const T& n, V
 // Validates the parameters and builds the kernel; nullptr for the kinds with PI
 // structure. Throws hysteron::Error naming the key.
 std::unique_ptr<Kernel> make_kernel(const ModelParams& params);
+// Whether make_kernel builds a kernel for this kind (has_pi_structure is its negation).
+bool has_kernel(const ModelParams& params) noexcept;
 
 // The structure of any kind: canonical_structure for the PI family, only the units map
 // (validated) for the others.

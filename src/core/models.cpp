@@ -10,6 +10,7 @@
 #include "hysteron/error.hpp"
 #include "kernels.hpp"
 #include "play_kernel.hpp"
+#include "validate.hpp"
 
 namespace hysteron {
 
@@ -27,14 +28,8 @@ struct NameVisitor {
   std::string_view operator()(const RatePiParams&) const { return "rate-pi"; }
 };
 
-void require_finite(double v, std::string_view model, std::string_view key) {
-  if (!std::isfinite(v)) throw Error(detail::format("{}: {} must be a finite number, got {}", model, key, v));
-}
-
-void check_limits(const Limits& l, std::string_view model) {
-  if (std::isnan(l.lo) || std::isnan(l.hi) || !(l.lo < l.hi))
-    throw Error(detail::format("{}: input_limits must satisfy lo < hi, got [{}, {}]", model, l.lo, l.hi));
-}
+using detail::check_limits;
+using detail::require_finite;
 
 // Thresholds and weights of the operators: equal lengths, finite, r >= 0.
 // Sorts by threshold, folds r = 0 into q and merges equal thresholds.
@@ -298,10 +293,7 @@ ModelParams absorb_scales(const ModelParams& params) {
   return out;
 }
 
-bool has_pi_structure(const ModelParams& params) noexcept {
-  return !(std::holds_alternative<PreisachParams>(params) || std::holds_alternative<KpParams>(params) ||
-           std::holds_alternative<BoucWenParams>(params) || std::holds_alternative<RatePiParams>(params));
-}
+bool has_pi_structure(const ModelParams& params) noexcept { return !detail::has_kernel(params); }
 
 Structure<double> canonical_structure(const ModelParams& params) {
   if (!has_pi_structure(params))

@@ -13,6 +13,7 @@
 #include <limits>
 #include <thread>
 
+#include "../core/kernels.hpp"
 #include "detail.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/inverse.hpp"
@@ -28,17 +29,6 @@ using Clock = std::chrono::steady_clock;
 constexpr int kSlopeGrid = 256;
 // The kinds FitModel::automatic tries, in the order of its table.
 constexpr auto& kAutoKinds = fit_model_kinds;
-
-// The smallest local slope of a kind without PI structure in model coordinates (before
-// the output gain): the direct term, which every hysteron only adds to (models.hpp);
-// bouc-wen: kx + min(kw, 0) rho max(1, 2 sigma) (dw/dx in [0, rho max(1, 2 sigma)]).
-double min_kernel_slope(const ModelParams& m) {
-  if (const auto* g = std::get_if<PreisachParams>(&m)) return g->q;
-  if (const auto* g = std::get_if<KpParams>(&m)) return g->q;
-  if (const auto* b = std::get_if<BoucWenParams>(&m)) return b->kx + std::min(b->kw, 0.0) * b->rho * std::max(1.0, 2 * b->sigma);
-  if (const auto* r = std::get_if<RatePiParams>(&m)) return r->q;
-  return 0.0;
-}
 
 FitReport invalid(std::string msg, FitModel kind, Clock::time_point t0) {
   return detail::invalid_report(std::move(msg), kind, t0);
@@ -88,7 +78,7 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
   const Limits& lim = input_limits(model);
   const double mslope = has_pi_structure(model)
                             ? min_model_slope(canonical_structure(model), um.to_model(lim.lo), um.to_model(lim.hi))
-                            : min_kernel_slope(model);
+                            : detail::make_kernel(model)->min_slope();
   const double slope = mslope * std::abs(um.output_gain) / um.input_scale;
   c.max_slope = slope > 0 ? 1.0 / slope : std::numeric_limits<double>::infinity();
   for (std::size_t k = tr.begin + 1; k < tr.end; ++k) c.max_input_step = std::max(c.max_input_step, std::abs(x[k] - x[k - 1]));

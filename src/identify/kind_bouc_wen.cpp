@@ -37,7 +37,7 @@ double scalar(const J& v) {
 template <class T>
 T min_slope_to_kx(const T* th) {
   if (scalar(th[1]) >= 0) return th[0];
-  return th[0] - th[1] * th[2] * (scalar(th[3]) > 0.5 ? T(2.0) * th[3] : T(1.0));
+  return th[0] - th[1] * bouc_wen_max_dwdx(th[2], th[3]);
 }
 
 struct BoucWenResiduals {
@@ -81,13 +81,11 @@ BoucWenParams params_of(const double* th) {
 Eigen::MatrixXd report_jacobian(const double* th) {
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(5, kBw);
   M.block(1, 1, 4, 4).setIdentity();
-  M(0, 0) = 1;
-  if (th[1] < 0) {
-    const double m = th[3] > 0.5 ? 2 * th[3] : 1.0;
-    M(0, 1) = -th[2] * m;
-    M(0, 2) = -th[1] * m;
-    if (th[3] > 0.5) M(0, 3) = -th[1] * th[2] * 2;
-  }
+  using J = ceres::Jet<double, kBw>;  // dkx / dtheta by automatic differentiation
+  J t[kBw];
+  for (int i = 0; i < kBw; ++i) t[i] = J(th[i], i);
+  const J kx = min_slope_to_kx(t);
+  for (int i = 0; i < kBw; ++i) M(0, i) = kx.v(i);
   return M;
 }
 

@@ -104,7 +104,7 @@ TEST(ExperimentKinds, PinnedKpIsUsedAndReported) {
   EXPECT_TRUE(std::holds_alternative<KpParams>(io::read_model_file((dir.path() / "best_model.json").string())));
 }
 
-// auto (the default): every kind is a candidate, each reported with its validation RMS and
+// auto without the adaptive variant: every kind is a candidate, each reported with its validation RMS and
 // fit time, and the chosen one has the least RMS among those that could be used.
 TEST(ExperimentKinds, AutoTriesEveryKindAndChoosesTheLeastValidationRms) {
   ExperimentOptions o;
@@ -157,6 +157,39 @@ TEST(ExperimentKinds, AutoTriesEveryKindAndChoosesTheLeastValidationRms) {
   EXPECT_EQ(least_kind, j["best_model"]["model"].get<std::string>());
   // the cascade with its compensated variant on both references
   for (const auto& run : r.runs) EXPECT_TRUE(std::isfinite(run.errors.rms_error_mm)) << run.variant;
+}
+
+// auto with the adaptive variant (the default): only PI-family kinds are eligible, the chosen
+// one has the least RMS among them, the others are listed with the reason, and the adaptive
+// variant runs on the chosen model.
+TEST(ExperimentKinds, AutoWithTheAdaptiveVariantChoosesAmongThePiFamily) {
+  ExperimentOptions o;
+  o.name = "gpi-pid";
+  o.learning_periods = 0;
+  ASSERT_TRUE(o.adaptive);
+  const ExperimentResult r = run_experiment(o);
+  ASSERT_EQ(r.candidates.size(), std::size(fit_model_kinds));
+  double least_pi = std::numeric_limits<double>::infinity();
+  const ModelCandidate* chosen = nullptr;
+  std::size_t others = 0;
+  for (const auto& c : r.candidates) {
+    if (c.chosen) chosen = &c;
+    if (!c.ok) continue;
+    const bool pi = c.kind == FitModel::pi || c.kind == FitModel::gpi || c.kind == FitModel::mpi_deadzone ||
+                    c.kind == FitModel::mpi_asym || c.kind == FitModel::maxwell_slip;
+    if (pi) {
+      least_pi = std::min(least_pi, c.validation.rms);
+    } else {
+      ++others;
+      EXPECT_TRUE(contains(c.message, "not eligible for auto while the adaptive variant runs")) << c.message;
+    }
+  }
+  EXPECT_GT(others, 0u);
+  ASSERT_NE(chosen, nullptr);
+  EXPECT_EQ(chosen->validation.rms, least_pi);
+  EXPECT_TRUE(has_pi_structure(r.best_fit.model));
+  EXPECT_TRUE(contains(r.model_reason, "the adaptive variant can use (PI family)")) << r.model_reason;
+  EXPECT_NE(find_run(r, "adaptive"), nullptr);
 }
 
 // Kinds that do not exist: an unknown name, an enum value outside the registry.

@@ -106,6 +106,13 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
   res.model_choice = o.model;
   double best_rms = std::numeric_limits<double>::infinity();
   std::size_t best = 0;
+  // auto chooses a kind every variant of the run can use: the adaptive variant re-identifies
+  // the weights of a PI-family model, so while it runs only those are eligible (the others
+  // are still fitted and listed, for comparison).
+  const bool pi_only = automatic && o.adaptive &&
+                       std::any_of(spec.variants.begin(), spec.variants.end(),
+                                   [](const Variant& v) { return v.name == "adaptive"; });
+  std::size_t eligible = 0;
   for (FitModel kind : candidate_kinds(o, spec)) {
     FitOptions f2 = fo;
     f2.model = kind;
@@ -133,7 +140,14 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
       res.messages.push_back(fmt::format("candidate {} skipped: {}", fit_model_name(kind), e.what()));
     }
     c.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (c.ok && c.validation.rms < best_rms) {
+    if (c.ok && pi_only && !has_pi_structure(rep.model)) {
+      c.message = fmt::format("not eligible for auto while the adaptive variant runs (it needs a PI-family model; "
+                              "--no-adaptive or --model {} to use it); {}",
+                              fit_model_name(kind), c.message);
+    } else if (c.ok) {
+      ++eligible;
+    }
+    if (c.ok && (!pi_only || has_pi_structure(rep.model)) && c.validation.rms < best_rms) {
       best_rms = c.validation.rms;
       best = res.candidates.size();
       res.best_fit = std::move(rep);
@@ -149,17 +163,27 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
   const ModelCandidate& c = res.candidates[best];
   if (automatic) {
     std::size_t ok = 0;
-    double second = std::numeric_limits<double>::infinity();
+    double second = std::numeric_limits<double>::infinity(), best_any = c.validation.rms;
+    FitModel best_any_kind = c.kind;
     for (const auto& x : res.candidates)
       if (x.ok) {
         ++ok;
+        if (x.validation.rms < best_any) {
+          best_any = x.validation.rms;
+          best_any_kind = x.kind;
+        }
         if (!x.chosen) second = std::min(second, x.validation.rms);
       }
     res.model_reason = fmt::format(
         "auto: {} has the least RMS on the second identification run, {:.3f} mm, of the {} of {} kinds that could "
-        "be fitted and inverted{}",
-        fit_model_name(c.kind), c.validation.rms, ok, res.candidates.size(),
-        std::isfinite(second) ? fmt::format(" (next best {:.3f} mm)", second) : std::string());
+        "be fitted and inverted{}{}",
+        fit_model_name(c.kind), c.validation.rms, pi_only ? eligible : ok, res.candidates.size(),
+        pi_only ? " and the adaptive variant can use (PI family)" : "",
+        pi_only && best_any_kind != c.kind
+            ? fmt::format(" (of all {}: {} at {:.3f} mm, used with --no-adaptive or --model {})", ok,
+                          fit_model_name(best_any_kind), best_any, fit_model_name(best_any_kind))
+        : std::isfinite(second) ? fmt::format(" (next best {:.3f} mm)", second)
+                                : std::string());
   } else {
     res.model_reason = fmt::format("{} asked for (--model {}); {:.3f} mm RMS on the second identification run",
                                    fit_model_name(c.kind), fit_model_name(c.kind), c.validation.rms);

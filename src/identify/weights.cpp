@@ -62,21 +62,30 @@ Eigen::MatrixXd regressors(const Structure<double>& s, std::span<const double> x
   return phi;
 }
 
-Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
-  const Eigen::Index n = A.cols();
-  Eigen::VectorXd d = A.colwise().norm().transpose();
+namespace {
+
+// Rows of A processed at a time by the normal-equation passes: the only m-sized
+// scratch of nnls/bounded_ls is one block of (centred) rows, kLsBlock x n.
+constexpr Eigen::Index kLsBlock = 4096;
+
+// Lawson-Hanson active set on the normal equations G t = h of min ||A t - b||,
+// t >= 0 (G = A^T A, h = A^T b), column-scaled by d_j = sqrt(G_jj) (the column
+// norms of A). Columns with d_j <= 1e-12 max d stay at 0.
+Eigen::VectorXd nnls_normal(const Eigen::MatrixXd& G0, const Eigen::VectorXd& h0) {
+  const Eigen::Index n = G0.cols();
+  Eigen::VectorXd d = G0.diagonal().cwiseMax(0.0).cwiseSqrt();
   const double dmax = n > 0 ? d.maxCoeff() : 0.0;
   std::vector<bool> usable(static_cast<std::size_t>(n));
   for (Eigen::Index j = 0; j < n; ++j) {
     usable[static_cast<std::size_t>(j)] = d(j) > 1e-12 * dmax && d(j) > 0;
     if (!usable[static_cast<std::size_t>(j)]) d(j) = 1.0;
   }
-  const Eigen::MatrixXd As = A * d.cwiseInverse().asDiagonal();
-  const Eigen::MatrixXd G = As.transpose() * As;
-  const Eigen::VectorXd h = As.transpose() * b;
+  const Eigen::VectorXd dinv = d.cwiseInverse();
+  const Eigen::MatrixXd G = dinv.asDiagonal() * G0 * dinv.asDiagonal();
+  const Eigen::VectorXd h = h0.cwiseProduct(dinv);
   Eigen::VectorXd t = Eigen::VectorXd::Zero(n);
   std::vector<bool> passive(static_cast<std::size_t>(n), false);
-  const double tol = 1e-12 * std::max(1.0, h.cwiseAbs().maxCoeff());
+  const double tol = 1e-12 * std::max(1.0, n > 0 ? h.cwiseAbs().maxCoeff() : 0.0);
   auto solve_passive = [&](Eigen::VectorXd& z) {
     std::vector<Eigen::Index> idx;
     for (Eigen::Index j = 0; j < n; ++j)
@@ -126,23 +135,92 @@ Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
         }
     }
   }
-  return t.cwiseQuotient(d);
+  return t.cwiseProduct(dinv);
+}
+
+// The normal equations G = Ac^T Ac, h = Ac^T (bc - Ac lo) in one pass over A's rows
+// (kLsBlock at a time, no copy of A), where Ac, bc are A, b less the column means
+// amean, bmean if `centre` (the subtraction done per row, as for an explicitly
+// centred copy: no cancellation of A^T A - m mu mu^T), else A, b themselves.
+void normal_equations(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo, bool centre,
+                      const Eigen::RowVectorXd& amean, double bmean, Eigen::MatrixXd& G, Eigen::VectorXd& h) {
+  const Eigen::Index m = A.rows(), n = A.cols();
+  G.setZero(n, n);
+  h.setZero(n);
+  const bool shift = !lo.isZero(0.0);
+  Eigen::MatrixXd Ac;
+  Eigen::VectorXd r;
+  for (Eigen::Index k0 = 0; k0 < m; k0 += kLsBlock) {
+    const Eigen::Index rows = std::min(kLsBlock, m - k0);
+    if (centre) {
+      Ac = A.middleRows(k0, rows).rowwise() - amean;
+      r = b.segment(k0, rows).array() - bmean;
+      if (shift) r.noalias() -= Ac * lo;
+      G.selfadjointView<Eigen::Lower>().rankUpdate(Ac.transpose());
+      h.noalias() += Ac.transpose() * r;
+    } else {
+      const auto Ab = A.middleRows(k0, rows);
+      G.selfadjointView<Eigen::Lower>().rankUpdate(Ab.transpose());
+      if (shift) {
+        r = b.segment(k0, rows);
+        r.noalias() -= Ab * lo;
+        h.noalias() += Ab.transpose() * r;
+      } else {
+        h.noalias() += Ab.transpose() * b.segment(k0, rows);
+      }
+    }
+  }
+  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+}
+
+// The residual sum of squares ||Ac t - bc||^2 (Ac, bc as in normal_equations),
+// kLsBlock rows at a time.
+double residual_sse(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& t, bool centre,
+                    const Eigen::RowVectorXd& amean, double bmean) {
+  const Eigen::Index m = A.rows();
+  double sse = 0.0;
+  Eigen::MatrixXd Ac;
+  Eigen::VectorXd r;
+  for (Eigen::Index k0 = 0; k0 < m; k0 += kLsBlock) {
+    const Eigen::Index rows = std::min(kLsBlock, m - k0);
+    if (centre) {
+      Ac = A.middleRows(k0, rows).rowwise() - amean;
+      r.noalias() = Ac * t;
+      r.array() -= b.segment(k0, rows).array() - bmean;
+    } else {
+      r.noalias() = A.middleRows(k0, rows) * t;
+      r -= b.segment(k0, rows);
+    }
+    sse += r.squaredNorm();
+  }
+  return sse;
+}
+
+}  // namespace
+
+Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+  Eigen::MatrixXd G;
+  Eigen::VectorXd h;
+  normal_equations(A, b, Eigen::VectorXd::Zero(A.cols()), false, Eigen::RowVectorXd(), 0.0, G, h);
+  return nnls_normal(G, h);
 }
 
 Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo,
                            double* offset, double* sse) {
+  Eigen::MatrixXd G;
+  Eigen::VectorXd h;
   if (!offset) {
-    const Eigen::VectorXd t = lo + nnls(A, b - A * lo);
-    if (sse) *sse = (A * t - b).squaredNorm();
+    normal_equations(A, b, lo, false, Eigen::RowVectorXd(), 0.0, G, h);
+    const Eigen::VectorXd t = lo + nnls_normal(G, h);
+    if (sse) *sse = residual_sse(A, b, t, false, Eigen::RowVectorXd(), 0.0);
     return t;
   }
   const Eigen::RowVectorXd amean = A.colwise().mean();
   const double bmean = b.mean();
-  const Eigen::MatrixXd Ac = A.rowwise() - amean;
-  const Eigen::VectorXd bc = b.array() - bmean;
-  const Eigen::VectorXd t = lo + nnls(Ac, bc - Ac * lo);
+  normal_equations(A, b, lo, true, amean, bmean, G, h);
+  const Eigen::VectorXd t = lo + nnls_normal(G, h);
   *offset = bmean - amean.dot(t);
-  if (sse) *sse = (Ac * t - bc).squaredNorm();
+  if (sse) *sse = residual_sse(A, b, t, true, amean, bmean);
   return t;
 }
 

@@ -24,9 +24,12 @@ ARGS=(--benchmark_filter='^BM_Kind(Step|Inverse)/' --benchmark_repetitions=5
 "$BIN" "${ARGS[@]}" > "$T/out.json"
 
 commit=$(git -C "$(dirname "$0")" rev-parse --short HEAD 2>/dev/null || echo unknown)
-dirty=$(git -C "$(dirname "$0")" status --porcelain --untracked-files=no -- src include bench 2>/dev/null | head -c1)
+# the code the table measures: the core layer and the benchmark
+dirty=$(cd "$(dirname "$0")/.." && git status --porcelain --untracked-files=no -- src/core include/hysteron/models.hpp \
+        include/hysteron/inverse.hpp include/hysteron/operators.hpp include/hysteron/envelope.hpp bench/bench_kinds.cpp \
+        2>/dev/null | head -c1)
 echo "command: $BIN ${ARGS[*]}"
-echo "commit: $commit${dirty:+ (src/, include/ or bench/ modified in the working tree)}; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "commit: $commit${dirty:+ (the core layer or bench_kinds.cpp modified in the working tree)}; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg)"
 echo
 $PY - "$T/out.json" <<'PYEOF'
 import json, re, sys

@@ -24,13 +24,16 @@ Eigen::MatrixXd regressors(const Structure<double>& s, std::span<const double> x
                            InitialState initial);
 
 // Nonnegative least squares min ||A t - b||, t >= 0 (Lawson-Hanson active set on
-// the column-scaled normal equations).
+// the column-scaled normal equations, accumulated 4096 rows of A at a time: no copy
+// of A, scratch of one block of rows).
 Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b);
 
 // Bounded least squares min ||A t + c - b||, t >= lo. With `offset` != nullptr the
-// offset c is free: it is eliminated exactly by centring the columns and the target,
-// and *offset receives its least-squares value (the mean residual); otherwise c = 0.
-// *sse (if given) receives the residual sum of squares.
+// offset c is free: it is eliminated exactly by centring the columns and the target
+// (each block of rows is centred before it enters the normal equations: no
+// A^T A - m mu mu^T cancellation), and *offset receives its least-squares value (the
+// mean residual); otherwise c = 0. *sse (if given) receives the residual sum of
+// squares (a second pass over A). Memory: n x n plus one block of rows, not m x n.
 Eigen::VectorXd bounded_ls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo,
                            double* offset, double* sse = nullptr);
 

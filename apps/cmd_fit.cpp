@@ -223,14 +223,17 @@ int run_fit(const FitCliOptions& c) {
   }
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {
-    text += "candidates (chosen by the hold-out RMS pooled over the first and the last part of the training range):\n";
-    std::string head = fmt::format("  {:<13} {:<15} {:>12} {:>12}", "kind", "status", "train RMS", "hold-out RMS");
+    text += "candidates (chosen by the hold-out score: over the first and the last part of the training range, the "
+            "geometric mean of the RMS over the best kind's):\n";
+    std::string head = fmt::format("  {:<13} {:<15} {:>12} {:>12} {:>9}", "kind", "status", "train RMS", "hold-out RMS",
+                                   "score");
     for (const auto& v : sets) head += fmt::format(" {:>14}", v.file.empty() ? std::string("validate RMS") : "validate RMS");
     text += head + fmt::format(" {:>9}\n", "time [s]");
     for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
       const auto& cand = rep.candidates[i];
-      std::string line = fmt::format("  {:<13} {:<15} {:>12.6g} {:>12.6g}", fit_model_name(cand.kind),
-                                     fit_status_name(cand.status), cand.train.rms, cand.holdout.rms);
+      std::string line = fmt::format("  {:<13} {:<15} {:>12.6g} {:>12.6g} {:>9.4g}", fit_model_name(cand.kind),
+                                     fit_status_name(cand.status), cand.train.rms, cand.holdout.rms,
+                                     cand.holdout_score);
       for (std::size_t k = 0; k < sets.size(); ++k) {
         const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();
         line += fmt::format(" {:>14}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");

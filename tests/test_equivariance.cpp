@@ -400,7 +400,9 @@ TEST(FitAuto, ChoosesOnTheHoldOutAndValidatesNearTheBestKind) {
   }
   ASSERT_EQ(chosen, 1);
   EXPECT_EQ(rep.model_kind, best->kind);
-  for (const auto& c : rep.candidates) EXPECT_LE(best->holdout.rms, c.holdout.rms) << fit_model_name(c.kind);
+  for (const auto& c : rep.candidates)
+    if (std::isfinite(c.holdout_score)) EXPECT_LE(best->holdout_score, c.holdout_score) << fit_model_name(c.kind);
+  EXPECT_GE(best->holdout_score, 1.0);
   const double e_auto = evaluate(rep.model, val.x, val.y).rms_percent_span;
   double e_best = std::numeric_limits<double>::infinity();
   for (FitModel kind : kKinds) e_best = std::min(e_best, validation_error(kind, train, val));

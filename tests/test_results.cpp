@@ -68,6 +68,7 @@ void expect_same(const FitCandidate& a, const FitCandidate& b) {
   EXPECT_EQ(a.message, b.message);
   expect_same(a.train, b.train);
   expect_same(a.holdout, b.holdout);
+  expect_same(a.holdout_score, b.holdout_score, "holdout_score");
   expect_same(a.time_s, b.time_s, "time_s");
   EXPECT_EQ(a.chosen, b.chosen);
   expect_same(a.model, b.model);
@@ -150,6 +151,7 @@ FitReport test_report() {
   c1.message = "ok";
   c1.train = metrics(0.02, 960);
   c1.holdout = metrics(0.05, 240);
+  c1.holdout_score = 1.25;
   c1.time_s = 0.5;
   c1.chosen = true;
   c1.model = test_gpi();

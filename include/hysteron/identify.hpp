@@ -221,6 +221,10 @@ struct FitCandidate {
   std::string message;
   FitMetrics train;    // fold 0: on the training range without its last part
   FitMetrics holdout;  // pooled over both folds' hold-outs (r2 not computed: NaN)
+  // What auto chooses by (least wins): the geometric mean over the two folds of this kind's
+  // hold-out RMS divided by the best kind's on that fold (1: best on both). Each fold
+  // counts alike, whatever its scale; NaN if a fold gave this kind no model.
+  double holdout_score = std::numeric_limits<double>::quiet_NaN();
   double time_s = 0.0;  // both folds
   bool chosen = false;
   ModelParams model;   // the candidate's model of fold 0

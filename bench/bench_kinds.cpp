@@ -24,6 +24,7 @@
 
 #include "hysteron/inverse.hpp"
 #include "hysteron/models.hpp"
+#include "bench_params.hpp"
 
 using namespace hysteron;
 
@@ -46,16 +47,7 @@ const std::vector<double>& input_signal() {
   return x;
 }
 
-// PI-family thresholds and weights as in bench_models.cpp (r spread over the range,
-// weights decaying with the threshold).
-void pi_operators(int n, std::vector<double>& r, std::vector<double>& p) {
-  r.resize(n);
-  p.resize(n);
-  for (int i = 0; i < n; ++i) {
-    r[i] = 0.6 * (i + 1) / (n + 1);
-    p[i] = 0.5 * std::exp(-3.0 * r[i]) / n * 10;
-  }
-}
+using bench::pi_operators;
 
 // Preisach / KP grid over the range: density decaying with the loop width alpha - beta,
 // total hysteron weight 0.4 whatever the number of levels, q = 0.6.
@@ -82,29 +74,8 @@ G grid(int levels) {
 ModelParams make_params(const std::string& kind, int n) {
   std::vector<double> r, p;
   pi_operators(n, r, p);
-  if (kind == "pi") return PiParams{0.5, r, p, kRange, {}};
-  if (kind == "gpi") {
-    GpiParams g;  // magnitudes like Table 2 of the GPI paper (pressure in MPa)
-    g.envelope = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
-    g.q = 0.8;
-    g.n = n;
-    g.rho = 0.4;
-    g.tau = 5.0;
-    g.alpha = 0.3 / n;
-    g.input_limits = kRange;
-    return g;
-  }
-  if (kind == "mpi-deadzone") return MpiDeadzoneParams{0.5, r, p, 1.0, {0.2, 0.4, 0.6}, {0.1, 0.2, -0.1}, kRange, {}};
-  if (kind == "mpi-asym") {
-    MpiAsymParams a;
-    a.ascending = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
-    a.descending = Envelope::tanh(1.1, 1.8, -0.5, 0.6);
-    a.q = 0.8;
-    a.r = r;
-    a.p = p;
-    a.input_limits = kRange;
-    return a;
-  }
+  if (kind == "pi" || kind == "gpi" || kind == "mpi-deadzone" || kind == "mpi-asym")
+    return bench::pi_family_model(kind, n, kRange);
   if (kind == "preisach") return grid<PreisachParams>(n);
   if (kind == "kp") return grid<KpParams>(n);
   if (kind == "bouc-wen") {

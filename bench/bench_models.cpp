@@ -8,6 +8,7 @@
 
 #include "hysteron/inverse.hpp"
 #include "hysteron/models.hpp"
+#include "bench_params.hpp"
 
 using namespace hysteron;
 
@@ -29,40 +30,12 @@ std::vector<double> input_signal(double lo, double hi) {
   return x;
 }
 
-ModelParams make_model(int kind, int n) {
-  std::vector<double> r(n), p(n);
-  for (int i = 0; i < n; ++i) {
-    r[i] = 0.6 * (i + 1) / (n + 1);
-    p[i] = 0.5 * std::exp(-3.0 * r[i]) / n * 10;
-  }
-  switch (kind) {
-    case 0: return PiParams{0.5, r, p, {0.0, 1.0}, {}};
-    case 1: {
-      GpiParams g;  // magnitudes like Table 2 of the GPI paper (pressure in MPa)
-      g.envelope = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
-      g.q = 0.8;
-      g.n = n;
-      g.rho = 0.4;
-      g.tau = 5.0;
-      g.alpha = 0.3 / n;
-      g.input_limits = {0.0, 0.6};
-      return g;
-    }
-    case 2: return MpiDeadzoneParams{0.5, r, p, 1.0, {0.2, 0.4, 0.6}, {0.1, 0.2, -0.1}, {0.0, 1.0}, {}};
-    default: {
-      MpiAsymParams a;
-      a.ascending = Envelope::tanh(1.0, 2.0, -0.6, 0.6);
-      a.descending = Envelope::tanh(1.1, 1.8, -0.5, 0.6);
-      a.q = 0.8;
-      a.r = r;
-      a.p = p;
-      a.input_limits = {0.0, 0.6};
-      return a;
-    }
-  }
-}
-
 const char* kNames[] = {"pi", "gpi", "mpi-deadzone", "mpi-asym"};
+
+// pi and mpi-deadzone with input limits [0, 1], gpi and mpi-asym [0, 0.6] (as measured so far).
+ModelParams make_model(int kind, int n) {
+  return bench::pi_family_model(kNames[kind], n, kind == 0 || kind == 2 ? Limits{0.0, 1.0} : Limits{0.0, 0.6});
+}
 
 void BM_ModelStep(benchmark::State& st) {
   const auto params = make_model(static_cast<int>(st.range(0)), static_cast<int>(st.range(1)));

@@ -140,14 +140,13 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
       res.messages.push_back(fmt::format("candidate {} skipped: {}", fit_model_name(kind), e.what()));
     }
     c.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (c.ok && pi_only && !has_pi_structure(rep.model)) {
+    const bool can_choose = c.ok && (!pi_only || has_pi_structure(rep.model));
+    if (c.ok && !can_choose)
       c.message = fmt::format("not eligible for auto while the adaptive variant runs (it needs a PI-family model; "
                               "--no-adaptive or --model {} to use it); {}",
                               fit_model_name(kind), c.message);
-    } else if (c.ok) {
-      ++eligible;
-    }
-    if (c.ok && (!pi_only || has_pi_structure(rep.model)) && c.validation.rms < best_rms) {
+    eligible += can_choose;
+    if (can_choose && c.validation.rms < best_rms) {
       best_rms = c.validation.rms;
       best = res.candidates.size();
       res.best_fit = std::move(rep);

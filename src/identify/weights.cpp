@@ -138,61 +138,48 @@ Eigen::VectorXd nnls_normal(const Eigen::MatrixXd& G0, const Eigen::VectorXd& h0
   return t.cwiseProduct(dinv);
 }
 
+// Calls f(Ac, bc) for each block of kLsBlock rows of A, b (no copy of A beyond one
+// block): Ac, bc are the block less the column means amean, bmean if `centre` (the
+// subtraction done per row, as for an explicitly centred copy: no cancellation of
+// A^T A - m mu mu^T), else the block itself.
+template <class F>
+void for_each_block(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, bool centre, const Eigen::RowVectorXd& amean,
+                    double bmean, F&& f) {
+  Eigen::MatrixXd Ac;
+  Eigen::VectorXd bc;
+  for (Eigen::Index k0 = 0; k0 < A.rows(); k0 += kLsBlock) {
+    const Eigen::Index rows = std::min(kLsBlock, A.rows() - k0);
+    Ac = A.middleRows(k0, rows);
+    bc = b.segment(k0, rows);
+    if (centre) {
+      Ac.rowwise() -= amean;
+      bc.array() -= bmean;
+    }
+    f(Ac, bc);
+  }
+}
+
 // The normal equations G = Ac^T Ac, h = Ac^T (bc - Ac lo) in one pass over A's rows
-// (kLsBlock at a time, no copy of A), where Ac, bc are A, b less the column means
-// amean, bmean if `centre` (the subtraction done per row, as for an explicitly
-// centred copy: no cancellation of A^T A - m mu mu^T), else A, b themselves.
+// (Ac, bc as in for_each_block).
 void normal_equations(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& lo, bool centre,
                       const Eigen::RowVectorXd& amean, double bmean, Eigen::MatrixXd& G, Eigen::VectorXd& h) {
-  const Eigen::Index m = A.rows(), n = A.cols();
-  G.setZero(n, n);
-  h.setZero(n);
+  G.setZero(A.cols(), A.cols());
+  h.setZero(A.cols());
   const bool shift = !lo.isZero(0.0);
-  Eigen::MatrixXd Ac;
-  Eigen::VectorXd r;
-  for (Eigen::Index k0 = 0; k0 < m; k0 += kLsBlock) {
-    const Eigen::Index rows = std::min(kLsBlock, m - k0);
-    if (centre) {
-      Ac = A.middleRows(k0, rows).rowwise() - amean;
-      r = b.segment(k0, rows).array() - bmean;
-      if (shift) r.noalias() -= Ac * lo;
-      G.selfadjointView<Eigen::Lower>().rankUpdate(Ac.transpose());
-      h.noalias() += Ac.transpose() * r;
-    } else {
-      const auto Ab = A.middleRows(k0, rows);
-      G.selfadjointView<Eigen::Lower>().rankUpdate(Ab.transpose());
-      if (shift) {
-        r = b.segment(k0, rows);
-        r.noalias() -= Ab * lo;
-        h.noalias() += Ab.transpose() * r;
-      } else {
-        h.noalias() += Ab.transpose() * b.segment(k0, rows);
-      }
-    }
-  }
+  for_each_block(A, b, centre, amean, bmean, [&](const Eigen::MatrixXd& Ac, Eigen::VectorXd& bc) {
+    if (shift) bc.noalias() -= Ac * lo;
+    G.selfadjointView<Eigen::Lower>().rankUpdate(Ac.transpose());
+    h.noalias() += Ac.transpose() * bc;
+  });
   G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
 }
 
-// The residual sum of squares ||Ac t - bc||^2 (Ac, bc as in normal_equations),
-// kLsBlock rows at a time.
+// The residual sum of squares ||Ac t - bc||^2 (Ac, bc as in for_each_block).
 double residual_sse(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& t, bool centre,
                     const Eigen::RowVectorXd& amean, double bmean) {
-  const Eigen::Index m = A.rows();
   double sse = 0.0;
-  Eigen::MatrixXd Ac;
-  Eigen::VectorXd r;
-  for (Eigen::Index k0 = 0; k0 < m; k0 += kLsBlock) {
-    const Eigen::Index rows = std::min(kLsBlock, m - k0);
-    if (centre) {
-      Ac = A.middleRows(k0, rows).rowwise() - amean;
-      r.noalias() = Ac * t;
-      r.array() -= b.segment(k0, rows).array() - bmean;
-    } else {
-      r.noalias() = A.middleRows(k0, rows) * t;
-      r -= b.segment(k0, rows);
-    }
-    sse += r.squaredNorm();
-  }
+  for_each_block(A, b, centre, amean, bmean,
+                 [&](const Eigen::MatrixXd& Ac, const Eigen::VectorXd& bc) { sse += (Ac * t - bc).squaredNorm(); });
   return sse;
 }
 

@@ -197,6 +197,10 @@ class FileLines {
     if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a data file", path));
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) throw Error(fmt::format("{}: cannot open data file ({})", path, std::strerror(errno)));
+    // a small regular file gets a buffer of its size (+1 to see the end), not the 256 KiB one
+    struct stat st {};
+    if (::fstat(fd_, &st) == 0 && S_ISREG(st.st_mode) && static_cast<std::size_t>(st.st_size) < cap_)
+      cap_ = std::max<std::size_t>(static_cast<std::size_t>(st.st_size) + 1, 4096);
     buf_.reset(new char[cap_]);
   }
   ~FileLines() {
@@ -222,7 +226,8 @@ class FileLines {
   }
 
  private:
-  // the buffer starts at 256 KiB and grows (up to a line's cap and a chunk) only for long lines
+  // the buffer starts at 256 KiB (a small file's size) and grows (up to a line's cap and a
+  // chunk) only for long lines
   static constexpr std::size_t kSize = max_text_line_bytes + (std::size_t{1} << 20);
 
   void fill() {
@@ -358,13 +363,15 @@ class TextParser {
       return parse_again(line);
     }
     for (auto f : fields_) names_.emplace_back(unquote(f));
-    // A name given twice would select the first column silently.
-    std::vector<std::size_t> order(names_.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    // A name given twice would select the first column silently (empty names may repeat: only
+    // the others are sorted).
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < names_.size(); ++i)
+      if (!names_[i].empty()) order.push_back(i);
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return names_[a] < names_[b]; });
     for (std::size_t i = 1; i < order.size(); ++i) {
       const std::size_t k = order[i - 1], m = order[i];
-      if (!names_[m].empty() && names_[m] == names_[k])
+      if (names_[m] == names_[k])
         throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
                                 lineno_, shown(names_[m]), k + 1, m + 1));
     }
@@ -778,15 +785,39 @@ void check_mat_file(const std::string& path) {
     return;
   }
   const std::size_t n = static_cast<std::size_t>(st.st_size);
-  void* map = ::mmap(nullptr, n, PROT_READ, MAP_PRIVATE, fd, 0);
+  // a small file is read (mapping it costs more), a large one mapped
+  std::vector<unsigned char> small;
+  void* map = MAP_FAILED;
+  if (n <= (std::size_t{1} << 16)) {
+    small.resize(n);
+    std::size_t got = 0;
+    while (got < n) {
+      const ssize_t r = ::read(fd, small.data() + got, n - got);
+      if (r < 0 && errno == EINTR) continue;
+      if (r <= 0) {
+        const int err = r < 0 ? errno : EIO;
+        ::close(fd);
+        throw Error(fmt::format("{}: cannot read: {}", path, std::strerror(err)));
+      }
+      got += static_cast<std::size_t>(r);
+    }
+  } else {
+    map = ::mmap(nullptr, n, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (map == MAP_FAILED) {
+      const int err = errno;
+      ::close(fd);
+      throw Error(fmt::format("{}: cannot read: {}", path, std::strerror(err)));
+    }
+  }
   ::close(fd);
-  if (map == MAP_FAILED) throw Error(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
   struct Unmap {
     void* p;
     std::size_t n;
-    ~Unmap() { ::munmap(p, n); }
+    ~Unmap() {
+      if (p != MAP_FAILED) ::munmap(p, n);
+    }
   } unmap{map, n};
-  const Bytes f{static_cast<const unsigned char*>(map), n, n};
+  const Bytes f{map != MAP_FAILED ? static_cast<const unsigned char*>(map) : small.data(), n, n};
   const bool v5 = n >= 128 && ((f.p[126] == 'I' && f.p[127] == 'M') || (f.p[126] == 'M' && f.p[127] == 'I'));
   if (!v5) {
     check_mat4(f, path);

@@ -93,6 +93,18 @@ TEST(FuzzRegression, MatV4SparseWithoutItsThreeColumnsIsRefused) {
   EXPECT_TRUE(has(msg, "a sparse MAT v4 matrix stored as 855638017x0")) << msg;
 }
 
+// 128 bytes with the v5 endian mark "IM" but version 0x0900: the structure check took it for a v5
+// file without variables, matio (v5 / v7.3 only for versions 0x0100 / 0x0200) read it as MAT v4
+// and allocated 1 GB for its second variable's name (found by fuzz_mat while measuring its
+// exec/s). A file is now checked as the format matio will read it as.
+TEST(FuzzRegression, MatV5MarkWithUnknownVersionIsCheckedAsMatioReadsItAsV4) {
+  const std::string path = regression("mat/v5-mark-unknown-version-read-as-v4.mat");
+  const std::string msg = error_of([&] { io::read_table(path); });
+  EXPECT_TRUE(has(msg, path + ": variable #2: inconsistent MAT v4 header")) << msg;
+  EXPECT_TRUE(has(msg, "name length 1072693248")) << msg;
+  EXPECT_TRUE(has(error_of([&] { io::read_column(path, "x"); }), "variable #2"));
+}
+
 // The same classes built by hand: a char matrix declaring 10^8 characters with 8 bytes of data,
 // a cell declaring 10^8 elements, a struct declaring 10^8 fields, sparse with a huge nzmax; each
 // in a 200-byte file.

@@ -818,13 +818,15 @@ void check_mat_file(const std::string& path) {
     }
   } unmap{map, n};
   const Bytes f{map != MAP_FAILED ? static_cast<const unsigned char*>(map) : small.data(), n, n};
-  const bool v5 = n >= 128 && ((f.p[126] == 'I' && f.p[127] == 'M') || (f.p[126] == 'M' && f.p[127] == 'I'));
-  if (!v5) {
+  // matio reads a file as v5 / v7.3 only with the endian mark and one of their two versions;
+  // any other file, a 128-byte header with an unknown version included, it reads as MAT v4
+  const bool mark = n >= 128 && ((f.p[126] == 'I' && f.p[127] == 'M') || (f.p[126] == 'M' && f.p[127] == 'I'));
+  const bool swap = mark && f.p[126] == 'M';
+  const unsigned version = !mark ? 0 : swap ? (f.p[124] << 8 | f.p[125]) : (f.p[125] << 8 | f.p[124]);
+  if (version != 0x0100 && version != 0x0200) {
     check_mat4(f, path);
     return;
   }
-  const bool swap = f.p[126] == 'M';
-  const unsigned version = swap ? (f.p[124] << 8 | f.p[125]) : (f.p[125] << 8 | f.p[124]);
   if (version == 0x0200) return check_mat73(f, path);  // v7.3 (HDF5)
   std::size_t pos = 128;
   for (std::size_t index = 0; pos < n; ++index) {

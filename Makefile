@@ -3,6 +3,7 @@ BUILD      ?= build
 ASAN_BUILD ?= build-asan
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
+FUZZ_MAX_LEN ?= 4096
 FUZZ_TARGETS := csv model_file mat rig_params
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
 PYTHON     := /usr/bin/python3
@@ -57,8 +58,12 @@ test-asan: deps
 # (fuzz/corpus/<target>, plus the past findings in fuzz/regressions/<target>: both read only;
 # libFuzzer writes new inputs to the first corpus directory only, $(FUZZ_BUILD)/corpus/<target>,
 # and crash-/leak-/timeout-/oom- files to $(FUZZ_BUILD)/artifacts; the files a target needs a
-# path for go to $(FUZZ_BUILD)/scratch, emptied after each target) and fails on the first
-# finding. The working tree stays clean (`git status` after `make fuzz FUZZ_SECONDS=5`).
+# path for go to a fresh directory in /dev/shm (in $(FUZZ_BUILD) without one), emptied after
+# each target and removed at the end) and fails on the first finding. Each target gets its
+# dictionary fuzz/dict/<target>.dict (format tokens and key names) and -max_len=$(FUZZ_MAX_LEN):
+# the formats' interesting structure fits in 4 KB, and longer inputs only slow each run (the
+# per-line and per-column limits are tested by tests/test_io_stream.cpp, not by the fuzzers).
+# The working tree stays clean (`git status` after `make fuzz FUZZ_SECONDS=5`).
 fuzz-build: deps
 	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DHYSTERON_FUZZ=ON \
 	  -DHYSTERON_BUILD_TESTS=OFF -DHYSTERON_BUILD_APPS=OFF -DHYSTERON_BUILD_PYTHON=OFF -DHYSTERON_BUILD_BENCH=OFF \
@@ -66,17 +71,19 @@ fuzz-build: deps
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_targets
 
 fuzz: fuzz-build
-	@mkdir -p $(FUZZ_BUILD)/artifacts $(FUZZ_BUILD)/scratch
-	@set -e; for t in $(FUZZ_TARGETS); do \
+	@mkdir -p $(FUZZ_BUILD)/artifacts
+	@set -e; base=$$([ -w /dev/shm ] && echo /dev/shm || echo $(CURDIR)/$(FUZZ_BUILD)); \
+	scratch=$$(mktemp -d $$base/hysteron-fuzz-scratch-XXXXXX); trap 'rm -rf "$$scratch"' EXIT; \
+	for t in $(FUZZ_TARGETS); do \
 	  mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
 	  echo "== fuzz_$$t: $(FUZZ_SECONDS) s"; \
-	  rc=0; ASAN_OPTIONS=detect_leaks=1 HYSTERON_FUZZ_SCRATCH=$(CURDIR)/$(FUZZ_BUILD)/scratch \
+	  rc=0; ASAN_OPTIONS=detect_leaks=1 HYSTERON_FUZZ_SCRATCH=$$scratch \
 	    ./$(FUZZ_BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 \
-	    -rss_limit_mb=2048 -malloc_limit_mb=512 -print_final_stats=1 \
-	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- $(FUZZ_BUILD)/corpus/$$t fuzz/corpus/$$t \
-	    $$([ -d fuzz/regressions/$$t ] && echo fuzz/regressions/$$t) \
+	    -rss_limit_mb=2048 -malloc_limit_mb=512 -max_len=$(FUZZ_MAX_LEN) -dict=fuzz/dict/$$t.dict \
+	    -print_final_stats=1 -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- \
+	    $(FUZZ_BUILD)/corpus/$$t fuzz/corpus/$$t $$([ -d fuzz/regressions/$$t ] && echo fuzz/regressions/$$t) \
 	    > $(FUZZ_BUILD)/fuzz_$$t.log 2>&1 || rc=$$?; \
-	  rm -rf $(FUZZ_BUILD)/scratch/hysteron-fuzz-*; \
+	  rm -rf "$$scratch"/hysteron-fuzz-*; \
 	  [ $$rc = 0 ] || { tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
 	  grep -E '^Done|stat::number_of_executed_units' $(FUZZ_BUILD)/fuzz_$$t.log; \
 	done

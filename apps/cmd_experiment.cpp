@@ -28,6 +28,7 @@ struct ExperimentArgs {
   bool json = false;
   std::string out;
   std::string model = "auto";
+  bool paper_references = false;
 };
 
 // "auto" and every kind fit() identifies (the registry, identify.hpp).
@@ -47,8 +48,12 @@ std::string model_help() {
                      kinds);
 }
 
-void add_model_option(CLI::App* cmd, ExperimentArgs& args) {
+void add_model_options(CLI::App* cmd, ExperimentArgs& args) {
   cmd->add_option("--model", args.model, model_help())->check(CLI::IsMember(model_choices()))->default_val("auto");
+  cmd->add_flag("--paper-references", args.paper_references,
+                "Track the papers' references as published even where they lie above the contraction this rig "
+                "reached in its identification run (default: such a reference is scaled into the rig's reach, "
+                "with a note; docs/control.md, section 5)");
 }
 
 ExperimentOptions options_from(const ExperimentArgs& a) {
@@ -60,6 +65,7 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   if (!a.tracking_plant.empty()) o.tracking_rig = load_rig_params(a.tracking_plant);
   o.adaptive = !a.no_adaptive;
   o.model = fit_model_from_name(a.model);
+  o.fit_references = !a.paper_references;
   return o;
 }
 
@@ -107,7 +113,7 @@ void add_experiment(CLI::App& app, Action& action) {
                   "Rig parameters of the tracking runs (JSON), if the rig changed after its identification on "
                   "--plant (default: the same rig)");
   cmd->add_flag("--no-adaptive", args->no_adaptive, "Do not run the adaptive variant");
-  add_model_option(cmd, *args);
+  add_model_options(cmd, *args);
   cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)")
       ->check(non_negative_integer());
   cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");
@@ -137,7 +143,7 @@ void add_experiment(CLI::App& app, Action& action) {
   demo->add_option("--learning-periods", dargs->learning_periods,
                    "Periods of the learning variant (0: no learning runs; default 10)")
       ->check(CLI::Range(0, 1000));
-  add_model_option(demo, *dargs);
+  add_model_options(demo, *dargs);
   demo->add_option("--out", dargs->out, "Directory for every experiment's outputs (default out/demo)")
       ->default_val("out/demo");
   demo->callback([dargs, &action] {

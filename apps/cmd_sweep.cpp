@@ -32,6 +32,7 @@ struct SweepArgs {
   std::uint64_t seed = 1;
   int learning_periods = ExperimentOptions{}.learning_periods;
   std::string model = "auto";
+  bool paper_references = false;
   unsigned jobs = 0;
   std::string out;
   std::string report;
@@ -120,6 +121,7 @@ int run_sweep_command(const SweepArgs& a) {
   o.seed = a.seed;
   o.learning_periods = a.learning_periods;
   o.model = fit_model_from_name(a.model);
+  o.fit_references = !a.paper_references;
   o.jobs = a.jobs;
   for (const auto& e : a.experiments) {
     if (e == "all") {
@@ -209,6 +211,9 @@ void add_sweep(CLI::App& app, Action& action) {
         ->check(CLI::IsMember(choices))
         ->default_val("auto");
   }
+  cmd->add_flag("--paper-references", args->paper_references,
+                "Every run tracks the papers' references as published, even above its rig's reach (then a "
+                "target miss); default: scaled into each rig's reach, shown as 'ref xS' (docs/control.md, section 5)");
   cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
       ->check(non_negative_integer())
       ->check(CLI::Range(1u, 1024u));

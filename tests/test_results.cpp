@@ -310,6 +310,11 @@ TEST(Results, ExperimentResultRoundTrip) {
   r.lead_s = 0.057;
   r.wall_time_s = 12.5;
   r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
+  r.reach_min_mm = -0.0125;
+  r.reach_max_mm = 84.75;
+  r.reference_ranges = {{"triangle", 0.0, 40.0, 0.0, 40.0, false, true},
+                        {"sine", 5.0, 95.0, 5.0, 80.5, true, true},
+                        {"step", 0.0, 99.0, 0.0, 99.0, false, false}};
   for (const char* variant : {"compensated", "faithful", "baseline"})
     for (const char* ref : {"triangle", "sine"}) {
       TrackingRun run;
@@ -339,6 +344,9 @@ TEST(Results, ExperimentResultRoundTrip) {
   expect_same(back.baseline_model, r.baseline_model);
   EXPECT_EQ(back.lead_s, r.lead_s);
   EXPECT_EQ(back.wall_time_s, r.wall_time_s);
+  EXPECT_EQ(back.reach_min_mm, r.reach_min_mm);
+  EXPECT_EQ(back.reach_max_mm, r.reach_max_mm);
+  EXPECT_EQ(back.reference_ranges, r.reference_ranges);
   EXPECT_EQ(back.published.source, r.published.source);
   ASSERT_EQ(back.published.errors.size(), 2u);
   for (const auto& e : r.published.errors) {

@@ -548,25 +548,30 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
     lines.push_back(csv.substr(s, e - s));
   }
   const auto header = csv_fields(lines.at(0));
-  ASSERT_EQ(header.size(), 16u);
+  ASSERT_EQ(header.size(), 17u);
   EXPECT_EQ(header[0], "experiment");
   EXPECT_EQ(header[7], "rms_mm");
   EXPECT_EQ(header[8], "rms_vs_nominal");
+  EXPECT_EQ(header[13], "reference_scale");
   const std::size_t tracking = r.run(0, 0).runs.size() + r.run(0, 1).runs.size();
   ASSERT_EQ(lines.size(), 1 + tracking + 1);
   std::size_t failed = 0;
   for (std::size_t i = 1; i < lines.size(); ++i) {
     const auto f = csv_fields(lines[i]);
     ASSERT_EQ(f.size(), header.size()) << lines[i];
-    if (f[13] == "failed") {
+    if (f[14] == "failed") {
       ++failed;
-      EXPECT_TRUE(contains(f[14], "max_substeps")) << f[14];
+      EXPECT_TRUE(contains(f[15], "max_substeps")) << f[15];
       continue;
     }
-    EXPECT_EQ(f[13], "ok");
+    EXPECT_EQ(f[14], "ok");
     const SweepRunErrors* x = r.find(0, f[1] == "nominal" ? 0 : 1, f[3], f[4]);
     ASSERT_NE(x, nullptr) << lines[i];
     EXPECT_EQ(std::stod(f[7]), x->errors.rms_error_mm);  // %.17g reads back exactly
+    EXPECT_EQ(std::stod(f[13]), x->reference_scale);
+    // the 35 kg load cannot lift the paper's 95 mm top at 0.57 MPa: its reference is scaled
+    if (f[1] == "nominal") EXPECT_EQ(f[13], "1");
+    if (f[1] == "load.mass=35") EXPECT_LT(x->reference_scale, 0.95) << lines[i];
     if (f[1] == "nominal") {
       EXPECT_EQ(f[8], "1");
     }

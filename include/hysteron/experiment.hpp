@@ -74,7 +74,24 @@ struct ExperimentOptions {
   // The adaptive variant needs the PI family (AdaptiveInverse): for another kind it is
   // skipped with a note saying so.
   FitModel model = FitModel::automatic;
+  // Keep every reference within the rig's reach: a reference whose top lies above the
+  // contraction the identification run had on its ascent at 95 % of the actuator's 0.6 MPa
+  // (5 % kept as headroom for the position loop) is scaled about its bottom so that its top
+  // lies there, and the result says so (ExperimentResult::reference_ranges, messages).
+  // false: the papers' references as published, with a note where they are out of reach
+  // (the error there is the actuator's limit, not the controller's). docs/control.md, 5.
+  bool fit_references = true;
   void validate() const;         // throws hysteron::Error
+};
+
+// A reference as the paper defines it and as it was tracked on this rig [mm].
+struct ReferenceRange {
+  std::string reference;
+  double paper_min_mm = 0.0, paper_max_mm = 0.0;  // as published
+  double min_mm = 0.0, max_mm = 0.0;              // as tracked (the paper's unless scaled)
+  bool scaled = false;        // scaled into the rig's reach (ExperimentOptions::fit_references)
+  bool reachable = true;      // the tracked reference lies within the reach (with its margin)
+  bool operator==(const ReferenceRange&) const = default;
 };
 
 // Dynamics of the rig from the commanded pressure to the measured contraction,
@@ -167,6 +184,11 @@ struct ExperimentResult {
   ModelParams baseline_model;     // the straight line of the baseline
   double lead_s = 0.0;            // preview of the compensated variants (identified)
   RigDynamics dynamics;           // identified from the identification run
+  // The contraction the rig reached in the identification run (min and max of an 11-sample
+  // moving mean of the measurement) [mm]; NaN in results written before it existed.
+  double reach_min_mm = std::numeric_limits<double>::quiet_NaN();
+  double reach_max_mm = std::numeric_limits<double>::quiet_NaN();
+  std::vector<ReferenceRange> reference_ranges;  // one per reference, in the order run
   std::vector<std::string> messages;  // notes of the run (e.g. a candidate model skipped)
   std::vector<TrackingRun> runs;
   PublishedFigures published;     // the paper's figures (empty where it gives none)

@@ -105,6 +105,7 @@ struct SweepOptions {
   // ExperimentOptions::model of every run: automatic (each run chooses among every kind on
   // its own rig; fits 9 kinds per run) or one kind pinned for every run.
   FitModel model = ExperimentOptions{}.model;
+  bool fit_references = ExperimentOptions{}.fit_references;  // of every run
   unsigned jobs = 0;                      // threads; 0 = std::thread::hardware_concurrency()
   std::function<void(const SweepProgress&)> progress;  // optional
   // What runs one experiment: run_experiment when empty (a test may pass a cheaper one;
@@ -120,6 +121,10 @@ struct SweepRunErrors {
   TrackingErrors errors;
   double min_command_mpa = 0.0, max_command_mpa = 0.0;  // NaN if the run logs no pressure command
   std::size_t saturated = 0;
+  // The reference as tracked over the published one (ExperimentResult::reference_ranges):
+  // the span's ratio (< 1: scaled into the rig's reach) and whether it lay within the reach.
+  double reference_scale = 1.0;
+  bool reachable = true;
 };
 
 // One (experiment, variant) run.
@@ -150,6 +155,7 @@ struct SweepResult {
   std::uint64_t seed = 1;
   unsigned jobs = 1;
   FitModel model = FitModel::automatic;  // SweepOptions::model
+  bool fit_references = true;            // SweepOptions::fit_references
   double wall_time_s = 0.0;
 
   std::size_t failures() const noexcept;
@@ -160,7 +166,8 @@ struct SweepResult {
   // The table (one row per tracking run, one per failed run), as CSV text; columns:
   // experiment, variant, overrides, reference, kind, max_mm, mae_mm, rms_mm,
   // rms_vs_nominal, rms_vs_baseline, min_command_mpa, max_command_mpa, saturated,
-  // status (ok | failed), error, wall_time_s. Numbers with %.17g (exact), NaN as "".
+  // reference_scale, status (ok | failed), error, wall_time_s. Numbers with %.17g
+  // (exact), NaN as "".
   std::string csv() const;
   // A human-readable table (RMS per kind), failures and target misses.
   std::string text() const;
@@ -168,7 +175,8 @@ struct SweepResult {
   nlohmann::json to_json() const;
   // The misses of issue 11's targets for the variant kind "compensated": RMS above
   // rms_ratio_limit x nominal, not below the baseline's, a command outside 0..0.6 MPa,
-  // and every failed run. One line each.
+  // a reference out of the rig's reach (SweepOptions::fit_references false), and every
+  // failed run. One line each.
   std::vector<std::string> target_misses() const;
 };
 

@@ -51,9 +51,10 @@ void bind_experiment(py::module_& m) {
       "run_experiment",
       [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
          const std::string& report_path, int learning_periods, bool adaptive, const py::object& tracking_plant,
-         const std::string& model) {
+         const std::string& model, bool paper_references) {
         ExperimentOptions o;
         o.model = fit_model_from_name(model);
+        o.fit_references = !paper_references;
         o.name = name;
         o.seed = seed;
         o.learning_periods = learning_periods;
@@ -135,7 +136,7 @@ void bind_experiment(py::module_& m) {
       },
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
       py::arg("report") = "", py::arg("learning_periods") = 10, py::arg("adaptive") = true,
-      py::arg("tracking_plant") = py::none(), py::arg("model") = "auto",
+      py::arg("tracking_plant") = py::none(), py::arg("model") = "auto", py::arg("paper_references") = false,
       R"doc(Run one of the registered experiments (experiment_names(): "gpi-pid", "mpi-openloop",
 "mpi-pwm") on the simulated rig. plant: rig parameter dict or JSON path (None: defaults).
 model: kind of hysteron's model, the one the compensated, learning and adaptive variants
@@ -146,6 +147,9 @@ learning_periods: periods of the learning variant (0: none; 0..1000).
 adaptive: run the adaptive variant (online RLS of the inverse's weights).
 tracking_plant: rig parameters of the tracking runs if the rig changed after its
 identification (None: the identified rig).
+paper_references: track the papers' references as published even above the contraction the
+rig reached in its identification run (default False: such a reference is scaled into the
+reach, said in "messages"; the ranges are in summary["references"] and summary["reach"]).
 out: directory for the CSV/JSON outputs (as `hysteron experiment --out`);
 report: path of an HTML report. Returns a dict: "summary" (the CLI's --json
 object), "table" (text), "identification" (numpy series + train_end), "fit",

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <tuple>
+#include <utility>
 
 #include "detail.hpp"
 #include "hysteron/error.hpp"
@@ -60,6 +62,86 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));
   return run;
+}
+
+// Pressure headroom kept below the actuator's limit at a reference's top [fraction of
+// kPressureMax]: the position loop needs pressure above the feedforward's to correct an error
+// there. The papers' references keep more on the nominal rig (gpi-pid's 95 mm top is reached
+// at about 0.56 MPa, docs/control.md section 5).
+constexpr double kPressureHeadroom = 0.05;
+
+// Centred 11-sample moving mean of the measured contraction (the sensor's noise does not
+// widen the reach) [mm].
+std::vector<double> smoothed(const std::vector<double>& x) {
+  const std::size_t n = x.size(), h = 5;
+  if (n <= 2 * h) return x;
+  std::vector<double> m(n);
+  double sum = 0.0;
+  for (std::size_t k = 0; k < 2 * h + 1; ++k) sum += x[k];
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t c = std::clamp(k, h, n - h - 1);  // window [c - h, c + h]
+    if (k > h && k < n - h) sum += x[c + h] - x[c - h - 1];
+    m[k] = sum / static_cast<double>(2 * h + 1);
+  }
+  return m;
+}
+
+// ExperimentOptions::fit_references: each reference's top kept at most at the contraction
+// the identification run had when its measured pressure first reached kPressureMax (1 -
+// kPressureHeadroom) (the least contraction at or above that pressure: the ascending branch),
+// scaled about its bottom. Only the top: a muscle's contraction at zero pressure, the bottom
+// of every reference here, is reached by venting it. The ranges and a note per reference
+// out of reach go into the result.
+std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, std::vector<Reference> refs,
+                                    ExperimentResult& res) {
+  const std::vector<double> x = smoothed(id.x_mm);
+  const double p_limit = (1.0 - kPressureHeadroom) * kPressureMax;
+  double top = std::numeric_limits<double>::infinity();
+  res.reach_min_mm = std::numeric_limits<double>::infinity();
+  res.reach_max_mm = -res.reach_min_mm;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    res.reach_min_mm = std::min(res.reach_min_mm, x[k]);
+    res.reach_max_mm = std::max(res.reach_max_mm, x[k]);
+    if (id.p[k] >= p_limit) top = std::min(top, x[k]);
+  }
+  const bool known = std::isfinite(top);  // else the identification never reached p_limit
+  for (Reference& ref : refs) {
+    const auto [lo_it, hi_it] = std::minmax_element(ref.ref_m.begin(), ref.ref_m.end());
+    ReferenceRange rr;
+    rr.reference = ref.name;
+    rr.paper_min_mm = rr.min_mm = *lo_it * 1e3;
+    rr.paper_max_mm = rr.max_mm = *hi_it * 1e3;
+    if (known && rr.paper_max_mm > top) {
+      const std::string why = fmt::format(
+          "the rig reached {:.1f} mm at most in its identification run, and {:.1f} mm on its ascent at {:.2f} MPa "
+          "({:.0f} % of the actuator's {:.2f} MPa kept as headroom for the position loop)",
+          res.reach_max_mm, top, p_limit, kPressureHeadroom * 100.0, kPressureMax);
+      if (o.fit_references && top > rr.paper_min_mm) {
+        const double s = (top - rr.paper_min_mm) / (rr.paper_max_mm - rr.paper_min_mm);
+        const double base = *lo_it;
+        for (double& r : ref.ref_m) r = base + s * (r - base);
+        rr.max_mm = top;
+        rr.scaled = true;
+        res.messages.push_back(fmt::format("reference {} scaled by {:.3f} about its bottom to {:.1f}..{:.1f} mm "
+                                           "(published {:.1f}..{:.1f} mm): {}; errors are against the scaled "
+                                           "reference (--paper-references keeps the published one)",
+                                           ref.name, s, rr.min_mm, rr.max_mm, rr.paper_min_mm, rr.paper_max_mm,
+                                           why));
+      } else {
+        rr.reachable = false;
+        res.messages.push_back(fmt::format("reference {} ({:.1f}..{:.1f} mm) is out of this rig's reach: {}; the "
+                                           "errors above {:.1f} mm are the actuator's limit, not the controller's",
+                                           ref.name, rr.paper_min_mm, rr.paper_max_mm, why, top));
+      }
+    } else if (!known && rr.paper_max_mm > res.reach_max_mm) {
+      res.messages.push_back(fmt::format("reference {}: its top, {:.1f} mm, lies above the {:.1f} mm the "
+                                         "identification run reached, whose pressure stayed below {:.2f} MPa; the "
+                                         "rig's reach above it is not known, and the reference is kept",
+                                         ref.name, rr.paper_max_mm, res.reach_max_mm, p_limit));
+    }
+    res.reference_ranges.push_back(rr);
+  }
+  return refs;
 }
 
 // The kinds a run tries for hysteron's model: the one asked for, or (auto) the paper's
@@ -278,7 +360,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
 
   // 4. tracking
   const std::uint64_t track_seed = o.seed + 104729;
-  for (const Reference& ref : spec.references(tc)) {
+  for (const Reference& ref : fit_to_reach(o, id, spec.references(tc), res)) {
     Context rc = ctx;
     rc.reference = &ref;
     for (const Variant& v : spec.variants) {

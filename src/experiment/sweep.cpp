@@ -359,6 +359,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   SweepResult r;
   r.seed = options.seed;
   r.model = options.model;
+  r.fit_references = options.fit_references;
   if (options.experiments.empty()) throw Error("sweep: no experiment given");
   const std::vector<std::string> known = experiment_names();
   for (const auto& name : options.experiments) {
@@ -447,6 +448,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.seed = options.seed;
         eo.learning_periods = options.learning_periods;
         eo.model = options.model;
+        eo.fit_references = options.fit_references;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
         for (const auto& tr : er.runs) {
           SweepRunErrors e;
@@ -454,6 +456,12 @@ SweepResult run_sweep(const SweepOptions& options) {
           e.kind = tr.variant;
           e.errors = tr.errors;
           e.saturated = tr.saturated;
+          for (const auto& rr : er.reference_ranges)
+            if (rr.reference == tr.reference) {
+              const double span = rr.paper_max_mm - rr.paper_min_mm;
+              e.reference_scale = span > 0.0 ? (rr.max_mm - rr.min_mm) / span : 1.0;
+              e.reachable = rr.reachable;
+            }
           if (tr.pressure_command_mpa.empty()) {
             e.min_command_mpa = e.max_command_mpa = nan;
           } else {
@@ -518,7 +526,7 @@ const SweepRunErrors* SweepResult::find(std::size_t experiment, std::size_t vari
 std::string SweepResult::csv() const {
   std::string out =
       "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,"
-      "min_command_mpa,max_command_mpa,saturated,status,error,wall_time_s\n";
+      "min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s\n";
   for (std::size_t e = 0; e < experiments.size(); ++e)
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const SweepRun& run = this->run(e, v);
@@ -527,19 +535,19 @@ std::string SweepResult::csv() const {
       const std::string head = fmt::format("{},{},{},", csv_field(experiments[e]), csv_field(variants[v].variant.name),
                                            csv_field(overrides));
       if (!run.ok) {
-        out += head + fmt::format(",,,,,,,,,,failed,{},{}\n", csv_field(run.error), csv_number(run.wall_time_s));
+        out += head + fmt::format(",,,,,,,,,,,failed,{},{}\n", csv_field(run.error), csv_number(run.wall_time_s));
         continue;
       }
       for (const auto& x : run.runs) {
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");
-        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},ok,,{}\n", csv_field(x.reference),
+        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{}\n", csv_field(x.reference),
                                   csv_field(x.kind), csv_number(x.errors.max_error_mm), csv_number(x.errors.mae_mm),
                                   csv_number(x.errors.rms_error_mm),
                                   csv_number(nom ? ratio(x.errors.rms_error_mm, nom->errors.rms_error_mm) : nan),
                                   csv_number(base ? ratio(x.errors.rms_error_mm, base->errors.rms_error_mm) : nan),
                                   csv_number(x.min_command_mpa), csv_number(x.max_command_mpa), x.saturated,
-                                  csv_number(run.wall_time_s));
+                                  csv_number(x.reference_scale), csv_number(run.wall_time_s));
       }
     }
   return out;
@@ -561,6 +569,10 @@ std::vector<std::string> SweepResult::target_misses() const {
           out.push_back(fmt::format("{}: pressure command {:.4f}..{:.4f} MPa leaves 0..0.6 MPa", what,
                                     x.min_command_mpa, x.max_command_mpa));
         if (x.kind != "compensated") continue;
+        if (!x.reachable)
+          out.push_back(fmt::format("{}: the reference lies above the rig's reach (--paper-references; the error "
+                                    "there is the actuator's limit)",
+                                    what));
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");
         const double limit = variants[v].variant.rms_ratio_limit;
@@ -584,6 +596,7 @@ std::string SweepResult::text() const {
                                 experiments.size(), variants.size(), seed, jobs, wall_time_s);
   out += "RMS tracking error [mm] per variant kind; comp/nom = compensated RMS / its nominal value;\n"
          "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa];\n";
+  out += "ref xS = the reference scaled by S into the rig's reach (docs/control.md, section 5);\n";
   out += fmt::format("model = the kind of hysteron's model the compensated variants invert ({})\n",
                      model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
                                                   : fmt::format("--model {}", fit_model_name(model)));
@@ -613,7 +626,10 @@ std::string SweepResult::text() const {
         out += std::isfinite(rn) ? fmt::format(" {:>9.2f}", rn) : fmt::format(" {:>9}", "-");
         out += std::isfinite(rb) ? fmt::format(" {:>9.2f}", rb) : fmt::format(" {:>9}", "-");
         out += std::isfinite(lo) ? fmt::format(" {:>6.3f}..{:<5.3f}", lo, hi) : fmt::format(" {:>13}", "-");
-        out += fmt::format("  {}\n", run.model);
+        out += fmt::format("  {}", run.model);
+        if (c && c->reference_scale != 1.0) out += fmt::format("  ref x{:.3f}", c->reference_scale);
+        if (c && !c->reachable) out += "  ref out of reach";
+        out += "\n";
       }
     }
   }
@@ -633,6 +649,7 @@ json SweepResult::to_json() const {
   j["jobs"] = jobs;
   j["wall_time_s"] = wall_time_s;
   j["model_choice"] = std::string(fit_model_name(model));
+  j["fit_references"] = fit_references;
   j["experiments"] = experiments;
   j["failures"] = failures();
   j["variants"] = json::array();
@@ -672,7 +689,9 @@ json SweepResult::to_json() const {
                                {"rms_vs_baseline", number(base ? ratio(x.errors.rms_error_mm, base->errors.rms_error_mm) : nan)},
                                {"min_command_mpa", number(x.min_command_mpa)},
                                {"max_command_mpa", number(x.max_command_mpa)},
-                               {"saturated", x.saturated}});
+                               {"saturated", x.saturated},
+                               {"reference_scale", number(x.reference_scale)},
+                               {"reachable", x.reachable}});
     }
     j["runs"].push_back(std::move(o));
   }

@@ -524,6 +524,16 @@ json to_json(const ExperimentResult& r) {
                    {"position_relay_period_s", number(r.dynamics.position_relay_period_s)},
                    {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
                    {"pressure_relay_period_s", number(r.dynamics.relay_period_s)}};
+  j["reach"] = {{"min_mm", number(r.reach_min_mm)}, {"max_mm", number(r.reach_max_mm)}};
+  j["references"] = json::array();
+  for (const auto& rr : r.reference_ranges)
+    j["references"].push_back({{"reference", rr.reference},
+                               {"paper_min_mm", number(rr.paper_min_mm)},
+                               {"paper_max_mm", number(rr.paper_max_mm)},
+                               {"min_mm", number(rr.min_mm)},
+                               {"max_mm", number(rr.max_mm)},
+                               {"scaled", rr.scaled},
+                               {"reachable", rr.reachable}});
   j["messages"] = r.messages;
   j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
   j["wall_time_s"] = number(r.wall_time_s);
@@ -599,6 +609,29 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     r.dynamics.position_relay_period_s = opt_double(d, "position_relay_period_s", dw, 0.0);
     r.dynamics.relay_gain = opt_double(d, "pressure_relay_gain_per_mpa", dw, 0.0);
     r.dynamics.relay_period_s = opt_double(d, "pressure_relay_period_s", dw, 0.0);
+  }
+  if (j.contains("reach")) {  // absent in files before it
+    const json& a = j["reach"];
+    const std::string aw = key_where(where, "reach");
+    r.reach_min_mm = get_double(a, "min_mm", aw);
+    r.reach_max_mm = get_double(a, "max_mm", aw);
+  }
+  if (j.contains("references")) {
+    const json& rs = j["references"];
+    const std::string rw = key_where(where, "references");
+    if (!rs.is_array()) throw Error(fmt::format("{}: expected an array", rw));
+    for (std::size_t i = 0; i < rs.size(); ++i) {
+      const std::string w = fmt::format("{}[{}]", rw, i);
+      ReferenceRange rr;
+      rr.reference = get_string(rs[i], "reference", w);
+      rr.paper_min_mm = get_double(rs[i], "paper_min_mm", w);
+      rr.paper_max_mm = get_double(rs[i], "paper_max_mm", w);
+      rr.min_mm = get_double(rs[i], "min_mm", w);
+      rr.max_mm = get_double(rs[i], "max_mm", w);
+      rr.scaled = get_bool(rs[i], "scaled", w);
+      rr.reachable = get_bool(rs[i], "reachable", w);
+      r.reference_ranges.push_back(std::move(rr));
+    }
   }
   if (j.contains("messages")) {
     const json& m = j["messages"];

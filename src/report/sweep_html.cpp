@@ -88,9 +88,11 @@ figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
       "time: {:.1f} s of wall time for {} runs. Errors are contraction tracking errors in mm (reference against the "
       "displacement sensor); the command range is the minimum and maximum pressure command in MPa over every variant "
       "kind. <i>comp/nom</i>: the compensated RMS over its value on the nominal rig; <i>comp/base</i>: over the "
-      "baseline's RMS on the same rig. Cells in red miss issue 11's targets: compensated RMS at most the variant's "
+      "baseline's RMS on the same rig. <i>model</i>: the kind of hysteron's model the compensated variants invert; "
+      "<i>reference scale</i>: the reference as tracked over the published one (below 1: scaled into the rig's "
+      "reach, docs/control.md section 5). Cells in red miss issue 11's targets: compensated RMS at most the variant's "
       "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0..0.6 "
-      "MPa.</p>\n",
+      "MPa, the reference within the rig's reach.</p>\n",
       r.seed, r.jobs, r.wall_time_s, r.runs.size());
 
   // the variants
@@ -133,8 +135,9 @@ figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
     h += fmt::format("<h2>{}</h2>\n<table>\n<tr><th class=\"l\">variant</th><th class=\"l\">reference</th>",
                      html_escape(r.experiments[e]));
     for (const auto& k : kinds) h += fmt::format("<th>{0} RMS</th><th>{0} max</th>", html_escape(k));
-    h += "<th>comp/nom</th><th>comp/base</th><th>command [MPa]</th><th>wall [s]</th></tr>\n";
-    const std::size_t ncols = 2 + 2 * kinds.size() + 4;
+    h += "<th>comp/nom</th><th>comp/base</th><th>command [MPa]</th><th class=\"l\">model</th>"
+         "<th>reference scale</th><th>wall [s]</th></tr>\n";
+    const std::size_t ncols = 2 + 2 * kinds.size() + 6;
     for (std::size_t v = 0; v < r.variants.size(); ++v) {
       const SweepRun& run = r.run(e, v);
       const std::string& vn = r.variants[v].variant.name;
@@ -167,9 +170,13 @@ figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
         const double rn = c && n && n->errors.rms_error_mm > 0 ? c->errors.rms_error_mm / n->errors.rms_error_mm : nan;
         const double rb = c && b && b->errors.rms_error_mm > 0 ? c->errors.rms_error_mm / b->errors.rms_error_mm : nan;
         const bool cmd_miss = std::isfinite(lo) && (lo < 0.0 || hi > 0.6);
-        h += fmt::format("<td>{}</td><td>{}</td><td{}>{}</td><td>{:.1f}</td></tr>\n", num(rn, 3), num(rb, 3),
-                         cmd_miss ? " class=\"miss\"" : "",
+        const std::string scale = !c                    ? std::string("&ndash;")
+                                  : !c->reachable         ? std::string("out of reach")
+                                                          : num(c->reference_scale, 3);
+        h += fmt::format("<td>{}</td><td>{}</td><td{}>{}</td><td class=\"l\">{}</td><td{}>{}</td><td>{:.1f}</td></tr>\n",
+                         num(rn, 3), num(rb, 3), cmd_miss ? " class=\"miss\"" : "",
                          std::isfinite(lo) ? fmt::format("{:.3f}..{:.3f}", lo, hi) : std::string("&ndash;"),
+                         html_escape(run.model), c && !c->reachable ? " class=\"miss\"" : "", scale,
                          run.wall_time_s);
       }
     }

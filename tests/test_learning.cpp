@@ -4,6 +4,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -263,4 +264,33 @@ TEST(ExperimentTuning, LearningReducesTheErrorMonotonically) {
     EXPECT_LT(l.periods.back().rms_error_mm, 0.3 * l.periods.front().rms_error_mm);
     EXPECT_LT(l.errors.rms_error_mm, find_run(r, "compensated").errors.rms_error_mm);
   }
+}
+
+// The learning band ends at the position loop's ultimate frequency from its relay test
+// (|Q(w_u)| <= 1/sqrt(2)), and with it mpi-openloop's learning (no pressure loop, references
+// with reversals at 40/35/30 mm) converges period after period on both references. With the
+// widest band the identified linear loop allowed (|Q(w_u)| = 0.94) it stalled after the
+// second period and grew again (0.418 0.242 0.267 0.266 0.235 ... 0.301 mm on the triangle).
+TEST(ExperimentTuning, LearningBandEndsAtTheRelaysUltimateFrequency) {
+  ExperimentOptions o;
+  o.name = "mpi-openloop";
+  o.learning_periods = 5;
+  o.adaptive = false;
+  o.model = FitModel::mpi_asym;
+  const ExperimentResult r = run_experiment(o);
+  const double wu = 2.0 * std::numbers::pi * o.control_period / r.dynamics.position_relay_period_s;
+  int learning_runs = 0;
+  for (const auto& run : r.runs) {
+    if (run.variant != "learning") continue;
+    ++learning_runs;
+    const auto at = run.description.find("half-width ");
+    ASSERT_NE(at, std::string::npos) << run.description;
+    const auto h = static_cast<std::size_t>(std::stoul(run.description.substr(at + 11)));
+    EXPECT_LE(binomial_response(h, wu), 1.0 / std::sqrt(2.0) + 1e-12) << run.reference << ": h = " << h;
+    ASSERT_EQ(run.periods.size(), 5u);
+    for (std::size_t j = 1; j < run.periods.size(); ++j)
+      EXPECT_LT(run.periods[j].rms_error_mm, run.periods[j - 1].rms_error_mm) << run.reference << " period " << j;
+    EXPECT_LT(run.periods.back().rms_error_mm, 0.5 * run.periods.front().rms_error_mm) << run.reference;
+  }
+  EXPECT_EQ(learning_runs, 2);
 }

@@ -155,6 +155,15 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
     lc[l] = std::log(c * c);
   }
   const auto shift_step = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(0.002 / tc)));
+  // The learning band ends at the position loop's ultimate frequency w_u = 2 pi tc / T_u (its
+  // relay test: the measured -180 degree point, above which the identified model is least
+  // trusted, and the hysteresis' stick at reversals is not in it): |Q(w_u)| <= 1/sqrt(2),
+  // i.e. h >= ln 2 / (2 (-ln cos^2(w_u / 2))). docs/control.md, section 3.
+  std::size_t h_floor = 0;
+  if (d.position_relay_period_s > 0.0) {
+    const double wu = 2.0 * std::numbers::pi * tc / d.position_relay_period_s, cu = std::cos(0.5 * wu);
+    if (wu < std::numbers::pi) h_floor = static_cast<std::size_t>(std::ceil(std::log(2.0) / (-2.0 * std::log(cu * cu))));
+  }
   // the largest gain of {0.5, 0.3, 0.2} for which some (shift, width) contracts
   for (double gain : {0.5, 0.3, 0.2}) {
     if (found) break;
@@ -167,7 +176,8 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
         worst[l % kGrid] = std::max(worst[l % kGrid], std::isfinite(a) ? a : 1e300);
       }
       // smallest half-width (widest band) that contracts with a 2 % margin
-      for (std::size_t h = 0; shift + 2 * h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
+      const std::size_t h0 = std::min(h_floor, (budget - shift) / 2);  // the floor, or as near as the period allows
+      for (std::size_t h = h0; shift + 2 * h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
         if (found && h > best.half_width) break;
         double rho = 0.0;
         for (std::size_t l = 0; l < kGrid; ++l)

@@ -5,6 +5,7 @@
 #include <complex>
 #include <numbers>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -111,6 +112,45 @@ TEST(Learning, ConstantErrorLearnsGainTimesErrorWithAWideFilter) {
       ilc.step(2.0);
     }
     EXPECT_EQ(ilc.iteration(), 2u);
+  }
+}
+
+// The progressive update equals the documented formula evaluated directly, over the whole
+// error history E (E(n) = e of sample n since the start, 0 before it; c's index wraps within
+// a period):  c_{j+1}(i) = sum_{m=-h..h} q_m [c_j((i+m) mod N) + L E(jN + i + m + d)],
+// on windows that wrap at either end of the period.
+TEST(Learning, ProgressiveUpdateEqualsTheFormula) {
+  for (const auto& [N, h, d] : {std::tuple<std::size_t, std::size_t, std::size_t>{97, 20, 7}, {50, 1, 0},
+                                {64, 31, 1}, {300, 0, 12}, {41, 10, 19}}) {
+    LearningParams p;
+    p.period = N;
+    p.gain = 0.35;
+    p.lead = d;
+    p.half_width = h;
+    IterativeLearning ilc(p);
+    std::vector<double> q(2 * h + 1, 0.0);  // binomial taps / 4^h, by Pascal's rule
+    q[0] = 1.0;
+    for (std::size_t n = 1; n <= 2 * h; ++n)
+      for (std::size_t m = n; m > 0; --m) q[m] = 0.5 * (q[m] + q[m - 1]), q[m - 1] *= (m == 1 ? 0.5 : 1.0);
+    std::vector<double> E, c_applied;
+    const std::size_t periods = 5;
+    for (std::size_t n = 0; n < periods * N; ++n) {
+      c_applied.push_back(ilc.correction(0));
+      E.push_back(std::sin(0.731 * static_cast<double>(n)) + 0.3 * std::cos(0.057 * static_cast<double>(n * n % 1009)));
+      ilc.step(E.back());
+    }
+    for (std::size_t j = 0; j + 1 < periods; ++j)
+      for (std::size_t i = 0; i < N; ++i) {
+        double want = 0.0;
+        for (std::ptrdiff_t m = -static_cast<std::ptrdiff_t>(h); m <= static_cast<std::ptrdiff_t>(h); ++m) {
+          const auto ci = static_cast<std::size_t>((static_cast<std::ptrdiff_t>(i + N) + m) % static_cast<std::ptrdiff_t>(N));
+          const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(j * N + i + d) + m;
+          const double e = n < 0 ? 0.0 : E[static_cast<std::size_t>(n)];
+          want += q[static_cast<std::size_t>(m + static_cast<std::ptrdiff_t>(h))] * (c_applied[j * N + ci] + p.gain * e);
+        }
+        ASSERT_NEAR(c_applied[(j + 1) * N + i], want, 1e-12) << "N " << N << " h " << h << " d " << d << " period "
+                                                              << j + 1 << " i " << i;
+      }
   }
 }
 

@@ -76,27 +76,60 @@ double IterativeLearning::correction(std::size_t ahead) const noexcept {
   return p < p_.period ? c_cur_[p] : c_next_[p - p_.period];
 }
 
+namespace {
+
+// sum_s q[s] (c[s] + L e[s]) over n contiguous samples, four partial sums (no serial
+// dependence on one accumulator; the order is fixed, so the result is deterministic).
+double weighted_sum(const double* q, const double* c, const double* e, double L, std::ptrdiff_t n) noexcept {
+  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+  std::ptrdiff_t s = 0;
+  for (; s + 4 <= n; s += 4) {
+    a0 += q[s] * (c[s] + L * e[s]);
+    a1 += q[s + 1] * (c[s + 1] + L * e[s + 1]);
+    a2 += q[s + 2] * (c[s + 2] + L * e[s + 2]);
+    a3 += q[s + 3] * (c[s + 3] + L * e[s + 3]);
+  }
+  for (; s < n; ++s) a0 += q[s] * (c[s] + L * e[s]);
+  return (a0 + a1) + (a2 + a3);
+}
+
+}  // namespace
+
 // c_{new}(i) = sum_m q_m [c(i+m) + L e(i+m+d)]. `c` is the previous generation; the
 // errors come from e_cur_ (this period, indices already measured) or e_prev_ (the
-// period before) as documented in step().
+// period before) as documented in step(). The taps m = -h..h are summed in contiguous
+// runs: a run ends where the index of c wraps around the period or the error's source
+// changes (at most 3 runs, since the window wraps at most once).
 double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) const noexcept {
   const auto N = static_cast<std::ptrdiff_t>(p_.period);
   const auto h = static_cast<std::ptrdiff_t>(p_.half_width);
   const auto d = static_cast<std::ptrdiff_t>(p_.lead);
   const auto ii = static_cast<std::ptrdiff_t>(i);
   double acc = 0.0;
-  for (std::ptrdiff_t m = -h; m <= h; ++m) {
+  for (std::ptrdiff_t m = -h; m <= h;) {
     std::ptrdiff_t ci = ii + m;
     if (ci < 0) ci += N;
     if (ci >= N) ci -= N;
+    std::ptrdiff_t len = std::min(h - m + 1, N - ci);
     const std::ptrdiff_t t = ii + m + d;
-    double e;
+    const double* e;
     if (tail) {  // i in [N - d - h, N): t >= N is this period's error at t - N
-      e = t >= N ? e_cur_[static_cast<std::size_t>(t - N)] : e_prev_[static_cast<std::size_t>(t)];
+      if (t >= N) {
+        e = e_cur_.data() + (t - N);
+      } else {
+        e = e_prev_.data() + t;
+        len = std::min(len, N - t);
+      }
     } else {     // t <= the current phase; t < 0 is the previous period's
-      e = t < 0 ? e_prev_[static_cast<std::size_t>(t + N)] : e_cur_[static_cast<std::size_t>(t)];
+      if (t < 0) {
+        e = e_prev_.data() + (t + N);
+        len = std::min(len, -t);
+      } else {
+        e = e_cur_.data() + t;
+      }
     }
-    acc += q_[static_cast<std::size_t>(m + h)] * (c[ci] + p_.gain * e);
+    acc += weighted_sum(q_.data() + (m + h), c + ci, e, p_.gain, len);
+    m += len;
   }
   return std::clamp(acc, -p_.max_correction, p_.max_correction);
 }

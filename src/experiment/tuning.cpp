@@ -168,11 +168,19 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   for (double gain : {0.5, 0.3, 0.2}) {
     if (found) break;
     best.gain = gain;
-    for (std::size_t shift = 0; shift <= max_shift; shift += shift_step) {
+    // e^{i w d} for every grid point, advanced by e^{i w shift_step} per shift (recomputed
+    // exactly every 64 shifts, so rounding cannot accumulate)
+    std::vector<std::complex<double>> rot(w.size()), step(w.size());
+    for (std::size_t l = 0; l < w.size(); ++l) step[l] = std::polar(1.0, w[l] * static_cast<double>(shift_step));
+    std::size_t advanced = 0;
+    for (std::size_t shift = 0; shift <= max_shift; shift += shift_step, ++advanced) {
+      for (std::size_t l = 0; l < w.size(); ++l)
+        rot[l] = advanced % 64 == 0 ? std::polar(1.0, w[l] * static_cast<double>(shift)) : rot[l] * step[l];
       // worst |1 - L e^{i w d} T| over the models, per frequency (the grid repeats per model)
       std::fill(worst.begin(), worst.end(), 0.0);
       for (std::size_t l = 0; l < w.size(); ++l) {
-        const double a = std::abs(1.0 - gain * std::polar(1.0, w[l] * static_cast<double>(shift)) * T[l]);
+        const std::complex<double> v = 1.0 - gain * rot[l] * T[l];
+        const double a = std::sqrt(std::norm(v));
         worst[l % kGrid] = std::max(worst[l % kGrid], std::isfinite(a) ? a : 1e300);
       }
       // smallest half-width (widest band) that contracts with a 2 % margin

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -698,16 +699,21 @@ void check_mat4(Bytes f, const std::string& path) {
     const std::string where = fmt::format("{}: variable #{}", path, index + 1);
     if (f.n - pos < 20)
       throw Error(fmt::format("{}: truncated: {} bytes left where a MAT v4 header needs 20", where, f.n - pos));
+    // as matio reads it (mat4.c): the type word is taken byte-swapped if it is not in 0..4052
+    // as stored, and its digit M (0 little-, 1 big-endian) alone decides whether the other
+    // fields are swapped (a swapped type word with M = 0 leaves them as stored)
     std::uint32_t h[5];
     std::memcpy(h, f.p + pos, 20);
-    if (h[0] > 9999) {  // the other byte order
-      for (auto& v : h) v = __builtin_bswap32(v);
-    }
-    const std::uint32_t type = h[0], rows = h[1], cols = h[2], imag = h[3], namelen = h[4];
+    if (h[0] > 4052) h[0] = __builtin_bswap32(h[0]);
+    const std::uint32_t type = h[0];
+    const bool swap = type <= 4052 && (type / 1000 == 1) == (std::endian::native == std::endian::little);
+    if (swap)
+      for (int i = 1; i < 5; ++i) h[i] = __builtin_bswap32(h[i]);
+    const std::uint32_t rows = h[1], cols = h[2], imag = h[3], namelen = h[4];
     const unsigned M = type / 1000, O = (type / 100) % 10, P = (type / 10) % 10, T = type % 10;
     static constexpr std::size_t kSize[6] = {8, 4, 4, 2, 2, 1};
-    if (M > 4 || O != 0 || P > 5 || T > 2 || imag > 1 || rows > 0x7fffffffu || cols > 0x7fffffffu ||
-        namelen == 0 || namelen > 4096)
+    if (type > 4052 || M > 1 || O != 0 || P > 5 || T > 2 || imag > 1 || rows > 0x7fffffffu ||
+        cols > 0x7fffffffu || namelen == 0 || namelen > 4096)
       throw Error(fmt::format("{}: inconsistent MAT v4 header (type {}, {}x{}, name length {})", where, type, rows,
                               cols, namelen));
     if (namelen > f.n - pos - 20)

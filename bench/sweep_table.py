@@ -3,7 +3,8 @@
 
 One row per experiment, reference and variant: the RMS error [mm] of every variant kind (in the
 order they appear), the compensated RMS over its nominal value and over the baseline's, the
-range of the pressure command over every kind [MPa]; "**" marks a miss of issue 11's targets
+range of the pressure command over every kind [MPa], the reference's scale (below 1: scaled into
+the rig's reach, docs/control.md section 5; "out" = out of reach with --paper-references); "**" marks a miss of issue 11's targets
 (compensated RMS above LIMIT x nominal, 2 x for the variant named "worst"; not below the
 baseline; a command outside 0..0.6 MPa). Failed runs are listed with their message.
 
@@ -35,8 +36,8 @@ def main():
         exp_order.setdefault(e, len(exp_order))
         ref_order.setdefault((e, ref), len(ref_order))
     keys.sort(key=lambda k: (exp_order[k[0]], ref_order[(k[0], k[1])]))
-    print("| experiment | reference | variant | " + " | ".join(kinds) + " | comp/nom | comp/base | command [MPa] |")
-    print("|---|---|---|" + "---|" * len(kinds) + "---|---|---|")
+    print("| experiment | reference | variant | " + " | ".join(kinds) + " | comp/nom | comp/base | command [MPa] | ref scale |")
+    print("|---|---|---|" + "---|" * len(kinds) + "---|---|---|---|")
     last = None
     for key in keys:
         exp, ref, var = key
@@ -54,9 +55,11 @@ def main():
         lo = min(float(x["min_command_mpa"]) for x in k.values() if x["min_command_mpa"])
         hi = max(float(x["max_command_mpa"]) for x in k.values() if x["max_command_mpa"])
         cmd = f"{lo:.3f}..{hi:.3f}" + (" **" if lo < 0.0 or hi > 0.6 else "")
+        scale = comp.get("reference_scale", "") if comp is not None else ""
+        scale = f"{float(scale):.3f}" if scale else "-"
         head = [exp, ref] if (exp, ref) != last else ["", ""]
         last = (exp, ref)
-        print("| " + " | ".join(head + [var] + cells + [rn, rb, cmd]) + " |")
+        print("| " + " | ".join(head + [var] + cells + [rn, rb, cmd, scale]) + " |")
     for r in failed:
         print(f"\nFAILED: {r['experiment']} {r['variant']}: {r['error']}")
 

@@ -51,8 +51,8 @@ std::string model_help() {
 void add_model_options(CLI::App* cmd, ExperimentArgs& args) {
   cmd->add_option("--model", args.model, model_help())->check(CLI::IsMember(model_choices()))->default_val("auto");
   cmd->add_flag("--paper-references", args.paper_references,
-                "Track the papers' references as published even where they lie above the contraction this rig "
-                "reached in its identification run (default: such a reference is scaled into the rig's reach, "
+                "Track the papers' references as published even where they leave the contraction range this "
+                "rig reached in its identification run (default: such a reference is mapped into the rig's reach, "
                 "with a note; docs/control.md, section 5)");
 }
 

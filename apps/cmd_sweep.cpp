@@ -212,8 +212,8 @@ void add_sweep(CLI::App& app, Action& action) {
         ->default_val("auto");
   }
   cmd->add_flag("--paper-references", args->paper_references,
-                "Every run tracks the papers' references as published, even above its rig's reach (then a "
-                "target miss); default: scaled into each rig's reach, shown as 'ref xS' (docs/control.md, section 5)");
+                "Every run tracks the papers' references as published, even beyond its rig's reach (then a "
+                "target miss); default: mapped into each rig's reach, shown as 'ref xS' (docs/control.md, section 5)");
   cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
       ->check(non_negative_integer())
       ->check(CLI::Range(1u, 1024u));

@@ -214,7 +214,7 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   EXPECT_NEAR(*std::max_element(c.reference_mm.begin(), c.reference_mm.end()), rr.max_mm, 1e-6);
   EXPECT_EQ(c.saturated, 0u);
   bool said = false;
-  for (const auto& m : scaled.messages) said = said || m.find("reference sine scaled by") != std::string::npos;
+  for (const auto& m : scaled.messages) said = said || m.find("reference sine mapped onto") != std::string::npos;
   EXPECT_TRUE(said);
 
   o.fit_references = false;
@@ -229,4 +229,27 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   said = false;
   for (const auto& m : paper.messages) said = said || m.find("out of this rig's reach") != std::string::npos;
   EXPECT_TRUE(said);
+}
+
+// A displacement sensor reading 10 mm high: the muscle at rest reads 10 mm, so the paper's
+// 5 mm bottom is out of reach (venting cannot go below rest). The reference is mapped onto
+// 10..95 mm (its top unchanged, within reach), and the compensated loop tracks it.
+TEST(Experiment, ReferenceBelowTheRestPositionIsMappedUp) {
+  ExperimentOptions o;
+  o.name = "gpi-pid";
+  o.learning_periods = 0;
+  o.adaptive = false;
+  o.model = FitModel::mpi_asym;
+  o.rig.sensors.displacement_offset = 0.010;
+  const ExperimentResult r = run_experiment(o);
+  ASSERT_EQ(r.reference_ranges.size(), 1u);
+  const ReferenceRange& rr = r.reference_ranges[0];
+  EXPECT_TRUE(rr.scaled);
+  EXPECT_NEAR(r.reach_min_mm, 10.0, 0.1);
+  EXPECT_NEAR(rr.min_mm, r.reach_min_mm, 1e-9);
+  EXPECT_NEAR(rr.max_mm, 95.0, 1e-9);
+  for (const auto& run : r.runs) {
+    EXPECT_GE(*std::min_element(run.reference_mm.begin(), run.reference_mm.end()), rr.min_mm - 1e-6) << run.variant;
+    if (run.variant == "compensated") EXPECT_LT(run.errors.rms_error_mm, 1.0);  // 1.48 mm before the mapping
+  }
 }

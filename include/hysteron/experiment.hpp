@@ -74,10 +74,11 @@ struct ExperimentOptions {
   // The adaptive variant needs the PI family (AdaptiveInverse): for another kind it is
   // skipped with a note saying so.
   FitModel model = FitModel::automatic;
-  // Keep every reference within the rig's reach: a reference whose top lies above the
-  // contraction the identification run had on its ascent at 95 % of the actuator's 0.6 MPa
-  // (5 % kept as headroom for the position loop) is scaled about its bottom so that its top
-  // lies there, and the result says so (ExperimentResult::reference_ranges, messages).
+  // Keep every reference within the rig's reach, measured on its identification run: from
+  // the contraction at rest to the contraction on its ascent at 95 % of the actuator's
+  // 0.6 MPa (5 % kept as headroom for the position loop). A reference that leaves it is
+  // mapped affinely onto its intersection with the reach (only the end that leaves it
+  // moves), and the result says so (ExperimentResult::reference_ranges, messages).
   // false: the papers' references as published, with a note where they are out of reach
   // (the error there is the actuator's limit, not the controller's). docs/control.md, 5.
   bool fit_references = true;
@@ -89,7 +90,7 @@ struct ReferenceRange {
   std::string reference;
   double paper_min_mm = 0.0, paper_max_mm = 0.0;  // as published
   double min_mm = 0.0, max_mm = 0.0;              // as tracked (the paper's unless scaled)
-  bool scaled = false;        // scaled into the rig's reach (ExperimentOptions::fit_references)
+  bool scaled = false;        // mapped into the rig's reach (ExperimentOptions::fit_references)
   bool reachable = true;      // the tracked reference lies within the reach (with its margin)
   bool operator==(const ReferenceRange&) const = default;
 };

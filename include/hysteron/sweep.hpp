@@ -122,7 +122,7 @@ struct SweepRunErrors {
   double min_command_mpa = 0.0, max_command_mpa = 0.0;  // NaN if the run logs no pressure command
   std::size_t saturated = 0;
   // The reference as tracked over the published one (ExperimentResult::reference_ranges):
-  // the span's ratio (< 1: scaled into the rig's reach) and whether it lay within the reach.
+  // the span's ratio (< 1: mapped into the rig's reach) and whether it lay within the reach.
   double reference_scale = 1.0;
   bool reachable = true;
 };

@@ -86,12 +86,13 @@ std::vector<double> smoothed(const std::vector<double>& x) {
   return m;
 }
 
-// ExperimentOptions::fit_references: each reference's top kept at most at the contraction
-// the identification run had when its measured pressure first reached kPressureMax (1 -
-// kPressureHeadroom) (the least contraction at or above that pressure: the ascending branch),
-// scaled about its bottom. Only the top: a muscle's contraction at zero pressure, the bottom
-// of every reference here, is reached by venting it. The ranges and a note per reference
-// out of reach go into the result.
+// ExperimentOptions::fit_references. The reach measured on the identification run: from the
+// contraction at rest (the least, vented) to the contraction on the ascent when the
+// measured pressure first reached kPressureMax (1 - kPressureHeadroom) (the least
+// contraction at or above that pressure). A reference that leaves it is mapped affinely
+// onto its intersection with the reach (only the end that leaves it moves; a reference
+// whose bottom is the rest position keeps it). The ranges and a note per reference out of
+// reach go into the result.
 std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, std::vector<Reference> refs,
                                     ExperimentResult& res) {
   const std::vector<double> x = smoothed(id.x_mm);
@@ -104,36 +105,40 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
     res.reach_max_mm = std::max(res.reach_max_mm, x[k]);
     if (id.p[k] >= p_limit) top = std::min(top, x[k]);
   }
-  const bool known = std::isfinite(top);  // else the identification never reached p_limit
+  const bool known_top = std::isfinite(top);  // else the identification never reached p_limit
+  // the rest position, with the sensor's resolution as tolerance: 0.1 % of the reached span
+  const double bottom = res.reach_min_mm - 1e-3 * (res.reach_max_mm - res.reach_min_mm);
   for (Reference& ref : refs) {
     const auto [lo_it, hi_it] = std::minmax_element(ref.ref_m.begin(), ref.ref_m.end());
     ReferenceRange rr;
     rr.reference = ref.name;
     rr.paper_min_mm = rr.min_mm = *lo_it * 1e3;
     rr.paper_max_mm = rr.max_mm = *hi_it * 1e3;
-    if (known && rr.paper_max_mm > top) {
+    const bool above = known_top && rr.paper_max_mm > top, below = rr.paper_min_mm < bottom;
+    if (above || below) {
       const std::string why = fmt::format(
-          "the rig reached {:.1f} mm at most in its identification run, and {:.1f} mm on its ascent at {:.2f} MPa "
-          "({:.0f} % of the actuator's {:.2f} MPa kept as headroom for the position loop)",
-          res.reach_max_mm, top, p_limit, kPressureHeadroom * 100.0, kPressureMax);
-      if (o.fit_references && top > rr.paper_min_mm) {
-        const double s = (top - rr.paper_min_mm) / (rr.paper_max_mm - rr.paper_min_mm);
-        const double base = *lo_it;
-        for (double& r : ref.ref_m) r = base + s * (r - base);
-        rr.max_mm = top;
+          "the rig's reach in its identification run is {:.1f} mm at rest to {:.1f} mm on its ascent at {:.2f} MPa "
+          "({:.0f} % of the actuator's {:.2f} MPa kept as headroom for the position loop; {:.1f} mm at most)",
+          res.reach_min_mm, top, p_limit, kPressureHeadroom * 100.0, kPressureMax, res.reach_max_mm);
+      const double new_lo = below ? res.reach_min_mm : rr.paper_min_mm, new_hi = above ? top : rr.paper_max_mm;
+      if (o.fit_references && new_hi > new_lo && rr.paper_max_mm > rr.paper_min_mm) {
+        const double s = (new_hi - new_lo) / (rr.paper_max_mm - rr.paper_min_mm);
+        const double old_lo = *lo_it;
+        for (double& r : ref.ref_m) r = new_lo * 1e-3 + s * (r - old_lo);
+        rr.min_mm = new_lo;
+        rr.max_mm = new_hi;
         rr.scaled = true;
-        res.messages.push_back(fmt::format("reference {} scaled by {:.3f} about its bottom to {:.1f}..{:.1f} mm "
-                                           "(published {:.1f}..{:.1f} mm): {}; errors are against the scaled "
-                                           "reference (--paper-references keeps the published one)",
-                                           ref.name, s, rr.min_mm, rr.max_mm, rr.paper_min_mm, rr.paper_max_mm,
-                                           why));
+        res.messages.push_back(fmt::format("reference {} mapped onto the rig's reach: {:.1f}..{:.1f} mm instead of the "
+                                           "published {:.1f}..{:.1f} mm (scale {:.3f}): {}; errors are against the "
+                                           "mapped reference (--paper-references keeps the published one)",
+                                           ref.name, rr.min_mm, rr.max_mm, rr.paper_min_mm, rr.paper_max_mm, s, why));
       } else {
         rr.reachable = false;
         res.messages.push_back(fmt::format("reference {} ({:.1f}..{:.1f} mm) is out of this rig's reach: {}; the "
-                                           "errors above {:.1f} mm are the actuator's limit, not the controller's",
-                                           ref.name, rr.paper_min_mm, rr.paper_max_mm, why, top));
+                                           "errors beyond it are the actuator's limit, not the controller's",
+                                           ref.name, rr.paper_min_mm, rr.paper_max_mm, why));
       }
-    } else if (!known && rr.paper_max_mm > res.reach_max_mm) {
+    } else if (!known_top && rr.paper_max_mm > res.reach_max_mm) {
       res.messages.push_back(fmt::format("reference {}: its top, {:.1f} mm, lies above the {:.1f} mm the "
                                          "identification run reached, whose pressure stayed below {:.2f} MPa; the "
                                          "rig's reach above it is not known, and the reference is kept",

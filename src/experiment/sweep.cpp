@@ -596,7 +596,7 @@ std::string SweepResult::text() const {
                                 experiments.size(), variants.size(), seed, jobs, wall_time_s);
   out += "RMS tracking error [mm] per variant kind; comp/nom = compensated RMS / its nominal value;\n"
          "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa];\n";
-  out += "ref xS = the reference scaled by S into the rig's reach (docs/control.md, section 5);\n";
+  out += "ref xS = the reference mapped into the rig's reach, its span scaled by S (docs/control.md, section 5);\n";
   out += fmt::format("model = the kind of hysteron's model the compensated variants invert ({})\n",
                      model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
                                                   : fmt::format("--model {}", fit_model_name(model)));

@@ -89,7 +89,7 @@ figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
       "displacement sensor); the command range is the minimum and maximum pressure command in MPa over every variant "
       "kind. <i>comp/nom</i>: the compensated RMS over its value on the nominal rig; <i>comp/base</i>: over the "
       "baseline's RMS on the same rig. <i>model</i>: the kind of hysteron's model the compensated variants invert; "
-      "<i>reference scale</i>: the reference as tracked over the published one (below 1: scaled into the rig's "
+      "<i>reference scale</i>: the reference as tracked over the published one (below 1: mapped into the rig's "
       "reach, docs/control.md section 5). Cells in red miss issue 11's targets: compensated RMS at most the variant's "
       "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0..0.6 "
       "MPa, the reference within the rig's reach.</p>\n",

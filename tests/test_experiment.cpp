@@ -12,6 +12,7 @@
 #include "hysteron/compensation.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
+#include "test_util.hpp"
 #include "hysteron/plant.hpp"
 
 using namespace hysteron;
@@ -184,11 +185,7 @@ TEST(Experiment, GpiPidEndToEnd) {
 // holding the command at the limit; with the published reference it sits at the limit and
 // the result says the reference is out of reach.
 TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
-  ExperimentOptions o;
-  o.name = "gpi-pid";
-  o.learning_periods = 0;
-  o.adaptive = false;
-  o.model = FitModel::mpi_asym;
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
   o.rig.load.mass = 35.0;
   const auto top_of_id_ascent = [](const ExperimentResult& r) {  // least contraction at >= 0.57 MPa
     double top = INFINITY;
@@ -235,11 +232,7 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
 // 5 mm bottom is out of reach (venting cannot go below rest). The reference is mapped onto
 // 10..95 mm (its top unchanged, within reach), and the compensated loop tracks it.
 TEST(Experiment, ReferenceBelowTheRestPositionIsMappedUp) {
-  ExperimentOptions o;
-  o.name = "gpi-pid";
-  o.learning_periods = 0;
-  o.adaptive = false;
-  o.model = FitModel::mpi_asym;
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
   o.rig.sensors.displacement_offset = 0.010;
   const ExperimentResult r = run_experiment(o);
   ASSERT_EQ(r.reference_ranges.size(), 1u);

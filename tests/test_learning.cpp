@@ -11,6 +11,7 @@
 #include "alloc_counter.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
+#include "test_util.hpp"
 #include "hysteron/learning.hpp"
 
 using namespace hysteron;
@@ -312,11 +313,7 @@ TEST(ExperimentTuning, LearningReducesTheErrorMonotonically) {
 // widest band the identified linear loop allowed (|Q(w_u)| = 0.94) it stalled after the
 // second period and grew again (0.418 0.242 0.267 0.266 0.235 ... 0.301 mm on the triangle).
 TEST(ExperimentTuning, LearningBandEndsAtTheRelaysUltimateFrequency) {
-  ExperimentOptions o;
-  o.name = "mpi-openloop";
-  o.learning_periods = 5;
-  o.adaptive = false;
-  o.model = FitModel::mpi_asym;
+  const ExperimentOptions o = test::quick_experiment("mpi-openloop", 5);
   const ExperimentResult r = run_experiment(o);
   const double wu = 2.0 * std::numbers::pi * o.control_period / r.dynamics.position_relay_period_s;
   int learning_runs = 0;

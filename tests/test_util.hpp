@@ -1,6 +1,6 @@
 #pragma once
-// Small helpers shared by the tests: a file's bytes, the message of an expected error, and a
-// random input path with reversals.
+// Small helpers shared by the tests: a file's bytes, the message of an expected error, a
+// random input path with reversals, and the options of a quick experiment run.
 #include <gtest/gtest.h>
 
 #include <cstddef>
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
 
 namespace hysteron::test {
 
@@ -51,5 +52,16 @@ inline std::vector<double> random_walk(std::mt19937_64& rng, std::size_t n, doub
 }
 
 inline bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// A quick run of experiment `name` on the nominal rig: mpi-asym pinned (no auto fits of every
+// kind), no adaptive variant, `learning_periods` periods of the learning variant.
+inline ExperimentOptions quick_experiment(const std::string& name, int learning_periods = 0) {
+  ExperimentOptions o;
+  o.name = name;
+  o.learning_periods = learning_periods;
+  o.adaptive = false;
+  o.model = FitModel::mpi_asym;
+  return o;
+}
 
 }  // namespace hysteron::test

@@ -38,3 +38,25 @@ def test_auto_lists_every_kind_and_chooses_the_least_validation_rms():
     assert best["chosen"] and best["kind"] == m["kind"]
     assert sum(c["chosen"] for c in m["candidates"]) == 1
     assert all(c["fit_time_s"] >= 0 for c in m["candidates"])
+
+
+def test_reference_beyond_the_rigs_reach_is_mapped_or_kept():
+    # a 35 kg load cannot lift the paper's 95 mm top: mapped into the reach by default
+    heavy = {"load": {"mass": 35.0}}
+    r = hysteron.run_experiment("gpi-pid", plant=heavy, learning_periods=0, adaptive=False, model="mpi-asym")
+    s = r["summary"]
+    (ref,) = s["references"]
+    assert ref["reference"] == "sine" and ref["scaled"] and ref["reachable"]
+    assert ref["paper_max_mm"] == pytest.approx(95.0)
+    assert ref["max_mm"] < s["reach"]["max_mm"] < 95.0
+    assert any("mapped onto the rig's reach" in m for m in r["messages"])
+    comp = next(x for x in r["runs"] if x["variant"] == "compensated")
+    assert comp["reference_mm"].max() == pytest.approx(ref["max_mm"])
+    # paper_references=True keeps the published one and says it is out of reach
+    p = hysteron.run_experiment("gpi-pid", plant=heavy, learning_periods=0, adaptive=False, model="mpi-asym",
+                                paper_references=True)
+    (pref,) = p["summary"]["references"]
+    assert not pref["scaled"] and not pref["reachable"]
+    pcomp = next(x for x in p["runs"] if x["variant"] == "compensated")
+    assert pcomp["reference_mm"].max() == pytest.approx(95.0)
+    assert pcomp["rms_error_mm"] > comp["rms_error_mm"]

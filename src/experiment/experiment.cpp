@@ -8,7 +8,6 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
-#include <tuple>
 #include <utility>
 
 #include "detail.hpp"

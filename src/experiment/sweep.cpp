@@ -570,8 +570,8 @@ std::vector<std::string> SweepResult::target_misses() const {
                                     x.min_command_mpa, x.max_command_mpa));
         if (x.kind != "compensated") continue;
         if (!x.reachable)
-          out.push_back(fmt::format("{}: the reference lies above the rig's reach (--paper-references; the error "
-                                    "there is the actuator's limit)",
+          out.push_back(fmt::format("{}: the reference leaves the rig's reach (--paper-references; the error "
+                                    "beyond it is the actuator's limit)",
                                     what));
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");

@@ -164,14 +164,14 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
     const double wu = 2.0 * std::numbers::pi * tc / d.position_relay_period_s, cu = std::cos(0.5 * wu);
     if (wu < std::numbers::pi) h_floor = static_cast<std::size_t>(std::ceil(std::log(2.0) / (-2.0 * std::log(cu * cu))));
   }
+  // e^{i w d} for every grid point, advanced by e^{i w shift_step} per shift (recomputed
+  // exactly every 64 shifts, so rounding cannot accumulate)
+  std::vector<std::complex<double>> rot(w.size()), step(w.size());
+  for (std::size_t l = 0; l < w.size(); ++l) step[l] = std::polar(1.0, w[l] * static_cast<double>(shift_step));
   // the largest gain of {0.5, 0.3, 0.2} for which some (shift, width) contracts
   for (double gain : {0.5, 0.3, 0.2}) {
     if (found) break;
     best.gain = gain;
-    // e^{i w d} for every grid point, advanced by e^{i w shift_step} per shift (recomputed
-    // exactly every 64 shifts, so rounding cannot accumulate)
-    std::vector<std::complex<double>> rot(w.size()), step(w.size());
-    for (std::size_t l = 0; l < w.size(); ++l) step[l] = std::polar(1.0, w[l] * static_cast<double>(shift_step));
     std::size_t advanced = 0;
     for (std::size_t shift = 0; shift <= max_shift; shift += shift_step, ++advanced) {
       for (std::size_t l = 0; l < w.size(); ++l)

@@ -208,20 +208,8 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
              classes);
   if (r.published.empty())
     page.para("The paper's text ends before its results: there are no published figures to compare.");
-  for (const auto& rr : r.reference_ranges) {
-    if (rr.scaled)
-      page.para(fmt::format("Reference {}: mapped into this rig's reach, {:.1f}..{:.1f} mm instead of the published "
-                            "{:.1f}..{:.1f} mm (measured on its identification run; "
-                            "docs/control.md, section 5). The errors are against the mapped reference.",
-                            html_escape(rr.reference), rr.min_mm, rr.max_mm, rr.paper_min_mm, rr.paper_max_mm));
-    else if (!rr.reachable)
-      page.para(fmt::format("Reference {} ({:.1f}..{:.1f} mm, as published) leaves this rig's reach (its "
-                            "identification run reached {:.1f}..{:.1f} mm): the errors beyond it are the actuator's "
-                            "limit, not the controller's (see the notes below).",
-                            html_escape(rr.reference), rr.paper_min_mm, rr.paper_max_mm, r.reach_min_mm,
-                            r.reach_max_mm));
-  }
   if (!r.messages.empty()) {
+    // e.g. a reference mapped into the rig's reach (docs/control.md, section 5), a skipped variant
     page.raw("<h3>Notes of the run</h3>\n<ul>\n");
     for (const auto& m : r.messages) page.raw(fmt::format("<li>{}</li>\n", html_escape(m)));
     page.raw("</ul>\n");

@@ -28,6 +28,7 @@
 #include <optional>
 #include <random>
 #include <sstream>
+#include <string_view>
 
 #include "hysteron/error.hpp"
 
@@ -364,19 +365,37 @@ class TextParser {
       return parse_again(line);
     }
     for (auto f : fields_) names_.emplace_back(unquote(f));
-    // A name given twice would select the first column silently (empty names may repeat: only
-    // the others are sorted).
-    std::vector<std::size_t> order;
-    for (std::size_t i = 0; i < names_.size(); ++i)
-      if (!names_[i].empty()) order.push_back(i);
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return names_[a] < names_[b]; });
-    for (std::size_t i = 1; i < order.size(); ++i) {
-      const std::size_t k = order[i - 1], m = order[i];
-      if (names_[m] == names_[k])
-        throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
-                                lineno_, shown(names_[m]), k + 1, m + 1));
-    }
+    // A name given twice would select the first column silently (empty names may repeat). The
+    // error names the smallest repeated name (in std::string order) and its first two columns.
+    std::size_t dup_first = 0, dup_second = 0;
+    if (repeated_name(dup_first, dup_second))
+      throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
+                              lineno_, shown(names_[dup_second]), dup_first + 1, dup_second + 1));
     return false;
+  }
+
+  // Finds the smallest non-empty name that appears more than once and the 0-based columns of its
+  // first two occurrences. One pass over an open-addressing hash table of column indices (a
+  // header of up to max_text_columns names, checked once per file: no sort, one allocation).
+  bool repeated_name(std::size_t& first, std::size_t& second) const {
+    constexpr std::size_t none = static_cast<std::size_t>(-1);
+    const std::size_t size = std::bit_ceil(2 * names_.size() + 2), mask = size - 1;
+    std::vector<std::size_t> slot(size, none);  // index of the first column with a name
+    bool found = false;
+    for (std::size_t i = 0; i < names_.size(); ++i) {
+      const std::string& name = names_[i];
+      if (name.empty()) continue;
+      std::size_t h = std::hash<std::string_view>{}(name) & mask;
+      while (slot[h] != none && names_[slot[h]] != name) h = (h + 1) & mask;
+      if (slot[h] == none) {
+        slot[h] = i;
+      } else if (!found || name < names_[second]) {  // a second occurrence (a third is never smaller)
+        first = slot[h];
+        second = i;
+        found = true;
+      }
+    }
+    return found;
   }
 
   // The first line is a data row: parse it as one.

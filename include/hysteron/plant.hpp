@@ -298,6 +298,7 @@ class PamRig {
   std::vector<double> delay_;
   std::size_t delay_pos_ = 0;
   double reg_alpha_ = 0.0;  // 1 - exp(-dt / tau)
+  double volume_scale_ = 0.0, volume_c2_ = 0.0;  // P6's constants, computed once
 
   // PWM: duty latched for the last three periods, indexed by period mod 3
   double pwm_period_ = 0.0;

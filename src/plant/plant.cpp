@@ -21,22 +21,39 @@ double festo_force(const MuscleParams& m, double p_gauge, double eps) noexcept {
 }
 
 namespace {
-double volume_scale(const MuscleParams& m) noexcept {
+// P6 with its constants: V(eps) = scale u (1 - c2 u^2) + V_dead, u = 1 - eps,
+// scale = pi r^2 L0 / sin^2(theta0), c2 = cos^2(theta0).
+struct VolumeTerms {
+  double scale, c2;
+};
+VolumeTerms volume_terms(const MuscleParams& m) noexcept {
   const double s = std::sin(m.rest_braid_angle);
-  return std::numbers::pi * m.effective_radius * m.effective_radius * m.rest_length / (s * s);
+  const double c = std::cos(m.rest_braid_angle);
+  return {std::numbers::pi * m.effective_radius * m.effective_radius * m.rest_length / (s * s), c * c};
+}
+double volume_at(VolumeTerms v, double dead_volume, double eps) noexcept {
+  const double u = 1.0 - eps;
+  return v.scale * u * (1.0 - u * u * v.c2) + dead_volume;
+}
+double volume_slope(VolumeTerms v, double eps) noexcept {  // dV/d(eps)
+  const double u = 1.0 - eps;
+  return -v.scale * (1.0 - 3.0 * u * u * v.c2);
+}
+// |z|^n of P3; n = 1, 1.5 and 2 (the documented range's ends and default) without pow.
+double bouc_wen_power(double a, double n) noexcept {
+  if (n == 1.0) return a;
+  if (n == 1.5) return a * std::sqrt(a);
+  if (n == 2.0) return a * a;
+  return std::pow(a, n);
 }
 }  // namespace
 
 double muscle_volume(const MuscleParams& m, double eps) noexcept {  // P6
-  const double c = std::cos(m.rest_braid_angle);
-  const double u = 1.0 - eps;
-  return volume_scale(m) * u * (1.0 - u * u * c * c) + m.dead_volume;
+  return volume_at(volume_terms(m), m.dead_volume, eps);
 }
 
 double muscle_volume_derivative(const MuscleParams& m, double eps) noexcept {
-  const double c = std::cos(m.rest_braid_angle);
-  const double u = 1.0 - eps;
-  return -volume_scale(m) * (1.0 - 3.0 * u * u * c * c);
+  return volume_slope(volume_terms(m), eps);
 }
 
 double iso6358_mass_flow(double conductance, double b, double p_up, double p_down, double t_up,
@@ -95,6 +112,9 @@ PamRig::PamRig(PamRigParams params, std::uint64_t seed) : p_(params), seed_(seed
                       ? -std::expm1(-dt / p_.sensors.pressure_time_constant)
                       : 1.0;
   pwm_period_ = 1.0 / p_.valves.pwm_frequency;
+  const VolumeTerms vt = volume_terms(p_.muscle);
+  volume_scale_ = vt.scale;
+  volume_c2_ = vt.c2;
 
   // P12: the stiffest pneumatic mode, linearised at the smallest volume; RK4 is
   // run with h lambda <= 1 (its stability limit on the real axis is 2.78).
@@ -164,7 +184,7 @@ void PamRig::derivative(const RigState& s, const Flow& f, double p_set, Deriv& d
                        h.creep_stiffness * (s.contraction - s.creep);
   d.contraction = s.velocity;
   d.velocity = (force - p_.load.mass * p_.load.gravity - p_.load.damping * s.velocity) / p_.load.mass;
-  const double zn = std::pow(std::abs(s.bouc_wen), h.exponent);
+  const double zn = bouc_wen_power(std::abs(s.bouc_wen), h.exponent);
   const double sgn = (s.bouc_wen * eps_dot > 0.0) ? 1.0 : -1.0;
   d.bouc_wen = eps_dot / h.transition_strain * (1.0 - zn * (h.beta * sgn + 1.0 - h.beta));
   d.creep = (s.contraction - s.creep) / h.creep_time;
@@ -199,8 +219,9 @@ void PamRig::derivative(const RigState& s, const Flow& f, double p_set, Deriv& d
     }
   }
   // P6-P7: chamber.
-  const double vol = muscle_volume(m, eps);
-  const double vol_dot = muscle_volume_derivative(m, eps) * eps_dot;
+  const VolumeTerms vt{volume_scale_, volume_c2_};
+  const double vol = volume_at(vt, m.dead_volume, eps);
+  const double vol_dot = volume_slope(vt, eps) * eps_dot;
   d.pressure = a.gas_constant * a.temperature / vol * (a.k_in * m_in - a.k_out * m_out) -
                a.k * s.pressure * vol_dot / vol;
 }

@@ -13,7 +13,7 @@
 // when  sup_w |Q(w) (1 - L e^{i w d} T(e^{i w}))| < 1  (learning_contraction()).
 //
 // step() never allocates, never throws and is deterministic; its cost is
-// O(h) per sample (the update of c_{j+1} is computed progressively, d + h
+// O(min(h, ~9 sqrt(h))) per sample (the update of c_{j+1} is computed progressively, d + h
 // samples behind the errors it needs, instead of in one burst per period).
 #include <complex>
 #include <cstddef>
@@ -65,6 +65,7 @@ class IterativeLearning {
 
   LearningParams p_;
   std::vector<double> q_;                 // 2h + 1 filter taps
+  std::size_t reach_ = 0;                 // taps m with |m| <= reach_ are summed (the rest < 1e-18 of q_0)
   std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}
   std::size_t k_ = 0, j_ = 0, faults_ = 0;

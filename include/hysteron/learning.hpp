@@ -13,7 +13,7 @@
 // when  sup_w |Q(w) (1 - L e^{i w d} T(e^{i w}))| < 1  (learning_contraction()).
 //
 // step() never allocates, never throws and is deterministic; its cost is
-// O(min(h, ~9 sqrt(h))) per sample (the update of c_{j+1} is computed progressively, d + h
+// min(2h + 1, ~13 sqrt(h)) taps per sample (the update of c_{j+1} is computed progressively, d + h
 // samples behind the errors it needs, instead of in one burst per period).
 #include <complex>
 #include <cstddef>

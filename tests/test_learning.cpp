@@ -107,8 +107,9 @@ TEST(Learning, ConstantErrorLearnsGainTimesErrorWithAWideFilter) {
     // away from the period's ends (where the window reaches the errors of the period before
     // the first, taken as 0) the correction is exactly L e
     for (std::size_t k = 0; k < p.period; ++k) {
-      if (k >= h + p.lead && k + h + p.lead < p.period)
+      if (k >= h + p.lead && k + h + p.lead < p.period) {
         ASSERT_NEAR(ilc.correction(), 0.8, 1e-12) << "h = " << h << ", k = " << k;
+      }
       ASSERT_TRUE(std::isfinite(ilc.correction()));
       ilc.step(2.0);
     }

@@ -229,15 +229,15 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
                                           r.best_validation)});
   if (!r.model_reason.empty()) page.para(fmt::format("Model of the compensated variants: {}.", r.model_reason));
   if (!r.candidates.empty()) {
-    std::vector<std::vector<std::string>> rows;
+    std::vector<std::vector<std::string>> cand;
     for (const auto& c : r.candidates) {
-      rows.push_back({html_escape(std::string(fit_model_name(c.kind))) + (c.chosen ? " (chosen)" : ""),
+      cand.push_back({html_escape(std::string(fit_model_name(c.kind))) + (c.chosen ? " (chosen)" : ""),
                       c.ok ? num(c.validation.rms) : std::string("&ndash;"),
                       c.ok ? num(c.validation.rms_percent_span, 3) : std::string("&ndash;"), num(c.fit_time_s, 3),
                       html_escape(std::string(fit_status_name(c.status))), html_escape(c.message)});
     }
     page.raw("<h3>Candidates for the compensated variants' model</h3>\n");
-    page.table({"kind", "RMS, second run [mm]", "RMS [% of span]", "fit time [s]", "fit status", "note"}, rows);
+    page.table({"kind", "RMS, second run [mm]", "RMS [% of span]", "fit time [s]", "fit status", "note"}, cand);
   }
   parameter_table(page, r.fit);
   page.raw("<h3>Fitted model (model.json)</h3>\n");

@@ -276,7 +276,7 @@ class PamRig {
   void apply_stops() noexcept;
   bool valve_open(bool inlet, double t) const noexcept;
   double gaussian() noexcept;
-  double quantize(double v, double range, int bits) const noexcept;
+  double quantize(double v, double range, double lsb) const noexcept;
   void detect_divergence() noexcept;
   void measure() noexcept;
 
@@ -299,6 +299,8 @@ class PamRig {
   std::size_t delay_pos_ = 0;
   double reg_alpha_ = 0.0;  // 1 - exp(-dt / tau)
   double volume_scale_ = 0.0, volume_c2_ = 0.0;  // P6's constants, computed once
+  double root_t_ = 1.0;                          // sqrt(T0 / T) of P8
+  double lsb_pressure_ = 0.0, lsb_displacement_ = 0.0;  // P11's quantisation steps
 
   // PWM: duty latched for the last three periods, indexed by period mod 3
   double pwm_period_ = 0.0;

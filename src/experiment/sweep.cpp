@@ -19,6 +19,7 @@
 #include <sstream>
 #include <thread>
 
+#include "detail.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/names.hpp"
@@ -430,13 +431,29 @@ SweepResult run_sweep(const SweepOptions& options) {
   unsigned jobs = options.jobs ? options.jobs : std::max(1u, std::thread::hardware_concurrency());
   jobs = static_cast<unsigned>(std::min<std::size_t>(jobs, total));
   r.jobs = jobs;
+  // Execution order (not the slots' order): experiments with more references first, so that
+  // the shortest runs fill the end and the threads finish together.
+  std::vector<std::size_t> order(total);
+  {
+    std::vector<std::size_t> cost(r.experiments.size(), 1);
+    for (std::size_t e = 0; e < cost.size(); ++e)
+      if (const experiment::Spec* spec = experiment::find_spec(r.experiments[e]); spec && spec->references)
+        cost[e] = spec->references(1e-3).size();
+    std::vector<std::size_t> ex(r.experiments.size());
+    for (std::size_t e = 0; e < ex.size(); ++e) ex[e] = e;
+    std::stable_sort(ex.begin(), ex.end(), [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
+    std::size_t i = 0;
+    for (std::size_t e : ex)
+      for (std::size_t v = 0; v < nv; ++v) order[i++] = e * nv + v;
+  }
   std::atomic<std::size_t> next{0};
   std::mutex progress_mutex;
   std::size_t done = 0;
   auto worker = [&] {
     for (;;) {
-      const std::size_t k = next.fetch_add(1);
-      if (k >= total) return;
+      const std::size_t i = next.fetch_add(1);
+      if (i >= total) return;
+      const std::size_t k = order[i];
       SweepRun& run = r.runs[k];
       run.experiment = r.experiments[k / nv];
       run.variant = k % nv;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 
 #include "detail.hpp"
@@ -154,6 +155,16 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
     const double c = std::cos(0.5 * w[l]);
     lc[l] = std::log(c * c);
   }
+  // |Q(w_l)| = exp(h lc[l]) on the grid, computed once per half-width h tried
+  std::map<std::size_t, std::vector<double>> q_cache;
+  auto q_of = [&](std::size_t h) -> const std::vector<double>& {
+    auto [it, fresh] = q_cache.try_emplace(h);
+    if (fresh) {
+      it->second.resize(kGrid);
+      for (std::size_t l = 0; l < kGrid; ++l) it->second[l] = std::exp(static_cast<double>(h) * lc[l]);
+    }
+    return it->second;
+  };
   const auto shift_step = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(0.002 / tc)));
   // The learning band ends at the position loop's ultimate frequency w_u = 2 pi tc / T_u (its
   // relay test: the measured -180 degree point, above which the identified model is least
@@ -187,9 +198,9 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
       const std::size_t h0 = std::min(h_floor, (budget - shift) / 2);  // the floor, or as near as the period allows
       for (std::size_t h = h0; shift + 2 * h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
         if (found && h > best.half_width) break;
+        const std::vector<double>& q = q_of(h);
         double rho = 0.0;
-        for (std::size_t l = 0; l < kGrid; ++l)
-          rho = std::max(rho, std::exp(static_cast<double>(h) * lc[l]) * worst[l]);
+        for (std::size_t l = 0; l < kGrid; ++l) rho = std::max(rho, q[l] * worst[l]);
         if (rho < 0.98) {
           if (!found || h < best.half_width || rho < contraction) {
             best.lead = shift;

@@ -56,11 +56,13 @@ double muscle_volume_derivative(const MuscleParams& m, double eps) noexcept {
   return volume_slope(volume_terms(m), eps);
 }
 
-double iso6358_mass_flow(double conductance, double b, double p_up, double p_down, double t_up,
-                         const AirParams& air) noexcept {  // P8
+namespace {
+// P8 with sqrt(T0 / T_up) given (a rig's temperature is constant: computed once).
+double iso6358_flow(double conductance, double b, double p_up, double p_down, double root_t,
+                    const AirParams& air) noexcept {
   if (!(p_up > p_down) || p_up <= 0.0) return 0.0;
   const double r = p_down / p_up;
-  const double choked = conductance * air.rho0 * p_up * std::sqrt(air.t0 / t_up);
+  const double choked = conductance * air.rho0 * p_up * root_t;
   if (r <= b) return choked;
   const double rl = air.linear_ratio;
   if (r <= rl) {
@@ -69,6 +71,12 @@ double iso6358_mass_flow(double conductance, double b, double p_up, double p_dow
   }
   const double ql = (rl - b) / (1.0 - b);
   return choked * std::sqrt(1.0 - ql * ql) * (1.0 - r) / (1.0 - rl);
+}
+}  // namespace
+
+double iso6358_mass_flow(double conductance, double b, double p_up, double p_down, double t_up,
+                         const AirParams& air) noexcept {  // P8
+  return iso6358_flow(conductance, b, p_up, p_down, std::sqrt(air.t0 / t_up), air);
 }
 
 double static_contraction(const PamRigParams& p, double p_gauge, double z) noexcept {
@@ -115,6 +123,9 @@ PamRig::PamRig(PamRigParams params, std::uint64_t seed) : p_(params), seed_(seed
   const VolumeTerms vt = volume_terms(p_.muscle);
   volume_scale_ = vt.scale;
   volume_c2_ = vt.c2;
+  root_t_ = std::sqrt(p_.air.t0 / p_.air.temperature);
+  lsb_pressure_ = p_.sensors.pressure_range / (std::ldexp(1.0, p_.sensors.pressure_bits) - 1.0);  // P11
+  lsb_displacement_ = p_.sensors.displacement_range / (std::ldexp(1.0, p_.sensors.displacement_bits) - 1.0);
 
   // P12: the stiffest pneumatic mode, linearised at the smallest volume; RK4 is
   // run with h lambda <= 1 (its stability limit on the real axis is 2.78).
@@ -193,9 +204,8 @@ void PamRig::derivative(const RigState& s, const Flow& f, double p_set, Deriv& d
   // Signed flow through an open orifice between a port at p_port and the chamber
   // (> 0 into the chamber): an open valve passes air both ways.
   auto port_flow = [&](double conductance, double b, double p_port) {
-    return p_port >= s.pressure
-               ? iso6358_mass_flow(conductance, b, p_port, s.pressure, a.temperature, a)
-               : -iso6358_mass_flow(conductance, b, s.pressure, p_port, a.temperature, a);
+    return p_port >= s.pressure ? iso6358_flow(conductance, b, p_port, s.pressure, root_t_, a)
+                                : -iso6358_flow(conductance, b, s.pressure, p_port, root_t_, a);
   };
   double m_net = 0.0;  // scaled so that inflow uses k_in and outflow k_out (P7)
   double m_in = 0.0, m_out = 0.0;
@@ -300,8 +310,7 @@ double PamRig::gaussian() noexcept {
   return r * std::cos(2.0 * std::numbers::pi * u2);
 }
 
-double PamRig::quantize(double v, double range, int bits) const noexcept {
-  const double lsb = range / (std::ldexp(1.0, bits) - 1.0);
+double PamRig::quantize(double v, double range, double lsb) const noexcept {
   return std::round(std::clamp(v, 0.0, range) / lsb) * lsb;
 }
 
@@ -316,9 +325,9 @@ void PamRig::measure() noexcept {  // P11
   out_.velocity = s_.velocity;
   out_.pressure = p_gauge;
   out_.pressure_measured =
-      quantize(p_filtered_ + se.pressure_offset + se.pressure_noise * np, se.pressure_range, se.pressure_bits);
+      quantize(p_filtered_ + se.pressure_offset + se.pressure_noise * np, se.pressure_range, lsb_pressure_);
   out_.contraction_measured = quantize(s_.contraction + se.displacement_offset + se.displacement_noise * nx,
-                                       se.displacement_range, se.displacement_bits);
+                                       se.displacement_range, lsb_displacement_);
   out_.ok = ok_;
 }
 

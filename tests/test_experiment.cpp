@@ -243,6 +243,6 @@ TEST(Experiment, ReferenceBelowTheRestPositionIsMappedUp) {
   EXPECT_NEAR(rr.max_mm, 95.0, 1e-9);
   for (const auto& run : r.runs) {
     EXPECT_GE(*std::min_element(run.reference_mm.begin(), run.reference_mm.end()), rr.min_mm - 1e-6) << run.variant;
-    if (run.variant == "compensated") EXPECT_LT(run.errors.rms_error_mm, 1.0);  // 1.48 mm before the mapping
+    if (run.variant == "compensated") { EXPECT_LT(run.errors.rms_error_mm, 1.0); }  // 1.48 mm before the mapping
   }
 }

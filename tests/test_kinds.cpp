@@ -78,7 +78,7 @@ TEST(Kinds, NamesAndStructure) {
   for (std::size_t k = 0; k < models.size(); ++k) {
     EXPECT_EQ(model_name(models[k]), names[k]);
     EXPECT_EQ(has_pi_structure(models[k]), k == 3) << names[k];
-    if (k != 3) EXPECT_THROW(canonical_structure(models[k]), Error);
+    if (k != 3) { EXPECT_THROW(canonical_structure(models[k]), Error); }
   }
 }
 

@@ -570,8 +570,8 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
     EXPECT_EQ(std::stod(f[7]), x->errors.rms_error_mm);  // %.17g reads back exactly
     EXPECT_EQ(std::stod(f[13]), x->reference_scale);
     // the 35 kg load cannot lift the paper's 95 mm top at 0.57 MPa: its reference is scaled
-    if (f[1] == "nominal") EXPECT_EQ(f[13], "1");
-    if (f[1] == "load.mass=35") EXPECT_LT(x->reference_scale, 0.95) << lines[i];
+    if (f[1] == "nominal") { EXPECT_EQ(f[13], "1"); }
+    if (f[1] == "load.mass=35") { EXPECT_LT(x->reference_scale, 0.95) << lines[i]; }
     if (f[1] == "nominal") {
       EXPECT_EQ(f[8], "1");
     }

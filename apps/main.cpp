@@ -21,6 +21,7 @@
 #include "hysteron/error.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/io/names.hpp"
+#include "hysteron/version.hpp"
 
 namespace {
 // SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
@@ -111,6 +112,7 @@ int main(int argc, char** argv) {
 
   CLI::App app{"hysteron: hysteresis models, exact inverses, identification and control of pneumatic muscles"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", fmt::format("hysteron {}", hysteron::version), "Print the version and exit");
   hysteron::cli::Action action;
   hysteron::cli::set_command_line(argc, argv);
   hysteron::cli::add_simulate_invert(app, action);

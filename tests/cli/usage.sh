@@ -45,5 +45,10 @@ else
   echo "FAIL: negative number as a value:"; cat "$T/err"; fails=$((fails + 1))
 fi
 "$BIN" fit --help > /dev/null 2>&1 || { echo "FAIL: --help exits non-zero"; fails=$((fails + 1)); }
+# --version: the project's version from CMakeLists.txt on stdout, exit 0 (it used to be a usage error)
+want="hysteron $(sed -n 's/^project(hysteron VERSION \([0-9.]*\).*/\1/p' "$2/CMakeLists.txt")"
+got=$("$BIN" --version 2> "$T/err"); rc=$?
+if [ $rc -eq 0 ] && [ "$got" = "$want" ]; then echo "ok: --version"
+else echo "FAIL: --version: exit $rc, printed '$got', expected '$want'"; cat "$T/err"; fails=$((fails + 1)); fi
 [ $fails -eq 0 ] || { echo "$fails failure(s)"; exit 1; }
 echo "all usage checks passed"

@@ -35,6 +35,10 @@ CLI's to about 1e-15 (checked and printed).
 
 Times are wall clock, medians of the repeats, each a complete run (read + model + write; for
 hysteron two process starts). Stage times of the numpy side are printed too.
+
+At the end, the floor: two process starts (`hysteron --version`) plus the forward and inverse model
+passes alone (hysteron's Python module next to the binary, build/python), i.e. what simulate +
+invert would take with free I/O, and the largest ratio to the naive numpy forward it allows.
 """
 import argparse
 import os
@@ -165,6 +169,40 @@ def run_cli(args):
     return time.perf_counter() - t0
 
 
+def floor(a, j, x, results):
+    """The least time any simulate + invert through two CLI processes can take on this machine:
+    two process starts (`hysteron --version`: dynamic loading, no work) plus the forward and the
+    inverse model pass alone (hysteron's Python module, in process, the same model and input),
+    with no reading, writing or checking at all. Against it, the largest ratio to the naive numpy
+    forward that any I/O could reach."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(a.bin)), "python"))
+    try:
+        import hysteron
+    except ImportError as e:
+        print(f"\nfloor: skipped (no hysteron Python module next to {a.bin}: {e})")
+        return
+    starts = [run_cli([a.bin, "--version"]) for _ in range(21)]
+    fwd, inv = [], []
+    for _ in range(a.repeats):
+        m = hysteron.Model(j("gpi.json"))
+        t0 = time.perf_counter()
+        y = m.simulate(x)
+        t1 = time.perf_counter()
+        hysteron.Inverse(j("gpi.json"), limits=(0.0, 0.6)).simulate(y)
+        t2 = time.perf_counter()
+        fwd.append(t1 - t0)
+        inv.append(t2 - t1)
+    start, f, i = statistics.median(starts), statistics.median(fwd), statistics.median(inv)
+    fl = 2 * start + f + i
+    print(f"\nfloor of simulate + invert (medians): 2 process starts 2 x {start * 1e3:.1f} ms + forward "
+          f"{f * 1e3:.1f} ms + inverse {i * 1e3:.1f} ms = {fl * 1e3:.1f} ms, with no I/O at all")
+    for fmt, target in (("csv", 20), ("mat", 100)):
+        npt = results[("naive", fmt)]
+        print(f"  {fmt:3}: naive numpy {npt:.3f} s / floor = at most {npt / fl:.1f}x possible "
+              f"(target {target}x needs simulate + invert <= {npt / target * 1e3:.1f} ms; "
+              f"measured {results[('hysteron', fmt)] * 1e3:.1f} ms)")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--bin", default="build/hysteron")
@@ -240,6 +278,7 @@ def main():
             npt, hy = results[(fw, fmt)], results[("hysteron", fmt)]
             row += [f"{npt:.3f} s", f"{hy:.3f} s", f"{npt / hy:.1f}x"]
         print("| " + " | ".join(row) + " |")
+    floor(a, j, x, results)
     if not a.dir:
         for name in os.listdir(tmp):
             os.remove(j(name))

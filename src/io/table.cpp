@@ -1,10 +1,9 @@
+// Data tables (table.hpp): text/CSV reading (in memory, streamed), the Table type, CSV writing.
+// The .mat side (checks, matio reading, writing) is in mat.cpp.
 #include "hysteron/io/table.hpp"
 
 #include <fcntl.h>
-#include <matio.h>
-#include <sys/mman.h>
 #include <sys/stat.h>
-#include <zlib.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -31,30 +30,17 @@
 #include <string_view>
 
 #include "hysteron/error.hpp"
+#include "mat.hpp"
 
 namespace hysteron::io {
 
-namespace {
-
-namespace fs = std::filesystem;
+namespace detail {
 
 bool is_mat_path(std::string_view path) {
   if (path.size() < 4) return false;
   std::string ext(path.substr(path.size() - 4));
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".mat";
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
-
-std::string_view unquote(std::string_view s) {
-  s = trim(s);
-  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = trim(s.substr(1, s.size() - 2));
-  return s;
 }
 
 // Printable, bounded form of a field or name for messages: at most 40 characters, control
@@ -69,6 +55,26 @@ std::string shown(std::string_view s) {
   }
   if (s.size() > n) out += fmt::format("... ({} bytes)", s.size());
   return out;
+}
+
+}  // namespace detail
+
+namespace {
+
+namespace fs = std::filesystem;
+using detail::is_mat_path;
+using detail::shown;
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+std::string_view unquote(std::string_view s) {
+  s = trim(s);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = trim(s.substr(1, s.size() - 2));
+  return s;
 }
 
 // Splits `line` into `out` (cleared, its capacity reused: no allocation per line once warm).
@@ -453,646 +459,6 @@ std::size_t select_column(const Table& t, const ReadOptions& opt) {
   return t.column_index(opt.column_spec);
 }
 
-// ---- .mat --------------------------------------------------------------------
-
-struct MatCloser {
-  void operator()(mat_t* m) const {
-    if (m) Mat_Close(m);
-  }
-};
-struct VarFreer {
-  void operator()(matvar_t* v) const {
-    if (v) Mat_VarFree(v);
-  }
-};
-using MatPtr = std::unique_ptr<mat_t, MatCloser>;
-using VarPtr = std::unique_ptr<matvar_t, VarFreer>;
-
-void quiet_matio_log(int, char*) {}
-
-void init_matio_log() {
-  static const bool once = [] {
-    Mat_LogInitFunc("hysteron", &quiet_matio_log);
-    return true;
-  }();
-  (void)once;
-}
-
-MatPtr open_mat(const std::string& path) {
-  init_matio_log();
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(fmt::format("{}: no such file", path));
-  if (fs::is_directory(path, ec)) throw Error(fmt::format("{}: is a directory, not a .mat file", path));
-  MatPtr m(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
-  if (!m) throw Error(fmt::format("{}: cannot open as a MATLAB .mat file (not a MAT v4/v5/v7.3 file?)", path));
-  return m;
-}
-
-// ---- .mat structure check (before matio allocates anything) -------------------------
-//
-// matio trusts the sizes in a file: a truncated file is read with garbage or zeros at the end,
-// and a small file that declares a huge array makes it allocate that much. check_mat_file walks
-// the file's structure first, with bounds from the file size: every variable must lie inside the
-// file, its declared element count must match its data, and a compressed variable must inflate
-// to exactly the size it declares (read in bounded chunks; the declared count is capped by what
-// its compressed bytes could hold).
-
-struct Bytes {
-  const unsigned char* p;
-  std::size_t n;      // extent: sizes are checked against it
-  std::size_t avail;  // bytes readable at p (less than n for the head of a compressed variable)
-};
-
-// a * b, saturated at 2^62 (sizes beyond it cannot be in a file)
-std::uint64_t mul_sat(std::uint64_t a, std::uint64_t b) {
-  std::uint64_t r = 0;
-  constexpr std::uint64_t cap = std::uint64_t{1} << 62;
-  return __builtin_mul_overflow(a, b, &r) || r > cap ? cap : r;
-}
-
-std::uint32_t get32(const unsigned char* p, bool swap) {
-  std::uint32_t v;
-  std::memcpy(&v, p, 4);
-  return swap ? __builtin_bswap32(v) : v;
-}
-
-std::size_t mat5_type_size(std::uint32_t t) {
-  switch (t) {
-    case 1: case 2: return 1;    // miINT8, miUINT8
-    case 3: case 4: return 2;    // miINT16, miUINT16
-    case 5: case 6: case 7: return 4;  // miINT32, miUINT32, miSINGLE
-    case 9: case 12: case 13: return 8;  // miDOUBLE, miINT64, miUINT64
-    case 16: case 17: return 1;  // miUTF8, miUTF16 (byte counts only)
-    default: return 0;
-  }
-}
-
-// A sub-element tag at s[pos]: type and byte count, small-data format included; returns the
-// offset of the data and advances pos past the (padded) element. Throws `bad` on overrun.
-struct SubElement {
-  std::uint32_t type;
-  std::size_t bytes, data;
-};
-
-SubElement next_sub(Bytes s, std::size_t& pos, bool swap, const std::string& where, std::string_view what) {
-  if (pos + 8 > s.n)
-    throw Error(fmt::format("{}: truncated or inconsistent: the {} ends after the variable ({} of {} bytes)", where,
-                            what, s.n, pos + 8));
-  if (pos + 8 > s.avail)
-    throw Error(fmt::format("{}: unsupported: the {} starts after byte {} of a compressed variable", where, what,
-                            s.avail));
-  const std::uint32_t w0 = get32(s.p + pos, swap);
-  SubElement e{};
-  if ((w0 >> 16) != 0) {  // small data element: bytes in the upper half, data in the next 4 bytes
-    e.type = w0 & 0xffff;
-    e.bytes = w0 >> 16;
-    e.data = pos + 4;
-    if (e.bytes > 4)
-      throw Error(fmt::format("{}: inconsistent: a small {} of {} bytes (at most 4)", where, what, e.bytes));
-    pos += 8;
-    return e;
-  }
-  e.type = w0;
-  e.bytes = get32(s.p + pos + 4, swap);
-  e.data = pos + 8;
-  if (e.bytes > s.n - e.data)
-    throw Error(fmt::format("{}: truncated or inconsistent: its {} declares {} bytes, the variable has {} left", where,
-                            what, e.bytes, s.n - e.data));
-  pos = e.data + ((e.bytes + 7) / 8) * 8;
-  return e;
-}
-
-// The inside of a miMATRIX element (s = its data, without the 8-byte tag), every class matio
-// reads: whatever matio would allocate from the sizes in it must be backed by bytes of the file
-// (numeric and char data exactly numel x the stored size; a cell's or a struct's elements each a
-// nested miMATRIX, checked the same way, at most 16 levels deep; a sparse matrix's nzmax and
-// columns bounded by its bytes). Names are reported in messages.
-void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t index, std::string* name_out,
-                       int depth = 0) {
-  std::string where = fmt::format("{}: variable #{}", path, index + 1);
-  if (depth > 16) throw Error(fmt::format("{}: unsupported: cells or structs nested more than 16 levels deep", where));
-  std::size_t pos = 0;
-  const SubElement flags = next_sub(s, pos, swap, where, "array flags");
-  if (flags.bytes < 8 || flags.data + 8 > s.avail) throw Error(fmt::format("{}: inconsistent: array flags of {} bytes", where, flags.bytes));
-  const std::uint32_t f = get32(s.p + flags.data, swap);
-  const std::uint32_t nzmax = get32(s.p + flags.data + 4, swap);
-  const unsigned cls = f & 0xff;
-  const bool complex = (f & 0x800) != 0;
-  const SubElement dims = next_sub(s, pos, swap, where, "dimensions");
-  if (dims.data + dims.bytes > s.avail) throw Error(fmt::format("{}: unsupported: too many dimensions", where));
-  if (dims.type != 5 || dims.bytes % 4 != 0 || dims.bytes < 8 || dims.bytes > 4 * 32)
-    throw Error(fmt::format("{}: inconsistent: bad dimensions element (type {}, {} bytes)", where, dims.type,
-                            dims.bytes));
-  const SubElement nm = next_sub(s, pos, swap, where, "name");
-  if (nm.data + nm.bytes > s.avail) throw Error(fmt::format("{}: unsupported: a name of {} bytes", where, nm.bytes));
-  std::string name(reinterpret_cast<const char*>(s.p + nm.data), nm.bytes);
-  name = name.substr(0, name.find('\0'));
-  if (!name.empty()) where = fmt::format("{}: variable \"{}\"", path, shown(name));
-  if (name_out) *name_out = name;
-  // numel with overflow check; every dimension must be non-negative
-  std::uint64_t numel = 1;
-  std::string dims_txt;
-  std::uint32_t ncols = 0;
-  for (std::size_t k = 0; k < dims.bytes / 4; ++k) {
-    const std::uint32_t d = get32(s.p + dims.data + 4 * k, swap);
-    if (d > 0x7fffffffu) throw Error(fmt::format("{}: inconsistent: negative dimension", where));
-    if (k == 1) ncols = d;
-    numel = mul_sat(numel, d);
-    dims_txt += fmt::format("{}{}", k ? "x" : "", d);
-  }
-  auto data_part = [&](std::string_view what, bool numeric) {
-    const SubElement data = next_sub(s, pos, swap, where, what);
-    const std::size_t sz = mat5_type_size(data.type);
-    if (sz == 0 || (numeric && data.type >= 16))
-      throw Error(fmt::format("{}: inconsistent: data of unknown type {}", where, data.type));
-    if (data.bytes != mul_sat(numel, sz))
-      throw Error(fmt::format("{}: truncated or inconsistent: size {} ({} elements) needs {} bytes of data, the file "
-                              "has {}",
-                              where, dims_txt, numel, mul_sat(numel, sz), data.bytes));
-  };
-  // `count` nested miMATRIX elements (cells, struct fields), each inside this one
-  auto nested = [&](std::uint64_t count) {
-    if (count > (s.n - std::min(pos, s.n)) / 8)
-      throw Error(fmt::format("{}: truncated or inconsistent: size {} needs {} elements, the variable has room for {}",
-                              where, dims_txt, count, (s.n - std::min(pos, s.n)) / 8));
-    for (std::uint64_t k = 0; k < count; ++k) {
-      const SubElement e = next_sub(s, pos, swap, where, "element of a cell or struct");
-      if (e.type != 14)
-        throw Error(fmt::format("{}: inconsistent: an element of a cell or struct of type {} (not a matrix)", where,
-                                e.type));
-      if (e.data + e.bytes > s.avail)
-        throw Error(fmt::format("{}: unsupported: an element of a cell or struct past byte {} of a compressed variable",
-                                where, s.avail));
-      if (e.bytes > 0) check_mat5_matrix(Bytes{s.p + e.data, e.bytes, e.bytes}, swap, path, index, nullptr, depth + 1);
-    }
-  };
-  switch (cls) {
-    case 6: case 7: case 8: case 9: case 10: case 11: case 12: case 13: case 14: case 15:  // numeric
-      data_part("data", true);
-      if (complex) data_part("imaginary part", true);
-      return;
-    case 4:  // char
-      data_part("data", false);
-      return;
-    case 1:  // cell
-      nested(numel);
-      return;
-    case 2: case 3: {  // struct, object (an object starts with its class name)
-      if (cls == 3) (void)next_sub(s, pos, swap, where, "class name");
-      const SubElement len = next_sub(s, pos, swap, where, "field name length");
-      if (len.type != 5 || len.bytes != 4 || len.data + 4 > s.avail)
-        throw Error(fmt::format("{}: inconsistent: bad field name length element", where));
-      const std::uint32_t L = get32(s.p + len.data, swap);
-      const SubElement names = next_sub(s, pos, swap, where, "field names");
-      if (L == 0 || L > 4096 || names.bytes % L != 0)
-        throw Error(fmt::format("{}: inconsistent: field names of {} bytes in slots of {}", where, names.bytes, L));
-      nested(mul_sat(numel, names.bytes / L));
-      return;
-    }
-    case 5: {  // sparse: row indices, column starts, values (and imaginary values)
-      const std::uint64_t room = s.n / 4;
-      if (nzmax > room || std::uint64_t{ncols} + 1 > room)
-        throw Error(fmt::format("{}: truncated or inconsistent: a sparse matrix of size {} with nzmax {} in {} bytes",
-                                where, dims_txt, nzmax, s.n));
-      const SubElement ir = next_sub(s, pos, swap, where, "row indices");
-      const SubElement jc = next_sub(s, pos, swap, where, "column starts");
-      if (mat5_type_size(ir.type) == 0 || mat5_type_size(jc.type) == 0 || ir.bytes / mat5_type_size(ir.type) > nzmax ||
-          jc.bytes / mat5_type_size(jc.type) != std::uint64_t{ncols} + 1)
-        throw Error(fmt::format("{}: inconsistent: sparse index arrays of {} and {} bytes for size {}, nzmax {}", where,
-                                ir.bytes, jc.bytes, dims_txt, nzmax));
-      return;
-    }
-    default:  // function handles, opaque objects (tables, strings), unknown classes: matio does not
-              // read their data, but sizes some of them by their dimensions (8+ bytes per element)
-      if (numel > s.n / 8)
-        throw Error(fmt::format("{}: truncated or inconsistent: a variable of class {} and size {} in {} bytes", where,
-                                cls, dims_txt, s.n));
-      return;
-  }
-}
-
-// Inflates a miCOMPRESSED element (at most 1032 bytes out per byte in, zlib's maximum ratio) and
-// checks its inside as an uncompressed variable. The whole variable is inflated (matio needs as
-// much to read it); a declared size that does not match what inflates is an error.
-void check_mat5_compressed(Bytes z, bool swap, const std::string& path, std::size_t index) {
-  const std::string where = fmt::format("{}: variable #{}", path, index + 1);
-  const std::size_t limit = z.n * 1032 + 1024;
-  z_stream zs{};
-  if (inflateInit(&zs) != Z_OK) throw Error(fmt::format("{}: cannot initialise zlib", where));
-  struct End {
-    z_stream* s;
-    ~End() { inflateEnd(s); }
-  } end{&zs};
-  zs.next_in = const_cast<Bytef*>(z.p);
-  zs.avail_in = static_cast<uInt>(std::min<std::size_t>(z.n, std::numeric_limits<uInt>::max()));
-  std::vector<unsigned char> out(std::min<std::size_t>(limit, 1 << 16));
-  int rc = Z_OK;
-  while (rc != Z_STREAM_END) {
-    if (zs.total_out == out.size()) {
-      if (out.size() >= limit) throw Error(fmt::format("{}: corrupt compressed data (expands without bound)", where));
-      out.resize(std::min(limit, out.size() * 2));
-    }
-    zs.next_out = out.data() + zs.total_out;
-    zs.avail_out = static_cast<uInt>(out.size() - zs.total_out);
-    rc = inflate(&zs, Z_NO_FLUSH);
-    if (rc == Z_STREAM_END) break;
-    if (rc == Z_BUF_ERROR && zs.avail_out == 0) continue;  // output full: grow
-    if (rc != Z_OK || (zs.avail_in == 0 && zs.avail_out != 0))
-      throw Error(fmt::format("{}: truncated or corrupt compressed data ({})", where,
-                              zs.msg ? zs.msg : "the compressed stream ends early"));
-  }
-  const std::size_t total = zs.total_out;
-  if (total < 8) throw Error(fmt::format("{}: corrupt compressed variable (no matrix inside)", where));
-  const std::uint32_t type = get32(out.data(), swap);
-  const std::size_t bytes = get32(out.data() + 4, swap);
-  if (type != 14) throw Error(fmt::format("{}: corrupt compressed variable (type {} inside, not a matrix)", where, type));
-  if (8 + bytes != total)
-    throw Error(fmt::format("{}: truncated or inconsistent: declares {} bytes, its compressed data holds {}", where,
-                            bytes, total - 8));
-  check_mat5_matrix(Bytes{out.data() + 8, bytes, bytes}, swap, path, index, nullptr);
-}
-
-void check_mat4(Bytes f, const std::string& path) {
-  std::size_t pos = 0;
-  for (std::size_t index = 0; pos < f.n; ++index) {
-    const std::string where = fmt::format("{}: variable #{}", path, index + 1);
-    if (f.n - pos < 20)
-      throw Error(fmt::format("{}: truncated: {} bytes left where a MAT v4 header needs 20", where, f.n - pos));
-    // as matio reads it (mat4.c): the type word is taken byte-swapped if it is not in 0..4052
-    // as stored, and its digit M (0 little-, 1 big-endian) alone decides whether the other
-    // fields are swapped (a swapped type word with M = 0 leaves them as stored)
-    std::uint32_t h[5];
-    std::memcpy(h, f.p + pos, 20);
-    if (h[0] > 4052) h[0] = __builtin_bswap32(h[0]);
-    const std::uint32_t type = h[0];
-    const bool swap = type <= 4052 && (type / 1000 == 1) == (std::endian::native == std::endian::little);
-    if (swap)
-      for (int i = 1; i < 5; ++i) h[i] = __builtin_bswap32(h[i]);
-    const std::uint32_t rows = h[1], cols = h[2], imag = h[3], namelen = h[4];
-    const unsigned M = type / 1000, O = (type / 100) % 10, P = (type / 10) % 10, T = type % 10;
-    static constexpr std::size_t kSize[6] = {8, 4, 4, 2, 2, 1};
-    if (type > 4052 || M > 1 || O != 0 || P > 5 || T > 2 || imag > 1 || rows > 0x7fffffffu ||
-        cols > 0x7fffffffu || namelen == 0 || namelen > 4096)
-      throw Error(fmt::format("{}: inconsistent MAT v4 header (type {}, {}x{}, name length {})", where, type, rows,
-                              cols, namelen));
-    if (namelen > f.n - pos - 20)
-      throw Error(fmt::format("{}: truncated: the name ({} bytes) ends after the file", where, namelen));
-    std::string name(reinterpret_cast<const char*>(f.p + pos + 20), namelen);
-    name = name.substr(0, name.find('\0'));
-    const std::string w = fmt::format("{}: variable \"{}\"", path, shown(name));
-    // a sparse matrix is stored as an N x 3 (real) or N x 4 (complex) array: matio sizes it by N
-    if (T == 2 && (rows == 0 || (cols != 3 && cols != 4)))
-      throw Error(fmt::format("{}: inconsistent: a sparse MAT v4 matrix stored as {}x{} (expected N x 3 or N x 4)", w,
-                              rows, cols));
-    const std::uint64_t need = mul_sat(mul_sat(rows, cols), kSize[P] * (imag ? 2u : 1u));
-    const std::size_t left = f.n - pos - 20 - namelen;
-    if (need > left)
-      throw Error(fmt::format("{}: truncated or inconsistent: size {}x{} needs {} bytes of data, the file has {}", w,
-                              rows, cols, need, left));
-    pos += 20 + namelen + static_cast<std::size_t>(need);
-  }
-}
-
-// MAT v7.3: an HDF5 file after a 512-byte MATLAB header. Its superblock (HDF5 format
-// specification, "Superblock", versions 0-3) must be there, and the file must be as long as the
-// end-of-file address it declares (a cut file otherwise reads as "0 variables" through matio).
-// The variables themselves are left to matio and HDF5.
-void check_mat73(Bytes f, const std::string& path) {
-  static constexpr unsigned char sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
-  std::size_t at = 0;
-  for (std::size_t off = 512; off + 8 <= f.n; off *= 2)  // HDF5 looks at 0, 512, 1024, 2048, ...
-    if (std::memcmp(f.p + off, sig, 8) == 0) {
-      at = off;
-      break;
-    }
-  if (at == 0)
-    throw Error(fmt::format("{}: MAT v7.3 header but no HDF5 data after it (no HDF5 signature at byte 512 or "
-                            "beyond; the file has {} bytes): truncated or not a MAT file",
-                            path, f.n));
-  auto need = [&](std::size_t end) {
-    if (end > f.n)
-      throw Error(fmt::format("{}: MAT v7.3 (HDF5) file truncated: its superblock at byte {} is cut ({} bytes)", path,
-                              at, f.n));
-  };
-  need(at + 16);
-  const unsigned version = f.p[at + 8];
-  std::size_t offsets = 0, eof_pos = 0;
-  if (version <= 1) {
-    offsets = f.p[at + 13];
-    eof_pos = at + 24 + (version == 1 ? 4 : 0) + 2 * offsets;  // base, free-space, then end of file
-  } else if (version <= 3) {
-    offsets = f.p[at + 9];
-    eof_pos = at + 12 + 2 * offsets;  // base, superblock extension, then end of file
-  } else {
-    throw Error(fmt::format("{}: MAT v7.3 (HDF5) file with an unknown superblock version {}", path, version));
-  }
-  if (offsets != 2 && offsets != 4 && offsets != 8)
-    throw Error(fmt::format("{}: MAT v7.3 (HDF5) superblock declares {}-byte addresses (2, 4 or 8 expected): damaged",
-                            path, offsets));
-  need(eof_pos + offsets);
-  std::uint64_t eof = 0;
-  for (std::size_t i = offsets; i-- > 0;) eof = eof << 8 | f.p[eof_pos + i];
-  // The end-of-file address counts from the start of the file (the 512-byte MATLAB header
-  // included); read as relative to the HDF5 data it would only be larger.
-  if (eof > f.n)
-    throw Error(fmt::format("{}: MAT v7.3 (HDF5) file truncated: its superblock declares {} bytes, the file has {}",
-                            path, eof, f.n));
-}
-
-// Throws hysteron::Error naming the file and the variable if the file is truncated or its sizes
-// are inconsistent. MAT v7.3 (HDF5) files: check_mat73, the rest is left to matio and HDF5.
-void check_mat_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return;  // open_mat reports it
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size == 0) {
-    ::close(fd);
-    return;
-  }
-  const std::size_t n = static_cast<std::size_t>(st.st_size);
-  // a small file is read (mapping it costs more), a large one mapped
-  std::vector<unsigned char> small;
-  void* map = MAP_FAILED;
-  if (n <= (std::size_t{1} << 16)) {
-    small.resize(n);
-    std::size_t got = 0;
-    while (got < n) {
-      const ssize_t r = ::read(fd, small.data() + got, n - got);
-      if (r < 0 && errno == EINTR) continue;
-      if (r <= 0) {
-        const int err = r < 0 ? errno : EIO;
-        ::close(fd);
-        throw Error(fmt::format("{}: cannot read: {}", path, std::strerror(err)));
-      }
-      got += static_cast<std::size_t>(r);
-    }
-  } else {
-    map = ::mmap(nullptr, n, PROT_READ, MAP_PRIVATE, fd, 0);
-    if (map == MAP_FAILED) {
-      const int err = errno;
-      ::close(fd);
-      throw Error(fmt::format("{}: cannot read: {}", path, std::strerror(err)));
-    }
-  }
-  ::close(fd);
-  struct Unmap {
-    void* p;
-    std::size_t n;
-    ~Unmap() {
-      if (p != MAP_FAILED) ::munmap(p, n);
-    }
-  } unmap{map, n};
-  const Bytes f{map != MAP_FAILED ? static_cast<const unsigned char*>(map) : small.data(), n, n};
-  // matio reads a file as v5 / v7.3 only with the endian mark and one of their two versions;
-  // any other file, a 128-byte header with an unknown version included, it reads as MAT v4
-  const bool mark = n >= 128 && ((f.p[126] == 'I' && f.p[127] == 'M') || (f.p[126] == 'M' && f.p[127] == 'I'));
-  const bool swap = mark && f.p[126] == 'M';
-  const unsigned version = !mark ? 0 : swap ? (f.p[124] << 8 | f.p[125]) : (f.p[125] << 8 | f.p[124]);
-  if (version != 0x0100 && version != 0x0200) {
-    check_mat4(f, path);
-    return;
-  }
-  if (version == 0x0200) return check_mat73(f, path);  // v7.3 (HDF5)
-  std::size_t pos = 128;
-  for (std::size_t index = 0; pos < n; ++index) {
-    if (n - pos < 8)
-      throw Error(fmt::format("{}: variable #{}: truncated: {} bytes left where a tag needs 8", path, index + 1,
-                              n - pos));
-    const std::uint32_t type = get32(f.p + pos, swap);
-    const std::size_t bytes = get32(f.p + pos + 4, swap);
-    const std::size_t data = pos + 8;
-    std::string name;
-    if (type == 14 || type == 15) {
-      if (bytes > n - data)
-        throw Error(fmt::format("{}: variable #{}: truncated: declares {} bytes, the file has {} left (of {})", path,
-                                index + 1, bytes, n - data, n));
-      if (type == 14)
-        check_mat5_matrix(Bytes{f.p + data, bytes, bytes}, swap, path, index, &name);
-      else
-        check_mat5_compressed(Bytes{f.p + data, bytes, bytes}, swap, path, index);
-    } else if (bytes > n - data) {
-      throw Error(fmt::format("{}: element #{}: truncated: declares {} bytes, the file has {} left", path, index + 1,
-                              bytes, n - data));
-    }
-    pos = data + bytes;
-    if (type != 15) pos = std::min(n, data + ((bytes + 7) / 8) * 8);
-  }
-}
-
-std::vector<std::string> mat_variable_names(const std::string& path) {
-  MatPtr m = open_mat(path);
-  std::vector<std::string> names;
-  for (;;) {
-    VarPtr v(Mat_VarReadNextInfo(m.get()));
-    if (!v) break;
-    if (v->name) names.emplace_back(v->name);
-  }
-  return names;
-}
-
-std::string list_names(const std::vector<std::string>& names) {
-  if (names.empty()) return "none";
-  std::string s;
-  for (const auto& n : names) {
-    if (!s.empty()) s += ", ";
-    s += '"' + n + '"';
-  }
-  return s;
-}
-
-template <class T>
-void copy_data(const void* data, std::size_t n, std::vector<double>& out) {
-  const T* p = static_cast<const T*>(data);
-  out.resize(n);
-  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<double>(p[i]);
-}
-
-const char* class_name(matio_classes c) {
-  switch (c) {
-    case MAT_C_CELL: return "cell";
-    case MAT_C_STRUCT: return "struct";
-    case MAT_C_OBJECT: return "object";
-    case MAT_C_CHAR: return "char";
-    case MAT_C_SPARSE: return "sparse";
-    case MAT_C_FUNCTION: return "function handle";
-    case MAT_C_OPAQUE: return "opaque (e.g. a table, string or datetime object)";
-    default: return "unknown";
-  }
-}
-
-std::string dims_text(const matvar_t& v) {
-  std::string dims;
-  for (int i = 0; i < v.rank; ++i) dims += fmt::format("{}{}", i ? "x" : "", v.dims[i]);
-  return dims;
-}
-
-// A real, full, numeric 2-D variable: values in column-major order (MATLAB's).
-struct MatArray {
-  std::string name;
-  std::string where;  // "path: variable \"name\"", for messages
-  std::size_t rows = 0, cols = 0;
-  std::vector<double> values;
-  bool is_vector() const noexcept { return rows <= 1 || cols <= 1; }  // empty counts as a vector
-  std::string size_text() const { return fmt::format("{}x{}", rows, cols); }
-};
-
-MatArray read_mat_array(const std::string& path, const std::string& name) {
-  MatPtr m = open_mat(path);
-  VarPtr v(Mat_VarRead(m.get(), name.c_str()));
-  if (!v) {
-    m.reset();
-    const auto names = mat_variable_names(path);
-    if (std::find(names.begin(), names.end(), name) != names.end())
-      throw Error(fmt::format("{}: variable \"{}\" cannot be read (corrupt, truncated or of an unsupported kind)", path,
-                              name));
-    throw Error(fmt::format("{}: no variable \"{}\"; the file has {}", path, name, list_names(names)));
-  }
-  MatArray a;
-  a.name = name;
-  a.where = fmt::format("{}: variable \"{}\"", path, name);
-  const std::string expected = "expected a real numeric vector or 2-D matrix (double, single or an integer class)";
-  if (v->class_type == MAT_C_SPARSE)
-    throw Error(fmt::format("{}: is a sparse matrix (size {}); {}: convert it with full() before saving", a.where,
-                            dims_text(*v), expected));
-  switch (v->class_type) {
-    case MAT_C_DOUBLE: case MAT_C_SINGLE: case MAT_C_INT8: case MAT_C_UINT8: case MAT_C_INT16:
-    case MAT_C_UINT16: case MAT_C_INT32: case MAT_C_UINT32: case MAT_C_INT64: case MAT_C_UINT64: break;
-    default: throw Error(fmt::format("{}: is not numeric (class {}); {}", a.where, class_name(v->class_type), expected));
-  }
-  if (v->isComplex) throw Error(fmt::format("{}: is complex (size {}); {}", a.where, dims_text(*v), expected));
-  if (v->rank != 2)
-    throw Error(fmt::format("{}: is a {}-D array (size {}); {}", a.where, v->rank, dims_text(*v), expected));
-  a.rows = v->dims[0];
-  a.cols = v->dims[1];
-  const std::size_t n = a.rows * a.cols;
-  if (n > 0 && !v->data) throw Error(fmt::format("{}: has no data", a.where));
-  if (n > 0) {
-    auto& out = a.values;
-    switch (v->data_type) {
-      case MAT_T_DOUBLE: copy_data<double>(v->data, n, out); break;
-      case MAT_T_SINGLE: copy_data<float>(v->data, n, out); break;
-      case MAT_T_INT8: copy_data<std::int8_t>(v->data, n, out); break;
-      case MAT_T_UINT8: copy_data<std::uint8_t>(v->data, n, out); break;
-      case MAT_T_INT16: copy_data<std::int16_t>(v->data, n, out); break;
-      case MAT_T_UINT16: copy_data<std::uint16_t>(v->data, n, out); break;
-      case MAT_T_INT32: copy_data<std::int32_t>(v->data, n, out); break;
-      case MAT_T_UINT32: copy_data<std::uint32_t>(v->data, n, out); break;
-      case MAT_T_INT64: copy_data<std::int64_t>(v->data, n, out); break;
-      case MAT_T_UINT64: copy_data<std::uint64_t>(v->data, n, out); break;
-      default: throw Error(fmt::format("{}: unsupported data type {}", a.where, static_cast<int>(v->data_type)));
-    }
-  }
-  return a;
-}
-
-// Column `col` of a matrix, or the whole vector (col = npos); refuses NaN/infinity in what is read.
-std::vector<double> mat_column(const MatArray& a, std::size_t col) {
-  std::vector<double> out;
-  if (a.is_vector()) {
-    out = a.values;
-    for (std::size_t i = 0; i < out.size(); ++i)
-      if (!std::isfinite(out[i]))
-        throw Error(fmt::format("{}: element {} (1-based) is not a finite number (NaN and infinity are refused)",
-                                a.where, i + 1));
-    return out;
-  }
-  out.assign(a.values.begin() + static_cast<std::ptrdiff_t>(col * a.rows),
-             a.values.begin() + static_cast<std::ptrdiff_t>((col + 1) * a.rows));
-  for (std::size_t i = 0; i < out.size(); ++i)
-    if (!std::isfinite(out[i]))
-      throw Error(fmt::format("{}: row {}, column {} (0-based column; row 1-based) is not a finite number (NaN and "
-                              "infinity are refused)",
-                              a.where, i + 1, col));
-  return out;
-}
-
-std::string choose_column_hint(const std::string& name, const MatArray& a) {
-  return fmt::format("is a {} matrix ({} rows = samples, {} columns); choose a column with \"{}:0\" .. \"{}:{}\" "
-                     "(0-based column index)",
-                     a.size_text(), a.rows, a.cols, name, name, a.cols - 1);
-}
-
-// A .mat column spec: "" (the file's only variable), a variable name (a vector, or an N x 1 /
-// 1 x N matrix), or NAME:INDEX (column INDEX, 0-based, of the 2-D matrix NAME). A variable whose
-// name is the whole spec wins over the NAME:INDEX reading (MATLAB names cannot hold ':', but
-// other writers' files may).
-std::vector<double> read_mat_variable(const std::string& path, const std::string& spec) {
-  check_mat_file(path);
-  std::string name = spec;
-  std::optional<std::size_t> col;
-  if (name.empty()) {
-    const auto names = mat_variable_names(path);
-    if (names.size() != 1)
-      throw Error(fmt::format("{}: has {} variables ({}); choose one by name (NAME:INDEX for a column of a matrix)",
-                              path, names.size(), list_names(names)));
-    name = names[0];
-  } else if (const auto colon = spec.rfind(':'); colon != std::string::npos) {
-    const auto names = mat_variable_names(path);
-    if (std::find(names.begin(), names.end(), spec) == names.end()) {
-      name = spec.substr(0, colon);
-      const std::string_view idx = std::string_view(spec).substr(colon + 1);
-      std::size_t k = 0;
-      const auto res = std::from_chars(idx.data(), idx.data() + idx.size(), k);
-      if (name.empty() || idx.empty() || res.ec != std::errc() || res.ptr != idx.data() + idx.size())
-        throw Error(fmt::format("{}: \"{}\" is not a column of the file: expected a variable name or NAME:INDEX "
-                                "(INDEX = 0-based column of the matrix NAME); the file has {}",
-                                path, spec, list_names(names)));
-      if (std::find(names.begin(), names.end(), name) == names.end())
-        throw Error(fmt::format("{}: no variable \"{}\" (in \"{}\"); the file has {}", path, name, spec,
-                                list_names(names)));
-      col = k;
-    }
-  }
-  const MatArray a = read_mat_array(path, name);
-  if (!col) {
-    if (!a.is_vector()) throw Error(fmt::format("{}: {}", a.where, choose_column_hint(name, a)));
-    return mat_column(a, 0);
-  }
-  const std::size_t ncols = a.is_vector() ? 1 : a.cols;
-  if (*col >= ncols) {
-    if (a.is_vector())
-      throw Error(fmt::format("{}: column index {} is out of range: the variable is a vector (size {}), a single "
-                              "column: use \"{}\" or \"{}:0\"",
-                              a.where, *col, a.size_text(), name, name));
-    throw Error(fmt::format("{}: column index {} is out of range: the variable is a {} matrix ({} columns, indices "
-                            "0..{})",
-                            a.where, *col, a.size_text(), a.cols, a.cols - 1));
-  }
-  return mat_column(a, *col);
-}
-
-bool is_matlab_identifier(std::string_view s) {
-  if (s.empty() || s.size() > 63 || !std::isalpha(static_cast<unsigned char>(s[0]))) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
-}
-
-void write_mat(const std::string& tmp, const std::vector<std::string>& names,
-               const std::vector<std::vector<double>>& columns, bool compress) {
-  init_matio_log();
-  MatPtr m(Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT5));
-  if (!m) throw Error("cannot create the .mat file");
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    size_t dims[2] = {columns[i].size(), 1};
-    // matio takes a non-const pointer; with MAT_F_DONT_COPY_DATA it neither copies nor frees nor writes to it
-    VarPtr v(Mat_VarCreate(names[i].c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims,
-                           const_cast<double*>(columns[i].data()), MAT_F_DONT_COPY_DATA));
-    if (!v) throw Error(fmt::format("cannot create .mat variable \"{}\"", names[i]));
-    if (Mat_VarWrite(m.get(), v.get(), compress ? MAT_COMPRESSION_ZLIB : MAT_COMPRESSION_NONE) != 0)
-      throw Error(fmt::format("cannot write .mat variable \"{}\"", names[i]));
-  }
-  if (Mat_Close(m.release()) != 0) throw Error("cannot close the .mat file (disk full?)");
-  // matio does not report every failed write (a full disk can lose buffered data silently):
-  // the file written must have the structure and the sizes of what was written
-  struct stat st {};
-  if (::stat(tmp.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;  // a device or a FIFO: nothing to re-read
-  try {
-    check_mat_file(tmp);
-    if (mat_variable_names(tmp) != names) throw Error("variables missing");
-  } catch (const Error& e) {
-    throw Error(fmt::format("the .mat file was not written completely (disk full?): {}", e.what()));
-  }
-}
-
 void write_all(int fd, const char* p, std::size_t n, const std::string& where) {
   while (n > 0) {
     const ssize_t w = ::write(fd, p, n);
@@ -1201,49 +567,11 @@ Table parse_text_table(std::string_view text, const std::string& source, const R
 
 Table read_table(const std::string& path, const ReadOptions& options) {
   if (!is_mat_path(path)) return read_text_table(path, options);
-  check_mat_file(path);
-  Table t;
-  t.source = path;
-  // vectors first (in file order), then the columns "NAME:0", "NAME:1", ... of the 2-D matrices
-  // with as many rows as the vectors have elements (or as the first such matrix, if no vector)
-  std::vector<MatArray> matrices;
-  for (const auto& name : mat_variable_names(path)) {
-    MatArray a;
-    std::vector<double> v;
-    try {
-      a = read_mat_array(path, name);
-      if (!a.is_vector()) {
-        matrices.push_back(std::move(a));
-        continue;
-      }
-      v = mat_column(a, 0);
-    } catch (const Error&) {
-      continue;  // not a real numeric vector or matrix (or not finite): not a column
-    }
-    if (!t.columns.empty() && v.size() != t.columns[0].size())
-      throw Error(fmt::format("{}: variable \"{}\" has {} elements but \"{}\" has {}; read them one by one", path,
-                              name, v.size(), t.names[0], t.columns[0].size()));
-    t.names.push_back(name);
-    t.columns.push_back(std::move(v));
-  }
-  for (const auto& a : matrices) {
-    if (!t.columns.empty() && a.rows != t.columns[0].size()) continue;
-    for (std::size_t j = 0; j < a.cols; ++j) {
-      std::vector<double> v;
-      try {
-        v = mat_column(a, j);
-      } catch (const Error&) {
-        continue;
-      }
-      t.names.push_back(fmt::format("{}:{}", a.name, j));
-      t.columns.push_back(std::move(v));
-    }
-  }
-  return t;
+  return detail::read_mat_table(path);
 }
 
 std::vector<double> read_column(const std::string& path, const ReadOptions& options) {
-  if (is_mat_path(path)) return read_mat_variable(path, options.column_spec);
+  if (is_mat_path(path)) return detail::read_mat_variable(path, options.column_spec);
   Table t = read_text_table(path, options);
   const std::size_t i = select_column(t, options);
   check_column_has_data(t, i);
@@ -1296,7 +624,7 @@ void write_columns(const std::string& path, const std::vector<std::string>& name
   if (columns.empty()) throw Error(fmt::format("{}: no columns to write", path));
   if (!mat) check_csv_names(path, names);
   for (std::size_t i = 0; i < names.size(); ++i) {
-    if (mat && !is_matlab_identifier(names[i]))
+    if (mat && !detail::is_matlab_identifier(names[i]))
       throw Error(fmt::format("{}: \"{}\" is not a valid MATLAB variable name (a letter, then letters, digits, _)",
                               path, names[i]));
     for (std::size_t k = 0; k < i; ++k)
@@ -1318,7 +646,7 @@ void write_columns(const std::string& path, const std::vector<std::string>& name
     });
     return;
   }
-  write_file_atomically(path, [&](const std::string& tmp) { write_mat(tmp, names, columns, options.compress_mat); });
+  write_file_atomically(path, [&](const std::string& tmp) { detail::write_mat(tmp, names, columns, options.compress_mat); });
 }
 
 // ---- streamed CSV output -----------------------------------------------------------

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "detail.hpp"
@@ -247,11 +248,12 @@ namespace {
 
 // Cumulative-slope solution s (s_0 = q, s_i = q + p_1 + ... + p_i) -> q, p.
 // Operators whose transformed column vanished on the data get p_i = 0.
-void slopes_to_weights(const Eigen::VectorXd& sl, const Eigen::MatrixXd& A, double& q, std::vector<double>& p) {
+// (norms: the column norms of A)
+void slopes_to_weights(const Eigen::VectorXd& sl, const Eigen::VectorXd& norms, double& q, std::vector<double>& p) {
   Eigen::VectorXd s = sl;
-  const double amax = A.colwise().norm().maxCoeff();
+  const double amax = norms.maxCoeff();
   for (Eigen::Index i = 1; i < s.size(); ++i)
-    if (A.col(i).norm() <= 1e-12 * amax) s(i) = s(i - 1);
+    if (norms(i) <= 1e-12 * amax) s(i) = s(i - 1);
   q = s(0);
   p.resize(static_cast<std::size_t>(s.size() - 1));
   for (Eigen::Index i = 1; i < s.size(); ++i) p[static_cast<std::size_t>(i - 1)] = s(i) - s(i - 1);
@@ -330,7 +332,7 @@ ModelParams fit_deadzone_weights(const MpiDeadzoneParams& m, std::span<const dou
   const Eigen::VectorXd sol = lo + t;
   double q;
   std::vector<double> p;
-  slopes_to_weights(sol.head(npi), A.leftCols(npi), q, p);
+  slopes_to_weights(sol.head(npi), A.leftCols(npi).colwise().norm().transpose(), q, p);
   MpiDeadzoneParams out = m;
   out.q = q;
   out.r = s.r;
@@ -343,6 +345,86 @@ ModelParams fit_deadzone_weights(const MpiDeadzoneParams& m, std::span<const dou
   invert_side(zp, cp, out.z, out.g);
   invert_side(zn, cn, out.z, out.g);
   return out;
+}
+
+// Calls f(P, k0) for each block of at most kLsBlock regressor rows (detail::regressors) of
+// s over `range`, simulated one block at a time (P: rows x (n + 1), rows k0.. of the range;
+// f may overwrite it). Memory: one block, not the m x (n + 1) matrix (issue 13: `fit` memory).
+template <class F>
+void for_each_regressor_block(const Structure<double>& s, std::span<const double> x, IndexRange range,
+                              InitialState initial, F&& f) {
+  const std::size_t n = s.r.size();
+  Eigen::MatrixXd phi(std::min<Eigen::Index>(detail::kLsBlock, static_cast<Eigen::Index>(range.end - range.begin)),
+                      static_cast<Eigen::Index>(n + 1));
+  std::vector<double> y(n);
+  detail::initial_operator_state(s, initial, x.empty() ? 0.0 : x[0], y);
+  Eigen::Index fill = 0, k0 = 0;
+  for (std::size_t k = 0; k < range.end; ++k) {
+    const double um = detail::operators_step(s, x[k], y.data());
+    if (k < range.begin) continue;
+    phi(fill, 0) = um;
+    for (std::size_t i = 0; i < n; ++i) phi(fill, static_cast<Eigen::Index>(i + 1)) = y[i];
+    if (++fill == phi.rows()) {
+      f(Eigen::Ref<Eigen::MatrixXd>(phi), k0);
+      k0 += fill;
+      fill = 0;
+    }
+  }
+  if (fill > 0) f(Eigen::Ref<Eigen::MatrixXd>(phi.topRows(fill)), k0);
+}
+
+// fit_weights without a dead zone: bounded_ls of the cumulative-slope columns A =
+// slope_columns(regressors) and target b = y over `r`, A streamed twice a block at a time
+// (for_each_regressor_block) instead of held (two m x (n + 1) matrices before): pass 1
+// the column sums (the means for the free offset), the column norms (slopes_to_weights)
+// and the span of u_m (the bound's scale), pass 2 the normal equations of the centred
+// rows, as bounded_ls forms them block by block; the same solution to rounding (the sums
+// are taken in another order).
+void streamed_slope_ls(const Structure<double>& s, std::span<const double> x, std::span<const double> y, IndexRange r,
+                       const WeightFitOptions& options, double& q, std::vector<double>& p, double& offset) {
+  const auto nc = static_cast<Eigen::Index>(s.r.size() + 1);
+  const auto m = static_cast<double>(r.end - r.begin);
+  const auto b_of = [&](Eigen::Index k0, Eigen::Index rows) {
+    return Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin + static_cast<std::size_t>(k0), rows);
+  };
+  auto to_slopes = [](Eigen::Ref<Eigen::MatrixXd> P) {  // slope_columns in place (ascending: col i + 1 still phi's)
+    for (Eigen::Index i = 0; i + 1 < P.cols(); ++i) P.col(i) -= P.col(i + 1);
+  };
+  Eigen::RowVectorXd asum = Eigen::RowVectorXd::Zero(nc), asq = Eigen::RowVectorXd::Zero(nc);
+  double bsum = 0.0, umin = std::numeric_limits<double>::infinity(), umax = -umin;
+  for_each_regressor_block(s, x, r, options.initial_state, [&](Eigen::Ref<Eigen::MatrixXd> P, Eigen::Index k0) {
+    umin = std::min(umin, P.col(0).minCoeff());
+    umax = std::max(umax, P.col(0).maxCoeff());
+    to_slopes(P);
+    asum += P.colwise().sum();
+    asq += P.colwise().squaredNorm();
+    bsum += b_of(k0, P.rows()).sum();
+  });
+  const double uspan = std::max(umax - umin, 1e-300);
+  const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(nc, options.margin * scale);
+  const bool centre = options.free_offset;
+  const Eigen::RowVectorXd amean = centre ? Eigen::RowVectorXd(asum / m) : Eigen::RowVectorXd::Zero(nc);
+  const double bmean = centre ? bsum / m : 0.0;
+  // the normal equations G = Ac^T Ac, h = Ac^T (bc - Ac lo) (as detail::normal_equations)
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(nc, nc);
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(nc), bc;
+  const bool shift = !lo.isZero(0.0);
+  for_each_regressor_block(s, x, r, options.initial_state, [&](Eigen::Ref<Eigen::MatrixXd> P, Eigen::Index k0) {
+    to_slopes(P);
+    bc = b_of(k0, P.rows());
+    if (centre) {
+      P.rowwise() -= amean;
+      bc.array() -= bmean;
+    }
+    if (shift) bc.noalias() -= P * lo;
+    G.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+    h.noalias() += P.transpose() * bc;
+  });
+  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+  const Eigen::VectorXd t = lo + detail::nnls_normal(G, h);
+  offset = centre ? bmean - amean.dot(t) : 0.0;
+  slopes_to_weights(t, asq.cwiseSqrt().transpose(), q, p);
 }
 
 }  // namespace
@@ -367,17 +449,9 @@ ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std
   }
   if (const auto* dz = std::get_if<MpiDeadzoneParams>(&model)) return fit_deadzone_weights(*dz, x, y, options, r);
   const Structure<double> s = canonical_structure(model);
-  const Eigen::MatrixXd phi = detail::regressors(s, x, r, options.initial_state);
-  const Eigen::MatrixXd A = slope_columns(phi);
-  const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin, static_cast<Eigen::Index>(r.end - r.begin));
-  const double uspan = std::max(phi.col(0).maxCoeff() - phi.col(0).minCoeff(), 1e-300);
-  const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
-  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(A.cols(), options.margin * scale);
-  double offset = 0.0;
-  const Eigen::VectorXd sol = detail::bounded_ls(A, b, lo, options.free_offset ? &offset : nullptr);
-  double q;
+  double q, offset;
   std::vector<double> p;
-  slopes_to_weights(sol, A, q, p);
+  streamed_slope_ls(s, x, y, r, options, q, p, offset);
   ModelParams out = detail::with_weights(model, s, q, p);
   units_map(out).output_offset = offset;
   return out;

@@ -9,7 +9,8 @@
 #
 # MODELS (default "pi gpi") are the kinds fitted; FIT_ARGS are added to every fit (default: none,
 # i.e. 2 starts on one thread per core); COMPARE=/path/to/other/hysteron runs every fit with that
-# binary too, on the same record, and says whether the two model files are identical. The records (a GPI, n = 10, driven by a slow chirp-like
+# binary too, on the same record, and says whether the two model files are identical (if not:
+# the largest relative difference of their numbers; KEEP=DIR keeps them as DIR/MODEL_ROWS_{0,1}.json). The records (a GPI, n = 10, driven by a slow chirp-like
 # input, plus 0.2 % noise; about 40 bytes a row as CSV) are written in a temporary directory and
 # removed at the end.
 set -euo pipefail
@@ -78,8 +79,30 @@ PYEOF
       if cmp -s <(grep -v '"note"' "$T/m0.json") <(grep -v '"note"' "$T/m1.json"); then
         echo "       $m: the two model files are identical"
       else
-        echo "       $m: the two model files DIFFER"
+        # the largest relative difference of any number of the two model files (same keys)
+        $PY - "$T/m0.json" "$T/m1.json" "$m" <<'PYEOF'
+import json, sys
+def nums(v, key=""):
+    if isinstance(v, dict):
+        for k, w in v.items():
+            yield from nums(w, f"{key}.{k}")
+    elif isinstance(v, list):
+        for i, w in enumerate(v):
+            yield from nums(w, f"{key}[{i}]")
+    elif isinstance(v, (int, float)) and not isinstance(v, bool):
+        yield key, float(v)
+a = dict(nums(json.load(open(sys.argv[1]))))
+b = dict(nums(json.load(open(sys.argv[2]))))
+if a.keys() != b.keys():
+    print(f"       {sys.argv[3]}: the two model files DIFFER in their keys")
+else:
+    k = max(a, key=lambda k: abs(a[k] - b[k]) / max(abs(a[k]), abs(b[k]), 1e-300))
+    rel = abs(a[k] - b[k]) / max(abs(a[k]), abs(b[k]), 1e-300)
+    print(f"       {sys.argv[3]}: the model files differ; largest relative difference {rel:.2g} ({k}: {a[k]!r} vs {b[k]!r})")
+PYEOF
       fi
+      [ -z "${KEEP:-}" ] || cp "$T/m0.json" "$KEEP/${m}_${n}_0.json"
+      [ -z "${KEEP:-}" ] || cp "$T/m1.json" "$KEEP/${m}_${n}_1.json"
     fi
   done
 done

@@ -67,4 +67,28 @@ LineFit straight_line(std::span<const double> x, std::span<const double> y, Inde
 FitReport fit_core(std::span<const double> x, std::span<const double> y, const FitOptions& options,
                    bool free_offset);
 
+// ---- test hooks (issue 13: `fit` memory) ----
+// LM of the gpi and slope kinds on the compressed costs (default, true) or on the m
+// residuals; returns the previous setting (lm.cpp; not thread-safe against running fits).
+bool set_lm_compression(bool on);
+
+// The least-squares problem LM is given at one point: its number of residuals, the cost
+// 1/2 ||r||^2, the gradient J^T r and J^T J (residuals.cpp).
+struct LmNormalEquations {
+  long residuals = 0;
+  double cost = 0.0;
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd jtj;
+};
+// Of the gpi cost in the chart (centre xc, half-span xs of the input) at the chart point of
+// Eq. 13's theta, full or compressed.
+LmNormalEquations gpi_normal_equations(std::span<const double> theta, int n, double xc, double xs,
+                                       std::span<const double> x, std::span<const double> y, IndexRange train,
+                                       InitialState initial, double huber, bool free_offset, bool compressed);
+// Of the cost of a slope layout (as slope_residuals), full or compressed.
+LmNormalEquations slope_normal_equations(FitModel model, std::span<const double> theta, std::span<const double> r,
+                                         std::span<const double> zp, std::span<const double> zn,
+                                         std::span<const double> x, std::span<const double> y, IndexRange train,
+                                         InitialState initial, double huber, bool free_offset, bool compressed);
+
 }  // namespace hysteron::detail

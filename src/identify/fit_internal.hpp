@@ -164,6 +164,13 @@ ceres::CostFunction* make_gpi_chart_cost(const Data& d, int n);
 ceres::CostFunction* make_slope_cost(const Data& d, const SlopeLayout* layout);
 // Ridge residuals w p_i = w (s_i - s_{i-1}), i = 1..n, of a cumulative-slope layout.
 ceres::CostFunction* make_ridge_cost(const SlopeLayout* layout);
+// The same two costs compressed to p + 1 residuals r' = [Q^T r; ||(I - Q Q^T) r||] with the
+// Jacobian [R; 0], J = Q R by a blocked QR of the rows (issue 13: `fit` memory): the same
+// cost, J^T r and J^T J, so the same LM steps, without m x p buffers (residuals.cpp: RowQr).
+ceres::CostFunction* make_compressed_gpi_chart_cost(const Data& d, int n);
+ceres::CostFunction* make_compressed_slope_cost(const Data& d, const SlopeLayout* layout);
+// Whether GpiLm and SlopeLm give LM the compressed costs (default; false: the m residuals).
+bool lm_compression();
 
 // ---- data-derived starts (starts.cpp) -----------------------------------------------
 
@@ -186,6 +193,9 @@ struct LmProblem {
   virtual ~LmProblem() = default;
   virtual void add_costs(ceres::Problem& problem, const Data& d, double* theta) const = 0;
   virtual bool active_set() const { return false; }
+  // Whether its costs are the compressed ones (no m x p buffers: solve_starts does not cap
+  // the concurrent starts by memory).
+  virtual bool compressed() const { return false; }
 };
 
 struct GpiLm final : LmProblem {
@@ -193,12 +203,14 @@ struct GpiLm final : LmProblem {
   explicit GpiLm(int n_) : n(n_) {}
   void add_costs(ceres::Problem& problem, const Data& d, double* theta) const override;
   bool active_set() const override { return true; }
+  bool compressed() const override { return lm_compression(); }
 };
 
 struct SlopeLm final : LmProblem {
   const SlopeLayout* layout;
   explicit SlopeLm(const SlopeLayout* l) : layout(l) {}
   void add_costs(ceres::Problem& problem, const Data& d, double* theta) const override;
+  bool compressed() const override { return lm_compression(); }
 };
 
 struct Solved {

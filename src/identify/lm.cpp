@@ -165,12 +165,23 @@ Solved solve(const LmProblem& lm, const Data& d, const std::vector<double>& thet
 
 }  // namespace
 
+namespace {
+// detail::set_lm_compression (tests): LM on the compressed costs (default) or the m residuals.
+std::atomic<bool> compress_lm{true};
+}  // namespace
+
+bool lm_compression() { return compress_lm.load(); }
+
+// (The Huber loss of these kinds is in their residuals, robust_residual, not a Ceres loss:
+// the compression is exact with it too.)
 void GpiLm::add_costs(ceres::Problem& problem, const Data& d, double* theta) const {
-  problem.AddResidualBlock(make_gpi_chart_cost(d, n), nullptr, theta);
+  problem.AddResidualBlock(lm_compression() ? make_compressed_gpi_chart_cost(d, n) : make_gpi_chart_cost(d, n),
+                           nullptr, theta);
 }
 
 void SlopeLm::add_costs(ceres::Problem& problem, const Data& d, double* theta) const {
-  problem.AddResidualBlock(make_slope_cost(d, layout), nullptr, theta);
+  problem.AddResidualBlock(lm_compression() ? make_compressed_slope_cost(d, layout) : make_slope_cost(d, layout),
+                           nullptr, theta);
   if (layout->ridge > 0 && !layout->r.empty() && layout->kind != FitModel::mpi_asym)
     problem.AddResidualBlock(make_ridge_cost(layout), nullptr, theta);
 }
@@ -183,7 +194,8 @@ constexpr Eigen::Index kQrBlockRows = 4096;
 // The R factor (p x p, upper triangular, R^T R = J^T J) of the Jacobian of every residual
 // block of `problem` at `theta`, restricted to the columns `keep` (the free parameters), by
 // a blocked Householder QR: [R; next rows] -> R, kQrBlockRows rows at a time. Memory: one
-// evaluation of the blocks (what one LM iteration holds) plus (p + kQrBlockRows) x p,
+// evaluation of the blocks (what one LM iteration holds: p + 1 rows for the compressed
+// costs of GpiLm and SlopeLm, whose [R; 0] has this R up to signs) plus (p + kQrBlockRows) x p,
 // instead of the several m x p copies (sparse, dense, SVD work and its thin U) of
 // ceres::Covariance's DENSE_SVD (issue 13: `fit` memory). False if a block cannot be
 // evaluated, has more than one parameter block, or a loss function (the caller then uses
@@ -332,13 +344,16 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
                                                          const std::vector<int>& held, const FitOptions& o,
                                                          FitReport& rep) {
   std::vector<Solved> solved(starts.size());
-  // With the default thread count (0: one per hardware thread) the concurrent starts are
-  // capped by memory: each holds about kLmCopies m x p Jacobian-sized buffers (Ceres' dense
-  // Jacobian and its evaluation scratch, residual vectors), so on a long record they run one
-  // after the other instead of multiplying the peak (issue 13: `fit` memory). The result does
-  // not depend on the number of threads; an explicit num_threads is kept.
+  // With the default thread count (0: one per hardware thread) the concurrent starts of an
+  // uncompressed cost (bouc-wen) are capped by memory: each holds about kLmCopies m x p
+  // Jacobian-sized buffers (Ceres' dense Jacobian and its evaluation scratch, residual
+  // vectors), so on a long record they run one after the other instead of multiplying the
+  // peak (issue 13: `fit` memory). Compressed costs (GpiLm, SlopeLm) hold one block of rows
+  // per start: no cap. The result does not depend on the number of threads; an explicit
+  // num_threads is kept.
+  const bool small = std::all_of(problems.begin(), problems.end(), [](const LmProblem* p) { return p->compressed(); });
   int threads = o.num_threads;
-  if (threads == 0 && !starts.empty()) {
+  if (threads == 0 && !starts.empty() && !small) {
     const double rows = static_cast<double>(d.train.end);
     const double per_start = kLmCopies * rows * static_cast<double>(starts.front().size() + 1) * sizeof(double);
     const auto hw = static_cast<double>(std::max(1u, std::thread::hardware_concurrency()));
@@ -373,6 +388,8 @@ double model_sse(const ModelParams& model, const Data& d) {
 }  // namespace hysteron::fitting
 
 namespace hysteron::detail {
+
+bool set_lm_compression(bool on) { return fitting::compress_lm.exchange(on); }
 
 // Runs fn(k) for k = 0..count-1, the k spread over up to `threads` threads (0: one per
 // hardware thread; 1: in order on this thread). Each k is independent, so the

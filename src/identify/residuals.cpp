@@ -1,13 +1,17 @@
 // Residuals of Eq. 12 and their analytic Jacobians (forward-mode sensitivities through
 // the operator recursion) for the gpi of Eqs. 6-8 and for the slope-parametrized models,
-// as Ceres cost functions; the autodiff functors they are tested against.
+// as Ceres cost functions, full (m residuals) or compressed (p + 1 residuals of a blocked QR,
+// RowQr: what LM is given); the autodiff functors they are tested against.
 #include <Eigen/Core>
+#include <Eigen/QR>
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
+#include "detail.hpp"
 #include "fit_internal.hpp"
 #include "hysteron/error.hpp"
 
@@ -81,13 +85,16 @@ struct GpiFunctor {
 
 }  // namespace
 
-// Residuals (and, if J != nullptr, their row-major m x 8 Jacobian) of the gpi in
-// one pass with plain doubles: forward-mode sensitivities through the recursion.
-// Each play output is either held (its derivative is carried from the previous
-// sample) or equals u - r_i / u + r_i (derivative of the envelope and of r_i =
-// alpha i). The branch tests are those of ops::generalized_play, so this is the
-// derivative the Jets of GpiFunctor compute (tested to 1e-10).
-void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J) {
+namespace {
+
+// Residuals (and, if want_j, their Jacobian rows) of the gpi in one pass with plain
+// doubles: forward-mode sensitivities through the recursion. Each play output is either
+// held (its derivative is carried from the previous sample) or equals u - r_i / u + r_i
+// (derivative of the envelope and of r_i = alpha i). The branch tests are those of
+// ops::generalized_play, so this is the derivative the Jets of GpiFunctor compute (tested
+// to 1e-10). emit(row, f, jr) gets each training row in order (jr: 8 values, or nullptr).
+template <class Emit>
+void gpi_pass(const Data& d, int n, const double* th, bool want_j, Emit&& emit) {
   const double c0 = th[0], c1 = th[1], c2 = th[2], c3 = th[3], q = th[4], rho = th[5], tau = th[6], alpha = th[7];
   const auto nn = static_cast<std::size_t>(n);
   std::vector<double> r(nn), e(nn), p(nn), y(nn, 0.0), g(5 * nn, 0.0);  // g: dy_i/d(c0..c3, alpha)
@@ -145,13 +152,23 @@ void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J
     double df = 1.0;
     const double f = robust_residual_with_slope(rr, d.huber, df);
     const std::size_t row = k - d.train.begin;
-    res[row] = f;
-    if (J) {
-      double* jr = J + kGpi * row;
-      jr[0] = -df * dc0, jr[1] = -df * dc1, jr[2] = -df * dc2, jr[3] = -df * dc3;
-      jr[4] = -df * u, jr[5] = -df * drho, jr[6] = -df * dtau, jr[7] = -df * dal;
+    if (!want_j) {
+      emit(row, f, static_cast<const double*>(nullptr));
+      continue;
     }
+    const double jr[kGpi] = {-df * dc0, -df * dc1, -df * dc2, -df * dc3, -df * u, -df * drho, -df * dtau, -df * dal};
+    emit(row, f, static_cast<const double*>(jr));
   }
+}
+
+}  // namespace
+
+// Residuals (and, if J != nullptr, their row-major m x 8 Jacobian) of the gpi (gpi_pass).
+void gpi_evaluate(const Data& d, int n, const double* th, double* res, double* J) {
+  gpi_pass(d, n, th, J != nullptr, [&](std::size_t row, double f, const double* jr) {
+    res[row] = f;
+    if (jr) std::copy(jr, jr + kGpi, J + kGpi * row);
+  });
 }
 
 namespace {
@@ -214,7 +231,9 @@ struct SlopeFunctor {
 }  // namespace
 
 
-// Residuals (and, if J != nullptr, their row-major m x size() Jacobian) of a
+namespace {
+
+// Residuals (and, if want_j, their Jacobian rows of size() values) of a
 // slope-parametrized model in one pass with plain doubles (forward-mode
 // sensitivities; the branch tests are those of ops::asymmetric_play / dead_zone, so
 // this is the derivative the Jets of SlopeFunctor compute, tested to 1e-10).
@@ -223,7 +242,9 @@ struct SlopeFunctor {
 // v + sum g_k S_k(v), d out/dv = 1 + sum of the active g_k, d out/dD_j = S_j - S_{j+1}.
 // mpi-asym: each play output is held (keeps its 8-vector of envelope derivatives)
 // or equals u_a - r_i (ascending coefficients) or u_d + r_i (descending ones).
-void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, double* res, double* J) {
+// emit(row, f, jr) gets each training row in order (jr: size() values, or nullptr).
+template <class Emit>
+void slope_pass(const Data& d, const SlopeLayout& L, const double* th, bool want_j, Emit&& emit) {
   const std::size_t n = L.r.size();
   const std::size_t P = static_cast<std::size_t>(L.size());
   const std::size_t env = static_cast<std::size_t>(L.env);
@@ -265,6 +286,7 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
     }
   }
   const double q = sl[0];
+  std::vector<double> row(want_j ? P : 0);
   for (std::size_t k = 0; k < d.train.end; ++k) {
     const double x = d.x[k];
     double ua = x, ud = x;
@@ -299,9 +321,11 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
     double df = 1.0;
     const double f = robust_residual_with_slope(rr, d.huber, df);
     const std::size_t rix = k - d.train.begin;
-    res[rix] = f;
-    if (!J) continue;
-    double* jr = J + P * rix;
+    if (!want_j) {
+      emit(rix, f, static_cast<const double*>(nullptr));
+      continue;
+    }
+    double* jr = row.data();
     const double a = -df * dv;  // d f / d v
     if (asym) {
       for (int c = 0; c < 4; ++c) jr[c] = 0.5 * q * dua[c], jr[4 + c] = 0.5 * q * dud[c];
@@ -329,7 +353,19 @@ void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, doubl
         j0 = e;
       }
     }
+    emit(rix, f, static_cast<const double*>(row.data()));
   }
+}
+
+}  // namespace
+
+// Residuals (and, if J != nullptr, their row-major m x size() Jacobian) of a slope layout (slope_pass).
+void slope_evaluate(const Data& d, const SlopeLayout& L, const double* th, double* res, double* J) {
+  const std::size_t P = static_cast<std::size_t>(L.size());
+  slope_pass(d, L, th, J != nullptr, [&](std::size_t row, double f, const double* jr) {
+    res[row] = f;
+    if (jr) std::copy(jr, jr + P, J + P * row);
+  });
 }
 
 
@@ -379,10 +415,131 @@ class SlopeCost final : public ceres::CostFunction {
   Data d_;
   const SlopeLayout* layout_;
 };
+
+// ---- compressed least squares (issue 13: `fit` memory) --------------------------------
+// LM sees p + 1 residuals r' = [Q^T r; ||(I - Q Q^T) r||] with the Jacobian J' = [R; 0]
+// instead of the m residuals r and the m x p Jacobian J = Q R. Then J'^T J' = J^T J,
+// J'^T r' = J^T r, ||r'|| = ||r|| and ||J' d + r'|| = ||J d + r|| for every step d, so LM
+// (its normal equations, Jacobi scaling diag(J^T J), model and actual cost changes) takes
+// the same steps in exact arithmetic. R and r' come from a blocked Householder QR of the
+// rows [1, J, r] (the column of ones only with the free offset: its Householder reflection
+// removes the mean, so the trailing block is the centred problem of project_offset),
+// kBlockRows rows at a time. Memory: one block of rows and the (c + kBlockRows) x c stack,
+// instead of m residuals and the m x p Jacobian (and Ceres' copies of them).
+class RowQr {
+ public:
+  static constexpr Eigen::Index kBlockRows = 4096;
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  // p Jacobian columns (0: residuals only), plus the column of ones if `offset`; each
+  // block of Jacobian rows is multiplied by D (p x p) before it is folded, if D is given.
+  RowQr(int p, bool offset, const Eigen::MatrixXd* D = nullptr)
+      : p_(p), off_(offset ? 1 : 0), c_(off_ + p + 1), stack_(c_ + kBlockRows, c_), D_(D),
+        res_(kBlockRows), jac_(static_cast<std::size_t>(kBlockRows * p)) {}
+  // One row: residual f and (if p > 0) its p Jacobian entries jr.
+  void add(double f, const double* jr) {
+    res_[static_cast<std::size_t>(fill_)] = f;
+    if (p_ > 0 && jr) std::copy(jr, jr + p_, jac_.begin() + static_cast<std::ptrdiff_t>(fill_ * p_));
+    if (++fill_ == kBlockRows) flush();
+  }
+  // After the last row: the p_out + 1 residuals r' and, if J, the (p_out + 1) x p_out
+  // row-major J' = [R_JJ; 0] (p_ == p_out). Residuals only (p_ == 0): r' = [0; ||r||].
+  void finish(int p_out, double* res, double* J) {
+    flush();
+    Eigen::MatrixXd R = Eigen::MatrixXd::Zero(c_, c_);  // rows beyond those folded stay zero
+    R.topRows(k_) = stack_.topRows(k_);
+    for (Eigen::Index i = 0; i < p_out; ++i) res[i] = p_ > 0 ? R(off_ + i, c_ - 1) : 0.0;
+    res[p_out] = R(c_ - 1, c_ - 1);
+    if (!J) return;
+    for (Eigen::Index i = 0; i < p_; ++i)
+      for (Eigen::Index j = 0; j < p_; ++j) J[i * p_ + j] = R(off_ + i, off_ + j);
+    std::fill(J + p_ * p_, J + p_ * (p_ + 1), 0.0);
+  }
+
+ private:
+  // Folds the buffered rows into R: [R; 1 J D r] -> R.
+  void flush() {
+    if (fill_ == 0) return;
+    Eigen::Map<Rows> J(jac_.data(), fill_, p_);
+    if (D_ && p_ > 0) {
+      block_ = J;
+      J.noalias() = block_ * *D_;
+    }
+    for (Eigen::Index i = 0; i < fill_; ++i) {
+      const Eigen::Index row = k_ + i;
+      if (off_) stack_(row, 0) = 1.0;
+      for (Eigen::Index j = 0; j < p_; ++j) stack_(row, off_ + j) = J(i, j);
+      stack_(row, c_ - 1) = res_[static_cast<std::size_t>(i)];
+    }
+    const Eigen::Index total = k_ + fill_;
+    qr_.compute(stack_.topRows(total));
+    k_ = std::min(total, c_);
+    stack_.topRows(k_) = qr_.matrixQR().topRows(k_).triangularView<Eigen::Upper>();
+    fill_ = 0;
+  }
+
+  Eigen::Index p_, off_, c_;
+  Eigen::MatrixXd stack_;  // rows [0, k_): R so far; then the block being folded
+  const Eigen::MatrixXd* D_;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr_;
+  std::vector<double> res_, jac_;
+  Rows block_;
+  Eigen::Index k_ = 0, fill_ = 0;
+};
+
+// The gpi cost in the chart (GpiChartCost), compressed (RowQr): kGpi + 1 residuals.
+class CompressedGpiChartCost final : public ceres::CostFunction {
+ public:
+  CompressedGpiChartCost(const Data& d, int n) : d_(d), n_(n), chart_{d.xc, d.xs} {
+    set_num_residuals(kGpi + 1);
+    mutable_parameter_block_sizes()->push_back(kGpi);
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const auto th = chart_.theta(params[0]);
+    for (double v : th)
+      if (!std::isfinite(v)) return false;
+    const bool want_j = jacobians && jacobians[0];
+    const Eigen::MatrixXd D = want_j ? Eigen::MatrixXd(chart_.jacobian(params[0])) : Eigen::MatrixXd();
+    RowQr qr(want_j ? kGpi : 0, d_.free_offset, want_j ? &D : nullptr);  // J_phi = J_theta dtheta/dphi
+    gpi_pass(d_, n_, th.data(), want_j, [&](std::size_t, double f, const double* jr) { qr.add(f, jr); });
+    qr.finish(kGpi, residuals, want_j ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  Data d_;
+  int n_;
+  GpiChart chart_;
+};
+
+// The cost of a slope layout (SlopeCost), compressed (RowQr): size() + 1 residuals.
+class CompressedSlopeCost final : public ceres::CostFunction {
+ public:
+  CompressedSlopeCost(const Data& d, const SlopeLayout* layout) : d_(d), layout_(layout) {
+    set_num_residuals(layout->size() + 1);
+    mutable_parameter_block_sizes()->push_back(layout->size());
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const bool want_j = jacobians && jacobians[0];
+    const int p = layout_->size();
+    RowQr qr(want_j ? p : 0, d_.free_offset);
+    slope_pass(d_, *layout_, params[0], want_j, [&](std::size_t, double f, const double* jr) { qr.add(f, jr); });
+    qr.finish(p, residuals, want_j ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  Data d_;
+  const SlopeLayout* layout_;
+};
+
 }  // namespace
 
 ceres::CostFunction* make_gpi_chart_cost(const Data& d, int n) { return new GpiChartCost(d, n); }
 ceres::CostFunction* make_slope_cost(const Data& d, const SlopeLayout* layout) { return new SlopeCost(d, layout); }
+ceres::CostFunction* make_compressed_gpi_chart_cost(const Data& d, int n) { return new CompressedGpiChartCost(d, n); }
+ceres::CostFunction* make_compressed_slope_cost(const Data& d, const SlopeLayout* layout) {
+  return new CompressedSlopeCost(d, layout);
+}
 ceres::CostFunction* make_ridge_cost(const SlopeLayout* layout) { return new RidgeCost(layout); }
 
 }  // namespace fitting
@@ -444,5 +601,62 @@ void slope_residuals(FitModel model, std::span<const double> theta, std::span<co
   }
   jacobian = J;
 }
+
+namespace detail {
+
+namespace {
+
+LmNormalEquations normal_equations(const ceres::CostFunction& cost, const double* theta) {
+  const int p = cost.parameter_block_sizes()[0];
+  LmNormalEquations out;
+  out.residuals = cost.num_residuals();
+  Eigen::VectorXd r(out.residuals);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(out.residuals, p);
+  const double* params[1] = {theta};
+  double* jacs[1] = {J.data()};
+  if (!cost.Evaluate(params, r.data(), jacs)) throw Error("normal_equations: the cost cannot be evaluated");
+  out.cost = 0.5 * r.squaredNorm();
+  out.gradient = J.transpose() * r;
+  out.jtj = J.transpose() * J;
+  return out;
+}
+
+}  // namespace
+
+LmNormalEquations gpi_normal_equations(std::span<const double> theta, int n, double xc, double xs,
+                                       std::span<const double> x, std::span<const double> y, IndexRange train,
+                                       InitialState initial, double huber, bool free_offset, bool compressed) {
+  if (theta.size() != static_cast<std::size_t>(kGpi)) throw Error("gpi_normal_equations: theta must have 8 entries");
+  check_record(x, y, "gpi_normal_equations");
+  fitting::Data d{x, y, check_range(train, x.size(), "gpi_normal_equations: train"), initial, huber};
+  d.xc = xc;
+  d.xs = xs;
+  d.free_offset = free_offset;
+  const std::unique_ptr<ceres::CostFunction> cost(compressed ? fitting::make_compressed_gpi_chart_cost(d, n)
+                                                             : fitting::make_gpi_chart_cost(d, n));
+  const auto phi = fitting::GpiChart{xc, xs}.phi(theta.data());
+  return normal_equations(*cost, phi.data());
+}
+
+LmNormalEquations slope_normal_equations(FitModel model, std::span<const double> theta, std::span<const double> r,
+                                         std::span<const double> zp, std::span<const double> zn,
+                                         std::span<const double> x, std::span<const double> y, IndexRange train,
+                                         InitialState initial, double huber, bool free_offset, bool compressed) {
+  SlopeLayout L;
+  L.kind = model;
+  L.env = model == FitModel::mpi_asym ? 8 : model == FitModel::gpi ? 4 : 0;
+  L.r.assign(r.begin(), r.end());
+  if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
+  if (theta.size() != static_cast<std::size_t>(L.size()))
+    throw Error(fmt::format("slope_normal_equations: theta must have {} entries, got {}", L.size(), theta.size()));
+  check_record(x, y, "slope_normal_equations");
+  fitting::Data d{x, y, check_range(train, x.size(), "slope_normal_equations: train"), initial, huber};
+  d.free_offset = free_offset;
+  const std::unique_ptr<ceres::CostFunction> cost(compressed ? fitting::make_compressed_slope_cost(d, &L)
+                                                             : fitting::make_slope_cost(d, &L));
+  return normal_equations(*cost, theta.data());
+}
+
+}  // namespace detail
 
 }  // namespace hysteron

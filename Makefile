@@ -12,7 +12,7 @@ CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=$(PYTHON) -DPYTHON_
 # Debian packages the build and the tests need (never downloaded from anywhere else).
 APT_PACKAGES := cmake make g++ pkg-config libeigen3-dev libceres-dev libcli11-dev nlohmann-json3-dev \
   libfmt-dev libgtest-dev libbenchmark-dev pybind11-dev python3-dev python3-numpy python3-scipy \
-  python3-pytest libmatio-dev gnuplot-nox chromium octave liboctave-dev zlib1g-dev \
+  python3-pytest libmatio-dev libhdf5-dev gnuplot-nox chromium octave liboctave-dev zlib1g-dev \
   clang libclang-rt-dev
 
 .PHONY: all deps configure build demo test test-asan fuzz fuzz-build bench clean

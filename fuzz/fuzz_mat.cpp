@@ -11,6 +11,12 @@
 
 namespace io = hysteron::io;
 
+// Debian's HDF5 1.10 (not instrumented) leaks object-header cache entries when it fails to open
+// a damaged object (e.g. H5Gopen2 on a corrupt root group: 848 bytes through matio's Mat_Open
+// alone, 1,696 through hysteron's v7.3 check, which opens it first). Those leaks are HDF5's, on
+// its error paths: leak reports whose allocation stack is inside libhdf5 are not findings.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libhdf5_serial.so\n"; }
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string path = hysteron::fuzz::scratch_file("input.mat", data, size);
   try {

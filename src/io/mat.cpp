@@ -4,6 +4,7 @@
 #include "mat.hpp"
 
 #include <fcntl.h>
+#include <hdf5.h>
 #include <matio.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -24,6 +25,8 @@
 #include <memory>
 #include <optional>
 #include <string_view>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "hysteron/error.hpp"
 
@@ -75,7 +78,8 @@ MatPtr open_mat(const std::string& path) {
 // the file's structure first, with bounds from the file size: every variable must lie inside the
 // file, its declared element count must match its data, and a compressed variable must inflate
 // to exactly the size it declares (read in bounded chunks; the declared count is capped by what
-// its compressed bytes could hold).
+// its compressed bytes could hold). A v7.3 (HDF5) file's datasets are checked through HDF5
+// (check_mat73): declared sizes against the bytes stored for them.
 
 struct Bytes {
   const unsigned char* p;
@@ -333,10 +337,285 @@ void check_mat4(Bytes f, const std::string& path) {
   }
 }
 
+// ---- MAT v7.3 variables (HDF5), before matio reads any of them --------------------------
+//
+// Every object of the HDF5 data is visited through the HDF5 C API (group links from the root,
+// and the object references of cells), and every dataset's declared size (elements x element
+// size) must be backed by the bytes stored for it:
+//  - its stored bytes (H5Dget_storage_size) lie within the file, and the data of all datasets
+//    together is no more than the file;
+//  - without a compression filter, the stored bytes cover the declared size (a dataset never
+//    written, which HDF5 reads as fill values, is refused); with deflate, the declared size is
+//    at most 1032 x the stored bytes (zlib's maximum ratio) + 1024;
+//  - a chunked dataset has every chunk written (a missing chunk reads as fill values);
+//  - contiguous data lies inside the file;
+//  - filters other than deflate, shuffle and fletcher32, data in external files, external links
+//    and virtual datasets are refused;
+//  - what matio would read for all variables (cells' elements counted once per reference) is
+//    at most 1032 x the file size.
+// HDF5 errors are not printed while checking (its automatic error stack printing is off).
+
+// An HDF5 identifier, closed by its function on destruction.
+class H5Handle {
+ public:
+  H5Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  H5Handle(const H5Handle&) = delete;
+  H5Handle& operator=(const H5Handle&) = delete;
+  ~H5Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  hid_t get() const noexcept { return id_; }
+  explicit operator bool() const noexcept { return id_ >= 0; }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+// HDF5 prints its error stack on stderr on every failed call unless told not to.
+class H5Quiet {
+ public:
+  H5Quiet() {
+    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  }
+  H5Quiet(const H5Quiet&) = delete;
+  H5Quiet& operator=(const H5Quiet&) = delete;
+  ~H5Quiet() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
+
+ private:
+  H5E_auto2_t func_ = nullptr;
+  void* data_ = nullptr;
+};
+
+std::uint64_t add_sat(std::uint64_t a, std::uint64_t b) {
+  constexpr std::uint64_t cap = std::uint64_t{1} << 62;
+  return a >= cap || b >= cap - a ? cap : a + b;
+}
+
+// A byte or element count for messages (mul_sat saturates at 2^62).
+std::string count_text(std::uint64_t v) {
+  return v >= (std::uint64_t{1} << 62) ? std::string("more than 2^62") : fmt::format("{}", v);
+}
+
+constexpr std::uint64_t kZlibMaxRatio = 1032;
+
+class Mat73Check {
+ public:
+  Mat73Check(const std::string& path, std::uint64_t file_size) : path_(path), n_(file_size) {}
+
+  void run() {
+    H5Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    if (!file)
+      throw Error(fmt::format("{}: MAT v7.3 file whose HDF5 data cannot be opened (damaged HDF5 structure)", path_));
+    H5Handle root(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose);
+    if (!root) throw Error(fmt::format("{}: MAT v7.3 file whose HDF5 root group cannot be read (damaged)", path_));
+    // the variables are the root's links; "#refs#" (the elements of cells) and other names
+    // starting with '#' are not variables: checked too, after them, and not added again
+    std::uint64_t total = 0;
+    const auto links = list_links(root.get(), "");
+    for (const bool hidden : {false, true})
+      for (const auto& l : links)
+        if ((!l.name.empty() && l.name[0] == '#') == hidden) {
+          const std::uint64_t c = link_cost(root.get(), l, l.name, 0);
+          if (!hidden) total = add_sat(total, c);
+        }
+    const std::uint64_t limit = add_sat(mul_sat(n_, kZlibMaxRatio), 1024);
+    if (total > limit)
+      throw Error(fmt::format("{}: inconsistent: its variables declare {} bytes of data (cell elements counted once per "
+                              "reference), more than its {} bytes can hold ({} at zlib's maximum ratio, 1032:1)",
+                              path_, count_text(total), n_, count_text(limit)));
+  }
+
+ private:
+  struct Link {
+    std::string name;
+    H5L_type_t type;
+  };
+
+  std::string where(const std::string& var) const { return fmt::format("{}: variable \"{}\"", path_, shown(var)); }
+
+  std::vector<Link> list_links(hid_t g, const std::string& var) const {
+    std::vector<Link> links;
+    auto on_link = [](hid_t, const char* name, const H5L_info_t* info, void* op) -> herr_t {
+      try {
+        static_cast<std::vector<Link>*>(op)->push_back(Link{name, info->type});
+        return 0;
+      } catch (...) {
+        return -1;
+      }
+    };
+    if (H5Literate(g, H5_INDEX_NAME, H5_ITER_NATIVE, nullptr, on_link, &links) < 0)
+      throw Error(fmt::format("{}: damaged: the links of HDF5 group \"{}\" cannot be listed", path_,
+                              var.empty() ? std::string("/") : shown(var)));
+    return links;
+  }
+
+  // What matio may allocate reading the object a link of group g names.
+  std::uint64_t link_cost(hid_t g, const Link& l, const std::string& var, int depth) {
+    if (l.type == H5L_TYPE_EXTERNAL)
+      throw Error(fmt::format("{}: unsupported: an HDF5 external link (to another file)", where(var)));
+    if (l.type != H5L_TYPE_HARD && l.type != H5L_TYPE_SOFT)
+      throw Error(fmt::format("{}: unsupported: an HDF5 link of user-defined type {}", where(var),
+                              static_cast<int>(l.type)));
+    H5Handle obj(H5Oopen(g, l.name.c_str(), H5P_DEFAULT), H5Oclose);
+    if (!obj) {
+      if (l.type == H5L_TYPE_SOFT) return 0;  // a dangling soft link: nothing to read
+      throw Error(fmt::format("{}: damaged: its HDF5 object cannot be opened", where(var)));
+    }
+    return object_cost(obj.get(), var, depth);
+  }
+
+  std::uint64_t object_cost(hid_t obj, const std::string& var, int depth) {
+    H5O_info_t info{};
+    if (H5Oget_info2(obj, &info, H5O_INFO_BASIC) < 0)
+      throw Error(fmt::format("{}: damaged: its HDF5 object header cannot be read", where(var)));
+    if (info.type != H5O_TYPE_GROUP && info.type != H5O_TYPE_DATASET) return 0;  // a named datatype: no data
+    if (const auto it = cost_.find(info.addr); it != cost_.end()) return it->second;
+    if (depth > 16)
+      throw Error(fmt::format("{}: unsupported: groups or cells nested more than 16 levels deep", where(var)));
+    if (!open_.insert(info.addr).second)
+      throw Error(fmt::format("{}: inconsistent: contains or references itself (a cycle in the HDF5 data)",
+                              where(var)));
+    std::uint64_t c = 0;
+    if (info.type == H5O_TYPE_GROUP) {
+      for (const auto& l : list_links(obj, var)) c = add_sat(c, link_cost(obj, l, var + "/" + l.name, depth + 1));
+    } else {
+      c = dataset_cost(obj, var, depth);
+    }
+    open_.erase(info.addr);
+    cost_.emplace(info.addr, c);
+    return c;
+  }
+
+  std::uint64_t dataset_cost(hid_t d, const std::string& var, int depth) {
+    const std::string w = where(var);
+    H5Handle space(H5Dget_space(d), H5Sclose), type(H5Dget_type(d), H5Tclose), dcpl(H5Dget_create_plist(d), H5Pclose);
+    if (!space || !type || !dcpl)
+      throw Error(fmt::format("{}: damaged: its HDF5 dataspace, datatype or creation properties cannot be read", w));
+    // the size, shown in MATLAB's order (HDF5 lists the dimensions the other way round)
+    std::uint64_t numel = 0;
+    std::string dims_txt;
+    std::vector<hsize_t> dims;
+    switch (H5Sget_simple_extent_type(space.get())) {
+      case H5S_NULL: dims_txt = "0 (null dataspace)"; break;
+      case H5S_SCALAR: numel = 1; dims_txt = "1x1 (scalar)"; break;
+      case H5S_SIMPLE: {
+        const int rank = H5Sget_simple_extent_ndims(space.get());
+        if (rank < 0 || rank > H5S_MAX_RANK) throw Error(fmt::format("{}: damaged: HDF5 dataspace of rank {}", w, rank));
+        dims.resize(static_cast<std::size_t>(rank));
+        if (rank > 0 && H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr) < 0)
+          throw Error(fmt::format("{}: damaged: its HDF5 dimensions cannot be read", w));
+        numel = 1;
+        for (std::size_t k = dims.size(); k-- > 0;) {
+          numel = mul_sat(numel, dims[k]);
+          dims_txt += fmt::format("{}{}", k + 1 < dims.size() ? "x" : "", dims[k]);
+        }
+        if (dims.empty()) dims_txt = "1x1";
+        break;
+      }
+      default: throw Error(fmt::format("{}: damaged: unknown HDF5 dataspace type", w));
+    }
+    const std::size_t esize = H5Tget_size(type.get());
+    if (esize == 0) throw Error(fmt::format("{}: damaged: its HDF5 datatype has no size", w));
+    const std::uint64_t declared = mul_sat(numel, esize);
+    const std::string size_txt = fmt::format("size {} ({} elements of {} bytes, {} bytes)", dims_txt,
+                                             count_text(numel), esize, count_text(declared));
+    if (H5Pget_external_count(dcpl.get()) > 0)
+      throw Error(fmt::format("{}: unsupported: its data is stored in an external file", w));
+    bool deflate = false;
+    const int nfilters = H5Pget_nfilters(dcpl.get());
+    for (int i = 0; i < nfilters; ++i) {
+      unsigned flags = 0, config = 0, cd[8] = {};
+      std::size_t ncd = 8;
+      char fname[64] = {};
+      const H5Z_filter_t id =
+          H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &ncd, cd, sizeof fname, fname, &config);
+      if (id == H5Z_FILTER_DEFLATE) deflate = true;
+      else if (id != H5Z_FILTER_SHUFFLE && id != H5Z_FILTER_FLETCHER32)
+        throw Error(fmt::format("{}: unsupported: HDF5 filter {} (deflate, shuffle and fletcher32 are read)", w, id));
+    }
+    const std::uint64_t stored = H5Dget_storage_size(d);
+    if (stored > n_)
+      throw Error(fmt::format("{}: truncated or inconsistent: {} declares {} bytes of stored data, the file has {}",
+                              w, size_txt, stored, n_));
+    stored_total_ = add_sat(stored_total_, stored);
+    if (stored_total_ > n_)
+      throw Error(fmt::format("{}: inconsistent: the data stored for the datasets so far adds up to {} bytes, more "
+                              "than the file's {} (shared or overlapping data)",
+                              w, stored_total_, n_));
+    switch (H5Pget_layout(dcpl.get())) {
+      case H5D_COMPACT: break;  // inside its object header, of the size stored there
+      case H5D_CONTIGUOUS:
+        if (stored > 0) {
+          // H5Dget_offset counts from the start of the HDF5 data; here it starts at byte 512
+          // (after the MATLAB header) or later, so this bound is never tighter than the truth
+          const haddr_t at = H5Dget_offset(d);
+          if (at == HADDR_UNDEF || at > n_ || stored > n_ - at)
+            throw Error(fmt::format("{}: truncated or inconsistent: {} is stored at byte {} for {} bytes, after the "
+                                    "end of the file ({} bytes)",
+                                    w, size_txt, at == HADDR_UNDEF ? std::string("(undefined)") : fmt::format("{}", at),
+                                    stored, n_));
+        }
+        break;
+      case H5D_CHUNKED: {
+        std::vector<hsize_t> chunk(dims.size());
+        if (dims.empty() || H5Pget_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()) !=
+                                static_cast<int>(chunk.size()))
+          throw Error(fmt::format("{}: damaged: chunked HDF5 data whose chunk dimensions cannot be read", w));
+        std::uint64_t expected = numel == 0 ? 0 : 1;
+        for (std::size_t k = 0; k < dims.size() && expected > 0; ++k) {
+          if (chunk[k] == 0) throw Error(fmt::format("{}: damaged: a chunk dimension of 0", w));
+          expected = mul_sat(expected, dims[k] / chunk[k] + (dims[k] % chunk[k] != 0 ? 1 : 0));
+        }
+        hsize_t written = 0;  // H5S_ALL is not handled by HDF5 1.10 here: the dataset's dataspace
+        if (H5Dget_num_chunks(d, space.get(), &written) < 0)
+          throw Error(fmt::format("{}: damaged: its HDF5 chunk index cannot be read", w));
+        if (written < expected)
+          throw Error(fmt::format("{}: truncated or inconsistent: {} has {} of its {} chunks written ({} bytes stored; "
+                                  "the missing chunks would read as fill values); the file has {} bytes",
+                                  w, size_txt, written, count_text(expected), stored, n_));
+        break;
+      }
+      default: throw Error(fmt::format("{}: unsupported: an HDF5 virtual dataset (data in other datasets)", w));
+    }
+    if (deflate) {
+      const std::uint64_t limit = add_sat(mul_sat(stored, kZlibMaxRatio), 1024);
+      if (declared > limit)
+        throw Error(fmt::format("{}: truncated or inconsistent: {} from {} bytes of compressed data, which inflate to at "
+                                "most {} (zlib's maximum ratio, 1032:1); the file has {} bytes",
+                                w, size_txt, stored, count_text(limit), n_));
+    } else if (stored < declared) {
+      throw Error(fmt::format("{}: truncated or inconsistent: {} but {} bytes stored{}; the file has {} bytes", w,
+                              size_txt, stored, stored == 0 ? " (no data written: it would read as fill values)" : "",
+                              n_));
+    }
+    std::uint64_t cost = declared;
+    // a cell: object references to its elements (in "#refs#"), which matio reads as well
+    if (numel > 0 && H5Tget_class(type.get()) == H5T_REFERENCE && H5Tequal(type.get(), H5T_STD_REF_OBJ) > 0) {
+      std::vector<hobj_ref_t> refs(static_cast<std::size_t>(numel));
+      if (H5Dread(d, H5T_STD_REF_OBJ, H5S_ALL, H5S_ALL, H5P_DEFAULT, refs.data()) < 0)
+        throw Error(fmt::format("{}: damaged: its HDF5 object references cannot be read", w));
+      for (std::size_t k = 0; k < refs.size(); ++k) {
+        H5Handle obj(H5Rdereference2(d, H5P_DEFAULT, H5R_OBJECT, &refs[k]), H5Oclose);
+        if (!obj) continue;  // a reference to nothing: matio cannot read it either
+        cost = add_sat(cost, object_cost(obj.get(), fmt::format("{}{{{}}}", var, k + 1), depth + 1));
+      }
+    }
+    return cost;
+  }
+
+  const std::string& path_;
+  std::uint64_t n_;
+  std::unordered_map<haddr_t, std::uint64_t> cost_;  // per object address: what matio may allocate reading it
+  std::unordered_set<haddr_t> open_;                 // being visited: met again, a cycle
+  std::uint64_t stored_total_ = 0;
+};
+
 // MAT v7.3: an HDF5 file after a 512-byte MATLAB header. Its superblock (HDF5 format
 // specification, "Superblock", versions 0-3) must be there, and the file must be as long as the
 // end-of-file address it declares (a cut file otherwise reads as "0 variables" through matio).
-// The variables themselves are left to matio and HDF5.
+// Then the variables, through HDF5 (Mat73Check above).
 void check_mat73(Bytes f, const std::string& path) {
   static constexpr unsigned char sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
   std::size_t at = 0;
@@ -377,10 +656,13 @@ void check_mat73(Bytes f, const std::string& path) {
   if (eof > f.n)
     throw Error(fmt::format("{}: MAT v7.3 (HDF5) file truncated: its superblock declares {} bytes, the file has {}",
                             path, eof, f.n));
+  const H5Quiet quiet;
+  Mat73Check(path, f.n).run();
 }
 
 // Throws hysteron::Error naming the file and the variable if the file is truncated or its sizes
-// are inconsistent. MAT v7.3 (HDF5) files: check_mat73, the rest is left to matio and HDF5.
+// are inconsistent. MAT v7.3 (HDF5) files: check_mat73 (the superblock, then every dataset's
+// declared size against its stored bytes, through HDF5).
 void check_mat_file(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return;  // open_mat reports it

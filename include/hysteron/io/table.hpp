@@ -25,8 +25,10 @@
 // an index out of range (with the matrix size), a matrix named without an index, and
 // sparse, complex, non-numeric (char, cell, struct, ...) and N-D (rank > 2) variables.
 // MAT v7.3 (HDF5) files are read through matio (Debian's is built with HDF5) like v5 files; one
-// whose HDF5 data is missing or shorter than its superblock declares is an error naming the file
-// (the variables' sizes inside the HDF5 data are left to matio and HDF5).
+// whose HDF5 data is missing or shorter than its superblock declares is an error naming the file,
+// and one with a dataset declaring more than the bytes stored for it (unwritten data or chunks,
+// more than zlib's 1032:1 from its deflate data) an error naming the file and the variable,
+// before matio allocates (HDF5's own metadata is left to HDF5).
 // In text files a colon has no special meaning: "a:b" is a header name (a header match
 // always wins; an index is a plain 0-based number).
 #include <cstddef>

@@ -28,6 +28,7 @@
 #include "hysteron/identify.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
+#include "hysteron/operators.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -303,6 +304,91 @@ TEST(FitMemory, StreamedFitWeightsEqualsBoundedLsOnTheRegressors) {
         EXPECT_NEAR((sl.array() - margin * scale).abs().minCoeff(), 0.0, tol) << what << ": no bound active";
       }
     }
+}
+
+// fit_weights with dead zones (the mpi-deadzone's start) streams the regressor rows twice as
+// well: the same weights and dead zones as nnls on the explicit matrix [slope columns of the
+// regressors, dead-zone columns] it held before, shifted by the lower bounds (invert_side of
+// weights.cpp repeated here), with zones on both sides and one the data never reaches.
+TEST(FitMemory, StreamedDeadzoneFitWeightsEqualsNnlsOnTheExplicitColumns) {
+  Record r = make_record(30001);
+  const auto [ylo0, yhi0] = std::minmax_element(r.y.begin(), r.y.end());
+  const double ymid = 0.5 * (*ylo0 + *yhi0), yspan = *yhi0 - *ylo0;
+  for (double& v : r.y) v -= ymid;  // dead zones on both sides of 0
+  hysteron::MpiDeadzoneParams m;
+  m.r = {0.01, 0.03, 0.05, 0.07, 0.09, 0.11};
+  m.p.assign(m.r.size(), 0.0);
+  m.z = {0.3 * yspan, 0.1 * yspan, -0.2 * yspan, 0.7 * yspan};  // 0.7: beyond the data
+  m.g.assign(m.z.size(), 0.0);
+  hysteron::MpiDeadzoneParams pi_part = m;
+  pi_part.z.clear();
+  pi_part.g.clear();
+  const hysteron::Structure<double> s = hysteron::canonical_structure(hysteron::ModelParams{pi_part});
+  const std::vector<double> zp{0.1 * yspan, 0.3 * yspan}, zn{-0.2 * yspan};  // reached, ordered away from 0
+  for (const double margin : {1e-6, 0.5}) {
+    hysteron::WeightFitOptions wo;
+    wo.train = IndexRange{777, 29000};
+    wo.margin = margin;
+    wo.initial_state = InitialState::relaxed;
+    const auto got = std::get<hysteron::MpiDeadzoneParams>(hysteron::fit_weights(m, r.x, r.y, wo));
+    // the oracle: the explicit matrix
+    const Eigen::MatrixXd phi = hysteron::detail::regressors(s, r.x, wo.train, wo.initial_state);
+    const Eigen::Index rows = phi.rows(), npi = phi.cols(), nz = 3;
+    Eigen::MatrixXd A(rows, npi + nz);
+    A.leftCols(npi) = phi;
+    for (Eigen::Index i = 0; i + 1 < npi; ++i) A.col(i) -= phi.col(i + 1);
+    Eigen::VectorXd rhs(rows);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      const double yk = r.y[wo.train.begin + static_cast<std::size_t>(k)];
+      double b = yk;
+      Eigen::Index col = npi;
+      for (const auto* side : {&zp, &zn})
+        for (std::size_t j = 0; j < side->size(); ++j) {
+          const double sj = hysteron::ops::dead_zone(yk, (*side)[j]);
+          const double sj1 = j + 1 < side->size() ? hysteron::ops::dead_zone(yk, (*side)[j + 1]) : 0.0;
+          A(k, col++) = -(sj - sj1);
+          if (j == 0) b -= sj;
+        }
+      rhs(k) = b;
+    }
+    const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(r.y.data() + wo.train.begin, rows);
+    const double scale = (b.maxCoeff() - b.minCoeff()) / (phi.col(0).maxCoeff() - phi.col(0).minCoeff());
+    Eigen::VectorXd lo(npi + nz);
+    lo.head(npi).setConstant(margin * scale);
+    lo.tail(nz).setConstant(std::max(margin, 1e-9));
+    const Eigen::VectorXd sol = lo + hysteron::detail::nnls(A, rhs - A * lo);
+    const std::string what = fmt::format("margin {}", margin);
+    const double tol = 1e-9 * sol.head(npi).cwiseAbs().maxCoeff();
+    EXPECT_NEAR(got.q, sol(0), tol) << what;
+    ASSERT_EQ(got.p.size(), m.r.size()) << what;
+    for (std::size_t i = 0; i < got.p.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      EXPECT_NEAR(got.p[i], sol(k + 1) - sol(k), tol) << what << " p" << i;
+    }
+    // invert_side: the forward zones of the inverse map's breakpoints and cumulative slopes
+    std::vector<double> z, g;
+    Eigen::Index col = npi;
+    for (const auto* side : {&zp, &zn}) {
+      double value = 0.0, prev_z = 0.0, prev_c = 1.0;
+      for (const double zj : *side) {
+        const double c = sol(col++);
+        value += prev_c * (zj - prev_z);
+        z.push_back(value);
+        g.push_back(1.0 / c - 1.0 / prev_c);
+        prev_z = zj;
+        prev_c = c;
+      }
+    }
+    ASSERT_EQ(got.z.size(), z.size()) << what;
+    ASSERT_EQ(got.g.size(), g.size()) << what;
+    for (std::size_t i = 0; i < z.size(); ++i) {
+      EXPECT_NEAR(got.z[i], z[i], 1e-9 * yspan) << what << " z" << i;
+      EXPECT_NEAR(got.g[i], g[i], 1e-9 * (1 + std::abs(g[i]))) << what << " g" << i;
+    }
+    if (margin > 0.1) {
+      EXPECT_NEAR((sol.head(npi).array() - margin * scale).abs().minCoeff(), 0.0, tol) << what << ": no bound active";
+    }
+  }
 }
 
 }  // namespace

@@ -259,13 +259,6 @@ void slopes_to_weights(const Eigen::VectorXd& sl, const Eigen::VectorXd& norms, 
   for (Eigen::Index i = 1; i < s.size(); ++i) p[static_cast<std::size_t>(i - 1)] = s(i) - s(i - 1);
 }
 
-// Columns for cumulative slopes: a_i = phi_i - phi_{i+1}, a_n = phi_n.
-Eigen::MatrixXd slope_columns(const Eigen::MatrixXd& phi) {
-  Eigen::MatrixXd A = phi;
-  for (Eigen::Index i = 0; i + 1 < phi.cols(); ++i) A.col(i) -= phi.col(i + 1);
-  return A;
-}
-
 double dead_zone_value(double v, double z) { return ops::dead_zone<double>(v, z); }
 
 // Forward dead zones from the inverse map S'(y) = y + sum g'_k S_{z'_k}(y), given on one
@@ -280,71 +273,6 @@ void invert_side(const std::vector<double>& zs, const std::vector<double>& c, st
     prev_z = zs[j];
     prev_c = c[j];
   }
-}
-
-ModelParams fit_deadzone_weights(const MpiDeadzoneParams& m, std::span<const double> x, std::span<const double> y,
-                                 const WeightFitOptions& o, IndexRange r) {
-  MpiDeadzoneParams pi_part = m;
-  pi_part.z.clear();
-  pi_part.g.clear();
-  const Structure<double> s = canonical_structure(pi_part);
-  const Eigen::MatrixXd phi = detail::regressors(s, x, r, o.initial_state);
-  const Eigen::Index rows = phi.rows();
-  // Inverse dead-zone thresholds in output units, reached by the data only.
-  const auto [ylo, yhi] = std::minmax_element(y.begin() + static_cast<std::ptrdiff_t>(r.begin),
-                                              y.begin() + static_cast<std::ptrdiff_t>(r.end));
-  std::vector<double> zp, zn;
-  for (double z : m.z) {
-    if (!std::isfinite(z)) throw Error("fit_weights: mpi-deadzone z must be finite");
-    if (z > 0 && z < *yhi) zp.push_back(z);
-    if (z < 0 && z > *ylo) zn.push_back(z);
-  }
-  std::sort(zp.begin(), zp.end());
-  zp.erase(std::unique(zp.begin(), zp.end()), zp.end());
-  std::sort(zn.begin(), zn.end(), std::greater<>());
-  zn.erase(std::unique(zn.begin(), zn.end()), zn.end());
-  const Eigen::Index npi = phi.cols();
-  const auto nz = static_cast<Eigen::Index>(zp.size() + zn.size());
-  Eigen::MatrixXd A(rows, npi + nz);
-  A.leftCols(npi) = slope_columns(phi);
-  Eigen::VectorXd rhs(rows);
-  for (Eigen::Index k = 0; k < rows; ++k) {
-    const double yk = y[r.begin + static_cast<std::size_t>(k)];
-    double b = yk;
-    Eigen::Index col = npi;
-    for (const std::vector<double>* side : {&zp, &zn}) {
-      const std::vector<double>& zs = *side;
-      for (std::size_t j = 0; j < zs.size(); ++j) {
-        const double sj = dead_zone_value(yk, zs[j]);
-        const double sj1 = j + 1 < zs.size() ? dead_zone_value(yk, zs[j + 1]) : 0.0;
-        A(k, col++) = -(sj - sj1);
-        if (j == 0) b -= sj;
-      }
-    }
-    rhs(k) = b;
-  }
-  const double uspan = std::max(phi.col(0).maxCoeff() - phi.col(0).minCoeff(), 1e-300);
-  const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
-  Eigen::VectorXd lo(npi + nz);
-  lo.head(npi).setConstant(o.margin * scale);
-  lo.tail(nz).setConstant(std::max(o.margin, 1e-9));
-  const Eigen::VectorXd t = detail::nnls(A, rhs - A * lo);
-  const Eigen::VectorXd sol = lo + t;
-  double q;
-  std::vector<double> p;
-  slopes_to_weights(sol.head(npi), A.leftCols(npi).colwise().norm().transpose(), q, p);
-  MpiDeadzoneParams out = m;
-  out.q = q;
-  out.r = s.r;
-  out.p = p;
-  out.g0 = 1.0;
-  out.z.clear();
-  out.g.clear();
-  std::vector<double> cp(sol.data() + npi, sol.data() + npi + static_cast<Eigen::Index>(zp.size()));
-  std::vector<double> cn(sol.data() + npi + static_cast<Eigen::Index>(zp.size()), sol.data() + npi + nz);
-  invert_side(zp, cp, out.z, out.g);
-  invert_side(zn, cn, out.z, out.g);
-  return out;
 }
 
 // Calls f(P, k0) for each block of at most kLsBlock regressor rows (detail::regressors) of
@@ -373,8 +301,101 @@ void for_each_regressor_block(const Structure<double>& s, std::span<const double
   if (fill > 0) f(Eigen::Ref<Eigen::MatrixXd>(phi.topRows(fill)), k0);
 }
 
-// fit_weights without a dead zone: bounded_ls of the cumulative-slope columns A =
-// slope_columns(regressors) and target b = y over `r`, A streamed twice a block at a time
+// fit_weights with dead zones (the mpi-deadzone's start): nnls of A = [slope columns of the
+// regressors (a_i = phi_i - phi_{i+1}, a_n = phi_n), dead-zone columns] and the target rhs,
+// shifted by the lower bounds, A streamed twice a block at a time (for_each_regressor_block) instead of held (phi, its slope columns
+// and A: three m x (n + 1 + nz) matrices before; issue 13: `fit` memory): pass 1 the span of
+// u_m (the bound's scale) and the norms of the slope columns (slopes_to_weights), pass 2 the
+// normal equations of the blocks of A and rhs - A lo, as nnls forms them; the same solution
+// to rounding.
+ModelParams fit_deadzone_weights(const MpiDeadzoneParams& m, std::span<const double> x, std::span<const double> y,
+                                 const WeightFitOptions& o, IndexRange r) {
+  MpiDeadzoneParams pi_part = m;
+  pi_part.z.clear();
+  pi_part.g.clear();
+  const Structure<double> s = canonical_structure(pi_part);
+  // Inverse dead-zone thresholds in output units, reached by the data only.
+  const auto [ylo, yhi] = std::minmax_element(y.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                                              y.begin() + static_cast<std::ptrdiff_t>(r.end));
+  std::vector<double> zp, zn;
+  for (double z : m.z) {
+    if (!std::isfinite(z)) throw Error("fit_weights: mpi-deadzone z must be finite");
+    if (z > 0 && z < *yhi) zp.push_back(z);
+    if (z < 0 && z > *ylo) zn.push_back(z);
+  }
+  std::sort(zp.begin(), zp.end());
+  zp.erase(std::unique(zp.begin(), zp.end()), zp.end());
+  std::sort(zn.begin(), zn.end(), std::greater<>());
+  zn.erase(std::unique(zn.begin(), zn.end()), zn.end());
+  const auto npi = static_cast<Eigen::Index>(s.r.size() + 1);
+  const auto nz = static_cast<Eigen::Index>(zp.size() + zn.size());
+  auto to_slopes = [](Eigen::Ref<Eigen::MatrixXd> P) {  // slope columns in place (ascending: col i + 1 still phi's)
+    for (Eigen::Index i = 0; i + 1 < P.cols(); ++i) P.col(i) -= P.col(i + 1);
+  };
+  // pass 1: the span of u_m, the norms of the slope columns
+  Eigen::RowVectorXd asq = Eigen::RowVectorXd::Zero(npi);
+  double umin = std::numeric_limits<double>::infinity(), umax = -umin;
+  for_each_regressor_block(s, x, r, o.initial_state, [&](Eigen::Ref<Eigen::MatrixXd> P, Eigen::Index) {
+    umin = std::min(umin, P.col(0).minCoeff());
+    umax = std::max(umax, P.col(0).maxCoeff());
+    to_slopes(P);
+    asq += P.colwise().squaredNorm();
+  });
+  const double uspan = std::max(umax - umin, 1e-300);
+  const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
+  Eigen::VectorXd lo(npi + nz);
+  lo.head(npi).setConstant(o.margin * scale);
+  lo.tail(nz).setConstant(std::max(o.margin, 1e-9));
+  // pass 2: G = A^T A, h = A^T (rhs - A lo), a block of rows of A at a time
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(npi + nz, npi + nz), A;
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(npi + nz), rhs;
+  for_each_regressor_block(s, x, r, o.initial_state, [&](Eigen::Ref<Eigen::MatrixXd> P, Eigen::Index k0) {
+    const Eigen::Index rows = P.rows();
+    to_slopes(P);
+    A.resize(rows, npi + nz);
+    A.leftCols(npi) = P;
+    rhs.resize(rows);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      const double yk = y[r.begin + static_cast<std::size_t>(k0 + k)];
+      double b = yk;
+      Eigen::Index col = npi;
+      for (const std::vector<double>* side : {&zp, &zn}) {
+        const std::vector<double>& zs = *side;
+        for (std::size_t j = 0; j < zs.size(); ++j) {
+          const double sj = dead_zone_value(yk, zs[j]);
+          const double sj1 = j + 1 < zs.size() ? dead_zone_value(yk, zs[j + 1]) : 0.0;
+          A(k, col++) = -(sj - sj1);
+          if (j == 0) b -= sj;
+        }
+      }
+      rhs(k) = b;
+    }
+    rhs.noalias() -= A * lo;
+    G.selfadjointView<Eigen::Lower>().rankUpdate(A.transpose());
+    h.noalias() += A.transpose() * rhs;
+  });
+  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+  const Eigen::VectorXd t = detail::nnls_normal(G, h);
+  const Eigen::VectorXd sol = lo + t;
+  double q;
+  std::vector<double> p;
+  slopes_to_weights(sol.head(npi), asq.cwiseSqrt().transpose(), q, p);
+  MpiDeadzoneParams out = m;
+  out.q = q;
+  out.r = s.r;
+  out.p = p;
+  out.g0 = 1.0;
+  out.z.clear();
+  out.g.clear();
+  std::vector<double> cp(sol.data() + npi, sol.data() + npi + static_cast<Eigen::Index>(zp.size()));
+  std::vector<double> cn(sol.data() + npi + static_cast<Eigen::Index>(zp.size()), sol.data() + npi + nz);
+  invert_side(zp, cp, out.z, out.g);
+  invert_side(zn, cn, out.z, out.g);
+  return out;
+}
+
+// fit_weights without a dead zone: bounded_ls of the cumulative-slope columns A (the slope
+// columns of the regressors) and target b = y over `r`, A streamed twice a block at a time
 // (for_each_regressor_block) instead of held (two m x (n + 1) matrices before): pass 1
 // the column sums (the means for the free offset), the column norms (slopes_to_weights)
 // and the span of u_m (the bound's scale), pass 2 the normal equations of the centred
@@ -387,7 +408,7 @@ void streamed_slope_ls(const Structure<double>& s, std::span<const double> x, st
   const auto b_of = [&](Eigen::Index k0, Eigen::Index rows) {
     return Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin + static_cast<std::size_t>(k0), rows);
   };
-  auto to_slopes = [](Eigen::Ref<Eigen::MatrixXd> P) {  // slope_columns in place (ascending: col i + 1 still phi's)
+  auto to_slopes = [](Eigen::Ref<Eigen::MatrixXd> P) {  // slope columns in place (ascending: col i + 1 still phi's)
     for (Eigen::Index i = 0; i + 1 < P.cols(); ++i) P.col(i) -= P.col(i + 1);
   };
   Eigen::RowVectorXd asum = Eigen::RowVectorXd::Zero(nc), asq = Eigen::RowVectorXd::Zero(nc);

@@ -13,6 +13,7 @@
 
 #include <array>
 #include <chrono>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -169,7 +170,14 @@ ceres::CostFunction* make_ridge_cost(const SlopeLayout* layout);
 // cost, J^T r and J^T J, so the same LM steps, without m x p buffers (residuals.cpp: RowQr).
 ceres::CostFunction* make_compressed_gpi_chart_cost(const Data& d, int n);
 ceres::CostFunction* make_compressed_slope_cost(const Data& d, const SlopeLayout* layout);
-// Whether GpiLm and SlopeLm give LM the compressed costs (default; false: the m residuals).
+// Any cost with one parameter block of p values given row by row, compressed the same way:
+// pass(theta, want_j, add) calls add(f, jr) for each residual f in order (jr: its p Jacobian
+// entries if want_j, else ignored) and returns false if theta cannot be evaluated (bouc-wen).
+using RowPass = std::function<bool(const double* theta, bool want_j,
+                                   const std::function<void(double f, const double* jr)>& add)>;
+ceres::CostFunction* make_compressed_row_cost(int p, RowPass pass);
+// Whether GpiLm, SlopeLm and bouc-wen's LM (without --huber) give LM the compressed costs
+// (default; false: the m residuals).
 bool lm_compression();
 
 // ---- data-derived starts (starts.cpp) -----------------------------------------------

@@ -2,14 +2,18 @@
 // and the output offset by LM (Ceres, automatic derivatives through the recursion of
 // the kernel: bouc_wen_increment, explicit steps of dw/dx, w clamped to [-1, 1]), from a grid
 // of starts over both loop orientations; the smallest slope over all states >= min_slope
-// keeps it invertible.
+// keeps it invertible. Without --huber LM works on the compressed problem (BoucWenLm).
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <memory>
 
 #include "../core/kernels.hpp"
+#include "detail.hpp"
+#include "hysteron/error.hpp"
 #include "kinds.hpp"
 
 namespace hysteron::fitting {
@@ -40,33 +44,72 @@ T min_slope_to_kx(const T* th) {
   return th[0] - th[1] * bouc_wen_max_dwdx(th[2], th[3]);
 }
 
+// The residuals kx x_k + kw w_k + c - y_k of the training rows in order: emit(f) with f of
+// type T (double, or a Jet carrying the row of the Jacobian).
+template <class T, class Emit>
+void bouc_wen_pass(const Data& d, const T* th, Emit&& emit) {
+  const T& kw = th[1];
+  const T kx = min_slope_to_kx(th);
+  const T& rho = th[2];
+  const T& sigma = th[3];
+  const T& n = th[4];
+  const T& c = th[5];
+  // virgin = relaxed at 0 (the kernel's reset); relaxed at x[0]
+  double xp = d.initial == InitialState::relaxed ? d.x[0] : 0.0;
+  T w(0.0);
+  for (std::size_t k = 0; k < d.train.end; ++k) {
+    w = detail::bouc_wen_increment<T>(w, d.x[k] - xp, rho, sigma, n, [](const T& v) { return scalar(v); });
+    xp = d.x[k];
+    if (k >= d.train.begin) emit(kx * d.x[k] + kw * w + c - d.y[k]);
+  }
+}
+
 struct BoucWenResiduals {
   const Data* d;
   template <class T>
   bool operator()(const T* th, T* res) const {
-    const T& kw = th[1];
-    const T kx = min_slope_to_kx(th);
-    const T& rho = th[2];
-    const T& sigma = th[3];
-    const T& n = th[4];
-    const T& c = th[5];
-    // virgin = relaxed at 0 (the kernel's reset); relaxed at x[0]
-    double xp = d->initial == InitialState::relaxed ? d->x[0] : 0.0;
-    T w(0.0);
-    for (std::size_t k = 0; k < d->train.end; ++k) {
-      w = detail::bouc_wen_increment<T>(w, d->x[k] - xp, rho, sigma, n, [](const T& v) { return scalar(v); });
-      xp = d->x[k];
-      if (k >= d->train.begin) res[k - d->train.begin] = kx * d->x[k] + kw * w + c - d->y[k];
-    }
+    T* out = res;
+    bouc_wen_pass(*d, th, [&](const T& f) { *out++ = f; });
     return true;
   }
 };
 
+// The m residuals (automatic derivatives through the whole record).
+ceres::CostFunction* make_full_cost(const Data& d) {
+  const int m = static_cast<int>(d.train.end - d.train.begin);
+  return new ceres::AutoDiffCostFunction<BoucWenResiduals, ceres::DYNAMIC, kBw>(new BoucWenResiduals{&d}, m);
+}
+
+// The compressed problem (make_compressed_row_cost) of the same rows.
+ceres::CostFunction* make_compressed_cost(const Data& d) {
+  return make_compressed_row_cost(
+      kBw, [dd = d](const double* th, bool want_j, const std::function<void(double, const double*)>& add) {
+        if (!want_j) {
+          bouc_wen_pass(dd, th, [&](double f) { add(f, nullptr); });
+          return true;
+        }
+        using J = ceres::Jet<double, kBw>;
+        J t[kBw];
+        for (int i = 0; i < kBw; ++i) t[i] = J(th[i], i);
+        bouc_wen_pass(dd, static_cast<const J*>(t), [&](const J& f) { add(f.a, f.v.data()); });
+        return true;
+      });
+}
+
+// Without a Ceres loss (no --huber) LM gets the compressed problem (make_compressed_row_cost:
+// 7 residuals [Q^T r; ||(I - Q Q^T) r||], Jacobian [R; 0]; the same cost, J^T r and J^T J,
+// so the same steps to rounding) instead of the m residuals and the m x 6 Jacobian (issue 13:
+// `fit` memory). The rows are those of BoucWenResiduals: the same Jets of kBw derivatives that
+// ceres::AutoDiffCostFunction evaluates, one row at a time. ceres::HuberLoss reweights the
+// m residuals (Ceres' corrector), which the compressed residuals cannot: with --huber the
+// full problem stays.
 struct BoucWenLm final : LmProblem {
+  bool huber = false;
+  explicit BoucWenLm(bool huber_) : huber(huber_) {}
+  bool compressed() const override { return !huber && lm_compression(); }
   void add_costs(ceres::Problem& problem, const Data& d, double* theta) const override {
-    const int m = static_cast<int>(d.train.end - d.train.begin);
-    auto* cost = new ceres::AutoDiffCostFunction<BoucWenResiduals, ceres::DYNAMIC, kBw>(new BoucWenResiduals{&d}, m);
-    problem.AddResidualBlock(cost, d.huber > 0 ? new ceres::HuberLoss(d.huber) : nullptr, theta);
+    problem.AddResidualBlock(compressed() ? make_compressed_cost(d) : make_full_cost(d),
+                             d.huber > 0 ? new ceres::HuberLoss(d.huber) : nullptr, theta);
     problem.SetParameterUpperBound(theta, 2, kRhoMax);
     problem.SetParameterUpperBound(theta, 3, kSigmaMax);
     problem.SetParameterUpperBound(theta, 4, kNMax);
@@ -124,7 +167,7 @@ class BoucWenKind final : public Parametrization {
     const std::vector<int> held = d.free_offset ? std::vector<int>{} : std::vector<int>{5};
     if (!d.free_offset)
       for (auto& s : starts) s[5] = 0.0;
-    BoucWenLm lm;
+    BoucWenLm lm(d.huber > 0);
     std::vector<const LmProblem*> problems(starts.size(), &lm);
     auto [solved, kbest] = solve_starts(problems, d, starts, lowers, held, o, rep);
     if (kbest == std::string::npos) {
@@ -161,3 +204,30 @@ const Parametrization& bouc_wen_kind() {
 }
 
 }  // namespace hysteron::fitting
+
+namespace hysteron::detail {
+
+LmNormalEquations bouc_wen_normal_equations(std::span<const double> theta, std::span<const double> x,
+                                            std::span<const double> y, IndexRange train, InitialState initial,
+                                            bool compressed) {
+  if (theta.size() != static_cast<std::size_t>(fitting::kBw))
+    throw Error("bouc_wen_normal_equations: theta must have 6 entries");
+  if (x.size() != y.size() || x.empty() || train.begin >= train.end || train.end > x.size())
+    throw Error("bouc_wen_normal_equations: bad record or range");
+  fitting::Data d{x, y, train, initial, 0.0};
+  const std::unique_ptr<ceres::CostFunction> cost(compressed ? fitting::make_compressed_cost(d)
+                                                             : fitting::make_full_cost(d));
+  LmNormalEquations out;
+  out.residuals = cost->num_residuals();
+  Eigen::VectorXd r(out.residuals);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(out.residuals, fitting::kBw);
+  const double* params[1] = {theta.data()};
+  double* jacs[1] = {J.data()};
+  if (!cost->Evaluate(params, r.data(), jacs)) throw Error("bouc_wen_normal_equations: the cost cannot be evaluated");
+  out.cost = 0.5 * r.squaredNorm();
+  out.gradient = J.transpose() * r;
+  out.jtj = J.transpose() * J;
+  return out;
+}
+
+}  // namespace hysteron::detail

@@ -345,12 +345,12 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
                                                          FitReport& rep) {
   std::vector<Solved> solved(starts.size());
   // With the default thread count (0: one per hardware thread) the concurrent starts of an
-  // uncompressed cost (bouc-wen) are capped by memory: each holds about kLmCopies m x p
-  // Jacobian-sized buffers (Ceres' dense Jacobian and its evaluation scratch, residual
-  // vectors), so on a long record they run one after the other instead of multiplying the
-  // peak (issue 13: `fit` memory). Compressed costs (GpiLm, SlopeLm) hold one block of rows
-  // per start: no cap. The result does not depend on the number of threads; an explicit
-  // num_threads is kept.
+  // uncompressed cost (bouc-wen with --huber) are capped by memory: each holds about
+  // kLmCopies m x p Jacobian-sized buffers (Ceres' dense Jacobian and its evaluation scratch,
+  // residual vectors), so on a long record they run one after the other instead of
+  // multiplying the peak (issue 13: `fit` memory). Compressed costs (GpiLm, SlopeLm, bouc-wen
+  // without a loss) hold one block of rows per start: no cap. The result does not depend on
+  // the number of threads; an explicit num_threads is kept.
   const bool small = std::all_of(problems.begin(), problems.end(), [](const LmProblem* p) { return p->compressed(); });
   int threads = o.num_threads;
   if (threads == 0 && !starts.empty() && !small) {

@@ -532,6 +532,26 @@ class CompressedSlopeCost final : public ceres::CostFunction {
   const SlopeLayout* layout_;
 };
 
+// A cost given by a pass over its rows (RowPass), compressed (RowQr): p + 1 residuals.
+class CompressedRowCost final : public ceres::CostFunction {
+ public:
+  CompressedRowCost(int p, RowPass pass) : p_(p), pass_(std::move(pass)) {
+    set_num_residuals(p + 1);
+    mutable_parameter_block_sizes()->push_back(p);
+  }
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const bool want_j = jacobians && jacobians[0];
+    RowQr qr(want_j ? p_ : 0, false);
+    if (!pass_(params[0], want_j, [&](double f, const double* jr) { qr.add(f, jr); })) return false;
+    qr.finish(p_, residuals, want_j ? jacobians[0] : nullptr);
+    return true;
+  }
+
+ private:
+  int p_;
+  RowPass pass_;
+};
+
 }  // namespace
 
 ceres::CostFunction* make_gpi_chart_cost(const Data& d, int n) { return new GpiChartCost(d, n); }
@@ -541,6 +561,7 @@ ceres::CostFunction* make_compressed_slope_cost(const Data& d, const SlopeLayout
   return new CompressedSlopeCost(d, layout);
 }
 ceres::CostFunction* make_ridge_cost(const SlopeLayout* layout) { return new RidgeCost(layout); }
+ceres::CostFunction* make_compressed_row_cost(int p, RowPass pass) { return new CompressedRowCost(p, std::move(pass)); }
 
 }  // namespace fitting
 

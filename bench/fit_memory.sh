@@ -7,8 +7,9 @@
 #   bench/fit_memory.sh [HYSTERON_BINARY] [ROWS...]        # defaults: build/hysteron, 1000000
 #   MODELS="pi gpi" FIT_ARGS="--threads 1" bench/fit_memory.sh build/hysteron 1000000 10000000
 #
-# MODELS (default "pi gpi") are the kinds fitted; FIT_ARGS are added to every fit (default: none,
-# i.e. 2 starts on one thread per core); COMPARE=/path/to/other/hysteron runs every fit with that
+# MODELS (default "pi gpi") are the kinds fitted (MODELS=all: pi gpi mpi-deadzone mpi-asym
+# preisach kp maxwell-slip rate-pi bouc-wen auto, every `fit --model` choice); FIT_ARGS are
+# added to every fit (default: none, i.e. 2 starts on one thread per core); COMPARE=/path/to/other/hysteron runs every fit with that
 # binary too, on the same record, and says whether the two model files are identical (if not:
 # the largest relative difference of their numbers; KEEP=DIR keeps them as DIR/MODEL_ROWS_{0,1}.json). The records (a GPI, n = 10, driven by a slow chirp-like
 # input, plus 0.2 % noise; about 40 bytes a row as CSV) are written in a temporary directory and
@@ -19,6 +20,7 @@ shift || true
 ROWS=("$@")
 [ ${#ROWS[@]} -gt 0 ] || ROWS=(1000000)
 MODELS=${MODELS:-pi gpi}
+[ "$MODELS" != all ] || MODELS="pi gpi mpi-deadzone mpi-asym preisach kp maxwell-slip rate-pi bouc-wen auto"
 FIT_ARGS=${FIT_ARGS:-}
 PY=/usr/bin/python3
 [ -x "$BIN" ] || { echo "no executable $BIN" >&2; exit 1; }
@@ -32,7 +34,7 @@ JSON
 COMPARE=${COMPARE:-}
 BINS=("$BIN")
 [ -z "$COMPARE" ] || BINS+=("$COMPARE")
-printf '%-6s %10s %12s %12s %8s %10s %-16s %s\n' model rows "record MB" "peak RSS MB" ratio "wall" status binary
+printf '%-12s %10s %12s %12s %8s %10s %-16s %s\n' model rows "record MB" "peak RSS MB" ratio "wall" status binary
 for n in "${ROWS[@]}"; do
   $PY - "$T/x.csv" "$n" <<'PYEOF'
 import sys
@@ -64,8 +66,10 @@ PYEOF
       b=${BINS[$i]}
       set +e
       # shellcheck disable=SC2086
+      extra=()  # rate-pi needs the sample time (the record's is taken as 1 ms)
+      [ "$m" != rate-pi ] || [[ "$FIT_ARGS" == *--sample-time* ]] || extra=(--sample-time 0.001)
       /usr/bin/time -v "$b" fit --model "$m" --data "$T/d.csv" --input input --output output \
-        --out "$T/m$i.json" --force $FIT_ARGS > "$T/fit.txt" 2> "$T/time.txt"
+        --out "$T/m$i.json" --force $FIT_ARGS "${extra[@]}" > "$T/fit.txt" 2> "$T/time.txt"
       code=$?
       set -e
       rss=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$T/time.txt")
@@ -73,7 +77,7 @@ PYEOF
       status=$(grep -o -m1 ' fit: [a-z_]*' "$T/fit.txt" | sed 's/ fit: //' || true)
       awk -v m="$m" -v n="$n" -v rss="$rss" -v wall="$wall" -v st="${status:-exit $code}" -v b="$b" 'BEGIN {
         rec = 16 * n / 1048576; mb = rss / 1024;
-        printf "%-6s %10d %12.1f %12.1f %8.1f %10s %-16s %s\n", m, n, rec, mb, mb / rec, wall, st, b }'
+        printf "%-12s %10d %12.1f %12.1f %8.1f %10s %-16s %s\n", m, n, rec, mb, mb / rec, wall, st, b }'
     done
     if [ -n "$COMPARE" ]; then
       if cmp -s <(grep -v '"note"' "$T/m0.json") <(grep -v '"note"' "$T/m1.json"); then

@@ -86,6 +86,22 @@ TEST(FuzzRegression, MatFunctionClassSizedBeyondTheFileIsRefused) {
   EXPECT_TRUE(has(msg, "truncated or inconsistent")) << msg;
 }
 
+// A MAT v5 sparse matrix whose values element declares 4,176,674,816 bytes in an 80-byte
+// variable, its column starts a small element of type 17 (UTF-16): matio allocated the 4 GB
+// (found by the third long fuzz_mat run at 8,966,069 executions). Index arrays must now be of an
+// integer type, and the values (and imaginary values) are checked like the index arrays: the
+// second file is the first with the column starts made int32, so only the values are wrong.
+TEST(FuzzRegression, MatV5SparseValuesDeclaringMoreThanTheVariableAreRefused) {
+  const std::string found = regression("mat/v5-sparse-utf16-column-starts.mat");
+  const std::string msg = error_of([&] { io::read_table(found); });
+  EXPECT_TRUE(has(msg, "variable \"data\": inconsistent: sparse index arrays of 8 and 1 bytes")) << msg;
+  const std::string path = regression("mat/v5-sparse-values-declare-4GB.mat");
+  const std::string msg2 = error_of([&] { io::read_table(path); });
+  EXPECT_TRUE(has(msg2, "variable \"data\": truncated or inconsistent: its sparse values declares 4176674816 bytes"))
+      << msg2;
+  EXPECT_TRUE(has(error_of([&] { io::read_column(path, "data"); }), "sparse values")) << msg2;
+}
+
 // A MAT v4 sparse matrix stored as 855638017 x 0: matio sized it by the rows (3.4 GB).
 TEST(FuzzRegression, MatV4SparseWithoutItsThreeColumnsIsRefused) {
   const std::string path = regression("mat/v4-sparse-0-columns.mat");

@@ -240,10 +240,21 @@ void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t 
                                 where, dims_txt, nzmax, s.n));
       const SubElement ir = next_sub(s, pos, swap, where, "row indices");
       const SubElement jc = next_sub(s, pos, swap, where, "column starts");
-      if (mat5_type_size(ir.type) == 0 || mat5_type_size(jc.type) == 0 || ir.bytes / mat5_type_size(ir.type) > nzmax ||
-          jc.bytes / mat5_type_size(jc.type) != std::uint64_t{ncols} + 1)
+      if (mat5_type_size(ir.type) == 0 || mat5_type_size(jc.type) == 0 || ir.type >= 16 || jc.type >= 16 ||
+          ir.bytes / mat5_type_size(ir.type) > nzmax || jc.bytes / mat5_type_size(jc.type) != std::uint64_t{ncols} + 1)
         throw Error(fmt::format("{}: inconsistent: sparse index arrays of {} and {} bytes for size {}, nzmax {}", where,
                                 ir.bytes, jc.bytes, dims_txt, nzmax));
+      // the values (and imaginary values): matio allocates what their tags declare, so each must
+      // lie inside the variable (next_sub) and hold at most nzmax numbers
+      const int parts = complex ? 2 : 1;
+      for (int k = 0; k < parts && pos < s.n; ++k) {
+        const char* what = k == 0 ? "sparse values" : "sparse imaginary values";
+        const SubElement v = next_sub(s, pos, swap, where, what);
+        const std::size_t sz = mat5_type_size(v.type);
+        if (sz == 0 || v.type >= 16 || v.bytes / sz > nzmax)
+          throw Error(fmt::format("{}: inconsistent: {} of type {} and {} bytes for nzmax {}", where, what, v.type,
+                                  v.bytes, nzmax));
+      }
       return;
     }
     default:  // function handles, opaque objects (tables, strings), unknown classes: matio does not

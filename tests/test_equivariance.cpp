@@ -336,8 +336,9 @@ TEST(FitChecks, InverseSlopeIsBoundedOnEveryKind) {
     // preisach: a relay that switches changes the output at once by its weight, so that
     // the inverse moves the input by up to max w / q for a small output step (kp, its
     // continuous form, has no such jump)
-    if (kind != FitModel::preisach)
+    if (kind != FitModel::preisach) {
       EXPECT_LE(rep.inverse.max_jump, rep.inverse.max_slope * dy * (1 + 1e-9) + 1e-12) << fit_model_name(kind);
+    }
     EXPECT_GT(rep.inverse.max_input_step, 0);
   }
   // a flipped output gives a decreasing model with the same bound
@@ -401,7 +402,9 @@ TEST(FitAuto, ChoosesOnTheHoldOutAndValidatesNearTheBestKind) {
   ASSERT_EQ(chosen, 1);
   EXPECT_EQ(rep.model_kind, best->kind);
   for (const auto& c : rep.candidates)
-    if (std::isfinite(c.holdout_score)) EXPECT_LE(best->holdout_score, c.holdout_score) << fit_model_name(c.kind);
+    if (std::isfinite(c.holdout_score)) {
+      EXPECT_LE(best->holdout_score, c.holdout_score) << fit_model_name(c.kind);
+    }
   EXPECT_GE(best->holdout_score, 1.0);
   const double e_auto = evaluate(rep.model, val.x, val.y).rms_percent_span;
   double e_best = std::numeric_limits<double>::infinity();

@@ -31,23 +31,6 @@ void project_offset(int m, int p, double* res, double* J) {
   Jm.rowwise() -= mean;
 }
 
-// Residual of Eq. 12, optionally mapped so that its square is the Huber loss:
-// f = r for |r| <= d, f = sign(r) sqrt(2 d |r| - d^2) beyond.
-template <class T>
-inline T robust_residual(const T& r, double d) {
-  if (d <= 0) return r;
-  // Divided by sqrt(d) when d < 1 (the record is normalised to a unit span): the
-  // minimiser is the same, but a tiny d (1e-300) no longer scales the cost and its
-  // gradient down to below the solver's absolute gradient tolerance (a "converged"
-  // fit after 0 iterations).
-  const double w = d < 1.0 ? 1.0 / std::sqrt(d) : 1.0;
-  if (r < T(d) && T(-d) < r) return T(w) * r;
-  using std::sqrt;
-  const T a = r < T(0) ? T(-r) : r;
-  const T f = d < 1.0 ? sqrt(T(2.0) * a - T(d)) : sqrt(T(2.0 * d) * a - T(d * d));
-  return r < T(0) ? T(-f) : f;
-}
-
 // robust_residual for the hand-written Jacobians, with its slope df/dr.
 inline double robust_residual_with_slope(double r, double d, double& slope) {
   const double f = robust_residual<double>(r, d);
@@ -571,6 +554,24 @@ using fitting::kGpi;
 using fitting::SlopeFunctor;
 using fitting::SlopeLayout;
 
+namespace {
+
+// The layout of the test hooks below: the fits build theirs in starts.cpp (envelope
+// parameters: 8 for mpi-asym, 4 for gpi; dead zones only for mpi-deadzone).
+SlopeLayout make_slope_layout(FitModel model, std::span<const double> theta, std::span<const double> r,
+                              std::span<const double> zp, std::span<const double> zn, const char* who) {
+  SlopeLayout L;
+  L.kind = model;
+  L.env = model == FitModel::mpi_asym ? 8 : model == FitModel::gpi ? 4 : 0;
+  L.r.assign(r.begin(), r.end());
+  if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
+  if (theta.size() != static_cast<std::size_t>(L.size()))
+    throw Error(fmt::format("{}: theta must have {} entries, got {}", who, L.size(), theta.size()));
+  return L;
+}
+
+}  // namespace
+
 void gpi_residuals(std::span<const double> theta, int n, std::span<const double> x, std::span<const double> y,
                    IndexRange train, InitialState initial, double huber, bool autodiff, Eigen::VectorXd& residuals,
                    Eigen::MatrixXd& jacobian) {
@@ -597,13 +598,7 @@ void slope_residuals(FitModel model, std::span<const double> theta, std::span<co
                      std::span<const double> zp, std::span<const double> zn, std::span<const double> x,
                      std::span<const double> y, IndexRange train, InitialState initial, double huber, bool autodiff,
                      Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian) {
-  SlopeLayout L;
-  L.kind = model;
-  L.env = model == FitModel::mpi_asym ? 8 : model == FitModel::gpi ? 4 : 0;
-  L.r.assign(r.begin(), r.end());
-  if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
-  if (theta.size() != static_cast<std::size_t>(L.size()))
-    throw Error(fmt::format("slope_residuals: theta must have {} entries, got {}", L.size(), theta.size()));
+  const SlopeLayout L = make_slope_layout(model, theta, r, zp, zn, "slope_residuals");
   detail::check_record(x, y, "slope_residuals");
   const IndexRange tr = detail::check_range(train, x.size(), "slope_residuals: train");
   const Data d{x, y, tr, initial, huber};
@@ -663,13 +658,7 @@ LmNormalEquations slope_normal_equations(FitModel model, std::span<const double>
                                          std::span<const double> zp, std::span<const double> zn,
                                          std::span<const double> x, std::span<const double> y, IndexRange train,
                                          InitialState initial, double huber, bool free_offset, bool compressed) {
-  SlopeLayout L;
-  L.kind = model;
-  L.env = model == FitModel::mpi_asym ? 8 : model == FitModel::gpi ? 4 : 0;
-  L.r.assign(r.begin(), r.end());
-  if (model == FitModel::mpi_deadzone) L.zp.assign(zp.begin(), zp.end()), L.zn.assign(zn.begin(), zn.end());
-  if (theta.size() != static_cast<std::size_t>(L.size()))
-    throw Error(fmt::format("slope_normal_equations: theta must have {} entries, got {}", L.size(), theta.size()));
+  const SlopeLayout L = make_slope_layout(model, theta, r, zp, zn, "slope_normal_equations");
   check_record(x, y, "slope_normal_equations");
   fitting::Data d{x, y, check_range(train, x.size(), "slope_normal_equations: train"), initial, huber};
   d.free_offset = free_offset;

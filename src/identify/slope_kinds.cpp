@@ -2,6 +2,9 @@
 // every start of the kind, the best mapped into the report by the kind.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "kinds.hpp"
 
 namespace hysteron::fitting {
@@ -66,6 +69,29 @@ void SlopeParametrization::fit(const Data& d, const Ranges& rg, const FitOptions
   if (o.compute_covariance) {
     const double sse = model_sse(rep.model, d);
     standard_errors(lms[kbest], d, best.theta, lower, best.at_bound, M, sse, rep);
+    // With the offset free (projected out of the residuals), a common shift of the
+    // envelopes' constants c[3] moves the output by a constant, except through the plays'
+    // virgin start: on a long record, or from a relaxed start (exactly), it is one direction
+    // with output_offset and the Jacobian is rank deficient. Then the errors of the other
+    // parameters are those with the (first) envelope's c[3] held; the c[3]s get none.
+    const auto none = [&] {
+      return std::all_of(rep.parameters.begin(), rep.parameters.end(),
+                         [](const FitParameter& p) { return std::isnan(p.std_error); });
+    };
+    if (d.free_offset && layout.env > 0 && none() &&
+        std::find(best.at_bound.begin(), best.at_bound.end(), 3) == best.at_bound.end()) {
+      std::vector<int> with_level = best.at_bound;
+      with_level.push_back(3);
+      rep.covariance_note.clear();
+      standard_errors(lms[kbest], d, best.theta, lower, with_level, M, sse, rep);
+      if (!none()) {
+        for (int i = 3; i < layout.env; i += 4) rep.parameters[static_cast<std::size_t>(i)].std_error = std::nan("");
+        rep.covariance_note =
+            "the envelopes' c[3] and output_offset are not separately identifiable from this record (a common shift "
+            "of the c[3]s acts only through the plays' virgin start); the other standard errors are those with the "
+            "first envelope's c[3] held, the c[3]s have none";
+      }
+    }
     if (!best.at_bound.empty())
       rep.covariance_note += fmt::format("{}{} cumulative slope(s) q + p_1 + ... + p_i ended on the invertibility bound "
                                          "and were held there (their uncertainty is not included)",

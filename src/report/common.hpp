@@ -6,6 +6,7 @@
 #include <cmath>
 #include <ctime>
 #include <string>
+#include <string_view>
 
 namespace hysteron::report::detail {
 
@@ -17,6 +18,11 @@ inline std::string now_utc() {
   std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", &tm);
   return buf;
 }
+
+// The document head of both pages up to the title and the command line (html.cpp): the
+// shared style, the page's max width [px] and its own CSS rules after it.
+std::string page_head(std::string_view title, std::string_view command_line, int max_width_px,
+                      std::string_view extra_css);
 
 // A number for an HTML cell: `digits` significant digits, a dash when not finite.
 inline std::string num(double v, int digits = 4) {

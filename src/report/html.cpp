@@ -41,22 +41,18 @@ std::string html_escape(std::string_view text) {
   return out;
 }
 
-namespace {
+namespace detail {
 
-using nlohmann::json;
-
-// One HTML document under construction.
-class Page {
- public:
-  Page(const std::string& title, const std::string& command_line) {
-    html_ = fmt::format(R"(<!DOCTYPE html>
+std::string page_head(std::string_view title, std::string_view command_line, int max_width_px,
+                      std::string_view extra_css) {
+  return fmt::format(R"(<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
 <meta name="generator" content="hysteron {ver}">
 <title>{title}</title>
 <style>
-body {{ font-family: Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1000px; color: #222; background: #fff; }}
+body {{ font-family: Helvetica, Arial, sans-serif; margin: 2em auto; max-width: {width}px; color: #222; background: #fff; }}
 h1 {{ font-size: 1.6em; margin-bottom: 0.2em; }}
 h2 {{ font-size: 1.25em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 1.8em; }}
 .meta {{ color: #555; font-size: 0.9em; }}
@@ -66,20 +62,32 @@ table {{ border-collapse: collapse; margin: 0.8em 0; font-size: 0.92em; }}
 th, td {{ border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }}
 th {{ background: #eef2f7; }}
 td.l, th.l {{ text-align: left; }}
-tr.published td {{ background: #fff7e0; font-style: italic; }}
 figure.plot {{ margin: 1.2em 0; }}
 figure.plot svg {{ max-width: 100%; height: auto; border: 1px solid #e4e4e4; }}
 figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
 .warn {{ color: #a40000; }}
-</style>
+{extra}</style>
 </head>
 <body>
 <h1>{title}</h1>
 <p class="meta">hysteron {ver} &middot; generated {date}<br>command: <code>{cmd}</code></p>
 )",
-                        fmt::arg("ver", hysteron_version), fmt::arg("title", html_escape(title)),
-                        fmt::arg("date", now_utc()), fmt::arg("cmd", html_escape(command_line)));
-  }
+                     fmt::arg("ver", hysteron_version), fmt::arg("title", html_escape(title)),
+                     fmt::arg("width", max_width_px), fmt::arg("extra", extra_css), fmt::arg("date", now_utc()),
+                     fmt::arg("cmd", html_escape(command_line)));
+}
+
+}  // namespace detail
+
+namespace {
+
+using nlohmann::json;
+
+// One HTML document under construction.
+class Page {
+ public:
+  Page(const std::string& title, const std::string& command_line)
+      : html_(detail::page_head(title, command_line, 1000, "tr.published td { background: #fff7e0; font-style: italic; }\n")) {}
   void raw(std::string_view s) { html_ += s; }
   void heading(std::string_view s) { html_ += fmt::format("<h2>{}</h2>\n", html_escape(s)); }
   void para(std::string_view s, std::string_view cls = "") {

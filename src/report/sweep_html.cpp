@@ -18,7 +18,6 @@
 
 namespace hysteron::report {
 
-using detail::now_utc;
 using detail::num;
 using detail::variant_color;
 
@@ -52,37 +51,13 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
   std::string names;
   for (const auto& e : r.experiments) { names += (names.empty() ? "" : ", "); names += e; }
   const std::string title = fmt::format("hysteron sweep: {} over {} rigs", names, r.variants.size());
-  std::string h = fmt::format(R"(<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="generator" content="hysteron {ver}">
-<title>{title}</title>
-<style>
-body {{ font-family: Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; background: #fff; }}
-h1 {{ font-size: 1.6em; margin-bottom: 0.2em; }}
-h2 {{ font-size: 1.25em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 1.8em; }}
-.meta {{ color: #555; font-size: 0.9em; }}
-code {{ background: #f4f4f4; padding: 0.1em 0.3em; border-radius: 3px; font-size: 0.9em; }}
-table {{ border-collapse: collapse; margin: 0.8em 0; font-size: 0.88em; }}
-th, td {{ border: 1px solid #ccc; padding: 0.25em 0.5em; text-align: right; }}
-th {{ background: #eef2f7; }}
-td.l, th.l {{ text-align: left; }}
-td.miss {{ background: #fde0e0; color: #a40000; font-weight: bold; }}
-tr.nominal td {{ background: #f3f8ee; }}
-tr.failed td {{ background: #fde0e0; }}
-figure.plot {{ margin: 1.2em 0; }}
-figure.plot svg {{ max-width: 100%; height: auto; border: 1px solid #e4e4e4; }}
-figcaption {{ font-size: 0.9em; color: #444; margin-top: 0.3em; }}
-.warn {{ color: #a40000; }}
-</style>
-</head>
-<body>
-<h1>{title}</h1>
-<p class="meta">hysteron {ver} &middot; generated {date}<br>command: <code>{cmd}</code></p>
-)",
-                              fmt::arg("ver", hysteron_version), fmt::arg("title", html_escape(title)),
-                              fmt::arg("date", now_utc()), fmt::arg("cmd", html_escape(command_line)));
+  // a wider page and narrower cells for the 12-column table; misses and the nominal rig marked
+  std::string h = detail::page_head(title, command_line, 1200,
+                                    "table { font-size: 0.88em; }\n"
+                                    "th, td { padding: 0.25em 0.5em; }\n"
+                                    "td.miss { background: #fde0e0; color: #a40000; font-weight: bold; }\n"
+                                    "tr.nominal td { background: #f3f8ee; }\n"
+                                    "tr.failed td { background: #fde0e0; }\n");
   h += fmt::format(
       "<p>Each experiment ran end to end (identification, fits, tracking) on every rig, rig noise seed {}, {} at a "
       "time: {:.1f} s of wall time for {} runs. Errors are contraction tracking errors in mm (reference against the "

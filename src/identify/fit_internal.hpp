@@ -13,6 +13,7 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -37,6 +38,23 @@ struct Data {
   // minimises over the offset exactly; the offset is then the mean residual.
   bool free_offset = false;
 };
+
+// Residual of Eq. 12, optionally mapped so that its square is the Huber loss:
+// f = r for |r| <= d, f = sign(r) sqrt(2 d |r| - d^2) beyond (residuals.cpp, bouc-wen).
+template <class T>
+inline T robust_residual(const T& r, double d) {
+  if (d <= 0) return r;
+  // Divided by sqrt(d) when d < 1 (the record is normalised to a unit span): the
+  // minimiser is the same, but a tiny d (1e-300) no longer scales the cost and its
+  // gradient down to below the solver's absolute gradient tolerance (a "converged"
+  // fit after 0 iterations).
+  const double w = d < 1.0 ? 1.0 / std::sqrt(d) : 1.0;
+  if (r < T(d) && T(-d) < r) return T(w) * r;
+  using std::sqrt;
+  const T a = r < T(0) ? T(-r) : r;
+  const T f = d < 1.0 ? sqrt(T(2.0) * a - T(d)) : sqrt(T(2.0 * d) * a - T(d * d));
+  return r < T(0) ? T(-f) : f;
+}
 
 struct Ranges {
   double xlo, xhi, ylo, yhi;

@@ -114,9 +114,10 @@ TEST(FitMemory, PiPeakIsBoundedByTheRecordSize) {
 
 // mpi-deadzone's start (fit_weights with dead zones: phi, its slope columns and the m x (n + 1 +
 // nz) matrix, 20x the record on 1M rows) and bouc-wen's LM (Ceres' m x 6 Jacobian and its
-// copies, 28x) stream their rows since (weights.cpp, kind_bouc_wen.cpp). Two LM iterations
-// keep the test short: both peaks came before the first step ends (the start's least squares,
-// the first Jacobian).
+// copies, 28x) stream their rows since (weights.cpp, kind_bouc_wen.cpp); bouc-wen --huber too
+// since its Huber loss is in its residuals (robust_residual) instead of ceres::HuberLoss (which
+// kept the full problem). Two LM iterations keep the test short: the peaks came before the
+// first step ends (the start's least squares, the first Jacobian).
 TEST(FitMemory, DeadzoneAndBoucWenPeaksAreBoundedByTheRecordSize) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "peak RSS is not the program's under AddressSanitizer (shadow memory, quarantine)";
@@ -124,12 +125,17 @@ TEST(FitMemory, DeadzoneAndBoucWenPeaksAreBoundedByTheRecordSize) {
   TempDir dir;
   constexpr std::size_t big = 400000, small = 4000;
   const std::string big_csv = write_record(dir, "big.csv", big), small_csv = write_record(dir, "small.csv", small);
-  for (const std::string kind : {"mpi-deadzone", "bouc-wen"}) {
+  const std::vector<std::vector<std::string>> fits{{"mpi-deadzone"}, {"bouc-wen"}, {"bouc-wen", "--huber", "0.01"}};
+  for (const auto& f : fits) {
+    std::string kind = f[0];
+    for (std::size_t i = 1; i < f.size(); ++i) kind += " " + f[i];
     auto run = [&](const std::string& data, const std::string& out) {
       int code = -1;
-      const long rss = peak_rss({cli(), "fit", "--model", kind, "--data", data, "--input", "input", "--output", "output",
-                                 "--out", dir.file(out), "--threads", "1", "--max-iterations", "2", "--force"},
-                                &code);
+      std::vector<std::string> args{cli(), "fit", "--model", f[0], "--data", data, "--input", "input", "--output",
+                                    "output", "--out", dir.file(out), "--threads", "1", "--max-iterations", "2",
+                                    "--force"};
+      args.insert(args.end(), f.begin() + 1, f.end());  // --huber 0.01
+      const long rss = peak_rss(args, &code);
       // 0 converged, 2 no convergence (the iteration limit), 3 poor fit: a model file either way
       EXPECT_TRUE(code == 0 || code == 2 || code == 3) << kind << " " << data << ": exit " << code;
       return rss;
@@ -140,7 +146,7 @@ TEST(FitMemory, DeadzoneAndBoucWenPeaksAreBoundedByTheRecordSize) {
     ASSERT_GT(peak, 0);
     const double record = 16.0 * static_cast<double>(big);
     const double ratio = static_cast<double>(peak - base) / record;
-    RecordProperty(kind + "_peak_over_record", std::to_string(ratio));
+    RecordProperty(f.size() > 1 ? f[0] + "_huber_peak_over_record" : f[0] + "_peak_over_record", std::to_string(ratio));
     EXPECT_LT(ratio, 6.0) << "fit --model " << kind << " on " << big << " rows: peak RSS " << peak / 1048576
                            << " MB, " << base / 1048576 << " MB on " << small << " rows; " << ratio << "x the record's "
                            << record / 1048576 << " MB";
@@ -247,21 +253,33 @@ TEST(FitMemory, CompressedSlopeProblemsHaveTheFullCostGradientAndJtJ) {
 }
 
 // bouc-wen (automatic derivatives): the compressed problem is built from the Jets of each row
-// (kind_bouc_wen.cpp) instead of ceres::AutoDiffCostFunction's m x 6 Jacobian.
+// (kind_bouc_wen.cpp) instead of ceres::AutoDiffCostFunction's m x 6 Jacobian; with the Huber
+// loss both are built from the robust residuals (robust_residual of each Jet row).
 TEST(FitMemory, CompressedBoucWenProblemHasTheFullCostGradientAndJtJ) {
   const Record r = make_record(20000);
   // [smallest slope, kw, rho, sigma, n, offset] in the units of the record (not the optimum)
   const std::vector<std::vector<double>> thetas{{0.4, -0.05, 12.0, 1.0, 1.5, 0.3}, {0.2, 0.08, 30.0, 2.5, 2.0, -0.1}};
   for (const auto& theta : thetas)
     for (const IndexRange train : {IndexRange{0, 20000}, IndexRange{999, 17000}})
-      for (const InitialState initial : {InitialState::virgin, InitialState::relaxed}) {
-        const std::string what = fmt::format("bouc-wen kw {} train [{}, {}) relaxed {}", theta[1], train.begin,
-                                             train.end, initial == InitialState::relaxed);
-        auto eq = [&](bool compressed) {
-          return hysteron::detail::bouc_wen_normal_equations(theta, r.x, r.y, train, initial, compressed);
-        };
-        expect_same_problem(eq(false), eq(true), static_cast<long>(train.end - train.begin), what);
-      }
+      for (const InitialState initial : {InitialState::virgin, InitialState::relaxed})
+        for (const double huber : {0.0, 0.01, 0.1}) {
+          const std::string what = fmt::format("bouc-wen kw {} train [{}, {}) relaxed {} huber {}", theta[1],
+                                               train.begin, train.end, initial == InitialState::relaxed, huber);
+          auto eq = [&](bool compressed, double h) {
+            return hysteron::detail::bouc_wen_normal_equations(theta, r.x, r.y, train, initial, h, compressed);
+          };
+          const LmNormalEquations full = eq(false, huber);
+          expect_same_problem(full, eq(true, huber), static_cast<long>(train.end - train.begin), what);
+          if (huber > 0) {
+            // the robust residuals f (d < 1): f^2 = r^2 / d for |r| <= d, 2 |r| - d < r^2 / d beyond:
+            // the cost is below the least-squares one over d iff some residuals lie beyond d (the
+            // sqrt branch is exercised; the residuals cross 0 along the record, so the linear one too).
+            const LmNormalEquations ls = eq(false, 0.0);
+            const double w2 = huber < 1.0 ? 1.0 / huber : 1.0;
+            EXPECT_LT(full.cost, w2 * ls.cost * (1 - 1e-6)) << what << ": no residual beyond the Huber threshold";
+            EXPECT_GT(full.cost, 0.0) << what;
+          }
+        }
 }
 
 // LM on the compressed problem takes the steps LM takes on the full one: the same status,
@@ -281,7 +299,7 @@ TEST(FitMemory, FitThroughTheCompressedProblemEqualsTheFullOne) {
   };
   for (const Case c : {Case{FitModel::pi, 0.0}, Case{FitModel::pi, 0.01}, Case{FitModel::mpi_asym, 0.0},
                        Case{FitModel::mpi_asym, 0.01}, Case{FitModel::mpi_deadzone, 0.0}, Case{FitModel::gpi, 0.0},
-                       Case{FitModel::bouc_wen, 0.0}}) {
+                       Case{FitModel::bouc_wen, 0.0}, Case{FitModel::bouc_wen, 0.01}}) {
     hysteron::FitOptions o;
     o.model = c.kind;
     o.num_operators = 6;

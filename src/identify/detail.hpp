@@ -91,10 +91,11 @@ LmNormalEquations slope_normal_equations(FitModel model, std::span<const double>
                                          std::span<const double> x, std::span<const double> y, IndexRange train,
                                          InitialState initial, double huber, bool free_offset, bool compressed);
 
-// Of the bouc-wen cost (its LM parameters theta = [s, kw, rho, sigma, n, offset], no loss),
-// full (ceres::AutoDiffCostFunction, m residuals) or compressed (kind_bouc_wen.cpp).
+// Of the bouc-wen cost (its LM parameters theta = [s, kw, rho, sigma, n, offset]; huber > 0:
+// the robust residuals), full (ceres::AutoDiffCostFunction, m residuals) or compressed
+// (kind_bouc_wen.cpp).
 LmNormalEquations bouc_wen_normal_equations(std::span<const double> theta, std::span<const double> x,
                                             std::span<const double> y, IndexRange train, InitialState initial,
-                                            bool compressed);
+                                            double huber, bool compressed);
 
 }  // namespace hysteron::detail

@@ -194,7 +194,7 @@ ceres::CostFunction* make_compressed_slope_cost(const Data& d, const SlopeLayout
 using RowPass = std::function<bool(const double* theta, bool want_j,
                                    const std::function<void(double f, const double* jr)>& add)>;
 ceres::CostFunction* make_compressed_row_cost(int p, RowPass pass);
-// Whether GpiLm, SlopeLm and bouc-wen's LM (without --huber) give LM the compressed costs
+// Whether GpiLm, SlopeLm and bouc-wen's LM give LM the compressed costs
 // (default; false: the m residuals).
 bool lm_compression();
 

@@ -2,7 +2,8 @@
 // and the output offset by LM (Ceres, automatic derivatives through the recursion of
 // the kernel: bouc_wen_increment, explicit steps of dw/dx, w clamped to [-1, 1]), from a grid
 // of starts over both loop orientations; the smallest slope over all states >= min_slope
-// keeps it invertible. Without --huber LM works on the compressed problem (BoucWenLm).
+// keeps it invertible. LM works on the compressed problem (BoucWenLm); the Huber loss is
+// in the residuals (robust_residual), as for the other kinds.
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
@@ -44,8 +45,9 @@ T min_slope_to_kx(const T* th) {
   return th[0] - th[1] * bouc_wen_max_dwdx(th[2], th[3]);
 }
 
-// The residuals kx x_k + kw w_k + c - y_k of the training rows in order: emit(f) with f of
-// type T (double, or a Jet carrying the row of the Jacobian).
+// The residuals kx x_k + kw w_k + c - y_k of the training rows in order, mapped by
+// robust_residual (--huber: f^2 is the Huber loss of r, over d if d < 1): emit(f), f of type T
+// (double, or a Jet carrying the row of the Jacobian).
 template <class T, class Emit>
 void bouc_wen_pass(const Data& d, const T* th, Emit&& emit) {
   const T& kw = th[1];
@@ -60,7 +62,7 @@ void bouc_wen_pass(const Data& d, const T* th, Emit&& emit) {
   for (std::size_t k = 0; k < d.train.end; ++k) {
     w = detail::bouc_wen_increment<T>(w, d.x[k] - xp, rho, sigma, n, [](const T& v) { return scalar(v); });
     xp = d.x[k];
-    if (k >= d.train.begin) emit(kx * d.x[k] + kw * w + c - d.y[k]);
+    if (k >= d.train.begin) emit(robust_residual<T>(kx * d.x[k] + kw * w + c - d.y[k], d.huber));
   }
 }
 
@@ -96,20 +98,18 @@ ceres::CostFunction* make_compressed_cost(const Data& d) {
       });
 }
 
-// Without a Ceres loss (no --huber) LM gets the compressed problem (make_compressed_row_cost:
-// 7 residuals [Q^T r; ||(I - Q Q^T) r||], Jacobian [R; 0]; the same cost, J^T r and J^T J,
-// so the same steps to rounding) instead of the m residuals and the m x 6 Jacobian (issue 13:
-// `fit` memory). The rows are those of BoucWenResiduals: the same Jets of kBw derivatives that
-// ceres::AutoDiffCostFunction evaluates, one row at a time. ceres::HuberLoss reweights the
-// m residuals (Ceres' corrector), which the compressed residuals cannot: with --huber the
-// full problem stays.
+// LM gets the compressed problem (make_compressed_row_cost: 7 residuals [Q^T r; ||(I - Q
+// Q^T) r||], Jacobian [R; 0]; the same cost, J^T r and J^T J, so the same steps to rounding)
+// instead of the m residuals and the m x 6 Jacobian (issue 13: `fit` memory). The rows are
+// those of BoucWenResiduals: the same Jets of kBw derivatives that
+// ceres::AutoDiffCostFunction evaluates, one row at a time. With --huber the rows are the
+// robust residuals, so both problems minimise the same residual vector. (A ceres::HuberLoss,
+// as before, cannot be compressed, and it was not a per-row loss: Ceres applies a loss to a
+// block's squared norm, and the m rows were one block: rho(||r||^2) = 2 d ||r|| - d^2.)
 struct BoucWenLm final : LmProblem {
-  bool huber = false;
-  explicit BoucWenLm(bool huber_) : huber(huber_) {}
-  bool compressed() const override { return !huber && lm_compression(); }
+  bool compressed() const override { return lm_compression(); }
   void add_costs(ceres::Problem& problem, const Data& d, double* theta) const override {
-    problem.AddResidualBlock(compressed() ? make_compressed_cost(d) : make_full_cost(d),
-                             d.huber > 0 ? new ceres::HuberLoss(d.huber) : nullptr, theta);
+    problem.AddResidualBlock(compressed() ? make_compressed_cost(d) : make_full_cost(d), nullptr, theta);
     problem.SetParameterUpperBound(theta, 2, kRhoMax);
     problem.SetParameterUpperBound(theta, 3, kSigmaMax);
     problem.SetParameterUpperBound(theta, 4, kNMax);
@@ -167,7 +167,7 @@ class BoucWenKind final : public Parametrization {
     const std::vector<int> held = d.free_offset ? std::vector<int>{} : std::vector<int>{5};
     if (!d.free_offset)
       for (auto& s : starts) s[5] = 0.0;
-    BoucWenLm lm(d.huber > 0);
+    const BoucWenLm lm;
     std::vector<const LmProblem*> problems(starts.size(), &lm);
     auto [solved, kbest] = solve_starts(problems, d, starts, lowers, held, o, rep);
     if (kbest == std::string::npos) {
@@ -192,6 +192,8 @@ class BoucWenKind final : public Parametrization {
                    best.theta[static_cast<std::size_t>(i)] <= lower[static_cast<std::size_t>(i)] * (1 + 1e-9) + 1e-300;
       rep.parameters.push_back(p);
     }
+    // sse = 2 x the final cost, that of the robust residuals with --huber: their Jacobian
+    // carries the same 1/sqrt(d) scale (robust_residual), so s^2 (J^T J)^-1 does not.
     if (o.compute_covariance) standard_errors(lm, d, best.theta, lower, held, report_jacobian(best.theta.data()), 2 * best.final_cost, rep);
   }
 };
@@ -209,12 +211,12 @@ namespace hysteron::detail {
 
 LmNormalEquations bouc_wen_normal_equations(std::span<const double> theta, std::span<const double> x,
                                             std::span<const double> y, IndexRange train, InitialState initial,
-                                            bool compressed) {
+                                            double huber, bool compressed) {
   if (theta.size() != static_cast<std::size_t>(fitting::kBw))
     throw Error("bouc_wen_normal_equations: theta must have 6 entries");
   if (x.size() != y.size() || x.empty() || train.begin >= train.end || train.end > x.size())
     throw Error("bouc_wen_normal_equations: bad record or range");
-  fitting::Data d{x, y, train, initial, 0.0};
+  fitting::Data d{x, y, train, initial, huber};
   const std::unique_ptr<ceres::CostFunction> cost(compressed ? fitting::make_compressed_cost(d)
                                                              : fitting::make_full_cost(d));
   LmNormalEquations out;

@@ -435,6 +435,36 @@ TEST(IdentifyAll, EnvelopeLevelsConfoundedWithTheOffsetLeaveTheOtherStandardErro
   }
 }
 
+// A Huber threshold far above every residual makes the loss least squares (scaled): the
+// standard errors must then be those of the least-squares fit. They were sqrt(d) of them
+// (d = threshold / output span), the plain SSE paired with the robust residuals' Jacobian.
+TEST(IdentifyAll, HuberAboveEveryResidualGivesTheLeastSquaresStandardErrors) {
+  const auto x = decaying_triangle({6, 5, 4, 3, 2, 1}, 200);
+  const auto y = with_noise(simulate_record(true_gpi(), x), 0.01, 13);
+  const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
+  const double huber = 0.02 * (*hi - *lo);  // d = 0.02: about 10 noise sigmas here
+  for (const FitModel kind : {FitModel::pi, FitModel::gpi, FitModel::mpi_asym}) {
+    FitOptions o;
+    o.model = kind;
+    o.num_operators = 6;
+    const FitReport ls = fit(x, y, o);
+    o.huber_delta = huber;
+    const FitReport hb = fit(x, y, o);
+    ASSERT_TRUE(has_model(ls.status) && has_model(hb.status)) << ls.full_report() << hb.full_report();
+    ASSERT_EQ(ls.parameters.size(), hb.parameters.size());
+    int compared = 0;
+    for (std::size_t i = 0; i < ls.parameters.size(); ++i) {
+      const FitParameter &a = ls.parameters[i], &b = hb.parameters[i];
+      if (!(std::isfinite(a.std_error) && std::isfinite(b.std_error)) || a.std_error <= 0 || b.std_error <= 0) continue;
+      if (a.name.ends_with("c[3]")) continue;  // with the offset free (least squares) c3 is another direction
+      EXPECT_GT(b.std_error / a.std_error, 0.5) << fit_model_name(kind) << " " << a.name;
+      EXPECT_LT(b.std_error / a.std_error, 2.0) << fit_model_name(kind) << " " << a.name;
+      ++compared;
+    }
+    EXPECT_GE(compared, 4) << fit_model_name(kind) << "\n" << ls.full_report() << hb.full_report();
+  }
+}
+
 TEST(IdentifyDeadzone, FitWeightsInvertsTheDeadZoneMap) {
   // Forward mpi-deadzone data; fit_weights with thresholds in output units.
   const auto x = decaying_triangle({10, 7, 9, 3, 6, 1}, 100);

@@ -270,5 +270,8 @@ void finish_status(FitReport& rep, const Solved& best, bool start_is_minimum);
 double projected_offset(const ModelParams& model, const Data& d);
 // Sum of squared errors of the model over the training range.
 double model_sse(const ModelParams& model, const Data& d);
+// The same for the residuals LM minimised: robust_residual's with d.huber > 0 (the variance
+// estimate that goes with their Jacobian in standard_errors), model_sse's otherwise.
+double fitted_sse(const ModelParams& model, const Data& d);
 
 }  // namespace hysteron::fitting

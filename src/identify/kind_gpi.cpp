@@ -97,7 +97,9 @@ class GpiKind final : public Parametrization {
           "data-derived value, and the standard errors are those of this gauge",
           best.theta[0], d.xs);
     if (o.compute_covariance) {
-      const double sse = model_sse(rep.model, d);
+      // (with --huber the Jacobian is the robust residuals', which are scaled by 1/sqrt(d):
+      // the plain SSE with it made the standard errors sqrt(d) too small)
+      const double sse = fitted_sse(rep.model, d);
       const std::string note = rep.covariance_note;
       const auto M = chart.jacobian(best.theta.data());
       standard_errors(lm, d, best.theta, best_lower, fixed, M, sse, rep);

@@ -272,7 +272,8 @@ void standard_errors(const LmProblem& lm, const Data& d, std::vector<double> the
       for (std::size_t j = 0; j < keep.size(); ++j)
         C(keep[i], keep[j]) = Cf(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
   } else {
-    // a loss function (Huber through ceres) or another layout: ceres::Covariance
+    // a loss function or another layout (no fit here has either since bouc-wen's Huber
+    // moved into its residuals, 481d63b; kept for LmProblems that add one): ceres::Covariance
     {
       ceres::CRSMatrix crs;
       double cost = 0;
@@ -345,7 +346,7 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
                                                          FitReport& rep) {
   std::vector<Solved> solved(starts.size());
   // With the default thread count (0: one per hardware thread) the concurrent starts of an
-  // uncompressed cost (bouc-wen with --huber) are capped by memory: each holds about
+  // uncompressed cost (the full problems of detail::set_lm_compression(false)) are capped by memory: each holds about
   // kLmCopies m x p Jacobian-sized buffers (Ceres' dense Jacobian and its evaluation scratch,
   // residual vectors), so on a long record they run one after the other instead of
   // multiplying the peak (issue 13: `fit` memory). Compressed costs (GpiLm, SlopeLm, bouc-wen
@@ -382,6 +383,17 @@ double model_sse(const ModelParams& model, const Data& d) {
   const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
   double sse = 0;
   for (std::size_t j = d.train.begin; j < d.train.end; ++j) sse += (d.y[j] - yp[j]) * (d.y[j] - yp[j]);
+  return sse;
+}
+
+double fitted_sse(const ModelParams& model, const Data& d) {
+  if (!(d.huber > 0)) return model_sse(model, d);
+  const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
+  double sse = 0;
+  for (std::size_t j = d.train.begin; j < d.train.end; ++j) {
+    const double f = robust_residual(d.y[j] - yp[j], d.huber);
+    sse += f * f;
+  }
   return sse;
 }
 

@@ -67,7 +67,9 @@ void SlopeParametrization::fit(const Data& d, const Ranges& rg, const FitOptions
   const auto nm = names(layout);
   for (std::size_t i = 0; i < nm.size(); ++i) rep.parameters.push_back({nm[i], v(static_cast<Eigen::Index>(i))});
   if (o.compute_covariance) {
-    const double sse = model_sse(rep.model, d);
+    // (with --huber the Jacobian is the robust residuals', which are scaled by 1/sqrt(d):
+    // the plain SSE with it made the standard errors sqrt(d) too small)
+    const double sse = fitted_sse(rep.model, d);
     standard_errors(lms[kbest], d, best.theta, lower, best.at_bound, M, sse, rep);
     // With the offset free (projected out of the residuals), a common shift of the
     // envelopes' constants c[3] moves the output by a constant, except through the plays'

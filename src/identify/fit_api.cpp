@@ -11,6 +11,7 @@
 #include <atomic>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include "../core/kernels.hpp"
@@ -116,6 +117,19 @@ void add_units_parameters(FitReport& rep) {
   rep.parameters.push_back({"input_scale", u.input_scale, 0.0, true, false});
   rep.parameters.push_back({"output_offset", u.output_offset, std::numeric_limits<double>::quiet_NaN(), false, false});
   rep.parameters.push_back({"output_gain", u.output_gain, 0.0, true, false});
+}
+
+// sqrt(2 mean rho(r)) over the range, rho the Huber loss of threshold delta (r^2 / 2 inside,
+// delta |r| - delta^2 / 2 beyond): the RMS of a least-squares fit, robust to outliers.
+double huber_rms(const ModelParams& model, std::span<const double> x, std::span<const double> y, IndexRange tr,
+                 InitialState initial, double delta) {
+  const std::vector<double> yp = simulate_record(model, x.subspan(0, tr.end), initial);
+  double sum = 0;
+  for (std::size_t k = tr.begin; k < tr.end; ++k) {
+    const double a = std::abs(y[k] - yp[k]);
+    sum += a <= delta ? a * a : 2 * delta * a - delta * delta;
+  }
+  return std::sqrt(sum / static_cast<double>(tr.end - tr.begin));
 }
 
 // One kind on a record already checked by fit(); tr = o.train resolved.
@@ -231,6 +245,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
 
   // The reference PI (a plain NNLS script's fit) on the same range.
+  std::optional<ModelParams> reference_model;
   try {
     // Fitted on the normalised record (no underflow at 1e-300 scales), then mapped
     // to raw units like the model: y = y[0] + sign sy (off + g core((x_m - o) / s)).
@@ -239,6 +254,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     ru = UnitsMap{x[0] + sx * ru.input_origin, sx * ru.input_scale, y[0] + sign * sy * ru.output_offset,
                   sign * sy * ru.output_gain};
     rep.reference = evaluate(ref, x, y, tr, InitialState::virgin);
+    reference_model = ref;
   } catch (const Error& e) {
     rep.warnings.push_back(fmt::format("reference PI not computed: {}", e.what()));
   }
@@ -274,9 +290,19 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     poor = fmt::format("training RMS {:.6g} removes less than 1 % of the variance a straight line leaves (line RMS {:.6g}): "
                        "the model explains no hysteresis",
                        rep.train.rms, line_rms);
-  else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms)
+  else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && o.huber_delta > 0 && reference_model) {
+    // A Huber fit trades RMS for robustness: it is compared with the reference under its own
+    // loss (the reference, a least-squares fit, is not even optimal there).
+    const double hf = huber_rms(rep.model, x, y, tr, o.initial_state, o.huber_delta);
+    const double hr = huber_rms(*reference_model, x, y, tr, InitialState::virgin, o.huber_delta);
+    if (hf > o.poor_fit_ratio * hr)
+      poor = fmt::format("training Huber RMS {:.6g} (sqrt of twice the mean Huber loss, delta {:.6g}) is {:.3g}x that of "
+                         "the reference PI ({:.6g}; limit {:.3g}x)",
+                         hf, o.huber_delta, hf / hr, hr, o.poor_fit_ratio);
+  } else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms) {
     poor = fmt::format("training RMS {:.6g} is {:.3g}x that of the reference PI ({:.6g}; limit {:.3g}x)", rep.train.rms,
                        rep.train.rms / rep.reference.rms, rep.reference.rms, o.poor_fit_ratio);
+  }
   if (!poor.empty()) {
     rep.message = fmt::format("poor fit: {} (solver: {}: {})", poor, fit_status_name(rep.status), rep.message);
     rep.status = FitStatus::poor_fit;

@@ -273,5 +273,7 @@ double model_sse(const ModelParams& model, const Data& d);
 // The same for the residuals LM minimised: robust_residual's with d.huber > 0 (the variance
 // estimate that goes with their Jacobian in standard_errors), model_sse's otherwise.
 double fitted_sse(const ModelParams& model, const Data& d);
+// The largest |y - model| over the training range.
+double max_abs_residual(const ModelParams& model, const Data& d);
 
 }  // namespace hysteron::fitting

@@ -327,7 +327,8 @@ void finish_status(FitReport& rep, const Solved& best, bool start_is_minimum) {
   }
   rep.message = best.message;
   // A solver that never moved from a start that is not a minimum by construction
-  // (start_is_minimum: the least-squares weights of the slope kinds, without Huber)
+  // (start_is_minimum: the least-squares weights of the slope kinds, without Huber or with
+  // every residual inside its quadratic zone)
   // has not shown convergence unless the start already fits to rounding: it stopped
   // because a tolerance was met at the start (a cost scaled to nothing).
   constexpr double rounding_cost = 1e-20;  // 0.5 sum r^2 of 1e6 residuals of 1e-13
@@ -384,6 +385,13 @@ double model_sse(const ModelParams& model, const Data& d) {
   double sse = 0;
   for (std::size_t j = d.train.begin; j < d.train.end; ++j) sse += (d.y[j] - yp[j]) * (d.y[j] - yp[j]);
   return sse;
+}
+
+double max_abs_residual(const ModelParams& model, const Data& d) {
+  const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
+  double m = 0;
+  for (std::size_t j = d.train.begin; j < d.train.end; ++j) m = std::max(m, std::abs(d.y[j] - yp[j]));
+  return m;
 }
 
 double fitted_sse(const ModelParams& model, const Data& d) {

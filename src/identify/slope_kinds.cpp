@@ -54,7 +54,12 @@ void SlopeParametrization::fit(const Data& d, const Ranges& rg, const FitOptions
   const Solved& best = solved[kbest];
   const SlopeLayout& layout = layouts[kbest];
   const std::vector<double>& lower = lowers[kbest];
-  finish_status(rep, best, /*start_is_minimum=*/d.huber == 0);
+  // The start is the least-squares weights: a minimum of the cost without Huber, and with it
+  // while every residual lies inside the loss's quadratic zone (|r| < d: there the Huber cost
+  // is the least-squares one, scaled).
+  const bool start_is_minimum =
+      d.huber == 0 || max_abs_residual(model(layout, best.theta.data()), d) < d.huber;
+  finish_status(rep, best, start_is_minimum);
   rep.initial_cost = best.initial_cost;
   rep.final_cost = best.final_cost;
   rep.iterations = best.iterations;

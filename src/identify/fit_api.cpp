@@ -325,6 +325,9 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   constexpr std::size_t nk = std::size(kAutoKinds);
   std::vector<FitReport> runs(2 * nk);
   std::vector<FitMetrics> held(2 * nk);
+  // With --huber the hold-outs are scored under the loss the fits minimised (huber_rms):
+  // plain RMS would let a hold-out's outliers, which no kind predicts, flatten its ratios.
+  std::vector<double> held_huber(2 * nk, std::numeric_limits<double>::quiet_NaN());
   detail::parallel_for(2 * nk, o.num_threads, [&](std::size_t j) {
     const std::size_t k = j / 2, fold = j % 2;
     FitOptions oc = o;
@@ -333,7 +336,11 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
     oc.num_threads = 1;
     oc.progress = nullptr;
     runs[j] = fit_one(x, y, oc, fit_range[fold], Clock::now());
-    if (has_model(runs[j].status)) held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
+    if (has_model(runs[j].status)) {
+      held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
+      if (o.huber_delta > 0)
+        held_huber[j] = huber_rms(runs[j].model, x, y, hold_range[fold], o.initial_state, o.huber_delta);
+    }
   });
   const auto yt = y.subspan(tr.begin, m);
   const auto [ylo, yhi] = std::minmax_element(yt.begin(), yt.end());
@@ -375,8 +382,8 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   double fold_best[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   const auto fold_rms = [&](std::size_t k, std::size_t fold) {
     const std::size_t j = 2 * k + fold;
-    return has_model(runs[j].status) && std::isfinite(held[j].rms) ? held[j].rms
-                                                                   : std::numeric_limits<double>::quiet_NaN();
+    const double r = o.huber_delta > 0 ? held_huber[j] : held[j].rms;
+    return has_model(runs[j].status) && std::isfinite(r) ? r : std::numeric_limits<double>::quiet_NaN();
   };
   for (std::size_t k = 0; k < nk; ++k)
     for (std::size_t fold = 0; fold < 2; ++fold)
@@ -413,9 +420,10 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   rep.candidates = std::move(cands);
   rep.message = fmt::format(
       "auto: {} chosen (hold-out score {:.4g}: the geometric mean over the first and the last {:.0f}% of the "
-      "training range, each predicted by a fit on the rest, of its RMS over the best kind's there; pooled hold-out "
+      "training range, each predicted by a fit on the rest, of its {} over the best kind's there; pooled hold-out "
       "RMS {:.6g}); {}",
       fit_model_name(of.model), rep.candidates[best].holdout_score, 100 * o.holdout_fraction,
+      o.huber_delta > 0 ? fmt::format("Huber RMS (delta {:.6g})", o.huber_delta) : std::string("RMS"),
       rep.candidates[best].holdout.rms, rep.message);
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return rep;

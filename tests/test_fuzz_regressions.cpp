@@ -88,8 +88,8 @@ TEST(FuzzRegression, MatFunctionClassSizedBeyondTheFileIsRefused) {
 
 // A MAT v5 sparse matrix whose values element declares 4,176,674,816 bytes in an 80-byte
 // variable, its column starts a small element of type 17 (UTF-16): matio allocated the 4 GB
-// (found by the third long fuzz_mat run at 8,966,069 executions). Index arrays must now be of an
-// integer type, and the values (and imaginary values) are checked like the index arrays: the
+// (found by the third long fuzz_mat run at 8,966,069 executions). Index arrays must now be of a
+// numeric type (not miUTF8/miUTF16; matio converts any numeric type), and the values (and imaginary values) are checked like the index arrays: the
 // second file is the first with the column starts made int32, so only the values are wrong.
 TEST(FuzzRegression, MatV5SparseValuesDeclaringMoreThanTheVariableAreRefused) {
   const std::string found = regression("mat/v5-sparse-utf16-column-starts.mat");

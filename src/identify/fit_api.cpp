@@ -121,15 +121,11 @@ void add_units_parameters(FitReport& rep) {
 
 // sqrt(2 mean rho(r)) over the range, rho the Huber loss of threshold delta (r^2 / 2 inside,
 // delta |r| - delta^2 / 2 beyond): the RMS of a least-squares fit, robust to outliers.
+// robust_residual(r, delta)^2 = 2 rho(r) / min(delta, 1) (it divides by sqrt(delta) below 1).
 double huber_rms(const ModelParams& model, std::span<const double> x, std::span<const double> y, IndexRange tr,
                  InitialState initial, double delta) {
-  const std::vector<double> yp = simulate_record(model, x.subspan(0, tr.end), initial);
-  double sum = 0;
-  for (std::size_t k = tr.begin; k < tr.end; ++k) {
-    const double a = std::abs(y[k] - yp[k]);
-    sum += a <= delta ? a * a : 2 * delta * a - delta * delta;
-  }
-  return std::sqrt(sum / static_cast<double>(tr.end - tr.begin));
+  const fitting::Data d{x, y, tr, initial, delta};
+  return std::sqrt(fitting::fitted_sse(model, d) * std::min(delta, 1.0) / static_cast<double>(tr.end - tr.begin));
 }
 
 // One kind on a record already checked by fit(); tr = o.train resolved.

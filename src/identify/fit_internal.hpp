@@ -263,6 +263,17 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
 void standard_errors(const LmProblem& lm, const Data& d, std::vector<double> theta, const std::vector<double>& lower,
                      const std::vector<int>& held, const Eigen::MatrixXd& M, double sse, FitReport& rep);
 
+// standard_errors, and when it finds the Jacobian rank deficient with the offset free
+// (projected out of the residuals), once more with the LM parameter `level` held too: an
+// envelope's constant, which moves the output by a constant like the offset except through
+// the plays' virgin start (on a long record, or from a relaxed start exactly, the two are one
+// direction). The reported parameters `no_error` then get none and `note` is the covariance
+// note. level < 0: standard_errors alone.
+void standard_errors_level_held(const LmProblem& lm, const Data& d, const std::vector<double>& theta,
+                                const std::vector<double>& lower, const std::vector<int>& held, const Eigen::MatrixXd& M,
+                                double sse, int level, const std::vector<int>& no_error, const char* note,
+                                FitReport& rep);
+
 // Status and message of the report from the best solution.
 void finish_status(FitReport& rep, const Solved& best, bool start_is_minimum);
 

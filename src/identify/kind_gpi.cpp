@@ -17,13 +17,6 @@ namespace {
 // linear to 3e-7, and c0 = S / a stays small enough for c3 to keep its digits.
 constexpr double kMinCurvature = 1e-3;
 
-// True when standard_errors left every parameter of the kind without an error (the
-// Jacobian was rank deficient); it sets all of them otherwise (0 for held or bound ones).
-bool none_computed(const FitReport& rep) {
-  return std::all_of(rep.parameters.begin(), rep.parameters.begin() + kGpi,
-                     [](const FitParameter& p) { return std::isnan(p.std_error); });
-}
-
 class GpiKind final : public Parametrization {
  public:
   bool handles(const FitOptions& o) const override { return o.model == FitModel::gpi && !o.gpi_free_weights; }
@@ -101,26 +94,13 @@ class GpiKind final : public Parametrization {
       // the plain SSE with it made the standard errors sqrt(d) too small)
       const double sse = fitted_sse(rep.model, d);
       const std::string note = rep.covariance_note;
-      const auto M = chart.jacobian(best.theta.data());
-      standard_errors(lm, d, best.theta, best_lower, fixed, M, sse, rep);
-      // With the offset free (projected out of the residuals), the envelope's level
-      // m = c3 + c0 tanh(b) (chart index 3) moves the output by a constant, except through
-      // the plays' virgin start: on a long record, or from a relaxed start (exactly), c3
-      // and output_offset are one direction, and the Jacobian is rank deficient. Then the
-      // errors of the other parameters are those with m held; c3 gets none.
-      if (d.free_offset && none_computed(rep) && std::find(fixed.begin(), fixed.end(), 3) == fixed.end()) {
-        std::vector<int> with_level = fixed;
-        with_level.push_back(3);
-        rep.covariance_note.clear();
-        standard_errors(lm, d, best.theta, best_lower, with_level, M, sse, rep);
-        if (!none_computed(rep)) {
-          rep.parameters[3].std_error = std::numeric_limits<double>::quiet_NaN();
-          rep.covariance_note =
-              "c[3] and output_offset are not separately identifiable from this record (only their sum is: the "
-              "envelope's level c3 + c0 tanh(c1 xc + c2) at the training input's centre xc acts only through the "
-              "plays' virgin start); the other standard errors are those with that level held, c[3] has none";
-        }
-      }
+      // the chart's m = c3 + c0 tanh(b) (index 3) is the envelope's level
+      standard_errors_level_held(
+          lm, d, best.theta, best_lower, fixed, chart.jacobian(best.theta.data()), sse, 3, {3},
+          "c[3] and output_offset are not separately identifiable from this record (only their sum is: the envelope's "
+          "level c3 + c0 tanh(c1 xc + c2) at the training input's centre xc acts only through the plays' virgin "
+          "start); the other standard errors are those with that level held, c[3] has none",
+          rep);
       if (!note.empty() && rep.covariance_note != note)
         rep.covariance_note = rep.covariance_note.empty() ? note : note + "; " + rep.covariance_note;
     }

@@ -319,6 +319,26 @@ void standard_errors(const LmProblem& lm, const Data& d, std::vector<double> the
   if (d.huber > 0) rep.covariance_note = "standard errors are approximate with the Huber loss";
 }
 
+void standard_errors_level_held(const LmProblem& lm, const Data& d, const std::vector<double>& theta,
+                                const std::vector<double>& lower, const std::vector<int>& held, const Eigen::MatrixXd& M,
+                                double sse, int level, const std::vector<int>& no_error, const char* note,
+                                FitReport& rep) {
+  standard_errors(lm, d, theta, lower, held, M, sse, rep);
+  // standard_errors sets every parameter's error (0 for held or bound ones) or none
+  const auto none = [&] {
+    return std::all_of(rep.parameters.begin(), rep.parameters.end(),
+                       [](const FitParameter& p) { return std::isnan(p.std_error); });
+  };
+  if (level < 0 || !d.free_offset || !none() || std::find(held.begin(), held.end(), level) != held.end()) return;
+  std::vector<int> with_level = held;
+  with_level.push_back(level);
+  rep.covariance_note.clear();
+  standard_errors(lm, d, theta, lower, with_level, M, sse, rep);
+  if (none()) return;
+  for (int i : no_error) rep.parameters[static_cast<std::size_t>(i)].std_error = std::numeric_limits<double>::quiet_NaN();
+  rep.covariance_note = note;
+}
+
 void finish_status(FitReport& rep, const Solved& best, bool start_is_minimum) {
   switch (best.termination) {
     case ceres::CONVERGENCE: rep.status = FitStatus::converged; break;
@@ -373,35 +393,42 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
   return {std::move(solved), best};
 }
 
-double projected_offset(const ModelParams& model, const Data& d) {
+namespace {
+
+// fn(y - model) for each sample of the training range, in order (the model run from the
+// record's start).
+template <class Fn>
+void for_each_residual(const ModelParams& model, const Data& d, Fn&& fn) {
   const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
+  for (std::size_t j = d.train.begin; j < d.train.end; ++j) fn(d.y[j] - yp[j]);
+}
+
+}  // namespace
+
+double projected_offset(const ModelParams& model, const Data& d) {
   double c = 0;
-  for (std::size_t j = d.train.begin; j < d.train.end; ++j) c += d.y[j] - yp[j];
+  for_each_residual(model, d, [&](double r) { c += r; });
   return c / static_cast<double>(d.train.end - d.train.begin);
 }
 
 double model_sse(const ModelParams& model, const Data& d) {
-  const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
   double sse = 0;
-  for (std::size_t j = d.train.begin; j < d.train.end; ++j) sse += (d.y[j] - yp[j]) * (d.y[j] - yp[j]);
+  for_each_residual(model, d, [&](double r) { sse += r * r; });
   return sse;
 }
 
 double max_abs_residual(const ModelParams& model, const Data& d) {
-  const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
   double m = 0;
-  for (std::size_t j = d.train.begin; j < d.train.end; ++j) m = std::max(m, std::abs(d.y[j] - yp[j]));
+  for_each_residual(model, d, [&](double r) { m = std::max(m, std::abs(r)); });
   return m;
 }
 
 double fitted_sse(const ModelParams& model, const Data& d) {
-  if (!(d.huber > 0)) return model_sse(model, d);
-  const std::vector<double> yp = simulate_record(model, d.x.subspan(0, d.train.end), d.initial);
   double sse = 0;
-  for (std::size_t j = d.train.begin; j < d.train.end; ++j) {
-    const double f = robust_residual(d.y[j] - yp[j], d.huber);
+  for_each_residual(model, d, [&](double r) {
+    const double f = robust_residual(r, d.huber);  // r itself without Huber
     sse += f * f;
-  }
+  });
   return sse;
 }
 

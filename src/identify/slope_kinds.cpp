@@ -2,9 +2,6 @@
 // every start of the kind, the best mapped into the report by the kind.
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cmath>
-
 #include "kinds.hpp"
 
 namespace hysteron::fitting {
@@ -54,16 +51,14 @@ void SlopeParametrization::fit(const Data& d, const Ranges& rg, const FitOptions
   const Solved& best = solved[kbest];
   const SlopeLayout& layout = layouts[kbest];
   const std::vector<double>& lower = lowers[kbest];
+  rep.model = model(layout, best.theta.data());
   // The start is the least-squares weights: a minimum of the cost without Huber, and with it
   // while every residual lies inside the loss's quadratic zone (|r| < d: there the Huber cost
-  // is the least-squares one, scaled).
-  const bool start_is_minimum =
-      d.huber == 0 || max_abs_residual(model(layout, best.theta.data()), d) < d.huber;
-  finish_status(rep, best, start_is_minimum);
+  // is the least-squares one, scaled). (With Huber the offset is not free: rep.model's is 0.)
+  finish_status(rep, best, d.huber == 0 || max_abs_residual(rep.model, d) < d.huber);
   rep.initial_cost = best.initial_cost;
   rep.final_cost = best.final_cost;
   rep.iterations = best.iterations;
-  rep.model = model(layout, best.theta.data());
   if (d.free_offset) units_map(rep.model).output_offset = projected_offset(rep.model, d);
   const Eigen::MatrixXd M = report_map(layout);
   const Eigen::VectorXd v =
@@ -75,30 +70,15 @@ void SlopeParametrization::fit(const Data& d, const Ranges& rg, const FitOptions
     // (with --huber the Jacobian is the robust residuals', which are scaled by 1/sqrt(d):
     // the plain SSE with it made the standard errors sqrt(d) too small)
     const double sse = fitted_sse(rep.model, d);
-    standard_errors(lms[kbest], d, best.theta, lower, best.at_bound, M, sse, rep);
-    // With the offset free (projected out of the residuals), a common shift of the
-    // envelopes' constants c[3] moves the output by a constant, except through the plays'
-    // virgin start: on a long record, or from a relaxed start (exactly), it is one direction
-    // with output_offset and the Jacobian is rank deficient. Then the errors of the other
-    // parameters are those with the (first) envelope's c[3] held; the c[3]s get none.
-    const auto none = [&] {
-      return std::all_of(rep.parameters.begin(), rep.parameters.end(),
-                         [](const FitParameter& p) { return std::isnan(p.std_error); });
-    };
-    if (d.free_offset && layout.env > 0 && none() &&
-        std::find(best.at_bound.begin(), best.at_bound.end(), 3) == best.at_bound.end()) {
-      std::vector<int> with_level = best.at_bound;
-      with_level.push_back(3);
-      rep.covariance_note.clear();
-      standard_errors(lms[kbest], d, best.theta, lower, with_level, M, sse, rep);
-      if (!none()) {
-        for (int i = 3; i < layout.env; i += 4) rep.parameters[static_cast<std::size_t>(i)].std_error = std::nan("");
-        rep.covariance_note =
-            "the envelopes' c[3] and output_offset are not separately identifiable from this record (a common shift "
-            "of the c[3]s acts only through the plays' virgin start); the other standard errors are those with the "
-            "first envelope's c[3] held, the c[3]s have none";
-      }
-    }
+    // the envelopes' constants c[3] (report and LM index 3, and 7 for mpi-asym's second)
+    std::vector<int> levels;
+    for (int i = 3; i < layout.env; i += 4) levels.push_back(i);
+    standard_errors_level_held(
+        lms[kbest], d, best.theta, lower, best.at_bound, M, sse, levels.empty() ? -1 : 3, levels,
+        "the envelopes' c[3] and output_offset are not separately identifiable from this record (a common shift of "
+        "the c[3]s acts only through the plays' virgin start); the other standard errors are those with the first "
+        "envelope's c[3] held, the c[3]s have none",
+        rep);
     if (!best.at_bound.empty())
       rep.covariance_note += fmt::format("{}{} cumulative slope(s) q + p_1 + ... + p_i ended on the invertibility bound "
                                          "and were held there (their uncertainty is not included)",

@@ -111,6 +111,10 @@ std::size_t mat5_type_size(std::uint32_t t) {
   }
 }
 
+// The size of a numeric type (miINT8 .. miUINT64); 0 for the character types miUTF8 and
+// miUTF16 and for unknown ones.
+std::size_t mat5_numeric_size(std::uint32_t t) { return t < 16 ? mat5_type_size(t) : 0; }
+
 // A sub-element tag at s[pos]: type and byte count, small-data format included; returns the
 // offset of the data and advances pos past the (padded) element. Throws `bad` on overrun.
 struct SubElement {
@@ -186,8 +190,8 @@ void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t 
   }
   auto data_part = [&](std::string_view what, bool numeric) {
     const SubElement data = next_sub(s, pos, swap, where, what);
-    const std::size_t sz = mat5_type_size(data.type);
-    if (sz == 0 || (numeric && data.type >= 16))
+    const std::size_t sz = numeric ? mat5_numeric_size(data.type) : mat5_type_size(data.type);
+    if (sz == 0)
       throw Error(fmt::format("{}: inconsistent: data of unknown type {}", where, data.type));
     if (data.bytes != mul_sat(numel, sz))
       throw Error(fmt::format("{}: truncated or inconsistent: size {} ({} elements) needs {} bytes of data, the file "
@@ -240,8 +244,8 @@ void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t 
                                 where, dims_txt, nzmax, s.n));
       const SubElement ir = next_sub(s, pos, swap, where, "row indices");
       const SubElement jc = next_sub(s, pos, swap, where, "column starts");
-      if (mat5_type_size(ir.type) == 0 || mat5_type_size(jc.type) == 0 || ir.type >= 16 || jc.type >= 16 ||
-          ir.bytes / mat5_type_size(ir.type) > nzmax || jc.bytes / mat5_type_size(jc.type) != std::uint64_t{ncols} + 1)
+      const std::size_t irs = mat5_numeric_size(ir.type), jcs = mat5_numeric_size(jc.type);
+      if (irs == 0 || jcs == 0 || ir.bytes / irs > nzmax || jc.bytes / jcs != std::uint64_t{ncols} + 1)
         throw Error(fmt::format("{}: inconsistent: sparse index arrays of {} and {} bytes for size {}, nzmax {}", where,
                                 ir.bytes, jc.bytes, dims_txt, nzmax));
       // the values (and imaginary values): matio allocates what their tags declare, so each must
@@ -250,8 +254,8 @@ void check_mat5_matrix(Bytes s, bool swap, const std::string& path, std::size_t 
       for (int k = 0; k < parts && pos < s.n; ++k) {
         const char* what = k == 0 ? "sparse values" : "sparse imaginary values";
         const SubElement v = next_sub(s, pos, swap, where, what);
-        const std::size_t sz = mat5_type_size(v.type);
-        if (sz == 0 || v.type >= 16 || v.bytes / sz > nzmax)
+        const std::size_t sz = mat5_numeric_size(v.type);
+        if (sz == 0 || v.bytes / sz > nzmax)
           throw Error(fmt::format("{}: inconsistent: {} of type {} and {} bytes for nzmax {}", where, what, v.type,
                                   v.bytes, nzmax));
       }

@@ -171,7 +171,9 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 PidParams position_pid(const Context& c);
 // Tyreus-Luyben PI from the relay test: K_c = K_u / 3.2, T_i = 2.2 T_u (duty per MPa).
 PidParams tyreus_luyben_pi(const RigDynamics& d, double tc);
-// The learning variant's ILC: the largest gain L of {0.5, 0.3, 0.2}, the phase lead d (<= 0.5 s) and the Q-filter's width
+// The learning gains the design tries, largest first (docs/control.md, section 3).
+inline constexpr double kLearningGains[] = {0.5, 0.3, 0.2, 0.1, 0.05};
+// The learning variant's ILC: the largest gain L of kLearningGains, the phase lead d (<= 0.5 s) and the Q-filter's width
 // chosen on the identified closed loop so that learning_contraction() < 1 with the
 // widest filter band (docs/control.md). Sets `contraction` to that bound.
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,

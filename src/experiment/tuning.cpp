@@ -179,8 +179,12 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   // exactly every 64 shifts, so rounding cannot accumulate)
   std::vector<std::complex<double>> rot(w.size()), step(w.size());
   for (std::size_t l = 0; l < w.size(); ++l) step[l] = std::polar(1.0, w[l] * static_cast<double>(shift_step));
-  // the largest gain of {0.5, 0.3, 0.2} for which some (shift, width) contracts
-  for (double gain : {0.5, 0.3, 0.2}) {
+  // The largest gain of kLearningGains for which some (shift, width) contracts. A smaller L
+  // asks less of the model: |1 - L e^{iwd} T| < 1 needs Re(e^{iwd} T) > L |T|^2 / 2, so on a
+  // rig whose loop rings (a lightly damped mode, a long dead time) 0.1 or 0.05 may contract
+  // where 0.2 does not. Where T ~ 1 (low frequencies) the error falls by a factor of about
+  // 1 - L per period (10 periods of L = 0.05: to about 0.6), so smaller gains are not tried.
+  for (double gain : kLearningGains) {
     if (found) break;
     best.gain = gain;
     std::size_t advanced = 0;

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "hysteron/error.hpp"
@@ -233,9 +234,12 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
     run.errors = {0.5, 0.3, 0.35};
     r.runs.push_back(run);
   }
+  // a trial whose rig diverged (+inf) is written as null and read back as +inf
+  r.gain_trials = {{"sine", {0.5, 1.0, 2.0}, {0.8, 0.6, std::numeric_limits<double>::infinity()}, 1.0}};
   const std::string dir = tmp / "exp";
   r.write(dir);
   const ExperimentResult back = read_experiment_dir(dir);
+  EXPECT_EQ(back.gain_trials, r.gain_trials);
   EXPECT_EQ(back.name, "gpi-pid");
   EXPECT_EQ(back.runs.size(), 3u);
   EXPECT_EQ(back.runs[0].reference, "sine");

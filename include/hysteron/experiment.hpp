@@ -165,6 +165,18 @@ struct ModelCandidate {
   bool chosen = false;      // it is best_fit
 };
 
+// The gain trial of one reference (docs/control.md, section 2): the compensated loop, with
+// its position PID's Ziegler-Nichols gains (K_p, K_i, K_d) scaled by each of `scales`, tracks
+// a trapezoid over the reference's range at its largest speed on the rig; the scale with the
+// least RMS error (measured contraction) is used by the compensated and adaptive variants.
+struct GainTrial {
+  std::string reference;
+  std::vector<double> scales;  // tried, ascending
+  std::vector<double> rms_mm;  // RMS error of each on the trapezoid (+inf: the rig diverged)
+  double scale = 1.0;          // the chosen one
+  bool operator==(const GainTrial&) const = default;
+};
+
 struct ExperimentResult {
   std::string name;
   std::string title;
@@ -190,6 +202,7 @@ struct ExperimentResult {
   double reach_min_mm = std::numeric_limits<double>::quiet_NaN();
   double reach_max_mm = std::numeric_limits<double>::quiet_NaN();
   std::vector<ReferenceRange> reference_ranges;  // one per reference, in the order run
+  std::vector<GainTrial> gain_trials;            // one per reference with a compensated loop
   std::vector<std::string> messages;  // notes of the run (e.g. a candidate model skipped)
   std::vector<TrackingRun> runs;
   PublishedFigures published;     // the paper's figures (empty where it gives none)

@@ -54,6 +54,7 @@ struct Context {
   std::size_t lead;                // preview [samples] of the compensated variants
   PidParams pressure_loop;         // valve experiments: PI of the pressure loop (relay test)
   bool learning = false;           // the loop is built for the learning variant (robust PID rule)
+  double gain_scale = 1.0;         // factor on the classic rule's PID gains (the gain trial's choice)
   const Reference* reference = nullptr;  // the reference the loop is built for
 };
 
@@ -167,8 +168,12 @@ void fit_load_mode(RigDynamics& d);
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3
 enum class PidRule { classic, some_overshoot };
 PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule);
-// The position PID of a compensated loop in context `c` (classic; some_overshoot when learning).
+// The position PID of a compensated loop in context `c`: the classic rule with its gains
+// times c.gain_scale; the some_overshoot rule, unscaled, when learning.
 PidParams position_pid(const Context& c);
+// Where position_pid(c)'s gains come from, for the loops' descriptions: "a relay test,
+// Ziegler-Nichols x1.26 by a gain trial" or "a relay test, Ziegler-Nichols some overshoot".
+std::string pid_origin(const Context& c);
 // Tyreus-Luyben PI from the relay test: K_c = K_u / 3.2, T_i = 2.2 T_u (duty per MPa).
 PidParams tyreus_luyben_pi(const RigDynamics& d, double tc);
 // The learning gains the design tries, largest first (docs/control.md, section 3).

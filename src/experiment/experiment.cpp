@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <utility>
 
@@ -61,6 +62,62 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));
   return run;
+}
+
+// The gain trial (docs/control.md, section 2). The relay's ultimate gain is measured with the
+// muscle reversing twice per period, where the rig's hysteresis sticks; tracking runs mostly
+// along the branches, where the loop gain is higher (on the worst rig of docs/plant.md the
+// classic gains oscillated at 2.9 Hz). So the compensated loop is tried on the rig: a
+// trapezoid over the reference's range [r_min, r_max] at its largest speed v (hold r_min
+// 1.5 s, ramp up, hold 0.5 s, ramp down, hold 0.5 s), once per gain scale s = 2^(k/3),
+// k = -4..2 (0.40..1.59: K_p stays below the relay's K_u, 0.6 x 1.59 = 0.95), scored by the RMS
+// of reference - measured contraction from the first ramp on. The least wins (ties: the
+// smaller s). A trial whose rig diverges scores +inf.
+GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Context c, const Reference& ref,
+                     std::size_t lead) {
+  GainTrial g;
+  g.reference = ref.name;
+  const std::size_t n = ref.period > 0 ? std::min(ref.period, ref.ref_m.size()) : ref.ref_m.size();
+  double lo = ref.ref_m.empty() ? 0.0 : ref.ref_m[0], hi = lo, v = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    lo = std::min(lo, ref.ref_m[k]);
+    hi = std::max(hi, ref.ref_m[k]);
+    if (k > 0) v = std::max(v, std::abs(ref.ref_m[k] - ref.ref_m[k - 1]) / c.tc);
+  }
+  if (!(v > 0.0) || !(hi > lo)) return g;  // a constant reference: nothing to try
+  std::vector<double> trap;
+  auto segment = [&](double seconds, double from, double to) {
+    const auto m = static_cast<std::size_t>(std::lround(seconds / c.tc));
+    for (std::size_t k = 0; k < m; ++k)
+      trap.push_back(from + (to - from) * static_cast<double>(k) / static_cast<double>(m));
+  };
+  const double ramp = (hi - lo) / v;
+  segment(1.5, lo, lo);
+  const std::size_t scored_from = trap.size();
+  segment(ramp, lo, hi);
+  segment(0.5, hi, hi);
+  segment(ramp, hi, lo);
+  segment(0.5, lo, lo);
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = -4; k <= 2; ++k) {
+    const double s = std::exp2(k / 3.0);
+    c.gain_scale = s;
+    double rms = std::numeric_limits<double>::infinity();
+    try {
+      const Loop loop = compensated.make(c);
+      const TrackingRun run = track(o, o.seed + 86028121, trap, lead, false, loop.law);
+      rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
+      if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
+    } catch (const Error&) {  // the rig diverged with this gain
+    }
+    g.scales.push_back(s);
+    g.rms_mm.push_back(rms);
+    if (rms < best) {
+      best = rms;
+      g.scale = s;
+    }
+  }
+  return g;
 }
 
 // Pressure headroom kept below the actuator's limit at a reference's top [fraction of
@@ -367,6 +424,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   for (const Reference& ref : fit_to_reach(o, id, spec.references(tc), res)) {
     Context rc = ctx;
     rc.reference = &ref;
+    for (const Variant& v : spec.variants)
+      if (v.name == "compensated") {
+        res.gain_trials.push_back(gain_trial(o, v, rc, ref, lead));
+        rc.gain_scale = res.gain_trials.back().scale;
+      }
     for (const Variant& v : spec.variants) {
       if (v.name == "adaptive" && !o.adaptive) continue;
       if (v.name == "adaptive" && !has_pi_structure(res.best_fit.model)) {
@@ -477,6 +539,12 @@ std::string ExperimentResult::table() const {
                    dynamics.relay_gain > 0 ? fmt::format(", pressure relay K_u = {:.3g}/MPa, T_u = {:.1f} ms",
                                                          dynamics.relay_gain, dynamics.relay_period_s * 1e3)
                                            : std::string());
+  for (const auto& g : gain_trials) {
+    s += fmt::format("  gain trial, {}: PID gains x{:.2f}; RMS [mm] on the trapezoid per scale:", g.reference, g.scale);
+    for (std::size_t i = 0; i < g.scales.size(); ++i)
+      s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], g.scales[i] == g.scale ? "*" : "", g.rms_mm[i]);
+    s += "\n";
+  }
   for (const auto& m : messages) s += fmt::format("  note: {}\n", m);
   return s;
 }

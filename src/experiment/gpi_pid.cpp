@@ -38,9 +38,9 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
   };
   const std::string name = c.reference->name;
   return Loop{std::move(law),
-              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID tuned by a relay test (Kp = {:.3g} MPa/m, "
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID tuned by {} (Kp = {:.3g} MPa/m, "
                           "Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
-                          c.result.lead_s * 1e3, adaptive_description(*a), pid.kp, pid.ki, pid.kd),
+                          c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), pid.kp, pid.ki, pid.kd),
               pid, [a, name] { return adaptive_note(*a, name); }};
 }
 
@@ -76,9 +76,9 @@ const Spec& gpi_pid_spec() {
          [](const Context& c) {
            const PidParams pid = position_pid(c);
            return Loop{ff_pid_law(c.result.best_fit.model, c.tc, pid),
-                       fmt::format("best inverse model fed {:.0f} ms ahead, PID tuned by a relay test "
+                       fmt::format("best inverse model fed {:.0f} ms ahead, PID tuned by {} "
                                    "(Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
-                                   c.result.lead_s * 1e3, pid.kp, pid.ki, pid.kd),
+                                   c.result.lead_s * 1e3, pid_origin(c), pid.kp, pid.ki, pid.kd),
                        pid};
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_ff_pid(c, false); }},

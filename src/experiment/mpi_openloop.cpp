@@ -54,10 +54,10 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
   };
   const std::string name = c.reference->name;
   return Loop{std::move(law),
-              fmt::format("best inverse model fed {:.0f} ms ahead, {}; {} + PID position correction tuned by a relay "
-                          "test (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; {} + PID position correction tuned by {} "
+                          "(Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a),
-                          p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", p.position.kp, p.position.ki,
+                          p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", pid_origin(c), p.position.kp, p.position.ki,
                           p.position.kd),
               p.position, [a, name] { return adaptive_note(*a, name); }};
 }
@@ -95,13 +95,13 @@ const Spec& mpi_openloop_spec() {
            OpenLoopParams p = published(c.tc);
            // learning: the loop its design models (identified with the plain regulator, as the relay test)
            if (c.learning) p.pressure_gain = 0.0;
-           // SIMC on the identified dynamics; the pressure loop only speeds the regulator up
+           // relay test (and gain trial) on the rig; the pressure loop only speeds the regulator up
            p.position = position_pid(c);
            return Loop{open_loop_law(c.result.best_fit.model, p),
                        fmt::format("best inverse model fed {:.0f} ms ahead, {} + PID position correction "
-                                   "tuned by a relay test (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
+                                   "tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                                    c.result.lead_s * 1e3,
-                                   p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", p.position.kp, p.position.ki, p.position.kd),
+                                   p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", pid_origin(c), p.position.kp, p.position.ki, p.position.kd),
                        p.position};
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_open_loop(c, false); }},

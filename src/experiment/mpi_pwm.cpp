@@ -57,10 +57,10 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
   };
   const std::string name = c.reference->name;
   return Loop{std::move(law),
-              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by a relay test (Kp = {:.3g} "
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by {} (Kp = {:.3g} "
                           "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
                           "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
-                          c.result.lead_s * 1e3, adaptive_description(*a), p.position.kp, p.position.ki,
+                          c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), p.position.kp, p.position.ki,
                           p.position.kd, p.pressure.kp, p.pressure.ki),
               p.position, [a, name] { return adaptive_note(*a, name); }};
 }
@@ -103,10 +103,10 @@ const Spec& mpi_pwm_spec() {
            p.position = position_pid(c);
            p.pressure = c.pressure_loop;
            return Loop{cascade_law(c.result.best_fit.model, p),
-                       fmt::format("best inverse model fed {:.0f} ms ahead; PID position loop by a relay test (Kp = {:.3g} "
+                       fmt::format("best inverse model fed {:.0f} ms ahead; PID position loop by {} (Kp = {:.3g} "
                                    "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = {:.3g}/MPa, "
                                    "Ki = {:.3g}/(MPa s))",
-                                   c.result.lead_s * 1e3, p.position.kp, p.position.ki, p.position.kd, p.pressure.kp,
+                                   c.result.lead_s * 1e3, pid_origin(c), p.position.kp, p.position.ki, p.position.kd, p.pressure.kp,
                                    p.pressure.ki),
                        p.position};
          }},

@@ -356,8 +356,17 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 namespace hysteron::experiment {
 
 PidParams position_pid(const Context& c) {
-  return relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax,
-                   c.learning ? PidRule::some_overshoot : PidRule::classic);
+  if (c.learning) return relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::some_overshoot);
+  PidParams p = relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::classic);
+  p.kp *= c.gain_scale;
+  p.ki *= c.gain_scale;
+  p.kd *= c.gain_scale;
+  return p;
+}
+
+std::string pid_origin(const Context& c) {
+  return c.learning ? std::string("a relay test, Ziegler-Nichols some overshoot")
+                    : fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);
 }
 
 void fit_load_mode(RigDynamics& d) {

@@ -40,6 +40,15 @@ double as_double(const json& v, std::string_view key, std::string_view where, do
 double get_double(const json& j, std::string_view key, std::string_view where, double null_value = nan) {
   return as_double(need(j, key, where), key, where, null_value);
 }
+// An array of numbers; null entries read as null_value.
+std::vector<double> get_doubles(const json& j, std::string_view key, std::string_view where, double null_value = nan) {
+  const json& v = need(j, key, where);
+  if (!v.is_array()) wrong_type(v, key, where, "an array of numbers");
+  std::vector<double> out;
+  out.reserve(v.size());
+  for (const auto& x : v) out.push_back(as_double(x, key, where, null_value));
+  return out;
+}
 double opt_double(const json& j, std::string_view key, std::string_view where, double def) {
   return j.contains(key) ? get_double(j, key, where) : def;
 }
@@ -534,6 +543,12 @@ json to_json(const ExperimentResult& r) {
                                {"max_mm", number(rr.max_mm)},
                                {"scaled", rr.scaled},
                                {"reachable", rr.reachable}});
+  j["gain_trials"] = json::array();
+  for (const auto& g : r.gain_trials) {
+    json rms = json::array();
+    for (double x : g.rms_mm) rms.push_back(number(x));
+    j["gain_trials"].push_back({{"reference", g.reference}, {"scale", number(g.scale)}, {"scales", g.scales}, {"rms_mm", rms}});
+  }
   j["messages"] = r.messages;
   j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
   j["wall_time_s"] = number(r.wall_time_s);
@@ -631,6 +646,25 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       rr.scaled = get_bool(rs[i], "scaled", w);
       rr.reachable = get_bool(rs[i], "reachable", w);
       r.reference_ranges.push_back(std::move(rr));
+    }
+  }
+  if (j.contains("gain_trials")) {  // absent in files before the gain trial
+    const json& gs = j["gain_trials"];
+    const std::string gw = key_where(where, "gain_trials");
+    if (!gs.is_array()) throw Error(fmt::format("{}: expected an array", gw));
+    for (std::size_t i = 0; i < gs.size(); ++i) {
+      const std::string w = fmt::format("{}[{}]", gw, i);
+      if (!gs[i].is_object()) throw Error(fmt::format("{}: expected an object", w));
+      GainTrial g;
+      g.reference = get_string(gs[i], "reference", w);
+      g.scale = get_double(gs[i], "scale", w);
+      g.scales = get_doubles(gs[i], "scales", w);
+      for (double s : g.scales)
+        if (!(s > 0.0)) throw Error(fmt::format("{}: key \"scales\": expected positive numbers", w));
+      g.rms_mm = get_doubles(gs[i], "rms_mm", w, std::numeric_limits<double>::infinity());  // null: diverged
+      if (g.scales.size() != g.rms_mm.size())
+        throw Error(fmt::format("{}: scales has {} values, rms_mm {}", w, g.scales.size(), g.rms_mm.size()));
+      r.gain_trials.push_back(std::move(g));
     }
   }
   if (j.contains("messages")) {

@@ -72,7 +72,8 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
 // 1.5 s, ramp up, hold 0.5 s, ramp down, hold 0.5 s), once per gain scale s = 2^(k/3),
 // k = -4..2 (0.40..1.59: K_p stays below the relay's K_u, 0.6 x 1.59 = 0.95), scored by the RMS
 // of reference - measured contraction from the first ramp on. The least wins (ties: the
-// smaller s). A trial whose rig diverges scores +inf.
+// smaller s). A trial whose rig diverges scores +inf. It runs on the identified rig (o.rig), as
+// the relay tests do, not on a --tracking-plant rig.
 GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Context c, const Reference& ref,
                      std::size_t lead) {
   GainTrial g;
@@ -98,6 +99,9 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
   segment(0.5, hi, hi);
   segment(ramp, hi, lo);
   segment(0.5, lo, lo);
+  // on the rig the relay tests ran on (a --tracking-plant rig changed after them)
+  ExperimentOptions on_identified_rig = o;
+  on_identified_rig.tracking_rig.reset();
   double best = std::numeric_limits<double>::infinity();
   for (int k = -4; k <= 2; ++k) {
     const double s = std::exp2(k / 3.0);
@@ -105,7 +109,7 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
     double rms = std::numeric_limits<double>::infinity();
     try {
       const Loop loop = compensated.make(c);
-      const TrackingRun run = track(o, o.seed + 86028121, trap, lead, false, loop.law);
+      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, loop.law);
       rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
       if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
     } catch (const Error&) {  // the rig diverged with this gain

@@ -235,7 +235,9 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
     r.runs.push_back(run);
   }
   // a trial whose rig diverged (+inf) is written as null and read back as +inf
-  r.gain_trials = {{"sine", {0.5, 1.0, 2.0}, {0.8, 0.6, std::numeric_limits<double>::infinity()}, 1.0}};
+  const double inf = std::numeric_limits<double>::infinity();
+  r.gain_trials = {{"sine", {0.5, 1.0, 2.0}, {0.8, 0.6, inf}, {0.7, 0.65, inf}, 0.5, true},
+                   {"triangle", {1.0}, {0.4}, {}, 1.0, false}};
   const std::string dir = tmp / "exp";
   r.write(dir);
   const ExperimentResult back = read_experiment_dir(dir);

@@ -169,11 +169,15 @@ struct ModelCandidate {
 // its position PID's Ziegler-Nichols gains (K_p, K_i, K_d) scaled by each of `scales`, tracks
 // a trapezoid over the reference's range at its largest speed on the rig; the scale with the
 // least RMS error (measured contraction) is used by the compensated and adaptive variants.
+// Where a load mode was identified, each scale is also tried with the feedforward's preview
+// passed through a zero-vibration shaper at that mode (docs/control.md, section 2).
 struct GainTrial {
   std::string reference;
-  std::vector<double> scales;  // tried, ascending
-  std::vector<double> rms_mm;  // RMS error of each on the trapezoid (+inf: the rig diverged)
-  double scale = 1.0;          // the chosen one
+  std::vector<double> scales;         // tried, ascending
+  std::vector<double> rms_mm;         // RMS error of each on the trapezoid (+inf: the rig diverged)
+  std::vector<double> rms_shaped_mm;  // ... with the shaped feedforward (empty: no shaper)
+  double scale = 1.0;                 // the chosen scale
+  bool shaped = false;                // the chosen loop shapes its feedforward
   bool operator==(const GainTrial&) const = default;
 };
 

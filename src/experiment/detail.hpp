@@ -171,6 +171,20 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 // The position PID of a compensated loop in context `c`: the classic rule with its gains
 // times c.gain_scale; the some_overshoot rule, unscaled, when learning.
 PidParams position_pid(const Context& c);
+// Zero-vibration input shaper (Singer and Seering 1990) for the identified load mode (w_n,
+// zeta < 1): two impulses a1 = 1 / (1 + K), a2 = K / (1 + K), K = exp(-zeta pi / sqrt(1 - zeta^2)),
+// half a damped period D = pi / w_d apart; the residual vibration of that mode is zero. Shifted
+// `advance` = round(a2 D) samples earlier so that its mean delay is zero (the reference is known
+// ahead): r_s(k) = a1 r(k + advance) + a2 r(k + advance - D), indices clamped to the record.
+struct ZvShaper {
+  double a1 = 1.0, a2 = 0.0;
+  std::size_t delay = 0, advance = 0;  // D and the advance [samples]
+  bool active() const noexcept { return a2 > 0.0 && delay > 0; }
+};
+// Inactive when no underdamped mode was identified (mode_frequency_hz = 0 or damping >= 1).
+ZvShaper zv_shaper(const RigDynamics& d, double tc);
+std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z);
+
 // Where position_pid(c)'s gains come from, for the loops' descriptions: "a relay test,
 // Ziegler-Nichols x1.26 by a gain trial" or "a relay test, Ziegler-Nichols some overshoot".
 std::string pid_origin(const Context& c);

@@ -64,6 +64,16 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   return run;
 }
 
+// `inner` with the feedforward's preview taken from `preview` (e.g. the shaped reference):
+// sample k gets preview[k + lead] (clamped to its last sample); the PID's reference is kept.
+Law with_preview(Law inner, std::shared_ptr<const std::vector<double>> preview, std::size_t lead) {
+  return [inner = std::move(inner), preview = std::move(preview), lead](const Sample& s) {
+    Sample m = s;
+    if (!preview->empty()) m.preview_m = (*preview)[std::min(s.k + lead, preview->size() - 1)];
+    return inner(m);
+  };
+}
+
 // The gain trial (docs/control.md, section 2). The relay's ultimate gain is measured with the
 // muscle reversing twice per period, where the rig's hysteresis sticks; tracking runs mostly
 // along the branches, where the loop gain is higher (on the worst rig of docs/plant.md the
@@ -73,7 +83,10 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
 // k = -4..2 (0.40..1.59: K_p stays below the relay's K_u, 0.6 x 1.59 = 0.95), scored by the RMS
 // of reference - measured contraction from the first ramp on. The least wins (ties: the
 // smaller s). A trial whose rig diverges scores +inf. It runs on the identified rig (o.rig), as
-// the relay tests do, not on a --tracking-plant rig.
+// the relay tests do, not on a --tracking-plant rig. Where a load mode was identified, every
+// scale is tried again with the feedforward's preview through the zero-vibration shaper at that
+// mode (zv_shaper: the mode rings after the corners of a ramp); the least RMS of all wins (ties:
+// unshaped first).
 GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Context c, const Reference& ref,
                      std::size_t lead) {
   GainTrial g;
@@ -102,23 +115,30 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
   // on the rig the relay tests ran on (a --tracking-plant rig changed after them)
   ExperimentOptions on_identified_rig = o;
   on_identified_rig.tracking_rig.reset();
+  const ZvShaper zv = zv_shaper(c.dynamics, c.tc);
+  const auto trap_shaped = std::make_shared<const std::vector<double>>(shaped(trap, zv));
   double best = std::numeric_limits<double>::infinity();
-  for (int k = -4; k <= 2; ++k) {
-    const double s = std::exp2(k / 3.0);
-    c.gain_scale = s;
-    double rms = std::numeric_limits<double>::infinity();
-    try {
-      const Loop loop = compensated.make(c);
-      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, loop.law);
-      rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
-      if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
-    } catch (const Error&) {  // the rig diverged with this gain
-    }
-    g.scales.push_back(s);
-    g.rms_mm.push_back(rms);
-    if (rms < best) {
-      best = rms;
-      g.scale = s;
+  for (bool shape : {false, true}) {
+    if (shape && !zv.active()) break;
+    for (int k = -4; k <= 2; ++k) {
+      const double s = std::exp2(k / 3.0);
+      c.gain_scale = s;
+      double rms = std::numeric_limits<double>::infinity();
+      try {
+        const Loop loop = compensated.make(c);
+        const Law law = shape ? with_preview(loop.law, trap_shaped, lead) : loop.law;
+        const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law);
+        rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
+        if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
+      } catch (const Error&) {  // the rig diverged with this gain
+      }
+      if (!shape) g.scales.push_back(s);
+      (shape ? g.rms_shaped_mm : g.rms_mm).push_back(rms);
+      if (rms < best) {
+        best = rms;
+        g.scale = s;
+        g.shaped = shape;
+      }
     }
   }
   return g;
@@ -433,6 +453,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         res.gain_trials.push_back(gain_trial(o, v, rc, ref, lead));
         rc.gain_scale = res.gain_trials.back().scale;
       }
+    // the compensated and adaptive loops' feedforward, through the shaper if the trial chose it
+    const bool shape = !res.gain_trials.empty() && res.gain_trials.back().reference == ref.name &&
+                       res.gain_trials.back().shaped;
+    const auto shaped_ref =
+        std::make_shared<const std::vector<double>>(shape ? shaped(ref.ref_m, zv_shaper(res.dynamics, tc)) : std::vector<double>{});
     for (const Variant& v : spec.variants) {
       if (v.name == "adaptive" && !o.adaptive) continue;
       if (v.name == "adaptive" && !has_pi_structure(res.best_fit.model)) {
@@ -449,6 +474,13 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         if (v.name != "adaptive") throw;
         res.messages.push_back(fmt::format("adaptive ({}) not run: {}", ref.name, e.what()));
         continue;
+      }
+      if (shape && v.preview) {
+        loop.law = with_preview(loop.law, shaped_ref, lead);
+        const ZvShaper z = zv_shaper(res.dynamics, tc);
+        loop.description += fmt::format("; feedforward through a zero-vibration shaper at the identified mode "
+                                        "({:.3f} now, {:.3f} after {:.0f} ms)",
+                                        z.a1, z.a2, static_cast<double>(z.delay) * tc * 1e3);
       }
       TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law);
       run.variant = v.name;
@@ -544,9 +576,16 @@ std::string ExperimentResult::table() const {
                                                          dynamics.relay_gain, dynamics.relay_period_s * 1e3)
                                            : std::string());
   for (const auto& g : gain_trials) {
-    s += fmt::format("  gain trial, {}: PID gains x{:.2f}; RMS [mm] on the trapezoid per scale:", g.reference, g.scale);
+    s += fmt::format("  gain trial, {}: PID gains x{:.2f}{}; RMS [mm] on the trapezoid per scale:", g.reference, g.scale,
+                     g.shaped ? ", shaped feedforward" : "");
     for (std::size_t i = 0; i < g.scales.size(); ++i)
-      s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], g.scales[i] == g.scale ? "*" : "", g.rms_mm[i]);
+      s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], !g.shaped && g.scales[i] == g.scale ? "*" : "", g.rms_mm[i]);
+    if (!g.rms_shaped_mm.empty()) {
+      s += "; shaped:";
+      for (std::size_t i = 0; i < g.scales.size(); ++i)
+        s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], g.shaped && g.scales[i] == g.scale ? "*" : "",
+                         g.rms_shaped_mm[i]);
+    }
     s += "\n";
   }
   for (const auto& m : messages) s += fmt::format("  note: {}\n", m);

@@ -364,6 +364,32 @@ PidParams position_pid(const Context& c) {
   return p;
 }
 
+ZvShaper zv_shaper(const RigDynamics& d, double tc) {
+  ZvShaper z;
+  const double zeta = d.mode_damping;
+  if (!(d.mode_frequency_hz > 0.0) || !(zeta >= 0.0 && zeta < 1.0)) return z;
+  const double root = std::sqrt(1.0 - zeta * zeta);
+  const double wd = 2.0 * std::numbers::pi * d.mode_frequency_hz * root;
+  const double K = std::exp(-zeta * std::numbers::pi / root);
+  const double D = std::round(std::numbers::pi / wd / tc);
+  if (!(D >= 1.0) || !(D < 1e7)) return z;
+  z.a1 = 1.0 / (1.0 + K);
+  z.a2 = K / (1.0 + K);
+  z.delay = static_cast<std::size_t>(D);
+  z.advance = static_cast<std::size_t>(std::lround(z.a2 * D));
+  return z;
+}
+
+std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z) {
+  if (!z.active() || r.empty()) return r;
+  const auto n = static_cast<std::ptrdiff_t>(r.size());
+  const auto at = [&](std::ptrdiff_t k) { return r[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(k, 0, n - 1))]; };
+  const auto adv = static_cast<std::ptrdiff_t>(z.advance), D = static_cast<std::ptrdiff_t>(z.delay);
+  std::vector<double> out(r.size());
+  for (std::ptrdiff_t k = 0; k < n; ++k) out[static_cast<std::size_t>(k)] = z.a1 * at(k + adv) + z.a2 * at(k + adv - D);
+  return out;
+}
+
 std::string pid_origin(const Context& c) {
   return c.learning ? std::string("a relay test, Ziegler-Nichols some overshoot")
                     : fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);

@@ -545,9 +545,15 @@ json to_json(const ExperimentResult& r) {
                                {"reachable", rr.reachable}});
   j["gain_trials"] = json::array();
   for (const auto& g : r.gain_trials) {
-    json rms = json::array();
+    json rms = json::array(), rms_shaped = json::array();
     for (double x : g.rms_mm) rms.push_back(number(x));
-    j["gain_trials"].push_back({{"reference", g.reference}, {"scale", number(g.scale)}, {"scales", g.scales}, {"rms_mm", rms}});
+    for (double x : g.rms_shaped_mm) rms_shaped.push_back(number(x));
+    j["gain_trials"].push_back({{"reference", g.reference},
+                                {"scale", number(g.scale)},
+                                {"shaped", g.shaped},
+                                {"scales", g.scales},
+                                {"rms_mm", rms},
+                                {"rms_shaped_mm", rms_shaped}});
   }
   j["messages"] = r.messages;
   j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
@@ -662,8 +668,14 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       for (double s : g.scales)
         if (!(s > 0.0)) throw Error(fmt::format("{}: key \"scales\": expected positive numbers", w));
       g.rms_mm = get_doubles(gs[i], "rms_mm", w, std::numeric_limits<double>::infinity());  // null: diverged
-      if (g.scales.size() != g.rms_mm.size())
-        throw Error(fmt::format("{}: scales has {} values, rms_mm {}", w, g.scales.size(), g.rms_mm.size()));
+      g.shaped = opt_bool(gs[i], "shaped", w, false);
+      if (gs[i].contains("rms_shaped_mm"))
+        g.rms_shaped_mm = get_doubles(gs[i], "rms_shaped_mm", w, std::numeric_limits<double>::infinity());
+      if (g.scales.size() != g.rms_mm.size() || (!g.rms_shaped_mm.empty() && g.rms_shaped_mm.size() != g.scales.size()))
+        throw Error(fmt::format("{}: scales has {} values, rms_mm {}, rms_shaped_mm {}", w, g.scales.size(),
+                                g.rms_mm.size(), g.rms_shaped_mm.size()));
+      if (g.shaped && g.rms_shaped_mm.empty())
+        throw Error(fmt::format("{}: shaped is true but rms_shaped_mm is empty", w));
       r.gain_trials.push_back(std::move(g));
     }
   }

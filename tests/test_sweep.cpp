@@ -473,6 +473,38 @@ void check_ParallelEqualsSerialBitForBit(const SweepResult* serial_, const Sweep
   }
 }
 
+// The compensated and adaptive rows carry their rig's gain-trial choice (a scale 2^(k/3),
+// k = -4..2, and whether the feedforward is shaped), in the JSON too; the other kinds do not.
+void check_GainTrialChoiceInTheRows(const SweepResult* serial_, const SweepResult* parallel_,
+                                    const std::vector<SweepProgress>& progress_) {
+  (void)serial_;
+  (void)progress_;
+  const SweepResult& r = *parallel_;
+  const nlohmann::json j = r.to_json();
+  std::size_t compensated = 0, chosen_other = 0;
+  for (std::size_t i = 0; i < r.runs.size(); ++i) {
+    if (!r.runs[i].ok) continue;
+    for (std::size_t t = 0; t < r.runs[i].runs.size(); ++t) {
+      const SweepRunErrors& x = r.runs[i].runs[t];
+      const nlohmann::json& row = j["runs"][i]["tracking"][t];
+      if (x.kind == "compensated" || x.kind == "adaptive") {
+        compensated += x.kind == "compensated";
+        chosen_other += x.gain_scale != 1.0 || x.shaped;
+        const double k = 3.0 * std::log2(x.gain_scale);
+        EXPECT_NEAR(k, std::round(k), 1e-9) << x.gain_scale;
+        EXPECT_GE(std::round(k), -4.0);
+        EXPECT_LE(std::round(k), 2.0);
+        EXPECT_EQ(row["gain_scale"].get<double>(), x.gain_scale);
+        EXPECT_EQ(row["shaped"].get<bool>(), x.shaped);
+      } else {
+        EXPECT_FALSE(row.contains("gain_scale")) << x.kind;
+      }
+    }
+  }
+  EXPECT_GT(compensated, 0u);
+  EXPECT_GT(chosen_other, 0u);  // the nominal gpi-pid rig chooses 1.26 with the shaper (docs/control.md)
+}
+
 void check_HeavierLoadChangesTheErrors(const SweepResult* serial_, const SweepResult* parallel_, const std::vector<SweepProgress>& progress_) {
   (void)serial_;
   (void)parallel_;
@@ -604,6 +636,10 @@ TEST(SweepRun, SmallSweepSerialAndParallel) {
   {
     SCOPED_TRACE("HeavierLoadChangesTheErrors");
     check_HeavierLoadChangesTheErrors(&serial, &parallel, progress);
+  }
+  {
+    SCOPED_TRACE("GainTrialChoiceInTheRows");
+    check_GainTrialChoiceInTheRows(&serial, &parallel, progress);
   }
   {
     SCOPED_TRACE("AFailingRunIsRecordedNotThrown");

@@ -125,6 +125,10 @@ struct SweepRunErrors {
   // the span's ratio (< 1: mapped into the rig's reach) and whether it lay within the reach.
   double reference_scale = 1.0;
   bool reachable = true;
+  // compensated and adaptive runs: the gain trial's choice for the reference
+  // (ExperimentResult::gain_trials): the scale of the PID gains and the shaped feedforward
+  double gain_scale = 1.0;
+  bool shaped = false;
 };
 
 // One (experiment, variant) run.

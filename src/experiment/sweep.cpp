@@ -479,6 +479,9 @@ SweepResult run_sweep(const SweepOptions& options) {
               e.reference_scale = span > 0.0 ? (rr.max_mm - rr.min_mm) / span : 1.0;
               e.reachable = rr.reachable;
             }
+          if (tr.variant == "compensated" || tr.variant == "adaptive")
+            for (const auto& g : er.gain_trials)
+              if (g.reference == tr.reference) e.gain_scale = g.scale, e.shaped = g.shaped;
           if (tr.pressure_command_mpa.empty()) {
             e.min_command_mpa = e.max_command_mpa = nan;
           } else {
@@ -614,6 +617,8 @@ std::string SweepResult::text() const {
   out += "RMS tracking error [mm] per variant kind; comp/nom = compensated RMS / its nominal value;\n"
          "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa];\n";
   out += "ref xS = the reference mapped into the rig's reach, its span scaled by S (docs/control.md, section 5);\n";
+  out += "PID xS [shaped] = the gain trial's choice for the compensated and adaptive loops, where not x1.00 unshaped\n"
+         "(docs/control.md, section 2);\n";
   out += fmt::format("model = the kind of hysteron's model the compensated variants invert ({})\n",
                      model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
                                                   : fmt::format("--model {}", fit_model_name(model)));
@@ -644,6 +649,8 @@ std::string SweepResult::text() const {
         out += std::isfinite(rb) ? fmt::format(" {:>9.2f}", rb) : fmt::format(" {:>9}", "-");
         out += std::isfinite(lo) ? fmt::format(" {:>6.3f}..{:<5.3f}", lo, hi) : fmt::format(" {:>13}", "-");
         out += fmt::format("  {}", run.model);
+        if (c && (c->gain_scale != 1.0 || c->shaped))
+          out += fmt::format("  PID x{:.2f}{}", c->gain_scale, c->shaped ? " shaped" : "");
         if (c && c->reference_scale != 1.0) out += fmt::format("  ref x{:.3f}", c->reference_scale);
         if (c && !c->reachable) out += "  ref out of reach";
         out += "\n";
@@ -697,7 +704,7 @@ json SweepResult::to_json() const {
     for (const auto& x : run.runs) {
       const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
       const SweepRunErrors* base = find(e, run.variant, x.reference, "baseline");
-      o["tracking"].push_back({{"reference", x.reference},
+      json t = {{"reference", x.reference},
                                {"kind", x.kind},
                                {"max_error_mm", number(x.errors.max_error_mm)},
                                {"mae_mm", number(x.errors.mae_mm)},
@@ -708,7 +715,9 @@ json SweepResult::to_json() const {
                                {"max_command_mpa", number(x.max_command_mpa)},
                                {"saturated", x.saturated},
                                {"reference_scale", number(x.reference_scale)},
-                               {"reachable", x.reachable}});
+                               {"reachable", x.reachable}};
+      if (x.kind == "compensated" || x.kind == "adaptive") t["gain_scale"] = x.gain_scale, t["shaped"] = x.shaped;
+      o["tracking"].push_back(std::move(t));
     }
     j["runs"].push_back(std::move(o));
   }

@@ -60,3 +60,20 @@ def test_reference_beyond_the_rigs_reach_is_mapped_or_kept():
     pcomp = next(x for x in p["runs"] if x["variant"] == "compensated")
     assert pcomp["reference_mm"].max() == pytest.approx(95.0)
     assert pcomp["rms_error_mm"] > comp["rms_error_mm"]
+
+
+def test_gain_trial_choice_is_in_the_summary_and_used():
+    # the compensated loop's PID gains are the relay's Ziegler-Nichols gains times the gain
+    # trial's scale (docs/control.md, section 2): the least RMS on the trapezoid, shaped or not
+    r = hysteron.run_experiment("gpi-pid", learning_periods=0, adaptive=False, model="mpi-asym")
+    (g,) = r["summary"]["gain_trials"]
+    assert g["reference"] == "sine"
+    assert len(g["scales"]) == len(g["rms_mm"]) == 7
+    assert g["scales"] == sorted(g["scales"])
+    tried = [(rms, False, s) for s, rms in zip(g["scales"], g["rms_mm"])]
+    tried += [(rms, True, s) for s, rms in zip(g["scales"], g["rms_shaped_mm"])]
+    rms, shaped, scale = min(tried, key=lambda t: (t[0], t[1], t[2]))
+    assert (g["scale"], g["shaped"]) == (scale, shaped)
+    comp = next(x for x in r["runs"] if x["variant"] == "compensated")
+    assert f"x{scale:.2f} by a gain trial" in comp["description"]
+    assert ("zero-vibration shaper" in comp["description"]) == shaped

@@ -380,7 +380,7 @@ TEST(ExperimentTuning, GainTrialDetunesTheLoopWhereItWouldOscillate) {
 }
 
 // The zero-vibration shaper at an identified mode: a ramp to a hold, passed through it, leaves
-// the mode (w_n^2 / (s^2 + 2 zeta w_n s + w_n^2), simulated exactly per sample) without residual
+// the mode (w_n^2 / (s^2 + 2 zeta w_n s + w_n^2), simulated with 20 substeps per sample) without residual
 // vibration, and its advance keeps the ramp's timing (zero mean delay).
 TEST(ExperimentTuning, ZeroVibrationShaperCancelsTheIdentifiedMode) {
   using experiment::shaped;

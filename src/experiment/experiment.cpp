@@ -448,16 +448,17 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   for (const Reference& ref : fit_to_reach(o, id, spec.references(tc), res)) {
     Context rc = ctx;
     rc.reference = &ref;
+    // the gain trial's choice for the compensated and adaptive loops: the PID's scale, and
+    // their feedforward through the shaper (zv inactive: not shaped)
+    ZvShaper zv;
     for (const Variant& v : spec.variants)
       if (v.name == "compensated") {
-        res.gain_trials.push_back(gain_trial(o, v, rc, ref, lead));
-        rc.gain_scale = res.gain_trials.back().scale;
+        GainTrial g = gain_trial(o, v, rc, ref, lead);
+        rc.gain_scale = g.scale;
+        if (g.shaped) zv = zv_shaper(res.dynamics, tc);
+        res.gain_trials.push_back(std::move(g));
       }
-    // the compensated and adaptive loops' feedforward, through the shaper if the trial chose it
-    const bool shape = !res.gain_trials.empty() && res.gain_trials.back().reference == ref.name &&
-                       res.gain_trials.back().shaped;
-    const auto shaped_ref =
-        std::make_shared<const std::vector<double>>(shape ? shaped(ref.ref_m, zv_shaper(res.dynamics, tc)) : std::vector<double>{});
+    const auto shaped_ref = std::make_shared<const std::vector<double>>(shaped(ref.ref_m, zv));
     for (const Variant& v : spec.variants) {
       if (v.name == "adaptive" && !o.adaptive) continue;
       if (v.name == "adaptive" && !has_pi_structure(res.best_fit.model)) {
@@ -475,12 +476,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         res.messages.push_back(fmt::format("adaptive ({}) not run: {}", ref.name, e.what()));
         continue;
       }
-      if (shape && v.preview) {
+      if (zv.active() && v.preview) {
         loop.law = with_preview(loop.law, shaped_ref, lead);
-        const ZvShaper z = zv_shaper(res.dynamics, tc);
         loop.description += fmt::format("; feedforward through a zero-vibration shaper at the identified mode "
                                         "({:.3f} now, {:.3f} after {:.0f} ms)",
-                                        z.a1, z.a2, static_cast<double>(z.delay) * tc * 1e3);
+                                        zv.a1, zv.a2, static_cast<double>(zv.delay) * tc * 1e3);
       }
       TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law);
       run.variant = v.name;

@@ -28,6 +28,9 @@ namespace hysteron {
 
 namespace {
 
+// The variant kinds that use the gain trial's choice (ExperimentResult::gain_trials).
+bool uses_gain_trial(std::string_view kind) { return kind == "compensated" || kind == "adaptive"; }
+
 using nlohmann::json;
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 
@@ -479,7 +482,7 @@ SweepResult run_sweep(const SweepOptions& options) {
               e.reference_scale = span > 0.0 ? (rr.max_mm - rr.min_mm) / span : 1.0;
               e.reachable = rr.reachable;
             }
-          if (tr.variant == "compensated" || tr.variant == "adaptive")
+          if (uses_gain_trial(tr.variant))
             for (const auto& g : er.gain_trials)
               if (g.reference == tr.reference) e.gain_scale = g.scale, e.shaped = g.shaped;
           if (tr.pressure_command_mpa.empty()) {
@@ -716,7 +719,7 @@ json SweepResult::to_json() const {
                                {"saturated", x.saturated},
                                {"reference_scale", number(x.reference_scale)},
                                {"reachable", x.reachable}};
-      if (x.kind == "compensated" || x.kind == "adaptive") t["gain_scale"] = x.gain_scale, t["shaped"] = x.shaped;
+      if (uses_gain_trial(x.kind)) t["gain_scale"] = x.gain_scale, t["shaped"] = x.shaped;
       o["tracking"].push_back(std::move(t));
     }
     j["runs"].push_back(std::move(o));

@@ -295,6 +295,38 @@ TEST(ExperimentTuning, GainsComeFromTheIdentification) {
   for (const auto& run : a.runs) EXPECT_NE(run.variant, "learning");  // learning_periods = 0
 }
 
+// A rig whose hysteresis band (40 kPa) is nearly as wide as the relay's first amplitude
+// (+-0.05 MPa): the muscle only creeps and the relay does not oscillate, so the amplitude is
+// doubled; the nominal rig keeps the first. Before, the whole experiment failed there.
+TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) {
+  const double tc = 1e-3;
+  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  RigDynamics nominal, wide_d;
+  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, nominal);
+  EXPECT_EQ(nominal.position_relay_amplitude_mpa, experiment::kPositionRelayAmplitude);
+  PamRigParams wide;
+  wide.hysteresis.pressure_band = 40e3;
+  experiment::position_relay_test(wide, 7, tc, make_actuator, wide_d);
+  EXPECT_GT(wide_d.position_relay_amplitude_mpa, experiment::kPositionRelayAmplitude);
+  EXPECT_GT(wide_d.position_relay_gain, 0.0);
+  EXPECT_GT(wide_d.position_relay_period_s, 0.0);
+  // the experiment runs end to end, its compensated loop well below the baseline's error
+  const ExperimentResult r = run_gpi_pid(wide, 0);
+  EXPECT_EQ(r.dynamics.position_relay_amplitude_mpa, wide_d.position_relay_amplitude_mpa);
+  EXPECT_NE(r.table().find("position relay (+-"), std::string::npos);
+  EXPECT_LT(find_run(r, "compensated").errors.rms_error_mm, 0.2 * find_run(r, "baseline").errors.rms_error_mm);
+  // a rig that cannot be made to oscillate within 0..0.6 MPa: a clear error naming the amplitudes
+  PamRigParams stuck;
+  stuck.hysteresis.pressure_band = 400e3;
+  RigDynamics none;
+  try {
+    experiment::position_relay_test(stuck, 7, tc, make_actuator, none);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("+-0.2 MPa"), std::string::npos) << e.what();
+  }
+}
+
 // The learning variant reduces the error from period to period, on the nominal rig and on
 // a slow regulator (100 ms lag, 12 ms dead time), up to the sensor-noise floor.
 TEST(ExperimentTuning, LearningReducesTheErrorMonotonically) {

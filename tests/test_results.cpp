@@ -308,6 +308,7 @@ TEST(Results, ExperimentResultRoundTrip) {
   r.best_validation = metrics(0.4, 15000);
   r.baseline_model = test_pi();
   r.lead_s = 0.057;
+  r.dynamics = {0.021, 0.056, 1.97e-4, 0.69, 152.5, 0.012, 13.02, 0.239, 0.1, 4.05, 0.7};
   r.wall_time_s = 12.5;
   r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
   r.reach_min_mm = -0.0125;
@@ -343,6 +344,16 @@ TEST(Results, ExperimentResultRoundTrip) {
   expect_same(back.best_validation, r.best_validation);
   expect_same(back.baseline_model, r.baseline_model);
   EXPECT_EQ(back.lead_s, r.lead_s);
+  // every identified quantity the table prints (the mode and the relay's amplitude too)
+  const auto fields = [](const RigDynamics& d) {
+    return std::vector<double>{d.dead_time_s, d.lag_s, d.gain_m_per_mpa, d.rms_mm, d.relay_gain, d.relay_period_s,
+                               d.position_relay_gain, d.position_relay_period_s, d.position_relay_amplitude_mpa,
+                               d.mode_frequency_hz, d.mode_damping};
+  };
+  EXPECT_EQ(fields(back.dynamics), fields(r.dynamics));
+  const std::string table = back.table();  // `hysteron report` prints the table from the file
+  EXPECT_NE(table.find("position relay (+-0.1 MPa) K_u = 13 MPa/m, T_u = 239 ms, mode 4.05 Hz (damping 0.70)"),
+            std::string::npos) << table;
   EXPECT_EQ(back.wall_time_s, r.wall_time_s);
   EXPECT_EQ(back.reach_min_mm, r.reach_min_mm);
   EXPECT_EQ(back.reach_max_mm, r.reach_max_mm);

@@ -108,11 +108,13 @@ struct RigDynamics {
   // ultimate gain K_u = 4 h / (pi sqrt(a^2 - eps^2)) [duty/MPa] and period T_u [s]; 0 if not run.
   double relay_gain = 0.0;
   double relay_period_s = 0.0;
-  // Relay test of the position loop (pressure p0 +- 0.05 MPa switched on the measured
-  // contraction around its level at p0): ultimate gain [MPa/m] and period [s]. It sees
-  // the load's mode, which the slow identification run does not.
+  // Relay test of the position loop (pressure p0 +- h switched on the measured contraction
+  // around its level at p0; h = 0.05 MPa, doubled while the muscle does not oscillate):
+  // ultimate gain [MPa/m], period [s] and the amplitude h used [MPa]. It sees the load's
+  // mode, which the slow identification run does not.
   double position_relay_gain = 0.0;
   double position_relay_period_s = 0.0;
+  double position_relay_amplitude_mpa = 0.0;
   // The load's mode that puts the relay's point on the FOPDT: G = FOPDT * w_n^2 /
   // (s^2 + 2 zeta w_n s + w_n^2) with G(i w_u) = -1 / K_u (0: no mode fits).
   double mode_frequency_hz = 0.0;

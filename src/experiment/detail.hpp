@@ -152,13 +152,18 @@ std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std
 // measured pressure around 0.3 MPa with a hysteresis of 3 noise standard deviations
 // (measured first, vented); fills relay_gain and relay_period_s of `d`.
 void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d);
-// Relay test of the position loop through `actuator` (desired pressure [MPa] and the rig's
-// outputs -> the rig's inputs): hold 0.3 MPa until settled, then switch the pressure
-// 0.3 +- 0.05 MPa on the measured contraction around its settled level, with a hysteresis of
-// 3 noise standard deviations; fills position_relay_gain and position_relay_period_s.
+// Relay test of the position loop through an actuator (desired pressure [MPa] and the rig's
+// outputs -> the rig's inputs; `make_actuator` gives a fresh one, e.g. with a reset pressure
+// loop, per run): hold 0.3 MPa until settled, then switch the pressure 0.3 +- h on the
+// measured contraction around its settled level, with a hysteresis of 3 noise standard
+// deviations. h = kPositionRelayAmplitude, doubled while the contraction does not oscillate
+// (a rig whose hysteresis band is wider than h) and 0.3 +- h stays within 0..kPressureMax.
+// Fills position_relay_gain, position_relay_period_s and position_relay_amplitude_mpa;
+// throws hysteron::Error naming every amplitude tried if none oscillates.
+inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h tried
 using Actuator = std::function<RigInputs(double desired_mpa, const RigOutputs&)>;
-void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator,
-                         RigDynamics& d);
+void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d);
 // The second-order mode through the relay's point (RigDynamics::mode_*): with F the
 // FOPDT at w_u = 2 pi / T_u and 1/H = (1 - r^2) + 2 i zeta r = -F K_u (r = w_u / w_n):
 //   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).

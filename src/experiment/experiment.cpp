@@ -430,16 +430,16 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics = identify_dynamics(res.best_fit.model, id, tc, lead);
   res.lead_s = static_cast<double>(lead) * tc;
   PidParams pressure_loop;
-  Actuator actuator = [](double p, const RigOutputs&) { return regulator(p); };
   if (spec.valves) {
     relay_test(o.rig, o.seed + 15485863, tc, res.dynamics);
     pressure_loop = tyreus_luyben_pi(res.dynamics, tc);
-    auto inner = std::make_shared<Pid>(pressure_loop);
-    actuator = [inner](double p, const RigOutputs& out) {
-      return valves(inner->step(p, out.pressure_measured * 1e-6), p);
-    };
   }
-  position_relay_test(o.rig, o.seed + 32452843, tc, actuator, res.dynamics);
+  auto make_actuator = [&]() -> Actuator {
+    if (!spec.valves) return [](double p, const RigOutputs&) { return regulator(p); };
+    auto inner = std::make_shared<Pid>(pressure_loop);
+    return [inner](double p, const RigOutputs& out) { return valves(inner->step(p, out.pressure_measured * 1e-6), p); };
+  };
+  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics);
   fit_load_mode(res.dynamics);
   const Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};
 
@@ -567,9 +567,13 @@ std::string ExperimentResult::table() const {
     for (const auto& e : r.periods) s += fmt::format(" {:.3f}", e.rms_error_mm);
     s += "\n";
   }
-  s += fmt::format("  identified: dead time {:.0f} ms, lag {:.0f} ms, slope {:.3f} mm/kPa; position relay K_u = {:.3g} "
+  // the relay's amplitude only where it had to be raised (a wide hysteresis band)
+  const double h = dynamics.position_relay_amplitude_mpa;
+  const std::string amplitude =
+      h > kPositionRelayAmplitude * (1.0 + 1e-9) ? fmt::format(" (+-{:g} MPa)", h) : std::string();
+  s += fmt::format("  identified: dead time {:.0f} ms, lag {:.0f} ms, slope {:.3f} mm/kPa; position relay{} K_u = {:.3g} "
                    "MPa/m, T_u = {:.0f} ms, mode {:.2f} Hz (damping {:.2f}){}\n",
-                   dynamics.dead_time_s * 1e3, dynamics.lag_s * 1e3, dynamics.gain_m_per_mpa,
+                   dynamics.dead_time_s * 1e3, dynamics.lag_s * 1e3, dynamics.gain_m_per_mpa, amplitude,
                    dynamics.position_relay_gain, dynamics.position_relay_period_s * 1e3,
                    dynamics.mode_frequency_hz, dynamics.mode_damping,
                    dynamics.relay_gain > 0 ? fmt::format(", pressure relay K_u = {:.3g}/MPa, T_u = {:.1f} ms",

@@ -290,9 +290,14 @@ PidParams tyreus_luyben_pi(const RigDynamics& d, double tc) {
 
 namespace hysteron::experiment {
 
-void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator,
-                         RigDynamics& d) {
-  constexpr double p0 = 0.3, h = 0.05;  // [MPa]
+namespace {
+
+// One relay run of the position loop with amplitude h [MPa] around p0 (docs/control.md,
+// section 1). Fills `d` and returns true when the contraction oscillated (at least 3 upward
+// crossings of its level and an amplitude above the relay's hysteresis in the last 2 s);
+// else `amp` and `crossings` say what was seen.
+bool position_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator, double p0,
+                        double h, RigDynamics& d, double& amp, std::size_t& crossings) {
   const auto settle = static_cast<std::size_t>(std::lround(1.5 / tc));
   const auto quiet = static_cast<std::size_t>(std::lround(0.3 / tc));
   const auto n = settle + static_cast<std::size_t>(std::lround(4.0 / tc));
@@ -330,12 +335,35 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, 
     lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
     if (i > from && x[i - 1] < x0 && x[i] >= x0) ups.push_back(i);
   }
-  const double a = 0.5 * (hi - lo);
-  if (ups.size() < 3 || !(a > eps))
-    throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate (amplitude {} mm, "
-                            "{} crossings in 2 s)", a * 1e3, ups.size()));
+  amp = 0.5 * (hi - lo);
+  crossings = ups.size();
+  if (ups.size() < 3 || !(amp > eps)) return false;
+  d.position_relay_amplitude_mpa = h;
   d.position_relay_period_s = static_cast<double>(ups.back() - ups.front()) * tc / static_cast<double>(ups.size() - 1);
-  d.position_relay_gain = 4.0 * h / (std::numbers::pi * std::sqrt(a * a - eps * eps));
+  d.position_relay_gain = 4.0 * h / (std::numbers::pi * std::sqrt(amp * amp - eps * eps));
+  return true;
+}
+
+}  // namespace
+
+void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d) {
+  constexpr double p0 = 0.3;  // [MPa]
+  // A relay must overcome the rig's hysteresis to make the muscle reverse: where the
+  // pressure band is wider than the amplitude the contraction only creeps and does not
+  // cross its level. Then the amplitude is doubled (Astrom and Hagglund adjust it to the
+  // process), while p0 +- h stays within the actuator's 0..kPressureMax.
+  std::string seen;
+  for (double h = kPositionRelayAmplitude; p0 - h >= 0.0 && p0 + h <= kPressureMax; h *= 2.0) {
+    double amp = 0.0;
+    std::size_t crossings = 0;
+    if (position_relay_run(rp, seed, tc, make_actuator(), p0, h, d, amp, crossings)) return;
+    seen += fmt::format("{}+-{:g} MPa: amplitude {:.3g} mm, {} crossings in 2 s", seen.empty() ? "" : "; ", h,
+                        amp * 1e3, crossings);
+  }
+  throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate around {} MPa at any "
+                          "amplitude within the actuator's 0..{} MPa ({})",
+                          p0, kPressureMax, seen));
 }
 
 PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule) {

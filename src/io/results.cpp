@@ -531,6 +531,9 @@ json to_json(const ExperimentResult& r) {
                    {"rms_mm", number(r.dynamics.rms_mm)},
                    {"position_relay_gain_mpa_per_m", number(r.dynamics.position_relay_gain)},
                    {"position_relay_period_s", number(r.dynamics.position_relay_period_s)},
+                   {"position_relay_amplitude_mpa", number(r.dynamics.position_relay_amplitude_mpa)},
+                   {"mode_frequency_hz", number(r.dynamics.mode_frequency_hz)},
+                   {"mode_damping", number(r.dynamics.mode_damping)},
                    {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
                    {"pressure_relay_period_s", number(r.dynamics.relay_period_s)}};
   j["reach"] = {{"min_mm", number(r.reach_min_mm)}, {"max_mm", number(r.reach_max_mm)}};
@@ -628,6 +631,9 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     r.dynamics.rms_mm = opt_double(d, "rms_mm", dw, 0.0);
     r.dynamics.position_relay_gain = opt_double(d, "position_relay_gain_mpa_per_m", dw, 0.0);
     r.dynamics.position_relay_period_s = opt_double(d, "position_relay_period_s", dw, 0.0);
+    r.dynamics.position_relay_amplitude_mpa = opt_double(d, "position_relay_amplitude_mpa", dw, 0.0);
+    r.dynamics.mode_frequency_hz = opt_double(d, "mode_frequency_hz", dw, 0.0);
+    r.dynamics.mode_damping = opt_double(d, "mode_damping", dw, 0.0);
     r.dynamics.relay_gain = opt_double(d, "pressure_relay_gain_per_mpa", dw, 0.0);
     r.dynamics.relay_period_s = opt_double(d, "pressure_relay_period_s", dw, 0.0);
   }

@@ -12,6 +12,13 @@
 // to y, the correction converges monotonically (in the 2-norm over a period)
 // when  sup_w |Q(w) (1 - L e^{i w d} T(e^{i w}))| < 1  (learning_contraction()).
 //
+// Supervision (optional, LearningParams::rise_tolerance): the bound above holds for the
+// identified linear loop, not for the rig. When a completed period's mean squared error
+// exceeds (1 + rise_tolerance)^2 times the least of the periods before it, L is halved for
+// the following updates (the correction keeps being filtered by Q, which removes what the
+// larger gain built up above the band where the loop was misjudged): as L -> 0 every
+// frequency contracts by |Q(w)| < 1, whatever T is.
+//
 // step() never allocates, never throws and is deterministic; its cost is
 // min(2h + 1, ~13 sqrt(h)) taps per sample (the update of c_{j+1} is computed progressively, d + h
 // samples behind the errors it needs, instead of in one burst per period).
@@ -30,6 +37,9 @@ struct LearningParams {
   std::size_t half_width = 0;   // h: binomial Q-filter of order 2h (0: no filter)
   std::size_t lookahead = 0;    // largest `ahead` of correction() (e.g. the loop's preview)
   double max_correction = std::numeric_limits<double>::infinity();  // |c| limit, > 0
+  // Relative rise of a period's RMS error over the least before it that halves L, >= 0
+  // (infinity: no supervision, L fixed).
+  double rise_tolerance = std::numeric_limits<double>::infinity();
   // Throws hysteron::Error naming the field; also when lead + 2 half_width + lookahead >= period.
   void validate() const;
 };
@@ -58,6 +68,8 @@ class IterativeLearning {
   std::size_t phase() const noexcept { return k_; }
   std::size_t iteration() const noexcept { return j_; }  // completed periods
   std::size_t faults() const noexcept { return faults_; }
+  double gain() const noexcept { return gain_; }             // L in use (params().gain until halved)
+  std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor halved L
   const LearningParams& params() const noexcept { return p_; }
 
  private:
@@ -69,6 +81,10 @@ class IterativeLearning {
   std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}
   std::size_t k_ = 0, j_ = 0, faults_ = 0;
+  double gain_ = 0.0;                     // L in use
+  double sse_ = 0.0;                      // sum of e^2 over this period so far
+  double least_mse_ = 0.0;                // least mean squared error of a completed period (inf: none)
+  std::size_t cuts_ = 0;
 };
 
 }  // namespace hysteron

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "format.hpp"
@@ -16,6 +17,8 @@ void LearningParams::validate() const {
   if (!(gain > 0.0 && gain < 2.0)) throw Error(detail::format("learning.gain = {}: must be in (0, 2)", gain));
   if (!(max_correction > 0.0))
     throw Error(detail::format("learning.max_correction = {}: must be > 0", max_correction));
+  if (!(rise_tolerance >= 0.0))
+    throw Error(detail::format("learning.rise_tolerance = {}: must be >= 0 (infinity: no supervision)", rise_tolerance));
   if (half_width > 10000) throw Error(detail::format("learning.half_width = {}: must be <= 10000", half_width));
   // the filter's window (2h + 1 samples) plus the lead and the lookahead must fit in one period,
   // so that every index of the update wraps around at most once
@@ -65,6 +68,8 @@ IterativeLearning::IterativeLearning(const LearningParams& params) : p_(params) 
   c_next_.assign(p_.period, 0.0);
   e_cur_.assign(p_.period, 0.0);
   e_prev_.assign(p_.period, 0.0);
+  gain_ = p_.gain;
+  least_mse_ = std::numeric_limits<double>::infinity();
 }
 
 void IterativeLearning::reset() noexcept {
@@ -72,7 +77,10 @@ void IterativeLearning::reset() noexcept {
   std::fill(c_next_.begin(), c_next_.end(), 0.0);
   std::fill(e_cur_.begin(), e_cur_.end(), 0.0);
   std::fill(e_prev_.begin(), e_prev_.end(), 0.0);
-  k_ = j_ = faults_ = 0;
+  k_ = j_ = faults_ = cuts_ = 0;
+  gain_ = p_.gain;
+  sse_ = 0.0;
+  least_mse_ = std::numeric_limits<double>::infinity();
 }
 
 double IterativeLearning::correction(std::size_t ahead) const noexcept {
@@ -134,7 +142,7 @@ double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) c
         e = e_cur_.data() + t;
       }
     }
-    acc += weighted_sum(q + m, c + ci, e, p_.gain, len);
+    acc += weighted_sum(q + m, c + ci, e, gain_, len);
     m += len;
   }
   return std::clamp(acc, -p_.max_correction, p_.max_correction);
@@ -152,12 +160,21 @@ void IterativeLearning::step(double error) noexcept {
   }
   const std::size_t N = p_.period, dh = p_.lead + p_.half_width;
   e_cur_[k_] = error;
+  sse_ += error * error;
   if (k_ >= dh) {
     c_next_[k_ - dh] = update_at(k_ - dh, c_cur_.data(), false);
   } else if (j_ >= 1) {
     c_cur_[N + k_ - dh] = update_at(N + k_ - dh, c_next_.data(), true);
   }
   if (++k_ == N) {
+    // supervision: a period worse than the best before it by more than the tolerance
+    const double mse = sse_ / static_cast<double>(N), allowed = 1.0 + p_.rise_tolerance;
+    if (std::isfinite(allowed) && mse > allowed * allowed * least_mse_) {
+      gain_ *= 0.5;
+      ++cuts_;
+    }
+    least_mse_ = std::min(least_mse_, mse);
+    sse_ = 0.0;
     std::swap(c_cur_, c_next_);
     std::swap(e_cur_, e_prev_);
     k_ = 0;

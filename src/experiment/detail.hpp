@@ -197,6 +197,11 @@ std::string pid_origin(const Context& c);
 PidParams tyreus_luyben_pi(const RigDynamics& d, double tc);
 // The learning gains the design tries, largest first (docs/control.md, section 3).
 inline constexpr double kLearningGains[] = {0.5, 0.3, 0.2, 0.1, 0.05};
+// LearningParams::rise_tolerance of the learning variant: the design promises a monotone
+// decrease, so L is halved after any period whose RMS error is above the least before it
+// (docs/control.md, section 3). At the noise floor a halving only lowers the noise the
+// learning feeds back.
+inline constexpr double kLearningRiseTolerance = 0.0;
 // The learning variant's ILC: the largest gain L of kLearningGains, the phase lead d (<= 0.5 s) and the Q-filter's width
 // chosen on the identified closed loop so that learning_contraction() < 1 with the
 // widest filter band (docs/control.md). Sets `contraction` to that bound.

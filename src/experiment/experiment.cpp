@@ -32,7 +32,8 @@ constexpr double kFitRate = 100.0;  // [Hz]
 TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const Reference& ref, const Loop& base,
                          std::uint64_t seed, std::vector<std::string>& messages) {
   double rho = 0.0;
-  const LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho);
+  LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho);
+  lp.rise_tolerance = kLearningRiseTolerance;
   auto ilc = std::make_shared<IterativeLearning>(lp);
   const std::size_t lead = ctx.lead;
   Law law = [ilc, inner = base.law, lead](const Sample& s) {
@@ -59,6 +60,10 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   run.description = fmt::format("{}; + iterative learning over {} periods (L = {}, phase lead {} samples, "
                                 "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop)",
                                 base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho);
+  if (ilc->gain_cuts() > 0)
+    run.description += fmt::format("; L halved {} time(s) to {:.3g}, after periods whose RMS error rose above the "
+                                   "least before them",
+                                   ilc->gain_cuts(), ilc->gain());
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));
   return run;

@@ -102,30 +102,56 @@ TEST(Learning, InvalidParametersAreRejected) {
   EXPECT_THROW(IterativeLearning{p}, Error);
 }
 
-// The supervisor halves L after a period whose mean squared error is above (1 + tolerance)^2
-// times the least of the periods before it, and only then; without supervision L stays.
-TEST(Learning, SupervisorHalvesTheGainAfterAPeriodWorseThanTheBest) {
-  // RMS of each period fed in; with tolerance 0.1 the 4th (1.2 > 1.1 x 0.9, the least before
-  // it) and the 6th (1.0 > 1.1 x 0.8) halve L, the 3rd (0.95 <= 1.1 x 0.9) and the others do not
-  const std::vector<double> rms{2.0, 0.9, 0.95, 1.2, 0.8, 1.0, 0.79};
+// The supervisor keeps the best period's correction. After a period whose mean squared error
+// is above (1 + tolerance)^2 times the best's it applies that correction again and halves L;
+// the restored period is re-measured and becomes the best. Without supervision nothing changes.
+TEST(Learning, SupervisorRestoresTheBestCorrectionAndHalvesTheGain) {
+  // RMS of each period (a constant error); with tolerance 0.1: the 4th (1.2 > 1.1 x 0.9, the
+  // best, 2nd) and the 6th (1.0 > 1.1 x 0.8, the restored 5th) are rises, the 3rd (0.95 <=
+  // 1.1 x 0.9) is not; the 1st is not compared (it starts from the initial state), so the
+  // 2nd is not a rise
+  const std::vector<double> rms{0.5, 0.9, 0.95, 1.2, 0.8, 1.0, 0.79};
   const std::vector<std::size_t> cuts_after{0, 0, 0, 1, 1, 2, 2};
   for (double tol : {0.1, std::numeric_limits<double>::infinity()}) {
+    const bool supervised = std::isfinite(tol);
     LearningParams p;
     p.period = 40;
     p.gain = 0.4;
+    p.lead = 3;
     p.half_width = 2;
     p.rise_tolerance = tol;
     IterativeLearning ilc(p);
+    std::vector<std::vector<double>> applied(rms.size());
     for (std::size_t j = 0; j < rms.size(); ++j) {
-      // a square wave of amplitude rms[j]: its RMS over the period is rms[j]
-      for (std::size_t k = 0; k < p.period; ++k) ilc.step(k % 2 ? rms[j] : -rms[j]);
-      const std::size_t expected = std::isfinite(tol) ? cuts_after[j] : 0;
+      for (std::size_t k = 0; k < p.period; ++k) {
+        applied[j].push_back(ilc.correction());
+        ilc.step(rms[j]);
+      }
+      const std::size_t expected = supervised ? cuts_after[j] : 0;
       EXPECT_EQ(ilc.gain_cuts(), expected) << "period " << j << ", tolerance " << tol;
       EXPECT_DOUBLE_EQ(ilc.gain(), 0.4 / static_cast<double>(1u << expected));
+    }
+    // the corrections grow with every period's (positive) error, so they differ per period
+    EXPECT_NE(applied[2], applied[1]);
+    if (supervised) {
+      EXPECT_EQ(applied[4], applied[1]);  // after the rise of period 3: the best, period 1
+      EXPECT_EQ(applied[6], applied[4]);  // after the rise of period 5: the restored period 4
+      // the update after a restore starts from the restored correction, with the halved gain:
+      // c_5(i) = sum_m q_m c_4(i + m) + (L / 2) e_4 away from the period's ends (q = 1 4 6 4 1 / 16)
+      const double q[] = {1.0 / 16, 4.0 / 16, 6.0 / 16, 4.0 / 16, 1.0 / 16};
+      for (std::size_t i = 2; i + 2 + p.lead < p.period; ++i) {
+        double filtered = 0.0;
+        for (std::size_t m = 0; m < 5; ++m) filtered += q[m] * applied[4][i + m - 2];
+        EXPECT_NEAR(applied[5][i], filtered + 0.2 * rms[4], 1e-12) << "i = " << i;
+      }
+    } else {
+      EXPECT_NE(applied[4], applied[1]);
+      EXPECT_NE(applied[6], applied[4]);
     }
     ilc.reset();
     EXPECT_EQ(ilc.gain_cuts(), 0u);
     EXPECT_DOUBLE_EQ(ilc.gain(), 0.4);
+    EXPECT_EQ(ilc.correction(), 0.0);
   }
 }
 

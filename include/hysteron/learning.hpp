@@ -13,11 +13,13 @@
 // when  sup_w |Q(w) (1 - L e^{i w d} T(e^{i w}))| < 1  (learning_contraction()).
 //
 // Supervision (optional, LearningParams::rise_tolerance): the bound above holds for the
-// identified linear loop, not for the rig. When a completed period's mean squared error
-// exceeds (1 + rise_tolerance)^2 times the least of the periods before it, L is halved for
-// the following updates (the correction keeps being filtered by Q, which removes what the
-// larger gain built up above the band where the loop was misjudged): as L -> 0 every
-// frequency contracts by |Q(w)| < 1, whatever T is.
+// identified linear loop, not for the rig. The class keeps the best correction, the one
+// whose period had the least mean squared error, from the second period on (the first
+// starts from the loop's initial state, so its error is not comparable). When a completed period's mean squared
+// error exceeds (1 + rise_tolerance)^2 times the best's, the next period applies the best
+// correction again (re-measuring it) and L is halved for the updates from then on: as
+// L -> 0 every frequency contracts by |Q(w)| < 1, whatever T is. Bookkeeping only swaps
+// buffers at the period's end (no copy, no burst).
 //
 // step() never allocates, never throws and is deterministic; its cost is
 // min(2h + 1, ~13 sqrt(h)) taps per sample (the update of c_{j+1} is computed progressively, d + h
@@ -69,7 +71,7 @@ class IterativeLearning {
   std::size_t iteration() const noexcept { return j_; }  // completed periods
   std::size_t faults() const noexcept { return faults_; }
   double gain() const noexcept { return gain_; }             // L in use (params().gain until halved)
-  std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor halved L
+  std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor reverted and halved L
   const LearningParams& params() const noexcept { return p_; }
 
  private:
@@ -78,12 +80,18 @@ class IterativeLearning {
   LearningParams p_;
   std::vector<double> q_;                 // 2h + 1 filter taps
   std::size_t reach_ = 0;                 // taps m with |m| <= reach_ are summed (the rest < 1e-18 of q_0)
+  void end_period() noexcept;
+
   std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
+  std::vector<double> c_best_;            // supervision: the correction of the best period
+  const double* tail_base_ = nullptr;     // c_{j-1}, from which the end of c_j is computed
+  bool best_valid_ = false;               // c_best_ holds a measured correction
+  bool skip_tail_ = false;                // c_j is a restored best: complete already
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}
   std::size_t k_ = 0, j_ = 0, faults_ = 0;
   double gain_ = 0.0;                     // L in use
   double sse_ = 0.0;                      // sum of e^2 over this period so far
-  double least_mse_ = 0.0;                // least mean squared error of a completed period (inf: none)
+  double least_mse_ = 0.0;                // mean squared error of c_best_'s period
   std::size_t cuts_ = 0;
 };
 

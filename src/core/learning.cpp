@@ -68,8 +68,8 @@ IterativeLearning::IterativeLearning(const LearningParams& params) : p_(params) 
   c_next_.assign(p_.period, 0.0);
   e_cur_.assign(p_.period, 0.0);
   e_prev_.assign(p_.period, 0.0);
-  gain_ = p_.gain;
-  least_mse_ = std::numeric_limits<double>::infinity();
+  if (std::isfinite(p_.rise_tolerance)) c_best_.assign(p_.period, 0.0);
+  reset();
 }
 
 void IterativeLearning::reset() noexcept {
@@ -77,10 +77,13 @@ void IterativeLearning::reset() noexcept {
   std::fill(c_next_.begin(), c_next_.end(), 0.0);
   std::fill(e_cur_.begin(), e_cur_.end(), 0.0);
   std::fill(e_prev_.begin(), e_prev_.end(), 0.0);
+  std::fill(c_best_.begin(), c_best_.end(), 0.0);
   k_ = j_ = faults_ = cuts_ = 0;
   gain_ = p_.gain;
   sse_ = 0.0;
   least_mse_ = std::numeric_limits<double>::infinity();
+  tail_base_ = c_next_.data();
+  best_valid_ = skip_tail_ = false;
 }
 
 double IterativeLearning::correction(std::size_t ahead) const noexcept {
@@ -163,23 +166,44 @@ void IterativeLearning::step(double error) noexcept {
   sse_ += error * error;
   if (k_ >= dh) {
     c_next_[k_ - dh] = update_at(k_ - dh, c_cur_.data(), false);
-  } else if (j_ >= 1) {
-    c_cur_[N + k_ - dh] = update_at(N + k_ - dh, c_next_.data(), true);
+  } else if (j_ >= 1 && !skip_tail_) {
+    c_cur_[N + k_ - dh] = update_at(N + k_ - dh, tail_base_, true);
   }
-  if (++k_ == N) {
-    // supervision: a period worse than the best before it by more than the tolerance
-    const double mse = sse_ / static_cast<double>(N), allowed = 1.0 + p_.rise_tolerance;
-    if (std::isfinite(allowed) && mse > allowed * allowed * least_mse_) {
-      gain_ *= 0.5;
-      ++cuts_;
-    }
-    least_mse_ = std::min(least_mse_, mse);
-    sse_ = 0.0;
+  if (++k_ == N) end_period();
+}
+
+// c_cur_ (c_j) is complete and was applied over the period just ended; c_next_ holds
+// c_{j+1} except its last d + h samples, which the next period computes from c_j.
+void IterativeLearning::end_period() noexcept {
+  const double mse = sse_ / static_cast<double>(p_.period);
+  // the first period starts from the loop's initial state, not in the periodic steady state
+  // the others share: its error is not comparable, so supervision starts after it
+  const double allowed = j_ == 0 ? std::numeric_limits<double>::infinity() : 1.0 + p_.rise_tolerance;
+  sse_ = 0.0;
+  skip_tail_ = false;
+  if (std::isfinite(allowed) && (!best_valid_ || mse < least_mse_)) {
+    // c_j is the best so far (or the restored best, re-measured): keep it in c_best_, the
+    // end of c_{j+1} is computed from there, and the old best's buffer becomes the scratch
+    std::swap(c_best_, c_cur_);
     std::swap(c_cur_, c_next_);
-    std::swap(e_cur_, e_prev_);
-    k_ = 0;
-    ++j_;
+    tail_base_ = c_best_.data();
+    least_mse_ = mse;
+    best_valid_ = true;
+  } else if (std::isfinite(allowed) && mse > allowed * allowed * least_mse_) {
+    // worse than the best: apply the best again (complete: no tail to compute) and halve L;
+    // c_{j+1} is dropped (c_next_ is the scratch the next period's updates overwrite)
+    std::swap(c_cur_, c_best_);
+    best_valid_ = false;
+    skip_tail_ = true;
+    gain_ *= 0.5;
+    ++cuts_;
+  } else {
+    std::swap(c_cur_, c_next_);
+    tail_base_ = c_next_.data();
   }
+  std::swap(e_cur_, e_prev_);
+  k_ = 0;
+  ++j_;
 }
 
 }  // namespace hysteron

@@ -104,6 +104,30 @@ TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t t
   return e;
 }
 
+std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to) {
+  to = std::min(to, run.t.size());
+  if (from >= to) return {};
+  std::size_t low = 0, high = 0;
+  double in2 = 0.0, out2 = 0.0;
+  for (std::size_t k = from; k < to; ++k) {
+    const double d = run.reference_mm[k] - run.measured_mm[k], p = run.pressure_command_mpa[k];
+    const bool at_low = p <= 0.0, at_high = p >= kPressureMax;
+    low += at_low, high += at_high;
+    (at_low || at_high ? in2 : out2) += d * d;
+  }
+  const std::size_t n = to - from, sat = low + high;
+  if (100 * sat < n) return {};  // brief touches of a limit: no note
+  const double rms_in = std::sqrt(in2 / static_cast<double>(sat));
+  const double rms_out = sat < n ? std::sqrt(out2 / static_cast<double>(n - sat)) : 0.0;
+  return fmt::format(
+      "{} ({}): the pressure command was at a limit on {:.1f} % of the scored samples ({} at 0 MPa, {} at {} MPa); "
+      "RMS error {:.3f} mm there, {:.3f} mm elsewhere: at a limit the loop has no authority left (e.g. the load "
+      "cannot follow the reference's descent with the muscle vented, or the reference needs more pressure than the "
+      "actuator has)",
+      run.variant, run.reference, 100.0 * static_cast<double>(sat) / static_cast<double>(n), low, high, kPressureMax,
+      rms_in, rms_out);
+}
+
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
                   std::size_t lead, bool periodic, const Law& law) {
   PamRig rig(o.tracking_rig ? *o.tracking_rig : o.rig, seed);

@@ -127,6 +127,10 @@ ModelParams straight_line(const IdRecord& r);
 // hysteron::Error; `status` (if given) receives the fit's status either way.
 FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what, FitStatus* status = nullptr);
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
+// A note for the result's messages when the pressure command sat at 0 or kPressureMax on at
+// least 1 % of the samples in [from, to) (their count and the RMS error there and elsewhere);
+// "" otherwise. Uses run.variant and run.reference.
+std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to);
 // Runs one tracking experiment: `reference` sampled at the control period, the
 // preview `lead` samples ahead (wrapping around for a periodic reference).
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,

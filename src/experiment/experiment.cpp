@@ -492,6 +492,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.reference = ref.name;
       run.description = loop.description;
       run.errors = errors_of(run, ref.score_from, run.t.size());
+      if (std::string note = saturation_note(run, ref.score_from, run.t.size()); !note.empty())
+        res.messages.push_back(std::move(note));
       res.runs.push_back(std::move(run));
       if (loop.note)
         if (std::string note = loop.note(); !note.empty()) res.messages.push_back(std::move(note));
@@ -502,6 +504,9 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           TrackingRun lr = learning_run(o, lc, ref, v.make(lc), track_seed, res.messages);
           lr.variant = "learning";
           lr.reference = ref.name;
+          const std::size_t last = lr.t.size() - std::min(lr.t.size(), ref.period);  // the scored last period
+          if (std::string note = saturation_note(lr, last, lr.t.size()); !note.empty())
+            res.messages.push_back(std::move(note));
           res.runs.push_back(std::move(lr));
         } catch (const Error& e) {  // no design contracts on this rig: no learning run, and say why
           res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));

@@ -434,6 +434,25 @@ TEST(ExperimentTuning, SaturationIsSaidWhereTheLoadCannotFollow) {
   EXPECT_GT(find_run(b, "compensated").saturated, 0u);
 }
 
+// The relay tests count one cycle per upward crossing of the level after the signal was below
+// level - eps (the relay's hysteresis). Counting every raw crossing, sensor noise around the
+// level counted cycles twice: the valves' pressure relay measured T_u = 12.0 ms on the nominal
+// rig (20.0 ms counted with the hysteresis) and 5.5 ms with a 10x noisier pressure sensor.
+// A noisier sensor widens the relay's hysteresis (3 noise sigmas), which can only slow the
+// cycle: its period is not shorter than the nominal's.
+TEST(ExperimentTuning, RelayPeriodIsNotShortenedBySensorNoise) {
+  const double tc = 1e-3;
+  RigDynamics nominal, noisy;
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  PamRigParams loud;
+  loud.sensors.pressure_noise *= 10.0;
+  experiment::relay_test(loud, 7, tc, noisy);
+  ASSERT_GT(nominal.relay_period_s, 0.0);
+  EXPECT_GE(noisy.relay_period_s, nominal.relay_period_s);
+  // the cycle is the valves' fill/vent through the PWM loop: well above 2 samples
+  EXPECT_GT(nominal.relay_period_s, 10.0 * tc);
+}
+
 // The learning variant reduces the error from period to period, on the nominal rig and on
 // a slow regulator (100 ms lag, 12 ms dead time), up to the sensor-noise floor.
 TEST(ExperimentTuning, LearningReducesTheErrorMonotonically) {

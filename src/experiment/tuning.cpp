@@ -32,6 +32,23 @@ double delayed_sse(const std::vector<double>& z, const std::vector<double>& x, s
   return sse;
 }
 
+// Upward crossings of `level` by y[from..): the first sample at or above it after y was last
+// below level - eps (the relay's own hysteresis), so that sensor noise around the level does
+// not count one crossing several times (a noisy pressure reading did: 182 "cycles" in 1 s of
+// an oscillation with a 12 ms period). Noise-free, every crossing of the level counts.
+std::vector<std::size_t> upward_crossings(const std::vector<double>& y, std::size_t from, double level, double eps) {
+  std::vector<std::size_t> ups;
+  bool armed = false;
+  for (std::size_t i = from; i < y.size(); ++i) {
+    if (y[i] < level - eps) armed = true;
+    if (armed && i > from && y[i - 1] < level && y[i] >= level) {
+      ups.push_back(i);
+      armed = false;
+    }
+  }
+  return ups;
+}
+
 }  // namespace
 
 RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead) {
@@ -263,11 +280,8 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   // the last second: amplitude and mean period between upward crossings of p0
   const std::size_t from = n - static_cast<std::size_t>(std::lround(1.0 / tc));
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  std::vector<std::size_t> ups;
-  for (std::size_t i = from; i < p.size(); ++i) {
-    lo = std::min(lo, p[i]), hi = std::max(hi, p[i]);
-    if (i > from && p[i - 1] < p0 && p[i] >= p0) ups.push_back(i);
-  }
+  for (std::size_t i = from; i < p.size(); ++i) lo = std::min(lo, p[i]), hi = std::max(hi, p[i]);
+  const std::vector<std::size_t> ups = upward_crossings(p, from, p0, eps);
   const double a = 0.5 * (hi - lo);
   if (ups.size() < 3 || !(a > eps))
     throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {} MPa "
@@ -330,11 +344,8 @@ bool position_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, c
   });
   const std::size_t from = n - static_cast<std::size_t>(std::lround(2.0 / tc));
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  std::vector<std::size_t> ups;
-  for (std::size_t i = from; i < x.size(); ++i) {
-    lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
-    if (i > from && x[i - 1] < x0 && x[i] >= x0) ups.push_back(i);
-  }
+  for (std::size_t i = from; i < x.size(); ++i) lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
+  const std::vector<std::size_t> ups = upward_crossings(x, from, x0, eps);
   amp = 0.5 * (hi - lo);
   crossings = ups.size();
   if (ups.size() < 3 || !(amp > eps)) return false;

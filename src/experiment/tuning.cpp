@@ -32,18 +32,24 @@ double delayed_sse(const std::vector<double>& z, const std::vector<double>& x, s
   return sse;
 }
 
-// Upward crossings of `level` by y[from..): the first sample at or above it after y was last
-// below level - eps (the relay's own hysteresis), so that sensor noise around the level does
-// not count one crossing several times (a noisy pressure reading did: 182 "cycles" in 1 s of
-// an oscillation with a 12 ms period). Noise-free, every crossing of the level counts.
+// Upward crossings of `level` by y[from..) as a Schmitt trigger with the relay's own hysteresis
+// counts them: armed once y was below level - eps, a crossing of the level counts when y then
+// reaches level + eps before it falls below level - eps again (the last crossing before that
+// is the one recorded). Counting every raw crossing, noise and the valves' PWM ripple around
+// the level counted one cycle several times (182 "cycles" in 1 s of an oscillation with a
+// 20 ms period on a noisy pressure sensor). Without noise every crossing of the level counts.
 std::vector<std::size_t> upward_crossings(const std::vector<double>& y, std::size_t from, double level, double eps) {
   std::vector<std::size_t> ups;
   bool armed = false;
+  std::size_t candidate = 0;
+  bool has_candidate = false;
   for (std::size_t i = from; i < y.size(); ++i) {
-    if (y[i] < level - eps) armed = true;
-    if (armed && i > from && y[i - 1] < level && y[i] >= level) {
-      ups.push_back(i);
-      armed = false;
+    if (y[i] < level - eps) armed = true, has_candidate = false;
+    if (!armed) continue;
+    if (i > from && y[i - 1] < level && y[i] >= level) candidate = i, has_candidate = true;
+    if (has_candidate && y[i] >= level + eps) {
+      ups.push_back(candidate);
+      armed = has_candidate = false;
     }
   }
   return ups;

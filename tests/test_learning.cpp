@@ -388,8 +388,8 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
 
 // A heavy load (45 kg) rings at 3 Hz with damping 0.27: the design contracts on the identified
 // loop (bound 0.978) but on the rig the 3-6 Hz error grows after the 5th period (RMS 0.374 ->
-// 0.504 mm by the 10th without supervision). The supervisor halves L after each rise, so the
-// last period ends below every period before the first rise.
+// 0.504 mm by the 10th without supervision). After each rise the supervisor restores the best
+// correction and halves L, so the last period ends below every period before the first rise.
 TEST(ExperimentTuning, LearningSupervisorStopsTheGrowthOnAHeavyLoad) {
   PamRigParams heavy;
   heavy.load.mass = 45.0;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <tuple>
@@ -153,6 +154,34 @@ TEST(Learning, SupervisorRestoresTheBestCorrectionAndHalvesTheGain) {
     EXPECT_DOUBLE_EQ(ilc.gain(), 0.4);
     EXPECT_EQ(ilc.correction(), 0.0);
   }
+}
+
+// A copy carries on exactly as the original would, also after the original is gone (the
+// supervisor's bookkeeping holds no pointer into the object's own buffers).
+TEST(Learning, CopyCarriesOnAsTheOriginal) {
+  LearningParams p;
+  p.period = 60;
+  p.gain = 0.4;
+  p.lead = 4;
+  p.half_width = 3;
+  p.rise_tolerance = 0.0;
+  auto error = [](std::size_t n) { return std::sin(0.37 * static_cast<double>(n)) + (n / 60 == 1 ? 0.0 : 0.5); };
+  IterativeLearning reference(p);
+  std::unique_ptr<IterativeLearning> original = std::make_unique<IterativeLearning>(p);
+  std::size_t n = 0;
+  for (; n < 122; ++n) {  // two period ends; the copy is made while the end of c_2 is computed from the best
+    reference.step(error(n));
+    original->step(error(n));
+  }
+  IterativeLearning copy = *original;
+  original.reset();
+  for (; n < 400; ++n) {
+    ASSERT_EQ(copy.correction(2), reference.correction(2)) << "sample " << n;
+    reference.step(error(n));
+    copy.step(error(n));
+  }
+  EXPECT_EQ(copy.gain_cuts(), reference.gain_cuts());
+  EXPECT_GT(reference.gain_cuts(), 0u);
 }
 
 // Q has unit DC gain (sum of taps 1): a constant error e learns c = L e after one period,

@@ -84,7 +84,7 @@ class IterativeLearning {
 
   std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
   std::vector<double> c_best_;            // supervision: the correction of the best period
-  const double* tail_base_ = nullptr;     // c_{j-1}, from which the end of c_j is computed
+  bool tail_from_best_ = false;           // c_{j-1}, from which the end of c_j is computed, is in c_best_ (else c_next_); a flag, not a pointer, so copies stay valid
   bool best_valid_ = false;               // c_best_ holds a measured correction
   bool skip_tail_ = false;                // c_j is a restored best: complete already
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}

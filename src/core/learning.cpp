@@ -82,7 +82,7 @@ void IterativeLearning::reset() noexcept {
   gain_ = p_.gain;
   sse_ = 0.0;
   least_mse_ = std::numeric_limits<double>::infinity();
-  tail_base_ = c_next_.data();
+  tail_from_best_ = false;
   best_valid_ = skip_tail_ = false;
 }
 
@@ -167,7 +167,7 @@ void IterativeLearning::step(double error) noexcept {
   if (k_ >= dh) {
     c_next_[k_ - dh] = update_at(k_ - dh, c_cur_.data(), false);
   } else if (j_ >= 1 && !skip_tail_) {
-    c_cur_[N + k_ - dh] = update_at(N + k_ - dh, tail_base_, true);
+    c_cur_[N + k_ - dh] = update_at(N + k_ - dh, tail_from_best_ ? c_best_.data() : c_next_.data(), true);
   }
   if (++k_ == N) end_period();
 }
@@ -186,7 +186,7 @@ void IterativeLearning::end_period() noexcept {
     // end of c_{j+1} is computed from there, and the old best's buffer becomes the scratch
     std::swap(c_best_, c_cur_);
     std::swap(c_cur_, c_next_);
-    tail_base_ = c_best_.data();
+    tail_from_best_ = true;
     least_mse_ = mse;
     best_valid_ = true;
   } else if (std::isfinite(allowed) && mse > allowed * allowed * least_mse_) {
@@ -199,7 +199,7 @@ void IterativeLearning::end_period() noexcept {
     ++cuts_;
   } else {
     std::swap(c_cur_, c_next_);
-    tail_base_ = c_next_.data();
+    tail_from_best_ = false;
   }
   std::swap(e_cur_, e_prev_);
   k_ = 0;

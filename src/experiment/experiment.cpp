@@ -507,6 +507,21 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           const std::size_t last = lr.t.size() - std::min(lr.t.size(), ref.period);  // the scored last period
           if (std::string note = saturation_note(lr, last, lr.t.size()); !note.empty())
             res.messages.push_back(std::move(note));
+          // a learning run that ends above the loop it learns on must not look like an improvement
+          for (const TrackingRun& base : res.runs)
+            if (base.variant == v.name && base.reference == ref.name &&
+                lr.errors.rms_error_mm > base.errors.rms_error_mm && lr.periods.size() >= 2) {
+              const double before = lr.periods[lr.periods.size() - 2].rms_error_mm;
+              res.messages.push_back(fmt::format(
+                  "learning ({}): after {} periods its RMS error, {:.3f} mm, is above the {} run's {:.3f} mm (it "
+                  "learns on a more robust, slower loop); {}",
+                  ref.name, lr.periods.size(), lr.errors.rms_error_mm, v.name, base.errors.rms_error_mm,
+                  lr.errors.rms_error_mm < before
+                      ? fmt::format("it was still falling ({:.3f} mm the period before): more periods "
+                                    "(--learning-periods) continue it",
+                                    before)
+                      : std::string("it was no longer falling")));
+            }
           res.runs.push_back(std::move(lr));
         } catch (const Error& e) {  // no design contracts on this rig: no learning run, and say why
           res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));

@@ -115,12 +115,7 @@ TEST(Learning, SupervisorRestoresTheBestCorrectionAndHalvesTheGain) {
   const std::vector<std::size_t> cuts_after{0, 0, 0, 1, 1, 2, 2};
   for (double tol : {0.1, std::numeric_limits<double>::infinity()}) {
     const bool supervised = std::isfinite(tol);
-    LearningParams p;
-    p.period = 40;
-    p.gain = 0.4;
-    p.lead = 3;
-    p.half_width = 2;
-    p.rise_tolerance = tol;
+    const LearningParams p{.period = 40, .gain = 0.4, .lead = 3, .half_width = 2, .rise_tolerance = tol};
     IterativeLearning ilc(p);
     std::vector<std::vector<double>> applied(rms.size());
     for (std::size_t j = 0; j < rms.size(); ++j) {
@@ -159,12 +154,7 @@ TEST(Learning, SupervisorRestoresTheBestCorrectionAndHalvesTheGain) {
 // A copy carries on exactly as the original would, also after the original is gone (the
 // supervisor's bookkeeping holds no pointer into the object's own buffers).
 TEST(Learning, CopyCarriesOnAsTheOriginal) {
-  LearningParams p;
-  p.period = 60;
-  p.gain = 0.4;
-  p.lead = 4;
-  p.half_width = 3;
-  p.rise_tolerance = 0.0;
+  const LearningParams p{.period = 60, .gain = 0.4, .lead = 4, .half_width = 3, .rise_tolerance = 0.0};
   auto error = [](std::size_t n) { return std::sin(0.37 * static_cast<double>(n)) + (n / 60 == 1 ? 0.0 : 0.5); };
   IterativeLearning reference(p);
   std::unique_ptr<IterativeLearning> original = std::make_unique<IterativeLearning>(p);
@@ -353,13 +343,21 @@ TEST(Learning, StepDoesNotAllocate) {
 
 namespace {
 
-ExperimentResult run_gpi_pid(const PamRigParams& rig, int periods) {
+// gpi-pid on `rig` with `periods` of learning; `pinned`: hysteron's model pinned to mpi-asym
+// and no adaptive run (the kind the default run chooses, without fitting the others).
+ExperimentOptions gpi_pid_options(const PamRigParams& rig, int periods, bool pinned = false) {
   ExperimentOptions o;
   o.name = "gpi-pid";
   o.rig = rig;
   o.learning_periods = periods;
-  return run_experiment(o);
+  if (pinned) {
+    o.adaptive = false;
+    o.model = FitModel::mpi_asym;
+  }
+  return o;
 }
+
+ExperimentResult run_gpi_pid(const PamRigParams& rig, int periods) { return run_experiment(gpi_pid_options(rig, periods)); }
 
 const TrackingRun& find_run(const ExperimentResult& r, const std::string& variant) {
   for (const auto& run : r.runs)
@@ -422,13 +420,7 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
 TEST(ExperimentTuning, LearningSupervisorStopsTheGrowthOnAHeavyLoad) {
   PamRigParams heavy;
   heavy.load.mass = 45.0;
-  ExperimentOptions o;
-  o.name = "gpi-pid";
-  o.rig = heavy;
-  o.learning_periods = 10;
-  o.adaptive = false;
-  o.model = FitModel::mpi_asym;
-  const ExperimentResult r = run_experiment(o);
+  const ExperimentResult r = run_experiment(gpi_pid_options(heavy, 10, true));
   const TrackingRun& l = find_run(r, "learning");
   ASSERT_EQ(l.periods.size(), 10u);
   std::size_t first_rise = 0;
@@ -540,13 +532,7 @@ TEST(ExperimentTuning, GainTrialDetunesTheLoopWhereItWouldOscillate) {
   ASSERT_NE(worst.load.mass, PamRigParams{}.load.mass);
   std::vector<ExperimentResult> rs;
   for (const PamRigParams& rig : {PamRigParams{}, worst}) {
-    ExperimentOptions o;
-    o.name = "gpi-pid";
-    o.rig = rig;
-    o.learning_periods = 0;
-    o.adaptive = false;
-    o.model = FitModel::mpi_asym;
-    rs.push_back(run_experiment(o));
+    rs.push_back(run_experiment(gpi_pid_options(rig, 0, true)));
     const ExperimentResult& r = rs.back();
     ASSERT_EQ(r.gain_trials.size(), 1u);
     const GainTrial& g = r.gain_trials[0];

@@ -15,11 +15,11 @@
 // Supervision (optional, LearningParams::rise_tolerance): the bound above holds for the
 // identified linear loop, not for the rig. The class keeps the best correction, the one
 // whose period had the least mean squared error, from the second period on (the first
-// starts from the loop's initial state, so its error is not comparable). When a completed period's mean squared
-// error exceeds (1 + rise_tolerance)^2 times the best's, the next period applies the best
-// correction again (re-measuring it) and L is halved for the updates from then on: as
-// L -> 0 every frequency contracts by |Q(w)| < 1, whatever T is. Bookkeeping only swaps
-// buffers at the period's end (no copy, no burst).
+// starts from the loop's initial state, so its error is not comparable). When a completed
+// period's mean squared error exceeds (1 + rise_tolerance)^2 times the best's, the next
+// period applies the best correction again (re-measuring it) and L is halved for the updates
+// from then on: as L -> 0 every frequency contracts by |Q(w)| < 1, whatever T is.
+// Bookkeeping only swaps buffers at the period's end (no copy, no burst).
 //
 // step() never allocates, never throws and is deterministic; its cost is
 // min(2h + 1, ~13 sqrt(h)) taps per sample (the update of c_{j+1} is computed progressively, d + h
@@ -76,15 +76,16 @@ class IterativeLearning {
 
  private:
   double update_at(std::size_t i, const double* c, bool tail) const noexcept;
+  void end_period() noexcept;  // swaps the generations; supervision (see above)
 
   LearningParams p_;
   std::vector<double> q_;                 // 2h + 1 filter taps
   std::size_t reach_ = 0;                 // taps m with |m| <= reach_ are summed (the rest < 1e-18 of q_0)
-  void end_period() noexcept;
-
   std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
   std::vector<double> c_best_;            // supervision: the correction of the best period
-  bool tail_from_best_ = false;           // c_{j-1}, from which the end of c_j is computed, is in c_best_ (else c_next_); a flag, not a pointer, so copies stay valid
+  // c_{j-1}, from which the end of c_j is computed, is in c_best_ (else c_next_); a flag, not a
+  // pointer into the buffers, so that a copy of the object stays valid
+  bool tail_from_best_ = false;
   bool best_valid_ = false;               // c_best_ holds a measured correction
   bool skip_tail_ = false;                // c_j is a restored best: complete already
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}

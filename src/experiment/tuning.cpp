@@ -55,6 +55,32 @@ std::vector<std::size_t> upward_crossings(const std::vector<double>& y, std::siz
   return ups;
 }
 
+// The limit cycle of a relay test in y[from..) around `level` (docs/control.md, section 1):
+// amplitude a = half the peak-to-peak, the cycles counted by upward_crossings, their mean
+// period T_u [s] and the describing function's ultimate gain K_u = 4 h / (pi sqrt(a^2 - eps^2))
+// for a relay of amplitude h and hysteresis eps. `oscillated`: at least 3 crossings and
+// a > eps (else T_u and K_u are 0).
+struct RelayCycle {
+  double amplitude = 0.0;
+  std::size_t crossings = 0;
+  double period_s = 0.0, ultimate_gain = 0.0;
+  bool oscillated = false;
+};
+
+RelayCycle relay_cycle(const std::vector<double>& y, std::size_t from, double level, double eps, double h, double tc) {
+  RelayCycle r;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = from; i < y.size(); ++i) lo = std::min(lo, y[i]), hi = std::max(hi, y[i]);
+  const std::vector<std::size_t> ups = upward_crossings(y, from, level, eps);
+  r.amplitude = 0.5 * (hi - lo);
+  r.crossings = ups.size();
+  r.oscillated = ups.size() >= 3 && r.amplitude > eps;
+  if (!r.oscillated) return r;
+  r.period_s = static_cast<double>(ups.back() - ups.front()) * tc / static_cast<double>(ups.size() - 1);
+  r.ultimate_gain = 4.0 * h / (std::numbers::pi * std::sqrt(r.amplitude * r.amplitude - eps * eps));
+  return r;
+}
+
 }  // namespace
 
 RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead) {
@@ -284,16 +310,12 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
     return valves(duty, p0);
   });
   // the last second: amplitude and mean period between upward crossings of p0
-  const std::size_t from = n - static_cast<std::size_t>(std::lround(1.0 / tc));
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (std::size_t i = from; i < p.size(); ++i) lo = std::min(lo, p[i]), hi = std::max(hi, p[i]);
-  const std::vector<std::size_t> ups = upward_crossings(p, from, p0, eps);
-  const double a = 0.5 * (hi - lo);
-  if (ups.size() < 3 || !(a > eps))
+  const RelayCycle cycle = relay_cycle(p, n - static_cast<std::size_t>(std::lround(1.0 / tc)), p0, eps, h, tc);
+  if (!cycle.oscillated)
     throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {} MPa "
-                            "(amplitude {} MPa, {} crossings)", p0, a, ups.size()));
-  d.relay_period_s = static_cast<double>(ups.back() - ups.front()) * tc / static_cast<double>(ups.size() - 1);
-  d.relay_gain = 4.0 * h / (std::numbers::pi * std::sqrt(a * a - eps * eps));
+                            "(amplitude {} MPa, {} crossings)", p0, cycle.amplitude, cycle.crossings));
+  d.relay_period_s = cycle.period_s;
+  d.relay_gain = cycle.ultimate_gain;
 }
 
 PidParams tyreus_luyben_pi(const RigDynamics& d, double tc) {
@@ -313,11 +335,9 @@ namespace hysteron::experiment {
 namespace {
 
 // One relay run of the position loop with amplitude h [MPa] around p0 (docs/control.md,
-// section 1). Fills `d` and returns true when the contraction oscillated (at least 3 upward
-// crossings of its level and an amplitude above the relay's hysteresis in the last 2 s);
-// else `amp` and `crossings` say what was seen.
-bool position_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator, double p0,
-                        double h, RigDynamics& d, double& amp, std::size_t& crossings) {
+// section 1): the limit cycle of its last 2 s; fills `d` where the contraction oscillated.
+RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator,
+                              double p0, double h, RigDynamics& d) {
   const auto settle = static_cast<std::size_t>(std::lround(1.5 / tc));
   const auto quiet = static_cast<std::size_t>(std::lround(0.3 / tc));
   const auto n = settle + static_cast<std::size_t>(std::lround(4.0 / tc));
@@ -348,17 +368,12 @@ bool position_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, c
     ++k;
     return actuator(p, o);
   });
-  const std::size_t from = n - static_cast<std::size_t>(std::lround(2.0 / tc));
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (std::size_t i = from; i < x.size(); ++i) lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
-  const std::vector<std::size_t> ups = upward_crossings(x, from, x0, eps);
-  amp = 0.5 * (hi - lo);
-  crossings = ups.size();
-  if (ups.size() < 3 || !(amp > eps)) return false;
+  const RelayCycle cycle = relay_cycle(x, n - static_cast<std::size_t>(std::lround(2.0 / tc)), x0, eps, h, tc);
+  if (!cycle.oscillated) return cycle;
   d.position_relay_amplitude_mpa = h;
-  d.position_relay_period_s = static_cast<double>(ups.back() - ups.front()) * tc / static_cast<double>(ups.size() - 1);
-  d.position_relay_gain = 4.0 * h / (std::numbers::pi * std::sqrt(amp * amp - eps * eps));
-  return true;
+  d.position_relay_period_s = cycle.period_s;
+  d.position_relay_gain = cycle.ultimate_gain;
+  return cycle;
 }
 
 }  // namespace
@@ -372,11 +387,10 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
   // process), while p0 +- h stays within the actuator's 0..kPressureMax.
   std::string seen;
   for (double h = kPositionRelayAmplitude; p0 - h >= 0.0 && p0 + h <= kPressureMax; h *= 2.0) {
-    double amp = 0.0;
-    std::size_t crossings = 0;
-    if (position_relay_run(rp, seed, tc, make_actuator(), p0, h, d, amp, crossings)) return;
+    const RelayCycle cycle = position_relay_run(rp, seed, tc, make_actuator(), p0, h, d);
+    if (cycle.oscillated) return;
     seen += fmt::format("{}+-{:g} MPa: amplitude {:.3g} mm, {} crossings in 2 s", seen.empty() ? "" : "; ", h,
-                        amp * 1e3, crossings);
+                        cycle.amplitude * 1e3, cycle.crossings);
   }
   throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate around {} MPa at any "
                           "amplitude within the actuator's 0..{} MPa ({})",

@@ -119,6 +119,7 @@ struct RigDynamics {
   // (s^2 + 2 zeta w_n s + w_n^2) with G(i w_u) = -1 / K_u (0: no mode fits).
   double mode_frequency_hz = 0.0;
   double mode_damping = 0.0;
+  bool operator==(const RigDynamics&) const = default;
 };
 
 struct TrackingErrors {

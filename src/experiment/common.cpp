@@ -25,15 +25,16 @@ RigInputs valves(double duty, double desired_mpa) {
 }
 
 IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
-                            double tc) {
+                            double tc, const Actuator& actuator) {
   PamRig rig(rp, seed);
   rig.reset();
   IdRecord rec;
   std::size_t k = 0;
   rig.run(static_cast<double>(pressure.size()) * tc, tc, [&](const RigOutputs& o) {
-    const RigInputs in = regulator(pressure[std::min(k, pressure.size() - 1)]);
+    const double desired = std::clamp(pressure[std::min(k, pressure.size() - 1)], 0.0, kPressureMax);
+    const RigInputs in = actuator(desired, o);
     rec.t.push_back(o.time);
-    rec.p_cmd.push_back(in.pressure_command);
+    rec.p_cmd.push_back(desired);
     rec.p.push_back(o.pressure_measured * 1e-6);
     rec.x_mm.push_back(o.contraction_measured * 1e3);
     ++k;

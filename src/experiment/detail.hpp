@@ -119,8 +119,14 @@ std::string adaptive_note(const AdaptiveInverse& a, const std::string& reference
 std::string adaptive_description(const AdaptiveInverse& a);
 
 // ---- shared machinery (common.cpp) ------------------------------------------------
+// What turns a desired pressure [MPa] into the rig's inputs, given its outputs: the
+// proportional regulator, or the switching valves behind a pressure loop.
+using Actuator = std::function<RigInputs(double desired_mpa, const RigOutputs&)>;
+// The identification run: `pressure` [MPa] at the control period through `actuator` (the
+// one the experiment's loops use, so that the dynamics identified on it are theirs).
+// Logs the desired pressure as p_cmd.
 IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
-                            double tc);
+                            double tc, const Actuator& actuator);
 IdRecord decimate(const IdRecord& r, std::size_t every);
 ModelParams straight_line(const IdRecord& r);
 // fit() with its model checked: a failed fit or a model that cannot be inverted is a
@@ -165,7 +171,6 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
 // Fills position_relay_gain, position_relay_period_s and position_relay_amplitude_mpa;
 // throws hysteron::Error naming every amplitude tried if none oscillates.
 inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h tried
-using Actuator = std::function<RigInputs(double desired_mpa, const RigOutputs&)>;
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
                          const std::function<Actuator()>& make_actuator, RigDynamics& d);
 // The second-order mode through the relay's point (RigDynamics::mode_*): with F the

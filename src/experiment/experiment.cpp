@@ -406,8 +406,22 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.seed = o.seed;
   res.published = spec.published;
 
+  // 0. the actuator of every run: the regulator, or the valves behind a pressure PI tuned
+  //    by a relay test of the valves (first: the identification runs through it too)
+  RigDynamics valves_relay;
+  PidParams pressure_loop;
+  if (spec.valves) {
+    relay_test(o.rig, o.seed + 15485863, tc, valves_relay);
+    pressure_loop = tyreus_luyben_pi(valves_relay, tc);
+  }
+  auto make_actuator = [&]() -> Actuator {
+    if (!spec.valves) return [](double p, const RigOutputs&) { return regulator(p); };
+    auto inner = std::make_shared<Pid>(pressure_loop);
+    return [inner](double p, const RigOutputs& out) { return valves(inner->step(p, out.pressure_measured * 1e-6), p); };
+  };
+
   // 1. identification run and the paper's fit on the major loop
-  const IdRecord id = identification_run(o.rig, o.seed, spec.id_pressure(tc), tc);
+  const IdRecord id = identification_run(o.rig, o.seed, spec.id_pressure(tc), tc, make_actuator());
   res.id_t = id.t;
   res.id_pressure_command_mpa = id.p_cmd;
   res.id_pressure_mpa = id.p;
@@ -426,24 +440,16 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
 
   // 2. hysteron's model: candidates fitted on the whole record, chosen on a second
   //    identification run (other seed, other pressure sequence).
-  const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919, spec.id2_pressure(tc), tc), every);
+  const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919, spec.id2_pressure(tc), tc, make_actuator()), every);
   choose_model(o, spec, idf, id2, fo, static_cast<double>(every) * tc, res);
   res.baseline_model = straight_line(id);
 
-  // 3. the rig's dynamics, from the identification run (and a relay test for the valves)
+  // 3. the rig's dynamics through its actuator, from the identification run
   std::size_t lead = 0;
   res.dynamics = identify_dynamics(res.best_fit.model, id, tc, lead);
   res.lead_s = static_cast<double>(lead) * tc;
-  PidParams pressure_loop;
-  if (spec.valves) {
-    relay_test(o.rig, o.seed + 15485863, tc, res.dynamics);
-    pressure_loop = tyreus_luyben_pi(res.dynamics, tc);
-  }
-  auto make_actuator = [&]() -> Actuator {
-    if (!spec.valves) return [](double p, const RigOutputs&) { return regulator(p); };
-    auto inner = std::make_shared<Pid>(pressure_loop);
-    return [inner](double p, const RigOutputs& out) { return valves(inner->step(p, out.pressure_measured * 1e-6), p); };
-  };
+  res.dynamics.relay_gain = valves_relay.relay_gain;
+  res.dynamics.relay_period_s = valves_relay.relay_period_s;
   position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics);
   fit_load_mode(res.dynamics);
   const Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};

@@ -84,6 +84,10 @@ struct Spec {
   std::vector<Variant> variants;            // run in this order; `learning` after `compensated`
   std::string learning_on = "compensated";  // the loop the learning variant runs on
   bool valves = false;                      // run the relay test of the valves' pressure loop
+  // Without valves: k_p of the proportional pressure loop the hysteron variants put around the
+  // regulator (command = p_d + k_p (p_d - p_measured)); the identification and the relay tests
+  // run through it too, so the dynamics identified are those of the actuator the loops use.
+  double pressure_loop_gain = 0.0;
 };
 
 const Spec& gpi_pid_spec();

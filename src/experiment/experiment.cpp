@@ -415,7 +415,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     pressure_loop = tyreus_luyben_pi(valves_relay, tc);
   }
   auto make_actuator = [&]() -> Actuator {
-    if (!spec.valves) return [](double p, const RigOutputs&) { return regulator(p); };
+    if (!spec.valves)
+      return [k = spec.pressure_loop_gain](double p, const RigOutputs& out) {
+        const double pm = out.pressure_measured * 1e-6;
+        return regulator(k != 0.0 && std::isfinite(pm) ? p + k * (p - pm) : p);
+      };
     auto inner = std::make_shared<Pid>(pressure_loop);
     return [inner](double p, const RigOutputs& out) { return valves(inner->step(p, out.pressure_measured * 1e-6), p); };
   };

@@ -35,7 +35,6 @@ OpenLoopParams published(double tc) {
 // adaptive inverse as its feedforward.
 Loop adaptive_open_loop(const Context& c, bool frozen) {
   OpenLoopParams p = published(c.tc);
-  if (c.learning) p.pressure_gain = 0.0;
   p.position = position_pid(c);
   auto a = adaptive_inverse(c, frozen);
   auto ff = std::make_shared<AdaptiveFeedforward>(a);
@@ -77,6 +76,7 @@ const Spec& mpi_openloop_spec() {
     s.operators = 20;
     s.id_pressure = mpi_identification_pressure;
     s.id2_pressure = gpi_identification_pressure;
+    s.pressure_loop_gain = kPressureGain;
     s.references = [](double tc) {
       std::vector<Reference> r{{"triangle", mpi_triangle_contraction(tc, 1), 0, 0},
                                {"sine", mpi_sine_contraction(tc, 1), 0, 0}};
@@ -92,10 +92,9 @@ const Spec& mpi_openloop_spec() {
          }},
         {"compensated", true,
          [](const Context& c) {
+           // the paper's pressure loop, through which the rig was identified (Spec::pressure_loop_gain),
+           // and the PID from the relay test (and gain trial) on it
            OpenLoopParams p = published(c.tc);
-           // learning: the loop its design models (identified with the plain regulator, as the relay test)
-           if (c.learning) p.pressure_gain = 0.0;
-           // relay test (and gain trial) on the rig; the pressure loop only speeds the regulator up
            p.position = position_pid(c);
            return Loop{open_loop_law(c.result.best_fit.model, p),
                        fmt::format("best inverse model fed {:.0f} ms ahead, {} + PID position correction "

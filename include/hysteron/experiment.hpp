@@ -188,7 +188,9 @@ struct ExperimentResult {
   std::string name;
   std::string title;
   std::uint64_t seed = 0;
-  // identification run (logged at the control period)
+  // identification run (logged at the control period), through the actuator of the
+  // experiment's hysteron variants (the regulator, with mpi-openloop's pressure loop, or
+  // mpi-pwm's valves behind their pressure PI): the command is the desired pressure
   std::vector<double> id_t, id_pressure_command_mpa, id_pressure_mpa, id_contraction_mm;
   std::size_t id_train_end = 0;   // samples [0, id_train_end) are the major loop
   FitReport fit;                  // the paper's model, fitted on the major loop

@@ -677,8 +677,8 @@ TEST(ExperimentTuning, ZeroVibrationShaperCancelsTheIdentifiedMode) {
 }
 
 // The learning band ends at the position loop's ultimate frequency from its relay test
-// (|Q(w_u)| <= 1/sqrt(2)), and with it mpi-openloop's learning (no pressure loop, references
-// with reversals at 40/35/30 mm) converges period after period on both references. With the
+// (|Q(w_u)| <= 1/sqrt(2)), and with it mpi-openloop's learning (references with reversals at
+// 40/35/30 mm) converges period after period on both references. With the
 // widest band the identified linear loop allowed (|Q(w_u)| = 0.94) it stalled after the
 // second period and grew again (0.418 0.242 0.267 0.266 0.235 ... 0.301 mm on the triangle).
 TEST(ExperimentTuning, LearningBandEndsAtTheRelaysUltimateFrequency) {

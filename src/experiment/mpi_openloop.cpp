@@ -53,11 +53,10 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
   };
   const std::string name = c.reference->name;
   return Loop{std::move(law),
-              fmt::format("best inverse model fed {:.0f} ms ahead, {}; {} + PID position correction tuned by {} "
-                          "(Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
-                          c.result.lead_s * 1e3, adaptive_description(*a),
-                          p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", pid_origin(c), p.position.kp, p.position.ki,
-                          p.position.kd),
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; pressure loop (k_p = {:g}) + PID position "
+                          "correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
+                          c.result.lead_s * 1e3, adaptive_description(*a), p.pressure_gain, pid_origin(c),
+                          p.position.kp, p.position.ki, p.position.kd),
               p.position, [a, name] { return adaptive_note(*a, name); }};
 }
 
@@ -97,10 +96,11 @@ const Spec& mpi_openloop_spec() {
            OpenLoopParams p = published(c.tc);
            p.position = position_pid(c);
            return Loop{open_loop_law(c.result.best_fit.model, p),
-                       fmt::format("best inverse model fed {:.0f} ms ahead, {} + PID position correction "
-                                   "tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
-                                   c.result.lead_s * 1e3,
-                                   p.pressure_gain > 0 ? "pressure loop" : "no pressure loop", pid_origin(c), p.position.kp, p.position.ki, p.position.kd),
+                       fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop (k_p = {:g}) + PID "
+                                   "position correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = "
+                                   "{:.3g} MPa s/m)",
+                                   c.result.lead_s * 1e3, p.pressure_gain, pid_origin(c), p.position.kp,
+                                   p.position.ki, p.position.kd),
                        p.position};
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_open_loop(c, false); }},

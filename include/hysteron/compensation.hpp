@@ -5,6 +5,7 @@
 // pressure [MPa] to contraction in model units (model_scale per metre, 1000
 // for models fitted in mm). Every step() is allocation-free, noexcept and
 // deterministic; every pressure command is clamped to the pressure limits.
+#include <cmath>
 #include <cstddef>
 
 #include "hysteron/control.hpp"
@@ -66,6 +67,12 @@ struct OpenLoopParams {
   double pressure_gain = 0.5;        // k_p [-] of the pressure loop, >= 0
   PidParams position;                // kp = ki = 0: pure open loop (as published)
 };
+
+// The proportional pressure loop of OpenLoopController: p_d + k_p (p_d - p_meas) [MPa], or p_d
+// where the measured pressure is not finite (not clamped).
+inline double pressure_loop_command(double p_d, double pressure_mpa, double k_p) noexcept {
+  return std::isfinite(pressure_mpa) ? p_d + k_p * (p_d - pressure_mpa) : p_d;
+}
 
 class OpenLoopController {
  public:

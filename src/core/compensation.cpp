@@ -93,9 +93,7 @@ double OpenLoopController::step(double reference_m, double preview_m, double mea
   const Limits& lim = p_.feedforward.pressure_limits;
   double p_d = ff_.step(preview_m);
   if (use_position_) p_d = std::clamp(p_d + position_.step(reference_m, measured_m), lim.lo, lim.hi);
-  double cmd = p_d;
-  if (std::isfinite(pressure_mpa)) cmd = p_d + p_.pressure_gain * (p_d - pressure_mpa);
-  return std::clamp(cmd, lim.lo, lim.hi);
+  return std::clamp(pressure_loop_command(p_d, pressure_mpa, p_.pressure_gain), lim.lo, lim.hi);
 }
 
 CascadePwmController::CascadePwmController(const ModelParams& model, const CascadeParams& params)

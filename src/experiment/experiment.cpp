@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "detail.hpp"
+#include "hysteron/compensation.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
@@ -417,8 +418,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   auto make_actuator = [&]() -> Actuator {
     if (!spec.valves)
       return [k = spec.pressure_loop_gain](double p, const RigOutputs& out) {
-        const double pm = out.pressure_measured * 1e-6;
-        return regulator(k != 0.0 && std::isfinite(pm) ? p + k * (p - pm) : p);
+        return regulator(pressure_loop_command(p, out.pressure_measured * 1e-6, k));
       };
     auto inner = std::make_shared<Pid>(pressure_loop);
     return [inner](double p, const RigOutputs& out) { return valves(inner->step(p, out.pressure_measured * 1e-6), p); };

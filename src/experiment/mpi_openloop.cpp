@@ -47,9 +47,7 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
   Law law = [ff, position, use_position, kp](const Sample& s) {
     double p_d = ff->step(s);
     if (use_position) p_d = std::clamp(p_d + position->step(s.reference_m, s.measured_m), 0.0, kPressureMax);
-    double cmd = p_d;
-    if (std::isfinite(s.pressure_mpa)) cmd = p_d + kp * (p_d - s.pressure_mpa);
-    return regulator(cmd);
+    return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp));
   };
   const std::string name = c.reference->name;
   return Loop{std::move(law),

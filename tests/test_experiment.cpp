@@ -228,6 +228,44 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   EXPECT_TRUE(said);
 }
 
+// A supply of 5 bar absolute (0.4 MPa gauge) caps the muscle's pressure below the 0.6 MPa the
+// loops may command: the identification run commands 0.6 MPa but measures at most about 0.4,
+// so the reach's top is taken at 95 % of the pressure measured there, not at 0.57 MPa (which
+// the run never reaches: the paper's 95 mm top was kept, the loops held the command at the
+// limit and the compensated RMS was 9.1 mm). The nominal supply is not flagged.
+TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.rig.air.supply_pressure = 5e5;  // [Pa abs]
+  const ExperimentResult r = run_experiment(o);
+  const double p_meas_max = *std::max_element(r.id_pressure_mpa.begin(), r.id_pressure_mpa.end());
+  EXPECT_GT(p_meas_max, 0.37);  // supply 0.5 MPa abs - 0.1 MPa atmosphere, less the regulator's drop
+  EXPECT_LT(p_meas_max, 0.42);
+  EXPECT_NEAR(r.reach_pressure_max_mpa, p_meas_max, 0.01);  // the 11-sample mean against the raw samples
+  EXPECT_NEAR(r.reach_top_pressure_mpa, 0.95 * r.reach_pressure_max_mpa, 1e-12);
+  double top = INFINITY;  // least contraction on the record at or above that pressure
+  for (std::size_t k = 0; k < r.id_pressure_mpa.size(); ++k)
+    if (r.id_pressure_mpa[k] >= r.reach_top_pressure_mpa) top = std::min(top, r.id_contraction_mm[k]);
+  ASSERT_TRUE(std::isfinite(top));
+  ASSERT_EQ(r.reference_ranges.size(), 1u);
+  const ReferenceRange& rr = r.reference_ranges[0];
+  EXPECT_TRUE(rr.scaled);
+  EXPECT_TRUE(rr.reachable);
+  EXPECT_NEAR(rr.max_mm, top, 0.5);
+  EXPECT_LT(rr.max_mm, 80.0);  // well below the paper's 95 mm
+  bool said = false;
+  for (const auto& m : r.messages) said = said || m.find("cap it below the 0.60 MPa") != std::string::npos;
+  EXPECT_TRUE(said);
+  for (const auto& run : r.runs)
+    if (run.variant == "compensated") {
+      EXPECT_LT(run.errors.rms_error_mm, 1.0) << "was 9.1 mm with the 95 mm top kept";
+    }
+
+  o.rig = PamRigParams{};
+  const ExperimentResult n = run_experiment(o);
+  EXPECT_NEAR(n.reach_top_pressure_mpa, 0.57, 1e-12);
+  for (const auto& m : n.messages) EXPECT_EQ(m.find("cap it below"), std::string::npos) << m;
+}
+
 // A displacement sensor reading 10 mm high: the muscle at rest reads 10 mm, so the paper's
 // 5 mm bottom is out of reach (venting cannot go below rest). The reference is mapped onto
 // 10..95 mm (its top unchanged, within reach), and the compensated loop tracks it.

@@ -313,6 +313,9 @@ TEST(Results, ExperimentResultRoundTrip) {
   r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
   r.reach_min_mm = -0.0125;
   r.reach_max_mm = 84.75;
+  r.reach_top_mm = 64.875;
+  r.reach_top_pressure_mpa = 0.38;
+  r.reach_pressure_max_mpa = 0.4;
   r.reference_ranges = {{"triangle", 0.0, 40.0, 0.0, 40.0, false, true},
                         {"sine", 5.0, 95.0, 5.0, 80.5, true, true},
                         {"step", 0.0, 99.0, 0.0, 99.0, false, false}};
@@ -357,6 +360,9 @@ TEST(Results, ExperimentResultRoundTrip) {
   EXPECT_EQ(back.wall_time_s, r.wall_time_s);
   EXPECT_EQ(back.reach_min_mm, r.reach_min_mm);
   EXPECT_EQ(back.reach_max_mm, r.reach_max_mm);
+  EXPECT_EQ(back.reach_top_mm, r.reach_top_mm);
+  EXPECT_EQ(back.reach_top_pressure_mpa, r.reach_top_pressure_mpa);
+  EXPECT_EQ(back.reach_pressure_max_mpa, r.reach_pressure_max_mpa);
   EXPECT_EQ(back.reference_ranges, r.reference_ranges);
   EXPECT_EQ(back.published.source, r.published.source);
   ASSERT_EQ(back.published.errors.size(), 2u);

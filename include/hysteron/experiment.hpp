@@ -210,6 +210,14 @@ struct ExperimentResult {
   // moving mean of the measurement) [mm]; NaN in results written before it existed.
   double reach_min_mm = std::numeric_limits<double>::quiet_NaN();
   double reach_max_mm = std::numeric_limits<double>::quiet_NaN();
+  // The top of the reach: the least contraction at or above reach_top_pressure_mpa on the
+  // identification run (NaN if the run never got there) [mm], that pressure (95 % of the
+  // actuator's top pressure: 0.6 MPa, or the most the measured pressure reached where the
+  // supply caps it below) [MPa], and the most the measured pressure reached (11-sample mean)
+  // [MPa]; NaN in results written before them.
+  double reach_top_mm = std::numeric_limits<double>::quiet_NaN();
+  double reach_top_pressure_mpa = std::numeric_limits<double>::quiet_NaN();
+  double reach_pressure_max_mpa = std::numeric_limits<double>::quiet_NaN();
   std::vector<ReferenceRange> reference_ranges;  // one per reference, in the order run
   std::vector<GainTrial> gain_trials;            // one per reference with a compensated loop
   std::vector<std::string> messages;  // notes of the run (e.g. a candidate model skipped)

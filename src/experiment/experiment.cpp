@@ -174,15 +174,29 @@ std::vector<double> smoothed(const std::vector<double>& x) {
 
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
-// measured pressure first reached kPressureMax (1 - kPressureHeadroom) (the least
-// contraction at or above that pressure). A reference that leaves it is mapped affinely
-// onto its intersection with the reach (only the end that leaves it moves; a reference
-// whose bottom is the rest position keeps it). The ranges and a note per reference out of
-// reach go into the result.
+// measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
+// (the least contraction at or above that pressure). The top pressure is kPressureMax,
+// or less where the run commanded kPressureMax (1 - kPressureHeadroom) or more but the
+// measured pressure stayed below it: the supply (or the regulator, or the valves) caps the
+// actuator, and its top is the most the measured pressure reached (11-sample mean). A
+// reference that leaves the reach is mapped affinely onto its intersection with it (only
+// the end that leaves it moves; a reference whose bottom is the rest position keeps it).
+// The ranges and a note per reference out of reach go into the result.
 std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, std::vector<Reference> refs,
                                     ExperimentResult& res) {
-  const std::vector<double> x = smoothed(id.x_mm);
-  const double p_limit = (1.0 - kPressureHeadroom) * kPressureMax;
+  const std::vector<double> x = smoothed(id.x_mm), p = smoothed(id.p);
+  const double p_cmd_max = id.p_cmd.empty() ? 0.0 : *std::max_element(id.p_cmd.begin(), id.p_cmd.end());
+  res.reach_pressure_max_mpa = p.empty() ? 0.0 : *std::max_element(p.begin(), p.end());
+  const bool capped = p_cmd_max >= (1.0 - kPressureHeadroom) * kPressureMax &&
+                      res.reach_pressure_max_mpa < (1.0 - kPressureHeadroom) * kPressureMax;
+  const double p_top = capped ? res.reach_pressure_max_mpa : kPressureMax;
+  const double p_limit = (1.0 - kPressureHeadroom) * p_top;
+  if (capped)
+    res.messages.push_back(fmt::format(
+        "the actuator's pressure reached at most {:.3f} MPa in the identification run, whose command went up to "
+        "{:.3f} MPa: the supply, regulator or valves cap it below the {:.2f} MPa the loops may command; the "
+        "rig's reach is measured up to {:.3f} MPa ({:.0f} % below that top as headroom)",
+        res.reach_pressure_max_mpa, p_cmd_max, kPressureMax, p_limit, kPressureHeadroom * 100.0));
   double top = std::numeric_limits<double>::infinity();
   res.reach_min_mm = std::numeric_limits<double>::infinity();
   res.reach_max_mm = -res.reach_min_mm;
@@ -192,6 +206,8 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
     if (id.p[k] >= p_limit) top = std::min(top, x[k]);
   }
   const bool known_top = std::isfinite(top);  // else the identification never reached p_limit
+  res.reach_top_mm = known_top ? top : std::numeric_limits<double>::quiet_NaN();
+  res.reach_top_pressure_mpa = p_limit;
   // the rest position, with the sensor's resolution as tolerance: 0.1 % of the reached span
   const double bottom = res.reach_min_mm - 1e-3 * (res.reach_max_mm - res.reach_min_mm);
   for (Reference& ref : refs) {
@@ -203,9 +219,10 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
     const bool above = known_top && rr.paper_max_mm > top, below = rr.paper_min_mm < bottom;
     if (above || below) {
       const std::string why = fmt::format(
-          "the rig's reach in its identification run is {:.1f} mm at rest to {:.1f} mm on its ascent at {:.2f} MPa "
+          "the rig's reach in its identification run is {:.1f} mm at rest to {} on its ascent at {:.2f} MPa "
           "({:.0f} % of the actuator's {:.2f} MPa kept as headroom for the position loop; {:.1f} mm at most)",
-          res.reach_min_mm, top, p_limit, kPressureHeadroom * 100.0, kPressureMax, res.reach_max_mm);
+          res.reach_min_mm, known_top ? fmt::format("{:.1f} mm", top) : std::string("an unknown contraction (never reached)"),
+          p_limit, kPressureHeadroom * 100.0, p_top, res.reach_max_mm);
       const double new_lo = below ? res.reach_min_mm : rr.paper_min_mm, new_hi = above ? top : rr.paper_max_mm;
       if (o.fit_references && new_hi > new_lo && rr.paper_max_mm > rr.paper_min_mm) {
         const double s = (new_hi - new_lo) / (rr.paper_max_mm - rr.paper_min_mm);

@@ -536,7 +536,11 @@ json to_json(const ExperimentResult& r) {
                    {"mode_damping", number(r.dynamics.mode_damping)},
                    {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
                    {"pressure_relay_period_s", number(r.dynamics.relay_period_s)}};
-  j["reach"] = {{"min_mm", number(r.reach_min_mm)}, {"max_mm", number(r.reach_max_mm)}};
+  j["reach"] = {{"min_mm", number(r.reach_min_mm)},
+                {"max_mm", number(r.reach_max_mm)},
+                {"top_mm", number(r.reach_top_mm)},
+                {"top_pressure_mpa", number(r.reach_top_pressure_mpa)},
+                {"pressure_max_mpa", number(r.reach_pressure_max_mpa)}};
   j["references"] = json::array();
   for (const auto& rr : r.reference_ranges)
     j["references"].push_back({{"reference", rr.reference},
@@ -642,6 +646,9 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     const std::string aw = key_where(where, "reach");
     r.reach_min_mm = get_double(a, "min_mm", aw);
     r.reach_max_mm = get_double(a, "max_mm", aw);
+    r.reach_top_mm = opt_double(a, "top_mm", aw, nan);  // absent in files before them
+    r.reach_top_pressure_mpa = opt_double(a, "top_pressure_mpa", aw, nan);
+    r.reach_pressure_max_mpa = opt_double(a, "pressure_max_mpa", aw, nan);
   }
   if (j.contains("references")) {
     const json& rs = j["references"];

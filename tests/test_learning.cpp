@@ -479,6 +479,27 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
   }
 }
 
+// A slow rig oscillates under the relay with a period too long for 3 cycles in the 2 s the
+// test measured: the contraction crosses its level (so the hysteresis does not hold it), and
+// the run is made longer instead of failing or raising the amplitude. A regulator with a
+// 0.4 s lag and 60 ms dead time and a 40 kg load: the relay's period is about 1.6 s (with
+// the 2 s window the amplitude was raised instead; mpi-pwm on a 16 mm muscle through the
+// paper's valves failed with "2 crossings in 2 s" at every amplitude).
+TEST(ExperimentTuning, RelayRunsLongerWhereTheRigIsSlow) {
+  const double tc = 1e-3;
+  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  PamRigParams slow;
+  slow.regulator.time_constant = 0.4;
+  slow.regulator.dead_time = 0.06;
+  slow.load.mass = 40.0;
+  RigDynamics d;
+  experiment::position_relay_test(slow, 7, tc, make_actuator, d);
+  EXPECT_EQ(d.position_relay_amplitude_mpa, experiment::kPositionRelayAmplitude);  // not raised
+  EXPECT_GT(d.position_relay_period_s, 1.0);  // 3 cycles do not fit in 2 s
+  EXPECT_LT(d.position_relay_period_s, 4.0);  // 3 cycles fit in the longest window, 8 s
+  EXPECT_GT(d.position_relay_gain, 0.0);
+}
+
 // A heavy load (45 kg) rings at 3 Hz with damping 0.27: the design contracts on the identified
 // loop (bound 0.978) but on the rig the 3-6 Hz error grows after the 5th period (RMS 0.374 ->
 // 0.504 mm by the 10th without supervision). After each rise the supervisor restores the best

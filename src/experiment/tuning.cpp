@@ -334,13 +334,14 @@ namespace hysteron::experiment {
 
 namespace {
 
-// One relay run of the position loop with amplitude h [MPa] around p0 (docs/control.md,
-// section 1): the limit cycle of its last 2 s; fills `d` where the contraction oscillated.
+// One relay run of the position loop with amplitude h [MPa] around p0 for `relay_s` seconds
+// after 1.5 s at p0 (docs/control.md, section 1): the limit cycle of its last relay_s / 2;
+// fills `d` where the contraction oscillated.
 RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, const Actuator& actuator,
-                              double p0, double h, RigDynamics& d) {
+                              double p0, double h, double relay_s, RigDynamics& d) {
   const auto settle = static_cast<std::size_t>(std::lround(1.5 / tc));
   const auto quiet = static_cast<std::size_t>(std::lround(0.3 / tc));
-  const auto n = settle + static_cast<std::size_t>(std::lround(4.0 / tc));
+  const auto n = settle + static_cast<std::size_t>(std::lround(relay_s / tc));
   PamRig rig(rp, seed);
   rig.reset();
   std::vector<double> x;
@@ -368,7 +369,8 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
     ++k;
     return actuator(p, o);
   });
-  const RelayCycle cycle = relay_cycle(x, n - static_cast<std::size_t>(std::lround(2.0 / tc)), x0, eps, h, tc);
+  const RelayCycle cycle =
+      relay_cycle(x, n - static_cast<std::size_t>(std::lround(0.5 * relay_s / tc)), x0, eps, h, tc);
   if (!cycle.oscillated) return cycle;
   d.position_relay_amplitude_mpa = h;
   d.position_relay_period_s = cycle.period_s;
@@ -384,13 +386,22 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
   // A relay must overcome the rig's hysteresis to make the muscle reverse: where the
   // pressure band is wider than the amplitude the contraction only creeps and does not
   // cross its level. Then the amplitude is doubled (Astrom and Hagglund adjust it to the
-  // process), while p0 +- h stays within the actuator's 0..kPressureMax.
+  // process), while p0 +- h stays within the actuator's 0..kPressureMax. A slow rig (a large
+  // muscle filled through small valves, a heavy load) oscillates with a period too long for
+  // 3 cycles in the measured window: where the contraction did cross its level (the relay
+  // switched, so it is not the hysteresis that holds it), the run is repeated twice and four
+  // times as long (8, 16 s of relay, the cycle measured over the last half) before the
+  // amplitude grows.
+  constexpr double relay_s = 4.0;  // [s] of relay; the cycle is measured over its last half
   std::string seen;
   for (double h = kPositionRelayAmplitude; p0 - h >= 0.0 && p0 + h <= kPressureMax; h *= 2.0) {
-    const RelayCycle cycle = position_relay_run(rp, seed, tc, make_actuator(), p0, h, d);
-    if (cycle.oscillated) return;
-    seen += fmt::format("{}+-{:g} MPa: amplitude {:.3g} mm, {} crossings in 2 s", seen.empty() ? "" : "; ", h,
-                        cycle.amplitude * 1e3, cycle.crossings);
+    for (double len = relay_s; len <= 4.0 * relay_s; len *= 2.0) {
+      const RelayCycle cycle = position_relay_run(rp, seed, tc, make_actuator(), p0, h, len, d);
+      if (cycle.oscillated) return;
+      seen += fmt::format("{}+-{:g} MPa: amplitude {:.3g} mm, {} crossings in {:g} s", seen.empty() ? "" : "; ", h,
+                          cycle.amplitude * 1e3, cycle.crossings, 0.5 * len);
+      if (cycle.crossings == 0) break;  // held by the hysteresis: a larger amplitude, not a longer run
+    }
   }
   throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate around {} MPa at any "
                           "amplitude within the actuator's 0..{} MPa ({})",

@@ -266,6 +266,37 @@ TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
   for (const auto& m : n.messages) EXPECT_EQ(m.find("cap it below"), std::string::npos) << m;
 }
 
+// A muscle twice as long (1 m) contracts twice as far per kPa: the paper's 5..95 mm sinusoid
+// needs only about 0.34 MPa on the ascent, and the paper's 0..0.6 MPa identification input
+// spends half its range where the loops never go. hysteron's model is then identified on
+// the inputs scaled to that pressure plus twice the reach's headroom (0.06 MPa); the nominal
+// muscle, whose 95 mm top needs about 0.56 MPa, keeps the paper's input.
+TEST(Experiment, ModelIsIdentifiedOverThePressureTheReferencesNeed) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.rig.muscle.rest_length = 1.0;
+  o.rig.sensors.displacement_range = 0.3;
+  const ExperimentResult r = run_experiment(o);
+  double p_need = 0.0;  // the most pressure at which the record's contraction was at or below 95 mm
+  for (std::size_t k = 0; k < r.id_pressure_mpa.size(); ++k)
+    if (r.id_contraction_mm[k] <= 95.0) p_need = std::max(p_need, r.id_pressure_mpa[k]);
+  EXPECT_GT(p_need, 0.25);
+  EXPECT_LT(p_need, 0.45);
+  EXPECT_NEAR(r.model_id_top_mpa, p_need + 0.06, 0.01);  // 11-sample means against raw samples
+  bool said = false;
+  for (const auto& m : r.messages) said = said || m.find("identified on the paper's pressure inputs scaled") != std::string::npos;
+  EXPECT_TRUE(said);
+  // the paper's own fit stays on the paper's input (the faithful variant is as published)
+  EXPECT_GT(*std::max_element(r.id_pressure_command_mpa.begin(), r.id_pressure_command_mpa.end()), 0.59);
+  for (const auto& run : r.runs)
+    if (run.variant == "compensated") {
+      EXPECT_LT(run.errors.rms_error_mm, 1.0) << "1.150 mm with the model identified over 0..0.6 MPa";
+    }
+
+  o.rig = PamRigParams{};
+  const ExperimentResult n = run_experiment(o);
+  EXPECT_EQ(n.model_id_top_mpa, 0.0);
+}
+
 // A displacement sensor reading 10 mm high: the muscle at rest reads 10 mm, so the paper's
 // 5 mm bottom is out of reach (venting cannot go below rest). The reference is mapped onto
 // 10..95 mm (its top unchanged, within reach), and the compensated loop tracks it.

@@ -308,6 +308,7 @@ TEST(Results, ExperimentResultRoundTrip) {
   r.best_validation = metrics(0.4, 15000);
   r.baseline_model = test_pi();
   r.lead_s = 0.057;
+  r.model_id_top_mpa = 0.354;
   r.dynamics = {0.021, 0.056, 1.97e-4, 0.69, 152.5, 0.012, 13.02, 0.239, 0.1, 4.05, 0.7};
   r.wall_time_s = 12.5;
   r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
@@ -361,6 +362,7 @@ TEST(Results, ExperimentResultRoundTrip) {
   EXPECT_EQ(back.reach_min_mm, r.reach_min_mm);
   EXPECT_EQ(back.reach_max_mm, r.reach_max_mm);
   EXPECT_EQ(back.reach_top_mm, r.reach_top_mm);
+  EXPECT_EQ(back.model_id_top_mpa, r.model_id_top_mpa);
   EXPECT_EQ(back.reach_top_pressure_mpa, r.reach_top_pressure_mpa);
   EXPECT_EQ(back.reach_pressure_max_mpa, r.reach_pressure_max_mpa);
   EXPECT_EQ(back.reference_ranges, r.reference_ranges);

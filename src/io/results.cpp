@@ -525,6 +525,7 @@ json to_json(const ExperimentResult& r) {
                                              {"chosen", c.chosen}});
   j["baseline_model"] = valid_model_or_null(r.baseline_model);
   j["lead_s"] = number(r.lead_s);
+  j["model_identification_top_mpa"] = number(r.model_id_top_mpa);
   j["dynamics"] = {{"dead_time_s", number(r.dynamics.dead_time_s)},
                    {"lag_s", number(r.dynamics.lag_s)},
                    {"gain_m_per_mpa", number(r.dynamics.gain_m_per_mpa)},
@@ -581,6 +582,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
   if (j.contains("published")) from_json(j["published"], r.published, key_where(where, "published"));
   r.wall_time_s = opt_double(j, "wall_time_s", where, 0.0);
   r.lead_s = opt_double(j, "lead_s", where, 0.0);
+  r.model_id_top_mpa = opt_double(j, "model_identification_top_mpa", where, 0.0);  // absent in files before it
 
   const json& id = need(j, "identification", where);
   const std::string idw = key_where(where, "identification");

@@ -260,24 +260,39 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
 // the ascent needs to reach the highest reference top, p_need = max{ p(k) : x(k) <= top }
 // on the identification run (11-sample means), plus twice the reach's headroom (one for the
 // position loop, as in fit_to_reach, one so that the model covers the descending branch
-// from above the top). Returns 0 (keep the input) where that is at or above the input's
-// maximum, or the reference top was never reached.
-double identification_top_mpa(const IdRecord& id, const std::vector<Reference>& refs,
-                              const std::vector<double>& input) {
-  if (refs.empty() || input.empty() || id.x_mm.empty()) return 0.0;
-  double top = -std::numeric_limits<double>::infinity();
-  for (const Reference& r : refs) top = std::max(top, 1e3 * *std::max_element(r.ref_m.begin(), r.ref_m.end()));
+// from above the top): p_id. p_id = 0 (keep the paper's inputs) where that is at or above
+// the input's maximum, or the run never went above the reference top.
+struct IdentificationRange {
+  double top_mm = 0.0, p_need_mpa = 0.0, p_id_mpa = 0.0, input_max_mpa = 0.0;
+  std::string note() const {
+    return fmt::format("hysteron's model is identified on the paper's pressure inputs scaled to 0..{:.3f} MPa (from "
+                       "{:.3f}): the references reach {:.1f} mm, which the rig's ascent reached at {:.3f} MPa in the "
+                       "identification run, and the model is not fitted where the loops do not go (docs/control.md, "
+                       "section 0)",
+                       p_id_mpa, input_max_mpa, top_mm, p_need_mpa);
+  }
+};
+
+IdentificationRange model_identification_range(const IdRecord& id, const std::vector<Reference>& refs,
+                                               const std::vector<double>& input) {
+  IdentificationRange r;
+  if (refs.empty() || input.empty() || id.x_mm.empty()) return r;
+  r.input_max_mpa = *std::max_element(input.begin(), input.end());
+  r.top_mm = -std::numeric_limits<double>::infinity();
+  for (const Reference& ref : refs)
+    r.top_mm = std::max(r.top_mm, 1e3 * *std::max_element(ref.ref_m.begin(), ref.ref_m.end()));
   const std::vector<double> x = smoothed(id.x_mm), p = smoothed(id.p);
   double p_need = -1.0;
   bool above = false;
   for (std::size_t k = 0; k < x.size(); ++k) {
-    if (x[k] <= top) p_need = std::max(p_need, p[k]);
+    if (x[k] <= r.top_mm) p_need = std::max(p_need, p[k]);
     else above = true;
   }
-  if (!above || p_need < 0.0) return 0.0;
-  const double target = p_need + 2.0 * kPressureHeadroom * kPressureMax;
-  const double in_max = *std::max_element(input.begin(), input.end());
-  return target < in_max ? target : 0.0;
+  if (!above || p_need < 0.0) return r;
+  r.p_need_mpa = p_need;
+  const double p_id = p_need + 2.0 * kPressureHeadroom * kPressureMax;
+  if (p_id < r.input_max_mpa) r.p_id_mpa = p_id;
+  return r;
 }
 
 // `input` scaled so that its maximum is top_mpa (unchanged where it is already below).
@@ -497,29 +512,19 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
 
   // 2. hysteron's model: candidates fitted on the whole record, chosen on a second
   //    identification run (other seed, other pressure sequence); both inputs scaled to the
-  //    pressure range the references need where that is well below the paper's input's
-  //    (identification_top_mpa; the references kept within the rig's reach first).
+  //    pressure range the references need where that is below the paper's input's maximum
+  //    (model_identification_range; the references kept within the rig's reach first).
   const std::vector<Reference> refs = fit_to_reach(o, id, spec.references(tc), res);
   const std::vector<double> id_input = spec.id_pressure(tc);
-  res.model_id_top_mpa = identification_top_mpa(id, refs, id_input);
-  const bool rescaled = res.model_id_top_mpa > 0.0;
+  const IdentificationRange range = model_identification_range(id, refs, id_input);
+  res.model_id_top_mpa = range.p_id_mpa;
+  const bool rescaled = range.p_id_mpa > 0.0;
   const IdRecord ids =
-      rescaled ? identification_run(o.rig, o.seed, scaled_to(id_input, res.model_id_top_mpa), tc, make_actuator()) : id;
-  if (rescaled)
-    res.messages.push_back(fmt::format(
-        "hysteron's model is identified on the paper's pressure inputs scaled to 0..{:.3f} MPa (from {:.3f}): the "
-        "references reach {:.1f} mm, which the rig's ascent reached at {:.3f} MPa in the identification run, and the "
-        "model is not fitted where the loops do not go (docs/control.md, section 0)",
-        res.model_id_top_mpa, *std::max_element(id_input.begin(), id_input.end()),
-        [&] {
-          double t = 0.0;
-          for (const Reference& r : refs) t = std::max(t, 1e3 * *std::max_element(r.ref_m.begin(), r.ref_m.end()));
-          return t;
-        }(),
-        res.model_id_top_mpa - 2.0 * kPressureHeadroom * kPressureMax));
+      rescaled ? identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator()) : id;
+  if (rescaled) res.messages.push_back(range.note());
   const IdRecord idsf = rescaled ? decimate(ids, every) : idf;
   const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919,
-                                                   scaled_to(spec.id2_pressure(tc), res.model_id_top_mpa), tc,
+                                                   scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc,
                                                    make_actuator()),
                                 every);
   choose_model(o, spec, idsf, id2, fo, static_cast<double>(every) * tc, res);

@@ -207,7 +207,7 @@ struct ExperimentResult {
   double lead_s = 0.0;            // preview of the compensated variants (identified)
   // The top of the pressure inputs hysteron's model was identified on [MPa]: 0 where they are
   // the paper's, else the pressure the references need plus headroom (docs/control.md,
-  // section 0), well below the paper's input's maximum.
+  // section 0), below the paper's input's maximum.
   double model_id_top_mpa = 0.0;
   RigDynamics dynamics;           // identified from the identification run
   // The contraction the rig reached in the identification run (min and max of an 11-sample

@@ -210,9 +210,7 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   const TrackingRun& c = compensated(scaled);
   EXPECT_NEAR(*std::max_element(c.reference_mm.begin(), c.reference_mm.end()), rr.max_mm, 1e-6);
   EXPECT_EQ(c.saturated, 0u);
-  bool said = false;
-  for (const auto& m : scaled.messages) said = said || m.find("reference sine mapped onto") != std::string::npos;
-  EXPECT_TRUE(said);
+  EXPECT_TRUE(test::said(scaled, "reference sine mapped onto"));
 
   o.fit_references = false;
   const ExperimentResult paper = run_experiment(o);
@@ -223,9 +221,7 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   EXPECT_NEAR(*std::max_element(p.reference_mm.begin(), p.reference_mm.end()), 95.0, 1e-6);
   EXPECT_GT(p.saturated, 100u);  // held at 0.6 MPa near every top
   EXPECT_GT(p.errors.rms_error_mm, 1.5 * c.errors.rms_error_mm);
-  said = false;
-  for (const auto& m : paper.messages) said = said || m.find("out of this rig's reach") != std::string::npos;
-  EXPECT_TRUE(said);
+  EXPECT_TRUE(test::said(paper, "out of this rig's reach"));
 }
 
 // A supply of 5 bar absolute (0.4 MPa gauge) caps the muscle's pressure below the 0.6 MPa the
@@ -252,9 +248,7 @@ TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
   EXPECT_TRUE(rr.reachable);
   EXPECT_NEAR(rr.max_mm, top, 0.5);
   EXPECT_LT(rr.max_mm, 80.0);  // well below the paper's 95 mm
-  bool said = false;
-  for (const auto& m : r.messages) said = said || m.find("cap it below the 0.60 MPa") != std::string::npos;
-  EXPECT_TRUE(said);
+  EXPECT_TRUE(test::said(r, "cap it below the 0.60 MPa"));
   for (const auto& run : r.runs)
     if (run.variant == "compensated") {
       EXPECT_LT(run.errors.rms_error_mm, 1.0) << "was 9.1 mm with the 95 mm top kept";
@@ -263,7 +257,7 @@ TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
   o.rig = PamRigParams{};
   const ExperimentResult n = run_experiment(o);
   EXPECT_NEAR(n.reach_top_pressure_mpa, 0.57, 1e-12);
-  for (const auto& m : n.messages) EXPECT_EQ(m.find("cap it below"), std::string::npos) << m;
+  EXPECT_FALSE(test::said(n, "cap it below"));
 }
 
 // A muscle twice as long (1 m) contracts twice as far per kPa: the paper's 5..95 mm sinusoid
@@ -282,9 +276,7 @@ TEST(Experiment, ModelIsIdentifiedOverThePressureTheReferencesNeed) {
   EXPECT_GT(p_need, 0.25);
   EXPECT_LT(p_need, 0.45);
   EXPECT_NEAR(r.model_id_top_mpa, p_need + 0.06, 0.01);  // 11-sample means against raw samples
-  bool said = false;
-  for (const auto& m : r.messages) said = said || m.find("identified on the paper's pressure inputs scaled") != std::string::npos;
-  EXPECT_TRUE(said);
+  EXPECT_TRUE(test::said(r, "identified on the paper's pressure inputs scaled"));
   // the paper's own fit stays on the paper's input (the faithful variant is as published)
   EXPECT_GT(*std::max_element(r.id_pressure_command_mpa.begin(), r.id_pressure_command_mpa.end()), 0.59);
   for (const auto& run : r.runs)

@@ -1,6 +1,7 @@
 #pragma once
 // Small helpers shared by the tests: a file's bytes, the message of an expected error, a
-// random input path with reversals, and the options of a quick experiment run.
+// random input path with reversals, a note in an experiment's result, and the options of a
+// quick experiment run.
 #include <gtest/gtest.h>
 
 #include <cstddef>
@@ -52,6 +53,13 @@ inline std::vector<double> random_walk(std::mt19937_64& rng, std::size_t n, doub
 }
 
 inline bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Whether one of the result's messages (its `note:` lines) contains `part`.
+inline bool said(const ExperimentResult& r, const std::string& part) {
+  for (const auto& m : r.messages)
+    if (has(m, part)) return true;
+  return false;
+}
 
 // A quick run of experiment `name` on the nominal rig: mpi-asym pinned (no auto fits of every
 // kind), no adaptive variant, `learning_periods` periods of the learning variant.

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <utility>
 
 #include "detail.hpp"
@@ -172,6 +173,13 @@ std::vector<double> smoothed(const std::vector<double>& x) {
   return m;
 }
 
+// The identification run's contraction [mm] and measured pressure [MPa], each as its
+// centred 11-sample mean: what the reach and the model's identification range are read from.
+struct SmoothedRun {
+  std::vector<double> x_mm, p;
+  explicit SmoothedRun(const IdRecord& id) : x_mm(smoothed(id.x_mm)), p(smoothed(id.p)) {}
+};
+
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
@@ -182,9 +190,10 @@ std::vector<double> smoothed(const std::vector<double>& x) {
 // reference that leaves the reach is mapped affinely onto its intersection with it (only
 // the end that leaves it moves; a reference whose bottom is the rest position keeps it).
 // The ranges and a note per reference out of reach go into the result.
-std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, std::vector<Reference> refs,
-                                    ExperimentResult& res) {
-  const std::vector<double> x = smoothed(id.x_mm), p = smoothed(id.p);
+std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, const SmoothedRun& sm,
+                                    std::vector<Reference> refs, ExperimentResult& res) {
+  const std::vector<double>& x = sm.x_mm;
+  const std::vector<double>& p = sm.p;
   const double p_cmd_max = id.p_cmd.empty() ? 0.0 : *std::max_element(id.p_cmd.begin(), id.p_cmd.end());
   res.reach_pressure_max_mpa = p.empty() ? 0.0 : *std::max_element(p.begin(), p.end());
   const bool capped = p_cmd_max >= (1.0 - kPressureHeadroom) * kPressureMax &&
@@ -273,15 +282,16 @@ struct IdentificationRange {
   }
 };
 
-IdentificationRange model_identification_range(const IdRecord& id, const std::vector<Reference>& refs,
+IdentificationRange model_identification_range(const SmoothedRun& sm, const std::vector<Reference>& refs,
                                                const std::vector<double>& input) {
   IdentificationRange r;
-  if (refs.empty() || input.empty() || id.x_mm.empty()) return r;
+  if (refs.empty() || input.empty() || sm.x_mm.empty()) return r;
   r.input_max_mpa = *std::max_element(input.begin(), input.end());
   r.top_mm = -std::numeric_limits<double>::infinity();
   for (const Reference& ref : refs)
     r.top_mm = std::max(r.top_mm, 1e3 * *std::max_element(ref.ref_m.begin(), ref.ref_m.end()));
-  const std::vector<double> x = smoothed(id.x_mm), p = smoothed(id.p);
+  const std::vector<double>& x = sm.x_mm;
+  const std::vector<double>& p = sm.p;
   double p_need = -1.0;
   bool above = false;
   for (std::size_t k = 0; k < x.size(); ++k) {
@@ -313,8 +323,16 @@ std::vector<FitModel> candidate_kinds(const ExperimentOptions& o, const Spec& sp
   return kinds;
 }
 
-int candidate_operators(FitModel kind, const Spec& spec) {
-  return kind == FitModel::mpi_asym ? 20 : std::max(10, spec.operators);
+// The fit options of a candidate kind for hysteron's model: the paper's options with the
+// kind, its number of operators (20 for mpi-asym, max(10, the paper's n) for the others),
+// the decimated record's sample time (rate-pi's rates are per second) and the whole record.
+FitOptions candidate_fit_options(const FitOptions& paper, FitModel kind, const Spec& spec, double fit_dt) {
+  FitOptions f = paper;
+  f.model = kind;
+  f.num_operators = kind == FitModel::mpi_asym ? 20 : std::max(10, spec.operators);
+  f.sample_time = fit_dt;
+  f.train = {};
+  return f;
 }
 
 // A rate-pi fitted at the decimated record's sample period, run at the control period: its
@@ -355,11 +373,7 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
                                    [](const Variant& v) { return v.name == "adaptive"; });
   std::size_t eligible = 0;
   for (FitModel kind : candidate_kinds(o, spec)) {
-    FitOptions f2 = fo;
-    f2.model = kind;
-    f2.num_operators = candidate_operators(kind, spec);
-    f2.sample_time = fit_dt;  // rate-pi's rates are per second
-    f2.train = {};
+    const FitOptions f2 = candidate_fit_options(fo, kind, spec, fit_dt);
     ModelCandidate c;
     c.kind = kind;
     FitReport rep;
@@ -514,15 +528,20 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   //    identification run (other seed, other pressure sequence); both inputs scaled to the
   //    pressure range the references need where that is below the paper's input's maximum
   //    (model_identification_range; the references kept within the rig's reach first).
-  const std::vector<Reference> refs = fit_to_reach(o, id, spec.references(tc), res);
+  const SmoothedRun smooth(id);
+  const std::vector<Reference> refs = fit_to_reach(o, id, smooth, spec.references(tc), res);
   const std::vector<double> id_input = spec.id_pressure(tc);
-  const IdentificationRange range = model_identification_range(id, refs, id_input);
+  const IdentificationRange range = model_identification_range(smooth, refs, id_input);
   res.model_id_top_mpa = range.p_id_mpa;
   const bool rescaled = range.p_id_mpa > 0.0;
-  const IdRecord ids =
-      rescaled ? identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator()) : id;
-  if (rescaled) res.messages.push_back(range.note());
-  const IdRecord idsf = rescaled ? decimate(ids, every) : idf;
+  std::optional<IdRecord> scaled_run, scaled_runf;  // the model's identification run, if not the paper's
+  if (rescaled) {
+    res.messages.push_back(range.note());
+    scaled_run = identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator());
+    scaled_runf = decimate(*scaled_run, every);
+  }
+  const IdRecord& ids = rescaled ? *scaled_run : id;
+  const IdRecord& idsf = rescaled ? *scaled_runf : idf;
   const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919,
                                                    scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc,
                                                    make_actuator()),
@@ -538,18 +557,18 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   ModelParams dynamics_model = res.best_fit.model;
   bool on_paper_run = !rescaled;
   if (rescaled) {
-    FitOptions f = fo;
-    f.model = res.best_fit.model_kind;
-    f.num_operators = candidate_operators(f.model, spec);
-    f.sample_time = static_cast<double>(every) * tc;
-    f.train = {};
+    const FitModel kind = res.best_fit.model_kind;
     try {
-      FitReport full = fit_checked(idf, f, fmt::format("{} model", fit_model_name(f.model)));
-      std::vector<std::string> ignored;
-      to_control_rate(full.model, o.control_period, ignored);
+      FitReport full = fit_checked(idf, candidate_fit_options(fo, kind, spec, static_cast<double>(every) * tc),
+                                   fmt::format("{} model", fit_model_name(kind)));
+      std::vector<std::string> said_already;  // to_control_rate's note was given for the chosen model
+      to_control_rate(full.model, o.control_period, said_already);
       dynamics_model = std::move(full.model);
       on_paper_run = true;
-    } catch (const Error&) {  // then the scaled run and its model (the candidates' notes say why)
+    } catch (const Error& e) {
+      res.messages.push_back(fmt::format("the dead time, lag and lead are identified on the scaled identification "
+                                         "run: {} could not be fitted on the paper's run ({})",
+                                         fit_model_name(kind), e.what()));
     }
   }
   res.dynamics = identify_dynamics(dynamics_model, on_paper_run ? id : ids, tc, lead);

@@ -137,6 +137,9 @@ struct TrackingRun {
   TrackingErrors errors;  // reference vs measured contraction (the last period of a learning run)
   std::vector<TrackingErrors> periods;  // learning runs: the errors of each period, in order
   std::size_t saturated = 0;  // control samples with the command at a pressure limit
+  // time [s] of the first scored sample: after a warm-up period or a pre-roll (the rig starts
+  // vented, docs/control.md section 5); a learning run: the start of its last period
+  double scored_from_s = 0.0;
 };
 
 // A paper's published tracking errors for one reference (NaN where it gives none).

@@ -118,6 +118,7 @@ void bind_experiment(py::module_& m) {
           x["description"] = run.description;
           x.attr("update")(from_json(io::to_json(run.errors)));  // max_error_mm, mae_mm, rms_error_mm
           x["saturated"] = run.saturated;
+          x["scored_from_s"] = run.scored_from_s;
           py::list per;
           for (const auto& e : run.periods) per.append(from_json(io::to_json(e)));
           x["periods"] = per;

@@ -35,14 +35,20 @@ using Law = std::function<RigInputs(const Sample&)>;
 RigInputs regulator(double p_mpa);                     // regulator command, clamped to 0..kPressureMax
 RigInputs valves(double duty, double desired_mpa);     // PWM duty, clamped to [-1, 1]
 
-// A reference of one experiment. `period` > 0 marks a periodic reference: ref_m
-// holds one period, repeated by the learning variant.
+// A reference of one experiment. `period` > 0 marks a periodic reference: ref_m from
+// `periodic_from` holds (at least) one period, repeated by the learning variant.
 struct Reference {
   std::string name;
-  std::vector<double> ref_m;  // [m] at the control period
-  std::size_t score_from = 0; // first scored sample
-  std::size_t period = 0;     // samples per period (0: not periodic)
+  std::vector<double> ref_m;     // [m] at the control period
+  std::size_t score_from = 0;    // first scored sample
+  std::size_t period = 0;        // samples per period (0: not periodic)
+  std::size_t periodic_from = 0; // first sample of the periodic part (after a pre-roll)
 };
+
+// Seconds a reference without a warm-up is held at its first value before it starts
+// (unscored), the loop running: the rig starts vented (add_pre_roll, docs/control.md
+// section 5). The relay tests settle for as long at their level.
+inline constexpr double kPreRollS = 1.5;
 
 // Everything an experiment's control laws may use: the fitted models and what
 // was identified from the rig at hand (never the nominal rig's values).

@@ -490,6 +490,7 @@ json to_json(const ExperimentResult& r) {
       e["reference"] = run.reference;
       e["description"] = run.description;
       e["saturated_samples"] = run.saturated;
+      e["scored_from_s"] = run.scored_from_s;
       if (!run.periods.empty()) {
         json per = json::array();
         for (const auto& p : run.periods) per.push_back(to_json(p));
@@ -723,6 +724,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       run.reference = opt_string(e, "reference", w, reference);
       run.description = opt_string(e, "description", w);
       run.saturated = e.contains("saturated_samples") ? get_size(e, "saturated_samples", w) : 0;
+      run.scored_from_s = opt_double(e, "scored_from_s", w, 0.0);
       from_json(e, run.errors, w);
       if (e.contains("periods")) {
         const json& per = e["periods"];

@@ -668,3 +668,49 @@ TEST(IdentifyRealData, PiezoGpiAndMpiBeatPiOnValidation) {
   // it contains (fit_api.cpp), so mpi-deadzone is never worse than pi.
   EXPECT_LE(dz, pi * (1 + 1e-9)) << "mpi-deadzone " << dz << " % vs pi " << pi << " %";
 }
+
+// A sensor that clips reads its limit for everything beyond it; a sensor that sees a rest on
+// a stop at its own zero clamps only the noise's negative half. detect_clipping tells them
+// apart by the share of the samples near the least reading that are exactly it, and fit()
+// warns on the first only.
+TEST(Clipping, SensorLimitIsFlaggedRestOnAStopIsNot) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  const std::size_t n = 20000;
+  std::vector<double> x(n), clipped(n), rest(n), topped(n), clean(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    x[k] = 0.5 - 0.5 * std::cos(2.0 * M_PI * 0.5 * 1e-3 * static_cast<double>(k));
+    const double e = noise(rng);
+    clipped[k] = std::max(0.0, 10.0 * (x[k] - 0.3) + e);                  // zeroed 3 units above the stop
+    rest[k] = std::max(0.0, std::max(0.0, 10.0 * (x[k] - 0.3)) + e);      // the stop at the sensor's zero
+    topped[k] = std::min(5.0, 10.0 * x[k] + e);                           // range ends inside the stroke
+    clean[k] = std::max(0.0, 10.0 * (x[k] - 0.3));                        // a stop without noise
+  }
+  const Clipping c = detect_clipping(clipped);
+  EXPECT_TRUE(c.low);
+  EXPECT_FALSE(c.high);
+  EXPECT_EQ(c.lo, 0.0);
+  EXPECT_NEAR(c.sigma, 0.01, 0.002);  // the noise off the clipped stretches
+  EXPECT_GT(c.low_share, 0.95);
+  const Clipping r = detect_clipping(rest);
+  EXPECT_FALSE(r.any()) << r.low_share;
+  EXPECT_GT(r.low_share, 0.4);  // about half: the noise's negative half clamped
+  EXPECT_LT(r.low_share, 0.75);
+  const Clipping t = detect_clipping(topped);
+  EXPECT_TRUE(t.high);
+  EXPECT_FALSE(t.low);
+  EXPECT_EQ(t.hi, 5.0);
+  EXPECT_TRUE(detect_clipping(clean).low) << "a stop without noise cannot be told from a limit";
+  EXPECT_FALSE(detect_clipping(std::vector<double>(50, 0.0)).any());
+
+  FitOptions o;
+  o.model = FitModel::pi;
+  o.num_operators = 5;
+  auto warned = [](const FitReport& rep) {
+    for (const auto& w : rep.warnings)
+      if (w.find("sits at its least reading") != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(warned(fit(x, clipped, o)));
+  EXPECT_FALSE(warned(fit(x, rest, o)));
+}

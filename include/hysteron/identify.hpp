@@ -109,6 +109,27 @@ FitMetrics compute_metrics(std::span<const double> measured, std::span<const dou
 // unequal lengths, non-finite data or a range outside the record.
 FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                     IndexRange range = {}, InitialState initial = InitialState::virgin);
+// A record that sits at its least (or largest) reading far more often than its noise
+// explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0
+// for every contraction below its zero; one whose range ends inside the stroke reads its
+// top beyond it), or a mechanical stop recorded without noise. sigma: the noise, 1.4826
+// MAD(second differences) / sqrt(6) (the motion cancels) over the samples off both
+// extremes (the clipped stretches have no noise). Of the samples within 3 sigma of
+// the least reading, the share exactly at it: about 1/2 where an unclipped signal's noise
+// reaches its least value (a rest on a stop at the sensor's 0), near 1 where it is
+// clipped. Clipped above 3/4 with at least 50 samples at the limit; the same at the top.
+// A stop recorded without noise is flagged too (nothing in the record tells it from a
+// limit; sigma is then the motion's curvature); never a record whose second differences
+// are all 0, or one with fewer than 100 samples.
+struct Clipping {
+  bool low = false, high = false;
+  double lo = 0.0, hi = 0.0;  // the least and largest readings
+  double sigma = 0.0;         // the noise estimate
+  double low_share = 0.0, high_share = 0.0;
+  bool any() const noexcept { return low || high; }
+};
+Clipping detect_clipping(std::span<const double> y);
+
 // Model output over the whole record (same start convention as fit()).
 std::vector<double> simulate_record(const ModelParams& params, std::span<const double> x,
                                     InitialState initial = InitialState::virgin);

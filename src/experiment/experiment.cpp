@@ -184,52 +184,6 @@ struct SmoothedRun {
   explicit SmoothedRun(const IdRecord& id) : x_mm(smoothed(id.x_mm)), p(smoothed(id.p)) {}
 };
 
-// A displacement sensor that clips (docs/control.md section 5): a sensor with a negative
-// offset, or a range below the stroke, reads its limit for every contraction beyond it, so
-// the record (and every tracking run's error) cannot see the muscle there. Read from the
-// raw record alone: sigma, the sensor noise, from the first differences (MAD, robust to the
-// motion); of the samples within 3 sigma of the record's least value, the share that are
-// exactly that value. An unclipped rest whose noise reaches the sensor's limit (the nominal
-// rig: the muscle on its stop at 0 mm, noise 0.01 mm) puts about half of them there; a
-// clipped one nearly all (the muscle below the sensor's zero reads 0 the whole time). Above
-// 3/4 the end is clipped, and the reach keeps 3 sigma from it (the noise band off the
-// limit). The same at the top. Noise-free records (sigma 0) are never flagged.
-struct SensorClip {
-  bool low = false, high = false;
-  double lo_mm = 0.0, hi_mm = 0.0, sigma_mm = 0.0;
-  double low_share = 0.0, high_share = 0.0;
-};
-
-SensorClip sensor_clip(const std::vector<double>& x) {
-  SensorClip c;
-  if (x.size() < 100) return c;
-  std::vector<double> d(x.size() - 1);
-  for (std::size_t k = 0; k + 1 < x.size(); ++k) d[k] = x[k + 1] - x[k];
-  auto median = [](std::vector<double>& v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
-  const double m = median(d);
-  for (double& v : d) v = std::abs(v - m);
-  c.sigma_mm = 1.4826 * median(d) / std::sqrt(2.0);
-  if (!(c.sigma_mm > 0.0) || !std::isfinite(c.sigma_mm)) return c;
-  const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
-  c.lo_mm = *lo_it;
-  c.hi_mm = *hi_it;
-  const double band = 3.0 * c.sigma_mm;
-  std::size_t near_lo = 0, at_lo = 0, near_hi = 0, at_hi = 0;
-  for (double v : x) {
-    if (v <= c.lo_mm + band) ++near_lo, at_lo += v == c.lo_mm;
-    if (v >= c.hi_mm - band) ++near_hi, at_hi += v == c.hi_mm;
-  }
-  c.low_share = static_cast<double>(at_lo) / static_cast<double>(near_lo);
-  c.high_share = static_cast<double>(at_hi) / static_cast<double>(near_hi);
-  // at least 50 samples at the limit: a few samples at an extreme are no clipping
-  c.low = at_lo >= 50 && c.low_share > 0.75;
-  c.high = at_hi >= 50 && c.high_share > 0.75;
-  return c;
-}
-
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
@@ -267,10 +221,12 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
   // the rest position, with the sensor's resolution as tolerance: 0.1 % of the reached span
   double floor_mm = res.reach_min_mm;  // where a reference below the reach is mapped to
   double bottom = res.reach_min_mm - 1e-3 * (res.reach_max_mm - res.reach_min_mm);
-  if (const SensorClip clip = sensor_clip(id.x_mm); clip.low || clip.high) {
-    const double band = 3.0 * clip.sigma_mm;
-    if (clip.low && clip.lo_mm + band > floor_mm) floor_mm = bottom = clip.lo_mm + band;
-    if (clip.high) top = std::min(top, clip.hi_mm - band);
+  // A displacement sensor that clips (detect_clipping; docs/control.md section 5): the rig
+  // cannot be seen beyond its limit, so the reach keeps 3 noise widths from it.
+  if (const Clipping clip = detect_clipping(id.x_mm); clip.any()) {
+    const double band = 3.0 * clip.sigma;
+    if (clip.low && clip.lo + band > floor_mm) floor_mm = bottom = clip.lo + band;
+    if (clip.high) top = std::min(top, clip.hi - band);
     res.messages.push_back(fmt::format(
         "the displacement sensor clips in the identification run: {}{}{} (noise {:.4f} mm from the record); the rig "
         "cannot be seen beyond, so the reach keeps 3 times the noise from {}: {}; the errors are measured by that "
@@ -278,13 +234,13 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
         "overshoots), and the model was fitted on the clipped record",
         clip.low ? fmt::format("{:.1f} % of its samples within 3 noise widths of its least reading, {:.3f} mm, are "
                                "exactly that reading",
-                               100.0 * clip.low_share, clip.lo_mm)
+                               100.0 * clip.low_share, clip.lo)
                  : std::string(),
         clip.low && clip.high ? "; " : "",
         clip.high ? fmt::format("{:.1f} % of those near its largest, {:.3f} mm, are exactly it", 100.0 * clip.high_share,
-                                clip.hi_mm)
+                                clip.hi)
                   : std::string(),
-        clip.sigma_mm, clip.low && clip.high ? "either limit" : "the limit",
+        clip.sigma, clip.low && clip.high ? "either limit" : "the limit",
         clip.low ? "a sensor zeroed above the muscle's rest (a negative offset) reads its limit while the muscle "
                    "is below it"
                  : "a sensor whose range ends inside the stroke reads its limit beyond it"));

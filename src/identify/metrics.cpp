@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "detail.hpp"
 #include "hysteron/error.hpp"
@@ -59,6 +60,42 @@ LineFit straight_line(std::span<const double> x, std::span<const double> y, Inde
 }
 
 }  // namespace detail
+
+Clipping detect_clipping(std::span<const double> y) {
+  Clipping c;
+  if (y.size() < 100) return c;
+  for (double v : y)
+    if (!std::isfinite(v)) return c;
+  const auto [lo_it, hi_it] = std::minmax_element(y.begin(), y.end());
+  c.lo = *lo_it;
+  c.hi = *hi_it;
+  // the noise where the signal is off its limits (the clipped stretches have none)
+  std::vector<double> d;
+  d.reserve(y.size());
+  for (std::size_t k = 0; k + 2 < y.size(); ++k)
+    if (std::min({y[k], y[k + 1], y[k + 2]}) > c.lo && std::max({y[k], y[k + 1], y[k + 2]}) < c.hi)
+      d.push_back(y[k + 2] - 2.0 * y[k + 1] + y[k]);
+  if (d.size() < 50) return c;
+  auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double m = median(d);
+  for (double& v : d) v = std::abs(v - m);
+  c.sigma = 1.4826 * median(d) / std::sqrt(6.0);
+  if (!(c.sigma > 0.0)) return c;
+  const double band = 3.0 * c.sigma;
+  std::size_t near_lo = 0, at_lo = 0, near_hi = 0, at_hi = 0;
+  for (double v : y) {
+    if (v <= c.lo + band) ++near_lo, at_lo += v == c.lo;
+    if (v >= c.hi - band) ++near_hi, at_hi += v == c.hi;
+  }
+  c.low_share = static_cast<double>(at_lo) / static_cast<double>(near_lo);
+  c.high_share = static_cast<double>(at_hi) / static_cast<double>(near_hi);
+  c.low = at_lo >= 50 && c.low_share > 0.75;
+  c.high = at_hi >= 50 && c.high_share > 0.75;
+  return c;
+}
 
 FitMetrics compute_metrics(std::span<const double> measured, std::span<const double> predicted) {
   if (measured.size() != predicted.size())

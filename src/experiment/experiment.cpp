@@ -184,6 +184,27 @@ struct SmoothedRun {
   explicit SmoothedRun(const IdRecord& id) : x_mm(smoothed(id.x_mm)), p(smoothed(id.p)) {}
 };
 
+// The note of a clipped displacement record (fit_to_reach).
+std::string clipping_note(const Clipping& clip) {
+  std::string where;
+  if (clip.low)
+    where = fmt::format("{:.1f} % of its samples within 3 noise widths of its least reading, {:.3f} mm, are exactly "
+                        "that reading",
+                        100.0 * clip.low_share, clip.lo);
+  if (clip.high)
+    where += fmt::format("{}{:.1f} % of those near its largest, {:.3f} mm, are exactly it", clip.low ? "; " : "",
+                         100.0 * clip.high_share, clip.hi);
+  return fmt::format(
+      "the displacement sensor clips in the identification run: {} (noise {:.4f} mm from the record); the rig cannot "
+      "be seen beyond, so the reach keeps 3 times the noise from {}: {}; the errors are measured by that sensor and "
+      "miss the muscle's excursions beyond its limit (at the start, from rest, and wherever the loop overshoots), and "
+      "the model was fitted on the clipped record",
+      where, clip.sigma, clip.low && clip.high ? "either limit" : "the limit",
+      clip.low ? "a sensor zeroed above the muscle's rest (a negative offset) reads its limit while the muscle is "
+                 "below it"
+               : "a sensor whose range ends inside the stroke reads its limit beyond it");
+}
+
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
@@ -227,23 +248,7 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
     const double band = 3.0 * clip.sigma;
     if (clip.low && clip.lo + band > floor_mm) floor_mm = bottom = clip.lo + band;
     if (clip.high) top = std::min(top, clip.hi - band);
-    res.messages.push_back(fmt::format(
-        "the displacement sensor clips in the identification run: {}{}{} (noise {:.4f} mm from the record); the rig "
-        "cannot be seen beyond, so the reach keeps 3 times the noise from {}: {}; the errors are measured by that "
-        "sensor and miss the muscle's excursions beyond its limit (at the start, from rest, and wherever the loop "
-        "overshoots), and the model was fitted on the clipped record",
-        clip.low ? fmt::format("{:.1f} % of its samples within 3 noise widths of its least reading, {:.3f} mm, are "
-                               "exactly that reading",
-                               100.0 * clip.low_share, clip.lo)
-                 : std::string(),
-        clip.low && clip.high ? "; " : "",
-        clip.high ? fmt::format("{:.1f} % of those near its largest, {:.3f} mm, are exactly it", 100.0 * clip.high_share,
-                                clip.hi)
-                  : std::string(),
-        clip.sigma, clip.low && clip.high ? "either limit" : "the limit",
-        clip.low ? "a sensor zeroed above the muscle's rest (a negative offset) reads its limit while the muscle "
-                   "is below it"
-                 : "a sensor whose range ends inside the stroke reads its limit beyond it"));
+    res.messages.push_back(clipping_note(clip));
   }
   const bool known_top = std::isfinite(top);  // else the identification never reached p_limit
   res.reach_top_mm = known_top ? top : std::numeric_limits<double>::quiet_NaN();

@@ -239,13 +239,15 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   add_units_parameters(rep);
   rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
   if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
-  if (const Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin)); clip.any())
-    rep.warnings.push_back(fmt::format(
-        "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) of "
-        "it, where noise alone would put about half: a sensor's limit (or a stop recorded without noise); the model "
-        "is fitted to the limit there, not to the actuator",
-        clip.low ? "least" : "largest", clip.low ? clip.lo : clip.hi, 100.0 * (clip.low ? clip.low_share : clip.high_share),
-        clip.sigma));
+  const Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
+  for (const bool low : {true, false})
+    if (low ? clip.low : clip.high)
+      rep.warnings.push_back(fmt::format(
+          "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "
+          "of it, where noise alone would put about half: a sensor's limit (or a stop recorded without noise); the "
+          "model is fitted to the limit there, not to the actuator",
+          low ? "least" : "largest", low ? clip.lo : clip.hi, 100.0 * (low ? clip.low_share : clip.high_share),
+          clip.sigma));
 
   // The reference PI (a plain NNLS script's fit) on the same range.
   std::optional<ModelParams> reference_model;

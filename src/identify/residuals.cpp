@@ -417,11 +417,7 @@ class RowQr {
   // p Jacobian columns (0: residuals only), plus the column of ones if `offset`; each
   // block of Jacobian rows is multiplied by D (p x p) before it is folded, if D is given.
   RowQr(int p, bool offset, const Eigen::MatrixXd* D = nullptr)
-      : p_(p), off_(offset ? 1 : 0), c_(off_ + p + 1), D_(D), w_(Workspace::acquire()) {
-    w_.stack.resize(c_ + kBlockRows, c_);  // every entry read is written first (flush)
-    if (w_.res.size() < static_cast<std::size_t>(kBlockRows)) w_.res.resize(kBlockRows);
-    if (w_.jac.size() < static_cast<std::size_t>(kBlockRows * p)) w_.jac.resize(static_cast<std::size_t>(kBlockRows * p));
-  }
+      : p_(p), off_(offset ? 1 : 0), c_(off_ + p + 1), D_(D), w_(Workspace::acquire(p, c_)) {}
   RowQr(const RowQr&) = delete;
   RowQr& operator=(const RowQr&) = delete;
   ~RowQr() { Workspace::release(); }
@@ -455,11 +451,18 @@ class RowQr {
     Eigen::HouseholderQR<Eigen::MatrixXd> qr;
     std::vector<double> res, jac;
     Rows block;
-    static Workspace& acquire() {
+    // Sized for p Jacobian columns and c stack columns; the depth counts only a workspace
+    // handed out (a throwing resize leaves it as it was).
+    static Workspace& acquire(Eigen::Index p, Eigen::Index c) {
       auto& pool = pool_();
       auto& depth = depth_();
       if (pool.size() <= depth) pool.push_back(std::make_unique<Workspace>());
-      return *pool[depth++];
+      Workspace& w = *pool[depth];
+      w.stack.resize(c + kBlockRows, c);  // every entry read is written first (flush)
+      if (w.res.size() < static_cast<std::size_t>(kBlockRows)) w.res.resize(kBlockRows);
+      if (w.jac.size() < static_cast<std::size_t>(kBlockRows * p)) w.jac.resize(static_cast<std::size_t>(kBlockRows * p));
+      ++depth;
+      return w;
     }
     static void release() noexcept { --depth_(); }
 

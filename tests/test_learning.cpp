@@ -647,6 +647,37 @@ TEST(ExperimentTuning, GainTrialDetunesTheLoopWhereItWouldOscillate) {
   EXPECT_LT(rs[1].gain_trials[0].scale, 1.0);
   EXPECT_LT(rs[1].gain_trials[0].scale, rs[0].gain_trials[0].scale);
   EXPECT_LT(find_run(rs[1], "compensated").errors.rms_error_mm, 2.0 * find_run(rs[0], "compensated").errors.rms_error_mm);
+
+  // Stopped early (what hysteron sweep does): the same choice and the same tracking runs; a
+  // stopped candidate's RMS is a lower bound of its complete one, above the chosen one's.
+  std::size_t stopped = 0;
+  for (std::size_t i = 0; i < rs.size(); ++i) {
+    ExperimentOptions o = gpi_pid_options(i == 0 ? PamRigParams{} : worst, 0, true);
+    o.complete_gain_trials = false;
+    const ExperimentResult e = run_experiment(o);
+    ASSERT_EQ(e.gain_trials.size(), 1u);
+    const GainTrial &full = rs[i].gain_trials[0], &g = e.gain_trials[0];
+    EXPECT_FALSE(full.early_stop);
+    EXPECT_EQ(g.scale, full.scale);
+    EXPECT_EQ(g.shaped, full.shaped);
+    EXPECT_EQ(g.scales, full.scales);
+    const double chosen = (full.shaped ? full.rms_shaped_mm : full.rms_mm)[static_cast<std::size_t>(
+        std::find(full.scales.begin(), full.scales.end(), full.scale) - full.scales.begin())];
+    auto compare = [&](const std::vector<double>& a, const std::vector<double>& b) {
+      ASSERT_EQ(a.size(), b.size());
+      for (std::size_t k = 0; k < a.size(); ++k) {
+        if (a[k] == b[k]) continue;  // run to its end
+        ++stopped;
+        EXPECT_LT(a[k], b[k]) << k;
+        EXPECT_GT(a[k], chosen) << k;
+      }
+    };
+    compare(g.rms_mm, full.rms_mm);
+    compare(g.rms_shaped_mm, full.rms_shaped_mm);
+    for (const char* kind : {"compensated", "baseline", "faithful"})
+      EXPECT_EQ(find_run(e, kind).errors.rms_error_mm, find_run(rs[i], kind).errors.rms_error_mm) << kind;
+  }
+  EXPECT_GT(stopped, 4u);  // it saves time: most candidates stop
 }
 
 // The zero-vibration shaper at an identified mode: a ramp to a hold, passed through it, leaves

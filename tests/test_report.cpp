@@ -237,7 +237,7 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   // a trial whose rig diverged (+inf) is written as null and read back as +inf
   const double inf = std::numeric_limits<double>::infinity();
   r.gain_trials = {{"sine", {0.5, 1.0, 2.0}, {0.8, 0.6, inf}, {0.7, 0.65, inf}, 0.5, true},
-                   {"triangle", {1.0}, {0.4}, {}, 1.0, false}};
+                   {"triangle", {1.0}, {0.4}, {}, 1.0, false, true}};
   const std::string dir = tmp / "exp";
   r.write(dir);
   const ExperimentResult back = read_experiment_dir(dir);

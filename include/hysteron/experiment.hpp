@@ -82,6 +82,11 @@ struct ExperimentOptions {
   // false: the papers' references as published, with a note where they are out of reach
   // (the error there is the actuator's limit, not the controller's). docs/control.md, 5.
   bool fit_references = true;
+  // The gain trial (GainTrial) runs every candidate to its end. false: a candidate is stopped
+  // once its squared error exceeds the best one's so far, the likeliest candidates first; the
+  // choice is the same, the stopped candidates' RMS are lower bounds (GainTrial::early_stop).
+  // hysteron sweep sets it: it reports the choice only.
+  bool complete_gain_trials = true;
   void validate() const;         // throws hysteron::Error
 };
 
@@ -184,6 +189,9 @@ struct GainTrial {
   std::vector<double> rms_shaped_mm;  // ... with the shaped feedforward (empty: no shaper)
   double scale = 1.0;                 // the chosen scale
   bool shaped = false;                // the chosen loop shapes its feedforward
+  // Candidates worse than the best were stopped early (ExperimentOptions::complete_gain_trials
+  // = false): their RMS are lower bounds, from the samples before the stop.
+  bool early_stop = false;
   bool operator==(const GainTrial&) const = default;
 };
 

@@ -128,28 +128,76 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
   on_identified_rig.tracking_rig.reset();
   const ZvShaper zv = zv_shaper(c.dynamics, c.tc);
   const auto trap_shaped = std::make_shared<const std::vector<double>>(shaped(trap, zv));
-  double best = std::numeric_limits<double>::infinity();
+  // The candidates (shaped?, scale 2^(k/3)), k = -4..2, in the order the result lists them.
+  struct Candidate {
+    bool shape;
+    int k;
+  };
+  std::vector<Candidate> order;
   for (bool shape : {false, true}) {
     if (shape && !zv.active()) break;
-    for (int k = -4; k <= 2; ++k) {
-      const double s = std::exp2(k / 3.0);
-      c.gain_scale = s;
-      double rms = std::numeric_limits<double>::infinity();
-      try {
-        const Loop loop = compensated.make(c);
-        const Law law = shape ? with_preview(loop.law, trap_shaped, lead) : loop.law;
-        const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law);
-        rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
-        if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
-      } catch (const Error&) {  // the rig diverged with this gain
+    for (int k = -4; k <= 2; ++k) order.push_back({shape, k});
+  }
+  const std::size_t per_kind = 7;
+  for (int k = -4; k <= 2; ++k) g.scales.push_back(std::exp2(k / 3.0));
+  g.rms_mm.assign(per_kind, std::numeric_limits<double>::infinity());
+  if (zv.active()) g.rms_shaped_mm.assign(per_kind, std::numeric_limits<double>::infinity());
+  // Early stop (ExperimentOptions::complete_gain_trials = false): the likeliest best first
+  // (the shaped loop, scales x1.26, x1.00, x1.59, then down; then the same unshaped: the
+  // choices of the documented sweep), and a candidate stops once the sum of its squared errors
+  // exceeds the best's by more than rounding. A stopped candidate's RMS only exceeds the best's,
+  // so it is never chosen, and ties go to the earlier candidate of `order`, as in a complete
+  // trial: the choice is the same.
+  const bool early = !o.complete_gain_trials;
+  std::vector<std::size_t> visit(order.size());
+  for (std::size_t i = 0; i < visit.size(); ++i) visit[i] = i;
+  if (early) {
+    auto rank = [](const Candidate& x) {
+      static constexpr int by_k[] = {6, 5, 4, 3, 1, 0, 2};  // k = -4..2
+      return (x.shape ? 0 : 10) + by_k[x.k + 4];
+    };
+    std::stable_sort(visit.begin(), visit.end(),
+                     [&](std::size_t a, std::size_t b) { return rank(order[a]) < rank(order[b]); });
+  }
+  struct Stopped {};  // thrown by the law to end a candidate early
+  const double n_scored = static_cast<double>(trap.size() - scored_from);
+  double best = std::numeric_limits<double>::infinity(), best_sse = best;
+  std::size_t best_at = order.size();
+  for (std::size_t at : visit) {
+    const Candidate& cand = order[at];
+    c.gain_scale = std::exp2(cand.k / 3.0);
+    double rms = std::numeric_limits<double>::infinity(), sse = 0.0;
+    try {
+      const Loop loop = compensated.make(c);
+      Law law = cand.shape ? with_preview(loop.law, trap_shaped, lead) : loop.law;
+      if (early && std::isfinite(best_sse)) {
+        const double stop_above = best_sse * (1.0 + 1e-9);
+        law = [inner = std::move(law), &sse, stop_above, scored_from](const Sample& s) {
+          if (s.k >= scored_from) {
+            const double d = s.reference_m * 1e3 - s.measured_m * 1e3;
+            sse += d * d;
+            if (sse > stop_above) throw Stopped{};
+          }
+          return inner(s);
+        };
       }
-      if (!shape) g.scales.push_back(s);
-      (shape ? g.rms_shaped_mm : g.rms_mm).push_back(rms);
-      if (rms < best) {
-        best = rms;
-        g.scale = s;
-        g.shaped = shape;
-      }
+      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law);
+      const TrackingErrors e = errors_of(run, scored_from, run.t.size());
+      rms = e.rms_error_mm;
+      sse = e.rms_error_mm * e.rms_error_mm * n_scored;
+      if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
+    } catch (const Stopped&) {  // above the best: a lower bound of its RMS
+      rms = std::sqrt(sse / n_scored);
+      g.early_stop = true;
+    } catch (const Error&) {  // the rig diverged with this gain
+    }
+    (cand.shape ? g.rms_shaped_mm : g.rms_mm)[static_cast<std::size_t>(cand.k + 4)] = rms;
+    if (rms < best || (rms == best && std::isfinite(rms) && at < best_at)) {
+      best = rms;
+      best_sse = sse;
+      best_at = at;
+      g.scale = c.gain_scale;
+      g.shaped = cand.shape;
     }
   }
   return g;
@@ -799,6 +847,7 @@ std::string ExperimentResult::table() const {
         s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], g.shaped && g.scales[i] == g.scale ? "*" : "",
                          g.rms_shaped_mm[i]);
     }
+    if (g.early_stop) s += " (stopped early above the best: those RMS are lower bounds)";
     s += "\n";
   }
   for (const auto& m : messages) s += fmt::format("  note: {}\n", m);

@@ -562,7 +562,8 @@ json to_json(const ExperimentResult& r) {
                                 {"shaped", g.shaped},
                                 {"scales", g.scales},
                                 {"rms_mm", rms},
-                                {"rms_shaped_mm", rms_shaped}});
+                                {"rms_shaped_mm", rms_shaped},
+                                {"early_stop", g.early_stop}});
   }
   j["messages"] = r.messages;
   j["units"] = {{"pressure", "MPa"}, {"contraction", "mm"}, {"time", "s"}};
@@ -685,6 +686,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
         if (!(s > 0.0)) throw Error(fmt::format("{}: key \"scales\": expected positive numbers", w));
       g.rms_mm = get_doubles(gs[i], "rms_mm", w, std::numeric_limits<double>::infinity());  // null: diverged
       g.shaped = opt_bool(gs[i], "shaped", w, false);
+      g.early_stop = opt_bool(gs[i], "early_stop", w, false);
       if (gs[i].contains("rms_shaped_mm"))
         g.rms_shaped_mm = get_doubles(gs[i], "rms_shaped_mm", w, std::numeric_limits<double>::infinity());
       if (g.scales.size() != g.rms_mm.size() || (!g.rms_shaped_mm.empty() && g.rms_shaped_mm.size() != g.scales.size()))

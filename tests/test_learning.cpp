@@ -152,6 +152,45 @@ TEST(Learning, SupervisorRestoresTheBestCorrectionAndHalvesTheGain) {
   }
 }
 
+// After hold_after_cuts halvings the supervisor holds the best correction: the periods after
+// apply it unchanged (no update, whatever their error), the gain is not cut again, and the
+// lookahead across the period's end reads the held correction's start.
+TEST(Learning, SupervisorHoldsTheBestCorrectionAfterEnoughCuts) {
+  // period 0 not compared; 1 best; 2 a rise (cut 1, back to 1's correction); 3 best; 4 a rise
+  // (cut 2: held at 3's correction); 5 and 6 would be rises, 7 a fall: no effect when held
+  const std::vector<double> rms{0.5, 0.9, 1.2, 0.8, 1.0, 1.5, 2.0, 0.1};
+  for (std::size_t hold : {std::size_t{0}, std::size_t{2}}) {
+    LearningParams p{.period = 40, .gain = 0.4, .lead = 3, .half_width = 2, .lookahead = 5, .rise_tolerance = 0.0};
+    p.hold_after_cuts = hold;
+    IterativeLearning ilc(p);
+    std::vector<std::vector<double>> applied(rms.size());
+    double ahead_at_end = 0.0;
+    for (std::size_t j = 0; j < rms.size(); ++j) {
+      for (std::size_t k = 0; k < p.period; ++k) {
+        applied[j].push_back(ilc.correction());
+        if (j == 5 && k == p.period - 2) ahead_at_end = ilc.correction(5);  // period 6's sample 3
+        ilc.step(rms[j]);
+      }
+    }
+    EXPECT_EQ(applied[3], applied[1]);  // restored after the first rise
+    EXPECT_EQ(applied[5], applied[3]);  // restored after the second rise
+    if (hold) {
+      EXPECT_TRUE(ilc.held());
+      EXPECT_EQ(ilc.gain_cuts(), 2u);
+      EXPECT_DOUBLE_EQ(ilc.gain(), 0.1);
+      for (std::size_t j = 6; j < rms.size(); ++j) EXPECT_EQ(applied[j], applied[3]) << "period " << j;
+      EXPECT_EQ(ahead_at_end, applied[3][3]);
+    } else {
+      EXPECT_FALSE(ilc.held());
+      EXPECT_GT(ilc.gain_cuts(), 2u);  // 5 is updated from 3's correction and rises: cut again
+      EXPECT_NE(applied[6], applied[3]);
+    }
+    ilc.reset();
+    EXPECT_FALSE(ilc.held());
+    EXPECT_EQ(ilc.correction(), 0.0);
+  }
+}
+
 // A copy carries on exactly as the original would, also after the original is gone (the
 // supervisor's bookkeeping holds no pointer into the object's own buffers).
 TEST(Learning, CopyCarriesOnAsTheOriginal) {

@@ -42,6 +42,10 @@ struct LearningParams {
   // Relative rise of a period's RMS error over the least before it that halves L, >= 0
   // (infinity: no supervision, L fixed).
   double rise_tolerance = std::numeric_limits<double>::infinity();
+  // After this many halvings of L the supervisor holds the best correction: no more updates
+  // (0: never). Each update is c <- Q(c + L e), so with L near 0 an update only smooths the
+  // best correction by Q, and the period after it is worse again.
+  std::size_t hold_after_cuts = 0;
   // Throws hysteron::Error naming the field; also when lead + 2 half_width + lookahead >= period.
   void validate() const;
 };
@@ -72,6 +76,7 @@ class IterativeLearning {
   std::size_t faults() const noexcept { return faults_; }
   double gain() const noexcept { return gain_; }             // L in use (params().gain until halved)
   std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor reverted and halved L
+  bool held() const noexcept { return held_; }               // the best correction is held (hold_after_cuts)
   const LearningParams& params() const noexcept { return p_; }
 
  private:
@@ -88,6 +93,7 @@ class IterativeLearning {
   bool tail_from_best_ = false;
   bool best_valid_ = false;               // c_best_ holds a measured correction
   bool skip_tail_ = false;                // c_j is a restored best: complete already
+  bool held_ = false;                     // c_cur_ is held: no more updates
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}
   std::size_t k_ = 0, j_ = 0, faults_ = 0;
   double gain_ = 0.0;                     // L in use

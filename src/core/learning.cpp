@@ -83,13 +83,13 @@ void IterativeLearning::reset() noexcept {
   sse_ = 0.0;
   least_mse_ = std::numeric_limits<double>::infinity();
   tail_from_best_ = false;
-  best_valid_ = skip_tail_ = false;
+  best_valid_ = skip_tail_ = held_ = false;
 }
 
 double IterativeLearning::correction(std::size_t ahead) const noexcept {
   ahead = std::min(ahead, p_.lookahead);
   const std::size_t p = k_ + ahead;
-  return p < p_.period ? c_cur_[p] : c_next_[p - p_.period];
+  return p < p_.period ? c_cur_[p] : (held_ ? c_cur_ : c_next_)[p - p_.period];
 }
 
 namespace {
@@ -164,7 +164,9 @@ void IterativeLearning::step(double error) noexcept {
   const std::size_t N = p_.period, dh = p_.lead + p_.half_width;
   e_cur_[k_] = error;
   sse_ += error * error;
-  if (k_ >= dh) {
+  if (held_) {
+    // the best correction, held: nothing to update
+  } else if (k_ >= dh) {
     c_next_[k_ - dh] = update_at(k_ - dh, c_cur_.data(), false);
   } else if (j_ >= 1 && !skip_tail_) {
     c_cur_[N + k_ - dh] = update_at(N + k_ - dh, tail_from_best_ ? c_best_.data() : c_next_.data(), true);
@@ -181,7 +183,9 @@ void IterativeLearning::end_period() noexcept {
   const double allowed = j_ == 0 ? std::numeric_limits<double>::infinity() : 1.0 + p_.rise_tolerance;
   sse_ = 0.0;
   skip_tail_ = false;
-  if (std::isfinite(allowed) && (!best_valid_ || mse < least_mse_)) {
+  if (held_) {
+    // c_cur_ stays
+  } else if (std::isfinite(allowed) && (!best_valid_ || mse < least_mse_)) {
     // c_j is the best so far (or the restored best, re-measured): keep it in c_best_, the
     // end of c_{j+1} is computed from there, and the old best's buffer becomes the scratch
     std::swap(c_best_, c_cur_);
@@ -197,6 +201,7 @@ void IterativeLearning::end_period() noexcept {
     skip_tail_ = true;
     gain_ *= 0.5;
     ++cuts_;
+    held_ = p_.hold_after_cuts > 0 && cuts_ >= p_.hold_after_cuts;
   } else {
     std::swap(c_cur_, c_next_);
     tail_from_best_ = false;

@@ -221,6 +221,12 @@ inline constexpr double kLearningGains[] = {0.5, 0.3, 0.2, 0.1, 0.05};
 // (docs/control.md, section 3). At the noise floor a halving only lowers the noise the
 // learning feeds back.
 inline constexpr double kLearningRiseTolerance = 0.0;
+// LearningParams::hold_after_cuts of the learning variant: after 3 halvings (L / 8) an update
+// only smooths the best correction by Q, and every other period was worse than the best (25
+// periods of mpi-openloop's triangle: 0.050 / 0.060 mm RMS alternating from the 13th on, L
+// halved 8 times; held: 0.051-0.052). Ten periods of the demo and the documented sweep never
+// reach 3 halvings (docs/control.md, section 3).
+inline constexpr std::size_t kLearningHoldAfterCuts = 3;
 // The learning variant's ILC: the largest gain L of kLearningGains, the phase lead d (<= 0.5 s) and the Q-filter's width
 // chosen on the identified closed loop so that learning_contraction() < 1 with the
 // widest filter band (docs/control.md). Sets `contraction` to that bound.

@@ -44,7 +44,7 @@ struct FitCliOptions {
   std::string model = "gpi", train, validate, out, report;
   DataSelection sel;
   std::vector<std::string> validate_data;
-  int n = 10, dead_zones = 4, starts = 2, threads = 0, max_iterations = 200;
+  int n = 10, dead_zones = 4, starts = 2, threads = 0, max_iterations = 200, censor_passes = FitOptions{}.censor_passes;
   double huber = 0.0, min_slope = FitOptions{}.min_slope, sample_time = 0.0;
   unsigned seed = 0;
   bool json = false, relaxed = false, force = false, free_weights = false;
@@ -108,6 +108,7 @@ int run_fit(const FitCliOptions& c) {
   o.initial_state = c.relaxed ? InitialState::relaxed : InitialState::virgin;
   o.gpi_free_weights = c.free_weights;
   o.sample_time = c.sample_time;
+  o.censor_passes = c.censor_passes;
   if (o.sample_time == 0.0 && time && time->size() > 1) {
     // rate-pi: the median step of the time column
     std::vector<double> dts(time->size() - 1);
@@ -292,6 +293,12 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--sample-time", c->sample_time,
                   "rate-pi: sample time of the record in s (default: the median step of --time-column)")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--censor-passes", c->censor_passes,
+                  fmt::format("an output that clips (a sensor's limit, detected from the record) is fitted as censored "
+                              "data: the samples at the limit where the model predicts beyond it count as no error, "
+                              "over this many refits (default {}; 0: fitted to the limit as recorded)",
+                              FitOptions{}.censor_passes))
+      ->check(CLI::Range(0, 10));
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
   sub->add_flag("--free-weights", c->free_weights,
                 "gpi: the free-weight variant (tanh envelope, q and n free weights) instead of Eq. 8's exponential law");

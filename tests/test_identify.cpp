@@ -714,3 +714,79 @@ TEST(Clipping, SensorLimitIsFlaggedRestOnAStopIsNot) {
   EXPECT_TRUE(warned(fit(x, clipped, o)));
   EXPECT_FALSE(warned(fit(x, rest, o)));
 }
+
+// A record clipped by its sensor is fitted as censored data (FitOptions::censor_passes): the
+// clipped samples only say the output is at or below the limit, so the model is no longer
+// pulled onto the limit, and it follows the true output better where the sensor sees it and
+// where it does not. The truth is a hysteretic model (a PI fitted to a curved record) driven
+// by a decaying oscillation; the sensor reads max(truth + noise, c), c its 30th percentile.
+TEST(Clipping, ClippedOutputIsFittedAsCensored) {
+  const std::size_t n = 12000;
+  std::vector<double> x(n), curved(n);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / static_cast<double>(n);
+    x[k] = 0.5 + 0.5 * (1.0 - 0.8 * t) * std::sin(2.0 * M_PI * 6.0 * t);
+    curved[k] = 10.0 * x[k] * x[k] + 2.0 * x[k];
+  }
+  FitOptions o;
+  o.model = FitModel::pi;
+  o.num_operators = 6;
+  const FitReport truth_fit = fit(x, curved, o);
+  ASSERT_TRUE(has_model(truth_fit.status)) << truth_fit.message;
+  const std::vector<double> truth = simulate_record(truth_fit.model, x);
+  std::vector<double> sorted = truth;
+  std::sort(sorted.begin(), sorted.end());
+  const double c = sorted[n * 3 / 10];
+  std::vector<double> y(n);
+  for (std::size_t k = 0; k < n; ++k) y[k] = std::max(truth[k] + noise(rng), c);
+  ASSERT_TRUE(detect_clipping(y).low);
+
+  o.model = FitModel::mpi_asym;
+  o.num_operators = 6;
+  FitOptions plain = o;
+  plain.censor_passes = 0;
+  const FitReport as_recorded = fit(x, y, plain), censored = fit(x, y, o);
+  ASSERT_TRUE(has_model(as_recorded.status)) << as_recorded.message;
+  ASSERT_TRUE(has_model(censored.status)) << censored.message;
+  auto says = [](const FitReport& r, const std::string& what) {
+    for (const auto& w : r.warnings)
+      if (w.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(says(as_recorded, "fitted to the limit there"));
+  EXPECT_TRUE(says(censored, "fitted as censored data (2 refit(s)"));
+  // RMS against the truth where the sensor sees it (3 noise widths above the limit) and below it
+  auto rms_vs_truth = [&](const FitReport& r, bool seen) {
+    const std::vector<double> p = simulate_record(r.model, x);
+    double s2 = 0.0;
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < n; ++k)
+      if ((truth[k] > c + 0.03) == seen && (seen || truth[k] < c)) s2 += (p[k] - truth[k]) * (p[k] - truth[k]), ++m;
+    return std::sqrt(s2 / static_cast<double>(m));
+  };
+  const double seen_plain = rms_vs_truth(as_recorded, true), seen_cens = rms_vs_truth(censored, true);
+  const double hidden_plain = rms_vs_truth(as_recorded, false), hidden_cens = rms_vs_truth(censored, false);
+  // where the sensor sees it the censored fit is closer to the truth (0.086 vs 0.093 mm with 2
+  // passes; 0.077 with 10: the refits converge slowly; 0.063 fitted on the unclipped record),
+  // and it is not worse below the limit, where neither extrapolates well (1.90 vs 1.96)
+  EXPECT_LT(seen_cens, 0.95 * seen_plain) << seen_cens << " vs " << seen_plain;
+  EXPECT_LT(hidden_cens, hidden_plain) << hidden_cens << " vs " << hidden_plain;
+  // the censored record's metrics: no error where the model predicts beyond the limit
+  std::size_t replaced = 0;
+  const std::vector<double> yc = censored_output(y, simulate_record(censored.model, x), detect_clipping(y), &replaced);
+  EXPECT_GT(replaced, n / 10);
+  EXPECT_NEAR(evaluate(censored.model, x, yc).rms, censored.train.rms, 0.2 * censored.train.rms);
+  EXPECT_THROW(censored_output(y, std::vector<double>(n - 1, 0.0), detect_clipping(y)), Error);
+  EXPECT_LT(censored.train.rms, as_recorded.train.rms);
+
+  // an unclipped record: the passes change nothing
+  std::vector<double> seen_only(n);
+  for (std::size_t k = 0; k < n; ++k) seen_only[k] = truth[k] + noise(rng);
+  ASSERT_FALSE(detect_clipping(seen_only).any());
+  const FitReport a = fit(x, seen_only, plain), b = fit(x, seen_only, o);
+  ASSERT_EQ(a.parameters.size(), b.parameters.size());
+  for (std::size_t i = 0; i < a.parameters.size(); ++i) EXPECT_EQ(a.parameters[i].value, b.parameters[i].value);
+  EXPECT_FALSE(says(b, "censored"));
+}

@@ -129,6 +129,13 @@ struct Clipping {
   bool any() const noexcept { return low || high; }
 };
 Clipping detect_clipping(std::span<const double> y);
+// y with its clipped samples (those exactly at a limit `clip` flagged, over the whole record)
+// replaced by `predicted` where that lies beyond the limit: the limit only says the true
+// output is at or beyond it, so a prediction there is no error (censored data). The other
+// samples, and a prediction on the near side of the limit, keep y. `replaced`, if given,
+// counts the samples changed. Equal lengths, else hysteron::Error.
+std::vector<double> censored_output(std::span<const double> y, std::span<const double> predicted,
+                                    const Clipping& clip, std::size_t* replaced = nullptr);
 
 // Model output over the whole record (same start convention as fit()).
 std::vector<double> simulate_record(const ModelParams& params, std::span<const double> x,
@@ -203,6 +210,12 @@ struct FitOptions {
   // (reference_pi) on the same range, or whose training R^2 < 0, ends as poor_fit.
   // 0 disables the reference comparison.
   double poor_fit_ratio = 1.05;
+  // An output that clips (detect_clipping over the training range) is fitted as censored:
+  // after the fit, the clipped samples where the model predicts beyond the limit are replaced
+  // by that prediction (censored_output) and the model fitted again, censor_passes times, so
+  // that the limit no longer pulls the model onto it; the metrics are then those of the
+  // censored record. A warning says so. 0: fitted to the limit as recorded. 0..10.
+  int censor_passes = 2;
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
   // With num_threads != 1 it is called from worker threads, one call at a time.
   std::function<void(int, int, double)> progress;

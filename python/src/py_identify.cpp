@@ -27,7 +27,8 @@ void bind_identify(py::module_& m) {
          const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
          int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const std::string& report,
          std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
-         int num_threads, int stall_iterations, double stall_tolerance, double min_slope, double sample_time) {
+         int num_threads, int stall_iterations, double stall_tolerance, double min_slope, double sample_time,
+         int censor_passes) {
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = num_operators;
@@ -46,6 +47,7 @@ void bind_identify(py::module_& m) {
         o.stall_tolerance = stall_tolerance;
         o.min_slope = min_slope;
         o.sample_time = sample_time;
+        o.censor_passes = censor_passes;
         const auto xs = as_span(x), ys = as_span(y);
         FitReport r;
         {
@@ -74,6 +76,7 @@ void bind_identify(py::module_& m) {
       py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()), py::arg("num_threads") = 0,
       py::arg("stall_iterations") = 25, py::arg("stall_tolerance") = 1e-5,
       py::arg("min_slope") = FitOptions{}.min_slope, py::arg("sample_time") = 0.0,
+      py::arg("censor_passes") = FitOptions{}.censor_passes,
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
 
 x, y: input and measured output (1-D arrays of equal length).
@@ -84,6 +87,8 @@ with the lowest hold-out RMS (pooled over the first and the last part of the tra
 min_slope: minimum slope of the model relative to span(y)/span(x) over the training
 range (bounds the inverse's slope).
 sample_time: seconds between samples (rate-pi only; 0 = unknown, then rate-pi is refused).
+censor_passes: an output that clips (a sensor's limit, detected from the record) is fitted as
+censored data over this many refits (0: fitted to the limit as recorded).
 train: (begin, end) sample range entering the cost (None = all; end None = to the end).
 num_starts: initial guesses refined by LM, on up to num_threads threads (0: one per
 hardware thread, 1: sequential; the result does not depend on it). max_iterations:

@@ -234,6 +234,15 @@ struct SmoothedRun {
   explicit SmoothedRun(const IdRecord& id) : x_mm(smoothed(id.x_mm)), p(smoothed(id.p)) {}
 };
 
+// evaluate(), on a record whose displacement sensor clips (detect_clipping): a prediction
+// beyond the limit where the record sits at it is no error (censored_output, as fit() fits).
+FitMetrics evaluate_censored(const ModelParams& m, const std::vector<double>& p, const std::vector<double>& x_mm,
+                             IndexRange range = {}) {
+  const Clipping clip = detect_clipping(x_mm);
+  if (!clip.any()) return evaluate(m, p, x_mm, range);
+  return evaluate(m, p, censored_output(x_mm, simulate_record(m, p), clip), range);
+}
+
 // The note of a clipped displacement record (fit_to_reach).
 std::string clipping_note(const Clipping& clip) {
   std::string where;
@@ -481,7 +490,7 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
     const auto t0 = std::chrono::steady_clock::now();
     try {
       rep = fit_checked(idf, f2, fmt::format("{} model", fit_model_name(kind)), &c.status);
-      c.validation = evaluate(rep.model, id2.p, id2.x_mm);
+      c.validation = evaluate_censored(rep.model, id2.p, id2.x_mm);
       if (!std::isfinite(c.validation.rms))
         throw Error(fmt::format("experiment: the {} model's output on the second identification run is not finite",
                                 fit_model_name(kind)));
@@ -623,7 +632,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   fo.train = {0, train_end};
   fo.seed = static_cast<unsigned>(o.seed);
   res.fit = fit_checked(idf, fo, "paper's model");
-  res.validation = evaluate(res.fit.model, idf.p, idf.x_mm, {train_end, IndexRange::npos});
+  res.validation = evaluate_censored(res.fit.model, idf.p, idf.x_mm, {train_end, IndexRange::npos});
 
   // 2. hysteron's model: candidates fitted on the whole record, chosen on a second
   //    identification run (other seed, other pressure sequence); both inputs scaled to the

@@ -97,6 +97,8 @@ bool FitOptions::is_valid(std::string* error) const {
     return fail(fmt::format("sample_time must be >= 0 (0: unknown), got {}", sample_time));
   if (!(poor_fit_ratio == 0 || (poor_fit_ratio >= 1 && std::isfinite(poor_fit_ratio))))
     return fail(fmt::format("poor_fit_ratio must be 0 (off) or >= 1, got {}", poor_fit_ratio));
+  if (censor_passes < 0 || censor_passes > 10)
+    return fail(fmt::format("censor_passes must be within 0..10, got {}", censor_passes));
   return true;
 }
 

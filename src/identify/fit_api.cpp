@@ -239,15 +239,6 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   add_units_parameters(rep);
   rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
   if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
-  const Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
-  for (const bool low : {true, false})
-    if (low ? clip.low : clip.high)
-      rep.warnings.push_back(fmt::format(
-          "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "
-          "of it, where noise alone would put about half: a sensor's limit (or a stop recorded without noise); the "
-          "model is fitted to the limit there, not to the actuator",
-          low ? "least" : "largest", low ? clip.lo : clip.hi, 100.0 * (low ? clip.low_share : clip.high_share),
-          clip.sigma));
 
   // The reference PI (a plain NNLS script's fit) on the same range.
   std::optional<ModelParams> reference_model;
@@ -447,8 +438,39 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   } catch (const Error& e) {
     return invalid(e.what(), options.model, t0);
   }
-  if (options.model == FitModel::automatic) return fit_auto(x, y, options, tr, t0);
-  return fit_one(x, y, options, tr, t0);
+  auto run = [&](std::span<const double> yy) {
+    return options.model == FitModel::automatic ? fit_auto(x, yy, options, tr, t0) : fit_one(x, yy, options, tr, t0);
+  };
+  FitReport rep = run(y);
+  const Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
+  if (!clip.any()) return rep;
+  // A clipped output (FitOptions::censor_passes): refitted on the record whose clipped samples
+  // take the model's prediction where it lies beyond the limit.
+  std::size_t censored = 0;
+  int passes = 0;
+  for (; passes < options.censor_passes && has_model(rep.status); ++passes) {
+    std::size_t n = 0;
+    const std::vector<double> yc =
+        censored_output(y, simulate_record(rep.model, x, options.initial_state), clip, &n);
+    if (n == 0) break;
+    FitReport next = run(yc);
+    if (!has_model(next.status)) break;
+    rep = std::move(next);
+    censored = n;
+  }
+  for (const bool low : {true, false})
+    if (low ? clip.low : clip.high)
+      rep.warnings.push_back(fmt::format(
+          "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "
+          "of it, where noise alone would put about half: a sensor's limit (or a stop recorded without noise); {}",
+          low ? "least" : "largest", low ? clip.lo : clip.hi, 100.0 * (low ? clip.low_share : clip.high_share),
+          clip.sigma,
+          passes > 0 ? fmt::format("fitted as censored data ({} refit(s); {} samples at a limit where the model "
+                                   "predicts beyond it count as no error, and the metrics are on that record)",
+                                   passes, censored)
+                     : std::string("the model is fitted to the limit there, not to the actuator")));
+  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return rep;
 }
 
 }  // namespace hysteron

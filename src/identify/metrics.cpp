@@ -97,6 +97,24 @@ Clipping detect_clipping(std::span<const double> y) {
   return c;
 }
 
+std::vector<double> censored_output(std::span<const double> y, std::span<const double> predicted,
+                                    const Clipping& clip, std::size_t* replaced) {
+  if (y.size() != predicted.size())
+    throw Error(fmt::format("censored_output: {} outputs but {} predictions", y.size(), predicted.size()));
+  std::vector<double> out(y.begin(), y.end());
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < y.size(); ++k) {
+    const double p = predicted[k];
+    if (!std::isfinite(p)) continue;
+    if ((clip.low && y[k] == clip.lo && p < clip.lo) || (clip.high && y[k] == clip.hi && p > clip.hi)) {
+      out[k] = p;
+      ++n;
+    }
+  }
+  if (replaced) *replaced = n;
+  return out;
+}
+
 FitMetrics compute_metrics(std::span<const double> measured, std::span<const double> predicted) {
   if (measured.size() != predicted.size())
     throw Error(fmt::format("metrics: measured has {} samples but predicted has {}", measured.size(), predicted.size()));

@@ -125,3 +125,20 @@ def test_new_kinds_run_invert_and_fit_from_python():
     assert r["status"] == "converged" and r["model"]["model"] == "kp", r["message"]
     bad = hysteron.fit(x, y, model="rate-pi")
     assert bad["status"] == "invalid_input" and "sample time" in bad["message"]
+
+
+def test_clipped_output_is_fitted_as_censored_unless_asked_not_to():
+    """A record whose sensor clips (its lowest third read as the limit, with noise elsewhere)
+    is fitted as censored data by default; censor_passes=0 fits it to the limit as recorded."""
+    x, truth = record()
+    limit = np.percentile(truth, 33)
+    rng = np.random.default_rng(3)
+    y = np.maximum(truth + rng.normal(0.0, 0.02, truth.size), limit)
+    censored = hysteron.fit(x, y, model="pi", num_operators=6)
+    as_recorded = hysteron.fit(x, y, model="pi", num_operators=6, censor_passes=0)
+    assert any("fitted as censored data" in w for w in censored["warnings"]), censored["warnings"]
+    assert any("fitted to the limit there" in w for w in as_recorded["warnings"]), as_recorded["warnings"]
+    # the censored metrics: a prediction below the limit where the record sits at it is no error
+    assert censored["train"]["rms"] < as_recorded["train"]["rms"]
+    bad = hysteron.fit(x, y, model="pi", censor_passes=11)
+    assert bad["status"] == "invalid_input" and "censor_passes" in bad["message"], bad["message"]

@@ -190,6 +190,29 @@ TEST(ExperimentKinds, AutoWithTheAdaptiveVariantChoosesAmongThePiFamily) {
   EXPECT_TRUE(has_pi_structure(r.best_fit.model));
   EXPECT_TRUE(contains(r.model_reason, "the adaptive variant can use (PI family)")) << r.model_reason;
   EXPECT_NE(find_run(r, "adaptive"), nullptr);
+
+  // Without fitting the ineligible kinds (hysteron sweep): the same choice and the same runs;
+  // the kinds left out are exactly those whose fitted model had no PI structure above.
+  o.fit_ineligible_candidates = false;
+  const ExperimentResult lean = run_experiment(o);
+  ASSERT_EQ(lean.candidates.size(), r.candidates.size());
+  EXPECT_EQ(lean.best_fit.model_kind, r.best_fit.model_kind);
+  EXPECT_EQ(lean.best_validation.rms, r.best_validation.rms);
+  for (std::size_t i = 0; i < r.candidates.size(); ++i) {
+    const ModelCandidate &full = r.candidates[i], &c = lean.candidates[i];
+    ASSERT_EQ(c.kind, full.kind);
+    const bool left_out = contains(c.message, "not fitted: not eligible");
+    EXPECT_EQ(left_out, full.ok && contains(full.message, "not eligible for auto")) << fit_model_name(c.kind);
+    if (left_out) {
+      EXPECT_FALSE(c.ok);
+    } else {
+      EXPECT_EQ(c.ok, full.ok);
+      EXPECT_EQ(c.validation.rms, full.validation.rms) << fit_model_name(c.kind);
+    }
+  }
+  ASSERT_EQ(lean.runs.size(), r.runs.size());
+  for (std::size_t i = 0; i < r.runs.size(); ++i)
+    EXPECT_EQ(lean.runs[i].errors.rms_error_mm, r.runs[i].errors.rms_error_mm) << r.runs[i].variant;
 }
 
 // Kinds that do not exist: an unknown name, an enum value outside the registry.

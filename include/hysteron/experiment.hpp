@@ -87,6 +87,10 @@ struct ExperimentOptions {
   // choice is the same, the stopped candidates' RMS are lower bounds (GainTrial::early_stop).
   // hysteron sweep sets it: it reports the choice only.
   bool complete_gain_trials = true;
+  // With FitModel::automatic and the adaptive variant, auto chooses among the PI family only,
+  // and the other kinds are fitted for comparison (ExperimentResult::candidates). false: they
+  // are not fitted (listed as such); the choice is the same. hysteron sweep sets it.
+  bool fit_ineligible_candidates = true;
   void validate() const;         // throws hysteron::Error
 };
 

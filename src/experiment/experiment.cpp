@@ -467,6 +467,21 @@ void to_control_rate(ModelParams& m, double tc, std::vector<std::string>& messag
                                  fit_dt, tc, lowered));
 }
 
+// The kinds whose fitted model has the PI family's play structure (has_pi_structure, which
+// choose_model checks on every fitted model): the ones the adaptive variant re-identifies.
+bool pi_family(FitModel k) {
+  switch (k) {
+    case FitModel::pi:
+    case FitModel::gpi:
+    case FitModel::mpi_deadzone:
+    case FitModel::mpi_asym:
+    case FitModel::maxwell_slip:
+      return true;
+    default:
+      return false;
+  }
+}
+
 // Fits the candidates of hysteron's model on `idf` and keeps (res.best_fit) the one with the
 // least RMS on `id2`; fills res.candidates, res.model_choice and res.model_reason.
 void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& idf, const IdRecord& id2,
@@ -486,6 +501,12 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
     const FitOptions f2 = candidate_fit_options(fo, kind, spec, fit_dt);
     ModelCandidate c;
     c.kind = kind;
+    if (pi_only && !o.fit_ineligible_candidates && !pi_family(kind)) {
+      c.message = "not fitted: not eligible for auto while the adaptive variant runs, and the run lists only the "
+                  "eligible ones (ExperimentOptions::fit_ineligible_candidates = false, as in hysteron sweep)";
+      res.candidates.push_back(std::move(c));
+      continue;
+    }
     FitReport rep;
     const auto t0 = std::chrono::steady_clock::now();
     try {

@@ -469,7 +469,8 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.learning_periods = options.learning_periods;
         eo.model = options.model;
         eo.fit_references = options.fit_references;
-        eo.complete_gain_trials = false;  // the sweep reports the trial's choice, not its curve
+        eo.complete_gain_trials = false;       // the sweep reports the trial's choice, not its curve
+        eo.fit_ineligible_candidates = false;  // ... and the model auto chose, not the others
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
         for (const auto& tr : er.runs) {
           SweepRunErrors e;

@@ -172,5 +172,29 @@ GLOG_v=10 GLOG_logtostderr=1 GLOG_minloglevel=0 "$BIN" fit --model gpi --data "$
   --threads 1 --out "$T/v.json" > /dev/null 2> "$T/verbose.err" || fail "verbose glog fit"
 glog_lines "$T/verbose.err" > /dev/null && fail "glog lines on stderr with GLOG_v=10: $(head -2 "$T/verbose.err")"
 
+# 8. a record whose sensor clips (the lowest third of a.csv's output read as its limit) is
+#    fitted as censored data and says so; --censor-passes 0 fits it to the limit; 11 is refused
+$PY - "$T/a.csv" "$T/clipped.csv" <<'PYEOF'
+import sys
+rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n")[1:] if r]
+ys = sorted(float(r[2]) for r in rows)
+limit = ys[len(ys) // 3]
+with open(sys.argv[2], "w") as f:
+    f.write("t_s,p,y\n")
+    for i, (t, p, y) in enumerate(rows):
+        noise = 0.02 * (((i * 7919) % 101) / 50.0 - 1.0)  # deterministic, +-0.02
+        f.write(f"{t},{p},{max(float(y) + noise, limit)!r}\n")
+PYEOF
+"$BIN" fit --model pi --data "$T/clipped.csv" --input p --output y --threads 1 --out "$T/c.json" \
+  > "$T/c.txt" 2>&1 || fail "fit of a clipped record"
+grep -q "fitted as censored data (2 refit(s)" "$T/c.txt" || fail "no censored-fit warning: $(grep warning "$T/c.txt")"
+"$BIN" fit --model pi --data "$T/clipped.csv" --input p --output y --threads 1 --censor-passes 0 --out "$T/c0.json" \
+  > "$T/c0.txt" 2>&1 || fail "fit of a clipped record with --censor-passes 0"
+grep -q "fitted to the limit there" "$T/c0.txt" || fail "no as-recorded warning: $(grep warning "$T/c0.txt")"
+"$BIN" fit --model pi --data "$T/clipped.csv" --input p --output y --censor-passes 11 --out "$T/c11.json" \
+  > /dev/null 2> "$T/c11.err" && fail "--censor-passes 11 accepted"
+grep -q "censor-passes" "$T/c11.err" || fail "--censor-passes 11: $(cat "$T/c11.err")"
+[ -e "$T/c11.json" ] && fail "--censor-passes 11 wrote a model"
+
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

@@ -130,53 +130,57 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
   on_identified_rig.tracking_rig.reset();
   const ZvShaper zv = zv_shaper(c.dynamics, c.tc);
   const auto trap_shaped = std::make_shared<const std::vector<double>>(shaped(trap, zv));
-  // The candidates (shaped?, scale 2^(k/3)), k = -4..2, in the order the result lists them.
+  // The candidates (shaped?, scale 2^(k/3)), k = kLo..kHi, in the order the result lists them.
+  constexpr int kLo = -4, kHi = 2;
+  constexpr auto per_kind = static_cast<std::size_t>(kHi - kLo + 1);
   struct Candidate {
     bool shape;
     int k;
+    std::size_t at() const { return static_cast<std::size_t>(k - kLo); }  // index in the lists
   };
   std::vector<Candidate> order;
   for (bool shape : {false, true}) {
     if (shape && !zv.active()) break;
-    for (int k = -4; k <= 2; ++k) order.push_back({shape, k});
+    for (int k = kLo; k <= kHi; ++k) order.push_back({shape, k});
   }
-  const std::size_t per_kind = 7;
-  for (int k = -4; k <= 2; ++k) g.scales.push_back(std::exp2(k / 3.0));
-  g.rms_mm.assign(per_kind, std::numeric_limits<double>::infinity());
-  if (zv.active()) g.rms_shaped_mm.assign(per_kind, std::numeric_limits<double>::infinity());
+  for (const Candidate& x : order)
+    if (!x.shape) g.scales.push_back(std::exp2(x.k / 3.0));
+  const double inf = std::numeric_limits<double>::infinity();
+  g.rms_mm.assign(per_kind, inf);
+  if (zv.active()) g.rms_shaped_mm.assign(per_kind, inf);
   // Early stop (ExperimentOptions::complete_gain_trials = false): the likeliest best first
   // (the shaped loop, scales x1.26, x1.00, x1.59, then down; then the same unshaped: the
-  // choices of the documented sweep), and a candidate stops once the sum of its squared errors
-  // exceeds the best's by more than rounding. A stopped candidate's RMS only exceeds the best's,
-  // so it is never chosen, and ties go to the earlier candidate of `order`, as in a complete
-  // trial: the choice is the same.
+  // choices of the documented sweep; the order only changes how soon the others stop), and a
+  // candidate stops once the sum of its squared errors exceeds the best's by more than
+  // rounding. A stopped candidate's RMS only exceeds the best's, so it is never chosen, and
+  // ties go to the earlier candidate of `order`, as in a complete trial: the choice is the same.
   const bool early = !o.complete_gain_trials;
   std::vector<std::size_t> visit(order.size());
   for (std::size_t i = 0; i < visit.size(); ++i) visit[i] = i;
   if (early) {
     auto rank = [](const Candidate& x) {
-      static constexpr int by_k[] = {6, 5, 4, 3, 1, 0, 2};  // k = -4..2
-      return (x.shape ? 0 : 10) + by_k[x.k + 4];
+      static constexpr int by_k[per_kind] = {6, 5, 4, 3, 1, 0, 2};  // k = -4..2
+      return (x.shape ? 0 : 10) + by_k[x.at()];
     };
     std::stable_sort(visit.begin(), visit.end(),
                      [&](std::size_t a, std::size_t b) { return rank(order[a]) < rank(order[b]); });
   }
   struct Stopped {};  // thrown by the law to end a candidate early
   const double n_scored = static_cast<double>(trap.size() - scored_from);
-  double best = std::numeric_limits<double>::infinity(), best_sse = best;
+  double best = inf;  // the least RMS so far
   std::size_t best_at = order.size();
   for (std::size_t at : visit) {
     const Candidate& cand = order[at];
     c.gain_scale = std::exp2(cand.k / 3.0);
-    double rms = std::numeric_limits<double>::infinity(), sse = 0.0;
+    double rms = inf, sse = 0.0;
     try {
       const Loop loop = compensated.make(c);
       Law law = cand.shape ? with_preview(loop.law, trap_shaped, lead) : loop.law;
-      if (early && std::isfinite(best_sse)) {
-        const double stop_above = best_sse * (1.0 + 1e-9);
+      if (early && std::isfinite(best)) {
+        const double stop_above = best * best * n_scored * (1.0 + 1e-9);  // the best's sum of squares
         law = [inner = std::move(law), &sse, stop_above, scored_from](const Sample& s) {
           if (s.k >= scored_from) {
-            const double d = s.reference_m * 1e3 - s.measured_m * 1e3;
+            const double d = s.reference_m * 1e3 - s.measured_m * 1e3;  // as errors_of
             sse += d * d;
             if (sse > stop_above) throw Stopped{};
           }
@@ -184,19 +188,16 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
         };
       }
       const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law);
-      const TrackingErrors e = errors_of(run, scored_from, run.t.size());
-      rms = e.rms_error_mm;
-      sse = e.rms_error_mm * e.rms_error_mm * n_scored;
-      if (!std::isfinite(rms)) rms = std::numeric_limits<double>::infinity();
+      rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
+      if (!std::isfinite(rms)) rms = inf;
     } catch (const Stopped&) {  // above the best: a lower bound of its RMS
       rms = std::sqrt(sse / n_scored);
       g.early_stop = true;
     } catch (const Error&) {  // the rig diverged with this gain
     }
-    (cand.shape ? g.rms_shaped_mm : g.rms_mm)[static_cast<std::size_t>(cand.k + 4)] = rms;
+    (cand.shape ? g.rms_shaped_mm : g.rms_mm)[cand.at()] = rms;
     if (rms < best || (rms == best && std::isfinite(rms) && at < best_at)) {
       best = rms;
-      best_sse = sse;
       best_at = at;
       g.scale = c.gain_scale;
       g.shaped = cand.shape;
@@ -256,8 +257,8 @@ std::string clipping_note(const Clipping& clip) {
   return fmt::format(
       "the displacement sensor clips in the identification run: {} (noise {:.4f} mm from the record); the rig cannot "
       "be seen beyond, so the reach keeps 3 times the noise from {}: {}; the errors are measured by that sensor and "
-      "miss the muscle's excursions beyond its limit (at the start, from rest, and wherever the loop overshoots), and "
-      "the model was fitted on the clipped record",
+      "miss the muscle's excursions beyond its limit (at the start, from rest, and wherever the loop overshoots); the "
+      "models are fitted on it as censored data (FitOptions::censor_passes)",
       where, clip.sigma, clip.low && clip.high ? "either limit" : "the limit",
       clip.low ? "a sensor zeroed above the muscle's rest (a negative offset) reads its limit while the muscle is "
                  "below it"

@@ -18,7 +18,8 @@
 // starts from the loop's initial state, so its error is not comparable). When a completed
 // period's mean squared error exceeds (1 + rise_tolerance)^2 times the best's, the next
 // period applies the best correction again (re-measuring it) and L is halved for the updates
-// from then on: as L -> 0 every frequency contracts by |Q(w)| < 1, whatever T is.
+// from then on: as L -> 0 every frequency contracts by |Q(w)| < 1, whatever T is. Until that
+// first halving, L may grow (LearningParams::max_gain): doubled after every new best period.
 // Bookkeeping only swaps buffers at the period's end (no copy, no burst).
 //
 // step() never allocates, never throws and is deterministic; its cost is
@@ -46,6 +47,13 @@ struct LearningParams {
   // (0: never). Each update is c <- Q(c + L e), so with L near 0 an update only smooths the
   // best correction by Q, and the period after it is worse again.
   std::size_t hold_after_cuts = 0;
+  // Largest L of the supervisor's growth (0: L never grows; else in [gain, 2)). Until the first
+  // halving, L is doubled (up to max_gain) after every period that is the new best: a design
+  // whose contraction bound holds only for a small L on the identified loop converges slowly
+  // (a factor of about 1 - L per period) on a rig where a larger L also contracts. The first
+  // period above the best restores the best correction and halves L, as above, and L grows no
+  // more. Needs supervision (a finite rise_tolerance).
+  double max_gain = 0.0;
   // Throws hysteron::Error naming the field; also when lead + 2 half_width + lookahead >= period.
   void validate() const;
 };
@@ -76,6 +84,7 @@ class IterativeLearning {
   std::size_t faults() const noexcept { return faults_; }
   double gain() const noexcept { return gain_; }             // L in use (params().gain until halved)
   std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor reverted and halved L
+  std::size_t gain_raises() const noexcept { return raises_; }  // times it doubled L (max_gain)
   bool held() const noexcept { return held_; }               // the best correction is held (hold_after_cuts)
   const LearningParams& params() const noexcept { return p_; }
 
@@ -99,7 +108,7 @@ class IterativeLearning {
   double gain_ = 0.0;                     // L in use
   double sse_ = 0.0;                      // sum of e^2 over this period so far
   double least_mse_ = 0.0;                // mean squared error of c_best_'s period
-  std::size_t cuts_ = 0;
+  std::size_t cuts_ = 0, raises_ = 0;
 };
 
 }  // namespace hysteron

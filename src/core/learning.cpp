@@ -19,6 +19,10 @@ void LearningParams::validate() const {
     throw Error(detail::format("learning.max_correction = {}: must be > 0", max_correction));
   if (!(rise_tolerance >= 0.0))
     throw Error(detail::format("learning.rise_tolerance = {}: must be >= 0 (infinity: no supervision)", rise_tolerance));
+  if (!(max_gain == 0.0 || (max_gain >= gain && max_gain < 2.0)))
+    throw Error(detail::format("learning.max_gain = {}: must be 0 (no growth) or in [gain = {}, 2)", max_gain, gain));
+  if (max_gain > 0.0 && !std::isfinite(rise_tolerance))
+    throw Error("learning.max_gain > 0 needs supervision: a finite rise_tolerance");
   if (half_width > 10000) throw Error(detail::format("learning.half_width = {}: must be <= 10000", half_width));
   // the filter's window (2h + 1 samples) plus the lead and the lookahead must fit in one period,
   // so that every index of the update wraps around at most once
@@ -78,7 +82,7 @@ void IterativeLearning::reset() noexcept {
   std::fill(e_cur_.begin(), e_cur_.end(), 0.0);
   std::fill(e_prev_.begin(), e_prev_.end(), 0.0);
   std::fill(c_best_.begin(), c_best_.end(), 0.0);
-  k_ = j_ = faults_ = cuts_ = 0;
+  k_ = j_ = faults_ = cuts_ = raises_ = 0;
   gain_ = p_.gain;
   sse_ = 0.0;
   least_mse_ = std::numeric_limits<double>::infinity();
@@ -193,6 +197,10 @@ void IterativeLearning::end_period() noexcept {
     tail_from_best_ = true;
     least_mse_ = mse;
     best_valid_ = true;
+    if (cuts_ == 0 && gain_ < p_.max_gain) {  // growth until the first halving
+      gain_ = std::min(2.0 * gain_, p_.max_gain);
+      ++raises_;
+    }
   } else if (std::isfinite(allowed) && mse > allowed * allowed * least_mse_) {
     // worse than the best: apply the best again (complete: no tail to compute) and halve L;
     // c_{j+1} is dropped (c_next_ is the scratch the next period's updates overwrite)

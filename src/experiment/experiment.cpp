@@ -37,6 +37,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho);
   lp.rise_tolerance = kLearningRiseTolerance;
   lp.hold_after_cuts = kLearningHoldAfterCuts;
+  lp.max_gain = std::max(lp.gain, kLearningMaxGain);
   auto ilc = std::make_shared<IterativeLearning>(lp);
   const std::size_t lead = ctx.lead;
   Law law = [ilc, inner = base.law, lead](const Sample& s) {
@@ -70,6 +71,8 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
     run.description += fmt::format("; L halved {} time(s) to {:.3g}, after periods whose RMS error rose above the "
                                    "least before them",
                                    ilc->gain_cuts(), ilc->gain());
+  if (ilc->gain_raises() > 0)
+    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
   if (ilc->held()) run.description += fmt::format("; best correction held after {} halvings", lp.hold_after_cuts);
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));

@@ -3,10 +3,14 @@
 //
 //   hysteron evaluate --model m.json|- --data D.csv --input COL --output COL
 //                     [--range A:B | --train A:B] [--time-column T] [--relaxed]
-//                     [--report r.html|r.json] [--json] [--input-label "Pressure [kPa]"] [--output-label "..."]
+//                     [--report r.html|r.json] [--json] [--uncensored] [--input-label "Pressure [kPa]"]
+//                     [--output-label "..."]
 //
 // The model is simulated over the whole record from its start (virgin, or --relaxed at
-// the first sample) and scored on the range (default: the whole record). Text summary on
+// the first sample) and scored on the range (default: the whole record). A record whose
+// output clips (a sensor's limit, detect_clipping) is scored as censored, as `fit` scores its
+// validation: a sample at the limit where the model predicts beyond it is no error
+// (--uncensored: as recorded); the text and the document say how many. Text summary on
 // stdout, or one JSON document with --json; the report is HTML (metrics, loops,
 // residuals) if its name ends in .html/.htm, else the JSON document.
 // Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files).
@@ -31,7 +35,7 @@ namespace {
 struct EvaluateOptions {
   std::string model, range, report;
   DataSelection sel;
-  bool json = false, relaxed = false;
+  bool json = false, relaxed = false, uncensored = false;
 };
 
 int run_evaluate(const EvaluateOptions& c) {
@@ -48,11 +52,15 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
   doc.model = model;
   doc.data = describe_data(sel, initial, range);
-  doc.result = {c.sel.file, range, evaluate(model, rec.x, rec.y, range, initial)};
+  doc.result.file = c.sel.file;
+  doc.result.range = range;
+  doc.result.metrics = c.uncensored ? evaluate(model, rec.x, rec.y, range, initial)
+                                    : evaluate_censored(model, rec.x, rec.y, range, initial, &doc.result.censored);
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {
-      const report::FitData data = plot_data(sel, rec, initial, range);
+      report::FitData data = plot_data(sel, rec, initial, range);
+      data.censor_clipped = !c.uncensored;
       report::write_evaluation_report(model, doc.model_file, data, c.report, command_line());
     } else {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");
@@ -68,6 +76,10 @@ int run_evaluate(const EvaluateOptions& c) {
                                  c.sel.file, range.begin, range.end, c.relaxed ? "relaxed" : "virgin");
   text += fmt::format("evaluate: rms {:.6g}{}  max {:.6g}{}  mae {:.6g}{}  rms {:.4g}% of span  r2 {:.6f}  ({} samples)\n",
                       m.rms, yu, m.max, yu, m.mae, yu, m.rms_percent_span, m.r2, m.n);
+  if (doc.result.censored > 0)
+    text += fmt::format("note: the output clips (a sensor's limit): {} samples at the limit where the model predicts "
+                        "beyond it are scored as censored, no error (--uncensored: as recorded)\n",
+                        doc.result.censored);
   if (!c.report.empty() && c.report != "-") text += fmt::format("report written to {}\n", c.report);
   std::fputs(text.c_str(), c.report == "-" ? stderr : stdout);
   return exit_ok;
@@ -86,6 +98,9 @@ void add_evaluate(CLI::App& app, Action& action) {
   sub->add_option("--report", c->report, "write a report: HTML if the name ends in .html/.htm, else JSON");
   sub->add_flag("--json", c->json, "print the result as one JSON document");
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
+  sub->add_flag("--uncensored", c->uncensored,
+                "score a record whose output clips as recorded (default: a sample at the limit where the model "
+                "predicts beyond it is no error, as fit scores its validation)");
   sub->callback([c, &action] { action = [c] { return run_evaluate(*c); }; });
 }
 

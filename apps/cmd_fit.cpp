@@ -25,6 +25,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -154,9 +155,15 @@ int run_fit(const FitCliOptions& c) {
   if (o.progress) fmt::print(stderr, "\r{:60}\r", "");
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 
-  auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v) -> std::optional<FitMetrics> {
+  // A validation record that clips is scored as censored, as the fit treats its own record
+  // (--censor-passes 0: as recorded); `censored` receives the count.
+  auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v,
+                         std::size_t* censored = nullptr) -> std::optional<FitMetrics> {
     try {
-      return v.file.empty() ? evaluate(m, x, y, v.range, o.initial_state) : evaluate(m, v.x, v.y, v.range, o.initial_state);
+      const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
+      const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
+      if (o.censor_passes == 0) return evaluate(m, vx, vy, v.range, o.initial_state);
+      return evaluate_censored(m, vx, vy, v.range, o.initial_state, censored);
     } catch (const Error&) {
       return std::nullopt;
     }
@@ -168,7 +175,8 @@ int run_fit(const FitCliOptions& c) {
   const bool fitted = has_model(rep.status);
   if (fitted)
     for (const auto& v : sets)
-      if (const auto m = evaluate_on(rep.model, v)) doc.validation.push_back({v.file, v.range, *m});
+      if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored))
+        doc.validation.push_back({v.file, v.range, *m, censored});
   if (!sets.empty())
     for (const auto& cand : rep.candidates) {
       std::vector<FitMetrics> row;
@@ -196,6 +204,7 @@ int run_fit(const FitCliOptions& c) {
     if (is_html_path(c.report)) {
       report::FitData data = plot_data(sel, rec, o.initial_state, train);
       for (const auto& v : sets) data.validation.push_back({v.file, v.x, v.y, v.t, v.range});
+      data.censor_clipped = o.censor_passes > 0;
       report::write_fit_report(rep, data, c.report, command_line());
     } else {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");
@@ -249,7 +258,12 @@ int run_fit(const FitCliOptions& c) {
   }
   for (const auto& e : doc.validation)
     text += metrics_text("validate:", e.metrics) +
-            fmt::format("  [{}, samples {}..{}]\n", e.file.empty() ? c.sel.file : e.file, e.range.begin, e.range.end);
+            fmt::format("  [{}, samples {}..{}{}]\n", e.file.empty() ? c.sel.file : e.file, e.range.begin, e.range.end,
+                        e.censored > 0 ? fmt::format("; the output clips: {} samples at its limit where the model "
+                                                     "predicts beyond it scored as censored, no error "
+                                                     "(--censor-passes 0: as recorded)",
+                                                     e.censored)
+                                       : std::string());
   if (write && c.out != "-")
     text += fmt::format("model written to {}\n", c.out);
   else if (!write)

@@ -715,6 +715,28 @@ TEST(Clipping, SensorLimitIsFlaggedRestOnAStopIsNot) {
   EXPECT_FALSE(warned(fit(x, rest, o)));
 }
 
+// A decaying oscillation x (n samples, `cycles` periods, its amplitude falling by `decay`) and
+// a PI model (6 operators) fitted to the curve 10 x^2 + 2 x on it: a hysteretic "truth".
+struct CurvedTruth {
+  std::vector<double> x, curved;
+  FitReport pi;
+};
+CurvedTruth curved_truth(std::size_t n, double cycles, double decay) {
+  CurvedTruth c;
+  c.x.resize(n);
+  c.curved.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / static_cast<double>(n);
+    c.x[k] = 0.5 + 0.5 * (1.0 - decay * t) * std::sin(2.0 * M_PI * cycles * t);
+    c.curved[k] = 10.0 * c.x[k] * c.x[k] + 2.0 * c.x[k];
+  }
+  FitOptions o;
+  o.model = FitModel::pi;
+  o.num_operators = 6;
+  c.pi = fit(c.x, c.curved, o);
+  return c;
+}
+
 // A record clipped by its sensor is fitted as censored data (FitOptions::censor_passes): the
 // clipped samples only say the output is at or below the limit, so the model is no longer
 // pulled onto the limit, and it follows the true output better where the sensor sees it and
@@ -722,18 +744,12 @@ TEST(Clipping, SensorLimitIsFlaggedRestOnAStopIsNot) {
 // by a decaying oscillation; the sensor reads max(truth + noise, c), c its 30th percentile.
 TEST(Clipping, ClippedOutputIsFittedAsCensored) {
   const std::size_t n = 12000;
-  std::vector<double> x(n), curved(n);
+  const CurvedTruth ct = curved_truth(n, 6.0, 0.8);
+  const std::vector<double>& x = ct.x;
   std::mt19937_64 rng(11);
   std::normal_distribution<double> noise(0.0, 0.01);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double t = static_cast<double>(k) / static_cast<double>(n);
-    x[k] = 0.5 + 0.5 * (1.0 - 0.8 * t) * std::sin(2.0 * M_PI * 6.0 * t);
-    curved[k] = 10.0 * x[k] * x[k] + 2.0 * x[k];
-  }
   FitOptions o;
-  o.model = FitModel::pi;
-  o.num_operators = 6;
-  const FitReport truth_fit = fit(x, curved, o);
+  const FitReport& truth_fit = ct.pi;
   ASSERT_TRUE(has_model(truth_fit.status)) << truth_fit.message;
   const std::vector<double> truth = simulate_record(truth_fit.model, x);
   std::vector<double> sorted = truth;
@@ -789,4 +805,50 @@ TEST(Clipping, ClippedOutputIsFittedAsCensored) {
   ASSERT_EQ(a.parameters.size(), b.parameters.size());
   for (std::size_t i = 0; i < a.parameters.size(); ++i) EXPECT_EQ(a.parameters[i].value, b.parameters[i].value);
   EXPECT_FALSE(says(b, "censored"));
+}
+
+// evaluate_censored: on a record whose output clips, a sample at the limit where the model
+// predicts beyond it counts no error (computed here sample by sample); the other samples
+// count as in evaluate(); on a record that does not clip it equals evaluate().
+TEST(Clipping, EvaluateCensoredScoresAClippedRecordAsTheFitDoes) {
+  const std::size_t n = 4000;
+  const CurvedTruth ct = curved_truth(n, 4.0, 0.6);
+  const std::vector<double>&x = ct.x, &curved = ct.curved;
+  const FitReport& r = ct.pi;
+  ASSERT_TRUE(has_model(r.status)) << r.message;
+  const std::vector<double> pred = simulate_record(r.model, x);
+  // the "measured" output: the curve 0.3 high with noise, clipped at its 25th percentile
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<double> y(n);
+  for (std::size_t k = 0; k < n; ++k) y[k] = curved[k] + 0.3 + noise(rng);
+  std::vector<double> sorted = y;
+  std::sort(sorted.begin(), sorted.end());
+  const double c = sorted[n / 4];
+  std::vector<double> clipped(n);
+  for (std::size_t k = 0; k < n; ++k) clipped[k] = std::max(y[k], c);
+  ASSERT_TRUE(detect_clipping(clipped).low);
+  const IndexRange range{n / 8, n - n / 8};
+  double s2 = 0.0;
+  std::size_t at_limit = 0;
+  for (std::size_t k = range.begin; k < range.end; ++k) {
+    const bool no_error = clipped[k] == c && pred[k] < c;
+    at_limit += no_error ? 1 : 0;
+    const double e = no_error ? 0.0 : clipped[k] - pred[k];
+    s2 += e * e;
+  }
+  ASSERT_GT(at_limit, n / 20);
+  std::size_t censored = 0;
+  const FitMetrics m = evaluate_censored(r.model, x, clipped, range, InitialState::virgin, &censored);
+  EXPECT_EQ(censored, at_limit);
+  EXPECT_EQ(m.n, range.end - range.begin);
+  EXPECT_NEAR(m.rms, std::sqrt(s2 / static_cast<double>(m.n)), 1e-12);
+  EXPECT_LT(m.rms, evaluate(r.model, x, clipped, range).rms);
+  // a record that does not clip: exactly evaluate(), nothing censored
+  ASSERT_FALSE(detect_clipping(y).any());
+  const FitMetrics plain = evaluate(r.model, x, y, range), same = evaluate_censored(r.model, x, y, range, InitialState::virgin, &censored);
+  EXPECT_EQ(censored, 0u);
+  EXPECT_EQ(same.rms, plain.rms);
+  EXPECT_EQ(same.max, plain.max);
+  EXPECT_THROW(evaluate_censored(r.model, x, std::vector<double>(n - 1, 0.0)), Error);
 }

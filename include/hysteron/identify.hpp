@@ -109,6 +109,14 @@ FitMetrics compute_metrics(std::span<const double> measured, std::span<const dou
 // unequal lengths, non-finite data or a range outside the record.
 FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                     IndexRange range = {}, InitialState initial = InitialState::virgin);
+// evaluate() on a record whose output clips (detect_clipping over the whole record): where
+// the record sits at a limit and the model predicts beyond it, the limit says only that the
+// true output is at or beyond it, so that sample is no error (censored_output, as fit()
+// fits such a record). `censored`, if given, receives the number of such samples in the
+// range. A record that does not clip scores exactly as evaluate().
+FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                             IndexRange range = {}, InitialState initial = InitialState::virgin,
+                             std::size_t* censored = nullptr);
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0
 // for every contraction below its zero; one whose range ends inside the stroke reads its

@@ -110,6 +110,9 @@ struct FitData {
   InitialState initial_state = InitialState::virgin;
   IndexRange train{};                  // the training range of the fit
   std::vector<ValidationData> validation;  // shown with their metrics, loops and residuals
+  // A validation (or evaluated) record whose output clips is scored as censored
+  // (evaluate_censored), as `hysteron fit` and `hysteron evaluate` score it by default.
+  bool censor_clipped = true;
 };
 
 // HTML report of an experiment (what `hysteron experiment NAME --out DIR` computed).

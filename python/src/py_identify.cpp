@@ -141,15 +141,26 @@ usable by hysteron.Model (it may not be invertible).)doc");
   m.def(
       "evaluate",
       [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const py::object& range,
-         const std::string& initial_state) {
-        return metrics_dict(
-            evaluate(model_spec(model), as_span(x), as_span(y), range_from(range), initial_state_from(initial_state)));
+         const std::string& initial_state, bool censored) {
+        const ModelParams spec = model_spec(model);
+        if (!censored)
+          return metrics_dict(evaluate(spec, as_span(x), as_span(y), range_from(range), initial_state_from(initial_state)));
+        std::size_t count = 0;
+        py::dict d = metrics_dict(evaluate_censored(spec, as_span(x), as_span(y), range_from(range),
+                                                    initial_state_from(initial_state), &count));
+        d["censored_samples"] = count;
+        return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),
-      py::arg("initial_state") = "virgin",
+      py::arg("initial_state") = "virgin", py::arg("censored") = false,
       R"doc(Simulate `model` (dict, file path or Model) over x from its start and return the
 error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
-((begin, end) or None for all samples).)doc");
+((begin, end) or None for all samples).
+
+censored: where y clips (a sensor's limit, detected from the record), a sample at the limit
+where the model predicts beyond it is no error, as fit() treats such a record and as
+`hysteron fit` / `hysteron evaluate` score it; the dict then also has censored_samples, their
+number in the range. Default False: scored as recorded.)doc");
 
   m.def(
       "simulate_record",

@@ -142,3 +142,23 @@ def test_clipped_output_is_fitted_as_censored_unless_asked_not_to():
     assert censored["train"]["rms"] < as_recorded["train"]["rms"]
     bad = hysteron.fit(x, y, model="pi", censor_passes=11)
     assert bad["status"] == "invalid_input" and "censor_passes" in bad["message"], bad["message"]
+
+
+def test_evaluate_scores_a_clipped_record_as_censored_when_asked():
+    """evaluate(censored=True): a sample at the clipped limit where the model predicts beyond it
+    is no error (checked sample by sample here); the default scores the record as recorded."""
+    x, truth = record()
+    limit = np.percentile(truth, 33)
+    rng = np.random.default_rng(4)
+    y = np.maximum(truth + rng.normal(0.0, 0.02, truth.size), limit)
+    model = hysteron.fit(x, truth, model="pi", num_operators=6)["model"]
+    pred = hysteron.simulate_record(model, x)
+    no_error = (y == limit) & (pred < limit)
+    expected = np.sqrt(np.mean(np.where(no_error, 0.0, y - pred) ** 2))
+    cens = hysteron.evaluate(model, x, y, censored=True)
+    plain = hysteron.evaluate(model, x, y)
+    assert cens["censored_samples"] == int(no_error.sum()) > 10
+    assert abs(cens["rms"] - expected) <= 1e-9 * expected
+    assert "censored_samples" not in plain and plain["rms"] > cens["rms"]
+    unclipped = hysteron.evaluate(model, x, truth + rng.normal(0.0, 0.02, truth.size), censored=True)
+    assert unclipped["censored_samples"] == 0

@@ -238,15 +238,6 @@ struct SmoothedRun {
   explicit SmoothedRun(const IdRecord& id) : x_mm(smoothed(id.x_mm)), p(smoothed(id.p)) {}
 };
 
-// evaluate(), on a record whose displacement sensor clips (detect_clipping): a prediction
-// beyond the limit where the record sits at it is no error (censored_output, as fit() fits).
-FitMetrics evaluate_censored(const ModelParams& m, const std::vector<double>& p, const std::vector<double>& x_mm,
-                             IndexRange range = {}) {
-  const Clipping clip = detect_clipping(x_mm);
-  if (!clip.any()) return evaluate(m, p, x_mm, range);
-  return evaluate(m, p, censored_output(x_mm, simulate_record(m, p), clip), range);
-}
-
 // The note of a clipped displacement record (fit_to_reach).
 std::string clipping_note(const Clipping& clip) {
   std::string where;

@@ -171,4 +171,19 @@ FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::s
                          std::span<const double>(yp).subspan(r.begin, r.end - r.begin));
 }
 
+FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                             IndexRange range, InitialState initial, std::size_t* censored) {
+  detail::check_record(x, y, "evaluate");
+  const IndexRange r = detail::check_range(range, x.size(), "evaluate");
+  if (censored) *censored = 0;
+  const Clipping clip = detect_clipping(y);
+  if (!clip.any()) return evaluate(params, x, y, range, initial);
+  const std::vector<double> yp = simulate_record(params, x, initial);
+  const std::vector<double> yc = censored_output(y, yp, clip);
+  if (censored)
+    for (std::size_t k = r.begin; k < r.end; ++k) *censored += yc[k] != y[k] ? 1 : 0;
+  return compute_metrics(std::span<const double>(yc).subspan(r.begin, r.end - r.begin),
+                         std::span<const double>(yp).subspan(r.begin, r.end - r.begin));
+}
+
 }  // namespace hysteron

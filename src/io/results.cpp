@@ -322,6 +322,7 @@ json to_json(const Evaluation& e) {
   json j = to_json(e.metrics);
   j["file"] = e.file;
   j["range"] = to_json(e.range);
+  j["censored_samples"] = e.censored;
   return j;
 }
 
@@ -330,6 +331,7 @@ void from_json(const json& j, Evaluation& e, std::string_view where) {
   e.file = opt_string(j, "file", where);
   e.range = {};
   if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
+  e.censored = j.contains("censored_samples") ? get_size(j, "censored_samples", where) : 0;
 }
 
 // ---- documents -------------------------------------------------------------------

@@ -552,7 +552,8 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   }
   auto metrics_on = [&](const ModelParams& m, const Val& v) -> std::optional<FitMetrics> {
     try {
-      return evaluate(m, v.x, v.y, v.range, data.initial_state);
+      return data.censor_clipped ? evaluate_censored(m, v.x, v.y, v.range, data.initial_state)
+                                 : evaluate(m, v.x, v.y, v.range, data.initial_state);
     } catch (const Error&) {
       return std::nullopt;
     }
@@ -650,12 +651,21 @@ void write_evaluation_report(const ModelParams& model, const std::string& model_
   const std::string yu = data.output.unit.empty() ? "" : fmt::format(" [{}]", data.output.unit);
   page.heading("Errors");
   if (y.size() == n && range.end <= n && range.begin < range.end) {
+    // a record whose output clips: scored as censored, as `hysteron evaluate` scores it
+    std::vector<double> measured(data.y.begin(), data.y.begin() + static_cast<std::ptrdiff_t>(n));
+    std::size_t censored = 0;
+    if (data.censor_clipped)
+      if (const Clipping clip = detect_clipping(measured); clip.any()) measured = censored_output(measured, y, clip, &censored);
     std::vector<std::vector<std::string>> rows = {
         metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu),
-                     compute_metrics(std::span(data.y).subspan(range.begin, range.end - range.begin),
+                     compute_metrics(std::span(measured).subspan(range.begin, range.end - range.begin),
                                      std::span(y).subspan(range.begin, range.end - range.begin)))};
-    if (range.begin > 0 || range.end < n) rows.push_back(metric_cells("whole record" + yu, compute_metrics(std::span(data.y).first(n), y)));
+    if (range.begin > 0 || range.end < n) rows.push_back(metric_cells("whole record" + yu, compute_metrics(measured, y)));
     page.table(metric_header, rows);
+    if (censored > 0)
+      page.para(fmt::format("The output clips (a sensor's limit): {} samples of the record at the limit where the model "
+                            "predicts beyond it are scored as censored, no error (--uncensored: as recorded).",
+                            censored));
   }
   page.raw("<h3>Model file</h3>\n");
   page.table({"key", "value"}, model_rows(model));
@@ -684,8 +694,9 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
     e.range = v.range;
     if (fit.status != FitStatus::invalid_input) {
       try {
-        e.metrics = evaluate(fit.model, v.x.empty() ? data.x : v.x, v.x.empty() ? data.y : v.y, v.range,
-                             data.initial_state);
+        const std::vector<double>&vx = v.x.empty() ? data.x : v.x, &vy = v.x.empty() ? data.y : v.y;
+        e.metrics = data.censor_clipped ? evaluate_censored(fit.model, vx, vy, v.range, data.initial_state, &e.censored)
+                                        : evaluate(fit.model, vx, vy, v.range, data.initial_state);
       } catch (const Error&) {
       }
     }

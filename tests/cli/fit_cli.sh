@@ -196,5 +196,32 @@ grep -q "fitted to the limit there" "$T/c0.txt" || fail "no as-recorded warning:
 grep -q "censor-passes" "$T/c11.err" || fail "--censor-passes 11: $(cat "$T/c11.err")"
 [ -e "$T/c11.json" ] && fail "--censor-passes 11 wrote a model"
 
+# 9. a validation record that clips is scored as censored, by fit --validate-data and by
+#    evaluate, and they say so with the same count; --censor-passes 0 / --uncensored score it as
+#    recorded, with a larger RMS
+"$BIN" fit --model pi --data "$T/a.csv" --input p --output y --threads 1 --validate-data "$T/clipped.csv" \
+  --out "$T/v9.json" --report "$T/v9r.json" > "$T/v9.txt" 2>&1 || fail "fit with a clipped validation record"
+grep -q "^validate:.*samples at its limit where the model predicts beyond it scored as censored" "$T/v9.txt" \
+  || fail "fit --validate-data: no censored note: $(grep validate: "$T/v9.txt")"
+"$BIN" fit --model pi --data "$T/a.csv" --input p --output y --threads 1 --validate-data "$T/clipped.csv" \
+  --censor-passes 0 --out "$T/v90.json" > "$T/v90.txt" 2>&1 || fail "fit --censor-passes 0 with a clipped validation record"
+grep -q "scored as censored" "$T/v90.txt" && fail "--censor-passes 0 still scores the validation record as censored"
+"$BIN" evaluate -m "$T/v9.json" -d "$T/clipped.csv" -i p -y y --json > "$T/e9.json" || fail "evaluate on a clipped record"
+"$BIN" evaluate -m "$T/v9.json" -d "$T/clipped.csv" -i p -y y > "$T/e9.txt" || fail "evaluate (text) on a clipped record"
+grep -q "^note: the output clips" "$T/e9.txt" || fail "evaluate: no censored note: $(cat "$T/e9.txt")"
+"$BIN" evaluate -m "$T/v9.json" -d "$T/clipped.csv" -i p -y y --uncensored --json > "$T/e9u.json" \
+  || fail "evaluate --uncensored"
+$PY - "$T/v9r.json" "$T/e9.json" "$T/e9u.json" <<'PYEOF' || fail "censored validation figures"
+import json, sys
+fit_doc, cens, unc = (json.load(open(f)) for f in sys.argv[1:])
+v = fit_doc["validate_files"][0]
+c = cens["metrics"]
+u = unc["metrics"]
+assert v["censored_samples"] > 100, v
+assert c["censored_samples"] == v["censored_samples"], (c, v)
+assert abs(c["rms"] - v["rms"]) <= 1e-12 * max(1.0, v["rms"]), (c["rms"], v["rms"])
+assert u["censored_samples"] == 0 and u["rms"] > 1.05 * c["rms"], (u, c)
+PYEOF
+
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

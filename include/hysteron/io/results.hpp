@@ -57,6 +57,7 @@ struct Evaluation {
   std::string file;      // the record ("" = the fit's own record)
   IndexRange range{};    // samples scored (resolved: end is a sample index)
   FitMetrics metrics;
+  std::size_t censored = 0;  // clipped samples of the range scored as censored (evaluate_censored)
 };
 
 // The document of `hysteron fit --report FILE.json` and `--json`.

@@ -550,9 +550,9 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
     e.range = v.range.resolved(std::min(e.x.size(), e.y.size()));
     vals.push_back(e);
   }
-  auto metrics_on = [&](const ModelParams& m, const Val& v) -> std::optional<FitMetrics> {
+  auto metrics_on = [&](const ModelParams& m, const Val& v, std::size_t* censored = nullptr) -> std::optional<FitMetrics> {
     try {
-      return data.censor_clipped ? evaluate_censored(m, v.x, v.y, v.range, data.initial_state)
+      return data.censor_clipped ? evaluate_censored(m, v.x, v.y, v.range, data.initial_state, censored)
                                  : evaluate(m, v.x, v.y, v.range, data.initial_state);
     } catch (const Error&) {
       return std::nullopt;
@@ -599,9 +599,14 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   const IndexRange tr = data.train.resolved(n);
   page.heading("Errors");
   std::vector<std::vector<std::string>> rows;
+  std::size_t own_censored = 0;  // the record's clipped samples scored as censored, as fit() fitted them
   if (model.size() == n && n > 0) {
+    std::vector<double> measured(data.y.begin(), data.y.begin() + static_cast<std::ptrdiff_t>(n));
+    if (data.censor_clipped && tr.end > tr.begin && tr.end <= n)
+      if (const Clipping clip = detect_clipping(std::span(measured).subspan(tr.begin, tr.end - tr.begin)); clip.any())
+        measured = censored_output(measured, model, clip, &own_censored);
     auto metrics = [&](std::size_t b, std::size_t e) {
-      return compute_metrics(std::span(data.y).subspan(b, e - b), std::span(model).subspan(b, e - b));
+      return compute_metrics(std::span(measured).subspan(b, e - b), std::span(model).subspan(b, e - b));
     };
     if (tr.end > tr.begin && tr.end <= n) rows.push_back(metric_cells("training" + yu, metrics(tr.begin, tr.end)));
     if (tr.begin > 0 || tr.end < n) {
@@ -614,14 +619,24 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   }
   if (can_simulate)
     for (const auto& v : vals) {
-      const auto m = metrics_on(fit.model, v);
+      std::size_t censored = 0;
+      const auto m = metrics_on(fit.model, v, &censored);
       if (m)
-        rows.push_back(metric_cells(fmt::format("validation: {}, samples {}..{}{}", validation_name(*v.v),
-                                                v.range.begin, v.range.end, yu), *m));
+        rows.push_back(metric_cells(fmt::format("validation: {}, samples {}..{}{}{}", validation_name(*v.v),
+                                                v.range.begin, v.range.end,
+                                                censored > 0 ? fmt::format(" ({} clipped samples censored)", censored)
+                                                             : std::string(),
+                                                yu),
+                                    *m));
       else
         page.para(fmt::format("The model cannot be evaluated on {}.", validation_name(*v.v)), "warn");
     }
   page.table(metric_header, rows);
+  if (own_censored > 0)
+    page.para(fmt::format("The output clips (a sensor's limit): {} samples of the record at the limit where the model "
+                          "predicts beyond it are scored as censored, no error, as the fit treated them "
+                          "(--censor-passes 0: as recorded).",
+                          own_censored));
 
   page.heading("Figures");
   if (n == 0) {

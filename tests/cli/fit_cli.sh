@@ -222,6 +222,19 @@ assert c["censored_samples"] == v["censored_samples"], (c, v)
 assert abs(c["rms"] - v["rms"]) <= 1e-12 * max(1.0, v["rms"]), (c["rms"], v["rms"])
 assert u["censored_samples"] == 0 and u["rms"] > 1.05 * c["rms"], (u, c)
 PYEOF
+# ... and the HTML reports say so: the validation row, the fit's own clipped record, evaluate's page
+"$BIN" fit --model pi --data "$T/a.csv" --input p --output y --threads 1 --validate-data "$T/clipped.csv" \
+  --out "$T/v9h.json" --report "$T/v9.html" > /dev/null 2>&1 || fail "fit --report html, clipped validation"
+grep -q "clipped samples censored" "$T/v9.html" || fail "fit report: no censored validation row"
+"$BIN" fit --model pi --data "$T/clipped.csv" --input p --output y --threads 1 --out "$T/c9.json" \
+  --report "$T/c9.html" > /dev/null 2>&1 || fail "fit --report html of a clipped record"
+grep -q "scored as censored, no error, as the fit treated them" "$T/c9.html" || fail "fit report: no censored note"
+"$BIN" evaluate -m "$T/v9.json" -d "$T/clipped.csv" -i p -y y --report "$T/e9.html" > /dev/null \
+  || fail "evaluate --report html"
+grep -q "are scored as censored, no error" "$T/e9.html" || fail "evaluate report: no censored note"
+"$BIN" evaluate -m "$T/v9.json" -d "$T/clipped.csv" -i p -y y --uncensored --report "$T/e9u.html" > /dev/null \
+  || fail "evaluate --uncensored --report html"
+grep -q "scored as censored" "$T/e9u.html" && fail "evaluate --uncensored report: censored note"
 
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

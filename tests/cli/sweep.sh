@@ -106,6 +106,40 @@ rc=$?
 grep -q "variant 'same' is the nominal rig" "$T/nominal.txt" || fail "no note for the nominal repeat: $(cat "$T/nominal.txt")"
 grep -qE '^nominal +sine' "$T/nominal.txt" || fail "no nominal row: $(cat "$T/nominal.txt")"
 
+# bench/issue11_targets.py on a made-up sweep CSV: every target met (exit 0), then one variant
+# above 1.5x its nominal RMS and one learning max above 0.3 mm (exit 1, both named), then a
+# file that is not a sweep CSV (exit 2)
+TARGETS="$(cd "$(dirname "$0")/../.." && pwd)/bench/issue11_targets.py"
+/usr/bin/python3 - "$T/t_ok.csv" "$T/t_miss.csv" <<'PYEOF'
+import sys
+head = "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s"
+def rows(ratio, learning_max):
+    out = [head]
+    def row(e, v, r, k, mx, rms, ratio_):
+        out.append(f"{e},{v},,{r},{k},{mx},0,{rms},{ratio_},0,0.05,0.55,0,1,ok,,1")
+    for e, refs in (("gpi-pid", ["sine"]), ("mpi-openloop", ["triangle", "sine"]), ("mpi-pwm", ["sine", "triangle"])):
+        for r in refs:
+            row(e, "nominal", r, "compensated", 0.9, 0.25, 1)
+            row(e, "nominal", r, "learning", learning_max if e == "mpi-pwm" else 0.2, 0.05, 0.2)
+            row(e, "nominal", r, "baseline", 5.0, 3.0, 12)
+    row("gpi-pid", "load 35 kg", "sine", "compensated", 1.0, 0.25 * ratio, ratio)
+    row("gpi-pid", "load 35 kg", "sine", "baseline", 5.0, 3.0, 12)
+    return "\n".join(out) + "\n"
+open(sys.argv[1], "w").write(rows(1.4, 0.25))
+open(sys.argv[2], "w").write(rows(1.6, 0.35))
+PYEOF
+/usr/bin/python3 "$TARGETS" "$T/t_ok.csv" > "$T/t_ok.txt" 2>&1 || fail "issue11_targets: an all-met CSV: exit $? ($(cat "$T/t_ok.txt"))"
+grep -q "^0 target(s) missed" "$T/t_ok.txt" || fail "issue11_targets: $(tail -1 "$T/t_ok.txt")"
+/usr/bin/python3 "$TARGETS" "$T/t_miss.csv" > "$T/t_miss.txt" 2>&1
+[ $? -eq 1 ] || fail "issue11_targets: misses not exit 1"
+grep -q "^MISSED gpi-pid load 35 kg sine compensated RMS / nominal: 1.600 (limit 1.5)" "$T/t_miss.txt" \
+  || fail "issue11_targets: the ratio miss is not named: $(cat "$T/t_miss.txt")"
+grep -q "^MISSED mpi-pwm nominal triangle learning max \[mm\]: 0.350" "$T/t_miss.txt" \
+  || fail "issue11_targets: the learning miss is not named"
+grep -q "^3 target(s) missed" "$T/t_miss.txt" || fail "issue11_targets: $(tail -1 "$T/t_miss.txt")"
+/usr/bin/python3 "$TARGETS" "$T/grid_nominal.json" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "issue11_targets: a JSON file not refused with exit 2"
+
 if [ $fails -ne 0 ]; then
   echo "$fails failure(s)"
   exit 1

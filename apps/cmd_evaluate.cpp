@@ -52,6 +52,7 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
   doc.model = model;
   doc.data = describe_data(sel, initial, range);
+  doc.data.censored = !c.uncensored;
   doc.result.file = c.sel.file;
   doc.result.range = range;
   doc.result.metrics = c.uncensored ? evaluate(model, rec.x, rec.y, range, initial)

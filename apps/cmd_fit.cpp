@@ -172,6 +172,7 @@ int run_fit(const FitCliOptions& c) {
   io::FitDocument doc;
   doc.fit = rep;
   doc.data = describe_data(sel, o.initial_state, train);
+  doc.data.censored = o.censor_passes > 0;
   const bool fitted = has_model(rep.status);
   if (fitted)
     for (const auto& v : sets)

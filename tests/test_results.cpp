@@ -215,7 +215,8 @@ TEST(Results, FitDocumentRoundTrip) {
   d.data.output_unit = "N";
   d.data.initial_state = InitialState::relaxed;
   d.data.train = {10, 1200};
-  d.validation = {{"", {1200, 1800}, metrics(0.04, 600)}, {"other.csv", {0, 900}, metrics(0.05, 900)}};
+  d.data.censored = false;
+  d.validation = {{"", {1200, 1800}, metrics(0.04, 600), 0}, {"other.csv", {0, 900}, metrics(0.05, 900), 37}};
   d.candidate_validation = {{metrics(0.041, 600), metrics(0.051, 900)}, {metrics(nan_v, 600), metrics(nan_v, 900)}};
   d.model_written = true;
   d.model_file = "model.json";
@@ -233,9 +234,11 @@ TEST(Results, FitDocumentRoundTrip) {
   EXPECT_EQ(back.data.initial_state, d.data.initial_state);
   EXPECT_EQ(back.data.train.begin, d.data.train.begin);
   EXPECT_EQ(back.data.train.end, d.data.train.end);
+  EXPECT_FALSE(back.data.censored);
   ASSERT_EQ(back.validation.size(), d.validation.size());
   for (std::size_t i = 0; i < d.validation.size(); ++i) {
     EXPECT_EQ(back.validation[i].file, d.validation[i].file);
+    EXPECT_EQ(back.validation[i].censored, d.validation[i].censored);
     EXPECT_EQ(back.validation[i].range.begin, d.validation[i].range.begin);
     EXPECT_EQ(back.validation[i].range.end, d.validation[i].range.end);
     expect_same(back.validation[i].metrics, d.validation[i].metrics);
@@ -252,6 +255,21 @@ TEST(Results, FitDocumentRoundTrip) {
   io::FitDocument open = d;
   open.data.train = {5, IndexRange::npos};
   EXPECT_EQ(round_trip(open).data.train.end, IndexRange::npos);
+  // documents of older versions have no "censored": scored as censored (the default); a
+  // non-boolean is refused, naming the key
+  nlohmann::json old_doc = io::to_json(d);
+  old_doc["data"].erase("censored");
+  old_doc["validate_files"][1].erase("censored_samples");
+  const io::FitDocument from_old = io::from_json<io::FitDocument>(old_doc, "old.json");
+  EXPECT_TRUE(from_old.data.censored);
+  EXPECT_EQ(from_old.validation.at(1).censored, 0u);
+  old_doc["data"]["censored"] = "yes";
+  try {
+    (void)io::from_json<io::FitDocument>(old_doc, "old.json");
+    FAIL() << "censored = \"yes\" accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("censored"), std::string::npos) << e.what();
+  }
   // the document says what it is; another schema is refused, naming where
   const nlohmann::json j = io::to_json(d);
   EXPECT_EQ(j["format"], "hysteron-fit-report");

@@ -289,7 +289,8 @@ json to_json(const DataDescription& d) {
             {"input_axis", {{"label", d.input_label}, {"unit", d.input_unit}}},
             {"output_axis", {{"label", d.output_label}, {"unit", d.output_unit}}},
             {"initial_state", std::string(initial_state_name(d.initial_state))},
-            {"train", to_json(d.train)}};
+            {"train", to_json(d.train)},
+            {"censored", d.censored}};
   if (!d.time_column.empty()) j["time_column"] = d.time_column;
   return j;
 }
@@ -316,6 +317,10 @@ void from_json(const json& j, DataDescription& d, std::string_view where) {
   d.initial_state = initial_state_from_name(opt_string(j, "initial_state", where, "virgin"),
                                             key_where(where, "initial_state"));
   if (j.contains("train")) from_json(j["train"], d.train, key_where(where, "train"));
+  if (j.contains("censored")) {
+    if (!j["censored"].is_boolean()) wrong_type(j["censored"], "censored", where, "true or false");
+    d.censored = j["censored"].get<bool>();
+  }
 }
 
 json to_json(const Evaluation& e) {

@@ -703,6 +703,7 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
   d.data.output_unit = data.output.unit;
   d.data.initial_state = data.initial_state;
   d.data.train = data.train;
+  d.data.censored = data.censor_clipped;
   for (const auto& v : data.validation) {
     io::Evaluation e;
     e.file = v.name;
@@ -781,6 +782,7 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
   out.data.output = {d.output_label, d.output_unit};
   out.data.initial_state = d.initial_state;
   out.data.train = d.train;
+  out.data.censor_clipped = d.censored;
   for (const auto& e : doc.validation) {
     ValidationData v;
     v.name = e.file;

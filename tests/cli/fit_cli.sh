@@ -235,6 +235,17 @@ grep -q "are scored as censored, no error" "$T/e9.html" || fail "evaluate report
 "$BIN" evaluate -m "$T/v9.json" -d "$T/clipped.csv" -i p -y y --uncensored --report "$T/e9u.html" > /dev/null \
   || fail "evaluate --uncensored --report html"
 grep -q "scored as censored" "$T/e9u.html" && fail "evaluate --uncensored report: censored note"
+# a report regenerated from the fit's JSON scores the record as the fit did: censored by default,
+# as recorded after --censor-passes 0 (the document's data.censored)
+for passes in 2 0; do
+  "$BIN" fit --model pi --data "$T/clipped.csv" --input p --output y --threads 1 --censor-passes $passes --force \
+    --out "$T/r$passes.json" --report "$T/r$passes.report.json" > /dev/null 2>&1 || fail "fit --censor-passes $passes --report json"
+  "$BIN" report "$T/r$passes.report.json" --out "$T/r$passes.html" > /dev/null 2>&1 || fail "report from the fit's JSON ($passes)"
+done
+grep -q "as the fit treated them" "$T/r2.html" || fail "regenerated report: no censored note"
+grep -q "as the fit treated them" "$T/r0.html" && fail "regenerated report of a --censor-passes 0 fit scores censored"
+$PY -c "import json,sys; d=[json.load(open(f))['data']['censored'] for f in sys.argv[1:]]; assert d == [True, False], d" \
+  "$T/r2.report.json" "$T/r0.report.json" || fail "data.censored in the fit documents"
 
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

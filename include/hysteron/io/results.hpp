@@ -50,6 +50,9 @@ struct DataDescription {
   std::string output_label = "Output", output_unit;
   InitialState initial_state = InitialState::virgin;
   IndexRange train{};  // fit: the training range; evaluate: the evaluated range
+  // A record whose output clips is fitted and scored as censored data (fit: censor_passes > 0;
+  // evaluate: not --uncensored); a report regenerated from the document scores it the same.
+  bool censored = true;
 };
 
 // A model checked on (a range of) a record.

@@ -52,16 +52,17 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
   doc.model = model;
   doc.data = describe_data(sel, initial, range);
-  doc.data.censored = !c.uncensored;
+  doc.data.censored = !c.uncensored;  // the document, the text and the HTML report score alike
   doc.result.file = c.sel.file;
   doc.result.range = range;
-  doc.result.metrics = c.uncensored ? evaluate(model, rec.x, rec.y, range, initial)
-                                    : evaluate_censored(model, rec.x, rec.y, range, initial, &doc.result.censored);
+  doc.result.metrics = doc.data.censored
+                           ? evaluate_censored(model, rec.x, rec.y, range, initial, &doc.result.censored)
+                           : evaluate(model, rec.x, rec.y, range, initial);
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {
       report::FitData data = plot_data(sel, rec, initial, range);
-      data.censor_clipped = !c.uncensored;
+      data.censor_clipped = doc.data.censored;
       report::write_evaluation_report(model, doc.model_file, data, c.report, command_line());
     } else {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");

@@ -156,14 +156,16 @@ int run_fit(const FitCliOptions& c) {
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 
   // A validation record that clips is scored as censored, as the fit treats its own record
-  // (--censor-passes 0: as recorded); `censored` receives the count.
+  // (--censor-passes 0: as recorded); `censored` receives the count. The documents and the
+  // HTML report say and do the same (data.censored, FitData::censor_clipped).
+  const bool censor = o.censor_passes > 0;
   auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v,
                          std::size_t* censored = nullptr) -> std::optional<FitMetrics> {
     try {
       const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
       const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
-      if (o.censor_passes == 0) return evaluate(m, vx, vy, v.range, o.initial_state);
-      return evaluate_censored(m, vx, vy, v.range, o.initial_state, censored);
+      if (censor) return evaluate_censored(m, vx, vy, v.range, o.initial_state, censored);
+      return evaluate(m, vx, vy, v.range, o.initial_state);
     } catch (const Error&) {
       return std::nullopt;
     }
@@ -172,7 +174,7 @@ int run_fit(const FitCliOptions& c) {
   io::FitDocument doc;
   doc.fit = rep;
   doc.data = describe_data(sel, o.initial_state, train);
-  doc.data.censored = o.censor_passes > 0;
+  doc.data.censored = censor;
   const bool fitted = has_model(rep.status);
   if (fitted)
     for (const auto& v : sets)
@@ -205,7 +207,7 @@ int run_fit(const FitCliOptions& c) {
     if (is_html_path(c.report)) {
       report::FitData data = plot_data(sel, rec, o.initial_state, train);
       for (const auto& v : sets) data.validation.push_back({v.file, v.x, v.y, v.t, v.range});
-      data.censor_clipped = o.censor_passes > 0;
+      data.censor_clipped = censor;
       report::write_fit_report(rep, data, c.report, command_line());
     } else {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");

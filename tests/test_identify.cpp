@@ -851,4 +851,23 @@ TEST(Clipping, EvaluateCensoredScoresAClippedRecordAsTheFitDoes) {
   EXPECT_EQ(same.rms, plain.rms);
   EXPECT_EQ(same.max, plain.max);
   EXPECT_THROW(evaluate_censored(r.model, x, std::vector<double>(n - 1, 0.0)), Error);
+  // censor_clipped: censored_output where the detection range clips, y unchanged where it does not
+  std::size_t replaced = 99;
+  EXPECT_EQ(censor_clipped(clipped, pred, {}, &replaced), censored_output(clipped, pred, detect_clipping(clipped)));
+  EXPECT_GT(replaced, at_limit);  // the whole record, not only the scored range
+  bool unclipped_stretch = false;
+  for (std::size_t k = 0; k < n && !unclipped_stretch; ++k)
+    if (clipped[k] > c + 1.0) {  // a stretch well above the limit: nothing clips there
+      std::size_t e = k;
+      while (e < n && clipped[e] > c + 1.0) ++e;
+      if (e - k >= 200) {
+        EXPECT_EQ(censor_clipped(clipped, pred, {k, e}, &replaced), clipped);
+        EXPECT_EQ(replaced, 0u);
+        unclipped_stretch = true;
+      }
+      k = e;
+    }
+  EXPECT_TRUE(unclipped_stretch);
+  EXPECT_THROW(censor_clipped(y, std::vector<double>(n - 1, 0.0)), Error);
+  EXPECT_THROW(censor_clipped(y, pred, {0, n + 1}), Error);
 }

@@ -144,6 +144,11 @@ Clipping detect_clipping(std::span<const double> y);
 // counts the samples changed. Equal lengths, else hysteron::Error.
 std::vector<double> censored_output(std::span<const double> y, std::span<const double> predicted,
                                     const Clipping& clip, std::size_t* replaced = nullptr);
+// censored_output with the clipping detected on y[detect_on] (detect_clipping; fit() detects
+// on its training range): y unchanged where nothing clips there. Throws as censored_output,
+// and on a range outside y.
+std::vector<double> censor_clipped(std::span<const double> y, std::span<const double> predicted,
+                                   IndexRange detect_on = {}, std::size_t* replaced = nullptr);
 
 // Model output over the whole record (same start convention as fit()).
 std::vector<double> simulate_record(const ModelParams& params, std::span<const double> x,

@@ -67,12 +67,13 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   run.description = fmt::format("{}; + iterative learning over {} periods (L = {}, phase lead {} samples, "
                                 "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop)",
                                 base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho);
+  // in the order the supervisor acts: the doublings come before the first halving
+  if (ilc->gain_raises() > 0)
+    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
   if (ilc->gain_cuts() > 0)
     run.description += fmt::format("; L halved {} time(s) to {:.3g}, after periods whose RMS error rose above the "
                                    "least before them",
                                    ilc->gain_cuts(), ilc->gain());
-  if (ilc->gain_raises() > 0)
-    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
   if (ilc->held()) run.description += fmt::format("; best correction held after {} halvings", lp.hold_after_cuts);
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));

@@ -171,17 +171,27 @@ FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::s
                          std::span<const double>(yp).subspan(r.begin, r.end - r.begin));
 }
 
+std::vector<double> censor_clipped(std::span<const double> y, std::span<const double> predicted, IndexRange detect_on,
+                                   std::size_t* replaced) {
+  const IndexRange r = detail::check_range(detect_on, y.size(), "censor_clipped");
+  if (const Clipping clip = detect_clipping(y.subspan(r.begin, r.end - r.begin)); clip.any())
+    return censored_output(y, predicted, clip, replaced);
+  if (y.size() != predicted.size())
+    throw Error(fmt::format("censored_output: {} outputs but {} predictions", y.size(), predicted.size()));
+  if (replaced) *replaced = 0;
+  return {y.begin(), y.end()};
+}
+
 FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                              IndexRange range, InitialState initial, std::size_t* censored) {
   detail::check_record(x, y, "evaluate");
   const IndexRange r = detail::check_range(range, x.size(), "evaluate");
-  if (censored) *censored = 0;
-  const Clipping clip = detect_clipping(y);
-  if (!clip.any()) return evaluate(params, x, y, range, initial);
   const std::vector<double> yp = simulate_record(params, x, initial);
-  const std::vector<double> yc = censored_output(y, yp, clip);
-  if (censored)
+  const std::vector<double> yc = censor_clipped(y, yp);
+  if (censored) {
+    *censored = 0;
     for (std::size_t k = r.begin; k < r.end; ++k) *censored += yc[k] != y[k] ? 1 : 0;
+  }
   return compute_metrics(std::span<const double>(yc).subspan(r.begin, r.end - r.begin),
                          std::span<const double>(yp).subspan(r.begin, r.end - r.begin));
 }

@@ -152,6 +152,15 @@ std::vector<std::string> metric_cells(const std::string& what, const FitMetrics&
 }
 const std::vector<std::string> metric_header = {"range", "RMS", "max |e|", "MAE", "RMS [% of span]", "R²", "samples"};
 
+// A record scored as `hysteron fit` / `evaluate` scored it: a clipped output as censored data
+// where FitData::censor_clipped (`censored` receives the count), else as recorded.
+FitMetrics score(const FitData& data, const ModelParams& m, std::span<const double> x, std::span<const double> y,
+                 IndexRange range, std::size_t* censored = nullptr) {
+  if (data.censor_clipped) return evaluate_censored(m, x, y, range, data.initial_state, censored);
+  if (censored) *censored = 0;
+  return evaluate(m, x, y, range, data.initial_state);
+}
+
 void parameter_table(Page& page, const FitReport& fit) {
   if (fit.parameters.empty()) return;
   std::vector<std::vector<std::string>> rows;
@@ -552,8 +561,7 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   }
   auto metrics_on = [&](const ModelParams& m, const Val& v, std::size_t* censored = nullptr) -> std::optional<FitMetrics> {
     try {
-      return data.censor_clipped ? evaluate_censored(m, v.x, v.y, v.range, data.initial_state, censored)
-                                 : evaluate(m, v.x, v.y, v.range, data.initial_state);
+      return score(data, m, v.x, v.y, v.range, censored);
     } catch (const Error&) {
       return std::nullopt;
     }
@@ -601,10 +609,10 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   std::vector<std::vector<std::string>> rows;
   std::size_t own_censored = 0;  // the record's clipped samples scored as censored, as fit() fitted them
   if (model.size() == n && n > 0) {
-    std::vector<double> measured(data.y.begin(), data.y.begin() + static_cast<std::ptrdiff_t>(n));
-    if (data.censor_clipped && tr.end > tr.begin && tr.end <= n)
-      if (const Clipping clip = detect_clipping(std::span(measured).subspan(tr.begin, tr.end - tr.begin)); clip.any())
-        measured = censored_output(measured, model, clip, &own_censored);
+    const std::span<const double> y = std::span(data.y).first(n);
+    const std::vector<double> measured = data.censor_clipped && tr.end > tr.begin && tr.end <= n
+                                             ? censor_clipped(y, model, tr, &own_censored)
+                                             : std::vector<double>(y.begin(), y.end());
     auto metrics = [&](std::size_t b, std::size_t e) {
       return compute_metrics(std::span(measured).subspan(b, e - b), std::span(model).subspan(b, e - b));
     };
@@ -667,10 +675,10 @@ void write_evaluation_report(const ModelParams& model, const std::string& model_
   page.heading("Errors");
   if (y.size() == n && range.end <= n && range.begin < range.end) {
     // a record whose output clips: scored as censored, as `hysteron evaluate` scores it
-    std::vector<double> measured(data.y.begin(), data.y.begin() + static_cast<std::ptrdiff_t>(n));
+    const std::span<const double> recorded = std::span(data.y).first(n);
     std::size_t censored = 0;
-    if (data.censor_clipped)
-      if (const Clipping clip = detect_clipping(measured); clip.any()) measured = censored_output(measured, y, clip, &censored);
+    const std::vector<double> measured = data.censor_clipped ? censor_clipped(recorded, y, {}, &censored)
+                                                             : std::vector<double>(recorded.begin(), recorded.end());
     std::vector<std::vector<std::string>> rows = {
         metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu),
                      compute_metrics(std::span(measured).subspan(range.begin, range.end - range.begin),
@@ -710,9 +718,7 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
     e.range = v.range;
     if (fit.status != FitStatus::invalid_input) {
       try {
-        const std::vector<double>&vx = v.x.empty() ? data.x : v.x, &vy = v.x.empty() ? data.y : v.y;
-        e.metrics = data.censor_clipped ? evaluate_censored(fit.model, vx, vy, v.range, data.initial_state, &e.censored)
-                                        : evaluate(fit.model, vx, vy, v.range, data.initial_state);
+        e.metrics = score(data, fit.model, v.x.empty() ? data.x : v.x, v.x.empty() ? data.y : v.y, v.range, &e.censored);
       } catch (const Error&) {
       }
     }

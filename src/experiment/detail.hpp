@@ -187,6 +187,11 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
 // FOPDT at w_u = 2 pi / T_u and 1/H = (1 - r^2) + 2 i zeta r = -F K_u (r = w_u / w_n):
 //   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).
 void fit_load_mode(RigDynamics& d);
+// The models the learning design must contract on (docs/control.md, section 3): the identified
+// FOPDT with and without its load mode, dead time x1 and x1.5, lag and slope each x0.67, x1,
+// x1.5; each neighbour's mode fitted through the relay's point again (fit_load_mode), and
+// dropped where its FOPDT alone explains the point (its twin without a mode is in the list).
+std::vector<RigDynamics> learning_neighbours(const RigDynamics& d);
 // PID from the position relay test, derivative filter T_u / 30:
 //   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3

@@ -180,33 +180,46 @@ std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std
   return G * (lead_z + K * (pid.kp + I)) / (1.0 + G * K * (pid.kp + I + D));
 }
 
+std::vector<RigDynamics> learning_neighbours(const RigDynamics& d) {
+  std::vector<RigDynamics> out;
+  for (bool mode : {true, false})
+    for (double ft : {1.0, 1.5})
+      for (double fl : {0.67, 1.0, 1.5})
+        for (double fk : {0.67, 1.0, 1.5}) {
+          if (mode && d.mode_frequency_hz == 0.0) continue;
+          RigDynamics dv = d;
+          if (!mode) dv.mode_frequency_hz = dv.mode_damping = 0.0;
+          dv.dead_time_s *= ft;
+          dv.lag_s *= fl;
+          dv.gain_m_per_mpa *= fk;
+          // A neighbour's mode is fitted through the relay's point again, as the identified one
+          // is: every neighbour with a mode agrees with what the relay measured at w_u. One whose
+          // FOPDT alone explains the point has none: it is its twin without a mode.
+          if (mode) {
+            fit_load_mode(dv);
+            if (dv.mode_frequency_hz == 0.0) continue;
+          }
+          out.push_back(dv);
+        }
+  return out;
+}
+
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
                                double tc, double& contraction) {
   // frequency grid: from the fundamental to Nyquist, log-spaced
   constexpr std::size_t kGrid = 600;
-  // robust: the identified FOPDT with and without the load mode, and their neighbours
-  // (dead time x1.5, lag x0.67..1.5, slope x0.67..1.5): one contraction bound over all
   std::vector<double> w0s(kGrid);
   const double w0 = 2.0 * std::numbers::pi / static_cast<double>(period);
   for (std::size_t l = 0; l < kGrid; ++l)
     w0s[l] = w0 * std::pow(std::numbers::pi / w0, static_cast<double>(l) / (kGrid - 1));
+  // robust: one contraction bound over the identified loop and its neighbours
   std::vector<double> w;
   std::vector<std::complex<double>> T;
-  for (bool mode : {true, false})
-  for (double ft : {1.0, 1.5})
-    for (double fl : {0.67, 1.0, 1.5})
-      for (double fk : {0.67, 1.0, 1.5}) {
-        if (mode && d.mode_frequency_hz == 0.0) continue;
-        RigDynamics dv = d;
-        if (!mode) dv.mode_frequency_hz = 0.0;
-        dv.dead_time_s *= ft;
-        dv.lag_s *= fl;
-        dv.gain_m_per_mpa *= fk;
-        for (std::size_t l = 0; l < kGrid; ++l) {
-          w.push_back(w0s[l]);
-          T.push_back(closed_loop(dv, pid, lead, tc, w0s[l]));
-        }
-      }
+  for (const RigDynamics& dv : learning_neighbours(d))
+    for (std::size_t l = 0; l < kGrid; ++l) {
+      w.push_back(w0s[l]);
+      T.push_back(closed_loop(dv, pid, lead, tc, w0s[l]));
+    }
   LearningParams best;
   best.period = period;
   best.gain = 0.5;

@@ -55,9 +55,7 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.data.censored = !c.uncensored;  // the document, the text and the HTML report score alike
   doc.result.file = c.sel.file;
   doc.result.range = range;
-  doc.result.metrics = doc.data.censored
-                           ? evaluate_censored(model, rec.x, rec.y, range, initial, &doc.result.censored)
-                           : evaluate(model, rec.x, rec.y, range, initial);
+  doc.result.metrics = evaluate_scored(model, rec.x, rec.y, range, initial, doc.data.censored, &doc.result.censored);
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {

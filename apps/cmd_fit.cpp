@@ -164,8 +164,7 @@ int run_fit(const FitCliOptions& c) {
     try {
       const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
       const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
-      if (censor) return evaluate_censored(m, vx, vy, v.range, o.initial_state, censored);
-      return evaluate(m, vx, vy, v.range, o.initial_state);
+      return evaluate_scored(m, vx, vy, v.range, o.initial_state, censor, censored);
     } catch (const Error&) {
       return std::nullopt;
     }

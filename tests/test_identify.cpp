@@ -851,6 +851,13 @@ TEST(Clipping, EvaluateCensoredScoresAClippedRecordAsTheFitDoes) {
   EXPECT_EQ(same.rms, plain.rms);
   EXPECT_EQ(same.max, plain.max);
   EXPECT_THROW(evaluate_censored(r.model, x, std::vector<double>(n - 1, 0.0)), Error);
+  // evaluate_scored: the one censored-or-as-recorded choice of the CLI, the reports and Python
+  std::size_t scored = 99;
+  EXPECT_EQ(evaluate_scored(r.model, x, clipped, range, InitialState::virgin, true, &scored).rms, m.rms);
+  EXPECT_EQ(scored, at_limit);
+  EXPECT_EQ(evaluate_scored(r.model, x, clipped, range, InitialState::virgin, false, &scored).rms,
+            evaluate(r.model, x, clipped, range).rms);
+  EXPECT_EQ(scored, 0u);
   // censor_clipped: censored_output where the detection range clips, y unchanged where it does not
   std::size_t replaced = 99;
   EXPECT_EQ(censor_clipped(clipped, pred, {}, &replaced), censored_output(clipped, pred, detect_clipping(clipped)));

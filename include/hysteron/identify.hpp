@@ -117,6 +117,10 @@ FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::s
 FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                              IndexRange range = {}, InitialState initial = InitialState::virgin,
                              std::size_t* censored = nullptr);
+// The one choice `hysteron fit`, `evaluate`, their reports and Python make: evaluate_censored()
+// if `censor` (the default of fit and evaluate), else evaluate() with *censored = 0.
+FitMetrics evaluate_scored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                           IndexRange range, InitialState initial, bool censor, std::size_t* censored = nullptr);
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0
 // for every contraction below its zero; one whose range ends inside the stroke reads its

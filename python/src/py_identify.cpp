@@ -143,12 +143,10 @@ usable by hysteron.Model (it may not be invertible).)doc");
       [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const py::object& range,
          const std::string& initial_state, bool censored) {
         const ModelParams spec = model_spec(model);
-        if (!censored)
-          return metrics_dict(evaluate(spec, as_span(x), as_span(y), range_from(range), initial_state_from(initial_state)));
         std::size_t count = 0;
-        py::dict d = metrics_dict(evaluate_censored(spec, as_span(x), as_span(y), range_from(range),
-                                                    initial_state_from(initial_state), &count));
-        d["censored_samples"] = count;
+        py::dict d = metrics_dict(evaluate_scored(spec, as_span(x), as_span(y), range_from(range),
+                                                  initial_state_from(initial_state), censored, &count));
+        if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),

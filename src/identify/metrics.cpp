@@ -174,12 +174,15 @@ FitMetrics evaluate(const ModelParams& params, std::span<const double> x, std::s
 std::vector<double> censor_clipped(std::span<const double> y, std::span<const double> predicted, IndexRange detect_on,
                                    std::size_t* replaced) {
   const IndexRange r = detail::check_range(detect_on, y.size(), "censor_clipped");
-  if (const Clipping clip = detect_clipping(y.subspan(r.begin, r.end - r.begin)); clip.any())
-    return censored_output(y, predicted, clip, replaced);
-  if (y.size() != predicted.size())
-    throw Error(fmt::format("censored_output: {} outputs but {} predictions", y.size(), predicted.size()));
-  if (replaced) *replaced = 0;
-  return {y.begin(), y.end()};
+  // (nothing clipped: censored_output returns y, 0 replaced, after the same length check)
+  return censored_output(y, predicted, detect_clipping(y.subspan(r.begin, r.end - r.begin)), replaced);
+}
+
+FitMetrics evaluate_scored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                           IndexRange range, InitialState initial, bool censor, std::size_t* censored) {
+  if (censor) return evaluate_censored(params, x, y, range, initial, censored);
+  if (censored) *censored = 0;
+  return evaluate(params, x, y, range, initial);
 }
 
 FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> x, std::span<const double> y,

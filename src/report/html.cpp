@@ -156,9 +156,7 @@ const std::vector<std::string> metric_header = {"range", "RMS", "max |e|", "MAE"
 // where FitData::censor_clipped (`censored` receives the count), else as recorded.
 FitMetrics score(const FitData& data, const ModelParams& m, std::span<const double> x, std::span<const double> y,
                  IndexRange range, std::size_t* censored = nullptr) {
-  if (data.censor_clipped) return evaluate_censored(m, x, y, range, data.initial_state, censored);
-  if (censored) *censored = 0;
-  return evaluate(m, x, y, range, data.initial_state);
+  return evaluate_scored(m, x, y, range, data.initial_state, data.censor_clipped, censored);
 }
 
 void parameter_table(Page& page, const FitReport& fit) {

@@ -828,6 +828,53 @@ TEST(ExperimentTuning, ZeroVibrationShaperCancelsTheIdentifiedMode) {
 // loop does; the identified loop is among them; the slope, dead time and lag are scaled as
 // before. With the identified mode kept (the rule before 2026-11-26) a neighbour with 1.5x the
 // dead time misses the point by far more than the tolerance.
+// The learning variant's feedforward goes through the shaper the gain trial chose for the
+// compensated loop of the same reference (docs/control.md, section 3, "The feedforward's
+// shaper"): said in its description exactly where the trial chose shaping, and on mpi-pwm's
+// triangle, where the valves saturate at the top reversal and the load mode rings, its largest
+// error after 10 periods is below the same run's without the shaper. Without shaping the runs
+// are the same.
+TEST(ExperimentTuning, LearningFeedforwardGoesThroughTheTrialsShaper) {
+  ExperimentOptions o;
+  o.name = "mpi-pwm";
+  o.adaptive = false;
+  o.model = FitModel::mpi_asym;
+  o.learning_periods = 10;
+  const ExperimentResult with = run_experiment(o);
+  const bool before = experiment::set_learning_shaper(false);
+  ExperimentResult without;
+  try {
+    without = run_experiment(o);
+  } catch (...) {
+    experiment::set_learning_shaper(before);
+    throw;
+  }
+  experiment::set_learning_shaper(before);
+  ASSERT_EQ(with.gain_trials.size(), 2u);
+  int shaped = 0;
+  for (const GainTrial& g : with.gain_trials) {
+    const TrackingRun *a = nullptr, *b = nullptr;
+    for (const TrackingRun& r : with.runs)
+      if (r.variant == "learning" && r.reference == g.reference) a = &r;
+    for (const TrackingRun& r : without.runs)
+      if (r.variant == "learning" && r.reference == g.reference) b = &r;
+    ASSERT_TRUE(a && b) << g.reference;
+    const bool says = a->description.find("gain trial's zero-vibration shaper") != std::string::npos;
+    EXPECT_EQ(says, g.shaped) << g.reference << ": " << a->description;
+    EXPECT_EQ(b->description.find("zero-vibration shaper"), std::string::npos) << b->description;
+    if (!g.shaped) {
+      EXPECT_EQ(a->errors.rms_error_mm, b->errors.rms_error_mm) << g.reference;
+      continue;
+    }
+    ++shaped;
+    EXPECT_NE(a->errors.rms_error_mm, b->errors.rms_error_mm) << g.reference;
+    if (g.reference == "triangle") {
+      EXPECT_LT(a->errors.max_error_mm, b->errors.max_error_mm);
+    }
+  }
+  EXPECT_GE(shaped, 1);
+}
+
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
   using C = std::complex<double>;
   RigDynamics d;  // gpi-pid's nominal loop (docs/control.md, section 1)

@@ -50,6 +50,17 @@ struct Reference {
 // section 5). The relay tests settle for as long at their level.
 inline constexpr double kPreRollS = 1.5;
 
+// Zero-vibration input shaper (Singer and Seering 1990) for the identified load mode (w_n,
+// zeta < 1): two impulses a1 = 1 / (1 + K), a2 = K / (1 + K), K = exp(-zeta pi / sqrt(1 - zeta^2)),
+// half a damped period D = pi / w_d apart; the residual vibration of that mode is zero. Shifted
+// `advance` = round(a2 D) samples earlier so that its mean delay is zero (the reference is known
+// ahead): r_s(k) = a1 r(k + advance) + a2 r(k + advance - D), indices clamped to the record.
+struct ZvShaper {
+  double a1 = 1.0, a2 = 0.0;
+  std::size_t delay = 0, advance = 0;  // D and the advance [samples]
+  bool active() const noexcept { return a2 > 0.0 && delay > 0; }
+};
+
 // Everything an experiment's control laws may use: the fitted models and what
 // was identified from the rig at hand (never the nominal rig's values).
 struct Context {
@@ -61,6 +72,7 @@ struct Context {
   PidParams pressure_loop;         // valve experiments: PI of the pressure loop (relay test)
   bool learning = false;           // the loop is built for the learning variant (robust PID rule)
   double gain_scale = 1.0;         // factor on the classic rule's PID gains (the gain trial's choice)
+  ZvShaper shaper{};               // the feedforward's shaper (the gain trial's choice; inactive: none)
   const Reference* reference = nullptr;  // the reference the loop is built for
 };
 
@@ -192,6 +204,9 @@ void fit_load_mode(RigDynamics& d);
 // x1.5; each neighbour's mode fitted through the relay's point again (fit_load_mode), and
 // dropped where its FOPDT alone explains the point (its twin without a mode is in the list).
 std::vector<RigDynamics> learning_neighbours(const RigDynamics& d);
+// Tests only: whether the learning variant's feedforward goes through the shaper the gain
+// trial chose for the compensated loop (default true). Returns the previous setting.
+bool set_learning_shaper(bool on);
 // PID from the position relay test, derivative filter T_u / 30:
 //   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3
@@ -200,17 +215,7 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 // The position PID of a compensated loop in context `c`: the classic rule with its gains
 // times c.gain_scale; the some_overshoot rule, unscaled, when learning.
 PidParams position_pid(const Context& c);
-// Zero-vibration input shaper (Singer and Seering 1990) for the identified load mode (w_n,
-// zeta < 1): two impulses a1 = 1 / (1 + K), a2 = K / (1 + K), K = exp(-zeta pi / sqrt(1 - zeta^2)),
-// half a damped period D = pi / w_d apart; the residual vibration of that mode is zero. Shifted
-// `advance` = round(a2 D) samples earlier so that its mean delay is zero (the reference is known
-// ahead): r_s(k) = a1 r(k + advance) + a2 r(k + advance - D), indices clamped to the record.
-struct ZvShaper {
-  double a1 = 1.0, a2 = 0.0;
-  std::size_t delay = 0, advance = 0;  // D and the advance [samples]
-  bool active() const noexcept { return a2 > 0.0 && delay > 0; }
-};
-// Inactive when no underdamped mode was identified (mode_frequency_hz = 0 or damping >= 1).
+// The shaper (ZvShaper, above) for the identified mode. Inactive when no underdamped mode was identified (mode_frequency_hz = 0 or damping >= 1).
 ZvShaper zv_shaper(const RigDynamics& d, double tc);
 std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z);
 

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -29,6 +30,8 @@ namespace {
 // period): the loops are slow (0.2 Hz), so nothing is lost and fitting is 10x faster.
 constexpr double kFitRate = 100.0;  // [Hz]
 
+std::atomic<bool> learning_shaper{true};  // set_learning_shaper (tests)
+
 // The learning variant on top of `base`: `periods` repetitions of the reference's
 // first period, the ILC designed on the identified closed loop.
 TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const Reference& ref, const Loop& base,
@@ -40,9 +43,20 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   lp.max_gain = std::max(lp.gain, kLearningMaxGain);
   auto ilc = std::make_shared<IterativeLearning>(lp);
   const std::size_t lead = ctx.lead;
-  Law law = [ilc, inner = base.law, lead](const Sample& s) {
+  std::vector<double> r;
+  r.reserve(ref.period * static_cast<std::size_t>(o.learning_periods));
+  for (int j = 0; j < o.learning_periods; ++j)
+    r.insert(r.end(), ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.periodic_from),
+             ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.periodic_from + ref.period));
+  // The feedforward's preview of the reference through the shaper the gain trial chose for the
+  // compensated loop (none if it chose none); the correction is added unshaped, so the loop
+  // from the correction to the contraction, which the design's T models, is unchanged.
+  std::shared_ptr<const std::vector<double>> preview;
+  if (ctx.shaper.active() && learning_shaper.load()) preview = std::make_shared<const std::vector<double>>(shaped(r, ctx.shaper));
+  Law law = [ilc, inner = base.law, lead, preview](const Sample& s) {
     Sample m = s;
     m.reference_m += ilc->correction(0);
+    if (preview) m.preview_m = (*preview)[std::min(s.k + lead, preview->size() - 1)];
     m.preview_m += ilc->correction(lead);
     const RigInputs in = inner(m);
     // anti-windup: no learning where the pressure command is at a limit (the error there
@@ -51,11 +65,6 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
     ilc->step(saturated ? 0.0 : s.reference_m - s.measured_m);
     return in;
   };
-  std::vector<double> r;
-  r.reserve(ref.period * static_cast<std::size_t>(o.learning_periods));
-  for (int j = 0; j < o.learning_periods; ++j)
-    r.insert(r.end(), ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.periodic_from),
-             ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.periodic_from + ref.period));
   TrackingRun run = track(o, seed, r, lead, true, law);
   for (int j = 0; j < o.learning_periods; ++j) {
     const std::size_t b = static_cast<std::size_t>(j) * ref.period;
@@ -68,6 +77,10 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
                                 "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop)",
                                 base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho);
   // in the order the supervisor acts: the doublings come before the first halving
+  if (preview)
+    run.description += fmt::format("; feedforward through the gain trial's zero-vibration shaper ({:.3f} now, {:.3f} "
+                                   "after {:.0f} ms), the correction unshaped",
+                                   ctx.shaper.a1, ctx.shaper.a2, static_cast<double>(ctx.shaper.delay) * ctx.tc * 1e3);
   if (ilc->gain_raises() > 0)
     run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
   if (ilc->gain_cuts() > 0)
@@ -720,6 +733,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         GainTrial g = gain_trial(o, v, rc, ref, lead);
         rc.gain_scale = g.scale;
         if (g.shaped) zv = zv_shaper(res.dynamics, tc);
+        rc.shaper = zv;
         res.gain_trials.push_back(std::move(g));
       }
     const auto shaped_ref = std::make_shared<const std::vector<double>>(shaped(ref.ref_m, zv));
@@ -881,5 +895,9 @@ std::string ExperimentResult::table() const {
   for (const auto& m : messages) s += fmt::format("  note: {}\n", m);
   return s;
 }
+
+namespace experiment {
+bool set_learning_shaper(bool on) { return learning_shaper.exchange(on); }
+}  // namespace experiment
 
 }  // namespace hysteron

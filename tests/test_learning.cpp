@@ -689,7 +689,8 @@ TEST(ExperimentTuning, LearningFallsBackToASmallerGainWhereTheLoopRings) {
   for (const auto& m : r.messages)
     said = said || (m.rfind("learning (sine): after 3 periods its RMS error", 0) == 0 &&
                     m.find("is above the compensated run's") != std::string::npos &&
-                    m.find("it was still falling") != std::string::npos);
+                    m.find("it was still falling") != std::string::npos &&
+                    m.find("more period(s) would bring it below") != std::string::npos);
   EXPECT_TRUE(said) << r.table();
   // The supervisor doubles L after every new best period (LearningParams::max_gain): within 10
   // periods the run ends well below the compensated loop (0.045 vs 0.424 mm; 0.231 with the
@@ -828,6 +829,47 @@ TEST(ExperimentTuning, ZeroVibrationShaperCancelsTheIdentifiedMode) {
 // loop does; the identified loop is among them; the slope, dead time and lag are scaled as
 // before. With the identified mode kept (the rule before 2026-11-26) a neighbour with 1.5x the
 // dead time misses the point by far more than the tolerance.
+// The note of a learning run that ends above the loop it learns on says whether it was still
+// falling and, at the last period's rate, whether more periods would bring it below: a run
+// that falls by 0.2 % per period must not read as "more periods continue it".
+TEST(ExperimentTuning, LearningAboveItsLoopSaysHowFarItIsFromBelow) {
+  auto run = [](std::vector<double> rms) {
+    TrackingRun r;
+    r.variant = "learning";
+    r.reference = "sine";
+    for (double x : rms) {
+      TrackingErrors e;
+      e.rms_error_mm = x;
+      r.periods.push_back(e);
+    }
+    r.errors = r.periods.back();
+    return r;
+  };
+  TrackingRun base = run({0.4});
+  base.variant = "compensated";
+  // 0.6 -> 0.5 mm: q = 5/6, ln(0.4 / 0.5) / ln(5/6) = 1.22, so 2 more periods
+  const std::string fast = experiment::learning_above_note(run({0.9, 0.6, 0.5}), base);
+  EXPECT_EQ(fast.rfind("learning (sine): after 3 periods its RMS error, 0.500 mm, is above the compensated run's "
+                       "0.400 mm",
+                       0),
+            0u)
+      << fast;
+  EXPECT_NE(fast.find("it was still falling (0.600 mm the period before; at that rate about 2 more period(s)"),
+            std::string::npos)
+      << fast;
+  // 5.057 -> 5.048 mm against 3.790: 143 periods at that rate, beyond the horizon
+  base.errors.rms_error_mm = 3.790;
+  const std::string slow = experiment::learning_above_note(run({6.4, 5.057, 5.048}), base);
+  EXPECT_NE(slow.find("it was still falling, but by only 0.18 % per period (5.057 mm the period before): at that "
+                      "rate it would not come below within 100 more periods"),
+            std::string::npos)
+      << slow;
+  EXPECT_EQ(slow.find("about"), std::string::npos) << slow;
+  const std::string risen = experiment::learning_above_note(run({6.4, 5.0, 5.1}), base);
+  EXPECT_NE(risen.find("it was no longer falling"), std::string::npos) << risen;
+  EXPECT_EQ(risen.find("still falling"), std::string::npos) << risen;
+}
+
 // The learning variant's feedforward goes through the shaper the gain trial chose for the
 // compensated loop of the same reference (docs/control.md, section 3, "The feedforward's
 // shaper"): said in its description exactly where the trial chose shaping, and on mpi-pwm's

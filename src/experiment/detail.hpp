@@ -207,6 +207,10 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d);
 // Tests only: whether the learning variant's feedforward goes through the shaper the gain
 // trial chose for the compensated loop (default true). Returns the previous setting.
 bool set_learning_shaper(bool on);
+// The note for a learning run whose last period's RMS error is above `base`'s (the loop it
+// learns on): whether it was still falling and, at the last period's rate of decrease, how many
+// more periods would bring it below (or that it would not within 100: it has stalled).
+std::string learning_above_note(const TrackingRun& learning, const TrackingRun& base);
 // PID from the position relay test, derivative filter T_u / 30:
 //   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3

@@ -784,18 +784,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           // a learning run that ends above the loop it learns on must not look like an improvement
           for (const TrackingRun& base : res.runs)
             if (base.variant == v.name && base.reference == ref.name &&
-                lr.errors.rms_error_mm > base.errors.rms_error_mm && lr.periods.size() >= 2) {
-              const double before = lr.periods[lr.periods.size() - 2].rms_error_mm;
-              res.messages.push_back(fmt::format(
-                  "learning ({}): after {} periods its RMS error, {:.3f} mm, is above the {} run's {:.3f} mm (it "
-                  "learns on a more robust, slower loop); {}",
-                  ref.name, lr.periods.size(), lr.errors.rms_error_mm, v.name, base.errors.rms_error_mm,
-                  lr.errors.rms_error_mm < before
-                      ? fmt::format("it was still falling ({:.3f} mm the period before): more periods "
-                                    "(--learning-periods) continue it",
-                                    before)
-                      : std::string("it was no longer falling")));
-            }
+                lr.errors.rms_error_mm > base.errors.rms_error_mm && lr.periods.size() >= 2)
+              res.messages.push_back(learning_above_note(lr, base));
           res.runs.push_back(std::move(lr));
         } catch (const Error& e) {  // no design contracts on this rig: no learning run, and say why
           res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));
@@ -897,6 +887,28 @@ std::string ExperimentResult::table() const {
 }
 
 namespace experiment {
+std::string learning_above_note(const TrackingRun& learning, const TrackingRun& base) {
+  const std::size_t n = learning.periods.size();
+  const double last = learning.errors.rms_error_mm, target = base.errors.rms_error_mm;
+  std::string head = fmt::format(
+      "learning ({}): after {} periods its RMS error, {:.3f} mm, is above the {} run's {:.3f} mm (it learns on a "
+      "more robust, slower loop); ",
+      learning.reference, n, last, base.variant, target);
+  const double before = n >= 2 ? learning.periods[n - 2].rms_error_mm : last;
+  if (!(last < before) || !(last > 0.0)) return head + "it was no longer falling";
+  // periods to reach the base run's error at the last period's rate, q = last / before per period
+  const double q = last / before;
+  const double more = std::log(target / last) / std::log(q);
+  constexpr double kHorizon = 100.0;  // periods: beyond this the run has stalled for any user
+  if (more <= kHorizon)
+    return head + fmt::format("it was still falling ({:.3f} mm the period before; at that rate about {:.0f} more "
+                              "period(s) would bring it below: --learning-periods)",
+                              before, std::ceil(more));
+  return head + fmt::format("it was still falling, but by only {:.2g} % per period ({:.3f} mm the period before): at "
+                            "that rate it would not come below within {:.0f} more periods",
+                            100.0 * (1.0 - q), before, kHorizon);
+}
+
 bool set_learning_shaper(bool on) { return learning_shaper.exchange(on); }
 }  // namespace experiment
 

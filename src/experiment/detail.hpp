@@ -219,7 +219,8 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 // The position PID of a compensated loop in context `c`: the classic rule with its gains
 // times c.gain_scale; the some_overshoot rule, unscaled, when learning.
 PidParams position_pid(const Context& c);
-// The shaper (ZvShaper, above) for the identified mode. Inactive when no underdamped mode was identified (mode_frequency_hz = 0 or damping >= 1).
+// The shaper (ZvShaper, above) for the identified mode. Inactive when no underdamped mode was
+// identified (mode_frequency_hz = 0 or damping >= 1).
 ZvShaper zv_shaper(const RigDynamics& d, double tc);
 std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z);
 

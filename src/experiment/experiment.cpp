@@ -52,7 +52,8 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   // compensated loop (none if it chose none); the correction is added unshaped, so the loop
   // from the correction to the contraction, which the design's T models, is unchanged.
   std::shared_ptr<const std::vector<double>> preview;
-  if (ctx.shaper.active() && learning_shaper.load()) preview = std::make_shared<const std::vector<double>>(shaped(r, ctx.shaper));
+  if (ctx.shaper.active() && learning_shaper.load())
+    preview = std::make_shared<const std::vector<double>>(shaped(r, ctx.shaper));
   Law law = [ilc, inner = base.law, lead, preview](const Sample& s) {
     Sample m = s;
     m.reference_m += ilc->correction(0);
@@ -76,11 +77,11 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   run.description = fmt::format("{}; + iterative learning over {} periods (L = {}, phase lead {} samples, "
                                 "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop)",
                                 base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho);
-  // in the order the supervisor acts: the doublings come before the first halving
   if (preview)
     run.description += fmt::format("; feedforward through the gain trial's zero-vibration shaper ({:.3f} now, {:.3f} "
                                    "after {:.0f} ms), the correction unshaped",
                                    ctx.shaper.a1, ctx.shaper.a2, static_cast<double>(ctx.shaper.delay) * ctx.tc * 1e3);
+  // in the order the supervisor acts: the doublings come before the first halving
   if (ilc->gain_raises() > 0)
     run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
   if (ilc->gain_cuts() > 0)

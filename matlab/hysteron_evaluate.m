@@ -6,7 +6,11 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %   M = HYSTERON_EVALUATE(MODEL, X, Y, 'range', [first last], 'initial_state',
 %   'relaxed') scores samples first..last only (1-based, inclusive; the model is
 %   still simulated from the first sample) and starts at rest at X(1).
-%   The same as `hysteron evaluate` on the command line.
+%   M = HYSTERON_EVALUATE(..., 'censored', true): where Y clips (a sensor's limit,
+%   detected from the record), a sample at the limit that the model puts beyond it is
+%   scored as met (censored data, as the fit treats it); M.censored_samples counts them.
+%   The same as `hysteron evaluate` on the command line, which scores censored by
+%   default (--uncensored: as recorded); here, as in Python, only when asked.
 %
 %   See also HYSTERON_FIT, HYSTERON_SIMULATE.
   if nargin < 3

@@ -17,6 +17,8 @@ function [model, report] = hysteron_fit(x, y, varargin)
 %     seed                seed of the start jitter (default 0)
 %     max_iterations      LM iterations per start (default 200)
 %     min_slope           minimum slope relative to span(y)/span(x) (default 0.02)
+%     censor_passes       an output that clips (a sensor's limit) is fitted as censored
+%                         data over this many refits (default 2; 0: as recorded)
 %     fix_scale, free_weights, compute_covariance, stall_iterations,
 %     stall_tolerance, holdout_fraction, poor_fit_ratio   (docs/identification.md)
 %     report              name of a self-contained HTML report to write (plots,

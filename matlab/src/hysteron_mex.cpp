@@ -15,7 +15,7 @@
 //   save        path, spec           -> (writes the model file atomically)
 //   simulate    spec, x, opts        -> y                     opts: relaxed
 //   invert      spec, y, opts        -> [x, saturated]        opts: limits
-//   evaluate    spec, x, y, opts     -> metrics struct        opts: range, initial_state
+//   evaluate    spec, x, y, opts     -> metrics struct        opts: range, initial_state, censored
 //   fit         x, y, opts           -> [model, report]       opts: see fit_options(), and report
 //                                                              (HTML file), input_axis, output_axis
 //   rig         pressure_mpa, opts   -> struct of columns     opts: params, seed, control_period
@@ -315,19 +315,25 @@ void cmd_evaluate(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   require_finite(x, "x");
   require_finite(y, "y");
   equal_lengths(x, y);
-  const Options opt(arg(nrhs, prhs, 4), "evaluate options", {"range", "initial_state"});
+  const Options opt(arg(nrhs, prhs, 4), "evaluate options", {"range", "initial_state", "censored"});
   const IndexRange range = opt.get("range") ? range_option(opt.get("range"), opt.where("range")) : IndexRange{};
   const InitialState init =
       opt.get("initial_state") ? initial_state_option(opt.get("initial_state"), opt.where("initial_state"))
                                : InitialState::virgin;
-  plhs[0] = to_mx(io::to_json(evaluate(spec.params, x, y, range, init)));
+  // censored: where y clips (detect_clipping), a sample at the limit that the model puts beyond
+  // it is scored as met, as `hysteron evaluate` does by default and Python's evaluate(censored=True)
+  const bool censored = opt.get("censored") && get_bool(opt.get("censored"), opt.where("censored"));
+  std::size_t count = 0;
+  nlohmann::json m = io::to_json(evaluate_scored(spec.params, x, y, range, init, censored, &count));
+  if (censored) m["censored_samples"] = count;  // (only when asked, as Python's)
+  plhs[0] = to_mx(m);
 }
 
 const std::vector<std::string> fit_option_names = {
     "model",        "num_operators",    "num_dead_zones", "initial_state",      "train",
     "huber_delta",  "num_starts",       "num_threads",    "seed",               "max_iterations",
     "fix_scale",    "free_weights",     "compute_covariance", "min_slope",      "stall_iterations",
-    "stall_tolerance", "holdout_fraction", "poor_fit_ratio", "report", "input_axis", "output_axis"};
+    "stall_tolerance", "holdout_fraction", "poor_fit_ratio", "censor_passes", "report", "input_axis", "output_axis"};
 
 FitOptions fit_options(const Options& opt) {
   FitOptions o;
@@ -375,6 +381,7 @@ FitOptions fit_options(const Options& opt) {
   integer("stall_iterations", o.stall_iterations);
   number("stall_tolerance", o.stall_tolerance);
   number("holdout_fraction", o.holdout_fraction);
+  integer("censor_passes", o.censor_passes);
   number("poor_fit_ratio", o.poor_fit_ratio);
   return o;
 }

@@ -43,6 +43,32 @@ function test_roundtrip()
     fails = fails + check(abs(e2.rms - 1) < 1e-12 && e2.n == 10, '%s: evaluate range [11 20]: rms %g n %d', names{i}, e2.rms, e2.n);
   end
 
+  % a clipped output (a sensor's lower limit c) scored as censored data when asked: a sample at
+  % c that the model puts below c counts as met, every other sample as recorded
+  g = models.gpi;
+  y = hysteron_simulate(g, x);
+  c = min(y) + 0.25 * (max(y) - min(y));
+  yc = max(y + 0.3, c);
+  plain = hysteron_evaluate(g, x, yc);
+  cens = hysteron_evaluate(g, x, yc, 'censored', true);
+  met = (yc == c) & (y < c);
+  err = yc - y;
+  err(met) = 0;
+  fails = fails + check(~isfield(plain, 'censored_samples'), 'evaluate without censored: no censored_samples field');
+  fails = fails + check(isfield(cens, 'censored_samples') && cens.censored_samples == sum(met) && sum(met) > 0, ...
+                        'censored_samples %d, expected %d', cens.censored_samples, sum(met));
+  fails = fails + check(abs(cens.rms - sqrt(mean(err .^ 2))) < 1e-12 && cens.rms < plain.rms, ...
+                        'censored rms %g, expected %g (as recorded %g)', cens.rms, sqrt(mean(err .^ 2)), plain.rms);
+  fails = fails + check(abs(plain.rms - sqrt(mean((yc - y) .^ 2))) < 1e-12, 'as recorded rms %g', plain.rms);
+  off = hysteron_evaluate(g, x, yc, 'censored', false);
+  fails = fails + check(isequal(off, plain), 'censored false differs from the default');
+  % ... and fitted as censored data by default, as recorded with 'censor_passes', 0
+  [~, as_recorded] = hysteron_fit(x, yc, 'model', 'pi', 'censor_passes', 0);
+  [~, censored_fit] = hysteron_fit(x, yc, 'model', 'pi');
+  said = @(r, text) any(cellfun(@(w) ~isempty(strfind(w, text)), r.warnings));
+  fails = fails + check(said(censored_fit, 'fitted as censored data') && ~said(as_recorded, 'fitted as censored data') ...
+                        && said(as_recorded, 'fitted to the limit'), 'censor_passes: the fits'' warnings do not say it');
+
   % saturation: outputs beyond reach give the limits, flagged
   g = models.gpi;
   y = hysteron_simulate(g, x);

@@ -7,6 +7,10 @@
 // (default 10^7) of
 //   hysteron_inverse_step                     the exact inverse alone
 //   hysteron_ff_pid_step                      inverse feedforward + PID (GPI paper, Fig. 10)
+//   hysteron_ilc_correction + hysteron_ilc_step   iterative learning on top of it (period 20 000,
+//                                             Q-filter half-width 2006 and lead 56, the demo's
+//                                             gpi-pid design, unsupervised: an update every
+//                                             sample; docs/control.md section 3)
 // in a closed loop with the forward model as the plant (the plant's step is not timed),
 // after W warm-up calls (default 10^5). The reference is a periodic trajectory with
 // minor loops (precomputed). Prints median, p99, p99.9, p99.99 and max in ns from an
@@ -220,7 +224,18 @@ int main(int argc, char** argv) {
   for (double& y : y_ref) y /= 1000.0;
   hysteron_model_reset(plant);
 
-  Histogram timer, inv_h, ctl_h;
+  Histogram timer, inv_h, ctl_h, ilc_h;
+  hysteron_ilc_params ip;
+  hysteron_ilc_default_params(&ip);
+  ip.period = period;
+  ip.gain = 0.5;
+  ip.lead = 56;
+  ip.half_width = 2006;
+  // unsupervised and never held, so that every sample computes its update (the worst case; the
+  // learning variant's supervisor may hold the best correction, after which a step costs less)
+  ip.max_correction = 0.01;  // [m]: bounded whatever this toy loop does with it
+  hysteron_ilc* ilc = nullptr;
+  if ((st = hysteron_ilc_create(&ip, &ilc)) != HYSTERON_OK) die("learning", st);
   const int locked = mlockall(MCL_CURRENT);
   std::printf("hysteron C ABI %s: worst-case latency, %zu timed calls each after %zu warm-up calls\n",
               hysteron_version_string(), calls, warmup);
@@ -295,19 +310,49 @@ int main(int argc, char** argv) {
   const std::size_t ctl_alloc = g_allocations.load() - a0;
   const long ctl_preempt = preemptions() - c0;
 
+  // 4. iterative learning on top of the same loop (only its two calls timed)
+  std::size_t ilc_fail = 0;
+  hysteron_ff_pid_reset(ctl);
+  hysteron_model_reset(plant);
+  measured = 0;
+  a0 = g_allocations.load();
+  c0 = preemptions();
+  for (std::size_t k = 0; k < warmup + calls; ++k) {
+    const double r = y_ref[k % period];
+    double c = 0;
+    const std::int64_t t0 = now_ns();
+    hysteron_status s = hysteron_ilc_correction(ilc, 0, &c);
+    const std::int64_t t1 = now_ns();
+    hysteron_ff_pid_step(ctl, r + c, r + c, measured, &p);
+    hysteron_model_step(plant, p, &y);
+    measured = y / 1000.0;
+    const std::int64_t t2 = now_ns();
+    if (s == HYSTERON_OK) s = hysteron_ilc_step(ilc, r - measured);
+    const std::int64_t t3 = now_ns();
+    if (k >= warmup) {
+      ilc_h.add((t1 - t0) + (t3 - t2));
+      ilc_fail += s != HYSTERON_OK;
+    }
+    sink += c;
+  }
+  const std::size_t ilc_alloc = g_allocations.load() - a0;
+  const long ilc_preempt = preemptions() - c0;
+
   std::printf("%-38s %8s %8s %8s %8s %8s %9s %12s %9s\n", "latency per call [ns]", "median", "p99", "p99.9", "p99.99",
               "max", "mean", "allocations", "failures");
   print_row("timer overhead (two clock_gettime)", timer, 0, 0);
   print_row("hysteron_inverse_step", inv_h, inv_alloc, inv_fail);
   print_row("hysteron_ff_pid_step (inverse + PID)", ctl_h, ctl_alloc, ctl_fail);
-  std::printf("calls above 1 ms: inverse %llu, ff+pid %llu; involuntary context switches during the timed loops "
-              "(preemptions, each can make one call's max): inverse %ld, ff+pid %ld; (checksum %.6g)\n",
+  print_row("hysteron_ilc_correction + _step", ilc_h, ilc_alloc, ilc_fail);
+  std::printf("calls above 1 ms: inverse %llu, ff+pid %llu, ilc %llu; involuntary context switches during the timed "
+              "loops (preemptions, each can make one call's max): inverse %ld, ff+pid %ld, ilc %ld; (checksum %.6g)\n",
               static_cast<unsigned long long>(inv_h.overflow), static_cast<unsigned long long>(ctl_h.overflow),
-              inv_preempt, ctl_preempt, sink);
+              static_cast<unsigned long long>(ilc_h.overflow), inv_preempt, ctl_preempt, ilc_preempt, sink);
+  hysteron_ilc_free(ilc);
 
   hysteron_ff_pid_free(ctl);
   hysteron_model_free(plant);
   hysteron_inverse_free(inverse);
   hysteron_params_free(params);
-  return (inv_alloc || ctl_alloc || inv_fail || ctl_fail) ? 1 : 0;
+  return (inv_alloc || ctl_alloc || ilc_alloc || inv_fail || ctl_fail || ilc_fail) ? 1 : 0;
 }

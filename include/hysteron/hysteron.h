@@ -1,6 +1,6 @@
 /*
  * hysteron C ABI: load a hysteresis model, run it forwards, run its exact inverse,
- * and run the inverse-feedforward + PID controller, from C, LabVIEW, Simulink,
+ * run the inverse-feedforward + PID controller and iterative learning control, from C, LabVIEW, Simulink,
  * ROS, Python ctypes or anything else that can call a C function.
  *
  * Plain C99; the library (libhysteron_c.so / libhysteron_c.a) is C++ inside.
@@ -20,8 +20,9 @@
  * - Out-pointers are written only on success, except that the per-sample step
  *   functions also write the held (previous) value when an input is not finite.
  * - The per-sample functions (hysteron_model_step, hysteron_inverse_step,
- *   hysteron_ff_pid_step) never allocate memory, never block and take a bounded
- *   time: they are meant for a real-time loop. Loading and creating allocate.
+ *   hysteron_ff_pid_step, hysteron_ilc_correction, hysteron_ilc_step) never allocate
+ *   memory, never block and take a bounded time: they are meant for a real-time loop.
+ *   Loading and creating allocate.
  *
  * Units: a model maps the actuator input x in the model file's input units
  * (e.g. MPa of pressure, V of a piezo amplifier) to the output y in its output
@@ -209,6 +210,55 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller
  * command. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double reference_m, double preview_m,
                                                    double measured_m, double* pressure_mpa);
+
+/* ---- iterative learning control (docs/control.md, section 3) ------------------ */
+/* For a periodic reference with N samples per period: a correction c is added to the
+ * reference (and to the feedforward's preview) of a closed loop, and learnt from the
+ * tracking error e = r - y over the periods (the C++ IterativeLearning):
+ *   c_{j+1}(k) = sum_{m=-h..h} q_m [ c_j(k+m) + L e_j(k+m+d) ]   (indices mod N),
+ * q the binomial Q-filter, |Q(w)| = cos^(2h)(w / 2). Each sample: read the correction(s),
+ * run the loop on r + c, then step with the error of that sample. `hysteron experiment`
+ * prints the L, d and h it designed for the rig at hand (the learning run's description). */
+typedef struct hysteron_ilc_params {
+  size_t period;          /* N [samples] per period, >= 2 (default 0: must be set) */
+  double gain;            /* L, in (0, 2) (default 0.5) */
+  size_t lead;            /* d [samples] (default 0) */
+  size_t half_width;      /* h of the Q-filter (default 0: no filter) */
+  size_t lookahead;       /* largest `ahead` of hysteron_ilc_correction (default 0);
+                             lead + 2 half_width + lookahead < period */
+  double max_correction;  /* |c| limit, > 0 (default: infinity) */
+  double rise_tolerance;  /* supervision: a period whose RMS error rises above the least
+                             before it by more than this fraction restores the best
+                             correction and halves L, >= 0 (default: infinity, none) */
+  size_t hold_after_cuts; /* after this many halvings the best correction is held (0: never) */
+  double max_gain;        /* L doubles after every new best period up to this, until the first
+                             halving (0: never; else in [gain, 2); needs rise_tolerance) */
+} hysteron_ilc_params;
+
+typedef struct hysteron_ilc hysteron_ilc;
+
+HYSTERON_C_API hysteron_status hysteron_ilc_default_params(hysteron_ilc_params* params);
+/* Allocates O(N). Invalid parameters are HYSTERON_ERROR_INVALID_ARGUMENT (the field is named). */
+HYSTERON_C_API hysteron_status hysteron_ilc_create(const hysteron_ilc_params* params, hysteron_ilc** out);
+HYSTERON_C_API hysteron_status hysteron_ilc_free(hysteron_ilc* ilc);
+/* Zero corrections, back to phase 0 of period 0, L back to params.gain. */
+HYSTERON_C_API hysteron_status hysteron_ilc_reset(hysteron_ilc* ilc);
+/* The correction to add to the reference `ahead` samples after the current one (0: the
+ * current sample; the feedforward's preview takes its lead). ahead > params.lookahead is
+ * HYSTERON_ERROR_INVALID_ARGUMENT. Call before hysteron_ilc_step for the current sample.
+ * Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_ilc_correction(const hysteron_ilc* ilc, size_t ahead, double* correction);
+/* Records the error r - y [the loop's units] of the current sample and advances one sample.
+ * A non-finite error is learnt as 0 and counted (the sample still advances, so the phase
+ * stays with the reference), and the call returns HYSTERON_ERROR_INVALID_ARGUMENT. Feed 0
+ * where the actuator is at a limit (the error there cannot be reduced). Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_ilc_step(hysteron_ilc* ilc, double error);
+/* Where it is: the phase in the period, completed periods, the L in use, how often the
+ * supervisor halved and doubled L, whether it holds the best correction, non-finite errors
+ * seen. Any out-pointer may be NULL. */
+HYSTERON_C_API hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_t* phase, size_t* iteration,
+                                                 double* gain, size_t* gain_cuts, size_t* gain_raises, int* held,
+                                                 size_t* faults);
 
 #ifdef __cplusplus
 }

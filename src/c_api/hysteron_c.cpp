@@ -29,6 +29,7 @@
 #include "hysteron/error.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/learning.hpp"
 #include "hysteron/models.hpp"
 #include "hysteron/version.hpp"
 
@@ -52,6 +53,10 @@ struct hysteron_inverse {
 struct hysteron_ff_pid {
   hysteron::FeedforwardPidController controller;
   double last = 0.0;  // the last command (held on a non-finite argument)
+};
+
+struct hysteron_ilc {
+  hysteron::IterativeLearning ilc;
 };
 
 namespace {
@@ -545,6 +550,105 @@ hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double referen
   controller->last = controller->controller.step(reference_m, preview_m, measured_m);
   *pressure_mpa = controller->last;
   return HYSTERON_OK;
+}
+
+// ---- iterative learning control ---------------------------------------------------
+
+hysteron_status hysteron_ilc_default_params(hysteron_ilc_params* params) {
+  return guard("hysteron_ilc_default_params", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    const hysteron::LearningParams d;
+    params->period = d.period;
+    params->gain = d.gain;
+    params->lead = d.lead;
+    params->half_width = d.half_width;
+    params->lookahead = d.lookahead;
+    params->max_correction = d.max_correction;
+    params->rise_tolerance = d.rise_tolerance;
+    params->hold_after_cuts = d.hold_after_cuts;
+    params->max_gain = d.max_gain;
+  });
+}
+
+hysteron_status hysteron_ilc_create(const hysteron_ilc_params* params, hysteron_ilc** out) {
+  return guard("hysteron_ilc_create", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(out);
+    hysteron::LearningParams p;
+    p.period = params->period;
+    p.gain = params->gain;
+    p.lead = params->lead;
+    p.half_width = params->half_width;
+    p.lookahead = params->lookahead;
+    p.max_correction = params->max_correction;
+    p.rise_tolerance = params->rise_tolerance;
+    p.hold_after_cuts = params->hold_after_cuts;
+    p.max_gain = params->max_gain;
+    try {
+      p.validate();
+    } catch (const hysteron::Error& e) {
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s", e.what());
+    }
+    *out = new hysteron_ilc{hysteron::IterativeLearning(p)};
+  });
+}
+
+hysteron_status hysteron_ilc_free(hysteron_ilc* ilc) {
+  delete ilc;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_ilc_reset(hysteron_ilc* ilc) {
+  return guard("hysteron_ilc_reset", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(ilc);
+    ilc->ilc.reset();
+  });
+}
+
+hysteron_status hysteron_ilc_correction(const hysteron_ilc* ilc, size_t ahead, double* correction) {
+  if (ilc == nullptr || correction == nullptr) {
+    set_message("hysteron_ilc_correction", ilc == nullptr ? "argument ilc is NULL" : "argument correction is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  if (ahead > ilc->ilc.params().lookahead) {
+    char text[160];
+    std::snprintf(text, sizeof text, "argument ahead = %zu is beyond params.lookahead = %zu", ahead,
+                  ilc->ilc.params().lookahead);
+    set_message("hysteron_ilc_correction", text);
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  *correction = ilc->ilc.correction(ahead);
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_ilc_step(hysteron_ilc* ilc, double error) {
+  if (ilc == nullptr) {
+    set_message("hysteron_ilc_step", "argument ilc is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  ilc->ilc.step(error);  // a non-finite error is learnt as 0 and counted
+  if (!std::isfinite(error)) {
+    char text[160];
+    std::snprintf(text, sizeof text, "argument error = %g is not finite (learnt as 0; the sample advanced)", error);
+    set_message("hysteron_ilc_step", text);
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_t* phase, size_t* iteration, double* gain,
+                                   size_t* gain_cuts, size_t* gain_raises, int* held, size_t* faults) {
+  return guard("hysteron_ilc_state", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(ilc);
+    const hysteron::IterativeLearning& l = ilc->ilc;
+    if (phase) *phase = l.phase();
+    if (iteration) *iteration = l.iteration();
+    if (gain) *gain = l.gain();
+    if (gain_cuts) *gain_cuts = l.gain_cuts();
+    if (gain_raises) *gain_raises = l.gain_raises();
+    if (held) *held = l.held() ? 1 : 0;
+    if (faults) *faults = l.faults();
+  });
 }
 
 }  // extern "C"

@@ -1,10 +1,12 @@
-// Bindings of the PID, the inverse feedforward and the feedforward + PID controller.
+// Bindings of the PID, the inverse feedforward, the feedforward + PID controller and the
+// iterative learning update.
 #include <fmt/format.h>
 
 #include <limits>
 
 #include "hysteron/compensation.hpp"
 #include "hysteron/control.hpp"
+#include "hysteron/learning.hpp"
 #include "more.hpp"
 
 namespace hysteron::python {
@@ -133,6 +135,64 @@ are used; default: Pid.gpi_paper()).)doc")
       .def("reset", &FeedforwardPidController::reset, "Back to the virgin state (inverse, lag history and PID).")
       .def("__repr__", [](const FeedforwardPidController&) {
         return std::string("FeedforwardPidController(inverse feedforward + PID, GPI paper Fig. 10)");
+      });
+
+  py::class_<IterativeLearning>(m, "IterativeLearning", R"doc(
+Iterative learning control for a periodic reference of `period` samples (docs/control.md,
+section 3): a correction c is added to a closed loop's reference (and its feedforward's
+preview) and learnt from the tracking error over the periods,
+c_{j+1}(k) = sum_m q_m [c_j(k+m) + gain e_j(k+m+lead)], q the binomial Q-filter of
+half-width `half_width`. Each sample: correction(0) (and correction(preview) for the
+feedforward), run the loop on r + c, then step(r - y). rise_tolerance, hold_after_cuts and
+max_gain set the supervisor (the learning variant: 0, 3, 0.5). step() never allocates; a
+non-finite error is learnt as 0 and counted (faults). Invalid parameters raise
+hysteron.Error naming the field.)doc")
+      .def(py::init([](std::size_t period, double gain, std::size_t lead, std::size_t half_width,
+                       std::size_t lookahead, double max_correction, double rise_tolerance,
+                       std::size_t hold_after_cuts, double max_gain) {
+             LearningParams p;
+             p.period = period;
+             p.gain = gain;
+             p.lead = lead;
+             p.half_width = half_width;
+             p.lookahead = lookahead;
+             p.max_correction = max_correction;
+             p.rise_tolerance = rise_tolerance;
+             p.hold_after_cuts = hold_after_cuts;
+             p.max_gain = max_gain;
+             return IterativeLearning(p);
+           }),
+           py::arg("period"), py::arg("gain") = 0.5, py::arg("lead") = 0, py::arg("half_width") = 0,
+           py::arg("lookahead") = 0, py::arg("max_correction") = inf, py::arg("rise_tolerance") = inf,
+           py::arg("hold_after_cuts") = 0, py::arg("max_gain") = 0.0)
+      .def(
+          "correction",
+          [](const IterativeLearning& l, std::size_t ahead) {
+            if (ahead > l.params().lookahead)
+              throw py::value_error(fmt::format("correction: ahead = {} is beyond lookahead = {}", ahead,
+                                                l.params().lookahead));
+            return l.correction(ahead);
+          },
+          py::arg("ahead") = 0,
+          "The correction to add to the reference `ahead` samples after the current one (ahead <= lookahead).")
+      .def("step", &IterativeLearning::step, py::arg("error"),
+           "Records the tracking error r - y of the current sample and advances one sample.")
+      .def("reset", &IterativeLearning::reset, "Zero corrections, back to phase 0 of period 0.")
+      .def_property_readonly("phase", &IterativeLearning::phase, "The sample's index in the period.")
+      .def_property_readonly("iteration", &IterativeLearning::iteration, "Completed periods.")
+      .def_property_readonly("gain", &IterativeLearning::gain, "The learning gain L in use.")
+      .def_property_readonly("gain_cuts", &IterativeLearning::gain_cuts,
+                             "Times the supervisor restored the best correction and halved L.")
+      .def_property_readonly("gain_raises", &IterativeLearning::gain_raises,
+                             "Times the supervisor doubled L after a best period.")
+      .def_property_readonly("held", &IterativeLearning::held, "True once the best correction is held.")
+      .def_property_readonly("faults", &IterativeLearning::faults, "Non-finite errors learnt as 0.")
+      .def("__repr__", [](const IterativeLearning& l) {
+        const LearningParams& q = l.params();
+        return fmt::format("IterativeLearning(period={}, gain={}, lead={}, half_width={}, lookahead={}, "
+                           "rise_tolerance={}, hold_after_cuts={}, max_gain={})",
+                           q.period, q.gain, q.lead, q.half_width, q.lookahead, q.rise_tolerance, q.hold_after_cuts,
+                           q.max_gain);
       });
 }
 

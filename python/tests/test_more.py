@@ -127,6 +127,40 @@ def test_inverse_feedforward_round_trip():
     assert 0.0 <= ctl.step(0.02, 0.02, 0.0) <= 0.6
 
 
+def test_iterative_learning_on_a_lagged_loop():
+    """The learning update around y_k = a y_(k-1) + (1 - a) u_(k-1), u = r + c: the error of each
+    period falls, to under 5 % of the first period's within 15 (the same loop as the C ABI's test)."""
+    n, a = 200, 0.8
+    ilc = hysteron.IterativeLearning(period=n, gain=0.5, lead=2, half_width=4, lookahead=3)
+    assert "period=200" in repr(ilc) and "half_width=4" in repr(ilc)
+    r = np.sin(2 * np.pi * np.arange(n) / n)
+    y = u = 0.0
+    rms = []
+    for _ in range(15):
+        e2 = 0.0
+        for k in range(n):
+            y = a * y + (1 - a) * u
+            u = r[k] + ilc.correction(0)
+            e = r[k] - y
+            e2 += e * e
+            ilc.step(e)
+        rms.append(math.sqrt(e2 / n))
+    assert all(b <= a_ * (1 + 1e-9) for a_, b in zip(rms, rms[1:])), rms
+    assert rms[-1] < 0.05 * rms[0]
+    assert ilc.iteration == 15 and ilc.phase == 0 and ilc.gain == 0.5 and not ilc.held
+    ilc.correction(3)
+    with pytest.raises(ValueError, match="lookahead = 3"):
+        ilc.correction(4)
+    ilc.step(float("nan"))
+    assert ilc.faults == 1 and ilc.phase == 1
+    ilc.reset()
+    assert ilc.phase == 0 and ilc.iteration == 0 and ilc.correction(0) == 0.0
+    with pytest.raises(hysteron.Error, match="period"):
+        hysteron.IterativeLearning(period=1)
+    with pytest.raises(hysteron.Error, match="must be < period = 200"):
+        hysteron.IterativeLearning(period=n, lead=2, half_width=99)
+
+
 def test_signals():
     p = hysteron.gpi_identification_pressure(0.01)
     assert p.max() == pytest.approx(0.6, abs=1e-9) and p.min() >= 0.0

@@ -584,11 +584,7 @@ hysteron_status hysteron_ilc_create(const hysteron_ilc_params* params, hysteron_
     p.rise_tolerance = params->rise_tolerance;
     p.hold_after_cuts = params->hold_after_cuts;
     p.max_gain = params->max_gain;
-    try {
-      p.validate();
-    } catch (const hysteron::Error& e) {
-      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s", e.what());
-    }
+    // the constructor validates: its hysteron::Error is this call's INVALID_ARGUMENT (guard)
     *out = new hysteron_ilc{hysteron::IterativeLearning(p)};
   });
 }

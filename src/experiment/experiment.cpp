@@ -32,6 +32,21 @@ constexpr double kFitRate = 100.0;  // [Hz]
 
 std::atomic<bool> learning_shaper{true};  // set_learning_shaper (tests)
 
+// `inner` with the feedforward's preview taken from `preview` (e.g. the shaped reference):
+// sample k gets preview[k + lead] (clamped to its last sample); the PID's reference is kept.
+Law with_preview(Law inner, std::shared_ptr<const std::vector<double>> preview, std::size_t lead) {
+  return [inner = std::move(inner), preview = std::move(preview), lead](const Sample& s) {
+    Sample m = s;
+    if (!preview->empty()) m.preview_m = (*preview)[std::min(s.k + lead, preview->size() - 1)];
+    return inner(m);
+  };
+}
+
+// The shaper's impulses for the loops' descriptions: "(0.955 now, 0.045 after 172 ms)".
+std::string shaper_timing(const ZvShaper& z, double tc) {
+  return fmt::format("({:.3f} now, {:.3f} after {:.0f} ms)", z.a1, z.a2, static_cast<double>(z.delay) * tc * 1e3);
+}
+
 // The learning variant on top of `base`: `periods` repetitions of the reference's
 // first period, the ILC designed on the identified closed loop.
 TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const Reference& ref, const Loop& base,
@@ -54,10 +69,9 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   std::shared_ptr<const std::vector<double>> preview;
   if (ctx.shaper.active() && learning_shaper.load())
     preview = std::make_shared<const std::vector<double>>(shaped(r, ctx.shaper));
-  Law law = [ilc, inner = base.law, lead, preview](const Sample& s) {
+  Law law = [ilc, inner = base.law, lead](const Sample& s) {
     Sample m = s;
     m.reference_m += ilc->correction(0);
-    if (preview) m.preview_m = (*preview)[std::min(s.k + lead, preview->size() - 1)];
     m.preview_m += ilc->correction(lead);
     const RigInputs in = inner(m);
     // anti-windup: no learning where the pressure command is at a limit (the error there
@@ -66,6 +80,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
     ilc->step(saturated ? 0.0 : s.reference_m - s.measured_m);
     return in;
   };
+  if (preview) law = with_preview(std::move(law), preview, lead);  // shaped first, the correction added to it
   TrackingRun run = track(o, seed, r, lead, true, law);
   for (int j = 0; j < o.learning_periods; ++j) {
     const std::size_t b = static_cast<std::size_t>(j) * ref.period;
@@ -78,9 +93,9 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
                                 "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop)",
                                 base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho);
   if (preview)
-    run.description += fmt::format("; feedforward through the gain trial's zero-vibration shaper ({:.3f} now, {:.3f} "
-                                   "after {:.0f} ms), the correction unshaped",
-                                   ctx.shaper.a1, ctx.shaper.a2, static_cast<double>(ctx.shaper.delay) * ctx.tc * 1e3);
+    run.description += fmt::format("; feedforward through the gain trial's zero-vibration shaper {}, the correction "
+                                   "unshaped",
+                                   shaper_timing(ctx.shaper, ctx.tc));
   // in the order the supervisor acts: the doublings come before the first halving
   if (ilc->gain_raises() > 0)
     run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
@@ -92,16 +107,6 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));
   return run;
-}
-
-// `inner` with the feedforward's preview taken from `preview` (e.g. the shaped reference):
-// sample k gets preview[k + lead] (clamped to its last sample); the PID's reference is kept.
-Law with_preview(Law inner, std::shared_ptr<const std::vector<double>> preview, std::size_t lead) {
-  return [inner = std::move(inner), preview = std::move(preview), lead](const Sample& s) {
-    Sample m = s;
-    if (!preview->empty()) m.preview_m = (*preview)[std::min(s.k + lead, preview->size() - 1)];
-    return inner(m);
-  };
 }
 
 // The gain trial (docs/control.md, section 2). The relay's ultimate gain is measured with the
@@ -757,9 +762,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       }
       if (zv.active() && v.preview) {
         loop.law = with_preview(loop.law, shaped_ref, lead);
-        loop.description += fmt::format("; feedforward through a zero-vibration shaper at the identified mode "
-                                        "({:.3f} now, {:.3f} after {:.0f} ms)",
-                                        zv.a1, zv.a2, static_cast<double>(zv.delay) * tc * 1e3);
+        loop.description += fmt::format("; feedforward through a zero-vibration shaper at the identified mode {}",
+                                        shaper_timing(zv, tc));
       }
       TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law);
       run.variant = v.name;

@@ -1,5 +1,6 @@
 // Iterative learning control (learning.hpp) and the learning variant of the experiments.
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +14,9 @@
 
 #include "alloc_counter.hpp"
 #include "hysteron/error.hpp"
+#include "hysteron/compensation.hpp"
 #include "hysteron/experiment.hpp"
+#include "hysteron/io/results.hpp"
 #include "test_util.hpp"
 #include "hysteron/learning.hpp"
 #include "hysteron/signals.hpp"
@@ -915,6 +918,77 @@ TEST(ExperimentTuning, LearningFeedforwardGoesThroughTheTrialsShaper) {
     }
   }
   EXPECT_GE(shaped, 1);
+}
+
+// A run's "controller" (result.json; docs/deploy.md) holds every number its loop needs: the
+// compensated loop rebuilt from it and the fitted model (FeedforwardPidController, the preview
+// through the shaper lead samples ahead) gives the run's pressure commands, and an
+// IterativeLearning built from the learning run's parameters, fed the run's errors, gives the
+// corrections the run applied and ends where its supervisor ended. Both survive result.json.
+TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
+  const ExperimentResult r = run_experiment(gpi_pid_options(PamRigParams{}, 3, true));
+  const double tc = 1e-3;
+  const TrackingRun& comp = find_run(r, "compensated");
+  const LoopDesign& d = comp.controller;
+  ASSERT_TRUE(d.pid);
+  ASSERT_TRUE(d.shaper);  // the gain trial shapes gpi-pid's nominal sine (docs/control.md, section 2)
+  EXPECT_GT(d.feedforward_lead, 0u);
+  EXPECT_DOUBLE_EQ(d.feedforward_lead_s, static_cast<double>(d.feedforward_lead) * tc);
+  EXPECT_NEAR(d.feedforward_lead_s, r.lead_s, 1e-12);
+  EXPECT_NE(comp.description.find(fmt::format("Kp = {:.3g} MPa/m", d.pid->kp)), std::string::npos) << comp.description;
+  {
+    const std::size_t n = comp.t.size();
+    std::vector<double> ref(n), shaped(n);
+    for (std::size_t k = 0; k < n; ++k) ref[k] = comp.reference_mm[k] * 1e-3;
+    const auto at = [&](std::ptrdiff_t k) {
+      return ref[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(k, 0, static_cast<std::ptrdiff_t>(n) - 1))];
+    };
+    const auto adv = static_cast<std::ptrdiff_t>(d.shaper->advance), D = static_cast<std::ptrdiff_t>(d.shaper->delay);
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto i = static_cast<std::ptrdiff_t>(k);
+      shaped[k] = d.shaper->a1 * at(i + adv) + d.shaper->a2 * at(i + adv - D);
+    }
+    FeedforwardParams ff;
+    ff.sample_time = tc;
+    FeedforwardPidController loop(r.best_fit.model, ff, *d.pid);
+    double worst = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double u =
+          loop.step(ref[k], shaped[std::min(k + d.feedforward_lead, n - 1)], comp.measured_mm[k] * 1e-3);
+      worst = std::max(worst, std::abs(std::clamp(u, 0.0, experiment::kPressureMax) - comp.pressure_command_mpa[k]));
+    }
+    EXPECT_LT(worst, 1e-9) << "MPa";
+  }
+  const TrackingRun& lr = find_run(r, "learning");
+  ASSERT_TRUE(lr.controller.learning);
+  const LoopDesign::Learning& l = *lr.controller.learning;
+  EXPECT_EQ(l.params.lookahead, lr.controller.feedforward_lead);
+  EXPECT_NE(lr.description.find(fmt::format("half-width {}", l.params.half_width)), std::string::npos);
+  ASSERT_EQ(lr.correction_mm.size(), lr.t.size());
+  IterativeLearning ilc(l.params);
+  double worst = 0.0, largest = 0.0;
+  for (std::size_t k = 0; k < lr.t.size(); ++k) {
+    const double c = ilc.correction(0) * 1e3;
+    worst = std::max(worst, std::abs(c - lr.correction_mm[k]));
+    largest = std::max(largest, std::abs(c));
+    const double cmd = lr.pressure_command_mpa[k];
+    const bool saturated = cmd <= 0.0 || cmd >= experiment::kPressureMax;
+    ilc.step(saturated ? 0.0 : (lr.reference_mm[k] - lr.measured_mm[k]) * 1e-3);
+  }
+  EXPECT_LT(worst, 1e-9) << "mm";
+  EXPECT_GT(largest, 0.05) << "mm: the run learnt a correction";
+  EXPECT_EQ(ilc.iteration(), 3u);
+  EXPECT_EQ(ilc.gain(), l.final_gain);
+  EXPECT_EQ(ilc.gain_cuts(), l.gain_cuts);
+  EXPECT_EQ(ilc.gain_raises(), l.gain_raises);
+  EXPECT_EQ(ilc.held(), l.held);
+  // result.json's writer and reader
+  const ExperimentResult back = io::from_json<ExperimentResult>(io::to_json(r), "result.json");
+  ASSERT_EQ(back.runs.size(), r.runs.size());
+  for (std::size_t i = 0; i < r.runs.size(); ++i)
+    EXPECT_EQ(io::to_json(back.runs[i].controller), io::to_json(r.runs[i].controller)) << r.runs[i].variant;
+  EXPECT_FALSE(find_run(back, "faithful").controller.shaper);
+  EXPECT_TRUE(find_run(back, "learning").controller.learning);
 }
 
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {

@@ -36,8 +36,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hysteron/control.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
+#include "hysteron/learning.hpp"
 #include "hysteron/plant.hpp"
 
 namespace hysteron {
@@ -138,10 +140,44 @@ struct TrackingErrors {
 };
 
 // One tracking run, logged at the control period.
+// The compensator a tracking run used, in the numbers its deployment needs (docs/deploy.md:
+// hysteron_pid, hysteron_ilc and the inverse feedforward of the C ABI); result.json's
+// "controller". Units: contraction in m, pressure in MPa (the loops' own units).
+struct LoopDesign {
+  // The position loop's PID (absent: no position loop, e.g. the faithful open loop).
+  std::optional<PidParams> pid;
+  // The feedforward's preview of the reference [samples at the control period, and s]
+  // (0: the inverse is fed the current reference).
+  std::size_t feedforward_lead = 0;
+  double feedforward_lead_s = 0.0;
+  // Zero-vibration shaper on the feedforward's preview (docs/control.md, section 2):
+  // preview(k) = a1 r(k + lead + advance) + a2 r(k + lead + advance - delay); absent: unshaped.
+  struct Shaper {
+    double a1 = 1.0, a2 = 0.0;
+    std::size_t delay = 0, advance = 0;  // [samples]
+  };
+  std::optional<Shaper> shaper;
+  // Iterative learning (the learning variant): the parameters its IterativeLearning was built
+  // with (supervision included; the correction is in m, added to the PID's reference and, lead
+  // samples ahead, to the feedforward's preview), the design's contraction bound on the
+  // identified loop, and what the supervisor did by the end of the run.
+  struct Learning {
+    LearningParams params;
+    double contraction_bound = 0.0;
+    double final_gain = 0.0;  // L in use at the end
+    std::size_t gain_raises = 0, gain_cuts = 0;
+    bool held = false;
+  };
+  std::optional<Learning> learning;
+};
+
 struct TrackingRun {
   std::string variant;    // faithful | compensated | baseline
   std::string reference;  // e.g. "sine", "triangle"
   std::string description;
+  LoopDesign controller;  // the loop's numbers (result.json "controller")
+  // learning runs: the correction [mm] added to the reference at every sample (empty otherwise)
+  std::vector<double> correction_mm;
   std::vector<double> t, reference_mm, measured_mm, actual_mm, pressure_command_mpa, pressure_mpa, duty;
   TrackingErrors errors;  // reference vs measured contraction (the last period of a learning run)
   std::vector<TrackingErrors> periods;  // learning runs: the errors of each period, in order

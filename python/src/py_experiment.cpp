@@ -119,6 +119,7 @@ void bind_experiment(py::module_& m) {
           x.attr("update")(from_json(io::to_json(run.errors)));  // max_error_mm, mae_mm, rms_error_mm
           x["saturated"] = run.saturated;
           x["scored_from_s"] = run.scored_from_s;
+          x["controller"] = from_json(io::to_json(run.controller));  // the loop's numbers (docs/deploy.md)
           py::list per;
           for (const auto& e : run.periods) per.append(from_json(io::to_json(e)));
           x["periods"] = per;
@@ -129,6 +130,7 @@ void bind_experiment(py::module_& m) {
           x["pressure_command_mpa"] = to_numpy(run.pressure_command_mpa);
           x["pressure_mpa"] = to_numpy(run.pressure_mpa);
           x["duty"] = to_numpy(run.duty);
+          x["correction_mm"] = to_numpy(run.correction_mm);  // learning runs; empty otherwise
           runs.append(x);
         }
         d["runs"] = runs;

@@ -1,4 +1,5 @@
 """Tests of the identification, rig, controller, experiment and report bindings."""
+import json
 import math
 import os
 import re
@@ -195,6 +196,29 @@ def test_experiment_summary_keys():
         assert open(os.path.join(d, "r.html")).read().count("<svg") == 7  # + the learning periods
         hysteron.write_report(os.path.join(d, "out"), os.path.join(d, "r2.html"))
         assert os.path.getsize(os.path.join(d, "r2.html")) > 10000
+        # the learning run's "controller" rebuilds its update outside the experiment
+        # (docs/deploy.md): fed the run's errors, it applies the run's corrections
+        lr = r["runs"][2]
+        ctl = lr["controller"]
+        assert ctl["pid"]["kp_mpa_per_m"] > 0 and ctl["feedforward_lead_samples"] > 0
+        assert "pid" in r["runs"][0]["controller"] and "learning" not in r["runs"][1]["controller"]
+        p = ctl["learning"]
+        ilc = hysteron.IterativeLearning(period=p["period_samples"], gain=p["gain"], lead=p["lead_samples"],
+                                         half_width=p["half_width"], lookahead=p["lookahead"],
+                                         rise_tolerance=p["rise_tolerance"], hold_after_cuts=p["hold_after_cuts"],
+                                         max_gain=p["max_gain"])
+        c = np.empty(lr["t"].shape)
+        for k in range(len(c)):
+            c[k] = ilc.correction(0) * 1e3
+            cmd = lr["pressure_command_mpa"][k]
+            ilc.step(0.0 if cmd <= 0.0 or cmd >= 0.6 else (lr["reference_mm"][k] - lr["measured_mm"][k]) * 1e-3)
+        assert np.max(np.abs(lr["correction_mm"])) > 0.05
+        assert np.max(np.abs(c - lr["correction_mm"])) < 1e-9
+        assert ilc.gain == p["final_gain"] and ilc.gain_cuts == p["gain_cuts"]
+        csv = np.genfromtxt(os.path.join(d, "out", "tracking_learning_sine.csv"), delimiter=",", names=True)
+        assert np.array_equal(csv["correction_mm"], lr["correction_mm"])
+        with open(os.path.join(d, "out", "result.json")) as f:
+            assert json.load(f)["learning"]["controller"] == ctl
 
 
 def test_experiment_registry():

@@ -47,6 +47,17 @@ std::string shaper_timing(const ZvShaper& z, double tc) {
   return fmt::format("({:.3f} now, {:.3f} after {:.0f} ms)", z.a1, z.a2, static_cast<double>(z.delay) * tc * 1e3);
 }
 
+// The numbers of a loop (result.json "controller"): its PID if it has one, the feedforward's
+// preview and the shaper on it (nullptr or inactive: none).
+LoopDesign loop_design(const PidParams& pid, std::size_t lead, double tc, const ZvShaper* zv) {
+  LoopDesign d;
+  if (pid.kp != 0.0 || pid.ki != 0.0 || pid.kd != 0.0) d.pid = pid;
+  d.feedforward_lead = lead;
+  d.feedforward_lead_s = static_cast<double>(lead) * tc;
+  if (zv && zv->active()) d.shaper = LoopDesign::Shaper{zv->a1, zv->a2, zv->delay, zv->advance};
+  return d;
+}
+
 // The learning variant on top of `base`: `periods` repetitions of the reference's
 // first period, the ILC designed on the identified closed loop.
 TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const Reference& ref, const Loop& base,
@@ -69,8 +80,13 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   std::shared_ptr<const std::vector<double>> preview;
   if (ctx.shaper.active() && learning_shaper.load())
     preview = std::make_shared<const std::vector<double>>(shaped(r, ctx.shaper));
-  Law law = [ilc, inner = base.law, lead](const Sample& s) {
+  // the correction applied at every sample, for the run's correction_mm (reserved: no
+  // reallocation while the rig runs)
+  auto applied = std::make_shared<std::vector<double>>();
+  applied->reserve(r.size());
+  Law law = [ilc, inner = base.law, lead, applied](const Sample& s) {
     Sample m = s;
+    applied->push_back(ilc->correction(0) * 1e3);
     m.reference_m += ilc->correction(0);
     m.preview_m += ilc->correction(lead);
     const RigInputs in = inner(m);
@@ -104,6 +120,9 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
                                    "least before them",
                                    ilc->gain_cuts(), ilc->gain());
   if (ilc->held()) run.description += fmt::format("; best correction held after {} halvings", lp.hold_after_cuts);
+  run.controller = loop_design(base.position, lead, ctx.tc, preview ? &ctx.shaper : nullptr);
+  run.controller.learning = LoopDesign::Learning{lp, rho, ilc->gain(), ilc->gain_raises(), ilc->gain_cuts(), ilc->held()};
+  if (applied->size() == run.t.size()) run.correction_mm = std::move(*applied);
   if (ilc->faults() > 0)
     messages.push_back(fmt::format("learning ({}): {} non-finite errors ignored", ref.name, ilc->faults()));
   return run;
@@ -769,6 +788,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.variant = v.name;
       run.reference = ref.name;
       run.description = loop.description;
+      run.controller = loop_design(loop.position, v.preview ? lead : 0, tc, v.preview ? &zv : nullptr);
       run.errors = errors_of(run, ref.score_from, run.t.size());
       run.scored_from_s = ref.score_from < run.t.size() ? run.t[ref.score_from] : 0.0;
       if (std::string note = saturation_note(run, ref.score_from, run.t.size()); !note.empty())
@@ -810,12 +830,17 @@ void ExperimentResult::write(const std::string& dir) const {
   io::write_columns((d / "identification.csv").string(),
                     {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
                     {id_t, id_pressure_command_mpa, id_pressure_mpa, id_contraction_mm});
-  for (const auto& r : runs)
-    io::write_columns((d / fmt::format("tracking_{}_{}.csv", r.variant, r.reference)).string(),
-                      {"t_s", "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa", "pressure_mpa",
-                       "pwm_duty"},
-                      {r.t, r.reference_mm, r.measured_mm, r.actual_mm, r.pressure_command_mpa, r.pressure_mpa,
-                       r.duty});
+  for (const auto& r : runs) {
+    std::vector<std::string> names = {"t_s",          "reference_mm",         "measured_mm", "actual_mm",
+                                      "pressure_command_mpa", "pressure_mpa", "pwm_duty"};
+    std::vector<std::vector<double>> columns = {r.t, r.reference_mm, r.measured_mm, r.actual_mm,
+                                                r.pressure_command_mpa, r.pressure_mpa, r.duty};
+    if (!r.correction_mm.empty()) {  // learning runs: the correction added to the reference
+      names.push_back("correction_mm");
+      columns.push_back(r.correction_mm);
+    }
+    io::write_columns((d / fmt::format("tracking_{}_{}.csv", r.variant, r.reference)).string(), names, columns);
+  }
   io::write_model_file((d / "model.json").string(), fit.model);
   io::write_model_file((d / "best_model.json").string(), best_fit.model,
                        model_reason.empty() ? nlohmann::json{}

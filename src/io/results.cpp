@@ -436,6 +436,121 @@ void from_json(const json& j, TrackingErrors& e, std::string_view where) {
 }
 
 namespace {
+constexpr std::pair<AntiWindup, std::string_view> kAntiWindup[] = {
+    {AntiWindup::none, "none"}, {AntiWindup::conditional, "conditional"}, {AntiWindup::back_calculation, "back_calculation"}};
+
+json pid_json(const PidParams& p) {
+  std::string_view aw = "conditional";
+  for (const auto& [k, name] : kAntiWindup)
+    if (k == p.anti_windup) aw = name;
+  return {{"kp_mpa_per_m", p.kp},
+          {"ki_mpa_per_m_s", p.ki},
+          {"kd_mpa_s_per_m", p.kd},
+          {"sample_time_s", p.sample_time},
+          {"derivative_filter_s", p.derivative_filter},
+          {"out_min_mpa", number(p.out_min)},
+          {"out_max_mpa", number(p.out_max)},
+          {"anti_windup", std::string(aw)},
+          {"tracking_time_s", p.tracking_time},
+          {"setpoint_weight_p", p.setpoint_weight_p},
+          {"setpoint_weight_d", p.setpoint_weight_d}};
+}
+
+PidParams pid_from(const json& j, std::string_view where) {
+  PidParams p;
+  p.kp = get_double(j, "kp_mpa_per_m", where);
+  p.ki = get_double(j, "ki_mpa_per_m_s", where);
+  p.kd = get_double(j, "kd_mpa_s_per_m", where);
+  p.sample_time = get_double(j, "sample_time_s", where);
+  p.derivative_filter = get_double(j, "derivative_filter_s", where);
+  p.out_min = get_double(j, "out_min_mpa", where, -std::numeric_limits<double>::infinity());
+  p.out_max = get_double(j, "out_max_mpa", where, std::numeric_limits<double>::infinity());
+  const std::string aw = get_string(j, "anti_windup", where);
+  bool known = false;
+  for (const auto& [k, name] : kAntiWindup)
+    if (aw == name) p.anti_windup = k, known = true;
+  if (!known)
+    throw Error(fmt::format("{}: key \"anti_windup\": expected none, conditional or back_calculation, got \"{}\"",
+                            where, aw));
+  p.tracking_time = get_double(j, "tracking_time_s", where);
+  p.setpoint_weight_p = get_double(j, "setpoint_weight_p", where);
+  p.setpoint_weight_d = get_double(j, "setpoint_weight_d", where);
+  return p;
+}
+}  // namespace
+
+json to_json(const LoopDesign& d) {
+  json j = json::object();
+  if (d.pid) j["pid"] = pid_json(*d.pid);
+  j["feedforward_lead_samples"] = d.feedforward_lead;
+  j["feedforward_lead_s"] = d.feedforward_lead_s;
+  if (d.shaper)
+    j["shaper"] = {{"a1", d.shaper->a1},
+                   {"a2", d.shaper->a2},
+                   {"delay_samples", d.shaper->delay},
+                   {"advance_samples", d.shaper->advance}};
+  if (d.learning) {
+    const auto& l = *d.learning;
+    const LearningParams& p = l.params;
+    j["learning"] = {{"period_samples", p.period},
+                     {"gain", p.gain},
+                     {"lead_samples", p.lead},
+                     {"half_width", p.half_width},
+                     {"lookahead", p.lookahead},
+                     {"max_correction_m", number(p.max_correction)},
+                     {"rise_tolerance", number(p.rise_tolerance)},
+                     {"hold_after_cuts", p.hold_after_cuts},
+                     {"max_gain", p.max_gain},
+                     {"contraction_bound", number(l.contraction_bound)},
+                     {"final_gain", l.final_gain},
+                     {"gain_raises", l.gain_raises},
+                     {"gain_cuts", l.gain_cuts},
+                     {"held", l.held}};
+  }
+  return j;
+}
+
+void from_json(const json& j, LoopDesign& d, std::string_view where) {
+  d = LoopDesign{};
+  if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
+  if (j.contains("pid")) d.pid = pid_from(j["pid"], key_where(where, "pid"));
+  d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
+  d.feedforward_lead_s = get_double(j, "feedforward_lead_s", where);
+  if (j.contains("shaper")) {
+    const std::string w = key_where(where, "shaper");
+    const json& s = j["shaper"];
+    LoopDesign::Shaper z;
+    z.a1 = get_double(s, "a1", w);
+    z.a2 = get_double(s, "a2", w);
+    z.delay = get_size(s, "delay_samples", w);
+    z.advance = get_size(s, "advance_samples", w);
+    d.shaper = z;
+  }
+  if (j.contains("learning")) {
+    const std::string w = key_where(where, "learning");
+    const json& x = j["learning"];
+    LoopDesign::Learning l;
+    LearningParams& p = l.params;
+    const double inf = std::numeric_limits<double>::infinity();
+    p.period = get_size(x, "period_samples", w);
+    p.gain = get_double(x, "gain", w);
+    p.lead = get_size(x, "lead_samples", w);
+    p.half_width = get_size(x, "half_width", w);
+    p.lookahead = get_size(x, "lookahead", w);
+    p.max_correction = get_double(x, "max_correction_m", w, inf);
+    p.rise_tolerance = get_double(x, "rise_tolerance", w, inf);
+    p.hold_after_cuts = get_size(x, "hold_after_cuts", w);
+    p.max_gain = get_double(x, "max_gain", w);
+    l.contraction_bound = get_double(x, "contraction_bound", w);
+    l.final_gain = get_double(x, "final_gain", w);
+    l.gain_raises = get_size(x, "gain_raises", w);
+    l.gain_cuts = get_size(x, "gain_cuts", w);
+    l.held = get_bool(x, "held", w);
+    d.learning = l;
+  }
+}
+
+namespace {
 json published_errors(const PublishedErrors& e) {
   json j = json::object();
   if (std::isfinite(e.max_error_mm)) j["max_error_mm"] = e.max_error_mm;
@@ -498,6 +613,7 @@ json to_json(const ExperimentResult& r) {
       e["description"] = run.description;
       e["saturated_samples"] = run.saturated;
       e["scored_from_s"] = run.scored_from_s;
+      e["controller"] = to_json(run.controller);
       if (!run.periods.empty()) {
         json per = json::array();
         for (const auto& p : run.periods) per.push_back(to_json(p));
@@ -735,6 +851,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       run.saturated = e.contains("saturated_samples") ? get_size(e, "saturated_samples", w) : 0;
       run.scored_from_s = opt_double(e, "scored_from_s", w, 0.0);
       from_json(e, run.errors, w);
+      if (e.contains("controller")) from_json(e["controller"], run.controller, key_where(w, "controller"));
       if (e.contains("periods")) {
         const json& per = e["periods"];
         const std::string pw = key_where(w, "periods");

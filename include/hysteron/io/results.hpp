@@ -124,6 +124,11 @@ void from_json(const nlohmann::json& j, EvaluationDocument& d, std::string_view 
 nlohmann::json to_json(const TrackingErrors& e);
 void from_json(const nlohmann::json& j, TrackingErrors& e, std::string_view where);
 
+// {"pid": {...} | absent, "feedforward_lead_samples", "feedforward_lead_s", "shaper": {...} |
+// absent, "learning": {...} | absent} (docs/deploy.md, "From an experiment to a deployment").
+nlohmann::json to_json(const LoopDesign& d);
+void from_json(const nlohmann::json& j, LoopDesign& d, std::string_view where);
+
 // null if the paper gives no figures; {"source", "max_error_mm", ...} for one reference;
 // {"source", "<reference>": {"max_error_mm", ...}, ...} for several.
 nlohmann::json to_json(const PublishedFigures& p);

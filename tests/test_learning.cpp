@@ -240,6 +240,87 @@ TEST(Learning, SupervisorHoldsTheBestCorrectionAfterEnoughCuts) {
   }
 }
 
+// A warm start (reset(correction)): period 0 applies the given correction (clipped to
+// max_correction), the update goes on from it, c_1 = Q(c_0 + L e_0), and a correction learnt
+// before starts the loop near where it ended; a wrong size or a non-finite value is an error
+// that leaves the state as it was.
+TEST(Learning, WarmStartContinuesFromTheGivenCorrection) {
+  const LearningParams p{.period = 120, .gain = 0.5, .lead = 3, .half_width = 3, .lookahead = 2,
+                         .rise_tolerance = 0.0, .hold_after_cuts = 3};
+  // learn cold for 12 periods on a lagged loop, keeping the correction the last period applied
+  std::vector<double> saved(p.period);
+  double cold_first = 0.0, cold_last = 0.0;
+  {
+    IterativeLearning ilc(p);
+    LagDelay plant(0.9, 3);
+    double y = 0.0;
+    for (int j = 0; j < 12; ++j) {
+      double s2 = 0.0;
+      for (std::size_t k = 0; k < p.period; ++k) {
+        const double r = reference(k, p.period), e = r - y;
+        s2 += e * e;
+        if (j == 11) saved[k] = ilc.correction();
+        const double u = r + ilc.correction();
+        ilc.step(e);
+        y = plant.step(u);
+      }
+      (j == 0 ? cold_first : cold_last) = std::sqrt(s2 / static_cast<double>(p.period));
+    }
+  }
+  ASSERT_LT(cold_last, 0.2 * cold_first);
+  IterativeLearning warm(p);
+  warm.reset(saved);
+  LagDelay plant(0.9, 3);
+  double y = 0.0, s2 = 0.0;
+  std::vector<double> e0(p.period);
+  for (std::size_t k = 0; k < p.period; ++k) {
+    const double r = reference(k, p.period);
+    e0[k] = r - y;
+    s2 += e0[k] * e0[k];
+    ASSERT_EQ(warm.correction(), saved[k]) << "phase " << k;
+    const double u = r + warm.correction();
+    warm.step(e0[k]);
+    y = plant.step(u);
+  }
+  EXPECT_LT(std::sqrt(s2 / static_cast<double>(p.period)), 0.3 * cold_first);
+  // c_1(k) = sum_m q_m [c_0(k+m) + L e(k+m+d)], q_m = binom(6, m+3) / 64, c_0's index mod N, the
+  // error's in time: beyond the period it is period 1's (fed 0 below)
+  const double q[7] = {1 / 64.0, 6 / 64.0, 15 / 64.0, 20 / 64.0, 15 / 64.0, 6 / 64.0, 1 / 64.0};
+  const auto N = static_cast<std::ptrdiff_t>(p.period);
+  for (std::ptrdiff_t k = 0; k < N; ++k) {
+    double c1 = 0.0;
+    for (std::ptrdiff_t m = -3; m <= 3; ++m) {
+      const std::ptrdiff_t t = k + m + 3;
+      c1 += q[m + 3] * (saved[static_cast<std::size_t>((k + m + N) % N)] +
+                        p.gain * (t < N ? e0[static_cast<std::size_t>(t)] : 0.0));
+    }
+    ASSERT_NEAR(warm.correction(), c1, 1e-12) << "phase " << k;
+    warm.step(0.0);
+  }
+  // clipped to max_correction
+  LearningParams clipped = p;
+  clipped.max_correction = 0.5;
+  IterativeLearning small(clipped);
+  std::vector<double> big(p.period, 2.0);
+  big[5] = -3.0;
+  small.reset(big);
+  EXPECT_EQ(small.correction(), 0.5);
+  for (int k = 0; k < 5; ++k) small.step(0.0);
+  EXPECT_EQ(small.correction(), -0.5);
+  // errors leave the state as it was
+  const std::size_t phase = small.phase();
+  EXPECT_THROW(small.reset(std::vector<double>(p.period - 1, 0.0)), Error);
+  big[7] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    small.reset(big);
+    ADD_FAILURE() << "a NaN correction was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("phase 7"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(small.phase(), phase);
+  EXPECT_EQ(small.correction(), -0.5);
+}
+
 // A copy carries on exactly as the original would, also after the original is gone (the
 // supervisor's bookkeeping holds no pointer into the object's own buffers).
 TEST(Learning, CopyCarriesOnAsTheOriginal) {

@@ -243,6 +243,13 @@ HYSTERON_C_API hysteron_status hysteron_ilc_create(const hysteron_ilc_params* pa
 HYSTERON_C_API hysteron_status hysteron_ilc_free(hysteron_ilc* ilc);
 /* Zero corrections, back to phase 0 of period 0, L back to params.gain. */
 HYSTERON_C_API hysteron_status hysteron_ilc_reset(hysteron_ilc* ilc);
+/* As hysteron_ilc_reset, but period 0 applies `correction` (n = params.period values, clipped to
+ * +-params.max_correction) instead of zeros, and learning goes on from it: a warm start from a
+ * correction learnt before (recorded with hysteron_ilc_correction(ilc, 0, ...) over a period of an
+ * earlier session, or the correction_mm column of `hysteron experiment`'s learning run, converted
+ * to the loop's units). n != period or a non-finite value is HYSTERON_ERROR_INVALID_ARGUMENT and
+ * changes nothing. Does not allocate. */
+HYSTERON_C_API hysteron_status hysteron_ilc_reset_to(hysteron_ilc* ilc, const double* correction, size_t n);
 /* The correction to add to the reference `ahead` samples after the current one (0: the
  * current sample; the feedforward's preview takes its lead). ahead > params.lookahead is
  * HYSTERON_ERROR_INVALID_ARGUMENT. Call before hysteron_ilc_step for the current sample.

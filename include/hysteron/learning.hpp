@@ -78,6 +78,12 @@ class IterativeLearning {
   void step(double error) noexcept;
   // Zero corrections, back to phase 0 of period 0.
   void reset() noexcept;
+  // As reset(), but period 0 applies c_0 = `correction` (N values, clipped to +-max_correction)
+  // instead of zeros, and learning goes on from it: a correction learnt before (an earlier
+  // session on the rig; an experiment's correction_mm over its last period, in the loop's units)
+  // warm-starts the loop. Throws hysteron::Error, the state unchanged, if it does not have N
+  // values or one is not finite. Does not allocate.
+  void reset(std::span<const double> correction);
 
   std::size_t phase() const noexcept { return k_; }
   std::size_t iteration() const noexcept { return j_; }  // completed periods

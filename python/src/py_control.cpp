@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include <limits>
+#include <optional>
+#include <span>
+#include <vector>
 
 #include "hysteron/compensation.hpp"
 #include "hysteron/control.hpp"
@@ -177,7 +180,16 @@ hysteron.Error naming the field.)doc")
           "The correction to add to the reference `ahead` samples after the current one (ahead <= lookahead).")
       .def("step", &IterativeLearning::step, py::arg("error"),
            "Records the tracking error r - y of the current sample and advances one sample.")
-      .def("reset", &IterativeLearning::reset, "Zero corrections, back to phase 0 of period 0.")
+      .def(
+          "reset",
+          [](IterativeLearning& l, std::optional<std::vector<double>> correction) {
+            if (correction) l.reset(std::span<const double>(*correction)); else l.reset();
+          },
+          py::arg("correction") = py::none(),
+          "Zero corrections, back to phase 0 of period 0. With correction (period values, the loop's units): "
+          "period 0 applies it instead of zeros and learning goes on from it (a warm start from a correction "
+          "learnt before, e.g. an experiment's correction_mm over its last period, in metres); hysteron.Error, "
+          "the state unchanged, if it does not have period values or one is not finite.")
       .def_property_readonly("phase", &IterativeLearning::phase, "The sample's index in the period.")
       .def_property_readonly("iteration", &IterativeLearning::iteration, "Completed periods.")
       .def_property_readonly("gain", &IterativeLearning::gain, "The learning gain L in use.")

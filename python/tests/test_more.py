@@ -137,11 +137,13 @@ def test_iterative_learning_on_a_lagged_loop():
     r = np.sin(2 * np.pi * np.arange(n) / n)
     y = u = 0.0
     rms = []
-    for _ in range(15):
+    saved = np.empty(n)
+    for j in range(15):
         e2 = 0.0
         for k in range(n):
             y = a * y + (1 - a) * u
-            u = r[k] + ilc.correction(0)
+            saved[k] = ilc.correction(0)  # the last period's is kept for the warm start below
+            u = r[k] + saved[k]
             e = r[k] - y
             e2 += e * e
             ilc.step(e)
@@ -156,6 +158,18 @@ def test_iterative_learning_on_a_lagged_loop():
     assert ilc.faults == 1 and ilc.phase == 1
     ilc.reset()
     assert ilc.phase == 0 and ilc.iteration == 0 and ilc.correction(0) == 0.0
+    # warm start from the 15th period's correction: the plant at rest, the first period applies it
+    with pytest.raises(hysteron.Error, match="has 199 values"):
+        ilc.reset(saved[:-1])
+    ilc.reset(saved)
+    y = u = e2 = 0.0
+    for k in range(n):
+        y = a * y + (1 - a) * u
+        assert ilc.correction(0) == saved[k]
+        u = r[k] + ilc.correction(0)
+        e2 += (r[k] - y) ** 2
+        ilc.step(r[k] - y)
+    assert math.sqrt(e2 / n) < 0.2 * rms[0]
     with pytest.raises(hysteron.Error, match="period"):
         hysteron.IterativeLearning(period=1)
     with pytest.raises(hysteron.Error, match="must be < period = 200"):

@@ -19,6 +19,7 @@
 #include <limits>
 #include <new>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -598,6 +599,14 @@ hysteron_status hysteron_ilc_reset(hysteron_ilc* ilc) {
   return guard("hysteron_ilc_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(ilc);
     ilc->ilc.reset();
+  });
+}
+
+hysteron_status hysteron_ilc_reset_to(hysteron_ilc* ilc, const double* correction, size_t n) {
+  return guard("hysteron_ilc_reset_to", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(ilc);
+    HYSTERON_REQUIRE(correction);
+    ilc->ilc.reset(std::span<const double>(correction, n));  // its Error: INVALID_ARGUMENT (guard)
   });
 }
 

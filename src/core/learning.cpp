@@ -90,6 +90,18 @@ void IterativeLearning::reset() noexcept {
   best_valid_ = skip_tail_ = held_ = false;
 }
 
+void IterativeLearning::reset(std::span<const double> correction) {
+  if (correction.size() != p_.period)
+    throw Error(detail::format("learning: the initial correction has {} values, the period {} samples",
+                               correction.size(), p_.period));
+  for (std::size_t i = 0; i < correction.size(); ++i)
+    if (!std::isfinite(correction[i]))
+      throw Error(detail::format("learning: the initial correction's value {} (phase {}) is not finite", correction[i], i));
+  reset();
+  for (std::size_t i = 0; i < correction.size(); ++i)
+    c_cur_[i] = std::clamp(correction[i], -p_.max_correction, p_.max_correction);
+}
+
 double IterativeLearning::correction(std::size_t ahead) const noexcept {
   ahead = std::min(ahead, p_.lookahead);
   const std::size_t p = k_ + ahead;

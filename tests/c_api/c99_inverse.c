@@ -209,7 +209,8 @@ static void check_errors(const hysteron_params* params, hysteron_model* model, h
 static void check_ilc(void) {
   hysteron_ilc_params ip;
   hysteron_ilc* ilc = NULL;
-  double rms[15], y = 0.0, u = 0.0, c = 0.0, g = 0.0;
+  static double saved[N_ILC];
+  double rms[15], y = 0.0, u = 0.0, c = 0.0, g = 0.0, warm = 0.0;
   size_t j, k, phase = 0, iteration = 0, faults = 0;
   int held = 1;
   const double a = 0.8, pi = 3.14159265358979323846;
@@ -237,6 +238,7 @@ static void check_ilc(void) {
       double e;
       y = a * y + (1.0 - a) * u; /* the plant answers the previous command */
       OK(hysteron_ilc_correction(ilc, 0, &c));
+      if (j == 14) saved[k] = c; /* the last period's correction, for the warm start below */
       u = r + c;
       e = r - y;
       s2 += e * e;
@@ -263,6 +265,36 @@ static void check_ilc(void) {
   OK(hysteron_ilc_state(ilc, &phase, &iteration, NULL, NULL, NULL, NULL, NULL));
   OK(hysteron_ilc_correction(ilc, 0, &c));
   CHECK(phase == 0 && iteration == 0 && c == 0.0, "reset: phase %zu, iteration %zu, correction %g", phase, iteration, c);
+  /* warm start: the plant at rest again, the first period applies the saved correction */
+  expect_error("ilc reset_to short", hysteron_ilc_reset_to(ilc, saved, N_ILC - 1), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "has 199 values");
+  expect_error("ilc reset_to NULL", hysteron_ilc_reset_to(ilc, NULL, N_ILC), HYSTERON_ERROR_NULL_POINTER, "correction");
+  c = saved[7];
+  saved[7] = NAN;
+  expect_error("ilc reset_to NaN", hysteron_ilc_reset_to(ilc, saved, N_ILC), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "phase 7) is not finite");
+  saved[7] = c;
+  OK(hysteron_ilc_reset_to(ilc, saved, N_ILC));
+  y = u = 0.0;
+  {
+    double s2 = 0.0;
+    int same = 1;
+    for (k = 0; k < N_ILC; ++k) {
+      const double r = sin(2.0 * pi * (double)k / N_ILC);
+      double e;
+      y = a * y + (1.0 - a) * u;
+      OK(hysteron_ilc_correction(ilc, 0, &c));
+      same = same && c == saved[k];
+      u = r + c;
+      e = r - y;
+      s2 += e * e;
+      OK(hysteron_ilc_step(ilc, e));
+    }
+    warm = sqrt(s2 / N_ILC);
+    CHECK(same, "warm start: the first period applies the saved correction");
+  }
+  CHECK(warm < 0.2 * rms[0], "warm start: the first period's RMS %g is not below 20 %% of a cold start's, %g", warm, rms[0]);
+  printf("ok   ilc: warm start from the 15th period's correction, first period RMS %g (cold %g)\n", warm, rms[0]);
   OK(hysteron_ilc_free(ilc));
   OK(hysteron_ilc_free(NULL));
 }

@@ -999,6 +999,23 @@ TEST(ExperimentTuning, LearningFeedforwardGoesThroughTheTrialsShaper) {
     }
   }
   EXPECT_GE(shaped, 1);
+  // every loop of the cascade says its valves' pressure loop (result.json "controller"): the
+  // paper's P loop (20 duty/MPa) in the faithful and baseline loops, the relay's PI in the others
+  for (const TrackingRun& r : with.runs) {
+    ASSERT_TRUE(r.controller.pressure_pid) << r.variant;
+    EXPECT_EQ(r.controller.pressure_gain, 0.0);
+    const PidParams& q = *r.controller.pressure_pid;
+    if (r.variant == "faithful" || r.variant == "baseline") {
+      EXPECT_EQ(q.kp, 20.0) << r.variant;
+      EXPECT_EQ(q.ki, 0.0) << r.variant;
+    } else {
+      EXPECT_NE(r.description.find(fmt::format("PI pressure loop by a relay test (Kp = {:.3g}/MPa, Ki = {:.3g}/(MPa s))",
+                                               q.kp, q.ki)),
+                std::string::npos)
+          << r.variant << ": " << r.description;
+      EXPECT_GT(q.ki, 0.0) << r.variant;
+    }
+  }
 }
 
 // A run's "controller" (result.json; docs/deploy.md) holds every number its loop needs: the
@@ -1146,4 +1163,10 @@ TEST(ExperimentTuning, LearningBandEndsAtTheRelaysUltimateFrequency) {
     EXPECT_LT(run.periods.back().rms_error_mm, 0.5 * run.periods.front().rms_error_mm) << run.reference;
   }
   EXPECT_EQ(learning_runs, 2);
+  // every loop says the paper's proportional pressure loop (k_p = 0.5) and has no valves' PI
+  for (const auto& run : r.runs) {
+    EXPECT_EQ(run.controller.pressure_gain, 0.5) << run.variant;
+    EXPECT_FALSE(run.controller.pressure_pid) << run.variant;
+    EXPECT_EQ(run.controller.pid.has_value(), run.variant != "faithful" && run.variant != "baseline") << run.variant;
+  }
 }

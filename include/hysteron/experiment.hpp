@@ -146,6 +146,10 @@ struct TrackingErrors {
 struct LoopDesign {
   // The position loop's PID (absent: no position loop, e.g. the faithful open loop).
   std::optional<PidParams> pid;
+  // The pressure loop inside it, where the loop has one: the valves' PI (error in MPa -> PWM
+  // duty, mpi-pwm) or the proportional loop p_cmd = p_d + k_p (p_d - p) (mpi-openloop; 0: none).
+  std::optional<PidParams> pressure_pid;
+  double pressure_gain = 0.0;
   // The feedforward's preview of the reference [samples at the control period, and s]
   // (0: the inverse is fed the current reference).
   std::size_t feedforward_lead = 0;

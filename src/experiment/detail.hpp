@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,8 @@ struct Loop {
   std::string description;
   PidParams position;  // the position loop's PID (the learning variant's design uses it)
   std::function<std::string()> note = {};  // after the run: a note for the result's messages ("" for none)
+  std::optional<PidParams> pressure = {};  // the valves' inner pressure loop (duty per MPa), if any
+  double pressure_gain = 0.0;              // k_p of a proportional pressure loop (0: none)
 };
 
 struct Variant {

@@ -49,9 +49,12 @@ std::string shaper_timing(const ZvShaper& z, double tc) {
 
 // The numbers of a loop (result.json "controller"): its PID if it has one, the feedforward's
 // preview and the shaper on it (nullptr or inactive: none).
-LoopDesign loop_design(const PidParams& pid, std::size_t lead, double tc, const ZvShaper* zv) {
+LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvShaper* zv) {
   LoopDesign d;
+  const PidParams& pid = loop.position;
   if (pid.kp != 0.0 || pid.ki != 0.0 || pid.kd != 0.0) d.pid = pid;
+  d.pressure_pid = loop.pressure;
+  d.pressure_gain = loop.pressure_gain;
   d.feedforward_lead = lead;
   d.feedforward_lead_s = static_cast<double>(lead) * tc;
   if (zv && zv->active()) d.shaper = LoopDesign::Shaper{zv->a1, zv->a2, zv->delay, zv->advance};
@@ -120,7 +123,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
                                    "least before them",
                                    ilc->gain_cuts(), ilc->gain());
   if (ilc->held()) run.description += fmt::format("; best correction held after {} halvings", lp.hold_after_cuts);
-  run.controller = loop_design(base.position, lead, ctx.tc, preview ? &ctx.shaper : nullptr);
+  run.controller = loop_design(base, lead, ctx.tc, preview ? &ctx.shaper : nullptr);
   run.controller.learning = LoopDesign::Learning{lp, rho, ilc->gain(), ilc->gain_raises(), ilc->gain_cuts(), ilc->held()};
   if (applied->size() == run.t.size()) run.correction_mm = std::move(*applied);
   if (ilc->faults() > 0)
@@ -788,7 +791,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.variant = v.name;
       run.reference = ref.name;
       run.description = loop.description;
-      run.controller = loop_design(loop.position, v.preview ? lead : 0, tc, v.preview ? &zv : nullptr);
+      run.controller = loop_design(loop, v.preview ? lead : 0, tc, v.preview ? &zv : nullptr);
       run.errors = errors_of(run, ref.score_from, run.t.size());
       run.scored_from_s = ref.score_from < run.t.size() ? run.t[ref.score_from] : 0.0;
       if (std::string note = saturation_note(run, ref.score_from, run.t.size()); !note.empty())

@@ -50,12 +50,14 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
     return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp));
   };
   const std::string name = c.reference->name;
-  return Loop{std::move(law),
-              fmt::format("best inverse model fed {:.0f} ms ahead, {}; pressure loop (k_p = {:g}) + PID position "
+  Loop loop{std::move(law),
+            fmt::format("best inverse model fed {:.0f} ms ahead, {}; pressure loop (k_p = {:g}) + PID position "
                           "correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a), p.pressure_gain, pid_origin(c),
                           p.position.kp, p.position.ki, p.position.kd),
-              p.position, [a, name] { return adaptive_note(*a, name); }};
+            p.position, [a, name] { return adaptive_note(*a, name); }};
+  loop.pressure_gain = kp;
+  return loop;
 }
 
 }  // namespace
@@ -84,8 +86,10 @@ const Spec& mpi_openloop_spec() {
     s.variants = {
         {"faithful", false,
          [](const Context& c) {
-           return Loop{open_loop_law(c.result.fit.model, published(c.tc)),
-                       "inverse asymmetric MPI, open loop, proportional pressure loop (k_p = 0.5)", {}};
+           Loop loop{open_loop_law(c.result.fit.model, published(c.tc)),
+                     "inverse asymmetric MPI, open loop, proportional pressure loop (k_p = 0.5)", {}};
+           loop.pressure_gain = kPressureGain;
+           return loop;
          }},
         {"compensated", true,
          [](const Context& c) {
@@ -93,19 +97,23 @@ const Spec& mpi_openloop_spec() {
            // and the PID from the relay test (and gain trial) on it
            OpenLoopParams p = published(c.tc);
            p.position = position_pid(c);
-           return Loop{open_loop_law(c.result.best_fit.model, p),
-                       fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop (k_p = {:g}) + PID "
+           Loop loop{open_loop_law(c.result.best_fit.model, p),
+                     fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop (k_p = {:g}) + PID "
                                    "position correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = "
                                    "{:.3g} MPa s/m)",
                                    c.result.lead_s * 1e3, p.pressure_gain, pid_origin(c), p.position.kp,
                                    p.position.ki, p.position.kd),
-                       p.position};
+                     p.position};
+           loop.pressure_gain = p.pressure_gain;
+           return loop;
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_open_loop(c, false); }},
         {"baseline", false,
          [](const Context& c) {
-           return Loop{open_loop_law(c.result.baseline_model, published(c.tc)),
-                       "straight-line open-loop inverse (no hysteresis), proportional pressure loop", {}};
+           Loop loop{open_loop_law(c.result.baseline_model, published(c.tc)),
+                     "straight-line open-loop inverse (no hysteresis), proportional pressure loop", {}};
+           loop.pressure_gain = kPressureGain;
+           return loop;
          }},
     };
     return s;

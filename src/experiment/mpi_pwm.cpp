@@ -56,13 +56,15 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
     return valves(std::clamp(pwm->step(u), -1.0, 1.0), p_d);
   };
   const std::string name = c.reference->name;
-  return Loop{std::move(law),
-              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by {} (Kp = {:.3g} "
-                          "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
-                          "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
-                          c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), p.position.kp, p.position.ki,
-                          p.position.kd, p.pressure.kp, p.pressure.ki),
-              p.position, [a, name] { return adaptive_note(*a, name); }};
+  Loop loop{std::move(law),
+            fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by {} (Kp = {:.3g} "
+                        "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
+                        "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
+                        c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), p.position.kp, p.position.ki,
+                        p.position.kd, p.pressure.kp, p.pressure.ki),
+            p.position, [a, name] { return adaptive_note(*a, name); }};
+  loop.pressure = p.pressure;
+  return loop;
 }
 
 }  // namespace
@@ -93,29 +95,34 @@ const Spec& mpi_pwm_spec() {
         {"faithful", false,
          [](const Context& c) {
            const CascadeParams p = published(c.tc);
-           return Loop{cascade_law(c.result.fit.model, p),
-                       "inverse dead-zone MPI + PID position loop, P pressure loop on PWM switching valves",
-                       p.position};
+           Loop loop{cascade_law(c.result.fit.model, p),
+                     "inverse dead-zone MPI + PID position loop, P pressure loop on PWM switching valves", p.position};
+           loop.pressure = p.pressure;
+           return loop;
          }},
         {"compensated", true,
          [](const Context& c) {
            CascadeParams p = published(c.tc);
            p.position = position_pid(c);
            p.pressure = c.pressure_loop;
-           return Loop{cascade_law(c.result.best_fit.model, p),
-                       fmt::format("best inverse model fed {:.0f} ms ahead; PID position loop by {} (Kp = {:.3g} "
-                                   "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = {:.3g}/MPa, "
-                                   "Ki = {:.3g}/(MPa s))",
-                                   c.result.lead_s * 1e3, pid_origin(c), p.position.kp, p.position.ki, p.position.kd, p.pressure.kp,
-                                   p.pressure.ki),
-                       p.position};
+           Loop loop{cascade_law(c.result.best_fit.model, p),
+                     fmt::format("best inverse model fed {:.0f} ms ahead; PID position loop by {} (Kp = {:.3g} "
+                                 "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay "
+                                 "test (Kp = {:.3g}/MPa, Ki = {:.3g}/(MPa s))",
+                                 c.result.lead_s * 1e3, pid_origin(c), p.position.kp, p.position.ki, p.position.kd,
+                                 p.pressure.kp, p.pressure.ki),
+                     p.position};
+           loop.pressure = p.pressure;
+           return loop;
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_cascade(c, false); }},
         {"baseline", false,
          [](const Context& c) {
            const CascadeParams p = published(c.tc);
-           return Loop{cascade_law(c.result.baseline_model, p),
-                       "straight-line feedforward (no hysteresis) in the same cascade", p.position};
+           Loop loop{cascade_law(c.result.baseline_model, p),
+                     "straight-line feedforward (no hysteresis) in the same cascade", p.position};
+           loop.pressure = p.pressure;
+           return loop;
          }},
     };
     return s;

@@ -482,6 +482,8 @@ PidParams pid_from(const json& j, std::string_view where) {
 json to_json(const LoopDesign& d) {
   json j = json::object();
   if (d.pid) j["pid"] = pid_json(*d.pid);
+  if (d.pressure_pid) j["pressure_pid"] = pid_json(*d.pressure_pid);
+  if (d.pressure_gain != 0.0) j["pressure_gain"] = d.pressure_gain;
   j["feedforward_lead_samples"] = d.feedforward_lead;
   j["feedforward_lead_s"] = d.feedforward_lead_s;
   if (d.shaper)
@@ -514,6 +516,8 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   d = LoopDesign{};
   if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
   if (j.contains("pid")) d.pid = pid_from(j["pid"], key_where(where, "pid"));
+  if (j.contains("pressure_pid")) d.pressure_pid = pid_from(j["pressure_pid"], key_where(where, "pressure_pid"));
+  d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
   d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
   d.feedforward_lead_s = get_double(j, "feedforward_lead_s", where);
   if (j.contains("shaper")) {

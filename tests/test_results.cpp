@@ -6,8 +6,10 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
 
@@ -427,6 +429,109 @@ TEST(Results, ExperimentResultRoundTrip) {
   EXPECT_TRUE(round_trip(none).published.empty());
   // the member function is the same writer
   EXPECT_EQ(r.to_json(), io::to_json(r));
+}
+
+// A run's "controller": every field back as written (unbounded limits and an unsupervised
+// learning's infinities as null), absent parts absent, and a bad value named with its path.
+TEST(Results, LoopDesignRoundTripAndErrors) {
+  const double inf = std::numeric_limits<double>::infinity();
+  LoopDesign d;
+  PidParams pid;
+  pid.kp = 9.81;
+  pid.ki = 82.0;
+  pid.kd = 0.293;
+  pid.sample_time = 2e-3;
+  pid.derivative_filter = 0.008;
+  pid.out_min = -inf;
+  pid.out_max = 0.6;
+  pid.anti_windup = AntiWindup::back_calculation;
+  pid.tracking_time = 0.05;
+  pid.setpoint_weight_p = 0.7;
+  pid.setpoint_weight_d = 0.1;
+  d.pid = pid;
+  PidParams pressure;
+  pressure.kp = 47.6;
+  pressure.ki = 1040.0;
+  pressure.anti_windup = AntiWindup::none;
+  d.pressure_pid = pressure;
+  d.pressure_gain = 0.5;
+  d.feedforward_lead = 76;
+  d.feedforward_lead_s = 0.152;
+  d.shaper = LoopDesign::Shaper{0.955, 0.045, 172, 8};
+  LoopDesign::Learning l;
+  l.params = LearningParams{.period = 5000, .gain = 0.3, .lead = 38, .half_width = 2011, .lookahead = 76};
+  l.params.hold_after_cuts = 3;
+  l.params.max_gain = 0.5;
+  l.contraction_bound = 0.696;
+  l.final_gain = 0.075;
+  l.gain_raises = 1;
+  l.gain_cuts = 2;
+  l.held = true;
+  d.learning = l;
+  const nlohmann::json j = io::to_json(d);
+  EXPECT_TRUE(j["pid"]["out_min_mpa"].is_null());
+  EXPECT_TRUE(j["learning"]["rise_tolerance"].is_null());
+  EXPECT_EQ(j["pid"]["anti_windup"], "back_calculation");
+  const LoopDesign b = io::from_json<LoopDesign>(j, "controller");
+  ASSERT_TRUE(b.pid && b.pressure_pid && b.shaper && b.learning);
+  const auto pid_fields = [](const PidParams& p) {
+    return std::vector<double>{p.kp, p.ki, p.kd, p.sample_time, p.derivative_filter, p.out_min, p.out_max,
+                               static_cast<double>(p.anti_windup), p.tracking_time, p.setpoint_weight_p,
+                               p.setpoint_weight_d};
+  };
+  EXPECT_EQ(pid_fields(*b.pid), pid_fields(pid));
+  EXPECT_EQ(pid_fields(*b.pressure_pid), pid_fields(pressure));
+  EXPECT_EQ(b.pressure_gain, 0.5);
+  EXPECT_EQ(b.feedforward_lead, 76u);
+  EXPECT_EQ(b.feedforward_lead_s, 0.152);
+  EXPECT_EQ(b.shaper->a1, 0.955);
+  EXPECT_EQ(b.shaper->a2, 0.045);
+  EXPECT_EQ(b.shaper->delay, 172u);
+  EXPECT_EQ(b.shaper->advance, 8u);
+  const LearningParams& p = b.learning->params;
+  EXPECT_EQ(p.period, 5000u);
+  EXPECT_EQ(p.gain, 0.3);
+  EXPECT_EQ(p.lead, 38u);
+  EXPECT_EQ(p.half_width, 2011u);
+  EXPECT_EQ(p.lookahead, 76u);
+  EXPECT_EQ(p.max_correction, inf);
+  EXPECT_EQ(p.rise_tolerance, inf);
+  EXPECT_EQ(p.hold_after_cuts, 3u);
+  EXPECT_EQ(p.max_gain, 0.5);
+  EXPECT_EQ(b.learning->contraction_bound, 0.696);
+  EXPECT_EQ(b.learning->final_gain, 0.075);
+  EXPECT_EQ(b.learning->gain_raises, 1u);
+  EXPECT_EQ(b.learning->gain_cuts, 2u);
+  EXPECT_TRUE(b.learning->held);
+  EXPECT_EQ(io::to_json(b), j);
+  // a loop without a PID, pressure loop, shaper or learning: none of them
+  const nlohmann::json bare = io::to_json(LoopDesign{});
+  EXPECT_FALSE(bare.contains("pid") || bare.contains("pressure_pid") || bare.contains("pressure_gain") ||
+               bare.contains("shaper") || bare.contains("learning"));
+  const LoopDesign bare_back = io::from_json<LoopDesign>(bare, "controller");
+  EXPECT_FALSE(bare_back.pid || bare_back.pressure_pid || bare_back.shaper || bare_back.learning);
+  // errors name the path
+  nlohmann::json bad = j;
+  bad["pid"]["anti_windup"] = "sometimes";
+  try {
+    (void)io::from_json<LoopDesign>(bad, "result.json.learning.sine.controller");
+    FAIL() << "an unknown anti-windup accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("result.json.learning.sine.controller.pid: key \"anti_windup\""),
+              std::string::npos)
+        << e.what();
+  }
+  bad = j;
+  bad["learning"]["half_width"] = -3;
+  EXPECT_THROW((void)io::from_json<LoopDesign>(bad, "controller"), Error);
+  bad = j;
+  bad["shaper"].erase("delay_samples");
+  try {
+    (void)io::from_json<LoopDesign>(bad, "controller");
+    FAIL() << "a shaper without its delay accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "controller.shaper: missing key \"delay_samples\"");
+  }
 }
 
 TEST(Results, ErrorsNameWhereAndKey) {

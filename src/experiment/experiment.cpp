@@ -834,8 +834,8 @@ void ExperimentResult::write(const std::string& dir) const {
                     {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
                     {id_t, id_pressure_command_mpa, id_pressure_mpa, id_contraction_mm});
   for (const auto& r : runs) {
-    std::vector<std::string> names = {"t_s",          "reference_mm",         "measured_mm", "actual_mm",
-                                      "pressure_command_mpa", "pressure_mpa", "pwm_duty"};
+    std::vector<std::string> names = {"t_s",      "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa",
+                                      "pressure_mpa", "pwm_duty"};
     std::vector<std::vector<double>> columns = {r.t, r.reference_mm, r.measured_mm, r.actual_mm,
                                                 r.pressure_command_mpa, r.pressure_mpa, r.duty};
     if (!r.correction_mm.empty()) {  // learning runs: the correction added to the reference

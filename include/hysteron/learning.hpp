@@ -4,8 +4,12 @@
 // by modifying the loop's reference (docs/control.md):
 //
 //   r'_j(k)     = r(k) + c_j(k)                              modified reference
-//   c_{j+1}(k)  = sum_{m=-h..h} q_m [ c_j(k+m) + L e_j(k+m+d) ]   (indices mod N)
+//   c_{j+1}(k)  = sum_{m=-h..h} q_m [ c_j(k+m) + L e_j(k+m+d) ]   (c's index mod N)
 //   q_m         = binom(2h, m+h) / 2^(2h)                    |Q(w)| = cos^(2h)(w/2)
+//
+// The error's index runs in time: e_j(k) for k < 0 or k >= N is the error of the period
+// before or after, at k mod N (the class keeps e_{j-1}; the end of c_{j+1} is completed in
+// period j+1, the first d + h samples, when those errors are measured).
 //
 // j the period, N samples per period, e = r - y the tracking error, L the
 // learning gain, d the phase lead [samples]. With T(z) the closed loop from r'

@@ -29,7 +29,7 @@ int main() {
   if (!run || !run->controller.pid || !run->controller.learning) return 1;
   const hysteron::LoopDesign& ctl = run->controller;
   const hysteron::LearningParams& q = ctl.learning->params;
-  const double ts = ctl.pid->sample_time;
+  const double ts = ctl.sample_time;  // the control period
   const std::size_t n = q.period, lead = ctl.feedforward_lead;
 
   // the reference over one period and the correction the run's last period applied [m]

@@ -25,10 +25,10 @@ with tempfile.TemporaryDirectory() as d:
     loop_csv = np.genfromtxt(os.path.join(d, "tracking_learning_sine.csv"), delimiter=",", names=True)
     ctl = run["controller"]
     p, q = ctl["pid"], ctl["learning"]
-    ts = p["sample_time_s"]
+    ts = ctl["sample_time_s"]  # the control period
     inf = math.inf
-    pid = hysteron.Pid(kp=p["kp_mpa_per_m"], ki=p["ki_mpa_per_m_s"], kd=p["kd_mpa_s_per_m"], sample_time=ts,
-                       derivative_filter=p["derivative_filter_s"],
+    pid = hysteron.Pid(kp=p["kp_mpa_per_m"], ki=p["ki_mpa_per_m_s"], kd=p["kd_mpa_s_per_m"],
+                       sample_time=p["sample_time_s"], derivative_filter=p["derivative_filter_s"],
                        out_min=-inf if p["out_min_mpa"] is None else p["out_min_mpa"],
                        out_max=inf if p["out_max_mpa"] is None else p["out_max_mpa"],
                        anti_windup=p["anti_windup"], tracking_time=p["tracking_time_s"],
@@ -45,7 +45,8 @@ preview = r.copy()
 if "shaper" in ctl:
     z = ctl["shaper"]
     k = np.arange(n)
-    preview = z["a1"] * r[(k + z["advance_samples"]) % n] + z["a2"] * r[(k + z["advance_samples"] - z["delay_samples"]) % n]
+    a, delay = z["advance_samples"], z["delay_samples"]
+    preview = z["a1"] * r[(k + a) % n] + z["a2"] * r[(k + a - delay) % n]
 
 
 def track(warm):

@@ -17,8 +17,10 @@
 #include "hysteron/compensation.hpp"
 #include "hysteron/experiment.hpp"
 #include "hysteron/io/results.hpp"
+#include "temp_dir.hpp"
 #include "test_util.hpp"
 #include "hysteron/learning.hpp"
+#include "hysteron/report.hpp"
 #include "hysteron/signals.hpp"
 #include "hysteron/sweep.hpp"
 #include "../src/experiment/detail.hpp"
@@ -1022,7 +1024,8 @@ TEST(ExperimentTuning, LearningFeedforwardGoesThroughTheTrialsShaper) {
 // compensated loop rebuilt from it and the fitted model (FeedforwardPidController, the preview
 // through the shaper lead samples ahead) gives the run's pressure commands, and an
 // IterativeLearning built from the learning run's parameters, fed the run's errors, gives the
-// corrections the run applied and ends where its supervisor ended. Both survive result.json.
+// corrections the run applied and ends where its supervisor ended. Both survive the output
+// directory (result.json and the tracking CSVs, read back by read_experiment_dir).
 TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
   const ExperimentResult r = run_experiment(gpi_pid_options(PamRigParams{}, 3, true));
   const double tc = 1e-3;
@@ -1031,8 +1034,8 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
   ASSERT_TRUE(d.pid);
   ASSERT_TRUE(d.shaper);  // the gain trial shapes gpi-pid's nominal sine (docs/control.md, section 2)
   EXPECT_GT(d.feedforward_lead, 0u);
-  EXPECT_DOUBLE_EQ(d.feedforward_lead_s, static_cast<double>(d.feedforward_lead) * tc);
-  EXPECT_NEAR(d.feedforward_lead_s, r.lead_s, 1e-12);
+  EXPECT_EQ(d.sample_time, tc);
+  EXPECT_NEAR(static_cast<double>(d.feedforward_lead) * d.sample_time, r.lead_s, 1e-12);
   EXPECT_NE(comp.description.find(fmt::format("Kp = {:.3g} MPa/m", d.pid->kp)), std::string::npos) << comp.description;
   {
     const std::size_t n = comp.t.size();
@@ -1080,13 +1083,17 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
   EXPECT_EQ(ilc.gain_cuts(), l.gain_cuts);
   EXPECT_EQ(ilc.gain_raises(), l.gain_raises);
   EXPECT_EQ(ilc.held(), l.held);
-  // result.json's writer and reader
-  const ExperimentResult back = io::from_json<ExperimentResult>(io::to_json(r), "result.json");
+  // the output directory's writer and reader (result.json and the tracking CSVs)
+  test::TempDir dir;
+  r.write(dir.file("out"));
+  const ExperimentResult back = report::read_experiment_dir(dir.file("out"));
   ASSERT_EQ(back.runs.size(), r.runs.size());
   for (std::size_t i = 0; i < r.runs.size(); ++i)
     EXPECT_EQ(io::to_json(back.runs[i].controller), io::to_json(r.runs[i].controller)) << r.runs[i].variant;
   EXPECT_FALSE(find_run(back, "faithful").controller.shaper);
   EXPECT_TRUE(find_run(back, "learning").controller.learning);
+  EXPECT_EQ(find_run(back, "learning").correction_mm, lr.correction_mm);
+  EXPECT_TRUE(find_run(back, "compensated").correction_mm.empty());
 }
 
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {

@@ -456,7 +456,7 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   d.pressure_pid = pressure;
   d.pressure_gain = 0.5;
   d.feedforward_lead = 76;
-  d.feedforward_lead_s = 0.152;
+  d.sample_time = 2e-3;
   d.shaper = LoopDesign::Shaper{0.955, 0.045, 172, 8};
   LoopDesign::Learning l;
   l.params = LearningParams{.period = 5000, .gain = 0.3, .lead = 38, .half_width = 2011, .lookahead = 76};
@@ -483,7 +483,7 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   EXPECT_EQ(pid_fields(*b.pressure_pid), pid_fields(pressure));
   EXPECT_EQ(b.pressure_gain, 0.5);
   EXPECT_EQ(b.feedforward_lead, 76u);
-  EXPECT_EQ(b.feedforward_lead_s, 0.152);
+  EXPECT_EQ(b.sample_time, 2e-3);
   EXPECT_EQ(b.shaper->a1, 0.955);
   EXPECT_EQ(b.shaper->a2, 0.045);
   EXPECT_EQ(b.shaper->delay, 172u);

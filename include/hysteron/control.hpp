@@ -5,6 +5,7 @@
 // that never allocates, never throws and is deterministic.
 #include <cstddef>
 #include <limits>
+#include <string_view>
 
 namespace hysteron {
 
@@ -13,6 +14,11 @@ enum class AntiWindup {
   conditional,          // integrate only if not saturated or the error drives out of saturation
   back_calculation,     // dI/dt += (u_sat - u) / T_t
 };
+
+// "none", "conditional", "back_calculation" (the Python binding's and result.json's names).
+std::string_view anti_windup_name(AntiWindup a) noexcept;
+// Throws hysteron::Error on an unknown name.
+AntiWindup anti_windup_from_name(std::string_view name);
 
 // Eq. 17:  u = K_p e + K_i int e dt + K_d de/dt, discretised at sample time T_s:
 //   P_k = K_p (b r_k - y_k)                                      setpoint weight b

@@ -150,12 +150,14 @@ struct LoopDesign {
   // duty, mpi-pwm) or the proportional loop p_cmd = p_d + k_p (p_d - p) (mpi-openloop; 0: none).
   std::optional<PidParams> pressure_pid;
   double pressure_gain = 0.0;
-  // The feedforward's preview of the reference [samples at the control period, and s]
-  // (0: the inverse is fed the current reference).
+  // The control period [s]: every count of samples here is in it.
+  double sample_time = 1e-3;
+  // The feedforward's preview of the reference [samples] (0: the inverse is fed the current
+  // reference).
   std::size_t feedforward_lead = 0;
-  double feedforward_lead_s = 0.0;
   // Zero-vibration shaper on the feedforward's preview (docs/control.md, section 2):
-  // preview(k) = a1 r(k + lead + advance) + a2 r(k + lead + advance - delay); absent: unshaped.
+  // preview(k) = s(k + lead), s(k) = a1 r(k + advance) + a2 r(k + advance - delay); absent:
+  // unshaped.
   struct Shaper {
     double a1 = 1.0, a2 = 0.0;
     std::size_t delay = 0, advance = 0;  // [samples]

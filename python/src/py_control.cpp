@@ -9,6 +9,7 @@
 
 #include "hysteron/compensation.hpp"
 #include "hysteron/control.hpp"
+#include "hysteron/error.hpp"
 #include "hysteron/learning.hpp"
 #include "more.hpp"
 
@@ -17,13 +18,11 @@ namespace hysteron::python {
 namespace {
 
 AntiWindup anti_windup_from(const std::string& s) {
-  if (s == "none") return AntiWindup::none;
-  if (s == "conditional") return AntiWindup::conditional;
-  if (s == "back_calculation") return AntiWindup::back_calculation;
-  throw py::value_error("anti_windup must be 'none', 'conditional' or 'back_calculation'");
-}
-const char* anti_windup_name(AntiWindup a) {
-  return a == AntiWindup::none ? "none" : a == AntiWindup::conditional ? "conditional" : "back_calculation";
+  try {
+    return anti_windup_from_name(s);
+  } catch (const Error& e) {
+    throw py::value_error(e.what());  // a bad argument, as before
+  }
 }
 
 py::dict pid_dict(const PidParams& p) {
@@ -35,7 +34,7 @@ py::dict pid_dict(const PidParams& p) {
   d["derivative_filter"] = p.derivative_filter;
   d["out_min"] = p.out_min;
   d["out_max"] = p.out_max;
-  d["anti_windup"] = anti_windup_name(p.anti_windup);
+  d["anti_windup"] = std::string(anti_windup_name(p.anti_windup));
   d["tracking_time"] = p.tracking_time;
   d["setpoint_weight_p"] = p.setpoint_weight_p;
   d["setpoint_weight_d"] = p.setpoint_weight_d;

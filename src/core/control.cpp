@@ -15,6 +15,21 @@ namespace {
 }
 }  // namespace
 
+std::string_view anti_windup_name(AntiWindup a) noexcept {
+  switch (a) {
+    case AntiWindup::none: return "none";
+    case AntiWindup::conditional: return "conditional";
+    case AntiWindup::back_calculation: return "back_calculation";
+  }
+  return "conditional";
+}
+
+AntiWindup anti_windup_from_name(std::string_view name) {
+  for (AntiWindup a : {AntiWindup::none, AntiWindup::conditional, AntiWindup::back_calculation})
+    if (name == anti_windup_name(a)) return a;
+  throw Error(detail::format("anti_windup must be 'none', 'conditional' or 'back_calculation', got '{}'", name));
+}
+
 PidParams gpi_paper_pid(double sample_time, double out_min, double out_max) {
   PidParams p;
   // Table 3: K_p = 0.05 V/mm, K_i = 0.01 V/(mm s); 1 V = 0.1 MPa, 1 mm = 1e-3 m.

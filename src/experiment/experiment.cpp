@@ -56,7 +56,7 @@ LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvSh
   d.pressure_pid = loop.pressure;
   d.pressure_gain = loop.pressure_gain;
   d.feedforward_lead = lead;
-  d.feedforward_lead_s = static_cast<double>(lead) * tc;
+  d.sample_time = tc;
   if (zv && zv->active()) d.shaper = LoopDesign::Shaper{zv->a1, zv->a2, zv->delay, zv->advance};
   return d;
 }
@@ -89,8 +89,9 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   applied->reserve(r.size());
   Law law = [ilc, inner = base.law, lead, applied](const Sample& s) {
     Sample m = s;
-    applied->push_back(ilc->correction(0) * 1e3);
-    m.reference_m += ilc->correction(0);
+    const double c = ilc->correction(0);
+    applied->push_back(c * 1e3);
+    m.reference_m += c;
     m.preview_m += ilc->correction(lead);
     const RigInputs in = inner(m);
     // anti-windup: no learning where the pressure command is at a limit (the error there

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <string>
 
 #include "detail.hpp"
 #include "hysteron/compensation.hpp"
@@ -17,11 +19,13 @@ namespace {
 
 constexpr double kPressureGain = 0.5;  // the paper's k_p of the pressure loop
 
-Law open_loop_law(const ModelParams& model, const OpenLoopParams& p) {
+// OpenLoopController on `model` with `p`; the loop's numbers (its PID and pressure loop) from p.
+Loop open_loop(const ModelParams& model, const OpenLoopParams& p, std::string description) {
   auto c = std::make_shared<OpenLoopController>(model, p);
-  return [c](const Sample& s) {
+  Law law = [c](const Sample& s) {
     return regulator(c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa));
   };
+  return Loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain};
 }
 
 OpenLoopParams published(double tc) {
@@ -50,14 +54,12 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
     return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp));
   };
   const std::string name = c.reference->name;
-  Loop loop{std::move(law),
-            fmt::format("best inverse model fed {:.0f} ms ahead, {}; pressure loop (k_p = {:g}) + PID position "
+  return Loop{std::move(law),
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; pressure loop (k_p = {:g}) + PID position "
                           "correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a), p.pressure_gain, pid_origin(c),
                           p.position.kp, p.position.ki, p.position.kd),
-            p.position, [a, name] { return adaptive_note(*a, name); }};
-  loop.pressure_gain = kp;
-  return loop;
+              p.position, [a, name] { return adaptive_note(*a, name); }, std::nullopt, kp};
 }
 
 }  // namespace
@@ -86,10 +88,8 @@ const Spec& mpi_openloop_spec() {
     s.variants = {
         {"faithful", false,
          [](const Context& c) {
-           Loop loop{open_loop_law(c.result.fit.model, published(c.tc)),
-                     "inverse asymmetric MPI, open loop, proportional pressure loop (k_p = 0.5)", {}};
-           loop.pressure_gain = kPressureGain;
-           return loop;
+           return open_loop(c.result.fit.model, published(c.tc),
+                            "inverse asymmetric MPI, open loop, proportional pressure loop (k_p = 0.5)");
          }},
         {"compensated", true,
          [](const Context& c) {
@@ -97,23 +97,18 @@ const Spec& mpi_openloop_spec() {
            // and the PID from the relay test (and gain trial) on it
            OpenLoopParams p = published(c.tc);
            p.position = position_pid(c);
-           Loop loop{open_loop_law(c.result.best_fit.model, p),
-                     fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop (k_p = {:g}) + PID "
-                                   "position correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = "
-                                   "{:.3g} MPa s/m)",
-                                   c.result.lead_s * 1e3, p.pressure_gain, pid_origin(c), p.position.kp,
-                                   p.position.ki, p.position.kd),
-                     p.position};
-           loop.pressure_gain = p.pressure_gain;
-           return loop;
+           return open_loop(c.result.best_fit.model, p,
+                            fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop (k_p = {:g}) + PID "
+                                        "position correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), "
+                                        "Kd = {:.3g} MPa s/m)",
+                                        c.result.lead_s * 1e3, p.pressure_gain, pid_origin(c), p.position.kp,
+                                        p.position.ki, p.position.kd));
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_open_loop(c, false); }},
         {"baseline", false,
          [](const Context& c) {
-           Loop loop{open_loop_law(c.result.baseline_model, published(c.tc)),
-                     "straight-line open-loop inverse (no hysteresis), proportional pressure loop", {}};
-           loop.pressure_gain = kPressureGain;
-           return loop;
+           return open_loop(c.result.baseline_model, published(c.tc),
+                            "straight-line open-loop inverse (no hysteresis), proportional pressure loop");
          }},
     };
     return s;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <string>
 
 #include "detail.hpp"
 #include "hysteron/compensation.hpp"
@@ -15,12 +16,15 @@ namespace hysteron::experiment {
 
 namespace {
 
-Law cascade_law(const ModelParams& model, const CascadeParams& p) {
+// CascadePwmController on `model` with `p`; the loop's numbers (its PID and the valves'
+// pressure loop) from p.
+Loop cascade(const ModelParams& model, const CascadeParams& p, std::string description) {
   auto c = std::make_shared<CascadePwmController>(model, p);
-  return [c](const Sample& s) {
+  Law law = [c](const Sample& s) {
     const double d = c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa);
     return valves(d, c->desired_pressure());
   };
+  return Loop{std::move(law), std::move(description), p.position, {}, p.pressure};
 }
 
 CascadeParams published(double tc) {
@@ -56,15 +60,13 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
     return valves(std::clamp(pwm->step(u), -1.0, 1.0), p_d);
   };
   const std::string name = c.reference->name;
-  Loop loop{std::move(law),
-            fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by {} (Kp = {:.3g} "
-                        "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
-                        "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
-                        c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), p.position.kp, p.position.ki,
-                        p.position.kd, p.pressure.kp, p.pressure.ki),
-            p.position, [a, name] { return adaptive_note(*a, name); }};
-  loop.pressure = p.pressure;
-  return loop;
+  return Loop{std::move(law),
+              fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by {} (Kp = {:.3g} "
+                          "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
+                          "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
+                          c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), p.position.kp, p.position.ki,
+                          p.position.kd, p.pressure.kp, p.pressure.ki),
+              p.position, [a, name] { return adaptive_note(*a, name); }, p.pressure};
 }
 
 }  // namespace
@@ -94,35 +96,26 @@ const Spec& mpi_pwm_spec() {
     s.variants = {
         {"faithful", false,
          [](const Context& c) {
-           const CascadeParams p = published(c.tc);
-           Loop loop{cascade_law(c.result.fit.model, p),
-                     "inverse dead-zone MPI + PID position loop, P pressure loop on PWM switching valves", p.position};
-           loop.pressure = p.pressure;
-           return loop;
+           return cascade(c.result.fit.model, published(c.tc),
+                          "inverse dead-zone MPI + PID position loop, P pressure loop on PWM switching valves");
          }},
         {"compensated", true,
          [](const Context& c) {
            CascadeParams p = published(c.tc);
            p.position = position_pid(c);
            p.pressure = c.pressure_loop;
-           Loop loop{cascade_law(c.result.best_fit.model, p),
-                     fmt::format("best inverse model fed {:.0f} ms ahead; PID position loop by {} (Kp = {:.3g} "
-                                 "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay "
-                                 "test (Kp = {:.3g}/MPa, Ki = {:.3g}/(MPa s))",
-                                 c.result.lead_s * 1e3, pid_origin(c), p.position.kp, p.position.ki, p.position.kd,
-                                 p.pressure.kp, p.pressure.ki),
-                     p.position};
-           loop.pressure = p.pressure;
-           return loop;
+           return cascade(c.result.best_fit.model, p,
+                          fmt::format("best inverse model fed {:.0f} ms ahead; PID position loop by {} (Kp = {:.3g} "
+                                      "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a "
+                                      "relay test (Kp = {:.3g}/MPa, Ki = {:.3g}/(MPa s))",
+                                      c.result.lead_s * 1e3, pid_origin(c), p.position.kp, p.position.ki,
+                                      p.position.kd, p.pressure.kp, p.pressure.ki));
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_cascade(c, false); }},
         {"baseline", false,
          [](const Context& c) {
-           const CascadeParams p = published(c.tc);
-           Loop loop{cascade_law(c.result.baseline_model, p),
-                     "straight-line feedforward (no hysteresis) in the same cascade", p.position};
-           loop.pressure = p.pressure;
-           return loop;
+           return cascade(c.result.baseline_model, published(c.tc),
+                          "straight-line feedforward (no hysteresis) in the same cascade");
          }},
     };
     return s;

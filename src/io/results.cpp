@@ -436,13 +436,7 @@ void from_json(const json& j, TrackingErrors& e, std::string_view where) {
 }
 
 namespace {
-constexpr std::pair<AntiWindup, std::string_view> kAntiWindup[] = {
-    {AntiWindup::none, "none"}, {AntiWindup::conditional, "conditional"}, {AntiWindup::back_calculation, "back_calculation"}};
-
 json pid_json(const PidParams& p) {
-  std::string_view aw = "conditional";
-  for (const auto& [k, name] : kAntiWindup)
-    if (k == p.anti_windup) aw = name;
   return {{"kp_mpa_per_m", p.kp},
           {"ki_mpa_per_m_s", p.ki},
           {"kd_mpa_s_per_m", p.kd},
@@ -450,7 +444,7 @@ json pid_json(const PidParams& p) {
           {"derivative_filter_s", p.derivative_filter},
           {"out_min_mpa", number(p.out_min)},
           {"out_max_mpa", number(p.out_max)},
-          {"anti_windup", std::string(aw)},
+          {"anti_windup", std::string(anti_windup_name(p.anti_windup))},
           {"tracking_time_s", p.tracking_time},
           {"setpoint_weight_p", p.setpoint_weight_p},
           {"setpoint_weight_d", p.setpoint_weight_d}};
@@ -466,12 +460,11 @@ PidParams pid_from(const json& j, std::string_view where) {
   p.out_min = get_double(j, "out_min_mpa", where, -std::numeric_limits<double>::infinity());
   p.out_max = get_double(j, "out_max_mpa", where, std::numeric_limits<double>::infinity());
   const std::string aw = get_string(j, "anti_windup", where);
-  bool known = false;
-  for (const auto& [k, name] : kAntiWindup)
-    if (aw == name) p.anti_windup = k, known = true;
-  if (!known)
-    throw Error(fmt::format("{}: key \"anti_windup\": expected none, conditional or back_calculation, got \"{}\"",
-                            where, aw));
+  try {
+    p.anti_windup = anti_windup_from_name(aw);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: key \"anti_windup\": {}", where, e.what()));
+  }
   p.tracking_time = get_double(j, "tracking_time_s", where);
   p.setpoint_weight_p = get_double(j, "setpoint_weight_p", where);
   p.setpoint_weight_d = get_double(j, "setpoint_weight_d", where);
@@ -485,7 +478,7 @@ json to_json(const LoopDesign& d) {
   if (d.pressure_pid) j["pressure_pid"] = pid_json(*d.pressure_pid);
   if (d.pressure_gain != 0.0) j["pressure_gain"] = d.pressure_gain;
   j["feedforward_lead_samples"] = d.feedforward_lead;
-  j["feedforward_lead_s"] = d.feedforward_lead_s;
+  j["sample_time_s"] = d.sample_time;
   if (d.shaper)
     j["shaper"] = {{"a1", d.shaper->a1},
                    {"a2", d.shaper->a2},
@@ -519,7 +512,7 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   if (j.contains("pressure_pid")) d.pressure_pid = pid_from(j["pressure_pid"], key_where(where, "pressure_pid"));
   d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
   d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
-  d.feedforward_lead_s = get_double(j, "feedforward_lead_s", where);
+  d.sample_time = get_double(j, "sample_time_s", where);
   if (j.contains("shaper")) {
     const std::string w = key_where(where, "shaper");
     const json& s = j["shaper"];

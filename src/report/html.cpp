@@ -389,6 +389,9 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
     run.pressure_command_mpa = column(tt, "pressure_command_mpa", ps);
     run.pressure_mpa = column(tt, "pressure_mpa", ps);
     run.duty = column(tt, "pwm_duty", ps);
+    // learning runs: the correction they applied (ExperimentResult::write)
+    if (std::find(tt.names.begin(), tt.names.end(), "correction_mm") != tt.names.end())
+      run.correction_mm = column(tt, "correction_mm", ps);
   };
   // the runs the summary lists: each needs its series (a summary without the reference
   // name, from an older hysteron, takes the variant's only file)

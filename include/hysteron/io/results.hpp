@@ -124,7 +124,7 @@ void from_json(const nlohmann::json& j, EvaluationDocument& d, std::string_view 
 nlohmann::json to_json(const TrackingErrors& e);
 void from_json(const nlohmann::json& j, TrackingErrors& e, std::string_view where);
 
-// {"pid": {...} | absent, "feedforward_lead_samples", "feedforward_lead_s", "shaper": {...} |
+// {"pid": {...} | absent, "sample_time_s", "feedforward_lead_samples", "shaper": {...} |
 // absent, "learning": {...} | absent} (docs/deploy.md, "From an experiment to a deployment").
 nlohmann::json to_json(const LoopDesign& d);
 void from_json(const nlohmann::json& j, LoopDesign& d, std::string_view where);

@@ -7,6 +7,8 @@
 // (default 10^7) of
 //   hysteron_inverse_step                     the exact inverse alone
 //   hysteron_ff_pid_step                      inverse feedforward + PID (GPI paper, Fig. 10)
+//   hysteron_open_loop_step                   the same + the pressure loop (k_p = 0.5)
+//   hysteron_cascade_step                     the same outer loop + P pressure loop + PWM
 //   hysteron_ilc_correction + hysteron_ilc_step   iterative learning on top of it (period 20 000,
 //                                             Q-filter half-width 2006 and lead 56, the demo's
 //                                             gpi-pid design, unsupervised: an update every
@@ -310,7 +312,52 @@ int main(int argc, char** argv) {
   const std::size_t ctl_alloc = g_allocations.load() - a0;
   const long ctl_preempt = preemptions() - c0;
 
-  // 4. iterative learning on top of the same loop (only its two calls timed)
+  // 4./5. the open loop with its pressure loop and the cascade on switching valves, in the same
+  // closed loop; the actuator (untimed) a first-order lag of the command (open loop) or the
+  // duty integrated into the pressure (cascade), the model as the muscle
+  hysteron_open_loop_params op;
+  hysteron_open_loop_default_params(&op);
+  op.loop = cp;
+  hysteron_open_loop* ol = nullptr;
+  if ((st = hysteron_open_loop_create(params, &op, &ol)) != HYSTERON_OK) die("open loop", st);
+  hysteron_cascade_params cc;
+  hysteron_cascade_default_params(&cc);
+  cc.outer = cp;
+  hysteron_cascade* cas = nullptr;
+  if ((st = hysteron_cascade_create(params, &cc, &cas)) != HYSTERON_OK) die("cascade", st);
+  Histogram ol_h, cas_h;
+  std::size_t ol_fail = 0, cas_fail = 0, ol_alloc = 0, cas_alloc = 0;
+  long ol_preempt = 0, cas_preempt = 0;
+  for (int which = 0; which < 2; ++which) {
+    Histogram& h = which == 0 ? ol_h : cas_h;
+    std::size_t fail = 0;
+    double pressure = lo;
+    hysteron_model_reset(plant);
+    measured = 0;
+    a0 = g_allocations.load();
+    c0 = preemptions();
+    for (std::size_t k = 0; k < warmup + calls; ++k) {
+      const double r = y_ref[k % period];
+      double u = 0, pd = 0;
+      const std::int64_t t0 = now_ns();
+      const hysteron_status s = which == 0 ? hysteron_open_loop_step(ol, r, r, measured, pressure, &u)
+                                           : hysteron_cascade_step(cas, r, r, measured, pressure, &u, &pd);
+      const std::int64_t t1 = now_ns();
+      if (k >= warmup) {
+        h.add(t1 - t0);
+        fail += s != HYSTERON_OK;
+      }
+      pressure = which == 0 ? pressure + 0.2 * (u - pressure) : std::clamp(pressure + 0.05 * (hi - lo) * u, lo, hi);
+      hysteron_model_step(plant, pressure, &y);
+      measured = y / 1000.0;
+      sink += u;
+    }
+    (which == 0 ? ol_alloc : cas_alloc) = g_allocations.load() - a0;
+    (which == 0 ? ol_preempt : cas_preempt) = preemptions() - c0;
+    (which == 0 ? ol_fail : cas_fail) = fail;
+  }
+
+  // 6. iterative learning on top of the ff+pid loop (only its two calls timed)
   std::size_t ilc_fail = 0;
   hysteron_ff_pid_reset(ctl);
   hysteron_model_reset(plant);
@@ -343,16 +390,26 @@ int main(int argc, char** argv) {
   print_row("timer overhead (two clock_gettime)", timer, 0, 0);
   print_row("hysteron_inverse_step", inv_h, inv_alloc, inv_fail);
   print_row("hysteron_ff_pid_step (inverse + PID)", ctl_h, ctl_alloc, ctl_fail);
+  print_row("hysteron_open_loop_step", ol_h, ol_alloc, ol_fail);
+  print_row("hysteron_cascade_step", cas_h, cas_alloc, cas_fail);
   print_row("hysteron_ilc_correction + _step", ilc_h, ilc_alloc, ilc_fail);
-  std::printf("calls above 1 ms: inverse %llu, ff+pid %llu, ilc %llu; involuntary context switches during the timed "
-              "loops (preemptions, each can make one call's max): inverse %ld, ff+pid %ld, ilc %ld; (checksum %.6g)\n",
+  std::printf("calls above 1 ms: inverse %llu, ff+pid %llu, open loop %llu, cascade %llu, ilc %llu; involuntary context "
+              "switches during the timed loops (preemptions, each can make one call's max): inverse %ld, ff+pid %ld, "
+              "open loop %ld, cascade %ld, ilc %ld; (checksum %.6g)\n",
               static_cast<unsigned long long>(inv_h.overflow), static_cast<unsigned long long>(ctl_h.overflow),
-              static_cast<unsigned long long>(ilc_h.overflow), inv_preempt, ctl_preempt, ilc_preempt, sink);
+              static_cast<unsigned long long>(ol_h.overflow), static_cast<unsigned long long>(cas_h.overflow),
+              static_cast<unsigned long long>(ilc_h.overflow), inv_preempt, ctl_preempt, ol_preempt, cas_preempt,
+              ilc_preempt, sink);
   hysteron_ilc_free(ilc);
+  hysteron_open_loop_free(ol);
+  hysteron_cascade_free(cas);
 
   hysteron_ff_pid_free(ctl);
   hysteron_model_free(plant);
   hysteron_inverse_free(inverse);
   hysteron_params_free(params);
-  return (inv_alloc || ctl_alloc || ilc_alloc || inv_fail || ctl_fail || ilc_fail) ? 1 : 0;
+  return (inv_alloc || ctl_alloc || ol_alloc || cas_alloc || ilc_alloc || inv_fail || ctl_fail || ol_fail || cas_fail ||
+          ilc_fail)
+             ? 1
+             : 0;
 }

@@ -1039,23 +1039,13 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
   EXPECT_NE(comp.description.find(fmt::format("Kp = {:.3g} MPa/m", d.pid->kp)), std::string::npos) << comp.description;
   {
     const std::size_t n = comp.t.size();
-    std::vector<double> ref(n), shaped(n);
-    for (std::size_t k = 0; k < n; ++k) ref[k] = comp.reference_mm[k] * 1e-3;
-    const auto at = [&](std::ptrdiff_t k) {
-      return ref[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(k, 0, static_cast<std::ptrdiff_t>(n) - 1))];
-    };
-    const auto adv = static_cast<std::ptrdiff_t>(d.shaper->advance), D = static_cast<std::ptrdiff_t>(d.shaper->delay);
-    for (std::size_t k = 0; k < n; ++k) {
-      const auto i = static_cast<std::ptrdiff_t>(k);
-      shaped[k] = d.shaper->a1 * at(i + adv) + d.shaper->a2 * at(i + adv - D);
-    }
+    const std::vector<double> preview = test::feedforward_preview(d, comp.reference_mm);
     FeedforwardParams ff;
     ff.sample_time = tc;
     FeedforwardPidController loop(r.best_fit.model, ff, *d.pid);
     double worst = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
-      const double u =
-          loop.step(ref[k], shaped[std::min(k + d.feedforward_lead, n - 1)], comp.measured_mm[k] * 1e-3);
+      const double u = loop.step(comp.reference_mm[k] * 1e-3, preview[k], comp.measured_mm[k] * 1e-3);
       worst = std::max(worst, std::abs(std::clamp(u, 0.0, experiment::kPressureMax) - comp.pressure_command_mpa[k]));
     }
     EXPECT_LT(worst, 1e-9) << "MPa";

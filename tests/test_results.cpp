@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "hysteron/error.hpp"
@@ -458,6 +459,11 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   d.feedforward_lead = 76;
   d.sample_time = 2e-3;
   d.shaper = LoopDesign::Shaper{0.955, 0.045, 172, 8};
+  d.kind = LoopDesign::Kind::cascade_pwm;
+  d.feedforward.pressure_limits = {0.05, 0.55};
+  d.feedforward.model_scale = 1.0;
+  d.feedforward.lag_time_constant = 0.03;
+  d.pwm = PwmParams{2.5, 0.01, 0.1, 0.9, 0.02};
   LoopDesign::Learning l;
   l.params = LearningParams{.period = 5000, .gain = 0.3, .lead = 38, .half_width = 2011, .lookahead = 76};
   l.params.hold_after_cuts = 3;
@@ -488,6 +494,16 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   EXPECT_EQ(b.shaper->a2, 0.045);
   EXPECT_EQ(b.shaper->delay, 172u);
   EXPECT_EQ(b.shaper->advance, 8u);
+  EXPECT_EQ(j["loop"], "cascade_pwm");
+  EXPECT_EQ(b.kind, LoopDesign::Kind::cascade_pwm);
+  EXPECT_EQ(b.feedforward.pressure_limits.lo, 0.05);
+  EXPECT_EQ(b.feedforward.pressure_limits.hi, 0.55);
+  EXPECT_EQ(b.feedforward.model_scale, 1.0);
+  EXPECT_EQ(b.feedforward.lag_time_constant, 0.03);
+  EXPECT_EQ(b.feedforward.sample_time, 2e-3);  // the loop's sample time, written once
+  ASSERT_TRUE(b.pwm);
+  EXPECT_EQ((std::vector<double>{b.pwm->gain, b.pwm->deadband, b.pwm->min_duty, b.pwm->max_duty, b.pwm->resolution}),
+            (std::vector<double>{2.5, 0.01, 0.1, 0.9, 0.02}));
   const LearningParams& p = b.learning->params;
   EXPECT_EQ(p.period, 5000u);
   EXPECT_EQ(p.gain, 0.3);
@@ -510,8 +526,46 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
                bare.contains("shaper") || bare.contains("learning"));
   const LoopDesign bare_back = io::from_json<LoopDesign>(bare, "controller");
   EXPECT_FALSE(bare_back.pid || bare_back.pressure_pid || bare_back.shaper || bare_back.learning);
+  EXPECT_EQ(bare["loop"], "feedforward_pid");
+  EXPECT_FALSE(bare.contains("pwm"));
+  // written before "loop": the structure from the pressure loops, the default feedforward and PWM
+  for (const auto& [pressure_pid, gain, kind] :
+       {std::tuple{true, 0.0, LoopDesign::Kind::cascade_pwm}, std::tuple{false, 0.5, LoopDesign::Kind::open_loop},
+        std::tuple{false, 0.0, LoopDesign::Kind::feedforward_pid}}) {
+    nlohmann::json old = j;
+    for (const char* k : {"loop", "feedforward", "pwm", "pressure_pid", "pressure_gain"}) old.erase(k);
+    if (pressure_pid) old["pressure_pid"] = j["pressure_pid"];
+    if (gain > 0.0) old["pressure_gain"] = gain;
+    const LoopDesign o = io::from_json<LoopDesign>(old, "controller");
+    EXPECT_EQ(o.kind, kind);
+    EXPECT_EQ(o.feedforward.pressure_limits.hi, FeedforwardParams{}.pressure_limits.hi);
+    EXPECT_EQ(o.feedforward.model_scale, FeedforwardParams{}.model_scale);
+    EXPECT_EQ(o.pwm.has_value(), pressure_pid);
+  }
   // errors name the path
   nlohmann::json bad = j;
+  bad["loop"] = "bang_bang";
+  try {
+    (void)io::from_json<LoopDesign>(bad, "result.json.compensated.sine.controller");
+    FAIL() << "an unknown loop accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("result.json.compensated.sine.controller: key \"loop\": unknown loop "
+                                         "\"bang_bang\""),
+              std::string::npos)
+        << e.what();
+  }
+  bad = j;
+  bad.erase("pwm");
+  EXPECT_THROW((void)io::from_json<LoopDesign>(bad, "controller"), Error);  // a cascade needs its PWM
+  bad = j;
+  bad["feedforward"].erase("model_scale_per_m");
+  try {
+    (void)io::from_json<LoopDesign>(bad, "controller");
+    FAIL() << "a feedforward without its scale accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "controller.feedforward: missing key \"model_scale_per_m\"");
+  }
+  bad = j;
   bad["pid"]["anti_windup"] = "sometimes";
   try {
     (void)io::from_json<LoopDesign>(bad, "result.json.learning.sine.controller");

@@ -36,6 +36,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hysteron/compensation.hpp"
 #include "hysteron/control.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
@@ -144,6 +145,18 @@ struct TrackingErrors {
 // hysteron_pid, hysteron_ilc and the inverse feedforward of the C ABI); result.json's
 // "controller". Units: contraction in m, pressure in MPa (the loops' own units).
 struct LoopDesign {
+  // Which controller the loop is (result.json "loop"; docs/deploy.md):
+  //   feedforward_pid  FeedforwardPidController  hysteron_ff_pid      (gpi-pid)
+  //   open_loop        OpenLoopController        hysteron_open_loop   (mpi-openloop)
+  //   cascade_pwm      CascadePwmController      hysteron_cascade     (mpi-pwm)
+  // The adaptive variant has the same structure with an inverse adapted online.
+  enum class Kind { feedforward_pid, open_loop, cascade_pwm };
+  Kind kind = Kind::feedforward_pid;
+  // The inverse feedforward's pressure limits, model scale and lag compensation (its
+  // sample_time is sample_time below).
+  FeedforwardParams feedforward;
+  // cascade_pwm: the valves' PWM modulator.
+  std::optional<PwmParams> pwm;
   // The position loop's PID (absent: no position loop, e.g. the faithful open loop).
   std::optional<PidParams> pid;
   // The pressure loop inside it, where the loop has one: the valves' PI (error in MPa -> PWM
@@ -185,6 +198,10 @@ struct TrackingRun {
   // learning runs: the correction [mm] added to the reference at every sample (empty otherwise)
   std::vector<double> correction_mm;
   std::vector<double> t, reference_mm, measured_mm, actual_mm, pressure_command_mpa, pressure_mpa, duty;
+  // The pressure sensor's reading the loop was given [MPa gauge] (pressure_mpa is the true
+  // pressure): with reference_mm and measured_mm, what a loop rebuilt from `controller` is fed.
+  // Empty when read from a directory written before it was recorded.
+  std::vector<double> pressure_measured_mpa;
   TrackingErrors errors;  // reference vs measured contraction (the last period of a learning run)
   std::vector<TrackingErrors> periods;  // learning runs: the errors of each period, in order
   std::size_t saturated = 0;  // control samples with the command at a pressure limit

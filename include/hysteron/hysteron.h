@@ -1,6 +1,7 @@
 /*
  * hysteron C ABI: load a hysteresis model, run it forwards, run its exact inverse,
- * run the inverse-feedforward + PID controller and iterative learning control, from C, LabVIEW, Simulink,
+ * run the inverse-feedforward + PID, open-loop and switching-valve cascade controllers and
+ * iterative learning control, from C, LabVIEW, Simulink,
  * ROS, Python ctypes or anything else that can call a C function.
  *
  * Plain C99; the library (libhysteron_c.so / libhysteron_c.a) is C++ inside.
@@ -20,7 +21,8 @@
  * - Out-pointers are written only on success, except that the per-sample step
  *   functions also write the held (previous) value when an input is not finite.
  * - The per-sample functions (hysteron_model_step, hysteron_inverse_step,
- *   hysteron_ff_pid_step, hysteron_ilc_correction, hysteron_ilc_step) never allocate
+ *   hysteron_ff_pid_step, hysteron_open_loop_step, hysteron_cascade_step,
+ *   hysteron_ilc_correction, hysteron_ilc_step) never allocate
  *   memory, never block and take a bounded time: they are meant for a real-time loop.
  *   Loading and creating allocate.
  *
@@ -210,6 +212,87 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller
  * command. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double reference_m, double preview_m,
                                                    double measured_m, double* pressure_mpa);
+
+/* ---- open-loop inverse compensation + pressure loop (asymmetric-MPI paper, Fig. 6) ---- */
+/* p_d = FF(preview) (+ PID(reference - measured) if any of kp, ki, kd is nonzero, the sum
+ * clamped to the pressure limits), then the proportional pressure loop
+ *   pressure_cmd = clamp(p_d + pressure_gain (p_d - pressure), pressure_min, pressure_max)
+ * around a proportional regulator. The C++ OpenLoopController; `hysteron experiment
+ * mpi-openloop`'s loops (result.json "controller", "loop": "open_loop"; docs/deploy.md). */
+typedef struct hysteron_open_loop_params {
+  /* The feedforward (sample_time, pressure limits, model_scale, lag_time_constant) and the
+   * position PID (kp = ki = kd = 0, the default: the paper's pure open loop), as in
+   * hysteron_ff_pid_params; the PID's output is limited to +-(pressure_max - pressure_min). */
+  hysteron_ff_pid_params loop;
+  double pressure_gain; /* k_p >= 0 of the pressure loop (default 0.5, the paper's; 0: none) */
+} hysteron_open_loop_params;
+
+typedef struct hysteron_open_loop hysteron_open_loop;
+
+HYSTERON_C_API hysteron_status hysteron_open_loop_default_params(hysteron_open_loop_params* params);
+/* As hysteron_ff_pid_create (the model is copied; invalid parameters are
+ * HYSTERON_ERROR_INVALID_ARGUMENT naming the field). */
+HYSTERON_C_API hysteron_status hysteron_open_loop_create(const hysteron_params* params,
+                                                        const hysteron_open_loop_params* controller,
+                                                        hysteron_open_loop** out);
+HYSTERON_C_API hysteron_status hysteron_open_loop_free(hysteron_open_loop* controller);
+/* Zero PID state, virgin inverse. */
+HYSTERON_C_API hysteron_status hysteron_open_loop_reset(hysteron_open_loop* controller);
+/* One sample: reference_m, preview_m, measured_m as in hysteron_ff_pid_step; pressure_mpa the
+ * measured gauge pressure [MPa]; *command_mpa the regulator's command [MPa]. A non-finite
+ * argument returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the
+ * previous command. Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_open_loop_step(hysteron_open_loop* controller, double reference_m,
+                                                      double preview_m, double measured_m, double pressure_mpa,
+                                                      double* command_mpa);
+
+/* ---- cascade with fast switching valves (dead-zone MPI paper) ------------------------ */
+/* Outer loop: p_d = clamp(FF(preview) + PID_x(reference - measured), pressure_min, pressure_max);
+ * inner loop: u = PID_p(p_d - pressure) [duty], limited to [-1, 1]; then the PWM modulator:
+ *   duty = 0 if |u| <= deadband, else sgn(u) min(max_duty, min_duty + gain (|u| - deadband)),
+ * rounded to `resolution` (0: continuous); duty > 0 opens the inlet valve, < 0 the exhaust.
+ * The C++ CascadePwmController; `hysteron experiment mpi-pwm`'s loops ("loop": "cascade_pwm"). */
+typedef struct hysteron_pid_params {
+  double kp, ki, kd;        /* K_p, K_i [1/s], K_d [s] in the loop's units (default 0) */
+  double derivative_filter; /* T_f [s] >= 0 (default 0) */
+  double tracking_time;     /* T_t [s] for back-calculation (default 0) */
+  double setpoint_weight_p; /* b (default 1) */
+  double setpoint_weight_d; /* c (default 0) */
+  double out_min, out_max;  /* output limits, out_min < out_max (default -1, 1; the inner loop's
+                               output is also limited to [-1, 1]) */
+  int anti_windup;          /* a hysteron_anti_windup (default CONDITIONAL) */
+} hysteron_pid_params;
+
+typedef struct hysteron_pwm_params {
+  double gain;       /* duty per unit of u, > 0 (default 1) */
+  double deadband;   /* >= 0 (default 0) */
+  double min_duty;   /* in [0, max_duty] (default 0) */
+  double max_duty;   /* in (0, 1] (default 1) */
+  double resolution; /* duty quantum in [0, 1], 0: continuous (default 0) */
+} hysteron_pwm_params;
+
+typedef struct hysteron_cascade_params {
+  hysteron_ff_pid_params outer; /* feedforward + position PID [MPa/m], as hysteron_ff_pid_params */
+  hysteron_pid_params pressure; /* inner loop: pressure error [MPa] -> duty (default: P, kp = 20, the paper's) */
+  hysteron_pwm_params pwm;
+} hysteron_cascade_params;
+
+typedef struct hysteron_cascade hysteron_cascade;
+
+HYSTERON_C_API hysteron_status hysteron_cascade_default_params(hysteron_cascade_params* params);
+HYSTERON_C_API hysteron_status hysteron_cascade_create(const hysteron_params* params,
+                                                      const hysteron_cascade_params* controller,
+                                                      hysteron_cascade** out);
+HYSTERON_C_API hysteron_status hysteron_cascade_free(hysteron_cascade* controller);
+/* Zero PID states and duty, virgin inverse. */
+HYSTERON_C_API hysteron_status hysteron_cascade_reset(hysteron_cascade* controller);
+/* One sample (arguments as hysteron_open_loop_step): *duty the PWM duty in [-1, 1] for the next
+ * valve period; *desired_pressure_mpa (may be NULL) the outer loop's p_d. A non-finite argument
+ * returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the previous
+ * outputs. Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_cascade_step(hysteron_cascade* controller, double reference_m,
+                                                    double preview_m, double measured_m, double pressure_mpa,
+                                                    double* duty, double* desired_pressure_mpa);
 
 /* ---- iterative learning control (docs/control.md, section 3) ------------------ */
 /* For a periodic reference with N samples per period: a correction c is added to the

@@ -1,5 +1,6 @@
-// Bindings of the PID, the inverse feedforward, the feedforward + PID controller and the
-// iterative learning update.
+// Bindings of the PID, the inverse feedforward, the three papers' controllers (feedforward +
+// PID, open loop with a pressure loop, cascade on switching valves) and the iterative learning
+// update.
 #include <fmt/format.h>
 
 #include <limits>
@@ -137,6 +138,80 @@ are used; default: Pid.gpi_paper()).)doc")
       .def("reset", &FeedforwardPidController::reset, "Back to the virgin state (inverse, lag history and PID).")
       .def("__repr__", [](const FeedforwardPidController&) {
         return std::string("FeedforwardPidController(inverse feedforward + PID, GPI paper Fig. 10)");
+      });
+
+  py::class_<OpenLoopController>(m, "OpenLoopController", R"doc(
+Asymmetric-MPI paper, Fig. 6: open-loop inverse compensation with a proportional
+pressure loop, p_cmd = clamp(p_d + pressure_gain (p_d - p_measured)) [MPa], p_d =
+FF(preview) (+ PID(y_d - y), clamped, if pid is given: hysteron's compensated
+variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
+(result.json "loop": "open_loop"; docs/deploy.md).)doc")
+      .def(py::init([](const py::object& model, const py::object& pid, double pressure_gain,
+                       std::pair<double, double> limits, double scale, double lag, double ts) {
+             OpenLoopParams p;
+             p.feedforward = ff_params(limits, scale, lag, ts);
+             if (!pid.is_none()) p.position = pid.cast<const Pid&>().params();
+             p.pressure_gain = pressure_gain;
+             return OpenLoopController(model_spec(model), p);
+           }),
+           py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_gain") = 0.5,
+           py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
+           py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
+      .def("step", &OpenLoopController::step, py::arg("reference_m"), py::arg("preview_m"), py::arg("measured_m"),
+           py::arg("pressure_mpa"),
+           "One control sample (pressure_mpa: the measured gauge pressure); returns the regulator's command [MPa].")
+      .def("reset", &OpenLoopController::reset, "Back to the virgin state (inverse, lag history and PID).")
+      .def("__repr__", [](const OpenLoopController&) {
+        return std::string("OpenLoopController(inverse feedforward + pressure loop, asymmetric-MPI paper Fig. 6)");
+      });
+
+  py::class_<CascadePwmController>(m, "CascadePwmController", R"doc(
+Dead-zone MPI paper: cascade on fast switching valves. Outer loop p_d =
+clamp(FF(preview) + pid(y_d - y)) [MPa] (default pid: Pid.gpi_paper()); inner loop
+u = pressure_pid(p_d - p_measured) limited to [-1, 1] (default: the paper's P loop,
+kp = 20 per MPa); then the PWM modulator (pwm: a dict of gain, deadband, min_duty,
+max_duty, resolution; missing keys take the defaults 1, 0, 0, 1, 0). step() returns the
+duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm").)doc")
+      .def(py::init([](const py::object& model, const py::object& pid, const py::object& pressure_pid,
+                       const py::object& pwm, std::pair<double, double> limits, double scale, double lag, double ts) {
+             CascadeParams p;
+             p.feedforward = ff_params(limits, scale, lag, ts);
+             p.position = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
+                                        : pid.cast<const Pid&>().params();
+             if (pressure_pid.is_none()) {
+               p.pressure.kp = 20.0;
+               p.pressure.sample_time = ts;
+             } else {
+               p.pressure = pressure_pid.cast<const Pid&>().params();
+             }
+             if (!pwm.is_none()) {
+               const auto d = pwm.cast<py::dict>();
+               for (const auto& [k, v] : d) {
+                 const auto key = k.cast<std::string>();
+                 const double x = v.cast<double>();
+                 if (key == "gain") p.pwm.gain = x;
+                 else if (key == "deadband") p.pwm.deadband = x;
+                 else if (key == "min_duty") p.pwm.min_duty = x;
+                 else if (key == "max_duty") p.pwm.max_duty = x;
+                 else if (key == "resolution") p.pwm.resolution = x;
+                 else
+                   throw py::value_error(fmt::format("pwm: unknown key \"{}\" (expected gain, deadband, min_duty, "
+                                                     "max_duty, resolution)",
+                                                     key));
+               }
+             }
+             return CascadePwmController(model_spec(model), p);
+           }),
+           py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_pid") = py::none(),
+           py::arg("pwm") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
+           py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
+      .def("step", &CascadePwmController::step, py::arg("reference_m"), py::arg("preview_m"), py::arg("measured_m"),
+           py::arg("pressure_mpa"), "One control sample; returns the PWM duty in [-1, 1].")
+      .def_property_readonly("desired_pressure", &CascadePwmController::desired_pressure,
+                             "The outer loop's p_d [MPa] of the last step.")
+      .def("reset", &CascadePwmController::reset, "Back to the virgin state (inverse, both PIDs, the duty).")
+      .def("__repr__", [](const CascadePwmController&) {
+        return std::string("CascadePwmController(feedforward + PID position loop, PI pressure loop, PWM valves)");
       });
 
   py::class_<IterativeLearning>(m, "IterativeLearning", R"doc(

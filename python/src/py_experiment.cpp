@@ -129,6 +129,7 @@ void bind_experiment(py::module_& m) {
           x["actual_mm"] = to_numpy(run.actual_mm);
           x["pressure_command_mpa"] = to_numpy(run.pressure_command_mpa);
           x["pressure_mpa"] = to_numpy(run.pressure_mpa);
+          x["pressure_measured_mpa"] = to_numpy(run.pressure_measured_mpa);  // what the loop was given
           x["duty"] = to_numpy(run.duty);
           x["correction_mm"] = to_numpy(run.correction_mm);  // learning runs; empty otherwise
           runs.append(x);

@@ -128,6 +128,49 @@ def test_inverse_feedforward_round_trip():
     assert 0.0 <= ctl.step(0.02, 0.02, 0.0) <= 0.6
 
 
+def test_open_loop_and_cascade_controllers():
+    # The open loop: p_d = FF (the feedforward twin), command clamp(p_d + 0.5 (p_d - p)); with a PID,
+    # p_d + PID clamped. The cascade: p_d = the FeedforwardPidController twin's command, duty
+    # clamp(20 (p_d - p), -1, 1) with the paper's P loop and the default PWM.
+    model = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rho": 0.4, "tau": 0.1,
+             "alpha": 2.0, "input_limits": [0.0, 0.6]}
+    ff = hysteron.InverseFeedforward(model)
+    ol = hysteron.OpenLoopController(model)
+    twin = hysteron.FeedforwardPidController(model, hysteron.Pid.gpi_paper())
+    cas = hysteron.CascadePwmController(model)
+    ts = np.arange(2000) * 1e-3
+    ref = (20.0 + 15.0 * np.sin(2 * np.pi * 0.5 * ts)) / 1000.0
+    p = 0.1
+    saturated = 0
+    for r, t in zip(ref, ts):
+        p_d = ff.step(r)
+        u = ol.step(r, r, 0.9 * r, p)
+        assert u == pytest.approx(min(0.6, max(0.0, p_d + 0.5 * (p_d - p))), abs=1e-15)
+        p_valves = 0.3 + 0.25 * np.sin(2 * np.pi * 1.3 * t)  # the valves' chamber, independently
+        duty = cas.step(r, r, 0.9 * r, p_valves)
+        assert cas.desired_pressure == pytest.approx(twin.step(r, r, 0.9 * r), abs=1e-15)
+        expected = min(1.0, max(-1.0, 20.0 * (cas.desired_pressure - p_valves)))
+        assert duty == pytest.approx(expected, abs=1e-15)
+        saturated += abs(expected) == 1.0
+        p += 0.2 * (u - p)
+    assert 0 < saturated < len(ref)
+    with_pid = hysteron.OpenLoopController(model, hysteron.Pid(kp=5.0, ki=1.0), pressure_gain=0.0)
+    assert with_pid.step(0.02, 0.02, 0.0, 0.3) > hysteron.OpenLoopController(model, pressure_gain=0.0).step(
+        0.02, 0.02, 0.0, 0.3)
+    # the PWM's dead band and an inner PI; bad parameters name the field
+    cas2 = hysteron.CascadePwmController(model, pressure_pid=hysteron.Pid(kp=20.0, out_min=-1, out_max=1),
+                                         pwm={"deadband": 0.5})
+    assert cas2.step(0.02, 0.02, 0.02, 0.0) == pytest.approx(0.5)  # u = 1 (limited): 1 - dead band
+    assert cas2.step(0.02, 0.02, 0.02, cas2.desired_pressure) == 0.0  # |u| <= dead band
+    with pytest.raises(hysteron.Error, match="pwm.max_duty"):
+        hysteron.CascadePwmController(model, pwm={"max_duty": 1.5})
+    with pytest.raises(ValueError, match="unknown key"):
+        hysteron.CascadePwmController(model, pwm={"dutty": 0.5})
+    with pytest.raises(hysteron.Error, match="pressure_gain"):
+        hysteron.OpenLoopController(model, pressure_gain=-1.0)
+    assert repr(ol).startswith("OpenLoopController(") and repr(cas).startswith("CascadePwmController(")
+
+
 def test_iterative_learning_on_a_lagged_loop():
     """The learning update around y_k = a y_(k-1) + (1 - a) u_(k-1), u = r + c: the error of each
     period falls, to under 5 % of the first period's within 15 (the same loop as the C ABI's test)."""

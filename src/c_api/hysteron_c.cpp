@@ -56,6 +56,16 @@ struct hysteron_ff_pid {
   double last = 0.0;  // the last command (held on a non-finite argument)
 };
 
+struct hysteron_open_loop {
+  hysteron::OpenLoopController controller;
+  double last = 0.0;  // the last command (held on a non-finite argument)
+};
+
+struct hysteron_cascade {
+  hysteron::CascadePwmController controller;
+  double last_duty = 0.0, last_desired = 0.0;  // held on a non-finite argument
+};
+
 struct hysteron_ilc {
   hysteron::IterativeLearning ilc;
 };
@@ -453,7 +463,116 @@ hysteron_status hysteron_inverse_invert(hysteron_inverse* inverse, const double*
   });
 }
 
+}  // extern "C"
+
 // ---- feedforward + PID --------------------------------------------------------------
+
+namespace {
+
+hysteron::AntiWindup to_anti_windup(int a, const char* field) {
+  switch (a) {
+    case HYSTERON_ANTI_WINDUP_NONE: return hysteron::AntiWindup::none;
+    case HYSTERON_ANTI_WINDUP_CONDITIONAL: return hysteron::AntiWindup::conditional;
+    case HYSTERON_ANTI_WINDUP_BACK_CALCULATION: return hysteron::AntiWindup::back_calculation;
+    default:
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s = %d: expected 0 (none), 1 (conditional) or 2 (back_calculation)",
+           field, a);
+  }
+}
+
+hysteron::FeedforwardParams to_feedforward(const hysteron_ff_pid_params& c) {
+  hysteron::FeedforwardParams ff;
+  ff.pressure_limits = {c.pressure_min, c.pressure_max};
+  ff.model_scale = c.model_scale;
+  ff.lag_time_constant = c.lag_time_constant;
+  ff.sample_time = c.sample_time;
+  return ff;
+}
+
+// The position PID of a hysteron_ff_pid_params (output limits: the caller's).
+hysteron::PidParams to_pid(const hysteron_ff_pid_params& c) {
+  hysteron::PidParams pid;
+  pid.kp = c.kp;
+  pid.ki = c.ki;
+  pid.kd = c.kd;
+  pid.sample_time = c.sample_time;
+  pid.derivative_filter = c.derivative_filter;
+  pid.tracking_time = c.tracking_time;
+  pid.setpoint_weight_p = c.setpoint_weight_p;
+  pid.setpoint_weight_d = c.setpoint_weight_d;
+  pid.anti_windup = to_anti_windup(c.anti_windup, "anti_windup");
+  return pid;
+}
+
+hysteron::PidParams to_pid(const hysteron_pid_params& c, double sample_time, const char* name) {
+  hysteron::PidParams pid;
+  pid.kp = c.kp;
+  pid.ki = c.ki;
+  pid.kd = c.kd;
+  pid.sample_time = sample_time;
+  pid.derivative_filter = c.derivative_filter;
+  pid.tracking_time = c.tracking_time;
+  pid.setpoint_weight_p = c.setpoint_weight_p;
+  pid.setpoint_weight_d = c.setpoint_weight_d;
+  pid.out_min = c.out_min;
+  pid.out_max = c.out_max;
+  char field[64];
+  std::snprintf(field, sizeof field, "%s.anti_windup", name);
+  pid.anti_windup = to_anti_windup(c.anti_windup, field);
+  return pid;
+}
+
+// The controller's parameters are the caller's arguments: their errors are INVALID_ARGUMENT
+// (checked before the model, whose errors are MODEL).
+// `inner`: the cascade's pressure loop, whose errors are prefixed "pressure: " (both PIDs'
+// messages name their field as pid.FIELD).
+void check_controller(const hysteron::FeedforwardParams& ff, const hysteron::PidParams& position,
+                      const hysteron::PidParams* inner = nullptr, const hysteron::PwmParams* pwm = nullptr,
+                      double pressure_gain = 0.0) {
+  try {
+    ff.validate();
+    hysteron::Pid check(position);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s", e.what());
+  }
+  try {
+    if (inner) hysteron::Pid check(*inner);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "pressure: %s", e.what());
+  }
+  try {
+    if (pwm) hysteron::PwmModulator check(*pwm);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s", e.what());
+  }
+  if (!std::isfinite(pressure_gain) || pressure_gain < 0.0)
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "pressure_gain = %g: expected a finite value >= 0", pressure_gain);
+}
+
+// "arguments ... not all finite" for the controllers' step functions (no allocation).
+bool finite_step_args(const char* fn, double reference_m, double preview_m, double measured_m, const double* pressure,
+                      const char* held) noexcept {
+  if (std::isfinite(reference_m) && std::isfinite(preview_m) && std::isfinite(measured_m) &&
+      (pressure == nullptr || std::isfinite(*pressure)))
+    return true;
+  char text[260];
+  if (pressure)
+    std::snprintf(text, sizeof text,
+                  "arguments reference_m = %g, preview_m = %g, measured_m = %g, pressure_mpa = %g: not all finite "
+                  "(state unchanged, previous %s held)",
+                  reference_m, preview_m, measured_m, *pressure, held);
+  else
+    std::snprintf(text, sizeof text,
+                  "arguments reference_m = %g, preview_m = %g, measured_m = %g: not all finite (state unchanged, "
+                  "previous %s held)",
+                  reference_m, preview_m, measured_m, held);
+  set_message(fn, text);
+  return false;
+}
+
+}  // namespace
+
+extern "C" {
 
 hysteron_status hysteron_ff_pid_default_params(hysteron_ff_pid_params* params) {
   return guard("hysteron_ff_pid_default_params", HYSTERON_ERROR_INTERNAL, [&] {
@@ -482,38 +601,12 @@ hysteron_status hysteron_ff_pid_create(const hysteron_params* params, const hyst
     HYSTERON_REQUIRE(params);
     HYSTERON_REQUIRE(controller);
     HYSTERON_REQUIRE(out);
-    const hysteron_ff_pid_params& c = *controller;
-    hysteron::FeedforwardParams ff;
-    ff.pressure_limits = {c.pressure_min, c.pressure_max};
-    ff.model_scale = c.model_scale;
-    ff.lag_time_constant = c.lag_time_constant;
-    ff.sample_time = c.sample_time;
-    hysteron::PidParams pid;
-    pid.kp = c.kp;
-    pid.ki = c.ki;
-    pid.kd = c.kd;
-    pid.sample_time = c.sample_time;
-    pid.derivative_filter = c.derivative_filter;
-    pid.tracking_time = c.tracking_time;
-    pid.setpoint_weight_p = c.setpoint_weight_p;
-    pid.setpoint_weight_d = c.setpoint_weight_d;
-    switch (c.anti_windup) {
-      case HYSTERON_ANTI_WINDUP_NONE: pid.anti_windup = hysteron::AntiWindup::none; break;
-      case HYSTERON_ANTI_WINDUP_CONDITIONAL: pid.anti_windup = hysteron::AntiWindup::conditional; break;
-      case HYSTERON_ANTI_WINDUP_BACK_CALCULATION: pid.anti_windup = hysteron::AntiWindup::back_calculation; break;
-      default:
-        fail(HYSTERON_ERROR_INVALID_ARGUMENT, "anti_windup = %d: expected 0 (none), 1 (conditional) or 2 (back_calculation)",
-             c.anti_windup);
-    }
+    const hysteron::FeedforwardParams ff = to_feedforward(*controller);
+    hysteron::PidParams pid = to_pid(*controller);
     pid.out_min = ff.pressure_limits.lo;  // the controller clamps to the pressure limits anyway
     pid.out_max = ff.pressure_limits.hi;
     // Controller parameters first (their errors are the caller's arguments), then the model.
-    try {
-      ff.validate();
-      hysteron::Pid check(pid);
-    } catch (const hysteron::Error& e) {
-      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s", e.what());
-    }
+    check_controller(ff, pid);
     *out = new hysteron_ff_pid{hysteron::FeedforwardPidController(params->params, ff, pid), 0.0};
   });
 }
@@ -538,18 +631,143 @@ hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double referen
                 controller == nullptr ? "argument controller is NULL" : "argument pressure_mpa is NULL");
     return HYSTERON_ERROR_NULL_POINTER;
   }
-  if (!std::isfinite(reference_m) || !std::isfinite(preview_m) || !std::isfinite(measured_m)) {
+  if (!finite_step_args("hysteron_ff_pid_step", reference_m, preview_m, measured_m, nullptr, "command")) {
     *pressure_mpa = controller->last;
-    char text[200];
-    std::snprintf(text, sizeof text,
-                  "arguments reference_m = %g, preview_m = %g, measured_m = %g: not all finite (state unchanged, "
-                  "previous command held)",
-                  reference_m, preview_m, measured_m);
-    set_message("hysteron_ff_pid_step", text);
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
   controller->last = controller->controller.step(reference_m, preview_m, measured_m);
   *pressure_mpa = controller->last;
+  return HYSTERON_OK;
+}
+
+// ---- open loop + pressure loop -------------------------------------------------------
+
+hysteron_status hysteron_open_loop_default_params(hysteron_open_loop_params* params) {
+  return guard("hysteron_open_loop_default_params", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    if (hysteron_ff_pid_default_params(&params->loop) != HYSTERON_OK) fail(HYSTERON_ERROR_INTERNAL, "loop");
+    params->pressure_gain = hysteron::OpenLoopParams{}.pressure_gain;
+  });
+}
+
+hysteron_status hysteron_open_loop_create(const hysteron_params* params, const hysteron_open_loop_params* controller,
+                                          hysteron_open_loop** out) {
+  return guard("hysteron_open_loop_create", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(controller);
+    HYSTERON_REQUIRE(out);
+    hysteron::OpenLoopParams p;
+    p.feedforward = to_feedforward(controller->loop);
+    p.position = to_pid(controller->loop);
+    const double span = p.feedforward.pressure_limits.hi - p.feedforward.pressure_limits.lo;
+    p.position.out_min = -span;  // the controller's limits of the correction
+    p.position.out_max = span;
+    p.pressure_gain = controller->pressure_gain;
+    check_controller(p.feedforward, p.position, nullptr, nullptr, p.pressure_gain);
+    *out = new hysteron_open_loop{hysteron::OpenLoopController(params->params, p), 0.0};
+  });
+}
+
+hysteron_status hysteron_open_loop_free(hysteron_open_loop* controller) {
+  delete controller;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_open_loop_reset(hysteron_open_loop* controller) {
+  return guard("hysteron_open_loop_reset", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(controller);
+    controller->controller.reset();
+    controller->last = 0.0;
+  });
+}
+
+hysteron_status hysteron_open_loop_step(hysteron_open_loop* controller, double reference_m, double preview_m,
+                                        double measured_m, double pressure_mpa, double* command_mpa) {
+  if (controller == nullptr || command_mpa == nullptr) {
+    set_message("hysteron_open_loop_step",
+                controller == nullptr ? "argument controller is NULL" : "argument command_mpa is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  if (!finite_step_args("hysteron_open_loop_step", reference_m, preview_m, measured_m, &pressure_mpa, "command")) {
+    *command_mpa = controller->last;
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  controller->last = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
+  *command_mpa = controller->last;
+  return HYSTERON_OK;
+}
+
+// ---- cascade with switching valves -----------------------------------------------------
+
+hysteron_status hysteron_cascade_default_params(hysteron_cascade_params* params) {
+  return guard("hysteron_cascade_default_params", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(params);
+    if (hysteron_ff_pid_default_params(&params->outer) != HYSTERON_OK) fail(HYSTERON_ERROR_INTERNAL, "outer");
+    const hysteron::PidParams pid;
+    hysteron_pid_params& q = params->pressure;
+    q.kp = 20.0;  // duty per MPa: the dead-zone MPI paper's P loop (mpi-pwm's faithful variant)
+    q.ki = pid.ki;
+    q.kd = pid.kd;
+    q.derivative_filter = pid.derivative_filter;
+    q.tracking_time = pid.tracking_time;
+    q.setpoint_weight_p = pid.setpoint_weight_p;
+    q.setpoint_weight_d = pid.setpoint_weight_d;
+    q.out_min = -1.0;
+    q.out_max = 1.0;
+    q.anti_windup = HYSTERON_ANTI_WINDUP_CONDITIONAL;
+    const hysteron::PwmParams pwm;
+    params->pwm = {pwm.gain, pwm.deadband, pwm.min_duty, pwm.max_duty, pwm.resolution};
+  });
+}
+
+hysteron_status hysteron_cascade_create(const hysteron_params* params, const hysteron_cascade_params* controller,
+                                        hysteron_cascade** out) {
+  return guard("hysteron_cascade_create", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(params);
+    HYSTERON_REQUIRE(controller);
+    HYSTERON_REQUIRE(out);
+    hysteron::CascadeParams p;
+    p.feedforward = to_feedforward(controller->outer);
+    p.position = to_pid(controller->outer);
+    p.position.out_min = p.feedforward.pressure_limits.lo;  // the controller clamps p_d to them
+    p.position.out_max = p.feedforward.pressure_limits.hi;
+    p.pressure = to_pid(controller->pressure, controller->outer.sample_time, "pressure");
+    const hysteron_pwm_params& w = controller->pwm;
+    p.pwm = {w.gain, w.deadband, w.min_duty, w.max_duty, w.resolution};
+    check_controller(p.feedforward, p.position, &p.pressure, &p.pwm);
+    *out = new hysteron_cascade{hysteron::CascadePwmController(params->params, p), 0.0, 0.0};
+  });
+}
+
+hysteron_status hysteron_cascade_free(hysteron_cascade* controller) {
+  delete controller;
+  return HYSTERON_OK;
+}
+
+hysteron_status hysteron_cascade_reset(hysteron_cascade* controller) {
+  return guard("hysteron_cascade_reset", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(controller);
+    controller->controller.reset();
+    controller->last_duty = controller->last_desired = 0.0;
+  });
+}
+
+hysteron_status hysteron_cascade_step(hysteron_cascade* controller, double reference_m, double preview_m,
+                                      double measured_m, double pressure_mpa, double* duty,
+                                      double* desired_pressure_mpa) {
+  if (controller == nullptr || duty == nullptr) {
+    set_message("hysteron_cascade_step", controller == nullptr ? "argument controller is NULL" : "argument duty is NULL");
+    return HYSTERON_ERROR_NULL_POINTER;
+  }
+  if (!finite_step_args("hysteron_cascade_step", reference_m, preview_m, measured_m, &pressure_mpa, "outputs")) {
+    *duty = controller->last_duty;
+    if (desired_pressure_mpa) *desired_pressure_mpa = controller->last_desired;
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
+  controller->last_duty = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
+  controller->last_desired = controller->controller.desired_pressure();
+  *duty = controller->last_duty;
+  if (desired_pressure_mpa) *desired_pressure_mpa = controller->last_desired;
   return HYSTERON_OK;
 }
 

@@ -136,7 +136,7 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
   TrackingRun run;
   const std::size_t n = ref_m.size();
   for (auto* v : {&run.t, &run.reference_mm, &run.measured_mm, &run.actual_mm, &run.pressure_command_mpa,
-                  &run.pressure_mpa, &run.duty})
+                  &run.pressure_mpa, &run.pressure_measured_mpa, &run.duty})
     v->reserve(n);
   std::size_t k = 0;
   rig.run(static_cast<double>(n) * o.control_period, o.control_period, [&](const RigOutputs& out) {
@@ -151,6 +151,7 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
     // With the valves, pressure_command carries the cascade's desired pressure (the rig ignores it).
     run.pressure_command_mpa.push_back(in.pressure_command);
     run.pressure_mpa.push_back(out.pressure * 1e-6);
+    run.pressure_measured_mpa.push_back(s.pressure_mpa);
     run.duty.push_back(in.mode == Actuation::switching_valves ? in.pwm_duty : 0.0);
     if (in.pressure_command <= 0.0 || in.pressure_command >= kPressureMax) ++run.saturated;
     ++k;

@@ -85,6 +85,9 @@ struct Loop {
   std::function<std::string()> note = {};  // after the run: a note for the result's messages ("" for none)
   std::optional<PidParams> pressure = {};  // the valves' inner pressure loop (duty per MPa), if any
   double pressure_gain = 0.0;              // k_p of a proportional pressure loop (0: none)
+  LoopDesign::Kind kind = LoopDesign::Kind::feedforward_pid;  // the controller's structure
+  FeedforwardParams feedforward = {};      // the inverse feedforward's limits, scale and lag
+  std::optional<PwmParams> pwm = {};       // the valves' modulator (cascade_pwm)
 };
 
 struct Variant {

@@ -51,6 +51,10 @@ std::string shaper_timing(const ZvShaper& z, double tc) {
 // preview and the shaper on it (nullptr or inactive: none).
 LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvShaper* zv) {
   LoopDesign d;
+  d.kind = loop.kind;
+  d.feedforward = loop.feedforward;
+  d.feedforward.sample_time = tc;
+  d.pwm = loop.pwm;
   const PidParams& pid = loop.position;
   if (pid.kp != 0.0 || pid.ki != 0.0 || pid.kd != 0.0) d.pid = pid;
   d.pressure_pid = loop.pressure;
@@ -839,6 +843,10 @@ void ExperimentResult::write(const std::string& dir) const {
                                       "pressure_mpa", "pwm_duty"};
     std::vector<std::vector<double>> columns = {r.t, r.reference_mm, r.measured_mm, r.actual_mm,
                                                 r.pressure_command_mpa, r.pressure_mpa, r.duty};
+    if (!r.pressure_measured_mpa.empty()) {  // the pressure sensor's reading the loop was given
+      names.push_back("pressure_measured_mpa");
+      columns.push_back(r.pressure_measured_mpa);
+    }
     if (!r.correction_mm.empty()) {  // learning runs: the correction added to the reference
       names.push_back("correction_mm");
       columns.push_back(r.correction_mm);

@@ -25,7 +25,8 @@ Loop open_loop(const ModelParams& model, const OpenLoopParams& p, std::string de
   Law law = [c](const Sample& s) {
     return regulator(c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa));
   };
-  return Loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain};
+  return Loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain,
+              LoopDesign::Kind::open_loop, p.feedforward};
 }
 
 OpenLoopParams published(double tc) {
@@ -59,7 +60,8 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
                           "correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a), p.pressure_gain, pid_origin(c),
                           p.position.kp, p.position.ki, p.position.kd),
-              p.position, [a, name] { return adaptive_note(*a, name); }, std::nullopt, kp};
+              p.position, [a, name] { return adaptive_note(*a, name); }, std::nullopt, kp,
+              LoopDesign::Kind::open_loop, p.feedforward};
 }
 
 }  // namespace

@@ -24,7 +24,8 @@ Loop cascade(const ModelParams& model, const CascadeParams& p, std::string descr
     const double d = c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa);
     return valves(d, c->desired_pressure());
   };
-  return Loop{std::move(law), std::move(description), p.position, {}, p.pressure};
+  return Loop{std::move(law), std::move(description), p.position, {}, p.pressure, 0.0,
+              LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
 }
 
 CascadeParams published(double tc) {
@@ -66,7 +67,8 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
                           "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
                           c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), p.position.kp, p.position.ki,
                           p.position.kd, p.pressure.kp, p.pressure.ki),
-              p.position, [a, name] { return adaptive_note(*a, name); }, p.pressure};
+              p.position, [a, name] { return adaptive_note(*a, name); }, p.pressure, 0.0,
+              LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
 }
 
 }  // namespace

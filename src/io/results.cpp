@@ -470,10 +470,41 @@ PidParams pid_from(const json& j, std::string_view where) {
   p.setpoint_weight_d = get_double(j, "setpoint_weight_d", where);
   return p;
 }
+
+// The names of LoopDesign::Kind in result.json's "loop".
+constexpr std::pair<LoopDesign::Kind, std::string_view> kLoopKinds[] = {
+    {LoopDesign::Kind::feedforward_pid, "feedforward_pid"},
+    {LoopDesign::Kind::open_loop, "open_loop"},
+    {LoopDesign::Kind::cascade_pwm, "cascade_pwm"}};
+
+std::string_view loop_kind_name(LoopDesign::Kind k) {
+  for (const auto& [kind, name] : kLoopKinds)
+    if (kind == k) return name;
+  return "unknown";
+}
+
+LoopDesign::Kind loop_kind_from(const json& j, std::string_view where) {
+  const std::string name = get_string(j, "loop", where);
+  for (const auto& [kind, n] : kLoopKinds)
+    if (n == name) return kind;
+  throw Error(fmt::format("{}: key \"loop\": unknown loop \"{}\" (expected feedforward_pid, open_loop or cascade_pwm)",
+                          where, name));
+}
 }  // namespace
 
 json to_json(const LoopDesign& d) {
   json j = json::object();
+  j["loop"] = std::string(loop_kind_name(d.kind));
+  j["feedforward"] = {{"pressure_min_mpa", d.feedforward.pressure_limits.lo},
+                      {"pressure_max_mpa", d.feedforward.pressure_limits.hi},
+                      {"model_scale_per_m", d.feedforward.model_scale},
+                      {"lag_time_constant_s", d.feedforward.lag_time_constant}};
+  if (d.pwm)
+    j["pwm"] = {{"gain", d.pwm->gain},
+                {"deadband", d.pwm->deadband},
+                {"min_duty", d.pwm->min_duty},
+                {"max_duty", d.pwm->max_duty},
+                {"resolution", d.pwm->resolution}};
   if (d.pid) j["pid"] = pid_json(*d.pid);
   if (d.pressure_pid) j["pressure_pid"] = pid_json(*d.pressure_pid);
   if (d.pressure_gain != 0.0) j["pressure_gain"] = d.pressure_gain;
@@ -513,6 +544,33 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
   d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
   d.sample_time = get_double(j, "sample_time_s", where);
+  d.feedforward.sample_time = d.sample_time;
+  if (j.contains("loop")) {
+    d.kind = loop_kind_from(j, where);
+    const std::string w = key_where(where, "feedforward");
+    const json& f = need(j, "feedforward", where);
+    d.feedforward.pressure_limits = {get_double(f, "pressure_min_mpa", w), get_double(f, "pressure_max_mpa", w)};
+    d.feedforward.model_scale = get_double(f, "model_scale_per_m", w);
+    d.feedforward.lag_time_constant = get_double(f, "lag_time_constant_s", w);
+    if (d.kind == LoopDesign::Kind::cascade_pwm) {
+      const std::string wp = key_where(where, "pwm");
+      const json& x = need(j, "pwm", where);
+      PwmParams p;
+      p.gain = get_double(x, "gain", wp);
+      p.deadband = get_double(x, "deadband", wp);
+      p.min_duty = get_double(x, "min_duty", wp);
+      p.max_duty = get_double(x, "max_duty", wp);
+      p.resolution = get_double(x, "resolution", wp);
+      d.pwm = p;
+    }
+  } else {
+    // Written before "loop" (2026-11-26): every experiment used the default feedforward and
+    // PWM, and the structure follows from the pressure loops.
+    d.kind = d.pressure_pid ? LoopDesign::Kind::cascade_pwm
+             : d.pressure_gain > 0.0 ? LoopDesign::Kind::open_loop
+                                     : LoopDesign::Kind::feedforward_pid;
+    if (d.pressure_pid) d.pwm = PwmParams{};
+  }
   if (j.contains("shaper")) {
     const std::string w = key_where(where, "shaper");
     const json& s = j["shaper"];

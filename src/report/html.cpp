@@ -389,6 +389,9 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
     run.pressure_command_mpa = column(tt, "pressure_command_mpa", ps);
     run.pressure_mpa = column(tt, "pressure_mpa", ps);
     run.duty = column(tt, "pwm_duty", ps);
+    // the pressure sensor's reading (written since 2026-11-26)
+    if (std::find(tt.names.begin(), tt.names.end(), "pressure_measured_mpa") != tt.names.end())
+      run.pressure_measured_mpa = column(tt, "pressure_measured_mpa", ps);
     // learning runs: the correction they applied (ExperimentResult::write)
     if (std::find(tt.names.begin(), tt.names.end(), "correction_mm") != tt.names.end())
       run.correction_mm = column(tt, "correction_mm", ps);

@@ -299,6 +299,160 @@ static void check_ilc(void) {
   OK(hysteron_ilc_free(NULL));
 }
 
+/* The open loop and the cascade (their C++ classes' formulas, hysteron.h), against the ff+pid
+ * twin with the same feedforward and position PID: the open loop without a PID and k_p = 0 is
+ * the feedforward; with k_p its command is clamp(p_d + k_p (p_d - p)); the cascade's p_d is the
+ * ff+pid's command and its duty clamp(k_p,inner (p_d - p), -1, 1) (gain 1, no dead band). Then
+ * the argument checks. y: a contraction trajectory [model units]; lo, hi: pressure limits. */
+static void check_loops(const hysteron_params* params, const double* y, size_t n, double lo, double hi) {
+  hysteron_ff_pid_params fp;
+  hysteron_open_loop_params op;
+  hysteron_cascade_params cp;
+  hysteron_ff_pid* twin = NULL;
+  hysteron_open_loop* ol = NULL;
+  hysteron_cascade* cc = NULL;
+  double worst_ff = 0.0, worst_pd = 0.0, worst_duty = 0.0, pressure = lo, held = 0.0;
+  size_t k;
+  int saturated_duty = 0;
+  OK(hysteron_ff_pid_default_params(&fp));
+  fp.pressure_min = lo;
+  fp.pressure_max = hi;
+  OK(hysteron_open_loop_default_params(&op));
+  CHECK(op.pressure_gain == 0.5, "default pressure_gain %g (the paper's 0.5)", op.pressure_gain);
+  op.loop = fp;
+  op.pressure_gain = 0.0;
+  OK(hysteron_open_loop_create(params, &op, &ol));
+  OK(hysteron_ff_pid_create(params, &fp, &twin));
+  if (ol == NULL || twin == NULL) return;
+  for (k = 0; k < n; ++k) {
+    double a = 0.0, b = 0.0;
+    OK(hysteron_ff_pid_step(twin, y[k] / 1000.0, y[k] / 1000.0, 0.0, &a));
+    OK(hysteron_open_loop_step(ol, y[k] / 1000.0, y[k] / 1000.0, 0.0, 0.0, &b));
+    if (fabs(a - b) > worst_ff) worst_ff = fabs(a - b);
+  }
+  printf("open loop without PID and pressure loop = the feedforward: %.3g\n", worst_ff);
+  CHECK(worst_ff == 0.0, "open loop vs feedforward %.3g", worst_ff);
+  OK(hysteron_open_loop_free(ol));
+  ol = NULL;
+  OK(hysteron_ff_pid_free(twin));
+  twin = NULL;
+
+  fp.kp = 5.0;
+  fp.ki = 1.0;
+  op.loop = fp;
+  op.pressure_gain = 0.5;
+  OK(hysteron_cascade_default_params(&cp));
+  CHECK(cp.pressure.kp == 20.0 && cp.pwm.gain == 1.0 && cp.pwm.max_duty == 1.0, "cascade defaults");
+  cp.outer = fp;
+  OK(hysteron_open_loop_create(params, &op, &ol));
+  OK(hysteron_cascade_create(params, &cp, &cc));
+  OK(hysteron_ff_pid_create(params, &fp, &twin));
+  if (ol == NULL || cc == NULL || twin == NULL) return;
+  for (k = 0; k < n; ++k) {
+    const double ref = y[k] / 1000.0, meas = 0.9 * ref, p_meas = pressure;
+    double u_twin = 0.0, u_ol = 0.0, duty = 0.0, p_d = 0.0, expect_duty;
+    OK(hysteron_ff_pid_step(twin, ref, ref, meas, &u_twin));
+    OK(hysteron_open_loop_step(ol, ref, ref, meas, p_meas, &u_ol));
+    OK(hysteron_cascade_step(cc, ref, ref, meas, p_meas, &duty, &p_d));
+    if (fabs(p_d - u_twin) > worst_pd) worst_pd = fabs(p_d - u_twin);
+    expect_duty = 20.0 * (p_d - p_meas);
+    if (expect_duty > 1.0) expect_duty = 1.0;
+    if (expect_duty < -1.0) expect_duty = -1.0;
+    saturated_duty += fabs(expect_duty) == 1.0;
+    if (fabs(duty - expect_duty) > worst_duty) worst_duty = fabs(duty - expect_duty);
+    CHECK(u_ol >= lo && u_ol <= hi, "open-loop command %g outside [%g, %g]", u_ol, lo, hi);
+    pressure = 0.7 * pressure + 0.3 * u_ol; /* a lagging actuator to feed back */
+  }
+  printf("cascade: |p_d - ff+pid| %.3g, |duty - 20 (p_d - p)| %.3g (%d samples at +-1)\n", worst_pd, worst_duty,
+         saturated_duty);
+  CHECK(worst_pd == 0.0, "cascade p_d vs ff+pid %.3g", worst_pd);
+  CHECK(worst_duty <= 1e-15, "cascade duty %.3g", worst_duty);
+  {
+    /* the open loop's pressure loop on its feedforward, PID off: clamp(p_d + 0.5 (p_d - p)) */
+    double worst = 0.0;
+    hysteron_open_loop_params o2 = op;
+    hysteron_open_loop* ol2 = NULL;
+    o2.loop.kp = o2.loop.ki = 0.0;
+    OK(hysteron_open_loop_create(params, &o2, &ol2));
+    OK(hysteron_ff_pid_reset(twin));
+    if (ol2 == NULL) return;
+    {
+      hysteron_ff_pid_params f0 = fp;
+      hysteron_ff_pid* ff = NULL;
+      f0.kp = f0.ki = 0.0;
+      OK(hysteron_ff_pid_create(params, &f0, &ff));
+      if (ff == NULL) return;
+      for (k = 0; k < n; ++k) {
+        const double ref = y[k] / 1000.0, p_meas = 0.5 * (lo + hi) + 0.1 * (hi - lo) * sin(0.05 * (double)k);
+        double p_d = 0.0, u = 0.0, e;
+        OK(hysteron_ff_pid_step(ff, ref, ref, ref, &p_d));
+        OK(hysteron_open_loop_step(ol2, ref, ref, ref, p_meas, &u));
+        e = p_d + 0.5 * (p_d - p_meas);
+        if (e < lo) e = lo;
+        if (e > hi) e = hi;
+        if (fabs(u - e) > worst) worst = fabs(u - e);
+      }
+      OK(hysteron_ff_pid_free(ff));
+    }
+    printf("open loop's pressure loop: |u - clamp(p_d + 0.5 (p_d - p))| %.3g\n", worst);
+    CHECK(worst <= 1e-15, "open-loop pressure loop %.3g", worst);
+    OK(hysteron_open_loop_free(ol2));
+  }
+
+  /* a non-finite argument: error, outputs held, state unchanged */
+  {
+    double u = 0.0, u2 = -1.0, duty = 0.0, duty2 = 3.0, pd = 0.0, pd2 = -1.0;
+    OK(hysteron_open_loop_step(ol, 0.01, 0.01, 0.01, lo, &u));
+    held = u;
+    expect_error("open_loop_step NaN pressure", hysteron_open_loop_step(ol, 0.01, 0.01, 0.01, NAN, &u2),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "pressure_mpa = nan");
+    CHECK(u2 == held, "NaN holds the open loop's previous command (%g, %g)", u2, held);
+    OK(hysteron_cascade_step(cc, 0.01, 0.01, 0.01, lo, &duty, &pd));
+    expect_error("cascade_step inf", hysteron_cascade_step(cc, INFINITY, 0.01, 0.01, lo, &duty2, &pd2),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "reference_m = inf");
+    CHECK(duty2 == duty && pd2 == pd, "inf holds the cascade's outputs");
+    expect_error("cascade_step NULL duty", hysteron_cascade_step(cc, 0, 0, 0, 0, NULL, NULL),
+                 HYSTERON_ERROR_NULL_POINTER, "duty");
+    OK(hysteron_cascade_step(cc, 0.01, 0.01, 0.01, lo, &duty2, NULL)); /* desired pressure may be NULL */
+  }
+  /* bad parameters name the field; nothing is created */
+  {
+    hysteron_open_loop_params bad = op;
+    hysteron_cascade_params badc = cp;
+    hysteron_open_loop* none = NULL;
+    hysteron_cascade* nonec = NULL;
+    bad.pressure_gain = -0.1;
+    expect_error("open_loop_create pressure_gain", hysteron_open_loop_create(params, &bad, &none),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "pressure_gain");
+    bad = op;
+    bad.loop.pressure_max = bad.loop.pressure_min;
+    expect_error("open_loop_create limits", hysteron_open_loop_create(params, &bad, &none),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "pressure");
+    CHECK(none == NULL, "nothing created");
+    badc.pwm.max_duty = 1.5;
+    expect_error("cascade_create max_duty", hysteron_cascade_create(params, &badc, &nonec),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "pwm.max_duty");
+    badc = cp;
+    badc.pressure.anti_windup = 7;
+    expect_error("cascade_create anti_windup", hysteron_cascade_create(params, &badc, &nonec),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "pressure.anti_windup = 7");
+    badc = cp;
+    badc.pressure.ki = NAN;
+    expect_error("cascade_create ki", hysteron_cascade_create(params, &badc, &nonec),
+                 HYSTERON_ERROR_INVALID_ARGUMENT, "pressure: pid.ki = nan");
+    CHECK(nonec == NULL, "nothing created");
+    expect_error("cascade_create NULL", hysteron_cascade_create(NULL, &cp, &nonec), HYSTERON_ERROR_NULL_POINTER,
+                 "params");
+  }
+  OK(hysteron_open_loop_reset(ol));
+  OK(hysteron_cascade_reset(cc));
+  OK(hysteron_open_loop_free(ol));
+  OK(hysteron_cascade_free(cc));
+  OK(hysteron_ff_pid_free(twin));
+  OK(hysteron_open_loop_free(NULL));
+  OK(hysteron_cascade_free(NULL));
+}
+
 static int selftest(const char* path) {
   static double x[N], y[N], y2[N], xi[N], xi2[N];
   hysteron_params* params = NULL;
@@ -422,6 +576,7 @@ static int selftest(const char* path) {
 
   check_errors(params, model, inverse);
   check_ilc();
+  check_loops(params, y, N, cp.pressure_min, cp.pressure_max);
 
   OK(hysteron_ff_pid_free(ctl));
   OK(hysteron_inverse_free(inverse));

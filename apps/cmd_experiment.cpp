@@ -87,7 +87,7 @@ void check_plant_not_output(const std::string& plant, const std::string& dir) {
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
     const std::string f = e.path().filename().string();
-    if (f.starts_with("tracking_") && f.ends_with(".csv")) outputs.push_back({"--out", e.path().string()});
+    if (ExperimentResult::is_output_file(f)) outputs.push_back({"--out", e.path().string()});
   }
   for (const auto& o : outputs) io::check_outputs_distinct({o}, {{"--plant", plant}});
 }

@@ -156,6 +156,51 @@ TEST(OutputFiles, ErrorsLeaveNoTemporaryFileAndTheOldFile) {
   EXPECT_TRUE(temp_files(d.path()).empty());
 }
 
+// A FileBatch: nothing replaced until commit(); the temporary files complete meanwhile (and
+// removed if the batch is dropped); symbolic links and hard links kept as without a batch.
+TEST(OutputFiles, BatchReplacesTheFilesTogether) {
+  TempDir d;
+  const std::string a = d.file("a.txt"), b = d.file("b.txt"), target = d.file("target.txt"),
+                    link = d.file("link.txt"), twin = d.file("twin.txt");
+  put(a, "old a\n");
+  put(target, "old target\n");
+  fs::create_symlink(target, link);
+  fs::create_hard_link(a, twin);
+  {
+    io::FileBatch batch;
+    io::write_text_file(a, "new a\n");
+    io::write_text_file(b, "new b\n");
+    io::write_text_file(link, "new target\n");
+    EXPECT_EQ(slurp(a), "old a\n");
+    EXPECT_FALSE(fs::exists(b));
+    EXPECT_EQ(temp_files(d.path()).size(), 3u);  // complete, waiting
+    EXPECT_THROW(io::FileBatch nested, Error);
+    batch.commit();
+  }
+  EXPECT_EQ(slurp(a), "new a\n");
+  EXPECT_EQ(slurp(twin), "new a\n");  // the hard link kept
+  EXPECT_EQ(slurp(b), "new b\n");
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(slurp(target), "new target\n");
+  EXPECT_TRUE(temp_files(d.path()).empty());
+  // an error in the batch: nothing replaced, no temporary file left
+  try {
+    io::FileBatch batch;
+    io::write_text_file(a, "newer a\n");
+    io::write_file_atomically(b, [](const std::string&) { throw Error("boom"); });
+    batch.commit();
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("boom"), std::string::npos);
+  }
+  EXPECT_EQ(slurp(a), "new a\n");
+  EXPECT_EQ(slurp(b), "new b\n");
+  EXPECT_TRUE(temp_files(d.path()).empty());
+  // without a batch (after one) files are replaced at once again
+  io::write_text_file(a, "a again\n");
+  EXPECT_EQ(slurp(a), "a again\n");
+}
+
 TEST(OutputFiles, RemoveTemporaryFilesRemovesLiveOnes) {
   TempDir d;
   const std::string f = d.file("out.csv");

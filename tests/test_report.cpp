@@ -1,16 +1,19 @@
 // Plots (gnuplot) and HTML reports.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
+#include "test_util.hpp"
 
 namespace fs = std::filesystem;
 using namespace hysteron;
@@ -199,8 +202,11 @@ TEST(Report, FitJsonRoundTripAndHtml) {
   EXPECT_FALSE(fs::exists(tmp / "x.html"));
 }
 
-TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
-  Tmp tmp;
+namespace {
+// A small experiment result (gpi-pid's shape, 800 identification samples, 300 per run) with
+// a run of each variant in `variants`.
+ExperimentResult small_experiment(std::initializer_list<const char*> variants = {"compensated", "faithful",
+                                                                                 "baseline"}) {
   ExperimentResult r;
   r.name = "gpi-pid";
   r.title = "test experiment";
@@ -216,7 +222,7 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   for (std::size_t i = 0; i < n; ++i) r.id_t.push_back(0.01 * static_cast<double>(i));
   r.id_train_end = 500;
   r.published = {"paper, Table 5", {{"", 2.659, 0.7358, 0.8701}}};
-  for (const char* variant : {"compensated", "faithful", "baseline"}) {
+  for (const char* variant : variants) {
     TrackingRun run;
     run.variant = variant;
     run.reference = "sine";
@@ -234,6 +240,13 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
     run.errors = {0.5, 0.3, 0.35};
     r.runs.push_back(run);
   }
+  return r;
+}
+}  // namespace
+
+TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
+  Tmp tmp;
+  ExperimentResult r = small_experiment();
   // a trial whose rig diverged (+inf) is written as null and read back as +inf
   const double inf = std::numeric_limits<double>::infinity();
   r.gain_trials = {{"sine", {0.5, 1.0, 2.0}, {0.8, 0.6, inf}, {0.7, 0.65, inf}, 0.5, true},
@@ -271,3 +284,51 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   EXPECT_NE(error_of([&] { write_report_from(tmp / "nothing", tmp / "x.html", ""); }).find("no such file"),
             std::string::npos);
 }
+
+// ExperimentResult::write replaces the output directory's files as a set: an error while
+// writing leaves every file of the earlier run as it was (and no temporary file); a run
+// without some of the earlier run's variants removes their CSVs and the earlier report, and
+// leaves the user's own files alone.
+TEST(Report, ExperimentOutputIsReplacedAsASet) {
+  Tmp tmp;
+  const std::string dir = tmp / "exp";
+  small_experiment({"compensated", "faithful", "learning"}).write(dir);
+  std::ofstream(dir + "/report.html") << "<html>the earlier run</html>";
+  std::ofstream(dir + "/notes.txt") << "mine";
+  const auto snapshot = [&] {
+    std::vector<std::pair<std::string, std::string>> files;
+    for (const auto& e : fs::directory_iterator(dir)) files.emplace_back(e.path().filename().string(), slurp(e.path()));
+    std::sort(files.begin(), files.end());
+    return files;
+  };
+  const auto before = snapshot();
+  ASSERT_EQ(before.size(), 9u);  // 3 tracking CSVs, identification, 2 models, result.json, report, notes
+  // a run whose last tracking series is malformed: written after the identification and the
+  // first runs' CSVs, so without the batch those would have been replaced already
+  ExperimentResult bad = small_experiment({"compensated", "faithful", "baseline"});
+  bad.id_contraction_mm.assign(bad.id_contraction_mm.size(), 1.0);
+  bad.runs.back().duty.pop_back();
+  const std::string message = test::error_of([&] { bad.write(dir); });
+  EXPECT_NE(message.find("tracking_baseline_sine.csv"), std::string::npos) << message;
+  EXPECT_EQ(snapshot(), before);  // nothing changed, no temporary file left
+  // a new directory that cannot be written is not left behind
+  EXPECT_THROW(bad.write(tmp / "new"), Error);
+  EXPECT_FALSE(fs::exists(tmp / "new"));
+  // a run without the learning variant, with a baseline
+  ExperimentResult next = small_experiment({"compensated", "faithful", "baseline"});
+  next.seed = 4;
+  next.write(dir);
+  EXPECT_FALSE(fs::exists(dir + "/tracking_learning_sine.csv"));
+  EXPECT_FALSE(fs::exists(dir + "/report.html"));  // it described the earlier run
+  EXPECT_TRUE(fs::exists(dir + "/tracking_baseline_sine.csv"));
+  EXPECT_EQ(slurp(dir + "/notes.txt"), "mine");
+  EXPECT_EQ(read_experiment_dir(dir).seed, 4u);
+  EXPECT_EQ(read_experiment_dir(dir).runs.size(), 3u);
+  // a directory without an earlier run's result.json: nothing of its own removed
+  const std::string other = tmp / "other";
+  fs::create_directories(other);
+  std::ofstream(other + "/tracking_mine.csv") << "a,b\n1,2\n";
+  next.write(other);
+  EXPECT_TRUE(fs::exists(other + "/tracking_mine.csv"));
+}
+

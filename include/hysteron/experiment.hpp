@@ -308,8 +308,17 @@ struct ExperimentResult {
   // The same as io::to_json(result) (hysteron/io/results.hpp, where it is defined).
   nlohmann::json to_json() const;
   // Writes identification.csv, tracking_<variant>_<reference>.csv, the models and
-  // result.json into dir (created if needed), each file atomically.
+  // result.json into dir (created if needed), each file atomically (io::write_file_atomically)
+  // and all together (io::FileBatch): every file is complete before the first is replaced, so
+  // on an error (Error names the file) nothing in dir has changed. Where dir held an earlier
+  // run (its result.json), that run's files this one does not have (tracking CSVs of variants
+  // it did not run, report.html, which described it) are removed afterwards; other files in
+  // dir are left alone.
   void write(const std::string& dir) const;
+  // True for the names of the files write() and `hysteron experiment` put into an output
+  // directory: identification.csv, model.json, best_model.json, result.json, report.html and
+  // tracking_*.csv.
+  static bool is_output_file(const std::string& filename);
   // Human-readable table beside the paper's figures.
   std::string table() const;
 };

@@ -830,36 +830,72 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   return res;
 }
 
-void ExperimentResult::write(const std::string& dir) const {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw Error(fmt::format("experiment: cannot create output directory {}: {}", dir, ec.message()));
-  const std::filesystem::path d(dir);
+bool ExperimentResult::is_output_file(const std::string& f) {
+  for (const char* name : {"identification.csv", "model.json", "best_model.json", "result.json", "report.html"})
+    if (f == name) return true;
+  return f.starts_with("tracking_") && f.ends_with(".csv");
+}
+
+namespace {
+
+// Writes this run's files into `d` (a new, empty directory).
+void write_files(const ExperimentResult& r, const std::filesystem::path& d) {
   io::write_columns((d / "identification.csv").string(),
                     {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
-                    {id_t, id_pressure_command_mpa, id_pressure_mpa, id_contraction_mm});
-  for (const auto& r : runs) {
+                    {r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa, r.id_contraction_mm});
+  for (const auto& run : r.runs) {
     std::vector<std::string> names = {"t_s",      "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa",
                                       "pressure_mpa", "pwm_duty"};
-    std::vector<std::vector<double>> columns = {r.t, r.reference_mm, r.measured_mm, r.actual_mm,
-                                                r.pressure_command_mpa, r.pressure_mpa, r.duty};
-    if (!r.pressure_measured_mpa.empty()) {  // the pressure sensor's reading the loop was given
+    std::vector<std::vector<double>> columns = {run.t, run.reference_mm, run.measured_mm, run.actual_mm,
+                                                run.pressure_command_mpa, run.pressure_mpa, run.duty};
+    if (!run.pressure_measured_mpa.empty()) {  // the pressure sensor's reading the loop was given
       names.push_back("pressure_measured_mpa");
-      columns.push_back(r.pressure_measured_mpa);
+      columns.push_back(run.pressure_measured_mpa);
     }
-    if (!r.correction_mm.empty()) {  // learning runs: the correction added to the reference
+    if (!run.correction_mm.empty()) {  // learning runs: the correction added to the reference
       names.push_back("correction_mm");
-      columns.push_back(r.correction_mm);
+      columns.push_back(run.correction_mm);
     }
-    io::write_columns((d / fmt::format("tracking_{}_{}.csv", r.variant, r.reference)).string(), names, columns);
+    io::write_columns((d / fmt::format("tracking_{}_{}.csv", run.variant, run.reference)).string(), names, columns);
   }
-  io::write_model_file((d / "model.json").string(), fit.model);
-  io::write_model_file((d / "best_model.json").string(), best_fit.model,
-                       model_reason.empty() ? nlohmann::json{}
-                                            : nlohmann::json{{"note", fmt::format("hysteron experiment {}: the model "
-                                                                                  "of the compensated variants; {}",
-                                                                                  name, model_reason)}});
-  io::write_text_file((d / "result.json").string(), io::to_json(*this).dump(2) + "\n");
+  io::write_model_file((d / "model.json").string(), r.fit.model);
+  io::write_model_file((d / "best_model.json").string(), r.best_fit.model,
+                       r.model_reason.empty()
+                           ? nlohmann::json{}
+                           : nlohmann::json{{"note", fmt::format("hysteron experiment {}: the model of the "
+                                                                 "compensated variants; {}",
+                                                                 r.name, r.model_reason)}});
+  io::write_text_file((d / "result.json").string(), io::to_json(r).dump(2) + "\n");
+}
+
+}  // namespace
+
+void ExperimentResult::write(const std::string& dir) const {
+  namespace fs = std::filesystem;
+  const fs::path d(dir);
+  std::error_code ec;
+  const bool existed = fs::is_directory(d, ec);
+  fs::create_directories(d, ec);
+  if (ec) throw Error(fmt::format("experiment: cannot create output directory {}: {}", dir, ec.message()));
+  const bool earlier_run = fs::exists(d / "result.json", ec);
+  try {
+    io::FileBatch batch;  // every file complete before any is replaced
+    write_files(*this, d);
+    batch.commit();
+  } catch (...) {
+    if (!existed) fs::remove(d, ec);  // the directory it created, if still empty
+    throw;
+  }
+  if (!earlier_run) return;
+  // The earlier run's files this one does not have (a variant it did not run, its report).
+  std::vector<std::string> written = {"identification.csv", "model.json", "best_model.json", "result.json"};
+  for (const auto& r : runs) written.push_back(fmt::format("tracking_{}_{}.csv", r.variant, r.reference));
+  std::vector<fs::path> stale;
+  for (const auto& e : fs::directory_iterator(d, ec)) {
+    const std::string f = e.path().filename().string();
+    if (is_output_file(f) && std::find(written.begin(), written.end(), f) == written.end()) stale.push_back(e.path());
+  }
+  for (const fs::path& p : stale) fs::remove(p, ec);
 }
 
 std::string ExperimentResult::table() const {

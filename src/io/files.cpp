@@ -160,6 +160,58 @@ void copy_into(const std::string& tmp, const std::string& target, const std::str
 
 }  // namespace
 
+// ---- batches (FileBatch) -----------------------------------------------------------
+
+namespace {
+// A complete, flushed temporary file waiting for FileBatch::commit().
+struct PendingFile {
+  std::unique_ptr<TempFile> tmp;
+  std::string real;  // the file to replace (symbolic links resolved)
+  std::string path;  // as given, for messages
+  bool hard_links = false;
+};
+}  // namespace
+
+namespace {
+// The pending files of the thread's open batch (FileBatch::Impl owns them).
+thread_local std::vector<PendingFile>* t_batch = nullptr;
+}  // namespace
+
+struct FileBatch::Impl {
+  std::vector<PendingFile> pending;
+};
+
+namespace {
+
+// Moves a complete temporary file into place (see write_file_atomically).
+void commit_file(PendingFile& f) {
+  if (f.hard_links) {
+    copy_into(f.tmp->path(), f.real, f.path);  // the inode kept (not atomic)
+    f.tmp.reset();                             // removes the temporary file
+    return;
+  }
+  if (std::rename(f.tmp->path().c_str(), f.real.c_str()) != 0)
+    throw Error(fmt::format("{}: cannot rename the temporary file into place: {}", f.path, std::strerror(errno)));
+  f.tmp->release();
+}
+}  // namespace
+
+FileBatch::FileBatch() : impl_(std::make_unique<Impl>()) {
+  if (t_batch != nullptr) throw Error("FileBatch: a batch is already open on this thread");
+  t_batch = &impl_->pending;
+}
+
+FileBatch::~FileBatch() {
+  if (t_batch == &impl_->pending) t_batch = nullptr;
+  // impl_'s pending temporary files are removed by their TempFile
+}
+
+void FileBatch::commit() {
+  if (t_batch == &impl_->pending) t_batch = nullptr;
+  for (PendingFile& f : impl_->pending) commit_file(f);
+  impl_->pending.clear();
+}
+
 void remove_temporary_files() noexcept {
   for (auto& slot : g_temp_slots)
     if (slot.state.load() == 2) ::unlink(slot.path);
@@ -204,13 +256,13 @@ void write_file_atomically(const std::string& path, const std::function<void(con
     if (::access(real.c_str(), W_OK) != 0)
       throw Error(fmt::format("{}: not writable ({}); not replacing it", path, std::strerror(errno)));
   }
-  std::optional<TempFile> tmp;
+  std::unique_ptr<TempFile> tmp;
   int fd = -1;
   std::random_device rd;
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
-    tmp.emplace((dir / fmt::format(".{}.tmp-{}-{}-{:08x}", target.filename().string(), ::getpid(), temp_counter++,
-                                   rd()))
-                    .string());
+    tmp = std::make_unique<TempFile>((dir / fmt::format(".{}.tmp-{}-{}-{:08x}", target.filename().string(),
+                                                        ::getpid(), temp_counter++, rd()))
+                                         .string());
     fd = ::open(tmp->path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0) {
       const int err = errno;
@@ -230,14 +282,13 @@ void write_file_atomically(const std::string& path, const std::function<void(con
     write(tmp->path());
     // flush to disk before the rename, so a crash leaves the old or the new file, never a torn one
     fsync_path(tmp->path(), path);
-    if (exists && st.st_nlink > 1) {
-      // hard links: the new content goes into the same inode (not atomic: see the header)
-      copy_into(tmp->path(), real, path);
-      return;  // ~TempFile removes the temporary file
+    // hard links: the new content goes into the same inode (not atomic: see the header)
+    PendingFile f{std::move(tmp), real, path, exists && st.st_nlink > 1};
+    if (t_batch != nullptr) {  // a FileBatch moves it into place with the others
+      t_batch->push_back(std::move(f));
+      return;
     }
-    if (std::rename(tmp->path().c_str(), real.c_str()) != 0)
-      throw Error(fmt::format("{}: cannot rename the temporary file into place: {}", path, std::strerror(errno)));
-    tmp->release();
+    commit_file(f);
   } catch (const Error&) {
     rethrow_named(path);
   }

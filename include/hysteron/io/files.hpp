@@ -4,6 +4,7 @@
 // removed by a signal handler, and outputs checked against inputs. Used by the
 // data tables (table.hpp), model files (model_file.hpp) and every result writer.
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +27,27 @@ namespace hysteron::io {
 // process is killed by a signal are removed by remove_temporary_files(), if the program's
 // handler calls it (the hysteron CLI does, for SIGINT, SIGTERM and SIGHUP).
 void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write);
+// Files replaced together (ExperimentResult::write): while a FileBatch is alive on a thread,
+// write_file_atomically on that thread fills and flushes each regular file's temporary file as
+// above but does not move it into place; commit() then does, for all of them in the order they
+// were written (renames; the copies into files with hard links). Destroyed without commit()
+// (an error while writing one of them), it removes every temporary file: none of the paths has
+// changed. Devices, FIFOs and stdout are written directly, as without a batch. A commit that
+// fails part way (a rename refused) throws Error naming the file; the files before it are
+// replaced, the rest not. Batches do not nest (a second one on the same thread throws).
+class FileBatch {
+ public:
+  FileBatch();
+  ~FileBatch();
+  FileBatch(const FileBatch&) = delete;
+  FileBatch& operator=(const FileBatch&) = delete;
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 // write_file_atomically with a text body; path "-" writes to stdout.
 void write_text_file(const std::string& path, std::string_view text);
 

@@ -2,13 +2,15 @@
 // directory, as docs/deploy.md tells a user to: result.json's "controller" of a run and the
 // model file it inverts give hysteron_open_loop (mpi-openloop) and hysteron_cascade (mpi-pwm)
 // that, fed the run's recorded reference, contraction and pressure readings, command what the
-// run commanded. Also their argument checks.
+// run commanded; so does the same loop rebuilt in C++ (make_controller, feedforward_preview).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "hysteron/experiment.hpp"
@@ -53,6 +55,36 @@ hysteron_params* load_model(const std::filesystem::path& file) {
 // compensated one the best.
 std::string model_file(const TrackingRun& r) { return r.variant == "faithful" ? "model.json" : "best_model.json"; }
 
+// The run's feedforward preview [m] (feedforward_preview, the documented formula).
+std::vector<double> preview_m(const TrackingRun& r) {
+  std::vector<double> ref(r.reference_mm.size());
+  for (std::size_t k = 0; k < ref.size(); ++k) ref[k] = r.reference_mm[k] * 1e-3;
+  return feedforward_preview(r.controller, ref);
+}
+
+// The same loop in C++ (make_controller on the run's model): the command (regulator) or the
+// duty and the desired pressure (valves) of every sample, against the run's.
+void replay_cpp(const ExperimentResult& r, const TrackingRun& run, double& worst_command, double& worst_duty) {
+  Controller c = make_controller(run.controller, run.variant == "faithful" ? r.fit.model : r.best_fit.model);
+  const std::vector<double> preview = preview_m(run);
+  for (std::size_t k = 0; k < run.t.size(); ++k) {
+    const double ref = run.reference_mm[k] * 1e-3, meas = run.measured_mm[k] * 1e-3, p = run.pressure_measured_mpa[k];
+    std::visit(
+        [&](auto& loop) {
+          using T = std::decay_t<decltype(loop)>;
+          if constexpr (std::is_same_v<T, FeedforwardPidController>) {
+            worst_command = std::max(worst_command, std::abs(loop.step(ref, preview[k], meas) - run.pressure_command_mpa[k]));
+          } else if constexpr (std::is_same_v<T, OpenLoopController>) {
+            worst_command = std::max(worst_command, std::abs(loop.step(ref, preview[k], meas, p) - run.pressure_command_mpa[k]));
+          } else {
+            worst_duty = std::max(worst_duty, std::abs(loop.step(ref, preview[k], meas, p) - run.duty[k]));
+            worst_command = std::max(worst_command, std::abs(loop.desired_pressure() - run.pressure_command_mpa[k]));
+          }
+        },
+        c);
+  }
+}
+
 struct Worst {
   double command = 0.0, duty = 0.0;
   std::size_t n = 0;
@@ -71,7 +103,7 @@ Worst replay_open_loop(const std::filesystem::path& dir, const TrackingRun& r) {
   hysteron_params_free(model);
   Worst w;
   if (!loop) return w;
-  const std::vector<double> preview = test::feedforward_preview(d, r.reference_mm);
+  const std::vector<double> preview = preview_m(r);
   for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
     double u = -1.0;
     EXPECT_EQ(hysteron_open_loop_step(loop, r.reference_mm[k] * 1e-3, preview[k], r.measured_mm[k] * 1e-3,
@@ -103,7 +135,7 @@ Worst replay_cascade(const std::filesystem::path& dir, const TrackingRun& r) {
   EXPECT_EQ(hysteron_cascade_create(model, &c, &loop), HYSTERON_OK) << hysteron_last_error();
   hysteron_params_free(model);
   if (!loop) return w;
-  const std::vector<double> preview = test::feedforward_preview(d, r.reference_mm);
+  const std::vector<double> preview = preview_m(r);
   for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
     double duty = 2.0, p_d = -1.0;
     EXPECT_EQ(hysteron_cascade_step(loop, r.reference_mm[k] * 1e-3, preview[k], r.measured_mm[k] * 1e-3,
@@ -130,6 +162,10 @@ void check_replay(const std::string& name, bool cascade) {
     if (run.variant != "faithful" && run.variant != "compensated") continue;
     ASSERT_EQ(run.pressure_measured_mpa.size(), run.t.size()) << run.variant;
     const Worst w = cascade ? replay_cascade(dir, run) : replay_open_loop(dir, run);
+    double cpp_command = 0.0, cpp_duty = 0.0;
+    replay_cpp(back, run, cpp_command, cpp_duty);
+    EXPECT_LT(cpp_command, 1e-9) << name << " " << run.variant << " " << run.reference << ": make_controller, MPa";
+    EXPECT_LT(cpp_duty, 1e-9) << name << " " << run.variant << " " << run.reference << ": make_controller, duty";
     EXPECT_EQ(w.n, run.t.size());
     EXPECT_LT(w.command, 1e-9) << name << " " << run.variant << " " << run.reference << ": MPa";
     EXPECT_LT(w.duty, 1e-9) << name << " " << run.variant << " " << run.reference << ": duty";

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <string>
 #include <tuple>
+#include <variant>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -1021,8 +1022,8 @@ TEST(ExperimentTuning, LearningFeedforwardGoesThroughTheTrialsShaper) {
 }
 
 // A run's "controller" (result.json; docs/deploy.md) holds every number its loop needs: the
-// compensated loop rebuilt from it and the fitted model (FeedforwardPidController, the preview
-// through the shaper lead samples ahead) gives the run's pressure commands, and an
+// compensated loop rebuilt from it and the fitted model (make_controller: FeedforwardPidController,
+// feedforward_preview: through the shaper, lead samples ahead) gives the run's pressure commands, and an
 // IterativeLearning built from the learning run's parameters, fed the run's errors, gives the
 // corrections the run applied and ends where its supervisor ended. Both survive the output
 // directory (result.json and the tracking CSVs, read back by read_experiment_dir).
@@ -1039,13 +1040,16 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
   EXPECT_NE(comp.description.find(fmt::format("Kp = {:.3g} MPa/m", d.pid->kp)), std::string::npos) << comp.description;
   {
     const std::size_t n = comp.t.size();
-    const std::vector<double> preview = test::feedforward_preview(d, comp.reference_mm);
-    FeedforwardParams ff;
-    ff.sample_time = tc;
-    FeedforwardPidController loop(r.best_fit.model, ff, *d.pid);
+    std::vector<double> ref(n);
+    for (std::size_t k = 0; k < n; ++k) ref[k] = comp.reference_mm[k] * 1e-3;
+    const std::vector<double> preview = feedforward_preview(d, ref);
+    EXPECT_EQ(d.kind, LoopDesign::Kind::feedforward_pid);
+    Controller c = make_controller(d, r.best_fit.model);
+    ASSERT_TRUE(std::holds_alternative<FeedforwardPidController>(c));
+    auto& loop = std::get<FeedforwardPidController>(c);
     double worst = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
-      const double u = loop.step(comp.reference_mm[k] * 1e-3, preview[k], comp.measured_mm[k] * 1e-3);
+      const double u = loop.step(ref[k], preview[k], comp.measured_mm[k] * 1e-3);
       worst = std::max(worst, std::abs(std::clamp(u, 0.0, experiment::kPressureMax) - comp.pressure_command_mpa[k]));
     }
     EXPECT_LT(worst, 1e-9) << "MPa";

@@ -4,7 +4,6 @@
 // quick experiment run.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cstddef>
 #include <fstream>
 #include <random>
@@ -64,30 +63,6 @@ inline bool said(const ExperimentResult& r, const std::string& part) {
 
 // A quick run of experiment `name` on the nominal rig: mpi-asym pinned (no auto fits of every
 // kind), no adaptive variant, `learning_periods` periods of the learning variant.
-// The reference [m] a tracking run's feedforward was fed (docs/deploy.md): r through the run's
-// zero-vibration shaper if it has one, s(k) = a1 r(k + advance) + a2 r(k + advance - delay),
-// then fed `feedforward_lead` samples ahead; indices clamped to the run, as `hysteron
-// experiment` does for its (non-periodic) tracking runs.
-inline std::vector<double> feedforward_preview(const LoopDesign& d, const std::vector<double>& reference_mm) {
-  const auto n = static_cast<std::ptrdiff_t>(reference_mm.size());
-  const auto at = [&](std::ptrdiff_t k) {
-    return reference_mm[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(k, 0, n - 1))] * 1e-3;
-  };
-  std::vector<double> shaped(reference_mm.size()), preview(reference_mm.size());
-  for (std::ptrdiff_t k = 0; k < n; ++k) {
-    if (!d.shaper) {
-      shaped[static_cast<std::size_t>(k)] = at(k);
-      continue;
-    }
-    const auto adv = static_cast<std::ptrdiff_t>(d.shaper->advance), D = static_cast<std::ptrdiff_t>(d.shaper->delay);
-    shaped[static_cast<std::size_t>(k)] = d.shaper->a1 * at(k + adv) + d.shaper->a2 * at(k + adv - D);
-  }
-  for (std::ptrdiff_t k = 0; k < n; ++k)
-    preview[static_cast<std::size_t>(k)] =
-        shaped[static_cast<std::size_t>(std::min(k + static_cast<std::ptrdiff_t>(d.feedforward_lead), n - 1))];
-  return preview;
-}
-
 inline ExperimentOptions quick_experiment(const std::string& name, int learning_periods = 0) {
   ExperimentOptions o;
   o.name = name;

@@ -32,6 +32,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -189,6 +190,22 @@ struct LoopDesign {
   };
   std::optional<Learning> learning;
 };
+
+// The loop a run's `controller` describes, rebuilt on `model` (the model file the run inverts:
+// best_model.json for the compensated and learning loops, model.json for the faithful one;
+// docs/deploy.md), by d.kind: FeedforwardPidController (the PID's limits the pressure limits),
+// OpenLoopController or CascadePwmController. Without d.pid the position loop is off (the open
+// loop as published; the other two get a zero PID). Throws Error on invalid numbers. The
+// learning is not part of it (an IterativeLearning from d.learning->params adds its correction
+// to the reference and the preview).
+using Controller = std::variant<FeedforwardPidController, OpenLoopController, CascadePwmController>;
+Controller make_controller(const LoopDesign& d, const ModelParams& model);
+
+// The reference the loop's feedforward is fed, for a recorded reference (any units, e.g. m):
+// through d.shaper if there is one, s(k) = a1 r(k + advance) + a2 r(k + advance - delay), then
+// d.feedforward_lead samples ahead, preview(k) = s(k + lead); indices clamped to the record, as
+// `hysteron experiment`'s tracking runs do.
+std::vector<double> feedforward_preview(const LoopDesign& d, std::span<const double> reference);
 
 struct TrackingRun {
   std::string variant;    // faithful | compensated | baseline

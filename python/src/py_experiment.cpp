@@ -1,6 +1,10 @@
 // Bindings of the papers' experiments, the plots and the HTML reports.
 #include <fmt/format.h>
 
+#include <span>
+#include <variant>
+
+#include "hysteron/compensation.hpp"
 #include "hysteron/experiment.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/report.hpp"
@@ -30,6 +34,30 @@ report::Labels labels(const std::string& title, const std::string& xl, const std
 
 void bind_experiment(py::module_& m) {
   m.def("experiment_names", &experiment_names, "Names of the registered experiments (the papers').");
+  m.def(
+      "controller_from",
+      [](const py::object& controller, const py::object& model) {
+        const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
+        Controller c = make_controller(d, model_spec(model));
+        return std::visit([](auto& loop) { return py::cast(std::move(loop)); }, c);
+      },
+      py::arg("controller"), py::arg("model"),
+      R"doc(The loop a tracking run's "controller" (a run's runs[i]["controller"], or result.json's)
+describes, on `model` (best_model.json for the compensated and learning loops, model.json for the
+faithful one): a FeedforwardPidController, OpenLoopController or CascadePwmController by its
+"loop". The learning is not part of it (IterativeLearning from controller["learning"]).
+hysteron.Error names a missing or invalid key. docs/deploy.md.)doc");
+  m.def(
+      "feedforward_preview",
+      [](const py::object& controller, const DoubleArray& reference) {
+        const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
+        return to_numpy(
+            feedforward_preview(d, std::span<const double>(reference.data(), static_cast<std::size_t>(reference.size()))));
+      },
+      py::arg("controller"), py::arg("reference"),
+      R"doc(The reference the loop's feedforward is fed (step()'s preview_m), for a recorded reference
+(any units): through controller["shaper"] if there is one, then feedforward_lead_samples ahead,
+indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
   m.def(
       "experiments",
       [] {

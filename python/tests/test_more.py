@@ -169,6 +169,22 @@ def test_open_loop_and_cascade_controllers():
     with pytest.raises(hysteron.Error, match="pressure_gain"):
         hysteron.OpenLoopController(model, pressure_gain=-1.0)
     assert repr(ol).startswith("OpenLoopController(") and repr(cas).startswith("CascadePwmController(")
+    # controller_from builds each kind from a "controller" dict (result.json's numbers) and gives
+    # the same commands as the classes built by hand
+    ff = {"pressure_min_mpa": 0.0, "pressure_max_mpa": 0.6, "model_scale_per_m": 1000.0, "lag_time_constant_s": 0.0}
+    pid = {"kp_mpa_per_m": 20.0, "ki_mpa_per_m_s": 0.0, "kd_mpa_s_per_m": 0.0, "sample_time_s": 1e-3,
+           "derivative_filter_s": 0.0, "out_min_mpa": -1.0, "out_max_mpa": 1.0, "anti_windup": "conditional",
+           "tracking_time_s": 0.0, "setpoint_weight_p": 1.0, "setpoint_weight_d": 0.0}
+    common = {"feedforward": ff, "sample_time_s": 1e-3, "feedforward_lead_samples": 0}
+    ol2 = hysteron.controller_from(dict(common, loop="open_loop", pressure_gain=0.5), model)
+    cas3 = hysteron.controller_from(dict(common, loop="cascade_pwm", pressure_pid=pid,
+                                         pwm={"gain": 1.0, "deadband": 0.0, "min_duty": 0.0, "max_duty": 1.0,
+                                              "resolution": 0.0}), model)
+    assert isinstance(ol2, hysteron.OpenLoopController) and isinstance(cas3, hysteron.CascadePwmController)
+    ol.reset()
+    for r in ref[:200]:
+        assert ol2.step(r, r, r, 0.2) == ol.step(r, r, r, 0.2)
+    assert -1.0 <= cas3.step(0.02, 0.02, 0.0, 0.1) <= 1.0 and cas3.desired_pressure > 0.0
 
 
 def test_iterative_learning_on_a_lagged_loop():
@@ -276,6 +292,21 @@ def test_experiment_summary_keys():
         assert np.array_equal(csv["correction_mm"], lr["correction_mm"])
         with open(os.path.join(d, "out", "result.json")) as f:
             assert json.load(f)["learning"]["controller"] == ctl
+        # the compensated loop rebuilt from its "controller" and best_model.json (controller_from,
+        # feedforward_preview), fed the run's recorded inputs, commands what the run commanded
+        comp = r["runs"][1]
+        assert comp["controller"]["loop"] == "feedforward_pid"
+        loop = hysteron.controller_from(comp["controller"], os.path.join(d, "out", "best_model.json"))
+        assert isinstance(loop, hysteron.FeedforwardPidController)
+        ref = comp["reference_mm"] * 1e-3
+        pre = hysteron.feedforward_preview(comp["controller"], ref)
+        assert pre.shape == ref.shape and not np.array_equal(pre, ref)
+        u = np.array([loop.step(ref[k], pre[k], comp["measured_mm"][k] * 1e-3) for k in range(len(ref))])
+        assert np.max(np.abs(u - comp["pressure_command_mpa"])) < 1e-9
+        assert comp["pressure_measured_mpa"].shape == ref.shape
+        bad = dict(comp["controller"], loop="bang_bang")
+        with pytest.raises(hysteron.Error, match="unknown loop"):
+            hysteron.controller_from(bad, os.path.join(d, "out", "best_model.json"))
 
 
 def test_experiment_registry():

@@ -161,3 +161,52 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
 }
 
 }  // namespace hysteron::experiment
+
+namespace hysteron {
+
+Controller make_controller(const LoopDesign& d, const ModelParams& model) {
+  FeedforwardParams ff = d.feedforward;
+  ff.sample_time = d.sample_time;
+  PidParams pid;
+  pid.sample_time = d.sample_time;
+  if (d.pid) pid = *d.pid;
+  switch (d.kind) {
+    case LoopDesign::Kind::feedforward_pid:
+      return Controller(std::in_place_type<FeedforwardPidController>, model, ff, pid);
+    case LoopDesign::Kind::open_loop: {
+      OpenLoopParams p;
+      p.feedforward = ff;
+      p.position = pid;
+      p.pressure_gain = d.pressure_gain;
+      return Controller(std::in_place_type<OpenLoopController>, model, p);
+    }
+    case LoopDesign::Kind::cascade_pwm: {
+      if (!d.pressure_pid) throw Error("controller: a cascade_pwm loop needs its pressure_pid");
+      CascadeParams p;
+      p.feedforward = ff;
+      p.position = pid;
+      p.pressure = *d.pressure_pid;
+      p.pwm = d.pwm.value_or(PwmParams{});
+      return Controller(std::in_place_type<CascadePwmController>, model, p);
+    }
+  }
+  throw Error("controller: unknown loop kind");
+}
+
+std::vector<double> feedforward_preview(const LoopDesign& d, std::span<const double> reference) {
+  const auto n = static_cast<std::ptrdiff_t>(reference.size());
+  std::vector<double> shaped(reference.begin(), reference.end()), preview(reference.size());
+  if (n == 0) return preview;
+  const auto at = [&](std::ptrdiff_t k) { return reference[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(k, 0, n - 1))]; };
+  if (d.shaper) {
+    const auto adv = static_cast<std::ptrdiff_t>(d.shaper->advance), D = static_cast<std::ptrdiff_t>(d.shaper->delay);
+    for (std::ptrdiff_t k = 0; k < n; ++k)
+      shaped[static_cast<std::size_t>(k)] = d.shaper->a1 * at(k + adv) + d.shaper->a2 * at(k + adv - D);
+  }
+  const auto lead = static_cast<std::ptrdiff_t>(d.feedforward_lead);
+  for (std::ptrdiff_t k = 0; k < n; ++k)
+    preview[static_cast<std::size_t>(k)] = shaped[static_cast<std::size_t>(std::min(k + lead, n - 1))];
+  return preview;
+}
+
+}  // namespace hysteron

@@ -838,8 +838,9 @@ bool ExperimentResult::is_output_file(const std::string& f) {
 
 namespace {
 
-// Writes this run's files into `d` (a new, empty directory).
-void write_files(const ExperimentResult& r, const std::filesystem::path& d) {
+// Writes the run's files into `d`; returns their names.
+std::vector<std::string> write_files(const ExperimentResult& r, const std::filesystem::path& d) {
+  std::vector<std::string> written = {"identification.csv", "model.json", "best_model.json", "result.json"};
   io::write_columns((d / "identification.csv").string(),
                     {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
                     {r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa, r.id_contraction_mm});
@@ -856,7 +857,8 @@ void write_files(const ExperimentResult& r, const std::filesystem::path& d) {
       names.push_back("correction_mm");
       columns.push_back(run.correction_mm);
     }
-    io::write_columns((d / fmt::format("tracking_{}_{}.csv", run.variant, run.reference)).string(), names, columns);
+    written.push_back(fmt::format("tracking_{}_{}.csv", run.variant, run.reference));
+    io::write_columns((d / written.back()).string(), names, columns);
   }
   io::write_model_file((d / "model.json").string(), r.fit.model);
   io::write_model_file((d / "best_model.json").string(), r.best_fit.model,
@@ -866,6 +868,7 @@ void write_files(const ExperimentResult& r, const std::filesystem::path& d) {
                                                                  "compensated variants; {}",
                                                                  r.name, r.model_reason)}});
   io::write_text_file((d / "result.json").string(), io::to_json(r).dump(2) + "\n");
+  return written;
 }
 
 }  // namespace
@@ -878,9 +881,10 @@ void ExperimentResult::write(const std::string& dir) const {
   fs::create_directories(d, ec);
   if (ec) throw Error(fmt::format("experiment: cannot create output directory {}: {}", dir, ec.message()));
   const bool earlier_run = fs::exists(d / "result.json", ec);
+  std::vector<std::string> written;
   try {
     io::FileBatch batch;  // every file complete before any is replaced
-    write_files(*this, d);
+    written = write_files(*this, d);
     batch.commit();
   } catch (...) {
     if (!existed) fs::remove(d, ec);  // the directory it created, if still empty
@@ -888,8 +892,6 @@ void ExperimentResult::write(const std::string& dir) const {
   }
   if (!earlier_run) return;
   // The earlier run's files this one does not have (a variant it did not run, its report).
-  std::vector<std::string> written = {"identification.csv", "model.json", "best_model.json", "result.json"};
-  for (const auto& r : runs) written.push_back(fmt::format("tracking_{}_{}.csv", r.variant, r.reference));
   std::vector<fs::path> stale;
   for (const auto& e : fs::directory_iterator(d, ec)) {
     const std::string f = e.path().filename().string();

@@ -170,9 +170,7 @@ struct PendingFile {
   std::string path;  // as given, for messages
   bool hard_links = false;
 };
-}  // namespace
 
-namespace {
 // The pending files of the thread's open batch (FileBatch::Impl owns them).
 thread_local std::vector<PendingFile>* t_batch = nullptr;
 }  // namespace

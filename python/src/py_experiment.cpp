@@ -6,6 +6,7 @@
 
 #include "hysteron/compensation.hpp"
 #include "hysteron/experiment.hpp"
+#include "hysteron/learning.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/report.hpp"
 #include "hysteron/io/results.hpp"
@@ -47,6 +48,17 @@ describes, on `model` (best_model.json for the compensated and learning loops, m
 faithful one): a FeedforwardPidController, OpenLoopController or CascadePwmController by its
 "loop". The learning is not part of it (IterativeLearning from controller["learning"]).
 hysteron.Error names a missing or invalid key. docs/deploy.md.)doc");
+  m.def(
+      "learning_from",
+      [](const py::object& controller) {
+        const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
+        if (!d.learning) throw Error("controller: no \"learning\" (not a learning run's controller)");
+        return IterativeLearning(d.learning->params);
+      },
+      py::arg("controller"),
+      R"doc(The learning update a learning run's "controller" describes (its "learning" parameters,
+supervision included), from period 0 with zero corrections: ilc.reset(correction) warm-starts it
+from a run's last correction_mm period (in m). hysteron.Error if the run has no learning.)doc");
   m.def(
       "feedforward_preview",
       [](const py::object& controller, const DoubleArray& reference) {

@@ -287,6 +287,16 @@ def test_experiment_summary_keys():
             ilc.step(0.0 if cmd <= 0.0 or cmd >= 0.6 else (lr["reference_mm"][k] - lr["measured_mm"][k]) * 1e-3)
         assert np.max(np.abs(lr["correction_mm"])) > 0.05
         assert np.max(np.abs(c - lr["correction_mm"])) < 1e-9
+        # the same update in one call
+        ilc2 = hysteron.learning_from(ctl)
+        c2 = np.empty(lr["t"].shape)
+        for k in range(len(c2)):
+            c2[k] = ilc2.correction(0) * 1e3
+            cmd = lr["pressure_command_mpa"][k]
+            ilc2.step(0.0 if cmd <= 0.0 or cmd >= 0.6 else (lr["reference_mm"][k] - lr["measured_mm"][k]) * 1e-3)
+        assert np.array_equal(c2, c) and ilc2.gain == ilc.gain and ilc2.held == ilc.held
+        with pytest.raises(hysteron.Error, match="not a learning run"):
+            hysteron.learning_from(r["runs"][1]["controller"])
         assert ilc.gain == p["final_gain"] and ilc.gain_cuts == p["gain_cuts"]
         csv = np.genfromtxt(os.path.join(d, "out", "tracking_learning_sine.csv"), delimiter=",", names=True)
         assert np.array_equal(csv["correction_mm"], lr["correction_mm"])

@@ -325,12 +325,13 @@ int main(int argc, char** argv) {
   cc.outer = cp;
   hysteron_cascade* cas = nullptr;
   if ((st = hysteron_cascade_create(params, &cc, &cas)) != HYSTERON_OK) die("cascade", st);
-  Histogram ol_h, cas_h;
-  std::size_t ol_fail = 0, cas_fail = 0, ol_alloc = 0, cas_alloc = 0;
-  long ol_preempt = 0, cas_preempt = 0;
+  struct Row {
+    Histogram h;
+    std::size_t fail = 0, alloc = 0;
+    long preempt = 0;
+  } rows[2];  // open loop, cascade
   for (int which = 0; which < 2; ++which) {
-    Histogram& h = which == 0 ? ol_h : cas_h;
-    std::size_t fail = 0;
+    Row& row = rows[which];
     double pressure = lo;
     hysteron_model_reset(plant);
     measured = 0;
@@ -344,18 +345,19 @@ int main(int argc, char** argv) {
                                            : hysteron_cascade_step(cas, r, r, measured, pressure, &u, &pd);
       const std::int64_t t1 = now_ns();
       if (k >= warmup) {
-        h.add(t1 - t0);
-        fail += s != HYSTERON_OK;
+        row.h.add(t1 - t0);
+        row.fail += s != HYSTERON_OK;
       }
       pressure = which == 0 ? pressure + 0.2 * (u - pressure) : std::clamp(pressure + 0.05 * (hi - lo) * u, lo, hi);
       hysteron_model_step(plant, pressure, &y);
       measured = y / 1000.0;
       sink += u;
     }
-    (which == 0 ? ol_alloc : cas_alloc) = g_allocations.load() - a0;
-    (which == 0 ? ol_preempt : cas_preempt) = preemptions() - c0;
-    (which == 0 ? ol_fail : cas_fail) = fail;
+    row.alloc = g_allocations.load() - a0;
+    row.preempt = preemptions() - c0;
   }
+  const Row& olr = rows[0];
+  const Row& casr = rows[1];
 
   // 6. iterative learning on top of the ff+pid loop (only its two calls timed)
   std::size_t ilc_fail = 0;
@@ -390,15 +392,15 @@ int main(int argc, char** argv) {
   print_row("timer overhead (two clock_gettime)", timer, 0, 0);
   print_row("hysteron_inverse_step", inv_h, inv_alloc, inv_fail);
   print_row("hysteron_ff_pid_step (inverse + PID)", ctl_h, ctl_alloc, ctl_fail);
-  print_row("hysteron_open_loop_step", ol_h, ol_alloc, ol_fail);
-  print_row("hysteron_cascade_step", cas_h, cas_alloc, cas_fail);
+  print_row("hysteron_open_loop_step", olr.h, olr.alloc, olr.fail);
+  print_row("hysteron_cascade_step", casr.h, casr.alloc, casr.fail);
   print_row("hysteron_ilc_correction + _step", ilc_h, ilc_alloc, ilc_fail);
   std::printf("calls above 1 ms: inverse %llu, ff+pid %llu, open loop %llu, cascade %llu, ilc %llu; involuntary context "
               "switches during the timed loops (preemptions, each can make one call's max): inverse %ld, ff+pid %ld, "
               "open loop %ld, cascade %ld, ilc %ld; (checksum %.6g)\n",
               static_cast<unsigned long long>(inv_h.overflow), static_cast<unsigned long long>(ctl_h.overflow),
-              static_cast<unsigned long long>(ol_h.overflow), static_cast<unsigned long long>(cas_h.overflow),
-              static_cast<unsigned long long>(ilc_h.overflow), inv_preempt, ctl_preempt, ol_preempt, cas_preempt,
+              static_cast<unsigned long long>(olr.h.overflow), static_cast<unsigned long long>(casr.h.overflow),
+              static_cast<unsigned long long>(ilc_h.overflow), inv_preempt, ctl_preempt, olr.preempt, casr.preempt,
               ilc_preempt, sink);
   hysteron_ilc_free(ilc);
   hysteron_open_loop_free(ol);
@@ -408,7 +410,7 @@ int main(int argc, char** argv) {
   hysteron_model_free(plant);
   hysteron_inverse_free(inverse);
   hysteron_params_free(params);
-  return (inv_alloc || ctl_alloc || ol_alloc || cas_alloc || ilc_alloc || inv_fail || ctl_fail || ol_fail || cas_fail ||
+  return (inv_alloc || ctl_alloc || olr.alloc || casr.alloc || ilc_alloc || inv_fail || ctl_fail || olr.fail || casr.fail ||
           ilc_fail)
              ? 1
              : 0;

@@ -90,67 +90,52 @@ struct Worst {
   std::size_t n = 0;
 };
 
-Worst replay_open_loop(const std::filesystem::path& dir, const TrackingRun& r) {
+// The loop rebuilt through the C ABI from the run's controller (hysteron_open_loop or
+// hysteron_cascade, by its "loop") and model file, fed the run's recorded inputs.
+Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
   const LoopDesign& d = r.controller;
-  EXPECT_EQ(d.kind, LoopDesign::Kind::open_loop);
-  hysteron_open_loop_params c;
-  EXPECT_EQ(hysteron_open_loop_default_params(&c), HYSTERON_OK);
-  c.loop = outer_params(d);
-  c.pressure_gain = d.pressure_gain;
-  hysteron_params* model = load_model(dir / model_file(r));
-  hysteron_open_loop* loop = nullptr;
-  EXPECT_EQ(hysteron_open_loop_create(model, &c, &loop), HYSTERON_OK) << hysteron_last_error();
-  hysteron_params_free(model);
   Worst w;
-  if (!loop) return w;
+  hysteron_open_loop* ol = nullptr;
+  hysteron_cascade* cas = nullptr;
+  hysteron_params* model = load_model(dir / model_file(r));
+  if (d.kind == LoopDesign::Kind::open_loop) {
+    hysteron_open_loop_params c;
+    EXPECT_EQ(hysteron_open_loop_default_params(&c), HYSTERON_OK);
+    c.loop = outer_params(d);
+    c.pressure_gain = d.pressure_gain;
+    EXPECT_EQ(hysteron_open_loop_create(model, &c, &ol), HYSTERON_OK) << hysteron_last_error();
+  } else if (d.kind == LoopDesign::Kind::cascade_pwm && d.pressure_pid && d.pwm) {
+    hysteron_cascade_params c;
+    EXPECT_EQ(hysteron_cascade_default_params(&c), HYSTERON_OK);
+    c.outer = outer_params(d);
+    const PidParams& q = *d.pressure_pid;
+    c.pressure = {q.kp, q.ki, q.kd, q.derivative_filter, q.tracking_time, q.setpoint_weight_p, q.setpoint_weight_d,
+                  q.out_min, q.out_max, static_cast<int>(q.anti_windup)};
+    c.pwm = {d.pwm->gain, d.pwm->deadband, d.pwm->min_duty, d.pwm->max_duty, d.pwm->resolution};
+    EXPECT_EQ(hysteron_cascade_create(model, &c, &cas), HYSTERON_OK) << hysteron_last_error();
+  } else {
+    ADD_FAILURE() << r.variant << ": not an open loop or a complete cascade";
+  }
+  hysteron_params_free(model);
+  if (!ol && !cas) return w;
   const std::vector<double> preview = preview_m(r);
   for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
-    double u = -1.0;
-    EXPECT_EQ(hysteron_open_loop_step(loop, r.reference_mm[k] * 1e-3, preview[k], r.measured_mm[k] * 1e-3,
-                                      r.pressure_measured_mpa[k], &u),
+    const double ref = r.reference_mm[k] * 1e-3, meas = r.measured_mm[k] * 1e-3, p = r.pressure_measured_mpa[k];
+    double u = -1.0, duty = 0.0;
+    EXPECT_EQ(ol ? hysteron_open_loop_step(ol, ref, preview[k], meas, p, &u)
+                 : hysteron_cascade_step(cas, ref, preview[k], meas, p, &duty, &u),
               HYSTERON_OK);
-    w.command = std::max(w.command, std::abs(u - r.pressure_command_mpa[k]));
-  }
-  hysteron_open_loop_free(loop);
-  return w;
-}
-
-Worst replay_cascade(const std::filesystem::path& dir, const TrackingRun& r) {
-  const LoopDesign& d = r.controller;
-  EXPECT_EQ(d.kind, LoopDesign::Kind::cascade_pwm);
-  hysteron_cascade_params c;
-  EXPECT_EQ(hysteron_cascade_default_params(&c), HYSTERON_OK);
-  c.outer = outer_params(d);
-  Worst w;
-  if (!d.pressure_pid || !d.pwm) {
-    ADD_FAILURE() << r.variant << ": a cascade without its pressure loop or PWM";
-    return w;
-  }
-  const PidParams& q = *d.pressure_pid;
-  c.pressure = {q.kp, q.ki, q.kd, q.derivative_filter, q.tracking_time, q.setpoint_weight_p, q.setpoint_weight_d,
-                q.out_min, q.out_max, static_cast<int>(q.anti_windup)};
-  c.pwm = {d.pwm->gain, d.pwm->deadband, d.pwm->min_duty, d.pwm->max_duty, d.pwm->resolution};
-  hysteron_params* model = load_model(dir / model_file(r));
-  hysteron_cascade* loop = nullptr;
-  EXPECT_EQ(hysteron_cascade_create(model, &c, &loop), HYSTERON_OK) << hysteron_last_error();
-  hysteron_params_free(model);
-  if (!loop) return w;
-  const std::vector<double> preview = preview_m(r);
-  for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
-    double duty = 2.0, p_d = -1.0;
-    EXPECT_EQ(hysteron_cascade_step(loop, r.reference_mm[k] * 1e-3, preview[k], r.measured_mm[k] * 1e-3,
-                                    r.pressure_measured_mpa[k], &duty, &p_d),
-              HYSTERON_OK);
+    w.command = std::max(w.command, std::abs(u - r.pressure_command_mpa[k]));  // with the valves: p_d
     w.duty = std::max(w.duty, std::abs(duty - r.duty[k]));
-    w.command = std::max(w.command, std::abs(p_d - r.pressure_command_mpa[k]));
   }
-  hysteron_cascade_free(loop);
+  hysteron_open_loop_free(ol);
+  hysteron_cascade_free(cas);
   return w;
 }
 
 // Runs `name` quickly, writes its directory, reads it back and replays its faithful and
 // compensated runs through the C ABI.
-void check_replay(const std::string& name, bool cascade) {
+void check_replay(const std::string& name, LoopDesign::Kind expected) {
   const ExperimentResult r = run_experiment(test::quick_experiment(name));
   test::TempDir tmp;
   const std::filesystem::path dir = tmp.file("out");
@@ -161,7 +146,8 @@ void check_replay(const std::string& name, bool cascade) {
   for (const TrackingRun& run : back.runs) {
     if (run.variant != "faithful" && run.variant != "compensated") continue;
     ASSERT_EQ(run.pressure_measured_mpa.size(), run.t.size()) << run.variant;
-    const Worst w = cascade ? replay_cascade(dir, run) : replay_open_loop(dir, run);
+    EXPECT_EQ(run.controller.kind, expected) << run.variant;
+    const Worst w = replay_c(dir, run);
     double cpp_command = 0.0, cpp_duty = 0.0;
     replay_cpp(back, run, cpp_command, cpp_duty);
     EXPECT_LT(cpp_command, 1e-9) << name << " " << run.variant << " " << run.reference << ": make_controller, MPa";
@@ -182,6 +168,6 @@ void check_replay(const std::string& name, bool cascade) {
 
 }  // namespace
 
-TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-openloop", false); }
+TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-openloop", LoopDesign::Kind::open_loop); }
 
-TEST(CApiLoops, CascadeRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-pwm", true); }
+TEST(CApiLoops, CascadeRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-pwm", LoopDesign::Kind::cascade_pwm); }

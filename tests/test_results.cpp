@@ -500,7 +500,7 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   EXPECT_EQ(b.feedforward.pressure_limits.hi, 0.55);
   EXPECT_EQ(b.feedforward.model_scale, 1.0);
   EXPECT_EQ(b.feedforward.lag_time_constant, 0.03);
-  EXPECT_EQ(b.feedforward.sample_time, 2e-3);  // the loop's sample time, written once
+  EXPECT_EQ(b.feedforward_params().sample_time, 2e-3);  // the loop's sample time, kept once
   ASSERT_TRUE(b.pwm);
   EXPECT_EQ((std::vector<double>{b.pwm->gain, b.pwm->deadband, b.pwm->min_duty, b.pwm->max_duty, b.pwm->resolution}),
             (std::vector<double>{2.5, 0.01, 0.1, 0.9, 0.02}));

@@ -153,9 +153,14 @@ struct LoopDesign {
   // The adaptive variant has the same structure with an inverse adapted online.
   enum class Kind { feedforward_pid, open_loop, cascade_pwm };
   Kind kind = Kind::feedforward_pid;
-  // The inverse feedforward's pressure limits, model scale and lag compensation (its
-  // sample_time is sample_time below).
-  FeedforwardParams feedforward;
+  // The inverse feedforward's pressure limits [MPa], model units per metre and the lag it
+  // compensates [s] (FeedforwardParams without the sample time: that is sample_time below).
+  struct Feedforward {
+    Limits pressure_limits{0.0, 0.6};
+    double model_scale = 1000.0;
+    double lag_time_constant = 0.0;
+  };
+  Feedforward feedforward;
   // cascade_pwm: the valves' PWM modulator.
   std::optional<PwmParams> pwm;
   // The position loop's PID (absent: no position loop, e.g. the faithful open loop).
@@ -189,6 +194,10 @@ struct LoopDesign {
     bool held = false;
   };
   std::optional<Learning> learning;
+  // The feedforward's parameters at the loop's sample time.
+  FeedforwardParams feedforward_params() const {
+    return {feedforward.pressure_limits, feedforward.model_scale, feedforward.lag_time_constant, sample_time};
+  }
 };
 
 // The loop a run's `controller` describes, rebuilt on `model` (the model file the run inverts:

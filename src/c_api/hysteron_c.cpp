@@ -489,21 +489,7 @@ hysteron::FeedforwardParams to_feedforward(const hysteron_ff_pid_params& c) {
   return ff;
 }
 
-// The position PID of a hysteron_ff_pid_params (output limits: the caller's).
-hysteron::PidParams to_pid(const hysteron_ff_pid_params& c) {
-  hysteron::PidParams pid;
-  pid.kp = c.kp;
-  pid.ki = c.ki;
-  pid.kd = c.kd;
-  pid.sample_time = c.sample_time;
-  pid.derivative_filter = c.derivative_filter;
-  pid.tracking_time = c.tracking_time;
-  pid.setpoint_weight_p = c.setpoint_weight_p;
-  pid.setpoint_weight_d = c.setpoint_weight_d;
-  pid.anti_windup = to_anti_windup(c.anti_windup, "anti_windup");
-  return pid;
-}
-
+// A PID at `sample_time`; `name` prefixes the anti-windup's field in messages ("": none).
 hysteron::PidParams to_pid(const hysteron_pid_params& c, double sample_time, const char* name) {
   hysteron::PidParams pid;
   pid.kp = c.kp;
@@ -516,10 +502,17 @@ hysteron::PidParams to_pid(const hysteron_pid_params& c, double sample_time, con
   pid.setpoint_weight_d = c.setpoint_weight_d;
   pid.out_min = c.out_min;
   pid.out_max = c.out_max;
-  char field[64];
-  std::snprintf(field, sizeof field, "%s.anti_windup", name);
-  pid.anti_windup = to_anti_windup(c.anti_windup, field);
+  const std::string field = *name ? std::string(name) + ".anti_windup" : std::string("anti_windup");
+  pid.anti_windup = to_anti_windup(c.anti_windup, field.c_str());
   return pid;
+}
+
+// The position PID of a hysteron_ff_pid_params (output limits: the caller's).
+hysteron::PidParams to_pid(const hysteron_ff_pid_params& c) {
+  const double inf = std::numeric_limits<double>::infinity();
+  return to_pid(hysteron_pid_params{c.kp, c.ki, c.kd, c.derivative_filter, c.tracking_time, c.setpoint_weight_p,
+                                    c.setpoint_weight_d, -inf, inf, c.anti_windup},
+                c.sample_time, "");
 }
 
 // The controller's parameters are the caller's arguments: their errors are INVALID_ARGUMENT

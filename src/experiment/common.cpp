@@ -165,8 +165,7 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
 namespace hysteron {
 
 Controller make_controller(const LoopDesign& d, const ModelParams& model) {
-  FeedforwardParams ff = d.feedforward;
-  ff.sample_time = d.sample_time;
+  const FeedforwardParams ff = d.feedforward_params();
   PidParams pid;
   pid.sample_time = d.sample_time;
   if (d.pid) pid = *d.pid;

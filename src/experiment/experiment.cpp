@@ -52,8 +52,7 @@ std::string shaper_timing(const ZvShaper& z, double tc) {
 LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvShaper* zv) {
   LoopDesign d;
   d.kind = loop.kind;
-  d.feedforward = loop.feedforward;
-  d.feedforward.sample_time = tc;
+  d.feedforward = {loop.feedforward.pressure_limits, loop.feedforward.model_scale, loop.feedforward.lag_time_constant};
   d.pwm = loop.pwm;
   const PidParams& pid = loop.position;
   if (pid.kp != 0.0 || pid.ki != 0.0 || pid.kd != 0.0) d.pid = pid;

@@ -544,7 +544,6 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
   d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
   d.sample_time = get_double(j, "sample_time_s", where);
-  d.feedforward.sample_time = d.sample_time;
   if (j.contains("loop")) {
     d.kind = loop_kind_from(j, where);
     const std::string w = key_where(where, "feedforward");

@@ -1,8 +1,10 @@
 // The C ABI's loops (include/hysteron/hysteron.h) rebuilt from an experiment's output
-// directory, as docs/deploy.md tells a user to: result.json's "controller" of a run and the
-// model file it inverts give hysteron_open_loop (mpi-openloop) and hysteron_cascade (mpi-pwm)
-// that, fed the run's recorded reference, contraction and pressure readings, command what the
-// run commanded; so does the same loop rebuilt in C++ (make_controller, feedforward_preview).
+// directory, as docs/deploy.md tells a user to: a run's loop read from result.json
+// (hysteron_loop_params_from_file) and the model file it inverts give hysteron_ff_pid (gpi-pid),
+// hysteron_open_loop (mpi-openloop) and hysteron_cascade (mpi-pwm) that, fed the run's recorded
+// reference (previewed by hysteron_loop_preview), contraction and pressure readings, command
+// what the run commanded; so does the same loop rebuilt in C++ (make_controller,
+// feedforward_preview).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,28 +24,6 @@
 using namespace hysteron;
 
 namespace {
-
-// The position loop's fields of a hysteron_ff_pid_params from result.json's numbers.
-hysteron_ff_pid_params outer_params(const LoopDesign& d) {
-  hysteron_ff_pid_params c;
-  EXPECT_EQ(hysteron_ff_pid_default_params(&c), HYSTERON_OK);
-  c.sample_time = d.sample_time;
-  c.pressure_min = d.feedforward.pressure_limits.lo;
-  c.pressure_max = d.feedforward.pressure_limits.hi;
-  c.model_scale = d.feedforward.model_scale;
-  c.lag_time_constant = d.feedforward.lag_time_constant;
-  if (d.pid) {
-    c.kp = d.pid->kp;
-    c.ki = d.pid->ki;
-    c.kd = d.pid->kd;
-    c.derivative_filter = d.pid->derivative_filter;
-    c.tracking_time = d.pid->tracking_time;
-    c.setpoint_weight_p = d.pid->setpoint_weight_p;
-    c.setpoint_weight_d = d.pid->setpoint_weight_d;
-    c.anti_windup = static_cast<int>(d.pid->anti_windup);  // none, conditional, back_calculation: 0, 1, 2
-  }
-  return c;
-}
 
 hysteron_params* load_model(const std::filesystem::path& file) {
   hysteron_params* p = nullptr;
@@ -90,60 +70,83 @@ struct Worst {
   std::size_t n = 0;
 };
 
-// The loop rebuilt through the C ABI from the run's controller (hysteron_open_loop or
-// hysteron_cascade, by its "loop") and model file, fed the run's recorded inputs.
+// The loop rebuilt through the C ABI as docs/deploy.md tells a C user to: the run's loop read
+// from result.json (hysteron_loop_params_from_file, "VARIANT.REFERENCE"), the object its kind
+// names created on the run's model file, and the preview from hysteron_loop_preview; fed the
+// run's recorded inputs.
 Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
-  const LoopDesign& d = r.controller;
   Worst w;
+  hysteron_loop_params c;
+  const std::string run = r.variant + "." + r.reference;
+  if (hysteron_loop_params_from_file((dir / "result.json").string().c_str(), run.c_str(), &c) != HYSTERON_OK) {
+    ADD_FAILURE() << run << ": " << hysteron_last_error();
+    return w;
+  }
+  hysteron_ff_pid* ff = nullptr;
   hysteron_open_loop* ol = nullptr;
   hysteron_cascade* cas = nullptr;
   hysteron_params* model = load_model(dir / model_file(r));
-  if (d.kind == LoopDesign::Kind::open_loop) {
-    hysteron_open_loop_params c;
-    EXPECT_EQ(hysteron_open_loop_default_params(&c), HYSTERON_OK);
-    c.loop = outer_params(d);
-    c.pressure_gain = d.pressure_gain;
-    EXPECT_EQ(hysteron_open_loop_create(model, &c, &ol), HYSTERON_OK) << hysteron_last_error();
-  } else if (d.kind == LoopDesign::Kind::cascade_pwm && d.pressure_pid && d.pwm) {
-    hysteron_cascade_params c;
-    EXPECT_EQ(hysteron_cascade_default_params(&c), HYSTERON_OK);
-    c.outer = outer_params(d);
-    const PidParams& q = *d.pressure_pid;
-    c.pressure = {q.kp, q.ki, q.kd, q.derivative_filter, q.tracking_time, q.setpoint_weight_p, q.setpoint_weight_d,
-                  q.out_min, q.out_max, static_cast<int>(q.anti_windup)};
-    c.pwm = {d.pwm->gain, d.pwm->deadband, d.pwm->min_duty, d.pwm->max_duty, d.pwm->resolution};
-    EXPECT_EQ(hysteron_cascade_create(model, &c, &cas), HYSTERON_OK) << hysteron_last_error();
-  } else {
-    ADD_FAILURE() << r.variant << ": not an open loop or a complete cascade";
+  hysteron_status st = HYSTERON_ERROR_INTERNAL;
+  switch (c.kind) {
+    case HYSTERON_LOOP_FEEDFORWARD_PID: st = hysteron_ff_pid_create(model, &c.ff_pid, &ff); break;
+    case HYSTERON_LOOP_OPEN_LOOP: st = hysteron_open_loop_create(model, &c.open_loop, &ol); break;
+    case HYSTERON_LOOP_CASCADE_PWM: st = hysteron_cascade_create(model, &c.cascade, &cas); break;
+    default: ADD_FAILURE() << run << ": kind " << c.kind;
   }
+  EXPECT_EQ(st, HYSTERON_OK) << run << ": " << hysteron_last_error();
   hysteron_params_free(model);
-  if (!ol && !cas) return w;
-  const std::vector<double> preview = preview_m(r);
+  if (st != HYSTERON_OK) return w;
+  std::vector<double> ref(r.t.size()), preview(r.t.size());
+  for (std::size_t k = 0; k < ref.size(); ++k) ref[k] = r.reference_mm[k] * 1e-3;
+  EXPECT_EQ(hysteron_loop_preview(&c, ref.data(), ref.size(), preview.data(), preview.size()), HYSTERON_OK)
+      << hysteron_last_error();
   for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
-    const double ref = r.reference_mm[k] * 1e-3, meas = r.measured_mm[k] * 1e-3, p = r.pressure_measured_mpa[k];
+    const double meas = r.measured_mm[k] * 1e-3, p = r.pressure_measured_mpa[k];
     double u = -1.0, duty = 0.0;
-    EXPECT_EQ(ol ? hysteron_open_loop_step(ol, ref, preview[k], meas, p, &u)
-                 : hysteron_cascade_step(cas, ref, preview[k], meas, p, &duty, &u),
+    EXPECT_EQ(ff    ? hysteron_ff_pid_step(ff, ref[k], preview[k], meas, &u)
+              : ol ? hysteron_open_loop_step(ol, ref[k], preview[k], meas, p, &u)
+                   : hysteron_cascade_step(cas, ref[k], preview[k], meas, p, &duty, &u),
               HYSTERON_OK);
     w.command = std::max(w.command, std::abs(u - r.pressure_command_mpa[k]));  // with the valves: p_d
     w.duty = std::max(w.duty, std::abs(duty - r.duty[k]));
   }
+  hysteron_ff_pid_free(ff);
   hysteron_open_loop_free(ol);
   hysteron_cascade_free(cas);
   return w;
 }
 
 // Runs `name` quickly, writes its directory, reads it back and replays its faithful and
-// compensated runs through the C ABI.
-void check_replay(const std::string& name, LoopDesign::Kind expected) {
-  const ExperimentResult r = run_experiment(test::quick_experiment(name));
+// compensated runs through the C ABI; a learning run's ILC parameters are read as well.
+void check_replay(const std::string& name, LoopDesign::Kind expected, int learning_periods = 0) {
+  const ExperimentResult r = run_experiment(test::quick_experiment(name, learning_periods));
   test::TempDir tmp;
   const std::filesystem::path dir = tmp.file("out");
   r.write(dir.string());
   const ExperimentResult back = report::read_experiment_dir(dir.string());
   int replayed = 0;
   bool shaped = false, corrected = false;
+  int learnt = 0;
   for (const TrackingRun& run : back.runs) {
+    if (run.variant == "learning") {
+      hysteron_loop_params c;
+      const std::string where = run.variant + "." + run.reference;
+      ASSERT_EQ(hysteron_loop_params_from_file((dir / "result.json").string().c_str(), where.c_str(), &c), HYSTERON_OK)
+          << hysteron_last_error();
+      ASSERT_TRUE(run.controller.learning.has_value());
+      const LearningParams& l = run.controller.learning->params;
+      EXPECT_EQ(c.has_learning, 1);
+      EXPECT_EQ(c.learning.period, l.period);
+      EXPECT_EQ(c.learning.gain, l.gain);
+      EXPECT_EQ(c.learning.lead, l.lead);
+      EXPECT_EQ(c.learning.half_width, l.half_width);
+      EXPECT_EQ(c.learning.lookahead, l.lookahead);
+      EXPECT_EQ(c.learning.max_correction, l.max_correction);
+      EXPECT_EQ(c.learning.rise_tolerance, l.rise_tolerance);
+      EXPECT_EQ(c.learning.hold_after_cuts, l.hold_after_cuts);
+      EXPECT_EQ(c.learning.max_gain, l.max_gain);
+      ++learnt;
+    }
     if (run.variant != "faithful" && run.variant != "compensated") continue;
     ASSERT_EQ(run.pressure_measured_mpa.size(), run.t.size()) << run.variant;
     EXPECT_EQ(run.controller.kind, expected) << run.variant;
@@ -159,7 +162,8 @@ void check_replay(const std::string& name, LoopDesign::Kind expected) {
     corrected = corrected || run.controller.pid.has_value();
     ++replayed;
   }
-  EXPECT_GE(replayed, 4);
+  EXPECT_GE(replayed, 2);
+  EXPECT_EQ(learnt > 0, learning_periods > 0);
   EXPECT_TRUE(corrected) << "a compensated loop has a position PID";
   // the nominal rig's gain trial shapes the compensated loops (docs/control.md, section 2), so
   // the preview through the shaper is checked too
@@ -167,6 +171,10 @@ void check_replay(const std::string& name, LoopDesign::Kind expected) {
 }
 
 }  // namespace
+
+TEST(CApiLoops, FeedforwardPidRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
+  check_replay("gpi-pid", LoopDesign::Kind::feedforward_pid, 2);
+}
 
 TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-openloop", LoopDesign::Kind::open_loop); }
 

@@ -42,6 +42,7 @@
 #include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/learning.hpp"
+#include "hysteron/loop_design.hpp"  // LoopDesign, make_controller, feedforward_preview
 #include "hysteron/plant.hpp"
 
 namespace hysteron {
@@ -142,80 +143,6 @@ struct TrackingErrors {
 };
 
 // One tracking run, logged at the control period.
-// The compensator a tracking run used, in the numbers its deployment needs (docs/deploy.md:
-// hysteron_pid, hysteron_ilc and the inverse feedforward of the C ABI); result.json's
-// "controller". Units: contraction in m, pressure in MPa (the loops' own units).
-struct LoopDesign {
-  // Which controller the loop is (result.json "loop"; docs/deploy.md):
-  //   feedforward_pid  FeedforwardPidController  hysteron_ff_pid      (gpi-pid)
-  //   open_loop        OpenLoopController        hysteron_open_loop   (mpi-openloop)
-  //   cascade_pwm      CascadePwmController      hysteron_cascade     (mpi-pwm)
-  // The adaptive variant has the same structure with an inverse adapted online.
-  enum class Kind { feedforward_pid, open_loop, cascade_pwm };
-  Kind kind = Kind::feedforward_pid;
-  // The inverse feedforward's pressure limits [MPa], model units per metre and the lag it
-  // compensates [s] (FeedforwardParams without the sample time: that is sample_time below).
-  struct Feedforward {
-    Limits pressure_limits{0.0, 0.6};
-    double model_scale = 1000.0;
-    double lag_time_constant = 0.0;
-  };
-  Feedforward feedforward;
-  // cascade_pwm: the valves' PWM modulator.
-  std::optional<PwmParams> pwm;
-  // The position loop's PID (absent: no position loop, e.g. the faithful open loop).
-  std::optional<PidParams> pid;
-  // The pressure loop inside it, where the loop has one: the valves' PI (error in MPa -> PWM
-  // duty, mpi-pwm) or the proportional loop p_cmd = p_d + k_p (p_d - p) (mpi-openloop; 0: none).
-  std::optional<PidParams> pressure_pid;
-  double pressure_gain = 0.0;
-  // The control period [s]: every count of samples here is in it.
-  double sample_time = 1e-3;
-  // The feedforward's preview of the reference [samples] (0: the inverse is fed the current
-  // reference).
-  std::size_t feedforward_lead = 0;
-  // Zero-vibration shaper on the feedforward's preview (docs/control.md, section 2):
-  // preview(k) = s(k + lead), s(k) = a1 r(k + advance) + a2 r(k + advance - delay); absent:
-  // unshaped.
-  struct Shaper {
-    double a1 = 1.0, a2 = 0.0;
-    std::size_t delay = 0, advance = 0;  // [samples]
-  };
-  std::optional<Shaper> shaper;
-  // Iterative learning (the learning variant): the parameters its IterativeLearning was built
-  // with (supervision included; the correction is in m, added to the PID's reference and, lead
-  // samples ahead, to the feedforward's preview), the design's contraction bound on the
-  // identified loop, and what the supervisor did by the end of the run.
-  struct Learning {
-    LearningParams params;
-    double contraction_bound = 0.0;
-    double final_gain = 0.0;  // L in use at the end
-    std::size_t gain_raises = 0, gain_cuts = 0;
-    bool held = false;
-  };
-  std::optional<Learning> learning;
-  // The feedforward's parameters at the loop's sample time.
-  FeedforwardParams feedforward_params() const {
-    return {feedforward.pressure_limits, feedforward.model_scale, feedforward.lag_time_constant, sample_time};
-  }
-};
-
-// The loop a run's `controller` describes, rebuilt on `model` (the model file the run inverts:
-// best_model.json for the compensated and learning loops, model.json for the faithful one;
-// docs/deploy.md), by d.kind: FeedforwardPidController (the PID's limits the pressure limits),
-// OpenLoopController or CascadePwmController. Without d.pid the position loop is off (the open
-// loop as published; the other two get a zero PID). Throws Error on invalid numbers. The
-// learning is not part of it (an IterativeLearning from d.learning->params adds its correction
-// to the reference and the preview).
-using Controller = std::variant<FeedforwardPidController, OpenLoopController, CascadePwmController>;
-Controller make_controller(const LoopDesign& d, const ModelParams& model);
-
-// The reference the loop's feedforward is fed, for a recorded reference (any units, e.g. m):
-// through d.shaper if there is one, s(k) = a1 r(k + advance) + a2 r(k + advance - delay), then
-// d.feedforward_lead samples ahead, preview(k) = s(k + lead); indices clamped to the record, as
-// `hysteron experiment`'s tracking runs do.
-std::vector<double> feedforward_preview(const LoopDesign& d, std::span<const double> reference);
-
 struct TrackingRun {
   std::string variant;    // faithful | compensated | baseline
   std::string reference;  // e.g. "sine", "triangle"

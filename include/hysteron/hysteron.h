@@ -350,6 +350,63 @@ HYSTERON_C_API hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_
                                                  double* gain, size_t* gain_cuts, size_t* gain_raises, int* held,
                                                  size_t* faults);
 
+/* ---- a loop from `hysteron experiment`'s result.json (docs/deploy.md) ---------------- */
+/* Every tracking run of `hysteron experiment NAME --out DIR` records its loop in DIR/result.json
+ * ("controller"): which controller, its gains, the feedforward's preview and the learning.
+ * hysteron_loop_params_from_file reads one run's loop into the structs above, so a C program
+ * deploys what the experiment found without parsing JSON itself:
+ *
+ *   hysteron_loop_params loop;
+ *   hysteron_loop_params_from_file("out/result.json", "compensated.sine", &loop);
+ *   hysteron_params_from_file("out/best_model.json", &model);   (faithful: model.json)
+ *   if (loop.kind == HYSTERON_LOOP_CASCADE_PWM) hysteron_cascade_create(model, &loop.cascade, &c);
+ *
+ * The numbers are the file's exactly; the *_create functions check them as for any caller. */
+typedef enum hysteron_loop_kind {
+  HYSTERON_LOOP_FEEDFORWARD_PID = 0, /* hysteron_ff_pid_create(model, &loop.ff_pid, ...) (gpi-pid) */
+  HYSTERON_LOOP_OPEN_LOOP = 1,       /* hysteron_open_loop_create(model, &loop.open_loop, ...) (mpi-openloop) */
+  HYSTERON_LOOP_CASCADE_PWM = 2      /* hysteron_cascade_create(model, &loop.cascade, ...) (mpi-pwm) */
+} hysteron_loop_kind;
+typedef struct hysteron_loop_params {
+  int kind; /* a hysteron_loop_kind: the object to create */
+  /* The loop's parameters for each kind. The feedforward and position PID are the same in all
+   * three (open_loop.loop and cascade.outer equal ff_pid); the parts a kind does not have are
+   * the *_default_params values. A run without a position PID (the faithful open loop) has
+   * kp = ki = kd = 0. */
+  hysteron_ff_pid_params ff_pid;       /* HYSTERON_LOOP_FEEDFORWARD_PID */
+  hysteron_open_loop_params open_loop; /* HYSTERON_LOOP_OPEN_LOOP */
+  hysteron_cascade_params cascade;     /* HYSTERON_LOOP_CASCADE_PWM */
+  /* The feedforward's preview of a known reference r (hysteron_loop_preview):
+   * preview(k) = s(k + feedforward_lead), s = r unshaped, else
+   * s(k) = shaper_a1 r(k + shaper_advance) + shaper_a2 r(k + shaper_advance - shaper_delay). */
+  size_t feedforward_lead; /* [samples] */
+  int shaped;              /* 1: through the shaper; 0: a1 = 1, a2 = 0, delay = advance = 0 */
+  double shaper_a1, shaper_a2;
+  size_t shaper_delay, shaper_advance; /* [samples] */
+  /* The learning run's iterative learning (hysteron_ilc_create(&loop.learning, ...)); else
+   * has_learning = 0 and hysteron_ilc_default_params. */
+  int has_learning;
+  hysteron_ilc_params learning;
+} hysteron_loop_params;
+/* One run's loop from a result.json text. `run` is "VARIANT" for an experiment with one
+ * reference (e.g. "compensated", "learning") or "VARIANT.REFERENCE" (e.g. "compensated.sine",
+ * "learning.triangle"); NULL or "" takes `json` as a "controller" object itself. Errors:
+ * HYSTERON_ERROR_PARSE (not JSON: line and column), HYSTERON_ERROR_MODEL (no such run, a
+ * missing or invalid key, or a loop these structs cannot hold exactly, e.g. a position PID
+ * whose output limits are narrower than the ones the controller applies; the message names the
+ * runs there are, or the key). *out is written only on success. */
+HYSTERON_C_API hysteron_status hysteron_loop_params_from_json(const char* json, const char* run,
+                                                             hysteron_loop_params* out);
+/* The same from a file (e.g. "out/result.json"); HYSTERON_ERROR_IO if it cannot be read. */
+HYSTERON_C_API hysteron_status hysteron_loop_params_from_file(const char* path, const char* run,
+                                                             hysteron_loop_params* out);
+/* The preview the loop's feedforward is fed for a recorded or planned reference r[0..n) (any
+ * units, e.g. m), by the formula above with indices clamped to [0, n): what the experiment's
+ * run fed its feedforward. n_preview must equal n_reference; preview may not alias reference.
+ * Not for the real-time loop: a batch over the whole reference (it does not allocate). */
+HYSTERON_C_API hysteron_status hysteron_loop_preview(const hysteron_loop_params* loop, const double* reference,
+                                                    size_t n_reference, double* preview, size_t n_preview);
+
 #ifdef __cplusplus
 }
 #endif

@@ -19,45 +19,7 @@
 
 #include "hysteron/hysteron.h"
 
-static int failures = 0;
-
-#define CHECK(cond, ...)                                       \
-  do {                                                         \
-    if (!(cond)) {                                             \
-      ++failures;                                              \
-      fprintf(stderr, "FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond); \
-      fprintf(stderr, __VA_ARGS__);                            \
-      fprintf(stderr, "\n");                                   \
-    }                                                          \
-  } while (0)
-
-/* A call that must succeed; prints the library's message otherwise. */
-#define OK(call)                                                                          \
-  do {                                                                                    \
-    hysteron_status st_ = (call);                                                         \
-    if (st_ != HYSTERON_OK) {                                                             \
-      ++failures;                                                                         \
-      fprintf(stderr, "FAIL %s:%d: %s -> %s: %s\n", __FILE__, __LINE__, #call,            \
-              hysteron_status_name(st_), hysteron_last_error());                          \
-    }                                                                                     \
-  } while (0)
-
-/* A call that must fail with `expected` and a message containing `needle`. */
-static void expect_error(const char* what, hysteron_status got, hysteron_status expected, const char* needle) {
-  const char* msg = hysteron_last_error();
-  if (got != expected) {
-    ++failures;
-    fprintf(stderr, "FAIL %s: got %s, expected %s (message: %s)\n", what, hysteron_status_name(got),
-            hysteron_status_name(expected), msg);
-    return;
-  }
-  if (msg == NULL || msg[0] == '\0' || strstr(msg, needle) == NULL) {
-    ++failures;
-    fprintf(stderr, "FAIL %s: message \"%s\" does not contain \"%s\"\n", what, msg ? msg : "(null)", needle);
-    return;
-  }
-  printf("ok   %s: %s: %s\n", what, hysteron_status_name(got), msg);
-}
+#include "c_check.h"
 
 static double max_abs_diff(const double* a, const double* b, size_t n) {
   double m = 0.0;

@@ -25,6 +25,7 @@
 
 #include "hysteron/experiment.hpp"
 #include "hysteron/identify.hpp"
+#include "hysteron/io/loop_design.hpp"  // LoopDesign (result.json "controller")
 #include "hysteron/io/model_file.hpp"  // parse_json
 
 namespace hysteron::io {
@@ -123,11 +124,6 @@ void from_json(const nlohmann::json& j, EvaluationDocument& d, std::string_view 
 
 nlohmann::json to_json(const TrackingErrors& e);
 void from_json(const nlohmann::json& j, TrackingErrors& e, std::string_view where);
-
-// {"pid": {...} | absent, "sample_time_s", "feedforward_lead_samples", "shaper": {...} |
-// absent, "learning": {...} | absent} (docs/deploy.md, "From an experiment to a deployment").
-nlohmann::json to_json(const LoopDesign& d);
-void from_json(const nlohmann::json& j, LoopDesign& d, std::string_view where);
 
 // null if the paper gives no figures; {"source", "max_error_mm", ...} for one reference;
 // {"source", "<reference>": {"max_error_mm", ...}, ...} for several.

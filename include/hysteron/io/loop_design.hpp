@@ -1,0 +1,30 @@
+#pragma once
+// result.json's "controller" (LoopDesign, hysteron/loop_design.hpp): the one writer and the one
+// reader of a loop's numbers, and the reader of one run's loop out of a whole result.json
+// (docs/deploy.md, "From an experiment to a deployment"). The C ABI's
+// hysteron_loop_params_from_file and Python's controller_from read through them.
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "hysteron/loop_design.hpp"
+
+namespace hysteron::io {
+
+// {"loop", "feedforward", "pid" | absent, "pressure_pid" | absent, "pressure_gain" | absent,
+// "pwm" | absent, "sample_time_s", "feedforward_lead_samples", "shaper" | absent,
+// "learning" | absent}. A "controller" without "loop" (written before 2026-11-26) is read with
+// the structure its pressure loops imply and the default feedforward and PWM.
+nlohmann::json to_json(const LoopDesign& d);
+void from_json(const nlohmann::json& j, LoopDesign& d, std::string_view where);
+
+// The loop of one run of a result.json document `doc` (`where` names it in messages):
+// `run` is "VARIANT" (an experiment with one reference, e.g. "compensated") or
+// "VARIANT.REFERENCE" (e.g. "learning.triangle"; also accepted where the variant has one
+// reference, if it is that one). An empty `run` takes `doc` as a "controller" object itself,
+// or as one run's entry (an object with a "controller"). Throws Error naming the runs there
+// are when `run` is not one of them, or when a variant has several references and `run`
+// names none.
+LoopDesign loop_design_of_run(const nlohmann::json& doc, std::string_view run, std::string_view where);
+
+}  // namespace hysteron::io

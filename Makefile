@@ -4,7 +4,7 @@ ASAN_BUILD ?= build-asan
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_MAX_LEN ?= 4096
-FUZZ_TARGETS := csv model_file mat rig_params
+FUZZ_TARGETS := csv model_file mat rig_params loop
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
 PYTHON     := /usr/bin/python3
 CMAKE_ARGS := -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=$(PYTHON) -DPYTHON_EXECUTABLE=$(PYTHON)

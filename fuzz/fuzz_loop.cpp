@@ -1,0 +1,99 @@
+// libFuzzer target: result.json's "controller" reader (io::loop_design_of_run, the reader behind
+// the C ABI's hysteron_loop_params_from_file), for a bare controller object and for the runs
+// "compensated", "compensated.sine" and "learning.triangle" of a whole result.json. An accepted
+// loop must survive a write/read round trip unchanged; where make_controller accepts it (on a
+// fixed PI model), its steps must give finite commands inside the pressure limits (a duty in
+// [-1, 1] with the valves), whatever finite reference, preview and measurements it is fed.
+// Only hysteron::Error may escape.
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <optional>
+#include <string_view>
+#include <type_traits>
+#include <variant>
+
+#include "hysteron/error.hpp"
+#include "hysteron/io/loop_design.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/loop_design.hpp"
+
+namespace io = hysteron::io;
+
+namespace {
+
+const hysteron::ModelParams& model() {
+  static const hysteron::ModelParams m = io::model_from_json(
+      io::parse_json(R"({"model": "pi", "q": 0.4, "r": [0, 0.1, 0.25, 0.5], "p": [0.3, 0.2, 0.15, 0.1],
+                         "input_limits": [0, 0.6]})",
+                     "model"),
+      "model");
+  return m;
+}
+
+void check(bool ok) {
+  if (!ok) std::abort();
+}
+
+// A few samples of the loop: commands finite and inside the limits.
+void run(const hysteron::LoopDesign& d) {
+  std::optional<hysteron::Controller> c;
+  try {
+    c.emplace(hysteron::make_controller(d, model()));
+  } catch (const hysteron::Error&) {
+    return;
+  }
+  const hysteron::Limits lim = d.feedforward.pressure_limits;
+  const double inputs[][4] = {{0.0, 0.0, 0.0, 0.0},     {0.01, 0.012, 0.009, 0.2}, {0.05, 0.05, -0.02, 0.7},
+                              {1e3, -1e3, 1e6, -1e6},   {-0.01, 0.3, 0.02, 0.1},   {1e-300, 1e300, -1e300, 5e-324},
+                              {0.02, 0.02, 0.02, 0.3}};
+  for (int rep = 0; rep < 3; ++rep)
+    for (const auto& x : inputs)
+      std::visit(
+          [&](auto& loop) {
+            using T = std::decay_t<decltype(loop)>;
+            if constexpr (std::is_same_v<T, hysteron::FeedforwardPidController>) {
+              const double u = loop.step(x[0], x[1], x[2]);
+              check(std::isfinite(u) && u >= lim.lo && u <= lim.hi);
+            } else if constexpr (std::is_same_v<T, hysteron::OpenLoopController>) {
+              const double u = loop.step(x[0], x[1], x[2], x[3]);
+              check(std::isfinite(u) && u >= lim.lo && u <= lim.hi);
+            } else {
+              const double duty = loop.step(x[0], x[1], x[2], x[3]);
+              check(std::isfinite(duty) && duty >= -1.0 && duty <= 1.0);
+              const double p_d = loop.desired_pressure();
+              check(std::isfinite(p_d) && p_d >= lim.lo && p_d <= lim.hi);
+            }
+          },
+          *c);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  nlohmann::json doc;
+  try {
+    doc = io::parse_json(text, "fuzz.json");
+  } catch (const hysteron::Error&) {
+    return 0;
+  }
+  for (const std::string_view which : {"", "compensated", "compensated.sine", "learning.triangle"}) {
+    hysteron::LoopDesign d;
+    try {
+      d = io::loop_design_of_run(doc, which, "fuzz.json");
+    } catch (const hysteron::Error&) {
+      continue;
+    }
+    const nlohmann::json j = io::to_json(d);
+    hysteron::LoopDesign again;
+    try {
+      io::from_json(io::parse_json(j.dump(), "round-trip"), again, "round-trip");
+    } catch (const hysteron::Error&) {
+      std::abort();  // a loop the reader accepted must be written in a form it accepts
+    }
+    check(io::to_json(again).dump() == j.dump());  // (NaN, read from null, dumps as null both times)
+    run(d);
+  }
+  return 0;
+}

@@ -235,6 +235,21 @@ hysteron_pid_params c_pid(const hysteron::PidParams& p) {
 
 // `where`: the controller's path in messages, e.g. "out/result.json.compensated.sine.controller".
 void to_c_loop(const hysteron::LoopDesign& d, const std::string& where, hysteron_loop_params& c) {
+  // the numbers the objects would refuse, refused here with the run's path (MODEL)
+  try {
+    d.feedforward_params().validate();
+    if (d.pid) hysteron::Pid check(*d.pid);
+    if (d.pressure_pid) hysteron::Pid check(*d.pressure_pid);
+    if (d.pwm) hysteron::PwmModulator check(*d.pwm);
+    if (!std::isfinite(d.pressure_gain) || d.pressure_gain < 0.0)
+      fail(HYSTERON_ERROR_MODEL, "%s: pressure_gain = %g: must be a finite number >= 0", where.c_str(), d.pressure_gain);
+    if (d.shaper && (!std::isfinite(d.shaper->a1) || !std::isfinite(d.shaper->a2)))
+      fail(HYSTERON_ERROR_MODEL, "%s.shaper: a1 = %g, a2 = %g: must be finite", where.c_str(), d.shaper->a1,
+           d.shaper->a2);
+    if (d.learning) d.learning->params.validate();
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_MODEL, "%s: %s", where.c_str(), e.what());
+  }
   hysteron_loop_params out{};
   if (hysteron_ff_pid_default_params(&out.ff_pid) != HYSTERON_OK ||
       hysteron_open_loop_default_params(&out.open_loop) != HYSTERON_OK ||

@@ -153,6 +153,20 @@ static hysteron_status bare(const char* loop, const char* pid_limits, const char
   return hysteron_loop_params_from_json(text, NULL, out);
 }
 
+/* A feedforward_pid controller whose PID has K_p and sample time given as JSON text. */
+static hysteron_status with_pid(const char* kp, const char* sample_time, hysteron_loop_params* out) {
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"loop\": \"feedforward_pid\", \"feedforward\": {\"pressure_min_mpa\": 0, \"pressure_max_mpa\": 0.6,"
+           " \"model_scale_per_m\": 1000, \"lag_time_constant_s\": 0},"
+           " \"pid\": {\"kp_mpa_per_m\": %s, \"ki_mpa_per_m_s\": 40, \"kd_mpa_s_per_m\": 0.2, \"sample_time_s\": %s,"
+           " \"derivative_filter_s\": 0, \"out_min_mpa\": null, \"out_max_mpa\": null, \"anti_windup\": \"none\","
+           " \"tracking_time_s\": 0, \"setpoint_weight_p\": 1, \"setpoint_weight_d\": 0},"
+           " \"sample_time_s\": 0.001, \"feedforward_lead_samples\": 0}",
+           kp, sample_time);
+  return hysteron_loop_params_from_json(text, NULL, out);
+}
+
 int main(int argc, char** argv) {
   hysteron_loop_params p, q;
   hysteron_params* model = NULL;
@@ -240,18 +254,12 @@ int main(int argc, char** argv) {
   expect_error("open loop: PID limits inside +-span",
                bare("open_loop", "\"out_min_mpa\": -0.3, \"out_max_mpa\": 0.6", "", &p), HYSTERON_ERROR_MODEL,
                "[-0.6, 0.6] the C controller applies");
-  {
-    char text[2048];
-    snprintf(text, sizeof text,
-             "{\"loop\": \"feedforward_pid\", \"feedforward\": {\"pressure_min_mpa\": 0, \"pressure_max_mpa\": 0.6,"
-             " \"model_scale_per_m\": 1000, \"lag_time_constant_s\": 0},"
-             " \"pid\": {\"kp_mpa_per_m\": 8, \"ki_mpa_per_m_s\": 40, \"kd_mpa_s_per_m\": 0.2, \"sample_time_s\": 0.002,"
-             " \"derivative_filter_s\": 0, \"out_min_mpa\": null, \"out_max_mpa\": null, \"anti_windup\": \"none\","
-             " \"tracking_time_s\": 0, \"setpoint_weight_p\": 1, \"setpoint_weight_d\": 0},"
-             " \"sample_time_s\": 0.001, \"feedforward_lead_samples\": 0}");
-    expect_error("PID at another sample time", hysteron_loop_params_from_json(text, NULL, &p), HYSTERON_ERROR_MODEL,
-                 "pid.sample_time_s = 0.002 differs from the loop's sample_time_s = 0.001");
-  }
+  expect_error("PID at another sample time", with_pid("8", "0.002", &p), HYSTERON_ERROR_MODEL,
+               "pid.sample_time_s = 0.002 differs from the loop's sample_time_s = 0.001");
+  expect_error("null gain", with_pid("null", "0.001", &p), HYSTERON_ERROR_MODEL, "pid.kp = nan");
+  expect_error("negative pressure gain",
+               bare("open_loop", "\"out_min_mpa\": null, \"out_max_mpa\": null", ", \"pressure_gain\": -0.5", &p),
+               HYSTERON_ERROR_MODEL, "pressure_gain = -0.5: must be a finite number >= 0");
   expect_error("missing key", hysteron_loop_params_from_json("{\"loop\": \"feedforward_pid\", \"sample_time_s\": 0.001}",
                                                             NULL, &p),
                HYSTERON_ERROR_MODEL, "feedforward_lead_samples");

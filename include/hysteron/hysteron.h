@@ -361,7 +361,8 @@ HYSTERON_C_API hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_
  *   hysteron_params_from_file("out/best_model.json", &model);   (faithful: model.json)
  *   if (loop.kind == HYSTERON_LOOP_CASCADE_PWM) hysteron_cascade_create(model, &loop.cascade, &c);
  *
- * The numbers are the file's exactly; the *_create functions check them as for any caller. */
+ * The numbers are the file's exactly; they are checked when read, as the *_create functions
+ * would check them. */
 typedef enum hysteron_loop_kind {
   HYSTERON_LOOP_FEEDFORWARD_PID = 0, /* hysteron_ff_pid_create(model, &loop.ff_pid, ...) (gpi-pid) */
   HYSTERON_LOOP_OPEN_LOOP = 1,       /* hysteron_open_loop_create(model, &loop.open_loop, ...) (mpi-openloop) */
@@ -392,9 +393,10 @@ typedef struct hysteron_loop_params {
  * reference (e.g. "compensated", "learning") or "VARIANT.REFERENCE" (e.g. "compensated.sine",
  * "learning.triangle"); NULL or "" takes `json` as a "controller" object itself. Errors:
  * HYSTERON_ERROR_PARSE (not JSON: line and column), HYSTERON_ERROR_MODEL (no such run, a
- * missing or invalid key, or a loop these structs cannot hold exactly, e.g. a position PID
- * whose output limits are narrower than the ones the controller applies; the message names the
- * runs there are, or the key). *out is written only on success. */
+ * missing key, a value the loop's objects would refuse such as a null or negative gain, or a
+ * loop these structs cannot hold exactly, e.g. a position PID whose output limits are narrower
+ * than the ones the controller applies; the message names the runs there are, or the key).
+ * *out is written only on success. */
 HYSTERON_C_API hysteron_status hysteron_loop_params_from_json(const char* json, const char* run,
                                                              hysteron_loop_params* out);
 /* The same from a file (e.g. "out/result.json"); HYSTERON_ERROR_IO if it cannot be read. */

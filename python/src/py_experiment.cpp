@@ -49,6 +49,21 @@ faithful one): a FeedforwardPidController, OpenLoopController or CascadePwmContr
 "loop". The learning is not part of it (IterativeLearning from controller["learning"]).
 hysteron.Error names a missing or invalid key. docs/deploy.md.)doc");
   m.def(
+      "loop_of_run",
+      [](const py::object& result, const std::string& run) {
+        const LoopDesign d = py::isinstance<py::dict>(result)
+                                 ? io::loop_design_of_run(to_json(result), run, "result")
+                                 : io::read_loop_design(py::str(result).cast<std::string>(), run);  // str or os.PathLike
+        return from_json(io::to_json(d));
+      },
+      py::arg("result"), py::arg("run"),
+      R"doc(One run's "controller" out of a result.json (a file name, or the parsed document as a
+dict): run is "VARIANT" for an experiment with one reference ("compensated") or
+"VARIANT.REFERENCE" ("learning.triangle"); "" takes result as a controller itself. The reader
+behind the C ABI's hysteron_loop_params_from_file; hysteron.Error names the runs there are when
+run is not one of them. Pass the dict it returns to controller_from, learning_from or
+feedforward_preview.)doc");
+  m.def(
       "learning_from",
       [](const py::object& controller) {
         const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");

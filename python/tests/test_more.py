@@ -2,6 +2,7 @@
 import json
 import math
 import os
+import pathlib
 import re
 import tempfile
 
@@ -317,6 +318,21 @@ def test_experiment_summary_keys():
         bad = dict(comp["controller"], loop="bang_bang")
         with pytest.raises(hysteron.Error, match="unknown loop"):
             hysteron.controller_from(bad, os.path.join(d, "out", "best_model.json"))
+        # loop_of_run: one run's controller out of result.json (a file or its parsed dict), the
+        # reader behind the C ABI's hysteron_loop_params_from_file
+        rj = os.path.join(d, "out", "result.json")
+        assert hysteron.loop_of_run(rj, "compensated") == comp["controller"]
+        assert hysteron.loop_of_run(pathlib.Path(rj), "learning.sine") == ctl
+        with open(rj) as f:
+            doc = json.load(f)
+        assert hysteron.loop_of_run(doc, "faithful") == r["runs"][0]["controller"]
+        assert hysteron.loop_of_run(comp["controller"], "") == comp["controller"]
+        with pytest.raises(hysteron.Error, match=r'no run "nope" \(variants: .*compensated'):
+            hysteron.loop_of_run(rj, "nope")
+        with pytest.raises(hysteron.Error, match='no reference "triangle"'):
+            hysteron.loop_of_run(rj, "compensated.triangle")
+        with pytest.raises(hysteron.Error, match="cannot open result file"):
+            hysteron.loop_of_run(os.path.join(d, "missing.json"), "compensated")
 
 
 def test_experiment_registry():

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"  // parse_json, read_text_file
 #include "json_read.hpp"
 
 namespace hysteron::io {
@@ -237,6 +238,10 @@ LoopDesign loop_design_of_run(const json& doc, std::string_view run, std::string
     throw Error(fmt::format("{}: no reference \"{}\" (references: {})", vw, reference, names_of(*v, is_run)));
   const std::string ew = key_where(vw, reference);
   return read((*e)["controller"], key_where(ew, "controller"));
+}
+
+LoopDesign read_loop_design(const std::string& path, std::string_view run) {
+  return loop_design_of_run(parse_json(read_text_file(path, "result file"), path), run, path);
 }
 
 }  // namespace hysteron::io

@@ -318,16 +318,16 @@ struct ToJson {
   }
 };
 
-std::string read_text(const std::string& path) {
+}  // namespace
+
+std::string read_text_file(const std::string& path, std::string_view what) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open model file", path));
+  if (!in) throw Error(fmt::format("{}: cannot open {}", path, what));
   std::ostringstream ss;
   ss << in.rdbuf();
   if (in.bad()) throw Error(fmt::format("{}: read error", path));
   return ss.str();
 }
-
-}  // namespace
 
 json parse_json(std::string_view text, std::string_view where) {
   if (const auto nul = text.find('\0'); nul != std::string_view::npos)
@@ -529,7 +529,7 @@ nlohmann::json model_to_json(const ModelParams& params) {
 }
 
 ModelParams read_model_file(const std::string& path) {
-  const json j = parse_json(read_text(path), path);
+  const json j = parse_json(read_text_file(path, "model file"), path);
   return model_from_json(j, path);
 }
 

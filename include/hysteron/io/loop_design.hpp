@@ -3,6 +3,7 @@
 // reader of a loop's numbers, and the reader of one run's loop out of a whole result.json
 // (docs/deploy.md, "From an experiment to a deployment"). The C ABI's
 // hysteron_loop_params_from_file and Python's controller_from read through them.
+#include <string>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
@@ -26,5 +27,7 @@ void from_json(const nlohmann::json& j, LoopDesign& d, std::string_view where);
 // are when `run` is not one of them, or when a variant has several references and `run`
 // names none.
 LoopDesign loop_design_of_run(const nlohmann::json& doc, std::string_view run, std::string_view where);
+// The same from the file `path` (its name is the `where` of messages).
+LoopDesign read_loop_design(const std::string& path, std::string_view run);
 
 }  // namespace hysteron::io

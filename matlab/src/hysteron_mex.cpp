@@ -20,6 +20,8 @@
 //                                                              (HTML file), input_axis, output_axis
 //   rig         pressure_mpa, opts   -> struct of columns     opts: params, seed, control_period
 //   rig_params  params               -> complete rig parameter struct
+//   loop        result, run, model, reference_m, measured_m, pressure_mpa
+//                                    -> struct: loop, command_mpa, duty, preview_m
 //
 // Errors: every C++ exception is caught here and raised as a MATLAB error with an
 // identifier "hysteron:..." (mx_json.hpp lists them) and a message naming the command,
@@ -45,13 +47,16 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "hysteron/error.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/loop_design.hpp"
 #include "hysteron/models.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/report.hpp"
@@ -492,12 +497,74 @@ void cmd_rig(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   plhs[0] = s;
 }
 
+// A run's loop (result.json's "controller"; docs/deploy.md) replayed over recorded signals: the
+// commands it gives for the reference, contraction and pressure readings, sample by sample, as
+// on a target. `source`: a result.json file name, or JSON text (a result.json or a controller).
+LoopDesign loop_source(const std::string& source, const std::string& run) {
+  try {
+    const auto first = source.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && source[first] == '{')
+      return io::loop_design_of_run(io::parse_json(source, "result"), run, "result");
+    if (source.empty()) throw MexError(id_bad_argument, "result: empty file name");
+    return io::read_loop_design(source, run);
+  } catch (const Error& e) {
+    throw MexError(id_bad_argument, e.what());
+  }
+}
+
+void cmd_loop(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
+  require_args(nrhs, 6, 7, "result, run, model, reference_m, measured_m, pressure_mpa");
+  const LoopDesign d = loop_source(get_string(prhs[1], "result"), get_string(prhs[2], "run"));
+  const ModelSpec spec = model_spec(prhs[3], "model");
+  const std::vector<double> ref = get_vector(prhs[4], "reference_m");
+  const std::vector<double> meas = get_vector(prhs[5], "measured_m");
+  require_finite(ref, "reference_m");
+  require_finite(meas, "measured_m");
+  if (meas.size() != ref.size())
+    throw MexError(id_bad_argument, fmt::format("measured_m has {} values, reference_m {}", meas.size(), ref.size()));
+  std::vector<double> pressure;
+  if (const mxArray* a = arg(nrhs, prhs, 6); a != nullptr && !mxIsEmpty(a)) {
+    pressure = get_vector(a, "pressure_mpa");
+    require_finite(pressure, "pressure_mpa");
+    if (pressure.size() != ref.size())
+      throw MexError(id_bad_argument,
+                     fmt::format("pressure_mpa has {} values, reference_m {}", pressure.size(), ref.size()));
+  } else if (d.kind != LoopDesign::Kind::feedforward_pid) {
+    throw MexError(id_bad_argument, "pressure_mpa: this loop has a pressure loop: give the measured pressure [MPa]");
+  }
+  Controller c = make_controller(d, spec.params);
+  const std::vector<double> preview = feedforward_preview(d, ref);
+  std::vector<double> command(ref.size()), duty(ref.size(), 0.0);
+  for (std::size_t k = 0; k < ref.size(); ++k)
+    std::visit(
+        [&](auto& loop) {
+          using T = std::decay_t<decltype(loop)>;
+          if constexpr (std::is_same_v<T, FeedforwardPidController>) {
+            command[k] = loop.step(ref[k], preview[k], meas[k]);
+          } else if constexpr (std::is_same_v<T, OpenLoopController>) {
+            command[k] = loop.step(ref[k], preview[k], meas[k], pressure[k]);
+          } else {
+            duty[k] = loop.step(ref[k], preview[k], meas[k], pressure[k]);
+            command[k] = loop.desired_pressure();
+          }
+        },
+        c);
+  const char* kinds[] = {"feedforward_pid", "open_loop", "cascade_pwm"};
+  const char* names[] = {"loop", "command_mpa", "duty", "preview_m"};
+  mxArray* out = mxCreateStructMatrix(1, 1, 4, names);
+  mxSetField(out, 0, "loop", mxCreateString(kinds[static_cast<int>(d.kind)]));
+  mxSetField(out, 0, "command_mpa", make_vector(command, prhs[4]));
+  mxSetField(out, 0, "duty", make_vector(duty, prhs[4]));
+  mxSetField(out, 0, "preview_m", make_vector(preview, prhs[4]));
+  plhs[0] = out;
+}
+
 const std::map<std::string, Command>& commands() {
   static const std::map<std::string, Command> table = {
       {"version", cmd_version},   {"model", cmd_model},     {"model_json", cmd_model_json},
       {"load", cmd_load},         {"save", cmd_save},       {"simulate", cmd_simulate},
       {"invert", cmd_invert},     {"evaluate", cmd_evaluate}, {"fit", cmd_fit},
-      {"rig", cmd_rig},           {"rig_params", cmd_rig_params}};
+      {"rig", cmd_rig},           {"rig_params", cmd_rig_params}, {"loop", cmd_loop}};
   return table;
 }
 

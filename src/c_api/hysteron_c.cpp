@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdint>
 #include <cstring>
 #include <exception>
 #include <fstream>
@@ -208,7 +209,6 @@ hysteron::ModelState make_state(const double* y, std::size_t n, double u) {
   s.u = u;
   return s;
 }
-
 
 // ---- a loop from result.json: LoopDesign -> the C structs --------------------------------
 // Everything the structs cannot hold exactly is an error (MODEL): the loop must command what
@@ -691,7 +691,6 @@ bool finite_step_args(const char* fn, double reference_m, double preview_m, doub
   return false;
 }
 
-
 }  // namespace
 
 extern "C" {
@@ -1024,7 +1023,8 @@ hysteron_status hysteron_loop_preview(const hysteron_loop_params* loop, const do
     }
     if (n_preview != n_reference)
       fail(HYSTERON_ERROR_INVALID_ARGUMENT, "n_preview = %zu, but n_reference = %zu", n_preview, n_reference);
-    if (n_reference > 0 && preview < reference + n_reference && reference < preview + n_preview)
+    const auto at = [](const double* p) { return reinterpret_cast<std::uintptr_t>(p); };
+    if (n_reference > 0 && at(preview) < at(reference + n_reference) && at(reference) < at(preview + n_preview))
       fail(HYSTERON_ERROR_INVALID_ARGUMENT, "preview overlaps reference");
     require_finite_array(reference, n_reference, "reference");
     hysteron::LoopDesign d;

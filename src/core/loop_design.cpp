@@ -37,19 +37,31 @@ Controller make_controller(const LoopDesign& d, const ModelParams& model) {
   throw Error("controller: unknown loop kind");
 }
 
+namespace {
+// j + plus - minus clamped to [0, n), for j in [0, n) and any plus, minus (a file's counts of
+// samples may be as large as a size_t holds: no overflow).
+std::size_t clamped_index(std::size_t j, std::size_t plus, std::size_t minus, std::size_t n) noexcept {
+  if (plus >= minus) {
+    const std::size_t up = plus - minus;
+    return up >= n - 1 - j ? n - 1 : j + up;
+  }
+  const std::size_t down = minus - plus;
+  return down >= j ? 0 : j - down;
+}
+}  // namespace
+
 void feedforward_preview(const LoopDesign& d, std::span<const double> reference, std::span<double> preview) {
   if (preview.size() != reference.size())
     throw Error("feedforward_preview: the preview must have the reference's length");
-  const auto n = static_cast<std::ptrdiff_t>(reference.size());
-  const auto at = [&](std::ptrdiff_t k) { return reference[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(k, 0, n - 1))]; };
-  const auto lead = static_cast<std::ptrdiff_t>(d.feedforward_lead);
-  for (std::ptrdiff_t k = 0; k < n; ++k) {
-    const std::ptrdiff_t j = std::min(k + lead, n - 1);  // s(k + lead), held at the end
+  const std::size_t n = reference.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t j = clamped_index(k, d.feedforward_lead, 0, n);  // s(k + lead), held at the end
     if (d.shaper) {
-      const auto adv = static_cast<std::ptrdiff_t>(d.shaper->advance), D = static_cast<std::ptrdiff_t>(d.shaper->delay);
-      preview[static_cast<std::size_t>(k)] = d.shaper->a1 * at(j + adv) + d.shaper->a2 * at(j + adv - D);
+      const double r1 = reference[clamped_index(j, d.shaper->advance, 0, n)];
+      const double r2 = reference[clamped_index(j, d.shaper->advance, d.shaper->delay, n)];
+      preview[k] = d.shaper->a1 * r1 + d.shaper->a2 * r2;
     } else {
-      preview[static_cast<std::size_t>(k)] = at(j);
+      preview[k] = reference[j];
     }
   }
 }

@@ -96,6 +96,22 @@ static void check_preview(hysteron_loop_params p) {
   for (k = 0, worst = 0.0; k < n; ++k) worst = fmax(worst, fabs(pv[k] - clamped(r, n, k + 3)));
   CHECK(worst == 0.0, "unshaped preview differs from r(k + lead) by %g", worst);
   printf("ok   hysteron_loop_preview: shaped and unshaped equal the formula over %d samples\n", n);
+  /* counts as large as a size_t holds (a file may say so): clamped, no overflow */
+  p.shaped = 1;
+  p.feedforward_lead = (size_t)-1;
+  p.shaper_advance = (size_t)-1;
+  p.shaper_delay = (size_t)-1;
+  OK(hysteron_loop_preview(&p, r, n, pv, n));
+  for (k = 0, worst = 0.0; k < n; ++k) worst = fmax(worst, fabs(pv[k] - (0.75 * r[n - 1] + 0.25 * r[n - 1])));
+  CHECK(worst == 0.0, "huge lead and advance = delay: differs from r(n - 1) by %g", worst);
+  p.feedforward_lead = 0;
+  p.shaper_advance = 0;
+  OK(hysteron_loop_preview(&p, r, n, pv, n));
+  for (k = 0, worst = 0.0; k < n; ++k)
+    worst = fmax(worst, fabs(pv[k] - (0.75 * r[k] + 0.25 * r[0])));
+  CHECK(worst == 0.0, "huge delay: differs from a1 r(k) + a2 r(0) by %g", worst);
+  p.shaped = 0;
+  p.feedforward_lead = 3;
   expect_error("preview: sizes", hysteron_loop_preview(&p, r, n, pv, n - 1), HYSTERON_ERROR_INVALID_ARGUMENT,
                "n_preview = 39");
   expect_error("preview: aliasing", hysteron_loop_preview(&p, r, n, r, n), HYSTERON_ERROR_INVALID_ARGUMENT,

@@ -10,8 +10,6 @@
 #include <cstdlib>
 #include <optional>
 #include <string_view>
-#include <type_traits>
-#include <variant>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/loop_design.hpp"
@@ -48,24 +46,11 @@ void run(const hysteron::LoopDesign& d) {
                               {1e3, -1e3, 1e6, -1e6},   {-0.01, 0.3, 0.02, 0.1},   {1e-300, 1e300, -1e300, 5e-324},
                               {0.02, 0.02, 0.02, 0.3}};
   for (int rep = 0; rep < 3; ++rep)
-    for (const auto& x : inputs)
-      std::visit(
-          [&](auto& loop) {
-            using T = std::decay_t<decltype(loop)>;
-            if constexpr (std::is_same_v<T, hysteron::FeedforwardPidController>) {
-              const double u = loop.step(x[0], x[1], x[2]);
-              check(std::isfinite(u) && u >= lim.lo && u <= lim.hi);
-            } else if constexpr (std::is_same_v<T, hysteron::OpenLoopController>) {
-              const double u = loop.step(x[0], x[1], x[2], x[3]);
-              check(std::isfinite(u) && u >= lim.lo && u <= lim.hi);
-            } else {
-              const double duty = loop.step(x[0], x[1], x[2], x[3]);
-              check(std::isfinite(duty) && duty >= -1.0 && duty <= 1.0);
-              const double p_d = loop.desired_pressure();
-              check(std::isfinite(p_d) && p_d >= lim.lo && p_d <= lim.hi);
-            }
-          },
-          *c);
+    for (const auto& x : inputs) {
+      const hysteron::LoopOutput o = hysteron::step(*c, x[0], x[1], x[2], x[3]);
+      check(std::isfinite(o.command_mpa) && o.command_mpa >= lim.lo && o.command_mpa <= lim.hi);  // p_d with valves
+      check(std::isfinite(o.duty) && o.duty >= -1.0 && o.duty <= 1.0);
+    }
 }
 
 }  // namespace

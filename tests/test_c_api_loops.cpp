@@ -11,8 +11,6 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
-#include <type_traits>
-#include <variant>
 #include <vector>
 
 #include "hysteron/experiment.hpp"
@@ -49,19 +47,9 @@ void replay_cpp(const ExperimentResult& r, const TrackingRun& run, double& worst
   const std::vector<double> preview = preview_m(run);
   for (std::size_t k = 0; k < run.t.size(); ++k) {
     const double ref = run.reference_mm[k] * 1e-3, meas = run.measured_mm[k] * 1e-3, p = run.pressure_measured_mpa[k];
-    std::visit(
-        [&](auto& loop) {
-          using T = std::decay_t<decltype(loop)>;
-          if constexpr (std::is_same_v<T, FeedforwardPidController>) {
-            worst_command = std::max(worst_command, std::abs(loop.step(ref, preview[k], meas) - run.pressure_command_mpa[k]));
-          } else if constexpr (std::is_same_v<T, OpenLoopController>) {
-            worst_command = std::max(worst_command, std::abs(loop.step(ref, preview[k], meas, p) - run.pressure_command_mpa[k]));
-          } else {
-            worst_duty = std::max(worst_duty, std::abs(loop.step(ref, preview[k], meas, p) - run.duty[k]));
-            worst_command = std::max(worst_command, std::abs(loop.desired_pressure() - run.pressure_command_mpa[k]));
-          }
-        },
-        c);
+    const LoopOutput o = step(c, ref, preview[k], meas, p);  // with the valves: p_d
+    worst_command = std::max(worst_command, std::abs(o.command_mpa - run.pressure_command_mpa[k]));
+    worst_duty = std::max(worst_duty, std::abs(o.duty - run.duty[k]));
   }
 }
 
@@ -89,8 +77,16 @@ Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
   hysteron_status st = HYSTERON_ERROR_INTERNAL;
   switch (c.kind) {
     case HYSTERON_LOOP_FEEDFORWARD_PID: st = hysteron_ff_pid_create(model, &c.ff_pid, &ff); break;
-    case HYSTERON_LOOP_OPEN_LOOP: st = hysteron_open_loop_create(model, &c.open_loop, &ol); break;
-    case HYSTERON_LOOP_CASCADE_PWM: st = hysteron_cascade_create(model, &c.cascade, &cas); break;
+    case HYSTERON_LOOP_OPEN_LOOP: {
+      const hysteron_open_loop_params op{c.ff_pid, c.pressure_gain};
+      st = hysteron_open_loop_create(model, &op, &ol);
+      break;
+    }
+    case HYSTERON_LOOP_CASCADE_PWM: {
+      const hysteron_cascade_params cp{c.ff_pid, c.pressure, c.pwm};
+      st = hysteron_cascade_create(model, &cp, &cas);
+      break;
+    }
     default: ADD_FAILURE() << run << ": kind " << c.kind;
   }
   EXPECT_EQ(st, HYSTERON_OK) << run << ": " << hysteron_last_error();

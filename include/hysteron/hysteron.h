@@ -359,24 +359,27 @@ HYSTERON_C_API hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_
  *   hysteron_loop_params loop;
  *   hysteron_loop_params_from_file("out/result.json", "compensated.sine", &loop);
  *   hysteron_params_from_file("out/best_model.json", &model);   (faithful: model.json)
- *   if (loop.kind == HYSTERON_LOOP_CASCADE_PWM) hysteron_cascade_create(model, &loop.cascade, &c);
+ *   if (loop.kind == HYSTERON_LOOP_CASCADE_PWM) {
+ *     hysteron_cascade_params cp = {loop.ff_pid, loop.pressure, loop.pwm};
+ *     hysteron_cascade_create(model, &cp, &c);
+ *   }
  *
  * The numbers are the file's exactly; they are checked when read, as the *_create functions
  * would check them. */
 typedef enum hysteron_loop_kind {
   HYSTERON_LOOP_FEEDFORWARD_PID = 0, /* hysteron_ff_pid_create(model, &loop.ff_pid, ...) (gpi-pid) */
-  HYSTERON_LOOP_OPEN_LOOP = 1,       /* hysteron_open_loop_create(model, &loop.open_loop, ...) (mpi-openloop) */
-  HYSTERON_LOOP_CASCADE_PWM = 2      /* hysteron_cascade_create(model, &loop.cascade, ...) (mpi-pwm) */
+  HYSTERON_LOOP_OPEN_LOOP = 1,       /* hysteron_open_loop_params {loop.ff_pid, loop.pressure_gain} (mpi-openloop) */
+  HYSTERON_LOOP_CASCADE_PWM = 2      /* hysteron_cascade_params {loop.ff_pid, loop.pressure, loop.pwm} (mpi-pwm) */
 } hysteron_loop_kind;
 typedef struct hysteron_loop_params {
   int kind; /* a hysteron_loop_kind: the object to create */
-  /* The loop's parameters for each kind. The feedforward and position PID are the same in all
-   * three (open_loop.loop and cascade.outer equal ff_pid); the parts a kind does not have are
-   * the *_default_params values. A run without a position PID (the faithful open loop) has
-   * kp = ki = kd = 0. */
-  hysteron_ff_pid_params ff_pid;       /* HYSTERON_LOOP_FEEDFORWARD_PID */
-  hysteron_open_loop_params open_loop; /* HYSTERON_LOOP_OPEN_LOOP */
-  hysteron_cascade_params cascade;     /* HYSTERON_LOOP_CASCADE_PWM */
+  /* The feedforward and the position PID (every kind; a run without a position PID, the
+   * faithful open loop, has kp = ki = kd = 0), then the parts of the pressure loop its kind
+   * has; the parts it does not have are the *_default_params values. */
+  hysteron_ff_pid_params ff_pid;
+  double pressure_gain;         /* HYSTERON_LOOP_OPEN_LOOP: k_p of the pressure loop */
+  hysteron_pid_params pressure; /* HYSTERON_LOOP_CASCADE_PWM: the valves' inner loop */
+  hysteron_pwm_params pwm;      /* HYSTERON_LOOP_CASCADE_PWM: the modulator */
   /* The feedforward's preview of a known reference r (hysteron_loop_preview):
    * preview(k) = s(k + feedforward_lead), s = r unshaped, else
    * s(k) = shaper_a1 r(k + shaper_advance) + shaper_a2 r(k + shaper_advance - shaper_delay). */

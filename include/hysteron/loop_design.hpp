@@ -85,6 +85,16 @@ struct LoopDesign {
 using Controller = std::variant<FeedforwardPidController, OpenLoopController, CascadePwmController>;
 Controller make_controller(const LoopDesign& d, const ModelParams& model);
 
+// One sample of whichever loop `c` holds: the pressure command [MPa] (with the valves, the
+// cascade's desired pressure p_d) and the PWM duty in [-1, 1] (0 without valves). The arguments
+// are those of the loops' step(); pressure_mpa (the measured gauge pressure) is not used by the
+// feedforward_pid loop. Real-time safe: no allocation, no exception.
+struct LoopOutput {
+  double command_mpa = 0.0;
+  double duty = 0.0;
+};
+LoopOutput step(Controller& c, double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
+
 // The reference the loop's feedforward is fed, for a recorded reference (any units, e.g. m):
 // through d.shaper if there is one, s(k) = a1 r(k + advance) + a2 r(k + advance - delay), then
 // d.feedforward_lead samples ahead, preview(k) = s(k + lead); indices clamped to the record, as

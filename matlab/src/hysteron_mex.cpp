@@ -47,7 +47,6 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
-#include <variant>
 #include <vector>
 
 #include "hysteron/error.hpp"
@@ -535,20 +534,11 @@ void cmd_loop(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   Controller c = make_controller(d, spec.params);
   const std::vector<double> preview = feedforward_preview(d, ref);
   std::vector<double> command(ref.size()), duty(ref.size(), 0.0);
-  for (std::size_t k = 0; k < ref.size(); ++k)
-    std::visit(
-        [&](auto& loop) {
-          using T = std::decay_t<decltype(loop)>;
-          if constexpr (std::is_same_v<T, FeedforwardPidController>) {
-            command[k] = loop.step(ref[k], preview[k], meas[k]);
-          } else if constexpr (std::is_same_v<T, OpenLoopController>) {
-            command[k] = loop.step(ref[k], preview[k], meas[k], pressure[k]);
-          } else {
-            duty[k] = loop.step(ref[k], preview[k], meas[k], pressure[k]);
-            command[k] = loop.desired_pressure();
-          }
-        },
-        c);
+  for (std::size_t k = 0; k < ref.size(); ++k) {
+    const LoopOutput o = step(c, ref[k], preview[k], meas[k], pressure.empty() ? 0.0 : pressure[k]);
+    command[k] = o.command_mpa;
+    duty[k] = o.duty;
+  }
   const char* kinds[] = {"feedforward_pid", "open_loop", "cascade_pwm"};
   const char* names[] = {"loop", "command_mpa", "duty", "preview_m"};
   mxArray* out = mxCreateStructMatrix(1, 1, 4, names);

@@ -9,19 +9,16 @@
 
 #include <nlohmann/json.hpp>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdint>
 #include <cstring>
 #include <exception>
-#include <fstream>
 #include <limits>
 #include <new>
 #include <optional>
 #include <span>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -174,14 +171,13 @@ hysteron_params* make_params(hysteron::ModelParams p) {
   return h;
 }
 
-// The whole file `path` (`what` names it in the IO error).
+// The whole file `path` (io::read_text_file; `what` names it): its errors are IO.
 std::string read_file(const char* path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(HYSTERON_ERROR_IO, "%s: cannot open %s: %s", path, what, std::strerror(errno));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) fail(HYSTERON_ERROR_IO, "%s: read error", path);
-  return ss.str();
+  try {
+    return hysteron::io::read_text_file(path, what);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_IO, "%s", e.what());
+  }
 }
 
 // io::parse_json (strict: also a repeated key or a NUL byte is a parse error), then the model.
@@ -210,126 +206,6 @@ hysteron::ModelState make_state(const double* y, std::size_t n, double u) {
   return s;
 }
 
-// ---- a loop from result.json: LoopDesign -> the C structs --------------------------------
-// Everything the structs cannot hold exactly is an error (MODEL): the loop must command what
-// the run commanded.
-
-// The PID's fields; its output limits [lo, hi] are checked against the ones the C controller
-// applies (`applied_lo`, `applied_hi`: the C++ controller intersects the two, so they match when
-// the recorded ones are not narrower).
-void check_pid_limits(const hysteron::PidParams& p, double applied_lo, double applied_hi, double sample_time,
-                      const char* where) {
-  if (p.sample_time != sample_time)
-    fail(HYSTERON_ERROR_MODEL, "%s.sample_time_s = %g differs from the loop's sample_time_s = %g", where,
-         p.sample_time, sample_time);
-  if (!(p.out_min <= applied_lo) || !(p.out_max >= applied_hi))
-    fail(HYSTERON_ERROR_MODEL,
-         "%s: output limits [%g, %g] are narrower than the [%g, %g] the C controller applies (not representable)",
-         where, p.out_min, p.out_max, applied_lo, applied_hi);
-}
-
-hysteron_pid_params c_pid(const hysteron::PidParams& p) {
-  return {p.kp, p.ki, p.kd, p.derivative_filter, p.tracking_time, p.setpoint_weight_p, p.setpoint_weight_d,
-          p.out_min, p.out_max, static_cast<int>(p.anti_windup)};
-}
-
-// `where`: the controller's path in messages, e.g. "out/result.json.compensated.sine.controller".
-void to_c_loop(const hysteron::LoopDesign& d, const std::string& where, hysteron_loop_params& c) {
-  // the numbers the objects would refuse, refused here with the run's path (MODEL)
-  try {
-    d.feedforward_params().validate();
-    if (d.pid) hysteron::Pid check(*d.pid);
-    if (d.pressure_pid) hysteron::Pid check(*d.pressure_pid);
-    if (d.pwm) hysteron::PwmModulator check(*d.pwm);
-    if (!std::isfinite(d.pressure_gain) || d.pressure_gain < 0.0)
-      fail(HYSTERON_ERROR_MODEL, "%s: pressure_gain = %g: must be a finite number >= 0", where.c_str(), d.pressure_gain);
-    if (d.shaper && (!std::isfinite(d.shaper->a1) || !std::isfinite(d.shaper->a2)))
-      fail(HYSTERON_ERROR_MODEL, "%s.shaper: a1 = %g, a2 = %g: must be finite", where.c_str(), d.shaper->a1,
-           d.shaper->a2);
-    if (d.learning) d.learning->params.validate();
-  } catch (const hysteron::Error& e) {
-    fail(HYSTERON_ERROR_MODEL, "%s: %s", where.c_str(), e.what());
-  }
-  hysteron_loop_params out{};
-  if (hysteron_ff_pid_default_params(&out.ff_pid) != HYSTERON_OK ||
-      hysteron_open_loop_default_params(&out.open_loop) != HYSTERON_OK ||
-      hysteron_cascade_default_params(&out.cascade) != HYSTERON_OK ||
-      hysteron_ilc_default_params(&out.learning) != HYSTERON_OK)
-    fail(HYSTERON_ERROR_INTERNAL, "default parameters");
-  using Kind = hysteron::LoopDesign::Kind;
-  const hysteron::Limits lim = d.feedforward.pressure_limits;
-  hysteron_ff_pid_params& f = out.ff_pid;
-  f.sample_time = d.sample_time;
-  f.pressure_min = lim.lo;
-  f.pressure_max = lim.hi;
-  f.model_scale = d.feedforward.model_scale;
-  f.lag_time_constant = d.feedforward.lag_time_constant;
-  if (d.pid) {
-    const double span = lim.hi - lim.lo;
-    const std::string w = where + ".pid";
-    if (d.kind == Kind::open_loop)
-      check_pid_limits(*d.pid, -span, span, d.sample_time, w.c_str());
-    else
-      check_pid_limits(*d.pid, lim.lo, lim.hi, d.sample_time, w.c_str());
-    const hysteron_pid_params q = c_pid(*d.pid);
-    f.kp = q.kp;
-    f.ki = q.ki;
-    f.kd = q.kd;
-    f.derivative_filter = q.derivative_filter;
-    f.tracking_time = q.tracking_time;
-    f.setpoint_weight_p = q.setpoint_weight_p;
-    f.setpoint_weight_d = q.setpoint_weight_d;
-    f.anti_windup = q.anti_windup;
-  } else {
-    f.kp = f.ki = f.kd = 0.0;  // no position loop
-  }
-  out.open_loop.loop = f;
-  out.cascade.outer = f;
-  switch (d.kind) {
-    case Kind::feedforward_pid: out.kind = HYSTERON_LOOP_FEEDFORWARD_PID; break;
-    case Kind::open_loop:
-      out.kind = HYSTERON_LOOP_OPEN_LOOP;
-      out.open_loop.pressure_gain = d.pressure_gain;
-      break;
-    case Kind::cascade_pwm: {
-      out.kind = HYSTERON_LOOP_CASCADE_PWM;
-      if (!d.pressure_pid) fail(HYSTERON_ERROR_MODEL, "%s: a cascade_pwm loop needs its pressure_pid", where.c_str());
-      if (d.pressure_pid->sample_time != d.sample_time)
-        fail(HYSTERON_ERROR_MODEL, "%s.pressure_pid.sample_time_s = %g differs from the loop's sample_time_s = %g",
-             where.c_str(), d.pressure_pid->sample_time, d.sample_time);
-      out.cascade.pressure = c_pid(*d.pressure_pid);
-      const hysteron::PwmParams w = d.pwm.value_or(hysteron::PwmParams{});
-      out.cascade.pwm = {w.gain, w.deadband, w.min_duty, w.max_duty, w.resolution};
-      break;
-    }
-  }
-  out.feedforward_lead = d.feedforward_lead;
-  const hysteron::LoopDesign::Shaper z = d.shaper.value_or(hysteron::LoopDesign::Shaper{});
-  out.shaped = d.shaper ? 1 : 0;
-  out.shaper_a1 = z.a1;
-  out.shaper_a2 = z.a2;
-  out.shaper_delay = z.delay;
-  out.shaper_advance = z.advance;
-  if (d.learning) {
-    const hysteron::LearningParams& p = d.learning->params;
-    out.has_learning = 1;
-    out.learning = {p.period, p.gain, p.lead, p.half_width, p.lookahead, p.max_correction, p.rise_tolerance,
-                    p.hold_after_cuts, p.max_gain};
-  }
-  c = out;
-}
-
-// io::parse_json (strict), then the run's loop.
-void read_loop(const std::string& text, const char* run, const std::string& where, hysteron_loop_params& out) {
-  nlohmann::json j;
-  try {
-    j = hysteron::io::parse_json(text, where);
-  } catch (const hysteron::Error& e) {
-    fail(HYSTERON_ERROR_PARSE, "%s", e.what());
-  }
-  const std::string r = run ? run : "";
-  to_c_loop(hysteron::io::loop_design_of_run(j, r, where), r.empty() ? where : where + "." + r + ".controller", out);
-}
 }  // namespace
 
 extern "C" {
@@ -689,6 +565,133 @@ bool finite_step_args(const char* fn, double reference_m, double preview_m, doub
                   reference_m, preview_m, measured_m, held);
   set_message(fn, text);
   return false;
+}
+
+// ---- a loop from result.json: LoopDesign -> the C structs --------------------------------
+// Everything the structs cannot hold exactly is an error (MODEL): the loop must command what
+// the run commanded.
+
+// The PID's fields; its output limits [lo, hi] are checked against the ones the C controller
+// applies (`applied_lo`, `applied_hi`: the C++ controller intersects the two, so they match when
+// the recorded ones are not narrower).
+void check_pid_limits(const hysteron::PidParams& p, double applied_lo, double applied_hi, double sample_time,
+                      const char* where) {
+  if (p.sample_time != sample_time)
+    fail(HYSTERON_ERROR_MODEL, "%s.sample_time_s = %g differs from the loop's sample_time_s = %g", where,
+         p.sample_time, sample_time);
+  if (!(p.out_min <= applied_lo) || !(p.out_max >= applied_hi))
+    fail(HYSTERON_ERROR_MODEL,
+         "%s: output limits [%g, %g] are narrower than the [%g, %g] the C controller applies (not representable)",
+         where, p.out_min, p.out_max, applied_lo, applied_hi);
+}
+
+hysteron_pid_params c_pid(const hysteron::PidParams& p) {
+  return {p.kp, p.ki, p.kd, p.derivative_filter, p.tracking_time, p.setpoint_weight_p, p.setpoint_weight_d,
+          p.out_min, p.out_max, static_cast<int>(p.anti_windup)};
+}
+
+// `where`: the controller's path in messages, e.g. "out/result.json.compensated.sine.controller".
+void to_c_loop(const hysteron::LoopDesign& d, const std::string& where, hysteron_loop_params& c) {
+  // the numbers the objects would refuse (check_controller, the learning), refused here with
+  // the run's path (MODEL)
+  try {
+    hysteron::PidParams none;
+    none.sample_time = d.sample_time;
+    check_controller(d.feedforward_params(), d.pid.value_or(none), d.pressure_pid ? &*d.pressure_pid : nullptr,
+                     d.pwm ? &*d.pwm : nullptr, d.pressure_gain);
+  } catch (const CError& e) {
+    fail(HYSTERON_ERROR_MODEL, "%s: %s", where.c_str(), e.text);
+  }
+  try {
+    if (d.learning) d.learning->params.validate();
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_MODEL, "%s: %s", where.c_str(), e.what());
+  }
+  if (d.shaper && (!std::isfinite(d.shaper->a1) || !std::isfinite(d.shaper->a2)))
+    fail(HYSTERON_ERROR_MODEL, "%s.shaper: a1 = %g, a2 = %g: must be finite", where.c_str(), d.shaper->a1,
+         d.shaper->a2);
+  hysteron_loop_params out{};
+  hysteron_open_loop_params open_loop;
+  hysteron_cascade_params cascade;
+  if (hysteron_open_loop_default_params(&open_loop) != HYSTERON_OK ||
+      hysteron_cascade_default_params(&cascade) != HYSTERON_OK ||
+      hysteron_ilc_default_params(&out.learning) != HYSTERON_OK)
+    fail(HYSTERON_ERROR_INTERNAL, "default parameters");
+  out.ff_pid = open_loop.loop;  // hysteron_ff_pid_default_params
+  out.pressure_gain = open_loop.pressure_gain;
+  out.pressure = cascade.pressure;
+  out.pwm = cascade.pwm;
+  using Kind = hysteron::LoopDesign::Kind;
+  const hysteron::Limits lim = d.feedforward.pressure_limits;
+  hysteron_ff_pid_params& f = out.ff_pid;
+  f.sample_time = d.sample_time;
+  f.pressure_min = lim.lo;
+  f.pressure_max = lim.hi;
+  f.model_scale = d.feedforward.model_scale;
+  f.lag_time_constant = d.feedforward.lag_time_constant;
+  if (d.pid) {
+    const double span = lim.hi - lim.lo;
+    const std::string w = where + ".pid";
+    if (d.kind == Kind::open_loop)
+      check_pid_limits(*d.pid, -span, span, d.sample_time, w.c_str());
+    else
+      check_pid_limits(*d.pid, lim.lo, lim.hi, d.sample_time, w.c_str());
+    const hysteron_pid_params q = c_pid(*d.pid);
+    f.kp = q.kp;
+    f.ki = q.ki;
+    f.kd = q.kd;
+    f.derivative_filter = q.derivative_filter;
+    f.tracking_time = q.tracking_time;
+    f.setpoint_weight_p = q.setpoint_weight_p;
+    f.setpoint_weight_d = q.setpoint_weight_d;
+    f.anti_windup = q.anti_windup;
+  } else {
+    f.kp = f.ki = f.kd = 0.0;  // no position loop
+  }
+  switch (d.kind) {
+    case Kind::feedforward_pid: out.kind = HYSTERON_LOOP_FEEDFORWARD_PID; break;
+    case Kind::open_loop:
+      out.kind = HYSTERON_LOOP_OPEN_LOOP;
+      out.pressure_gain = d.pressure_gain;
+      break;
+    case Kind::cascade_pwm: {
+      out.kind = HYSTERON_LOOP_CASCADE_PWM;
+      if (!d.pressure_pid) fail(HYSTERON_ERROR_MODEL, "%s: a cascade_pwm loop needs its pressure_pid", where.c_str());
+      if (d.pressure_pid->sample_time != d.sample_time)
+        fail(HYSTERON_ERROR_MODEL, "%s.pressure_pid.sample_time_s = %g differs from the loop's sample_time_s = %g",
+             where.c_str(), d.pressure_pid->sample_time, d.sample_time);
+      out.pressure = c_pid(*d.pressure_pid);
+      const hysteron::PwmParams w = d.pwm.value_or(hysteron::PwmParams{});
+      out.pwm = {w.gain, w.deadband, w.min_duty, w.max_duty, w.resolution};
+      break;
+    }
+  }
+  out.feedforward_lead = d.feedforward_lead;
+  const hysteron::LoopDesign::Shaper z = d.shaper.value_or(hysteron::LoopDesign::Shaper{});
+  out.shaped = d.shaper ? 1 : 0;
+  out.shaper_a1 = z.a1;
+  out.shaper_a2 = z.a2;
+  out.shaper_delay = z.delay;
+  out.shaper_advance = z.advance;
+  if (d.learning) {
+    const hysteron::LearningParams& p = d.learning->params;
+    out.has_learning = 1;
+    out.learning = {p.period, p.gain, p.lead, p.half_width, p.lookahead, p.max_correction, p.rise_tolerance,
+                    p.hold_after_cuts, p.max_gain};
+  }
+  c = out;
+}
+
+// io::parse_json (strict), then the run's loop.
+void read_loop(const std::string& text, const char* run, const std::string& where, hysteron_loop_params& out) {
+  nlohmann::json j;
+  try {
+    j = hysteron::io::parse_json(text, where);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_PARSE, "%s", e.what());
+  }
+  const std::string r = run ? run : "";
+  to_c_loop(hysteron::io::loop_design_of_run(j, r, where), r.empty() ? where : where + "." + r + ".controller", out);
 }
 
 }  // namespace

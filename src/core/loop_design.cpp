@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "hysteron/error.hpp"
 
@@ -35,6 +37,22 @@ Controller make_controller(const LoopDesign& d, const ModelParams& model) {
     }
   }
   throw Error("controller: unknown loop kind");
+}
+
+LoopOutput step(Controller& c, double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept {
+  return std::visit(
+      [&](auto& loop) -> LoopOutput {
+        using T = std::decay_t<decltype(loop)>;
+        if constexpr (std::is_same_v<T, FeedforwardPidController>) {
+          return {loop.step(reference_m, preview_m, measured_m), 0.0};
+        } else if constexpr (std::is_same_v<T, OpenLoopController>) {
+          return {loop.step(reference_m, preview_m, measured_m, pressure_mpa), 0.0};
+        } else {
+          const double duty = loop.step(reference_m, preview_m, measured_m, pressure_mpa);
+          return {loop.desired_pressure(), duty};
+        }
+      },
+      c);
 }
 
 namespace {

@@ -21,17 +21,9 @@
 
 #define EQ(a, b) CHECK((a) == (b), "%s = %.17g, expected %.17g", #a, (double)(a), (double)(b))
 
-static int same_ff(const hysteron_ff_pid_params* a, const hysteron_ff_pid_params* b) {
-  return a->sample_time == b->sample_time && a->pressure_min == b->pressure_min && a->pressure_max == b->pressure_max &&
-         a->model_scale == b->model_scale && a->lag_time_constant == b->lag_time_constant && a->kp == b->kp &&
-         a->ki == b->ki && a->kd == b->kd && a->derivative_filter == b->derivative_filter &&
-         a->tracking_time == b->tracking_time && a->setpoint_weight_p == b->setpoint_weight_p &&
-         a->setpoint_weight_d == b->setpoint_weight_d && a->anti_windup == b->anti_windup;
-}
-
 /* The fixture's compensated triangle, field by field (tests/c_api/result.json). */
 static void check_compensated_triangle(const hysteron_loop_params* p) {
-  const hysteron_ff_pid_params* f = &p->cascade.outer;
+  const hysteron_ff_pid_params* f = &p->ff_pid;
   EQ(p->kind, HYSTERON_LOOP_CASCADE_PWM);
   EQ(f->sample_time, 0.001);
   EQ(f->pressure_min, 0.01);
@@ -46,20 +38,17 @@ static void check_compensated_triangle(const hysteron_loop_params* p) {
   EQ(f->setpoint_weight_p, 0.875);
   EQ(f->setpoint_weight_d, 0.25);
   EQ(f->anti_windup, HYSTERON_ANTI_WINDUP_BACK_CALCULATION);
-  /* the same feedforward and position PID in every kind's struct */
-  CHECK(same_ff(&p->ff_pid, f), "ff_pid differs from cascade.outer");
-  CHECK(same_ff(&p->open_loop.loop, f), "open_loop.loop differs from cascade.outer");
-  EQ(p->cascade.pressure.kp, 6.5);
-  EQ(p->cascade.pressure.ki, 120.0);
-  EQ(p->cascade.pressure.kd, 0.0);
-  EQ(p->cascade.pressure.out_min, -0.5);
-  EQ(p->cascade.pressure.out_max, 0.75);
-  EQ(p->cascade.pressure.anti_windup, HYSTERON_ANTI_WINDUP_NONE);
-  EQ(p->cascade.pwm.gain, 1.5);
-  EQ(p->cascade.pwm.deadband, 0.02);
-  EQ(p->cascade.pwm.min_duty, 0.05);
-  EQ(p->cascade.pwm.max_duty, 0.95);
-  EQ(p->cascade.pwm.resolution, 0.01);
+  EQ(p->pressure.kp, 6.5);
+  EQ(p->pressure.ki, 120.0);
+  EQ(p->pressure.kd, 0.0);
+  EQ(p->pressure.out_min, -0.5);
+  EQ(p->pressure.out_max, 0.75);
+  EQ(p->pressure.anti_windup, HYSTERON_ANTI_WINDUP_NONE);
+  EQ(p->pwm.gain, 1.5);
+  EQ(p->pwm.deadband, 0.02);
+  EQ(p->pwm.min_duty, 0.05);
+  EQ(p->pwm.max_duty, 0.95);
+  EQ(p->pwm.resolution, 0.01);
   EQ(p->feedforward_lead, 76);
   EQ(p->shaped, 1);
   EQ(p->shaper_a1, 0.955);
@@ -128,20 +117,22 @@ static void check_create(const hysteron_loop_params* p, const hysteron_params* m
   int k;
   double u = NAN, duty = NAN, pd = NAN;
   if (p->kind == HYSTERON_LOOP_CASCADE_PWM) {
+    const hysteron_cascade_params cp = {p->ff_pid, p->pressure, p->pwm};
     hysteron_cascade* c = NULL;
-    OK(hysteron_cascade_create(model, &p->cascade, &c));
+    OK(hysteron_cascade_create(model, &cp, &c));
     for (k = 0; c && k < 50; ++k) {
       OK(hysteron_cascade_step(c, 0.01, 0.012, 0.009, 0.2, &duty, &pd));
       CHECK(duty >= -1.0 && duty <= 1.0, "duty %g", duty);
-      CHECK(pd >= p->cascade.outer.pressure_min && pd <= p->cascade.outer.pressure_max, "p_d %g", pd);
+      CHECK(pd >= p->ff_pid.pressure_min && pd <= p->ff_pid.pressure_max, "p_d %g", pd);
     }
     hysteron_cascade_free(c);
   } else if (p->kind == HYSTERON_LOOP_OPEN_LOOP) {
+    const hysteron_open_loop_params op = {p->ff_pid, p->pressure_gain};
     hysteron_open_loop* c = NULL;
-    OK(hysteron_open_loop_create(model, &p->open_loop, &c));
+    OK(hysteron_open_loop_create(model, &op, &c));
     for (k = 0; c && k < 50; ++k) {
       OK(hysteron_open_loop_step(c, 0.01, 0.012, 0.009, 0.2, &u));
-      CHECK(u >= p->open_loop.loop.pressure_min && u <= p->open_loop.loop.pressure_max, "command %g", u);
+      CHECK(u >= p->ff_pid.pressure_min && u <= p->ff_pid.pressure_max, "command %g", u);
     }
     hysteron_open_loop_free(c);
   } else {
@@ -203,7 +194,7 @@ int main(int argc, char** argv) {
 
   OK(hysteron_loop_params_from_file(result, "compensated.sine", &p));
   EQ(p.kind, HYSTERON_LOOP_CASCADE_PWM);
-  EQ(p.cascade.outer.kp, 3.5);
+  EQ(p.ff_pid.kp, 3.5);
   EQ(p.feedforward_lead, 60);
   EQ(p.shaped, 0);
   EQ(p.shaper_a1, 1.0);
@@ -211,8 +202,8 @@ int main(int argc, char** argv) {
 
   /* the faithful loop: unbounded PID limits (null) are representable */
   OK(hysteron_loop_params_from_file(result, "faithful.triangle", &p));
-  EQ(p.cascade.outer.kp, 10.0);
-  EQ(p.cascade.pressure.kp, 20.0);
+  EQ(p.ff_pid.kp, 10.0);
+  EQ(p.pressure.kp, 20.0);
   check_create(&p, model);
 
   /* the learning run's ILC */
@@ -243,8 +234,8 @@ int main(int argc, char** argv) {
   check_create(&q, model);
   OK(bare("open_loop", "\"out_min_mpa\": -0.6, \"out_max_mpa\": 0.6", ", \"pressure_gain\": 0.5", &q));
   EQ(q.kind, HYSTERON_LOOP_OPEN_LOOP);
-  EQ(q.open_loop.pressure_gain, 0.5);
-  EQ(q.open_loop.loop.kp, 8.0);
+  EQ(q.pressure_gain, 0.5);
+  EQ(q.ff_pid.kp, 8.0);
   check_create(&q, model);
 
   /* errors; *out is left as it was */
@@ -275,7 +266,7 @@ int main(int argc, char** argv) {
   expect_error("null gain", with_pid("null", "0.001", &p), HYSTERON_ERROR_MODEL, "pid.kp = nan");
   expect_error("negative pressure gain",
                bare("open_loop", "\"out_min_mpa\": null, \"out_max_mpa\": null", ", \"pressure_gain\": -0.5", &p),
-               HYSTERON_ERROR_MODEL, "pressure_gain = -0.5: must be a finite number >= 0");
+               HYSTERON_ERROR_MODEL, "pressure_gain = -0.5: expected a finite value >= 0");
   expect_error("missing key", hysteron_loop_params_from_json("{\"loop\": \"feedforward_pid\", \"sample_time_s\": 0.001}",
                                                             NULL, &p),
                HYSTERON_ERROR_MODEL, "feedforward_lead_samples");

@@ -26,7 +26,7 @@ namespace hysteron::io {
 // (model files, rig parameters, reports) is read through this function.
 nlohmann::json parse_json(std::string_view text, std::string_view where);
 
-// The whole file (e.g. a JSON file to parse_json); Error "PATH: cannot open WHAT" or
+// The whole file (e.g. a JSON file to parse_json); Error "PATH: cannot open WHAT: REASON" or
 // "PATH: read error".
 std::string read_text_file(const std::string& path, std::string_view what);
 

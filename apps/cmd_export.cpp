@@ -1,6 +1,7 @@
 // hysteron export: a model file as one self-contained C99 file (docs/export.md).
 //
 //   hysteron export --model M.json --out compensator.c [--header compensator.h] [--prefix NAME] [--limits=LO,HI]
+//                   [--loop result.json --run RUN]
 // --model - reads the model JSON from stdin; --out - writes the C file to stdout (not with --header).
 #include <fmt/format.h>
 
@@ -22,7 +23,7 @@ namespace hysteron::cli {
 namespace {
 
 struct Options {
-  std::string model, out, header, prefix, limits;
+  std::string model, out, header, prefix, limits, loop, run;
 };
 
 // Default prefix: the output file's stem with every other character as '_'
@@ -38,7 +39,8 @@ std::string default_prefix(const std::string& out) {
 int run_export(const Options& o) {
   if (o.out == "-" && !o.header.empty()) throw Error("--header needs --out to name a file (not -)");
   if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
-  io::check_outputs_distinct({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}});
+  if (!o.run.empty() && o.loop.empty()) throw Error("--run names a run of the --loop file: give --loop too");
+  io::check_outputs_distinct({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});
   const ModelParams params = read_model_source(o.model);
   io::ExportOptions e;
   e.prefix = o.prefix.empty() ? default_prefix(o.out) : o.prefix;
@@ -49,6 +51,16 @@ int run_export(const Options& o) {
   e.source_name = o.model == "-" ? std::string("<stdin>") : std::filesystem::path(o.model).filename().string();
   if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();
   if (!o.limits.empty()) e.inverse_limits = parse_limits(o.limits);
+  if (!o.loop.empty()) {
+    // The adaptive run's controller holds its structure only: its inverse was re-identified
+    // online (RLS), which generated C does not do, so its loop would not be the run's.
+    if (o.run == "adaptive" || o.run.starts_with("adaptive."))
+      throw Error(fmt::format("{}: run \"{}\": its inverse is adapted online (RLS), which generated C does not do; "
+                              "export the compensated run's loop", o.loop, o.run));
+    e.loop = io::read_loop_design(o.loop, o.run);
+    e.loop_source = fmt::format("\"{}\"{}", std::filesystem::path(o.loop).filename().string(),
+                                o.run.empty() ? std::string() : fmt::format(", run \"{}\"", o.run));
+  }
   e.command_line = command_line();
   io::GeneratedC c;
   try {
@@ -59,7 +71,8 @@ int run_export(const Options& o) {
   if (!o.header.empty()) io::write_text_file(o.header, c.header);
   io::write_text_file(o.out, c.source);
   if (o.out != "-")
-    fmt::print(stderr, "export: {} model -> {}{} (prefix {})\n", model_name(params), o.out,
+    fmt::print(stderr, "export: {} model{} -> {}{} (prefix {})\n", model_name(params),
+               e.loop ? fmt::format(" and the loop of {}", e.loop_source) : std::string(), o.out,
                o.header.empty() ? std::string() : fmt::format(" + {}", o.header), e.prefix);
   return exit_ok;
 }
@@ -79,6 +92,11 @@ void add_export(CLI::App& app, Action& action) {
   sub->add_option("--limits", o->limits,
                   "input limits LO,HI the inverse saturates at (default: the model's input_limits; write "
                   "--limits=LO,HI if LO < 0)");
+  sub->add_option("--loop", o->loop,
+                  "also write the compensating loop around the inverse: an experiment's result.json (or a "
+                  "controller JSON); the model must be the one the run inverts (docs/export.md, \"The loop\")");
+  sub->add_option("--run", o->run,
+                  "the run of the --loop file, e.g. compensated or compensated.sine (not learning or adaptive runs)");
   sub->callback([o, &action] { action = [o] { return run_export(*o); }; });
 }
 

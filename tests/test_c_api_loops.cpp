@@ -4,7 +4,8 @@
 // hysteron_open_loop (mpi-openloop) and hysteron_cascade (mpi-pwm) that, fed the run's recorded
 // reference (previewed by hysteron_loop_preview), contraction and pressure readings, command
 // what the run commanded; so does the same loop rebuilt in C++ (make_controller,
-// feedforward_preview).
+// feedforward_preview), and the loop as generated C (hysteron export --loop: io::generate_c on
+// the run's loop and model file, compiled with gcc).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,8 +14,11 @@
 #include <string>
 #include <vector>
 
+#include "export_loop_util.hpp"
 #include "hysteron/experiment.hpp"
 #include "hysteron/hysteron.h"
+#include "hysteron/io/loop_design.hpp"
+#include "hysteron/io/model_file.hpp"
 #include "hysteron/report.hpp"
 #include "temp_dir.hpp"
 #include "test_util.hpp"
@@ -112,6 +116,32 @@ Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
   return w;
 }
 
+// The loop as generated C, from the files as `hysteron export --model MODEL --loop result.json
+// --run VARIANT.REFERENCE` reads them, fed the run's recorded inputs; its own preview of the
+// reference must be the library's.
+Worst replay_generated(const std::filesystem::path& dir, const TrackingRun& r) {
+  Worst w;
+  const LoopDesign d = io::read_loop_design((dir / "result.json").string(), r.variant + "." + r.reference);
+  const ModelParams model = io::read_model_file((dir / model_file(r)).string());
+  std::vector<double> ref(r.t.size()), meas(r.t.size());
+  for (std::size_t k = 0; k < ref.size(); ++k) {
+    ref[k] = r.reference_mm[k] * 1e-3;
+    meas[k] = r.measured_mm[k] * 1e-3;
+  }
+  const std::vector<double> preview = feedforward_preview(d, ref);
+  test::TempDir tmp;
+  const test::LoopRun got =
+      test::run_generated_loop(d, model, tmp.file("."), false, ref, preview, meas, r.pressure_measured_mpa);
+  EXPECT_EQ(got.error, "") << r.variant << "." << r.reference;
+  EXPECT_EQ(got.preview, preview) << r.variant << "." << r.reference << ": the generated preview";
+  EXPECT_EQ(got.command.size(), r.t.size());
+  for (std::size_t k = 0; k < got.command.size() && k < r.t.size(); ++k, ++w.n) {
+    w.command = std::max(w.command, std::abs(got.command[k] - r.pressure_command_mpa[k]));  // with the valves: p_d
+    w.duty = std::max(w.duty, std::abs(got.duty[k] - r.duty[k]));
+  }
+  return w;
+}
+
 // Runs `name` quickly, writes its directory, reads it back and replays its faithful and
 // compensated runs through the C ABI; a learning run's ILC parameters are read as well.
 void check_replay(const std::string& name, LoopDesign::Kind expected, int learning_periods = 0) {
@@ -154,6 +184,15 @@ void check_replay(const std::string& name, LoopDesign::Kind expected, int learni
     EXPECT_EQ(w.n, run.t.size());
     EXPECT_LT(w.command, 1e-9) << name << " " << run.variant << " " << run.reference << ": MPa";
     EXPECT_LT(w.duty, 1e-9) << name << " " << run.variant << " " << run.reference << ": duty";
+    if (test::have_gcc()) {
+      const Worst g = replay_generated(dir, run);
+      EXPECT_EQ(g.n, run.t.size());
+      EXPECT_LT(g.command, 1e-9) << name << " " << run.variant << " " << run.reference << ": generated C, MPa";
+      EXPECT_LT(g.duty, 1e-9) << name << " " << run.variant << " " << run.reference << ": generated C, duty";
+      std::printf("  %s %s.%s: %zu samples; largest difference from the run: C ABI %.3g MPa / %.3g duty, generated C "
+                  "%.3g MPa / %.3g duty\n",
+                  name.c_str(), run.variant.c_str(), run.reference.c_str(), g.n, w.command, w.duty, g.command, g.duty);
+    }
     shaped = shaped || run.controller.shaper.has_value();
     corrected = corrected || run.controller.pid.has_value();
     ++replayed;

@@ -52,6 +52,8 @@ class FeedforwardPidController {
   // for a known reference, else reference_m); measured_m: sensor. Returns MPa.
   double step(double reference_m, double preview_m, double measured_m) noexcept;
   void reset() noexcept;
+  // The PID as built (its output limits narrowed to the pressure limits).
+  const Pid& pid() const noexcept { return pid_; }
 
  private:
   InverseFeedforward ff_;
@@ -79,6 +81,11 @@ class OpenLoopController {
   OpenLoopController(const ModelParams& model, const OpenLoopParams& params);
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;
+  const OpenLoopParams& params() const noexcept { return p_; }
+  // The position PID as built (output limits narrowed to +-the pressure span) and whether
+  // step() uses it (a gain is non-zero).
+  const Pid& position() const noexcept { return position_; }
+  bool uses_position() const noexcept { return use_position_; }
 
  private:
   OpenLoopParams p_;
@@ -104,6 +111,11 @@ class CascadePwmController {
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;
   double desired_pressure() const noexcept { return p_d_; }
+  const CascadeParams& params() const noexcept { return p_; }
+  // The PIDs as built: the position PID's output limits narrowed to the pressure limits, the
+  // pressure PID's to [-1, 1].
+  const Pid& position() const noexcept { return position_; }
+  const Pid& pressure() const noexcept { return pressure_; }
 
  private:
   CascadeParams p_;

@@ -73,6 +73,13 @@ class Pid {
 
   const PidParams& params() const noexcept { return p_; }
   const PidState& state() const noexcept { return s_; }
+  // The discrete coefficients step() uses (derived from params() in the constructor):
+  // a_d = T_f / (T_f + T_s), b_d = K_d / (T_f + T_s), k_t = min(1, T_s / T_t) (0 without
+  // back-calculation). hysteron export bakes them into generated C.
+  struct Coefficients {
+    double a_d, b_d, k_t;
+  };
+  Coefficients coefficients() const noexcept { return {a_d_, b_d_, k_t_}; }
   double output() const noexcept { return s_.output; }
   std::size_t faults() const noexcept { return faults_; }
 

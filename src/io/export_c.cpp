@@ -18,22 +18,17 @@
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/version.hpp"
+#include "export_c_text.hpp"
+#include "export_loop.hpp"
 
 namespace hysteron::io {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// A C double literal that reads back to the same double: the shortest round-trip
-// decimal (fmt's "{}"), with ".0" added to integers; +-HUGE_VAL for infinities.
-std::string num(double v) {
-  if (std::isinf(v)) return v > 0 ? "HUGE_VAL" : "-HUGE_VAL";
-  if (std::isnan(v)) throw Error("export: a constant of the model is NaN (this is a bug)");
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
+using detail::comment_safe;
+using detail::kInf;
+using detail::num;
+using detail::replace_all;
 
 std::string array_init(const std::vector<double>& v) {
   if (v.empty()) return "{0.0}";
@@ -45,17 +40,6 @@ std::string array_init(const std::vector<double>& v) {
   return s + "}";
 }
 
-void replace_all(std::string& s, std::string_view from, std::string_view to) {
-  for (std::size_t pos = 0; (pos = s.find(from, pos)) != std::string::npos; pos += to.size()) s.replace(pos, from.size(), to);
-}
-
-// Text for a C comment: no "*/", no control characters.
-std::string comment_safe(std::string s) {
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
-  replace_all(s, "*/", "* /");
-  return s;
-}
 
 // Everything the inverse's constructor derives, recomputed with its arithmetic
 // (src/core/inverse.cpp); the limits are checked against a real Inverse.
@@ -324,6 +308,7 @@ struct Gen {
   const ModelParams& params;
   const ExportOptions& o;
   const Baked& b;
+  const detail::LoopC* loop;  // the loop's text, or null (ExportOptions::loop)
   std::size_t n = 0;
   std::string size;  // array size (n, at least 1)
 
@@ -384,6 +369,9 @@ struct Gen {
                      header ? "C99 declarations" : "C99 source", version);
     t += fmt::format(" * Model kind: {}{}.\n", model_name(params),
                      o.source_name.empty() ? std::string() : fmt::format(", from the model file \"{}\"", comment_safe(o.source_name)));
+    if (loop)
+      t += fmt::format(" * With the compensating loop around its inverse{}.\n",
+                       o.loop_source.empty() ? std::string() : fmt::format(", from {}", comment_safe(o.loop_source)));
     if (!o.command_line.empty()) t += fmt::format(" * Regenerate with: {}\n", comment_safe(o.command_line));
     t += " * Do not edit by hand: every constant is the model's, read back exactly.\n";
     t += " *\n";
@@ -400,7 +388,9 @@ struct Gen {
     const Limits& l = b.lim_raw;
     t += fmt::format(" * The inverse saturates at the input limits [{}, {}] (raw input units){}.\n",
                      std::isinf(l.lo) ? std::string("-inf") : num(l.lo), std::isinf(l.hi) ? std::string("inf") : num(l.hi),
-                     (std::isinf(o.inverse_limits.lo) && std::isinf(o.inverse_limits.hi)) ? "" : " (from --limits)");
+                     loop ? " (the loop's pressure limits)"
+                     : (std::isinf(o.inverse_limits.lo) && std::isinf(o.inverse_limits.hi)) ? ""
+                                                                                          : " (from --limits)");
     return t;
   }
 
@@ -900,22 +890,27 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
     std::string upper = o.prefix;
     for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     GeneratedC out;
-    std::string src = banner(false) + model_comment() + " *\n" + parameters_comment() + api_comment();
+    std::string src = banner(false) + model_comment() + " *\n" + parameters_comment();
+    if (loop) src += loop->comment;
+    src += api_comment();
     src += "\n#ifndef $U_C_INCLUDED\n#define $U_C_INCLUDED\n\n#include <math.h>\n";
     if (uses_tanh()) src += "#include <stdint.h>\n";
     if (o.header_name.empty()) {
       src += declarations();
+      if (loop) src += loop->declarations;
     } else {
       src += fmt::format("\n#include \"{}\"\n", o.header_name);
       std::string h = banner(true) + " * The definitions are in the generated .c file (docs/export.md).\n */\n";
       h += "\n#ifndef $U_H_INCLUDED\n#define $U_H_INCLUDED\n";
       h += declarations();
+      if (loop) h += loop->declarations;
       h += "\n#endif /* $U_H_INCLUDED */\n";
       out.header = finish(std::move(h));
     }
     src += constants();
     src += helpers();
     src += functions();
+    if (loop) src += loop->definitions;
     src += "\n#endif /* $U_C_INCLUDED */\n";
     out.source = finish(std::move(src));
     return out;
@@ -941,9 +936,27 @@ GeneratedC generate_c(const ModelParams& params, const ExportOptions& options) {
   if (options.header_name.find_first_of("\"\\\n\r") != std::string::npos)
     throw Error(fmt::format("export: header name \"{}\" cannot be #included (it contains a quote, backslash or newline)",
                             options.header_name));
-  const Baked b = bake(params, options.inverse_limits);
+  Limits inverse_limits = options.inverse_limits;
+  std::optional<detail::LoopC> loop;
+  if (options.loop) {
+    // the loop's inverse saturates at its pressure limits (InverseFeedforward)
+    const Limits& pl = options.loop->feedforward.pressure_limits;
+    const bool unset = std::isinf(inverse_limits.lo) && std::isinf(inverse_limits.hi);
+    if (!unset && !(inverse_limits == pl))
+      throw Error(fmt::format("the limits [{}, {}] differ from the loop's pressure limits [{}, {}], at which "
+                              "its inverse saturates: leave the limits out",
+                              inverse_limits.lo, inverse_limits.hi, pl.lo, pl.hi));
+    try {
+      loop = detail::loop_c(*options.loop, params);
+    } catch (const Error& e) {
+      throw Error(fmt::format("the loop{}: {}",
+                              options.loop_source.empty() ? std::string() : " of " + options.loop_source, e.what()));
+    }
+    inverse_limits = pl;
+  }
+  const Baked b = bake(params, inverse_limits);
   const std::size_t n = b.s.r.size();
-  const Gen g{params, options, b, n, std::to_string(std::max<std::size_t>(n, 1))};
+  const Gen g{params, options, b, loop ? &*loop : nullptr, n, std::to_string(std::max<std::size_t>(n, 1))};
   return g.run();
 }
 

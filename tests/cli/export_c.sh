@@ -158,6 +158,57 @@ rm "$T/out/m.json"
 expect_fail "header with --out -" 1 '--header needs --out' -- "$BIN" export --model "$T/gpi.json" --out - --header "$T/out/new.h"
 expect_fail "no --out" 1 '--out is required' -- "$BIN" export --model "$T/gpi.json"
 expect_fail "unwritable directory" 1 'nodir/new.c' -- "$BIN" export --model "$T/gpi.json" --out "$T/nodir/new.c"
+
+# --loop: a run's loop from a result.json around the inverse (docs/export.md, "The loop"); the
+# fixture tests/c_api/result.json has valve (cascade_pwm) loops. The exhaustive comparison with
+# the library is tests/test_export_loop.cpp, with experiments' runs tests/test_c_api_loops.cpp.
+RES=$SRC/tests/c_api/result.json
+DZ=$SRC/tests/c_api/dz.json
+mkdir -p "$T/loop"
+if "$BIN" export --model "$DZ" --loop "$RES" --run compensated.sine --out "$T/loop/loop.c" --header "$T/loop/loop.h" \
+    --prefix lp 2> "$T/loop/stderr"; then
+  grep -q 'run "compensated.sine"' "$T/loop/loop.c" || fail "--loop: the C file does not name the run"
+  grep -q 'lp_loop_step' "$T/loop/loop.h" || fail "--loop: the header lacks lp_loop_step"
+  if [ $HAVE_GCC = 1 ]; then
+    if gcc -std=c99 -pedantic -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -O2 \
+        -I"$T/loop" "$SRC/tests/export/loop_driver.c" "$T/loop/loop.c" -o "$T/loop/driver" -lm 2> "$T/loop/gcc.log"; then
+      # a few steps and a preview: finite commands in the pressure limits, duties in [-1, 1]
+      printf 'p 3 0x1p-7 0x1p-6 0x1p-5\ns 0x1p-7 0x1p-7 0 0.1\ns 0x1p-6 0x1p-6 nan 0.2\nr\ns 0x1p-5 0x1p-5 0x1p-5 inf\n' |
+        "$T/loop/driver" > "$T/loop/out.txt" || fail "--loop: the driver failed"
+      $PY - "$T/loop/out.txt" <<'PY' || fail "--loop: the driver's results"
+import math, sys
+lines = open(sys.argv[1]).read().split("\n")
+assert lines[0].startswith("P ") and len(lines[0].split()) == 4, lines[0]
+steps = [l.split() for l in lines[1:] if l]
+assert len(steps) == 3, steps
+for _, u, d in steps:
+    u, d = float.fromhex(u), float.fromhex(d)
+    assert math.isfinite(u) and 0 <= u <= 0.6 and -1 <= d <= 1, (u, d)
+print("ok: --loop: the generated loop compiles with -Werror and steps (" + "; ".join(" ".join(s[1:]) for s in steps) + ")")
+PY
+    else
+      fail "--loop: the generated loop does not compile cleanly"; cat "$T/loop/gcc.log"
+    fi
+  fi
+else
+  fail "--loop: export failed"; cat "$T/loop/stderr"
+fi
+expect_fail "--run without --loop" 1 '--run names a run of the --loop file' -- \
+  "$BIN" export --model "$DZ" --run compensated.sine --out "$T/out/new.c"
+expect_fail "--loop: a learning run" 1 'the loop of "result.json", run "learning.triangle": it adds iterative learning' -- \
+  "$BIN" export --model "$DZ" --loop "$RES" --run learning.triangle --out "$T/out/new.c"
+expect_fail "--loop: an adaptive run" 1 'its inverse is adapted online' -- \
+  "$BIN" export --model "$DZ" --loop "$RES" --run adaptive.sine --out "$T/out/new.c"
+expect_fail "--loop: no such run" 1 'no reference "ramp" (references: sine, triangle)' -- \
+  "$BIN" export --model "$DZ" --loop "$RES" --run compensated.ramp --out "$T/out/new.c"
+expect_fail "--loop: several references, none named" 1 'one run per reference (sine, triangle)' -- \
+  "$BIN" export --model "$DZ" --loop "$RES" --run compensated --out "$T/out/new.c"
+expect_fail "--loop: --limits other than the loop's" 1 "differ from the loop's pressure limits" -- \
+  "$BIN" export --model "$DZ" --loop "$RES" --run compensated.sine --limits=0,0.5 --out "$T/out/new.c"
+expect_fail "--loop: missing file" 1 'nope.json: cannot open result file' -- \
+  "$BIN" export --model "$DZ" --loop "$T/nope.json" --run compensated.sine --out "$T/out/new.c"
+expect_fail "--loop over the --out file" 1 'out/keep.c' -- \
+  "$BIN" export --model "$DZ" --loop "$T/out/keep.c" --run compensated.sine --out "$T/out/keep.c"
 [ "$(cat "$T/out/keep.c")" = precious ] || fail "an existing output file was changed"
 if [ "$(ls -A "$T/out")" != "keep.c" ]; then fail "files were left behind: $(ls -A "$T/out")"; fi
 

@@ -11,8 +11,10 @@
 //   o.source_name = "gpi.json";        // shown in the file's comments
 //   hysteron::io::GeneratedC c = hysteron::io::generate_c(params, o);
 //   hysteron::io::write_text_file("comp.c", c.source);
+#include <optional>
 #include <string>
 
+#include "hysteron/loop_design.hpp"
 #include "hysteron/models.hpp"
 
 namespace hysteron::io {
@@ -33,6 +35,14 @@ struct ExportOptions {
   Limits inverse_limits;
   // The command line shown in the comments (how to regenerate the file); empty: none.
   std::string command_line;
+  // A compensating loop around the inverse (hysteron export --loop; docs/export.md "The loop"):
+  // the file then also has $P_loop, $P_loop_reset, $P_loop_step and $P_loop_preview, which
+  // step exactly as make_controller(*loop, params) with step(). The inverse then saturates at
+  // the loop's pressure limits (inverse_limits must be unset or equal to them). A loop with
+  // learning is refused (the generated C has no ILC).
+  std::optional<LoopDesign> loop;
+  // Where the loop came from (e.g. "out/result.json, run compensated.sine"), for the comments.
+  std::string loop_source;
 };
 
 struct GeneratedC {

@@ -1,0 +1,38 @@
+#pragma once
+// Helpers shared by the generated-C writers (export_c.cpp, export_loop.cpp).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <string_view>
+
+#include "hysteron/error.hpp"
+
+namespace hysteron::io::detail {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A C double literal that reads back to the same double: the shortest round-trip
+// decimal (fmt's "{}"), with ".0" added to integers; +-HUGE_VAL for infinities.
+inline std::string num(double v) {
+  if (std::isinf(v)) return v > 0 ? "HUGE_VAL" : "-HUGE_VAL";
+  if (std::isnan(v)) throw Error("export: a constant of the model is NaN (this is a bug)");
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+inline void replace_all(std::string& s, std::string_view from, std::string_view to) {
+  for (std::size_t pos = 0; (pos = s.find(from, pos)) != std::string::npos; pos += to.size()) s.replace(pos, from.size(), to);
+}
+
+// Text for a C comment: no "*/", no control characters.
+inline std::string comment_safe(std::string s) {
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  replace_all(s, "*/", "* /");
+  return s;
+}
+
+}  // namespace hysteron::io::detail

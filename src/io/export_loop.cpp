@@ -1,0 +1,404 @@
+// The loop in generated C (export_loop.hpp). Every number is read from the controller
+// make_controller builds (the PIDs as built, with their narrowed limits and discrete
+// coefficients), so the C code steps exactly what step(Controller&, ...) steps.
+#include "export_loop.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <variant>
+
+#include "export_c_text.hpp"
+#include "hysteron/compensation.hpp"
+#include "hysteron/control.hpp"
+#include "hysteron/error.hpp"
+
+namespace hysteron::io::detail {
+
+namespace {
+
+// Counts of samples in the generated C are size_t constants; 2^31 - 1 fits every target's.
+constexpr std::size_t kMaxCount = 2147483647u;
+
+std::string count_literal(std::size_t v, const char* what) {
+  if (v > kMaxCount)
+    throw Error(fmt::format("{} = {} samples is more than generated C holds (at most {})", what, v, kMaxCount));
+  return fmt::format("{}u", v);
+}
+
+// A Pid as built, as a C initializer of $P_pid_gains (the field order of the struct below).
+std::string pid_gains(const Pid& pid) {
+  const PidParams& p = pid.params();
+  const Pid::Coefficients k = pid.coefficients();
+  const int aw = p.anti_windup == AntiWindup::none ? 0 : p.anti_windup == AntiWindup::conditional ? 1 : 2;
+  // Pid::reset(0): the output clamp(0, out_min, out_max), the integral that output if K_i > 0
+  const double u0 = std::clamp(0.0, p.out_min, p.out_max);
+  return fmt::format("{{{}, {}, {}, {}, {}, {},\n   {}, {}, {}, {}, {}, {}, {}}}", num(p.kp), num(p.ki), num(p.sample_time),
+                     num(p.setpoint_weight_p), num(p.setpoint_weight_d), num(k.a_d), num(k.b_d), num(k.k_t),
+                     num(p.out_min), num(p.out_max), aw, num(u0), num(p.ki > 0.0 ? u0 : 0.0));
+}
+
+std::string pid_comment(const char* name, const Pid& pid) {
+  const PidParams& p = pid.params();
+  return fmt::format(
+      " *   {}: K_p = {}, K_i = {} 1/s, K_d = {} s, T_f = {} s, output in [{}, {}],\n"
+      " *     anti-windup {}{}, setpoint weights b = {}, c = {}\n",
+      name, num(p.kp), num(p.ki), num(p.kd), num(p.derivative_filter), num(p.out_min), num(p.out_max),
+      anti_windup_name(p.anti_windup),
+      p.anti_windup == AntiWindup::back_calculation ? fmt::format(" (T_s / T_t = {})", num(pid.coefficients().k_t))
+                                                     : std::string(),
+      num(p.setpoint_weight_p), num(p.setpoint_weight_d));
+}
+
+constexpr std::string_view kPidStep = R"(
+/* Discrete PID (hysteron::Pid::step, control.hpp; Eq. 17 of gpi-lm-feedforward-pid.txt):
+ *   P = K_p (b r - y),  D = a_d D + b_d (d - d_prev), d = c r - y,  v = P + I + D + ff,
+ *   u = clamp(v, out_min, out_max),  I += K_i T_s (r - y) by the anti-windup rule.
+ * A non-finite input or intermediate holds the last output (counted in faults). */
+static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, double y, double ff)
+{
+  double e, prop, d_err, prev_d_error, derivative, v, u, di, integral;
+  if (!isfinite(r) || !isfinite(y) || !isfinite(ff)) {
+    ++s->faults;
+    return s->output;
+  }
+  e = r - y;
+  prop = k->kp * (k->b * r - y);
+  d_err = k->c * r - y;
+  prev_d_error = s->initialized ? s->prev_d_error : d_err;  /* no derivative kick */
+  derivative = k->a_d * s->derivative + k->b_d * (d_err - prev_d_error);
+  v = prop + s->integral + derivative + ff;
+  u = $P_clamp(v, k->out_min, k->out_max);
+  di = k->ki * k->ts * e;
+  integral = s->integral;
+  if (k->anti_windup == 0) {
+    integral += di;
+  } else if (k->anti_windup == 1) {  /* conditional: not further into saturation */
+    if (!((v > k->out_max && di > 0.0) || (v < k->out_min && di < 0.0))) integral += di;
+  } else {                           /* back-calculation */
+    integral += di + k->k_t * (u - v);
+  }
+  if (!isfinite(v) || !isfinite(derivative) || !isfinite(integral)) {
+    ++s->faults;
+    return s->output;
+  }
+  s->initialized = 1;
+  s->derivative = derivative;
+  s->prev_d_error = d_err;
+  s->integral = integral;
+  s->saturated = u != v;
+  s->output = u;
+  return u;
+}
+
+static void $P_pid_reset($P_pid_state *s, const $P_pid_gains *k)
+{
+  s->integral = k->reset_integral;
+  s->derivative = 0.0;
+  s->prev_d_error = 0.0;
+  s->output = k->reset_output;
+  s->initialized = 0;
+  s->saturated = 0;
+  s->faults = 0;
+}
+
+/* The inverse feedforward (hysteron::InverseFeedforward::step): the pressure [MPa] the model
+ * needs for desired_m [m], plus the lag compensation tau dp/dt, within the pressure limits. */
+static double $P_feedforward($P_loop *c, double desired_m)
+{
+  const double p = $P_inverse_step(&c->inverse, desired_m * $P_model_scale);
+  double cmd = p;
+  if (c->ff_started && $P_lag_time_constant > 0) cmd = p + $P_lag_time_constant * (p - c->ff_prev) / $P_sample_time;
+  c->ff_prev = p;
+  c->ff_started = 1;
+  return $P_clamp(cmd, $P_pressure_lo, $P_pressure_hi);
+}
+
+/* j + plus - minus clamped to [0, n) (feedforward_preview's index arithmetic, no overflow). */
+static size_t $P_clamped_index(size_t j, size_t plus, size_t minus, size_t n)
+{
+  if (plus >= minus) {
+    const size_t up = plus - minus;
+    return up >= n - 1 - j ? n - 1 : j + up;
+  } else {
+    const size_t down = minus - plus;
+    return down >= j ? 0 : j - down;
+  }
+}
+)";
+
+}  // namespace
+
+LoopC loop_c(const LoopDesign& d, const ModelParams& model) {
+  if (d.learning)
+    throw Error(
+        "it adds iterative learning (a learning run), which generated C does not contain: export the run's "
+        "compensated loop, or deploy the learning through the C ABI (hysteron_ilc, docs/deploy.md)");
+  const Controller ctl = make_controller(d, model);  // every check of the loop, with its messages
+  const std::string lead = count_literal(d.feedforward_lead, "feedforward_lead");
+  std::string advance = "0u", delay = "0u";
+  if (d.shaper) {
+    advance = count_literal(d.shaper->advance, "shaper.advance");
+    delay = count_literal(d.shaper->delay, "shaper.delay");
+  }
+  const FeedforwardParams ff = d.feedforward_params();
+  LoopC out;
+
+  // ---- the comment: the loop's structure and its numbers
+  std::string& cm = out.comment;
+  cm += " *\n * The loop (docs/deploy.md; hysteron::make_controller and step(), loop_design.hpp), one step\n";
+  cm += fmt::format(" * every T_s = {} s; contraction in m, pressure in MPa:\n", num(d.sample_time));
+  cm += fmt::format(" *   u_ff = clamp(p + tau (p - p_prev) / T_s, {}, {}), p = inverse(model_scale y_preview),\n",
+                    num(ff.pressure_limits.lo), num(ff.pressure_limits.hi));
+  cm += fmt::format(" *     model_scale = {} per m, tau = {} s\n", num(ff.model_scale), num(ff.lag_time_constant));
+  std::string kind_decl;
+  switch (d.kind) {
+    case LoopDesign::Kind::feedforward_pid: {
+      const auto& c = std::get<FeedforwardPidController>(ctl);
+      cm += " *   feedforward_pid (FeedforwardPidController): p_cmd = clamp(PID(r, y, u_ff), limits)\n";
+      cm += pid_comment("position PID", c.pid());
+      break;
+    }
+    case LoopDesign::Kind::open_loop: {
+      const auto& c = std::get<OpenLoopController>(ctl);
+      cm += " *   open_loop (OpenLoopController): p_d = u_ff";
+      cm += c.uses_position() ? " + PID(r, y), clamped to the limits,\n" : " (no position loop),\n";
+      cm += fmt::format(" *     p_cmd = clamp(p_d + k_p (p_d - p), limits), k_p = {} (p: measured pressure)\n",
+                        num(c.params().pressure_gain));
+      if (c.uses_position()) cm += pid_comment("position PID", c.position());
+      break;
+    }
+    case LoopDesign::Kind::cascade_pwm: {
+      const auto& c = std::get<CascadePwmController>(ctl);
+      const PwmParams& w = c.params().pwm;
+      cm += " *   cascade_pwm (CascadePwmController): p_d = clamp(PID(r, y, u_ff), limits),\n";
+      cm += " *     duty = PWM(pressure PID(p_d, p)), in [-1, 1] (> 0 inlet, < 0 exhaust)\n";
+      cm += pid_comment("position PID", c.position());
+      cm += pid_comment("pressure PID", c.pressure());
+      cm += fmt::format(" *   PWM: gain {}, deadband {}, duty in [{}, {}], resolution {}\n", num(w.gain), num(w.deadband),
+                        num(w.min_duty), num(w.max_duty), num(w.resolution));
+      break;
+    }
+  }
+  if (d.shaper)
+    cm += fmt::format(" *   preview(k) = a1 r(k + L + A) + a2 r(k + L + A - D): L = {}, A = {}, D = {} samples,\n"
+                      " *     a1 = {}, a2 = {} (zero-vibration shaper, docs/control.md)\n",
+                      d.feedforward_lead, d.shaper->advance, d.shaper->delay, num(d.shaper->a1), num(d.shaper->a2));
+  else
+    cm += fmt::format(" *   preview(k) = r(k + {}) (the feedforward's lead, samples)\n", d.feedforward_lead);
+
+  // ---- declarations
+  const bool cascade = d.kind == LoopDesign::Kind::cascade_pwm;
+  std::string& dc = out.declarations;
+  dc += fmt::format(R"(
+/* ---- the loop ---- */
+
+#include <stddef.h>
+
+/* The sample time [s] the loop was designed for: call $P_loop_step at this period. */
+#define $U_LOOP_SAMPLE_TIME_S {}
+
+/* PID gains as the loop built them (hysteron::Pid: params() and coefficients()). */
+typedef struct $P_pid_gains {{
+  double kp, ki, ts, b, c;         /* K_p, K_i [1/s], T_s [s], setpoint weights */
+  double a_d, b_d, k_t;            /* T_f/(T_f+T_s), K_d/(T_f+T_s), T_s/T_t */
+  double out_min, out_max;         /* output limits */
+  int anti_windup;                 /* 0 none, 1 conditional, 2 back-calculation */
+  double reset_output, reset_integral;  /* the state after a reset */
+}} $P_pid_gains;
+
+/* PID state (hysteron::PidState). */
+typedef struct $P_pid_state {{
+  double integral;       /* I_k */
+  double derivative;     /* D_k */
+  double prev_d_error;   /* d_(k-1) */
+  double output;         /* last output, held on a fault */
+  int initialized;       /* 0 until the first finite sample (no derivative kick) */
+  int saturated;         /* 1 if the last output was clamped */
+  unsigned long faults;  /* samples held: a non-finite input or intermediate */
+}} $P_pid_state;
+
+/* The loop's state. Set with $P_loop_reset before the first step. */
+typedef struct $P_loop {{
+  $P_inverse inverse;    /* the feedforward's inverse (inverse.saturated: the reference asks
+                            for more than the pressure limits give) */
+  double ff_prev;        /* last inverse output [MPa] (lag compensation) */
+  int ff_started;
+  $P_pid_state position; /* the position PID{} */
+{}}} $P_loop;
+
+#ifdef __cplusplus
+extern "C" {{
+#endif
+
+/* Initial state, as a new loop (the inverse virgin, the PIDs at their reset output). */
+void $P_loop_reset($P_loop *c);
+/* One sample (step(Controller&, ...), loop_design.hpp): reference_m, the reference now [m];
+ * preview_m, the feedforward's reference (preview[k] of $P_loop_preview); measured_m, the
+ * contraction [m]; pressure_mpa, the measured gauge pressure [MPa]{}. Returns the pressure
+ * command [MPa]{}, always finite and inside the pressure limits; writes the valves' PWM duty
+ * in [-1, 1] to *duty if duty is not NULL ({}). Non-finite inputs are counted in the PIDs' and
+ * the inverse's faults; the last finite command is held. */
+double $P_loop_step($P_loop *c, double reference_m, double preview_m, double measured_m, double pressure_mpa,
+                    double *duty);
+/* The feedforward's reference for a recorded or planned reference (feedforward_preview):
+ * preview[k] = {}, indices clamped to [0, n). preview must not overlap reference. The
+ * loop needs the reference {} samples ahead. */
+void $P_loop_preview(const double *reference, double *preview, size_t n);
+
+#ifdef __cplusplus
+}}
+#endif
+)",
+                    num(d.sample_time), d.kind == LoopDesign::Kind::open_loop ? " (unused without gains)" : "",
+                    cascade ? "  $P_pid_state pressure; /* the pressure PID (error in MPa -> duty) */\n"
+                              "  double desired_pressure; /* p_d, the position loop's output [MPa] */\n"
+                              "  double duty;            /* last PWM duty */\n"
+                              "  unsigned long pwm_faults; /* non-finite pressure-PID outputs (duty held) */\n"
+                            : "",
+                    d.kind == LoopDesign::Kind::feedforward_pid ? " (not used by this loop)" : "",
+                    cascade ? " (this loop: the desired pressure p_d of the valves' loop)" : "",
+                    cascade ? "this loop's actuator command" : "0: this loop has no valves",
+                    d.shaper ? "a1 r(k + L + A) + a2 r(k + L + A - D)" : "r(k + L)",
+                    d.feedforward_lead + (d.shaper ? d.shaper->advance : 0));
+
+  // ---- definitions
+  std::string& df = out.definitions;
+  df += "\n/* ---- the loop's constants ---- */\n";
+  df += fmt::format("static const double $P_sample_time = {};  /* T_s [s] */\n", num(d.sample_time));
+  df += fmt::format("static const double $P_model_scale = {};  /* model output units per m */\n", num(ff.model_scale));
+  df += fmt::format("static const double $P_lag_time_constant = {};  /* tau [s] */\n", num(ff.lag_time_constant));
+  df += fmt::format("static const double $P_pressure_lo = {}, $P_pressure_hi = {};  /* pressure limits [MPa] */\n",
+                    num(ff.pressure_limits.lo), num(ff.pressure_limits.hi));
+  df += fmt::format("static const size_t $P_lead = {};  /* the feedforward's lead [samples] */\n", lead);
+  if (d.shaper) {
+    df += fmt::format("static const size_t $P_advance = {}, $P_delay = {};  /* shaper [samples] */\n", advance, delay);
+    df += fmt::format("static const double $P_a1 = {}, $P_a2 = {};  /* shaper weights */\n", num(d.shaper->a1),
+                      num(d.shaper->a2));
+  }
+  switch (d.kind) {
+    case LoopDesign::Kind::feedforward_pid:
+      df += fmt::format("static const $P_pid_gains $P_position_gains =\n  {};\n",
+                        pid_gains(std::get<FeedforwardPidController>(ctl).pid()));
+      break;
+    case LoopDesign::Kind::open_loop: {
+      const auto& c = std::get<OpenLoopController>(ctl);
+      df += fmt::format("static const $P_pid_gains $P_position_gains =\n  {};\n", pid_gains(c.position()));
+      df += fmt::format("static const int $P_use_position = {};  /* a position gain is non-zero */\n",
+                        c.uses_position() ? 1 : 0);
+      df += fmt::format("static const double $P_pressure_gain = {};  /* k_p */\n", num(c.params().pressure_gain));
+      break;
+    }
+    case LoopDesign::Kind::cascade_pwm: {
+      const auto& c = std::get<CascadePwmController>(ctl);
+      const PwmParams& w = c.params().pwm;
+      df += fmt::format("static const $P_pid_gains $P_position_gains =\n  {};\n", pid_gains(c.position()));
+      df += fmt::format("static const $P_pid_gains $P_pressure_gains =\n  {};\n", pid_gains(c.pressure()));
+      df += fmt::format(
+          "static const double $P_pwm_gain = {}, $P_pwm_deadband = {}, $P_pwm_min_duty = {}, $P_pwm_max_duty = {},\n"
+          "  $P_pwm_resolution = {};  /* PWM (hysteron::PwmParams) */\n",
+          num(w.gain), num(w.deadband), num(w.min_duty), num(w.max_duty), num(w.resolution));
+      break;
+    }
+  }
+  df += R"(
+static double $P_clamp(double v, double lo, double hi)
+{
+  return v < lo ? lo : hi < v ? hi : v;  /* std::clamp */
+}
+)";
+  df += kPidStep;
+  if (cascade)
+    df += R"(
+/* PWM modulator (hysteron::PwmModulator::step): the duty for a command u. */
+static double $P_pwm_step($P_loop *c, double u)
+{
+  double mag, d = 0.0;
+  if (!isfinite(u)) {
+    ++c->pwm_faults;
+    return c->duty;
+  }
+  mag = fabs(u);
+  if (mag > $P_pwm_deadband) {
+    d = $P_pwm_min_duty + $P_pwm_gain * (mag - $P_pwm_deadband);
+    if (!(d < $P_pwm_max_duty)) d = $P_pwm_max_duty;
+    if ($P_pwm_resolution > 0.0) {
+      d = round(d / $P_pwm_resolution) * $P_pwm_resolution;
+      if (!(d < $P_pwm_max_duty)) d = $P_pwm_max_duty;
+    }
+    if (u < 0.0) d = -d;
+  }
+  c->duty = d;
+  return d;
+}
+)";
+  df += R"(
+void $P_loop_reset($P_loop *c)
+{
+  $P_inverse_reset(&c->inverse);
+  c->ff_prev = 0.0;
+  c->ff_started = 0;
+  $P_pid_reset(&c->position, &$P_position_gains);
+)";
+  if (cascade)
+    df += "  $P_pid_reset(&c->pressure, &$P_pressure_gains);\n  c->desired_pressure = 0.0;\n  c->duty = 0.0;\n"
+          "  c->pwm_faults = 0;\n";
+  df += "}\n";
+  df += R"(
+double $P_loop_step($P_loop *c, double reference_m, double preview_m, double measured_m, double pressure_mpa,
+                    double *duty)
+{
+)";
+  switch (d.kind) {
+    case LoopDesign::Kind::feedforward_pid:
+      df += R"(  const double u_ff = $P_feedforward(c, preview_m);
+  const double u = $P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, u_ff);
+  (void)pressure_mpa;
+  if (duty) *duty = 0.0;
+  return $P_clamp(isfinite(u) ? u : u_ff, $P_pressure_lo, $P_pressure_hi);
+}
+)";
+      break;
+    case LoopDesign::Kind::open_loop:
+      df += R"(  double p_d = $P_feedforward(c, preview_m), cmd;
+  if ($P_use_position)
+    p_d = $P_clamp(p_d + $P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, 0.0), $P_pressure_lo,
+                   $P_pressure_hi);
+  /* the pressure loop (pressure_loop_command): without a finite measurement, p_d itself */
+  cmd = isfinite(pressure_mpa) ? p_d + $P_pressure_gain * (p_d - pressure_mpa) : p_d;
+  if (duty) *duty = 0.0;
+  return $P_clamp(cmd, $P_pressure_lo, $P_pressure_hi);
+}
+)";
+      break;
+    case LoopDesign::Kind::cascade_pwm:
+      df += R"(  const double u_ff = $P_feedforward(c, preview_m);
+  double u, d;
+  c->desired_pressure = $P_clamp($P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, u_ff),
+                                 $P_pressure_lo, $P_pressure_hi);
+  u = $P_pid_step(&c->pressure, &$P_pressure_gains, c->desired_pressure, pressure_mpa, 0.0);
+  d = $P_clamp($P_pwm_step(c, u), -1.0, 1.0);
+  if (duty) *duty = d;
+  return c->desired_pressure;
+}
+)";
+      break;
+  }
+  df += R"(
+void $P_loop_preview(const double *reference, double *preview, size_t n)
+{
+  size_t k;
+  for (k = 0; k < n; ++k) {
+    const size_t j = $P_clamped_index(k, $P_lead, 0u, n);  /* s(k + lead), held at the end */
+)";
+  df += d.shaper ? R"(    preview[k] = $P_a1 * reference[$P_clamped_index(j, $P_advance, 0u, n)] +
+                 $P_a2 * reference[$P_clamped_index(j, $P_advance, $P_delay, n)];
+)"
+                 : R"(    preview[k] = reference[j];
+)";
+  df += "  }\n}\n";
+  return out;
+}
+
+}  // namespace hysteron::io::detail

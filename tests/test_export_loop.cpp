@@ -1,0 +1,305 @@
+// The loop in generated C (hysteron export --loop, src/io/export_loop.cpp) against the
+// library's: for loops of every kind, anti-windup rule, shaper and PWM setting, generate the
+// C file with the loop, compile it with tests/export/loop_driver.c and step it over 20,000
+// samples of a reference, measurements that jump far enough to saturate every PID, pressure
+// readings and non-finite inputs, with resets; make_controller + step() fed the same must
+// command the same (|difference| <= 1e-12; bit-identical on x86-64, as the model's export).
+// The preview of the reference must equal feedforward_preview's.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "export_loop_util.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/io/export_c.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
+#include "hysteron/loop_design.hpp"
+#include "temp_dir.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+// Pressure [MPa] -> contraction [mm]: a PI model with about 0-35 mm over 0-0.6 MPa, and an
+// mpi-asym (numerical inverse).
+ModelParams pi_model() {
+  return io::model_from_json(io::parse_json(R"({"model": "pi", "q": 30, "r": [0.02, 0.05, 0.1, 0.15],
+      "p": [12, 9, 6, 3], "input_limits": [0, 0.6]})", "pi"), "pi");
+}
+ModelParams asym_model() {
+  return io::model_from_json(io::parse_json(R"({"model": "mpi-asym", "q": 30, "r": [0.02, 0.05, 0.1],
+      "p": [10, 8, 5], "ascending": {"envelope": "tanh", "c": [1, 1.3, 0.05, 0.01]},
+      "descending": {"envelope": "affine", "c": [0.9, 0.01]}, "input_limits": [0, 0.6]})", "asym"), "asym");
+}
+
+PidParams pid(double kp, double ki, double kd, double tf, AntiWindup aw) {
+  PidParams p;
+  p.kp = kp;
+  p.ki = ki;
+  p.kd = kd;
+  p.derivative_filter = tf;
+  p.anti_windup = aw;
+  p.out_min = -0.6;
+  p.out_max = 0.6;
+  return p;
+}
+
+struct Case {
+  std::string name;
+  LoopDesign design;
+  bool asym = false;
+  bool single = false;
+};
+
+std::vector<Case> cases() {
+  std::vector<Case> v;
+  {
+    LoopDesign d;  // gpi-pid's shape: shaped preview, filtered D, lag compensation
+    d.kind = LoopDesign::Kind::feedforward_pid;
+    d.feedforward.lag_time_constant = 0.02;
+    d.pid = pid(9.8, 82, 0.29, 0.008, AntiWindup::conditional);
+    d.feedforward_lead = 40;
+    d.shaper = LoopDesign::Shaper{0.9, 0.1, 150, 10};
+    v.push_back({"ff_pid_conditional_shaped", d, false, false});
+  }
+  {
+    LoopDesign d;  // back-calculation with setpoint weights; limits whose reset output is not 0
+    d.kind = LoopDesign::Kind::feedforward_pid;
+    d.feedforward.pressure_limits = {0.05, 0.55};
+    d.pid = pid(20, 150, 0.0, 0.0, AntiWindup::back_calculation);
+    d.pid->setpoint_weight_p = 0.7;
+    d.pid->setpoint_weight_d = 0.3;
+    v.push_back({"ff_pid_back_calculation_asym", d, true, true});
+  }
+  {
+    LoopDesign d;  // the open loop as published: no position loop
+    d.kind = LoopDesign::Kind::open_loop;
+    d.pressure_gain = 0.5;
+    d.feedforward_lead = 25;
+    v.push_back({"open_loop_published", d, true, false});
+  }
+  {
+    LoopDesign d;  // with a position PID (no anti-windup, unfiltered D)
+    d.kind = LoopDesign::Kind::open_loop;
+    d.pressure_gain = 1.3;
+    d.pid = pid(6, 30, 0.05, 0.0, AntiWindup::none);
+    d.shaper = LoopDesign::Shaper{0.6, 0.4, 90, 0};
+    v.push_back({"open_loop_position_pid", d, false, true});
+  }
+  {
+    LoopDesign d;  // the valves: quantised PWM with a dead band and a minimum duty
+    d.kind = LoopDesign::Kind::cascade_pwm;
+    d.pid = pid(8, 40, 0.2, 0.01, AntiWindup::conditional);
+    PidParams pp = pid(12, 60, 0.0, 0.0, AntiWindup::conditional);
+    pp.out_min = -1;
+    pp.out_max = 1;
+    d.pressure_pid = pp;
+    d.pwm = PwmParams{1.5, 0.01, 0.05, 0.95, 0.01};
+    d.feedforward_lead = 30;
+    d.shaper = LoopDesign::Shaper{0.8, 0.2, 120, 5};
+    v.push_back({"cascade_quantised_pwm", d, true, false});
+  }
+  {
+    LoopDesign d;  // continuous PWM, back-calculation in the pressure loop
+    d.kind = LoopDesign::Kind::cascade_pwm;
+    d.feedforward.lag_time_constant = 0.01;
+    d.pid = pid(5, 20, 0.0, 0.0, AntiWindup::back_calculation);
+    d.pid->tracking_time = 0.05;
+    PidParams pp = pid(4, 30, 0.0, 0.0, AntiWindup::back_calculation);
+    pp.out_min = -2;  // narrowed to [-1, 1] by the cascade
+    pp.out_max = 2;
+    d.pressure_pid = pp;
+    d.pwm = PwmParams{1.0, 0.0, 0.0, 1.0, 0.0};
+    v.push_back({"cascade_continuous_pwm", d, false, true});
+  }
+  return v;
+}
+
+struct Inputs {
+  std::vector<double> reference, measured, pressure;
+  std::vector<std::size_t> resets;
+  std::size_t nonfinite = 0;
+};
+
+Inputs make_inputs(std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Inputs in;
+  double meas_offset = 0.0, p = 0.3;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k);
+    const double r = 0.016 + 0.012 * std::sin(2 * M_PI * t / 2000) + 0.004 * std::sin(2 * M_PI * 3 * t / 2000);
+    if (unit(rng) < 0.002) meas_offset = (unit(rng) - 0.5) * 0.08;  // jumps that saturate the PIDs
+    meas_offset *= 0.995;
+    double m = r + meas_offset + 0.0005 * (unit(rng) - 0.5);
+    p = std::clamp(p + 0.02 * (unit(rng) - 0.5), -0.05, 0.7);
+    double pr = p, ref = r;
+    const double a = unit(rng);
+    if (a > 0.998) {  // a non-finite value in one of the inputs
+      const double bad = a > 0.9995 ? std::numeric_limits<double>::quiet_NaN()
+                         : a > 0.999 ? std::numeric_limits<double>::infinity()
+                                     : -std::numeric_limits<double>::infinity();
+      const int which = static_cast<int>(unit(rng) * 3);
+      (which == 0 ? ref : which == 1 ? m : pr) = bad;
+      ++in.nonfinite;
+    }
+    in.reference.push_back(ref);
+    in.measured.push_back(m);
+    in.pressure.push_back(pr);
+  }
+  for (std::size_t r : {n / 5, n / 2, (4 * n) / 5}) in.resets.push_back(r);
+  return in;
+}
+
+void reset(Controller& c) {
+  std::visit([](auto& l) { l.reset(); }, c);
+}
+
+struct Compared {
+  double worst_command = 0.0, worst_duty = 0.0, worst_preview = 0.0;
+  std::size_t exact = 0, n = 0, at_limits = 0, nonzero_duty = 0;
+};
+
+// The library's loop on the same inputs (the reference's finite values previewed, as a user
+// would: the preview of a non-finite sample is fed as is).
+Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, const std::vector<double>& preview) {
+  Compared r;
+  const ModelParams model = c.asym ? asym_model() : pi_model();
+  Controller ctl = make_controller(c.design, model);
+  const Limits lim = c.design.feedforward.pressure_limits;
+  std::size_t next = 0;
+  for (std::size_t k = 0; k < in.reference.size() && k < got.command.size(); ++k) {
+    while (next < in.resets.size() && in.resets[next] <= k) {
+      if (in.resets[next] == k) reset(ctl);
+      ++next;
+    }
+    const LoopOutput o = step(ctl, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
+    r.worst_command = std::max(r.worst_command, std::abs(o.command_mpa - got.command[k]));
+    r.worst_duty = std::max(r.worst_duty, std::abs(o.duty - got.duty[k]));
+    r.exact += o.command_mpa == got.command[k] && o.duty == got.duty[k];
+    r.at_limits += o.command_mpa == lim.lo || o.command_mpa == lim.hi;
+    r.nonzero_duty += o.duty != 0.0;
+    ++r.n;
+  }
+  for (std::size_t k = 0; k < preview.size() && k < got.preview.size(); ++k)
+    r.worst_preview = std::max(r.worst_preview, std::abs(preview[k] - got.preview[k]));
+  return r;
+}
+
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
+class ExportLoop : public ::testing::TestWithParam<Case> {};
+
+TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found: generated C not compiled";
+  const Case& c = GetParam();
+  test::TempDir dir;
+  const Inputs in = make_inputs(20000, 777u + static_cast<unsigned>(c.name.size()));
+  // the preview of the reference with its non-finite samples, as the C function computes it
+  const std::vector<double> preview = feedforward_preview(c.design, in.reference);
+  const test::LoopRun got = test::run_generated_loop(c.design, c.asym ? asym_model() : pi_model(), dir.file("."),
+                                                     c.single, in.reference, preview, in.measured, in.pressure,
+                                                     in.resets);
+  ASSERT_EQ(got.error, "");
+  ASSERT_EQ(got.command.size(), in.reference.size());
+  ASSERT_EQ(got.preview.size(), in.reference.size());
+  const Compared r = compare(c, in, got, preview);
+  EXPECT_LE(r.worst_command, 1e-12) << "MPa";
+  EXPECT_LE(r.worst_duty, 1e-12);
+  EXPECT_EQ(r.worst_preview, 0.0) << "the preview takes no arithmetic but the shaper's, in the same order";
+#if defined(__x86_64__) && defined(__SSE2__)
+  EXPECT_EQ(r.exact, r.n) << "not bit-identical to the library's loop";
+#endif
+  // what the inputs exercised
+  EXPECT_GT(in.nonfinite, 10u);
+  EXPECT_GT(r.at_limits, 10u) << "the loop never commanded a pressure limit";
+  if (c.design.kind == LoopDesign::Kind::cascade_pwm) {
+    EXPECT_GT(r.nonzero_duty, r.n / 10);
+  }
+  std::printf("  %s: %zu samples (%zu non-finite inputs, %zu at a pressure limit, %zu resets): largest difference "
+              "%.3g MPa, %.3g duty, %.3g preview; bit-identical %zu / %zu\n",
+              c.name.c_str(), r.n, in.nonfinite, r.at_limits, in.resets.size(), r.worst_command, r.worst_duty,
+              r.worst_preview, r.exact, r.n);
+}
+
+INSTANTIATE_TEST_SUITE_P(Export, ExportLoop, ::testing::ValuesIn(cases()),
+                         [](const ::testing::TestParamInfo<Case>& p) { return p.param.name; });
+
+// The comparison can fail: the C file of a loop whose K_p, pressure PID K_i or shaper weight
+// is 1e-9 off (relative), compared with the library's loop, differs.
+TEST(ExportLoopCheck, PerturbedNumberIsDetected) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found";
+  const Case c = cases()[4];  // cascade, quantised PWM
+  const Inputs in = make_inputs(5000, 99u);
+  const std::vector<double> preview = feedforward_preview(c.design, in.reference);
+  for (int which = 0; which < 3; ++which) {
+    LoopDesign d = c.design;
+    if (which == 0) d.pid->kp *= 1 + 1e-9;
+    if (which == 1) d.pressure_pid->ki *= 1 + 1e-9;
+    if (which == 2) d.shaper->a2 *= 1 + 1e-9;
+    test::TempDir dir;
+    // the C file's own preview is compared with the unperturbed design's
+    const test::LoopRun got =
+        test::run_generated_loop(d, asym_model(), dir.file("."), false, in.reference, preview, in.measured, in.pressure);
+    ASSERT_EQ(got.error, "");
+    const Compared r = compare(c, in, got, preview);
+    EXPECT_GT(std::max({r.worst_command, r.worst_duty, r.worst_preview}), 0.0) << "perturbation " << which;
+    EXPECT_LT(r.exact, r.n) << "perturbation " << which;
+  }
+}
+
+TEST(ExportLoopCheck, LoopsGeneratedCCannotHoldAreRefused) {
+  const ModelParams m = pi_model();
+  auto refused = [&](const LoopDesign& d, const std::string& expected, Limits limits = {}) {
+    io::ExportOptions o;
+    o.loop = d;
+    o.inverse_limits = limits;
+    try {
+      (void)io::generate_c(m, o);
+      ADD_FAILURE() << "accepted; expected: " << expected;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  LoopDesign ok = cases()[0].design;
+  {
+    LoopDesign d = ok;
+    d.learning = LoopDesign::Learning{};
+    refused(d, "the loop: it adds iterative learning");
+  }
+  {
+    LoopDesign d = ok;
+    d.feedforward_lead = std::size_t{1} << 31;
+    refused(d, "feedforward_lead = 2147483648 samples");
+  }
+  {
+    LoopDesign d = ok;
+    d.shaper->delay = std::numeric_limits<std::size_t>::max();
+    refused(d, "shaper.delay");
+  }
+  {
+    LoopDesign d = ok;
+    d.pid->kp = -1;
+    refused(d, "pid.kp = -1");
+  }
+  {
+    LoopDesign d = cases()[4].design;
+    d.pressure_pid.reset();
+    refused(d, "needs its pressure_pid");
+  }
+  refused(ok, "differ from the loop's pressure limits", Limits{0.0, 0.5});
+  // the loop's own limits may be given
+  io::ExportOptions o;
+  o.loop = ok;
+  o.inverse_limits = ok.feedforward.pressure_limits;
+  EXPECT_NO_THROW((void)io::generate_c(m, o));
+}
+
+}  // namespace

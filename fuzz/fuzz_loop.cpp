@@ -3,15 +3,18 @@
 // "compensated", "compensated.sine" and "learning.triangle" of a whole result.json. An accepted
 // loop must survive a write/read round trip unchanged; where make_controller accepts it (on a
 // fixed PI model), its steps must give finite commands inside the pressure limits (a duty in
-// [-1, 1] with the valves), whatever finite reference, preview and measurements it is fed.
-// Only hysteron::Error may escape.
+// [-1, 1] with the valves), whatever finite reference, preview and measurements it is fed, and
+// hysteron export --loop must write it as C (io::generate_c) unless it has learning or a count
+// of samples beyond 2^31 - 1 (refused with hysteron::Error). Only hysteron::Error may escape.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "hysteron/error.hpp"
+#include "hysteron/io/export_c.hpp"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/loop_design.hpp"
@@ -51,6 +54,19 @@ void run(const hysteron::LoopDesign& d) {
       check(std::isfinite(o.command_mpa) && o.command_mpa >= lim.lo && o.command_mpa <= lim.hi);  // p_d with valves
       check(std::isfinite(o.duty) && o.duty >= -1.0 && o.duty <= 1.0);
     }
+  // generated C: every loop make_controller accepts, but those generated C cannot hold
+  constexpr std::size_t max_count = 2147483647u;
+  const bool holdable = !d.learning && d.feedforward_lead <= max_count &&
+                        (!d.shaper || (d.shaper->advance <= max_count && d.shaper->delay <= max_count));
+  io::ExportOptions o;
+  o.prefix = "fz";
+  o.loop = d;
+  try {
+    const io::GeneratedC g = io::generate_c(model(), o);
+    check(holdable && g.source.find("double fz_loop_step(fz_loop *c") != std::string::npos);
+  } catch (const hysteron::Error&) {
+    check(!holdable);
+  }
 }
 
 }  // namespace

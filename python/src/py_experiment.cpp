@@ -1,7 +1,9 @@
 // Bindings of the papers' experiments, the plots and the HTML reports.
 #include <fmt/format.h>
 
+#include <optional>
 #include <span>
+#include <utility>
 #include <variant>
 
 #include "hysteron/compensation.hpp"
@@ -9,6 +11,7 @@
 #include "hysteron/learning.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/report.hpp"
+#include "hysteron/io/export_c.hpp"
 #include "hysteron/io/results.hpp"
 #include "more.hpp"
 
@@ -48,6 +51,33 @@ describes, on `model` (best_model.json for the compensated and learning loops, m
 faithful one): a FeedforwardPidController, OpenLoopController or CascadePwmController by its
 "loop". The learning is not part of it (IterativeLearning from controller["learning"]).
 hysteron.Error names a missing or invalid key. docs/deploy.md.)doc");
+  m.def(
+      "export_c",
+      [](const py::object& model, const std::string& prefix, const std::string& header_name,
+         const std::optional<std::pair<double, double>>& limits, const py::object& controller,
+         const std::string& source_name) {
+        io::ExportOptions o;
+        o.prefix = prefix;
+        o.header_name = header_name;
+        o.source_name = source_name;
+        if (limits) o.inverse_limits = Limits{limits->first, limits->second};
+        if (!controller.is_none()) o.loop = io::from_json<LoopDesign>(to_json(controller), "controller");
+        const io::GeneratedC g = io::generate_c(model_spec(model), o);
+        py::dict out;
+        out["source"] = g.source;
+        out["header"] = g.header;
+        return out;
+      },
+      py::arg("model"), py::kw_only(), py::arg("prefix") = "compensator", py::arg("header_name") = "",
+      py::arg("limits") = py::none(), py::arg("controller") = py::none(), py::arg("source_name") = "",
+      R"doc(hysteron export as a function (docs/export.md): the model and its exact inverse as one
+self-contained C99 file, {"source": the .c text, "header": the .h text or "" without header_name}.
+prefix names every C symbol; header_name (e.g. "compensator.h") moves the declarations to a
+header the source #includes; limits=(lo, hi) the inverse's input limits. controller (a run's
+"controller" dict, e.g. loop_of_run(result, "compensated.sine")) adds the run's loop around the
+inverse: PREFIX_loop_reset / _loop_step / _loop_preview, which step exactly as controller_from(
+controller, model). model must be the one the run inverts. hysteron.Error on a model without
+inverse, a bad prefix, or a loop with learning.)doc");
   m.def(
       "loop_of_run",
       [](const py::object& result, const std::string& run) {

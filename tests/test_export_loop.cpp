@@ -27,11 +27,16 @@ using namespace hysteron;
 
 namespace {
 
-// Pressure [MPa] -> contraction [mm]: a PI model with about 0-35 mm over 0-0.6 MPa, and an
-// mpi-asym (numerical inverse).
+// Pressure [MPa] -> contraction [mm]: a PI model with about 0-35 mm over 0-0.6 MPa, a gpi
+// with a units map, and an mpi-asym (numerical inverse).
 ModelParams pi_model() {
   return io::model_from_json(io::parse_json(R"({"model": "pi", "q": 30, "r": [0.02, 0.05, 0.1, 0.15],
       "p": [12, 9, 6, 3], "input_limits": [0, 0.6]})", "pi"), "pi");
+}
+ModelParams gpi_units_model() {  // a units map: x_m = (x - 0.05) / 0.5, y = 1 + 30 v
+  return io::model_from_json(io::parse_json(R"({"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05],
+      "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05, "input_origin": 0.05, "input_scale": 0.5,
+      "output_offset": 1.0, "output_gain": 30.0, "input_limits": [0, 0.6]})", "gpi"), "gpi");
 }
 ModelParams asym_model() {
   return io::model_from_json(io::parse_json(R"({"model": "mpi-asym", "q": 30, "r": [0.02, 0.05, 0.1],
@@ -51,10 +56,13 @@ PidParams pid(double kp, double ki, double kd, double tf, AntiWindup aw) {
   return p;
 }
 
+enum class M { pi, asym, gpi_units };
+ModelParams model_of(M m) { return m == M::pi ? pi_model() : m == M::asym ? asym_model() : gpi_units_model(); }
+
 struct Case {
   std::string name;
   LoopDesign design;
-  bool asym = false;
+  M model = M::pi;
   bool single = false;
 };
 
@@ -67,7 +75,7 @@ std::vector<Case> cases() {
     d.pid = pid(9.8, 82, 0.29, 0.008, AntiWindup::conditional);
     d.feedforward_lead = 40;
     d.shaper = LoopDesign::Shaper{0.9, 0.1, 150, 10};
-    v.push_back({"ff_pid_conditional_shaped", d, false, false});
+    v.push_back({"ff_pid_conditional_shaped", d, M::pi, false});
   }
   {
     LoopDesign d;  // back-calculation with setpoint weights; limits whose reset output is not 0
@@ -76,14 +84,14 @@ std::vector<Case> cases() {
     d.pid = pid(20, 150, 0.0, 0.0, AntiWindup::back_calculation);
     d.pid->setpoint_weight_p = 0.7;
     d.pid->setpoint_weight_d = 0.3;
-    v.push_back({"ff_pid_back_calculation_asym", d, true, true});
+    v.push_back({"ff_pid_back_calculation_asym", d, M::asym, true});
   }
   {
     LoopDesign d;  // the open loop as published: no position loop
     d.kind = LoopDesign::Kind::open_loop;
     d.pressure_gain = 0.5;
     d.feedforward_lead = 25;
-    v.push_back({"open_loop_published", d, true, false});
+    v.push_back({"open_loop_published", d, M::asym, false});
   }
   {
     LoopDesign d;  // with a position PID (no anti-windup, unfiltered D)
@@ -91,7 +99,7 @@ std::vector<Case> cases() {
     d.pressure_gain = 1.3;
     d.pid = pid(6, 30, 0.05, 0.0, AntiWindup::none);
     d.shaper = LoopDesign::Shaper{0.6, 0.4, 90, 0};
-    v.push_back({"open_loop_position_pid", d, false, true});
+    v.push_back({"open_loop_position_pid", d, M::gpi_units, true});
   }
   {
     LoopDesign d;  // the valves: quantised PWM with a dead band and a minimum duty
@@ -104,7 +112,7 @@ std::vector<Case> cases() {
     d.pwm = PwmParams{1.5, 0.01, 0.05, 0.95, 0.01};
     d.feedforward_lead = 30;
     d.shaper = LoopDesign::Shaper{0.8, 0.2, 120, 5};
-    v.push_back({"cascade_quantised_pwm", d, true, false});
+    v.push_back({"cascade_quantised_pwm", d, M::asym, false});
   }
   {
     LoopDesign d;  // continuous PWM, back-calculation in the pressure loop
@@ -117,7 +125,7 @@ std::vector<Case> cases() {
     pp.out_max = 2;
     d.pressure_pid = pp;
     d.pwm = PwmParams{1.0, 0.0, 0.0, 1.0, 0.0};
-    v.push_back({"cascade_continuous_pwm", d, false, true});
+    v.push_back({"cascade_continuous_pwm", d, M::pi, true});
   }
   return v;
 }
@@ -171,7 +179,7 @@ struct Compared {
 // would: the preview of a non-finite sample is fed as is).
 Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, const std::vector<double>& preview) {
   Compared r;
-  const ModelParams model = c.asym ? asym_model() : pi_model();
+  const ModelParams model = model_of(c.model);
   Controller ctl = make_controller(c.design, model);
   const Limits lim = c.design.feedforward.pressure_limits;
   std::size_t next = 0;
@@ -204,7 +212,7 @@ TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
   const Inputs in = make_inputs(20000, 777u + static_cast<unsigned>(c.name.size()));
   // the preview of the reference with its non-finite samples, as the C function computes it
   const std::vector<double> preview = feedforward_preview(c.design, in.reference);
-  const test::LoopRun got = test::run_generated_loop(c.design, c.asym ? asym_model() : pi_model(), dir.file("."),
+  const test::LoopRun got = test::run_generated_loop(c.design, model_of(c.model), dir.file("."),
                                                      c.single, in.reference, preview, in.measured, in.pressure,
                                                      in.resets);
   ASSERT_EQ(got.error, "");

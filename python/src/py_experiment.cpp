@@ -76,7 +76,8 @@ prefix names every C symbol; header_name (e.g. "compensator.h") moves the declar
 header the source #includes; limits=(lo, hi) the inverse's input limits. controller (a run's
 "controller" dict, e.g. loop_of_run(result, "compensated.sine")) adds the run's loop around the
 inverse: PREFIX_loop_reset / _loop_step / _loop_preview, which step exactly as controller_from(
-controller, model). model must be the one the run inverts. hysteron.Error on a model without
+controller, model). model must be the one the run inverts; an adaptive run's loop would be
+written with a fixed inverse (hysteron export refuses it). hysteron.Error on a model without
 inverse, a bad prefix, or a loop with learning.)doc");
   m.def(
       "loop_of_run",

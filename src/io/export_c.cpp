@@ -40,7 +40,6 @@ std::string array_init(const std::vector<double>& v) {
   return s + "}";
 }
 
-
 // Everything the inverse's constructor derives, recomputed with its arithmetic
 // (src/core/inverse.cpp); the limits are checked against a real Inverse.
 struct Baked {
@@ -373,7 +372,8 @@ struct Gen {
       t += fmt::format(" * With the compensating loop around its inverse{}.\n",
                        o.loop_source.empty() ? std::string() : fmt::format(", from {}", comment_safe(o.loop_source)));
     if (!o.command_line.empty()) t += fmt::format(" * Regenerate with: {}\n", comment_safe(o.command_line));
-    t += " * Do not edit by hand: every constant is the model's, read back exactly.\n";
+    t += loop ? " * Do not edit by hand: every constant is the model's or the loop's, read back exactly.\n"
+              : " * Do not edit by hand: every constant is the model's, read back exactly.\n";
     t += " *\n";
     return t;
   }

@@ -5,7 +5,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <cstddef>
 #include <variant>
 
@@ -32,11 +31,11 @@ std::string pid_gains(const Pid& pid) {
   const PidParams& p = pid.params();
   const Pid::Coefficients k = pid.coefficients();
   const int aw = p.anti_windup == AntiWindup::none ? 0 : p.anti_windup == AntiWindup::conditional ? 1 : 2;
-  // Pid::reset(0): the output clamp(0, out_min, out_max), the integral that output if K_i > 0
-  const double u0 = std::clamp(0.0, p.out_min, p.out_max);
+  // the state after a reset: the controller's PIDs are built reset and not yet stepped
+  const PidState& s0 = pid.state();
   return fmt::format("{{{}, {}, {}, {}, {}, {},\n   {}, {}, {}, {}, {}, {}, {}}}", num(p.kp), num(p.ki), num(p.sample_time),
                      num(p.setpoint_weight_p), num(p.setpoint_weight_d), num(k.a_d), num(k.b_d), num(k.k_t),
-                     num(p.out_min), num(p.out_max), aw, num(u0), num(p.ki > 0.0 ? u0 : 0.0));
+                     num(p.out_min), num(p.out_max), aw, num(s0.output), num(s0.integral));
 }
 
 std::string pid_comment(const char* name, const Pid& pid) {

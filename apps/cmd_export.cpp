@@ -96,7 +96,8 @@ void add_export(CLI::App& app, Action& action) {
                   "also write the compensating loop around the inverse: an experiment's result.json (or a "
                   "controller JSON); the model must be the one the run inverts (docs/export.md, \"The loop\")");
   sub->add_option("--run", o->run,
-                  "the run of the --loop file, e.g. compensated or compensated.sine (not learning or adaptive runs)");
+                  "the run of the --loop file, e.g. compensated.sine, or learning.sine for the loop with its iterative "
+                  "learning (not adaptive runs)");
   sub->callback([o, &action] { action = [o] { return run_export(*o); }; });
 }
 

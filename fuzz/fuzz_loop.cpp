@@ -4,8 +4,9 @@
 // loop must survive a write/read round trip unchanged; where make_controller accepts it (on a
 // fixed PI model), its steps must give finite commands inside the pressure limits (a duty in
 // [-1, 1] with the valves), whatever finite reference, preview and measurements it is fed, and
-// hysteron export --loop must write it as C (io::generate_c) unless it has learning or a count
-// of samples beyond 2^31 - 1 (refused with hysteron::Error). Only hysteron::Error may escape.
+// hysteron export --loop must write it as C (io::generate_c) unless a count of samples is beyond
+// 2^31 - 1, its learning's parameters are invalid or the learning's state would be more than
+// 2^31 - 1 bytes (refused with hysteron::Error). Only hysteron::Error may escape.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -17,6 +18,7 @@
 #include "hysteron/io/export_c.hpp"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/learning.hpp"
 #include "hysteron/loop_design.hpp"
 
 namespace io = hysteron::io;
@@ -56,7 +58,20 @@ void run(const hysteron::LoopDesign& d) {
     }
   // generated C: every loop make_controller accepts, but those generated C cannot hold
   constexpr std::size_t max_count = 2147483647u;
-  const bool holdable = !d.learning && d.feedforward_lead <= max_count &&
+  bool learning_holdable = true;
+  if (d.learning) {
+    const hysteron::LearningParams& p = d.learning->params;
+    try {
+      p.validate();
+    } catch (const hysteron::Error&) {
+      learning_holdable = false;
+    }
+    const double doubles = std::isfinite(p.rise_tolerance) ? 5.0 : 4.0;
+    learning_holdable = learning_holdable && p.period <= max_count && p.lead <= max_count &&
+                        p.half_width <= max_count && p.lookahead <= max_count && p.hold_after_cuts <= max_count &&
+                        doubles * 8.0 * static_cast<double>(p.period) <= static_cast<double>(max_count);
+  }
+  const bool holdable = learning_holdable && d.feedforward_lead <= max_count &&
                         (!d.shaper || (d.shaper->advance <= max_count && d.shaper->delay <= max_count));
   io::ExportOptions o;
   o.prefix = "fz";
@@ -64,6 +79,7 @@ void run(const hysteron::LoopDesign& d) {
   try {
     const io::GeneratedC g = io::generate_c(model(), o);
     check(holdable && g.source.find("double fz_loop_step(fz_loop *c") != std::string::npos);
+    check(!d.learning || g.source.find("double fz_loop_learning_step(fz_loop *c") != std::string::npos);
   } catch (const hysteron::Error&) {
     check(!holdable);
   }

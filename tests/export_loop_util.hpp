@@ -29,17 +29,21 @@ inline std::string hexf(double v) {
 struct LoopRun {
   std::string error;                 // "" or what failed (generation, compiler, driver)
   std::vector<double> preview;       // lp_loop_preview of the reference
-  std::vector<double> command, duty; // lp_loop_step of every sample
+  std::vector<double> command, duty; // lp_loop_step (lp_loop_learning_step) of every sample
+  std::vector<double> correction;    // with learning: lp_learning_correction(0) before every step
+  int warm_status = 0;               // lp_learning_warm_start's return value, if called
 };
 
 // Generates `d` on `model` (prefix lp; one .c, or .c + .h), compiles it with
 // gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 in `dir`, computes the preview of
 // `reference` and steps every sample with the given inputs; a reset before each sample listed
-// in `resets`.
+// in `resets`. With d.learning, the steps are lp_loop_learning_step's, after a warm start from
+// `warm_start` if it is not empty (a reset restarts the learning cold).
 inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model, const std::filesystem::path& dir,
                                   bool single, const std::vector<double>& reference, const std::vector<double>& preview,
                                   const std::vector<double>& measured, const std::vector<double>& pressure,
-                                  const std::vector<std::size_t>& resets = {}) {
+                                  const std::vector<std::size_t>& resets = {},
+                                  const std::vector<double>& warm_start = {}) {
   namespace fs = std::filesystem;
   LoopRun out;
   io::ExportOptions o;
@@ -57,8 +61,8 @@ inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model,
   if (!single) std::ofstream(dir / "loop.h", std::ios::binary) << g.header;
   const std::string driver = std::string(HYSTERON_SOURCE_DIR) + "/tests/export/loop_driver.c";
   const std::string cc = fmt::format(
-      "gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 {} -I'{}' '{}' {} -o '{}' -lm > '{}' 2>&1",
-      single ? "-DLP_SINGLE" : "", dir.string(), driver, single ? "" : "'" + (dir / "loop.c").string() + "'",
+      "gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 {} {} -I'{}' '{}' {} -o '{}' -lm > '{}' 2>&1",
+      single ? "-DLP_SINGLE" : "", d.learning ? "-DLP_LEARNING" : "", dir.string(), driver, single ? "" : "'" + (dir / "loop.c").string() + "'",
       (dir / "loop_driver").string(), (dir / "gcc.log").string());
   if (std::system(cc.c_str()) != 0) {
     std::ifstream log(dir / "gcc.log");
@@ -70,13 +74,19 @@ inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model,
     s << "p " << reference.size();
     for (double v : reference) s << ' ' << hexf(v);
     s << '\n';
+    if (!warm_start.empty()) {
+      s << "w " << warm_start.size();
+      for (double v : warm_start) s << ' ' << hexf(v);
+      s << '\n';
+    }
+    const char* op = d.learning ? "l " : "s ";
     std::size_t next = 0;
     for (std::size_t k = 0; k < reference.size(); ++k) {
       while (next < resets.size() && resets[next] <= k) {
         if (resets[next] == k) s << "r\n";
         ++next;
       }
-      s << "s " << hexf(reference[k]) << ' ' << hexf(preview[k]) << ' ' << hexf(measured[k]) << ' '
+      s << op << hexf(reference[k]) << ' ' << hexf(preview[k]) << ' ' << hexf(measured[k]) << ' '
         << hexf(pressure[k]) << '\n';
     }
   }
@@ -97,6 +107,12 @@ inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model,
     } else if (tag == "S" && (ls >> a >> b)) {
       out.command.push_back(std::strtod(a.c_str(), nullptr));
       out.duty.push_back(std::strtod(b.c_str(), nullptr));
+    } else if (std::string c; tag == "L" && (ls >> a >> b >> c)) {
+      out.command.push_back(std::strtod(a.c_str(), nullptr));
+      out.duty.push_back(std::strtod(b.c_str(), nullptr));
+      out.correction.push_back(std::strtod(c.c_str(), nullptr));
+    } else if (tag == "W" && (ls >> a)) {
+      out.warm_status = std::atoi(a.c_str());
     } else {
       out.error = "unexpected driver output: " + line;
       return out;

@@ -19,6 +19,8 @@
 #include "hysteron/hysteron.h"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/learning.hpp"
+#include "hysteron/loop_design.hpp"
 #include "hysteron/report.hpp"
 #include "temp_dir.hpp"
 #include "test_util.hpp"
@@ -142,6 +144,60 @@ Worst replay_generated(const std::filesystem::path& dir, const TrackingRun& r) {
   return w;
 }
 
+// A learning run's feedforward preview [m], as the run fed it: through the shaper (indices
+// clamped to the record: feedforward_preview) or, unshaped, the reference lead samples ahead,
+// wrapped around the record (the learning run's reference is periodic).
+std::vector<double> learning_preview_m(const LoopDesign& d, const std::vector<double>& ref) {
+  if (d.shaper) return feedforward_preview(d, ref);
+  std::vector<double> p(ref.size());
+  for (std::size_t k = 0; k < ref.size(); ++k) p[k] = ref[(k + d.feedforward_lead) % ref.size()];
+  return p;
+}
+
+struct LearningWorst {
+  double command = 0.0, duty = 0.0, correction_mm = 0.0;
+  std::size_t n = 0;
+};
+
+// A learning run's loop and learning, from the files as `hysteron export --loop result.json --run
+// learning.REF` reads them, fed the run's recorded inputs: in C++ (make_controller and an
+// IterativeLearning stepped by step(Controller&, IterativeLearning&, ...)) and as generated C
+// (lp_loop_learning_step), against the run's commands and correction_mm.
+void replay_learning(const std::filesystem::path& dir, const TrackingRun& r, LearningWorst& cpp, LearningWorst& gen) {
+  const std::string where = r.variant + "." + r.reference;
+  const LoopDesign d = io::read_loop_design((dir / "result.json").string(), where);
+  ASSERT_TRUE(d.learning.has_value()) << where;
+  const ModelParams model = io::read_model_file((dir / model_file(r)).string());
+  ASSERT_EQ(r.correction_mm.size(), r.t.size()) << where;
+  std::vector<double> ref(r.t.size()), meas(r.t.size());
+  for (std::size_t k = 0; k < ref.size(); ++k) {
+    ref[k] = r.reference_mm[k] * 1e-3;
+    meas[k] = r.measured_mm[k] * 1e-3;
+  }
+  const std::vector<double> preview = learning_preview_m(d, ref);
+  Controller c = make_controller(d, model);
+  IterativeLearning ilc(d.learning->params);
+  for (std::size_t k = 0; k < ref.size(); ++k, ++cpp.n) {
+    const double c0 = ilc.correction(0);
+    const LoopOutput o = step(c, ilc, d, ref[k], preview[k], meas[k], r.pressure_measured_mpa[k]);
+    cpp.command = std::max(cpp.command, std::abs(o.command_mpa - r.pressure_command_mpa[k]));
+    cpp.duty = std::max(cpp.duty, std::abs(o.duty - r.duty[k]));
+    cpp.correction_mm = std::max(cpp.correction_mm, std::abs(c0 * 1e3 - r.correction_mm[k]));
+  }
+  if (!test::have_gcc()) return;
+  test::TempDir tmp;
+  const test::LoopRun got =
+      test::run_generated_loop(d, model, tmp.file("."), false, ref, preview, meas, r.pressure_measured_mpa);
+  ASSERT_EQ(got.error, "") << where;
+  ASSERT_EQ(got.command.size(), r.t.size()) << where;
+  ASSERT_EQ(got.correction.size(), r.t.size()) << where;
+  for (std::size_t k = 0; k < got.command.size(); ++k, ++gen.n) {
+    gen.command = std::max(gen.command, std::abs(got.command[k] - r.pressure_command_mpa[k]));
+    gen.duty = std::max(gen.duty, std::abs(got.duty[k] - r.duty[k]));
+    gen.correction_mm = std::max(gen.correction_mm, std::abs(got.correction[k] * 1e3 - r.correction_mm[k]));
+  }
+}
+
 // Runs `name` quickly, writes its directory, reads it back and replays its faithful and
 // compensated runs through the C ABI; a learning run's ILC parameters are read as well.
 void check_replay(const std::string& name, LoopDesign::Kind expected, int learning_periods = 0) {
@@ -172,6 +228,22 @@ void check_replay(const std::string& name, LoopDesign::Kind expected, int learni
       EXPECT_EQ(c.learning.hold_after_cuts, l.hold_after_cuts);
       EXPECT_EQ(c.learning.max_gain, l.max_gain);
       ++learnt;
+      LearningWorst cpp, gen;
+      replay_learning(dir, run, cpp, gen);
+      EXPECT_EQ(cpp.n, run.t.size());
+      EXPECT_LT(cpp.command, 1e-9) << name << " " << where << ": make_controller + IterativeLearning, MPa";
+      EXPECT_LT(cpp.duty, 1e-9) << name << " " << where << ": duty";
+      EXPECT_LT(cpp.correction_mm, 1e-9) << name << " " << where << ": correction, mm";
+      if (test::have_gcc()) {
+        EXPECT_EQ(gen.n, run.t.size());
+        EXPECT_LT(gen.command, 1e-9) << name << " " << where << ": generated C, MPa";
+        EXPECT_LT(gen.duty, 1e-9) << name << " " << where << ": generated C, duty";
+        EXPECT_LT(gen.correction_mm, 1e-9) << name << " " << where << ": generated C, correction, mm";
+      }
+      std::printf("  %s %s: %zu samples; largest difference from the run: C++ %.3g MPa / %.3g duty / %.3g mm "
+                  "correction, generated C %.3g MPa / %.3g duty / %.3g mm\n",
+                  name.c_str(), where.c_str(), cpp.n, cpp.command, cpp.duty, cpp.correction_mm, gen.command, gen.duty,
+                  gen.correction_mm);
     }
     if (run.variant != "faithful" && run.variant != "compensated") continue;
     ASSERT_EQ(run.pressure_measured_mpa.size(), run.t.size()) << run.variant;

@@ -20,6 +20,7 @@
 #include "hysteron/io/export_c.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/learning.hpp"
 #include "hysteron/loop_design.hpp"
 #include "temp_dir.hpp"
 
@@ -263,6 +264,175 @@ TEST(ExportLoopCheck, PerturbedNumberIsDetected) {
   }
 }
 
+// ---- with iterative learning (src/io/export_learning.cpp) --------------------------------
+
+LearningParams learning(std::size_t period, double gain, std::size_t lead, std::size_t half_width,
+                        std::size_t lookahead) {
+  LearningParams p;
+  p.period = period;
+  p.gain = gain;
+  p.lead = lead;
+  p.half_width = half_width;
+  p.lookahead = lookahead;
+  return p;
+}
+
+struct LearningCase {
+  Case loop;
+  bool warm = false;  // start from a correction (lp_learning_warm_start; IterativeLearning::reset(c))
+};
+
+std::vector<LearningCase> learning_cases() {
+  const std::vector<Case> base = cases();
+  std::vector<LearningCase> v;
+  {
+    Case c = base[0];  // supervision as the experiments': rise 0, L doubled up to 0.5; held after 1 halving
+    c.name = "ff_pid_supervised_held";
+    // pressure limits the PID (+-0.6) never reaches: no error is zeroed, so each period's error is
+    // the inputs' (the errors of every third period made larger below: the supervisor acts)
+    c.design.feedforward.pressure_limits = {-1.0, 1.0};
+    LearningParams p = learning(1500, 0.2, 20, 40, c.design.feedforward_lead);
+    p.rise_tolerance = 0.0;
+    p.hold_after_cuts = 1;
+    p.max_gain = 0.5;
+    c.design.learning = LoopDesign::Learning{p, 0.7, 0.0, 0, 0, false};
+    v.push_back({c, false});
+  }
+  {
+    Case c = base[3];  // no supervision, no Q-filter, a correction limit; one .c file
+    c.name = "open_loop_unsupervised_limited";
+    LearningParams p = learning(2000, 0.5, 0, 0, 0);
+    p.max_correction = 0.002;
+    c.design.learning = LoopDesign::Learning{p, 0.9, 0.0, 0, 0, false};
+    v.push_back({c, false});
+  }
+  {
+    Case c = base[4];  // a wide filter (taps beyond its reach skipped), a tolerance, warm start
+    c.name = "cascade_wide_filter_warm";
+    LearningParams p = learning(2500, 0.3, 35, 1000, c.design.feedforward_lead);
+    p.rise_tolerance = 0.1;
+    p.max_correction = 0.003;
+    c.design.learning = LoopDesign::Learning{p, 0.5, 0.0, 0, 0, false};
+    v.push_back({c, true});
+  }
+  return v;
+}
+
+void PrintTo(const LearningCase& c, std::ostream* os) { *os << c.loop.name; }
+
+class ExportLearning : public ::testing::TestWithParam<LearningCase> {};
+
+TEST_P(ExportLearning, StepsAsTheLibrarysLearningLoop) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found: generated C not compiled";
+  const Case& c = GetParam().loop;
+  const LoopDesign& d = c.design;
+  const LearningParams& lp = d.learning->params;
+  test::TempDir dir;
+  Inputs in = make_inputs(20000, 4242u + static_cast<unsigned>(c.name.size()));
+  if (lp.rise_tolerance == 0.0)  // every third period measured 1 mm off: its error rises, the supervisor acts
+    for (std::size_t k = 0; k < in.measured.size(); ++k)
+      if ((k / lp.period) % 3 == 2) in.measured[k] += 0.001;
+  const std::vector<double> preview = feedforward_preview(d, in.reference);
+  std::vector<double> warm;
+  if (GetParam().warm)  // a smooth correction, partly beyond the limit (clipped by both)
+    for (std::size_t k = 0; k < lp.period; ++k)
+      warm.push_back(0.005 * std::sin(2 * M_PI * static_cast<double>(k) / static_cast<double>(lp.period)));
+  const test::LoopRun got = test::run_generated_loop(d, model_of(c.model), dir.file("."), c.single, in.reference,
+                                                     preview, in.measured, in.pressure, in.resets, warm);
+  ASSERT_EQ(got.error, "");
+  ASSERT_EQ(got.command.size(), in.reference.size());
+  ASSERT_EQ(got.correction.size(), in.reference.size());
+  EXPECT_EQ(got.warm_status, 0);
+
+  // the library: make_controller + IterativeLearning, stepped by step(Controller&, IterativeLearning&, ...)
+  Controller ctl = make_controller(d, model_of(c.model));
+  IterativeLearning ilc(lp);
+  if (!warm.empty()) ilc.reset(warm);
+  double worst_command = 0.0, worst_duty = 0.0, worst_correction = 0.0, largest_correction = 0.0;
+  std::size_t exact = 0, next = 0, periods = 0, cuts = 0, raises = 0;
+  bool held = false;
+  for (std::size_t k = 0; k < in.reference.size(); ++k) {
+    while (next < in.resets.size() && in.resets[next] <= k) {
+      if (in.resets[next] == k) {
+        periods += ilc.iteration();
+        cuts += ilc.gain_cuts();
+        raises += ilc.gain_raises();
+        held = held || ilc.held();
+        reset(ctl);
+        ilc.reset();
+      }
+      ++next;
+    }
+    const double c0 = ilc.correction(0);
+    const LoopOutput o = step(ctl, ilc, d, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
+    worst_command = std::max(worst_command, std::abs(o.command_mpa - got.command[k]));
+    worst_duty = std::max(worst_duty, std::abs(o.duty - got.duty[k]));
+    worst_correction = std::max(worst_correction, std::abs(c0 - got.correction[k]));
+    largest_correction = std::max(largest_correction, std::abs(c0));
+    exact += o.command_mpa == got.command[k] && o.duty == got.duty[k] && c0 == got.correction[k];
+  }
+  periods += ilc.iteration();
+  cuts += ilc.gain_cuts();
+  raises += ilc.gain_raises();
+  held = held || ilc.held();
+  const std::size_t n = in.reference.size();
+  EXPECT_LE(worst_command, 1e-12) << "MPa";
+  EXPECT_LE(worst_duty, 1e-12);
+  EXPECT_LE(worst_correction, 1e-15) << "m";
+#if defined(__x86_64__) && defined(__SSE2__)
+  EXPECT_EQ(exact, n) << "not bit-identical to the library's learning loop";
+#endif
+  // what the inputs exercised: corrections learnt (up to the limit where there is one), periods
+  // completed, and the supervisor's actions where it supervises
+  EXPECT_GT(largest_correction, 1e-4);
+  EXPECT_LE(largest_correction, lp.max_correction);
+  EXPECT_GE(periods, 3u);
+  if (c.name == "ff_pid_supervised_held") {
+    EXPECT_GT(cuts, 0u);
+    EXPECT_GT(raises, 0u);
+    EXPECT_TRUE(held);
+  }
+  if (c.name == "cascade_wide_filter_warm") {
+    EXPECT_LT(IterativeLearning(lp).filter_reach(), lp.half_width) << "the filter's far taps are skipped";
+  }
+  std::printf("  %s: %zu samples, %zu periods, L halved %zu / doubled %zu times%s, largest correction %.3g m: "
+              "largest difference %.3g MPa, %.3g duty, %.3g m correction; bit-identical %zu / %zu\n",
+              c.name.c_str(), n, periods, cuts, raises, held ? ", held" : "", largest_correction, worst_command,
+              worst_duty, worst_correction, exact, n);
+}
+
+INSTANTIATE_TEST_SUITE_P(Export, ExportLearning, ::testing::ValuesIn(learning_cases()),
+                         [](const ::testing::TestParamInfo<LearningCase>& p) { return p.param.loop.name; });
+
+// The comparison can fail: the learning gain, the phase lead or the filter's width 1 off, the
+// generated learning differs from the library's.
+TEST(ExportLoopCheck, PerturbedLearningIsDetected) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found";
+  const LearningCase lc = learning_cases()[0];
+  const LoopDesign& d = lc.loop.design;
+  const Inputs in = make_inputs(6000, 5u);
+  const std::vector<double> preview = feedforward_preview(d, in.reference);
+  for (int which = 0; which < 3; ++which) {
+    LoopDesign p = d;
+    if (which == 0) p.learning->params.gain *= 1 + 1e-9;
+    if (which == 1) p.learning->params.lead += 1;
+    if (which == 2) p.learning->params.half_width += 1;
+    test::TempDir dir;
+    const test::LoopRun got = test::run_generated_loop(p, model_of(lc.loop.model), dir.file("."), false, in.reference,
+                                                       preview, in.measured, in.pressure);
+    ASSERT_EQ(got.error, "");
+    Controller ctl = make_controller(d, model_of(lc.loop.model));
+    IterativeLearning ilc(d.learning->params);
+    std::size_t differ = 0;
+    for (std::size_t k = 0; k < in.reference.size() && k < got.command.size(); ++k) {
+      const double c0 = ilc.correction(0);
+      const LoopOutput o = step(ctl, ilc, d, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
+      differ += o.command_mpa != got.command[k] || c0 != got.correction[k];
+    }
+    EXPECT_GT(differ, 0u) << "perturbation " << which;
+  }
+}
+
 TEST(ExportLoopCheck, LoopsGeneratedCCannotHoldAreRefused) {
   const ModelParams m = pi_model();
   auto refused = [&](const LoopDesign& d, const std::string& expected, Limits limits = {}) {
@@ -279,8 +449,15 @@ TEST(ExportLoopCheck, LoopsGeneratedCCannotHoldAreRefused) {
   LoopDesign ok = cases()[0].design;
   {
     LoopDesign d = ok;
-    d.learning = LoopDesign::Learning{};
-    refused(d, "the loop: it adds iterative learning");
+    d.learning = LoopDesign::Learning{};  // period 0
+    refused(d, "learning.period = 0: must be >= 2 samples");
+    d.learning->params = learning(1000, 0.5, 600, 300, 40);
+    refused(d, "learning: lead + 2 half_width + lookahead = 600 + 2 x 300 + 40 must be < period = 1000");
+    d.learning->params = learning((std::size_t{1} << 31) + 10, 0.5, 10, 3, 5);
+    refused(d, "learning.period = 2147483658 samples is more than generated C holds");
+    d.learning->params = learning(60'000'000, 0.5, 10, 3, 5);  // 4 x 60e6 doubles: 1.92e9 bytes
+    d.learning->params.rise_tolerance = 0.0;                   // 5 x: 2.4e9 bytes
+    refused(d, "learning.period = 60000000 samples: the learning's state (5 x 60000000 doubles, 2400000000 bytes)");
   }
   {
     LoopDesign d = ok;

@@ -97,6 +97,11 @@ class IterativeLearning {
   std::size_t gain_raises() const noexcept { return raises_; }  // times it doubled L (max_gain)
   bool held() const noexcept { return held_; }               // the best correction is held (hold_after_cuts)
   const LearningParams& params() const noexcept { return p_; }
+  // The binomial Q-filter as built: 2h + 1 taps q_m, m = -h..h (their sum is 1), of which the
+  // per-sample update sums |m| <= filter_reach() (the others are below 1e-18 of q_0). For a
+  // transcription of the update (hysteron export --loop of a learning run).
+  std::span<const double> filter_taps() const noexcept { return q_; }
+  std::size_t filter_reach() const noexcept { return reach_; }
 
  private:
   double update_at(std::size_t i, const double* c, bool tail) const noexcept;

@@ -95,6 +95,15 @@ struct LoopOutput {
 };
 LoopOutput step(Controller& c, double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
 
+// One sample of a learning loop (the learning variant of `hysteron experiment`; docs/control.md,
+// section 3): `c` fed the reference plus the correction c_j(k) (ilc.correction(0)) and the preview
+// plus the correction d.feedforward_lead samples ahead; then `ilc` records the error
+// reference_m - measured_m, or 0 where the command is at one of d's pressure limits (there the
+// loop has no authority left, and the Q-filter would spread the error's integral). `ilc` is built
+// from d.learning->params. Real-time safe: no allocation, no exception.
+LoopOutput step(Controller& c, IterativeLearning& ilc, const LoopDesign& d, double reference_m, double preview_m,
+                double measured_m, double pressure_mpa) noexcept;
+
 // The reference the loop's feedforward is fed, for a recorded reference (any units, e.g. m):
 // through d.shaper if there is one, s(k) = a1 r(k + advance) + a2 r(k + advance - delay), then
 // d.feedforward_lead samples ahead, preview(k) = s(k + lead); indices clamped to the record, as

@@ -76,9 +76,11 @@ prefix names every C symbol; header_name (e.g. "compensator.h") moves the declar
 header the source #includes; limits=(lo, hi) the inverse's input limits. controller (a run's
 "controller" dict, e.g. loop_of_run(result, "compensated.sine")) adds the run's loop around the
 inverse: PREFIX_loop_reset / _loop_step / _loop_preview, which step exactly as controller_from(
-controller, model). model must be the one the run inverts; an adaptive run's loop would be
-written with a fixed inverse (hysteron export refuses it). hysteron.Error on a model without
-inverse, a bad prefix, or a loop with learning.)doc");
+controller, model); a learning run's controller also adds its iterative learning,
+PREFIX_learning_reset / _learning_warm_start / _learning_step and PREFIX_loop_learning_step, which
+step exactly as learning_from(controller) around the loop. model must be the one the run
+inverts; an adaptive run's loop would be written with a fixed inverse (hysteron export refuses
+it). hysteron.Error on a model without inverse, a bad prefix, or a loop generated C cannot hold.)doc");
   m.def(
       "loop_of_run",
       [](const py::object& result, const std::string& run) {

@@ -26,8 +26,13 @@ def test_export_c_text_and_errors():
     assert '#include "pam.h"' in both["source"]
     assert "double pam_loop_step(pam_loop *c" in both["header"]
     assert "cascade_pwm" in both["source"]
-    with pytest.raises(hysteron.Error, match="iterative learning"):
-        hysteron.export_c(MODEL, controller=hysteron.loop_of_run(str(RESULT), "learning.triangle"))
+    learning = hysteron.loop_of_run(str(RESULT), "learning.triangle")
+    learnt = hysteron.export_c(MODEL, prefix="pam", header_name="pam.h", controller=learning)
+    assert "double pam_loop_learning_step(pam_loop *c, pam_learning *l" in learnt["header"]
+    assert "#define PAM_LEARNING_PERIOD %du" % learning["learning"]["period_samples"] in learnt["header"]
+    learning["learning"]["half_width"] = learning["learning"]["period_samples"]  # the filter wider than a period
+    with pytest.raises(hysteron.Error, match="learning"):
+        hysteron.export_c(MODEL, controller=learning)
     with pytest.raises(hysteron.Error, match="differ from the loop's pressure limits"):
         hysteron.export_c(MODEL, controller=ctl, limits=(0.0, 0.5))
     with pytest.raises(hysteron.Error, match="prefix"):

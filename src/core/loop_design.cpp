@@ -55,6 +55,16 @@ LoopOutput step(Controller& c, double reference_m, double preview_m, double meas
       c);
 }
 
+LoopOutput step(Controller& c, IterativeLearning& ilc, const LoopDesign& d, double reference_m, double preview_m,
+                double measured_m, double pressure_mpa) noexcept {
+  const LoopOutput o = step(c, reference_m + ilc.correction(0), preview_m + ilc.correction(d.feedforward_lead),
+                            measured_m, pressure_mpa);
+  const Limits& lim = d.feedforward.pressure_limits;
+  const bool saturated = o.command_mpa <= lim.lo || o.command_mpa >= lim.hi;
+  ilc.step(saturated ? 0.0 : reference_m - measured_m);
+  return o;
+}
+
 namespace {
 // j + plus - minus clamped to [0, n), for j in [0, n) and any plus, minus (a file's counts of
 // samples may be as large as a size_t holds: no overflow).

@@ -1,8 +1,9 @@
 #pragma once
-// Helpers shared by the generated-C writers (export_c.cpp, export_loop.cpp).
+// Helpers shared by the generated-C writers (export_c.cpp, export_loop.cpp, export_learning.cpp).
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -21,6 +22,16 @@ inline std::string num(double v) {
   std::string s = fmt::format("{}", v);
   if (s.find_first_of(".eE") == std::string::npos) s += ".0";
   return s;
+}
+
+// Counts of samples in the generated C are size_t constants; 2^31 - 1 fits every target's.
+constexpr std::size_t kMaxCount = 2147483647u;
+
+// A count as a C size_t literal; throws Error naming `what` if generated C cannot hold it.
+inline std::string count_literal(std::size_t v, const char* what) {
+  if (v > kMaxCount)
+    throw Error(fmt::format("{} = {} samples is more than generated C holds (at most {})", what, v, kMaxCount));
+  return fmt::format("{}u", v);
 }
 
 inline void replace_all(std::string& s, std::string_view from, std::string_view to) {

@@ -17,15 +17,6 @@ namespace hysteron::io::detail {
 
 namespace {
 
-// Counts of samples in the generated C are size_t constants; 2^31 - 1 fits every target's.
-constexpr std::size_t kMaxCount = 2147483647u;
-
-std::string count_literal(std::size_t v, const char* what) {
-  if (v > kMaxCount)
-    throw Error(fmt::format("{} = {} samples is more than generated C holds (at most {})", what, v, kMaxCount));
-  return fmt::format("{}u", v);
-}
-
 // A Pid as built, as a C initializer of $P_pid_gains (the field order of the struct below).
 std::string pid_gains(const Pid& pid) {
   const PidParams& p = pid.params();
@@ -130,10 +121,6 @@ static size_t $P_clamped_index(size_t j, size_t plus, size_t minus, size_t n)
 }  // namespace
 
 LoopC loop_c(const LoopDesign& d, const ModelParams& model) {
-  if (d.learning)
-    throw Error(
-        "it adds iterative learning (a learning run), which generated C does not contain: export the run's "
-        "compensated loop, or deploy the learning through the C ABI (hysteron_ilc, docs/deploy.md)");
   const Controller ctl = make_controller(d, model);  // every check of the loop, with its messages
   const std::string lead = count_literal(d.feedforward_lead, "feedforward_lead");
   std::string advance = "0u", delay = "0u";
@@ -397,6 +384,7 @@ void $P_loop_preview(const double *reference, double *preview, size_t n)
                  : R"(    preview[k] = reference[j];
 )";
   df += "  }\n}\n";
+  if (d.learning) append_learning_c(d, out);
   return out;
 }
 

@@ -18,8 +18,14 @@ struct LoopC {
 };
 
 // Checks that the loop can be built on `model` (make_controller's checks) and that the
-// generated C can hold it (no learning; sample counts below 2^31), then writes it.
-// Throws Error naming the reason.
+// generated C can hold it (sample counts below 2^31), then writes it, with its learning if
+// d.learning (append_learning_c). Throws Error naming the reason.
 LoopC loop_c(const LoopDesign& d, const ModelParams& model);
+
+// The iterative learning of d.learning (IterativeLearning, learning.hpp, transcribed in
+// export_learning.cpp) and the learning loop's step (step(Controller&, IterativeLearning&, ...),
+// loop_design.hpp), appended to `out` (the text of d's loop). Throws Error if the parameters are
+// invalid (LearningParams::validate) or the period does not fit generated C.
+void append_learning_c(const LoopDesign& d, LoopC& out);
 
 }  // namespace hysteron::io::detail

@@ -195,8 +195,37 @@ else
 fi
 expect_fail "--run without --loop" 1 '--run names a run of the --loop file' -- \
   "$BIN" export --model "$DZ" --run compensated.sine --out "$T/out/new.c"
-expect_fail "--loop: a learning run" 1 'the loop of "result.json", run "learning.triangle": it adds iterative learning' -- \
-  "$BIN" export --model "$DZ" --loop "$RES" --run learning.triangle --out "$T/out/new.c"
+# a learning run: the loop and its iterative learning (lp_loop_learning_step)
+mkdir -p "$T/learn"
+if "$BIN" export --model "$DZ" --loop "$RES" --run learning.triangle --out "$T/learn/loop.c" --header "$T/learn/loop.h" \
+    --prefix lp 2> "$T/learn/stderr"; then
+  grep -q 'Iterative learning around the loop' "$T/learn/loop.c" || fail "--loop learning: the comment lacks the learning"
+  grep -q 'lp_loop_learning_step' "$T/learn/loop.h" || fail "--loop learning: the header lacks lp_loop_learning_step"
+  if [ $HAVE_GCC = 1 ]; then
+    if gcc -std=c99 -pedantic -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -O2 \
+        -DLP_LEARNING -I"$T/learn" "$SRC/tests/export/loop_driver.c" "$T/learn/loop.c" \
+        -o "$T/learn/driver" -lm 2> "$T/learn/gcc.log"; then
+      # learning steps with a NaN measurement, a warm start of the wrong length (refused: -1)
+      printf 'w 2 0 0\nl 0x1p-7 0x1p-7 0 0.1\nl 0x1p-6 0x1p-6 nan 0.2\nr\nl 0x1p-5 0x1p-5 0x1p-5 inf\n' |
+        "$T/learn/driver" > "$T/learn/out.txt" || fail "--loop learning: the driver failed"
+      $PY - "$T/learn/out.txt" <<'PY' || fail "--loop learning: the driver's results"
+import math, sys
+lines = [l.split() for l in open(sys.argv[1]).read().split("\n") if l]
+assert lines[0] == ["W", "-1"], lines[0]
+steps = lines[1:]
+assert len(steps) == 3 and all(s[0] == "L" for s in steps), steps
+for _, u, d, c in steps:
+    u, d, c = float.fromhex(u), float.fromhex(d), float.fromhex(c)
+    assert math.isfinite(u) and 0 <= u <= 0.6 and -1 <= d <= 1 and c == 0.0, (u, d, c)
+print("ok: --loop learning.triangle: compiles with -Werror and steps (" + "; ".join(" ".join(s[1:]) for s in steps) + ")")
+PY
+    else
+      fail "--loop learning: the generated loop does not compile cleanly"; cat "$T/learn/gcc.log"
+    fi
+  fi
+else
+  fail "--loop learning: export failed"; cat "$T/learn/stderr"
+fi
 expect_fail "--loop: an adaptive run" 1 'its inverse is adapted online' -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run adaptive.sine --out "$T/out/new.c"
 expect_fail "--loop: no such run" 1 'no reference "ramp" (references: sine, triangle)' -- \

@@ -6,7 +6,9 @@
  * lp_loop_step over 10^6 precomputed samples: a 0.5 Hz sine reference of amplitude A m around
  * A m (argument 1, default 0.012), its preview (lp_loop_preview), a measurement 10 samples
  * behind with a ripple, a pressure reading; three repetitions. Prints ns per sample and a
- * checksum of the commands. */
+ * checksum of the commands. For a learning run's loop (--run learning.sine), compile with
+ * -DLP_LEARNING: each repetition then also times lp_loop_learning_step (the loop and its
+ * iterative learning) right after lp_loop_step on the same samples. */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stdio.h>
@@ -45,6 +47,17 @@ int main(int argc, char **argv)
     for (k = 0; k < N; ++k) acc += lp_loop_step(&c, ref[k], pre[k], meas[k], pres[k], &duty) + duty;
     t1 = now();
     printf("loop step: %.1f ns per sample\n", 1e9 * (t1 - t0) / N);
+#ifdef LP_LEARNING
+    {
+      static lp_learning l;
+      lp_loop_reset(&c);
+      lp_learning_reset(&l);
+      t0 = now();
+      for (k = 0; k < N; ++k) acc += lp_loop_learning_step(&c, &l, ref[k], pre[k], meas[k], pres[k], &duty) + duty;
+      t1 = now();
+      printf("loop + learning step: %.1f ns per sample (%lu periods)\n", 1e9 * (t1 - t0) / N, (unsigned long)l.j);
+    }
+#endif
   }
   printf("checksum %.17g\n", acc);
   return 0;

@@ -6,6 +6,11 @@
  *   r                       reset                                  (no output)
  *   s REF PREV MEAS PRESS   one step of lp_loop_step               -> "S command duty"
  *   p N V0 .. VN-1          lp_loop_preview of N values            -> "P v0 .. vN-1"
+ * With -DLP_LEARNING (a loop exported with its learning), also
+ *   l REF PREV MEAS PRESS   one step of lp_loop_learning_step      -> "L command duty c0"
+ *                           (c0 = lp_learning_correction(0) before the step)
+ *   w N V0 .. VN-1          lp_learning_warm_start                 -> "W status"
+ * and r resets the learning too.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,17 +21,49 @@
 #include "loop.h"
 #endif
 
+#ifdef LP_LEARNING
+static lp_learning l; /* large: not on the stack */
+#endif
+
 int main(void)
 {
   lp_loop c;
   char op[8];
   double a[4];
   lp_loop_reset(&c);
+#ifdef LP_LEARNING
+  lp_learning_reset(&l);
+#endif
   while (scanf("%7s", op) == 1) {
     switch (op[0]) {
       case 'r':
         lp_loop_reset(&c);
+#ifdef LP_LEARNING
+        lp_learning_reset(&l);
+#endif
         break;
+#ifdef LP_LEARNING
+      case 'l': {
+        double duty = -2.0, u, c0;
+        if (scanf("%lf %lf %lf %lf", &a[0], &a[1], &a[2], &a[3]) != 4) return 2;
+        c0 = lp_learning_correction(&l, 0u);
+        u = lp_loop_learning_step(&c, &l, a[0], a[1], a[2], a[3], &duty);
+        printf("L %a %a %a\n", u, duty, c0);
+        break;
+      }
+      case 'w': {
+        unsigned long n, k;
+        double *v;
+        if (scanf("%lu", &n) != 1 || n == 0) return 2;
+        v = (double *)malloc(n * sizeof *v);
+        if (!v) return 3;
+        for (k = 0; k < n; ++k)
+          if (scanf("%lf", &v[k]) != 1) return 2;
+        printf("W %d\n", lp_learning_warm_start(&l, v, (size_t)n));
+        free(v);
+        break;
+      }
+#endif
       case 's': {
         double duty = -2.0, u;
         if (scanf("%lf %lf %lf %lf", &a[0], &a[1], &a[2], &a[3]) != 4) return 2;

@@ -39,7 +39,8 @@ struct ExportOptions {
   // the file then also has $P_loop, $P_loop_reset, $P_loop_step and $P_loop_preview, which
   // step exactly as make_controller(*loop, params) with step(). The inverse then saturates at
   // the loop's pressure limits (inverse_limits must be unset or equal to them). A loop with
-  // learning is refused (the generated C has no ILC).
+  // learning (a learning run's) also gets $P_learning and $P_loop_learning_step, which step
+  // exactly as an IterativeLearning of its parameters with step(Controller&, IterativeLearning&, ...).
   std::optional<LoopDesign> loop;
   // Where the loop came from (e.g. "out/result.json, run compensated.sine"), for the comments.
   std::string loop_source;

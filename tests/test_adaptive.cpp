@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <random>
 #include <vector>
 
@@ -13,6 +14,9 @@
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
 #include "hysteron/inverse.hpp"
+#include "hysteron/io/export_c.hpp"
+#include "hysteron/io/loop_design.hpp"
+#include "hysteron/loop_design.hpp"
 #include "hysteron/models.hpp"
 
 using namespace hysteron;
@@ -293,6 +297,28 @@ TEST(Adaptive, BeatsTheFixedInverseOnARigWithAWiderHysteresisBand) {
       ASSERT_NE(comp, nullptr);
       EXPECT_LT(run.errors.rms_error_mm, comp->errors.rms_error_mm) << run.reference;
       for (double p : run.pressure_command_mpa) ASSERT_TRUE(p >= 0.0 && p <= 0.6);
+      // its "controller" says that the inverse was adapted (the RLS's numbers), and every
+      // rebuild with a fixed inverse refuses it: make_controller, generated C (and so hysteron
+      // export and Python's export_c); the compensated run's loop has no adaptation
+      ASSERT_TRUE(run.controller.adaptation.has_value());
+      EXPECT_GT(run.controller.adaptation->lambda, 0.99);
+      EXPECT_LT(run.controller.adaptation->lambda, 1.0);
+      EXPECT_GT(run.controller.adaptation->margin, 0.0);
+      EXPECT_FALSE(comp->controller.adaptation.has_value());
+      const LoopDesign back = io::loop_design_of_run(io::to_json(run.controller), "", "controller");
+      ASSERT_TRUE(back.adaptation.has_value());
+      EXPECT_EQ(back.adaptation->lambda, run.controller.adaptation->lambda);
+      EXPECT_EQ(back.adaptation->delay, run.controller.adaptation->delay);
+      try {
+        (void)make_controller(run.controller, r.best_fit.model);
+        ADD_FAILURE() << "make_controller rebuilt an adaptive loop with a fixed inverse";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("its inverse is adapted online"), std::string::npos) << e.what();
+      }
+      io::ExportOptions eo;
+      eo.loop = run.controller;
+      EXPECT_THROW((void)io::generate_c(r.best_fit.model, eo), Error);
+      EXPECT_NO_THROW((void)make_controller(comp->controller, r.best_fit.model));
     }
     EXPECT_TRUE(any);
     bool noted = false;

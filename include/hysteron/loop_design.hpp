@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <optional>
 #include <span>
+#include <string>
 #include <variant>
 #include <vector>
 
@@ -25,7 +26,7 @@ struct LoopDesign {
   //   feedforward_pid  FeedforwardPidController  hysteron_ff_pid      (gpi-pid)
   //   open_loop        OpenLoopController        hysteron_open_loop   (mpi-openloop)
   //   cascade_pwm      CascadePwmController      hysteron_cascade     (mpi-pwm)
-  // The adaptive variant has the same structure with an inverse adapted online.
+  // The adaptive variant has the same structure with an inverse adapted online (adaptation).
   enum class Kind { feedforward_pid, open_loop, cascade_pwm };
   Kind kind = Kind::feedforward_pid;
   // The inverse feedforward's pressure limits [MPa], model units per metre and the lag it
@@ -69,6 +70,16 @@ struct LoopDesign {
     bool held = false;
   };
   std::optional<Learning> learning;
+  // The adaptive variant: the inverse's weights re-identified online by RLS with forgetting
+  // (AdaptiveInverse, experiment.hpp), handed to the inverse at the bottom of each loop of the
+  // reference. Not part of make_controller (it builds the fitted, fixed inverse): generated C
+  // and the C ABI's hysteron_loop_params_from_file refuse such a loop rather than drop it.
+  struct Adaptation {
+    double lambda = 1.0;     // forgetting factor
+    std::size_t delay = 0;   // samples by which the contraction lags the pressure in the pairs
+    double margin = 0.0;     // the invertibility constraints' margin (model units)
+  };
+  std::optional<Adaptation> adaptation;
   // The feedforward's parameters at the loop's sample time.
   FeedforwardParams feedforward_params() const {
     return {feedforward.pressure_limits, feedforward.model_scale, feedforward.lag_time_constant, sample_time};
@@ -82,8 +93,12 @@ struct LoopDesign {
 // loop as published; the other two get a zero PID). Throws Error on invalid numbers. The
 // learning is not part of it (an IterativeLearning from d.learning->params adds its correction
 // to the reference and the preview).
+// A loop with d.adaptation (an adaptive run's) is refused: make_controller's inverse is fixed.
 using Controller = std::variant<FeedforwardPidController, OpenLoopController, CascadePwmController>;
 Controller make_controller(const LoopDesign& d, const ModelParams& model);
+// Why a loop with an adaptation cannot be rebuilt with a fixed inverse ("" without one): the
+// message make_controller and the C ABI's reader give.
+std::string adaptation_refusal(const LoopDesign& d);
 
 // One sample of whichever loop `c` holds: the pressure command [MPa] (with the valves, the
 // cascade's desired pressure p_d) and the PWM duty in [-1, 1] (0 without valves). The arguments

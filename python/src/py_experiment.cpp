@@ -49,8 +49,9 @@ void bind_experiment(py::module_& m) {
       R"doc(The loop a tracking run's "controller" (a run's runs[i]["controller"], or result.json's)
 describes, on `model` (best_model.json for the compensated and learning loops, model.json for the
 faithful one): a FeedforwardPidController, OpenLoopController or CascadePwmController by its
-"loop". The learning is not part of it (IterativeLearning from controller["learning"]).
-hysteron.Error names a missing or invalid key. docs/deploy.md.)doc");
+"loop". The learning is not part of it (IterativeLearning from controller["learning"]). An
+adaptive run's controller ("adaptation": its inverse adapted online) is refused: the loop's
+inverse is fixed. hysteron.Error names a missing or invalid key. docs/deploy.md.)doc");
   m.def(
       "export_c",
       [](const py::object& model, const std::string& prefix, const std::string& header_name,
@@ -79,8 +80,8 @@ inverse: PREFIX_loop_reset / _loop_step / _loop_preview, which step exactly as c
 controller, model); a learning run's controller also adds its iterative learning,
 PREFIX_learning_reset / _learning_warm_start / _learning_step and PREFIX_loop_learning_step, which
 step exactly as learning_from(controller) around the loop. model must be the one the run
-inverts; an adaptive run's loop would be written with a fixed inverse (hysteron export refuses
-it). hysteron.Error on a model without inverse, a bad prefix, or a loop generated C cannot hold.)doc");
+inverts. hysteron.Error on a model without inverse, a bad prefix, an adaptive run's loop (its
+inverse adapted online) or a loop generated C cannot hold.)doc");
   m.def(
       "loop_of_run",
       [](const py::object& result, const std::string& run) {

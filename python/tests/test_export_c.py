@@ -33,6 +33,11 @@ def test_export_c_text_and_errors():
     learning["learning"]["half_width"] = learning["learning"]["period_samples"]  # the filter wider than a period
     with pytest.raises(hysteron.Error, match="learning"):
         hysteron.export_c(MODEL, controller=learning)
+    adaptive = hysteron.loop_of_run(str(RESULT), "adaptive.sine")  # "adaptation": an inverse adapted online
+    with pytest.raises(hysteron.Error, match="its inverse is adapted online"):
+        hysteron.export_c(MODEL, controller=adaptive)
+    with pytest.raises(hysteron.Error, match="its inverse is adapted online"):
+        hysteron.controller_from(adaptive, MODEL)
     with pytest.raises(hysteron.Error, match="differ from the loop's pressure limits"):
         hysteron.export_c(MODEL, controller=ctl, limits=(0.0, 0.5))
     with pytest.raises(hysteron.Error, match="prefix"):

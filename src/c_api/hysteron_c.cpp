@@ -691,7 +691,10 @@ void read_loop(const std::string& text, const char* run, const std::string& wher
     fail(HYSTERON_ERROR_PARSE, "%s", e.what());
   }
   const std::string r = run ? run : "";
-  to_c_loop(hysteron::io::loop_design_of_run(j, r, where), r.empty() ? where : where + "." + r + ".controller", out);
+  const std::string at = r.empty() ? where : where + "." + r + ".controller";
+  const hysteron::LoopDesign d = hysteron::io::loop_design_of_run(j, r, where);
+  if (d.adaptation) fail(HYSTERON_ERROR_MODEL, "%s: %s", at.c_str(), hysteron::adaptation_refusal(d).c_str());
+  to_c_loop(d, at, out);
 }
 
 }  // namespace

@@ -7,11 +7,22 @@
 #include <utility>
 #include <variant>
 
+#include "format.hpp"
+
 #include "hysteron/error.hpp"
 
 namespace hysteron {
 
+std::string adaptation_refusal(const LoopDesign& d) {
+  if (!d.adaptation) return {};
+  return detail::format("its inverse is adapted online (\"adaptation\": RLS with forgetting, lambda = {}; an "
+                        "adaptive run), which a loop with a fixed inverse does not do: use the compensated run's loop "
+                        "(the same structure with the fitted inverse)",
+                        d.adaptation->lambda);
+}
+
 Controller make_controller(const LoopDesign& d, const ModelParams& model) {
+  if (d.adaptation) throw Error("controller: " + adaptation_refusal(d));
   const FeedforwardParams ff = d.feedforward_params();
   PidParams pid;
   pid.sample_time = d.sample_time;

@@ -57,6 +57,8 @@ std::string adaptive_description(const AdaptiveInverse& a) {
                      a.inverse().structure().asymmetric ? "p_i >= 0, q" : "q + p_1 + ... + p_i", a.margin());
 }
 
+LoopDesign::Adaptation adaptation_of(const AdaptiveInverse& a) { return {a.lambda(), a.delay(), a.margin()}; }
+
 std::string adaptive_note(const AdaptiveInverse& a, const std::string& reference) {
   const auto& n = a.counters();
   const double ja = a.adapted_error(), jf = a.fitted_error();

@@ -88,6 +88,7 @@ struct Loop {
   LoopDesign::Kind kind = LoopDesign::Kind::feedforward_pid;  // the controller's structure
   FeedforwardParams feedforward = {};      // the inverse feedforward's limits, scale and lag
   std::optional<PwmParams> pwm = {};       // the valves' modulator (cascade_pwm)
+  std::optional<LoopDesign::Adaptation> adaptation = {};  // the adaptive variant's RLS (adaptation_of)
 };
 
 struct Variant {
@@ -145,6 +146,8 @@ class AdaptiveFeedforward {
 // "adaptive (REF): ..." counters and the guard's verdict, for the result's messages.
 std::string adaptive_note(const AdaptiveInverse& a, const std::string& reference);
 std::string adaptive_description(const AdaptiveInverse& a);
+// The adaptive loop's RLS in result.json's "controller" (LoopDesign::adaptation).
+LoopDesign::Adaptation adaptation_of(const AdaptiveInverse& a);
 
 // ---- shared machinery (common.cpp) ------------------------------------------------
 // What turns a desired pressure [MPa] into the rig's inputs, given its outputs: the

@@ -58,6 +58,7 @@ LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvSh
   if (pid.kp != 0.0 || pid.ki != 0.0 || pid.kd != 0.0) d.pid = pid;
   d.pressure_pid = loop.pressure;
   d.pressure_gain = loop.pressure_gain;
+  d.adaptation = loop.adaptation;
   d.feedforward_lead = lead;
   d.sample_time = tc;
   if (zv && zv->active()) d.shaper = LoopDesign::Shaper{zv->a1, zv->a2, zv->delay, zv->advance};

@@ -37,11 +37,13 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
     return regulator(std::isfinite(u) ? u : u_ff);
   };
   const std::string name = c.reference->name;
-  return Loop{std::move(law),
+  Loop result{std::move(law),
               fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID tuned by {} (Kp = {:.3g} MPa/m, "
                           "Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), pid.kp, pid.ki, pid.kd),
               pid, [a, name] { return adaptive_note(*a, name); }};
+  if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
+  return result;
 }
 
 }  // namespace

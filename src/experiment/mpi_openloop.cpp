@@ -55,13 +55,15 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
     return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp));
   };
   const std::string name = c.reference->name;
-  return Loop{std::move(law),
+  Loop result{std::move(law),
               fmt::format("best inverse model fed {:.0f} ms ahead, {}; pressure loop (k_p = {:g}) + PID position "
                           "correction tuned by {} (Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a), p.pressure_gain, pid_origin(c),
                           p.position.kp, p.position.ki, p.position.kd),
               p.position, [a, name] { return adaptive_note(*a, name); }, std::nullopt, kp,
               LoopDesign::Kind::open_loop, p.feedforward};
+  if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
+  return result;
 }
 
 }  // namespace

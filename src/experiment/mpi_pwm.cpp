@@ -61,7 +61,7 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
     return valves(std::clamp(pwm->step(u), -1.0, 1.0), p_d);
   };
   const std::string name = c.reference->name;
-  return Loop{std::move(law),
+  Loop result{std::move(law),
               fmt::format("best inverse model fed {:.0f} ms ahead, {}; PID position loop by {} (Kp = {:.3g} "
                           "MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m); PI pressure loop by a relay test (Kp = "
                           "{:.3g}/MPa, Ki = {:.3g}/(MPa s))",
@@ -69,6 +69,8 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
                           p.position.kd, p.pressure.kp, p.pressure.ki),
               p.position, [a, name] { return adaptive_note(*a, name); }, p.pressure, 0.0,
               LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
+  if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
+  return result;
 }
 
 }  // namespace

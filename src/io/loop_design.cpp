@@ -115,6 +115,10 @@ json to_json(const LoopDesign& d) {
                      {"gain_cuts", l.gain_cuts},
                      {"held", l.held}};
   }
+  if (d.adaptation)
+    j["adaptation"] = {{"lambda", number(d.adaptation->lambda)},
+                       {"delay_samples", d.adaptation->delay},
+                       {"margin", number(d.adaptation->margin)}};
   return j;
 }
 
@@ -183,6 +187,15 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
     l.gain_cuts = get_size(x, "gain_cuts", w);
     l.held = get_bool(x, "held", w);
     d.learning = l;
+  }
+  if (j.contains("adaptation")) {
+    const std::string w = key_where(where, "adaptation");
+    const json& x = j["adaptation"];
+    LoopDesign::Adaptation a;
+    a.lambda = get_double(x, "lambda", w);
+    a.delay = get_size(x, "delay_samples", w);
+    a.margin = get_double(x, "margin", w);
+    d.adaptation = a;
   }
 }
 

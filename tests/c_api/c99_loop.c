@@ -243,8 +243,11 @@ int main(int argc, char** argv) {
   expect_error("variant with several references",
                hysteron_loop_params_from_file(result, "compensated", &p), HYSTERON_ERROR_MODEL,
                "result.json.compensated: one run per reference (sine, triangle): name one, e.g. \"compensated.sine\"");
-  expect_error("no such variant", hysteron_loop_params_from_file(result, "adaptive.sine", &p), HYSTERON_ERROR_MODEL,
-               "no run \"adaptive\" (variants: compensated, faithful, learning)");
+  expect_error("no such variant", hysteron_loop_params_from_file(result, "baseline.sine", &p), HYSTERON_ERROR_MODEL,
+               "no run \"baseline\" (variants: adaptive, compensated, faithful, learning)");
+  expect_error("an adaptive run", hysteron_loop_params_from_file(result, "adaptive.sine", &p), HYSTERON_ERROR_MODEL,
+               "result.json.adaptive.sine.controller: its inverse is adapted online (\"adaptation\": RLS with "
+               "forgetting, lambda = 0.9998; an adaptive run)");
   expect_error("no such reference", hysteron_loop_params_from_file(result, "faithful.sine", &p),
                HYSTERON_ERROR_MODEL, "no reference \"sine\" (references: triangle)");
   expect_error("no run named", hysteron_loop_params_from_file(result, NULL, &p), HYSTERON_ERROR_MODEL,

@@ -1,8 +1,10 @@
 #pragma once
 // A generated loop (hysteron export --loop) compiled with tests/export/loop_driver.c and run
-// on recorded inputs (tests/test_export_loop.cpp, tests/test_c_api_loops.cpp).
+// on recorded inputs (tests/test_export_loop.cpp, tests/test_c_api_loops.cpp); have_gcc and
+// hexf also serve tests/test_export.cpp.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -18,11 +20,10 @@ namespace hysteron::test {
 
 inline bool have_gcc() { return std::system("gcc --version > /dev/null 2>&1") == 0; }
 
-// Exact text of a double for the driver (C99 hex float; nan, inf, -inf).
+// Exact text of a double for the drivers (C99 hex float; nan, inf, -inf).
 inline std::string hexf(double v) {
-  if (v != v) return "nan";
-  if (v == 1.0 / 0.0) return "inf";
-  if (v == -1.0 / 0.0) return "-inf";
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
   return fmt::format("{:a}", v);
 }
 

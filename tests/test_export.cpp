@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "export_loop_util.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/export_c.hpp"
@@ -36,7 +37,7 @@ namespace fs = std::filesystem;
 using namespace hysteron;
 
 bool have(const char* compiler) { return std::system(fmt::format("{} --version > /dev/null 2>&1", compiler).c_str()) == 0; }
-bool have_gcc() { return have("gcc"); }
+using test::have_gcc;
 
 struct Case {
   std::string name;
@@ -92,11 +93,8 @@ void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
 ModelParams params_of(const Case& c) { return io::model_from_json(io::parse_json(c.json, c.name), c.name); }
 
-std::string hex(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  return fmt::format("{:a}", v);
-}
+// Exact text of a double for the driver (C99 hex float; nan, inf, -inf).
+std::string hex(double v) { return test::hexf(v); }
 
 struct Expected {
   char op;

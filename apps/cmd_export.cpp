@@ -56,8 +56,9 @@ int run_export(const Options& o) {
     // An adaptive run's loop says so ("adaptation", refused by generate_c); result.json files
     // written before 2026-11-27 do not, so such a run is also refused by its name.
     if (!e.loop->adaptation && (o.run == "adaptive" || o.run.starts_with("adaptive.")))
-      throw Error(fmt::format("{}: run \"{}\": its inverse is adapted online (RLS; a file written before its "
-                              "\"controller\" said so), which generated C does not do; export the compensated run's loop",
+      throw Error(fmt::format("{}: run \"{}\": its inverse is adapted online (RLS; the file predates "
+                              "\"adaptation\" in its \"controller\"), which generated C does not do; export the "
+                              "compensated run's loop",
                               o.loop, o.run));
     e.loop_source = fmt::format("\"{}\"{}", std::filesystem::path(o.loop).filename().string(),
                                 o.run.empty() ? std::string() : fmt::format(", run \"{}\"", o.run));

@@ -81,3 +81,54 @@ def test_generated_loop_steps_as_controller_from(tmp_path):
         assert duty.value == d, k
         limits += u in (0.0, 0.6)
     assert limits > 0  # the commands reached a pressure limit
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
+def test_generated_learning_loop_steps_as_learning_from(tmp_path):
+    # a learning run's loop and its iterative learning in generated C, against Python's own
+    # composition: controller_from(...) fed reference + c(0) and preview + c(lead), and
+    # learning_from(...) fed the error, or 0 at a pressure limit (docs/export.md, "The learning")
+    ctl = hysteron.loop_of_run(str(RESULT), "learning.triangle")
+    gen = hysteron.export_c(MODEL, prefix="lp", controller=ctl)
+    (tmp_path / "loop.c").write_text(gen["source"])
+    lib = tmp_path / "libloop.so"
+    subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-shared", "-fPIC",
+                    str(tmp_path / "loop.c"), "-o", str(lib), "-lm"], check=True, capture_output=True)
+    c = ctypes.CDLL(str(lib))
+    c.lp_loop_learning_step.restype = ctypes.c_double
+    c.lp_loop_learning_step.argtypes = [ctypes.c_void_p, ctypes.c_void_p] + [ctypes.c_double] * 4 + [
+        ctypes.POINTER(ctypes.c_double)]
+    c.lp_learning_correction.restype = ctypes.c_double
+    c.lp_learning_correction.argtypes = [ctypes.c_void_p, ctypes.c_size_t]
+    period = ctl["learning"]["period_samples"]
+    loop_state = ctypes.create_string_buffer(1 << 16)
+    learning_state = ctypes.create_string_buffer(8 * 6 * period + 4096)  # 5 N doubles and the counters
+    c.lp_loop_reset(loop_state)
+    c.lp_learning_reset(learning_state)
+    lib_loop = hysteron.controller_from(ctl, MODEL)  # a CascadePwmController
+    ilc = hysteron.learning_from(ctl)
+    lead = ctl["feedforward_lead_samples"]
+    lo, hi = ctl["feedforward"]["pressure_min_mpa"], ctl["feedforward"]["pressure_max_mpa"]
+
+    n = 3 * period
+    t = np.arange(n) * 1e-3
+    ref = (16.0 + 12.0 * np.sin(2 * np.pi * t / (period * 1e-3))) / 1000.0
+    preview = np.array(hysteron.feedforward_preview(ctl, ref))
+    rng = np.random.default_rng(11)
+    measured = ref + 0.003 * np.sin(2 * np.pi * t / (period * 1e-3) - 0.5) + 0.0003 * rng.standard_normal(n)
+    pressure = np.clip(0.3 + 0.3 * np.sin(2 * np.pi * t / (period * 1e-3) - 0.4), 0, 0.7)
+    measured[700] = np.nan
+    duty = ctypes.c_double()
+    learnt = 0.0
+    for k in range(n):
+        c0 = ilc.correction(0)
+        assert c.lp_learning_correction(learning_state, 0) == c0, k
+        u = c.lp_loop_learning_step(loop_state, learning_state, ref[k], preview[k], measured[k], pressure[k],
+                                    ctypes.byref(duty))
+        d = lib_loop.step(ref[k] + c0, preview[k] + ilc.correction(lead), measured[k], pressure[k])
+        p = lib_loop.desired_pressure
+        ilc.step(0.0 if (p <= lo or p >= hi) else ref[k] - measured[k])
+        assert u == p, k
+        assert duty.value == d, k
+        learnt = max(learnt, abs(c0))
+    assert ilc.iteration == 3 and learnt > 1e-4  # three periods, corrections learnt

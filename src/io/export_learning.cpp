@@ -53,7 +53,8 @@ void $P_learning_reset($P_learning *l);
  * not the period or a value is not finite (IterativeLearning::reset(correction)). */
 int $P_learning_warm_start($P_learning *l, const double *correction, size_t n);
 /* The correction [m] to add to the reference `ahead` samples after the current one (ahead is
- * at most $P_learning_lookahead: larger values are taken as it). Call before $P_learning_step. */
+ * at most $LOOKAHEAD, the loop's lead: larger values are taken as it). Call before
+ * $P_learning_step. */
 double $P_learning_correction(const $P_learning *l, size_t ahead);
 /* Records the tracking error e = r - y [m] of the current sample and advances one sample; a
  * non-finite error is recorded as 0 and counted in l->faults. */
@@ -311,6 +312,7 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
   replace_all(dc, "$N\n", period + "\n");
   replace_all(dc, "$BYTES", fmt::format("{:.0f}", bytes));
   replace_all(dc, "$BEST", supervised ? ", the best period's" : "");
+  replace_all(dc, "$LOOKAHEAD", std::to_string(p.lookahead));
   out.declarations += dc;
 
   // ---- definitions

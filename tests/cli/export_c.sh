@@ -228,6 +228,11 @@ else
 fi
 expect_fail "--loop: an adaptive run" 1 'its inverse is adapted online' -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run adaptive.sine --out "$T/out/new.c"
+# a result.json from before "adaptation" (the key removed): the adaptive run is refused by its name
+$PY -c 'import json, sys; d = json.load(open(sys.argv[1])); del d["adaptive"]["sine"]["controller"]["adaptation"]; json.dump(d, open(sys.argv[2], "w"))' \
+  "$RES" "$T/old_result.json"
+expect_fail "--loop: an adaptive run, file without adaptation" 1 'the file predates "adaptation"' -- \
+  "$BIN" export --model "$DZ" --loop "$T/old_result.json" --run adaptive.sine --out "$T/out/new.c"
 expect_fail "--loop: no such run" 1 'no reference "ramp" (references: sine, triangle)' -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run compensated.ramp --out "$T/out/new.c"
 expect_fail "--loop: several references, none named" 1 'one run per reference (sine, triangle)' -- \

@@ -52,14 +52,7 @@ int run_export(const Options& o) {
   if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();
   if (!o.limits.empty()) e.inverse_limits = parse_limits(o.limits);
   if (!o.loop.empty()) {
-    e.loop = io::read_loop_design(o.loop, o.run);
-    // An adaptive run's loop says so ("adaptation", refused by generate_c); result.json files
-    // written before 2026-11-27 do not, so such a run is also refused by its name.
-    if (!e.loop->adaptation && (o.run == "adaptive" || o.run.starts_with("adaptive.")))
-      throw Error(fmt::format("{}: run \"{}\": its inverse is adapted online (RLS; the file predates "
-                              "\"adaptation\" in its \"controller\"), which generated C does not do; export the "
-                              "compensated run's loop",
-                              o.loop, o.run));
+    e.loop = io::read_loop_design(o.loop, o.run);  // an adaptive run's loop is refused by generate_c
     e.loop_source = fmt::format("\"{}\"{}", std::filesystem::path(o.loop).filename().string(),
                                 o.run.empty() ? std::string() : fmt::format(", run \"{}\"", o.run));
   }

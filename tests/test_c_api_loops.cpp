@@ -39,12 +39,15 @@ hysteron_params* load_model(const std::filesystem::path& file) {
 // compensated one the best.
 std::string model_file(const TrackingRun& r) { return r.variant == "faithful" ? "model.json" : "best_model.json"; }
 
-// The run's feedforward preview [m] (feedforward_preview, the documented formula).
-std::vector<double> preview_m(const TrackingRun& r) {
-  std::vector<double> ref(r.reference_mm.size());
-  for (std::size_t k = 0; k < ref.size(); ++k) ref[k] = r.reference_mm[k] * 1e-3;
-  return feedforward_preview(r.controller, ref);
+// A recorded signal [mm] in the loops' units [m].
+std::vector<double> metres(const std::vector<double>& mm) {
+  std::vector<double> m(mm.size());
+  for (std::size_t k = 0; k < mm.size(); ++k) m[k] = mm[k] * 1e-3;
+  return m;
 }
+
+// The run's feedforward preview [m] (feedforward_preview, the documented formula).
+std::vector<double> preview_m(const TrackingRun& r) { return feedforward_preview(r.controller, metres(r.reference_mm)); }
 
 // The same loop in C++ (make_controller on the run's model): the command (regulator) or the
 // duty and the desired pressure (valves) of every sample, against the run's.
@@ -98,8 +101,8 @@ Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
   EXPECT_EQ(st, HYSTERON_OK) << run << ": " << hysteron_last_error();
   hysteron_params_free(model);
   if (st != HYSTERON_OK) return w;
-  std::vector<double> ref(r.t.size()), preview(r.t.size());
-  for (std::size_t k = 0; k < ref.size(); ++k) ref[k] = r.reference_mm[k] * 1e-3;
+  const std::vector<double> ref = metres(r.reference_mm);
+  std::vector<double> preview(ref.size());
   EXPECT_EQ(hysteron_loop_preview(&c, ref.data(), ref.size(), preview.data(), preview.size()), HYSTERON_OK)
       << hysteron_last_error();
   for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
@@ -125,11 +128,7 @@ Worst replay_generated(const std::filesystem::path& dir, const TrackingRun& r) {
   Worst w;
   const LoopDesign d = io::read_loop_design((dir / "result.json").string(), r.variant + "." + r.reference);
   const ModelParams model = io::read_model_file((dir / model_file(r)).string());
-  std::vector<double> ref(r.t.size()), meas(r.t.size());
-  for (std::size_t k = 0; k < ref.size(); ++k) {
-    ref[k] = r.reference_mm[k] * 1e-3;
-    meas[k] = r.measured_mm[k] * 1e-3;
-  }
+  const std::vector<double> ref = metres(r.reference_mm), meas = metres(r.measured_mm);
   const std::vector<double> preview = feedforward_preview(d, ref);
   test::TempDir tmp;
   const test::LoopRun got =
@@ -169,11 +168,7 @@ void replay_learning(const std::filesystem::path& dir, const TrackingRun& r, Lea
   ASSERT_TRUE(d.learning.has_value()) << where;
   const ModelParams model = io::read_model_file((dir / model_file(r)).string());
   ASSERT_EQ(r.correction_mm.size(), r.t.size()) << where;
-  std::vector<double> ref(r.t.size()), meas(r.t.size());
-  for (std::size_t k = 0; k < ref.size(); ++k) {
-    ref[k] = r.reference_mm[k] * 1e-3;
-    meas[k] = r.measured_mm[k] * 1e-3;
-  }
+  const std::vector<double> ref = metres(r.reference_mm), meas = metres(r.measured_mm);
   const std::vector<double> preview = learning_preview_m(d, ref);
   Controller c = make_controller(d, model);
   IterativeLearning ilc(d.learning->params);

@@ -266,17 +266,6 @@ TEST(ExportLoopCheck, PerturbedNumberIsDetected) {
 
 // ---- with iterative learning (src/io/export_learning.cpp) --------------------------------
 
-LearningParams learning(std::size_t period, double gain, std::size_t lead, std::size_t half_width,
-                        std::size_t lookahead) {
-  LearningParams p;
-  p.period = period;
-  p.gain = gain;
-  p.lead = lead;
-  p.half_width = half_width;
-  p.lookahead = lookahead;
-  return p;
-}
-
 struct LearningCase {
   Case loop;
   bool warm = false;  // start from a correction (lp_learning_warm_start; IterativeLearning::reset(c))
@@ -291,27 +280,24 @@ std::vector<LearningCase> learning_cases() {
     // pressure limits the PID (+-0.6) never reaches: no error is zeroed, so each period's error is
     // the inputs' (the errors of every third period made larger below: the supervisor acts)
     c.design.feedforward.pressure_limits = {-1.0, 1.0};
-    LearningParams p = learning(1500, 0.2, 20, 40, c.design.feedforward_lead);
-    p.rise_tolerance = 0.0;
-    p.hold_after_cuts = 1;
-    p.max_gain = 0.5;
+    const LearningParams p{.period = 1500, .gain = 0.2, .lead = 20, .half_width = 40,
+                           .lookahead = c.design.feedforward_lead, .rise_tolerance = 0.0, .hold_after_cuts = 1,
+                           .max_gain = 0.5};
     c.design.learning = LoopDesign::Learning{p, 0.7, 0.0, 0, 0, false};
     v.push_back({c, false});
   }
   {
     Case c = base[3];  // no supervision, no Q-filter, a correction limit; one .c file
     c.name = "open_loop_unsupervised_limited";
-    LearningParams p = learning(2000, 0.5, 0, 0, 0);
-    p.max_correction = 0.002;
+    const LearningParams p{.period = 2000, .gain = 0.5, .max_correction = 0.002};
     c.design.learning = LoopDesign::Learning{p, 0.9, 0.0, 0, 0, false};
     v.push_back({c, false});
   }
   {
     Case c = base[4];  // a wide filter (taps beyond its reach skipped), a tolerance, warm start
     c.name = "cascade_wide_filter_warm";
-    LearningParams p = learning(2500, 0.3, 35, 1000, c.design.feedforward_lead);
-    p.rise_tolerance = 0.1;
-    p.max_correction = 0.003;
+    const LearningParams p{.period = 2500, .gain = 0.3, .lead = 35, .half_width = 1000,
+                           .lookahead = c.design.feedforward_lead, .max_correction = 0.003, .rise_tolerance = 0.1};
     c.design.learning = LoopDesign::Learning{p, 0.5, 0.0, 0, 0, false};
     v.push_back({c, true});
   }
@@ -451,12 +437,12 @@ TEST(ExportLoopCheck, LoopsGeneratedCCannotHoldAreRefused) {
     LoopDesign d = ok;
     d.learning = LoopDesign::Learning{};  // period 0
     refused(d, "learning.period = 0: must be >= 2 samples");
-    d.learning->params = learning(1000, 0.5, 600, 300, 40);
+    d.learning->params = {.period = 1000, .lead = 600, .half_width = 300, .lookahead = 40};
     refused(d, "learning: lead + 2 half_width + lookahead = 600 + 2 x 300 + 40 must be < period = 1000");
-    d.learning->params = learning((std::size_t{1} << 31) + 10, 0.5, 10, 3, 5);
+    d.learning->params = {.period = (std::size_t{1} << 31) + 10, .lead = 10, .half_width = 3, .lookahead = 5};
     refused(d, "learning.period = 2147483658 samples is more than generated C holds");
-    d.learning->params = learning(60'000'000, 0.5, 10, 3, 5);  // 4 x 60e6 doubles: 1.92e9 bytes
-    d.learning->params.rise_tolerance = 0.0;                   // 5 x: 2.4e9 bytes
+    // supervised: 5 x 60e6 doubles, 2.4e9 bytes (unsupervised, 4 x: 1.92e9, would fit)
+    d.learning->params = {.period = 60'000'000, .lead = 10, .half_width = 3, .lookahead = 5, .rise_tolerance = 0.0};
     refused(d, "learning.period = 60000000 samples: the learning's state (5 x 60000000 doubles, 2400000000 bytes)");
   }
   {

@@ -17,6 +17,16 @@ MODEL = {"model": "pi", "q": 30.0, "r": [0.02, 0.05, 0.1, 0.15], "p": [12.0, 9.0
          "input_limits": [0.0, 0.6]}  # MPa -> mm, about 0-35 mm
 
 
+def load_generated(tmp_path, controller):
+    """export_c of MODEL with `controller`'s loop (prefix lp), compiled with gcc -Werror as a shared
+    library and loaded with ctypes."""
+    (tmp_path / "loop.c").write_text(hysteron.export_c(MODEL, prefix="lp", controller=controller)["source"])
+    lib = tmp_path / "libloop.so"
+    subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-shared", "-fPIC",
+                    str(tmp_path / "loop.c"), "-o", str(lib), "-lm"], check=True, capture_output=True)
+    return ctypes.CDLL(str(lib))
+
+
 def test_export_c_text_and_errors():
     plain = hysteron.export_c(MODEL, prefix="pam")
     assert "double pam_inverse_step(pam_inverse *inv, double y_desired)" in plain["source"]
@@ -47,12 +57,7 @@ def test_export_c_text_and_errors():
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
 def test_generated_loop_steps_as_controller_from(tmp_path):
     ctl = hysteron.loop_of_run(str(RESULT), "compensated.sine")
-    gen = hysteron.export_c(MODEL, prefix="lp", controller=ctl)
-    (tmp_path / "loop.c").write_text(gen["source"])
-    lib = tmp_path / "libloop.so"
-    subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-shared", "-fPIC",
-                    str(tmp_path / "loop.c"), "-o", str(lib), "-lm"], check=True, capture_output=True)
-    c = ctypes.CDLL(str(lib))
+    c = load_generated(tmp_path, ctl)
     c.lp_loop_step.restype = ctypes.c_double
     c.lp_loop_step.argtypes = [ctypes.c_void_p] + [ctypes.c_double] * 4 + [ctypes.POINTER(ctypes.c_double)]
     c.lp_loop_preview.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t]
@@ -89,12 +94,7 @@ def test_generated_learning_loop_steps_as_learning_from(tmp_path):
     # composition: controller_from(...) fed reference + c(0) and preview + c(lead), and
     # learning_from(...) fed the error, or 0 at a pressure limit (docs/export.md, "The learning")
     ctl = hysteron.loop_of_run(str(RESULT), "learning.triangle")
-    gen = hysteron.export_c(MODEL, prefix="lp", controller=ctl)
-    (tmp_path / "loop.c").write_text(gen["source"])
-    lib = tmp_path / "libloop.so"
-    subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-shared", "-fPIC",
-                    str(tmp_path / "loop.c"), "-o", str(lib), "-lm"], check=True, capture_output=True)
-    c = ctypes.CDLL(str(lib))
+    c = load_generated(tmp_path, ctl)
     c.lp_loop_learning_step.restype = ctypes.c_double
     c.lp_loop_learning_step.argtypes = [ctypes.c_void_p, ctypes.c_void_p] + [ctypes.c_double] * 4 + [
         ctypes.POINTER(ctypes.c_double)]

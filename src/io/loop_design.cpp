@@ -222,6 +222,19 @@ bool is_variant(const json& v) {
 }
 }  // namespace
 
+namespace {
+// A run of the adaptive variant whose controller does not record its "adaptation" (a
+// result.json written before 2026-11-27): its loop would read as one with a fixed inverse.
+LoopDesign unless_unmarked_adaptive(LoopDesign d, std::string_view variant, std::string_view where) {
+  if (variant == "adaptive" && !d.adaptation)
+    throw Error(fmt::format("{}: an adaptive run's loop, written before its \"adaptation\" was recorded: its inverse "
+                            "was adapted online (RLS), which a loop with a fixed inverse does not do: use the "
+                            "compensated run's loop",
+                            where));
+  return d;
+}
+}  // namespace
+
 LoopDesign loop_design_of_run(const json& doc, std::string_view run, std::string_view where) {
   if (!doc.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, doc.type_name()));
   if (run.empty()) {
@@ -241,7 +254,7 @@ LoopDesign loop_design_of_run(const json& doc, std::string_view run, std::string
     if (!reference.empty() && v->value("reference", std::string()) != reference)
       throw Error(fmt::format("{}: no reference \"{}\" (this experiment has one: \"{}\")", vw, reference,
                               v->value("reference", std::string())));
-    return read((*v)["controller"], key_where(vw, "controller"));
+    return unless_unmarked_adaptive(read((*v)["controller"], key_where(vw, "controller")), variant, vw);
   }
   if (reference.empty())
     throw Error(fmt::format("{}: one run per reference ({}): name one, e.g. \"{}.{}\"", vw, names_of(*v, is_run),
@@ -250,7 +263,7 @@ LoopDesign loop_design_of_run(const json& doc, std::string_view run, std::string
   if (e == v->end() || !is_run(*e))
     throw Error(fmt::format("{}: no reference \"{}\" (references: {})", vw, reference, names_of(*v, is_run)));
   const std::string ew = key_where(vw, reference);
-  return read((*e)["controller"], key_where(ew, "controller"));
+  return unless_unmarked_adaptive(read((*e)["controller"], key_where(ew, "controller")), variant, ew);
 }
 
 LoopDesign read_loop_design(const std::string& path, std::string_view run) {

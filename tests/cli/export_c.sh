@@ -164,18 +164,31 @@ expect_fail "unwritable directory" 1 'nodir/new.c' -- "$BIN" export --model "$T/
 # the library is tests/test_export_loop.cpp, with experiments' runs tests/test_c_api_loops.cpp.
 RES=$SRC/tests/c_api/result.json
 DZ=$SRC/tests/c_api/dz.json
-mkdir -p "$T/loop"
-if "$BIN" export --model "$DZ" --loop "$RES" --run compensated.sine --out "$T/loop/loop.c" --header "$T/loop/loop.h" \
-    --prefix lp 2> "$T/loop/stderr"; then
-  grep -q 'run "compensated.sine"' "$T/loop/loop.c" || fail "--loop: the C file does not name the run"
-  grep -q 'lp_loop_step' "$T/loop/loop.h" || fail "--loop: the header lacks lp_loop_step"
-  if [ $HAVE_GCC = 1 ]; then
-    if gcc -std=c99 -pedantic -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -O2 \
-        -I"$T/loop" "$SRC/tests/export/loop_driver.c" "$T/loop/loop.c" -o "$T/loop/driver" -lm 2> "$T/loop/gcc.log"; then
-      # a few steps and a preview: finite commands in the pressure limits, duties in [-1, 1]
-      printf 'p 3 0x1p-7 0x1p-6 0x1p-5\ns 0x1p-7 0x1p-7 0 0.1\ns 0x1p-6 0x1p-6 nan 0.2\nr\ns 0x1p-5 0x1p-5 0x1p-5 inf\n' |
-        "$T/loop/driver" > "$T/loop/out.txt" || fail "--loop: the driver failed"
-      $PY - "$T/loop/out.txt" <<'PY' || fail "--loop: the driver's results"
+# export_loop DIR RUN SYMBOL [CFLAGS...]: exports RUN of the fixture with prefix lp into DIR
+# (loop.c + loop.h), checks that the header declares SYMBOL and, with gcc, compiles it with
+# tests/export/loop_driver.c and strict warnings as errors into DIR/driver. Succeeds when the
+# driver is ready to run; otherwise records why (a failure, or no gcc).
+export_loop() {
+  local dir=$1 run=$2 symbol=$3
+  shift 3
+  mkdir -p "$dir"
+  if ! "$BIN" export --model "$DZ" --loop "$RES" --run "$run" --out "$dir/loop.c" --header "$dir/loop.h" \
+      --prefix lp 2> "$dir/stderr"; then
+    fail "--loop $run: export failed"; cat "$dir/stderr"; return 1
+  fi
+  grep -q "run \"$run\"" "$dir/loop.c" || fail "--loop $run: the C file does not name the run"
+  grep -q "$symbol" "$dir/loop.h" || fail "--loop $run: the header lacks $symbol"
+  [ $HAVE_GCC = 1 ] || return 1
+  if ! gcc -std=c99 -pedantic -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -O2 "$@" \
+      -I"$dir" "$SRC/tests/export/loop_driver.c" "$dir/loop.c" -o "$dir/driver" -lm 2> "$dir/gcc.log"; then
+    fail "--loop $run: the generated loop does not compile cleanly"; cat "$dir/gcc.log"; return 1
+  fi
+}
+if export_loop "$T/loop" compensated.sine lp_loop_step; then
+  # a few steps and a preview: finite commands in the pressure limits, duties in [-1, 1]
+  printf 'p 3 0x1p-7 0x1p-6 0x1p-5\ns 0x1p-7 0x1p-7 0 0.1\ns 0x1p-6 0x1p-6 nan 0.2\nr\ns 0x1p-5 0x1p-5 0x1p-5 inf\n' |
+    "$T/loop/driver" > "$T/loop/out.txt" || fail "--loop: the driver failed"
+  $PY - "$T/loop/out.txt" <<'PY' || fail "--loop: the driver's results"
 import math, sys
 lines = open(sys.argv[1]).read().split("\n")
 assert lines[0].startswith("P ") and len(lines[0].split()) == 4, lines[0]
@@ -186,29 +199,16 @@ for _, u, d in steps:
     assert math.isfinite(u) and 0 <= u <= 0.6 and -1 <= d <= 1, (u, d)
 print("ok: --loop: the generated loop compiles with -Werror and steps (" + "; ".join(" ".join(s[1:]) for s in steps) + ")")
 PY
-    else
-      fail "--loop: the generated loop does not compile cleanly"; cat "$T/loop/gcc.log"
-    fi
-  fi
-else
-  fail "--loop: export failed"; cat "$T/loop/stderr"
 fi
 expect_fail "--run without --loop" 1 '--run names a run of the --loop file' -- \
   "$BIN" export --model "$DZ" --run compensated.sine --out "$T/out/new.c"
 # a learning run: the loop and its iterative learning (lp_loop_learning_step)
-mkdir -p "$T/learn"
-if "$BIN" export --model "$DZ" --loop "$RES" --run learning.triangle --out "$T/learn/loop.c" --header "$T/learn/loop.h" \
-    --prefix lp 2> "$T/learn/stderr"; then
+if export_loop "$T/learn" learning.triangle lp_loop_learning_step -DLP_LEARNING; then
   grep -q 'Iterative learning around the loop' "$T/learn/loop.c" || fail "--loop learning: the comment lacks the learning"
-  grep -q 'lp_loop_learning_step' "$T/learn/loop.h" || fail "--loop learning: the header lacks lp_loop_learning_step"
-  if [ $HAVE_GCC = 1 ]; then
-    if gcc -std=c99 -pedantic -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes -O2 \
-        -DLP_LEARNING -I"$T/learn" "$SRC/tests/export/loop_driver.c" "$T/learn/loop.c" \
-        -o "$T/learn/driver" -lm 2> "$T/learn/gcc.log"; then
-      # learning steps with a NaN measurement, a warm start of the wrong length (refused: -1)
-      printf 'w 2 0 0\nl 0x1p-7 0x1p-7 0 0.1\nl 0x1p-6 0x1p-6 nan 0.2\nr\nl 0x1p-5 0x1p-5 0x1p-5 inf\n' |
-        "$T/learn/driver" > "$T/learn/out.txt" || fail "--loop learning: the driver failed"
-      $PY - "$T/learn/out.txt" <<'PY' || fail "--loop learning: the driver's results"
+  # learning steps with a NaN measurement, a warm start of the wrong length (refused: -1)
+  printf 'w 2 0 0\nl 0x1p-7 0x1p-7 0 0.1\nl 0x1p-6 0x1p-6 nan 0.2\nr\nl 0x1p-5 0x1p-5 0x1p-5 inf\n' |
+    "$T/learn/driver" > "$T/learn/out.txt" || fail "--loop learning: the driver failed"
+  $PY - "$T/learn/out.txt" <<'PY' || fail "--loop learning: the driver's results"
 import math, sys
 lines = [l.split() for l in open(sys.argv[1]).read().split("\n") if l]
 assert lines[0] == ["W", "-1"], lines[0]
@@ -219,19 +219,13 @@ for _, u, d, c in steps:
     assert math.isfinite(u) and 0 <= u <= 0.6 and -1 <= d <= 1 and c == 0.0, (u, d, c)
 print("ok: --loop learning.triangle: compiles with -Werror and steps (" + "; ".join(" ".join(s[1:]) for s in steps) + ")")
 PY
-    else
-      fail "--loop learning: the generated loop does not compile cleanly"; cat "$T/learn/gcc.log"
-    fi
-  fi
-else
-  fail "--loop learning: export failed"; cat "$T/learn/stderr"
 fi
 expect_fail "--loop: an adaptive run" 1 'its inverse is adapted online' -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run adaptive.sine --out "$T/out/new.c"
-# a result.json from before "adaptation" (the key removed): the adaptive run is refused by its name
+# a result.json from before "adaptation" (the key removed): its reader refuses the adaptive run
 $PY -c 'import json, sys; d = json.load(open(sys.argv[1])); del d["adaptive"]["sine"]["controller"]["adaptation"]; json.dump(d, open(sys.argv[2], "w"))' \
   "$RES" "$T/old_result.json"
-expect_fail "--loop: an adaptive run, file without adaptation" 1 'the file predates "adaptation"' -- \
+expect_fail "--loop: an adaptive run, file without adaptation" 1 'written before its "adaptation" was recorded' -- \
   "$BIN" export --model "$DZ" --loop "$T/old_result.json" --run adaptive.sine --out "$T/out/new.c"
 expect_fail "--loop: no such run" 1 'no reference "ramp" (references: sine, triangle)' -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run compensated.ramp --out "$T/out/new.c"

@@ -25,7 +25,8 @@ void from_json(const nlohmann::json& j, LoopDesign& d, std::string_view where);
 // reference, if it is that one). An empty `run` takes `doc` as a "controller" object itself,
 // or as one run's entry (an object with a "controller"). Throws Error naming the runs there
 // are when `run` is not one of them, or when a variant has several references and `run`
-// names none.
+// names none; also for a run of the adaptive variant without "adaptation" (a file written
+// before 2026-11-27: its loop would read as one with a fixed inverse).
 LoopDesign loop_design_of_run(const nlohmann::json& doc, std::string_view run, std::string_view where);
 // The same from the file `path` (its name is the `where` of messages).
 LoopDesign read_loop_design(const std::string& path, std::string_view run);

@@ -267,6 +267,48 @@ TEST(PamRig, StepAndRunDoNotAllocate) {
   EXPECT_GT(sum, 0.0);
 }
 
+
+// run() without an observer skips the sensor outputs of the steps between control samples;
+// the controller must see bit for bit what it sees with an observer (which measures every
+// step), with the regulator and with the valves, a control period of 10 and of 7 rig steps
+// (one that does not divide the duration) and a sensor filter.
+TEST(PamRig, RunWithoutObserverSeesWhatRunWithObserverSees) {
+  PamRigParams p;
+  p.sensors.pressure_time_constant = 2e-3;
+  for (const Actuation mode : {Actuation::regulator, Actuation::switching_valves}) {
+    for (const double period : {1e-3, 7e-4}) {
+      auto law = [&](std::vector<RigOutputs>& seen) {
+        return [&seen, mode](const RigOutputs& y) {
+          seen.push_back(y);
+          const double t = y.time, u = 0.25 + 0.2 * std::sin(6.0 * t);
+          return mode == Actuation::regulator ? RigInputs{u, 0.0, mode}
+                                              : RigInputs{0.0, std::sin(9.0 * t + 40.0 * y.contraction_measured), mode};
+        };
+      };
+      std::vector<RigOutputs> a, b;
+      PamRig ra(p, 7), rb(p, 7);
+      std::size_t observed = 0;
+      const RigOutputs la = ra.run(0.8, period, law(a), [&](const RigInputs&, const RigOutputs&) { ++observed; });
+      const RigOutputs lb = rb.run(0.8, period, law(b));
+      ASSERT_EQ(observed, 8000u);
+      ASSERT_EQ(a.size(), b.size());
+      ASSERT_GT(a.size(), 100u);
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(a[i].time, b[i].time) << i;
+        ASSERT_EQ(a[i].contraction_measured, b[i].contraction_measured) << i;
+        ASSERT_EQ(a[i].pressure_measured, b[i].pressure_measured) << i;
+        ASSERT_EQ(a[i].contraction, b[i].contraction) << i;
+        ASSERT_EQ(a[i].pressure, b[i].pressure) << i;
+        ASSERT_EQ(a[i].inlet_open, b[i].inlet_open) << i;
+        ASSERT_EQ(a[i].exhaust_open, b[i].exhaust_open) << i;
+      }
+      EXPECT_EQ(la.contraction_measured, lb.contraction_measured);
+      EXPECT_EQ(la.pressure_measured, lb.pressure_measured);
+      // the noise stream continues alike after run()
+      EXPECT_EQ(ra.step({0.3, 0.0, mode}).contraction_measured, rb.step({0.3, 0.0, mode}).contraction_measured);
+    }
+  }
+}
 TEST(PamRigParams, JsonRoundTripAndErrors) {
   PamRigParams p;
   p.load.mass = 12.5;

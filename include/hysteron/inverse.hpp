@@ -89,7 +89,12 @@ class Inverse {
   double step_numerical(double y) noexcept;
   double step_kernel(double y) noexcept;
   double dead_zone_inverse(double y) const noexcept;
-  double forward_tentative(double x, double* dfdx) const noexcept;
+  // mpi-asym: both envelopes and their slopes at one input (one tanh per side).
+  struct EnvelopesAt {
+    double ua, ud, da, dd;
+  };
+  EnvelopesAt envelopes_at(double x) const noexcept;
+  double forward_tentative(const EnvelopesAt& e, double* dfdx) const noexcept;
 
   ModelParams params_;
   Structure<double> s_;
@@ -108,6 +113,7 @@ class Inverse {
   // numerical inverse: forward operator state (PI family) or the kind's kernel
   detail::KernelCopy kernel_;
   std::vector<double> y_;
+  EnvelopesAt env_lo_{}, env_hi_{};  // mpi-asym: at lim_.lo and lim_.hi (constant)
   double x_ = 0.0;
   bool saturated_ = false;
   std::size_t faults_ = 0;

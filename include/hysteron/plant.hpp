@@ -44,6 +44,7 @@
 #include <random>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
@@ -241,9 +242,12 @@ class PamRig {
   template <class Controller, class Observer>
   RigOutputs run(double duration, double control_period, Controller&& controller,
                  Observer&& observer);
+  // As above without an observer: the steps between control samples skip the sensors'
+  // outputs (their filter and noise stream advance as in step()), so the controller and the
+  // returned outputs see exactly what they would see with an observer.
   template <class Controller>
   RigOutputs run(double duration, double control_period, Controller&& controller) {
-    return run(duration, control_period, controller, [](const RigInputs&, const RigOutputs&) {});
+    return run(duration, control_period, controller, Unobserved{});
   }
 
   bool ok() const noexcept { return ok_; }
@@ -271,6 +275,12 @@ class PamRig {
     bool inlet = false;
     bool exhaust = false;
   };
+  struct Unobserved {
+    void operator()(const RigInputs&, const RigOutputs&) const noexcept {}
+  };
+  void advance(const RigInputs& in) noexcept;          // step() without its outputs
+  void step_unobserved(const RigInputs& in) noexcept;  // step() whose outputs nobody reads
+  void set_valve_flags() noexcept;
   void derivative(const RigState& s, const Flow& f, double p_set, Deriv& d) const noexcept;
   void integrate(double h, const Flow& f) noexcept;
   void apply_stops() noexcept;
@@ -322,10 +332,15 @@ RigOutputs PamRig::run(double duration, double control_period, Controller&& cont
   std::int64_t every = static_cast<std::int64_t>(control_period / h + 0.5);
   if (every < 1) every = 1;
   RigInputs in = last_in_;
+  constexpr bool observed = !std::is_same_v<std::remove_cvref_t<Observer>, Unobserved>;
   for (std::int64_t k = 0; k < steps; ++k) {
     if (k % every == 0) in = controller(static_cast<const RigOutputs&>(out_));
-    const RigOutputs& y = step(in);
-    observer(static_cast<const RigInputs&>(in), y);
+    if (observed || (k + 1) % every == 0 || k + 1 == steps) {
+      const RigOutputs& y = step(in);
+      observer(static_cast<const RigInputs&>(in), y);
+    } else {
+      step_unobserved(in);
+    }
     if (!ok_) check();
   }
   return out_;

@@ -139,6 +139,8 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     if (!lim_.bounded())
       throw Error(detail::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input", name));
     y_.assign(n, 0.0);
+    env_lo_ = envelopes_at(lim_.lo);
+    env_hi_ = envelopes_at(lim_.hi);
   }
   // Raw limits: the caller's where given (a command never leaves them by rounding).
   lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : std::isinf(lim_.lo) ? lim_.lo : um.from_model(lim_.lo),
@@ -296,11 +298,27 @@ double Inverse::step_analytical(double y) noexcept {
   return x_;
 }
 
-double Inverse::forward_tentative(double x, double* dfdx) const noexcept {
-  const double ua = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
-  const double ud = envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x);
-  const Envelope ea{s_.asc_kind, s_.asc_c}, ed{s_.desc_kind, s_.desc_c};
-  const double da = ea.derivative(x), dd = ed.derivative(x);
+Inverse::EnvelopesAt Inverse::envelopes_at(double x) const noexcept {
+  // The value and slope of one envelope as envelope_value and Envelope::derivative give
+  // them, with the tanh of a tanh envelope computed once for both.
+  auto one = [x](EnvelopeKind kind, const std::array<double, 4>& c, double& u, double& du) {
+    if (kind == EnvelopeKind::tanh) {
+      const double t = detail::tanh_fast(c[1] * x + c[2]);
+      u = c[0] * t + c[3];
+      du = c[0] * c[1] * (1.0 - t * t);
+    } else {
+      u = envelope_value<double>(kind, c.data(), x);
+      du = Envelope{kind, c}.derivative(x);
+    }
+  };
+  EnvelopesAt e;
+  one(s_.asc_kind, s_.asc_c, e.ua, e.da);
+  one(s_.desc_kind, s_.desc_c, e.ud, e.dd);
+  return e;
+}
+
+double Inverse::forward_tentative(const EnvelopesAt& e, double* dfdx) const noexcept {
+  const double ua = e.ua, ud = e.ud, da = e.da, dd = e.dd;
   double f = s_.q * 0.5 * (ua + ud);
   double df = s_.q * 0.5 * (da + dd);
   for (std::size_t i = 0; i < s_.r.size(); ++i) {
@@ -322,36 +340,43 @@ double Inverse::forward_tentative(double x, double* dfdx) const noexcept {
 double Inverse::step_numerical(double y) noexcept {
   double df = 0.0;
   double a = lim_.lo, b = lim_.hi;
-  const double fa = forward_tentative(a, &df);
-  const double fb = forward_tentative(b, &df);
+  const double fa = forward_tentative(env_lo_, &df);
+  const double fb = forward_tentative(env_hi_, &df);
   double x;
+  EnvelopesAt ex{};  // the envelopes at x, once x has been evaluated
+  bool have_ex = false;
   if (y >= fb) {
     x = b;
     saturated_ = y > fb;
+    ex = env_hi_, have_ex = true;
   } else if (y <= fa) {
     x = a;
     saturated_ = y < fa;
+    ex = env_lo_, have_ex = true;
   } else {
     saturated_ = false;
     // Safeguarded Newton inside the bracket [a, b] with f(a) < y < f(b).
     x = std::clamp(x_, a, b);
     for (int it = 0; it < 200; ++it) {
-      const double fx = forward_tentative(x, &df);
+      ex = envelopes_at(x);
+      have_ex = true;
+      const double fx = forward_tentative(ex, &df);
       if (fx == y) break;
       if (fx < y) a = x; else b = x;
       double xn = x - (fx - y) / df;
       if (!(df > 0) || !(xn > a && xn < b)) xn = 0.5 * (a + b);
       if (b - a <= 4 * kEps * std::max(std::abs(a), std::abs(b)) || xn == x) {
+        have_ex = xn == x;
         x = xn;
         break;
       }
       x = xn;
+      have_ex = false;
     }
   }
   // Commit: the forward operators driven by x.
-  const double ua = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), x);
-  const double ud = envelope_value<double>(s_.desc_kind, s_.desc_c.data(), x);
-  for (std::size_t i = 0; i < s_.r.size(); ++i) y_[i] = ops::asymmetric_play<double>(ua, ud, s_.r[i], y_[i]);
+  if (!have_ex) ex = envelopes_at(x);
+  for (std::size_t i = 0; i < s_.r.size(); ++i) y_[i] = ops::asymmetric_play<double>(ex.ua, ex.ud, s_.r[i], y_[i]);
   x_ = x;
   return x_;
 }

@@ -348,8 +348,44 @@ void PamRig::detect_divergence() noexcept {
   ok_ = false;
 }
 
-RigOutputs PamRig::step(const RigInputs& in_raw) noexcept {
+RigOutputs PamRig::step(const RigInputs& in) noexcept {
   if (!ok_) return out_;
+  advance(in);
+  measure();
+  set_valve_flags();
+  return out_;
+}
+
+void PamRig::step_unobserved(const RigInputs& in) noexcept {
+  if (!ok_) return;
+  advance(in);
+  if (!ok_) {  // the outputs of a fault are kept as step() leaves them
+    measure();
+    set_valve_flags();
+    return;
+  }
+  // measure() without its outputs: the sensor filter and the noise generator advance exactly
+  // as there (two normal deviates; a pair costs two draws and is computed when one is
+  // left over), so every later measure() reads the same as after step().
+  const double p_gauge = s_.pressure - p_.air.atmospheric_pressure;
+  p_filtered_ += sensor_alpha_ * (p_gauge - p_filtered_);
+  if (has_spare_) {
+    gaussian();
+    gaussian();
+  } else {
+    rng_.discard(2);
+  }
+}
+
+void PamRig::set_valve_flags() noexcept {
+  const bool switching = last_in_.mode == Actuation::switching_valves;
+  const double tol = 1e-6 * p_.simulation.dt;
+  const double t1 = time();
+  out_.inlet_open = switching && valve_open(true, t1 - tol);
+  out_.exhaust_open = switching && valve_open(false, t1 - tol);
+}
+
+void PamRig::advance(const RigInputs& in_raw) noexcept {
   // Inputs: non-finite values are faults; hold the previous input.
   RigInputs in = in_raw;
   if (!std::isfinite(in.pressure_command)) {
@@ -381,7 +417,7 @@ RigOutputs PamRig::step(const RigInputs& in_raw) noexcept {
   if (!delay_.empty()) {
     delayed = delay_[delay_pos_];
     delay_[delay_pos_] = command;
-    delay_pos_ = (delay_pos_ + 1) % delay_.size();
+    if (++delay_pos_ == delay_.size()) delay_pos_ = 0;
   }
   s_.regulator_setpoint += reg_alpha_ * (delayed - s_.regulator_setpoint);
 
@@ -417,10 +453,6 @@ RigOutputs PamRig::step(const RigInputs& in_raw) noexcept {
   }
   ++n_;
   detect_divergence();
-  measure();
-  out_.inlet_open = switching && valve_open(true, t1 - tol);
-  out_.exhaust_open = switching && valve_open(false, t1 - tol);
-  return out_;
 }
 
 void PamRig::check() const {

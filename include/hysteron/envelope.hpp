@@ -133,6 +133,18 @@ struct Envelope {
   double value(double x) const noexcept { return envelope_value<double>(kind, c.data(), x); }
   // d gamma / dx.
   double derivative(double x) const noexcept;
+  // value(x) and derivative(x), bit-identical to them, with a tanh envelope's tanh
+  // computed once for both (the numerical inverse's Newton step needs both).
+  void value_and_derivative(double x, double& u, double& du) const noexcept {
+    if (kind == EnvelopeKind::tanh) {
+      const double t = detail::tanh_fast(c[1] * x + c[2]);
+      u = c[0] * t + c[3];
+      du = c[0] * c[1] * (1.0 - t * t);
+    } else {
+      u = value(x);
+      du = derivative(x);
+    }
+  }
   // Open range (lo, hi) of gamma; infinite for identity and affine.
   double range_lo() const noexcept;
   double range_hi() const noexcept;

@@ -299,21 +299,9 @@ double Inverse::step_analytical(double y) noexcept {
 }
 
 Inverse::EnvelopesAt Inverse::envelopes_at(double x) const noexcept {
-  // The value and slope of one envelope as envelope_value and Envelope::derivative give
-  // them, with the tanh of a tanh envelope computed once for both.
-  auto one = [x](EnvelopeKind kind, const std::array<double, 4>& c, double& u, double& du) {
-    if (kind == EnvelopeKind::tanh) {
-      const double t = detail::tanh_fast(c[1] * x + c[2]);
-      u = c[0] * t + c[3];
-      du = c[0] * c[1] * (1.0 - t * t);
-    } else {
-      u = envelope_value<double>(kind, c.data(), x);
-      du = Envelope{kind, c}.derivative(x);
-    }
-  };
   EnvelopesAt e;
-  one(s_.asc_kind, s_.asc_c, e.ua, e.da);
-  one(s_.desc_kind, s_.desc_c, e.ud, e.dd);
+  Envelope{s_.asc_kind, s_.asc_c}.value_and_derivative(x, e.ua, e.da);
+  Envelope{s_.desc_kind, s_.desc_c}.value_and_derivative(x, e.ud, e.dd);
   return e;
 }
 

@@ -147,19 +147,23 @@ std::string envelope_formula(const Envelope& e) {
   return "";
 }
 
-// d gamma / dx (Envelope::derivative) as C statements returning the value.
-std::string derivative_body(const Envelope& e) {
+// e[iu] = gamma(x) and e[idu] = d gamma / dx as C statements, bit-identical to
+// Envelope::value_and_derivative (a tanh envelope's tanh once for both).
+std::string value_and_derivative_body(const Envelope& e, int iu, int idu) {
+  const std::string c0 = num(e.c[0]), c1 = num(e.c[1]), c2 = num(e.c[2]), c3 = num(e.c[3]);
   switch (e.kind) {
-    case EnvelopeKind::identity: return "  (void)x;\n  return 1.0;\n";
-    case EnvelopeKind::affine: return fmt::format("  (void)x;\n  return {};\n", num(e.c[0]));
+    case EnvelopeKind::identity: return fmt::format("  e[{}] = x;\n  e[{}] = 1.0;\n", iu, idu);
+    case EnvelopeKind::affine: return fmt::format("  e[{}] = {} * x + {};\n  e[{}] = {};\n", iu, c0, c1, idu, c0);
     case EnvelopeKind::tanh:
-      return fmt::format("  const double t = $P_tanh({} * x + {});\n  return {} * {} * (1.0 - t * t);\n", num(e.c[1]),
-                         num(e.c[2]), num(e.c[0]), num(e.c[1]));
+      return fmt::format("  {{\n    const double t = $P_tanh({} * x + {});\n    e[{}] = {} * t + {};\n"
+                         "    e[{}] = {} * {} * (1.0 - t * t);\n  }}\n",
+                         c1, c2, iu, c0, c3, idu, c0, c1);
     case EnvelopeKind::atan:
-      return fmt::format("  const double z = {} * x + {};\n  return {} * {} / (1.0 + z * z);\n", num(e.c[1]), num(e.c[2]),
-                         num(e.c[0]), num(e.c[1]));
+      return fmt::format("  {{\n    const double z = {} * x + {};\n    e[{}] = {} * atan(z) + {};\n"
+                         "    e[{}] = {} * {} / (1.0 + z * z);\n  }}\n",
+                         c1, c2, iu, c0, c3, idu, c0, c1);
   }
-  return "  return 1.0;\n";
+  return "";
 }
 
 // gamma^-1(u) of FastEnvelope::inverse (finite at the range's edges).
@@ -501,6 +505,17 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
                      num(b.lim.lo), num(b.lim.hi));
     t += fmt::format("static const double $P_lim_raw_lo = {}, $P_lim_raw_hi = {};  /* input limits, raw units */\n",
                      num(b.lim_raw.lo), num(b.lim_raw.hi));
+    if (s.asymmetric) {
+      // Both envelopes and their slopes at the two limits, as Inverse keeps them (constant).
+      auto at = [&](double x) {
+        std::array<double, 4> e{};
+        b.asc.value_and_derivative(x, e[0], e[2]);
+        b.desc.value_and_derivative(x, e[1], e[3]);
+        return fmt::format("{{{}, {}, {}, {}}}", num(e[0]), num(e[1]), num(e[2]), num(e[3]));
+      };
+      t += fmt::format("static const double $P_env_lo[4] = {}, $P_env_hi[4] = {};  /* u_a, u_d, du_a/dx_m, du_d/dx_m at the limits */\n",
+                       at(b.lim.lo), at(b.lim.hi));
+    }
     if (!s.asymmetric) {
       t += fmt::format("static const double $P_qi = {};  /* q' = 1/q (Eq. 11) */\n", num(b.qi));
       t += fmt::format("static const double $P_ri[{}] = {};  /* r'_i (Eq. 11) */\n", size, array_init(b.ri));
@@ -548,15 +563,6 @@ static double $P_gamma_d(double x)
   return {};
 }}
 
-/* d gamma_a / dx_m and d gamma_d / dx_m (Envelope::derivative). */
-static double $P_gamma_derivative(double x)
-{{
-{}}}
-
-static double $P_gamma_d_derivative(double x)
-{{
-{}}}
-
 /* sum_i p_i y_i in four partial sums, as the library (weighted_sum, models.hpp). */
 static double $P_weighted_sum(const double *y)
 {{
@@ -588,12 +594,29 @@ static double $P_asym_step(double x, double *y, double *u_a)
   return $P_q * (ua + ud) * 0.5 + $P_weighted_sum(y);
 }}
 
-/* f(x_m) for the inverse's operator state, without committing it, and df/dx_m
- * (Inverse::forward_tentative). */
-static double $P_forward_tentative(const double *y, double x, double *dfdx)
+/* e = {{u_a, u_d, du_a/dx_m, du_d/dx_m}} at x_m, a tanh computed once per envelope
+ * (Inverse::envelopes_at). */
+static void $P_envelopes(double x, double *e)
 {{
-  const double ua = $P_gamma(x), ud = $P_gamma_d(x);
-  const double da = $P_gamma_derivative(x), dd = $P_gamma_d_derivative(x);
+{}{}}}
+
+/* The asymmetric plays committed at the envelopes e of the input (Inverse::step_numerical). */
+static void $P_asym_commit(const double *e, double *y)
+{{
+  double lo, m;
+  int i;
+  for (i = 0; i < $U_NUM_OPERATORS; ++i) {{
+    lo = e[0] - $P_r[i];
+    m = y[i] < e[1] + $P_r[i] ? y[i] : e[1] + $P_r[i];
+    y[i] = lo < m ? m : lo;
+  }}
+}}
+
+/* f(x_m) for the inverse's operator state, without committing it, and df/dx_m, from the
+ * envelopes e at x_m (Inverse::forward_tentative). */
+static double $P_forward_tentative(const double *y, const double *e, double *dfdx)
+{{
+  const double ua = e[0], ud = e[1], da = e[2], dd = e[3];
   double f = $P_q * 0.5 * (ua + ud);
   double df = $P_q * 0.5 * (da + dd);
   double lo, hi, m;
@@ -614,7 +637,8 @@ static double $P_forward_tentative(const double *y, double x, double *dfdx)
   return f;
 }}
 )",
-                       envelope_formula(b.desc), envelope_expr(b.fdesc, "x"), derivative_body(b.asc), derivative_body(b.desc));
+                       envelope_formula(b.desc), envelope_expr(b.fdesc, "x"), value_and_derivative_body(b.asc, 0, 2),
+                       value_and_derivative_body(b.desc, 1, 3));
     } else {
       t += kPlaySum;
       t += kMapDeviations;
@@ -831,29 +855,34 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
 
 double $P_inverse_step($P_inverse *inv, double y_desired)
 {
-  double ym, a = $P_lim_lo, b = $P_lim_hi, fa, fb, df = 0.0, x, ua;
+  double ym, a = $P_lim_lo, b = $P_lim_hi, fa, fb, df = 0.0, x, e[4];
+  const double *ex = 0; /* the envelopes at x, once x has been evaluated */
   if (!isfinite(y_desired)) {
     ++inv->faults;
     x = $P_input_origin + $P_input_scale * inv->x;
     return x < $P_lim_raw_lo ? $P_lim_raw_lo : $P_lim_raw_hi < x ? $P_lim_raw_hi : x;
   }
   ym = (y_desired - $P_output_offset) * $P_inv_output_gain;  /* units map */
-  fa = $P_forward_tentative(inv->y, a, &df);
-  fb = $P_forward_tentative(inv->y, b, &df);
+  fa = $P_forward_tentative(inv->y, $P_env_lo, &df);
+  fb = $P_forward_tentative(inv->y, $P_env_hi, &df);
   if (ym >= fb) {
     x = b;
     inv->saturated = ym > fb;
+    ex = $P_env_hi;
   } else if (ym <= fa) {
     x = a;
     inv->saturated = ym < fa;
+    ex = $P_env_lo;
   } else {
     int it;
     inv->saturated = 0;
     /* Safeguarded Newton inside the bracket [a, b] with f(a) < y_m < f(b). */
     x = inv->x < a ? a : b < inv->x ? b : inv->x;
     for (it = 0; it < 200; ++it) {
-      const double fx = $P_forward_tentative(inv->y, x, &df);
-      double xn, wa, wb;
+      double fx, xn, wa, wb;
+      $P_envelopes(x, e);
+      ex = e;
+      fx = $P_forward_tentative(inv->y, e, &df);
       if (fx == ym) break;
       if (fx < ym) a = x; else b = x;
       xn = x - (fx - ym) / df;
@@ -861,13 +890,19 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
       wa = fabs(a);
       wb = fabs(b);
       if (b - a <= 0x1p-50 * (wa < wb ? wb : wa) || xn == x) {  /* 4 eps max(|a|, |b|) */
+        if (xn != x) ex = 0;
         x = xn;
         break;
       }
       x = xn;
+      ex = 0;
     }
   }
-  (void)$P_asym_step(x, inv->y, &ua);  /* commit: the forward operators driven by x */
+  if (!ex) {
+    $P_envelopes(x, e);
+    ex = e;
+  }
+  $P_asym_commit(ex, inv->y);  /* commit: the forward operators driven by x */
   inv->x = x;
   x = $P_input_origin + $P_input_scale * x;  /* units map */
   return x < $P_lim_raw_lo ? $P_lim_raw_lo : $P_lim_raw_hi < x ? $P_lim_raw_hi : x;

@@ -578,29 +578,8 @@ static double $P_weighted_sum(const double *y)
   return (s0 + s1) + (s2 + s3);
 }}
 
-/* The asymmetric plays driven by x_m: y_i = max{{ u_a - r_i, min{{ u_d + r_i, y_i }} }};
- * returns v = q (u_a + u_d) / 2 + sum_i p_i y_i and u_a. */
-static double $P_asym_step(double x, double *y, double *u_a)
-{{
-  const double ua = $P_gamma(x), ud = $P_gamma_d(x);
-  double lo, m;
-  int i;
-  for (i = 0; i < $U_NUM_OPERATORS; ++i) {{
-    lo = ua - $P_r[i];
-    m = y[i] < ud + $P_r[i] ? y[i] : ud + $P_r[i];
-    y[i] = lo < m ? m : lo;
-  }}
-  *u_a = ua;
-  return $P_q * (ua + ud) * 0.5 + $P_weighted_sum(y);
-}}
-
-/* e = {{u_a, u_d, du_a/dx_m, du_d/dx_m}} at x_m, a tanh computed once per envelope
- * (Inverse::envelopes_at). */
-static void $P_envelopes(double x, double *e)
-{{
-{}{}}}
-
-/* The asymmetric plays committed at the envelopes e of the input (Inverse::step_numerical). */
+/* The asymmetric plays committed at the envelopes e = {{u_a, u_d, ...}} of the input:
+ * y_i = max{{ u_a - r_i, min{{ u_d + r_i, y_i }} }} (Inverse::step_numerical, Model::step). */
 static void $P_asym_commit(const double *e, double *y)
 {{
   double lo, m;
@@ -611,6 +590,21 @@ static void $P_asym_commit(const double *e, double *y)
     y[i] = lo < m ? m : lo;
   }}
 }}
+
+/* The asymmetric plays driven by x_m; returns v = q (u_a + u_d) / 2 + sum_i p_i y_i and u_a. */
+static double $P_asym_step(double x, double *y, double *u_a)
+{{
+  const double e[2] = {{$P_gamma(x), $P_gamma_d(x)}};
+  $P_asym_commit(e, y);
+  *u_a = e[0];
+  return $P_q * (e[0] + e[1]) * 0.5 + $P_weighted_sum(y);
+}}
+
+/* e = {{u_a, u_d, du_a/dx_m, du_d/dx_m}} at x_m, a tanh computed once per envelope
+ * (Inverse::envelopes_at). */
+static void $P_envelopes(double x, double *e)
+{{
+{}{}}}
 
 /* f(x_m) for the inverse's operator state, without committing it, and df/dx_m, from the
  * envelopes e at x_m (Inverse::forward_tentative). */

@@ -314,10 +314,18 @@ double PamRig::quantize(double v, double range, double lsb) const noexcept {
   return std::round(std::clamp(v, 0.0, range) / lsb) * lsb;
 }
 
+namespace {
+// P11's first-order pressure-sensor lag, one rig step: returns the gauge pressure [Pa].
+double filter_pressure(const RigState& s, const AirParams& air, double alpha, double& filtered) noexcept {
+  const double p_gauge = s.pressure - air.atmospheric_pressure;
+  filtered += alpha * (p_gauge - filtered);
+  return p_gauge;
+}
+}  // namespace
+
 void PamRig::measure() noexcept {  // P11
   const auto& se = p_.sensors;
-  const double p_gauge = s_.pressure - p_.air.atmospheric_pressure;
-  p_filtered_ += sensor_alpha_ * (p_gauge - p_filtered_);
+  const double p_gauge = filter_pressure(s_, p_.air, sensor_alpha_, p_filtered_);
   const double np = gaussian();
   const double nx = gaussian();
   out_.time = time();
@@ -365,16 +373,10 @@ void PamRig::step_unobserved(const RigInputs& in) noexcept {
     return;
   }
   // measure() without its outputs: the sensor filter and the noise generator advance exactly
-  // as there (two normal deviates; a pair costs two draws and is computed when one is
-  // left over), so every later measure() reads the same as after step().
-  const double p_gauge = s_.pressure - p_.air.atmospheric_pressure;
-  p_filtered_ += sensor_alpha_ * (p_gauge - p_filtered_);
-  if (has_spare_) {
-    gaussian();
-    gaussian();
-  } else {
-    rng_.discard(2);
-  }
+  // as there, so every later measure() reads the same as after step(). measure() takes one
+  // pair of normal deviates (two draws) per call, so none is left over between calls.
+  filter_pressure(s_, p_.air, sensor_alpha_, p_filtered_);
+  rng_.discard(2);
 }
 
 void PamRig::set_valve_flags() noexcept {

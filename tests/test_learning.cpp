@@ -1090,6 +1090,48 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
   EXPECT_TRUE(find_run(back, "compensated").correction_mm.empty());
 }
 
+// The learning loop's derivative time (docs/control.md, section 2): of T_u / 3 (the "some
+// overshoot" rule's), T_u / 2 and 2 T_u / 3, the one whose identified feedback loop has the least
+// resonance peak. The regulator rig's well-damped loop keeps the rule's T_u / 3; the valve rig's
+// lightly damped mode gets a longer one. Gains K_c and T_i stay the rule's.
+TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
+  const double tc = 1e-3;
+  const auto rig = [](double theta, double tau, double K, double Ku, double Tu) {
+    RigDynamics d;
+    d.dead_time_s = theta;
+    d.lag_s = tau;
+    d.gain_m_per_mpa = K;
+    d.position_relay_gain = Ku;
+    d.position_relay_period_s = Tu;
+    experiment::fit_load_mode(d);
+    return d;
+  };
+  const RigDynamics regulator = rig(0.021, 0.056, 0.197, 13.0, 0.239);  // gpi-pid's nominal (section 1)
+  const RigDynamics valves = rig(0.0, 0.008, 0.200, 12.3, 0.238);       // mpi-pwm's nominal (section 1)
+  ASSERT_GT(regulator.mode_damping, 0.5);
+  ASSERT_GT(valves.mode_frequency_hz, 0.0);
+  ASSERT_LT(valves.mode_damping, 0.2);
+  for (const RigDynamics* d : {&regulator, &valves}) {
+    const PidParams rule =
+        experiment::relay_pid(*d, tc, -experiment::kPressureMax, experiment::kPressureMax, experiment::PidRule::some_overshoot);
+    const PidParams p = experiment::learning_pid(*d, tc);
+    EXPECT_DOUBLE_EQ(p.kp, rule.kp);
+    EXPECT_DOUBLE_EQ(p.ki, rule.ki);
+    EXPECT_DOUBLE_EQ(p.derivative_filter, rule.derivative_filter);
+    const double chosen = experiment::feedback_peak(*d, p, tc);
+    EXPECT_GT(chosen, 1.0);  // a peak: |T| reaches 1 at low frequencies
+    for (double td : {1.0 / 3.0, 0.5, 2.0 / 3.0}) {
+      PidParams q = rule;
+      q.kd = q.kp * td * d->position_relay_period_s;
+      EXPECT_LE(chosen, experiment::feedback_peak(*d, q, tc)) << td;
+    }
+  }
+  const PidParams reg = experiment::learning_pid(regulator, tc);
+  EXPECT_NEAR(reg.kd / reg.kp, regulator.position_relay_period_s / 3.0, 1e-12);
+  const PidParams val = experiment::learning_pid(valves, tc);
+  EXPECT_GT(val.kd / val.kp, valves.position_relay_period_s / 3.0 * 1.2);
+}
+
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
   using C = std::complex<double>;
   RigDynamics d;  // gpi-pid's nominal loop (docs/control.md, section 1)

@@ -162,7 +162,15 @@ PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_m
   return p;
 }
 
-std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std::size_t lead, double tc, double w) {
+namespace {
+
+// G (the FOPDT by backward Euler, times the mode at s = i w / tc), the integral and the
+// derivative term of the PID, at w [rad/sample].
+struct LoopTerms {
+  std::complex<double> G, I, D;
+};
+
+LoopTerms loop_terms(const RigDynamics& d, const PidParams& pid, double tc, double w) {
   using C = std::complex<double>;
   const C zi = std::polar(1.0, -w);  // z^-1
   const double a = tc / (d.lag_s + tc);
@@ -175,9 +183,30 @@ std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std
   const C I = pid.ki * tc / (1.0 - zi);
   const double tf = pid.derivative_filter;
   const C D = pid.kd / (tf + tc) * (1.0 - zi) / (1.0 - tf / (tf + tc) * zi);
+  return {G, I, D};
+}
+
+}  // namespace
+
+std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std::size_t lead, double tc, double w) {
+  const auto [G, I, D] = loop_terms(d, pid, tc, w);
   const double K = d.gain_m_per_mpa;
-  const C lead_z = std::polar(1.0, w * static_cast<double>(lead));
+  const std::complex<double> lead_z = std::polar(1.0, w * static_cast<double>(lead));
   return G * (lead_z + K * (pid.kp + I)) / (1.0 + G * K * (pid.kp + I + D));
+}
+
+double feedback_peak(const RigDynamics& d, const PidParams& pid, double tc) {
+  // 600 log-spaced frequencies from 0.05 Hz to a quarter of the sampling rate
+  constexpr int kPoints = 600;
+  const double w_lo = 2.0 * std::numbers::pi * 0.05 * tc, w_hi = 0.5 * std::numbers::pi;
+  double peak = 0.0;
+  for (int l = 0; l < kPoints; ++l) {
+    const double w = w_lo * std::pow(w_hi / w_lo, static_cast<double>(l) / (kPoints - 1));
+    const auto [G, I, D] = loop_terms(d, pid, tc, w);
+    const std::complex<double> L = G * d.gain_m_per_mpa * (pid.kp + I + D);
+    peak = std::max(peak, std::abs(L / (1.0 + L)));
+  }
+  return peak;
 }
 
 std::vector<RigDynamics> learning_neighbours(const RigDynamics& d) {
@@ -455,8 +484,20 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 
 namespace hysteron::experiment {
 
+PidParams learning_pid(const RigDynamics& d, double tc) {
+  PidParams best = relay_pid(d, tc, -kPressureMax, kPressureMax, PidRule::some_overshoot);
+  double least = feedback_peak(d, best, tc);
+  for (double td : {0.5, 2.0 / 3.0}) {  // T_d = T_u / 2, 2 T_u / 3 (the rule's T_u / 3 first)
+    PidParams p = best;
+    p.kd = p.kp * td * d.position_relay_period_s;
+    const double peak = feedback_peak(d, p, tc);
+    if (peak < least) least = peak, best = p;  // ties: the shorter T_d
+  }
+  return best;
+}
+
 PidParams position_pid(const Context& c) {
-  if (c.learning) return relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::some_overshoot);
+  if (c.learning) return learning_pid(c.dynamics, c.tc);
   PidParams p = relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::classic);
   p.kp *= c.gain_scale;
   p.ki *= c.gain_scale;
@@ -491,8 +532,13 @@ std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z) {
 }
 
 std::string pid_origin(const Context& c) {
-  return c.learning ? std::string("a relay test, Ziegler-Nichols some overshoot")
-                    : fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);
+  if (c.learning) {
+    const PidParams p = learning_pid(c.dynamics, c.tc);
+    return fmt::format("a relay test, Ziegler-Nichols some overshoot with T_d = {:.3g} T_u (of 0.333, 0.5 and "
+                       "0.667 T_u, the least resonance peak of the identified feedback loop, {:.3g})",
+                       p.kd / p.kp / c.dynamics.position_relay_period_s, feedback_peak(c.dynamics, p, c.tc));
+  }
+  return fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);
 }
 
 void fit_load_mode(RigDynamics& d) {

@@ -1092,8 +1092,10 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
 
 // The learning loop's derivative time (docs/control.md, section 2): of T_u / 3 (the "some
 // overshoot" rule's), T_u / 2 and 2 T_u / 3, the one whose identified feedback loop has the least
-// resonance peak. The regulator rig's well-damped loop keeps the rule's T_u / 3; the valve rig's
-// lightly damped mode gets a longer one. Gains K_c and T_i stay the rule's.
+// complementary sensitivity peak among those whose sensitivity peak is at most the rule's. The
+// regulator rig's well-damped loop keeps T_u / 3; the valve rig's lightly damped mode gets a
+// longer one; the 5 kg valve rig, whose complementary peak a longer T_d lowers a little but whose
+// sensitivity peak it raises, keeps T_u / 3. K_c and T_i stay the rule's.
 TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
   const double tc = 1e-3;
   const auto rig = [](double theta, double tau, double K, double Ku, double Tu) {
@@ -1108,28 +1110,43 @@ TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
   };
   const RigDynamics regulator = rig(0.021, 0.056, 0.197, 13.0, 0.239);  // gpi-pid's nominal (section 1)
   const RigDynamics valves = rig(0.0, 0.008, 0.200, 12.3, 0.238);       // mpi-pwm's nominal (section 1)
+  const RigDynamics light = rig(0.0, 0.013, 0.248, 30.7, 0.172);        // mpi-pwm with a 5 kg load
   ASSERT_GT(regulator.mode_damping, 0.5);
   ASSERT_GT(valves.mode_frequency_hz, 0.0);
   ASSERT_LT(valves.mode_damping, 0.2);
-  for (const RigDynamics* d : {&regulator, &valves}) {
+  const auto with_td = [](PidParams p, double td, double Tu) {
+    p.kd = p.kp * td * Tu;
+    return p;
+  };
+  for (const RigDynamics* d : {&regulator, &valves, &light}) {
     const PidParams rule =
         experiment::relay_pid(*d, tc, -experiment::kPressureMax, experiment::kPressureMax, experiment::PidRule::some_overshoot);
     const PidParams p = experiment::learning_pid(*d, tc);
     EXPECT_DOUBLE_EQ(p.kp, rule.kp);
     EXPECT_DOUBLE_EQ(p.ki, rule.ki);
     EXPECT_DOUBLE_EQ(p.derivative_filter, rule.derivative_filter);
-    const double chosen = experiment::feedback_peak(*d, p, tc);
-    EXPECT_GT(chosen, 1.0);  // a peak: |T| reaches 1 at low frequencies
+    const experiment::LoopPeaks chosen = experiment::loop_peaks(*d, p, tc), at_rule = experiment::loop_peaks(*d, rule, tc);
+    EXPECT_GT(chosen.complementary, 1.0);  // a peak: |T| reaches 1 at low frequencies
+    EXPECT_LE(chosen.sensitivity, at_rule.sensitivity);
     for (double td : {1.0 / 3.0, 0.5, 2.0 / 3.0}) {
-      PidParams q = rule;
-      q.kd = q.kp * td * d->position_relay_period_s;
-      EXPECT_LE(chosen, experiment::feedback_peak(*d, q, tc)) << td;
+      const experiment::LoopPeaks q = experiment::loop_peaks(*d, with_td(rule, td, d->position_relay_period_s), tc);
+      if (q.sensitivity <= at_rule.sensitivity) {
+        EXPECT_LE(chosen.complementary, q.complementary) << td;
+      }
     }
   }
   const PidParams reg = experiment::learning_pid(regulator, tc);
   EXPECT_NEAR(reg.kd / reg.kp, regulator.position_relay_period_s / 3.0, 1e-12);
   const PidParams val = experiment::learning_pid(valves, tc);
   EXPECT_GT(val.kd / val.kp, valves.position_relay_period_s / 3.0 * 1.2);
+  // the light rig: a longer T_d would lower the complementary peak, but raise the sensitivity's
+  const PidParams rule_light =
+      experiment::relay_pid(light, tc, -experiment::kPressureMax, experiment::kPressureMax, experiment::PidRule::some_overshoot);
+  const experiment::LoopPeaks half = experiment::loop_peaks(light, with_td(rule_light, 0.5, light.position_relay_period_s), tc);
+  const experiment::LoopPeaks third = experiment::loop_peaks(light, rule_light, tc);
+  EXPECT_LT(half.complementary, third.complementary);
+  EXPECT_GT(half.sensitivity, third.sensitivity);
+  EXPECT_DOUBLE_EQ(experiment::learning_pid(light, tc).kd, rule_light.kd);
 }
 
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {

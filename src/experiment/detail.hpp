@@ -228,12 +228,16 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 // The position PID of a compensated loop in context `c`: the classic rule with its gains
 // times c.gain_scale; learning_pid (below), unscaled, when learning.
 PidParams position_pid(const Context& c);
-// max_w |L / (1 + L)|, L = G K C: the resonance peak of the identified feedback loop's
-// complementary sensitivity (G, K as in closed_loop), over 0.05 Hz .. a quarter of the sampling rate.
-double feedback_peak(const RigDynamics& d, const PidParams& pid, double tc);
+// The identified feedback loop's peaks, L = G K C (G, K as in closed_loop), over 0.05 Hz .. a
+// quarter of the sampling rate: max_w |1 / (1 + L)| (sensitivity) and max_w |L / (1 + L)|
+// (complementary sensitivity: the resonance the learning's T carries).
+struct LoopPeaks {
+  double sensitivity = 0.0, complementary = 0.0;
+};
+LoopPeaks loop_peaks(const RigDynamics& d, const PidParams& pid, double tc);
 // The learning loop's PID: Ziegler-Nichols "some overshoot" (K_c = K_u / 3, T_i = T_u / 2) with
-// the derivative time of T_u / 3 (the rule's), T_u / 2 or 2 T_u / 3 whose feedback loop has the
-// least feedback_peak on the identified dynamics (ties: the shorter).
+// the derivative time of T_u / 3 (the rule's), T_u / 2 or 2 T_u / 3 whose loop has the least
+// complementary peak among those whose sensitivity peak is at most the rule's (ties: the shorter).
 PidParams learning_pid(const RigDynamics& d, double tc);
 // The shaper (ZvShaper, above) for the identified mode. Inactive when no underdamped mode was
 // identified (mode_frequency_hz = 0 or damping >= 1).

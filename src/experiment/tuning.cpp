@@ -195,18 +195,19 @@ std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std
   return G * (lead_z + K * (pid.kp + I)) / (1.0 + G * K * (pid.kp + I + D));
 }
 
-double feedback_peak(const RigDynamics& d, const PidParams& pid, double tc) {
+LoopPeaks loop_peaks(const RigDynamics& d, const PidParams& pid, double tc) {
   // 600 log-spaced frequencies from 0.05 Hz to a quarter of the sampling rate
   constexpr int kPoints = 600;
   const double w_lo = 2.0 * std::numbers::pi * 0.05 * tc, w_hi = 0.5 * std::numbers::pi;
-  double peak = 0.0;
+  LoopPeaks peaks;
   for (int l = 0; l < kPoints; ++l) {
     const double w = w_lo * std::pow(w_hi / w_lo, static_cast<double>(l) / (kPoints - 1));
     const auto [G, I, D] = loop_terms(d, pid, tc, w);
     const std::complex<double> L = G * d.gain_m_per_mpa * (pid.kp + I + D);
-    peak = std::max(peak, std::abs(L / (1.0 + L)));
+    peaks.sensitivity = std::max(peaks.sensitivity, std::abs(1.0 / (1.0 + L)));
+    peaks.complementary = std::max(peaks.complementary, std::abs(L / (1.0 + L)));
   }
-  return peak;
+  return peaks;
 }
 
 std::vector<RigDynamics> learning_neighbours(const RigDynamics& d) {
@@ -485,13 +486,16 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 namespace hysteron::experiment {
 
 PidParams learning_pid(const RigDynamics& d, double tc) {
-  PidParams best = relay_pid(d, tc, -kPressureMax, kPressureMax, PidRule::some_overshoot);
-  double least = feedback_peak(d, best, tc);
+  const PidParams rule = relay_pid(d, tc, -kPressureMax, kPressureMax, PidRule::some_overshoot);
+  const LoopPeaks at_rule = loop_peaks(d, rule, tc);
+  PidParams best = rule;
+  double least = at_rule.complementary;
   for (double td : {0.5, 2.0 / 3.0}) {  // T_d = T_u / 2, 2 T_u / 3 (the rule's T_u / 3 first)
-    PidParams p = best;
+    PidParams p = rule;
     p.kd = p.kp * td * d.position_relay_period_s;
-    const double peak = feedback_peak(d, p, tc);
-    if (peak < least) least = peak, best = p;  // ties: the shorter T_d
+    const LoopPeaks at = loop_peaks(d, p, tc);
+    // a lower complementary peak, without raising the sensitivity peak; ties: the shorter T_d
+    if (at.complementary < least && at.sensitivity <= at_rule.sensitivity) least = at.complementary, best = p;
   }
   return best;
 }
@@ -534,9 +538,11 @@ std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z) {
 std::string pid_origin(const Context& c) {
   if (c.learning) {
     const PidParams p = learning_pid(c.dynamics, c.tc);
+    const LoopPeaks at = loop_peaks(c.dynamics, p, c.tc);
     return fmt::format("a relay test, Ziegler-Nichols some overshoot with T_d = {:.3g} T_u (of 0.333, 0.5 and "
-                       "0.667 T_u, the least resonance peak of the identified feedback loop, {:.3g})",
-                       p.kd / p.kp / c.dynamics.position_relay_period_s, feedback_peak(c.dynamics, p, c.tc));
+                       "0.667 T_u, the least complementary sensitivity peak of the identified feedback loop, "
+                       "{:.3g}, whose sensitivity peak, {:.3g}, is at most the rule's)",
+                       p.kd / p.kp / c.dynamics.position_relay_period_s, at.complementary, at.sensitivity);
   }
   return fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);
 }

@@ -516,6 +516,20 @@ TEST(Learning, StepDoesNotAllocate) {
 
 namespace {
 
+// A loop as the experiments identify it (docs/control.md, section 1): dead time theta [s], lag
+// tau [s], slope K [m/MPa] and the position relay's K_u [MPa/m] and T_u [s]; the load mode is
+// fitted through the relay's point.
+RigDynamics relay_identified(double theta, double tau, double K, double Ku, double Tu) {
+  RigDynamics d;
+  d.dead_time_s = theta;
+  d.lag_s = tau;
+  d.gain_m_per_mpa = K;
+  d.position_relay_gain = Ku;
+  d.position_relay_period_s = Tu;
+  experiment::fit_load_mode(d);
+  return d;
+}
+
 // gpi-pid on `rig` with `periods` of learning; `pinned`: hysteron's model pinned to mpi-asym
 // and no adaptive run (the kind the default run chooses, without fitting the others).
 ExperimentOptions gpi_pid_options(const PamRigParams& rig, int periods, bool pinned = false) {
@@ -1098,19 +1112,9 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
 // sensitivity peak it raises, keeps T_u / 3. K_c and T_i stay the rule's.
 TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
   const double tc = 1e-3;
-  const auto rig = [](double theta, double tau, double K, double Ku, double Tu) {
-    RigDynamics d;
-    d.dead_time_s = theta;
-    d.lag_s = tau;
-    d.gain_m_per_mpa = K;
-    d.position_relay_gain = Ku;
-    d.position_relay_period_s = Tu;
-    experiment::fit_load_mode(d);
-    return d;
-  };
-  const RigDynamics regulator = rig(0.021, 0.056, 0.197, 13.0, 0.239);  // gpi-pid's nominal (section 1)
-  const RigDynamics valves = rig(0.0, 0.008, 0.200, 12.3, 0.238);       // mpi-pwm's nominal (section 1)
-  const RigDynamics light = rig(0.0, 0.013, 0.248, 30.7, 0.172);        // mpi-pwm with a 5 kg load
+  const RigDynamics regulator = relay_identified(0.021, 0.056, 0.197, 13.0, 0.239);  // gpi-pid's nominal
+  const RigDynamics valves = relay_identified(0.0, 0.008, 0.200, 12.3, 0.238);       // mpi-pwm's nominal
+  const RigDynamics light = relay_identified(0.0, 0.013, 0.248, 30.7, 0.172);        // mpi-pwm, 5 kg load
   ASSERT_GT(regulator.mode_damping, 0.5);
   ASSERT_GT(valves.mode_frequency_hz, 0.0);
   ASSERT_LT(valves.mode_damping, 0.2);
@@ -1151,13 +1155,7 @@ TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
 
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
   using C = std::complex<double>;
-  RigDynamics d;  // gpi-pid's nominal loop (docs/control.md, section 1)
-  d.dead_time_s = 0.021;
-  d.lag_s = 0.056;
-  d.gain_m_per_mpa = 0.197;
-  d.position_relay_gain = 13.0;
-  d.position_relay_period_s = 0.239;
-  experiment::fit_load_mode(d);
+  const RigDynamics d = relay_identified(0.021, 0.056, 0.197, 13.0, 0.239);  // gpi-pid's nominal loop
   ASSERT_GT(d.mode_frequency_hz, 0.0);
   const double wu = 2.0 * std::numbers::pi / d.position_relay_period_s;
   const auto G = [&](const RigDynamics& v) {

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -351,4 +353,62 @@ TEST(PamRigParams, JsonRoundTripAndErrors) {
   EXPECT_NE(error_of([&] { load_rig_params(path); }).find(path.string()), std::string::npos);
   std::filesystem::remove(path);
   EXPECT_THROW(load_rig_params(path), Error);
+}
+
+// with_unread_parameters_of: what a sweep relies on to run a variant once. Rigs that differ
+// only in parameters the actuation does not read give the same outputs bit for bit; rigs that
+// differ in parameters it reads do not (the run below can tell them apart).
+namespace {
+std::vector<RigOutputs> drive(const PamRigParams& p, Actuation mode) {
+  PamRig rig(p, 7);
+  std::vector<RigOutputs> out;
+  for (int k = 0; k < 30000; ++k) {
+    const double t = k * p.simulation.dt;
+    // both inputs move: the one the mode does not use must not matter either
+    const double command = 0.3 + 0.2 * std::sin(2.0 * std::numbers::pi * 0.7 * t);  // MPa
+    const double duty = 0.8 * std::sin(2.0 * std::numbers::pi * 0.5 * t);
+    out.push_back(rig.step({command, duty, mode}));
+  }
+  return out;
+}
+bool same_outputs(const std::vector<RigOutputs>& a, const std::vector<RigOutputs>& b) {
+  auto bits = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+  if (a.size() != b.size()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    if (!bits(a[k].contraction, b[k].contraction) || !bits(a[k].contraction_measured, b[k].contraction_measured) ||
+        !bits(a[k].velocity, b[k].velocity) || !bits(a[k].pressure, b[k].pressure) ||
+        !bits(a[k].pressure_measured, b[k].pressure_measured) || a[k].inlet_open != b[k].inlet_open ||
+        a[k].exhaust_open != b[k].exhaust_open || a[k].ok != b[k].ok)
+      return false;
+  return true;
+}
+}  // namespace
+
+TEST(PamRigUnread, ValvesDoNotReadTheRegulatorsLagAndTheRegulatorNotTheValvesTiming) {
+  const PamRigParams base{};
+  PamRigParams lag = base;  // the regulator's P9 parameters
+  lag.regulator.time_constant = 0.1;
+  lag.regulator.dead_time = 0.012;
+  lag.regulator.max_command = 0.5e6;
+  PamRigParams timing = base;  // the valves' P10 timing
+  timing.valves.pwm_frequency = 100.0;
+  timing.valves.on_delay = 2e-3;
+  timing.valves.off_delay = 0.5e-3;
+  timing.valves.min_pulse = 0.3e-3;
+  const auto valves = Actuation::switching_valves, regulator = Actuation::regulator;
+
+  EXPECT_EQ(rig_params_to_json(with_unread_parameters_of(lag, valves, base)), rig_params_to_json(base));
+  EXPECT_EQ(rig_params_to_json(with_unread_parameters_of(timing, regulator, base)), rig_params_to_json(base));
+  EXPECT_NE(rig_params_to_json(with_unread_parameters_of(lag, regulator, base)), rig_params_to_json(base));
+  EXPECT_NE(rig_params_to_json(with_unread_parameters_of(timing, valves, base)), rig_params_to_json(base));
+
+  EXPECT_TRUE(same_outputs(drive(base, valves), drive(lag, valves)));
+  EXPECT_TRUE(same_outputs(drive(base, regulator), drive(timing, regulator)));
+  EXPECT_FALSE(same_outputs(drive(base, regulator), drive(lag, regulator)));
+  EXPECT_FALSE(same_outputs(drive(base, valves), drive(timing, valves)));
+
+  // the stages' conductances are read under either mode (the sub-steps, P12)
+  PamRigParams conductance = base;
+  conductance.valves.sonic_conductance *= 4.0;
+  EXPECT_NE(rig_params_to_json(with_unread_parameters_of(conductance, regulator, base)), rig_params_to_json(base));
 }

@@ -10,9 +10,13 @@
 #include <stdexcept>
 #include <thread>
 #include <cstring>
+#include <mutex>
 #include <set>
+#include <algorithm>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "hysteron/error.hpp"
 #include "hysteron/sweep.hpp"
@@ -387,6 +391,80 @@ TEST(SweepRun, ARigIsRunOnce) {
   EXPECT_TRUE(contains(r.notes[1], "'nominal again' is the nominal rig")) << r.notes[1];
   EXPECT_TRUE(contains(r.notes[2], "'heavy by percent' is the rig of variant 'heavy'")) << r.notes[2];
   EXPECT_EQ(r.runs.size(), 2u);
+}
+
+// A variant that differs only in what an experiment's actuator never reads
+// (with_unread_parameters_of) is run once for that experiment and still run for the others.
+TEST(SweepRun, AVariantTheExperimentCannotTellApartIsRunOnce) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid", "mpi-pwm"};  // the regulator; the switching valves
+  o.variants = variant_grid_from_json(nlohmann::json::parse(R"({"variants": [
+      {"name": "slow regulator", "set": {"regulator.time_constant": 0.1, "regulator.dead_time": 0.012}},
+      {"name": "slow valves", "set": {"valves.on_delay": 0.002}},
+      {"name": "heavy", "set": {"load.mass": 35}},
+      {"name": "heavy, slow regulator", "set": {"load.mass": 35, "regulator.time_constant": 0.1}}]})"), "grid");
+  std::mutex m;
+  std::vector<std::pair<std::string, PamRigParams>> called;
+  o.runner = [&](const ExperimentOptions& eo) {
+    {
+      std::lock_guard<std::mutex> lock(m);
+      called.emplace_back(eo.name, eo.rig);
+    }
+    ExperimentResult r = fake_experiment(eo);
+    // the rig's regulator and valve timing in the errors: a copied slot shows whose run it is
+    for (auto& t : r.runs) t.errors.mae_mm = eo.rig.regulator.time_constant + eo.rig.valves.on_delay;
+    return r;
+  };
+  std::size_t progress_total = 0;
+  o.progress = [&](const SweepProgress& p) { progress_total = p.total; };
+  o.jobs = 2;
+  const SweepResult r = run_sweep(o);
+  ASSERT_EQ(r.variants.size(), 5u);
+  ASSERT_EQ(r.runs.size(), 10u);
+  auto runs_of = [&](const std::string& e, double tau, double on_delay, double mass) {
+    return std::count_if(called.begin(), called.end(), [&](const auto& c) {
+      return c.first == e && c.second.regulator.time_constant == tau && c.second.valves.on_delay == on_delay &&
+             c.second.load.mass == mass;
+    });
+  };
+  const PamRigParams nominal{};
+  const double tau0 = nominal.regulator.time_constant, d0 = nominal.valves.on_delay, m0 = nominal.load.mass;
+  // gpi-pid (regulator): every variant but the valves' timing; mpi-pwm (valves): every one but
+  // the regulator's lag, and the heavy rig's slow-regulator twin
+  EXPECT_EQ(called.size(), 7u);
+  EXPECT_EQ(progress_total, 7u);
+  EXPECT_EQ(runs_of("gpi-pid", tau0, d0, m0), 1);
+  EXPECT_EQ(runs_of("gpi-pid", 0.1, d0, m0), 1);
+  EXPECT_EQ(runs_of("gpi-pid", tau0, 0.002, m0), 0);
+  EXPECT_EQ(runs_of("gpi-pid", tau0, d0, 35.0), 1);
+  EXPECT_EQ(runs_of("gpi-pid", 0.1, d0, 35.0), 1);
+  EXPECT_EQ(runs_of("mpi-pwm", tau0, d0, m0), 1);
+  EXPECT_EQ(runs_of("mpi-pwm", 0.1, d0, m0), 0);
+  EXPECT_EQ(runs_of("mpi-pwm", tau0, 0.002, m0), 1);
+  EXPECT_EQ(runs_of("mpi-pwm", tau0, d0, 35.0), 1);
+  EXPECT_EQ(runs_of("mpi-pwm", 0.1, d0, 35.0), 0);
+  // every slot is filled, with its own variant index; a copied slot has the run it copies
+  auto mae = [&](std::size_t e, std::size_t v) { return r.run(e, v).runs.at(0).errors.mae_mm; };
+  for (std::size_t e = 0; e < 2; ++e)
+    for (std::size_t v = 0; v < 5; ++v) {
+      EXPECT_TRUE(r.run(e, v).ok) << e << " " << v;
+      EXPECT_EQ(r.run(e, v).variant, v);
+      EXPECT_EQ(r.run(e, v).experiment, o.experiments[e]);
+    }
+  EXPECT_EQ(mae(0, 2), tau0 + d0);  // gpi-pid, slow valves: the nominal run
+  EXPECT_EQ(mae(1, 1), tau0 + d0);  // mpi-pwm, slow regulator: the nominal run
+  EXPECT_EQ(mae(1, 4), tau0 + d0);  // mpi-pwm, heavy and slow regulator: the heavy run
+  EXPECT_EQ(r.run(1, 4).runs.at(0).errors.rms_error_mm, r.run(1, 3).runs.at(0).errors.rms_error_mm);
+  EXPECT_EQ(mae(0, 1), 0.1 + d0);
+  EXPECT_EQ(mae(1, 2), tau0 + 0.002);
+  EXPECT_EQ(r.run(1, 1).wall_time_s, 0.0);
+  std::size_t said = 0;
+  for (const auto& n : r.notes)
+    said += contains(n, "mpi-pwm on variant 'slow regulator': the rig of variant 'nominal'") ||
+            contains(n, "mpi-pwm on variant 'heavy, slow regulator': the rig of variant 'heavy'") ||
+            contains(n, "gpi-pid on variant 'slow valves': the rig of variant 'nominal'");
+  EXPECT_EQ(said, 3u);
+  EXPECT_EQ(r.notes.size(), 3u);
 }
 
 TEST(SweepRun, InvalidOptionsThrowBeforeRunning) {

@@ -191,6 +191,15 @@ double static_contraction(const PamRigParams& params, double p_gauge, double z =
 
 enum class Actuation { regulator, switching_valves };
 
+// `p` with the parameters that a rig driven only by `mode` never reads replaced by those of
+// `other`. Under switching_valves: the regulator's time constant, dead time and command limit
+// (P9 acts only on the regulator's setpoint, which no valve flow reads). Under regulator: the
+// valves' PWM frequency, switching delays and minimum pulse (P10). The conductances and critical
+// ratios of both stages are read under either mode: they set the sub-steps (P12). Two rigs
+// that are equal after this give the same outputs, bit for bit, under that mode (test_plant.cpp
+// checks it), so a sweep runs such a variant once (sweep.cpp).
+PamRigParams with_unread_parameters_of(PamRigParams p, Actuation mode, const PamRigParams& other);
+
 struct RigInputs {
   double pressure_command = 0.0;  // regulator setpoint [MPa gauge] (regulator mode)
   double pwm_duty = 0.0;          // [-1, 1]; > 0 inlet, < 0 exhaust (switching mode)

@@ -429,14 +429,43 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
 
   // the jobs: experiment-major, each result in its own slot (the order never depends on threads)
-  const std::size_t nv = r.variants.size(), total = r.experiments.size() * nv;
-  r.runs.resize(total);
+  const std::size_t nv = r.variants.size(), slots = r.experiments.size() * nv;
+  r.runs.resize(slots);
+  // A variant whose rig the experiment drives as it drives an earlier variant's (they differ
+  // only in parameters its actuator never reads: a valve experiment and the regulator's lag) is
+  // not run again: its slot gets that run's results (same_as[k] = the slot it copies).
+  std::vector<std::size_t> same_as(slots);
+  for (std::size_t k = 0; k < slots; ++k) same_as[k] = k;
+  for (std::size_t e = 0; e < r.experiments.size(); ++e) {
+    const experiment::Spec* spec = experiment::find_spec(r.experiments[e]);
+    const Actuation mode = spec && spec->valves ? Actuation::switching_valves : Actuation::regulator;
+    for (std::size_t v = 1; v < nv; ++v)
+      for (std::size_t u = 0; u < v; ++u) {
+        const PamRigParams& earlier = r.variants[u].rig;
+        if (same_as[e * nv + u] != e * nv + u ||
+            rig_params_to_json(with_unread_parameters_of(r.variants[v].rig, mode, earlier)) !=
+                rig_params_to_json(earlier))
+          continue;
+        same_as[e * nv + v] = e * nv + u;
+        r.notes.push_back(fmt::format(
+            "{} on variant '{}': the rig of variant '{}' as this experiment drives it ({}; the parameters they differ "
+            "in act only {}): not run twice, its results are those of '{}'",
+            r.experiments[e], r.variants[v].variant.name, r.variants[u].variant.name,
+            mode == Actuation::switching_valves ? "through its switching valves" : "through its regulator",
+            mode == Actuation::switching_valves ? "on the regulator" : "on the switching valves",
+            r.variants[u].variant.name));
+        break;
+      }
+  }
+  std::size_t total = 0;
+  for (std::size_t k = 0; k < slots; ++k) total += same_as[k] == k;
   unsigned jobs = options.jobs ? options.jobs : std::max(1u, std::thread::hardware_concurrency());
   jobs = static_cast<unsigned>(std::min<std::size_t>(jobs, total));
   r.jobs = jobs;
   // Execution order (not the slots' order): experiments with more references first, so that
   // the shortest runs fill the end and the threads finish together.
-  std::vector<std::size_t> order(total);
+  std::vector<std::size_t> order;
+  order.reserve(total);
   {
     std::vector<std::size_t> cost(r.experiments.size(), 1);
     for (std::size_t e = 0; e < cost.size(); ++e)
@@ -445,9 +474,9 @@ SweepResult run_sweep(const SweepOptions& options) {
     std::vector<std::size_t> ex(r.experiments.size());
     for (std::size_t e = 0; e < ex.size(); ++e) ex[e] = e;
     std::stable_sort(ex.begin(), ex.end(), [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
-    std::size_t i = 0;
     for (std::size_t e : ex)
-      for (std::size_t v = 0; v < nv; ++v) order[i++] = e * nv + v;
+      for (std::size_t v = 0; v < nv; ++v)
+        if (same_as[e * nv + v] == e * nv + v) order.push_back(e * nv + v);
   }
   std::atomic<std::size_t> next{0};
   std::mutex progress_mutex;
@@ -529,6 +558,12 @@ SweepResult run_sweep(const SweepOptions& options) {
     for (unsigned i = 0; i < jobs; ++i) threads.emplace_back(worker);
     for (auto& t : threads) t.join();
   }
+  for (std::size_t k = 0; k < slots; ++k)
+    if (same_as[k] != k) {
+      r.runs[k] = r.runs[same_as[k]];
+      r.runs[k].variant = k % nv;
+      r.runs[k].wall_time_s = 0.0;  // not run
+    }
   r.wall_time_s = std::chrono::duration<double>(clock::now() - start).count();
   return r;
 }

@@ -153,6 +153,20 @@ void validate(const PamRigParams& p, std::string_view where) {
          fmt::format(">= the stroke {} m", p.muscle.max_contraction * p.muscle.rest_length));
 }
 
+PamRigParams with_unread_parameters_of(PamRigParams p, Actuation mode, const PamRigParams& other) {
+  if (mode == Actuation::switching_valves) {
+    p.regulator.time_constant = other.regulator.time_constant;
+    p.regulator.dead_time = other.regulator.dead_time;
+    p.regulator.max_command = other.regulator.max_command;
+  } else {
+    p.valves.pwm_frequency = other.valves.pwm_frequency;
+    p.valves.on_delay = other.valves.on_delay;
+    p.valves.off_delay = other.valves.off_delay;
+    p.valves.min_pulse = other.valves.min_pulse;
+  }
+  return p;
+}
+
 PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where) {
   if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
   PamRigParams p;

@@ -747,6 +747,26 @@ TEST(ExperimentTuning, RelayPeriodIsNotShortenedBySensorNoise) {
   EXPECT_GT(nominal.relay_period_s, 10.0 * tc);
 }
 
+// The valves' relay takes its hysteresis from the sensor's noise measured at the relay's level
+// with the valves closed, not while vented: a pressure sensor reading 10 kPa low clips at 0
+// there (no noise seen, no hysteresis), and the relay chattered on the noise at half the
+// nominal period (10.3 ms against 20.8 ms), which tuned the pressure PI's integral 2.4x up.
+// An offset of the sensor is not the rig's dynamics: the cycle is the nominal one.
+TEST(ExperimentTuning, RelayCycleDoesNotDependOnThePressureSensorsOffset) {
+  const double tc = 1e-3;
+  RigDynamics nominal;
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  ASSERT_GT(nominal.relay_period_s, 0.0);
+  for (double offset : {-10e3, 10e3}) {
+    PamRigParams shifted;
+    shifted.sensors.pressure_offset = offset;
+    RigDynamics d;
+    experiment::relay_test(shifted, 7, tc, d);
+    EXPECT_NEAR(d.relay_period_s / nominal.relay_period_s, 1.0, 0.1) << offset;
+    EXPECT_NEAR(d.relay_gain / nominal.relay_gain, 1.0, 0.15) << offset;
+  }
+}
+
 // The learning variant reduces the error from period to period, on the nominal rig and on
 // a slow regulator (100 ms lag, 12 ms dead time), up to the sensor-noise floor.
 TEST(ExperimentTuning, LearningReducesTheErrorMonotonically) {

@@ -342,26 +342,36 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   constexpr double h = 0.5;        // relay amplitude [duty]
   constexpr double p0 = 0.3;       // [MPa]
   const auto quiet = static_cast<std::size_t>(std::lround(0.2 / tc));
-  const auto n = static_cast<std::size_t>(std::lround(2.0 / tc));
+  const auto max_fill = static_cast<std::size_t>(std::lround(2.0 / tc));
+  const auto relay_n = static_cast<std::size_t>(std::lround(1.8 / tc));
   PamRig rig(rp, seed);
   rig.reset();
   std::vector<double> p;
-  p.reserve(n);
+  p.reserve(max_fill + quiet + relay_n);
   double eps = 0.0;
   bool up = true;
-  std::size_t k = 0;
-  rig.run(static_cast<double>(n) * tc, tc, [&](const RigOutputs& o) {
+  // 1. fill to p0 (the reading can clip while vented: a sensor offset below zero reads 0 there),
+  // 2. valves closed for `quiet`: the sensor's noise from the reading's first differences
+  //    (sigma^2 = E[(y_k - y_{k-1})^2] / 2 for white noise; the slow pressure change as the load
+  //    settles adds little), the relay's hysteresis 3 sigma,
+  // 3. the relay around p0.
+  std::size_t k = 0, filled = 0, relay_from = 0, end = max_fill + quiet + relay_n;
+  rig.run(static_cast<double>(end) * tc, tc, [&](const RigOutputs& o) {
     const double pm = o.pressure_measured * 1e-6;
     p.push_back(pm);
-    if (k == quiet) {  // noise of the vented reading -> hysteresis of the relay
-      double m = 0, s2 = 0;
-      for (std::size_t i = 0; i < quiet; ++i) m += p[i];
-      m /= static_cast<double>(quiet);
-      for (std::size_t i = 0; i < quiet; ++i) s2 += (p[i] - m) * (p[i] - m);
-      eps = 3.0 * std::sqrt(s2 / static_cast<double>(quiet));
-    }
     double duty = 0.0;
-    if (k >= quiet) {
+    if (filled == 0) {
+      if (pm >= p0 || k + 1 >= max_fill) filled = k + 1;
+      else duty = h;
+    }
+    if (filled > 0 && relay_from == 0 && k + 1 >= filled + quiet) {
+      double s2 = 0.0;
+      for (std::size_t i = filled + 1; i <= k; ++i) s2 += (p[i] - p[i - 1]) * (p[i] - p[i - 1]);
+      eps = 3.0 * std::sqrt(s2 / (2.0 * static_cast<double>(k - filled)));
+      relay_from = k + 1;
+      end = relay_from + relay_n;
+    }
+    if (relay_from > 0 && k >= relay_from) {
       if (up && pm > p0 + eps) up = false;
       if (!up && pm < p0 - eps) up = true;
       duty = up ? h : -h;
@@ -369,8 +379,9 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
     ++k;
     return valves(duty, p0);
   });
+  p.resize(std::min(p.size(), end));
   // the last second: amplitude and mean period between upward crossings of p0
-  const RelayCycle cycle = relay_cycle(p, n - static_cast<std::size_t>(std::lround(1.0 / tc)), p0, eps, h, tc);
+  const RelayCycle cycle = relay_cycle(p, p.size() - static_cast<std::size_t>(std::lround(1.0 / tc)), p0, eps, h, tc);
   if (!cycle.oscillated)
     throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {} MPa "
                             "(amplitude {} MPa, {} crossings)", p0, cycle.amplitude, cycle.crossings));

@@ -355,8 +355,8 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   //    (sigma^2 = E[(y_k - y_{k-1})^2] / 2 for white noise; the slow pressure change as the load
   //    settles adds little), the relay's hysteresis 3 sigma,
   // 3. the relay around p0.
-  std::size_t k = 0, filled = 0, relay_from = 0, end = max_fill + quiet + relay_n;
-  rig.run(static_cast<double>(end) * tc, tc, [&](const RigOutputs& o) {
+  std::size_t k = 0, filled = 0, relay_from = 0;
+  auto control = [&](const RigOutputs& o) {
     const double pm = o.pressure_measured * 1e-6;
     p.push_back(pm);
     double duty = 0.0;
@@ -369,7 +369,6 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
       for (std::size_t i = filled + 1; i <= k; ++i) s2 += (p[i] - p[i - 1]) * (p[i] - p[i - 1]);
       eps = 3.0 * std::sqrt(s2 / (2.0 * static_cast<double>(k - filled)));
       relay_from = k + 1;
-      end = relay_from + relay_n;
     }
     if (relay_from > 0 && k >= relay_from) {
       if (up && pm > p0 + eps) up = false;
@@ -378,8 +377,9 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
     }
     ++k;
     return valves(duty, p0);
-  });
-  p.resize(std::min(p.size(), end));
+  };
+  while (filled == 0) rig.run(tc, tc, control);  // one control period at a time until filled
+  rig.run(static_cast<double>(quiet + relay_n) * tc, tc, control);
   // the last second: amplitude and mean period between upward crossings of p0
   const RelayCycle cycle = relay_cycle(p, p.size() - static_cast<std::size_t>(std::lround(1.0 / tc)), p0, eps, h, tc);
   if (!cycle.oscillated)

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <numbers>
 #include <filesystem>
 #include <fstream>
@@ -372,12 +371,11 @@ std::vector<RigOutputs> drive(const PamRigParams& p, Actuation mode) {
   return out;
 }
 bool same_outputs(const std::vector<RigOutputs>& a, const std::vector<RigOutputs>& b) {
-  auto bits = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
   if (a.size() != b.size()) return false;
   for (std::size_t k = 0; k < a.size(); ++k)
-    if (!bits(a[k].contraction, b[k].contraction) || !bits(a[k].contraction_measured, b[k].contraction_measured) ||
-        !bits(a[k].velocity, b[k].velocity) || !bits(a[k].pressure, b[k].pressure) ||
-        !bits(a[k].pressure_measured, b[k].pressure_measured) || a[k].inlet_open != b[k].inlet_open ||
+    if (a[k].contraction != b[k].contraction || a[k].contraction_measured != b[k].contraction_measured ||
+        a[k].velocity != b[k].velocity || a[k].pressure != b[k].pressure ||
+        a[k].pressure_measured != b[k].pressure_measured || a[k].inlet_open != b[k].inlet_open ||
         a[k].exhaust_open != b[k].exhaust_open || a[k].ok != b[k].ok)
       return false;
   return true;

@@ -439,13 +439,13 @@ SweepResult run_sweep(const SweepOptions& options) {
   for (std::size_t e = 0; e < r.experiments.size(); ++e) {
     const experiment::Spec* spec = experiment::find_spec(r.experiments[e]);
     const Actuation mode = spec && spec->valves ? Actuation::switching_valves : Actuation::regulator;
+    // each rig as the experiment reads it: the parameters it does not read set to the base's
+    std::vector<json> read(nv);
+    for (std::size_t v = 0; v < nv; ++v)
+      read[v] = rig_params_to_json(with_unread_parameters_of(r.variants[v].rig, mode, options.base));
     for (std::size_t v = 1; v < nv; ++v)
-      for (std::size_t u = 0; u < v; ++u) {
-        const PamRigParams& earlier = r.variants[u].rig;
-        if (same_as[e * nv + u] != e * nv + u ||
-            rig_params_to_json(with_unread_parameters_of(r.variants[v].rig, mode, earlier)) !=
-                rig_params_to_json(earlier))
-          continue;
+      for (std::size_t u = 0; u < v; ++u) {  // the first equal one is run (no earlier one equals it)
+        if (read[u] != read[v]) continue;
         same_as[e * nv + v] = e * nv + u;
         r.notes.push_back(fmt::format(
             "{} on variant '{}': the rig of variant '{}' as this experiment drives it ({}; the parameters they differ "

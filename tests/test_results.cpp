@@ -330,7 +330,7 @@ TEST(Results, ExperimentResultRoundTrip) {
   r.baseline_model = test_pi();
   r.lead_s = 0.057;
   r.model_id_top_mpa = 0.354;
-  r.dynamics = {0.021, 0.056, 1.97e-4, 0.69, 152.5, 0.012, 13.02, 0.239, 0.1, 4.05, 0.7};
+  r.dynamics = {0.021, 0.056, 1.97e-4, 0.69, 152.5, 0.012, 13.02, 0.239, 0.1, 3.1e-5, 4.05, 0.7};
   r.wall_time_s = 12.5;
   r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
   r.reach_min_mm = -0.0125;
@@ -373,6 +373,7 @@ TEST(Results, ExperimentResultRoundTrip) {
   const auto fields = [](const RigDynamics& d) {
     return std::vector<double>{d.dead_time_s, d.lag_s, d.gain_m_per_mpa, d.rms_mm, d.relay_gain, d.relay_period_s,
                                d.position_relay_gain, d.position_relay_period_s, d.position_relay_amplitude_mpa,
+                               d.position_relay_hysteresis_m,
                                d.mode_frequency_hz, d.mode_damping};
   };
   EXPECT_EQ(fields(back.dynamics), fields(r.dynamics));

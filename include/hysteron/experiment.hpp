@@ -129,6 +129,9 @@ struct RigDynamics {
   double position_relay_gain = 0.0;
   double position_relay_period_s = 0.0;
   double position_relay_amplitude_mpa = 0.0;
+  // The relay's hysteresis eps [m]: 3 sigma of the contraction sensor's noise, sigma from the
+  // first differences of the reading at p0 (so the load still settling does not count).
+  double position_relay_hysteresis_m = 0.0;
   // The load's mode that puts the relay's point on the FOPDT: G = FOPDT * w_n^2 /
   // (s^2 + 2 zeta w_n s + w_n^2) with G(i w_u) = -1 / K_u (0: no mode fits).
   double mode_frequency_hz = 0.0;

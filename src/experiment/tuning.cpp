@@ -423,12 +423,14 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
   rig.run(static_cast<double>(n) * tc, tc, [&](const RigOutputs& o) {
     x.push_back(o.contraction_measured);
     if (k == settle) {  // level and noise at p0 over the last `quiet` samples
-      double m = 0, s2 = 0;
+      // The noise from first differences, sigma^2 = E[(x_k - x_{k-1})^2] / 2 for white noise
+      // (as the pressure relay's): the samples' spread around their mean would count the load
+      // still settling, 1.1-3.8x the sensor's sigma on the documented rigs.
+      double m = 0, d2 = 0;
       for (std::size_t i = settle - quiet; i < settle; ++i) m += x[i];
-      m /= static_cast<double>(quiet);
-      for (std::size_t i = settle - quiet; i < settle; ++i) s2 += (x[i] - m) * (x[i] - m);
-      x0 = m;
-      eps = 3.0 * std::sqrt(s2 / static_cast<double>(quiet));
+      for (std::size_t i = settle - quiet + 1; i < settle; ++i) d2 += (x[i] - x[i - 1]) * (x[i] - x[i - 1]);
+      x0 = m / static_cast<double>(quiet);
+      eps = 3.0 * std::sqrt(0.5 * d2 / static_cast<double>(quiet - 1));
     }
     double p = p0;
     if (k >= settle) {
@@ -444,6 +446,7 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
       relay_cycle(x, n - static_cast<std::size_t>(std::lround(0.5 * relay_s / tc)), x0, eps, h, tc);
   if (!cycle.oscillated) return cycle;
   d.position_relay_amplitude_mpa = h;
+  d.position_relay_hysteresis_m = eps;
   d.position_relay_period_s = cycle.period_s;
   d.position_relay_gain = cycle.ultimate_gain;
   return cycle;

@@ -472,6 +472,7 @@ json to_json(const ExperimentResult& r) {
                    {"position_relay_gain_mpa_per_m", number(r.dynamics.position_relay_gain)},
                    {"position_relay_period_s", number(r.dynamics.position_relay_period_s)},
                    {"position_relay_amplitude_mpa", number(r.dynamics.position_relay_amplitude_mpa)},
+                   {"position_relay_hysteresis_m", number(r.dynamics.position_relay_hysteresis_m)},
                    {"mode_frequency_hz", number(r.dynamics.mode_frequency_hz)},
                    {"mode_damping", number(r.dynamics.mode_damping)},
                    {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
@@ -578,6 +579,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     r.dynamics.position_relay_gain = opt_double(d, "position_relay_gain_mpa_per_m", dw, 0.0);
     r.dynamics.position_relay_period_s = opt_double(d, "position_relay_period_s", dw, 0.0);
     r.dynamics.position_relay_amplitude_mpa = opt_double(d, "position_relay_amplitude_mpa", dw, 0.0);
+    r.dynamics.position_relay_hysteresis_m = opt_double(d, "position_relay_hysteresis_m", dw, 0.0);
     r.dynamics.mode_frequency_hz = opt_double(d, "mode_frequency_hz", dw, 0.0);
     r.dynamics.mode_damping = opt_double(d, "mode_damping", dw, 0.0);
     r.dynamics.relay_gain = opt_double(d, "pressure_relay_gain_per_mpa", dw, 0.0);

@@ -1241,6 +1241,35 @@ TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
   EXPECT_EQ(experiment::learning_neighbours(plain).size(), 18u);
 }
 
+// Where no filter contracts, the design's error says how near it came: the least bound it found,
+// with its gain, lead and half-width, against the 0.98 it needs. A loop with 0.1 s dead time and
+// a 0.15 s period, of which the feedforward's preview takes 0.1 s: the filter can be at most 24
+// samples wide and passes the frequencies where the loop's phase has turned (the same loop with a
+// 5 s period contracts).
+TEST(ExperimentTuning, LearningDesignThatFindsNoFilterSaysHowNearItCame) {
+  RigDynamics d;
+  d.dead_time_s = 0.1;
+  d.lag_s = 0.1;
+  d.gain_m_per_mpa = 0.2;
+  d.position_relay_gain = 12.0;
+  d.position_relay_period_s = 0.5;
+  d.position_relay_amplitude_mpa = 0.05;
+  const PidParams pid = experiment::relay_pid(d, 1e-3, -0.6, 0.6, experiment::PidRule::some_overshoot);
+  double rho = 0.0;
+  ASSERT_NO_THROW(experiment::design_learning(d, pid, 100, 5000, 1e-3, rho));
+  EXPECT_LT(rho, 0.98);
+  try {
+    experiment::design_learning(d, pid, 100, 150, 1e-3, rho);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    const auto at = m.find("the least bound found is rho = ");
+    ASSERT_NE(at, std::string::npos) << m;
+    EXPECT_GE(std::stod(m.substr(at + 31)), 0.98) << m;
+    EXPECT_NE(m.find("0.98 needed"), std::string::npos) << m;
+  }
+}
+
 // The learning band ends at the position loop's ultimate frequency from its relay test
 // (|Q(w_u)| <= 1/sqrt(2)), and with it mpi-openloop's learning (references with reversals at
 // 40/35/30 mm) converges period after period on both references. With the

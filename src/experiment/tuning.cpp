@@ -293,6 +293,9 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   // rig whose loop rings (a lightly damped mode, a long dead time) 0.1 or 0.05 may contract
   // where 0.2 does not. Where T ~ 1 (low frequencies) the error falls by a factor of about
   // 1 - L per period (10 periods of L = 0.05: to about 0.6), so smaller gains are not tried.
+  // the least bound seen, for the message where none is below 0.98
+  double least = std::numeric_limits<double>::infinity(), least_gain = 0.0;
+  std::size_t least_shift = 0, least_h = 0;
   for (double gain : kLearningGains) {
     if (found) break;
     best.gain = gain;
@@ -314,6 +317,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
         const std::vector<double>& q = q_of(h);
         double rho = 0.0;
         for (std::size_t l = 0; l < kGrid; ++l) rho = std::max(rho, q[l] * worst[l]);
+        if (rho < least) least = rho, least_gain = gain, least_shift = shift, least_h = h;
         if (rho < 0.98) {
           if (!found || h < best.half_width || rho < contraction) {
             best.lead = shift;
@@ -329,8 +333,12 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   if (found) contraction = learning_contraction(best, w, T);  // the bound as the library computes it
   if (!found)
     throw Error(fmt::format("no learning filter contracts on the identified loop and its neighbours "
-                            "(theta = {:.3f} s, tau = {:.3f} s, mode {:.2f} Hz, damping {:.2f}; period {} samples)",
-                            d.dead_time_s, d.lag_s, d.mode_frequency_hz, d.mode_damping, period));
+                            "(theta = {:.3f} s, tau = {:.3f} s, mode {:.2f} Hz, damping {:.2f}; period {} samples; {})",
+                            d.dead_time_s, d.lag_s, d.mode_frequency_hz, d.mode_damping, period,
+                            std::isfinite(least)
+                                ? fmt::format("the least bound found is rho = {:.4f} at L = {:g}, lead {} samples, "
+                                              "half-width {}; 0.98 needed", least, least_gain, least_shift, least_h)
+                                : std::string("no filter fits in the period")));
   return best;
 }
 

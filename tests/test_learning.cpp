@@ -1247,13 +1247,7 @@ TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
 // samples wide and passes the frequencies where the loop's phase has turned (the same loop with a
 // 5 s period contracts).
 TEST(ExperimentTuning, LearningDesignThatFindsNoFilterSaysHowNearItCame) {
-  RigDynamics d;
-  d.dead_time_s = 0.1;
-  d.lag_s = 0.1;
-  d.gain_m_per_mpa = 0.2;
-  d.position_relay_gain = 12.0;
-  d.position_relay_period_s = 0.5;
-  d.position_relay_amplitude_mpa = 0.05;
+  const RigDynamics d = relay_identified(0.1, 0.1, 0.2, 12.0, 0.5);
   const PidParams pid = experiment::relay_pid(d, 1e-3, -0.6, 0.6, experiment::PidRule::some_overshoot);
   double rho = 0.0;
   ASSERT_NO_THROW(experiment::design_learning(d, pid, 100, 5000, 1e-3, rho));

@@ -84,6 +84,15 @@ struct RelayCycle {
   bool oscillated = false;
 };
 
+// The noise sigma of y[from..to) from its first differences, sigma^2 = E[(y_k - y_{k-1})^2] / 2
+// for white noise: a slow drift (a load still settling) adds little, where the samples' spread
+// around their mean would count it. Needs to - from >= 2.
+double first_difference_sigma(const std::vector<double>& y, std::size_t from, std::size_t to) {
+  double s2 = 0.0;
+  for (std::size_t i = from + 1; i < to; ++i) s2 += (y[i] - y[i - 1]) * (y[i] - y[i - 1]);
+  return std::sqrt(s2 / (2.0 * static_cast<double>(to - from - 1)));
+}
+
 RelayCycle relay_cycle(const std::vector<double>& y, std::size_t from, double level, double eps, double h, double tc) {
   RelayCycle r;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -359,9 +368,8 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   double eps = 0.0;
   bool up = true;
   // 1. fill to p0 (the reading can clip while vented: a sensor offset below zero reads 0 there),
-  // 2. valves closed for `quiet`: the sensor's noise from the reading's first differences
-  //    (sigma^2 = E[(y_k - y_{k-1})^2] / 2 for white noise; the slow pressure change as the load
-  //    settles adds little), the relay's hysteresis 3 sigma,
+  // 2. valves closed for `quiet`: the relay's hysteresis 3 sigma of the sensor's noise
+  //    (first_difference_sigma: the slow pressure change as the load settles adds little),
   // 3. the relay around p0.
   std::size_t k = 0, filled = 0, relay_from = 0;
   auto control = [&](const RigOutputs& o) {
@@ -373,9 +381,7 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
       else duty = h;
     }
     if (filled > 0 && relay_from == 0 && k + 1 >= filled + quiet) {
-      double s2 = 0.0;
-      for (std::size_t i = filled + 1; i <= k; ++i) s2 += (p[i] - p[i - 1]) * (p[i] - p[i - 1]);
-      eps = 3.0 * std::sqrt(s2 / (2.0 * static_cast<double>(k - filled)));
+      eps = 3.0 * first_difference_sigma(p, filled, k + 1);
       relay_from = k + 1;
     }
     if (relay_from > 0 && k >= relay_from) {
@@ -430,15 +436,12 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
   std::size_t k = 0;
   rig.run(static_cast<double>(n) * tc, tc, [&](const RigOutputs& o) {
     x.push_back(o.contraction_measured);
-    if (k == settle) {  // level and noise at p0 over the last `quiet` samples
-      // The noise from first differences, sigma^2 = E[(x_k - x_{k-1})^2] / 2 for white noise
-      // (as the pressure relay's): the samples' spread around their mean would count the load
-      // still settling, 1.1-3.8x the sensor's sigma on the documented rigs.
-      double m = 0, d2 = 0;
+    if (k == settle) {  // level and noise at p0 over the last `quiet` samples (the samples'
+      // spread would count the load still settling: 1.1-3.8x the sensor's sigma on the documented rigs)
+      double m = 0;
       for (std::size_t i = settle - quiet; i < settle; ++i) m += x[i];
-      for (std::size_t i = settle - quiet + 1; i < settle; ++i) d2 += (x[i] - x[i - 1]) * (x[i] - x[i - 1]);
       x0 = m / static_cast<double>(quiet);
-      eps = 3.0 * std::sqrt(0.5 * d2 / static_cast<double>(quiet - 1));
+      eps = 3.0 * first_difference_sigma(x, settle - quiet, settle);
     }
     double p = p0;
     if (k >= settle) {

@@ -36,6 +36,11 @@ def main():
         s = {k: round(rng.uniform(*RANGES[k]), 6) for k in chosen}
         if "valves.on_delay" in s:
             s["valves.off_delay"] = s["valves.on_delay"]
+        # A muscle longer than 0.6 m strokes more than the default 0.15 m displacement sensor
+        # (max contraction 0.25): give it a 0.2 m sensor, as a user would (the rig's validation
+        # refuses a stroke beyond the sensor's range).
+        if s.get("muscle.rest_length", 0.0) * 0.25 > 0.15:
+            s["sensors.displacement_range"] = 0.2
         variants.append({"name": f"r{i:02d}", "set": s})
     json.dump({"variants": variants}, sys.stdout, indent=1)
     sys.stdout.write("\n")

@@ -338,6 +338,17 @@ TEST(PamRigParams, JsonRoundTripAndErrors) {
   EXPECT_NE(msg(R"({"simulation": {"dt": 1e-3}})").find("simulation.dt"), std::string::npos);
   EXPECT_NE(msg(R"({"air": {"supply_pressure": 5e4}})").find("air.supply_pressure"), std::string::npos);
   EXPECT_NE(msg(R"([1, 2])").find("expected a JSON object"), std::string::npos);
+  // A muscle whose stroke (0.25 x 0.7 m) exceeds the displacement sensor's range (0.15 m): the
+  // message names the key to change and why; a longer sensor makes the same rig valid.
+  const auto stroke = msg(R"({"muscle": {"rest_length": 0.7}})");
+  EXPECT_NE(stroke.find("rig.json.sensors.displacement_range = 0.15"), std::string::npos) << stroke;
+  EXPECT_NE(stroke.find(">= the stroke 0.175 m"), std::string::npos) << stroke;
+  EXPECT_NE(stroke.find("longer displacement sensor"), std::string::npos) << stroke;
+  EXPECT_EQ(rig_params_from_json(
+                nlohmann::json::parse(R"({"muscle": {"rest_length": 0.7}, "sensors": {"displacement_range": 0.2}})"),
+                "x")
+                .muscle.rest_length,
+            0.7);
   nlohmann::json nan_json;
   nan_json["load"]["mass"] = NAN;
   EXPECT_NE(error_of([&] { rig_params_from_json(nan_json, "n"); }).find("n.load.mass"), std::string::npos);

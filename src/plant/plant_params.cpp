@@ -150,7 +150,9 @@ void validate(const PamRigParams& p, std::string_view where) {
     fail(where, "simulation.dt", p.simulation.dt, fmt::format("<= half the PWM period {} s", period));
   if (p.muscle.max_contraction * p.muscle.rest_length > p.sensors.displacement_range)
     fail(where, "sensors.displacement_range", p.sensors.displacement_range,
-         fmt::format(">= the stroke {} m", p.muscle.max_contraction * p.muscle.rest_length));
+         fmt::format(">= the stroke {} m (muscle.max_contraction x muscle.rest_length; a longer "
+                     "muscle needs a longer displacement sensor)",
+                     p.muscle.max_contraction * p.muscle.rest_length));
 }
 
 PamRigParams with_unread_parameters_of(PamRigParams p, Actuation mode, const PamRigParams& other) {

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Where a learning run's remaining error is: its last period against the one before, and the
-error's spectrum in bands (docs/control.md, "What does not work").
+error's spectrum in bands (docs/history.md, part 2).
 
     build/hysteron demo            # writes out/demo/<experiment>/tracking_learning_<reference>.csv
     /usr/bin/python3 bench/learning_residual.py out/demo/mpi-openloop/tracking_learning_triangle.csv

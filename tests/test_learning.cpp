@@ -749,6 +749,69 @@ TEST(ExperimentTuning, RelayPeriodIsNotShortenedBySensorNoise) {
   EXPECT_GT(nominal.relay_period_s, 10.0 * tc);
 }
 
+// Both relay tests run at the middle of the pressure the rig can use: 0.3 MPa of the actuator's
+// 0..0.6 MPa, or half the top where the supply caps it. A 4 bar (absolute) supply holds the
+// muscle at 0.3 MPa gauge: the valves' relay around 0.3 MPa could not rise above its level and
+// mpi-pwm failed on that rig ("did not oscillate around 0.3 MPa (amplitude 0.00256 MPa, 0
+// crossings)"); the position relay switched 0.3 +- 0.05 MPa, half of it out of reach. And the
+// identification run's commands above that cap made the FOPDT's lag the grid's bound (300 ms).
+// A supply that still holds the relay's 0.35 MPa keeps it at 0.3 MPa.
+TEST(ExperimentTuning, RelaysRunAtTheMiddleOfThePressureTheSupplyReaches) {
+  const double tc = 1e-3;
+  RigDynamics nominal;
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  EXPECT_EQ(nominal.relay_level_mpa, experiment::kRelayLevel);
+  PamRigParams low;
+  low.air.supply_pressure = 4e5;  // [Pa abs]
+  const double cap = (low.air.supply_pressure - low.air.atmospheric_pressure) * 1e-6;  // 0.3 MPa gauge
+  RigDynamics d;
+  experiment::relay_test(low, 7, tc, d);
+  EXPECT_NEAR(d.relay_level_mpa / (0.5 * cap), 1.0, 0.03) << d.relay_level_mpa;
+  EXPECT_GT(d.relay_gain, 0.0);
+  EXPECT_GT(d.relay_period_s, 10.0 * tc);
+  // the position relay around half the top it is given where 0.3 + 0.05 MPa is beyond it; the
+  // full range, and a top that still holds 0.35 MPa, keep 0.3 MPa
+  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  RigDynamics pos_nominal, pos_low;
+  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, pos_nominal);
+  EXPECT_EQ(pos_nominal.position_relay_level_mpa, experiment::kRelayLevel);
+  experiment::position_relay_test(low, 7, tc, make_actuator, pos_low, cap);
+  EXPECT_EQ(pos_low.position_relay_level_mpa, 0.5 * cap);
+  RigDynamics pos_mid;
+  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, pos_mid, 0.4);
+  EXPECT_EQ(pos_mid.position_relay_level_mpa, experiment::kRelayLevel);
+  EXPECT_EQ(pos_mid.position_relay_gain, pos_nominal.position_relay_gain);
+  EXPECT_GT(pos_low.position_relay_gain, 0.0);
+  EXPECT_THROW(experiment::position_relay_test(low, 7, tc, make_actuator, pos_low, 0.0), Error);
+  // mpi-pwm end to end on that rig: both levels near 0.15 MPa, in the result and its table, a
+  // lag well inside the identification's 0.3 s grid, and the compensated loop well below the
+  // baseline
+  ExperimentOptions o;
+  o.name = "mpi-pwm";
+  o.rig = low;
+  o.adaptive = false;
+  o.model = FitModel::mpi_asym;
+  o.learning_periods = 0;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_NEAR(r.dynamics.relay_level_mpa / (0.5 * cap), 1.0, 0.03);
+  EXPECT_NEAR(r.dynamics.position_relay_level_mpa / (0.5 * cap), 1.0, 0.03);
+  EXPECT_LT(r.dynamics.dead_time_s + r.dynamics.lag_s, 0.1);
+  const std::string table = r.table();
+  EXPECT_NE(table.find("position relay (at 0.15"), std::string::npos) << table;
+  EXPECT_NE(table.find("pressure relay (at 0.15"), std::string::npos) << table;
+  for (const char* ref : {"sine", "triangle"}) {
+    const TrackingRun* c = nullptr;
+    const TrackingRun* b = nullptr;
+    for (const auto& run : r.runs) {
+      if (run.reference != ref) continue;
+      if (run.variant == "compensated") c = &run;
+      if (run.variant == "baseline") b = &run;
+    }
+    ASSERT_TRUE(c && b) << ref;
+    EXPECT_LT(c->errors.rms_error_mm, 0.2 * b->errors.rms_error_mm) << ref;
+  }
+}
+
 // The valves' relay takes its hysteresis from the sensor's noise measured at the relay's level
 // with the valves closed, not while vented: a pressure sensor reading 10 kPa low clips at 0
 // there (no noise seen, no hysteresis), and the relay chattered on the noise at half the

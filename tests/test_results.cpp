@@ -330,7 +330,7 @@ TEST(Results, ExperimentResultRoundTrip) {
   r.baseline_model = test_pi();
   r.lead_s = 0.057;
   r.model_id_top_mpa = 0.354;
-  r.dynamics = {0.021, 0.056, 1.97e-4, 0.69, 152.5, 0.012, 13.02, 0.239, 0.1, 3.1e-5, 4.05, 0.7};
+  r.dynamics = {0.021, 0.056, 1.97e-4, 0.69, 152.5, 0.012, 13.02, 0.239, 0.1, 3.1e-5, 4.05, 0.7, 0.3, 0.3};
   r.wall_time_s = 12.5;
   r.published = {"paper, Results", {{"triangle", 1.29, nan_v, nan_v}, {"sine", 1.38, nan_v, nan_v}}};
   r.reach_min_mm = -0.0125;
@@ -373,10 +373,30 @@ TEST(Results, ExperimentResultRoundTrip) {
   const auto fields = [](const RigDynamics& d) {
     return std::vector<double>{d.dead_time_s, d.lag_s, d.gain_m_per_mpa, d.rms_mm, d.relay_gain, d.relay_period_s,
                                d.position_relay_gain, d.position_relay_period_s, d.position_relay_amplitude_mpa,
-                               d.position_relay_hysteresis_m,
+                               d.position_relay_hysteresis_m, d.position_relay_level_mpa, d.relay_level_mpa,
                                d.mode_frequency_hz, d.mode_damping};
   };
   EXPECT_EQ(fields(back.dynamics), fields(r.dynamics));
+  {  // a file from before the relays' levels were written: both ran at 0.3 MPa where they ran
+    nlohmann::json j = io::to_json(r);
+    j["dynamics"].erase("position_relay_level_mpa");
+    j["dynamics"].erase("pressure_relay_level_mpa");
+    ExperimentResult old = io::from_json<ExperimentResult>(j, "old");
+    EXPECT_EQ(old.dynamics.position_relay_level_mpa, 0.3);
+    EXPECT_EQ(old.dynamics.relay_level_mpa, 0.3);
+    j["dynamics"]["pressure_relay_gain_per_mpa"] = 0.0;  // a regulator rig: no pressure relay
+    old = io::from_json<ExperimentResult>(j, "old");
+    EXPECT_EQ(old.dynamics.relay_level_mpa, 0.0);
+    // a capped rig's levels come back and the table names them
+    ExperimentResult capped = r;
+    capped.dynamics.position_relay_level_mpa = 0.15;
+    capped.dynamics.relay_level_mpa = 0.151;
+    const ExperimentResult cb = round_trip(capped);
+    EXPECT_EQ(cb.dynamics.position_relay_level_mpa, 0.15);
+    EXPECT_EQ(cb.dynamics.relay_level_mpa, 0.151);
+    EXPECT_NE(cb.table().find("position relay (at 0.150 +-0.1 MPa)"), std::string::npos) << cb.table();
+    EXPECT_NE(cb.table().find("pressure relay (at 0.151 MPa)"), std::string::npos) << cb.table();
+  }
   const std::string table = back.table();  // `hysteron report` prints the table from the file
   EXPECT_NE(table.find("position relay (+-0.1 MPa) K_u = 13 MPa/m, T_u = 239 ms, mode 4.05 Hz (damping 0.70)"),
             std::string::npos) << table;

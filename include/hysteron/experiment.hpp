@@ -118,7 +118,7 @@ struct RigDynamics {
   double lag_s = 0.0;          // tau
   double gain_m_per_mpa = 0.0; // mean slope of the record: contraction span / pressure span
   double rms_mm = 0.0;         // RMS of the fit of this model to the record
-  // Valve experiments: relay test of the pressure loop (duty +-h around 0.3 MPa):
+  // Valve experiments: relay test of the pressure loop (duty +-h around relay_level_mpa):
   // ultimate gain K_u = 4 h / (pi sqrt(a^2 - eps^2)) [duty/MPa] and period T_u [s]; 0 if not run.
   double relay_gain = 0.0;
   double relay_period_s = 0.0;
@@ -136,6 +136,11 @@ struct RigDynamics {
   // (s^2 + 2 zeta w_n s + w_n^2) with G(i w_u) = -1 / K_u (0: no mode fits).
   double mode_frequency_hz = 0.0;
   double mode_damping = 0.0;
+  // The pressures the relays switched around [MPa] (position, and the valves' pressure relay;
+  // 0 if not run): 0.3, the middle of the actuator's 0..0.6 MPa, or half the top the rig
+  // reaches where its supply caps it below that (docs/control.md, section 1).
+  double position_relay_level_mpa = 0.0;
+  double relay_level_mpa = 0.0;
   bool operator==(const RigDynamics&) const = default;
 };
 

@@ -189,21 +189,32 @@ PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_m
 // with the feedforward fed `lead` samples ahead and the PID `pid` (the inverse model
 // taken as exact): T = G (z^lead + K (K_p + I(z))) / (1 + G K C(z)), at w [rad/sample].
 std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std::size_t lead, double tc, double w);
-// Relay test (Astrom-Hagglund) of the valves' pressure loop: duty +-h switched on the
-// measured pressure around 0.3 MPa with a hysteresis of 3 noise standard deviations
-// (measured first, vented); fills relay_gain and relay_period_s of `d`.
+// The level of both relay tests [MPa]: the middle of the pressure range the loops can use,
+// 0..kPressureMax, or 0..top where the supply caps the actuator below kPressureMax.
+inline constexpr double kRelayLevel = 0.5 * kPressureMax;
+// Relay test (Astrom-Hagglund) of the valves' pressure loop: fill to kRelayLevel, then duty
+// +-h switched on the measured pressure around it with a hysteresis of 3 noise standard
+// deviations (measured with the valves closed). Where that does not oscillate and the highest
+// pressure measured is below twice the level (a supply that caps the rig), the test runs once
+// more around half that highest pressure. Fills relay_gain, relay_period_s and
+// relay_level_mpa of `d`; throws hysteron::Error if it does not oscillate.
 void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d);
 // Relay test of the position loop through an actuator (desired pressure [MPa] and the rig's
 // outputs -> the rig's inputs; `make_actuator` gives a fresh one, e.g. with a reset pressure
-// loop, per run): hold 0.3 MPa until settled, then switch the pressure 0.3 +- h on the
-// measured contraction around its settled level, with a hysteresis of 3 noise standard
-// deviations. h = kPositionRelayAmplitude, doubled while the contraction does not oscillate
-// (a rig whose hysteresis band is wider than h) and 0.3 +- h stays within 0..kPressureMax.
-// Fills position_relay_gain, position_relay_period_s and position_relay_amplitude_mpa;
-// throws hysteron::Error naming every amplitude tried if none oscillates.
+// loop, per run): hold p0 until settled, then switch the pressure p0 +- h on the measured
+// contraction around its settled level, with a hysteresis of 3 noise standard deviations.
+// `top` [MPa] is the actuator's usable top pressure (kPressureMax, or less where the
+// identification run found it capped): p0 = kRelayLevel where kRelayLevel + the first h is
+// within it, else top / 2.
+// h = kPositionRelayAmplitude, doubled while the contraction does not oscillate (a rig whose
+// hysteresis band is wider than h) and p0 +- h stays within 0..top. Fills
+// position_relay_gain, position_relay_period_s, position_relay_amplitude_mpa and
+// position_relay_level_mpa; throws hysteron::Error naming every amplitude tried if none
+// oscillates.
 inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h tried
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
-                         const std::function<Actuator()>& make_actuator, RigDynamics& d);
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d,
+                         double top = kPressureMax);
 // The second-order mode through the relay's point (RigDynamics::mode_*): with F the
 // FOPDT at w_u = 2 pi / T_u and 1/H = (1 - r^2) + 2 i zeta r = -F K_u (r = w_u / w_n):
 //   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).

@@ -355,9 +355,18 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
 
 namespace hysteron::experiment {
 
-void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d) {
+namespace {
+
+// One run of the valves' pressure relay around p0 [MPa] (relay_test): the limit cycle of its
+// last second, the highest pressure measured over the whole run (`top`) and the relay's
+// hysteresis eps.
+struct PressureRelayRun {
+  RelayCycle cycle;
+  double top = 0.0, eps = 0.0;
+};
+
+PressureRelayRun pressure_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, double p0) {
   constexpr double h = 0.5;        // relay amplitude [duty]
-  constexpr double p0 = 0.3;       // [MPa]
   const auto quiet = static_cast<std::size_t>(std::lround(0.2 / tc));
   const auto max_fill = static_cast<std::size_t>(std::lround(2.0 / tc));
   const auto relay_n = static_cast<std::size_t>(std::lround(1.8 / tc));
@@ -394,13 +403,37 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   };
   while (filled == 0) rig.run(tc, tc, control);  // one control period at a time until filled
   rig.run(static_cast<double>(quiet + relay_n) * tc, tc, control);
+  PressureRelayRun r;
   // the last second: amplitude and mean period between upward crossings of p0
-  const RelayCycle cycle = relay_cycle(p, p.size() - static_cast<std::size_t>(std::lround(1.0 / tc)), p0, eps, h, tc);
-  if (!cycle.oscillated)
-    throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {} MPa "
-                            "(amplitude {} MPa, {} crossings)", p0, cycle.amplitude, cycle.crossings));
-  d.relay_period_s = cycle.period_s;
-  d.relay_gain = cycle.ultimate_gain;
+  r.cycle = relay_cycle(p, p.size() - static_cast<std::size_t>(std::lround(1.0 / tc)), p0, eps, h, tc);
+  r.top = *std::max_element(p.begin(), p.end());
+  r.eps = eps;
+  return r;
+}
+
+}  // namespace
+
+void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d) {
+  // At kRelayLevel first. Where it did not oscillate and the highest pressure that run
+  // measured is below twice its level (a supply that caps the rig at or below the level: the
+  // limit cycle has no upper half), once more around half that top, the middle of the range
+  // the rig reaches.
+  double p0 = kRelayLevel;  // [MPa]
+  PressureRelayRun r = pressure_relay_run(rp, seed, tc, p0);
+  std::string first;
+  if (!r.cycle.oscillated && r.top > 0.0 && 0.5 * r.top < p0 - r.eps) {
+    first = fmt::format("; around {} MPa first, where the pressure reached at most {:.4f} MPa (the supply caps it)",
+                        p0, r.top);
+    p0 = 0.5 * r.top;
+    r = pressure_relay_run(rp, seed, tc, p0);
+  }
+  if (!r.cycle.oscillated)
+    throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {:.4g} "
+                            "MPa (amplitude {:.3g} MPa, {} crossings{})",
+                            p0, r.cycle.amplitude, r.cycle.crossings, first));
+  d.relay_period_s = r.cycle.period_s;
+  d.relay_gain = r.cycle.ultimate_gain;
+  d.relay_level_mpa = p0;
 }
 
 PidParams tyreus_luyben_pi(const RigDynamics& d, double tc) {
@@ -457,6 +490,7 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
       relay_cycle(x, n - static_cast<std::size_t>(std::lround(0.5 * relay_s / tc)), x0, eps, h, tc);
   if (!cycle.oscillated) return cycle;
   d.position_relay_amplitude_mpa = h;
+  d.position_relay_level_mpa = p0;
   d.position_relay_hysteresis_m = eps;
   d.position_relay_period_s = cycle.period_s;
   d.position_relay_gain = cycle.ultimate_gain;
@@ -466,8 +500,13 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
 }  // namespace
 
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
-                         const std::function<Actuator()>& make_actuator, RigDynamics& d) {
-  constexpr double p0 = 0.3;  // [MPa]
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d, double top) {
+  if (!(top > 0.0 && top <= kPressureMax))
+    throw Error(fmt::format("experiment: the position relay's top pressure {} MPa must be in (0, {}]", top,
+                            kPressureMax));
+  // [MPa]: kRelayLevel while the relay's first upper level is within reach, else the middle of
+  // the range the rig reaches (a supply that caps the actuator)
+  const double p0 = kRelayLevel + kPositionRelayAmplitude <= top ? kRelayLevel : 0.5 * top;
   // A relay must overcome the rig's hysteresis to make the muscle reverse: where the
   // pressure band is wider than the amplitude the contraction only creeps and does not
   // cross its level. Then the amplitude is doubled (Astrom and Hagglund adjust it to the
@@ -479,7 +518,7 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
   // amplitude grows.
   constexpr double relay_s = 4.0;  // [s] of relay; the cycle is measured over its last half
   std::string seen;
-  for (double h = kPositionRelayAmplitude; p0 - h >= 0.0 && p0 + h <= kPressureMax; h *= 2.0) {
+  for (double h = kPositionRelayAmplitude; p0 - h >= 0.0 && p0 + h <= top; h *= 2.0) {
     for (double len = relay_s; len <= 4.0 * relay_s; len *= 2.0) {
       const RelayCycle cycle = position_relay_run(rp, seed, tc, make_actuator(), p0, h, len, d);
       if (cycle.oscillated) return;
@@ -490,7 +529,7 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
   }
   throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate around {} MPa at any "
                           "amplitude within the actuator's 0..{} MPa ({})",
-                          p0, kPressureMax, seen));
+                          p0, top, seen));
 }
 
 PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule) {

@@ -472,11 +472,13 @@ json to_json(const ExperimentResult& r) {
                    {"position_relay_gain_mpa_per_m", number(r.dynamics.position_relay_gain)},
                    {"position_relay_period_s", number(r.dynamics.position_relay_period_s)},
                    {"position_relay_amplitude_mpa", number(r.dynamics.position_relay_amplitude_mpa)},
+                   {"position_relay_level_mpa", number(r.dynamics.position_relay_level_mpa)},
                    {"position_relay_hysteresis_m", number(r.dynamics.position_relay_hysteresis_m)},
                    {"mode_frequency_hz", number(r.dynamics.mode_frequency_hz)},
                    {"mode_damping", number(r.dynamics.mode_damping)},
                    {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
-                   {"pressure_relay_period_s", number(r.dynamics.relay_period_s)}};
+                   {"pressure_relay_period_s", number(r.dynamics.relay_period_s)},
+                   {"pressure_relay_level_mpa", number(r.dynamics.relay_level_mpa)}};
   j["reach"] = {{"min_mm", number(r.reach_min_mm)},
                 {"max_mm", number(r.reach_max_mm)},
                 {"top_mm", number(r.reach_top_mm)},
@@ -584,6 +586,10 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     r.dynamics.mode_damping = opt_double(d, "mode_damping", dw, 0.0);
     r.dynamics.relay_gain = opt_double(d, "pressure_relay_gain_per_mpa", dw, 0.0);
     r.dynamics.relay_period_s = opt_double(d, "pressure_relay_period_s", dw, 0.0);
+    // files before the levels were written: both relays ran at 0.3 MPa where they ran at all
+    r.dynamics.position_relay_level_mpa =
+        opt_double(d, "position_relay_level_mpa", dw, r.dynamics.position_relay_gain > 0.0 ? 0.3 : 0.0);
+    r.dynamics.relay_level_mpa = opt_double(d, "pressure_relay_level_mpa", dw, r.dynamics.relay_gain > 0.0 ? 0.3 : 0.0);
   }
   if (j.contains("reach")) {  // absent in files before it
     const json& a = j["reach"];

@@ -320,20 +320,16 @@ std::string clipping_note(const Clipping& clip) {
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
-// (the least contraction at or above that pressure). The top pressure is kPressureMax,
-// or less where the run commanded kPressureMax (1 - kPressureHeadroom) or more but the
-// measured pressure stayed below it: the supply (or the regulator, or the valves) caps the
-// actuator, and its top is the most the measured pressure reached (11-sample mean). A
+// (the least contraction at or above that pressure). The top pressure p_top is usable_top's
+// (kPressureMax, or the most the measured pressure reached where the supply, the regulator
+// or the valves cap the actuator; res.reach_pressure_max_mpa, set by the caller). A
 // reference that leaves the reach is mapped affinely onto its intersection with it (only
 // the end that leaves it moves; a reference whose bottom is the rest position keeps it).
 // The ranges and a note per reference out of reach go into the result.
 std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, const SmoothedRun& sm,
-                                    std::vector<Reference> refs, ExperimentResult& res) {
+                                    double p_top, std::vector<Reference> refs, ExperimentResult& res) {
   const std::vector<double>& x = sm.x_mm;
-  const std::vector<double>& p = sm.p;
   const double p_cmd_max = id.p_cmd.empty() ? 0.0 : *std::max_element(id.p_cmd.begin(), id.p_cmd.end());
-  res.reach_pressure_max_mpa = p.empty() ? 0.0 : *std::max_element(p.begin(), p.end());
-  const double p_top = usable_top(id, res.reach_pressure_max_mpa);
   const bool capped = p_top < kPressureMax;
   const double p_limit = (1.0 - kPressureHeadroom) * p_top;
   if (capped)
@@ -712,7 +708,10 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   //    pressure range the references need where that is below the paper's input's maximum
   //    (model_identification_range; the references kept within the rig's reach first).
   const SmoothedRun smooth(id);
-  std::vector<Reference> refs = fit_to_reach(o, id, smooth, spec.references(tc), res);
+  res.reach_pressure_max_mpa = smooth.p.empty() ? 0.0 : *std::max_element(smooth.p.begin(), smooth.p.end());
+  // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip
+  const double top = usable_top(id, res.reach_pressure_max_mpa);
+  std::vector<Reference> refs = fit_to_reach(o, id, smooth, top, spec.references(tc), res);
   add_pre_roll(refs, tc);
   const std::vector<double> id_input = spec.id_pressure(tc);
   const IdentificationRange range = model_identification_range(smooth, refs, id_input);
@@ -760,7 +759,6 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // peaks falls short by less, 5.5 % with a 200 ms lag), the model is run on the commands
   // clipped at that top: what the actuator could deliver, so the FOPDT does not take the
   // saturation for a lag (a 4 bar supply: 300 ms, the grid's bound, on mpi-pwm).
-  const double top = usable_top(id, res.reach_pressure_max_mpa);
   const IdRecord& dyn_run = on_paper_run ? id : ids;
   const double cmd_max = dyn_run.p_cmd.empty() ? 0.0 : *std::max_element(dyn_run.p_cmd.begin(), dyn_run.p_cmd.end());
   IdRecord capped_run;

@@ -665,6 +665,59 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
   }
 }
 
+// A heavy load hangs on its rest below a pressure that grows with its weight (the
+// identification run lifts 65 kg off its rest only above about 0.29 MPa, 70 kg above 0.31).
+// A relay at 0.3 +- 0.05 MPa then lets it down onto the rest every cycle: at 65 kg the cycle
+// is cut there and the describing function gave K_u = 79.5 MPa/m (6x the nominal rig's), and
+// every loop tuned from it oscillated (gpi-pid compensated 16.2 mm RMS, 2.2x the baseline's);
+// at 70 kg the contraction could not fall below its level and every experiment failed ("did
+// not oscillate"). The relay now runs around the middle of the identification run's stroke
+// wherever its lower level is below the pressure that lifts the load.
+TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWouldSetTheLoadDown) {
+  const double tc = 1e-3;
+  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  PamRigParams heavy;
+  heavy.load.mass = 70.0;
+  RigDynamics none;
+  try {
+    experiment::position_relay_test(heavy, 7, tc, make_actuator, none);
+    ADD_FAILURE() << "0.3 MPa lifts 70 kg: the test's premise does not hold";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("around 0.3 MPa: +-0.05 MPa"), std::string::npos) << e.what();
+  }
+  // a level that cannot fit the first amplitude within the actuator's range is named as such
+  try {
+    experiment::position_relay_test(heavy, 7, tc, make_actuator, none, experiment::kPressureMax, {0.31, 0.58});
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("around 0.58 MPa: no amplitude of at least 0.05 MPa fits"), std::string::npos) << what;
+    EXPECT_NE(what.find("off its rest only above 0.310 MPa"), std::string::npos) << what;
+  }
+  // end to end: the level comes from the identification run, and the loops track
+  const ExperimentResult nominal = run_gpi_pid(PamRigParams{}, 0);
+  EXPECT_EQ(nominal.dynamics.position_relay_level_mpa, experiment::kRelayLevel);
+  for (double mass : {65.0, 70.0}) {
+    heavy.load.mass = mass;
+    const ExperimentResult r = run_gpi_pid(heavy, 0);
+    double lo = 1e9, hi = -1e9;
+    for (double x : r.id_contraction_mm) lo = std::min(lo, x), hi = std::max(hi, x);
+    double p_mid_up = 0.0;  // the ascent's pressure at mid-stroke: the first sample at or above it
+    for (std::size_t k = 0; k < r.id_contraction_mm.size(); ++k)
+      if (r.id_contraction_mm[k] >= 0.5 * (lo + hi)) {
+        p_mid_up = r.id_pressure_mpa[k];
+        break;
+      }
+    EXPECT_GT(r.dynamics.position_relay_level_mpa, experiment::kRelayLevel + experiment::kPositionRelayAmplitude);
+    EXPECT_NEAR(r.dynamics.position_relay_level_mpa, p_mid_up, 0.05) << mass;  // within the hysteresis band
+    // the free-hanging load's loop: an ultimate gain of the nominal rig's order, not 6x it
+    EXPECT_LT(r.dynamics.position_relay_gain, 2.0 * nominal.dynamics.position_relay_gain) << mass;
+    EXPECT_NE(r.table().find("position relay (at 0.4"), std::string::npos) << r.table();
+    EXPECT_LT(find_run(r, "compensated").errors.rms_error_mm, 0.2 * find_run(r, "baseline").errors.rms_error_mm)
+        << mass;
+  }
+}
+
 // A slow rig oscillates under the relay with a period too long for 3 cycles in the 2 s the
 // test measured: the contraction crosses its level (so the hysteresis does not hold it), and
 // the run is made longer instead of failing or raising the amplitude. A regulator with a

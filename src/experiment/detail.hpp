@@ -209,12 +209,21 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
 // h = kPositionRelayAmplitude, doubled while the contraction does not oscillate (a rig whose
 // hysteresis band is wider than h) and p0 +- h stays within 0..top. Fills
 // position_relay_gain, position_relay_period_s, position_relay_amplitude_mpa and
-// position_relay_level_mpa; throws hysteron::Error naming every amplitude tried if none
-// oscillates.
+// position_relay_level_mpa. With `stroke` known (mid_mpa > 0): p0 = stroke.mid_mpa where
+// p0 - h would be below stroke.floor_mpa (a heavy load that p0 - h lets down onto its rest),
+// and where no amplitude oscillates around p0, the same is tried around stroke.mid_mpa.
+// Throws hysteron::Error naming every level and amplitude tried if none oscillates.
 inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h tried
+// The pressures of an identification run's stroke [MPa] (stroke_pressures in experiment.cpp):
+// floor_mpa, the least at which the contraction is off its rest (above its least by 2 % of
+// its span; on the descent, where the hysteresis puts it lowest); mid_mpa, the mean where the
+// contraction is within 5 % of its span of the middle of the stroke. 0: not known.
+struct StrokePressures {
+  double floor_mpa = 0.0, mid_mpa = 0.0;
+};
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
                          const std::function<Actuator()>& make_actuator, RigDynamics& d,
-                         double top = kPressureMax);
+                         double top = kPressureMax, StrokePressures stroke = {});
 // The second-order mode through the relay's point (RigDynamics::mode_*): with F the
 // FOPDT at w_u = 2 pi / T_u and 1/H = (1 - r^2) + 2 i zeta r = -F K_u (r = w_u / w_n):
 //   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).

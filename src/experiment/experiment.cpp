@@ -296,6 +296,26 @@ double usable_top(const IdRecord& id, double reached_mpa) {
   return capped && reached_mpa > 0.0 ? reached_mpa : kPressureMax;
 }
 
+// The pressures of the identification run's stroke (StrokePressures, detail.hpp), on its
+// 11-sample means.
+StrokePressures stroke_pressures(const SmoothedRun& sm) {
+  StrokePressures s;
+  if (sm.x_mm.empty()) return s;
+  const auto [lo, hi] = std::minmax_element(sm.x_mm.begin(), sm.x_mm.end());
+  const double span = *hi - *lo, mid = 0.5 * (*lo + *hi);
+  if (!(span > 0.0)) return s;
+  double sum = 0.0, floor = std::numeric_limits<double>::infinity();
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < sm.x_mm.size(); ++k) {
+    if (std::abs(sm.x_mm[k] - mid) <= 0.05 * span) sum += sm.p[k], ++n;
+    if (sm.x_mm[k] > *lo + 0.02 * span) floor = std::min(floor, sm.p[k]);
+  }
+  if (n == 0 || !std::isfinite(floor)) return s;
+  s.mid_mpa = sum / static_cast<double>(n);
+  s.floor_mpa = floor;
+  return s;
+}
+
 // The note of a clipped displacement record (fit_to_reach).
 std::string clipping_note(const Clipping& clip) {
   std::string where;
@@ -467,6 +487,31 @@ IdentificationRange model_identification_range(const SmoothedRun& sm, const std:
 std::vector<double> scaled_to(std::vector<double> input, double top_mpa) {
   const double m = input.empty() ? 0.0 : *std::max_element(input.begin(), input.end());
   if (top_mpa > 0.0 && m > top_mpa)
+    for (double& v : input) v *= top_mpa / m;
+  return input;
+}
+
+// Where the paper's identification input stops short of the actuator's top (mpi-openloop's
+// 0.5 MPa of 0.6) and its run never reached the highest reference top, the rig's reach at
+// that top is not known and a model fitted on the run would be extrapolated there (a 0.2 m
+// muscle, a heavy load or a weak muscle): the pressure the input is extended to, kPressureMax,
+// else 0 (the paper's input is kept). Not where the supply caps the actuator below the
+// input's maximum already (p_top < kPressureMax): a larger command would not be delivered.
+double extended_input_top(const std::vector<double>& input, const SmoothedRun& sm, const std::vector<Reference>& refs,
+                          double p_top) {
+  if (input.empty() || refs.empty() || sm.x_mm.empty() || p_top < kPressureMax) return 0.0;
+  const double input_max = *std::max_element(input.begin(), input.end());
+  if (!(input_max < (1.0 - kPressureHeadroom) * kPressureMax)) return 0.0;
+  double ref_top = -std::numeric_limits<double>::infinity();
+  for (const Reference& ref : refs) ref_top = std::max(ref_top, 1e3 * *std::max_element(ref.ref_m.begin(), ref.ref_m.end()));
+  const double reached = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
+  return reached > ref_top ? 0.0 : kPressureMax;
+}
+
+// `input` scaled by a factor so that its maximum is top_mpa, up or down.
+std::vector<double> scaled_exactly_to(std::vector<double> input, double top_mpa) {
+  const double m = input.empty() ? 0.0 : *std::max_element(input.begin(), input.end());
+  if (top_mpa > 0.0 && m > 0.0)
     for (double& v : input) v *= top_mpa / m;
   return input;
 }
@@ -707,42 +752,66 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   //    identification run (other seed, other pressure sequence); both inputs scaled to the
   //    pressure range the references need where that is below the paper's input's maximum
   //    (model_identification_range; the references kept within the rig's reach first).
-  const SmoothedRun smooth(id);
+  // Where the paper's input stops short of the actuator's top and its run never reached the
+  // references' top, the reach and hysteron's model come from a run of that input extended to
+  // the top (extended_input_top); the paper's model stays fitted on the paper's run.
+  const std::vector<double> paper_input = spec.id_pressure(tc);
+  std::vector<Reference> refs = spec.references(tc);
+  std::optional<IdRecord> extended_run, extended_runf;
+  {
+    const SmoothedRun sm(id);
+    const double reached = sm.p.empty() ? 0.0 : *std::max_element(sm.p.begin(), sm.p.end());
+    if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, reached)); ext > 0.0) {
+      const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
+      const double reached_mm = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
+      extended_run = identification_run(o.rig, o.seed, scaled_exactly_to(paper_input, ext), tc, make_actuator());
+      extended_runf = decimate(*extended_run, every);
+      res.messages.push_back(fmt::format(
+          "the paper's identification input goes up to {:.3f} MPa, where this rig's contraction stayed at or below "
+          "{:.1f} mm, short of the references' top: the rig's reach and hysteron's model are measured on that input "
+          "scaled to {:.3f} MPa, the actuator's top (the paper's model stays fitted on the paper's run; "
+          "docs/control.md, section 0)",
+          input_max, reached_mm, ext));
+    }
+  }
+  const IdRecord& id_run = extended_run ? *extended_run : id;  // the run the reach and the model come from
+  const IdRecord& id_runf = extended_run ? *extended_runf : idf;
+  const std::vector<double> id_input = extended_run ? scaled_exactly_to(paper_input, kPressureMax) : paper_input;
+  const SmoothedRun smooth(id_run);
   res.reach_pressure_max_mpa = smooth.p.empty() ? 0.0 : *std::max_element(smooth.p.begin(), smooth.p.end());
   // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip
-  const double top = usable_top(id, res.reach_pressure_max_mpa);
-  std::vector<Reference> refs = fit_to_reach(o, id, smooth, top, spec.references(tc), res);
+  const double top = usable_top(id_run, res.reach_pressure_max_mpa);
+  refs = fit_to_reach(o, id_run, smooth, top, std::move(refs), res);
   add_pre_roll(refs, tc);
-  const std::vector<double> id_input = spec.id_pressure(tc);
   const IdentificationRange range = model_identification_range(smooth, refs, id_input);
-  res.model_id_top_mpa = range.p_id_mpa;
   const bool rescaled = range.p_id_mpa > 0.0;
+  res.model_id_top_mpa = rescaled ? range.p_id_mpa : extended_run ? kPressureMax : 0.0;
   std::optional<IdRecord> scaled_run, scaled_runf;  // the model's identification run, if not the paper's
   if (rescaled) {
     res.messages.push_back(range.note());
     scaled_run = identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator());
     scaled_runf = decimate(*scaled_run, every);
   }
-  const IdRecord& ids = rescaled ? *scaled_run : id;
-  const IdRecord& idsf = rescaled ? *scaled_runf : idf;
+  const IdRecord& ids = rescaled ? *scaled_run : id_run;
+  const IdRecord& idsf = rescaled ? *scaled_runf : id_runf;
   const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919,
                                                    scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc,
                                                    make_actuator()),
                                 every);
   choose_model(o, spec, idsf, id2, fo, static_cast<double>(every) * tc, res);
-  res.baseline_model = straight_line(id);
+  res.baseline_model = straight_line(id_run);
 
-  // 3. the rig's dynamics through its actuator, from the paper's identification run, around
-  //    hysteron's kind fitted on it (where the model was identified on scaled inputs, its
-  //    kind is fitted once more on the paper's run: the FOPDT, the lead and the loops tuned
-  //    from them are those of the rig over the whole run, as without the scaling)
+  // 3. the rig's dynamics through its actuator, from the paper's identification run (or its
+  //    extension, above), around hysteron's kind fitted on it (where the model was identified
+  //    on scaled inputs, its kind is fitted once more on that run: the FOPDT, the lead and the
+  //    loops tuned from them are those of the rig over the whole run, as without the scaling)
   std::size_t lead = 0;
   ModelParams dynamics_model = res.best_fit.model;
   bool on_paper_run = !rescaled;
   if (rescaled) {
     const FitModel kind = res.best_fit.model_kind;
     try {
-      FitReport full = fit_checked(idf, candidate_fit_options(fo, kind, spec, static_cast<double>(every) * tc),
+      FitReport full = fit_checked(id_runf, candidate_fit_options(fo, kind, spec, static_cast<double>(every) * tc),
                                    fmt::format("{} model", fit_model_name(kind)));
       std::vector<std::string> said_already;  // to_control_rate's note was given for the chosen model
       to_control_rate(full.model, o.control_period, said_already);
@@ -759,7 +828,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // peaks falls short by less, 5.5 % with a 200 ms lag), the model is run on the commands
   // clipped at that top: what the actuator could deliver, so the FOPDT does not take the
   // saturation for a lag (a 4 bar supply: 300 ms, the grid's bound, on mpi-pwm).
-  const IdRecord& dyn_run = on_paper_run ? id : ids;
+  const IdRecord& dyn_run = on_paper_run ? id_run : ids;
   const double cmd_max = dyn_run.p_cmd.empty() ? 0.0 : *std::max_element(dyn_run.p_cmd.begin(), dyn_run.p_cmd.end());
   IdRecord capped_run;
   const bool clip = top < (1.0 - 2.0 * kPressureHeadroom) * std::min(cmd_max, kPressureMax);
@@ -772,7 +841,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics.relay_gain = valves_relay.relay_gain;
   res.dynamics.relay_period_s = valves_relay.relay_period_s;
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;
-  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top);
+  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top, stroke_pressures(smooth));
   fit_load_mode(res.dynamics);
   const Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};
 

@@ -500,13 +500,19 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
 }  // namespace
 
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
-                         const std::function<Actuator()>& make_actuator, RigDynamics& d, double top) {
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d, double top,
+                         StrokePressures stroke) {
   if (!(top > 0.0 && top <= kPressureMax))
     throw Error(fmt::format("experiment: the position relay's top pressure {} MPa must be in (0, {}]", top,
                             kPressureMax));
   // [MPa]: kRelayLevel while the relay's first upper level is within reach, else the middle of
   // the range the rig reaches (a supply that caps the actuator)
-  const double p0 = kRelayLevel + kPositionRelayAmplitude <= top ? kRelayLevel : 0.5 * top;
+  double p0 = kRelayLevel + kPositionRelayAmplitude <= top ? kRelayLevel : 0.5 * top;
+  // ... and the middle of the stroke where p0's lower level would let the load down onto its
+  // rest: there the contraction cannot fall below its level, or the cycle is cut at the rest
+  // and the describing function's K_u is far off (65 kg: 79.5 MPa/m at 0.3 MPa, 6x the
+  // nominal rig's; every loop tuned from it oscillated)
+  if (stroke.mid_mpa > 0.0 && p0 - kPositionRelayAmplitude < stroke.floor_mpa) p0 = stroke.mid_mpa;
   // A relay must overcome the rig's hysteresis to make the muscle reverse: where the
   // pressure band is wider than the amplitude the contraction only creeps and does not
   // cross its level. Then the amplitude is doubled (Astrom and Hagglund adjust it to the
@@ -515,21 +521,35 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
   // 3 cycles in the measured window: where the contraction did cross its level (the relay
   // switched, so it is not the hysteresis that holds it), the run is repeated twice and four
   // times as long (8, 16 s of relay, the cycle measured over the last half) before the
-  // amplitude grows.
+  // amplitude grows. Where no amplitude makes it oscillate around p0, the same is tried
+  // around the middle of the stroke.
   constexpr double relay_s = 4.0;  // [s] of relay; the cycle is measured over its last half
   std::string seen;
-  for (double h = kPositionRelayAmplitude; p0 - h >= 0.0 && p0 + h <= top; h *= 2.0) {
-    for (double len = relay_s; len <= 4.0 * relay_s; len *= 2.0) {
-      const RelayCycle cycle = position_relay_run(rp, seed, tc, make_actuator(), p0, h, len, d);
-      if (cycle.oscillated) return;
-      seen += fmt::format("{}+-{:g} MPa: amplitude {:.3g} mm, {} crossings in {:g} s", seen.empty() ? "" : "; ", h,
-                          cycle.amplitude * 1e3, cycle.crossings, 0.5 * len);
-      if (cycle.crossings == 0) break;  // held by the hysteresis: a larger amplitude, not a longer run
+  std::vector<double> levels{p0};
+  if (stroke.mid_mpa > 0.0 && std::abs(stroke.mid_mpa - p0) > 0.5 * kPositionRelayAmplitude)
+    levels.push_back(stroke.mid_mpa);
+  for (const double level : levels) {
+    seen += fmt::format("{}around {:.3g} MPa: ", seen.empty() ? "" : "; ", level);
+    bool first = true;
+    for (double h = kPositionRelayAmplitude; level - h >= 0.0 && level + h <= top; h *= 2.0) {
+      for (double len = relay_s; len <= 4.0 * relay_s; len *= 2.0) {
+        const RelayCycle cycle = position_relay_run(rp, seed, tc, make_actuator(), level, h, len, d);
+        if (cycle.oscillated) return;
+        seen += fmt::format("{}+-{:g} MPa: amplitude {:.3g} mm, {} crossings in {:g} s", first ? "" : ", ", h,
+                            cycle.amplitude * 1e3, cycle.crossings, 0.5 * len);
+        first = false;
+        if (cycle.crossings == 0) break;  // held by the hysteresis: a larger amplitude, not a longer run
+      }
     }
+    if (first) seen += fmt::format("no amplitude of at least {:g} MPa fits within the actuator's range", kPositionRelayAmplitude);
   }
-  throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate around {} MPa at any "
-                          "amplitude within the actuator's 0..{} MPa ({})",
-                          p0, top, seen));
+  throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate at any amplitude "
+                          "within the actuator's 0..{} MPa ({}){}",
+                          top, seen,
+                          stroke.mid_mpa > 0.0
+                              ? fmt::format("; the identification run lifted the load off its rest only above {:.3f} MPa",
+                                            stroke.floor_mpa)
+                              : std::string()));
 }
 
 PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule) {

@@ -1130,6 +1130,25 @@ TEST(ExperimentTuning, LearningAboveItsLoopSaysHowFarItIsFromBelow) {
   EXPECT_EQ(risen.find("still falling"), std::string::npos) << risen;
 }
 
+// A compensated loop that does no better than the baseline (65 kg before the position relay
+// moved to mid-stroke: 16.2 against 7.4 mm) says so; one below it says nothing.
+TEST(ExperimentTuning, LoopNotBelowTheBaselineSaysSo) {
+  TrackingRun base, run;
+  base.variant = "baseline";
+  run.variant = "compensated";
+  base.reference = run.reference = "sine";
+  base.errors.rms_error_mm = 7.403;
+  run.errors.rms_error_mm = 16.177;
+  const std::string note = experiment::above_baseline_note(run, base);
+  EXPECT_EQ(note.rfind("compensated (sine): its RMS error, 16.177 mm, is not below the baseline's 7.403 mm", 0), 0u)
+      << note;
+  EXPECT_NE(note.find("does no better than no compensation"), std::string::npos) << note;
+  run.errors.rms_error_mm = 7.403;  // equal is not below
+  EXPECT_FALSE(experiment::above_baseline_note(run, base).empty());
+  run.errors.rms_error_mm = 0.446;
+  EXPECT_TRUE(experiment::above_baseline_note(run, base).empty());
+}
+
 // The learning variant's feedforward goes through the shaper the gain trial chose for the
 // compensated loop of the same reference (docs/control.md, section 3, "The feedforward's
 // shaper"): said in its description exactly where the trial chose shaping, and on mpi-pwm's

@@ -240,6 +240,9 @@ bool set_learning_shaper(bool on);
 // learns on): whether it was still falling and, at the last period's rate of decrease, how many
 // more periods would bring it below (or that it would not within 100: it has stalled).
 std::string learning_above_note(const TrackingRun& learning, const TrackingRun& base);
+// The note of a compensated, adaptive or learning run whose RMS error is not below the
+// baseline run's on the same reference; empty where it is below.
+std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base);
 // PID from the position relay test, derivative filter T_u / 30:
 //   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3

@@ -917,6 +917,14 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         }
       }
     }
+    // a loop tuned from the rig's identification that does no better than the baseline must not
+    // look like compensation (a relay cycle cut at the load's rest gave gains 6x too high once)
+    for (const TrackingRun& base : res.runs)
+      if (base.variant == "baseline" && base.reference == ref.name)
+        for (const TrackingRun& run : res.runs)
+          if (run.reference == ref.name && (run.variant == "compensated" || run.variant == "adaptive" ||
+                                            run.variant == "learning"))
+            if (std::string note = above_baseline_note(run, base); !note.empty()) res.messages.push_back(std::move(note));
   }
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
@@ -1088,6 +1096,15 @@ std::string learning_above_note(const TrackingRun& learning, const TrackingRun& 
   return head + fmt::format("it was still falling, but by only {:.2g} % per period ({:.3f} mm the period before): at "
                             "that rate it would not come below within {:.0f} more periods",
                             100.0 * (1.0 - q), before, kHorizon);
+}
+
+std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base) {
+  if (run.errors.rms_error_mm < base.errors.rms_error_mm) return {};
+  return fmt::format(
+      "{} ({}): its RMS error, {:.3f} mm, is not below the baseline's {:.3f} mm (a straight line for the "
+      "hysteresis): the loop tuned from this rig's identification does no better than no compensation; the "
+      "identified dynamics and relay tests above are suspect",
+      run.variant, run.reference, run.errors.rms_error_mm, base.errors.rms_error_mm);
 }
 
 bool set_learning_shaper(bool on) { return learning_shaper.exchange(on); }

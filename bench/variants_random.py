@@ -5,8 +5,12 @@ plausible ranges (load, damping, hysteresis band and shape, creep, regulator lag
 band, force map, dead volume, sensor offsets, PWM frequency, valve delays, muscle length).
 Deterministic for a seed.
 
-    /usr/bin/python3 bench/variants_random.py [SEED] [N] > grid.json
+    /usr/bin/python3 bench/variants_random.py [SEED] [N] [--wide] > grid.json
     build/hysteron sweep all --grid grid.json --jobs 2 --out out/random.csv --report out/random.html
+
+--wide draws 3 to 6 properties from wider ranges that reach the extreme and beyond sets'
+(docs/plant.md): loads of 2-90 kg, regulators of 20-300 ms, valve and regulator flow, the
+band's growth with pressure, sensor noise, muscle radius 6-16 mm, supplies of 4.5-9 bar.
 """
 import json
 import random
@@ -25,9 +29,46 @@ RANGES = {
 }
 
 
+WIDE = {
+    "load.mass": (2, 90), "load.damping": (50, 2500),
+    "hysteresis.pressure_band": (1000, 45000), "hysteresis.transition_strain": (0.003, 0.02),
+    "hysteresis.beta": (0.1, 0.95), "hysteresis.creep_stiffness": (0, 600), "hysteresis.creep_time": (0.3, 10),
+    "hysteresis.pressure_band_slope": (0, 0.15), "hysteresis.exponent": (1.0, 2.0),
+    "regulator.time_constant": (0.02, 0.3), "regulator.dead_time": (0.002, 0.04),
+    "regulator.proportional_band": (5000, 80000), "regulator.sonic_conductance": (4e-9, 5e-8),
+    "muscle.force_620": (600, 2000), "muscle.dead_volume": (5e-6, 2e-4), "muscle.effective_radius": (0.006, 0.016),
+    "sensors.pressure_offset": (-30000, 30000), "sensors.displacement_offset": (-0.01, 0.01),
+    "sensors.displacement_noise": (0, 0.0003), "sensors.pressure_noise": (0, 4000),
+    "sensors.pressure_time_constant": (0.0005, 0.02),
+    "valves.pwm_frequency": (50, 500), "valves.on_delay": (0.0002, 0.005), "valves.sonic_conductance": (2e-9, 2e-8),
+    "valves.min_pulse": (0, 0.002),
+    "muscle.rest_length": (0.25, 0.9), "air.supply_pressure": (450000, 900000),
+}
+
+
+def wide(seed, n):
+    rng = random.Random(seed)
+    keys = list(WIDE)
+    variants = []
+    for i in range(n):
+        chosen = rng.sample(keys, rng.randint(3, 6))
+        s = {k: round(rng.uniform(*WIDE[k]), 9) for k in chosen}
+        if "valves.on_delay" in s:
+            s["valves.off_delay"] = s["valves.on_delay"]
+        if s.get("muscle.rest_length", 0.5) * 0.25 > 0.15:  # a longer stroke than the 0.15 m sensor
+            s["sensors.displacement_range"] = 0.25
+        variants.append({"name": f"w{i:02d}", "set": s})
+    return variants
+
+
 def main():
-    seed = int(sys.argv[1]) if len(sys.argv) > 1 else 20261126
-    n = int(sys.argv[2]) if len(sys.argv) > 2 else 14
+    args = [a for a in sys.argv[1:] if a != "--wide"]
+    seed = int(args[0]) if len(args) > 0 else 20261126
+    n = int(args[1]) if len(args) > 1 else 14
+    if "--wide" in sys.argv[1:]:
+        json.dump({"variants": wide(seed, n)}, sys.stdout, indent=1)
+        sys.stdout.write("\n")
+        return
     rng = random.Random(seed)
     keys = list(RANGES)
     variants = []

@@ -249,7 +249,8 @@ std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base)
 enum class PidRule { classic, some_overshoot };
 PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_max, PidRule rule);
 // The position PID of a compensated loop in context `c`: the classic rule with its gains
-// times c.gain_scale; learning_pid (below), unscaled, when learning.
+// times c.gain_scale; learning_pid (below) when learning, times c.gain_scale where that is
+// below 1 (the gain trial found the relay's gains too high on the rig).
 PidParams position_pid(const Context& c);
 // The identified feedback loop's peaks, L = G K C (G, K as in closed_loop), over 0.05 Hz .. a
 // quarter of the sampling rate: max_w |1 / (1 + L)| (sensitivity) and max_w |L / (1 + L)|

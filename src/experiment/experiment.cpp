@@ -297,18 +297,25 @@ double usable_top(const IdRecord& id, double reached_mpa) {
 }
 
 // The pressures of the identification run's stroke (StrokePressures, detail.hpp), on its
-// 11-sample means.
-StrokePressures stroke_pressures(const SmoothedRun& sm) {
+// 11-sample means. "Off its rest" is also at least 3 noise sigmas of the raw reading above its
+// least (sigma from the record's first differences): on a short stroke with a noisy sensor 2 %
+// of the span is within the noise, and a noise peak at the rest read as a lifted load (77 kg,
+// 0.16 mm of noise: "lifted above 0.009 MPa").
+StrokePressures stroke_pressures(const IdRecord& id, const SmoothedRun& sm) {
   StrokePressures s;
-  if (sm.x_mm.empty()) return s;
+  if (sm.x_mm.empty() || id.x_mm.size() < 2) return s;
   const auto [lo, hi] = std::minmax_element(sm.x_mm.begin(), sm.x_mm.end());
   const double span = *hi - *lo, mid = 0.5 * (*lo + *hi);
   if (!(span > 0.0)) return s;
+  double d2 = 0.0;
+  for (std::size_t k = 1; k < id.x_mm.size(); ++k) d2 += (id.x_mm[k] - id.x_mm[k - 1]) * (id.x_mm[k] - id.x_mm[k - 1]);
+  const double sigma = std::sqrt(d2 / (2.0 * static_cast<double>(id.x_mm.size() - 1)));
+  const double lifted = *lo + std::max(0.02 * span, 3.0 * sigma);
   double sum = 0.0, floor = std::numeric_limits<double>::infinity();
   std::size_t n = 0;
   for (std::size_t k = 0; k < sm.x_mm.size(); ++k) {
     if (std::abs(sm.x_mm[k] - mid) <= 0.05 * span) sum += sm.p[k], ++n;
-    if (sm.x_mm[k] > *lo + 0.02 * span) floor = std::min(floor, sm.p[k]);
+    if (sm.x_mm[k] > lifted) floor = std::min(floor, sm.p[k]);
   }
   if (n == 0 || !std::isfinite(floor)) return s;
   s.mid_mpa = sum / static_cast<double>(n);
@@ -841,7 +848,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics.relay_gain = valves_relay.relay_gain;
   res.dynamics.relay_period_s = valves_relay.relay_period_s;
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;
-  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top, stroke_pressures(smooth));
+  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top, stroke_pressures(id_run, smooth));
   fit_load_mode(res.dynamics);
   const Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};
 

@@ -658,7 +658,8 @@ std::string SweepResult::text() const {
          "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa];\n";
   out += "ref xS = the reference mapped into the rig's reach, its span scaled by S (docs/control.md, section 5);\n";
   out += "PID xS [shaped] = the gain trial's choice for the compensated and adaptive loops (the shaping also for\n"
-         "the learning loop's feedforward), where not x1.00 unshaped (docs/control.md, sections 2 and 3);\n";
+         "the learning loop's feedforward, a scale below 1 also for its PID), where not x1.00 unshaped\n"
+         "(docs/control.md, sections 2 and 3);\n";
   out += fmt::format("model = the kind of hysteron's model the compensated variants invert ({})\n",
                      model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
                                                   : fmt::format("--model {}", fit_model_name(model)));

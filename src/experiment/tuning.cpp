@@ -544,7 +544,7 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
     if (first) seen += fmt::format("no amplitude of at least {:g} MPa fits within the actuator's range", kPositionRelayAmplitude);
   }
   throw Error(fmt::format("experiment: the relay test of the position loop did not oscillate at any amplitude "
-                          "within the actuator's 0..{} MPa ({}){}",
+                          "within the actuator's 0..{:.3g} MPa ({}){}",
                           top, seen,
                           stroke.mid_mpa > 0.0
                               ? fmt::format("; the identification run lifted the load off its rest only above {:.3f} MPa",
@@ -585,7 +585,17 @@ PidParams learning_pid(const RigDynamics& d, double tc) {
 }
 
 PidParams position_pid(const Context& c) {
-  if (c.learning) return learning_pid(c.dynamics, c.tc);
+  if (c.learning) {
+    // The learning rule's gains come from the same relay test as the classic rule's. Where the
+    // gain trial found the classic gains too high on the rig (scale < 1: the relay's K_u
+    // overstates the loop's margin, e.g. where a wide hysteresis band takes up the relay's
+    // swing), they are scaled down as much (docs/control.md, section 3, "The learning loop's
+    // PID and the gain trial"); a scale above 1 leaves the robust rule as it is.
+    PidParams p = learning_pid(c.dynamics, c.tc);
+    const double s = std::min(1.0, c.gain_scale);
+    p.kp *= s, p.ki *= s, p.kd *= s;
+    return p;
+  }
   PidParams p = relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::classic);
   p.kp *= c.gain_scale;
   p.ki *= c.gain_scale;
@@ -625,8 +635,11 @@ std::string pid_origin(const Context& c) {
     const LoopPeaks at = loop_peaks(c.dynamics, p, c.tc);
     return fmt::format("a relay test, Ziegler-Nichols some overshoot with T_d = {:.3g} T_u (of 0.333, 0.5 and "
                        "0.667 T_u, the least complementary sensitivity peak of the identified feedback loop, "
-                       "{:.3g}, whose sensitivity peak, {:.3g}, is at most the rule's)",
-                       p.kd / p.kp / c.dynamics.position_relay_period_s, at.complementary, at.sensitivity);
+                       "{:.3g}, whose sensitivity peak, {:.3g}, is at most the rule's){}",
+                       p.kd / p.kp / c.dynamics.position_relay_period_s, at.complementary, at.sensitivity,
+                       c.gain_scale < 1.0 ? fmt::format(", x{:.2f} as the gain trial scaled the classic rule's gains",
+                                                        c.gain_scale)
+                                          : std::string());
   }
   return fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);
 }

@@ -46,18 +46,21 @@ WIDE = {
 }
 
 
-def wide(seed, n):
+def draw(seed, n, ranges, most, digits, sensor, prefix):
+    """n variants of 3..`most` properties drawn from `ranges`, rounded to `digits`; a muscle
+    whose stroke (max contraction 0.25) exceeds the default 0.15 m displacement sensor gets a
+    `sensor` m one, as a user would (the rig's validation refuses a stroke beyond its range)."""
     rng = random.Random(seed)
-    keys = list(WIDE)
+    keys = list(ranges)
     variants = []
     for i in range(n):
-        chosen = rng.sample(keys, rng.randint(3, 6))
-        s = {k: round(rng.uniform(*WIDE[k]), 9) for k in chosen}
+        chosen = rng.sample(keys, rng.randint(3, most))
+        s = {k: round(rng.uniform(*ranges[k]), digits) for k in chosen}
         if "valves.on_delay" in s:
             s["valves.off_delay"] = s["valves.on_delay"]
-        if s.get("muscle.rest_length", 0.5) * 0.25 > 0.15:  # a longer stroke than the 0.15 m sensor
-            s["sensors.displacement_range"] = 0.25
-        variants.append({"name": f"w{i:02d}", "set": s})
+        if s.get("muscle.rest_length", 0.0) * 0.25 > 0.15:
+            s["sensors.displacement_range"] = sensor
+        variants.append({"name": f"{prefix}{i:02d}", "set": s})
     return variants
 
 
@@ -66,23 +69,9 @@ def main():
     seed = int(args[0]) if len(args) > 0 else 20261126
     n = int(args[1]) if len(args) > 1 else 14
     if "--wide" in sys.argv[1:]:
-        json.dump({"variants": wide(seed, n)}, sys.stdout, indent=1)
-        sys.stdout.write("\n")
-        return
-    rng = random.Random(seed)
-    keys = list(RANGES)
-    variants = []
-    for i in range(n):
-        chosen = rng.sample(keys, rng.randint(3, 5))
-        s = {k: round(rng.uniform(*RANGES[k]), 6) for k in chosen}
-        if "valves.on_delay" in s:
-            s["valves.off_delay"] = s["valves.on_delay"]
-        # A muscle longer than 0.6 m strokes more than the default 0.15 m displacement sensor
-        # (max contraction 0.25): give it a 0.2 m sensor, as a user would (the rig's validation
-        # refuses a stroke beyond the sensor's range).
-        if s.get("muscle.rest_length", 0.0) * 0.25 > 0.15:
-            s["sensors.displacement_range"] = 0.2
-        variants.append({"name": f"r{i:02d}", "set": s})
+        variants = draw(seed, n, WIDE, 6, 9, 0.25, "w")
+    else:
+        variants = draw(seed, n, RANGES, 5, 6, 0.2, "r")
     json.dump({"variants": variants}, sys.stdout, indent=1)
     sys.stdout.write("\n")
 

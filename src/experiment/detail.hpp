@@ -216,8 +216,9 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
 inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h tried
 // The pressures of an identification run's stroke [MPa] (stroke_pressures in experiment.cpp):
 // floor_mpa, the least at which the contraction is off its rest (above its least by 2 % of
-// its span; on the descent, where the hysteresis puts it lowest); mid_mpa, the mean where the
-// contraction is within 5 % of its span of the middle of the stroke. 0: not known.
+// its span and by 3 noise sigmas; on the descent, where the hysteresis puts it lowest);
+// mid_mpa, the mean where the contraction is within 5 % of its span of the middle of the
+// stroke. 0: not known.
 struct StrokePressures {
   double floor_mpa = 0.0, mid_mpa = 0.0;
 };

@@ -589,7 +589,7 @@ PidParams position_pid(const Context& c) {
     // The learning rule's gains come from the same relay test as the classic rule's. Where the
     // gain trial found the classic gains too high on the rig (scale < 1: the relay's K_u
     // overstates the loop's margin, e.g. where a wide hysteresis band takes up the relay's
-    // swing), they are scaled down as much (docs/control.md, section 3, "The learning loop's
+    // swing), they are scaled down as much (docs/control.md, section 2, "The learning loop's
     // PID and the gain trial"); a scale above 1 leaves the robust rule as it is.
     PidParams p = learning_pid(c.dynamics, c.tc);
     const double s = std::min(1.0, c.gain_scale);

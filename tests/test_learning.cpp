@@ -27,6 +27,7 @@
 #include "../src/experiment/detail.hpp"
 
 using namespace hysteron;
+using hysteron::test::error_of;
 
 namespace {
 
@@ -657,12 +658,8 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
   PamRigParams stuck;
   stuck.hysteresis.pressure_band = 400e3;
   RigDynamics none;
-  try {
-    experiment::position_relay_test(stuck, 7, tc, make_actuator, none);
-    ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("+-0.2 MPa"), std::string::npos) << e.what();
-  }
+  const std::string what = error_of([&] { experiment::position_relay_test(stuck, 7, tc, make_actuator, none); });
+  EXPECT_NE(what.find("+-0.2 MPa"), std::string::npos) << what;
 }
 
 // A heavy load hangs on its rest below a pressure that grows with its weight (the
@@ -679,21 +676,15 @@ TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWoul
   PamRigParams heavy;
   heavy.load.mass = 70.0;
   RigDynamics none;
-  try {
-    experiment::position_relay_test(heavy, 7, tc, make_actuator, none);
-    ADD_FAILURE() << "0.3 MPa lifts 70 kg: the test's premise does not hold";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("around 0.3 MPa: +-0.05 MPa"), std::string::npos) << e.what();
-  }
+  // (no error at all would mean 0.3 MPa lifts 70 kg: the test's premise would not hold)
+  const std::string at_level = error_of([&] { experiment::position_relay_test(heavy, 7, tc, make_actuator, none); });
+  EXPECT_NE(at_level.find("around 0.3 MPa: +-0.05 MPa"), std::string::npos) << at_level;
   // a level that cannot fit the first amplitude within the actuator's range is named as such
-  try {
+  const std::string what = error_of([&] {
     experiment::position_relay_test(heavy, 7, tc, make_actuator, none, experiment::kPressureMax, {0.31, 0.58});
-    ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("around 0.58 MPa: no amplitude of at least 0.05 MPa fits"), std::string::npos) << what;
-    EXPECT_NE(what.find("off its rest only above 0.310 MPa"), std::string::npos) << what;
-  }
+  });
+  EXPECT_NE(what.find("around 0.58 MPa: no amplitude of at least 0.05 MPa fits"), std::string::npos) << what;
+  EXPECT_NE(what.find("off its rest only above 0.310 MPa"), std::string::npos) << what;
   // 77.6 kg on a 5.16 bar (absolute) supply, with 0.16 mm of displacement noise: a stroke of a
   // few mm between lift-off and the supply's cap, too narrow for the relay. The error names the
   // lift-off pressure, not a noise peak at the rest (it said 0.009 MPa when 2 % of that short
@@ -702,18 +693,13 @@ TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWoul
   narrow.load.mass = 77.6;
   narrow.air.supply_pressure = 515554.0;
   narrow.sensors.displacement_noise = 0.16e-3;
-  try {
-    run_gpi_pid(narrow, 0);
-    ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("within the actuator's 0..0.416 MPa ("), std::string::npos) << what;
-    const auto at = what.find("off its rest only above ");
-    ASSERT_NE(at, std::string::npos) << what;
-    const double lift = std::stod(what.substr(at + 24));
-    EXPECT_GT(lift, 0.3) << what;  // 70 kg is lifted above 0.31 MPa
-    EXPECT_LT(lift, 0.416) << what;
-  }
+  const std::string narrow_what = error_of([&] { run_gpi_pid(narrow, 0); });
+  EXPECT_NE(narrow_what.find("within the actuator's 0..0.416 MPa ("), std::string::npos) << narrow_what;
+  const auto at = narrow_what.find("off its rest only above ");
+  ASSERT_NE(at, std::string::npos) << narrow_what;
+  const double lift = std::stod(narrow_what.substr(at + 24));
+  EXPECT_GT(lift, 0.3) << narrow_what;  // 70 kg is lifted above 0.31 MPa
+  EXPECT_LT(lift, 0.416) << narrow_what;
   // end to end: the level comes from the identification run, and the loops track
   const ExperimentResult nominal = run_gpi_pid(PamRigParams{}, 0);
   EXPECT_EQ(nominal.dynamics.position_relay_level_mpa, experiment::kRelayLevel);

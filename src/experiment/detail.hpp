@@ -214,6 +214,10 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
 // and where no amplitude oscillates around p0, the same is tried around stroke.mid_mpa.
 // Throws hysteron::Error naming every level and amplitude tried if none oscillates.
 inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h tried
+// The noise sigma of y[from..to) from its first differences, sigma^2 = E[(y_k - y_{k-1})^2] / 2
+// for white noise: a slow drift (a load still settling) adds little, where the samples' spread
+// around their mean would count it. Needs to - from >= 2.
+double first_difference_sigma(const std::vector<double>& y, std::size_t from, std::size_t to);
 // The pressures of an identification run's stroke [MPa] (stroke_pressures in experiment.cpp):
 // floor_mpa, the least at which the contraction is off its rest (above its least by 2 % of
 // its span and by 3 noise sigmas; on the descent, where the hysteresis puts it lowest);

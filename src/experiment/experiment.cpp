@@ -303,13 +303,11 @@ double usable_top(const IdRecord& id, double reached_mpa) {
 // 0.16 mm of noise: "lifted above 0.009 MPa").
 StrokePressures stroke_pressures(const IdRecord& id, const SmoothedRun& sm) {
   StrokePressures s;
-  if (sm.x_mm.empty() || id.x_mm.size() < 2) return s;
+  if (sm.x_mm.empty() || id.x_mm.size() < 3) return s;
   const auto [lo, hi] = std::minmax_element(sm.x_mm.begin(), sm.x_mm.end());
   const double span = *hi - *lo, mid = 0.5 * (*lo + *hi);
   if (!(span > 0.0)) return s;
-  double d2 = 0.0;
-  for (std::size_t k = 1; k < id.x_mm.size(); ++k) d2 += (id.x_mm[k] - id.x_mm[k - 1]) * (id.x_mm[k] - id.x_mm[k - 1]);
-  const double sigma = std::sqrt(d2 / (2.0 * static_cast<double>(id.x_mm.size() - 1)));
+  const double sigma = first_difference_sigma(id.x_mm, 0, id.x_mm.size());
   const double lifted = *lo + std::max(0.02 * span, 3.0 * sigma);
   double sum = 0.0, floor = std::numeric_limits<double>::infinity();
   std::size_t n = 0;
@@ -490,10 +488,11 @@ IdentificationRange model_identification_range(const SmoothedRun& sm, const std:
   return r;
 }
 
-// `input` scaled so that its maximum is top_mpa (unchanged where it is already below).
-std::vector<double> scaled_to(std::vector<double> input, double top_mpa) {
+// `input` scaled so that its maximum is top_mpa: down only (unchanged where it is already
+// below), or with `up_too` by the factor either way.
+std::vector<double> scaled_to(std::vector<double> input, double top_mpa, bool up_too = false) {
   const double m = input.empty() ? 0.0 : *std::max_element(input.begin(), input.end());
-  if (top_mpa > 0.0 && m > top_mpa)
+  if (top_mpa > 0.0 && m > 0.0 && (up_too || m > top_mpa))
     for (double& v : input) v *= top_mpa / m;
   return input;
 }
@@ -513,14 +512,6 @@ double extended_input_top(const std::vector<double>& input, const SmoothedRun& s
   for (const Reference& ref : refs) ref_top = std::max(ref_top, 1e3 * *std::max_element(ref.ref_m.begin(), ref.ref_m.end()));
   const double reached = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
   return reached > ref_top ? 0.0 : kPressureMax;
-}
-
-// `input` scaled by a factor so that its maximum is top_mpa, up or down.
-std::vector<double> scaled_exactly_to(std::vector<double> input, double top_mpa) {
-  const double m = input.empty() ? 0.0 : *std::max_element(input.begin(), input.end());
-  if (top_mpa > 0.0 && m > 0.0)
-    for (double& v : input) v *= top_mpa / m;
-  return input;
 }
 
 // The kinds a run tries for hysteron's model: the one asked for, or (auto) the paper's
@@ -771,7 +762,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, reached)); ext > 0.0) {
       const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
       const double reached_mm = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
-      extended_run = identification_run(o.rig, o.seed, scaled_exactly_to(paper_input, ext), tc, make_actuator());
+      extended_run = identification_run(o.rig, o.seed, scaled_to(paper_input, ext, true), tc, make_actuator());
       extended_runf = decimate(*extended_run, every);
       res.messages.push_back(fmt::format(
           "the paper's identification input goes up to {:.3f} MPa, where this rig's contraction stayed at or below "
@@ -783,7 +774,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   }
   const IdRecord& id_run = extended_run ? *extended_run : id;  // the run the reach and the model come from
   const IdRecord& id_runf = extended_run ? *extended_runf : idf;
-  const std::vector<double> id_input = extended_run ? scaled_exactly_to(paper_input, kPressureMax) : paper_input;
+  const std::vector<double> id_input = extended_run ? scaled_to(paper_input, kPressureMax, true) : paper_input;
   const SmoothedRun smooth(id_run);
   res.reach_pressure_max_mpa = smooth.p.empty() ? 0.0 : *std::max_element(smooth.p.begin(), smooth.p.end());
   // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip

@@ -84,15 +84,6 @@ struct RelayCycle {
   bool oscillated = false;
 };
 
-// The noise sigma of y[from..to) from its first differences, sigma^2 = E[(y_k - y_{k-1})^2] / 2
-// for white noise: a slow drift (a load still settling) adds little, where the samples' spread
-// around their mean would count it. Needs to - from >= 2.
-double first_difference_sigma(const std::vector<double>& y, std::size_t from, std::size_t to) {
-  double s2 = 0.0;
-  for (std::size_t i = from + 1; i < to; ++i) s2 += (y[i] - y[i - 1]) * (y[i] - y[i - 1]);
-  return std::sqrt(s2 / (2.0 * static_cast<double>(to - from - 1)));
-}
-
 RelayCycle relay_cycle(const std::vector<double>& y, std::size_t from, double level, double eps, double h, double tc) {
   RelayCycle r;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -108,6 +99,13 @@ RelayCycle relay_cycle(const std::vector<double>& y, std::size_t from, double le
 }
 
 }  // namespace
+
+// sigma^2 = E[(y_k - y_{k-1})^2] / 2 for white noise (detail.hpp).
+double first_difference_sigma(const std::vector<double>& y, std::size_t from, std::size_t to) {
+  double s2 = 0.0;
+  for (std::size_t i = from + 1; i < to; ++i) s2 += (y[i] - y[i - 1]) * (y[i] - y[i - 1]);
+  return std::sqrt(s2 / (2.0 * static_cast<double>(to - from - 1)));
+}
 
 RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead) {
   const std::vector<double> ys = simulate_record(model, r.p_cmd);  // [mm]; rate-independent: shifts commute

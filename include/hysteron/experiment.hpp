@@ -114,8 +114,9 @@ struct ReferenceRange {
 // fitted hysteresis model M, which is rate-independent, so the shift commutes):
 //   x(t) ~ lag_tau[ M(p_cmd) ](t - theta),   tau dz/dt = M(p_cmd) - z
 struct RigDynamics {
-  // theta and tau as fitted; where the fit passes beyond the position relay's point and no mode
-  // brings it there, split again to pass through it (the slope kept; a note says so).
+  // theta and tau as fitted; where the fit has more phase lag at the position relay's frequency
+  // than the relay measured and no mode explains it, split again, their sum kept, to reach
+  // -180 degrees there (a note says so).
   double dead_time_s = 0.0;    // theta
   double lag_s = 0.0;          // tau
   double gain_m_per_mpa = 0.0; // mean slope of the record: contraction span / pressure span

@@ -234,12 +234,11 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
 //   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).
 void fit_load_mode(RigDynamics& d);
 // Where no mode puts the FOPDT through the relay's point (fit_load_mode left mode_frequency_hz
-// at 0: the FOPDT alone passes beyond it, more than -180 degrees or a gain above 1 / K_u at
-// w_u) and K K_u > 1, the dead time and lag are split again so that the FOPDT alone passes
-// through it (docs/control.md, section 1, "Where the FOPDT passes beyond the relay's point"):
-//   |F(i w_u)| = K / sqrt(1 + (w_u tau)^2) = 1 / K_u,  w_u theta + atan(w_u tau) = pi.
-// The slope K is kept. Returns whether it changed d.
-bool fit_fopdt_through_relay_point(RigDynamics& d);
+// at 0) because the FOPDT alone has more phase lag at w_u than the relay measured, its dead
+// time and lag are split again, theta + tau kept, so that w_u theta + atan(w_u tau) = pi
+// (docs/control.md, section 1, "Where the FOPDT has more phase lag than the relay measured").
+// The slope is kept; the gain at w_u is not matched. Returns whether it changed d.
+bool fit_fopdt_to_relay_phase(RigDynamics& d);
 // The models the learning design must contract on (docs/control.md, section 3): the identified
 // FOPDT with and without its load mode, dead time x1 and x1.5, lag and slope each x0.67, x1,
 // x1.5; each neighbour's mode fitted through the relay's point again (fit_load_mode), and

@@ -841,15 +841,15 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;
   position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top, stroke_pressures(id_run, smooth));
   fit_load_mode(res.dynamics);
-  if (const RigDynamics fitted = res.dynamics; fit_fopdt_through_relay_point(res.dynamics))
+  if (const RigDynamics fitted = res.dynamics; fit_fopdt_to_relay_phase(res.dynamics))
     res.messages.push_back(fmt::format(
-        "the FOPDT fitted on the identification run (dead time {:.0f} ms, lag {:.0f} ms) passes beyond the position "
-        "relay's point (K_u = {:.3g} MPa/m, T_u = {:.0f} ms), and no load mode brings it there; its dead time and "
-        "lag, which the run's least squares splits poorly, are split again so that it passes through the point: "
-        "dead time {:.0f} ms, lag {:.0f} ms, the slope kept (the learning design and the learning loop's PID use "
-        "them; docs/control.md, section 1)",
-        fitted.dead_time_s * 1e3, fitted.lag_s * 1e3, res.dynamics.position_relay_gain,
-        res.dynamics.position_relay_period_s * 1e3, res.dynamics.dead_time_s * 1e3, res.dynamics.lag_s * 1e3));
+        "the FOPDT fitted on the identification run (dead time {:.0f} ms, lag {:.0f} ms) has more phase lag at the "
+        "position relay's frequency ({:.2f} Hz) than the relay measured, -180 degrees, and no load mode explains "
+        "that; its dead time and lag, whose sum the run's least squares fixes better than their split, are split "
+        "again, their sum kept, so that it reaches -180 degrees there: dead time {:.0f} ms, lag {:.0f} ms (the "
+        "learning design and the learning loop's PID use them; docs/control.md, section 1)",
+        fitted.dead_time_s * 1e3, fitted.lag_s * 1e3, 1.0 / res.dynamics.position_relay_period_s,
+        res.dynamics.dead_time_s * 1e3, res.dynamics.lag_s * 1e3));
   const Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};
 
   // 4. tracking

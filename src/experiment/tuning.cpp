@@ -642,15 +642,16 @@ std::string pid_origin(const Context& c) {
   return fmt::format("a relay test, Ziegler-Nichols x{:.2f} by a gain trial", c.gain_scale);
 }
 
-bool fit_fopdt_through_relay_point(RigDynamics& d) {
-  if (d.mode_frequency_hz > 0.0 || !(d.position_relay_gain > 0.0) || !(d.position_relay_period_s > 0.0)) return false;
+bool fit_fopdt_to_relay_phase(RigDynamics& d) {
+  if (d.mode_frequency_hz > 0.0 || !(d.position_relay_period_s > 0.0)) return false;
   const double wu = 2.0 * std::numbers::pi / d.position_relay_period_s;
-  const double kk = d.gain_m_per_mpa * d.position_relay_gain;  // |F(0)| K_u
-  if (!(kk > 1.0) || !std::isfinite(kk)) return false;
-  const double tau = std::sqrt(kk * kk - 1.0) / wu;                     // |F(i w_u)| = 1 / K_u
-  const double theta = (std::numbers::pi - std::atan(wu * tau)) / wu;  // arg F(i w_u) = -pi
-  d.dead_time_s = theta;
-  d.lag_s = tau;
+  const double sum = d.dead_time_s + d.lag_s;  // theta + tau, kept
+  auto lag_at = [&](double theta) { return wu * theta + std::atan(wu * (sum - theta)); };  // -arg F(i w_u)
+  if (!(lag_at(d.dead_time_s) > std::numbers::pi)) return false;
+  double lo = 0.0, hi = d.dead_time_s;  // lag_at rises with theta: lag_at(0) < pi < lag_at(hi)
+  for (int i = 0; i < 100 && hi - lo > 1e-12; ++i) (lag_at(0.5 * (lo + hi)) > std::numbers::pi ? hi : lo) = 0.5 * (lo + hi);
+  d.dead_time_s = 0.5 * (lo + hi);
+  d.lag_s = sum - d.dead_time_s;
   return true;
 }
 

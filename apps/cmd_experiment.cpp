@@ -82,7 +82,8 @@ std::string g_command;  // the command line, shown in reports
 void check_plant_not_output(const std::string& plant, const std::string& dir) {
   if (plant.empty() || dir.empty()) return;
   std::vector<io::NamedPath> outputs;
-  for (const char* f : {"identification.csv", "model.json", "best_model.json", "result.json", "report.html"})
+  for (const char* f : {"identification.csv", "model_identification.csv", "model.json", "best_model.json", "result.json",
+                        "report.html"})
     outputs.push_back({"--out", (std::filesystem::path(dir) / f).string()});
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {

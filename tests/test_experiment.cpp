@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 #include <random>
 
@@ -12,6 +13,8 @@
 #include "hysteron/compensation.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
+#include "hysteron/report.hpp"
+#include "temp_dir.hpp"
 #include "test_util.hpp"
 #include "hysteron/plant.hpp"
 
@@ -318,11 +321,46 @@ TEST(Experiment, IdentificationIsExtendedToTheActuatorsTopWhereThePapersInputFal
     }
   EXPECT_EQ(compensated, 2);
 
+  // the run hysteron's model was fitted on, the paper's input extended to 0.6 MPa, is kept
+  ASSERT_FALSE(r.model_id_t.empty());
+  EXPECT_EQ(r.model_id_pressure_command_mpa.size(), r.model_id_t.size());
+  EXPECT_EQ(r.model_id_contraction_mm.size(), r.model_id_t.size());
+  EXPECT_NEAR(*std::max_element(r.model_id_pressure_command_mpa.begin(), r.model_id_pressure_command_mpa.end()), 0.6,
+              1e-9);
+  EXPECT_GT(*std::max_element(r.model_id_contraction_mm.begin(), r.model_id_contraction_mm.end()), reached);
+
   o.rig = PamRigParams{};
   const ExperimentResult n = run_experiment(o);
   EXPECT_FALSE(test::said(n, "the actuator's top (the paper's model"));
   EXPECT_GT(n.model_id_top_mpa, 0.0);
   EXPECT_LT(n.model_id_top_mpa, 0.5);  // scaled down, as before
+  ASSERT_FALSE(n.model_id_t.empty());
+  EXPECT_NEAR(*std::max_element(n.model_id_pressure_command_mpa.begin(), n.model_id_pressure_command_mpa.end()),
+              n.model_id_top_mpa, 1e-9);
+
+  // written as model_identification.csv and read back; removed where a later run into the same
+  // directory fitted its model on the paper's run
+  test::TempDir dir;
+  const std::string out = dir.file("out");
+  n.write(out);
+  ASSERT_TRUE(std::filesystem::exists(dir.file("out/model_identification.csv")));
+  const ExperimentResult back = report::read_experiment_dir(out);
+  ASSERT_EQ(back.model_id_t.size(), n.model_id_t.size());
+  for (std::size_t k = 0; k < n.model_id_t.size(); k += 997) {
+    EXPECT_NEAR(back.model_id_t[k], n.model_id_t[k], 1e-12);
+    EXPECT_NEAR(back.model_id_pressure_command_mpa[k], n.model_id_pressure_command_mpa[k], 1e-12);
+    EXPECT_NEAR(back.model_id_pressure_mpa[k], n.model_id_pressure_mpa[k], 1e-12);
+    EXPECT_NEAR(back.model_id_contraction_mm[k], n.model_id_contraction_mm[k], 1e-12);
+  }
+  ExperimentResult on_paper_run = n;
+  on_paper_run.model_id_t.clear();
+  on_paper_run.model_id_pressure_command_mpa.clear();
+  on_paper_run.model_id_pressure_mpa.clear();
+  on_paper_run.model_id_contraction_mm.clear();
+  on_paper_run.write(out);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out/model_identification.csv")));
+  EXPECT_TRUE(report::read_experiment_dir(out).model_id_t.empty());
+  EXPECT_TRUE(ExperimentResult::is_output_file("model_identification.csv"));
 }
 
 // A displacement sensor reading 10 mm high: the muscle at rest reads 10 mm, so the paper's

@@ -247,6 +247,11 @@ struct ExperimentResult {
   // the paper's, else the pressure the references need plus headroom (docs/control.md,
   // section 0), below the paper's input's maximum.
   double model_id_top_mpa = 0.0;
+  // The identification run hysteron's model (best_fit) was fitted on, where it is not the
+  // paper's run above (model_id_top_mpa > 0: the paper's input scaled to the references'
+  // pressures, or extended to the actuator's top), at the control period, as id_*; empty where
+  // it is the paper's run. write() puts it into model_identification.csv.
+  std::vector<double> model_id_t, model_id_pressure_command_mpa, model_id_pressure_mpa, model_id_contraction_mm;
   RigDynamics dynamics;           // identified from the identification run
   // The contraction the rig reached in the identification run (min and max of an 11-sample
   // moving mean of the measurement) [mm]; NaN in results written before it existed.
@@ -271,8 +276,8 @@ struct ExperimentResult {
   // max_error_mm, mae_mm, rms_error_mm (keyed by reference where there are several).
   // The same as io::to_json(result) (hysteron/io/results.hpp, where it is defined).
   nlohmann::json to_json() const;
-  // Writes identification.csv, tracking_<variant>_<reference>.csv, the models and
-  // result.json into dir (created if needed), each file atomically (io::write_file_atomically)
+  // Writes identification.csv, model_identification.csv (where model_id_t is not empty),
+  // tracking_<variant>_<reference>.csv, the models and result.json into dir (created if needed), each file atomically (io::write_file_atomically)
   // and all together (io::FileBatch): every file is complete before the first is replaced, so
   // on an error (Error names the file) nothing in dir has changed. Where dir held an earlier
   // run (its result.json), that run's files this one does not have (tracking CSVs of variants
@@ -280,8 +285,8 @@ struct ExperimentResult {
   // dir are left alone.
   void write(const std::string& dir) const;
   // True for the names of the files write() and `hysteron experiment` put into an output
-  // directory: identification.csv, model.json, best_model.json, result.json, report.html and
-  // tracking_*.csv.
+  // directory: identification.csv, model_identification.csv, model.json, best_model.json,
+  // result.json, report.html and tracking_*.csv.
   static bool is_output_file(const std::string& filename);
   // Human-readable table beside the paper's figures.
   std::string table() const;

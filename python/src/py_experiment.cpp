@@ -174,6 +174,16 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         id["contraction_mm"] = to_numpy(r.id_contraction_mm);
         id["train_end"] = r.id_train_end;
         d["identification"] = id;
+        if (!r.model_id_t.empty()) {  // the run hysteron's model was fitted on, where not the paper's
+          py::dict mid;
+          mid["t"] = to_numpy(r.model_id_t);
+          mid["pressure_command_mpa"] = to_numpy(r.model_id_pressure_command_mpa);
+          mid["pressure_mpa"] = to_numpy(r.model_id_pressure_mpa);
+          mid["contraction_mm"] = to_numpy(r.model_id_contraction_mm);
+          d["model_identification"] = mid;
+        } else {
+          d["model_identification"] = py::none();
+        }
         d["fit"] = fit_dict(r.fit);
         d["validation"] = metrics_dict(r.validation);
         d["best_fit"] = fit_dict(r.best_fit);

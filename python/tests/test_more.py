@@ -252,6 +252,23 @@ def test_plot_errors():
 
 
 @pytest.mark.skipif(os.environ.get("HYSTERON_SKIP_SLOW") == "1", reason="slow")
+def test_model_identification_run_where_the_model_is_not_fitted_on_the_papers_run():
+    # mpi-openloop's model is fitted on its input scaled to the references' pressures: that run
+    # is returned, written to model_identification.csv and plotted in the report
+    with tempfile.TemporaryDirectory() as d:
+        r = hysteron.run_experiment("mpi-openloop", seed=1, out=os.path.join(d, "out"), report=os.path.join(d, "r.html"),
+                                    learning_periods=0, adaptive=False)
+        m = r["model_identification"]
+        top = r["summary"]["model_identification_top_mpa"]
+        assert 0.0 < top < 0.5
+        assert m["t"].shape == m["pressure_command_mpa"].shape == m["contraction_mm"].shape
+        assert np.max(m["pressure_command_mpa"]) == pytest.approx(top, abs=1e-9)
+        assert np.max(r["identification"]["pressure_command_mpa"]) == pytest.approx(0.5, abs=1e-9)
+        back = np.genfromtxt(os.path.join(d, "out", "model_identification.csv"), delimiter=",", names=True)
+        assert np.allclose(back["contraction_mm"], m["contraction_mm"], atol=1e-9)
+        assert "model_identification.csv" in open(os.path.join(d, "r.html")).read()
+
+
 def test_experiment_summary_keys():
     with tempfile.TemporaryDirectory() as d:
         r = hysteron.run_experiment("gpi-pid", seed=1, out=os.path.join(d, "out"), report=os.path.join(d, "r.html"),
@@ -267,6 +284,7 @@ def test_experiment_summary_keys():
         assert len(r["runs"][2]["periods"]) == 2 and r["runs"][0]["periods"] == []
         assert s["variants"] == ["faithful", "compensated", "learning", "adaptive", "baseline"]
         assert r["identification"]["train_end"] > 0
+        assert r["model_identification"] is None  # gpi-pid's model is fitted on the paper's run
         assert open(os.path.join(d, "r.html")).read().count("<svg") == 7  # + the learning periods
         hysteron.write_report(os.path.join(d, "out"), os.path.join(d, "r2.html"))
         assert os.path.getsize(os.path.join(d, "r2.html")) > 10000

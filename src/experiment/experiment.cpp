@@ -792,6 +792,12 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   }
   const IdRecord& ids = rescaled ? *scaled_run : id_run;
   const IdRecord& idsf = rescaled ? *scaled_runf : id_runf;
+  if (rescaled || extended_run) {  // the run hysteron's model is fitted on, where it is not the paper's
+    res.model_id_t = ids.t;
+    res.model_id_pressure_command_mpa = ids.p_cmd;
+    res.model_id_pressure_mpa = ids.p;
+    res.model_id_contraction_mm = ids.x_mm;
+  }
   const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919,
                                                    scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc,
                                                    make_actuator()),
@@ -938,7 +944,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
 }
 
 bool ExperimentResult::is_output_file(const std::string& f) {
-  for (const char* name : {"identification.csv", "model.json", "best_model.json", "result.json", "report.html"})
+  for (const char* name : {"identification.csv", "model_identification.csv", "model.json", "best_model.json",
+                           "result.json", "report.html"})
     if (f == name) return true;
   return f.starts_with("tracking_") && f.ends_with(".csv");
 }
@@ -951,6 +958,12 @@ std::vector<std::string> write_files(const ExperimentResult& r, const std::files
   io::write_columns((d / "identification.csv").string(),
                     {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
                     {r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa, r.id_contraction_mm});
+  if (!r.model_id_t.empty()) {
+    written.push_back("model_identification.csv");
+    io::write_columns((d / written.back()).string(), {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
+                      {r.model_id_t, r.model_id_pressure_command_mpa, r.model_id_pressure_mpa,
+                       r.model_id_contraction_mm});
+  }
   for (const auto& run : r.runs) {
     std::vector<std::string> names = {"t_s",      "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa",
                                       "pressure_mpa", "pwm_duty"};

@@ -296,6 +296,22 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
                   fmt::format("Fit residuals over the identification run; the model was trained on t < {:.3g} s.",
                               split < n ? r.id_t[split] : r.id_t.back()));
   }
+  if (!r.model_id_t.empty()) {  // the run hysteron's model was fitted on, where it is not the paper's
+    std::vector<double> best;
+    try {
+      best = simulate_record(r.best_fit.model, r.model_id_pressure_mpa);
+    } catch (const Error& e) {
+      page.para(fmt::format("The best model cannot be simulated on its identification run: {}", e.what()), "warn");
+    }
+    PlotSpec loops{{"hysteron's model on the run it was fitted on (model_identification.csv)", pressure, contraction},
+                   {{"measured", r.model_id_pressure_mpa, r.model_id_contraction_mm, "lines", "#d62728", false}}};
+    if (best.size() == r.model_id_t.size())
+      loops.series.push_back({fmt::format("{} model", fit_model_name(r.best_fit.model_kind)), r.model_id_pressure_mpa,
+                              best, "lines", "#1f77b4", true});
+    page.figure(loops, fmt::format("hysteron's model ({}, best_model.json) was fitted on a run of the paper's input "
+                                   "scaled to a top of {:.3f} MPa, not on the run above (docs/control.md, section 0).",
+                                   fit_model_name(r.best_fit.model_kind), r.model_id_top_mpa));
+  }
 
   // tracking figures, one group per reference
   std::vector<std::string> refs;
@@ -365,12 +381,20 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
   r.fit.model = io::read_model_file(need_file("model.json"));
   r.best_fit.model = fs::exists(d / "best_model.json") ? io::read_model_file((d / "best_model.json").string())
                                                        : r.fit.model;
-  const std::string idc = need_file("identification.csv");
-  const io::Table t = io::read_table(idc);
-  r.id_t = column(t, "t_s", idc);
-  r.id_pressure_command_mpa = column(t, "pressure_command_mpa", idc);
-  r.id_pressure_mpa = column(t, "pressure_mpa", idc);
-  r.id_contraction_mm = column(t, "contraction_mm", idc);
+  // an identification run's CSV (identification.csv, model_identification.csv) into its four series
+  auto read_id_run = [](const std::string& path, std::vector<double>& t_s, std::vector<double>& command,
+                        std::vector<double>& pressure, std::vector<double>& contraction) {
+    const io::Table t = io::read_table(path);
+    t_s = column(t, "t_s", path);
+    command = column(t, "pressure_command_mpa", path);
+    pressure = column(t, "pressure_mpa", path);
+    contraction = column(t, "contraction_mm", path);
+  };
+  read_id_run(need_file("identification.csv"), r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa,
+              r.id_contraction_mm);
+  if (const fs::path mic = d / "model_identification.csv"; fs::exists(mic))  // absent: the paper's run
+    read_id_run(mic.string(), r.model_id_t, r.model_id_pressure_command_mpa, r.model_id_pressure_mpa,
+                r.model_id_contraction_mm);
 
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(d)) {

@@ -277,8 +277,9 @@ struct ExperimentResult {
   // The same as io::to_json(result) (hysteron/io/results.hpp, where it is defined).
   nlohmann::json to_json() const;
   // Writes identification.csv, model_identification.csv (where model_id_t is not empty),
-  // tracking_<variant>_<reference>.csv, the models and result.json into dir (created if needed), each file atomically (io::write_file_atomically)
-  // and all together (io::FileBatch): every file is complete before the first is replaced, so
+  // tracking_<variant>_<reference>.csv, the models and result.json into dir (created if
+  // needed), each file atomically (io::write_file_atomically) and all together
+  // (io::FileBatch): every file is complete before the first is replaced, so
   // on an error (Error names the file) nothing in dir has changed. Where dir held an earlier
   // run (its result.json), that run's files this one does not have (tracking CSVs of variants
   // it did not run, report.html, which described it) are removed afterwards; other files in

@@ -954,16 +954,18 @@ namespace {
 
 // Writes the run's files into `d`; returns their names.
 std::vector<std::string> write_files(const ExperimentResult& r, const std::filesystem::path& d) {
-  std::vector<std::string> written = {"identification.csv", "model.json", "best_model.json", "result.json"};
-  io::write_columns((d / "identification.csv").string(),
-                    {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
-                    {r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa, r.id_contraction_mm});
-  if (!r.model_id_t.empty()) {
-    written.push_back("model_identification.csv");
-    io::write_columns((d / written.back()).string(), {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
-                      {r.model_id_t, r.model_id_pressure_command_mpa, r.model_id_pressure_mpa,
-                       r.model_id_contraction_mm});
-  }
+  std::vector<std::string> written = {"model.json", "best_model.json", "result.json"};
+  // an identification run's four series (read back by report::read_experiment_dir)
+  auto write_id_run = [&](const char* name, const std::vector<double>& t_s, const std::vector<double>& command,
+                          const std::vector<double>& pressure, const std::vector<double>& contraction) {
+    written.push_back(name);
+    io::write_columns((d / name).string(), {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
+                      {t_s, command, pressure, contraction});
+  };
+  write_id_run("identification.csv", r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa, r.id_contraction_mm);
+  if (!r.model_id_t.empty())
+    write_id_run("model_identification.csv", r.model_id_t, r.model_id_pressure_command_mpa, r.model_id_pressure_mpa,
+                 r.model_id_contraction_mm);
   for (const auto& run : r.runs) {
     std::vector<std::string> names = {"t_s",      "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa",
                                       "pressure_mpa", "pwm_duty"};

@@ -192,8 +192,8 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   o.rig.load.mass = 35.0;
   const auto top_of_id_ascent = [](const ExperimentResult& r) {  // least contraction at >= 0.57 MPa
     double top = INFINITY;
-    for (std::size_t k = 0; k < r.id_pressure_mpa.size(); ++k)
-      if (r.id_pressure_mpa[k] >= 0.57) top = std::min(top, r.id_contraction_mm[k]);
+    for (std::size_t k = 0; k < r.identification.pressure_mpa.size(); ++k)
+      if (r.identification.pressure_mpa[k] >= 0.57) top = std::min(top, r.identification.contraction_mm[k]);
     return top;
   };
   const auto compensated = [](const ExperimentResult& r) -> const TrackingRun& {
@@ -236,14 +236,15 @@ TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
   ExperimentOptions o = test::quick_experiment("gpi-pid");
   o.rig.air.supply_pressure = 5e5;  // [Pa abs]
   const ExperimentResult r = run_experiment(o);
-  const double p_meas_max = *std::max_element(r.id_pressure_mpa.begin(), r.id_pressure_mpa.end());
+  const IdentificationRun& id = r.identification;
+  const double p_meas_max = *std::max_element(id.pressure_mpa.begin(), id.pressure_mpa.end());
   EXPECT_GT(p_meas_max, 0.37);  // supply 0.5 MPa abs - 0.1 MPa atmosphere, less the regulator's drop
   EXPECT_LT(p_meas_max, 0.42);
   EXPECT_NEAR(r.reach_pressure_max_mpa, p_meas_max, 0.01);  // the 11-sample mean against the raw samples
   EXPECT_NEAR(r.reach_top_pressure_mpa, 0.95 * r.reach_pressure_max_mpa, 1e-12);
   double top = INFINITY;  // least contraction on the record at or above that pressure
-  for (std::size_t k = 0; k < r.id_pressure_mpa.size(); ++k)
-    if (r.id_pressure_mpa[k] >= r.reach_top_pressure_mpa) top = std::min(top, r.id_contraction_mm[k]);
+  for (std::size_t k = 0; k < id.size(); ++k)
+    if (id.pressure_mpa[k] >= r.reach_top_pressure_mpa) top = std::min(top, id.contraction_mm[k]);
   ASSERT_TRUE(std::isfinite(top));
   ASSERT_EQ(r.reference_ranges.size(), 1u);
   const ReferenceRange& rr = r.reference_ranges[0];
@@ -274,14 +275,15 @@ TEST(Experiment, ModelIsIdentifiedOverThePressureTheReferencesNeed) {
   o.rig.sensors.displacement_range = 0.3;
   const ExperimentResult r = run_experiment(o);
   double p_need = 0.0;  // the most pressure at which the record's contraction was at or below 95 mm
-  for (std::size_t k = 0; k < r.id_pressure_mpa.size(); ++k)
-    if (r.id_contraction_mm[k] <= 95.0) p_need = std::max(p_need, r.id_pressure_mpa[k]);
+  for (std::size_t k = 0; k < r.identification.pressure_mpa.size(); ++k)
+    if (r.identification.contraction_mm[k] <= 95.0) p_need = std::max(p_need, r.identification.pressure_mpa[k]);
   EXPECT_GT(p_need, 0.25);
   EXPECT_LT(p_need, 0.45);
   EXPECT_NEAR(r.model_id_top_mpa, p_need + 0.06, 0.01);  // 11-sample means against raw samples
   EXPECT_TRUE(test::said(r, "identified on the paper's pressure inputs scaled"));
   // the paper's own fit stays on the paper's input (the faithful variant is as published)
-  EXPECT_GT(*std::max_element(r.id_pressure_command_mpa.begin(), r.id_pressure_command_mpa.end()), 0.59);
+  const std::vector<double>& paper_command = r.identification.pressure_command_mpa;
+  EXPECT_GT(*std::max_element(paper_command.begin(), paper_command.end()), 0.59);
   for (const auto& run : r.runs)
     if (run.variant == "compensated") {
       EXPECT_LT(run.errors.rms_error_mm, 1.0) << "1.150 mm with the model identified over 0..0.6 MPa";
@@ -303,9 +305,10 @@ TEST(Experiment, IdentificationIsExtendedToTheActuatorsTopWhereThePapersInputFal
   const ExperimentResult r = run_experiment(o);
   EXPECT_TRUE(test::said(r, "scaled to 0.600 MPa, the actuator's top"));
   // the paper's own run, the one the faithful variant's model is fitted on, is unchanged
-  EXPECT_LE(*std::max_element(r.id_pressure_command_mpa.begin(), r.id_pressure_command_mpa.end()), 0.5 + 1e-12);
+  const std::vector<double>& paper_command = r.identification.pressure_command_mpa;
+  EXPECT_LE(*std::max_element(paper_command.begin(), paper_command.end()), 0.5 + 1e-12);
   double reached = 0.0;  // the paper's run's most contraction
-  for (double x : r.id_contraction_mm) reached = std::max(reached, x);
+  for (double x : r.identification.contraction_mm) reached = std::max(reached, x);
   EXPECT_LT(reached, 40.0);
   EXPECT_GT(r.model_id_top_mpa, 0.5);
   ASSERT_TRUE(std::isfinite(r.reach_top_mm)) << "the reach at the actuator's top was not measured";
@@ -322,20 +325,21 @@ TEST(Experiment, IdentificationIsExtendedToTheActuatorsTopWhereThePapersInputFal
   EXPECT_EQ(compensated, 2);
 
   // the run hysteron's model was fitted on, the paper's input extended to 0.6 MPa, is kept
-  ASSERT_FALSE(r.model_id_t.empty());
-  EXPECT_EQ(r.model_id_pressure_command_mpa.size(), r.model_id_t.size());
-  EXPECT_EQ(r.model_id_contraction_mm.size(), r.model_id_t.size());
-  EXPECT_NEAR(*std::max_element(r.model_id_pressure_command_mpa.begin(), r.model_id_pressure_command_mpa.end()), 0.6,
-              1e-9);
-  EXPECT_GT(*std::max_element(r.model_id_contraction_mm.begin(), r.model_id_contraction_mm.end()), reached);
+  const IdentificationRun& ext = r.model_identification;
+  ASSERT_FALSE(ext.empty());
+  EXPECT_EQ(ext.pressure_command_mpa.size(), ext.size());
+  EXPECT_EQ(ext.contraction_mm.size(), ext.size());
+  EXPECT_NEAR(*std::max_element(ext.pressure_command_mpa.begin(), ext.pressure_command_mpa.end()), 0.6, 1e-9);
+  EXPECT_GT(*std::max_element(ext.contraction_mm.begin(), ext.contraction_mm.end()), reached);
 
   o.rig = PamRigParams{};
   const ExperimentResult n = run_experiment(o);
   EXPECT_FALSE(test::said(n, "the actuator's top (the paper's model"));
   EXPECT_GT(n.model_id_top_mpa, 0.0);
   EXPECT_LT(n.model_id_top_mpa, 0.5);  // scaled down, as before
-  ASSERT_FALSE(n.model_id_t.empty());
-  EXPECT_NEAR(*std::max_element(n.model_id_pressure_command_mpa.begin(), n.model_id_pressure_command_mpa.end()),
+  const IdentificationRun& scaled = n.model_identification;
+  ASSERT_FALSE(scaled.empty());
+  EXPECT_NEAR(*std::max_element(scaled.pressure_command_mpa.begin(), scaled.pressure_command_mpa.end()),
               n.model_id_top_mpa, 1e-9);
 
   // written as model_identification.csv and read back; removed where a later run into the same
@@ -345,21 +349,19 @@ TEST(Experiment, IdentificationIsExtendedToTheActuatorsTopWhereThePapersInputFal
   n.write(out);
   ASSERT_TRUE(std::filesystem::exists(dir.file("out/model_identification.csv")));
   const ExperimentResult back = report::read_experiment_dir(out);
-  ASSERT_EQ(back.model_id_t.size(), n.model_id_t.size());
-  for (std::size_t k = 0; k < n.model_id_t.size(); k += 997) {
-    EXPECT_NEAR(back.model_id_t[k], n.model_id_t[k], 1e-12);
-    EXPECT_NEAR(back.model_id_pressure_command_mpa[k], n.model_id_pressure_command_mpa[k], 1e-12);
-    EXPECT_NEAR(back.model_id_pressure_mpa[k], n.model_id_pressure_mpa[k], 1e-12);
-    EXPECT_NEAR(back.model_id_contraction_mm[k], n.model_id_contraction_mm[k], 1e-12);
+  const IdentificationRun& read = back.model_identification;
+  ASSERT_EQ(read.size(), scaled.size());
+  for (std::size_t k = 0; k < scaled.size(); k += 997) {
+    EXPECT_NEAR(read.t[k], scaled.t[k], 1e-12);
+    EXPECT_NEAR(read.pressure_command_mpa[k], scaled.pressure_command_mpa[k], 1e-12);
+    EXPECT_NEAR(read.pressure_mpa[k], scaled.pressure_mpa[k], 1e-12);
+    EXPECT_NEAR(read.contraction_mm[k], scaled.contraction_mm[k], 1e-12);
   }
   ExperimentResult on_paper_run = n;
-  on_paper_run.model_id_t.clear();
-  on_paper_run.model_id_pressure_command_mpa.clear();
-  on_paper_run.model_id_pressure_mpa.clear();
-  on_paper_run.model_id_contraction_mm.clear();
+  on_paper_run.model_identification = {};
   on_paper_run.write(out);
   EXPECT_FALSE(std::filesystem::exists(dir.file("out/model_identification.csv")));
-  EXPECT_TRUE(report::read_experiment_dir(out).model_id_t.empty());
+  EXPECT_TRUE(report::read_experiment_dir(out).model_identification.empty());
   EXPECT_TRUE(ExperimentResult::is_output_file("model_identification.csv"));
 }
 

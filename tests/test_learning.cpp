@@ -583,8 +583,8 @@ TEST(ExperimentTuning, ValveRigIsIdentifiedThroughItsValves) {
   o.rig.regulator.time_constant = 0.1;
   o.rig.regulator.dead_time = 0.012;
   const ExperimentResult b = run_experiment(o);
-  EXPECT_EQ(a.id_pressure_mpa, b.id_pressure_mpa);
-  EXPECT_EQ(a.id_contraction_mm, b.id_contraction_mm);
+  EXPECT_EQ(a.identification.pressure_mpa, b.identification.pressure_mpa);
+  EXPECT_EQ(a.identification.contraction_mm, b.identification.contraction_mm);
   EXPECT_EQ(a.dynamics, b.dynamics);
   EXPECT_EQ(a.lead_s, b.lead_s);
   ASSERT_EQ(a.runs.size(), b.runs.size());
@@ -593,8 +593,8 @@ TEST(ExperimentTuning, ValveRigIsIdentifiedThroughItsValves) {
   // the valves' pressure loop follows the identification's command: the measured pressure
   // stays within the command's range
   double lo = 1e9, hi = -1e9;
-  for (double p : a.id_pressure_command_mpa) lo = std::min(lo, p), hi = std::max(hi, p);
-  for (double p : a.id_pressure_mpa) {
+  for (double p : a.identification.pressure_command_mpa) lo = std::min(lo, p), hi = std::max(hi, p);
+  for (double p : a.identification.pressure_mpa) {
     EXPECT_GE(p, lo - 0.05);
     EXPECT_LE(p, hi + 0.05);
   }
@@ -616,16 +616,16 @@ TEST(ExperimentTuning, OpenLoopRigIsIdentifiedThroughItsPressureLoop) {
   o.adaptive = false;
   o.model = FitModel::mpi_asym;
   const ExperimentResult r = run_experiment(o);
-  const experiment::IdRecord plain = experiment::identification_run(
+  const IdentificationRun plain = experiment::identification_run(
       slow, o.seed, mpi_identification_pressure(tc), tc,
       [](double p, const RigOutputs&) { return experiment::regulator(p); });
-  ASSERT_EQ(plain.p.size(), r.id_pressure_mpa.size());
-  EXPECT_EQ(plain.p_cmd, r.id_pressure_command_mpa);
+  ASSERT_EQ(plain.pressure_mpa.size(), r.identification.pressure_mpa.size());
+  EXPECT_EQ(plain.pressure_command_mpa, r.identification.pressure_command_mpa);
   // the pressure follows the command more closely through the pressure loop
   double lag_loop = 0, lag_plain = 0;
-  for (std::size_t k = 0; k < plain.p.size(); ++k) {
-    lag_loop += std::abs(r.id_pressure_command_mpa[k] - r.id_pressure_mpa[k]);
-    lag_plain += std::abs(plain.p_cmd[k] - plain.p[k]);
+  for (std::size_t k = 0; k < plain.pressure_mpa.size(); ++k) {
+    lag_loop += std::abs(r.identification.pressure_command_mpa[k] - r.identification.pressure_mpa[k]);
+    lag_plain += std::abs(plain.pressure_command_mpa[k] - plain.pressure_mpa[k]);
   }
   EXPECT_LT(lag_loop, 0.8 * lag_plain);
   // and the identified lag of the loop's actuator is shorter than the plain regulator's
@@ -707,11 +707,11 @@ TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWoul
     heavy.load.mass = mass;
     const ExperimentResult r = run_gpi_pid(heavy, 0);
     double lo = 1e9, hi = -1e9;
-    for (double x : r.id_contraction_mm) lo = std::min(lo, x), hi = std::max(hi, x);
+    for (double x : r.identification.contraction_mm) lo = std::min(lo, x), hi = std::max(hi, x);
     double p_mid_up = 0.0;  // the ascent's pressure at mid-stroke: the first sample at or above it
-    for (std::size_t k = 0; k < r.id_contraction_mm.size(); ++k)
-      if (r.id_contraction_mm[k] >= 0.5 * (lo + hi)) {
-        p_mid_up = r.id_pressure_mpa[k];
+    for (std::size_t k = 0; k < r.identification.contraction_mm.size(); ++k)
+      if (r.identification.contraction_mm[k] >= 0.5 * (lo + hi)) {
+        p_mid_up = r.identification.pressure_mpa[k];
         break;
       }
     EXPECT_GT(r.dynamics.position_relay_level_mpa, experiment::kRelayLevel + experiment::kPositionRelayAmplitude);

@@ -212,14 +212,14 @@ ExperimentResult small_experiment(std::initializer_list<const char*> variants = 
   r.title = "test experiment";
   r.seed = 3;
   const std::size_t n = 800;
-  r.id_pressure_mpa = test_input(n);
+  r.identification.pressure_mpa = test_input(n);
   r.fit.model_kind = FitModel::gpi;
   r.fit.status = FitStatus::converged;
   r.fit.model = test_gpi();
   r.best_fit = r.fit;
-  r.id_contraction_mm = simulate_record(r.fit.model, r.id_pressure_mpa);
-  r.id_pressure_command_mpa = r.id_pressure_mpa;
-  for (std::size_t i = 0; i < n; ++i) r.id_t.push_back(0.01 * static_cast<double>(i));
+  r.identification.contraction_mm = simulate_record(r.fit.model, r.identification.pressure_mpa);
+  r.identification.pressure_command_mpa = r.identification.pressure_mpa;
+  for (std::size_t i = 0; i < n; ++i) r.identification.t.push_back(0.01 * static_cast<double>(i));
   r.id_train_end = 500;
   r.published = {"paper, Table 5", {{"", 2.659, 0.7358, 0.8701}}};
   for (const char* variant : variants) {
@@ -258,7 +258,7 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   EXPECT_EQ(back.name, "gpi-pid");
   EXPECT_EQ(back.runs.size(), 3u);
   EXPECT_EQ(back.runs[0].reference, "sine");
-  EXPECT_EQ(back.id_contraction_mm, r.id_contraction_mm);
+  EXPECT_EQ(back.identification.contraction_mm, r.identification.contraction_mm);
   write_report_from(dir, tmp / "exp.html", "hysteron report exp --out exp.html");
   const std::string html = slurp(tmp / "exp.html");
   EXPECT_EQ(count(html, "<svg"), 6u);  // Fig. 4, loops, residuals, Figs. 11, 12, 13
@@ -306,7 +306,7 @@ TEST(Report, ExperimentOutputIsReplacedAsASet) {
   // a run whose last tracking series is malformed: written after the identification and the
   // first runs' CSVs, so without the batch those would have been replaced already
   ExperimentResult bad = small_experiment({"compensated", "faithful", "baseline"});
-  bad.id_contraction_mm.assign(bad.id_contraction_mm.size(), 1.0);
+  bad.identification.contraction_mm.assign(bad.identification.contraction_mm.size(), 1.0);
   bad.runs.back().duty.pop_back();
   const std::string message = test::error_of([&] { bad.write(dir); });
   EXPECT_NE(message.find("tracking_baseline_sine.csv"), std::string::npos) << message;

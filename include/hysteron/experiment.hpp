@@ -153,6 +153,20 @@ struct TrackingErrors {
   double rms_error_mm = 0.0;
 };
 
+// One identification run, logged at the control period, through the actuator of the
+// experiment's hysteron variants (the regulator, with mpi-openloop's pressure loop, or
+// mpi-pwm's valves behind their pressure PI). Written as identification.csv and
+// model_identification.csv, with these names as columns.
+struct IdentificationRun {
+  std::vector<double> t;                     // [s]
+  std::vector<double> pressure_command_mpa;  // the desired pressure [MPa]
+  std::vector<double> pressure_mpa;          // measured [MPa]
+  std::vector<double> contraction_mm;        // measured [mm]
+  bool empty() const noexcept { return t.empty(); }
+  std::size_t size() const noexcept { return t.size(); }
+  bool operator==(const IdentificationRun&) const = default;
+};
+
 // One tracking run, logged at the control period.
 struct TrackingRun {
   std::string variant;    // faithful | compensated | baseline
@@ -226,10 +240,7 @@ struct ExperimentResult {
   std::string name;
   std::string title;
   std::uint64_t seed = 0;
-  // identification run (logged at the control period), through the actuator of the
-  // experiment's hysteron variants (the regulator, with mpi-openloop's pressure loop, or
-  // mpi-pwm's valves behind their pressure PI): the command is the desired pressure
-  std::vector<double> id_t, id_pressure_command_mpa, id_pressure_mpa, id_contraction_mm;
+  IdentificationRun identification;  // the paper's identification input, run on this rig
   std::size_t id_train_end = 0;   // samples [0, id_train_end) are the major loop
   FitReport fit;                  // the paper's model, fitted on the major loop
   FitMetrics validation;          // ... on the minor loops
@@ -249,9 +260,9 @@ struct ExperimentResult {
   double model_id_top_mpa = 0.0;
   // The identification run hysteron's model (best_fit) was fitted on, where it is not the
   // paper's run above (model_id_top_mpa > 0: the paper's input scaled to the references'
-  // pressures, or extended to the actuator's top), at the control period, as id_*; empty where
-  // it is the paper's run. write() puts it into model_identification.csv.
-  std::vector<double> model_id_t, model_id_pressure_command_mpa, model_id_pressure_mpa, model_id_contraction_mm;
+  // pressures, or extended to the actuator's top); empty where it is the paper's run. write()
+  // puts it into model_identification.csv.
+  IdentificationRun model_identification;
   RigDynamics dynamics;           // identified from the identification run
   // The contraction the rig reached in the identification run (min and max of an 11-sample
   // moving mean of the measurement) [mm]; NaN in results written before it existed.
@@ -276,7 +287,7 @@ struct ExperimentResult {
   // max_error_mm, mae_mm, rms_error_mm (keyed by reference where there are several).
   // The same as io::to_json(result) (hysteron/io/results.hpp, where it is defined).
   nlohmann::json to_json() const;
-  // Writes identification.csv, model_identification.csv (where model_id_t is not empty),
+  // Writes identification.csv, model_identification.csv (where model_identification is not empty),
   // tracking_<variant>_<reference>.csv, the models and result.json into dir (created if
   // needed), each file atomically (io::write_file_atomically) and all together
   // (io::FileBatch): every file is complete before the first is replaced, so

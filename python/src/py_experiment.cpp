@@ -29,6 +29,17 @@ report::Labels labels(const std::string& title, const std::string& xl, const std
   return {title, {xl, xu}, {yl, yu}};
 }
 
+// An identification run as the dict of run_experiment()'s "identification" and
+// "model_identification" (the CSV's columns; t in seconds).
+py::dict id_run_dict(const IdentificationRun& run) {
+  py::dict d;
+  d["t"] = to_numpy(run.t);
+  d["pressure_command_mpa"] = to_numpy(run.pressure_command_mpa);
+  d["pressure_mpa"] = to_numpy(run.pressure_mpa);
+  d["contraction_mm"] = to_numpy(run.contraction_mm);
+  return d;
+}
+
 // Keyword arguments shared by the plot functions.
 #define HYSTERON_PLOT_ARGS(title, xl, xu, yl, yu)                                                            \
   py::arg("path"), py::arg("title") = title, py::arg("x_label") = xl, py::arg("x_unit") = xu,                \
@@ -167,23 +178,12 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         py::dict d;
         d["summary"] = from_json(io::to_json(r));
         d["table"] = r.table();
-        py::dict id;
-        id["t"] = to_numpy(r.id_t);
-        id["pressure_command_mpa"] = to_numpy(r.id_pressure_command_mpa);
-        id["pressure_mpa"] = to_numpy(r.id_pressure_mpa);
-        id["contraction_mm"] = to_numpy(r.id_contraction_mm);
+        py::dict id = id_run_dict(r.identification);
         id["train_end"] = r.id_train_end;
         d["identification"] = id;
-        if (!r.model_id_t.empty()) {  // the run hysteron's model was fitted on, where not the paper's
-          py::dict mid;
-          mid["t"] = to_numpy(r.model_id_t);
-          mid["pressure_command_mpa"] = to_numpy(r.model_id_pressure_command_mpa);
-          mid["pressure_mpa"] = to_numpy(r.model_id_pressure_mpa);
-          mid["contraction_mm"] = to_numpy(r.model_id_contraction_mm);
-          d["model_identification"] = mid;
-        } else {
-          d["model_identification"] = py::none();
-        }
+        // the run hysteron's model was fitted on, where not the paper's
+        d["model_identification"] = r.model_identification.empty() ? py::object(py::none())
+                                                                   : py::object(id_run_dict(r.model_identification));
         d["fit"] = fit_dict(r.fit);
         d["validation"] = metrics_dict(r.validation);
         d["best_fit"] = fit_dict(r.best_fit);

@@ -16,8 +16,8 @@ std::shared_ptr<AdaptiveInverse> adaptive_inverse(const Context& c, bool frozen)
   // The rig's response delay from the measured pressure to the measured contraction: the pure
   // delay that best fits the fitted model to the identification run (the preview's rule,
   // tuning.cpp, from the measured pressure instead of the command), searched up to 0.3 s.
-  const std::vector<double>& pm = c.result.id_pressure_mpa;
-  const std::vector<double>& xm = c.result.id_contraction_mm;
+  const std::vector<double>& pm = c.result.identification.pressure_mpa;
+  const std::vector<double>& xm = c.result.identification.contraction_mm;
   const std::vector<double> ys = Model(c.result.best_fit.model).simulate(pm);
   const auto max_delay = std::min<std::size_t>(static_cast<std::size_t>(std::lround(0.3 / c.tc)), xm.size() / 2);
   double best = std::numeric_limits<double>::infinity();

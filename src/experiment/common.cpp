@@ -24,46 +24,46 @@ RigInputs valves(double duty, double desired_mpa) {
   return in;
 }
 
-IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
-                            double tc, const Actuator& actuator) {
+IdentificationRun identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
+                                     double tc, const Actuator& actuator) {
   PamRig rig(rp, seed);
   rig.reset();
-  IdRecord rec;
+  IdentificationRun rec;
   std::size_t k = 0;
   rig.run(static_cast<double>(pressure.size()) * tc, tc, [&](const RigOutputs& o) {
     const double desired = std::clamp(pressure[std::min(k, pressure.size() - 1)], 0.0, kPressureMax);
     const RigInputs in = actuator(desired, o);
     rec.t.push_back(o.time);
-    rec.p_cmd.push_back(desired);
-    rec.p.push_back(o.pressure_measured * 1e-6);
-    rec.x_mm.push_back(o.contraction_measured * 1e3);
+    rec.pressure_command_mpa.push_back(desired);
+    rec.pressure_mpa.push_back(o.pressure_measured * 1e-6);
+    rec.contraction_mm.push_back(o.contraction_measured * 1e3);
     ++k;
     return in;
   });
   return rec;
 }
 
-IdRecord decimate(const IdRecord& r, std::size_t every) {
-  IdRecord d;
+IdentificationRun decimate(const IdentificationRun& r, std::size_t every) {
+  IdentificationRun d;
   for (std::size_t i = 0; i < r.t.size(); i += every) {
     d.t.push_back(r.t[i]);
-    d.p_cmd.push_back(r.p_cmd[i]);
-    d.p.push_back(r.p[i]);
-    d.x_mm.push_back(r.x_mm[i]);
+    d.pressure_command_mpa.push_back(r.pressure_command_mpa[i]);
+    d.pressure_mpa.push_back(r.pressure_mpa[i]);
+    d.contraction_mm.push_back(r.contraction_mm[i]);
   }
   return d;
 }
 
 // Straight line x = a p + b through the record (least squares): the baseline's
 // "inverse without hysteresis".
-ModelParams straight_line(const IdRecord& r) {
-  const auto n = static_cast<double>(r.p.size());
+ModelParams straight_line(const IdentificationRun& r) {
+  const auto n = static_cast<double>(r.pressure_mpa.size());
   double sp = 0, sx = 0, spp = 0, spx = 0;
-  for (std::size_t i = 0; i < r.p.size(); ++i) {
-    sp += r.p[i];
-    sx += r.x_mm[i];
-    spp += r.p[i] * r.p[i];
-    spx += r.p[i] * r.x_mm[i];
+  for (std::size_t i = 0; i < r.pressure_mpa.size(); ++i) {
+    sp += r.pressure_mpa[i];
+    sx += r.contraction_mm[i];
+    spp += r.pressure_mpa[i] * r.pressure_mpa[i];
+    spx += r.pressure_mpa[i] * r.contraction_mm[i];
   }
   const double den = n * spp - sp * sp;
   const double a = (n * spx - sp * sx) / den;
@@ -77,8 +77,8 @@ ModelParams straight_line(const IdRecord& r) {
   return g;
 }
 
-FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what, FitStatus* status) {
-  FitReport rep = fit(r.p, r.x_mm, fo);
+FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, FitStatus* status) {
+  FitReport rep = fit(r.pressure_mpa, r.contraction_mm, fo);
   if (status) *status = rep.status;
   if (rep.status == FitStatus::invalid_input || rep.status == FitStatus::failed)
     throw Error(fmt::format("experiment: fit of the {} failed: {}", what, rep.message));

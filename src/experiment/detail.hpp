@@ -21,11 +21,6 @@ namespace hysteron::experiment {
 
 inline constexpr double kPressureMax = 0.6;  // [MPa] actuator limit of every experiment
 
-// One identification run (logged at the control period).
-struct IdRecord {
-  std::vector<double> t, p_cmd, p, x_mm;
-};
-
 // What a controller sees each control period and what it commands.
 struct Sample {
   double reference_m, preview_m, measured_m, pressure_mpa;
@@ -155,14 +150,14 @@ LoopDesign::Adaptation adaptation_of(const AdaptiveInverse& a);
 using Actuator = std::function<RigInputs(double desired_mpa, const RigOutputs&)>;
 // The identification run: `pressure` [MPa] at the control period through `actuator` (the
 // one the experiment's loops use, so that the dynamics identified on it are theirs).
-// Logs the desired pressure as p_cmd.
-IdRecord identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
-                            double tc, const Actuator& actuator);
-IdRecord decimate(const IdRecord& r, std::size_t every);
-ModelParams straight_line(const IdRecord& r);
+// Logs the desired pressure as pressure_command_mpa.
+IdentificationRun identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
+                                     double tc, const Actuator& actuator);
+IdentificationRun decimate(const IdentificationRun& r, std::size_t every);
+ModelParams straight_line(const IdentificationRun& r);
 // fit() with its model checked: a failed fit or a model that cannot be inverted is a
 // hysteron::Error; `status` (if given) receives the fit's status either way.
-FitReport fit_checked(const IdRecord& r, FitOptions fo, const std::string& what, FitStatus* status = nullptr);
+FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, FitStatus* status = nullptr);
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
 // A note for the result's messages when the pressure command sat at 0 or kPressureMax on at
 // least 1 % of the samples in [from, to) (their count and the RMS error there and elsewhere);
@@ -181,7 +176,7 @@ namespace hysteron::experiment {
 // First order plus dead time around the fitted model (RigDynamics), by least squares
 // over a grid of (theta, tau) on the identification run at the control period;
 // `lead` receives the best pure delay (tau = 0) [samples], the feedforward's preview.
-RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead);
+RigDynamics identify_dynamics(const ModelParams& model, const IdentificationRun& r, double tc, std::size_t& lead);
 // SIMC rule (Skogestad 2003) for the position PI on the FOPDT (K, tau, theta), tight
 // tuning tau_c = theta:  K_c = tau / (K (tau_c + theta)),  T_i = min(tau, 4 (tau_c + theta)).
 PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_max);

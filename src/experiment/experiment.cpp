@@ -280,18 +280,21 @@ std::vector<double> smoothed(const std::vector<double>& x) {
   return m;
 }
 
+// The largest element of v; 0 where v is empty.
+double max_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+
 // The identification run's contraction [mm] and measured pressure [MPa], each as its
 // centred 11-sample mean: what the reach and the model's identification range are read from.
 struct SmoothedRun {
   std::vector<double> x_mm, p;
-  explicit SmoothedRun(const IdRecord& id) : x_mm(smoothed(id.x_mm)), p(smoothed(id.p)) {}
+  explicit SmoothedRun(const IdentificationRun& id) : x_mm(smoothed(id.contraction_mm)), p(smoothed(id.pressure_mpa)) {}
 };
 
 // The top pressure the loops can use [MPa]: kPressureMax, or the highest the identification
 // run reached (`reached_mpa`) where that stayed below (1 - kPressureHeadroom) of the run's
 // highest command (at most kPressureMax): the supply, regulator or valves cap the actuator.
-double usable_top(const IdRecord& id, double reached_mpa) {
-  const double p_cmd_max = id.p_cmd.empty() ? 0.0 : *std::max_element(id.p_cmd.begin(), id.p_cmd.end());
+double usable_top(const IdentificationRun& id, double reached_mpa) {
+  const double p_cmd_max = max_of(id.pressure_command_mpa);
   const bool capped = reached_mpa < (1.0 - kPressureHeadroom) * std::min(p_cmd_max, kPressureMax);
   return capped && reached_mpa > 0.0 ? reached_mpa : kPressureMax;
 }
@@ -301,13 +304,13 @@ double usable_top(const IdRecord& id, double reached_mpa) {
 // least (sigma from the record's first differences): on a short stroke with a noisy sensor 2 %
 // of the span is within the noise, and a noise peak at the rest read as a lifted load (77 kg,
 // 0.16 mm of noise: "lifted above 0.009 MPa").
-StrokePressures stroke_pressures(const IdRecord& id, const SmoothedRun& sm) {
+StrokePressures stroke_pressures(const IdentificationRun& id, const SmoothedRun& sm) {
   StrokePressures s;
-  if (sm.x_mm.empty() || id.x_mm.size() < 3) return s;
+  if (sm.x_mm.empty() || id.contraction_mm.size() < 3) return s;
   const auto [lo, hi] = std::minmax_element(sm.x_mm.begin(), sm.x_mm.end());
   const double span = *hi - *lo, mid = 0.5 * (*lo + *hi);
   if (!(span > 0.0)) return s;
-  const double sigma = first_difference_sigma(id.x_mm, 0, id.x_mm.size());
+  const double sigma = first_difference_sigma(id.contraction_mm, 0, id.contraction_mm.size());
   const double lifted = *lo + std::max(0.02 * span, 3.0 * sigma);
   double sum = 0.0, floor = std::numeric_limits<double>::infinity();
   std::size_t n = 0;
@@ -351,10 +354,10 @@ std::string clipping_note(const Clipping& clip) {
 // reference that leaves the reach is mapped affinely onto its intersection with it (only
 // the end that leaves it moves; a reference whose bottom is the rest position keeps it).
 // The ranges and a note per reference out of reach go into the result.
-std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& id, const SmoothedRun& sm,
+std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdentificationRun& id, const SmoothedRun& sm,
                                     double p_top, std::vector<Reference> refs, ExperimentResult& res) {
   const std::vector<double>& x = sm.x_mm;
-  const double p_cmd_max = id.p_cmd.empty() ? 0.0 : *std::max_element(id.p_cmd.begin(), id.p_cmd.end());
+  const double p_cmd_max = max_of(id.pressure_command_mpa);
   const bool capped = p_top < kPressureMax;
   const double p_limit = (1.0 - kPressureHeadroom) * p_top;
   if (capped)
@@ -369,14 +372,14 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdRecord& 
   for (std::size_t k = 0; k < x.size(); ++k) {
     res.reach_min_mm = std::min(res.reach_min_mm, x[k]);
     res.reach_max_mm = std::max(res.reach_max_mm, x[k]);
-    if (id.p[k] >= p_limit) top = std::min(top, x[k]);
+    if (id.pressure_mpa[k] >= p_limit) top = std::min(top, x[k]);
   }
   // the rest position, with the sensor's resolution as tolerance: 0.1 % of the reached span
   double floor_mm = res.reach_min_mm;  // where a reference below the reach is mapped to
   double bottom = res.reach_min_mm - 1e-3 * (res.reach_max_mm - res.reach_min_mm);
   // A displacement sensor that clips (detect_clipping; docs/control.md section 5): the rig
   // cannot be seen beyond its limit, so the reach keeps 3 noise widths from it.
-  if (const Clipping clip = detect_clipping(id.x_mm); clip.any()) {
+  if (const Clipping clip = detect_clipping(id.contraction_mm); clip.any()) {
     const double band = 3.0 * clip.sigma;
     if (clip.low && clip.lo + band > floor_mm) floor_mm = bottom = clip.lo + band;
     if (clip.high) top = std::min(top, clip.hi - band);
@@ -491,7 +494,7 @@ IdentificationRange model_identification_range(const SmoothedRun& sm, const std:
 // `input` scaled so that its maximum is top_mpa: down only (unchanged where it is already
 // below), or with `up_too` by the factor either way.
 std::vector<double> scaled_to(std::vector<double> input, double top_mpa, bool up_too = false) {
-  const double m = input.empty() ? 0.0 : *std::max_element(input.begin(), input.end());
+  const double m = max_of(input);
   if (top_mpa > 0.0 && m > 0.0 && (up_too || m > top_mpa))
     for (double& v : input) v *= top_mpa / m;
   return input;
@@ -545,7 +548,7 @@ void to_control_rate(ModelParams& m, double tc, std::vector<std::string>& messag
   if (!r) return;
   const double fit_dt = r->dt;
   r->dt = tc;
-  const double rmax = r->r.empty() ? 0.0 : *std::max_element(r->r.begin(), r->r.end());
+  const double rmax = max_of(r->r);
   std::string lowered;
   if (rmax > 0.0 && r->c * rmax > 0.5 * (r->tau + r->dt)) {
     const double c = 0.5 * (r->tau + r->dt) / rmax * (1.0 - 1e-12);
@@ -575,8 +578,8 @@ bool pi_family(FitModel k) {
 
 // Fits the candidates of hysteron's model on `idf` and keeps (res.best_fit) the one with the
 // least RMS on `id2`; fills res.candidates, res.model_choice and res.model_reason.
-void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& idf, const IdRecord& id2,
-                  const FitOptions& fo, double fit_dt, ExperimentResult& res) {
+void choose_model(const ExperimentOptions& o, const Spec& spec, const IdentificationRun& idf,
+                  const IdentificationRun& id2, const FitOptions& fo, double fit_dt, ExperimentResult& res) {
   const bool automatic = o.model == FitModel::automatic;
   res.model_choice = o.model;
   double best_rms = std::numeric_limits<double>::infinity();
@@ -602,7 +605,7 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const IdRecord& 
     const auto t0 = std::chrono::steady_clock::now();
     try {
       rep = fit_checked(idf, f2, fmt::format("{} model", fit_model_name(kind)), &c.status);
-      c.validation = evaluate_censored(rep.model, id2.p, id2.x_mm);
+      c.validation = evaluate_censored(rep.model, id2.pressure_mpa, id2.contraction_mm);
       if (!std::isfinite(c.validation.rms))
         throw Error(fmt::format("experiment: the {} model's output on the second identification run is not finite",
                                 fit_model_name(kind)));
@@ -729,14 +732,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   };
 
   // 1. identification run and the paper's fit on the major loop
-  const IdRecord id = identification_run(o.rig, o.seed, spec.id_pressure(tc), tc, make_actuator());
-  res.id_t = id.t;
-  res.id_pressure_command_mpa = id.p_cmd;
-  res.id_pressure_mpa = id.p;
-  res.id_contraction_mm = id.x_mm;
+  const IdentificationRun id = identification_run(o.rig, o.seed, spec.id_pressure(tc), tc, make_actuator());
+  res.identification = id;
   res.id_train_end = static_cast<std::size_t>(std::lround(spec.train_seconds / tc));
   const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / (kFitRate * tc))));
-  const IdRecord idf = decimate(id, every);
+  const IdentificationRun idf = decimate(id, every);
   const std::size_t train_end = (res.id_train_end + every - 1) / every;
   FitOptions fo;
   fo.model = spec.model;
@@ -744,7 +744,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   fo.train = {0, train_end};
   fo.seed = static_cast<unsigned>(o.seed);
   res.fit = fit_checked(idf, fo, "paper's model");
-  res.validation = evaluate_censored(res.fit.model, idf.p, idf.x_mm, {train_end, IndexRange::npos});
+  res.validation =
+      evaluate_censored(res.fit.model, idf.pressure_mpa, idf.contraction_mm, {train_end, IndexRange::npos});
 
   // 2. hysteron's model: candidates fitted on the whole record, chosen on a second
   //    identification run (other seed, other pressure sequence); both inputs scaled to the
@@ -755,10 +756,10 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // the top (extended_input_top); the paper's model stays fitted on the paper's run.
   const std::vector<double> paper_input = spec.id_pressure(tc);
   std::vector<Reference> refs = spec.references(tc);
-  std::optional<IdRecord> extended_run, extended_runf;
+  std::optional<IdentificationRun> extended_run, extended_runf;
   {
     const SmoothedRun sm(id);
-    const double reached = sm.p.empty() ? 0.0 : *std::max_element(sm.p.begin(), sm.p.end());
+    const double reached = max_of(sm.p);
     if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, reached)); ext > 0.0) {
       const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
       const double reached_mm = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
@@ -772,11 +773,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           input_max, reached_mm, ext));
     }
   }
-  const IdRecord& id_run = extended_run ? *extended_run : id;  // the run the reach and the model come from
-  const IdRecord& id_runf = extended_run ? *extended_runf : idf;
+  const IdentificationRun& id_run = extended_run ? *extended_run : id;  // the run the reach and the model come from
+  const IdentificationRun& id_runf = extended_run ? *extended_runf : idf;
   const std::vector<double> id_input = extended_run ? scaled_to(paper_input, kPressureMax, true) : paper_input;
   const SmoothedRun smooth(id_run);
-  res.reach_pressure_max_mpa = smooth.p.empty() ? 0.0 : *std::max_element(smooth.p.begin(), smooth.p.end());
+  res.reach_pressure_max_mpa = max_of(smooth.p);
   // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip
   const double top = usable_top(id_run, res.reach_pressure_max_mpa);
   refs = fit_to_reach(o, id_run, smooth, top, std::move(refs), res);
@@ -784,24 +785,18 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   const IdentificationRange range = model_identification_range(smooth, refs, id_input);
   const bool rescaled = range.p_id_mpa > 0.0;
   res.model_id_top_mpa = rescaled ? range.p_id_mpa : extended_run ? kPressureMax : 0.0;
-  std::optional<IdRecord> scaled_run, scaled_runf;  // the model's identification run, if not the paper's
+  std::optional<IdentificationRun> scaled_run, scaled_runf;  // the model's identification run, if not the paper's
   if (rescaled) {
     res.messages.push_back(range.note());
     scaled_run = identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator());
     scaled_runf = decimate(*scaled_run, every);
   }
-  const IdRecord& ids = rescaled ? *scaled_run : id_run;
-  const IdRecord& idsf = rescaled ? *scaled_runf : id_runf;
-  if (rescaled || extended_run) {  // the run hysteron's model is fitted on, where it is not the paper's
-    res.model_id_t = ids.t;
-    res.model_id_pressure_command_mpa = ids.p_cmd;
-    res.model_id_pressure_mpa = ids.p;
-    res.model_id_contraction_mm = ids.x_mm;
-  }
-  const IdRecord id2 = decimate(identification_run(o.rig, o.seed + 7919,
-                                                   scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc,
-                                                   make_actuator()),
-                                every);
+  const IdentificationRun& ids = rescaled ? *scaled_run : id_run;
+  const IdentificationRun& idsf = rescaled ? *scaled_runf : id_runf;
+  if (rescaled || extended_run) res.model_identification = ids;  // the model's run, where not the paper's
+  const IdentificationRun id2 = decimate(
+      identification_run(o.rig, o.seed + 7919, scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc, make_actuator()),
+      every);
   choose_model(o, spec, idsf, id2, fo, static_cast<double>(every) * tc, res);
   res.baseline_model = straight_line(id_run);
 
@@ -832,13 +827,13 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // peaks falls short by less, 5.5 % with a 200 ms lag), the model is run on the commands
   // clipped at that top: what the actuator could deliver, so the FOPDT does not take the
   // saturation for a lag (a 4 bar supply: 300 ms, the grid's bound, on mpi-pwm).
-  const IdRecord& dyn_run = on_paper_run ? id_run : ids;
-  const double cmd_max = dyn_run.p_cmd.empty() ? 0.0 : *std::max_element(dyn_run.p_cmd.begin(), dyn_run.p_cmd.end());
-  IdRecord capped_run;
+  const IdentificationRun& dyn_run = on_paper_run ? id_run : ids;
+  const double cmd_max = max_of(dyn_run.pressure_command_mpa);
+  IdentificationRun capped_run;
   const bool clip = top < (1.0 - 2.0 * kPressureHeadroom) * std::min(cmd_max, kPressureMax);
   if (clip) {
     capped_run = dyn_run;
-    for (double& v : capped_run.p_cmd) v = std::min(v, top);
+    for (double& v : capped_run.pressure_command_mpa) v = std::min(v, top);
   }
   res.dynamics = identify_dynamics(dynamics_model, clip ? capped_run : dyn_run, tc, lead);
   res.lead_s = static_cast<double>(lead) * tc;
@@ -955,17 +950,14 @@ namespace {
 // Writes the run's files into `d`; returns their names.
 std::vector<std::string> write_files(const ExperimentResult& r, const std::filesystem::path& d) {
   std::vector<std::string> written = {"model.json", "best_model.json", "result.json"};
-  // an identification run's four series (read back by report::read_experiment_dir)
-  auto write_id_run = [&](const char* name, const std::vector<double>& t_s, const std::vector<double>& command,
-                          const std::vector<double>& pressure, const std::vector<double>& contraction) {
+  // an identification run's columns (read back by report::read_experiment_dir)
+  auto write_id_run = [&](const char* name, const IdentificationRun& run) {
     written.push_back(name);
     io::write_columns((d / name).string(), {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
-                      {t_s, command, pressure, contraction});
+                      {run.t, run.pressure_command_mpa, run.pressure_mpa, run.contraction_mm});
   };
-  write_id_run("identification.csv", r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa, r.id_contraction_mm);
-  if (!r.model_id_t.empty())
-    write_id_run("model_identification.csv", r.model_id_t, r.model_id_pressure_command_mpa, r.model_id_pressure_mpa,
-                 r.model_id_contraction_mm);
+  write_id_run("identification.csv", r.identification);
+  if (!r.model_identification.empty()) write_id_run("model_identification.csv", r.model_identification);
   for (const auto& run : r.runs) {
     std::vector<std::string> names = {"t_s",      "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa",
                                       "pressure_mpa", "pwm_duty"};

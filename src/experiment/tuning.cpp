@@ -107,10 +107,12 @@ double first_difference_sigma(const std::vector<double>& y, std::size_t from, st
   return std::sqrt(s2 / (2.0 * static_cast<double>(to - from - 1)));
 }
 
-RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, double tc, std::size_t& lead) {
-  const std::vector<double> ys = simulate_record(model, r.p_cmd);  // [mm]; rate-independent: shifts commute
+RigDynamics identify_dynamics(const ModelParams& model, const IdentificationRun& r, double tc, std::size_t& lead) {
+  const std::vector<double>& pc = r.pressure_command_mpa;  // [MPa]
+  const std::vector<double>& xm = r.contraction_mm;        // [mm]
+  const std::vector<double> ys = simulate_record(model, pc);  // [mm]; rate-independent: shifts commute
   const auto max_delay = static_cast<std::size_t>(std::lround(0.3 / tc));
-  const std::size_t from = std::min(max_delay, r.x_mm.size() / 2);
+  const std::size_t from = std::min(max_delay, xm.size() / 2);
   std::vector<double> z(ys.size());
   auto a_of = [tc](double tau) { return tc / (tau + tc); };
 
@@ -118,7 +120,7 @@ RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, doubl
   double best = std::numeric_limits<double>::infinity();
   lead = 0;
   for (std::size_t d = 0; d <= max_delay; ++d) {
-    const double sse = delayed_sse(ys, r.x_mm, d, from);
+    const double sse = delayed_sse(ys, xm, d, from);
     if (sse < best) best = sse, lead = d;
   }
   // (theta, tau): coarse grid of 5 ms, then 1 ms around the best
@@ -129,7 +131,7 @@ RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, doubl
     for (std::size_t ti = t0; ti <= t1; ti += step) {
       lag(ys, a_of(static_cast<double>(ti) * tc), z);
       for (std::size_t d = d0; d <= d1; d += step) {
-        const double sse = delayed_sse(z, r.x_mm, d, from);
+        const double sse = delayed_sse(z, xm, d, from);
         if (sse < best) best = sse, bd = d, bt = ti;
       }
     }
@@ -141,12 +143,12 @@ RigDynamics identify_dynamics(const ModelParams& model, const IdRecord& r, doubl
   RigDynamics dyn;
   dyn.dead_time_s = static_cast<double>(bd) * tc;
   dyn.lag_s = static_cast<double>(bt) * tc;
-  dyn.rms_mm = std::sqrt(best / static_cast<double>(r.x_mm.size() - from));
+  dyn.rms_mm = std::sqrt(best / static_cast<double>(xm.size() - from));
   // K: least-squares slope of contraction on commanded pressure [m/MPa]
-  const auto n = static_cast<double>(r.p_cmd.size());
+  const auto n = static_cast<double>(pc.size());
   double sp = 0, sx = 0, spp = 0, spx = 0;
-  for (std::size_t i = 0; i < r.p_cmd.size(); ++i) {
-    sp += r.p_cmd[i], sx += r.x_mm[i], spp += r.p_cmd[i] * r.p_cmd[i], spx += r.p_cmd[i] * r.x_mm[i];
+  for (std::size_t i = 0; i < pc.size(); ++i) {
+    sp += pc[i], sx += xm[i], spp += pc[i] * pc[i], spx += pc[i] * xm[i];
   }
   dyn.gain_m_per_mpa = (n * spx - sp * sx) / (n * spp - sp * sp) * 1e-3;
   if (!(dyn.gain_m_per_mpa > 0.0) || !std::isfinite(dyn.rms_mm))

@@ -234,7 +234,7 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
   page.heading("Identification");
   page.para(fmt::format("The paper's model ({}) fitted on the major loop ({}): status {}{}{}.",
                         fit_model_name(r.fit.model_kind),
-                        r.id_train_end > 0 ? fmt::format("samples 0..{} of {}", r.id_train_end, r.id_t.size())
+                        r.id_train_end > 0 ? fmt::format("samples 0..{} of {}", r.id_train_end, r.identification.size())
                                            : std::string("training range not recorded"),
                         fit_status_name(r.fit.status), r.fit.message.empty() ? "" : ", ", r.fit.message));
   page.table(metric_header, {metric_cells("major loop (training) [mm]", r.fit.train),
@@ -263,50 +263,51 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
   // figures of the identification run
   page.heading("Figures");
   const Axis time{"Time", "s"}, pressure{"Pressure", "MPa"}, contraction{"Contraction", "mm"};
-  if (!r.id_t.empty()) {
+  if (const IdentificationRun& id = r.identification; !id.empty()) {
     page.figure({{"Identification input", time, pressure},
-                 {{"pressure command", r.id_t, r.id_pressure_command_mpa, "lines", "#1f77b4", false},
-                  {"measured pressure", r.id_t, r.id_pressure_mpa, "lines", "#d62728", false}}},
+                 {{"pressure command", id.t, id.pressure_command_mpa, "lines", "#1f77b4", false},
+                  {"measured pressure", id.t, id.pressure_mpa, "lines", "#d62728", false}}},
                 "Identification input: the pressure command and the measured pressure (paper Fig. 4).");
     std::vector<double> model;
     try {
-      model = simulate_record(r.fit.model, r.id_pressure_mpa);
+      model = simulate_record(r.fit.model, id.pressure_mpa);
     } catch (const Error& e) {
       page.para(fmt::format("The model cannot be simulated on the identification run: {}", e.what()), "warn");
     }
-    const std::size_t n = r.id_t.size();
+    const std::size_t n = id.t.size();
     const std::size_t split = r.id_train_end > 0 && r.id_train_end < n ? r.id_train_end : n;
     auto sub = [](const std::vector<double>& v, std::size_t b, std::size_t e) {
       return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(b), v.begin() + static_cast<std::ptrdiff_t>(e));
     };
     PlotSpec loops{{"Length/pressure hysteresis: measured and model", pressure, contraction}, {}};
-    loops.series.push_back({split < n ? "measured, major loop" : "measured", sub(r.id_pressure_mpa, 0, split),
-                            sub(r.id_contraction_mm, 0, split), "lines", "#d62728", false});
+    loops.series.push_back({split < n ? "measured, major loop" : "measured", sub(id.pressure_mpa, 0, split),
+                            sub(id.contraction_mm, 0, split), "lines", "#d62728", false});
     if (split < n)
-      loops.series.push_back({"measured, minor loops", sub(r.id_pressure_mpa, split, n),
-                              sub(r.id_contraction_mm, split, n), "lines", "#ff9896", false});
+      loops.series.push_back({"measured, minor loops", sub(id.pressure_mpa, split, n),
+                              sub(id.contraction_mm, split, n), "lines", "#ff9896", false});
     if (model.size() == n)
-      loops.series.push_back({fmt::format("{} model", fit_model_name(r.fit.model_kind)), r.id_pressure_mpa, model,
+      loops.series.push_back({fmt::format("{} model", fit_model_name(r.fit.model_kind)), id.pressure_mpa, model,
                               "lines", "#1f77b4", true});
     page.figure(loops, "Measured contraction against pressure, major and minor loops, with the identified model "
                        "(paper Figs. 5 and 9).");
     if (model.size() == n)
       page.figure({{"Model residuals on the identification run", time, {"Residual (measured - model)", "mm"}},
-                   {{"residual", r.id_t, difference(r.id_contraction_mm, model), "lines", "#2ca02c", false}}},
+                   {{"residual", id.t, difference(id.contraction_mm, model), "lines", "#2ca02c", false}}},
                   fmt::format("Fit residuals over the identification run; the model was trained on t < {:.3g} s.",
-                              split < n ? r.id_t[split] : r.id_t.back()));
+                              split < n ? id.t[split] : id.t.back()));
   }
-  if (!r.model_id_t.empty()) {  // the run hysteron's model was fitted on, where it is not the paper's
+  // the run hysteron's model was fitted on, where it is not the paper's
+  if (const IdentificationRun& mid = r.model_identification; !mid.empty()) {
     std::vector<double> best;
     try {
-      best = simulate_record(r.best_fit.model, r.model_id_pressure_mpa);
+      best = simulate_record(r.best_fit.model, mid.pressure_mpa);
     } catch (const Error& e) {
       page.para(fmt::format("The best model cannot be simulated on its identification run: {}", e.what()), "warn");
     }
     PlotSpec loops{{"hysteron's model on the run it was fitted on (model_identification.csv)", pressure, contraction},
-                   {{"measured", r.model_id_pressure_mpa, r.model_id_contraction_mm, "lines", "#d62728", false}}};
-    if (best.size() == r.model_id_t.size())
-      loops.series.push_back({fmt::format("{} model", fit_model_name(r.best_fit.model_kind)), r.model_id_pressure_mpa,
+                   {{"measured", mid.pressure_mpa, mid.contraction_mm, "lines", "#d62728", false}}};
+    if (best.size() == mid.t.size())
+      loops.series.push_back({fmt::format("{} model", fit_model_name(r.best_fit.model_kind)), mid.pressure_mpa,
                               best, "lines", "#1f77b4", true});
     page.figure(loops, fmt::format("hysteron's model ({}, best_model.json) was fitted on a run of the paper's input "
                                    "scaled to a top of {:.3f} MPa, not on the run above (docs/control.md, section 0).",
@@ -381,20 +382,15 @@ ExperimentResult read_experiment_dir(const std::string& dir) {
   r.fit.model = io::read_model_file(need_file("model.json"));
   r.best_fit.model = fs::exists(d / "best_model.json") ? io::read_model_file((d / "best_model.json").string())
                                                        : r.fit.model;
-  // an identification run's CSV (identification.csv, model_identification.csv) into its four series
-  auto read_id_run = [](const std::string& path, std::vector<double>& t_s, std::vector<double>& command,
-                        std::vector<double>& pressure, std::vector<double>& contraction) {
+  // an identification run's CSV (identification.csv, model_identification.csv)
+  auto read_id_run = [](const std::string& path) {
     const io::Table t = io::read_table(path);
-    t_s = column(t, "t_s", path);
-    command = column(t, "pressure_command_mpa", path);
-    pressure = column(t, "pressure_mpa", path);
-    contraction = column(t, "contraction_mm", path);
+    return IdentificationRun{column(t, "t_s", path), column(t, "pressure_command_mpa", path),
+                             column(t, "pressure_mpa", path), column(t, "contraction_mm", path)};
   };
-  read_id_run(need_file("identification.csv"), r.id_t, r.id_pressure_command_mpa, r.id_pressure_mpa,
-              r.id_contraction_mm);
+  r.identification = read_id_run(need_file("identification.csv"));
   if (const fs::path mic = d / "model_identification.csv"; fs::exists(mic))  // absent: the paper's run
-    read_id_run(mic.string(), r.model_id_t, r.model_id_pressure_command_mpa, r.model_id_pressure_mpa,
-                r.model_id_contraction_mm);
+    r.model_identification = read_id_run(mic.string());
 
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(d)) {

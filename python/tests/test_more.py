@@ -266,7 +266,15 @@ def test_model_identification_run_where_the_model_is_not_fitted_on_the_papers_ru
         assert np.max(r["identification"]["pressure_command_mpa"]) == pytest.approx(0.5, abs=1e-9)
         back = np.genfromtxt(os.path.join(d, "out", "model_identification.csv"), delimiter=",", names=True)
         assert np.allclose(back["contraction_mm"], m["contraction_mm"], atol=1e-9)
-        assert "model_identification.csv" in open(os.path.join(d, "r.html")).read()
+        html = open(os.path.join(d, "r.html")).read()
+        assert "model_identification.csv" in html
+        # the residual figure's RMS is the chosen model's, simulated here on the run's pressure
+        model = hysteron.Model(os.path.join(d, "out", "best_model.json"))
+        rms = np.sqrt(np.mean((m["contraction_mm"] - model.simulate(m["pressure_mpa"])) ** 2))
+        said = re.search(r"over the run it was fitted on \(the whole run\): RMS ([0-9.]+) mm", html)
+        assert said is not None
+        assert float(said.group(1)) == pytest.approx(rms, abs=6e-4)
+        assert 0.0 < rms < 1.0  # a model that fits its own run
 
 
 def test_experiment_summary_keys():

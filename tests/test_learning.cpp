@@ -1463,6 +1463,49 @@ TEST(ExperimentTuning, FopdtReachesTheRelaysPhaseWhereNoModeCan) {
   EXPECT_LT(find_run(r, "learning").errors.rms_error_mm, find_run(r, "compensated").errors.rms_error_mm) << r.table();
 }
 
+// Where no learning filter contracts on the identified loop and no mode was fitted because the
+// FOPDT has more gain at the relay's frequency than the relay measured, the design is tried
+// again on the FOPDT put through the relay's point, gain and phase (fit_fopdt_through_relay_point).
+// Rig w16 of `bench/variants_random.py 10 20 --wide` (a 0.53 m muscle, a 221 ms regulator, the
+// band's transition at 1.8 % strain): the FOPDT fitted on the identification run has 95 ms of dead
+// time and 152 ms of lag, 1.4x the relay's gain at w_u, no filter contracted (rho >= 1.40) and
+// gpi-pid ran no learning; through the point the lag is 220 ms, the regulator's own.
+TEST(ExperimentTuning, LearningIsDesignedThroughTheRelaysPointWhereNoFilterContractsOnTheFopdt) {
+  RigDynamics d = relay_identified(0.095, 0.152, 0.197, 21.9, 0.331);
+  ASSERT_EQ(d.mode_frequency_hz, 0.0);  // the premise: no mode fits
+  const double wu = 2.0 * std::numbers::pi / d.position_relay_period_s;
+  const auto at_wu = [&](const RigDynamics& v) {  // F(i w_u) K_u
+    return v.gain_m_per_mpa * v.position_relay_gain * std::polar(1.0, -wu * v.dead_time_s) /
+           std::complex<double>(1.0, wu * v.lag_s);
+  };
+  ASSERT_GT(std::abs(at_wu(d)), 1.3);  // the FOPDT's gain at w_u is too high for the relay's point
+  ASSERT_TRUE(experiment::fit_fopdt_through_relay_point(d));
+  EXPECT_NEAR(std::abs(at_wu(d)), 1.0, 1e-9);
+  EXPECT_NEAR(std::arg(-at_wu(d)), 0.0, 1e-9);  // -180 degrees
+  EXPECT_EQ(d.gain_m_per_mpa, 0.197);
+  EXPECT_NEAR(d.lag_s, 0.220, 0.002);
+  // a loop with a mode, and one without whose slope is below 1 / K_u (no lag reaches the relay's
+  // gain), are left as they are
+  for (RigDynamics v : {relay_identified(0.021, 0.056, 0.197, 13.0, 0.239), relay_identified(0.15, 0.2, 0.05, 15.0, 0.3)}) {
+    const RigDynamics before = v;
+    EXPECT_TRUE(v.mode_frequency_hz > 0.0 || v.gain_m_per_mpa * v.position_relay_gain < 1.0);
+    EXPECT_FALSE(experiment::fit_fopdt_through_relay_point(v));
+    EXPECT_EQ(v, before);
+  }
+  // end to end: the note, and a learning run that ends below the compensated loop, where none ran
+  PamRigParams rig;
+  rig.muscle.rest_length = 0.532981844;
+  rig.hysteresis.transition_strain = 0.017600375;
+  rig.regulator.time_constant = 0.221107866;
+  const ExperimentResult r = run_experiment(gpi_pid_options(rig, 10, true));
+  EXPECT_EQ(r.dynamics.mode_frequency_hz, 0.0);
+  EXPECT_TRUE(test::said(r, "designed on the FOPDT put through the position relay's point")) << r.table();
+  EXPECT_FALSE(test::said(r, "learning (sine) not run")) << r.table();
+  const TrackingRun& learning = find_run(r, "learning");
+  EXPECT_LT(learning.errors.rms_error_mm, 0.5 * find_run(r, "compensated").errors.rms_error_mm) << r.table();
+  EXPECT_LT(learning.periods.back().rms_error_mm, learning.periods.front().rms_error_mm);
+}
+
 // Where no filter contracts, the design's error says how near it came: the least bound it found,
 // with its gain, lead and half-width, against the 0.98 it needs. A loop with 0.1 s dead time and
 // a 0.15 s period, of which the feedforward's preview takes 0.1 s: the filter can be at most 24

@@ -234,6 +234,12 @@ void fit_load_mode(RigDynamics& d);
 // (docs/control.md, section 1, "Where the FOPDT has more phase lag than the relay measured").
 // The slope is kept; the gain at w_u is not matched. Returns whether it changed d.
 bool fit_fopdt_to_relay_phase(RigDynamics& d);
+// The FOPDT with its slope K kept put through the relay's whole point, gain and phase:
+//   |F(i w_u)| = 1 / K_u:  tau = sqrt((K K_u)^2 - 1) / w_u,   arg F(i w_u) = -pi:  theta = (pi - atan(w_u tau)) / w_u.
+// Only where no mode was fitted and K K_u > 1; returns whether it changed d. A fallback of the
+// learning design where no filter contracts on the identified FOPDT (docs/control.md,
+// section 3, "Where no filter contracts on a FOPDT with too much gain at w_u").
+bool fit_fopdt_through_relay_point(RigDynamics& d);
 // The models the learning design must contract on (docs/control.md, section 3): the identified
 // FOPDT with and without its load mode, dead time x1 and x1.5, lag and slope each x0.67, x1,
 // x1.5; each neighbour's mode fitted through the relay's point again (fit_load_mode), and

@@ -907,8 +907,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       if (v.name == spec.learning_on && o.learning_periods > 0 && ref.period > 0) {
         Context lc = rc;
         lc.learning = true;
-        try {
-          TrackingRun lr = learning_run(o, lc, ref, v.make(lc), track_seed, res.messages);
+        auto add_learning = [&](TrackingRun lr) {
           lr.variant = "learning";
           lr.reference = ref.name;
           const std::size_t last = lr.t.size() - std::min(lr.t.size(), ref.period);  // the scored last period
@@ -920,8 +919,34 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
                 lr.errors.rms_error_mm > base.errors.rms_error_mm && lr.periods.size() >= 2)
               res.messages.push_back(learning_above_note(lr, base));
           res.runs.push_back(std::move(lr));
-        } catch (const Error& e) {  // no design contracts on this rig: no learning run, and say why
-          res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));
+        };
+        try {
+          add_learning(learning_run(o, lc, ref, v.make(lc), track_seed, res.messages));
+        } catch (const Error& e) {  // no design contracts on the identified loop
+          // Where the FOPDT has more gain at the relay's frequency than the relay measured (no
+          // mode fitted), once more on the FOPDT through the relay's point; else no learning
+          // run, and say why.
+          RigDynamics through = lc.dynamics;
+          bool done = false;
+          if (fit_fopdt_through_relay_point(through)) {
+            const Context lt{lc.options, lc.result, through,    lc.tc,        lc.lead, lc.pressure_loop,
+                             true,       lc.gain_scale, lc.shaper, lc.reference};
+            try {
+              std::vector<std::string> notes;
+              TrackingRun lr = learning_run(o, lt, ref, v.make(lt), track_seed, notes);
+              res.messages.push_back(fmt::format(
+                  "learning ({}): {}; so the learning loop is designed on the FOPDT put through the position "
+                  "relay's point, gain and phase, instead: dead time {:.0f} ms and lag {:.0f} ms for the identified "
+                  "{:.0f} ms and {:.0f} ms (docs/control.md, section 3)",
+                  ref.name, e.what(), through.dead_time_s * 1e3, through.lag_s * 1e3, lc.dynamics.dead_time_s * 1e3,
+                  lc.dynamics.lag_s * 1e3));
+              res.messages.insert(res.messages.end(), notes.begin(), notes.end());
+              add_learning(std::move(lr));
+              done = true;
+            } catch (const Error&) {  // not on that model either: the first reason is the one given
+            }
+          }
+          if (!done) res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));
         }
       }
     }

@@ -657,6 +657,18 @@ bool fit_fopdt_to_relay_phase(RigDynamics& d) {
   return true;
 }
 
+bool fit_fopdt_through_relay_point(RigDynamics& d) {
+  if (d.mode_frequency_hz > 0.0 || !(d.position_relay_gain > 0.0) || !(d.position_relay_period_s > 0.0)) return false;
+  const double wu = 2.0 * std::numbers::pi / d.position_relay_period_s;
+  const double kk = d.gain_m_per_mpa * d.position_relay_gain;  // |F(0)| K_u
+  if (!(kk > 1.0) || !std::isfinite(kk)) return false;
+  const double tau = std::sqrt(kk * kk - 1.0) / wu;                     // |F(i w_u)| = 1 / K_u
+  const double theta = (std::numbers::pi - std::atan(wu * tau)) / wu;  // arg F(i w_u) = -pi
+  d.dead_time_s = theta;
+  d.lag_s = tau;
+  return true;
+}
+
 void fit_load_mode(RigDynamics& d) {
   d.mode_frequency_hz = d.mode_damping = 0.0;
   if (!(d.position_relay_gain > 0.0) || !(d.position_relay_period_s > 0.0)) return;

@@ -1414,6 +1414,13 @@ TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
   EXPECT_EQ(without, 18u);
   EXPECT_GT(with_mode, 9u);
   EXPECT_LE(with_mode, 18u);
+  // Neighbours::with_mode: the same neighbours with the mode, none of the twins without it
+  const std::vector<RigDynamics> kept_mode = experiment::learning_neighbours(d, experiment::Neighbours::with_mode);
+  EXPECT_EQ(kept_mode.size(), with_mode);
+  for (const RigDynamics& v : kept_mode) {
+    EXPECT_GT(v.mode_frequency_hz, 0.0);
+    EXPECT_NE(std::find(nb.begin(), nb.end(), v), nb.end());
+  }
   RigDynamics kept = d;  // the identified mode on a 1.5x dead time
   kept.dead_time_s *= 1.5;
   EXPECT_GT(std::abs(G(kept) * kept.position_relay_gain + 1.0), 0.1);
@@ -1422,6 +1429,8 @@ TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {
   plain.mode_frequency_hz = plain.mode_damping = 0.0;
   for (const RigDynamics& v : experiment::learning_neighbours(plain)) EXPECT_EQ(v.mode_frequency_hz, 0.0);
   EXPECT_EQ(experiment::learning_neighbours(plain).size(), 18u);
+  EXPECT_EQ(experiment::learning_neighbours(plain, experiment::Neighbours::with_mode),
+            experiment::learning_neighbours(plain));
 }
 
 // A FOPDT with more phase lag at the relay's frequency than the relay measured (beyond -180
@@ -1463,14 +1472,16 @@ TEST(ExperimentTuning, FopdtReachesTheRelaysPhaseWhereNoModeCan) {
   EXPECT_LT(find_run(r, "learning").errors.rms_error_mm, find_run(r, "compensated").errors.rms_error_mm) << r.table();
 }
 
-// Where no learning filter contracts on the identified loop and no mode was fitted because the
-// FOPDT has more gain at the relay's frequency than the relay measured, the design is tried
-// again on the FOPDT put through the relay's point, gain and phase (fit_fopdt_through_relay_point).
-// Rig w16 of `bench/variants_random.py 10 20 --wide` (a 0.53 m muscle, a 221 ms regulator, the
-// band's transition at 1.8 % strain): the FOPDT fitted on the identification run has 95 ms of dead
-// time and 152 ms of lag, 1.4x the relay's gain at w_u, no filter contracted (rho >= 1.40) and
-// gpi-pid ran no learning; through the point the lag is 220 ms, the regulator's own.
-TEST(ExperimentTuning, LearningIsDesignedThroughTheRelaysPointWhereNoFilterContractsOnTheFopdt) {
+// Where no learning filter contracts on the identified loop and its neighbours, the design is
+// tried again on models that agree with the position relay's point. Without a mode, where the
+// FOPDT has more gain at the relay's frequency than the relay measured, on the FOPDT put through
+// the point, gain and phase (fit_fopdt_through_relay_point): rig w16 of `bench/variants_random.py
+// 10 20 --wide` (a 0.53 m muscle, a 221 ms regulator, the band's transition at 1.8 % strain),
+// whose FOPDT of 95 ms dead time and 152 ms lag has 1.4x the relay's gain at w_u; no filter
+// contracted (rho >= 1.40) and gpi-pid ran no learning; through the point the lag is 220 ms, the
+// regulator's own. With a mode, on the neighbours that keep it (Neighbours::with_mode): the 0.4 m
+// muscle of the outside set, where a twin without the mode sat at the edge of stability.
+TEST(ExperimentTuning, LearningIsDesignedOnModelsThroughTheRelaysPointWhereNoFilterContracts) {
   RigDynamics d = relay_identified(0.095, 0.152, 0.197, 21.9, 0.331);
   ASSERT_EQ(d.mode_frequency_hz, 0.0);  // the premise: no mode fits
   const double wu = 2.0 * std::numbers::pi / d.position_relay_period_s;
@@ -1504,6 +1515,18 @@ TEST(ExperimentTuning, LearningIsDesignedThroughTheRelaysPointWhereNoFilterContr
   const TrackingRun& learning = find_run(r, "learning");
   EXPECT_LT(learning.errors.rms_error_mm, 0.5 * find_run(r, "compensated").errors.rms_error_mm) << r.table();
   EXPECT_LT(learning.periods.back().rms_error_mm, learning.periods.front().rms_error_mm);
+
+  // with a mode: the 0.4 m muscle
+  PamRigParams short_muscle;
+  short_muscle.muscle.rest_length = 0.4;
+  const ExperimentResult s = run_experiment(gpi_pid_options(short_muscle, 10, true));
+  EXPECT_GT(s.dynamics.mode_frequency_hz, 0.0);
+  EXPECT_TRUE(test::said(s, "designed on the neighbours that keep the load mode")) << s.table();
+  EXPECT_FALSE(test::said(s, "learning (sine) not run")) << s.table();
+  const TrackingRun& learned = find_run(s, "learning");
+  EXPECT_LT(learned.errors.rms_error_mm, 0.5 * find_run(s, "compensated").errors.rms_error_mm) << s.table();
+  for (std::size_t j = 1; j < learned.periods.size(); ++j)
+    EXPECT_LT(learned.periods[j].rms_error_mm, learned.periods[j - 1].rms_error_mm) << "period " << j + 1;
 }
 
 // Where no filter contracts, the design's error says how near it came: the least bound it found,

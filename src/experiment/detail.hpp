@@ -238,13 +238,20 @@ bool fit_fopdt_to_relay_phase(RigDynamics& d);
 //   |F(i w_u)| = 1 / K_u:  tau = sqrt((K K_u)^2 - 1) / w_u,   arg F(i w_u) = -pi:  theta = (pi - atan(w_u tau)) / w_u.
 // Only where no mode was fitted and K K_u > 1; returns whether it changed d. A fallback of the
 // learning design where no filter contracts on the identified FOPDT (docs/control.md,
-// section 3, "Where no filter contracts on a FOPDT with too much gain at w_u").
+// section 3, "Where no filter contracts on the identified loop's neighbours").
 bool fit_fopdt_through_relay_point(RigDynamics& d);
+// Which models the learning design must contract on (learning_neighbours).
+enum class Neighbours {
+  all,         // every neighbour below
+  with_mode,   // where a mode was fitted, only the neighbours that keep it (through the relay's point)
+};
 // The models the learning design must contract on (docs/control.md, section 3): the identified
 // FOPDT with and without its load mode, dead time x1 and x1.5, lag and slope each x0.67, x1,
 // x1.5; each neighbour's mode fitted through the relay's point again (fit_load_mode), and
 // dropped where its FOPDT alone explains the point (its twin without a mode is in the list).
-std::vector<RigDynamics> learning_neighbours(const RigDynamics& d);
+// Neighbours::with_mode leaves out the twins without a mode where d has one: they do not pass
+// through the relay's point, so the relay may have ruled them out.
+std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours which = Neighbours::all);
 // Tests only: whether the learning variant's feedforward goes through the shaper the gain
 // trial chose for the compensated loop (default true). Returns the previous setting.
 bool set_learning_shaper(bool on);
@@ -307,6 +314,6 @@ inline constexpr double kLearningMaxGain = kLearningGains[0];
 // chosen on the identified closed loop so that learning_contraction() < 1 with the
 // widest filter band (docs/control.md). Sets `contraction` to that bound.
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
-                               double tc, double& contraction);
+                               double tc, double& contraction, Neighbours which = Neighbours::all);
 
 }  // namespace hysteron::experiment

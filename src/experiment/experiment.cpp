@@ -66,11 +66,12 @@ LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvSh
 }
 
 // The learning variant on top of `base`: `periods` repetitions of the reference's
-// first period, the ILC designed on the identified closed loop.
+// first period, the ILC designed on the identified closed loop and `which` of its neighbours.
 TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const Reference& ref, const Loop& base,
-                         std::uint64_t seed, std::vector<std::string>& messages) {
+                         std::uint64_t seed, std::vector<std::string>& messages,
+                         Neighbours which = Neighbours::all) {
   double rho = 0.0;
-  LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho);
+  LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho, which);
   lp.rise_tolerance = kLearningRiseTolerance;
   lp.hold_after_cuts = kLearningHoldAfterCuts;
   lp.max_gain = std::max(lp.gain, kLearningMaxGain);
@@ -922,28 +923,38 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         };
         try {
           add_learning(learning_run(o, lc, ref, v.make(lc), track_seed, res.messages));
-        } catch (const Error& e) {  // no design contracts on the identified loop
-          // Where the FOPDT has more gain at the relay's frequency than the relay measured (no
-          // mode fitted), once more on the FOPDT through the relay's point; else no learning
-          // run, and say why.
-          RigDynamics through = lc.dynamics;
+        } catch (const Error& e) {  // no design contracts on the identified loop and its neighbours
+          // Once more on models that agree with the position relay's point (docs/control.md,
+          // section 3): without a mode, where the FOPDT has more gain at the relay's frequency
+          // than the relay measured, the FOPDT through the point; with a mode, the neighbours that
+          // keep it. Else no learning run, and say why.
+          const RigDynamics& identified = lc.dynamics;
+          RigDynamics through = identified;
+          const bool with_mode = identified.mode_frequency_hz > 0.0;
           bool done = false;
-          if (fit_fopdt_through_relay_point(through)) {
-            const Context lt{lc.options, lc.result, through,    lc.tc,        lc.lead, lc.pressure_loop,
-                             true,       lc.gain_scale, lc.shaper, lc.reference};
+          if (with_mode || fit_fopdt_through_relay_point(through)) {
+            const RigDynamics& model = with_mode ? identified : through;
+            const Context lt{lc.options,    lc.result, model,     lc.tc,       lc.lead,
+                             lc.pressure_loop, true,   lc.gain_scale, lc.shaper, lc.reference};
             try {
               std::vector<std::string> notes;
-              TrackingRun lr = learning_run(o, lt, ref, v.make(lt), track_seed, notes);
-              res.messages.push_back(fmt::format(
-                  "learning ({}): {}; so the learning loop is designed on the FOPDT put through the position "
-                  "relay's point, gain and phase, instead: dead time {:.0f} ms and lag {:.0f} ms for the identified "
-                  "{:.0f} ms and {:.0f} ms (docs/control.md, section 3)",
-                  ref.name, e.what(), through.dead_time_s * 1e3, through.lag_s * 1e3, lc.dynamics.dead_time_s * 1e3,
-                  lc.dynamics.lag_s * 1e3));
+              TrackingRun lr = learning_run(o, lt, ref, v.make(lt), track_seed, notes, Neighbours::with_mode);
+              res.messages.push_back(
+                  with_mode
+                      ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that keep "
+                                    "the load mode, which pass through the position relay's point, without their "
+                                    "twins without it (docs/control.md, section 3)",
+                                    ref.name, e.what())
+                      : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through "
+                                    "the position relay's point, gain and phase, instead: dead time {:.0f} ms and "
+                                    "lag {:.0f} ms for the identified {:.0f} ms and {:.0f} ms (docs/control.md, "
+                                    "section 3)",
+                                    ref.name, e.what(), through.dead_time_s * 1e3, through.lag_s * 1e3,
+                                    identified.dead_time_s * 1e3, identified.lag_s * 1e3));
               res.messages.insert(res.messages.end(), notes.begin(), notes.end());
               add_learning(std::move(lr));
               done = true;
-            } catch (const Error&) {  // not on that model either: the first reason is the one given
+            } catch (const Error&) {  // not on those models either: the first reason is the one given
             }
           }
           if (!done) res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));

@@ -219,13 +219,14 @@ LoopPeaks loop_peaks(const RigDynamics& d, const PidParams& pid, double tc) {
   return peaks;
 }
 
-std::vector<RigDynamics> learning_neighbours(const RigDynamics& d) {
+std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours which) {
   std::vector<RigDynamics> out;
   for (bool mode : {true, false})
     for (double ft : {1.0, 1.5})
       for (double fl : {0.67, 1.0, 1.5})
         for (double fk : {0.67, 1.0, 1.5}) {
           if (mode && d.mode_frequency_hz == 0.0) continue;
+          if (!mode && which == Neighbours::with_mode && d.mode_frequency_hz > 0.0) continue;
           RigDynamics dv = d;
           if (!mode) dv.mode_frequency_hz = dv.mode_damping = 0.0;
           dv.dead_time_s *= ft;
@@ -244,7 +245,7 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d) {
 }
 
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
-                               double tc, double& contraction) {
+                               double tc, double& contraction, Neighbours which) {
   // frequency grid: from the fundamental to Nyquist, log-spaced
   constexpr std::size_t kGrid = 600;
   std::vector<double> w0s(kGrid);
@@ -254,7 +255,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   // robust: one contraction bound over the identified loop and its neighbours
   std::vector<double> w;
   std::vector<std::complex<double>> T;
-  for (const RigDynamics& dv : learning_neighbours(d))
+  for (const RigDynamics& dv : learning_neighbours(d, which))
     for (std::size_t l = 0; l < kGrid; ++l) {
       w.push_back(w0s[l]);
       T.push_back(closed_loop(dv, pid, lead, tc, w0s[l]));

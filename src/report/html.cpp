@@ -312,17 +312,12 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
     page.figure(loops, fmt::format("hysteron's model ({}, best_model.json) was fitted on a run of the paper's input "
                                    "scaled to a top of {:.3f} MPa, not on the run above (docs/control.md, section 0).",
                                    fit_model_name(r.best_fit.model_kind), r.model_id_top_mpa));
-    if (best.size() == mid.t.size()) {
-      const std::vector<double> res = difference(mid.contraction_mm, best);
-      double ss = 0.0;
-      for (double e : res) ss += e * e;
+    if (best.size() == mid.t.size())
       page.figure({{"hysteron's model's residuals on the run it was fitted on", time, {"Residual (measured - model)", "mm"}},
-                   {{"residual", mid.t, res, "lines", "#2ca02c", false}}},
+                   {{"residual", mid.t, difference(mid.contraction_mm, best), "lines", "#2ca02c", false}}},
                   fmt::format("Residuals of hysteron's model ({}) over the run it was fitted on (the whole run): RMS "
                               "{:.3f} mm.",
-                              fit_model_name(r.best_fit.model_kind),
-                              res.empty() ? 0.0 : std::sqrt(ss / static_cast<double>(res.size()))));
-    }
+                              fit_model_name(r.best_fit.model_kind), compute_metrics(mid.contraction_mm, best).rms));
   }
 
   // tracking figures, one group per reference

@@ -137,6 +137,48 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   return run;
 }
 
+// learning_run on `lc` (the loop built for learning); where no design contracts on the
+// identified loop and its neighbours, once more on models that agree with the position relay's
+// point (docs/control.md, section 3): with a load mode, the neighbours that keep it; without
+// one, where the FOPDT has more gain at the relay's frequency than the relay measured, the
+// FOPDT through the point. Where neither contracts: nothing, and the first reason in `messages`.
+std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, const Context& lc, const Reference& ref,
+                                                  const Variant& v, std::uint64_t seed,
+                                                  std::vector<std::string>& messages) {
+  try {
+    return learning_run(o, lc, ref, v.make(lc), seed, messages);
+  } catch (const Error& e) {
+    const RigDynamics& identified = lc.dynamics;
+    RigDynamics through = identified;
+    const bool with_mode = identified.mode_frequency_hz > 0.0;
+    if (with_mode || fit_fopdt_through_relay_point(through)) {
+      const RigDynamics& model = with_mode ? identified : through;
+      const Context lt{lc.options,       lc.result, model,         lc.tc,     lc.lead,
+                       lc.pressure_loop, true,      lc.gain_scale, lc.shaper, lc.reference};
+      try {
+        std::vector<std::string> notes;
+        TrackingRun lr = learning_run(o, lt, ref, v.make(lt), seed, notes, Neighbours::with_mode);
+        messages.push_back(
+            with_mode ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that "
+                                    "keep the load mode, which pass through the position relay's point, without "
+                                    "their twins without it (docs/control.md, section 3)",
+                                    ref.name, e.what())
+                      : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through "
+                                    "the position relay's point, gain and phase, instead: dead time {:.0f} ms and "
+                                    "lag {:.0f} ms for the identified {:.0f} ms and {:.0f} ms (docs/control.md, "
+                                    "section 3)",
+                                    ref.name, e.what(), through.dead_time_s * 1e3, through.lag_s * 1e3,
+                                    identified.dead_time_s * 1e3, identified.lag_s * 1e3));
+        messages.insert(messages.end(), notes.begin(), notes.end());
+        return lr;
+      } catch (const Error&) {  // not on those models either: the first reason is the one given
+      }
+    }
+    messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));
+    return std::nullopt;
+  }
+}
+
 // The gain trial (docs/control.md, section 2). The relay's ultimate gain is measured with the
 // muscle reversing twice per period, where the rig's hysteresis sticks; tracking runs mostly
 // along the branches, where the loop gain is higher (on the worst rig of docs/plant.md the
@@ -908,56 +950,18 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       if (v.name == spec.learning_on && o.learning_periods > 0 && ref.period > 0) {
         Context lc = rc;
         lc.learning = true;
-        auto add_learning = [&](TrackingRun lr) {
-          lr.variant = "learning";
-          lr.reference = ref.name;
-          const std::size_t last = lr.t.size() - std::min(lr.t.size(), ref.period);  // the scored last period
-          if (std::string note = saturation_note(lr, last, lr.t.size()); !note.empty())
+        if (std::optional<TrackingRun> lr = learning_with_fallback(o, lc, ref, v, track_seed, res.messages)) {
+          lr->variant = "learning";
+          lr->reference = ref.name;
+          const std::size_t last = lr->t.size() - std::min(lr->t.size(), ref.period);  // the scored last period
+          if (std::string note = saturation_note(*lr, last, lr->t.size()); !note.empty())
             res.messages.push_back(std::move(note));
           // a learning run that ends above the loop it learns on must not look like an improvement
           for (const TrackingRun& base : res.runs)
             if (base.variant == v.name && base.reference == ref.name &&
-                lr.errors.rms_error_mm > base.errors.rms_error_mm && lr.periods.size() >= 2)
-              res.messages.push_back(learning_above_note(lr, base));
-          res.runs.push_back(std::move(lr));
-        };
-        try {
-          add_learning(learning_run(o, lc, ref, v.make(lc), track_seed, res.messages));
-        } catch (const Error& e) {  // no design contracts on the identified loop and its neighbours
-          // Once more on models that agree with the position relay's point (docs/control.md,
-          // section 3): without a mode, where the FOPDT has more gain at the relay's frequency
-          // than the relay measured, the FOPDT through the point; with a mode, the neighbours that
-          // keep it. Else no learning run, and say why.
-          const RigDynamics& identified = lc.dynamics;
-          RigDynamics through = identified;
-          const bool with_mode = identified.mode_frequency_hz > 0.0;
-          bool done = false;
-          if (with_mode || fit_fopdt_through_relay_point(through)) {
-            const RigDynamics& model = with_mode ? identified : through;
-            const Context lt{lc.options,    lc.result, model,     lc.tc,       lc.lead,
-                             lc.pressure_loop, true,   lc.gain_scale, lc.shaper, lc.reference};
-            try {
-              std::vector<std::string> notes;
-              TrackingRun lr = learning_run(o, lt, ref, v.make(lt), track_seed, notes, Neighbours::with_mode);
-              res.messages.push_back(
-                  with_mode
-                      ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that keep "
-                                    "the load mode, which pass through the position relay's point, without their "
-                                    "twins without it (docs/control.md, section 3)",
-                                    ref.name, e.what())
-                      : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through "
-                                    "the position relay's point, gain and phase, instead: dead time {:.0f} ms and "
-                                    "lag {:.0f} ms for the identified {:.0f} ms and {:.0f} ms (docs/control.md, "
-                                    "section 3)",
-                                    ref.name, e.what(), through.dead_time_s * 1e3, through.lag_s * 1e3,
-                                    identified.dead_time_s * 1e3, identified.lag_s * 1e3));
-              res.messages.insert(res.messages.end(), notes.begin(), notes.end());
-              add_learning(std::move(lr));
-              done = true;
-            } catch (const Error&) {  // not on those models either: the first reason is the one given
-            }
-          }
-          if (!done) res.messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));
+                lr->errors.rms_error_mm > base.errors.rms_error_mm && lr->periods.size() >= 2)
+              res.messages.push_back(learning_above_note(*lr, base));
+          res.runs.push_back(std::move(*lr));
         }
       }
     }

@@ -294,9 +294,10 @@ std::vector<LearningCase> learning_cases() {
     v.push_back({c, false});
   }
   {
-    Case c = base[4];  // a wide filter (taps beyond its reach skipped), a tolerance, warm start
+    Case c = base[4];  // a wide filter (taps beyond its reach skipped; h above the period, its 2 x 454
+                       // summed taps within it), a tolerance, warm start
     c.name = "cascade_wide_filter_warm";
-    const LearningParams p{.period = 2500, .gain = 0.3, .lead = 35, .half_width = 1000,
+    const LearningParams p{.period = 2500, .gain = 0.3, .lead = 35, .half_width = 5000,
                            .lookahead = c.design.feedforward_lead, .max_correction = 0.003, .rise_tolerance = 0.1};
     c.design.learning = LoopDesign::Learning{p, 0.5, 0.0, 0, 0, false};
     v.push_back({c, true});
@@ -437,8 +438,8 @@ TEST(ExportLoopCheck, LoopsGeneratedCCannotHoldAreRefused) {
     LoopDesign d = ok;
     d.learning = LoopDesign::Learning{};  // period 0
     refused(d, "learning.period = 0: must be >= 2 samples");
-    d.learning->params = {.period = 1000, .lead = 600, .half_width = 300, .lookahead = 40};
-    refused(d, "learning: lead + 2 half_width + lookahead = 600 + 2 x 300 + 40 must be < period = 1000");
+    d.learning->params = {.period = 1000, .lead = 750, .half_width = 300, .lookahead = 40};  // reach 110
+    refused(d, "learning: lead + 2 reach + lookahead = 750 + 2 x 110 + 40 must be < period = 1000");
     d.learning->params = {.period = (std::size_t{1} << 31) + 10, .lead = 10, .half_width = 3, .lookahead = 5};
     refused(d, "learning.period = 2147483658 samples is more than generated C holds");
     // supervised: 5 x 60e6 doubles, 2.4e9 bytes (unsupervised, 4 x: 1.92e9, would fit)

@@ -122,6 +122,58 @@ TEST(Learning, InvalidParametersAreRejected) {
   EXPECT_THROW(IterativeLearning{p}, Error);
 }
 
+// The taps the update sums end where q_m falls below 1e-18 of q_0, checked against the binomial
+// coefficients by lgamma (ln q_m / q_0 = 2 ln h! - ln (h + m)! - ln (h - m)!); the window that must
+// fit in the period is that reach, not h: a filter with h above the period is accepted where its
+// summed taps fit, and refused, naming the reach, where they do not.
+TEST(Learning, FilterReachIsWhereTheTapsFallBelow1e18) {
+  const auto log_ratio = [](std::size_t h, std::size_t m) {
+    const double H = static_cast<double>(h), M = static_cast<double>(m);
+    return 2.0 * std::lgamma(H + 1.0) - std::lgamma(H + M + 1.0) - std::lgamma(H - M + 1.0);
+  };
+  const double floor = std::log(1e-18);
+  for (std::size_t h : {0u, 1u, 31u, 32u, 300u, 5000u, 20000u, 10'000'000u}) {
+    const std::size_t r = binomial_reach(h);
+    ASSERT_LE(r, h);
+    if (h <= 31) {
+      EXPECT_EQ(r, h) << "h = " << h;  // C(2h, h) <= 1e18: every tap is summed
+    }
+    EXPECT_GE(log_ratio(h, r), floor - 1e-6) << "h = " << h;
+    if (r < h) {
+      EXPECT_LT(log_ratio(h, r + 1), floor + 1e-6) << "h = " << h;
+    }
+    if (h >= 300) {
+      EXPECT_NEAR(static_cast<double>(r) / std::sqrt(static_cast<double>(h)), 6.4, 0.3) << "h = " << h;
+    }
+  }
+  LearningParams p;
+  p.period = 2500;
+  p.lead = 35;
+  p.lookahead = 80;
+  p.half_width = 20000;  // 35 + 2 x 910 + 80 < 2500
+  ASSERT_EQ(binomial_reach(p.half_width), 910u);
+  IterativeLearning ilc(p);
+  EXPECT_EQ(ilc.filter_reach(), 910u);
+  ASSERT_EQ(ilc.filter_taps().size(), 2u * 910u + 1u);
+  double sum = 0.0;
+  for (double q : ilc.filter_taps()) sum += q;
+  EXPECT_NEAR(sum, 1.0, 1e-14);
+  // the centre tap against lgamma: q_0 = C(2h, h) / 4^h
+  const double q0 = std::exp(std::lgamma(40001.0) - 2.0 * std::lgamma(20001.0) - 40000.0 * std::log(2.0));
+  EXPECT_NEAR(ilc.filter_taps()[910] / q0, 1.0, 1e-9);
+  p.half_width = 60000;  // reach 1576: 35 + 3152 + 80 >= 2500
+  try {
+    IterativeLearning{p};
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_TRUE(test::has(e.what(), "lead + 2 reach + lookahead = 35 + 2 x 1576 + 80 must be < period = 2500"))
+        << e.what();
+  }
+  p.half_width = kMaxLearningHalfWidth + 1;
+  p.period = 100'000;
+  EXPECT_THROW(IterativeLearning{p}, Error);
+}
+
 // With max_gain, L is doubled after every period that is the new best, up to max_gain, until
 // the first rise: that one restores the best correction and halves L, and L grows no more. Away
 // from the period's ends a constant error e_j learns c_{j+1} = c_j + L_j e_j (unit DC gain).
@@ -379,7 +431,8 @@ TEST(Learning, ConstantErrorLearnsGainTimesErrorWithAWideFilter) {
 TEST(Learning, ProgressiveUpdateEqualsTheFormula) {
   for (const auto& [N, h, d] : {std::tuple<std::size_t, std::size_t, std::size_t>{97, 20, 7}, {50, 1, 0},
                                 {64, 31, 1}, {300, 0, 12}, {41, 10, 19},
-                                {3000, 1400, 9}}) {  // h = 1400: the negligible tails are skipped
+                                {3000, 1400, 9},   // h = 1400: the negligible tails are skipped
+                                {400, 600, 9}}) {  // h above the period: its 2 x 156 summed taps inside it
     LearningParams p;
     p.period = N;
     p.gain = 0.35;
@@ -470,8 +523,8 @@ TEST(Learning, WidestWindowStaysInsideThePeriod) {
   p.period = 101;
   p.gain = 0.5;
   p.lead = 7;
-  p.half_width = 42;
-  p.lookahead = 9;  // 7 + 84 + 9 = 100
+  p.half_width = 51;  // the largest h whose summed taps reach 42
+  p.lookahead = 9;    // 7 + 2 x 42 + 9 = 100
   IterativeLearning ilc(p);
   double worst = 0.0;
   for (std::size_t k = 0; k < 12 * p.period; ++k) {
@@ -1523,6 +1576,43 @@ TEST(ExperimentTuning, LearningIsDesignedOnModelsThroughTheRelaysPointWhereNoFil
   PamRigParams short_muscle;  // with a mode: the 0.4 m muscle
   short_muscle.muscle.rest_length = 0.4;
   learns(short_muscle, true, "designed on the neighbours that keep the load mode");
+}
+
+// Where no filter whose whole window (2h + 1 taps) fits in the period contracts, on the identified
+// models or the relay's, the design tries the narrower filters whose summed taps fit
+// (FilterWindow::summed_taps): their band ends further below the loop's resonance. gpi-pid on a
+// 95 kg load (its mode 2.46 Hz, damping 0.04) ran no learning (least bound 1.48 at the widest
+// half-width that fitted, 2377); with a half-width above half the period it learns, period after
+// period, to below the compensated loop.
+TEST(ExperimentTuning, LearningBandEndsBelowALightlyDampedModeWithANarrowerFilter) {
+  PamRigParams heavy;
+  heavy.load.mass = 95.0;
+  ExperimentOptions o = gpi_pid_options(heavy, 10);
+  o.adaptive = false;
+  o.model = FitModel::gpi;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_GT(r.dynamics.mode_frequency_hz, 0.0);
+  EXPECT_LT(r.dynamics.mode_damping, 0.1);
+  EXPECT_TRUE(test::said(r, "with a narrower Q-filter, one whose summed taps, not its whole window, fit")) << r.table();
+  const TrackingRun& learning = find_run(r, "learning");
+  ASSERT_TRUE(learning.controller.learning && learning.controller.pid);
+  const LearningParams& lp = learning.controller.learning->params;
+  EXPECT_GE(lp.lead + 2 * lp.half_width + lp.lookahead, lp.period);  // its whole window does not fit
+  EXPECT_LT(learning.controller.learning->contraction_bound, 0.98);
+  // the design on the run's loop: nothing with the whole window, this filter with the summed taps
+  double rho = 0.0;
+  const PidParams& pid = *learning.controller.pid;
+  const double tc = learning.controller.sample_time;
+  EXPECT_THROW(experiment::design_learning(r.dynamics, pid, lp.lookahead, lp.period, tc, rho), Error);
+  const LearningParams narrow = experiment::design_learning(r.dynamics, pid, lp.lookahead, lp.period, tc, rho,
+                                                            experiment::Neighbours::all,
+                                                            experiment::FilterWindow::summed_taps);
+  EXPECT_EQ(narrow.half_width, lp.half_width);
+  EXPECT_EQ(narrow.lead, lp.lead);
+  EXPECT_EQ(narrow.gain, lp.gain);
+  EXPECT_LT(learning.errors.rms_error_mm, 0.75 * find_run(r, "compensated").errors.rms_error_mm) << r.table();
+  for (std::size_t j = 1; j < learning.periods.size(); ++j)
+    EXPECT_LT(learning.periods[j].rms_error_mm, learning.periods[j - 1].rms_error_mm) << "period " << j + 1;
 }
 
 // Where no filter contracts, the design's error says how near it came: the least bound it found,

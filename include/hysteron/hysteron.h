@@ -306,9 +306,10 @@ typedef struct hysteron_ilc_params {
   size_t period;          /* N [samples] per period, >= 2 (default 0: must be set) */
   double gain;            /* L, in (0, 2) (default 0.5) */
   size_t lead;            /* d [samples] (default 0) */
-  size_t half_width;      /* h of the Q-filter (default 0: no filter) */
+  size_t half_width;      /* h of the Q-filter (default 0: no filter; at most 10^7) */
   size_t lookahead;       /* largest `ahead` of hysteron_ilc_correction (default 0);
-                             lead + 2 half_width + lookahead < period */
+                             lead + 2 r + lookahead < period, r the filter's summed taps
+                             each side (r = h up to h = 31, about 6.4 sqrt(h) beyond) */
   double max_correction;  /* |c| limit, > 0 (default: infinity) */
   double rise_tolerance;  /* supervision: a period whose RMS error rises above the least
                              before it by more than this fraction restores the best

@@ -26,9 +26,10 @@
 // first halving, L may grow (LearningParams::max_gain): doubled after every new best period.
 // Bookkeeping only swaps buffers at the period's end (no copy, no burst).
 //
-// step() never allocates, never throws and is deterministic; its cost is
-// min(2h + 1, ~13 sqrt(h)) taps per sample (the update of c_{j+1} is computed progressively, d + h
-// samples behind the errors it needs, instead of in one burst per period).
+// step() never allocates, never throws and is deterministic; its cost is 2r + 1 taps per sample,
+// r = binomial_reach(h) = min(h, ~6.4 sqrt(h)) (the taps q_m >= 1e-18 q_0; the update of c_{j+1} is
+// computed progressively, learning_update_delay() samples behind the errors it needs, instead of
+// in one burst per period).
 #include <complex>
 #include <cstddef>
 #include <limits>
@@ -41,7 +42,7 @@ struct LearningParams {
   std::size_t period = 0;       // N [samples], >= 2
   double gain = 0.5;            // L, in (0, 2)
   std::size_t lead = 0;         // d [samples]
-  std::size_t half_width = 0;   // h: binomial Q-filter of order 2h (0: no filter)
+  std::size_t half_width = 0;   // h: binomial Q-filter of order 2h (0: no filter), <= kMaxLearningHalfWidth
   std::size_t lookahead = 0;    // largest `ahead` of correction() (e.g. the loop's preview)
   double max_correction = std::numeric_limits<double>::infinity();  // |c| limit, > 0
   // Relative rise of a period's RMS error over the least before it that halves L, >= 0
@@ -58,9 +59,24 @@ struct LearningParams {
   // period above the best restores the best correction and halves L, as above, and L grows no
   // more. Needs supervision (a finite rise_tolerance).
   double max_gain = 0.0;
-  // Throws hysteron::Error naming the field; also when lead + 2 half_width + lookahead >= period.
+  // Throws hysteron::Error naming the field; also when lead + 2 binomial_reach(half_width) +
+  // lookahead >= period (the taps summed must fit in one period; h itself may exceed it).
   void validate() const;
 };
+
+inline constexpr std::size_t kMaxLearningHalfWidth = 10'000'000;  // h; its reach is 20,358 samples
+
+// The taps of the binomial Q-filter of half-width h that the update sums, |m| <= reach: the
+// largest m with q_m >= 1e-18 q_0 (h itself up to h = 31; about 6.4 sqrt(h) for large h). The
+// others change no sum beyond its rounding.
+std::size_t binomial_reach(std::size_t half_width) noexcept;
+
+// How many samples the progressive update runs behind the errors: c_{j+1}(i) is computed at phase
+// i + D of period j, and the last D samples of c_{j+1} in period j + 1 (with the L in use then:
+// where the supervisor doubled or halved L at the period's end, those D samples use the new L).
+// D = d + h where the whole window fits (d + 2h + lookahead < N, as before 2026-11-28), else
+// d + binomial_reach(h).
+std::size_t learning_update_delay(const LearningParams& p) noexcept;
 
 // Frequency response of the binomial Q-filter of half-width h at w [rad/sample]: cos^(2h)(w/2).
 double binomial_response(std::size_t half_width, double w) noexcept;
@@ -97,9 +113,10 @@ class IterativeLearning {
   std::size_t gain_raises() const noexcept { return raises_; }  // times it doubled L (max_gain)
   bool held() const noexcept { return held_; }               // the best correction is held (hold_after_cuts)
   const LearningParams& params() const noexcept { return p_; }
-  // The binomial Q-filter as built: 2h + 1 taps q_m, m = -h..h (their sum is 1), of which the
-  // per-sample update sums |m| <= filter_reach() (the others are below 1e-18 of q_0). For a
-  // transcription of the update (hysteron export --loop of a learning run).
+  // The binomial Q-filter as built: the 2r + 1 taps q_m, m = -r..r, r = filter_reach() =
+  // binomial_reach(h), that the per-sample update sums (their sum is 1; the others, below 1e-18
+  // of q_0, are not kept). For a transcription of the update (hysteron export --loop of a
+  // learning run).
   std::span<const double> filter_taps() const noexcept { return q_; }
   std::size_t filter_reach() const noexcept { return reach_; }
 
@@ -108,8 +125,9 @@ class IterativeLearning {
   void end_period() noexcept;  // swaps the generations; supervision (see above)
 
   LearningParams p_;
-  std::vector<double> q_;                 // 2h + 1 filter taps
+  std::vector<double> q_;                 // 2 reach_ + 1 filter taps, q_[reach_] = q_0
   std::size_t reach_ = 0;                 // taps m with |m| <= reach_ are summed (the rest < 1e-18 of q_0)
+  std::size_t delay_ = 0;                 // learning_update_delay(p_)
   std::vector<double> c_cur_, c_next_;    // c_j, c_{j+1}
   std::vector<double> c_best_;            // supervision: the correction of the best period
   // c_{j-1}, from which the end of c_j is computed, is in c_best_ (else c_next_); a flag, not a

@@ -40,7 +40,8 @@ def test_export_c_text_and_errors():
     learnt = hysteron.export_c(MODEL, prefix="pam", header_name="pam.h", controller=learning)
     assert "double pam_loop_learning_step(pam_loop *c, pam_learning *l" in learnt["header"]
     assert "#define PAM_LEARNING_PERIOD %du" % learning["learning"]["period_samples"] in learnt["header"]
-    learning["learning"]["half_width"] = learning["learning"]["period_samples"]  # the filter wider than a period
+    # the filter's summed taps (about 6.4 sqrt(h) each side) wider than a period
+    learning["learning"]["half_width"] = min(learning["learning"]["period_samples"] ** 2 // 16, 10_000_000)
     with pytest.raises(hysteron.Error, match="learning"):
         hysteron.export_c(MODEL, controller=learning)
     adaptive = hysteron.loop_of_run(str(RESULT), "adaptive.sine")  # "adaptation": an inverse adapted online

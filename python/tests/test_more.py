@@ -233,7 +233,7 @@ def test_iterative_learning_on_a_lagged_loop():
     with pytest.raises(hysteron.Error, match="period"):
         hysteron.IterativeLearning(period=1)
     with pytest.raises(hysteron.Error, match="must be < period = 200"):
-        hysteron.IterativeLearning(period=n, lead=2, half_width=99)
+        hysteron.IterativeLearning(period=n, lead=2, half_width=2000)  # 2 x 287 summed taps
 
 
 def test_signals():

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <utility>
+#include <vector>
 
 #include "format.hpp"
 
@@ -23,18 +24,35 @@ void LearningParams::validate() const {
     throw Error(detail::format("learning.max_gain = {}: must be 0 (no growth) or in [gain = {}, 2)", max_gain, gain));
   if (max_gain > 0.0 && !std::isfinite(rise_tolerance))
     throw Error("learning.max_gain > 0 needs supervision: a finite rise_tolerance");
-  if (half_width > 10000) throw Error(detail::format("learning.half_width = {}: must be <= 10000", half_width));
-  // the filter's window (2h + 1 samples) plus the lead and the lookahead must fit in one period,
-  // so that every index of the update wraps around at most once
-  if (lead >= period || half_width >= period || lookahead >= period ||
-      lead + 2 * half_width + lookahead >= period)
-    throw Error(detail::format("learning: lead + 2 half_width + lookahead = {} + 2 x {} + {} must be < period = {} "
-                               "samples", lead, half_width, lookahead, period));
+  if (half_width > kMaxLearningHalfWidth)
+    throw Error(detail::format("learning.half_width = {}: must be <= {}", half_width, kMaxLearningHalfWidth));
+  // the taps the update sums (2 reach + 1, reach = binomial_reach(h)) plus the lead and the
+  // lookahead must fit in one period, so that every index of the update wraps around at most once
+  const std::size_t reach = binomial_reach(half_width);
+  if (lead >= period || lookahead >= period || lead + 2 * reach + lookahead >= period)
+    throw Error(detail::format("learning: lead + 2 reach + lookahead = {} + 2 x {} + {} must be < period = {} "
+                               "samples (reach {}: the Q-filter's taps summed, for half_width {})",
+                               lead, reach, lookahead, period, reach, half_width));
 }
 
 double binomial_response(std::size_t half_width, double w) noexcept {
   const double c = std::cos(0.5 * w);
   return std::pow(c * c, static_cast<double>(half_width));
+}
+
+std::size_t binomial_reach(std::size_t half_width) noexcept {
+  // q_m / q_0 = prod_{k=1..m} (h - k + 1) / (h + k): the largest m with q_m >= 1e-18 q_0
+  double r = 1.0;
+  for (std::size_t m = 1; m <= half_width; ++m) {
+    r *= static_cast<double>(half_width - m + 1) / static_cast<double>(half_width + m);
+    if (r < 1e-18) return m - 1;
+  }
+  return half_width;
+}
+
+std::size_t learning_update_delay(const LearningParams& p) noexcept {
+  const bool whole = p.half_width < p.period && p.lead + 2 * p.half_width + p.lookahead < p.period;
+  return p.lead + (whole ? p.half_width : binomial_reach(p.half_width));
 }
 
 double learning_contraction(const LearningParams& p, std::span<const double> w,
@@ -51,23 +69,37 @@ double learning_contraction(const LearningParams& p, std::span<const double> w,
 
 IterativeLearning::IterativeLearning(const LearningParams& params) : p_(params) {
   p_.validate();
-  const std::size_t taps = 2 * p_.half_width + 1;
-  q_.assign(taps, 0.0);
-  // binomial coefficients / 2^(2h) by the recurrence q <- (q + shifted q) / 2, which keeps
-  // the sum at 1 at every step (C(2h, h) itself overflows a double for h > ~510)
-  q_[0] = 1.0;
-  for (std::size_t n = 1; n < taps; ++n) {
-    for (std::size_t m = n; m > 0; --m) q_[m] = 0.5 * (q_[m] + q_[m - 1]);
-    q_[0] *= 0.5;
+  // The binomial taps q_m = C(2h, h + m) / 4^h for |m| <= reach (the others are below 1e-18 of
+  // q_0 and change no sum of 2h + 1 terms beyond its rounding: |tail| <= 2h x 1e-18 of the total;
+  // about 6.4 sqrt(h) of them remain), normalised to sum 1. C(2h, h) itself overflows a double for
+  // h > ~510, so: up to kPascalHalfWidth all 2h + 1 by the recurrence q <- (q + shifted q) / 2,
+  // which keeps the sum at 1 at every step (O(h^2), sums of positive terms); above it, by the
+  // ratio q_m / q_(m-1) = (h - m + 1) / (h + m) from the centre (O(sqrt(h)), relative error about
+  // m x 1e-16).
+  constexpr std::size_t kPascalHalfWidth = 10000;
+  const std::size_t h = p_.half_width;
+  reach_ = binomial_reach(h);
+  delay_ = learning_update_delay(p_);
+  q_.assign(2 * reach_ + 1, 0.0);
+  if (h <= kPascalHalfWidth) {
+    std::vector<double> all(2 * h + 1, 0.0);
+    all[0] = 1.0;
+    for (std::size_t n = 1; n < all.size(); ++n) {
+      for (std::size_t m = n; m > 0; --m) all[m] = 0.5 * (all[m] + all[m - 1]);
+      all[0] *= 0.5;
+    }
+    double s = 0.0;
+    for (double v : all) s += v;
+    for (std::size_t i = 0; i < q_.size(); ++i) q_[i] = all[h - reach_ + i] / s;
+  } else {
+    q_[reach_] = 1.0;
+    for (std::size_t m = 1; m <= reach_; ++m)
+      q_[reach_ + m] = q_[reach_ - m] =
+          q_[reach_ + m - 1] * static_cast<double>(h - m + 1) / static_cast<double>(h + m);
+    double s = 0.0;
+    for (double v : q_) s += v;
+    for (double& v : q_) v /= s;
   }
-  double s = 0.0;
-  for (double v : q_) s += v;
-  for (double& v : q_) v /= s;
-  // Taps below 1e-18 of the centre tap change no sum of 2h + 1 terms beyond its rounding
-  // (|tail| <= 2h x 1e-18 of the total); for h above ~30 they are skipped, which also keeps
-  // denormal tails (4^-h underflows) out of the per-sample sum. O(sqrt(h)) taps remain.
-  reach_ = p_.half_width;
-  while (reach_ > 0 && q_[p_.half_width - reach_] < 1e-18 * q_[p_.half_width]) --reach_;
   c_cur_.assign(p_.period, 0.0);
   c_next_.assign(p_.period, 0.0);
   e_cur_.assign(p_.period, 0.0);
@@ -137,7 +169,7 @@ double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) c
   const auto h = static_cast<std::ptrdiff_t>(reach_);  // taps beyond reach_ are negligible
   const auto d = static_cast<std::ptrdiff_t>(p_.lead);
   const auto ii = static_cast<std::ptrdiff_t>(i);
-  const double* q = q_.data() + p_.half_width;  // q[m], m = -half_width..half_width
+  const double* q = q_.data() + reach_;  // q[m], m = -reach..reach
   double acc = 0.0;
   for (std::ptrdiff_t m = -h; m <= h;) {
     std::ptrdiff_t ci = ii + m;
@@ -146,7 +178,7 @@ double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) c
     std::ptrdiff_t len = std::min(h - m + 1, N - ci);
     const std::ptrdiff_t t = ii + m + d;
     const double* e;
-    if (tail) {  // i in [N - d - h, N): t >= N is this period's error at t - N
+    if (tail) {  // i in [N - d - r, N): t >= N is this period's error at t - N
       if (t >= N) {
         e = e_cur_.data() + (t - N);
       } else {
@@ -168,16 +200,17 @@ double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) c
 }
 
 // At phase k of period j, after recording e_j(k):
-//   body: c_{j+1}(i) for i = k - d - h (every error it needs is measured);
-//   tail: for j >= 1 and k < d + h, c_j(i) for i = N + k - d - h, the end of this
+//   body: c_{j+1}(i) for i = k - D (every error it needs is measured; D = delay_ =
+//         learning_update_delay(), at least d + reach_);
+//   tail: for j >= 1 and k < D, c_j(i) for i = N + k - D, the end of this
 //         period, which needed errors of this period's start (c_{j-1} is still in
-//         c_next_ there: the body starts overwriting it only at k = d + h).
+//         c_next_ there: the body starts overwriting it only at k = D).
 void IterativeLearning::step(double error) noexcept {
   if (!std::isfinite(error)) {
     error = 0.0;
     ++faults_;
   }
-  const std::size_t N = p_.period, dh = p_.lead + p_.half_width;
+  const std::size_t N = p_.period, dh = delay_;
   e_cur_[k_] = error;
   sse_ += error * error;
   if (held_) {
@@ -191,7 +224,7 @@ void IterativeLearning::step(double error) noexcept {
 }
 
 // c_cur_ (c_j) is complete and was applied over the period just ended; c_next_ holds
-// c_{j+1} except its last d + h samples, which the next period computes from c_j.
+// c_{j+1} except its last D = delay_ samples, which the next period computes from c_j.
 void IterativeLearning::end_period() noexcept {
   const double mse = sse_ / static_cast<double>(p_.period);
   // the first period starts from the loop's initial state, not in the periodic steady state

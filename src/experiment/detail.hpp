@@ -310,10 +310,18 @@ inline constexpr std::size_t kLearningHoldAfterCuts = 3;
 // design tries, until the first rise (docs/control.md, section 3). Gpi-pid with load damping
 // 200 N s/m (design L = 0.05): 0.488 -> 0.231 mm RMS after 10 periods (compensated 0.424).
 inline constexpr double kLearningMaxGain = kLearningGains[0];
+// Which Q-filters the learning design tries (half-width h; the window, with the lead and the
+// loop's preview, must fit in one period).
+enum class FilterWindow {
+  whole,        // the filter's whole window, 2h + 1 taps: the widest bands
+  summed_taps,  // the taps the update sums, 2 binomial_reach(h) + 1 (about 13 sqrt(h)): also
+                // the narrower bands that end below a lightly damped mode
+};
 // The learning variant's ILC: the largest gain L of kLearningGains, the phase lead d (<= 0.5 s) and the Q-filter's width
 // chosen on the identified closed loop so that learning_contraction() < 1 with the
 // widest filter band (docs/control.md). Sets `contraction` to that bound.
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
-                               double tc, double& contraction, Neighbours which = Neighbours::all);
+                               double tc, double& contraction, Neighbours which = Neighbours::all,
+                               FilterWindow window = FilterWindow::whole);
 
 }  // namespace hysteron::experiment

@@ -66,12 +66,13 @@ LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvSh
 }
 
 // The learning variant on top of `base`: `periods` repetitions of the reference's
-// first period, the ILC designed on the identified closed loop and `which` of its neighbours.
+// first period, the ILC designed on the identified closed loop and `which` of its neighbours,
+// among the Q-filters of `window`.
 TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const Reference& ref, const Loop& base,
-                         std::uint64_t seed, std::vector<std::string>& messages,
-                         Neighbours which = Neighbours::all) {
+                         std::uint64_t seed, std::vector<std::string>& messages, Neighbours which = Neighbours::all,
+                         FilterWindow window = FilterWindow::whole) {
   double rho = 0.0;
-  LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho, which);
+  LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho, which, window);
   lp.rise_tolerance = kLearningRiseTolerance;
   lp.hold_after_cuts = kLearningHoldAfterCuts;
   lp.max_gain = std::max(lp.gain, kLearningMaxGain);
@@ -141,42 +142,63 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
 // identified loop and its neighbours, once more on models that agree with the position relay's
 // point (docs/control.md, section 3): with a load mode, the neighbours that keep it; without
 // one, where the FOPDT has more gain at the relay's frequency than the relay measured, the
-// FOPDT through the point. Where neither contracts: nothing, and the first reason in `messages`.
+// FOPDT through the point. Where neither contracts, both again with the narrower Q-filters
+// whose summed taps fit in the period (FilterWindow::summed_taps). Where nothing contracts:
+// nothing, and the first reason in `messages`.
 std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, const Context& lc, const Reference& ref,
                                                   const Variant& v, std::uint64_t seed,
                                                   std::vector<std::string>& messages) {
+  std::string first;
   try {
     return learning_run(o, lc, ref, v.make(lc), seed, messages);
   } catch (const Error& e) {
-    const RigDynamics& identified = lc.dynamics;
-    RigDynamics through = identified;
-    const bool with_mode = identified.mode_frequency_hz > 0.0;
-    if (with_mode || fit_fopdt_through_relay_point(through)) {
-      const RigDynamics& model = with_mode ? identified : through;
-      const Context lt{lc.options,       lc.result, model,         lc.tc,     lc.lead,
-                       lc.pressure_loop, true,      lc.gain_scale, lc.shaper, lc.reference};
+    first = e.what();
+  }
+  const RigDynamics& identified = lc.dynamics;
+  RigDynamics through = identified;
+  const bool with_mode = identified.mode_frequency_hz > 0.0;
+  const bool relay_models = with_mode || fit_fopdt_through_relay_point(through);
+  const Context lt{lc.options,       lc.result, with_mode ? identified : through, lc.tc,     lc.lead,
+                   lc.pressure_loop, true,      lc.gain_scale,                    lc.shaper, lc.reference};
+  const std::string narrower = ", with a narrower Q-filter, one whose summed taps, not its whole window, fit in the "
+                               "period";
+  for (const FilterWindow window : {FilterWindow::whole, FilterWindow::summed_taps}) {
+    const std::string how = window == FilterWindow::whole ? "" : narrower;
+    if (window == FilterWindow::summed_taps) {
       try {
         std::vector<std::string> notes;
-        TrackingRun lr = learning_run(o, lt, ref, v.make(lt), seed, notes, Neighbours::with_mode);
-        messages.push_back(
-            with_mode ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that "
-                                    "keep the load mode, which pass through the position relay's point, without "
-                                    "their twins without it (docs/control.md, section 3)",
-                                    ref.name, e.what())
-                      : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through "
-                                    "the position relay's point, gain and phase, instead: dead time {:.0f} ms and "
-                                    "lag {:.0f} ms for the identified {:.0f} ms and {:.0f} ms (docs/control.md, "
-                                    "section 3)",
-                                    ref.name, e.what(), through.dead_time_s * 1e3, through.lag_s * 1e3,
-                                    identified.dead_time_s * 1e3, identified.lag_s * 1e3));
+        TrackingRun lr = learning_run(o, lc, ref, v.make(lc), seed, notes, Neighbours::all, window);
+        messages.push_back(fmt::format("learning ({}): {}; so on the same models with a narrower Q-filter, one "
+                                       "whose summed taps, not its whole window, fit in the period: its band ends "
+                                       "further below the loop's resonance (docs/control.md, section 3)",
+                                       ref.name, first));
         messages.insert(messages.end(), notes.begin(), notes.end());
         return lr;
-      } catch (const Error&) {  // not on those models either: the first reason is the one given
+      } catch (const Error&) {  // nor with the narrower filters: the relay's models below
       }
     }
-    messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, e.what()));
-    return std::nullopt;
+    if (!relay_models) continue;
+    try {
+      std::vector<std::string> notes;
+      TrackingRun lr = learning_run(o, lt, ref, v.make(lt), seed, notes, Neighbours::with_mode, window);
+      messages.push_back(
+          with_mode ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that "
+                                  "keep the load mode, which pass through the position relay's point, without "
+                                  "their twins without it{} (docs/control.md, section 3)",
+                                  ref.name, first, how)
+                    : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through "
+                                  "the position relay's point, gain and phase, instead: dead time {:.0f} ms and "
+                                  "lag {:.0f} ms for the identified {:.0f} ms and {:.0f} ms{} (docs/control.md, "
+                                  "section 3)",
+                                  ref.name, first, through.dead_time_s * 1e3, through.lag_s * 1e3,
+                                  identified.dead_time_s * 1e3, identified.lag_s * 1e3, how));
+      messages.insert(messages.end(), notes.begin(), notes.end());
+      return lr;
+    } catch (const Error&) {  // not on those models either: the first reason is the one given
+    }
   }
+  messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, first));
+  return std::nullopt;
 }
 
 // The gain trial (docs/control.md, section 2). The relay's ultimate gain is measured with the

@@ -245,7 +245,7 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours wh
 }
 
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
-                               double tc, double& contraction, Neighbours which) {
+                               double tc, double& contraction, Neighbours which, FilterWindow window) {
   // frequency grid: from the fundamental to Nyquist, log-spaced
   constexpr std::size_t kGrid = 600;
   std::vector<double> w0s(kGrid);
@@ -265,7 +265,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   best.gain = 0.5;
   best.lookahead = lead;
   contraction = std::numeric_limits<double>::infinity();
-  const std::size_t budget = period > lead + 2 ? period - lead - 2 : 0;  // lead + d + 2h < period
+  const std::size_t budget = period > lead + 2 ? period - lead - 2 : 0;  // lead + d + 2h (or 2r) < period
   const std::size_t max_shift = std::min<std::size_t>(budget / 2, static_cast<std::size_t>(std::lround(0.5 / tc)));
   bool found = false;
   // log cos^2(w/2) per grid point: |Q(w)| = exp(h * lc[l])
@@ -306,6 +306,10 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   // the least bound seen, for the message where none is below 0.98
   double least = std::numeric_limits<double>::infinity(), least_gain = 0.0;
   std::size_t least_shift = 0, least_h = 0;
+  // the window that must fit: the filter's 2h + 1 taps, or the 2 reach + 1 the update sums
+  const auto fits = [window, budget](std::size_t shift, std::size_t h) {
+    return h <= kMaxLearningHalfWidth && shift + 2 * (window == FilterWindow::whole ? h : binomial_reach(h)) <= budget;
+  };
   for (double gain : kLearningGains) {
     if (found) break;
     best.gain = gain;
@@ -322,7 +326,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
       }
       // smallest half-width (widest band) that contracts with a 2 % margin
       const std::size_t h0 = std::min(h_floor, (budget - shift) / 2);  // the floor, or as near as the period allows
-      for (std::size_t h = h0; shift + 2 * h <= budget; h = h < 4 ? h + 1 : h + h / 4) {
+      for (std::size_t h = h0; fits(shift, h); h = h < 4 ? h + 1 : h + h / 4) {
         if (found && h > best.half_width) break;
         const std::vector<double>& q = q_of(h);
         double rho = 0.0;

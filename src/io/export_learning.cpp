@@ -219,12 +219,12 @@ double $P_learning_correction(const $P_learning *l, size_t ahead)
   return p < $U_LEARNING_PERIOD ? l->c[l->cur][p] : l->c[l->held ? l->cur : l->next][p - $U_LEARNING_PERIOD];
 }
 
-/* At phase k of period j, after recording e_j(k): c_(j+1)(k - d - h) (every error it needs is
- * measured), or for j >= 1 and k < d + h the end of c_j, c_j(N + k - d - h), which needed this
+/* At phase k of period j, after recording e_j(k): c_(j+1)(k - D), D = delay (every error it needs
+ * is measured), or for j >= 1 and k < D the end of c_j, c_j(N + k - D), which needed this
  * period's first errors (IterativeLearning::step). */
 void $P_learning_step($P_learning *l, double error_m)
 {
-  const size_t dh = $P_learning_lead + $P_learning_half_width;
+  const size_t dh = $P_learning_delay;
   if (!isfinite(error_m)) {
     error_m = 0.0;
     ++l->faults;
@@ -261,7 +261,6 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
   p.validate();
   const std::string period = count_literal(p.period, "learning.period");
   const std::string lead = count_literal(p.lead, "learning.lead");
-  const std::string half_width = count_literal(p.half_width, "learning.half_width");
   const std::string lookahead = count_literal(p.lookahead, "learning.lookahead");
   if (p.hold_after_cuts > kMaxCount)
     throw Error(fmt::format("learning.hold_after_cuts = {} is more than generated C holds (at most {})",
@@ -279,7 +278,7 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
   // The Q-filter as the library builds it. Its taps depend on h alone, so it is built on the
   // shortest period that h, d and the lookahead allow (no N-sized buffers here).
   LearningParams shortest = p;
-  shortest.period = std::max<std::size_t>(2, p.lead + 2 * p.half_width + p.lookahead + 1);
+  shortest.period = std::max<std::size_t>(2, p.lead + 2 * binomial_reach(p.half_width) + p.lookahead + 1);
   const IterativeLearning ilc(shortest);
   const std::size_t reach = ilc.filter_reach();
   const std::span<const double> q = ilc.filter_taps();
@@ -319,7 +318,6 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
   std::string& df = out.definitions;
   df += "\n/* ---- the learning's constants ---- */\n";
   df += fmt::format("static const size_t $P_learning_lead = {};  /* d, the phase lead [samples] */\n", lead);
-  df += fmt::format("static const size_t $P_learning_half_width = {};  /* h of the Q-filter */\n", half_width);
   df += fmt::format("static const size_t $P_learning_lookahead = {};  /* the largest `ahead` of a correction */\n",
                     lookahead);
   df += fmt::format("static const double $P_learning_gain = {};  /* L after a reset */\n", num(p.gain));
@@ -331,11 +329,14 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
                     num(supervised ? p.rise_tolerance : 0.0), supervised ? "the supervisor's" : "unused");
   df += fmt::format("static const unsigned long $P_learning_hold_after_cuts = {};  /* 0: never held */\n", hold);
   df += fmt::format("static const size_t $P_learning_reach = {}u;  /* taps m = -reach..reach are summed */\n", reach);
+  df += fmt::format("static const size_t $P_learning_delay = {}u;  /* D: the update runs D samples behind the errors "
+                    "(learning_update_delay) */\n",
+                    learning_update_delay(p));
   df += fmt::format("/* q_m, m = -reach..reach (the others are below 1e-18 of q_0) */\nstatic const double "
                     "$P_learning_q[{}] = {{",
                     2 * reach + 1);
   for (std::size_t i = 0; i <= 2 * reach; ++i)
-    df += fmt::format("{}{}", i % 4 == 0 ? "\n  " : " ", num(q[p.half_width - reach + i])) + (i < 2 * reach ? "," : "");
+    df += fmt::format("{}{}", i % 4 == 0 ? "\n  " : " ", num(q[i])) + (i < 2 * reach ? "," : "");
   df += "\n};\n";
   std::string body(kLearningDefinitions);
   replace_all(body, "$NCu", fmt::format("{}u", nc));

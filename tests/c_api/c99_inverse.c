@@ -185,7 +185,7 @@ static void check_ilc(void) {
   expect_error("ilc gain 2.5", hysteron_ilc_create(&ip, &ilc), HYSTERON_ERROR_INVALID_ARGUMENT, "gain = 2.5");
   ip.gain = 0.5;
   ip.lead = 2;
-  ip.half_width = 99;
+  ip.half_width = 2000; /* its summed taps, 2 x 287, beyond the period */
   expect_error("ilc window beyond the period", hysteron_ilc_create(&ip, &ilc), HYSTERON_ERROR_INVALID_ARGUMENT,
                "must be < period = 200");
   ip.half_width = 4;

@@ -178,7 +178,7 @@ double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) c
     std::ptrdiff_t len = std::min(h - m + 1, N - ci);
     const std::ptrdiff_t t = ii + m + d;
     const double* e;
-    if (tail) {  // i in [N - d - r, N): t >= N is this period's error at t - N
+    if (tail) {  // i in [N - D, N), D = delay_: t >= N is this period's error at t - N
       if (t >= N) {
         e = e_cur_.data() + (t - N);
       } else {

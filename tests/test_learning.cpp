@@ -454,7 +454,8 @@ TEST(Learning, ProgressiveUpdateEqualsTheFormula) {
       for (std::size_t i = 0; i < N; ++i) {
         double want = 0.0;
         for (std::ptrdiff_t m = -static_cast<std::ptrdiff_t>(h); m <= static_cast<std::ptrdiff_t>(h); ++m) {
-          const auto ci = static_cast<std::size_t>((static_cast<std::ptrdiff_t>(i + N) + m) % static_cast<std::ptrdiff_t>(N));
+          const auto Ns = static_cast<std::ptrdiff_t>(N);  // (i + m) mod N, also for |m| > N (h above the period)
+          const auto ci = static_cast<std::size_t>(((static_cast<std::ptrdiff_t>(i) + m) % Ns + Ns) % Ns);
           const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(j * N + i + d) + m;
           const double e = n < 0 ? 0.0 : E[static_cast<std::size_t>(n)];
           want += q[static_cast<std::size_t>(m + static_cast<std::ptrdiff_t>(h))] * (c_applied[j * N + ci] + p.gain * e);

@@ -221,7 +221,8 @@ preview) and learnt from the tracking error over the periods,
 c_{j+1}(k) = sum_m q_m [c_j(k+m) + gain e_j(k+m+lead)], q the binomial Q-filter of
 half-width `half_width`. Each sample: correction(0) (and correction(preview) for the
 feedforward), run the loop on r + c, then step(r - y). rise_tolerance, hold_after_cuts and
-max_gain set the supervisor (the learning variant: 0, 3, 0.5). step() never allocates; a
+max_gain set the supervisor (the learning variant: 0, 3, and up to 0.5: the largest gain
+whose bound holds on the identified loop). step() never allocates; a
 non-finite error is learnt as 0 and counted (faults). Invalid parameters raise
 hysteron.Error naming the field.)doc")
       .def(py::init([](std::size_t period, double gain, std::size_t lead, std::size_t half_width,

@@ -75,7 +75,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   LearningParams lp = design_learning(ctx.dynamics, base.position, ctx.lead, ref.period, ctx.tc, rho, which, window);
   lp.rise_tolerance = kLearningRiseTolerance;
   lp.hold_after_cuts = kLearningHoldAfterCuts;
-  lp.max_gain = std::max(lp.gain, kLearningMaxGain);
+  lp.max_gain = learning_growth_limit(ctx.dynamics, base.position, ctx.lead, lp, ctx.tc);
   auto ilc = std::make_shared<IterativeLearning>(lp);
   const std::size_t lead = ctx.lead;
   std::vector<double> r;
@@ -124,7 +124,11 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
                                    shaper_timing(ctx.shaper, ctx.tc));
   // in the order the supervisor acts: the doublings come before the first halving
   if (ilc->gain_raises() > 0)
-    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
+    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far (up to {}, the "
+                                   "largest gain whose contraction bound holds on the identified loop itself)",
+                                   ilc->gain_raises(), lp.max_gain);
+  else if (lp.max_gain <= lp.gain && lp.gain < kLearningGains[0])
+    run.description += "; L fixed: no larger gain's contraction bound holds on the identified loop itself";
   if (ilc->gain_cuts() > 0)
     run.description += fmt::format("; L halved {} time(s) to {:.3g}, after periods whose RMS error rose above the "
                                    "least before them",

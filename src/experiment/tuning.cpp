@@ -244,6 +244,28 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours wh
   return out;
 }
 
+double learning_growth_limit(const RigDynamics& d, const PidParams& pid, std::size_t lead, const LearningParams& p,
+                             double tc) {
+  constexpr std::size_t kGrid = 600;  // as design_learning's grid: the fundamental to Nyquist, log-spaced
+  const double w0 = 2.0 * std::numbers::pi / static_cast<double>(p.period);
+  std::vector<double> w(kGrid);
+  std::vector<std::complex<double>> T(kGrid);
+  for (std::size_t l = 0; l < kGrid; ++l) {
+    w[l] = w0 * std::pow(std::numbers::pi / w0, static_cast<double>(l) / (kGrid - 1));
+    T[l] = closed_loop(d, pid, lead, tc, w[l]);
+  }
+  // {L : |Q| |1 - L z| < 1} is an interval at each frequency, so their intersection is one too:
+  // the largest gain tried that contracts bounds every gain between it and the design's
+  double limit = p.gain;
+  for (double gain : kLearningGains) {
+    if (gain <= limit) continue;
+    LearningParams q = p;
+    q.gain = gain;
+    if (learning_contraction(q, w, T) < 1.0) limit = gain;
+  }
+  return limit;
+}
+
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
                                double tc, double& contraction, Neighbours which, FilterWindow window) {
   // frequency grid: from the fundamental to Nyquist, log-spaced

@@ -164,41 +164,43 @@ std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, co
   const bool relay_models = with_mode || fit_fopdt_through_relay_point(through);
   const Context lt{lc.options,       lc.result, with_mode ? identified : through, lc.tc,     lc.lead,
                    lc.pressure_loop, true,      lc.gain_scale,                    lc.shaper, lc.reference};
-  const std::string narrower = ", with a narrower Q-filter, one whose summed taps, not its whole window, fit in the "
-                               "period";
-  for (const FilterWindow window : {FilterWindow::whole, FilterWindow::summed_taps}) {
-    const std::string how = window == FilterWindow::whole ? "" : narrower;
-    if (window == FilterWindow::summed_taps) {
-      try {
-        std::vector<std::string> notes;
-        TrackingRun lr = learning_run(o, lc, ref, v.make(lc), seed, notes, Neighbours::all, window);
-        messages.push_back(fmt::format("learning ({}): {}; so on the same models with a narrower Q-filter, one "
-                                       "whose summed taps, not its whole window, fit in the period: its band ends "
-                                       "further below the loop's resonance (docs/control.md, section 3)",
-                                       ref.name, first));
-        messages.insert(messages.end(), notes.begin(), notes.end());
-        return lr;
-      } catch (const Error&) {  // nor with the narrower filters: the relay's models below
-      }
-    }
-    if (!relay_models) continue;
+  // the attempts after the first, in order, and what the result says of the one that runs
+  struct Attempt {
+    const Context* ctx;
+    Neighbours which;
+    FilterWindow window;
+  };
+  std::vector<Attempt> attempts;
+  if (relay_models) attempts.push_back({&lt, Neighbours::with_mode, FilterWindow::whole});
+  attempts.push_back({&lc, Neighbours::all, FilterWindow::summed_taps});
+  if (relay_models) attempts.push_back({&lt, Neighbours::with_mode, FilterWindow::summed_taps});
+  const auto why = [&](const Attempt& a) {
+    if (a.ctx == &lc)
+      return fmt::format("learning ({}): {}; so on the same models with a narrower Q-filter, one whose summed taps, "
+                         "not its whole window, fit in the period: its band ends further below the loop's resonance "
+                         "(docs/control.md, section 3)",
+                         ref.name, first);
+    const std::string how = a.window == FilterWindow::whole ? ""
+                                                            : ", with a narrower Q-filter, one whose summed taps, not "
+                                                              "its whole window, fit in the period";
+    return with_mode ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that keep "
+                                   "the load mode, which pass through the position relay's point, without their "
+                                   "twins without it{} (docs/control.md, section 3)",
+                                   ref.name, first, how)
+                     : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through the "
+                                   "position relay's point, gain and phase, instead: dead time {:.0f} ms and lag "
+                                   "{:.0f} ms for the identified {:.0f} ms and {:.0f} ms{} (docs/control.md, section 3)",
+                                   ref.name, first, through.dead_time_s * 1e3, through.lag_s * 1e3,
+                                   identified.dead_time_s * 1e3, identified.lag_s * 1e3, how);
+  };
+  for (const Attempt& a : attempts) {
     try {
       std::vector<std::string> notes;
-      TrackingRun lr = learning_run(o, lt, ref, v.make(lt), seed, notes, Neighbours::with_mode, window);
-      messages.push_back(
-          with_mode ? fmt::format("learning ({}): {}; so the learning filter is designed on the neighbours that "
-                                  "keep the load mode, which pass through the position relay's point, without "
-                                  "their twins without it{} (docs/control.md, section 3)",
-                                  ref.name, first, how)
-                    : fmt::format("learning ({}): {}; so the learning loop is designed on the FOPDT put through "
-                                  "the position relay's point, gain and phase, instead: dead time {:.0f} ms and "
-                                  "lag {:.0f} ms for the identified {:.0f} ms and {:.0f} ms{} (docs/control.md, "
-                                  "section 3)",
-                                  ref.name, first, through.dead_time_s * 1e3, through.lag_s * 1e3,
-                                  identified.dead_time_s * 1e3, identified.lag_s * 1e3, how));
+      TrackingRun lr = learning_run(o, *a.ctx, ref, v.make(*a.ctx), seed, notes, a.which, a.window);
+      messages.push_back(why(a));
       messages.insert(messages.end(), notes.begin(), notes.end());
       return lr;
-    } catch (const Error&) {  // not on those models either: the first reason is the one given
+    } catch (const Error&) {  // not on these models or filters: the next attempt; the first reason is the one given
     }
   }
   messages.push_back(fmt::format("learning ({}) not run: {}", ref.name, first));

@@ -1192,6 +1192,18 @@ TEST(ExperimentTuning, LearningAboveItsLoopSaysHowFarItIsFromBelow) {
   const std::string risen = experiment::learning_above_note(run({6.4, 5.0, 5.1}), base);
   EXPECT_NE(risen.find("it was no longer falling"), std::string::npos) << risen;
   EXPECT_EQ(risen.find("still falling"), std::string::npos) << risen;
+  // the cause, from the periods: never below the base run, and its first period says how far
+  // its loop started above
+  EXPECT_NE(risen.find("(it learns on a more robust, slower loop: its first period, before any correction, was "
+                       "6.400 mm, and no period came below)"),
+            std::string::npos)
+      << risen;
+  // below the base run in one period, and above it after: which period, and that it rose
+  const std::string back = experiment::learning_above_note(run({6.4, 3.5, 3.7, 3.9}), base);
+  EXPECT_NE(back.find("(it was below in period 2, 3.500 mm, and rose after it); it was no longer falling"),
+            std::string::npos)
+      << back;
+  EXPECT_EQ(back.find("slower loop"), std::string::npos) << back;
 }
 
 // The learning loop's PID follows the gain trial where the trial detunes the classic rule's

@@ -257,7 +257,8 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours wh
 bool set_learning_shaper(bool on);
 // The note for a learning run whose last period's RMS error is above `base`'s (the loop it
 // learns on): whether it was still falling and, at the last period's rate of decrease, how many
-// more periods would bring it below (or that it would not within 100: it has stalled).
+// more periods would bring it below (or that it would not within 100: it has stalled); and why:
+// below `base` in an earlier period (which), or never (its first period, on a slower loop).
 std::string learning_above_note(const TrackingRun& learning, const TrackingRun& base);
 // The note of a compensated, adaptive or learning run whose RMS error is not below the
 // baseline run's on the same reference; empty where it is below.

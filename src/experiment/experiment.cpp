@@ -1161,10 +1161,21 @@ namespace experiment {
 std::string learning_above_note(const TrackingRun& learning, const TrackingRun& base) {
   const std::size_t n = learning.periods.size();
   const double last = learning.errors.rms_error_mm, target = base.errors.rms_error_mm;
-  std::string head = fmt::format(
-      "learning ({}): after {} periods its RMS error, {:.3f} mm, is above the {} run's {:.3f} mm (it learns on a "
-      "more robust, slower loop); ",
-      learning.reference, n, last, base.variant, target);
+  // why, from the periods: below the base run in some period (the rig did not repeat what the
+  // update assumed, or the supervisor's restores cost more), or never (its loop starts higher)
+  std::size_t best = 0;
+  for (std::size_t j = 1; j < n; ++j)
+    if (learning.periods[j].rms_error_mm < learning.periods[best].rms_error_mm) best = j;
+  const double least = n > 0 ? learning.periods[best].rms_error_mm : last;
+  const std::string why =
+      least < target
+          ? fmt::format("it was below in period {}, {:.3f} mm, and rose after it", best + 1, least)
+          : fmt::format("it learns on a more robust, slower loop: its first period, before any correction, was "
+                        "{:.3f} mm, and no period came below",
+                        n > 0 ? learning.periods[0].rms_error_mm : last);
+  std::string head = fmt::format("learning ({}): after {} periods its RMS error, {:.3f} mm, is above the {} run's "
+                                 "{:.3f} mm ({}); ",
+                                 learning.reference, n, last, base.variant, target, why);
   const double before = n >= 2 ? learning.periods[n - 2].rms_error_mm : last;
   if (!(last < before) || !(last > 0.0)) return head + "it was no longer falling";
   // periods to reach the base run's error at the last period's rate, q = last / before per period

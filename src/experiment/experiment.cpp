@@ -116,19 +116,17 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   const std::size_t last = static_cast<std::size_t>(o.learning_periods - 1) * ref.period;
   run.scored_from_s = last < run.t.size() ? run.t[last] : 0.0;
   run.description = fmt::format("{}; + iterative learning over {} periods (L = {}, phase lead {} samples, "
-                                "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop)",
-                                base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho);
+                                "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop; L "
+                                "may grow to {}, the largest gain whose bound holds on the identified loop itself)",
+                                base.description, o.learning_periods, lp.gain, lp.lead, lp.half_width, rho,
+                                lp.max_gain);
   if (preview)
     run.description += fmt::format("; feedforward through the gain trial's zero-vibration shaper {}, the correction "
                                    "unshaped",
                                    shaper_timing(ctx.shaper, ctx.tc));
   // in the order the supervisor acts: the doublings come before the first halving
   if (ilc->gain_raises() > 0)
-    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far (up to {}, the "
-                                   "largest gain whose contraction bound holds on the identified loop itself)",
-                                   ilc->gain_raises(), lp.max_gain);
-  else if (lp.max_gain <= lp.gain && lp.gain < kLearningGains[0])
-    run.description += "; L fixed: no larger gain's contraction bound holds on the identified loop itself";
+    run.description += fmt::format("; L doubled {} time(s) after periods that were the best so far", ilc->gain_raises());
   if (ilc->gain_cuts() > 0)
     run.description += fmt::format("; L halved {} time(s) to {:.3g}, after periods whose RMS error rose above the "
                                    "least before them",

@@ -244,16 +244,24 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours wh
   return out;
 }
 
+namespace {
+// The learning design's frequency grid [rad/sample]: kLearningGrid points from the period's
+// fundamental to Nyquist, log-spaced.
+constexpr std::size_t kLearningGrid = 600;
+std::vector<double> learning_grid(std::size_t period) {
+  std::vector<double> w(kLearningGrid);
+  const double w0 = 2.0 * std::numbers::pi / static_cast<double>(period);
+  for (std::size_t l = 0; l < kLearningGrid; ++l)
+    w[l] = w0 * std::pow(std::numbers::pi / w0, static_cast<double>(l) / (kLearningGrid - 1));
+  return w;
+}
+}  // namespace
+
 double learning_growth_limit(const RigDynamics& d, const PidParams& pid, std::size_t lead, const LearningParams& p,
                              double tc) {
-  constexpr std::size_t kGrid = 600;  // as design_learning's grid: the fundamental to Nyquist, log-spaced
-  const double w0 = 2.0 * std::numbers::pi / static_cast<double>(p.period);
-  std::vector<double> w(kGrid);
-  std::vector<std::complex<double>> T(kGrid);
-  for (std::size_t l = 0; l < kGrid; ++l) {
-    w[l] = w0 * std::pow(std::numbers::pi / w0, static_cast<double>(l) / (kGrid - 1));
-    T[l] = closed_loop(d, pid, lead, tc, w[l]);
-  }
+  const std::vector<double> w = learning_grid(p.period);
+  std::vector<std::complex<double>> T(w.size());
+  for (std::size_t l = 0; l < w.size(); ++l) T[l] = closed_loop(d, pid, lead, tc, w[l]);
   // {L : |Q| |1 - L z| < 1} is an interval at each frequency, so their intersection is one too:
   // the largest gain tried that contracts bounds every gain between it and the design's
   double limit = p.gain;
@@ -268,12 +276,8 @@ double learning_growth_limit(const RigDynamics& d, const PidParams& pid, std::si
 
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
                                double tc, double& contraction, Neighbours which, FilterWindow window) {
-  // frequency grid: from the fundamental to Nyquist, log-spaced
-  constexpr std::size_t kGrid = 600;
-  std::vector<double> w0s(kGrid);
-  const double w0 = 2.0 * std::numbers::pi / static_cast<double>(period);
-  for (std::size_t l = 0; l < kGrid; ++l)
-    w0s[l] = w0 * std::pow(std::numbers::pi / w0, static_cast<double>(l) / (kGrid - 1));
+  constexpr std::size_t kGrid = kLearningGrid;
+  const std::vector<double> w0s = learning_grid(period);
   // robust: one contraction bound over the identified loop and its neighbours
   std::vector<double> w;
   std::vector<std::complex<double>> T;

@@ -164,16 +164,16 @@ std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, co
                    lc.pressure_loop, true,      lc.gain_scale,                    lc.shaper, lc.reference};
   // the attempts after the first, in order, and what the result says of the one that runs
   struct Attempt {
-    const Context* ctx;
+    bool on_relay_models;  // on lt (the models through the relay's point), else on lc again
     Neighbours which;
     FilterWindow window;
   };
   std::vector<Attempt> attempts;
-  if (relay_models) attempts.push_back({&lt, Neighbours::with_mode, FilterWindow::whole});
-  attempts.push_back({&lc, Neighbours::all, FilterWindow::summed_taps});
-  if (relay_models) attempts.push_back({&lt, Neighbours::with_mode, FilterWindow::summed_taps});
+  if (relay_models) attempts.push_back({true, Neighbours::with_mode, FilterWindow::whole});
+  attempts.push_back({false, Neighbours::all, FilterWindow::summed_taps});
+  if (relay_models) attempts.push_back({true, Neighbours::with_mode, FilterWindow::summed_taps});
   const auto why = [&](const Attempt& a) {
-    if (a.ctx == &lc)
+    if (!a.on_relay_models)
       return fmt::format("learning ({}): {}; so on the same models with a narrower Q-filter, one whose summed taps, "
                          "not its whole window, fit in the period: its band ends further below the loop's resonance "
                          "(docs/control.md, section 3)",
@@ -194,7 +194,8 @@ std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, co
   for (const Attempt& a : attempts) {
     try {
       std::vector<std::string> notes;
-      TrackingRun lr = learning_run(o, *a.ctx, ref, v.make(*a.ctx), seed, notes, a.which, a.window);
+      const Context& ctx = a.on_relay_models ? lt : lc;
+      TrackingRun lr = learning_run(o, ctx, ref, v.make(ctx), seed, notes, a.which, a.window);
       messages.push_back(why(a));
       messages.insert(messages.end(), notes.begin(), notes.end());
       return lr;

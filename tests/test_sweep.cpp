@@ -374,6 +374,55 @@ TEST(SweepRun, ThreadPoolResultsDoNotDependOnTheNumberOfThreads) {
   EXPECT_NEAR(j.at("runs").at(6).at("tracking").at(6).at("rms_vs_nominal").get<double>(), ratio, 1e-12);
 }
 
+// compensated 0.1 mm x mass / 20 kg; learning that x mass / 30 kg: below the compensated loop up
+// to 30 kg, equal at 30 kg, above beyond
+ExperimentResult fake_learning(const ExperimentOptions& o) {
+  const double m = o.rig.load.mass;
+  ExperimentResult r;
+  r.name = o.name;
+  for (const char* kind : {"compensated", "learning"}) {
+    TrackingRun t;
+    t.reference = "sine";
+    t.variant = kind;
+    t.errors.rms_error_mm = 0.1 * m / 20.0 * (kind[0] == 'l' ? m / 30.0 : 1.0);
+    t.errors.max_error_mm = 3.0 * t.errors.rms_error_mm;
+    r.runs.push_back(std::move(t));
+  }
+  return r;
+}
+
+TEST(SweepRun, ListsTheLearningRunsNotBelowTheirCompensatedLoop) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.variants = parse_vary("load.mass=10,30,40");
+  o.runner = fake_learning;
+  o.jobs = 1;
+  const SweepResult r = run_sweep(o);
+  ASSERT_EQ(r.variants.size(), 4u);
+  ASSERT_EQ(r.variants[0].rig.load.mass, 20.0);  // the fake's numbers assume the nominal 20 kg
+  const auto above = r.learning_not_below_compensated();
+  ASSERT_EQ(above.size(), 2u);
+  EXPECT_TRUE(contains(above[0], "gpi-pid load.mass=30 sine learning: RMS 0.150 mm, not below the compensated "
+                                 "loop's 0.150 mm (1.00x)")) << above[0];
+  EXPECT_TRUE(contains(above[1], "gpi-pid load.mass=40 sine learning: RMS 0.267 mm, not below the compensated "
+                                 "loop's 0.200 mm (1.33x)")) << above[1];
+  const std::string text = r.text();
+  EXPECT_TRUE(contains(text, "Learning runs not below their compensated loop (2):")) << text;
+  EXPECT_TRUE(contains(text, above[1])) << text;
+  const auto j = r.to_json();
+  ASSERT_EQ(j.at("learning_not_below_compensated").size(), 2u);
+  EXPECT_EQ(j.at("learning_not_below_compensated").at(0).get<std::string>(), above[0]);
+  const std::string html = report::sweep_report_html(r, "hysteron sweep gpi-pid --vary load.mass=10,30,40");
+  EXPECT_TRUE(contains(html, "2 learning run(s) not below their compensated loop")) << html.substr(0, 2000);
+  EXPECT_TRUE(contains(html, "gpi-pid load.mass=40 sine learning: RMS 0.267 mm"));
+  // a sweep where every learning run is below lists none, and the text has no such section
+  o.variants = parse_vary("load.mass=10,25");
+  const SweepResult below = run_sweep(o);
+  EXPECT_TRUE(below.learning_not_below_compensated().empty());
+  EXPECT_FALSE(contains(below.text(), "Learning runs not below"));
+  EXPECT_TRUE(below.to_json().at("learning_not_below_compensated").empty());
+}
+
 TEST(SweepRun, ARigIsRunOnce) {
   SweepOptions o;
   o.experiments = {"gpi-pid"};

@@ -182,6 +182,10 @@ struct SweepResult {
   // a reference out of the rig's reach (SweepOptions::fit_references false), and every
   // failed run. One line each.
   std::vector<std::string> target_misses() const;
+  // The learning runs whose RMS error is not below the compensated run's on the same rig and
+  // reference: the periods of learning did not pay for themselves there (docs/control.md,
+  // section 3; each experiment's own note says why). One line each, with both errors.
+  std::vector<std::string> learning_not_below_compensated() const;
 };
 
 // Runs every (experiment, variant) pair (the base rig first, as "nominal"), `jobs`

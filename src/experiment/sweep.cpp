@@ -648,6 +648,25 @@ std::vector<std::string> SweepResult::target_misses() const {
   return out;
 }
 
+std::vector<std::string> SweepResult::learning_not_below_compensated() const {
+  std::vector<std::string> out;
+  for (std::size_t e = 0; e < experiments.size(); ++e)
+    for (std::size_t v = 0; v < variants.size(); ++v) {
+      const SweepRun& run = this->run(e, v);
+      if (!run.ok) continue;
+      for (const auto& x : run.runs) {
+        if (x.kind != "learning") continue;
+        const SweepRunErrors* c = find(e, v, x.reference, "compensated");
+        if (!c || x.errors.rms_error_mm < c->errors.rms_error_mm) continue;
+        out.push_back(fmt::format("{} {} {} learning: RMS {:.3f} mm, not below the compensated loop's {:.3f} mm "
+                                  "({:.2f}x)",
+                                  experiments[e], variants[v].variant.name, x.reference, x.errors.rms_error_mm,
+                                  c->errors.rms_error_mm, ratio(x.errors.rms_error_mm, c->errors.rms_error_mm)));
+      }
+    }
+  return out;
+}
+
 std::string SweepResult::text() const {
   const std::vector<std::string> kinds = kinds_of(*this);
   std::size_t wv = 7;
@@ -704,6 +723,10 @@ std::string SweepResult::text() const {
   out += misses.empty() ? std::string("\nEvery issue-11 target met (compensated RMS, baseline, command range).\n")
                         : fmt::format("\nIssue-11 targets missed ({}):\n", misses.size());
   for (const auto& m : misses) out += "  " + m + "\n";
+  if (const auto above = learning_not_below_compensated(); !above.empty()) {
+    out += fmt::format("\nLearning runs not below their compensated loop ({}):\n", above.size());
+    for (const auto& m : above) out += "  " + m + "\n";
+  }
   return out;
 }
 
@@ -763,6 +786,7 @@ json SweepResult::to_json() const {
     j["runs"].push_back(std::move(o));
   }
   j["target_misses"] = target_misses();
+  j["learning_not_below_compensated"] = learning_not_below_compensated();
   j["notes"] = notes;
   return j;
 }

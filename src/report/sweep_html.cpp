@@ -97,6 +97,12 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
     for (const auto& m : misses) h += fmt::format("<li>{}</li>\n", html_escape(m));
     h += "</ul>\n";
   }
+  if (const auto above = r.learning_not_below_compensated(); !above.empty()) {
+    h += fmt::format("<p class=\"warn\">{} learning run(s) not below their compensated loop:</p>\n<ul>\n",
+                     above.size());
+    for (const auto& m : above) h += fmt::format("<li>{}</li>\n", html_escape(m));
+    h += "</ul>\n";
+  }
 
   // the kinds present
   std::vector<std::string> kinds;

@@ -183,8 +183,9 @@ struct SweepResult {
   // failed run. One line each.
   std::vector<std::string> target_misses() const;
   // The learning runs whose RMS error is not below the compensated run's on the same rig and
-  // reference: the periods of learning did not pay for themselves there (docs/control.md,
-  // section 3; each experiment's own note says why). One line each, with both errors.
+  // reference (a tie or a non-finite error too): the periods of learning did not pay for
+  // themselves there (docs/control.md, section 3; where it is above, the experiment's own note
+  // says why). One line each, with both errors.
   std::vector<std::string> learning_not_below_compensated() const;
 };
 

@@ -33,6 +33,7 @@ struct SweepArgs {
   int learning_periods = ExperimentOptions{}.learning_periods;
   std::string model = "auto";
   bool paper_references = false;
+  bool identify_on_base = false;
   unsigned jobs = 0;
   std::string out;
   std::string report;
@@ -122,6 +123,7 @@ int run_sweep_command(const SweepArgs& a) {
   o.learning_periods = a.learning_periods;
   o.model = fit_model_from_name(a.model);
   o.fit_references = !a.paper_references;
+  o.identify_on_base = a.identify_on_base;
   o.jobs = a.jobs;
   for (const auto& e : a.experiments) {
     if (e == "all") {
@@ -214,6 +216,10 @@ void add_sweep(CLI::App& app, Action& action) {
   cmd->add_flag("--paper-references", args->paper_references,
                 "Every run tracks the papers' references as published, even beyond its rig's reach (then a "
                 "target miss); default: mapped into each rig's reach, shown as 'ref xS' (docs/control.md, section 5)");
+  cmd->add_flag("--identify-on-base", args->identify_on_base,
+                "Identify and tune every run on the base rig and track on the variant's: a rig that changed after "
+                "its identification (another load, a wider band), the loops not re-tuned (docs/plant.md); default: "
+                "each variant identified and tuned on its own rig");
   cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
       ->check(non_negative_integer())
       ->check(CLI::Range(1u, 1024u));

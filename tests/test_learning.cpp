@@ -1261,6 +1261,12 @@ TEST(ExperimentTuning, LoopNotBelowTheBaselineSaysSo) {
   EXPECT_EQ(note.rfind("compensated (sine): its RMS error, 16.177 mm, is not below the baseline's 7.403 mm", 0), 0u)
       << note;
   EXPECT_NE(note.find("does no better than no compensation"), std::string::npos) << note;
+  EXPECT_NE(note.find("relay tests above are suspect"), std::string::npos) << note;
+  // on a rig that changed after its identification, the note names that as the cause
+  const std::string changed = experiment::above_baseline_note(run, base, true);
+  EXPECT_EQ(changed.rfind("compensated (sine): its RMS error, 16.177 mm, is not below the baseline's 7.403 mm", 0), 0u);
+  EXPECT_NE(changed.find("differs from it"), std::string::npos) << changed;
+  EXPECT_EQ(changed.find("suspect"), std::string::npos) << changed;
   run.errors.rms_error_mm = 7.403;  // equal is not below
   EXPECT_FALSE(experiment::above_baseline_note(run, base).empty());
   run.errors.rms_error_mm = 0.446;

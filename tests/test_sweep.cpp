@@ -11,6 +11,7 @@
 #include <thread>
 #include <cstring>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <algorithm>
 #include <string>
@@ -421,6 +422,73 @@ TEST(SweepRun, ListsTheLearningRunsNotBelowTheirCompensatedLoop) {
   EXPECT_TRUE(below.learning_not_below_compensated().empty());
   EXPECT_FALSE(contains(below.text(), "Learning runs not below"));
   EXPECT_TRUE(below.to_json().at("learning_not_below_compensated").empty());
+}
+
+// --identify-on-base: every variant's run is identified and tuned on the base rig and tracks on
+// the variant's rig (ExperimentOptions::tracking_rig); the nominal run has no tracking rig. The
+// rigs are deduplicated as before, and the text, JSON and page say how the runs were made.
+TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid", "mpi-pwm"};
+  o.base.hysteresis.pressure_band = 20e3;  // a base rig other than the nominal one
+  o.variants = variant_grid_from_json(nlohmann::json::parse(R"({"variants": [
+      {"name": "heavy", "set": {"load.mass": 35}},
+      {"name": "slow regulator", "set": {"regulator.time_constant": 0.1}}]})"), "grid");
+  o.identify_on_base = true;
+  o.jobs = 2;
+  std::mutex m;
+  struct Call {
+    std::string name;
+    PamRigParams rig;
+    std::optional<PamRigParams> tracking;
+  };
+  std::vector<Call> calls;
+  o.runner = [&](const ExperimentOptions& eo) {
+    {
+      std::lock_guard<std::mutex> lock(m);
+      calls.push_back({eo.name, eo.rig, eo.tracking_rig});
+    }
+    ExperimentResult r = fake_experiment(eo.tracking_rig ? [&] {
+      ExperimentOptions t = eo;
+      t.rig = *eo.tracking_rig;  // the fake's errors follow the rig tracked on
+      return t;
+    }() : eo);
+    return r;
+  };
+  const SweepResult r = run_sweep(o);
+  EXPECT_TRUE(r.identify_on_base);
+  // gpi-pid: nominal, heavy, slow regulator; mpi-pwm (valves): the slow regulator is its nominal rig
+  ASSERT_EQ(calls.size(), 5u);
+  const nlohmann::json base = rig_params_to_json(o.base);
+  std::size_t tracked_on_variant = 0;
+  for (const Call& c : calls) {
+    EXPECT_EQ(rig_params_to_json(c.rig), base) << c.name << ": not identified on the base rig";
+    if (!c.tracking) continue;
+    ++tracked_on_variant;
+    const nlohmann::json t = rig_params_to_json(*c.tracking);
+    EXPECT_NE(t, base);
+    EXPECT_TRUE(c.tracking->load.mass == 35.0 || c.tracking->regulator.time_constant == 0.1) << t.dump();
+    EXPECT_EQ(c.tracking->hysteresis.pressure_band, 20e3) << "the variant is not the base rig with its overrides";
+  }
+  EXPECT_EQ(tracked_on_variant, 3u);  // every run but the two nominal ones
+  // the errors are those of the rig tracked on
+  EXPECT_EQ(r.run(0, 1).runs.at(0).errors.rms_error_mm, fake_experiment([&] {
+    ExperimentOptions t;
+    t.name = "gpi-pid";
+    t.rig = r.variants[1].rig;
+    return t;
+  }()).runs.at(0).errors.rms_error_mm);
+  EXPECT_TRUE(contains(r.text(), "identified on the base rig")) << r.text();
+  EXPECT_TRUE(r.to_json().at("identify_on_base").get<bool>());
+  EXPECT_TRUE(contains(report::sweep_report_html(r, "hysteron sweep --identify-on-base"),
+                       "identified and tuned on the nominal rig, tracking on each variant's"));
+  // by default each variant is identified on its own rig, and nothing says otherwise
+  o.identify_on_base = false;
+  calls.clear();
+  const SweepResult own = run_sweep(o);
+  for (const Call& c : calls) EXPECT_FALSE(c.tracking.has_value()) << c.name;
+  EXPECT_FALSE(contains(own.text(), "identified on the base rig"));
+  EXPECT_FALSE(own.to_json().at("identify_on_base").get<bool>());
 }
 
 TEST(SweepRun, ARigIsRunOnce) {

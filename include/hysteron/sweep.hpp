@@ -106,6 +106,11 @@ struct SweepOptions {
   // its own rig; fits 9 kinds per run) or one kind pinned for every run.
   FitModel model = ExperimentOptions{}.model;
   bool fit_references = ExperimentOptions{}.fit_references;  // of every run
+  // Every run identified and tuned on the base rig, its tracking runs on the variant's rig
+  // (ExperimentOptions::tracking_rig): a rig that changed after its identification (another
+  // load, a wider band, a slower regulator), the loops not re-tuned. false: each variant is
+  // identified and tuned on its own rig.
+  bool identify_on_base = false;
   unsigned jobs = 0;                      // threads; 0 = std::thread::hardware_concurrency()
   std::function<void(const SweepProgress&)> progress;  // optional
   // What runs one experiment: run_experiment when empty (a test may pass a cheaper one;
@@ -160,6 +165,7 @@ struct SweepResult {
   unsigned jobs = 1;
   FitModel model = FitModel::automatic;  // SweepOptions::model
   bool fit_references = true;            // SweepOptions::fit_references
+  bool identify_on_base = false;         // SweepOptions::identify_on_base
   double wall_time_s = 0.0;
 
   std::size_t failures() const noexcept;

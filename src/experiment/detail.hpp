@@ -262,7 +262,9 @@ bool set_learning_shaper(bool on);
 std::string learning_above_note(const TrackingRun& learning, const TrackingRun& base);
 // The note of a compensated, adaptive or learning run whose RMS error is not below the
 // baseline run's on the same reference; empty where it is below.
-std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base);
+// rig_changed: the tracking rig differs from the identified one (ExperimentOptions::tracking_rig),
+// which the note then names as the likelier cause.
+std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base, bool rig_changed = false);
 // PID from the position relay test, derivative filter T_u / 30:
 //   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3

@@ -994,12 +994,14 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     }
     // a loop tuned from the rig's identification that does no better than the baseline must not
     // look like compensation (a relay cycle cut at the load's rest gave gains 6x too high once)
+    const bool rig_changed = o.tracking_rig && rig_params_to_json(*o.tracking_rig) != rig_params_to_json(o.rig);
     for (const TrackingRun& base : res.runs)
       if (base.variant == "baseline" && base.reference == ref.name)
         for (const TrackingRun& run : res.runs)
           if (run.reference == ref.name && (run.variant == "compensated" || run.variant == "adaptive" ||
                                             run.variant == "learning"))
-            if (std::string note = above_baseline_note(run, base); !note.empty()) res.messages.push_back(std::move(note));
+            if (std::string note = above_baseline_note(run, base, rig_changed); !note.empty())
+              res.messages.push_back(std::move(note));
   }
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
@@ -1190,13 +1192,18 @@ std::string learning_above_note(const TrackingRun& learning, const TrackingRun& 
                             100.0 * (1.0 - q), before, kHorizon);
 }
 
-std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base) {
+std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base, bool rig_changed) {
   if (run.errors.rms_error_mm < base.errors.rms_error_mm) return {};
   return fmt::format(
       "{} ({}): its RMS error, {:.3f} mm, is not below the baseline's {:.3f} mm (a straight line for the "
-      "hysteresis): the loop tuned from this rig's identification does no better than no compensation; the "
-      "identified dynamics and relay tests above are suspect",
-      run.variant, run.reference, run.errors.rms_error_mm, base.errors.rms_error_mm);
+      "hysteresis): {}",
+      run.variant, run.reference, run.errors.rms_error_mm, base.errors.rms_error_mm,
+      rig_changed ? "the loop was identified and tuned on the rig of --plant (default: the nominal one), and the "
+                    "rig it tracked on (--tracking-plant) differs from it: its gains and model do not suit the "
+                    "changed rig (a loop tuned on a well-damped load can ring on a less damped one, docs/plant.md); "
+                    "identify and tune on the rig as it is now, or use the learning variant"
+                  : "the loop tuned from this rig's identification does no better than no compensation; the "
+                    "identified dynamics and relay tests above are suspect");
 }
 
 bool set_learning_shaper(bool on) { return learning_shaper.exchange(on); }

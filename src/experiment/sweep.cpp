@@ -364,6 +364,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   r.seed = options.seed;
   r.model = options.model;
   r.fit_references = options.fit_references;
+  r.identify_on_base = options.identify_on_base;
   if (options.experiments.empty()) throw Error("sweep: no experiment given");
   const std::vector<std::string> known = experiment_names();
   for (const auto& name : options.experiments) {
@@ -494,6 +495,10 @@ SweepResult run_sweep(const SweepOptions& options) {
         ExperimentOptions eo;
         eo.name = run.experiment;
         eo.rig = r.variants[run.variant].rig;
+        if (options.identify_on_base && run.variant > 0) {  // identified on the base rig, tracking on the variant's
+          eo.tracking_rig = eo.rig;
+          eo.rig = options.base;
+        }
         eo.seed = options.seed;
         eo.learning_periods = options.learning_periods;
         eo.model = options.model;
@@ -682,6 +687,9 @@ std::string SweepResult::text() const {
   out += fmt::format("model = the kind of hysteron's model the compensated variants invert ({})\n",
                      model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
                                                   : fmt::format("--model {}", fit_model_name(model)));
+  if (identify_on_base)
+    out += "identified on the base rig: every run was identified and tuned on the nominal rig and tracked on the\n"
+           "variant's (a rig that changed after its identification; its loops not re-tuned)\n";
   for (std::size_t e = 0; e < experiments.size(); ++e) {
     out += fmt::format("\n{}\n{:<{}}  {:<9}", experiments[e], "variant", wv, "reference");
     for (const auto& k : kinds) out += fmt::format(" {:>11}", k);
@@ -738,6 +746,7 @@ json SweepResult::to_json() const {
   j["wall_time_s"] = wall_time_s;
   j["model_choice"] = std::string(fit_model_name(model));
   j["fit_references"] = fit_references;
+  j["identify_on_base"] = identify_on_base;
   j["experiments"] = experiments;
   j["failures"] = failures();
   j["variants"] = json::array();

@@ -59,7 +59,7 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
                                     "tr.nominal td { background: #f3f8ee; }\n"
                                     "tr.failed td { background: #fde0e0; }\n");
   h += fmt::format(
-      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig, rig noise seed {}, {} at a "
+      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig{}, rig noise seed {}, {} at a "
       "time: {:.1f} s of wall time for {} runs. Errors are contraction tracking errors in mm (reference against the "
       "displacement sensor); the command range is the minimum and maximum pressure command in MPa over every variant "
       "kind. <i>comp/nom</i>: the compensated RMS over its value on the nominal rig; <i>comp/base</i>: over the "
@@ -68,6 +68,9 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
       "reach, docs/control.md section 5). Cells in red miss issue 11's targets: compensated RMS at most the variant's "
       "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0..0.6 "
       "MPa, the reference within the rig's reach.</p>\n",
+      r.identify_on_base ? " (identified and tuned on the nominal rig, tracking on each variant's: a rig that changed "
+                           "after its identification)"
+                         : "",
       r.seed, r.jobs, r.wall_time_s, r.runs.size());
 
   // the variants

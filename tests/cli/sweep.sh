@@ -98,6 +98,30 @@ grep -q "RMS error against load.mass" "$T/sweep.html" || fail "no RMS-against-lo
 grep -q "failed: rig: the air dynamics" "$T/sweep.html" || fail "the failure is not on the page"
 grep -q "hysteron sweep gpi-pid" "$T/sweep.html" || fail "the command line is not on the page"
 
+# --identify-on-base: the variant's run is `hysteron experiment --tracking-plant` on it (identified
+# on the base rig), to the last digit; the default identifies it on its own rig (other errors)
+printf '{"load": {"damping": 200}}\n' > "$T/d200.json"
+"$BIN" sweep gpi-pid --vary load.damping=200 --identify-on-base --learning-periods 0 --model gpi --jobs 2 \
+  --json > "$T/iob.json" 2> "$T/iob.err" || fail "identify-on-base sweep: exit $? ($(cat "$T/iob.err"))"
+"$BIN" sweep gpi-pid --vary load.damping=200 --learning-periods 0 --model gpi --jobs 2 --json > "$T/own.json" \
+  2> "$T/own.err" || fail "sweep: exit $? ($(cat "$T/own.err"))"
+"$BIN" experiment gpi-pid --tracking-plant "$T/d200.json" --learning-periods 0 --model gpi --json \
+  > "$T/iob_exp.json" 2> "$T/iob_exp.err" || fail "experiment --tracking-plant: exit $? ($(cat "$T/iob_exp.err"))"
+$PY - "$T/iob.json" "$T/own.json" "$T/iob_exp.json" <<'PYEOF' || fail "identify-on-base"
+import json, sys
+iob, own, exp = (json.load(open(p)) for p in sys.argv[1:])
+assert iob["identify_on_base"] is True and own["identify_on_base"] is False
+def rms(doc, variant):
+    run = next(r for r in doc["runs"] if r["variant"] == variant)
+    return {t["kind"]: t["rms_error_mm"] for t in run["tracking"]}
+changed = rms(iob, "load.damping=200")
+for kind in ("faithful", "compensated", "baseline"):
+    assert changed[kind] == exp[kind]["rms_error_mm"], (kind, changed[kind], exp[kind]["rms_error_mm"])
+assert changed["compensated"] != rms(own, "load.damping=200")["compensated"]
+assert rms(iob, "nominal") == rms(own, "nominal")
+PYEOF
+grep -q "identify-on-base" <("$BIN" sweep --help) || fail "--identify-on-base is not in the help"
+
 # only the nominal rig (a variant equal to it is the nominal row): exit 0, the text table
 printf '{"variants": [{"name": "same", "set": {"load.mass": 20}}]}\n' > "$T/grid_nominal.json"
 "$BIN" sweep gpi-pid --grid "$T/grid_nominal.json" --jobs 1 --learning-periods 0 > "$T/nominal.txt" 2> "$T/nominal.err"

@@ -125,22 +125,13 @@ int run_sweep_command(const SweepArgs& a) {
   o.fit_references = !a.paper_references;
   o.identify_on_base = a.identify_on_base;
   o.jobs = a.jobs;
-  for (const auto& e : a.experiments) {
-    if (e == "all") {
-      for (const auto& n : experiment_names()) o.experiments.push_back(n);
-    } else {
-      o.experiments.push_back(e);
-    }
-  }
+  o.experiments = sweep_experiments(a.experiments);
   if (!a.plant.empty()) o.base = load_rig_params(a.plant);
   if (a.vary.empty() && a.grid.empty() && a.set.empty())
     throw Error(fmt::format("sweep: no variants: give --vary PATH=V1,V2,..., --grid FILE.json or --set {}",
                             documented_set_name));
-  if (!a.set.empty()) {
-    if (a.set != documented_set_name)
-      throw Error(fmt::format("--set {}: unknown set (the one built-in set is '{}')", a.set, documented_set_name));
-    for (auto& v : documented_variants()) o.variants.push_back(std::move(v));
-  }
+  if (!a.set.empty())
+    for (auto& v : variant_set(a.set, "--set")) o.variants.push_back(std::move(v));
   for (const auto& spec : a.vary)
     for (auto& v : parse_vary(spec)) o.variants.push_back(std::move(v));
   if (!a.grid.empty())

@@ -427,6 +427,24 @@ TEST(SweepRun, ListsTheLearningRunsNotBelowTheirCompensatedLoop) {
 // --identify-on-base: every variant's run is identified and tuned on the base rig and tracks on
 // the variant's rig (ExperimentOptions::tracking_rig); the nominal run has no tracking rig. The
 // rigs are deduplicated as before, and the text, JSON and page say how the runs were made.
+// The CLI's and Python's names: "all" is every registered experiment; "documented" the one set.
+TEST(SweepNames, AllIsEveryExperimentAndDocumentedTheOneSet) {
+  const std::vector<std::string> every = experiment_names();
+  ASSERT_EQ(every.size(), 3u);
+  EXPECT_EQ(sweep_experiments({"all"}), every);
+  std::vector<std::string> mixed = {"mpi-pwm"};
+  for (const auto& n : every) mixed.push_back(n);
+  EXPECT_EQ(sweep_experiments({"mpi-pwm", "all"}), mixed);  // run_sweep then refuses the repeat
+  EXPECT_EQ(sweep_experiments({"gpi-pd"}), std::vector<std::string>{"gpi-pd"});  // checked by run_sweep
+  EXPECT_EQ(variant_set("documented", "--set").size(), documented_variants().size());
+  try {
+    variant_set("worst", "--set");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "--set worst: unknown set (the one built-in set is 'documented')");
+  }
+}
+
 TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
   SweepOptions o;
   o.experiments = {"gpi-pid", "mpi-pwm"};

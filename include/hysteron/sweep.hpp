@@ -87,6 +87,12 @@ std::vector<PlantVariant> variant_grid_from_json(const nlohmann::json& j, std::s
 // The nominal values (20 kg, 15 kPa, 50 ms / 7 ms, 400 N s/m) are the nominal rig.
 std::vector<PlantVariant> documented_variants();
 inline constexpr std::string_view documented_set_name = "documented";
+// A built-in set by name (documented_set_name, the only one); any other name is a
+// hysteron::Error "WHERE NAME: unknown set (the one built-in set is 'documented')".
+std::vector<PlantVariant> variant_set(std::string_view name, std::string_view where);
+// The experiments of a sweep from the names given: "all" is every registered experiment
+// (experiment_names()), in place; the others as given (run_sweep checks them).
+std::vector<std::string> sweep_experiments(const std::vector<std::string>& names);
 
 // Progress of a sweep: called once per finished run, from one thread at a time.
 struct SweepProgress {

@@ -11,6 +11,8 @@
 #include "hysteron/learning.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/report.hpp"
+#include "hysteron/sweep.hpp"
+#include "hysteron/io/files.hpp"
 #include "hysteron/io/export_c.hpp"
 #include "hysteron/io/results.hpp"
 #include "more.hpp"
@@ -259,6 +261,68 @@ object), "table" (text), "identification" (numpy series + train_end), "fit",
 "validation", "best_fit", "best_validation", "model" (choice, kind, reason, candidates: kind,
 ok, status, message, validation, fit_time_s, chosen), "messages", "runs" (list of dicts with the
 errors, the per-period errors of a learning run and numpy time series) and "published".)doc");
+
+  m.def(
+      "run_sweep",
+      [](const py::object& experiments, const std::vector<std::string>& vary, const py::object& grid,
+         const std::string& set, const py::object& plant, std::uint64_t seed, int learning_periods,
+         const std::string& model, bool paper_references, bool identify_on_base, unsigned jobs, const std::string& out,
+         const std::string& report_path) {
+        SweepOptions o;
+        o.experiments = sweep_experiments(py::isinstance<py::str>(experiments)
+                                              ? std::vector<std::string>{experiments.cast<std::string>()}
+                                              : experiments.cast<std::vector<std::string>>());
+        o.seed = seed;
+        o.learning_periods = learning_periods;
+        o.model = fit_model_from_name(model);
+        o.fit_references = !paper_references;
+        o.identify_on_base = identify_on_base;
+        o.jobs = jobs;
+        if (!plant.is_none())
+          o.base = py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
+                                                  : rig_params_from_json(to_json(plant), "plant");
+        if (!set.empty())
+          for (auto& v : variant_set(set, "run_sweep: set")) o.variants.push_back(std::move(v));
+        for (const auto& spec : vary)
+          for (auto& v : parse_vary(spec)) o.variants.push_back(std::move(v));
+        if (!grid.is_none())
+          for (auto& v : py::isinstance<py::str>(grid) ? read_variant_grid(grid.cast<std::string>())
+                                                       : variant_grid_from_json(to_json(grid), "grid"))
+            o.variants.push_back(std::move(v));
+        if (o.variants.empty())
+          throw Error(fmt::format("run_sweep: no variants: give vary=['PATH=V1,V2,...'], grid= or set='{}'",
+                                  documented_set_name));
+        SweepResult r;
+        {
+          py::gil_scoped_release release;
+          r = run_sweep(o);
+        }
+        // the page first (gnuplot may fail), then the table; each written atomically
+        std::string html;
+        if (!report_path.empty()) html = report::sweep_report_html(r, "hysteron.run_sweep(...)");
+        if (!out.empty()) io::write_text_file(out, r.csv());
+        if (!report_path.empty()) io::write_text_file(report_path, html);
+        py::dict d = from_json(r.to_json());
+        d["text"] = r.text();
+        return d;
+      },
+      py::arg("experiments"), py::kw_only(), py::arg("vary") = std::vector<std::string>{}, py::arg("grid") = py::none(),
+      py::arg("set") = "", py::arg("plant") = py::none(), py::arg("seed") = 1, py::arg("learning_periods") = 10,
+      py::arg("model") = "auto", py::arg("paper_references") = false, py::arg("identify_on_base") = false,
+      py::arg("jobs") = 0u, py::arg("out") = "", py::arg("report") = "",
+      R"doc(Run experiments over plant variants on all cores, as `hysteron sweep` (docs/plant.md).
+experiments: a name of experiment_names(), "all", or a list of them. Variants (at least one
+source): vary, a list of "PATH=V1,V2,..." (e.g. "load.mass=10,35", "muscle.force_620=-15%");
+grid, a grid file's path or its dict ({"variants": [{"name": ..., "set": {PATH: value}}]});
+set="documented", issue 11's documented set. plant: the base rig (dict or JSON path; None:
+nominal), always run first as "nominal". identify_on_base: identify and tune every run on the
+base rig and track on the variant's (a rig that changed after its identification; default:
+each variant identified on its own rig). seed, learning_periods, model, paper_references: as
+run_experiment, for every run. jobs: runs at once (0: the number of cores). out: the CSV table,
+report: the HTML page (written after every run finished). Returns the JSON document of
+`hysteron sweep --json` as a dict (variants, runs with their tracking errors, target_misses,
+learning_not_below_compensated, notes, failures, ...) and "text", the text table. A failed run
+is recorded in the result (failures > 0), not raised; bad input raises hysteron.Error.)doc");
 
   m.def(
       "write_report",

@@ -5,7 +5,7 @@ import inspect
 
 import hysteron
 
-EXPERIMENT = {"experiment_names", "run_experiment", "write_report", "plot", "plot_hysteresis_loops",
+EXPERIMENT = {"experiment_names", "run_experiment", "run_sweep", "write_report", "plot", "plot_hysteresis_loops",
               "plot_identification_input", "plot_tracking", "plot_tracking_error", "plot_desired_vs_actual",
               "plot_fit_residuals", "sweep", "sweep_names"}
 

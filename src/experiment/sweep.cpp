@@ -322,6 +322,24 @@ std::vector<PlantVariant> read_variant_grid(const std::string& path) {
   return variant_grid_from_json(io::parse_json(text.str(), path), path);
 }
 
+std::vector<PlantVariant> variant_set(std::string_view name, std::string_view where) {
+  if (name != documented_set_name)
+    throw Error(fmt::format("{} {}: unknown set (the one built-in set is '{}')", where, name, documented_set_name));
+  return documented_variants();
+}
+
+std::vector<std::string> sweep_experiments(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  for (const auto& e : names) {
+    if (e == "all") {
+      for (const auto& n : experiment_names()) out.push_back(n);
+    } else {
+      out.push_back(e);
+    }
+  }
+  return out;
+}
+
 std::vector<PlantVariant> documented_variants() {
   auto one = [](std::string name, std::string group, std::vector<ParameterOverride> o) {
     PlantVariant v;

@@ -42,6 +42,12 @@ py::dict id_run_dict(const IdentificationRun& run) {
   return d;
 }
 
+// A rig from a JSON file's path or a parameter dict (`where` names the argument in errors).
+PamRigParams rig_from(const py::object& plant, const char* where) {
+  return py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
+                                        : rig_params_from_json(to_json(plant), where);
+}
+
 // Keyword arguments shared by the plot functions.
 #define HYSTERON_PLOT_ARGS(title, xl, xu, yl, yu)                                                            \
   py::arg("path"), py::arg("title") = title, py::arg("x_label") = xl, py::arg("x_unit") = xu,                \
@@ -161,13 +167,8 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         o.seed = seed;
         o.learning_periods = learning_periods;
         o.adaptive = adaptive;
-        if (!plant.is_none())
-          o.rig = py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
-                                                 : rig_params_from_json(to_json(plant), "plant");
-        if (!tracking_plant.is_none())
-          o.tracking_rig = py::isinstance<py::str>(tracking_plant)
-                               ? load_rig_params(tracking_plant.cast<std::string>())
-                               : rig_params_from_json(to_json(tracking_plant), "tracking_plant");
+        if (!plant.is_none()) o.rig = rig_from(plant, "plant");
+        if (!tracking_plant.is_none()) o.tracking_rig = rig_from(tracking_plant, "tracking_plant");
         ExperimentResult r;
         {
           py::gil_scoped_release release;
@@ -278,9 +279,7 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
         o.fit_references = !paper_references;
         o.identify_on_base = identify_on_base;
         o.jobs = jobs;
-        if (!plant.is_none())
-          o.base = py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
-                                                  : rig_params_from_json(to_json(plant), "plant");
+        if (!plant.is_none()) o.base = rig_from(plant, "plant");
         if (!set.empty())
           for (auto& v : variant_set(set, "run_sweep: set")) o.variants.push_back(std::move(v));
         for (const auto& spec : vary)

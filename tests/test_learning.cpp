@@ -1267,6 +1267,10 @@ TEST(ExperimentTuning, LoopNotBelowTheBaselineSaysSo) {
   EXPECT_EQ(changed.rfind("compensated (sine): its RMS error, 16.177 mm, is not below the baseline's 7.403 mm", 0), 0u);
   EXPECT_NE(changed.find("differs from it"), std::string::npos) << changed;
   EXPECT_EQ(changed.find("suspect"), std::string::npos) << changed;
+  EXPECT_NE(changed.find("or use the learning variant"), std::string::npos) << changed;
+  TrackingRun learning = run;
+  learning.variant = "learning";  // it does not advise itself
+  EXPECT_EQ(experiment::above_baseline_note(learning, base, true).find("learning variant"), std::string::npos);
   run.errors.rms_error_mm = 7.403;  // equal is not below
   EXPECT_FALSE(experiment::above_baseline_note(run, base).empty());
   run.errors.rms_error_mm = 0.446;

@@ -1198,12 +1198,13 @@ std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base,
       "{} ({}): its RMS error, {:.3f} mm, is not below the baseline's {:.3f} mm (a straight line for the "
       "hysteresis): {}",
       run.variant, run.reference, run.errors.rms_error_mm, base.errors.rms_error_mm,
-      rig_changed ? "the loop was identified and tuned on the rig of --plant (default: the nominal one), and the "
-                    "rig it tracked on (--tracking-plant) differs from it: its gains and model do not suit the "
-                    "changed rig (a loop tuned on a well-damped load can ring on a less damped one, docs/plant.md); "
-                    "identify and tune on the rig as it is now, or use the learning variant"
-                  : "the loop tuned from this rig's identification does no better than no compensation; the "
-                    "identified dynamics and relay tests above are suspect");
+      rig_changed ? fmt::format("the loop was identified and tuned on the rig of --plant (default: the nominal one), "
+                                "and the rig it tracked on (--tracking-plant) differs from it: its gains and model may "
+                                "not suit the changed rig (a loop tuned on a well-damped load can ring on a less "
+                                "damped one, docs/plant.md); identify and tune on the rig as it is now{}",
+                                run.variant == "learning" ? "" : ", or use the learning variant")
+                  : std::string("the loop tuned from this rig's identification does no better than no compensation; "
+                                "the identified dynamics and relay tests above are suspect"));
 }
 
 bool set_learning_shaper(bool on) { return learning_shaper.exchange(on); }

@@ -497,6 +497,8 @@ TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
     return t;
   }()).runs.at(0).errors.rms_error_mm);
   EXPECT_TRUE(contains(r.text(), "identified on the base rig")) << r.text();
+  ASSERT_FALSE(r.target_misses().empty());  // 35 kg: the fake's RMS is 1.75x nominal
+  EXPECT_TRUE(contains(r.text(), "they were set for rigs identified and tuned as they are")) << r.text();
   EXPECT_TRUE(r.to_json().at("identify_on_base").get<bool>());
   EXPECT_TRUE(contains(report::sweep_report_html(r, "hysteron sweep --identify-on-base"),
                        "identified and tuned on the nominal rig, tracking on each variant's"));
@@ -506,6 +508,7 @@ TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
   const SweepResult own = run_sweep(o);
   for (const Call& c : calls) EXPECT_FALSE(c.tracking.has_value()) << c.name;
   EXPECT_FALSE(contains(own.text(), "identified on the base rig"));
+  EXPECT_FALSE(contains(own.text(), "they were set for rigs"));
   EXPECT_FALSE(own.to_json().at("identify_on_base").get<bool>());
 }
 

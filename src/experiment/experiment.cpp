@@ -925,6 +925,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
 
   // 4. tracking
   const std::uint64_t track_seed = o.seed + 104729;
+  // the tracking rig is not the one identified (--tracking-plant): the notes name that first
+  const bool rig_changed = o.tracking_rig && rig_params_to_json(*o.tracking_rig) != rig_params_to_json(o.rig);
   for (const Reference& ref : refs) {
     Context rc = ctx;
     rc.reference = &ref;
@@ -994,7 +996,6 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     }
     // a loop tuned from the rig's identification that does no better than the baseline must not
     // look like compensation (a relay cycle cut at the load's rest gave gains 6x too high once)
-    const bool rig_changed = o.tracking_rig && rig_params_to_json(*o.tracking_rig) != rig_params_to_json(o.rig);
     for (const TrackingRun& base : res.runs)
       if (base.variant == "baseline" && base.reference == ref.name)
         for (const TrackingRun& run : res.runs)

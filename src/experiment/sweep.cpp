@@ -747,7 +747,10 @@ std::string SweepResult::text() const {
   if (!notes.empty()) out += "\n";
   const auto misses = target_misses();
   out += misses.empty() ? std::string("\nEvery issue-11 target met (compensated RMS, baseline, command range).\n")
-                        : fmt::format("\nIssue-11 targets missed ({}):\n", misses.size());
+                        : fmt::format("\nIssue-11 targets missed ({}){}:\n", misses.size(),
+                                      identify_on_base ? "; they were set for rigs identified and tuned as they are, "
+                                                         "not for rigs that changed after it"
+                                                       : "");
   for (const auto& m : misses) out += "  " + m + "\n";
   if (const auto above = learning_not_below_compensated(); !above.empty()) {
     out += fmt::format("\nLearning runs not below their compensated loop ({}):\n", above.size());

@@ -96,7 +96,10 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
   if (misses.empty()) {
     h += "<p>Every run met the targets.</p>\n";
   } else {
-    h += fmt::format("<p class=\"warn\">{} miss(es):</p>\n<ul>\n", misses.size());
+    h += fmt::format("<p class=\"warn\">{} miss(es){}:</p>\n<ul>\n", misses.size(),
+                     r.identify_on_base ? " (the targets were set for rigs identified and tuned as they are, not for "
+                                          "rigs that changed after it)"
+                                        : "");
     for (const auto& m : misses) h += fmt::format("<li>{}</li>\n", html_escape(m));
     h += "</ul>\n";
   }

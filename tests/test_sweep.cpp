@@ -424,9 +424,6 @@ TEST(SweepRun, ListsTheLearningRunsNotBelowTheirCompensatedLoop) {
   EXPECT_TRUE(below.to_json().at("learning_not_below_compensated").empty());
 }
 
-// --identify-on-base: every variant's run is identified and tuned on the base rig and tracks on
-// the variant's rig (ExperimentOptions::tracking_rig); the nominal run has no tracking rig. The
-// rigs are deduplicated as before, and the text, JSON and page say how the runs were made.
 // The CLI's and Python's names: "all" is every registered experiment; "documented" the one set.
 TEST(SweepNames, AllIsEveryExperimentAndDocumentedTheOneSet) {
   const std::vector<std::string> every = experiment_names();
@@ -445,6 +442,9 @@ TEST(SweepNames, AllIsEveryExperimentAndDocumentedTheOneSet) {
   }
 }
 
+// --identify-on-base: every variant's run is identified and tuned on the base rig and tracks on
+// the variant's rig (ExperimentOptions::tracking_rig); the nominal run has no tracking rig. The
+// rigs are deduplicated as before, and the text, JSON and page say how the runs were made.
 TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
   SweepOptions o;
   o.experiments = {"gpi-pid", "mpi-pwm"};
@@ -501,7 +501,7 @@ TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
   EXPECT_TRUE(contains(r.text(), "they were set for rigs identified and tuned as they are")) << r.text();
   EXPECT_TRUE(r.to_json().at("identify_on_base").get<bool>());
   EXPECT_TRUE(contains(report::sweep_report_html(r, "hysteron sweep --identify-on-base"),
-                       "identified and tuned on the nominal rig, tracking on each variant's"));
+                       "identified and tuned on the base rig, the row <i>nominal</i>, tracking on each variant's"));
   // by default each variant is identified on its own rig, and nothing says otherwise
   o.identify_on_base = false;
   calls.clear();

@@ -706,8 +706,8 @@ std::string SweepResult::text() const {
                      model == FitModel::automatic ? std::string("auto: chosen by each run on its rig")
                                                   : fmt::format("--model {}", fit_model_name(model)));
   if (identify_on_base)
-    out += "identified on the base rig: every run was identified and tuned on the nominal rig and tracked on the\n"
-           "variant's (a rig that changed after its identification; its loops not re-tuned)\n";
+    out += "identified on the base rig: every run was identified and tuned on the base rig (the row 'nominal') and\n"
+           "tracked on the variant's (a rig that changed after its identification; its loops not re-tuned)\n";
   for (std::size_t e = 0; e < experiments.size(); ++e) {
     out += fmt::format("\n{}\n{:<{}}  {:<9}", experiments[e], "variant", wv, "reference");
     for (const auto& k : kinds) out += fmt::format(" {:>11}", k);

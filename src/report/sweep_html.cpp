@@ -68,8 +68,8 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
       "reach, docs/control.md section 5). Cells in red miss issue 11's targets: compensated RMS at most the variant's "
       "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0..0.6 "
       "MPa, the reference within the rig's reach.</p>\n",
-      r.identify_on_base ? " (identified and tuned on the nominal rig, tracking on each variant's: a rig that changed "
-                           "after its identification)"
+      r.identify_on_base ? " (identified and tuned on the base rig, the row <i>nominal</i>, tracking on each variant's: "
+                           "a rig that changed after its identification)"
                          : "",
       r.seed, r.jobs, r.wall_time_s, r.runs.size());
 

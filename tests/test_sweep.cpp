@@ -498,17 +498,27 @@ TEST(SweepRun, IdentifiedOnTheBaseRigTracksOnTheVariants) {
   }()).runs.at(0).errors.rms_error_mm);
   EXPECT_TRUE(contains(r.text(), "identified on the base rig")) << r.text();
   ASSERT_FALSE(r.target_misses().empty());  // 35 kg: the fake's RMS is 1.75x nominal
-  EXPECT_TRUE(contains(r.text(), "they were set for rigs identified and tuned as they are")) << r.text();
+  EXPECT_TRUE(contains(r.text(), "targets were set for rigs identified and tuned as they are")) << r.text();
+  EXPECT_EQ(r.to_json().at("identification_note").get<std::string>(), r.identification_note());
   EXPECT_TRUE(r.to_json().at("identify_on_base").get<bool>());
-  EXPECT_TRUE(contains(report::sweep_report_html(r, "hysteron sweep --identify-on-base"),
-                       "identified and tuned on the base rig, the row <i>nominal</i>, tracking on each variant's"));
+  const std::string page = report::sweep_report_html(r, "hysteron sweep --identify-on-base");
+  EXPECT_TRUE(contains(page, "every run was identified and tuned on the base rig (the row"));
+  EXPECT_TRUE(contains(page, "targets were set for rigs identified and tuned as they are"));
+  EXPECT_FALSE(contains(report::sweep_report_html(run_sweep([&] {
+                                                   SweepOptions d = o;
+                                                   d.identify_on_base = false;
+                                                   return d;
+                                                 }()),
+                                                 "hysteron sweep"),
+                        "identified and tuned on the base rig"));
   // by default each variant is identified on its own rig, and nothing says otherwise
   o.identify_on_base = false;
   calls.clear();
   const SweepResult own = run_sweep(o);
   for (const Call& c : calls) EXPECT_FALSE(c.tracking.has_value()) << c.name;
   EXPECT_FALSE(contains(own.text(), "identified on the base rig"));
-  EXPECT_FALSE(contains(own.text(), "they were set for rigs"));
+  EXPECT_FALSE(contains(own.text(), "targets were set for rigs"));
+  EXPECT_TRUE(own.identification_note().empty());
   EXPECT_FALSE(own.to_json().at("identify_on_base").get<bool>());
 }
 

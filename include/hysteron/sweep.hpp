@@ -199,6 +199,9 @@ struct SweepResult {
   // themselves there (docs/control.md, section 3; where it is above, the experiment's own note
   // says why). One line each, with both errors.
   std::vector<std::string> learning_not_below_compensated() const;
+  // How the runs were identified, where not each on its own rig (identify_on_base): one
+  // sentence for the text, the page and the JSON ("" by default).
+  std::string identification_note() const;
 };
 
 // Runs every (experiment, variant) pair (the base rig first, as "nominal"), `jobs`

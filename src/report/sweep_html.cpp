@@ -59,7 +59,7 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
                                     "tr.nominal td { background: #f3f8ee; }\n"
                                     "tr.failed td { background: #fde0e0; }\n");
   h += fmt::format(
-      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig{}, rig noise seed {}, {} at a "
+      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig, rig noise seed {}, {} at a "
       "time: {:.1f} s of wall time for {} runs. Errors are contraction tracking errors in mm (reference against the "
       "displacement sensor); the command range is the minimum and maximum pressure command in MPa over every variant "
       "kind. <i>comp/nom</i>: the compensated RMS over its value on the nominal rig; <i>comp/base</i>: over the "
@@ -68,10 +68,9 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
       "reach, docs/control.md section 5). Cells in red miss issue 11's targets: compensated RMS at most the variant's "
       "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0..0.6 "
       "MPa, the reference within the rig's reach.</p>\n",
-      r.identify_on_base ? " (identified and tuned on the base rig, the row <i>nominal</i>, tracking on each variant's: "
-                           "a rig that changed after its identification)"
-                         : "",
       r.seed, r.jobs, r.wall_time_s, r.runs.size());
+  if (const std::string note = r.identification_note(); !note.empty())
+    h += fmt::format("<p class=\"warn\">{}.</p>\n", html_escape(note));
 
   // the variants
   h += "<h2>Rigs</h2>\n<table>\n<tr><th class=\"l\">variant</th><th class=\"l\">overrides (values on the rig)</th>"
@@ -96,10 +95,7 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
   if (misses.empty()) {
     h += "<p>Every run met the targets.</p>\n";
   } else {
-    h += fmt::format("<p class=\"warn\">{} miss(es){}:</p>\n<ul>\n", misses.size(),
-                     r.identify_on_base ? " (the targets were set for rigs identified and tuned as they are, not for "
-                                          "rigs that changed after it)"
-                                        : "");
+    h += fmt::format("<p class=\"warn\">{} miss(es):</p>\n<ul>\n", misses.size());
     for (const auto& m : misses) h += fmt::format("<li>{}</li>\n", html_escape(m));
     h += "</ul>\n";
   }

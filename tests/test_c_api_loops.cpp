@@ -70,8 +70,9 @@ struct Worst {
 // The loop rebuilt through the C ABI as docs/deploy.md tells a C user to: the run's loop read
 // from result.json (hysteron_loop_params_from_file, "VARIANT.REFERENCE"), the object its kind
 // names created on the run's model file, and the preview from hysteron_loop_preview; fed the
-// run's recorded inputs.
-Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
+// run's recorded inputs. The position PID's limit-cycle guard is read and set too
+// (hysteron_loop_guard_from_file, hysteron_*_set_guard) unless with_guard is false.
+Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r, bool with_guard = true) {
   Worst w;
   hysteron_loop_params c;
   const std::string run = r.variant + "." + r.reference;
@@ -101,6 +102,17 @@ Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
   EXPECT_EQ(st, HYSTERON_OK) << run << ": " << hysteron_last_error();
   hysteron_params_free(model);
   if (st != HYSTERON_OK) return w;
+  hysteron_pid_guard g;
+  EXPECT_EQ(hysteron_loop_guard_from_file((dir / "result.json").string().c_str(), run.c_str(), &g), HYSTERON_OK)
+      << hysteron_last_error();
+  const bool tuned = r.variant != "faithful";  // the faithful loop keeps the paper's PID, unguarded
+  EXPECT_EQ(g.period > 0.0, tuned && r.controller.pid.has_value()) << run;
+  if (with_guard) {
+    EXPECT_EQ(ff ? hysteron_ff_pid_set_guard(ff, &g) : ol ? hysteron_open_loop_set_guard(ol, &g)
+                                                           : hysteron_cascade_set_guard(cas, &g),
+              HYSTERON_OK)
+        << hysteron_last_error();
+  }
   const std::vector<double> ref = metres(r.reference_mm);
   std::vector<double> preview(ref.size());
   EXPECT_EQ(hysteron_loop_preview(&c, ref.data(), ref.size(), preview.data(), preview.size()), HYSTERON_OK)
@@ -114,6 +126,16 @@ Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r) {
               HYSTERON_OK);
     w.command = std::max(w.command, std::abs(u - r.pressure_command_mpa[k]));  // with the valves: p_d
     w.duty = std::max(w.duty, std::abs(duty - r.duty[k]));
+  }
+  double scale = 0.0;
+  std::size_t cuts = 0;
+  EXPECT_EQ(ff    ? hysteron_ff_pid_guard_state(ff, &scale, &cuts)
+            : ol ? hysteron_open_loop_guard_state(ol, &scale, &cuts)
+                 : hysteron_cascade_guard_state(cas, &scale, &cuts),
+            HYSTERON_OK);
+  if (with_guard) {
+    EXPECT_EQ(cuts, r.controller.guard_cuts) << run;
+    EXPECT_EQ(scale, r.controller.guard_final_scale) << run;
   }
   hysteron_ff_pid_free(ff);
   hysteron_open_loop_free(ol);
@@ -195,15 +217,19 @@ void replay_learning(const std::filesystem::path& dir, const TrackingRun& r, Lea
 
 // Runs `name` quickly, writes its directory, reads it back and replays its faithful and
 // compensated runs through the C ABI; a learning run's ILC parameters are read as well.
-void check_replay(const std::string& name, LoopDesign::Kind expected, int learning_periods = 0) {
-  const ExperimentResult r = run_experiment(test::quick_experiment(name, learning_periods));
+// expect_guard_cut: a compensated run's limit-cycle guard cut its gains (and the C ABI's loop
+// without the guard then commands otherwise).
+void check_replay(const ExperimentOptions& o, LoopDesign::Kind expected, bool expect_guard_cut = false) {
+  const std::string name = o.name;
+  const int learning_periods = o.learning_periods;
+  const ExperimentResult r = run_experiment(o);
   test::TempDir tmp;
   const std::filesystem::path dir = tmp.file("out");
   r.write(dir.string());
   const ExperimentResult back = report::read_experiment_dir(dir.string());
   int replayed = 0;
   bool shaped = false, corrected = false;
-  int learnt = 0;
+  int learnt = 0, guard_cut = 0;
   for (const TrackingRun& run : back.runs) {
     if (run.variant == "learning") {
       hysteron_loop_params c;
@@ -260,11 +286,16 @@ void check_replay(const std::string& name, LoopDesign::Kind expected, int learni
                   "%.3g MPa / %.3g duty\n",
                   name.c_str(), run.variant.c_str(), run.reference.c_str(), g.n, w.command, w.duty, g.command, g.duty);
     }
+    if (run.controller.guard_cuts > 0) {
+      ++guard_cut;
+      EXPECT_GT(replay_c(dir, run, false).command, 1e-6) << name << " " << run.variant << ": the same without the guard";
+    }
     shaped = shaped || run.controller.shaper.has_value();
     corrected = corrected || run.controller.pid.has_value();
     ++replayed;
   }
   EXPECT_GE(replayed, 2);
+  EXPECT_EQ(guard_cut > 0, expect_guard_cut) << name;
   EXPECT_EQ(learnt > 0, learning_periods > 0);
   EXPECT_TRUE(corrected) << "a compensated loop has a position PID";
   // the nominal rig's gain trial shapes the compensated loops (docs/control.md, section 2), so
@@ -275,9 +306,24 @@ void check_replay(const std::string& name, LoopDesign::Kind expected, int learni
 }  // namespace
 
 TEST(CApiLoops, FeedforwardPidRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
-  check_replay("gpi-pid", LoopDesign::Kind::feedforward_pid, 2);
+  check_replay(test::quick_experiment("gpi-pid", 2), LoopDesign::Kind::feedforward_pid);
 }
 
-TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-openloop", LoopDesign::Kind::open_loop); }
+TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
+  check_replay(test::quick_experiment("mpi-openloop"), LoopDesign::Kind::open_loop);
+}
 
-TEST(CApiLoops, CascadeRebuiltFromResultJsonCommandsWhatTheRunCommanded) { check_replay("mpi-pwm", LoopDesign::Kind::cascade_pwm); }
+TEST(CApiLoops, CascadeRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
+  check_replay(test::quick_experiment("mpi-pwm"), LoopDesign::Kind::cascade_pwm);
+}
+
+// Tuned on the nominal rig, tracking with the load damping halved: the compensated loop rings
+// and its limit-cycle guard cuts the gains (docs/control.md, section 2); the C ABI's loop with
+// the run's guard commands what the run commanded, and without it does not.
+TEST(CApiLoops, GuardedLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  PamRigParams changed = o.rig;
+  changed.load.damping = 200.0;
+  o.tracking_rig = changed;
+  check_replay(o, LoopDesign::Kind::feedforward_pid, true);
+}

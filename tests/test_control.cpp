@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <utility>
+#include <vector>
 #include <random>
 #include <string>
 
@@ -182,6 +185,123 @@ TEST(Pid, Deterministic) {
   EXPECT_EQ(run(), run());
 }
 
+namespace {
+// First-order lag tau behind a dead time of `delay` samples: the loop the guard's tests ring.
+struct DeadTimeLag {
+  FirstOrder lag;
+  std::vector<double> line;
+  std::size_t at = 0;
+  DeadTimeLag(double tau, double ts, std::size_t delay) : lag(tau, ts), line(delay, 0.0) {}
+  double step(double u) {
+    const double out = line[at];
+    line[at] = u;
+    at = (at + 1) % line.size();
+    return lag.step(out);
+  }
+};
+
+// Ultimate period [s] and gain of the loop above under proportional control: w theta + atan(w tau) = pi,
+// K_u = sqrt(1 + (w tau)^2) (bisection; independent of the guard).
+std::pair<double, double> ultimate(double tau, double theta) {
+  double lo = 0.0, hi = std::numbers::pi / theta;
+  for (int i = 0; i < 200; ++i) {
+    const double w = 0.5 * (lo + hi);
+    (w * theta + std::atan(w * tau) > std::numbers::pi ? hi : lo) = w;
+  }
+  const double w = 0.5 * (lo + hi);
+  return {2.0 * std::numbers::pi / w, std::sqrt(1.0 + w * tau * w * tau)};
+}
+
+// Error of `pid` tracking r(t) on the dead-time loop, one value per sample.
+std::vector<double> errors_on_dead_time_loop(Pid& pid, double seconds, double (*r)(double), double noise = 0.0) {
+  const double ts = pid.params().sample_time;
+  DeadTimeLag plant(0.05, ts, 50);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> n(-noise, noise);
+  std::vector<double> e;
+  double y = 0.0;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(seconds / ts); ++k) {
+    const double t = static_cast<double>(k) * ts;
+    const double ym = y + (noise > 0.0 ? n(rng) : 0.0);
+    e.push_back(r(t) - y);
+    y = plant.step(pid.step(r(t), ym));
+  }
+  return e;
+}
+
+double max_abs(const std::vector<double>& e, std::size_t from) {
+  double m = 0.0;
+  for (std::size_t k = from; k < e.size(); ++k) m = std::max(m, std::abs(e[k]));
+  return m;
+}
+}  // namespace
+
+TEST(PidGuard, ValidatesParams) {
+  PidParams p;
+  p.guard.period = -1.0;
+  EXPECT_NE(error_of(p).find("pid.guard.period"), std::string::npos);
+  p.guard.period = 0.2;  // on: needs an amplitude
+  EXPECT_NE(error_of(p).find("pid.guard.amplitude"), std::string::npos);
+  p.guard.amplitude = 0.1;
+  EXPECT_EQ(error_of(p), "");
+  p.guard.factor = 1.0;
+  EXPECT_NE(error_of(p).find("pid.guard.factor"), std::string::npos);
+  p.guard.factor = 0.5;
+  p.guard.min_scale = 0.0;
+  EXPECT_NE(error_of(p).find("pid.guard.min_scale"), std::string::npos);
+  p.guard.min_scale = 0.25;
+  p.guard.count = NAN;
+  EXPECT_NE(error_of(p).find("pid.guard.count"), std::string::npos);
+  p.guard = PidGuard{.period = 0.0, .amplitude = NAN};  // off: the rest is not used
+  EXPECT_EQ(error_of(p), "");
+}
+
+TEST(PidGuard, CutsTheGainsOfALoopThatRings) {
+  // PI at 1.5 times the ultimate gain of a 50 ms lag behind 50 ms of dead time: unstable. A step
+  // of 1 to track; the guard's amplitude 0.05, its period the loop's ultimate period.
+  const double ts = 1e-3;
+  const auto [tu, ku] = ultimate(0.05, 0.05);
+  PidParams p{.kp = 1.5 * ku, .ki = 1.5 * ku / (2.0 * tu), .sample_time = ts, .out_min = -5.0, .out_max = 5.0};
+  auto step_reference = [](double) { return 1.0; };
+  Pid unguarded(p);
+  const std::vector<double> ring = errors_on_dead_time_loop(unguarded, 20.0, step_reference);
+  p.guard = PidGuard{.period = tu, .amplitude = 0.05};
+  Pid guarded(p);
+  const std::vector<double> held = errors_on_dead_time_loop(guarded, 20.0, step_reference);
+  const std::size_t last_5s = ring.size() - 5000;
+  EXPECT_GT(max_abs(ring, last_5s), 1.0);  // rings between the output limits
+  EXPECT_GE(guarded.state().guard_cuts, 1u);
+  EXPECT_LT(guarded.state().gain_scale, 0.67);  // below K_u: 1.5 x 0.63 = 0.95
+  EXPECT_LT(max_abs(held, last_5s), 0.01);
+  // reset() restores the tuned gains
+  guarded.reset();
+  EXPECT_EQ(guarded.state().gain_scale, 1.0);
+  EXPECT_EQ(guarded.state().guard_cuts, 0u);
+}
+
+TEST(PidGuard, LeavesAStableLoopAlone) {
+  // The same loop at 0.4 K_u, tracking a sine of 20 T_u and then a square wave of amplitude 1
+  // (half-periods of 10 T_u: each step rings a little and settles), with measurement noise
+  // below the hysteresis: the guarded PID's outputs are the unguarded one's to the last bit.
+  const double ts = 1e-3;
+  const auto [tu, ku] = ultimate(0.05, 0.05);
+  PidParams p{.kp = 0.4 * ku, .ki = 0.4 * ku / (2.0 * tu), .kd = 0.4 * ku * tu / 8.0, .sample_time = ts,
+              .derivative_filter = tu / 30.0, .out_min = -5.0, .out_max = 5.0};
+  static double period = 0.0;
+  period = 20.0 * tu;
+  auto sine = [](double t) { return std::sin(2.0 * std::numbers::pi * t / period); };
+  auto square = [](double t) { return std::fmod(t, period) < 0.5 * period ? 1.0 : -1.0; };
+  for (auto* r : {+sine, +square}) {
+    Pid plain(p);
+    PidParams q = p;
+    q.guard = PidGuard{.period = tu, .amplitude = 0.05};
+    Pid guarded(q);
+    EXPECT_EQ(errors_on_dead_time_loop(plain, 20.0, r, 0.01), errors_on_dead_time_loop(guarded, 20.0, r, 0.01));
+    EXPECT_EQ(guarded.state().guard_cuts, 0u);
+    EXPECT_EQ(guarded.state().gain_scale, 1.0);
+  }
+}
+
 TEST(Pwm, Modulation) {
   PwmModulator m(PwmParams{.gain = 2.0, .deadband = 0.01, .min_duty = 0.05, .max_duty = 0.9, .resolution = 0.01});
   EXPECT_EQ(m.step(0.005), 0.0);
@@ -197,7 +317,7 @@ TEST(Pwm, Modulation) {
 
 TEST(Control, StepsDoNotAllocate) {
   Pid pid(PidParams{.kp = 1.0, .ki = 1.0, .kd = 0.1, .sample_time = 1e-3, .derivative_filter = 1e-2,
-                    .out_min = 0.0, .out_max = 0.6});
+                    .out_min = 0.0, .out_max = 0.6, .guard = PidGuard{.period = 0.01, .amplitude = 1e-3}});
   PwmModulator pwm(PwmParams{});
   double acc = 0.0;
   const std::size_t before = hysteron_test::allocations();

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <variant>
 #include <vector>
@@ -77,6 +78,10 @@ std::vector<Case> cases() {
     d.feedforward_lead = 40;
     d.shaper = LoopDesign::Shaper{0.9, 0.1, 150, 10};
     v.push_back({"ff_pid_conditional_shaped", d, M::pi, false});
+    // with a limit-cycle guard that the inputs' jumps trip (a short memory, a low count)
+    d.pid->guard = PidGuard{.period = 0.3, .amplitude = 0.002, .count = 1.5, .memory = 10.0, .factor = 0.7,
+                            .min_scale = 0.2};
+    v.push_back({"ff_pid_guarded", d, M::pi, false});
   }
   {
     LoopDesign d;  // back-calculation with setpoint weights; limits whose reset output is not 0
@@ -114,6 +119,8 @@ std::vector<Case> cases() {
     d.feedforward_lead = 30;
     d.shaper = LoopDesign::Shaper{0.8, 0.2, 120, 5};
     v.push_back({"cascade_quantised_pwm", d, M::asym, false});
+    d.pid->guard = PidGuard{.period = 0.3, .amplitude = 0.002, .count = 1.5, .memory = 10.0};
+    v.push_back({"cascade_guarded", d, M::asym, true});
   }
   {
     LoopDesign d;  // continuous PWM, back-calculation in the pressure loop
@@ -129,6 +136,12 @@ std::vector<Case> cases() {
     v.push_back({"cascade_continuous_pwm", d, M::pi, true});
   }
   return v;
+}
+
+Case case_named(const std::string& name) {
+  for (const Case& c : cases())
+    if (c.name == name) return c;
+  throw std::logic_error("no case " + name);
 }
 
 struct Inputs {
@@ -174,7 +187,20 @@ void reset(Controller& c) {
 struct Compared {
   double worst_command = 0.0, worst_duty = 0.0, worst_preview = 0.0;
   std::size_t exact = 0, n = 0, at_limits = 0, nonzero_duty = 0;
+  std::size_t guard_cuts = 0;  // the most cuts of the library's position PID between two resets
 };
+
+// The position PID of whichever loop `c` holds.
+const Pid& position_pid(const Controller& c) {
+  return std::visit(
+      [](const auto& l) -> const Pid& {
+        if constexpr (std::is_same_v<std::decay_t<decltype(l)>, FeedforwardPidController>)
+          return l.pid();
+        else
+          return l.position();
+      },
+      c);
+}
 
 // The library's loop on the same inputs (the reference's finite values previewed, as a user
 // would: the preview of a non-finite sample is fed as is).
@@ -190,6 +216,7 @@ Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, cons
       ++next;
     }
     const LoopOutput o = step(ctl, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
+    r.guard_cuts = std::max(r.guard_cuts, position_pid(ctl).state().guard_cuts);
     r.worst_command = std::max(r.worst_command, std::abs(o.command_mpa - got.command[k]));
     r.worst_duty = std::max(r.worst_duty, std::abs(o.duty - got.duty[k]));
     r.exact += o.command_mpa == got.command[k] && o.duty == got.duty[k];
@@ -232,6 +259,9 @@ TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
   if (c.design.kind == LoopDesign::Kind::cascade_pwm) {
     EXPECT_GT(r.nonzero_duty, r.n / 10);
   }
+  if (c.design.pid && c.design.pid->guard.enabled()) {
+    EXPECT_GE(r.guard_cuts, 1u) << "the limit-cycle guard never cut the gains";
+  }
   std::printf("  %s: %zu samples (%zu non-finite inputs, %zu at a pressure limit, %zu resets): largest difference "
               "%.3g MPa, %.3g duty, %.3g preview; bit-identical %zu / %zu\n",
               c.name.c_str(), r.n, in.nonfinite, r.at_limits, in.resets.size(), r.worst_command, r.worst_duty,
@@ -245,7 +275,7 @@ INSTANTIATE_TEST_SUITE_P(Export, ExportLoop, ::testing::ValuesIn(cases()),
 // is 1e-9 off (relative), compared with the library's loop, differs.
 TEST(ExportLoopCheck, PerturbedNumberIsDetected) {
   if (!test::have_gcc()) GTEST_SKIP() << "gcc not found";
-  const Case c = cases()[4];  // cascade, quantised PWM
+  const Case c = case_named("cascade_quantised_pwm");
   const Inputs in = make_inputs(5000, 99u);
   const std::vector<double> preview = feedforward_preview(c.design, in.reference);
   for (int which = 0; which < 3; ++which) {
@@ -462,7 +492,7 @@ TEST(ExportLoopCheck, LoopsGeneratedCCannotHoldAreRefused) {
     refused(d, "pid.kp = -1");
   }
   {
-    LoopDesign d = cases()[4].design;
+    LoopDesign d = case_named("cascade_quantised_pwm").design;
     d.pressure_pid.reset();
     refused(d, "needs its pressure_pid");
   }

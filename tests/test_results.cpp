@@ -470,7 +470,11 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   pid.tracking_time = 0.05;
   pid.setpoint_weight_p = 0.7;
   pid.setpoint_weight_d = 0.1;
+  pid.guard = PidGuard{.period = 0.239, .amplitude = 1.8e-3, .count = 4.0, .memory = 6.0, .factor = 0.5,
+                       .min_scale = 0.3};
   d.pid = pid;
+  d.guard_final_scale = 0.25;
+  d.guard_cuts = 2;
   PidParams pressure;
   pressure.kp = 47.6;
   pressure.ki = 1040.0;
@@ -504,10 +508,14 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   const auto pid_fields = [](const PidParams& p) {
     return std::vector<double>{p.kp, p.ki, p.kd, p.sample_time, p.derivative_filter, p.out_min, p.out_max,
                                static_cast<double>(p.anti_windup), p.tracking_time, p.setpoint_weight_p,
-                               p.setpoint_weight_d};
+                               p.setpoint_weight_d, p.guard.period, p.guard.amplitude, p.guard.count,
+                               p.guard.memory, p.guard.factor, p.guard.min_scale};
   };
   EXPECT_EQ(pid_fields(*b.pid), pid_fields(pid));
   EXPECT_EQ(pid_fields(*b.pressure_pid), pid_fields(pressure));
+  EXPECT_FALSE(j["pressure_pid"].contains("guard"));  // off: not written
+  EXPECT_EQ(b.guard_final_scale, 0.25);
+  EXPECT_EQ(b.guard_cuts, 2u);
   EXPECT_EQ(b.pressure_gain, 0.5);
   EXPECT_EQ(b.feedforward_lead, 76u);
   EXPECT_EQ(b.sample_time, 2e-3);
@@ -544,7 +552,15 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   // a loop without a PID, pressure loop, shaper or learning: none of them
   const nlohmann::json bare = io::to_json(LoopDesign{});
   EXPECT_FALSE(bare.contains("pid") || bare.contains("pressure_pid") || bare.contains("pressure_gain") ||
-               bare.contains("shaper") || bare.contains("learning"));
+               bare.contains("shaper") || bare.contains("learning") || bare.contains("guard_cuts"));
+  // written before the limit-cycle guard: the PID has none
+  nlohmann::json unguarded = j;
+  unguarded["pid"].erase("guard");
+  unguarded.erase("guard_cuts");
+  unguarded.erase("guard_final_scale");
+  const LoopDesign ub = io::from_json<LoopDesign>(unguarded, "controller");
+  EXPECT_FALSE(ub.pid->guard.enabled());
+  EXPECT_EQ(ub.guard_cuts, 0u);
   const LoopDesign bare_back = io::from_json<LoopDesign>(bare, "controller");
   EXPECT_FALSE(bare_back.pid || bare_back.pressure_pid || bare_back.shaper || bare_back.learning);
   EXPECT_EQ(bare["loop"], "feedforward_pid");

@@ -54,6 +54,8 @@ class FeedforwardPidController {
   void reset() noexcept;
   // The PID as built (its output limits narrowed to the pressure limits).
   const Pid& pid() const noexcept { return pid_; }
+  // Replaces the PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
+  void set_guard(const PidGuard& guard) { pid_.set_guard(guard); }
 
  private:
   InverseFeedforward ff_;
@@ -86,6 +88,8 @@ class OpenLoopController {
   // step() uses it (a gain is non-zero).
   const Pid& position() const noexcept { return position_; }
   bool uses_position() const noexcept { return use_position_; }
+  // Replaces the position PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
+  void set_guard(const PidGuard& guard) { position_.set_guard(guard); }
 
  private:
   OpenLoopParams p_;
@@ -116,6 +120,8 @@ class CascadePwmController {
   // pressure PID's to [-1, 1].
   const Pid& position() const noexcept { return position_; }
   const Pid& pressure() const noexcept { return pressure_; }
+  // Replaces the position PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
+  void set_guard(const PidGuard& guard) { position_.set_guard(guard); }
 
  private:
   CascadeParams p_;

@@ -20,6 +20,24 @@ std::string_view anti_windup_name(AntiWindup a) noexcept;
 // Throws hysteron::Error on an unknown name.
 AntiWindup anti_windup_from_name(std::string_view name);
 
+// Limit-cycle guard (docs/control.md, section 2, "The limit-cycle guard"): a loop that rings
+// near its ultimate period T_u, e.g. on a rig that changed after its tuning, gets its gains cut.
+// The error e = r - y is split into half-cycles at its sign changes, with a hysteresis of
+// amplitude / 4 (noise around zero ends none). A half-cycle that lasts at most T_u and whose
+// integral of |e| dt exceeds amplitude T_u / pi (a half-sine of that amplitude at period T_u)
+// adds 1 to a count that decays with time constant memory T_u; when the count reaches `count`,
+// K_p, K_i and K_d are multiplied by `factor` (not below min_scale times the tuned gains) and
+// the count restarts. The cut gains stay until reset(). period = 0: off (the default).
+struct PidGuard {
+  double period = 0.0;     // T_u [s], >= 0 (0: off)
+  double amplitude = 0.0;  // a [error units], > 0 where period > 0
+  double count = 5.0;      // half-cycles (decayed) that cut the gains, > 0
+  double memory = 5.0;     // the count's decay time constant [T_u], > 0
+  double factor = 0.63;    // in (0, 1)
+  double min_scale = 0.25; // in (0, 1]
+  bool enabled() const noexcept { return period > 0.0; }
+};
+
 // Eq. 17:  u = K_p e + K_i int e dt + K_d de/dt, discretised at sample time T_s:
 //   P_k = K_p (b r_k - y_k)                                      setpoint weight b
 //   D_k = T_f / (T_f + T_s) D_{k-1} + K_d / (T_f + T_s) (d_k - d_{k-1}),
@@ -42,6 +60,7 @@ struct PidParams {
   double tracking_time = 0.0;      // T_t [s] for back-calculation; 0 selects sqrt(T_i T_d) or T_i
   double setpoint_weight_p = 1.0;  // b
   double setpoint_weight_d = 0.0;  // c (0: derivative on measurement, no setpoint kick)
+  PidGuard guard = {};             // limit-cycle guard (off by default)
 };
 
 // Table 3 of the GPI paper in SI/MPa units (see above), output limited to
@@ -55,6 +74,15 @@ struct PidState {
   double output = 0.0;       // u_{k-1} (held on a fault)
   bool initialized = false;  // false until the first finite sample (no derivative kick)
   bool saturated = false;    // the last output was clamped
+  // The limit-cycle guard (PidParams::guard): the factor on K_p, K_i, K_d in use, the times it
+  // cut them, the sign (-1, 0, 1) of the current half-cycle of e, its integral of |e| dt and
+  // length [samples], and the decaying count of half-cycles that looked like a limit cycle.
+  double gain_scale = 1.0;
+  std::size_t guard_cuts = 0;
+  int guard_sign = 0;
+  double guard_iae = 0.0;
+  std::size_t guard_samples = 0;
+  double guard_count = 0.0;
 };
 
 class Pid {
@@ -63,8 +91,13 @@ class Pid {
   // also for gains whose discrete coefficients overflow (kd / (T_f + T_s)).
   explicit Pid(const PidParams& params);
 
-  // Zero state; optionally start bumplessly at output u0 (integral = clamp(u0)).
+  // Zero state; optionally start bumplessly at output u0 (integral = clamp(u0)). The gains are
+  // the tuned ones again (the guard's scale 1).
   void reset(double u0 = 0.0) noexcept;
+  // Replaces the limit-cycle guard (params().guard) and restarts it: the gains as tuned, no
+  // half-cycles counted. Throws hysteron::Error naming the field ("pid.guard.factor = 1: ...").
+  // Not for the real-time loop's step: a setup call.
+  void set_guard(const PidGuard& guard);
   // One sample. A non-finite setpoint, measurement or feedforward, or a
   // non-finite intermediate (an overflow of large gains on a large error), holds
   // the last output, leaves the state unchanged and is counted in faults():
@@ -75,11 +108,13 @@ class Pid {
   const PidState& state() const noexcept { return s_; }
   // The discrete coefficients step() uses (derived from params() in the constructor):
   // a_d = T_f / (T_f + T_s), b_d = K_d / (T_f + T_s), k_t = min(1, T_s / T_t) (0 without
-  // back-calculation). hysteron export bakes them into generated C.
+  // back-calculation); the limit-cycle guard's per-sample decay of its count,
+  // exp(-T_s / (memory T_u)), and its half-cycles' limit a T_u / pi (both 0 without the guard).
+  // hysteron export bakes them into generated C.
   struct Coefficients {
-    double a_d, b_d, k_t;
+    double a_d, b_d, k_t, guard_decay, guard_iae_limit;
   };
-  Coefficients coefficients() const noexcept { return {a_d_, b_d_, k_t_}; }
+  Coefficients coefficients() const noexcept { return {a_d_, b_d_, k_t_, guard_decay_, guard_iae_limit_}; }
   double output() const noexcept { return s_.output; }
   std::size_t faults() const noexcept { return faults_; }
 
@@ -88,7 +123,10 @@ class Pid {
   PidState s_;
   double a_d_ = 0.0, b_d_ = 0.0;  // derivative filter coefficients
   double k_t_ = 0.0;              // T_s / T_t
+  double guard_decay_ = 0.0;      // exp(-T_s / (memory T_u))
+  double guard_iae_limit_ = 0.0;  // a T_u / pi
   std::size_t faults_ = 0;
+  void guard_step(double e) noexcept;
 };
 
 // Turns a continuous command u (e.g. a PID output) into the PWM duty of the

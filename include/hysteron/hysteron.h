@@ -294,6 +294,41 @@ HYSTERON_C_API hysteron_status hysteron_cascade_step(hysteron_cascade* controlle
                                                     double preview_m, double measured_m, double pressure_mpa,
                                                     double* duty, double* desired_pressure_mpa);
 
+/* ---- the position PID's limit-cycle guard (docs/control.md, section 2) ------------------ */
+/* A loop that rings near its ultimate period T_u (e.g. on a rig that changed after its tuning)
+ * gets its position PID's gains cut: half-cycles of the error r - y (between its sign changes,
+ * with a hysteresis of amplitude / 4) no longer than T_u whose integral of |e| dt exceeds
+ * amplitude T_u / pi add 1 to a count that decays with time constant memory T_u; at `count`
+ * the gains K_p, K_i, K_d are multiplied by `factor`, not below min_scale times the tuned
+ * ones. The cut gains stay until the controller's reset. `hysteron experiment`'s tuned loops
+ * (compensated, learning, adaptive) have one; hysteron_loop_guard_from_file reads it. Off by
+ * default (period 0), and in the faithful and baseline loops. */
+typedef struct hysteron_pid_guard {
+  double period;    /* T_u [s] >= 0 (0: off, the default) */
+  double amplitude; /* [m] > 0 where period > 0 (default 0) */
+  double count;     /* > 0 (default 5) */
+  double memory;    /* the count's decay time constant [T_u] > 0 (default 5) */
+  double factor;    /* on the gains per cut, in (0, 1) (default 0.63) */
+  double min_scale; /* in (0, 1] (default 0.25) */
+} hysteron_pid_guard;
+
+HYSTERON_C_API hysteron_status hysteron_pid_guard_default(hysteron_pid_guard* guard);
+/* Sets the position PID's guard of a controller and restarts it (the gains as tuned). Invalid
+ * numbers are HYSTERON_ERROR_INVALID_ARGUMENT naming the field; the controller is then
+ * unchanged. A setup call, not for the real-time loop. */
+HYSTERON_C_API hysteron_status hysteron_ff_pid_set_guard(hysteron_ff_pid* controller, const hysteron_pid_guard* guard);
+HYSTERON_C_API hysteron_status hysteron_open_loop_set_guard(hysteron_open_loop* controller,
+                                                           const hysteron_pid_guard* guard);
+HYSTERON_C_API hysteron_status hysteron_cascade_set_guard(hysteron_cascade* controller, const hysteron_pid_guard* guard);
+/* What the guard did: the factor on the position PID's gains now (1: as tuned) and how often
+ * it cut them since the last reset. Either out-pointer may be NULL. Real-time safe. */
+HYSTERON_C_API hysteron_status hysteron_ff_pid_guard_state(const hysteron_ff_pid* controller, double* gain_scale,
+                                                          size_t* cuts);
+HYSTERON_C_API hysteron_status hysteron_open_loop_guard_state(const hysteron_open_loop* controller, double* gain_scale,
+                                                             size_t* cuts);
+HYSTERON_C_API hysteron_status hysteron_cascade_guard_state(const hysteron_cascade* controller, double* gain_scale,
+                                                           size_t* cuts);
+
 /* ---- iterative learning control (docs/control.md, section 3) ------------------ */
 /* For a periodic reference with N samples per period: a correction c is added to the
  * reference (and to the feedforward's preview) of a closed loop, and learnt from the
@@ -364,6 +399,8 @@ HYSTERON_C_API hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_
  *     hysteron_cascade_params cp = {loop.ff_pid, loop.pressure, loop.pwm};
  *     hysteron_cascade_create(model, &cp, &c);
  *   }
+ *   hysteron_loop_guard_from_file("out/result.json", "compensated.sine", &guard);
+ *   hysteron_cascade_set_guard(c, &guard);   (the position PID's limit-cycle guard, below)
  *
  * The numbers are the file's exactly; they are checked when read, as the *_create functions
  * would check them. */
@@ -406,6 +443,15 @@ HYSTERON_C_API hysteron_status hysteron_loop_params_from_json(const char* json, 
 /* The same from a file (e.g. "out/result.json"); HYSTERON_ERROR_IO if it cannot be read. */
 HYSTERON_C_API hysteron_status hysteron_loop_params_from_file(const char* path, const char* run,
                                                              hysteron_loop_params* out);
+/* The position PID's limit-cycle guard of the same run (hysteron_loop_params holds the loop
+ * without it): pass it to hysteron_ff_pid_set_guard, hysteron_open_loop_set_guard or
+ * hysteron_cascade_set_guard after creating the loop, so that the loop is the run's. A run
+ * without one (or written before it) gives period = 0, off. Errors as hysteron_loop_params_from_json;
+ * *out is written only on success. */
+HYSTERON_C_API hysteron_status hysteron_loop_guard_from_json(const char* json, const char* run,
+                                                            hysteron_pid_guard* out);
+HYSTERON_C_API hysteron_status hysteron_loop_guard_from_file(const char* path, const char* run,
+                                                            hysteron_pid_guard* out);
 /* The preview the loop's feedforward is fed for a recorded or planned reference r[0..n) (any
  * units, e.g. m), by the formula above with indices clamped to [0, n): what the experiment's
  * run fed its feedforward. n_preview must equal n_reference; preview may not alias reference.

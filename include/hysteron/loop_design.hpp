@@ -39,8 +39,14 @@ struct LoopDesign {
   Feedforward feedforward;
   // cascade_pwm: the valves' PWM modulator.
   std::optional<PwmParams> pwm;
-  // The position loop's PID (absent: no position loop, e.g. the faithful open loop).
+  // The position loop's PID (absent: no position loop, e.g. the faithful open loop), with its
+  // limit-cycle guard (pid->guard; off in the faithful and baseline loops).
   std::optional<PidParams> pid;
+  // What the guard did by the end of the run: the factor on the PID's gains then and how often
+  // it cut them (1 and 0 where it never acted or there is none). make_controller's loop starts
+  // from the tuned gains.
+  double guard_final_scale = 1.0;
+  std::size_t guard_cuts = 0;
   // The pressure loop inside it, where the loop has one: the valves' PI (error in MPa -> PWM
   // duty, mpi-pwm) or the proportional loop p_cmd = p_d + k_p (p_d - p) (mpi-openloop; 0: none).
   std::optional<PidParams> pressure_pid;

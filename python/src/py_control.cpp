@@ -39,6 +39,16 @@ py::dict pid_dict(const PidParams& p) {
   d["tracking_time"] = p.tracking_time;
   d["setpoint_weight_p"] = p.setpoint_weight_p;
   d["setpoint_weight_d"] = p.setpoint_weight_d;
+  if (p.guard.enabled()) {
+    py::dict g;
+    g["period"] = p.guard.period;
+    g["amplitude"] = p.guard.amplitude;
+    g["count"] = p.guard.count;
+    g["memory"] = p.guard.memory;
+    g["factor"] = p.guard.factor;
+    g["min_scale"] = p.guard.min_scale;
+    d["guard"] = g;
+  }
   return d;
 }
 
@@ -93,6 +103,21 @@ weights. step() never allocates; a non-finite input holds the last output.)doc")
       .def_property_readonly("saturated", [](const Pid& p) { return p.state().saturated; },
                              "True if the last output was clamped.")
       .def_property_readonly("faults", &Pid::faults, "Number of non-finite inputs ignored.")
+      .def(
+          "set_guard",
+          [](Pid& p, double period, double amplitude, double count, double memory, double factor, double min_scale) {
+            p.set_guard(PidGuard{period, amplitude, count, memory, factor, min_scale});
+          },
+          py::arg("period"), py::arg("amplitude"), py::arg("count") = 5.0, py::arg("memory") = 5.0,
+          py::arg("factor") = 0.63, py::arg("min_scale") = 0.25,
+          "The limit-cycle guard (docs/control.md, section 2): half-cycles of the error no longer than period "
+          "(T_u [s]) with an integral of |e| dt above amplitude * period / pi count; at `count` (decaying with "
+          "time constant memory * period) the gains are multiplied by factor, not below min_scale. period = 0: "
+          "off. Restarts the guard; raises hysteron.Error on invalid numbers.")
+      .def_property_readonly("gain_scale", [](const Pid& p) { return p.state().gain_scale; },
+                             "The limit-cycle guard's factor on the gains now (1: as tuned).")
+      .def_property_readonly("guard_cuts", [](const Pid& p) { return p.state().guard_cuts; },
+                             "How often the limit-cycle guard cut the gains since the last reset.")
       .def_property_readonly("params", [](const Pid& p) { return pid_dict(p.params()); },
                              "The parameters as a dict (the constructor's keyword arguments).")
       .def("__repr__", [](const Pid& p) {

@@ -116,6 +116,31 @@ def test_pid_limits_and_antiwindup():
     assert gp.params["kp"] == pytest.approx(5.0) and gp.params["out_max"] == pytest.approx(0.6)
 
 
+def test_pid_limit_cycle_guard():
+    # P control at twice the ultimate gain of a 50-sample delay: the loop rings between the limits.
+    # The guard (period about the ring's, 100 samples at 1 ms) cuts the gains until it stops.
+    def run(pid, n=8000, delay=50):
+        line, y, errors = [0.0] * delay, 0.0, []
+        for k in range(n):
+            errors.append(1.0 - y)
+            line.append(pid.step(1.0, y))
+            y = line.pop(0)  # a pure delay: the ultimate gain is 1, the period 2 delays
+        last = np.array(errors[-2000:])
+        return last.max() - last.min()  # the ring's swing over the last 2 s
+    ringing = hysteron.Pid(kp=2.0, ki=0.0, out_min=-3.0, out_max=3.0)
+    assert run(ringing) > 1.0 and ringing.gain_scale == 1.0 and ringing.guard_cuts == 0
+    guarded = hysteron.Pid(kp=2.0, ki=0.0, out_min=-3.0, out_max=3.0)
+    guarded.set_guard(period=0.1, amplitude=0.05)
+    assert guarded.params["guard"]["period"] == 0.1
+    held = run(guarded)
+    assert guarded.guard_cuts >= 2 and guarded.gain_scale < 0.5  # 2 x 0.63^2 = 0.79 < 1 is stable
+    assert held < 1e-6  # settled (P alone keeps an offset of 1 / (1 + K), no ring around it)
+    with pytest.raises(hysteron.Error, match="pid.guard.factor"):
+        guarded.set_guard(period=0.1, amplitude=0.05, factor=1.0)
+    guarded.reset()
+    assert guarded.gain_scale == 1.0 and guarded.guard_cuts == 0
+
+
 def test_inverse_feedforward_round_trip():
     model = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rho": 0.4, "tau": 0.1,
              "alpha": 2.0, "input_limits": [0.0, 0.6]}

@@ -697,6 +697,31 @@ void read_loop(const std::string& text, const char* run, const std::string& wher
   to_c_loop(d, at, out);
 }
 
+hysteron_pid_guard to_c_guard(const hysteron::PidGuard& g) {
+  return {g.period, g.amplitude, g.count, g.memory, g.factor, g.min_scale};
+}
+
+hysteron::PidGuard from_c_guard(const hysteron_pid_guard& g) {
+  return {g.period, g.amplitude, g.count, g.memory, g.factor, g.min_scale};
+}
+
+void guard_state(const hysteron::Pid& pid, double* gain_scale, size_t* cuts) {
+  if (gain_scale) *gain_scale = pid.state().gain_scale;
+  if (cuts) *cuts = pid.state().guard_cuts;
+}
+
+// The run's position PID's guard (off without a PID or a guard).
+void read_guard(const std::string& text, const char* run, const std::string& where, hysteron_pid_guard& out) {
+  nlohmann::json j;
+  try {
+    j = hysteron::io::parse_json(text, where);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_PARSE, "%s", e.what());
+  }
+  const hysteron::LoopDesign d = hysteron::io::loop_design_of_run(j, run ? run : "", where);
+  out = to_c_guard(d.pid ? d.pid->guard : hysteron::PidGuard{});
+}
+
 }  // namespace
 
 extern "C" {
@@ -898,6 +923,60 @@ hysteron_status hysteron_cascade_step(hysteron_cascade* controller, double refer
   return HYSTERON_OK;
 }
 
+// ---- the position PID's limit-cycle guard ------------------------------------------
+
+hysteron_status hysteron_pid_guard_default(hysteron_pid_guard* guard) {
+  return ::guard("hysteron_pid_guard_default", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(guard);
+    *guard = to_c_guard(hysteron::PidGuard{});
+  });
+}
+
+hysteron_status hysteron_ff_pid_set_guard(hysteron_ff_pid* controller, const hysteron_pid_guard* guard) {
+  return ::guard("hysteron_ff_pid_set_guard", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(controller);
+    HYSTERON_REQUIRE(guard);
+    controller->controller.set_guard(from_c_guard(*guard));
+  });
+}
+
+hysteron_status hysteron_open_loop_set_guard(hysteron_open_loop* controller, const hysteron_pid_guard* guard) {
+  return ::guard("hysteron_open_loop_set_guard", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(controller);
+    HYSTERON_REQUIRE(guard);
+    controller->controller.set_guard(from_c_guard(*guard));
+  });
+}
+
+hysteron_status hysteron_cascade_set_guard(hysteron_cascade* controller, const hysteron_pid_guard* guard) {
+  return ::guard("hysteron_cascade_set_guard", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(controller);
+    HYSTERON_REQUIRE(guard);
+    controller->controller.set_guard(from_c_guard(*guard));
+  });
+}
+
+hysteron_status hysteron_ff_pid_guard_state(const hysteron_ff_pid* controller, double* gain_scale, size_t* cuts) {
+  return ::guard("hysteron_ff_pid_guard_state", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(controller);
+    guard_state(controller->controller.pid(), gain_scale, cuts);
+  });
+}
+
+hysteron_status hysteron_open_loop_guard_state(const hysteron_open_loop* controller, double* gain_scale, size_t* cuts) {
+  return ::guard("hysteron_open_loop_guard_state", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(controller);
+    guard_state(controller->controller.position(), gain_scale, cuts);
+  });
+}
+
+hysteron_status hysteron_cascade_guard_state(const hysteron_cascade* controller, double* gain_scale, size_t* cuts) {
+  return ::guard("hysteron_cascade_guard_state", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(controller);
+    guard_state(controller->controller.position(), gain_scale, cuts);
+  });
+}
+
 // ---- iterative learning control ---------------------------------------------------
 
 hysteron_status hysteron_ilc_default_params(hysteron_ilc_params* params) {
@@ -1016,6 +1095,22 @@ hysteron_status hysteron_loop_params_from_file(const char* path, const char* run
     HYSTERON_REQUIRE(path);
     HYSTERON_REQUIRE(out);
     read_loop(read_file(path, "result file"), run, path, *out);
+  });
+}
+
+hysteron_status hysteron_loop_guard_from_json(const char* json, const char* run, hysteron_pid_guard* out) {
+  return guard("hysteron_loop_guard_from_json", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(json);
+    HYSTERON_REQUIRE(out);
+    read_guard(json, run, "result.json", *out);
+  });
+}
+
+hysteron_status hysteron_loop_guard_from_file(const char* path, const char* run, hysteron_pid_guard* out) {
+  return guard("hysteron_loop_guard_from_file", HYSTERON_ERROR_MODEL, [&] {
+    HYSTERON_REQUIRE(path);
+    HYSTERON_REQUIRE(out);
+    read_guard(read_file(path, "result file"), run, path, *out);
   });
 }
 

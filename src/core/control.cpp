@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "format.hpp"
 
@@ -75,7 +76,32 @@ Pid::Pid(const PidParams& p) : p_(p) {
   if (!std::isfinite(b_d_)) bad("pid.kd", p.kd, "such that kd / (derivative_filter + sample_time) is finite");
   if (!std::isfinite(p.ki * ts)) bad("pid.ki", p.ki, "such that ki * sample_time is finite");
   if (!std::isfinite(k_t_)) bad("pid.tracking_time", p.tracking_time, "a time giving a finite tracking gain");
+  set_guard(p.guard);
   reset();
+}
+
+void Pid::set_guard(const PidGuard& g) {
+  if (!std::isfinite(g.period) || g.period < 0.0) bad("pid.guard.period", g.period, "a finite number >= 0");
+  double decay = 0.0, limit = 0.0;
+  if (g.enabled()) {
+    if (!std::isfinite(g.amplitude) || g.amplitude <= 0.0) bad("pid.guard.amplitude", g.amplitude, "finite and > 0");
+    if (!std::isfinite(g.count) || g.count <= 0.0) bad("pid.guard.count", g.count, "finite and > 0");
+    if (!std::isfinite(g.memory) || g.memory <= 0.0) bad("pid.guard.memory", g.memory, "finite and > 0");
+    if (!(g.factor > 0.0 && g.factor < 1.0)) bad("pid.guard.factor", g.factor, "in (0, 1)");
+    if (!(g.min_scale > 0.0 && g.min_scale <= 1.0)) bad("pid.guard.min_scale", g.min_scale, "in (0, 1]");
+    decay = std::exp(-p_.sample_time / (g.memory * g.period));
+    limit = g.amplitude * g.period / std::numbers::pi;
+  }
+  p_.guard = g;
+  guard_decay_ = decay;
+  guard_iae_limit_ = limit;
+  // the guard restarts; the rest of the state goes on
+  s_.gain_scale = 1.0;
+  s_.guard_cuts = 0;
+  s_.guard_sign = 0;
+  s_.guard_iae = 0.0;
+  s_.guard_samples = 0;
+  s_.guard_count = 0.0;
 }
 
 void Pid::reset(double u0) noexcept {
@@ -93,16 +119,17 @@ double Pid::step(double r, double y, double ff) noexcept {
     return s_.output;
   }
   const double e = r - y;
-  const double prop = p_.kp * (p_.setpoint_weight_p * r - y);
+  const double scale = s_.gain_scale;  // 1 unless the limit-cycle guard cut the gains
+  const double prop = scale * p_.kp * (p_.setpoint_weight_p * r - y);
   const double d_err = p_.setpoint_weight_d * r - y;
   const double prev_d_error = s_.initialized ? s_.prev_d_error : d_err;  // no derivative kick
   // Candidate state; committed only if every intermediate is finite (large but
   // valid gains can still overflow on a large error): otherwise the last output
   // is held, the state is left unchanged and the sample is counted as a fault.
-  const double derivative = a_d_ * s_.derivative + b_d_ * (d_err - prev_d_error);
+  const double derivative = a_d_ * s_.derivative + scale * b_d_ * (d_err - prev_d_error);
   const double v = prop + s_.integral + derivative + ff;
   const double u = std::clamp(v, p_.out_min, p_.out_max);
-  const double di = p_.ki * p_.sample_time * e;
+  const double di = scale * p_.ki * p_.sample_time * e;
   double integral = s_.integral;
   switch (p_.anti_windup) {
     case AntiWindup::none: integral += di; break;
@@ -122,7 +149,33 @@ double Pid::step(double r, double y, double ff) noexcept {
   s_.integral = integral;
   s_.saturated = u != v;
   s_.output = u;
+  if (p_.guard.enabled()) guard_step(e);
   return u;
+}
+
+void Pid::guard_step(double e) noexcept {
+  const PidGuard& g = p_.guard;
+  s_.guard_iae += std::abs(e) * p_.sample_time;
+  ++s_.guard_samples;
+  const double h = 0.25 * g.amplitude;
+  const int sign = e > h ? 1 : (e < -h ? -1 : 0);
+  if (sign != 0 && sign != s_.guard_sign) {  // a half-cycle ended
+    const double length = static_cast<double>(s_.guard_samples) * p_.sample_time;
+    if (s_.guard_sign != 0 && length <= g.period && s_.guard_iae > guard_iae_limit_)
+      s_.guard_count += 1.0;
+    s_.guard_sign = sign;
+    s_.guard_iae = 0.0;
+    s_.guard_samples = 0;
+  }
+  s_.guard_count *= guard_decay_;
+  if (s_.guard_count >= g.count) {
+    s_.guard_count = 0.0;
+    const double next = std::max(g.min_scale, s_.gain_scale * g.factor);
+    if (next < s_.gain_scale) {
+      s_.gain_scale = next;
+      ++s_.guard_cuts;
+    }
+  }
 }
 
 PwmModulator::PwmModulator(const PwmParams& p) : p_(p) {

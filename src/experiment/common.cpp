@@ -105,6 +105,18 @@ TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t t
   return e;
 }
 
+std::string guard_note(const TrackingRun& run, bool rig_changed) {
+  const LoopDesign& c = run.controller;
+  if (c.guard_cuts == 0 || !c.pid) return "";
+  return fmt::format("{} ({}): the loop rang near its ultimate period (T_u = {:.0f} ms, the position relay's), and "
+                     "the PID's limit-cycle guard cut its gains {} time(s), to x{:.2f} of the tuned ones "
+                     "(docs/control.md, section 2); {}",
+                     run.variant, run.reference, c.pid->guard.period * 1e3, c.guard_cuts, c.guard_final_scale,
+                     rig_changed ? "the rig it tracked on (--tracking-plant) differs from the one it was tuned on: "
+                                   "identify and tune on the rig as it is now"
+                                 : "the gain trial's gains are too high for this reference on this rig");
+}
+
 std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to) {
   to = std::min(to, run.t.size());
   if (from >= to) return {};

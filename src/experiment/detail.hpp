@@ -70,6 +70,9 @@ struct Context {
   double gain_scale = 1.0;         // factor on the classic rule's PID gains (the gain trial's choice)
   ZvShaper shaper{};               // the feedforward's shaper (the gain trial's choice; inactive: none)
   const Reference* reference = nullptr;  // the reference the loop is built for
+  // The tuned PIDs' limit-cycle guard amplitude [m] (PidGuard; 0: off, as in the gain trial):
+  // set from the gain trial's error at the chosen loop (guard_amplitude).
+  double guard_amplitude_m = 0.0;
 };
 
 // One variant's loop, built fresh for each run.
@@ -84,6 +87,8 @@ struct Loop {
   FeedforwardParams feedforward = {};      // the inverse feedforward's limits, scale and lag
   std::optional<PwmParams> pwm = {};       // the valves' modulator (cascade_pwm)
   std::optional<LoopDesign::Adaptation> adaptation = {};  // the adaptive variant's RLS (adaptation_of)
+  // After the run: the position PID's state (its limit-cycle guard's cuts and gain scale).
+  std::function<PidState()> position_state = {};
 };
 
 struct Variant {
@@ -163,6 +168,10 @@ TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t t
 // least 1 % of the samples in [from, to) (their count and the RMS error there and elsewhere);
 // "" otherwise. Uses run.variant and run.reference.
 std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to);
+// "" unless the run's limit-cycle guard cut its position PID's gains (run.controller.guard_cuts):
+// how often, to which scale, at which period; rig_changed: the run tracked on a rig other than
+// the one it was tuned on (--tracking-plant), the likely cause.
+std::string guard_note(const TrackingRun& run, bool rig_changed);
 // Runs one tracking experiment: `reference` sampled at the control period, the
 // preview `lead` samples ahead (wrapping around for a periodic reference).
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
@@ -274,6 +283,12 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 // times c.gain_scale; learning_pid (below) when learning, times c.gain_scale where that is
 // below 1 (the gain trial found the relay's gains too high on the rig).
 PidParams position_pid(const Context& c);
+// The limit-cycle guard of the tuned PIDs (docs/control.md, section 2): period the position
+// relay's T_u, amplitude c.guard_amplitude_m; off where either is 0 (the gain trial's loops).
+PidGuard pid_guard(const Context& c);
+// The guard's amplitude [m] from a gain trial: 2 sqrt(2) times the RMS error of the chosen loop
+// on the trapezoid, the amplitude of a sine with twice that RMS (0: no finite RMS).
+double guard_amplitude(const GainTrial& g);
 // The identified feedback loop's peaks, L = G K C (G, K as in closed_loop), over 0.05 Hz .. a
 // quarter of the sampling rate: max_w |1 / (1 + L)| (sensitivity) and max_w |L / (1 + L)|
 // (complementary sensitivity: the resonance the learning's T carries).

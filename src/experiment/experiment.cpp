@@ -61,6 +61,11 @@ LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvSh
   d.adaptation = loop.adaptation;
   d.feedforward_lead = lead;
   d.sample_time = tc;
+  if (loop.position_state) {
+    const PidState s = loop.position_state();
+    d.guard_final_scale = s.gain_scale;
+    d.guard_cuts = s.guard_cuts;
+  }
   if (zv && zv->active()) d.shaper = LoopDesign::Shaper{zv->a1, zv->a2, zv->delay, zv->advance};
   return d;
 }
@@ -161,7 +166,8 @@ std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, co
   const bool with_mode = identified.mode_frequency_hz > 0.0;
   const bool relay_models = with_mode || fit_fopdt_through_relay_point(through);
   const Context lt{lc.options,       lc.result, with_mode ? identified : through, lc.tc,     lc.lead,
-                   lc.pressure_loop, true,      lc.gain_scale,                    lc.shaper, lc.reference};
+                   lc.pressure_loop, true,      lc.gain_scale,                    lc.shaper, lc.reference,
+                   lc.guard_amplitude_m};
   // the attempts after the first, in order, and what the result says of the one that runs
   struct Attempt {
     bool on_relay_models;  // on lt (the models through the relay's point), else on lc again
@@ -937,6 +943,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       if (v.name == "compensated") {
         GainTrial g = gain_trial(o, v, rc, ref, lead);
         rc.gain_scale = g.scale;
+        rc.guard_amplitude_m = guard_amplitude(g);
         if (g.shaped) zv = zv_shaper(res.dynamics, tc);
         rc.shaper = zv;
         res.gain_trials.push_back(std::move(g));
@@ -973,6 +980,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.scored_from_s = ref.score_from < run.t.size() ? run.t[ref.score_from] : 0.0;
       if (std::string note = saturation_note(run, ref.score_from, run.t.size()); !note.empty())
         res.messages.push_back(std::move(note));
+      if (std::string note = guard_note(run, rig_changed); !note.empty()) res.messages.push_back(std::move(note));
       res.runs.push_back(std::move(run));
       if (loop.note)
         if (std::string note = loop.note(); !note.empty()) res.messages.push_back(std::move(note));
@@ -985,6 +993,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           const std::size_t last = lr->t.size() - std::min(lr->t.size(), ref.period);  // the scored last period
           if (std::string note = saturation_note(*lr, last, lr->t.size()); !note.empty())
             res.messages.push_back(std::move(note));
+          if (std::string note = guard_note(*lr, rig_changed); !note.empty()) res.messages.push_back(std::move(note));
           // a learning run that ends above the loop it learns on must not look like an improvement
           for (const TrackingRun& base : res.runs)
             if (base.variant == v.name && base.reference == ref.name &&

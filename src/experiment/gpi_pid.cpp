@@ -15,11 +15,15 @@ namespace hysteron::experiment {
 
 namespace {
 
-Law ff_pid_law(const ModelParams& model, double tc, const PidParams& pid) {
+// FeedforwardPidController on `model` with `pid`.
+Loop ff_pid_loop(const ModelParams& model, double tc, const PidParams& pid, std::string description) {
   FeedforwardParams ff;
   ff.sample_time = tc;
   auto c = std::make_shared<FeedforwardPidController>(model, ff, pid);
-  return [c](const Sample& s) { return regulator(c->step(s.reference_m, s.preview_m, s.measured_m)); };
+  Loop loop{[c](const Sample& s) { return regulator(c->step(s.reference_m, s.preview_m, s.measured_m)); },
+            std::move(description), pid};
+  loop.position_state = [c] { return c->pid().state(); };
+  return loop;
 }
 
 // The compensated loop (FeedforwardPidController) with the adaptive inverse as its feedforward.
@@ -43,6 +47,7 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
                           c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), pid.kp, pid.ki, pid.kd),
               pid, [a, name] { return adaptive_note(*a, name); }};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
+  result.position_state = [fb] { return fb->state(); };
   return result;
 }
 
@@ -71,24 +76,23 @@ const Spec& gpi_pid_spec() {
         {"faithful", false,
          [](const Context& c) {
            const PidParams paper = gpi_paper_pid(c.tc, -kPressureMax, kPressureMax);
-           return Loop{ff_pid_law(c.result.fit.model, c.tc, paper),
-                       "inverse GPI feedforward + PID of Table 3 (Kp = 0.05 V/mm, Ki = 0.01 V/(mm s))", paper};
+           return ff_pid_loop(c.result.fit.model, c.tc, paper,
+                              "inverse GPI feedforward + PID of Table 3 (Kp = 0.05 V/mm, Ki = 0.01 V/(mm s))");
          }},
         {"compensated", true,
          [](const Context& c) {
            const PidParams pid = position_pid(c);
-           return Loop{ff_pid_law(c.result.best_fit.model, c.tc, pid),
-                       fmt::format("best inverse model fed {:.0f} ms ahead, PID tuned by {} "
-                                   "(Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
-                                   c.result.lead_s * 1e3, pid_origin(c), pid.kp, pid.ki, pid.kd),
-                       pid};
+           return ff_pid_loop(c.result.best_fit.model, c.tc, pid,
+                              fmt::format("best inverse model fed {:.0f} ms ahead, PID tuned by {} "
+                                          "(Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
+                                          c.result.lead_s * 1e3, pid_origin(c), pid.kp, pid.ki, pid.kd));
          }},
         {"adaptive", true, [](const Context& c) { return adaptive_ff_pid(c, false); }},
         {"baseline", false,
          [](const Context& c) {
            const PidParams paper = gpi_paper_pid(c.tc, -kPressureMax, kPressureMax);
-           return Loop{ff_pid_law(c.result.baseline_model, c.tc, paper),
-                       "straight-line feedforward (no hysteresis) + PID of Table 3", paper};
+           return ff_pid_loop(c.result.baseline_model, c.tc, paper,
+                              "straight-line feedforward (no hysteresis) + PID of Table 3");
          }},
     };
     return s;

@@ -25,8 +25,10 @@ Loop open_loop(const ModelParams& model, const OpenLoopParams& p, std::string de
   Law law = [c](const Sample& s) {
     return regulator(c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa));
   };
-  return Loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain,
-              LoopDesign::Kind::open_loop, p.feedforward};
+  Loop loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain,
+            LoopDesign::Kind::open_loop, p.feedforward};
+  loop.position_state = [c] { return c->position().state(); };
+  return loop;
 }
 
 OpenLoopParams published(double tc) {
@@ -63,6 +65,7 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
               p.position, [a, name] { return adaptive_note(*a, name); }, std::nullopt, kp,
               LoopDesign::Kind::open_loop, p.feedforward};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
+  result.position_state = [position] { return position->state(); };
   return result;
 }
 

@@ -24,8 +24,10 @@ Loop cascade(const ModelParams& model, const CascadeParams& p, std::string descr
     const double d = c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa);
     return valves(d, c->desired_pressure());
   };
-  return Loop{std::move(law), std::move(description), p.position, {}, p.pressure, 0.0,
-              LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
+  Loop loop{std::move(law), std::move(description), p.position, {}, p.pressure, 0.0,
+            LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
+  loop.position_state = [c] { return c->position().state(); };
+  return loop;
 }
 
 CascadeParams published(double tc) {
@@ -70,6 +72,7 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
               p.position, [a, name] { return adaptive_note(*a, name); }, p.pressure, 0.0,
               LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
+  result.position_state = [position] { return position->state(); };
   return result;
 }
 

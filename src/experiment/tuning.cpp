@@ -625,13 +625,31 @@ PidParams position_pid(const Context& c) {
     PidParams p = learning_pid(c.dynamics, c.tc);
     const double s = std::min(1.0, c.gain_scale);
     p.kp *= s, p.ki *= s, p.kd *= s;
+    p.guard = pid_guard(c);
     return p;
   }
   PidParams p = relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::classic);
   p.kp *= c.gain_scale;
   p.ki *= c.gain_scale;
   p.kd *= c.gain_scale;
+  p.guard = pid_guard(c);
   return p;
+}
+
+PidGuard pid_guard(const Context& c) {
+  PidGuard g;
+  if (c.guard_amplitude_m > 0.0 && c.dynamics.position_relay_period_s > 0.0) {
+    g.period = c.dynamics.position_relay_period_s;
+    g.amplitude = c.guard_amplitude_m;
+  }
+  return g;
+}
+
+double guard_amplitude(const GainTrial& g) {
+  const std::vector<double>& rms = g.shaped ? g.rms_shaped_mm : g.rms_mm;
+  for (std::size_t i = 0; i < g.scales.size() && i < rms.size(); ++i)
+    if (g.scales[i] == g.scale && std::isfinite(rms[i])) return 2.0 * std::numbers::sqrt2 * rms[i] * 1e-3;
+  return 0.0;
 }
 
 ZvShaper zv_shaper(const RigDynamics& d, double tc) {

@@ -24,9 +24,12 @@ std::string pid_gains(const Pid& pid) {
   const int aw = p.anti_windup == AntiWindup::none ? 0 : p.anti_windup == AntiWindup::conditional ? 1 : 2;
   // the state after a reset: the controller's PIDs are built reset and not yet stepped
   const PidState& s0 = pid.state();
-  return fmt::format("{{{}, {}, {}, {}, {}, {},\n   {}, {}, {}, {}, {}, {}, {}}}", num(p.kp), num(p.ki), num(p.sample_time),
-                     num(p.setpoint_weight_p), num(p.setpoint_weight_d), num(k.a_d), num(k.b_d), num(k.k_t),
-                     num(p.out_min), num(p.out_max), aw, num(s0.output), num(s0.integral));
+  const PidGuard& g = p.guard;
+  return fmt::format("{{{}, {}, {}, {}, {}, {},\n   {}, {}, {}, {}, {}, {}, {},\n   {}, {}, {}, {}, {}, {}, {}}}", num(p.kp),
+                     num(p.ki), num(p.sample_time), num(p.setpoint_weight_p), num(p.setpoint_weight_d), num(k.a_d),
+                     num(k.b_d), num(k.k_t), num(p.out_min), num(p.out_max), aw, num(s0.output), num(s0.integral),
+                     num(g.period), num(g.amplitude), num(g.count), num(g.factor), num(g.min_scale),
+                     num(k.guard_decay), num(k.guard_iae_limit));
 }
 
 std::string pid_comment(const char* name, const Pid& pid) {
@@ -38,29 +41,65 @@ std::string pid_comment(const char* name, const Pid& pid) {
       anti_windup_name(p.anti_windup),
       p.anti_windup == AntiWindup::back_calculation ? fmt::format(" (T_s / T_t = {})", num(pid.coefficients().k_t))
                                                      : std::string(),
-      num(p.setpoint_weight_p), num(p.setpoint_weight_d));
+      num(p.setpoint_weight_p), num(p.setpoint_weight_d)) +
+    (p.guard.enabled()
+         ? fmt::format(" *     limit-cycle guard: T_u = {} s, amplitude {}, count {}, memory {} T_u, gains x{} per cut, "
+                       "not below x{}\n",
+                       num(p.guard.period), num(p.guard.amplitude), num(p.guard.count), num(p.guard.memory),
+                       num(p.guard.factor), num(p.guard.min_scale))
+         : std::string());
 }
 
 constexpr std::string_view kPidStep = R"(
+/* The limit-cycle guard (hysteron::Pid, PidGuard): half-cycles of e between its sign changes
+ * (hysteresis amplitude / 4) no longer than T_u with an integral of |e| dt above a T_u / pi
+ * count; the count decays by guard_decay per sample; at guard_count it cuts the gains. */
+static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
+{
+  const double h = 0.25 * k->guard_amplitude;
+  const int sign = e > h ? 1 : (e < -h ? -1 : 0);
+  s->guard_iae += fabs(e) * k->ts;
+  ++s->guard_samples;
+  if (sign != 0 && sign != s->guard_sign) {
+    const double length = (double)s->guard_samples * k->ts;
+    if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit) s->guard_count += 1.0;
+    s->guard_sign = sign;
+    s->guard_iae = 0.0;
+    s->guard_samples = 0;
+  }
+  s->guard_count *= k->guard_decay;
+  if (s->guard_count >= k->guard_count) {
+    double next = s->gain_scale * k->guard_factor;
+    if (next < k->guard_min_scale) next = k->guard_min_scale;
+    s->guard_count = 0.0;
+    if (next < s->gain_scale) {
+      s->gain_scale = next;
+      ++s->guard_cuts;
+    }
+  }
+}
+
 /* Discrete PID (hysteron::Pid::step, control.hpp; Eq. 17 of gpi-lm-feedforward-pid.txt):
- *   P = K_p (b r - y),  D = a_d D + b_d (d - d_prev), d = c r - y,  v = P + I + D + ff,
- *   u = clamp(v, out_min, out_max),  I += K_i T_s (r - y) by the anti-windup rule.
+ *   P = s K_p (b r - y),  D = a_d D + s b_d (d - d_prev), d = c r - y,  v = P + I + D + ff,
+ *   u = clamp(v, out_min, out_max),  I += s K_i T_s (r - y) by the anti-windup rule,
+ * s the limit-cycle guard's scale (1 unless it cut the gains; docs/control.md, section 2).
  * A non-finite input or intermediate holds the last output (counted in faults). */
 static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, double y, double ff)
 {
-  double e, prop, d_err, prev_d_error, derivative, v, u, di, integral;
+  double e, scale, prop, d_err, prev_d_error, derivative, v, u, di, integral;
   if (!isfinite(r) || !isfinite(y) || !isfinite(ff)) {
     ++s->faults;
     return s->output;
   }
   e = r - y;
-  prop = k->kp * (k->b * r - y);
+  scale = s->gain_scale;
+  prop = scale * k->kp * (k->b * r - y);
   d_err = k->c * r - y;
   prev_d_error = s->initialized ? s->prev_d_error : d_err;  /* no derivative kick */
-  derivative = k->a_d * s->derivative + k->b_d * (d_err - prev_d_error);
+  derivative = k->a_d * s->derivative + scale * k->b_d * (d_err - prev_d_error);
   v = prop + s->integral + derivative + ff;
   u = $P_clamp(v, k->out_min, k->out_max);
-  di = k->ki * k->ts * e;
+  di = scale * k->ki * k->ts * e;
   integral = s->integral;
   if (k->anti_windup == 0) {
     integral += di;
@@ -79,6 +118,7 @@ static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, doub
   s->integral = integral;
   s->saturated = u != v;
   s->output = u;
+  if (k->guard_period > 0.0) $P_pid_guard(s, k, e);
   return u;
 }
 
@@ -91,6 +131,12 @@ static void $P_pid_reset($P_pid_state *s, const $P_pid_gains *k)
   s->initialized = 0;
   s->saturated = 0;
   s->faults = 0;
+  s->gain_scale = 1.0;
+  s->guard_cuts = 0;
+  s->guard_sign = 0;
+  s->guard_iae = 0.0;
+  s->guard_samples = 0;
+  s->guard_count = 0.0;
 }
 
 /* The inverse feedforward (hysteron::InverseFeedforward::step): the pressure [MPa] the model
@@ -192,6 +238,9 @@ typedef struct $P_pid_gains {{
   double out_min, out_max;         /* output limits */
   int anti_windup;                 /* 0 none, 1 conditional, 2 back-calculation */
   double reset_output, reset_integral;  /* the state after a reset */
+  /* limit-cycle guard (guard_period = T_u [s]; 0: off): amplitude, count, factor per cut, least
+     scale, the count's decay per sample, the half-cycles' limit of the integral of |e| dt */
+  double guard_period, guard_amplitude, guard_count, guard_factor, guard_min_scale, guard_decay, guard_iae_limit;
 }} $P_pid_gains;
 
 /* PID state (hysteron::PidState). */
@@ -203,6 +252,12 @@ typedef struct $P_pid_state {{
   int initialized;       /* 0 until the first finite sample (no derivative kick) */
   int saturated;         /* 1 if the last output was clamped */
   unsigned long faults;  /* samples held: a non-finite input or intermediate */
+  double gain_scale;     /* the limit-cycle guard's factor on the gains (1: as tuned) */
+  unsigned long guard_cuts;     /* times the guard cut the gains */
+  int guard_sign;               /* sign of the current half-cycle of e (0: none yet) */
+  double guard_iae;             /* its integral of |e| dt */
+  unsigned long guard_samples;  /* its length [samples] */
+  double guard_count;           /* decaying count of half-cycles like a limit cycle */
 }} $P_pid_state;
 
 /* The loop's state. Set with $P_loop_reset before the first step. */

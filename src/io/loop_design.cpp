@@ -19,7 +19,7 @@ using namespace json_read;
 
 namespace {
 json pid_json(const PidParams& p) {
-  return {{"kp_mpa_per_m", p.kp},
+  json j = {{"kp_mpa_per_m", p.kp},
           {"ki_mpa_per_m_s", p.ki},
           {"kd_mpa_s_per_m", p.kd},
           {"sample_time_s", p.sample_time},
@@ -30,6 +30,10 @@ json pid_json(const PidParams& p) {
           {"tracking_time_s", p.tracking_time},
           {"setpoint_weight_p", p.setpoint_weight_p},
           {"setpoint_weight_d", p.setpoint_weight_d}};
+  if (p.guard.enabled())
+    j["guard"] = {{"period_s", p.guard.period},   {"amplitude", p.guard.amplitude}, {"count", p.guard.count},
+                  {"memory_periods", p.guard.memory}, {"factor", p.guard.factor},     {"min_scale", p.guard.min_scale}};
+  return j;
 }
 
 PidParams pid_from(const json& j, std::string_view where) {
@@ -50,6 +54,16 @@ PidParams pid_from(const json& j, std::string_view where) {
   p.tracking_time = get_double(j, "tracking_time_s", where);
   p.setpoint_weight_p = get_double(j, "setpoint_weight_p", where);
   p.setpoint_weight_d = get_double(j, "setpoint_weight_d", where);
+  if (j.contains("guard")) {  // absent in files written before the guard: off
+    const std::string w = key_where(where, "guard");
+    const json& g = j["guard"];
+    p.guard.period = get_double(g, "period_s", w);
+    p.guard.amplitude = get_double(g, "amplitude", w);
+    p.guard.count = get_double(g, "count", w);
+    p.guard.memory = get_double(g, "memory_periods", w);
+    p.guard.factor = get_double(g, "factor", w);
+    p.guard.min_scale = get_double(g, "min_scale", w);
+  }
   return p;
 }
 
@@ -88,6 +102,10 @@ json to_json(const LoopDesign& d) {
                 {"max_duty", d.pwm->max_duty},
                 {"resolution", d.pwm->resolution}};
   if (d.pid) j["pid"] = pid_json(*d.pid);
+  if (d.pid && d.pid->guard.enabled()) {
+    j["guard_final_scale"] = d.guard_final_scale;
+    j["guard_cuts"] = d.guard_cuts;
+  }
   if (d.pressure_pid) j["pressure_pid"] = pid_json(*d.pressure_pid);
   if (d.pressure_gain != 0.0) j["pressure_gain"] = d.pressure_gain;
   j["feedforward_lead_samples"] = d.feedforward_lead;
@@ -128,6 +146,10 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   if (j.contains("pid")) d.pid = pid_from(j["pid"], key_where(where, "pid"));
   if (j.contains("pressure_pid")) d.pressure_pid = pid_from(j["pressure_pid"], key_where(where, "pressure_pid"));
   d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
+  if (d.pid && d.pid->guard.enabled()) {
+    d.guard_final_scale = get_double(j, "guard_final_scale", where);
+    d.guard_cuts = get_size(j, "guard_cuts", where);
+  }
   d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
   d.sample_time = get_double(j, "sample_time_s", where);
   if (j.contains("loop")) {

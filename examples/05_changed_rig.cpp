@@ -3,8 +3,9 @@
 // load damping halved (400 -> 200 N s/m), as `hysteron sweep gpi-pid --vary load.damping=200
 // --identify-on-base`; beside it the same change re-identified and re-tuned on the changed rig.
 // Prints the RMS error of each variant kind. Fails unless, on the changed rig not re-tuned, the
-// learning loop ends below the compensated loop and below the baseline, and re-tuning brings the
-// compensated loop below its baseline.
+// learning loop ends below the compensated loop and below the baseline, the compensated loop
+// (whose limit-cycle guard cuts the gains that ring there, docs/control.md section 2) ends below
+// the baseline too, and re-tuning brings the compensated loop below its baseline.
 #include <fmt/format.h>
 
 #include <map>
@@ -41,10 +42,10 @@ int main() {
   fmt::print("{:<12} {:>13} {:>9}   RMS [mm], load damping 200 N s/m\n", "kind", "not re-tuned", "re-tuned");
   for (const auto& [kind, v] : a) fmt::print("{:<12} {:>13.3f} {:>9.3f}\n", kind, v, b[kind]);
   const bool ok = a["learning"] < a["compensated"] && a["learning"] < a["baseline"] &&
-                  b["compensated"] < b["baseline"];
+                  a["compensated"] < a["baseline"] && b["compensated"] < b["baseline"];
   if (!ok) {
-    fmt::print("FAIL: expected learning below compensated and baseline on the changed rig, and the re-tuned "
-               "compensated loop below its baseline\n");
+    fmt::print("FAIL: expected learning below compensated and baseline on the changed rig, the compensated loop "
+               "below its baseline there, and the re-tuned compensated loop below its baseline\n");
     return 1;
   }
   return 0;

@@ -424,6 +424,40 @@ TEST(SweepRun, ListsTheLearningRunsNotBelowTheirCompensatedLoop) {
   EXPECT_TRUE(below.to_json().at("learning_not_below_compensated").empty());
 }
 
+// compensated runs whose guard cut the gains above 30 kg (twice, to x0.40), none below
+ExperimentResult fake_guard(const ExperimentOptions& o) {
+  ExperimentResult r = fake_learning(o);
+  if (o.rig.load.mass > 30.0) {
+    r.runs[0].controller.guard_cuts = 2;
+    r.runs[0].controller.guard_final_scale = 0.3969;
+  }
+  return r;
+}
+
+TEST(SweepRun, ListsTheRunsWhoseLimitCycleGuardActed) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.variants = parse_vary("load.mass=10,40");
+  o.runner = fake_guard;
+  o.jobs = 1;
+  const SweepResult r = run_sweep(o);
+  const auto cut = r.guard_acted();
+  ASSERT_EQ(cut.size(), 1u);
+  EXPECT_TRUE(contains(cut[0], "gpi-pid load.mass=40 sine compensated: gains cut 2 time(s), to x0.40 of the tuned "
+                               "ones (RMS 0.200 mm)")) << cut[0];
+  EXPECT_TRUE(contains(r.text(), "Runs whose limit-cycle guard cut the PID's gains (1;")) << r.text();
+  const auto j = r.to_json();
+  EXPECT_EQ(j.at("guard_acted").at(0).get<std::string>(), cut[0]);
+  EXPECT_EQ(j.at("runs").at(2).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 2u);
+  EXPECT_EQ(j.at("runs").at(1).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 0u);
+  const std::string html = report::sweep_report_html(r, "hysteron sweep gpi-pid --vary load.mass=10,40");
+  EXPECT_TRUE(contains(html, "1 run(s) whose limit-cycle guard cut the PID's gains"));
+  o.variants = parse_vary("load.mass=10");
+  const SweepResult none = run_sweep(o);
+  EXPECT_TRUE(none.guard_acted().empty());
+  EXPECT_FALSE(contains(none.text(), "limit-cycle guard"));
+}
+
 // The CLI's and Python's names: "all" is every registered experiment; "documented" the one set.
 TEST(SweepNames, AllIsEveryExperimentAndDocumentedTheOneSet) {
   const std::vector<std::string> every = experiment_names();

@@ -140,6 +140,10 @@ struct SweepRunErrors {
   // (ExperimentResult::gain_trials): the scale of the PID gains and the shaped feedforward
   double gain_scale = 1.0;
   bool shaped = false;
+  // What the position PID's limit-cycle guard did (LoopDesign::guard_cuts, guard_final_scale;
+  // docs/control.md, section 2): 0 and 1 where it never acted or the loop has none.
+  std::size_t guard_cuts = 0;
+  double guard_final_scale = 1.0;
 };
 
 // One (experiment, variant) run.
@@ -199,6 +203,9 @@ struct SweepResult {
   // themselves there (docs/control.md, section 3; where it is above, the experiment's own note
   // says why). One line each, with both errors.
   std::vector<std::string> learning_not_below_compensated() const;
+  // The runs whose position PID's limit-cycle guard cut its gains (they rang near the relay's
+  // period; docs/control.md, section 2): how often and to which scale. One line each.
+  std::vector<std::string> guard_acted() const;
   // How the runs were identified, where not each on its own rig (identify_on_base): one
   // sentence for the text, the page and the JSON ("" by default).
   std::string identification_note() const;

@@ -530,6 +530,8 @@ SweepResult run_sweep(const SweepOptions& options) {
           e.kind = tr.variant;
           e.errors = tr.errors;
           e.saturated = tr.saturated;
+          e.guard_cuts = tr.controller.guard_cuts;
+          e.guard_final_scale = tr.controller.guard_final_scale;
           for (const auto& rr : er.reference_ranges)
             if (rr.reference == tr.reference) {
               const double span = rr.paper_max_mm - rr.paper_min_mm;
@@ -690,6 +692,21 @@ std::vector<std::string> SweepResult::learning_not_below_compensated() const {
   return out;
 }
 
+std::vector<std::string> SweepResult::guard_acted() const {
+  std::vector<std::string> out;
+  for (std::size_t e = 0; e < experiments.size(); ++e)
+    for (std::size_t v = 0; v < variants.size(); ++v) {
+      const SweepRun& run = this->run(e, v);
+      if (!run.ok) continue;
+      for (const auto& x : run.runs)
+        if (x.guard_cuts > 0)
+          out.push_back(fmt::format("{} {} {} {}: gains cut {} time(s), to x{:.2f} of the tuned ones (RMS {:.3f} mm)",
+                                    experiments[e], variants[v].variant.name, x.reference, x.kind, x.guard_cuts,
+                                    x.guard_final_scale, x.errors.rms_error_mm));
+    }
+  return out;
+}
+
 std::string SweepResult::identification_note() const {
   if (!identify_on_base) return {};
   return "identified on the base rig: every run was identified and tuned on the base rig (the row 'nominal') and "
@@ -758,6 +775,12 @@ std::string SweepResult::text() const {
     out += fmt::format("\nLearning runs not below their compensated loop ({}):\n", above.size());
     for (const auto& m : above) out += "  " + m + "\n";
   }
+  if (const auto cut = guard_acted(); !cut.empty()) {
+    out += fmt::format("\nRuns whose limit-cycle guard cut the PID's gains ({}; they rang near the relay's period, "
+                       "docs/control.md section 2):\n",
+                       cut.size());
+    for (const auto& m : cut) out += "  " + m + "\n";
+  }
   return out;
 }
 
@@ -814,12 +837,15 @@ json SweepResult::to_json() const {
                                {"reference_scale", number(x.reference_scale)},
                                {"reachable", x.reachable}};
       if (uses_gain_trial(x.kind)) t["gain_scale"] = x.gain_scale, t["shaped"] = x.shaped;
+      t["guard_cuts"] = x.guard_cuts;
+      t["guard_final_scale"] = x.guard_final_scale;
       o["tracking"].push_back(std::move(t));
     }
     j["runs"].push_back(std::move(o));
   }
   j["target_misses"] = target_misses();
   j["learning_not_below_compensated"] = learning_not_below_compensated();
+  j["guard_acted"] = guard_acted();
   j["notes"] = notes;
   return j;
 }

@@ -105,6 +105,13 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
     for (const auto& m : above) h += fmt::format("<li>{}</li>\n", html_escape(m));
     h += "</ul>\n";
   }
+  if (const auto cut = r.guard_acted(); !cut.empty()) {
+    h += fmt::format("<p>{} run(s) whose limit-cycle guard cut the PID's gains (they rang near the relay's period; "
+                     "docs/control.md, section 2):</p>\n<ul>\n",
+                     cut.size());
+    for (const auto& m : cut) h += fmt::format("<li>{}</li>\n", html_escape(m));
+    h += "</ul>\n";
+  }
 
   // the kinds present
   std::vector<std::string> kinds;

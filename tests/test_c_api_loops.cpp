@@ -19,6 +19,7 @@
 #include "hysteron/hysteron.h"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/learning.hpp"
 #include "hysteron/loop_design.hpp"
 #include "hysteron/report.hpp"
@@ -315,6 +316,47 @@ TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
 
 TEST(CApiLoops, CascadeRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
   check_replay(test::quick_experiment("mpi-pwm"), LoopDesign::Kind::cascade_pwm);
+}
+
+// hysteron_loop_guard_from_json: the guard as written; one the loop would refuse, and a guard on
+// the pressure PID (which the C ABI cannot set), refused with the path and the field.
+TEST(CApiLoops, GuardIsReadCheckedLikeTheLoop) {
+  LoopDesign d;
+  d.pid = PidParams{.kp = 9.8, .ki = 82.0, .out_min = 0.0, .out_max = 0.6};
+  d.pid->guard = PidGuard{.period = 0.239, .amplitude = 2.15e-3};
+  hysteron_pid_guard g{};
+  const std::string ok = io::to_json(d).dump();
+  ASSERT_EQ(hysteron_loop_guard_from_json(ok.c_str(), nullptr, &g), HYSTERON_OK) << hysteron_last_error();
+  EXPECT_EQ(g.period, 0.239);
+  EXPECT_EQ(g.amplitude, 2.15e-3);
+  EXPECT_EQ(g.factor, PidGuard{}.factor);
+  LoopDesign bad = d;
+  bad.pid->guard.factor = 1.5;
+  const std::string b = io::to_json(bad).dump();
+  hysteron_pid_guard untouched{};
+  untouched.period = -7.0;
+  EXPECT_EQ(hysteron_loop_guard_from_json(b.c_str(), nullptr, &untouched), HYSTERON_ERROR_MODEL);
+  EXPECT_NE(std::string(hysteron_last_error()).find("pid.guard.factor = 1.5"), std::string::npos)
+      << hysteron_last_error();
+  EXPECT_EQ(untouched.period, -7.0);  // written only on success
+  LoopDesign inner = d;
+  inner.kind = LoopDesign::Kind::cascade_pwm;
+  inner.pwm = PwmParams{};
+  inner.pressure_pid = PidParams{.kp = 20.0, .out_min = -1.0, .out_max = 1.0};
+  inner.pressure_pid->guard = PidGuard{.period = 0.02, .amplitude = 0.01};
+  const std::string i = io::to_json(inner).dump();
+  EXPECT_EQ(hysteron_loop_guard_from_json(i.c_str(), nullptr, &g), HYSTERON_ERROR_MODEL);
+  EXPECT_NE(std::string(hysteron_last_error()).find("pressure_pid.guard"), std::string::npos) << hysteron_last_error();
+  hysteron_loop_params lp;
+  EXPECT_EQ(hysteron_loop_params_from_json(i.c_str(), nullptr, &lp), HYSTERON_ERROR_MODEL);
+  // a hand-written controller without what a run's guard did reads as nothing done yet
+  nlohmann::json hand = io::to_json(d);
+  hand.erase("guard_cuts");
+  hand.erase("guard_final_scale");
+  const LoopDesign back = io::from_json<LoopDesign>(hand, "controller");
+  EXPECT_TRUE(back.pid->guard.enabled());
+  EXPECT_EQ(back.guard_cuts, 0u);
+  EXPECT_EQ(back.guard_final_scale, 1.0);
 }
 
 // Tuned on the nominal rig, tracking with the load damping halved: the compensated loop rings

@@ -52,6 +52,25 @@ py::dict pid_dict(const PidParams& p) {
   return d;
 }
 
+// A limit-cycle guard from Pid(guard={...}) (the keys of Pid.params["guard"]); None: off.
+PidGuard guard_from(const py::object& o) {
+  PidGuard g;
+  if (o.is_none()) return g;
+  if (!py::isinstance<py::dict>(o)) throw Error("Pid: guard must be a dict or None");
+  for (const auto& [key, value] : o.cast<py::dict>()) {
+    const std::string k = py::str(key);
+    const double v = value.cast<double>();
+    if (k == "period") g.period = v;
+    else if (k == "amplitude") g.amplitude = v;
+    else if (k == "count") g.count = v;
+    else if (k == "memory") g.memory = v;
+    else if (k == "factor") g.factor = v;
+    else if (k == "min_scale") g.min_scale = v;
+    else throw Error("Pid: guard: unknown key '" + k + "' (period, amplitude, count, memory, factor, min_scale)");
+  }
+  return g;
+}
+
 FeedforwardParams ff_params(std::pair<double, double> limits, double model_scale, double lag, double ts) {
   FeedforwardParams f;
   f.pressure_limits = {limits.first, limits.second};
@@ -71,7 +90,8 @@ Discrete PID (Eq. 17 of the GPI paper) with output limits, anti-windup
 ("none", "conditional", "back_calculation"), derivative filter and setpoint
 weights. step() never allocates; a non-finite input holds the last output.)doc")
       .def(py::init([](double kp, double ki, double kd, double sample_time, double derivative_filter, double out_min,
-                       double out_max, const std::string& anti_windup, double tracking_time, double b, double c) {
+                       double out_max, const std::string& anti_windup, double tracking_time, double b, double c,
+                       const py::object& guard) {
              PidParams p;
              p.kp = kp;
              p.ki = ki;
@@ -84,12 +104,13 @@ weights. step() never allocates; a non-finite input holds the last output.)doc")
              p.tracking_time = tracking_time;
              p.setpoint_weight_p = b;
              p.setpoint_weight_d = c;
+             p.guard = guard_from(guard);
              return Pid(p);
            }),
            py::arg("kp") = 0.0, py::arg("ki") = 0.0, py::arg("kd") = 0.0, py::arg("sample_time") = 1e-3,
            py::arg("derivative_filter") = 0.0, py::arg("out_min") = -inf, py::arg("out_max") = inf,
            py::arg("anti_windup") = "conditional", py::arg("tracking_time") = 0.0, py::arg("setpoint_weight_p") = 1.0,
-           py::arg("setpoint_weight_d") = 0.0)
+           py::arg("setpoint_weight_d") = 0.0, py::arg("guard") = py::none())
       .def_static(
           "gpi_paper", [](double ts, double lo, double hi) { return Pid(gpi_paper_pid(ts, lo, hi)); },
           py::arg("sample_time") = 1e-3, py::arg("out_min") = -0.6, py::arg("out_max") = 0.6,

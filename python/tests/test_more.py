@@ -132,6 +132,10 @@ def test_pid_limit_cycle_guard():
     guarded = hysteron.Pid(kp=2.0, ki=0.0, out_min=-3.0, out_max=3.0)
     guarded.set_guard(period=0.1, amplitude=0.05)
     assert guarded.params["guard"]["period"] == 0.1
+    again = hysteron.Pid(**guarded.params)  # the params are the constructor's arguments, the guard too
+    assert again.params == guarded.params
+    with pytest.raises(hysteron.Error, match="unknown key 'periods'"):
+        hysteron.Pid(guard={"periods": 0.1})
     held = run(guarded)
     assert guarded.guard_cuts >= 2 and guarded.gain_scale < 0.5  # 2 x 0.63^2 = 0.79 < 1 is stable
     assert held < 1e-6  # settled (P alone keeps an offset of 1 / (1 + K), no ring around it)

@@ -610,6 +610,9 @@ void to_c_loop(const hysteron::LoopDesign& d, const std::string& where, hysteron
   if (d.shaper && (!std::isfinite(d.shaper->a1) || !std::isfinite(d.shaper->a2)))
     fail(HYSTERON_ERROR_MODEL, "%s.shaper: a1 = %g, a2 = %g: must be finite", where.c_str(), d.shaper->a1,
          d.shaper->a2);
+  if (d.pressure_pid && d.pressure_pid->guard.enabled())
+    fail(HYSTERON_ERROR_MODEL, "%s.pressure_pid.guard: the C ABI's loops have a limit-cycle guard on the position PID "
+         "only (hysteron_*_set_guard)", where.c_str());
   hysteron_loop_params out{};
   hysteron_open_loop_params open_loop;
   hysteron_cascade_params cascade;
@@ -710,7 +713,8 @@ void guard_state(const hysteron::Pid& pid, double* gain_scale, size_t* cuts) {
   if (cuts) *cuts = pid.state().guard_cuts;
 }
 
-// The run's position PID's guard (off without a PID or a guard).
+// The run's position PID's guard (off without a PID or a guard), after every check
+// hysteron_loop_params_from_json makes on the run's loop.
 void read_guard(const std::string& text, const char* run, const std::string& where, hysteron_pid_guard& out) {
   nlohmann::json j;
   try {
@@ -718,7 +722,12 @@ void read_guard(const std::string& text, const char* run, const std::string& whe
   } catch (const hysteron::Error& e) {
     fail(HYSTERON_ERROR_PARSE, "%s", e.what());
   }
-  const hysteron::LoopDesign d = hysteron::io::loop_design_of_run(j, run ? run : "", where);
+  const std::string r = run ? run : "";
+  const std::string at = r.empty() ? where : where + "." + r + ".controller";
+  const hysteron::LoopDesign d = hysteron::io::loop_design_of_run(j, r, where);
+  if (d.adaptation) fail(HYSTERON_ERROR_MODEL, "%s: %s", at.c_str(), hysteron::adaptation_refusal(d).c_str());
+  hysteron_loop_params checked;
+  to_c_loop(d, at, checked);
   out = to_c_guard(d.pid ? d.pid->guard : hysteron::PidGuard{});
 }
 

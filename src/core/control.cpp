@@ -156,7 +156,8 @@ double Pid::step(double r, double y, double ff) noexcept {
 void Pid::guard_step(double e) noexcept {
   const PidGuard& g = p_.guard;
   s_.guard_iae += std::abs(e) * p_.sample_time;
-  ++s_.guard_samples;
+  // its length, counted until it is longer than T_u (which it then stays: no wrap-around)
+  if (static_cast<double>(s_.guard_samples) * p_.sample_time <= g.period) ++s_.guard_samples;
   const double h = 0.25 * g.amplitude;
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
   if (sign != 0 && sign != s_.guard_sign) {  // a half-cycle ended

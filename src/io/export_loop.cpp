@@ -59,7 +59,7 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
   const double h = 0.25 * k->guard_amplitude;
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
   s->guard_iae += fabs(e) * k->ts;
-  ++s->guard_samples;
+  if ((double)s->guard_samples * k->ts <= k->guard_period) ++s->guard_samples;  /* no wrap-around */
   if (sign != 0 && sign != s->guard_sign) {
     const double length = (double)s->guard_samples * k->ts;
     if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit) s->guard_count += 1.0;

@@ -146,9 +146,9 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   if (j.contains("pid")) d.pid = pid_from(j["pid"], key_where(where, "pid"));
   if (j.contains("pressure_pid")) d.pressure_pid = pid_from(j["pressure_pid"], key_where(where, "pressure_pid"));
   d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
-  if (d.pid && d.pid->guard.enabled()) {
-    d.guard_final_scale = get_double(j, "guard_final_scale", where);
-    d.guard_cuts = get_size(j, "guard_cuts", where);
+  if (d.pid && d.pid->guard.enabled()) {  // what the run's guard did; a hand-written loop: nothing yet
+    d.guard_final_scale = opt_double(j, "guard_final_scale", where, 1.0);
+    d.guard_cuts = j.contains("guard_cuts") ? get_size(j, "guard_cuts", where) : 0;
   }
   d.feedforward_lead = get_size(j, "feedforward_lead_samples", where);
   d.sample_time = get_double(j, "sample_time_s", where);

@@ -686,7 +686,9 @@ void to_c_loop(const hysteron::LoopDesign& d, const std::string& where, hysteron
 }
 
 // io::parse_json (strict), then the run's loop.
-void read_loop(const std::string& text, const char* run, const std::string& where, hysteron_loop_params& out) {
+// Returns the run's loop as read (out: its C structs, every check made).
+hysteron::LoopDesign read_loop(const std::string& text, const char* run, const std::string& where,
+                               hysteron_loop_params& out) {
   nlohmann::json j;
   try {
     j = hysteron::io::parse_json(text, where);
@@ -698,6 +700,7 @@ void read_loop(const std::string& text, const char* run, const std::string& wher
   const hysteron::LoopDesign d = hysteron::io::loop_design_of_run(j, r, where);
   if (d.adaptation) fail(HYSTERON_ERROR_MODEL, "%s: %s", at.c_str(), hysteron::adaptation_refusal(d).c_str());
   to_c_loop(d, at, out);
+  return d;
 }
 
 hysteron_pid_guard to_c_guard(const hysteron::PidGuard& g) {
@@ -708,26 +711,36 @@ hysteron::PidGuard from_c_guard(const hysteron_pid_guard& g) {
   return {g.period, g.amplitude, g.count, g.memory, g.factor, g.min_scale};
 }
 
-void guard_state(const hysteron::Pid& pid, double* gain_scale, size_t* cuts) {
-  if (gain_scale) *gain_scale = pid.state().gain_scale;
-  if (cuts) *cuts = pid.state().guard_cuts;
+// The position PID of each C ABI loop.
+const hysteron::Pid& position_pid(const hysteron::FeedforwardPidController& c) { return c.pid(); }
+const hysteron::Pid& position_pid(const hysteron::OpenLoopController& c) { return c.position(); }
+const hysteron::Pid& position_pid(const hysteron::CascadePwmController& c) { return c.position(); }
+
+// hysteron_{ff_pid,open_loop,cascade}_set_guard and _guard_state on handle h (its .controller).
+template <class Handle>
+hysteron_status set_guard_of(const char* fn, Handle* h, const hysteron_pid_guard* g) {
+  return guard(fn, HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
+    HYSTERON_REQUIRE(h);
+    HYSTERON_REQUIRE(g);
+    h->controller.set_guard(from_c_guard(*g));
+  });
+}
+
+template <class Handle>
+hysteron_status guard_state_of(const char* fn, const Handle* h, double* gain_scale, size_t* cuts) {
+  return guard(fn, HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(h);
+    const hysteron::PidState& s = position_pid(h->controller).state();
+    if (gain_scale) *gain_scale = s.gain_scale;
+    if (cuts) *cuts = s.guard_cuts;
+  });
 }
 
 // The run's position PID's guard (off without a PID or a guard), after every check
-// hysteron_loop_params_from_json makes on the run's loop.
+// hysteron_loop_params_from_json makes on the run's loop (read_loop).
 void read_guard(const std::string& text, const char* run, const std::string& where, hysteron_pid_guard& out) {
-  nlohmann::json j;
-  try {
-    j = hysteron::io::parse_json(text, where);
-  } catch (const hysteron::Error& e) {
-    fail(HYSTERON_ERROR_PARSE, "%s", e.what());
-  }
-  const std::string r = run ? run : "";
-  const std::string at = r.empty() ? where : where + "." + r + ".controller";
-  const hysteron::LoopDesign d = hysteron::io::loop_design_of_run(j, r, where);
-  if (d.adaptation) fail(HYSTERON_ERROR_MODEL, "%s: %s", at.c_str(), hysteron::adaptation_refusal(d).c_str());
   hysteron_loop_params checked;
-  to_c_loop(d, at, checked);
+  const hysteron::LoopDesign d = read_loop(text, run, where, checked);
   out = to_c_guard(d.pid ? d.pid->guard : hysteron::PidGuard{});
 }
 
@@ -942,48 +955,27 @@ hysteron_status hysteron_pid_guard_default(hysteron_pid_guard* guard) {
 }
 
 hysteron_status hysteron_ff_pid_set_guard(hysteron_ff_pid* controller, const hysteron_pid_guard* guard) {
-  return ::guard("hysteron_ff_pid_set_guard", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
-    HYSTERON_REQUIRE(controller);
-    HYSTERON_REQUIRE(guard);
-    controller->controller.set_guard(from_c_guard(*guard));
-  });
+  return set_guard_of("hysteron_ff_pid_set_guard", controller, guard);
 }
 
 hysteron_status hysteron_open_loop_set_guard(hysteron_open_loop* controller, const hysteron_pid_guard* guard) {
-  return ::guard("hysteron_open_loop_set_guard", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
-    HYSTERON_REQUIRE(controller);
-    HYSTERON_REQUIRE(guard);
-    controller->controller.set_guard(from_c_guard(*guard));
-  });
+  return set_guard_of("hysteron_open_loop_set_guard", controller, guard);
 }
 
 hysteron_status hysteron_cascade_set_guard(hysteron_cascade* controller, const hysteron_pid_guard* guard) {
-  return ::guard("hysteron_cascade_set_guard", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
-    HYSTERON_REQUIRE(controller);
-    HYSTERON_REQUIRE(guard);
-    controller->controller.set_guard(from_c_guard(*guard));
-  });
+  return set_guard_of("hysteron_cascade_set_guard", controller, guard);
 }
 
 hysteron_status hysteron_ff_pid_guard_state(const hysteron_ff_pid* controller, double* gain_scale, size_t* cuts) {
-  return ::guard("hysteron_ff_pid_guard_state", HYSTERON_ERROR_INTERNAL, [&] {
-    HYSTERON_REQUIRE(controller);
-    guard_state(controller->controller.pid(), gain_scale, cuts);
-  });
+  return guard_state_of("hysteron_ff_pid_guard_state", controller, gain_scale, cuts);
 }
 
 hysteron_status hysteron_open_loop_guard_state(const hysteron_open_loop* controller, double* gain_scale, size_t* cuts) {
-  return ::guard("hysteron_open_loop_guard_state", HYSTERON_ERROR_INTERNAL, [&] {
-    HYSTERON_REQUIRE(controller);
-    guard_state(controller->controller.position(), gain_scale, cuts);
-  });
+  return guard_state_of("hysteron_open_loop_guard_state", controller, gain_scale, cuts);
 }
 
 hysteron_status hysteron_cascade_guard_state(const hysteron_cascade* controller, double* gain_scale, size_t* cuts) {
-  return ::guard("hysteron_cascade_guard_state", HYSTERON_ERROR_INTERNAL, [&] {
-    HYSTERON_REQUIRE(controller);
-    guard_state(controller->controller.position(), gain_scale, cuts);
-  });
+  return guard_state_of("hysteron_cascade_guard_state", controller, gain_scale, cuts);
 }
 
 // ---- iterative learning control ---------------------------------------------------

@@ -673,37 +673,40 @@ std::vector<std::string> SweepResult::target_misses() const {
   return out;
 }
 
+namespace {
+// f(e, v, x) for every tracking run x of every finished (experiment e, variant v) run.
+template <class F>
+void each_tracking_run(const SweepResult& r, F&& f) {
+  for (std::size_t e = 0; e < r.experiments.size(); ++e)
+    for (std::size_t v = 0; v < r.variants.size(); ++v) {
+      const SweepRun& run = r.run(e, v);
+      if (!run.ok) continue;
+      for (const auto& x : run.runs) f(e, v, x);
+    }
+}
+}  // namespace
+
 std::vector<std::string> SweepResult::learning_not_below_compensated() const {
   std::vector<std::string> out;
-  for (std::size_t e = 0; e < experiments.size(); ++e)
-    for (std::size_t v = 0; v < variants.size(); ++v) {
-      const SweepRun& run = this->run(e, v);
-      if (!run.ok) continue;
-      for (const auto& x : run.runs) {
-        if (x.kind != "learning") continue;
-        const SweepRunErrors* c = find(e, v, x.reference, "compensated");
-        if (!c || x.errors.rms_error_mm < c->errors.rms_error_mm) continue;
-        out.push_back(fmt::format("{} {} {} learning: RMS {:.3f} mm, not below the compensated loop's {:.3f} mm "
-                                  "({:.2f}x)",
-                                  experiments[e], variants[v].variant.name, x.reference, x.errors.rms_error_mm,
-                                  c->errors.rms_error_mm, ratio(x.errors.rms_error_mm, c->errors.rms_error_mm)));
-      }
-    }
+  each_tracking_run(*this, [&](std::size_t e, std::size_t v, const SweepRunErrors& x) {
+    if (x.kind != "learning") return;
+    const SweepRunErrors* c = find(e, v, x.reference, "compensated");
+    if (!c || x.errors.rms_error_mm < c->errors.rms_error_mm) return;
+    out.push_back(fmt::format("{} {} {} learning: RMS {:.3f} mm, not below the compensated loop's {:.3f} mm ({:.2f}x)",
+                              experiments[e], variants[v].variant.name, x.reference, x.errors.rms_error_mm,
+                              c->errors.rms_error_mm, ratio(x.errors.rms_error_mm, c->errors.rms_error_mm)));
+  });
   return out;
 }
 
 std::vector<std::string> SweepResult::guard_acted() const {
   std::vector<std::string> out;
-  for (std::size_t e = 0; e < experiments.size(); ++e)
-    for (std::size_t v = 0; v < variants.size(); ++v) {
-      const SweepRun& run = this->run(e, v);
-      if (!run.ok) continue;
-      for (const auto& x : run.runs)
-        if (x.guard_cuts > 0)
-          out.push_back(fmt::format("{} {} {} {}: gains cut {} time(s), to x{:.2f} of the tuned ones (RMS {:.3f} mm)",
-                                    experiments[e], variants[v].variant.name, x.reference, x.kind, x.guard_cuts,
-                                    x.guard_final_scale, x.errors.rms_error_mm));
-    }
+  each_tracking_run(*this, [&](std::size_t e, std::size_t v, const SweepRunErrors& x) {
+    if (x.guard_cuts > 0)
+      out.push_back(fmt::format("{} {} {} {}: gains cut {} time(s), to x{:.2f} of the tuned ones (RMS {:.3f} mm)",
+                                experiments[e], variants[v].variant.name, x.reference, x.kind, x.guard_cuts,
+                                x.guard_final_scale, x.errors.rms_error_mm));
+  });
   return out;
 }
 

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -299,6 +300,42 @@ ExperimentResult fake_experiment(const ExperimentOptions& o) {
       r.runs.push_back(std::move(t));
     }
   return r;
+}
+
+TEST(SweepRun, StopsStartingRunsWhenAStopIsRequested) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid", "mpi-pwm"};
+  o.variants = parse_vary("load.mass=5,10,15,25,30,40,45,50,55,60");
+  o.runner = fake_experiment;
+  for (unsigned jobs : {1u, 3u}) {
+    o.jobs = jobs;
+    std::atomic<std::size_t> started{0}, asked{0};
+    o.runner = [&](const ExperimentOptions& eo) {
+      ++started;
+      return fake_experiment(eo);
+    };
+    // stop once 4 runs have started: the runs under way end, no other starts
+    o.stop_requested = [&] {
+      ++asked;
+      return started.load() >= 4;
+    };
+    try {
+      (void)run_sweep(o);
+      FAIL() << "a stopped sweep returned a result";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("sweep stopped after"), std::string::npos) << what;
+      EXPECT_NE(what.find("of 22 runs"), std::string::npos) << what;
+    }
+    EXPECT_GE(started.load(), 4u);
+    EXPECT_LE(started.load(), 3u + jobs);  // at most one more per thread, asked before it
+    EXPECT_GE(asked.load(), started.load());
+  }
+  // never asked to stop: the whole sweep
+  o.jobs = 2;
+  o.runner = fake_experiment;
+  o.stop_requested = [] { return false; };
+  EXPECT_EQ(run_sweep(o).runs.size(), 22u);
 }
 
 TEST(SweepRun, ThreadPoolResultsDoNotDependOnTheNumberOfThreads) {

@@ -1,6 +1,9 @@
 // Bindings of the papers' experiments, the plots and the HTML reports.
 #include <fmt/format.h>
 
+#include <atomic>
+#include <chrono>
+#include <future>
 #include <optional>
 #include <span>
 #include <utility>
@@ -18,6 +21,42 @@
 #include "more.hpp"
 
 namespace hysteron::python {
+
+namespace {
+
+// run_sweep without the GIL, on a thread of its own, while this (Python's main) thread looks
+// for signals every 100 ms: Ctrl-C stops new runs from starting, waits for the runs under way
+// (a few seconds each) and raises KeyboardInterrupt.
+SweepResult run_sweep_interruptible(SweepOptions o) {
+  std::atomic<bool> stop{false};
+  o.stop_requested = [&stop] { return stop.load(); };
+  bool interrupted = false;
+  SweepResult r;
+  {
+    py::gil_scoped_release release;
+    auto done = std::async(std::launch::async, [&o] { return run_sweep(o); });
+    while (done.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+      py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() != 0) {  // the signal's exception is now set in this thread
+        interrupted = true;
+        stop.store(true);
+        break;
+      }
+    }
+    if (interrupted) {
+      try {
+        (void)done.get();  // the runs under way end; the sweep then throws "stopped"
+      } catch (...) {
+      }
+    } else {
+      r = done.get();  // a failure of the sweep itself is rethrown here
+    }
+  }
+  if (interrupted) throw py::error_already_set();
+  return r;
+}
+
+}  // namespace
 
 namespace {
 
@@ -291,11 +330,7 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
         if (o.variants.empty())
           throw Error(fmt::format("run_sweep: no variants: give vary=['PATH=V1,V2,...'], grid= or set='{}'",
                                   documented_set_name));
-        SweepResult r;
-        {
-          py::gil_scoped_release release;
-          r = run_sweep(o);
-        }
+        const SweepResult r = run_sweep_interruptible(std::move(o));
         // the page first (gnuplot may fail), then the table; each written atomically
         std::string html;
         if (!report_path.empty()) html = report::sweep_report_html(r, "hysteron.run_sweep(...)");
@@ -317,7 +352,8 @@ set="documented", issue 11's documented set. plant: the base rig (dict or JSON p
 nominal), always run first as "nominal". identify_on_base: identify and tune every run on the
 base rig and track on the variant's (a rig that changed after its identification; default:
 each variant identified on its own rig). seed, learning_periods, model, paper_references: as
-run_experiment, for every run. jobs: runs at once (0: the number of cores). out: the CSV table,
+run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run and raises
+KeyboardInterrupt once the runs under way end (nothing written). out: the CSV table,
 report: the HTML page (written after every run finished). Returns the JSON document of
 `hysteron sweep --json` as a dict (variants, runs with their tracking errors, target_misses,
 learning_not_below_compensated, notes, failures, ...) and "text", the text table. A failed run

@@ -56,3 +56,37 @@ def test_ctrl_c_stops_a_long_rig_run_within_a_second():
     elapsed = time.monotonic() - sent
     assert rc == 0 and child.stdout.read().strip() == "interrupted"
     print(f"stopped {elapsed:.3f} s after SIGINT")
+
+
+def test_ctrl_c_stops_a_long_sweep_and_writes_nothing(tmp_path):
+    # ~100 runs (minutes on 2 cores); SIGINT must raise KeyboardInterrupt once the runs under
+    # way end, and the table asked for must not be written.
+    out = tmp_path / "sweep.csv"
+    code = textwrap.dedent(f"""
+        import sys, hysteron
+        masses = ",".join(str(m) for m in range(10, 41))
+        print("started", flush=True)
+        try:
+            hysteron.run_sweep("all", vary=["load.mass=" + masses], learning_periods=0, jobs=2,
+                               out={str(out)!r})
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+            sys.exit(0)
+        sys.exit(3)
+    """)
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, env=env)
+    assert child.stdout.readline().strip() == "started"
+    time.sleep(1.0)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    try:
+        rc = child.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        pytest.fail("run_sweep ignored SIGINT for 60 s")
+    elapsed = time.monotonic() - sent
+    assert rc == 0 and child.stdout.read().strip() == "interrupted"
+    assert not out.exists()
+    print(f"stopped {elapsed:.3f} s after SIGINT")

@@ -500,8 +500,13 @@ SweepResult run_sweep(const SweepOptions& options) {
   std::atomic<std::size_t> next{0};
   std::mutex progress_mutex;
   std::size_t done = 0;
+  std::atomic<bool> stopped{false};
   auto worker = [&] {
     for (;;) {
+      if (stopped.load() || (options.stop_requested && options.stop_requested())) {
+        stopped.store(true);
+        return;
+      }
       const std::size_t i = next.fetch_add(1);
       if (i >= total) return;
       const std::size_t k = order[i];
@@ -564,9 +569,9 @@ SweepResult run_sweep(const SweepOptions& options) {
         run.error = "unknown exception";
       }
       run.wall_time_s = std::chrono::duration<double>(clock::now() - t0).count();
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      ++done;
       if (options.progress) {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        ++done;
         try {
           options.progress({done, total, run.experiment, r.variants[run.variant].variant.name, run.ok, run.wall_time_s});
         } catch (...) {
@@ -583,6 +588,8 @@ SweepResult run_sweep(const SweepOptions& options) {
     for (unsigned i = 0; i < jobs; ++i) threads.emplace_back(worker);
     for (auto& t : threads) t.join();
   }
+  if (stopped.load())
+    throw Error(fmt::format("sweep stopped after {} of {} runs (stop requested)", done, total));
   for (std::size_t k = 0; k < slots; ++k)
     if (same_as[k] != k) {
       r.runs[k] = r.runs[same_as[k]];

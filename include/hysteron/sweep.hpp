@@ -191,8 +191,9 @@ struct SweepResult {
   // The table (one row per tracking run, one per failed run), as CSV text; columns:
   // experiment, variant, overrides, reference, kind, max_mm, mae_mm, rms_mm,
   // rms_vs_nominal, rms_vs_baseline, min_command_mpa, max_command_mpa, saturated,
-  // reference_scale, status (ok | failed), error, wall_time_s. Numbers with %.17g
-  // (exact), NaN as "".
+  // reference_scale, status (ok | failed), error, wall_time_s, guard_cuts, guard_final_scale
+  // (what the position PID's limit-cycle guard did; 0 and 1 where it has none). Numbers with
+  // %.17g (exact), NaN as "".
   std::string csv() const;
   // A human-readable table (RMS per kind), failures and target misses.
   std::string text() const;

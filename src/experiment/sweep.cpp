@@ -618,7 +618,8 @@ const SweepRunErrors* SweepResult::find(std::size_t experiment, std::size_t vari
 std::string SweepResult::csv() const {
   std::string out =
       "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,"
-      "min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s\n";
+      "min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s,guard_cuts,"
+      "guard_final_scale\n";
   for (std::size_t e = 0; e < experiments.size(); ++e)
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const SweepRun& run = this->run(e, v);
@@ -627,19 +628,20 @@ std::string SweepResult::csv() const {
       const std::string head = fmt::format("{},{},{},", csv_field(experiments[e]), csv_field(variants[v].variant.name),
                                            csv_field(overrides));
       if (!run.ok) {
-        out += head + fmt::format(",,,,,,,,,,,failed,{},{}\n", csv_field(run.error), csv_number(run.wall_time_s));
+        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,\n", csv_field(run.error), csv_number(run.wall_time_s));
         continue;
       }
       for (const auto& x : run.runs) {
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");
-        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{}\n", csv_field(x.reference),
+        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{}\n", csv_field(x.reference),
                                   csv_field(x.kind), csv_number(x.errors.max_error_mm), csv_number(x.errors.mae_mm),
                                   csv_number(x.errors.rms_error_mm),
                                   csv_number(nom ? ratio(x.errors.rms_error_mm, nom->errors.rms_error_mm) : nan),
                                   csv_number(base ? ratio(x.errors.rms_error_mm, base->errors.rms_error_mm) : nan),
                                   csv_number(x.min_command_mpa), csv_number(x.max_command_mpa), x.saturated,
-                                  csv_number(x.reference_scale), csv_number(run.wall_time_s));
+                                  csv_number(x.reference_scale), csv_number(run.wall_time_s), x.guard_cuts,
+                                  csv_number(x.guard_final_scale));
       }
     }
   return out;

@@ -136,11 +136,11 @@ grep -qE '^nominal +sine' "$T/nominal.txt" || fail "no nominal row: $(cat "$T/no
 TARGETS="$(cd "$(dirname "$0")/../.." && pwd)/bench/issue11_targets.py"
 /usr/bin/python3 - "$T/t_ok.csv" "$T/t_miss.csv" <<'PYEOF'
 import sys
-head = "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s"
+head = "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s,guard_cuts,guard_final_scale"
 def rows(ratio, learning_max):
     out = [head]
     def row(e, v, r, k, mx, rms, ratio_):
-        out.append(f"{e},{v},,{r},{k},{mx},0,{rms},{ratio_},0,0.05,0.55,0,1,ok,,1")
+        out.append(f"{e},{v},,{r},{k},{mx},0,{rms},{ratio_},0,0.05,0.55,0,1,ok,,1,0,1")
     for e, refs in (("gpi-pid", ["sine"]), ("mpi-openloop", ["triangle", "sine"]), ("mpi-pwm", ["sine", "triangle"])):
         for r in refs:
             row(e, "nominal", r, "compensated", 0.9, 0.25, 1)

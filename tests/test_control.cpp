@@ -240,6 +240,9 @@ TEST(PidGuard, ValidatesParams) {
   PidParams p;
   p.guard.period = -1.0;
   EXPECT_NE(error_of(p).find("pid.guard.period"), std::string::npos);
+  p.guard.period = 3.0 * p.sample_time;  // on, but a half-cycle shorter than 2 samples: never seen
+  EXPECT_NE(error_of(p).find("pid.guard.period"), std::string::npos);
+  EXPECT_NE(error_of(p).find("at least 4 sample times"), std::string::npos);
   p.guard.period = 0.2;  // on: needs an amplitude
   EXPECT_NE(error_of(p).find("pid.guard.amplitude"), std::string::npos);
   p.guard.amplitude = 0.1;

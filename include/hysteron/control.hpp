@@ -29,7 +29,7 @@ AntiWindup anti_windup_from_name(std::string_view name);
 // K_p, K_i and K_d are multiplied by `factor` (not below min_scale times the tuned gains) and
 // the count restarts. The cut gains stay until reset(). period = 0: off (the default).
 struct PidGuard {
-  double period = 0.0;     // T_u [s], >= 0 (0: off)
+  double period = 0.0;     // T_u [s]: 0 (off) or >= 4 sample times
   double amplitude = 0.0;  // a [error units], > 0 where period > 0
   double count = 5.0;      // half-cycles (decayed) that cut the gains, > 0
   double memory = 5.0;     // the count's decay time constant [T_u], > 0

@@ -304,7 +304,7 @@ HYSTERON_C_API hysteron_status hysteron_cascade_step(hysteron_cascade* controlle
  * (compensated, learning, adaptive) have one; hysteron_loop_guard_from_file reads it. Off by
  * default (period 0), and in the faithful and baseline loops. */
 typedef struct hysteron_pid_guard {
-  double period;    /* T_u [s] >= 0 (0: off, the default) */
+  double period;    /* T_u [s]: 0 (off, the default) or >= 4 sample times */
   double amplitude; /* [m] > 0 where period > 0 (default 0) */
   double count;     /* > 0 (default 5) */
   double memory;    /* the count's decay time constant [T_u] > 0 (default 5) */

@@ -84,6 +84,10 @@ void Pid::set_guard(const PidGuard& g) {
   if (!std::isfinite(g.period) || g.period < 0.0) bad("pid.guard.period", g.period, "a finite number >= 0");
   double decay = 0.0, limit = 0.0;
   if (g.enabled()) {
+    // a half-cycle of at most T_u / 2 must span samples, or no ring is ever counted
+    if (g.period < 4.0 * p_.sample_time)
+      bad("pid.guard.period", g.period, detail::format("0 (off) or at least 4 sample times ({} s): a ring of a shorter "
+                                                       "period cannot be seen at this sample time", 4.0 * p_.sample_time).c_str());
     if (!std::isfinite(g.amplitude) || g.amplitude <= 0.0) bad("pid.guard.amplitude", g.amplitude, "finite and > 0");
     if (!std::isfinite(g.count) || g.count <= 0.0) bad("pid.guard.count", g.count, "finite and > 0");
     if (!std::isfinite(g.memory) || g.memory <= 0.0) bad("pid.guard.memory", g.memory, "finite and > 0");

@@ -253,10 +253,24 @@ TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
   EXPECT_NEAR(rr.max_mm, top, 0.5);
   EXPECT_LT(rr.max_mm, 80.0);  // well below the paper's 95 mm
   EXPECT_TRUE(test::said(r, "cap it below the 0.60 MPa"));
+  EXPECT_FALSE(test::said(r, "pressure sensor's range ends"));
   for (const auto& run : r.runs)
     if (run.variant == "compensated") {
       EXPECT_LT(run.errors.rms_error_mm, 1.0) << "was 9.1 mm with the 95 mm top kept";
     }
+
+  // A pressure sensor whose range ends at 0.5 MPa: its reading stops there while the regulator
+  // delivers the 0.6 MPa commanded and the muscle goes on contracting. The reach is still kept
+  // where the sensor sees (the models are fitted on its reading), but the note names the
+  // sensor, not the supply (it named the supply, regulator or valves before 2026-11-29).
+  o.rig = PamRigParams{};
+  o.rig.sensors.pressure_range = 5e5;  // [Pa]
+  const ExperimentResult s = run_experiment(o);
+  EXPECT_NEAR(s.reach_pressure_max_mpa, 0.5, 0.005);
+  EXPECT_NEAR(s.reach_top_pressure_mpa, 0.95 * s.reach_pressure_max_mpa, 1e-12);
+  EXPECT_TRUE(test::said(s, "the pressure sensor's range ends below the actuator's pressure"));
+  EXPECT_TRUE(test::said(s, "the muscle went on contracting with the command"));
+  EXPECT_FALSE(test::said(s, "cap it below"));
 
   o.rig = PamRigParams{};
   const ExperimentResult n = run_experiment(o);

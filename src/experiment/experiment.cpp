@@ -367,12 +367,79 @@ struct SmoothedRun {
 };
 
 // The top pressure the loops can use [MPa]: kPressureMax, or the highest the identification
-// run reached (`reached_mpa`) where that stayed below (1 - kPressureHeadroom) of the run's
-// highest command (at most kPressureMax): the supply, regulator or valves cap the actuator.
-double usable_top(const IdentificationRun& id, double reached_mpa) {
-  const double p_cmd_max = max_of(id.pressure_command_mpa);
-  const bool capped = reached_mpa < (1.0 - kPressureHeadroom) * std::min(p_cmd_max, kPressureMax);
-  return capped && reached_mpa > 0.0 ? reached_mpa : kPressureMax;
+// run's pressure reading reached (max of sm.p) where that stayed below (1 - kPressureHeadroom)
+// of the run's highest command (at most kPressureMax): the supply, regulator or valves cap the
+// actuator. Unless the muscle went on contracting with the command while the reading stayed at
+// its top: over the samples where the reading is within 1 % of its top and the command rises,
+// the least-squares slope of the contraction on the command is at least kSensorTopSlope of the
+// run's (on the commands below 0.9 of that top). An actuator held at its top holds the
+// contraction (0.3-4.7 % of the run's slope there with a 4 or 4.5 bar supply, a lag of up to
+// 300 ms, a 10 kg load; a sensor whose range ends at 0.45-0.55 MPa: 58-143 %), so a slope that
+// steep is the pressure sensor's limit (its range ends there, or it reads low), not the
+// actuator's. The top is the reading's either way: the models are fitted on the reading and the
+// pressure loops close on it, so the loops are kept where it sees; only the note differs.
+constexpr double kSensorTopSlope = 0.25;
+
+struct ActuatorTop {
+  double mpa = kPressureMax;    // the usable top
+  double reached_mpa = 0.0;     // the reading's top
+  bool sensor_limited = false;  // the reading stopped short of the commands, the muscle did not
+  double slope_ratio = 0.0;     // the contraction's slope on the command at the reading's top / the run's
+  double x_lo_mm = 0.0, x_hi_mm = 0.0, cmd_lo_mpa = 0.0, cmd_hi_mpa = 0.0;  // over those samples
+};
+
+ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
+  ActuatorTop t;
+  t.reached_mpa = max_of(sm.p);
+  const std::vector<double>& c = id.pressure_command_mpa;
+  const double p_cmd_max = max_of(c);
+  const bool short_of_commands = t.reached_mpa < (1.0 - kPressureHeadroom) * std::min(p_cmd_max, kPressureMax);
+  if (!short_of_commands || !(t.reached_mpa > 0.0)) return t;
+  t.mpa = t.reached_mpa;
+  // least-squares slope of x on c over the samples `in` selects
+  auto slope = [&](auto in) {
+    double n = 0, sc = 0, sx = 0, scc = 0, scx = 0;
+    for (std::size_t k = 1; k < c.size() && k < sm.x_mm.size(); ++k)
+      if (in(k)) n += 1, sc += c[k], sx += sm.x_mm[k], scc += c[k] * c[k], scx += c[k] * sm.x_mm[k];
+    const double var = n * scc - sc * sc;
+    return std::pair{n, var > 0.0 ? (n * scx - sc * sx) / var : 0.0};
+  };
+  auto at_top = [&](std::size_t k) { return sm.p[k] >= 0.99 * t.reached_mpa && c[k] > c[k - 1]; };
+  const auto [n_top, b_top] = slope(at_top);
+  const auto [n_run, b_run] = slope([&](std::size_t k) { return c[k] <= 0.9 * t.reached_mpa; });
+  if (n_top < 20.0 || n_run < 20.0 || !(b_run > 0.0)) return t;
+  t.slope_ratio = b_top / b_run;
+  t.x_lo_mm = t.cmd_lo_mpa = std::numeric_limits<double>::infinity();
+  t.x_hi_mm = t.cmd_hi_mpa = -t.x_lo_mm;
+  for (std::size_t k = 1; k < c.size() && k < sm.x_mm.size(); ++k)
+    if (at_top(k)) {
+      t.x_lo_mm = std::min(t.x_lo_mm, sm.x_mm[k]), t.x_hi_mm = std::max(t.x_hi_mm, sm.x_mm[k]);
+      t.cmd_lo_mpa = std::min(t.cmd_lo_mpa, c[k]), t.cmd_hi_mpa = std::max(t.cmd_hi_mpa, c[k]);
+    }
+  const double sigma = first_difference_sigma(id.contraction_mm, 0, id.contraction_mm.size());
+  t.sensor_limited = t.slope_ratio >= kSensorTopSlope && t.x_hi_mm - t.x_lo_mm > 5.0 * sigma;
+  return t;
+}
+
+// The note of a top below the commands (fit_to_reach): the actuator's cap, or the sensor's limit.
+std::string top_note(const ActuatorTop& t, double p_cmd_max, double p_limit) {
+  if (!t.sensor_limited)
+    return fmt::format(
+        "the actuator's pressure reached at most {:.3f} MPa in the identification run, whose command went up to "
+        "{:.3f} MPa: the supply, regulator or valves cap it below the {:.2f} MPa the loops may command; the "
+        "rig's reach is measured up to {:.3f} MPa ({:.0f} % below that top as headroom)",
+        t.reached_mpa, p_cmd_max, kPressureMax, p_limit, kPressureHeadroom * 100.0);
+  return fmt::format(
+      "the pressure reading of the identification run stopped at {:.3f} MPa while the command went up to {:.3f} MPa, "
+      "but the muscle went on contracting with the command ({:.1f} to {:.1f} mm while the command rose from {:.3f} to "
+      "{:.3f} MPa with the reading at its top: {:.0f} % of the run's slope, where an actuator held at its top holds "
+      "the contraction): the pressure sensor's range ends below the actuator's pressure, or it reads low (an "
+      "offset), not the actuator; the models are fitted on the reading and the pressure loops close on it, so the "
+      "rig's reach is measured up to {:.3f} MPa of the reading ({:.0f} % below its top as headroom); a sensor whose "
+      "range covers the actuator's would let the loops use the rest (--paper-references tracks the published "
+      "references regardless)",
+      t.reached_mpa, p_cmd_max, t.x_lo_mm, t.x_hi_mm, t.cmd_lo_mpa, t.cmd_hi_mpa, 100.0 * t.slope_ratio, p_limit,
+      kPressureHeadroom * 100.0);
 }
 
 // The pressures of the identification run's stroke (StrokePressures, detail.hpp), on its
@@ -426,22 +493,17 @@ std::string clipping_note(const Clipping& clip) {
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
 // (the least contraction at or above that pressure). The top pressure p_top is usable_top's
 // (kPressureMax, or the most the measured pressure reached where the supply, the regulator
-// or the valves cap the actuator; res.reach_pressure_max_mpa, set by the caller). A
+// or the valves cap the actuator, or the pressure sensor's range ends; its note says which). A
 // reference that leaves the reach is mapped affinely onto its intersection with it (only
 // the end that leaves it moves; a reference whose bottom is the rest position keeps it).
 // The ranges and a note per reference out of reach go into the result.
 std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdentificationRun& id, const SmoothedRun& sm,
-                                    double p_top, std::vector<Reference> refs, ExperimentResult& res) {
+                                    const ActuatorTop& actuator_top, std::vector<Reference> refs,
+                                    ExperimentResult& res) {
   const std::vector<double>& x = sm.x_mm;
-  const double p_cmd_max = max_of(id.pressure_command_mpa);
-  const bool capped = p_top < kPressureMax;
+  const double p_top = actuator_top.mpa;
   const double p_limit = (1.0 - kPressureHeadroom) * p_top;
-  if (capped)
-    res.messages.push_back(fmt::format(
-        "the actuator's pressure reached at most {:.3f} MPa in the identification run, whose command went up to "
-        "{:.3f} MPa: the supply, regulator or valves cap it below the {:.2f} MPa the loops may command; the "
-        "rig's reach is measured up to {:.3f} MPa ({:.0f} % below that top as headroom)",
-        res.reach_pressure_max_mpa, p_cmd_max, kPressureMax, p_limit, kPressureHeadroom * 100.0));
+  if (p_top < kPressureMax) res.messages.push_back(top_note(actuator_top, max_of(id.pressure_command_mpa), p_limit));
   double top = std::numeric_limits<double>::infinity();
   res.reach_min_mm = std::numeric_limits<double>::infinity();
   res.reach_max_mm = -res.reach_min_mm;
@@ -835,8 +897,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   std::optional<IdentificationRun> extended_run, extended_runf;
   {
     const SmoothedRun sm(id);
-    const double reached = max_of(sm.p);
-    if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, reached)); ext > 0.0) {
+    if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, sm).mpa); ext > 0.0) {
       const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
       const double reached_mm = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
       extended_run = identification_run(o.rig, o.seed, scaled_to(paper_input, ext, true), tc, make_actuator());
@@ -855,8 +916,9 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   const SmoothedRun smooth(id_run);
   res.reach_pressure_max_mpa = max_of(smooth.p);
   // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip
-  const double top = usable_top(id_run, res.reach_pressure_max_mpa);
-  refs = fit_to_reach(o, id_run, smooth, top, std::move(refs), res);
+  const ActuatorTop actuator_top = usable_top(id_run, smooth);
+  const double top = actuator_top.mpa;
+  refs = fit_to_reach(o, id_run, smooth, actuator_top, std::move(refs), res);
   add_pre_roll(refs, tc);
   const IdentificationRange range = model_identification_range(smooth, refs, id_input);
   const bool rescaled = range.p_id_mpa > 0.0;

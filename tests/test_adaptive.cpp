@@ -321,8 +321,16 @@ TEST(Adaptive, BeatsTheFixedInverseOnARigWithAWiderHysteresisBand) {
       EXPECT_NO_THROW((void)make_controller(comp->controller, r.best_fit.model));
     }
     EXPECT_TRUE(any);
-    bool noted = false;
-    for (const auto& m : r.messages) noted = noted || m.rfind("adaptive (", 0) == 0;
+    bool noted = false, changed = false, above = false;
+    for (const auto& m : r.messages) {
+      noted = noted || m.rfind("adaptive (", 0) == 0;
+      // the run says it tracked on another rig, and which parameter differs (2026-11-29)
+      changed = changed || (m.find("differs from the identified one (--plant) in 1 parameter(s): "
+                                   "hysteresis.pressure_band: 15000.0 -> 25000.0") != std::string::npos);
+      above = above || m.find("is above the compensated run's") != std::string::npos;
+    }
     EXPECT_TRUE(noted);
+    EXPECT_TRUE(changed);
+    EXPECT_FALSE(above);  // it is below on this rig: no such note
   }
 }

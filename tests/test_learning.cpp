@@ -1277,6 +1277,35 @@ TEST(ExperimentTuning, LoopNotBelowTheBaselineSaysSo) {
   EXPECT_TRUE(experiment::above_baseline_note(run, base).empty());
 }
 
+// An adaptive run above the compensated one says so (a pressure sensor's offset of 30 kPa after
+// the identification: gpi-pid adaptive 0.731 against 0.363 mm, 2026-11-29), and names a changed
+// tracking rig; one below, or equal, says nothing.
+TEST(ExperimentTuning, AdaptiveAboveTheCompensatedRunSaysSo) {
+  TrackingRun comp, run;
+  comp.variant = "compensated";
+  run.variant = "adaptive";
+  comp.reference = run.reference = "sine";
+  comp.errors.rms_error_mm = 0.363;
+  run.errors.rms_error_mm = 0.731;
+  const std::string note = experiment::adaptive_above_note(run, comp);
+  EXPECT_EQ(note.rfind("adaptive (sine): its RMS error, 0.731 mm, is above the compensated run's 0.363 mm (+101.4 %)", 0),
+            0u) << note;
+  EXPECT_EQ(note.find("--tracking-plant"), std::string::npos) << note;
+  const std::string changed = experiment::adaptive_above_note(run, comp, true);
+  EXPECT_NE(changed.find("(--tracking-plant) differs from the identified one"), std::string::npos) << changed;
+  run.errors.rms_error_mm = 0.363;
+  EXPECT_TRUE(experiment::adaptive_above_note(run, comp, true).empty());
+  run.errors.rms_error_mm = 0.2;
+  EXPECT_TRUE(experiment::adaptive_above_note(run, comp).empty());
+  // the changed rig's note lists every parameter that differs, and only those
+  PamRigParams a, b;
+  b.load.mass = 35.0;
+  b.sensors.pressure_offset = 3e4;
+  const std::string rig = experiment::changed_rig_note(a, b);
+  EXPECT_NE(rig.find("in 2 parameter(s): load.mass: 20.0 -> 35.0; sensors.pressure_offset: 0.0 -> 30000.0;"),
+            std::string::npos) << rig;
+}
+
 // The learning variant's feedforward goes through the shaper the gain trial chose for the
 // compensated loop of the same reference (docs/control.md, section 3, "The feedforward's
 // shaper"): said in its description exactly where the trial chose shaping, and on mpi-pwm's

@@ -995,6 +995,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   const std::uint64_t track_seed = o.seed + 104729;
   // the tracking rig is not the one identified (--tracking-plant): the notes name that first
   const bool rig_changed = o.tracking_rig && rig_params_to_json(*o.tracking_rig) != rig_params_to_json(o.rig);
+  if (rig_changed) res.messages.push_back(changed_rig_note(o.rig, *o.tracking_rig));
   for (const Reference& ref : refs) {
     Context rc = ctx;
     rc.reference = &ref;
@@ -1073,6 +1074,13 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           if (run.reference == ref.name && (run.variant == "compensated" || run.variant == "adaptive" ||
                                             run.variant == "learning"))
             if (std::string note = above_baseline_note(run, base, rig_changed); !note.empty())
+              res.messages.push_back(std::move(note));
+    // nor an adaptive run that ends above the compensated one it adapts
+    for (const TrackingRun& comp : res.runs)
+      if (comp.variant == "compensated" && comp.reference == ref.name)
+        for (const TrackingRun& run : res.runs)
+          if (run.reference == ref.name && run.variant == "adaptive")
+            if (std::string note = adaptive_above_note(run, comp, rig_changed); !note.empty())
               res.messages.push_back(std::move(note));
   }
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -1277,6 +1285,38 @@ std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base,
                                 run.variant == "learning" ? "" : ", or use the learning variant")
                   : std::string("the loop tuned from this rig's identification does no better than no compensation; "
                                 "the identified dynamics and relay tests above are suspect"));
+}
+
+std::string adaptive_above_note(const TrackingRun& adaptive, const TrackingRun& compensated, bool rig_changed) {
+  if (!(adaptive.errors.rms_error_mm > compensated.errors.rms_error_mm)) return {};
+  return fmt::format(
+      "{} ({}): its RMS error, {:.3f} mm, is above the compensated run's {:.3f} mm ({:+.1f} %), the same loop with "
+      "the fitted inverse: the weights it adapted online predicted the contraction from the pressure reading at "
+      "least as well as the fitted ones (its guard) but tracked worse (docs/control.md section 4){}",
+      adaptive.variant, adaptive.reference, adaptive.errors.rms_error_mm, compensated.errors.rms_error_mm,
+      100.0 * (adaptive.errors.rms_error_mm / compensated.errors.rms_error_mm - 1.0),
+      rig_changed ? "; the rig it tracked on (--tracking-plant) differs from the identified one: a change the "
+                    "weights cannot represent (a pressure sensor's offset, a load that shifts the pressure at "
+                    "which the muscle starts to contract) is fitted into them as a wrong shape"
+                  : "");
+}
+
+// The leaves of two rigs' JSON forms (rig_params_to_json) that differ, as "section.key: a -> b".
+std::string changed_rig_note(const PamRigParams& identified, const PamRigParams& tracking) {
+  const nlohmann::json a = rig_params_to_json(identified), b = rig_params_to_json(tracking);
+  std::vector<std::string> diffs;
+  for (const auto& [section, keys] : a.items())
+    for (const auto& [key, value] : keys.items()) {
+      const nlohmann::json& other = b.at(section).at(key);
+      if (other != value) diffs.push_back(fmt::format("{}.{}: {} -> {}", section, key, value.dump(), other.dump()));
+    }
+  std::string list;
+  for (const auto& d : diffs) list += (list.empty() ? "" : "; ") + d;
+  return fmt::format(
+      "the tracking runs are on the rig of --tracking-plant, which differs from the identified one (--plant) in "
+      "{} parameter(s): {}; every loop was identified and tuned on the identified rig, not re-tuned (its reach, "
+      "model, gains and learning design are that rig's)",
+      diffs.size(), list);
 }
 
 bool set_learning_shaper(bool on) { return learning_shaper.exchange(on); }

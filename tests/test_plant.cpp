@@ -254,6 +254,30 @@ TEST(PamRig, ExcessiveStiffnessRejectedAtConstruction) {
   p.valves.sonic_conductance = 1e-3;  // absurd: a pipe the size of a barn door
   const std::string msg = error_of([&] { PamRig rig(p, 1); });
   EXPECT_NE(msg.find("max_substeps"), std::string::npos) << msg;
+  // the load's rate too: 0.5 g on a 20 kN s/m guide needs 4001 sub-steps, refused by name
+  PamRigParams light;
+  light.load.mass = 5e-4;
+  light.load.damping = 2e4;
+  const std::string m2 = error_of([&] { PamRig rig(light, 1); });
+  EXPECT_NE(m2.find("load.damping / load.mass"), std::string::npos) << m2;
+  EXPECT_NE(m2.find("max_substeps"), std::string::npos) << m2;
+}
+
+// A light load on a heavily damped guide (0.5 kg, 20 kN s/m: c / m = 4e4 1/s, beyond RK4's
+// stability at one step of 0.1 ms) is integrated with enough sub-steps; it diverged at run time
+// ("non-positive absolute pressure") before 2026-11-29.
+TEST(PamRig, StiffLoadGetsItsSubSteps) {
+  PamRigParams p;
+  p.load.mass = 0.5;
+  p.load.damping = 2e4;
+  PamRig rig(p, 1);
+  for (int k = 0; k < 20000; ++k) rig.step({0.4, 0.0, Actuation::regulator});  // 2 s at 0.4 MPa
+  ASSERT_TRUE(rig.ok());
+  EXPECT_NO_THROW(rig.check());
+  EXPECT_GT(rig.state().contraction, 0.01);  // it moves, slowly: c / k of about 1 s
+  // the nominal rig's sub-steps are the air's alone (its load's rate is 50 1/s)
+  PamRig nominal(PamRigParams{}, 1);
+  EXPECT_TRUE(nominal.ok());
 }
 
 TEST(PamRig, StepAndRunDoNotAllocate) {
@@ -327,6 +351,15 @@ TEST(PamRigParams, JsonRoundTripAndErrors) {
     return error_of([&] { rig_params_from_json(nlohmann::json::parse(text), "rig.json"); });
   };
   EXPECT_NE(msg(R"({"load": {"mas": 3}})").find("unknown key 'mas'"), std::string::npos);
+  // the section's keys, and the closest when it looks like a typo (2026-11-29)
+  EXPECT_NE(msg(R"({"load": {"mas": 3}})").find("did you mean 'mass'? (the keys of load: mass, damping, gravity"),
+            std::string::npos) << msg(R"({"load": {"mas": 3}})");
+  EXPECT_EQ(msg(R"({"load": {"volume": 3}})").find("did you mean"), std::string::npos);
+  // a braid at or above the neutral angle atan(sqrt(2)) would lengthen under pressure
+  EXPECT_NE(msg(R"({"muscle": {"rest_braid_angle": 1.0}})").find("rig.json.muscle.rest_braid_angle = 1.0: must be"),
+            std::string::npos);
+  EXPECT_NE(msg(R"({"muscle": {"rest_braid_angle": 0.96}})").find("54.74 deg"), std::string::npos);
+  EXPECT_NO_THROW(rig_params_from_json(nlohmann::json::parse(R"({"muscle": {"rest_braid_angle": 0.95}})"), "x"));
   EXPECT_NE(msg(R"({"lode": {}})").find("unknown key 'lode'"), std::string::npos);
   const auto neg = msg(R"({"load": {"mass": -1}})");
   EXPECT_NE(neg.find("rig.json.load.mass"), std::string::npos) << neg;

@@ -137,12 +137,25 @@ PamRig::PamRig(PamRigParams params, std::uint64_t seed) : p_(params), seed_(seed
   const double v_min = muscle_volume(p_.muscle, 0.0);
   const double lambda = std::max(a.k_in, a.k_out) * a.gas_constant * a.temperature / v_min *
                         std::max(dm_reg, dm_valves);
-  const double needed = std::ceil(dt * lambda / 1.0);
-  if (needed > p_.simulation.max_substeps)
+  // ... and the load's: its damping rate c / m (a light load on a heavily damped guide) and its
+  // stiffest mode sqrt(k / m), k the force map's stiffness at rest, F620 c0 c1 / (eps620 L0),
+  // plus the creep element's (without them a 0.5 kg load with 20 kN s/m diverged at run time).
+  const auto& mu = p_.muscle;
+  const double k_max = mu.force_620 * mu.c0 * mu.c1 / (mu.eps_620 * mu.rest_length) + p_.hysteresis.creep_stiffness;
+  const double lambda_load = p_.load.damping / p_.load.mass + std::sqrt(k_max / p_.load.mass);
+  const double needed = std::ceil(dt * std::max(lambda, lambda_load) / 1.0);
+  if (needed > p_.simulation.max_substeps) {
+    if (lambda_load > lambda)
+      throw Error(fmt::format(
+          "rig: the load's dynamics (load.damping / load.mass = {:.4g} / {:.4g} kg, rate {:.4g} 1/s with its stiffest "
+          "mode) need {} sub-steps per dt = {} s, more than simulation.max_substeps = {}; a heavier load, less "
+          "damping or a smaller simulation.dt",
+          p_.load.damping, p_.load.mass, lambda_load, needed, dt, p_.simulation.max_substeps));
     throw Error(fmt::format(
         "rig: the air dynamics (rate {:.4g} 1/s) need {} sub-steps per dt = {} s, more than "
         "simulation.max_substeps = {}; reduce simulation.dt or a valve conductance",
         lambda, needed, dt, p_.simulation.max_substeps));
+  }
   substeps_ = std::max(1, static_cast<int>(needed));
   reset();
 }

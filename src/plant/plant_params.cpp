@@ -1,8 +1,10 @@
 // Parameter validation and JSON I/O of the simulated rig (plant.hpp).
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -11,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hysteron/io/files.hpp"
+#include "hysteron/io/names.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/plant.hpp"
 
@@ -18,7 +21,7 @@ namespace hysteron {
 namespace {
 
 // What a field must satisfy.
-enum class Rule { finite, positive, nonnegative, unit_closed, unit_open, acute_angle, bits };
+enum class Rule { finite, positive, nonnegative, unit_closed, unit_open, acute_angle, braid_angle, bits };
 
 const char* describe(Rule r) {
   switch (r) {
@@ -28,6 +31,9 @@ const char* describe(Rule r) {
     case Rule::unit_closed: return "a number in [0, 1]";
     case Rule::unit_open: return "a number in (0, 1)";
     case Rule::acute_angle: return "an angle in (0, pi/2) rad";
+    case Rule::braid_angle:
+      return "an angle in (0, 0.9553) rad: below the braid's neutral angle atan(sqrt(2)) = 54.74 deg, above which "
+             "the muscle's volume shrinks as it contracts (it would lengthen under pressure)";
     case Rule::bits: return "an integer in [1, 31]";
   }
   return "";
@@ -42,6 +48,7 @@ bool satisfies(Rule r, double v) {
     case Rule::unit_closed: return v >= 0.0 && v <= 1.0;
     case Rule::unit_open: return v > 0.0 && v < 1.0;
     case Rule::acute_angle: return v > 0.0 && v < std::numbers::pi / 2.0;
+    case Rule::braid_angle: return v > 0.0 && v < std::atan(std::sqrt(2.0));
     case Rule::bits: return v >= 1.0 && v <= 31.0 && v == std::floor(v);
   }
   return false;
@@ -54,7 +61,7 @@ void for_each_field(P& p, F&& f) {
   auto& m = p.muscle;
   f("muscle", "rest_length", m.rest_length, Rule::positive);
   f("muscle", "max_contraction", m.max_contraction, Rule::unit_open);
-  f("muscle", "rest_braid_angle", m.rest_braid_angle, Rule::acute_angle);
+  f("muscle", "rest_braid_angle", m.rest_braid_angle, Rule::braid_angle);
   f("muscle", "effective_radius", m.effective_radius, Rule::positive);
   f("muscle", "dead_volume", m.dead_volume, Rule::nonnegative);
   f("muscle", "force_620", m.force_620, Rule::positive);
@@ -210,7 +217,19 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
         if (!satisfies(rule, static_cast<double>(field)))
           throw Error(fmt::format("{} = {}: must be {}", path, value.dump(), describe(rule)));
       });
-      if (!found) throw Error(fmt::format("{}.{}: unknown key '{}'", where, section, key));
+      if (!found) {
+        // the section's keys, and the closest of them when the key looks like a typo of it
+        std::string keys, hint;
+        std::size_t best = std::numeric_limits<std::size_t>::max();
+        for_each_field(p, [&](const char* sec, const char* name, auto&, Rule) {
+          if (section != sec) return;
+          keys += (keys.empty() ? "" : ", ") + std::string(name);
+          const std::size_t d = io::edit_distance(key, name);
+          if (d < best && d <= std::max<std::size_t>(2, key.size() / 3)) best = d, hint = name;
+        });
+        throw Error(fmt::format("{}.{}: unknown key '{}'{} (the keys of {}: {})", where, section, key,
+                                hint.empty() ? "" : fmt::format(", did you mean '{}'?", hint), section, keys));
+      }
     }
   }
   validate(p, where);

@@ -718,6 +718,26 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
   EXPECT_NE(what.find("+-0.2 MPa"), std::string::npos) << what;
 }
 
+// Valves that drop pulses shorter than 1.82 ms, at 346 Hz (a period of 2.89 ms): at the valves'
+// relay's duty +-0.5 (1.45 ms) they never open and the muscle stays vented (0.004 MPa); the
+// relay runs again at +-1 (before 2026-11-29 mpi-pwm failed there, naming the supply). Nominal
+// valves keep +-0.5.
+TEST(ExperimentTuning, ValveRelayRunsAtFullDutyWhereHalfDutyDoesNotOpenTheValves) {
+  const double tc = 1e-3;
+  RigDynamics nominal, slow;
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  EXPECT_EQ(nominal.relay_duty, 0.5);
+  EXPECT_GT(nominal.relay_gain, 0.0);
+  PamRigParams p;
+  p.valves.min_pulse = 1.822864e-3;
+  p.valves.pwm_frequency = 345.900323424;
+  experiment::relay_test(p, 7, tc, slow);
+  EXPECT_EQ(slow.relay_duty, 1.0);
+  EXPECT_GT(slow.relay_gain, 0.0);
+  EXPECT_GT(slow.relay_period_s, 0.0);
+  EXPECT_NEAR(slow.relay_level_mpa, experiment::kRelayLevel, 1e-12);
+}
+
 // A heavy load hangs on its rest below a pressure that grows with its weight (the
 // identification run lifts 65 kg off its rest only above about 0.29 MPa, 70 kg above 0.31).
 // A relay at 0.3 +- 0.05 MPa then lets it down onto the rest every cycle: at 65 kg the cycle

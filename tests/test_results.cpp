@@ -374,16 +374,18 @@ TEST(Results, ExperimentResultRoundTrip) {
     return std::vector<double>{d.dead_time_s, d.lag_s, d.gain_m_per_mpa, d.rms_mm, d.relay_gain, d.relay_period_s,
                                d.position_relay_gain, d.position_relay_period_s, d.position_relay_amplitude_mpa,
                                d.position_relay_hysteresis_m, d.position_relay_level_mpa, d.relay_level_mpa,
-                               d.mode_frequency_hz, d.mode_damping};
+                               d.relay_duty, d.mode_frequency_hz, d.mode_damping};
   };
   EXPECT_EQ(fields(back.dynamics), fields(r.dynamics));
   {  // a file from before the relays' levels were written: both ran at 0.3 MPa where they ran
     nlohmann::json j = io::to_json(r);
     j["dynamics"].erase("position_relay_level_mpa");
     j["dynamics"].erase("pressure_relay_level_mpa");
+    j["dynamics"].erase("pressure_relay_duty");
     ExperimentResult old = io::from_json<ExperimentResult>(j, "old");
     EXPECT_EQ(old.dynamics.position_relay_level_mpa, 0.3);
     EXPECT_EQ(old.dynamics.relay_level_mpa, 0.3);
+    EXPECT_EQ(old.dynamics.relay_duty, r.dynamics.relay_gain > 0.0 ? 0.5 : 0.0);
     j["dynamics"]["pressure_relay_gain_per_mpa"] = 0.0;  // a regulator rig: no pressure relay
     old = io::from_json<ExperimentResult>(j, "old");
     EXPECT_EQ(old.dynamics.relay_level_mpa, 0.0);
@@ -391,7 +393,11 @@ TEST(Results, ExperimentResultRoundTrip) {
     ExperimentResult capped = r;
     capped.dynamics.position_relay_level_mpa = 0.15;
     capped.dynamics.relay_level_mpa = 0.151;
+    capped.dynamics.relay_duty = 1.0;
     const ExperimentResult cb = round_trip(capped);
+    EXPECT_EQ(cb.dynamics.relay_duty, 1.0);
+    EXPECT_NE(cb.table().find("pressure relay (at 0.151 MPa) (duty +-1: the valves did not open at +-0.5)"),
+              std::string::npos) << cb.table();
     EXPECT_EQ(cb.dynamics.position_relay_level_mpa, 0.15);
     EXPECT_EQ(cb.dynamics.relay_level_mpa, 0.151);
     EXPECT_NE(cb.table().find("position relay (at 0.150 +-0.1 MPa)"), std::string::npos) << cb.table();

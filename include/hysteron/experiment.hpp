@@ -144,6 +144,9 @@ struct RigDynamics {
   // reaches where its supply caps it below that (docs/control.md, section 1).
   double position_relay_level_mpa = 0.0;
   double relay_level_mpa = 0.0;
+  // The valves' relay amplitude h [duty]: 0.5, or 1 where the valves did not open at 0.5 (a
+  // minimum pulse or opening delay longer than half the PWM period); 0 if not run.
+  double relay_duty = 0.0;
   bool operator==(const RigDynamics&) const = default;
 };
 

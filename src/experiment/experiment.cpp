@@ -978,6 +978,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics.relay_gain = valves_relay.relay_gain;
   res.dynamics.relay_period_s = valves_relay.relay_period_s;
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;
+  res.dynamics.relay_duty = valves_relay.relay_duty;
   position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top, stroke_pressures(id_run, smooth));
   fit_load_mode(res.dynamics);
   if (const RigDynamics fitted = res.dynamics; fit_fopdt_to_relay_phase(res.dynamics))
@@ -1214,10 +1215,13 @@ std::string ExperimentResult::table() const {
                    dynamics.position_relay_gain, dynamics.position_relay_period_s * 1e3,
                    dynamics.mode_frequency_hz, dynamics.mode_damping,
                    dynamics.relay_gain > 0
-                       ? fmt::format(", pressure relay{} K_u = {:.3g}/MPa, T_u = {:.1f} ms",
+                       ? fmt::format(", pressure relay{}{} K_u = {:.3g}/MPa, T_u = {:.1f} ms",
                                      moved(dynamics.relay_level_mpa)
                                          ? fmt::format(" (at {:.3f} MPa)", dynamics.relay_level_mpa)
                                          : std::string(),
+                                     dynamics.relay_duty > 0.5 ? fmt::format(" (duty +-{:g}: the valves did not "
+                                                                             "open at +-0.5)", dynamics.relay_duty)
+                                                               : std::string(),
                                      dynamics.relay_gain, dynamics.relay_period_s * 1e3)
                        : std::string());
   for (const auto& g : gain_trials) {

@@ -396,8 +396,8 @@ struct PressureRelayRun {
   double top = 0.0, eps = 0.0;
 };
 
-PressureRelayRun pressure_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, double p0) {
-  constexpr double h = 0.5;        // relay amplitude [duty]
+PressureRelayRun pressure_relay_run(const PamRigParams& rp, std::uint64_t seed, double tc, double p0,
+                                    double h = 0.5 /* relay amplitude [duty] */) {
   const auto quiet = static_cast<std::size_t>(std::lround(0.2 / tc));
   const auto max_fill = static_cast<std::size_t>(std::lround(2.0 / tc));
   const auto relay_n = static_cast<std::size_t>(std::lround(1.8 / tc));
@@ -452,11 +452,23 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   double p0 = kRelayLevel;  // [MPa]
   PressureRelayRun r = pressure_relay_run(rp, seed, tc, p0);
   std::string first;
+  // Valves that barely filled the muscle at duty 0.5 (less than a tenth of the level in the 2 s
+  // fill) do not open at that duty (a minimum pulse or an opening delay longer than half the
+  // PWM period: 1.8 ms at 346 Hz reached 0.004 MPa): the relay runs again at full duty.
+  double h = 0.5;
+  if (!r.cycle.oscillated && r.top < 0.1 * p0) {
+    const double top_half = r.top;
+    h = 1.0;
+    r = pressure_relay_run(rp, seed, tc, p0, h);
+    first = fmt::format("; at duty +-0.5 first, where the pressure reached at most {:.4f} MPa (the valves did not "
+                        "open: a minimum pulse or opening delay longer than half the PWM period?), then at +-1",
+                        top_half);
+  }
   if (!r.cycle.oscillated && r.top > 0.0 && 0.5 * r.top < p0 - r.eps) {
-    first = fmt::format("; around {} MPa first, where the pressure reached at most {:.4f} MPa (the supply caps it)",
-                        p0, r.top);
+    first += fmt::format("; around {} MPa first, where the pressure reached at most {:.4f} MPa (the supply caps it)",
+                         p0, r.top);
     p0 = 0.5 * r.top;
-    r = pressure_relay_run(rp, seed, tc, p0);
+    r = pressure_relay_run(rp, seed, tc, p0, h);
   }
   if (!r.cycle.oscillated)
     throw Error(fmt::format("experiment: the relay test of the valves' pressure loop did not oscillate around {:.4g} "
@@ -465,6 +477,7 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
   d.relay_period_s = r.cycle.period_s;
   d.relay_gain = r.cycle.ultimate_gain;
   d.relay_level_mpa = p0;
+  d.relay_duty = h;
 }
 
 PidParams tyreus_luyben_pi(const RigDynamics& d, double tc) {

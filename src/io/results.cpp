@@ -478,7 +478,8 @@ json to_json(const ExperimentResult& r) {
                    {"mode_damping", number(r.dynamics.mode_damping)},
                    {"pressure_relay_gain_per_mpa", number(r.dynamics.relay_gain)},
                    {"pressure_relay_period_s", number(r.dynamics.relay_period_s)},
-                   {"pressure_relay_level_mpa", number(r.dynamics.relay_level_mpa)}};
+                   {"pressure_relay_level_mpa", number(r.dynamics.relay_level_mpa)},
+                   {"pressure_relay_duty", number(r.dynamics.relay_duty)}};
   j["reach"] = {{"min_mm", number(r.reach_min_mm)},
                 {"max_mm", number(r.reach_max_mm)},
                 {"top_mm", number(r.reach_top_mm)},
@@ -590,6 +591,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
     r.dynamics.position_relay_level_mpa =
         opt_double(d, "position_relay_level_mpa", dw, r.dynamics.position_relay_gain > 0.0 ? 0.3 : 0.0);
     r.dynamics.relay_level_mpa = opt_double(d, "pressure_relay_level_mpa", dw, r.dynamics.relay_gain > 0.0 ? 0.3 : 0.0);
+    r.dynamics.relay_duty = opt_double(d, "pressure_relay_duty", dw, r.dynamics.relay_gain > 0.0 ? 0.5 : 0.0);
   }
   if (j.contains("reach")) {  // absent in files before it
     const json& a = j["reach"];

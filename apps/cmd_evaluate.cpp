@@ -44,9 +44,35 @@ int run_evaluate(const EvaluateOptions& c) {
   const ModelParams model = read_model_source(c.model);
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);
+  if (rec.t && c.range.find('s') != std::string::npos)
+    require_increasing_time(*rec.t, c.sel.file, sel.time_column, "a range in seconds");
   const IndexRange range = c.range.empty() ? IndexRange{0, rec.x.size()}
                                            : parse_range(c.range, "--range", rec.t ? &*rec.t : nullptr, rec.x.size());
   const InitialState initial = c.relaxed ? InitialState::relaxed : InitialState::virgin;
+  if (range.end - range.begin < 2)
+    throw Error(fmt::format("{}: {} sample(s) in the evaluated range [{}, {}): too few to score (need at least 2)",
+                            c.sel.file, range.end - range.begin, range.begin, range.end));
+  std::vector<std::string> warnings;
+  if (const auto* rp = std::get_if<RatePiParams>(&model); rp && rec.t && rec.t->size() > 1) {
+    // rate-pi's rates are per second through its dt: a record sampled otherwise is run at the wrong rates
+    for (std::size_t k = 1; k < rec.t->size(); ++k)
+      if (!((*rec.t)[k] > (*rec.t)[k - 1])) {
+        warnings.push_back(fmt::format("{}: the time column {} does not increase at sample {} (data row {}): the "
+                                       "record's sample time is uncertain",
+                                       c.sel.file, sel.time_column, k, k + 1));
+        break;
+      }
+    const double dt = median_time_step(*rec.t);
+    if (std::abs(dt - rp->dt) > 0.1 * rp->dt)
+      warnings.push_back(fmt::format("{}: the record's sample time {:.6g} s (median step of the time column {}) differs "
+                                     "from the rate-pi model's dt {:.6g} s: the model runs its rates {:.3g}x too {}",
+                                     c.sel.file, dt, sel.time_column, rp->dt, std::max(dt, rp->dt) / std::min(dt, rp->dt),
+                                     dt > rp->dt ? "slow" : "fast"));
+    if (warnings.empty())
+      if (std::string w = uniform_time_warning(*rec.t, c.sel.file, sel.time_column); !w.empty())
+      warnings.push_back(std::move(w));
+  }
+  for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
 
   io::EvaluationDocument doc;
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;

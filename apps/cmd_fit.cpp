@@ -110,16 +110,19 @@ int run_fit(const FitCliOptions& c) {
   o.gpi_free_weights = c.free_weights;
   o.sample_time = c.sample_time;
   o.censor_passes = c.censor_passes;
-  if (o.sample_time == 0.0 && time && time->size() > 1) {
-    // rate-pi: the median step of the time column
-    std::vector<double> dts(time->size() - 1);
-    for (std::size_t k = 1; k < time->size(); ++k) dts[k - 1] = (*time)[k] - (*time)[k - 1];
-    std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
-    if (!(dts[dts.size() / 2] > 0))
-      throw Error(fmt::format("{}: the time column {} does not increase (median step {}): no sample time", c.sel.file,
-                              c.sel.time_column, dts[dts.size() / 2]));
-    o.sample_time = dts[dts.size() / 2];
+  std::vector<std::string> time_warnings;
+  const bool rate = o.model == FitModel::rate_pi || o.model == FitModel::automatic;
+  if (rate && o.sample_time == 0.0 && time && time->size() > 1) {
+    // rate-pi: the median step of the time column, which must increase and should be uniform
+    require_increasing_time(*time, c.sel.file, c.sel.time_column, "rate-pi's sample time (or give --sample-time)");
+    if (std::string w = uniform_time_warning(*time, c.sel.file, c.sel.time_column); !w.empty())
+      time_warnings.push_back(std::move(w));
+    o.sample_time = median_time_step(*time);
   }
+  // a range in seconds looks its ends up in the time column: it must increase
+  const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
+  if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))
+    require_increasing_time(*time, c.sel.file, c.sel.time_column, "a range in seconds");
   const IndexRange train =
       c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
   o.train = train;
@@ -135,6 +138,7 @@ int run_fit(const FitCliOptions& c) {
     v.x = std::move(d.x);
     v.y = std::move(d.y);
     if (d.t) v.t = std::move(*d.t);
+    if (d.t && in_seconds(c.validate)) require_increasing_time(v.t, file, c.sel.time_column, "a range in seconds");
     v.range = c.validate.empty() ? IndexRange{0, v.x.size()}
                                  : parse_range(c.validate, fmt::format("--validate (on {})", file),
                                                time ? &v.t : nullptr, v.x.size());
@@ -151,7 +155,9 @@ int run_fit(const FitCliOptions& c) {
     o.progress = [](int start, int it, double cost) {
       fmt::print(stderr, "\rstart {} iteration {:3d} cost {:.6g}   ", start, it, cost);
     };
-  const FitReport rep = fit(x, y, o);
+  FitReport rep = fit(x, y, o);
+  if (has_model(rep.status) && (rep.model_kind == FitModel::rate_pi || o.model == FitModel::automatic))
+    rep.warnings.insert(rep.warnings.end(), time_warnings.begin(), time_warnings.end());
   if (o.progress) fmt::print(stderr, "\r{:60}\r", "");
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 
@@ -243,9 +249,10 @@ int run_fit(const FitCliOptions& c) {
     text += head + fmt::format(" {:>9}\n", "time [s]");
     for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
       const auto& cand = rep.candidates[i];
-      std::string line = fmt::format("  {:<13} {:<15} {:>12.6g} {:>12.6g} {:>9.4g}", fit_model_name(cand.kind),
-                                     fit_status_name(cand.status), cand.train.rms, cand.holdout.rms,
-                                     cand.holdout_score);
+      const auto cell = [](double v, const char* f) { return std::isfinite(v) ? fmt::format(fmt::runtime(f), v) : "-"; };
+      std::string line = fmt::format("  {:<13} {:<15} {:>12} {:>12} {:>9}", fit_model_name(cand.kind),
+                                     fit_status_name(cand.status), cell(cand.train.rms, "{:.6g}"),
+                                     cell(cand.holdout.rms, "{:.6g}"), cell(cand.holdout_score, "{:.4g}"));
       for (std::size_t k = 0; k < sets.size(); ++k) {
         const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();
         line += fmt::format(" {:>14}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");

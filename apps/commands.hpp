@@ -65,6 +65,16 @@ void add_data_options(CLI::App* sub, DataSelection& sel);
 // The input, output and (if named) time columns of `file`, of equal lengths; throws
 // hysteron::Error naming the file otherwise.
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel);
+// Time columns (rate-pi's sample time, ranges in seconds): throws hysteron::Error naming the file,
+// the column and the first sample whose time stamp does not exceed the one before (`why`: what
+// needs increasing stamps).
+void require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
+                             std::string_view why);
+// The median step of an increasing time column (s).
+double median_time_step(const std::vector<double>& t);
+// "" if every step of an increasing time column lies within 0.4 .. 1.9 times the median step, else
+// a warning that names the file, the column and the sample of the widest (a gap) or narrowest step.
+std::string uniform_time_warning(const std::vector<double>& t, const std::string& file, const std::string& column);
 // The data section of a fit/evaluation document and the plot data of its HTML report.
 io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range);
 report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range);

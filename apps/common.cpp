@@ -160,6 +160,47 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
   return d;
 }
 
+void require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
+                             std::string_view why) {
+  for (std::size_t k = 1; k < t.size(); ++k)
+    if (!(t[k] > t[k - 1]))
+      throw Error(fmt::format("{}: the time column {} does not increase at sample {} (data row {}: {} s after {} s); {} "
+                              "needs strictly increasing time stamps",
+                              file, column, k, k + 1, t[k], t[k - 1], why));
+}
+
+namespace {
+// Steps of a uniformly sampled column: within these multiples of the median step (a step of 2
+// sample times or more has lost a sample; stamps rounded to a clock's tick vary by up to 1/2).
+constexpr double kMaxStep = 1.9, kMinStep = 0.4;
+}  // namespace
+
+double median_time_step(const std::vector<double>& t) {
+  if (t.size() < 2) return 0.0;
+  std::vector<double> dts(t.size() - 1);
+  for (std::size_t k = 1; k < t.size(); ++k) dts[k - 1] = t[k] - t[k - 1];
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
+  return dts[dts.size() / 2];
+}
+
+std::string uniform_time_warning(const std::vector<double>& t, const std::string& file, const std::string& column) {
+  const double dt = median_time_step(t);  // s
+  if (t.size() < 3 || !(dt > 0)) return {};
+  std::size_t widest = 1, narrowest = 1;
+  for (std::size_t k = 2; k < t.size(); ++k) {
+    if (t[k] - t[k - 1] > t[widest] - t[widest - 1]) widest = k;
+    if (t[k] - t[k - 1] < t[narrowest] - t[narrowest - 1]) narrowest = k;
+  }
+  const double hi = t[widest] - t[widest - 1], lo = t[narrowest] - t[narrowest - 1];
+  if (hi <= kMaxStep * dt && lo >= kMinStep * dt) return {};
+  const bool gap = hi > kMaxStep * dt;
+  const std::size_t k = gap ? widest : narrowest;
+  return fmt::format("{}: the time column {} is not uniformly sampled: the step to sample {} (data row {}) is {:.6g} s, "
+                     "{:.3g} times the median step {:.6g} s ({}); rate-pi's rates assume one sample time",
+                     file, column, k, k + 1, gap ? hi : lo, (gap ? hi : lo) / dt, dt,
+                     gap ? "a gap, or lost samples" : "jittered sampling");
+}
+
 io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range) {
   const report::Axis in = parse_axis(sel.input_label, sel.input), out = parse_axis(sel.output_label, sel.output);
   io::DataDescription d;

@@ -380,6 +380,46 @@ TEST(FitChecks, UselessOrWorseThanReferenceIsPoorFit) {
   }
 }
 
+// A record without hysteresis (a straight line, exact or with a little noise) is fitted as well by
+// the line as by any kind: converged with a warning, not poor_fit; noise alone stays poor_fit above.
+TEST(FitChecks, NoHysteresisIsConvergedWithAWarning) {
+  const std::vector<double> x = triangle({6, 4, 5, 2, 3.5, 1}, 200);
+  std::vector<double> line;
+  for (double v : x) line.push_back(0.3 * v + 2.0);
+  for (const double sigma : {0.0, 1e-3}) {
+    const std::vector<double> y = sigma > 0 ? noisy(line, sigma, 6) : line;
+    for (FitModel kind : {FitModel::pi, FitModel::kp}) {
+      const FitReport rep = fit(x, y, options_for(kind));
+      EXPECT_EQ(rep.status, FitStatus::converged) << fit_model_name(kind) << " sigma " << sigma << ": " << rep.full_report();
+      EXPECT_TRUE(std::any_of(rep.warnings.begin(), rep.warnings.end(),
+                              [](const std::string& w) { return w.find("no hysteresis") != std::string::npos; }))
+          << fit_model_name(kind) << " sigma " << sigma << ": " << rep.full_report();
+    }
+  }
+}
+
+// auto refuses a constant output as every kind does; a candidate that could not run has no metrics.
+TEST(FitAuto, ConstantOutputIsRefusedAndUnrunCandidatesHaveNoMetrics) {
+  const std::vector<double> x = triangle({6, 4, 5, 2}, 100);
+  FitOptions o = options_for(FitModel::automatic);
+  const FitReport c = fit(x, std::vector<double>(x.size(), 5.0), o);
+  EXPECT_EQ(c.status, FitStatus::invalid_input) << c.full_report();
+  EXPECT_NE(c.message.find("the output is constant over the training range"), std::string::npos) << c.message;
+  o.sample_time = 0;  // rate-pi cannot run
+  std::vector<double> y;
+  for (double v : x) y.push_back(std::tanh(0.3 * v) + 0.05 * v);
+  const FitReport rep = fit(x, y, o);
+  bool seen = false;
+  for (const auto& cand : rep.candidates)
+    if (cand.kind == FitModel::rate_pi) {
+      seen = true;
+      EXPECT_FALSE(has_model(cand.status));
+      EXPECT_TRUE(std::isnan(cand.train.rms) && std::isnan(cand.train.r2)) << cand.train.rms;
+      EXPECT_TRUE(std::isnan(cand.holdout.rms) && std::isnan(cand.holdout.r2)) << cand.holdout.rms;
+    }
+  EXPECT_TRUE(seen);
+}
+
 // ---- auto ---------------------------------------------------------------------------
 
 TEST(FitAuto, ChoosesOnTheHoldOutAndValidatesNearTheBestKind) {

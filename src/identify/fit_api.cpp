@@ -102,6 +102,14 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
 // straight line explains no hysteresis (e.g. an output that is noise): a poor fit.
 // (Any model kind contains a line; a hysteretic record leaves a line far more.)
 constexpr double kLineRatio = 0.99498743710662;  // sqrt(0.99)
+// ... unless the record has (almost) no hysteresis: then the line is the right model and a fit as
+// good as it is not useless. That is the case when both the line and the fit leave an error that
+// is negligible: at most kNegligible of the output's span over the training range, or, when the
+// line explains at least kLineR2 of the output's variance (the output is not noise), at most
+// kNoiseFactor times the output's noise (detect_clipping's sigma, from its second differences).
+constexpr double kNegligible = 0.01;
+constexpr double kLineR2 = 0.9;
+constexpr double kNoiseFactor = 1.2;
 
 // The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|);
 // the names are the model file's keys, the factors the kind's (kind_*.cpp).
@@ -280,8 +288,26 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   // Honest status: useless or worse than the reference is never plain `converged`.
   std::string poor;
   const double line_rms = line.rms * sy;
+  // the error a line or the fit may leave on a record without hysteresis (kNegligible above)
+  double tolerance = kNegligible * sy;
+  {
+    double ym = 0, var = 0;
+    for (double v : yt) ym += v;
+    ym /= static_cast<double>(yt.size());
+    for (double v : yt) var += (v - ym) * (v - ym);
+    var /= static_cast<double>(yt.size());
+    const double sigma = detect_clipping(yt).sigma;
+    if (std::isfinite(sigma) && line_rms * line_rms <= (1 - kLineR2) * var)
+      tolerance = std::max(tolerance, kNoiseFactor * sigma);
+  }
+  const bool no_hysteresis = line_rms <= tolerance && rep.train.rms <= tolerance;
   if (!(rep.train.r2 >= 0))
     poor = fmt::format("training R^2 = {:.4g} < 0: worse than a constant", rep.train.r2);
+  else if (no_hysteresis)
+    rep.warnings.push_back(fmt::format(
+        "the record shows (almost) no hysteresis: a straight line fits it as well (line RMS {:.6g}, the model's {:.6g}; "
+        "{:.3g}% of the output's span), a linear model may do",
+        line_rms, rep.train.rms, 100 * line_rms / sy));
   else if (rep.train.rms >= kLineRatio * line_rms)
     poor = fmt::format("training RMS {:.6g} removes less than 1 % of the variance a straight line leaves (line RMS {:.6g}): "
                        "the model explains no hysteresis",
@@ -313,6 +339,14 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   // one input) cannot decide alone: fold 0 holds out the last holdout_fraction of the
   // training range, fold 1 the first; a candidate's hold-out error pools both.
   const std::size_t m = tr.end - tr.begin;
+  {
+    // the same refusals as every explicit kind (fit_one): nothing to choose between on such a record
+    const auto xt = x.subspan(tr.begin, m), yt = y.subspan(tr.begin, m);
+    const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
+    const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
+    if (!(*xh - *xl > 0)) return invalid("fit: the input is constant over the training range", o.model, t0);
+    if (!(*yh - *yl > 0)) return invalid("fit: the output is constant over the training range", o.model, t0);
+  }
   const auto h = static_cast<std::size_t>(std::llround(o.holdout_fraction * static_cast<double>(m)));
   if (h < 1 || h >= m)
     return invalid("fit: auto: the training range is too short to split off a hold-out", o.model, t0);
@@ -348,8 +382,14 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
     c.status = r.status;
     c.message = r.message;
     c.time_s = r.time_s + runs[2 * k + 1].time_s;
+    if (!has_model(r.status)) {
+      // no model (e.g. rate-pi without a sample time): no metrics, not zeros (NaN: null in JSON, "-" in text)
+      FitMetrics none;
+      none.rms = none.max = none.mae = none.rms_percent_span = none.r2 = std::numeric_limits<double>::quiet_NaN();
+      c.train = c.holdout = none;
+      continue;
+    }
     c.train = r.train;
-    if (!has_model(r.status)) continue;
     c.model = r.model;
     FitMetrics pooled;
     double sse = 0, sae = 0;

@@ -152,7 +152,8 @@ FitMetrics compute_metrics(std::span<const double> measured, std::span<const dou
   const double span = detail::span_of(measured);
   m.rms_percent_span = span > 0 ? 100.0 * (m.rms / span) : std::numeric_limits<double>::quiet_NaN();
   // 1 - SSE / SST with SSE = e_scale^2 sse and SST = y_scale^2 sst.
-  m.r2 = sst > 0 ? 1.0 - (e_scale / y_scale) * (e_scale / y_scale) * (sse / sst) : std::numeric_limits<double>::quiet_NaN();
+  // (a constant output has no variance to explain: its sst is only the mean's rounding)
+  m.r2 = sst > 0 && span > 0 ? 1.0 - (e_scale / y_scale) * (e_scale / y_scale) * (sse / sst) : std::numeric_limits<double>::quiet_NaN();
   return m;
 }
 

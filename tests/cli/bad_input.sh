@@ -83,5 +83,23 @@ if [ "$(ls -A "$T/out")" != "keep.csv" ]; then echo "FAIL: stray files in out/: 
 "$BIN" simulate --model "$T/good.json" --input "$T/x.csv" --output "$T/out/keep.csv" || { echo "FAIL: good run"; fails=$((fails + 1)); }
 [ "$(wc -l < "$T/out/keep.csv")" -eq 4 ] || { echo "FAIL: good run output"; fails=$((fails + 1)); }
 
+# time columns: rate-pi's sample time and ranges in seconds need increasing stamps; a gap warns
+awk 'BEGIN { print "t,p,y"; for (k = 0; k < 400; ++k) { t = (k == 200 ? 0.199 : k * 0.001); \
+  p = 50 + 40 * sin(k / 20); print t "," p "," (0.3 * p + 2 + 3 * sin(k / 20 + 0.4)) } }' > "$T/tswap.csv"
+expect_fail "time column not increasing (rate-pi)" 'the time column t does not increase at sample 200 (data row 201' -- \
+  "$BIN" fit --model rate-pi --data "$T/tswap.csv" --input p --output y --time-column t --out "$T/out/keep.csv"
+expect_fail "time column not increasing (seconds range)" 'does not increase at sample 200' -- \
+  "$BIN" fit --model pi --data "$T/tswap.csv" --input p --output y --time-column t --train 0s:0.3s --out "$T/out/keep.csv"
+awk 'BEGIN { print "t,p,y"; for (k = 0; k < 400; ++k) { t = k * 0.001 + (k >= 200 ? 5 : 0); \
+  p = 50 + 40 * sin(k / 20); print t "," p "," (0.3 * p + 2 + 3 * sin(k / 20 + 0.4)) } }' > "$T/tgap.csv"
+"$BIN" fit --model rate-pi --data "$T/tgap.csv" --input p --output y --time-column t --force --out "$T/gap.json" \
+  > "$T/gap.txt" 2>&1
+grep -q "not uniformly sampled: the step to sample 200 (data row 201)" "$T/gap.txt" ||
+  { echo "FAIL: a gap in the time column: no warning"; cat "$T/gap.txt"; fails=$((fails + 1)); }
+printf 'p,y\n1,2\n' > "$T/onerow.csv"
+expect_fail "evaluate on one row" 'too few to score' -- \
+  "$BIN" evaluate --model "$T/good.json" --data "$T/onerow.csv" --input p --output y
+[ "$(cat "$T/out/keep.csv" | wc -l)" -eq 4 ] || { echo "FAIL: keep.csv replaced"; fails=$((fails + 1)); }
+
 if [ $fails -ne 0 ]; then echo "bad_input: $fails failures"; exit 1; fi
 echo "bad_input: ok"

@@ -45,7 +45,7 @@ int run_evaluate(const EvaluateOptions& c) {
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);
   if (rec.t && c.range.find('s') != std::string::npos)
-    require_increasing_time(*rec.t, c.sel.file, sel.time_column, "a range in seconds");
+    (void)require_increasing_time(*rec.t, c.sel.file, sel.time_column, "a range in seconds");
   const IndexRange range = c.range.empty() ? IndexRange{0, rec.x.size()}
                                            : parse_range(c.range, "--range", rec.t ? &*rec.t : nullptr, rec.x.size());
   const InitialState initial = c.relaxed ? InitialState::relaxed : InitialState::virgin;

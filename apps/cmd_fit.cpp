@@ -114,7 +114,10 @@ int run_fit(const FitCliOptions& c) {
   const bool rate = o.model == FitModel::rate_pi || o.model == FitModel::automatic;
   if (rate && o.sample_time == 0.0 && time && time->size() > 1) {
     // rate-pi: the median step of the time column, which must increase and should be uniform
-    require_increasing_time(*time, c.sel.file, c.sel.time_column, "rate-pi's sample time (or give --sample-time)");
+    if (std::string w = require_increasing_time(*time, c.sel.file, c.sel.time_column,
+                                                "rate-pi's sample time (or give --sample-time)");
+        !w.empty())
+      time_warnings.push_back(std::move(w));
     if (std::string w = uniform_time_warning(*time, c.sel.file, c.sel.time_column); !w.empty())
       time_warnings.push_back(std::move(w));
     o.sample_time = median_time_step(*time);
@@ -122,7 +125,7 @@ int run_fit(const FitCliOptions& c) {
   // a range in seconds looks its ends up in the time column: it must increase
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
   if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))
-    require_increasing_time(*time, c.sel.file, c.sel.time_column, "a range in seconds");
+    (void)require_increasing_time(*time, c.sel.file, c.sel.time_column, "a range in seconds");
   const IndexRange train =
       c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
   o.train = train;
@@ -138,7 +141,7 @@ int run_fit(const FitCliOptions& c) {
     v.x = std::move(d.x);
     v.y = std::move(d.y);
     if (d.t) v.t = std::move(*d.t);
-    if (d.t && in_seconds(c.validate)) require_increasing_time(v.t, file, c.sel.time_column, "a range in seconds");
+    if (d.t && in_seconds(c.validate)) (void)require_increasing_time(v.t, file, c.sel.time_column, "a range in seconds");
     v.range = c.validate.empty() ? IndexRange{0, v.x.size()}
                                  : parse_range(c.validate, fmt::format("--validate (on {})", file),
                                                time ? &v.t : nullptr, v.x.size());

@@ -160,13 +160,26 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
   return d;
 }
 
-void require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
-                             std::string_view why) {
-  for (std::size_t k = 1; k < t.size(); ++k)
+std::string require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
+                                    std::string_view why) {
+  std::size_t repeats = 0, first_repeat = 0;
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    if (t[k] == t[k - 1]) {
+      if (repeats++ == 0) first_repeat = k;
+      continue;
+    }
     if (!(t[k] > t[k - 1]))
-      throw Error(fmt::format("{}: the time column {} does not increase at sample {} (data row {}: {} s after {} s); {} "
-                              "needs strictly increasing time stamps",
+      throw Error(fmt::format("{}: the time column {} goes backwards at sample {} (data row {}: {} s after {} s); {} "
+                              "needs increasing time stamps",
                               file, column, k, k + 1, t[k], t[k - 1], why));
+  }
+  if (repeats == 0) return {};
+  const std::string where = fmt::format("{}: the time column {} repeats a stamp at {} of its {} steps (the first at "
+                                        "sample {}, data row {}: {} s)",
+                                        file, column, repeats, t.size() - 1, first_repeat, first_repeat + 1,
+                                        t[first_repeat]);
+  if (100 * repeats > t.size() - 1) throw Error(fmt::format("{}; {} needs increasing time stamps", where, why));
+  return where + "; the median step is used";
 }
 
 namespace {
@@ -186,11 +199,14 @@ double median_time_step(const std::vector<double>& t) {
 std::string uniform_time_warning(const std::vector<double>& t, const std::string& file, const std::string& column) {
   const double dt = median_time_step(t);  // s
   if (t.size() < 3 || !(dt > 0)) return {};
-  std::size_t widest = 1, narrowest = 1;
-  for (std::size_t k = 2; k < t.size(); ++k) {
-    if (t[k] - t[k - 1] > t[widest] - t[widest - 1]) widest = k;
-    if (t[k] - t[k - 1] < t[narrowest] - t[narrowest - 1]) narrowest = k;
+  // repeated stamps (require_increasing_time's warning) are not steps: the smallest positive one
+  std::size_t widest = 1, narrowest = 0;
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    const double step = t[k] - t[k - 1];
+    if (step > t[widest] - t[widest - 1]) widest = k;
+    if (step > 0.0 && (narrowest == 0 || step < t[narrowest] - t[narrowest - 1])) narrowest = k;
   }
+  if (narrowest == 0) return {};
   const double hi = t[widest] - t[widest - 1], lo = t[narrowest] - t[narrowest - 1];
   if (hi <= kMaxStep * dt && lo >= kMinStep * dt) return {};
   const bool gap = hi > kMaxStep * dt;

@@ -355,6 +355,9 @@ TEST(PamRigParams, JsonRoundTripAndErrors) {
   EXPECT_NE(msg(R"({"load": {"mas": 3}})").find("did you mean 'mass'? (the keys of load: mass, damping, gravity"),
             std::string::npos) << msg(R"({"load": {"mas": 3}})");
   EXPECT_EQ(msg(R"({"load": {"volume": 3}})").find("did you mean"), std::string::npos);
+  // a dead time's delay line is dead_time / dt samples: more than 10 s is refused (1e6 s ran out of memory)
+  EXPECT_NE(msg(R"({"regulator": {"dead_time": 1e6}})").find("regulator.dead_time"), std::string::npos);
+  EXPECT_NE(msg(R"({"regulator": {"dead_time": 10.5}})").find("<= 10 s"), std::string::npos);
   // a braid at or above the neutral angle atan(sqrt(2)) would lengthen under pressure
   EXPECT_NE(msg(R"({"muscle": {"rest_braid_angle": 1.0}})").find("rig.json.muscle.rest_braid_angle = 1.0: must be"),
             std::string::npos);

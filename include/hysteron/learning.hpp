@@ -39,7 +39,7 @@
 namespace hysteron {
 
 struct LearningParams {
-  std::size_t period = 0;       // N [samples], >= 2
+  std::size_t period = 0;       // N [samples], in [2, kMaxLearningPeriod]
   double gain = 0.5;            // L, in (0, 2)
   std::size_t lead = 0;         // d [samples]
   std::size_t half_width = 0;   // h: binomial Q-filter of order 2h (0: no filter), <= kMaxLearningHalfWidth
@@ -65,6 +65,7 @@ struct LearningParams {
 };
 
 inline constexpr std::size_t kMaxLearningHalfWidth = 10'000'000;  // h; its reach is 20,358 samples
+inline constexpr std::size_t kMaxLearningPeriod = 10'000'000;     // N [samples]
 
 // The taps of the binomial Q-filter of half-width h that the update sums, |m| <= reach: the
 // largest m with q_m >= 1e-18 q_0 (h itself up to h = 31; about 6.4 sqrt(h) for large h). The

@@ -21,6 +21,11 @@ inline std::span<const double> as_span(const DoubleArray& a) {
   return {a.data(), static_cast<std::size_t>(a.size())};
 }
 
+// as_span, and every value finite: hysteron::Error "WHAT[i] = nan: not finite" otherwise.
+std::span<const double> as_finite_span(const DoubleArray& a, const char* what);
+// A scalar argument that must be finite: hysteron::Error "WHAT = nan: not finite" otherwise.
+double finite_arg(double v, const char* what);
+
 inline py::array_t<double> to_numpy(const std::vector<double>& v) {
   py::array_t<double> out(static_cast<py::ssize_t>(v.size()));
   std::copy(v.begin(), v.end(), out.mutable_data());

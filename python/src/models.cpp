@@ -67,7 +67,9 @@ or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
           [](Model& s, const DoubleArray& x) { return to_numpy(s.simulate(as_span(x))); }, py::arg("x"),
           "Outputs for an input array, continuing from the current state.")
       .def("reset", py::overload_cast<>(&Model::reset), "Back to the virgin state.")
-      .def("reset_relaxed", &Model::reset_relaxed, py::arg("x0"), "Start at rest at input x0.")
+      .def(
+          "reset_relaxed", [](Model& self, double x0) { self.reset_relaxed(finite_arg(x0, "Model.reset_relaxed: x0")); },
+          py::arg("x0"), "Start at rest at input x0 (finite).")
       .def_property_readonly("state", [](const Model& s) { return to_numpy(s.state().y); },
                              "Operator outputs y_i.")
       .def("to_dict", [](const Model& s) { return from_json(io::model_to_json(s.params())); },

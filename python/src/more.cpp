@@ -1,10 +1,27 @@
 // Bindings of identification, the rig, controllers, experiments, plots and reports.
 #include "more.hpp"
 
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
 
 namespace hysteron::python {
+
+std::span<const double> as_finite_span(const DoubleArray& a, const char* what) {
+  const std::span<const double> s = as_span(a);
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!std::isfinite(s[i])) throw Error(fmt::format("{}[{}] = {}: not finite", what, i, s[i]));
+  return s;
+}
+
+double finite_arg(double v, const char* what) {
+  if (!std::isfinite(v)) throw Error(fmt::format("{} = {}: not finite", what, v));
+  return v;
+}
 
 ModelParams model_spec(const py::handle& spec) {
   if (py::isinstance<py::str>(spec)) return io::read_model_file(spec.cast<std::string>());

@@ -117,7 +117,9 @@ weights. step() never allocates; a non-finite input holds the last output.)doc")
           "Table 3 of the GPI paper in SI/MPa units (K_p = 5 MPa/m, K_i = 1 MPa/(m s)).")
       .def("step", &Pid::step, py::arg("setpoint"), py::arg("measurement"), py::arg("feedforward") = 0.0,
            "One sample; returns the clamped output.")
-      .def("reset", &Pid::reset, py::arg("u0") = 0.0, "Zero state, optionally starting bumplessly at output u0.")
+      .def(
+          "reset", [](Pid& p, double u0) { p.reset(finite_arg(u0, "Pid.reset: u0")); }, py::arg("u0") = 0.0,
+          "Zero state, optionally starting bumplessly at output u0 (finite).")
       .def_property_readonly("output", &Pid::output, "The last (clamped) output.")
       .def_property_readonly("integral", [](const Pid& p) { return p.state().integral; },
                              "The integrator's state (in output units).")

@@ -170,8 +170,7 @@ from a run's last correction_mm period (in m). hysteron.Error if the run has no 
       "feedforward_preview",
       [](const py::object& controller, const DoubleArray& reference) {
         const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
-        return to_numpy(
-            feedforward_preview(d, std::span<const double>(reference.data(), static_cast<std::size_t>(reference.size()))));
+        return to_numpy(feedforward_preview(d, as_finite_span(reference, "feedforward_preview: reference")));
       },
       py::arg("controller"), py::arg("reference"),
       R"doc(The reference the loop's feedforward is fed (step()'s preview_m), for a recorded reference

@@ -171,7 +171,8 @@ number in the range. Default False: scored as recorded.)doc");
   m.def(
       "compute_metrics",
       [](const DoubleArray& measured, const DoubleArray& predicted) {
-        return metrics_dict(compute_metrics(as_span(measured), as_span(predicted)));
+        return metrics_dict(
+            compute_metrics(as_finite_span(measured, "measured"), as_finite_span(predicted, "predicted")));
       },
       py::arg("measured"), py::arg("predicted"), "Error metrics of predicted against measured (equal lengths).");
 
@@ -186,7 +187,9 @@ and envelopes and gives the initial weights.)doc")
            "One sample: update with input x and measured y; returns the a-priori prediction.")
       .def(
           "reset_state",
-          [](Rls& r, const std::string& initial, double x0) { r.reset_state(initial_state_from(initial), x0); },
+          [](Rls& r, const std::string& initial, double x0) {
+            r.reset_state(initial_state_from(initial), finite_arg(x0, "Rls.reset_state: x0"));
+          },
           py::arg("initial_state") = "virgin", py::arg("x0") = 0.0, "Restart the operator state, keeping the weights.")
       .def_property_readonly(
           "theta", [](const Rls& r) { return to_numpy(std::vector<double>(r.theta().begin(), r.theta().end())); },

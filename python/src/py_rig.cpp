@@ -71,7 +71,9 @@ for a given seed.)doc")
       .def(py::init([](const py::object& params, std::uint64_t seed) { return PamRig(rig_params_from(params), seed); }),
            py::arg("params") = py::none(), py::arg("seed") = 1)
       .def("reset", &PamRig::reset, "Vented muscle at rest, t = 0, RNG re-seeded.")
-      .def("reset_at_pressure", &PamRig::reset_at_pressure, py::arg("p_gauge"),
+      .def("reset_at_pressure",
+           [](PamRig& r, double p) { r.reset_at_pressure(finite_arg(p, "PamRig.reset_at_pressure: p_gauge")); },
+           py::arg("p_gauge"),
            "Static equilibrium at gauge pressure p_gauge [Pa].")
       .def(
           "step",
@@ -90,7 +92,7 @@ for a given seed.)doc")
       .def(
           "run_pressure",
           [](PamRig& r, const DoubleArray& profile, double control_period) {
-            const auto p = as_span(profile);
+            const auto p = as_finite_span(profile, "run_pressure: profile");
             // A period that is not a whole number of rig steps was rounded silently.
             const double ratio = control_period / r.dt();
             const long every = std::isfinite(ratio) && ratio < 1e12 ? std::lround(ratio) : 0;

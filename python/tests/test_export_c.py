@@ -73,6 +73,13 @@ def test_generated_loop_steps_as_controller_from(tmp_path):
     c_preview = np.zeros(n)
     c.lp_loop_preview(ref.ctypes.data, c_preview.ctypes.data, n)
     assert np.array_equal(c_preview, preview)
+    # a non-finite or 2-D reference is refused by name, as the C ABI's hysteron_loop_preview does
+    bad = ref.copy()
+    bad[7] = np.nan
+    with pytest.raises(hysteron.Error, match=r"feedforward_preview: reference\[7\] = nan"):
+        hysteron.feedforward_preview(ctl, bad)
+    with pytest.raises(ValueError, match="one-dimensional"):
+        hysteron.feedforward_preview(ctl, ref.reshape(50, 100))
     rng = np.random.default_rng(5)
     measured = ref + 0.004 * np.sin(2 * np.pi * 1.7 * t) + 0.0005 * rng.standard_normal(n)
     pressure = np.clip(0.3 + 0.3 * np.sin(2 * np.pi * 0.5 * t - 0.4) + 0.02 * rng.standard_normal(n), 0, 0.7)

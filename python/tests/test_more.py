@@ -263,6 +263,35 @@ def test_iterative_learning_on_a_lagged_loop():
         hysteron.IterativeLearning(period=1)
     with pytest.raises(hysteron.Error, match="must be < period = 200"):
         hysteron.IterativeLearning(period=n, lead=2, half_width=2000)  # 2 x 287 summed taps
+    # a period beyond the documented bound is refused before anything is allocated (10^8 raised
+    # MemoryError after 2 s, 10^9 stalled the process)
+    with pytest.raises(hysteron.Error, match=r"learning.period = 1000000000: must be <= 10000000"):
+        hysteron.IterativeLearning(period=10**9)
+
+
+def test_non_finite_arguments_are_refused_by_name():
+    # each was silent before 2026-11-29 (a NaN metric read as a perfect fit, a NaN reset as virgin)
+    with pytest.raises(hysteron.Error, match=r"predicted\[3\] = nan: not finite"):
+        hysteron.compute_metrics([1.0, 2.0, 3.0, 4.0], [1.0, 2.0, 3.0, float("nan")])
+    with pytest.raises(hysteron.Error, match=r"measured\[0\] = inf"):
+        hysteron.compute_metrics([float("inf"), 2.0], [1.0, 2.0])
+    m = hysteron.Model({"model": "pi", "r": [0.0, 0.1], "p": [1.0, 0.5]})
+    with pytest.raises(hysteron.Error, match="Model.reset_relaxed: x0 = nan"):
+        m.reset_relaxed(float("nan"))
+    m.reset_relaxed(0.2)  # finite: fine
+    with pytest.raises(hysteron.Error, match="Pid.reset: u0 = nan"):
+        hysteron.Pid(kp=1.0).reset(float("nan"))
+    rig = hysteron.PamRig(seed=1)
+    with pytest.raises(hysteron.Error, match="reset_at_pressure: p_gauge = inf"):
+        rig.reset_at_pressure(float("inf"))
+    with pytest.raises(hysteron.Error, match=r"run_pressure: profile\[1\] = nan"):
+        rig.run_pressure(np.array([0.1, np.nan, 0.2]))
+    rls = hysteron.Rls({"model": "pi", "r": [0.0, 0.1], "p": [1.0, 0.5]})
+    with pytest.raises(hysteron.Error, match="Rls.reset_state: x0 = nan"):
+        rls.reset_state("relaxed", float("nan"))
+    # a constant input leaves the weights undetermined (q came out near 1e294)
+    with pytest.raises(hysteron.Error, match="input is constant"):
+        hysteron.fit_weights({"model": "pi", "r": [0.0, 0.1], "p": [1.0, 0.5]}, np.full(50, 0.3), np.linspace(0, 1, 50))
 
 
 def test_signals():

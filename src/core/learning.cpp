@@ -15,6 +15,10 @@ namespace hysteron {
 
 void LearningParams::validate() const {
   if (period < 2) throw Error(detail::format("learning.period = {}: must be >= 2 samples", period));
+  // five buffers of `period` doubles (400 MB at the limit: 2.8 h at 1 kHz); beyond it the C ABI's
+  // size_t (e.g. SIZE_MAX) ended in an internal error and Python's 10^9 stalled the process
+  if (period > kMaxLearningPeriod)
+    throw Error(detail::format("learning.period = {}: must be <= {} samples", period, kMaxLearningPeriod));
   if (!(gain > 0.0 && gain < 2.0)) throw Error(detail::format("learning.gain = {}: must be in (0, 2)", gain));
   if (!(max_correction > 0.0))
     throw Error(detail::format("learning.max_correction = {}: must be > 0", max_correction));

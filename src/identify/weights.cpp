@@ -455,6 +455,11 @@ ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std
   detail::check_record(x, y, "fit_weights");
   const IndexRange r = detail::check_range(options.train, x.size(), "fit_weights");
   if (!(options.margin >= 0) || !std::isfinite(options.margin)) throw Error("fit_weights: margin must be >= 0");
+  {  // a constant input leaves the weights undetermined (q came out near 1e294)
+    const auto [lo, hi] = std::minmax_element(x.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                                              x.begin() + static_cast<std::ptrdiff_t>(r.end));
+    if (!(*hi > *lo)) throw Error(fmt::format("fit_weights: the input is constant ({}) over the training range", *lo));
+  }
   const UnitsMap um = units_map(model);
   if (!um.identity()) {
     // Work in model coordinates and keep the units map (models.hpp).

@@ -148,6 +148,9 @@ void validate(const PamRigParams& p, std::string_view where) {
          "> regulator.critical_ratio and > valves.critical_ratio");
   if (p.simulation.dt > 1e-4 * (1.0 + 1e-12))
     fail(where, "simulation.dt", p.simulation.dt, "<= 1e-4 s (pam-plant.md)");
+  // the dead time's delay line holds dead_time / dt samples (1e6 s asked for 8e10 bytes)
+  if (p.regulator.dead_time > 10.0)
+    fail(where, "regulator.dead_time", p.regulator.dead_time, "<= 10 s (a proportional regulator's is 5-10 ms)");
   const double period = 1.0 / p.valves.pwm_frequency;
   if (p.valves.on_delay >= period)
     fail(where, "valves.on_delay", p.valves.on_delay, fmt::format("< the PWM period {} s", period));

@@ -180,6 +180,10 @@ static void check_ilc(void) {
   CHECK(ip.period == 0 && ip.gain == 0.5 && ip.max_gain == 0.0, "defaults: period %zu, gain %g", ip.period, ip.gain);
   expect_error("ilc period 0", hysteron_ilc_create(&ip, &ilc), HYSTERON_ERROR_INVALID_ARGUMENT, "period");
   CHECK(ilc == NULL, "no handle on failure");
+  ip.period = (size_t)-1; /* SIZE_MAX: refused by its bound (it was an INTERNAL error) */
+  expect_error("ilc period SIZE_MAX", hysteron_ilc_create(&ip, &ilc), HYSTERON_ERROR_INVALID_ARGUMENT,
+               "must be <= 10000000 samples");
+  CHECK(ilc == NULL, "no handle on failure");
   ip.period = N_ILC;
   ip.gain = 2.5;
   expect_error("ilc gain 2.5", hysteron_ilc_create(&ip, &ilc), HYSTERON_ERROR_INVALID_ARGUMENT, "gain = 2.5");

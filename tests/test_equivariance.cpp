@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <random>
@@ -124,7 +125,11 @@ double validation_error(FitModel kind, const Record& train, const Record& val, I
   return evaluate(r.model, val.x, val.y, val_range).rms_percent_span;
 }
 
-std::filesystem::path shared_data() { return std::filesystem::path(HYSTERON_SOURCE_DIR) / ".." / "shared" / "data"; }
+// ../shared/data next to the checkout, or $HYSTERON_SHARED_DATA (a worktree elsewhere).
+std::filesystem::path shared_data() {
+  if (const char* dir = std::getenv("HYSTERON_SHARED_DATA"); dir && *dir) return dir;
+  return std::filesystem::path(HYSTERON_SOURCE_DIR) / ".." / "shared" / "data";
+}
 
 // Every `step`-th row of columns (in, out) of a shared record (read by hysteron's CSV reader).
 Record shared_record(const std::filesystem::path& file, std::size_t in, std::size_t out, std::size_t step) {
@@ -238,6 +243,67 @@ TEST(Equivariance, FestoRecordEveryKindEveryTransform) {
       const double e = validation_error(kind, apply(t, train), apply(t, val));
       EXPECT_NEAR(e, ref, 0.01 * ref) << fit_model_name(kind) << " under " << t.name;
     }
+  }
+}
+
+// A negated input (a sensor wired the other way round) is a mirrored record: every kind's
+// fit is the mirror image of the plain record's, so that it validates the same. The training
+// range starts at a sample that is not 0 (the state at its start comes from the record).
+// preisach and kp were not: relays / kernels alike over the training rows got their weight by
+// the grid's order, which the mirror reverses (kp 6.0 % vs 21.7 % on the Festo record).
+namespace {
+Record input_negated(const Record& r) {
+  Record out = r;
+  for (double& v : out.x) v = -v;
+  return out;
+}
+
+// Reversal curves from one top: a fast rise (2 samples) to top, a slow fall (per_leg
+// samples) to each bottom in turn (pressure steps up, slow releases).
+std::vector<double> reversal_curves(double start, double top, std::initializer_list<double> bottoms, int per_leg) {
+  std::vector<double> x{start};
+  for (double b : bottoms) {
+    x.push_back(0.5 * (x.back() + top));
+    for (int i = 0; i < per_leg; ++i) x.push_back(top + (b - top) * i / per_leg);
+  }
+  return x;
+}
+}  // namespace
+
+TEST(Equivariance, InputNegatedSyntheticEveryKind) {
+  MpiAsymParams truth = std::get<MpiAsymParams>(sample_models()[3]);
+  Record train, val;
+  // as the Festo records: relays alike over the training rows (all on by each step up)
+  train.x = reversal_curves(0.7, 6.2, {3.0, 1.0, 0.0, 2.5, 1.2, 4.0, 0.6, 3.2, 1.8, 5.0, 0.3}, 150);
+  val.x = wandering_sine(2400, 6.0);
+  for (double& v : val.x) v += 0.4;  // starts elsewhere
+  train.y = noisy(simulate_record(truth, train.x), 0.01, 8);
+  val.y = noisy(simulate_record(truth, val.x), 0.01, 9);
+  const IndexRange range{450, train.x.size()};
+  for (FitModel kind : kKinds) {
+    // mpi-asym is not mirror-equivariant on this record yet (1.60 % vs 2.45 %: its LM, not the
+    // least squares of the grid kinds; a separate issue). It is on the Festo record below.
+    if (kind == FitModel::mpi_asym) continue;
+    const double ref = validation_error(kind, train, val, range);
+    ASSERT_TRUE(std::isfinite(ref)) << fit_model_name(kind);
+    const double e = validation_error(kind, input_negated(train), input_negated(val), range);
+    EXPECT_NEAR(e, ref, 0.01 * ref) << fit_model_name(kind) << ": " << ref << " % plain, " << e << " % negated";
+  }
+}
+
+TEST(Equivariance, InputNegatedFestoEveryKind) {
+  const auto dir = shared_data() / "pam-force-pressure";
+  if (!std::filesystem::exists(dir / "festo10mm_20cm_test8.csv"))
+    GTEST_SKIP() << "measured data not found at " << dir
+                 << " (../shared/data is absent in this checkout; HYSTERON_SHARED_DATA can name it)";
+  // every 2nd row; trained on test8's rows 3000..15000 of the full record, validated on test9
+  const Record train = shared_record(dir / "festo10mm_20cm_test8.csv", 1, 0, 2);
+  const Record val = shared_record(dir / "festo10mm_20cm_test9.csv", 1, 0, 2);
+  const IndexRange range{1500, train.x.size()};
+  for (FitModel kind : kKinds) {
+    const double ref = validation_error(kind, train, val, range);
+    const double e = validation_error(kind, input_negated(train), input_negated(val), range);
+    EXPECT_NEAR(e, ref, 0.01 * ref) << fit_model_name(kind) << ": " << ref << " % plain, " << e << " % negated";
   }
 }
 

@@ -45,7 +45,7 @@ int run_evaluate(const EvaluateOptions& c) {
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);
   if (rec.t && c.range.find('s') != std::string::npos)
-    (void)require_increasing_time(*rec.t, c.sel.file, sel.time_column, "a range in seconds");
+    (void)require_increasing_time(*rec.t, c.sel.file, sel.time_column, "a range in seconds", true);
   const IndexRange range = c.range.empty() ? IndexRange{0, rec.x.size()}
                                            : parse_range(c.range, "--range", rec.t ? &*rec.t : nullptr, rec.x.size());
   const InitialState initial = c.relaxed ? InitialState::relaxed : InitialState::virgin;
@@ -63,7 +63,11 @@ int run_evaluate(const EvaluateOptions& c) {
         break;
       }
     const double dt = median_time_step(*rec.t);
-    if (std::abs(dt - rp->dt) > 0.1 * rp->dt)
+    if (!(dt > 0.0))
+      warnings.push_back(fmt::format("{}: the time column {} has no positive median step: the record's sample time "
+                                     "is unknown",
+                                     c.sel.file, sel.time_column));
+    else if (std::abs(dt - rp->dt) > 0.1 * rp->dt)
       warnings.push_back(fmt::format("{}: the record's sample time {:.6g} s (median step of the time column {}) differs "
                                      "from the rate-pi model's dt {:.6g} s: the model runs its rates {:.3g}x too {}",
                                      c.sel.file, dt, sel.time_column, rp->dt, std::max(dt, rp->dt) / std::min(dt, rp->dt),

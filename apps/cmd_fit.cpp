@@ -113,19 +113,26 @@ int run_fit(const FitCliOptions& c) {
   std::vector<std::string> time_warnings;
   const bool rate = o.model == FitModel::rate_pi || o.model == FitModel::automatic;
   if (rate && o.sample_time == 0.0 && time && time->size() > 1) {
-    // rate-pi: the median step of the time column, which must increase and should be uniform
-    if (std::string w = require_increasing_time(*time, c.sel.file, c.sel.time_column,
-                                                "rate-pi's sample time (or give --sample-time)");
-        !w.empty())
-      time_warnings.push_back(std::move(w));
-    if (std::string w = uniform_time_warning(*time, c.sel.file, c.sel.time_column); !w.empty())
-      time_warnings.push_back(std::move(w));
-    o.sample_time = median_time_step(*time);
+    // rate-pi: the median step of the time column, which must increase and should be uniform.
+    // auto: only its rate-pi candidate needs it; a column that cannot give it leaves that
+    // candidate unfitted (no sample time), with the reason as a warning, instead of refusing the fit.
+    try {
+      if (std::string w = require_increasing_time(*time, c.sel.file, c.sel.time_column,
+                                                  "rate-pi's sample time (or give --sample-time)");
+          !w.empty())
+        time_warnings.push_back(std::move(w));
+      if (std::string w = uniform_time_warning(*time, c.sel.file, c.sel.time_column); !w.empty())
+        time_warnings.push_back(std::move(w));
+      o.sample_time = median_time_step(*time);
+    } catch (const Error& e) {
+      if (o.model != FitModel::automatic) throw;
+      time_warnings.push_back(fmt::format("{}: auto's rate-pi candidate is not fitted", e.what()));
+    }
   }
-  // a range in seconds looks its ends up in the time column: it must increase
+  // a range in seconds looks its ends up in the time column: it must not go backwards
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
   if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))
-    (void)require_increasing_time(*time, c.sel.file, c.sel.time_column, "a range in seconds");
+    (void)require_increasing_time(*time, c.sel.file, c.sel.time_column, "a range in seconds", true);
   const IndexRange train =
       c.train.empty() ? IndexRange{0, x.size()} : parse_range(c.train, "--train", time ? &*time : nullptr, x.size());
   o.train = train;
@@ -141,7 +148,8 @@ int run_fit(const FitCliOptions& c) {
     v.x = std::move(d.x);
     v.y = std::move(d.y);
     if (d.t) v.t = std::move(*d.t);
-    if (d.t && in_seconds(c.validate)) (void)require_increasing_time(v.t, file, c.sel.time_column, "a range in seconds");
+    if (d.t && in_seconds(c.validate))
+      (void)require_increasing_time(v.t, file, c.sel.time_column, "a range in seconds", true);
     v.range = c.validate.empty() ? IndexRange{0, v.x.size()}
                                  : parse_range(c.validate, fmt::format("--validate (on {})", file),
                                                time ? &v.t : nullptr, v.x.size());
@@ -159,7 +167,10 @@ int run_fit(const FitCliOptions& c) {
       fmt::print(stderr, "\rstart {} iteration {:3d} cost {:.6g}   ", start, it, cost);
     };
   FitReport rep = fit(x, y, o);
-  if (has_model(rep.status) && (rep.model_kind == FitModel::rate_pi || o.model == FitModel::automatic))
+  // the time column's warnings concern rate-pi only: where it is the kind fitted (or auto chose it),
+  // or where auto's rate-pi candidate could not be fitted because of them
+  if (has_model(rep.status) && (rep.model_kind == FitModel::rate_pi || (o.model == FitModel::automatic &&
+                                                                        o.sample_time == 0.0)))
     rep.warnings.insert(rep.warnings.end(), time_warnings.begin(), time_warnings.end());
   if (o.progress) fmt::print(stderr, "\r{:60}\r", "");
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));

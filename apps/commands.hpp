@@ -66,11 +66,12 @@ void add_data_options(CLI::App* sub, DataSelection& sel);
 // hysteron::Error naming the file otherwise.
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel);
 // Time columns (rate-pi's sample time, ranges in seconds): throws hysteron::Error naming the file,
-// the column and the first sample whose time stamp is below the one before (`why`: what needs
-// ordered stamps), or where more than 1 % of the steps repeat a stamp. Fewer repeats (a logger's
-// clock tick: the Festo record test9 has one) are returned as a warning ("" if none).
+// the column and the first sample whose time stamp is not a number or below the one before
+// (`why`: what needs ordered stamps), or, unless `repeats_ok` (a range's look-up needs no more than
+// that), where more than 1 % of the steps repeat a stamp. Fewer repeats (a logger's clock tick: the
+// Festo record test9 has one) are returned as a warning ("" if none).
 std::string require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
-                                    std::string_view why);
+                                    std::string_view why, bool repeats_ok = false);
 // The median step of an increasing time column (s).
 double median_time_step(const std::vector<double>& t);
 // "" if every step of an increasing time column lies within 0.4 .. 1.9 times the median step, else

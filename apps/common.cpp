@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <iostream>
 #include <iterator>
 #include <string>
@@ -161,8 +162,13 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
 }
 
 std::string require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
-                                    std::string_view why) {
+                                    std::string_view why, bool repeats_ok) {
   std::size_t repeats = 0, first_repeat = 0;
+  for (std::size_t k = 0; k < t.size(); ++k)
+    if (std::isnan(t[k]))
+      throw Error(fmt::format("{}: the time column {} is not a number at sample {} (data row {}); {} needs time "
+                              "stamps",
+                              file, column, k, k + 1, why));
   for (std::size_t k = 1; k < t.size(); ++k) {
     if (t[k] == t[k - 1]) {
       if (repeats++ == 0) first_repeat = k;
@@ -178,7 +184,8 @@ std::string require_increasing_time(const std::vector<double>& t, const std::str
                                         "sample {}, data row {}: {} s)",
                                         file, column, repeats, t.size() - 1, first_repeat, first_repeat + 1,
                                         t[first_repeat]);
-  if (100 * repeats > t.size() - 1) throw Error(fmt::format("{}; {} needs increasing time stamps", where, why));
+  if (!repeats_ok && 100 * repeats > t.size() - 1)
+    throw Error(fmt::format("{}; {} needs increasing time stamps", where, why));
   return where + "; the median step is used";
 }
 
@@ -200,14 +207,16 @@ std::string uniform_time_warning(const std::vector<double>& t, const std::string
   const double dt = median_time_step(t);  // s
   if (t.size() < 3 || !(dt > 0)) return {};
   // repeated stamps (require_increasing_time's warning) are not steps: the smallest positive one
-  std::size_t widest = 1, narrowest = 0;
+  std::size_t widest = 0, narrowest = 0;
+  double hi = -std::numeric_limits<double>::infinity(), lo = std::numeric_limits<double>::infinity();
   for (std::size_t k = 1; k < t.size(); ++k) {
-    const double step = t[k] - t[k - 1];
-    if (step > t[widest] - t[widest - 1]) widest = k;
-    if (step > 0.0 && (narrowest == 0 || step < t[narrowest] - t[narrowest - 1])) narrowest = k;
+    // a step right after a repeated stamp spans the repeat: half the two steps (0.099, 0.099,
+    // 0.101 is one sample stamped late, not a gap)
+    const double step = k >= 2 && t[k - 1] == t[k - 2] ? 0.5 * (t[k] - t[k - 2]) : t[k] - t[k - 1];
+    if (step > hi) hi = step, widest = k;
+    if (step > 0.0 && step < lo) lo = step, narrowest = k;
   }
   if (narrowest == 0) return {};
-  const double hi = t[widest] - t[widest - 1], lo = t[narrowest] - t[narrowest - 1];
   if (hi <= kMaxStep * dt && lo >= kMinStep * dt) return {};
   const bool gap = hi > kMaxStep * dt;
   const std::size_t k = gap ? widest : narrowest;

@@ -338,7 +338,7 @@ HYSTERON_C_API hysteron_status hysteron_cascade_guard_state(const hysteron_casca
  * run the loop on r + c, then step with the error of that sample. `hysteron experiment`
  * prints the L, d and h it designed for the rig at hand (the learning run's description). */
 typedef struct hysteron_ilc_params {
-  size_t period;          /* N [samples] per period, >= 2 (default 0: must be set) */
+  size_t period;          /* N [samples] per period, 2..10^7 (default 0: must be set) */
   double gain;            /* L, in (0, 2) (default 0.5) */
   size_t lead;            /* d [samples] (default 0) */
   size_t half_width;      /* h of the Q-filter (default 0: no filter; at most 10^7) */

@@ -352,7 +352,7 @@ nominal), always run first as "nominal". identify_on_base: identify and tune eve
 base rig and track on the variant's (a rig that changed after its identification; default:
 each variant identified on its own rig). seed, learning_periods, model, paper_references: as
 run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run and raises
-KeyboardInterrupt once the runs under way end (nothing written). out: the CSV table,
+KeyboardInterrupt once the runs under way end (seconds to tens of seconds; nothing written). out: the CSV table,
 report: the HTML page (written after every run finished). Returns the JSON document of
 `hysteron sweep --json` as a dict (variants, runs with their tracking errors, target_misses,
 learning_not_below_compensated, notes, failures, ...) and "text", the text table. A failed run

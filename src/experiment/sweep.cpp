@@ -503,7 +503,15 @@ SweepResult run_sweep(const SweepOptions& options) {
   std::atomic<bool> stopped{false};
   auto worker = [&] {
     for (;;) {
-      if (stopped.load() || (options.stop_requested && options.stop_requested())) {
+      bool stop = stopped.load();
+      if (!stop && options.stop_requested) {
+        try {
+          stop = options.stop_requested();
+        } catch (...) {
+          stop = true;  // a stop hook that throws asks for a stop (an exception must not end a worker thread)
+        }
+      }
+      if (stop) {
         stopped.store(true);
         return;
       }
@@ -588,7 +596,7 @@ SweepResult run_sweep(const SweepOptions& options) {
     for (unsigned i = 0; i < jobs; ++i) threads.emplace_back(worker);
     for (auto& t : threads) t.join();
   }
-  if (stopped.load())
+  if (stopped.load() && done < total)  // a stop seen after the last run keeps the complete sweep
     throw Error(fmt::format("sweep stopped after {} of {} runs (stop requested)", done, total));
   for (std::size_t k = 0; k < slots; ++k)
     if (same_as[k] != k) {

@@ -651,7 +651,8 @@ PidParams position_pid(const Context& c) {
 
 PidGuard pid_guard(const Context& c) {
   PidGuard g;
-  if (c.guard_amplitude_m > 0.0 && c.dynamics.position_relay_period_s > 0.0) {
+  // (a T_u under 4 control periods cannot be seen by the guard: none)
+  if (c.guard_amplitude_m > 0.0 && c.dynamics.position_relay_period_s >= 4.0 * c.tc) {
     g.period = c.dynamics.position_relay_period_s;
     g.amplitude = c.guard_amplitude_m;
   }

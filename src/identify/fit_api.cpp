@@ -303,14 +303,16 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   const bool no_hysteresis = line_rms <= tolerance && rep.train.rms <= tolerance;
   if (!(rep.train.r2 >= 0))
     poor = fmt::format("training R^2 = {:.4g} < 0: worse than a constant", rep.train.r2);
-  else if (no_hysteresis)
+  else if (no_hysteresis && (rep.train.rms >= 0.5 * line_rms || line_rms <= 1e-6 * sy))
+    // both negligible, and the model no better than the line by much (a narrow but real loop, which
+    // the model fits several times better than the line, goes on to the checks below)
     rep.warnings.push_back(fmt::format(
-        "the record shows (almost) no hysteresis: a straight line fits it as well (line RMS {:.6g}, the model's {:.6g}; "
-        "{:.3g}% of the output's span), a linear model may do",
+        "the record shows (almost) no hysteresis: a straight line fits it as well (line RMS {:.6g}, the model's "
+        "{:.6g}; {:.3g}% of the output's span), a linear model may do",
         line_rms, rep.train.rms, 100 * line_rms / sy));
   else if (rep.train.rms >= kLineRatio * line_rms)
-    poor = fmt::format("training RMS {:.6g} removes less than 1 % of the variance a straight line leaves (line RMS {:.6g}): "
-                       "the model explains no hysteresis",
+    poor = fmt::format("training RMS {:.6g} removes less than 1 % of the variance a straight line leaves (line RMS "
+                       "{:.6g}): the model explains no hysteresis",
                        rep.train.rms, line_rms);
   else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && o.huber_delta > 0 && reference_model) {
     // A Huber fit trades RMS for robustness: it is compared with the reference under its own

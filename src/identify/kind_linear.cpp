@@ -86,8 +86,17 @@ Ties find_ties(const Eigen::MatrixXd& A, const Eigen::VectorXd& lo, bool centre)
   t.group.assign(static_cast<std::size_t>(n), 0);
   if (n == 0 || A.rows() == 0) return t;
   const Eigen::RowVectorXd mean = centre ? Eigen::RowVectorXd(A.colwise().mean()) : Eigen::RowVectorXd::Zero(n);
-  // candidates sorted by their first (centred) row: equal columns are within kTieTol there
-  const Eigen::RowVectorXd key = A.row(0) - mean;
+  // candidates sorted by a fixed weighted sum of their (centred) rows, weights in [0.5, 1.5) from
+  // the golden-ratio sequence: equal columns are within kTieTol sum(w) there, and distinct ones
+  // rarely are (the first row alone was 0 or 1 for every relay of an uncentred Huber fit, which
+  // made the search quadratic in the columns)
+  Eigen::VectorXd w(A.rows());
+  for (Eigen::Index r = 0; r < A.rows(); ++r) {
+    const double f = static_cast<double>(r) * 0.6180339887498949;
+    w(r) = 0.5 + (f - std::floor(f));
+  }
+  const double window = kTieTol * w.sum();
+  const Eigen::RowVectorXd key = (w.transpose() * A).array() - mean.array() * w.sum();
   std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
   for (Eigen::Index j = 0; j < n; ++j) order[static_cast<std::size_t>(j)] = j;
   std::stable_sort(order.begin() + 1, order.end(), [&](Eigen::Index a, Eigen::Index b) { return key(a) < key(b); });
@@ -95,7 +104,7 @@ Ties find_ties(const Eigen::MatrixXd& A, const Eigen::VectorXd& lo, bool centre)
   head[0] = 0;
   for (std::size_t k = 1; k < order.size(); ++k) {
     const Eigen::Index j = order[k];
-    for (std::size_t c = k; c-- > 1 && key(j) - key(order[c]) <= kTieTol;) {
+    for (std::size_t c = k; c-- > 1 && key(j) - key(order[c]) <= window;) {
       const Eigen::Index i = order[c];
       if (head[static_cast<std::size_t>(i)] != i || lo(i) != lo(j)) continue;
       if (((A.col(i) - A.col(j)).array() - (mean(i) - mean(j))).abs().maxCoeff() <= kTieTol) {

@@ -151,6 +151,9 @@ void validate(const PamRigParams& p, std::string_view where) {
   // the dead time's delay line holds dead_time / dt samples (1e6 s asked for 8e10 bytes)
   if (p.regulator.dead_time > 10.0)
     fail(where, "regulator.dead_time", p.regulator.dead_time, "<= 10 s (a proportional regulator's is 5-10 ms)");
+  if (p.regulator.dead_time > 1e7 * p.simulation.dt)
+    fail(where, "regulator.dead_time", p.regulator.dead_time,
+         fmt::format("<= 1e7 simulation steps of dt = {} s (its delay line)", p.simulation.dt));
   const double period = 1.0 / p.valves.pwm_frequency;
   if (p.valves.on_delay >= period)
     fail(where, "valves.on_delay", p.valves.on_delay, fmt::format("< the PWM period {} s", period));

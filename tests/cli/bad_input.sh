@@ -106,10 +106,22 @@ grep -q "needs increasing time stamps" "$T/rep.txt" && { echo "FAIL: one repeate
 [ -s "$T/rep.json" ] || { echo "FAIL: one repeated stamp: no model written with --force"; fails=$((fails + 1)); }
 grep -q "repeats a stamp at 1 of its 399 steps (the first at sample 100, data row 101" "$T/rep.txt" ||
   { echo "FAIL: a repeated stamp: no warning"; cat "$T/rep.txt"; fails=$((fails + 1)); }
+grep -q "not uniformly sampled" "$T/rep.txt" && { echo "FAIL: a repeated stamp read as a gap"; cat "$T/rep.txt"; fails=$((fails + 1)); }
 awk 'BEGIN { print "t,p,y"; for (k = 0; k < 400; ++k) { t = int(k / 2) * 0.002; \
   p = 50 + 40 * sin(k / 20); print t "," p "," (0.3 * p + 2 + 3 * sin(k / 20 + 0.4)) } }' > "$T/treps.csv"
 expect_fail "time column repeating on half its steps" 'repeats a stamp at 200 of its 399 steps' -- \
   "$BIN" fit --model rate-pi --data "$T/treps.csv" --input p --output y --time-column t --out "$T/out/keep.csv"
+# ... and a range in seconds needs no more than stamps that do not go backwards
+"$BIN" fit --model pi --data "$T/treps.csv" --input p --output y --time-column t --train 0s:0.3s --force \
+  --out "$T/reps_range.json" > "$T/reps_range.txt" 2>&1
+grep -q "needs increasing time stamps" "$T/reps_range.txt" &&
+  { echo "FAIL: a range in seconds refused on repeated stamps"; cat "$T/reps_range.txt"; fails=$((fails + 1)); }
+# auto on a column that cannot give rate-pi its sample time fits the other kinds, and says why
+"$BIN" fit --model auto --data "$T/tswap.csv" --input p --output y --time-column t --force --out "$T/auto_swap.json" \
+  > "$T/auto_swap.txt" 2>&1
+[ -s "$T/auto_swap.json" ] || { echo "FAIL: auto refused a backwards stamp"; cat "$T/auto_swap.txt"; fails=$((fails + 1)); }
+grep -q "auto's rate-pi candidate is not fitted" "$T/auto_swap.txt" ||
+  { echo "FAIL: auto: no word on its rate-pi candidate"; cat "$T/auto_swap.txt"; fails=$((fails + 1)); }
 printf 'p,y\n1,2\n' > "$T/onerow.csv"
 expect_fail "evaluate on one row" 'too few to score' -- \
   "$BIN" evaluate --model "$T/good.json" --data "$T/onerow.csv" --input p --output y

@@ -1268,15 +1268,22 @@ TEST(ExperimentTuning, LearningPidFollowsTheGainTrialWhereItDetunes) {
       << learning.description;
 }
 
+namespace {
+// A tracking run of the sine by `variant` with an RMS error of `rms_mm`, for the notes' tests.
+TrackingRun sine_run(const char* variant, double rms_mm) {
+  TrackingRun r;
+  r.variant = variant;
+  r.reference = "sine";
+  r.errors.rms_error_mm = rms_mm;
+  return r;
+}
+}  // namespace
+
 // A compensated loop that does no better than the baseline (65 kg before the position relay
 // moved to mid-stroke: 16.2 against 7.4 mm) says so; one below it says nothing.
 TEST(ExperimentTuning, LoopNotBelowTheBaselineSaysSo) {
-  TrackingRun base, run;
-  base.variant = "baseline";
-  run.variant = "compensated";
-  base.reference = run.reference = "sine";
-  base.errors.rms_error_mm = 7.403;
-  run.errors.rms_error_mm = 16.177;
+  const TrackingRun base = sine_run("baseline", 7.403);
+  TrackingRun run = sine_run("compensated", 16.177);
   const std::string note = experiment::above_baseline_note(run, base);
   EXPECT_EQ(note.rfind("compensated (sine): its RMS error, 16.177 mm, is not below the baseline's 7.403 mm", 0), 0u)
       << note;
@@ -1301,12 +1308,8 @@ TEST(ExperimentTuning, LoopNotBelowTheBaselineSaysSo) {
 // the identification: gpi-pid adaptive 0.731 against 0.363 mm, 2026-11-29), and names a changed
 // tracking rig; one below, or equal, says nothing.
 TEST(ExperimentTuning, AdaptiveAboveTheCompensatedRunSaysSo) {
-  TrackingRun comp, run;
-  comp.variant = "compensated";
-  run.variant = "adaptive";
-  comp.reference = run.reference = "sine";
-  comp.errors.rms_error_mm = 0.363;
-  run.errors.rms_error_mm = 0.731;
+  const TrackingRun comp = sine_run("compensated", 0.363);
+  TrackingRun run = sine_run("adaptive", 0.731);
   const std::string note = experiment::adaptive_above_note(run, comp);
   EXPECT_EQ(note.rfind("adaptive (sine): its RMS error, 0.731 mm, is above the compensated run's 0.363 mm (+101.4 %)", 0),
             0u) << note;

@@ -26,7 +26,7 @@ namespace {
 
 // run_sweep without the GIL, on a thread of its own, while this (Python's main) thread looks
 // for signals every 100 ms: Ctrl-C stops new runs from starting, waits for the runs under way
-// (a few seconds each) and raises KeyboardInterrupt.
+// (seconds each without learning, tens of seconds with it) and raises KeyboardInterrupt.
 SweepResult run_sweep_interruptible(SweepOptions o) {
   std::atomic<bool> stop{false};
   o.stop_requested = [&stop] { return stop.load(); };
@@ -56,9 +56,6 @@ SweepResult run_sweep_interruptible(SweepOptions o) {
   return r;
 }
 
-}  // namespace
-
-namespace {
 
 std::vector<double> vec(const DoubleArray& a) {
   const auto s = as_span(a);

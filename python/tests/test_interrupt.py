@@ -28,14 +28,14 @@ def test_rls_fit_passes_range():
         hysteron.rls_fit(model, x, x, passes=10**9)
 
 
-def test_ctrl_c_stops_a_long_rig_run_within_a_second():
-    # A child runs ~10^9 rig steps (hours); SIGINT must end it with KeyboardInterrupt.
-    code = textwrap.dedent("""
-        import sys, numpy as np, hysteron
-        rig = hysteron.PamRig(seed=1)
+def interrupted_after(call, settle, timeout, what):
+    """Runs `call` (Python source, after `import sys, numpy as np, hysteron`) in a child, sends it
+    SIGINT `settle` s after it started and requires KeyboardInterrupt within `timeout` s; returns
+    the seconds from the signal to the child's end."""
+    code = "import sys, numpy as np, hysteron\n" + textwrap.dedent(f"""
         print("started", flush=True)
         try:
-            rig.run_pressure(np.full(10, 0.2), control_period=rig.dt * 10**8)
+            {call}
         except KeyboardInterrupt:
             print("interrupted", flush=True)
             sys.exit(0)
@@ -45,48 +45,31 @@ def test_ctrl_c_stops_a_long_rig_run_within_a_second():
     env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
     child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, env=env)
     assert child.stdout.readline().strip() == "started"
-    time.sleep(0.3)
+    time.sleep(settle)
     sent = time.monotonic()
     child.send_signal(signal.SIGINT)
     try:
-        rc = child.wait(timeout=30)
+        rc = child.wait(timeout=timeout)
     except subprocess.TimeoutExpired:
         child.kill()
-        pytest.fail("run_pressure ignored SIGINT for 30 s")
+        pytest.fail(f"{what} ignored SIGINT for {timeout} s")
     elapsed = time.monotonic() - sent
     assert rc == 0 and child.stdout.read().strip() == "interrupted"
-    print(f"stopped {elapsed:.3f} s after SIGINT")
+    print(f"{what} stopped {elapsed:.3f} s after SIGINT")
+    return elapsed
+
+
+def test_ctrl_c_stops_a_long_rig_run_within_a_second():
+    # ~10^9 rig steps (hours); SIGINT must end it with KeyboardInterrupt.
+    interrupted_after("(rig := hysteron.PamRig(seed=1)).run_pressure(np.full(10, 0.2), control_period=rig.dt * 10**8)",
+                      0.3, 30, "run_pressure")
 
 
 def test_ctrl_c_stops_a_long_sweep_and_writes_nothing(tmp_path):
-    # ~100 runs (minutes on 2 cores); SIGINT must raise KeyboardInterrupt once the runs under
-    # way end, and the table asked for must not be written.
+    # 96 runs (minutes on 2 cores); SIGINT must raise KeyboardInterrupt once the runs under way
+    # end, and the table asked for must not be written.
     out = tmp_path / "sweep.csv"
-    code = textwrap.dedent(f"""
-        import sys, hysteron
-        masses = ",".join(str(m) for m in range(10, 41))
-        print("started", flush=True)
-        try:
-            hysteron.run_sweep("all", vary=["load.mass=" + masses], learning_periods=0, jobs=2,
-                               out={str(out)!r})
-        except KeyboardInterrupt:
-            print("interrupted", flush=True)
-            sys.exit(0)
-        sys.exit(3)
-    """)
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, env=env)
-    assert child.stdout.readline().strip() == "started"
-    time.sleep(1.0)
-    sent = time.monotonic()
-    child.send_signal(signal.SIGINT)
-    try:
-        rc = child.wait(timeout=60)
-    except subprocess.TimeoutExpired:
-        child.kill()
-        pytest.fail("run_sweep ignored SIGINT for 60 s")
-    elapsed = time.monotonic() - sent
-    assert rc == 0 and child.stdout.read().strip() == "interrupted"
+    masses = ",".join(str(m) for m in range(10, 41))
+    interrupted_after(f"hysteron.run_sweep('all', vary=['load.mass={masses}'], learning_periods=0, jobs=2, "
+                      f"out={str(out)!r})", 1.0, 60, "run_sweep")
     assert not out.exists()
-    print(f"stopped {elapsed:.3f} s after SIGINT")

@@ -1068,21 +1068,24 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       }
     }
     // a loop tuned from the rig's identification that does no better than the baseline must not
-    // look like compensation (a relay cycle cut at the load's rest gave gains 6x too high once)
-    for (const TrackingRun& base : res.runs)
-      if (base.variant == "baseline" && base.reference == ref.name)
-        for (const TrackingRun& run : res.runs)
-          if (run.reference == ref.name && (run.variant == "compensated" || run.variant == "adaptive" ||
-                                            run.variant == "learning"))
-            if (std::string note = above_baseline_note(run, base, rig_changed); !note.empty())
-              res.messages.push_back(std::move(note));
+    // look like compensation (a relay cycle cut at the load's rest gave gains 6x too high once),
     // nor an adaptive run that ends above the compensated one it adapts
-    for (const TrackingRun& comp : res.runs)
-      if (comp.variant == "compensated" && comp.reference == ref.name)
-        for (const TrackingRun& run : res.runs)
-          if (run.reference == ref.name && run.variant == "adaptive")
-            if (std::string note = adaptive_above_note(run, comp, rig_changed); !note.empty())
-              res.messages.push_back(std::move(note));
+    const auto of_ref = [&](std::string_view variant) -> const TrackingRun* {
+      for (const TrackingRun& run : res.runs)
+        if (run.reference == ref.name && run.variant == variant) return &run;
+      return nullptr;
+    };
+    const TrackingRun* base = of_ref("baseline");
+    const TrackingRun* comp = of_ref("compensated");
+    const auto say = [&](std::string note) {
+      if (!note.empty()) res.messages.push_back(std::move(note));
+    };
+    for (const TrackingRun& run : res.runs) {
+      if (run.reference != ref.name) continue;
+      if (base && (run.variant == "compensated" || run.variant == "adaptive" || run.variant == "learning"))
+        say(above_baseline_note(run, *base, rig_changed));
+      if (comp && run.variant == "adaptive") say(adaptive_above_note(run, *comp, rig_changed));
+    }
   }
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

@@ -137,17 +137,32 @@ double huber_rms(const ModelParams& model, std::span<const double> x, std::span<
 }
 
 // One kind on a record already checked by fit(); tr = o.train resolved.
+// The input's and output's ranges over the training range, and why the record cannot be fitted
+// if either is constant (every kind and auto refuse it alike; nullptr otherwise).
+struct TrainingRanges {
+  double xlo, xhi, ylo, yhi;
+  const char* constant;
+};
+
+TrainingRanges training_ranges(std::span<const double> x, std::span<const double> y, IndexRange tr) {
+  const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
+  const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
+  const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
+  TrainingRanges r{*xl, *xh, *yl, *yh, nullptr};
+  if (!(r.xhi - r.xlo > 0)) r.constant = "fit: the input is constant over the training range";
+  else if (!(r.yhi - r.ylo > 0)) r.constant = "fit: the output is constant over the training range";
+  return r;
+}
+
 FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
                   Clock::time_point t0) {
   // Normalisation: x_m = (x - x[0]) / span(x), y_m = sign (y - y[0]) / span(y) over the
   // training range, sign that of the least-squares line of y on x. Every constant here
   // moves with an offset, a scale or a sign flip of the data, so the fit is equivariant.
-  const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
-  const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
-  const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
-  const double sx = *xh - *xl, sy = *yh - *yl;
-  if (!(sx > 0)) return invalid("fit: the input is constant over the training range", o.model, t0);
-  if (!(sy > 0)) return invalid("fit: the output is constant over the training range", o.model, t0);
+  const auto yt = y.subspan(tr.begin, tr.end - tr.begin);
+  const TrainingRanges rg = training_ranges(x, y, tr);
+  if (rg.constant) return invalid(rg.constant, o.model, t0);
+  const double sx = rg.xhi - rg.xlo, sy = rg.yhi - rg.ylo;
   if (!std::isfinite(sx) || !std::isfinite(sy) || !std::isnormal(sx) || !std::isnormal(sy))
     return invalid(fmt::format("fit: the training spans (input {}, output {}) are not representable after normalisation",
                                sx, sy),
@@ -234,7 +249,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   UnitsMap& um = units_map(rep.model);
   const double c = um.output_offset;
   um = UnitsMap{x[0], sx, y[0] + sign * sy * c, sign * sy};
-  std::visit([&](auto& m) { m.input_limits = Limits{*xl, *xh}; }, rep.model);
+  std::visit([&](auto& m) { m.input_limits = Limits{rg.xlo, rg.xhi}; }, rep.model);
   // The scales go into the kind's parameters (they then read in the user's units).
   rep.model = absorb_scales(rep.model);
   for (auto& p : rep.parameters) {
@@ -269,7 +284,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     const Structure<double> s = canonical_structure(rep.model);
     const Envelope e{s.asc_kind, s.asc_c};
     const UnitsMap& u = s.units;
-    const double uspan = std::abs(e.value(u.to_model(*xh)) - e.value(u.to_model(*xl)));
+    const double uspan = std::abs(e.value(u.to_model(rg.xhi)) - e.value(u.to_model(rg.xlo)));
     const double smin = min_cumulative_slope(s);
     const double bound = o.min_slope * sy / (std::abs(u.output_gain) * uspan);
     if (uspan > 0 && smin <= bound * (1 + 1e-6))
@@ -341,14 +356,8 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   // one input) cannot decide alone: fold 0 holds out the last holdout_fraction of the
   // training range, fold 1 the first; a candidate's hold-out error pools both.
   const std::size_t m = tr.end - tr.begin;
-  {
-    // the same refusals as every explicit kind (fit_one): nothing to choose between on such a record
-    const auto xt = x.subspan(tr.begin, m), yt = y.subspan(tr.begin, m);
-    const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
-    const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
-    if (!(*xh - *xl > 0)) return invalid("fit: the input is constant over the training range", o.model, t0);
-    if (!(*yh - *yl > 0)) return invalid("fit: the output is constant over the training range", o.model, t0);
-  }
+  // the same refusals as every explicit kind (fit_one): nothing to choose between on such a record
+  if (const char* why = training_ranges(x, y, tr).constant) return invalid(why, o.model, t0);
   const auto h = static_cast<std::size_t>(std::llround(o.holdout_fraction * static_cast<double>(m)));
   if (h < 1 || h >= m)
     return invalid("fit: auto: the training range is too short to split off a hold-out", o.model, t0);

@@ -224,6 +224,7 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   EXPECT_NEAR(*std::max_element(p.reference_mm.begin(), p.reference_mm.end()), 95.0, 1e-6);
   EXPECT_GT(p.saturated, 100u);  // held at 0.6 MPa near every top
   EXPECT_GT(p.errors.rms_error_mm, 1.5 * c.errors.rms_error_mm);
+  EXPECT_FALSE(test::said(paper, "levelled off"));  // the actuator reaches 0.6 MPa: not a cap
   EXPECT_TRUE(test::said(paper, "out of this rig's reach"));
 }
 
@@ -276,6 +277,46 @@ TEST(Experiment, SupplyBelowTheCommandCapsTheReach) {
   const ExperimentResult n = run_experiment(o);
   EXPECT_NEAR(n.reach_top_pressure_mpa, 0.57, 1e-12);
   EXPECT_FALSE(test::said(n, "cap it below"));
+}
+
+// The supply drops to 4 bar absolute after the identification (--tracking-plant): the references
+// fitted to the identified rig's reach need 0.6 MPa and the loops hold the command there. The
+// saturation note names the level the pressure was capped at, the identified rig's reach, and
+// that the rig changed (before 2026-11-29 it gave the generic wording only).
+TEST(Experiment, SupplyDropAfterIdentificationNamesTheCap) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  PamRigParams tracking;
+  tracking.air.supply_pressure = 4e5;  // [Pa abs]
+  o.tracking_rig = tracking;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_TRUE(test::said(r, "the pressure reading levelled off at 0.3"));
+  EXPECT_TRUE(test::said(r, "where the identification run reached 0.5"));
+  EXPECT_TRUE(test::said(r, "identify on the rig as it is now"));
+}
+
+// A displacement sensor whose offset changes by 2 mm after the identification (--tracking-plant):
+// the loops track the reading, so the true contraction is 2 mm off the reference while the
+// errors, the sensor's, stay small (compensated 0.37 mm). A note gives the true errors and
+// names the changed offset; the same offset on the identified rig too is the sensor's zero, not
+// a hidden error (no note), and the nominal rig has none.
+TEST(Experiment, DisplacementOffsetAfterIdentificationIsNamed) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  PamRigParams shifted;
+  shifted.sensors.displacement_offset = 2e-3;  // [m]
+  o.tracking_rig = shifted;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_TRUE(test::said(r, "the displacement sensor's reading hides part of the tracking error"));
+  EXPECT_TRUE(test::said(r, "the reading 2.00"));
+  EXPECT_TRUE(test::said(r, "its offset changed after the identification, 0.000 -> 2.000 mm"));
+  for (const TrackingRun& run : r.runs)
+    if (run.variant == "compensated") {
+      EXPECT_LT(run.errors.rms_error_mm, 1.0);  // the sensor's: small
+    }
+  o.tracking_rig.reset();
+  o.rig = shifted;  // the same sensor throughout: its zero, not an error
+  EXPECT_FALSE(test::said(run_experiment(o), "hides part of the tracking error"));
+  o.rig = PamRigParams{};
+  EXPECT_FALSE(test::said(run_experiment(o), "hides part of the tracking error"));
 }
 
 // A muscle twice as long (1 m) contracts twice as far per kPa: the paper's 5..95 mm sinusoid

@@ -1329,6 +1329,50 @@ TEST(ExperimentTuning, AdaptiveAboveTheCompensatedRunSaysSo) {
             std::string::npos) << rig;
 }
 
+// A pressure that levels off below the command at the top is named as capped (a 4 bar supply on
+// the rig tracked on); one still rising through the regulator's lag at the end of a short
+// stretch, or levelling off at the top, is not.
+TEST(ExperimentTuning, PressureLevelledOffBelowTheTopIsNamedAsCapped) {
+  const auto run_with = [](double level_mpa, double lag_s, std::size_t stretch) {
+    TrackingRun r = sine_run("compensated", 5.0);
+    const double dt = 1e-3;
+    double p = 0.0;
+    for (std::size_t k = 0; k < 2 * stretch; ++k) {
+      const bool top = k >= stretch / 2 && k < stretch / 2 + stretch;
+      const double cmd = top ? experiment::kPressureMax : 0.2;
+      p += dt / lag_s * (std::min(cmd, level_mpa) - p);  // a first-order lag to what the actuator gives
+      r.t.push_back(static_cast<double>(k) * dt);
+      r.pressure_command_mpa.push_back(cmd);
+      r.pressure_measured_mpa.push_back(p);
+      r.reference_mm.push_back(50.0);
+      r.measured_mm.push_back(top ? 40.0 : 50.0);
+    }
+    return r;
+  };
+  // capped at 0.3 MPa: named, with the identification run's reach and the changed rig
+  const TrackingRun capped = run_with(0.3, 0.05, 2000);
+  const std::optional<experiment::CappedTop> c = experiment::capped_top(capped, 0, capped.t.size());
+  ASSERT_TRUE(c.has_value());
+  EXPECT_NEAR(c->level_mpa, 0.3, 1e-3);
+  EXPECT_NEAR(c->stretch_s, 1.999, 1e-9);
+  const std::string note = experiment::saturation_note(capped, 0, capped.t.size(), 0.59, true);
+  EXPECT_NE(note.find("levelled off at 0.300 MPa, where the identification run reached 0.590 MPa"), std::string::npos)
+      << note;
+  EXPECT_NE(note.find("identify on the rig as it is now"), std::string::npos) << note;
+  // the same cap where the identification run saw it too: no claim about the identified rig
+  const std::string same = experiment::saturation_note(capped, 0, capped.t.size(), 0.3, false);
+  EXPECT_NE(same.find("levelled off at 0.300 MPa:"), std::string::npos) << same;
+  EXPECT_EQ(same.find("identification run reached"), std::string::npos) << same;
+  // the actuator reaches the top: the generic wording
+  const TrackingRun full = run_with(1.0, 0.05, 2000);
+  EXPECT_FALSE(experiment::capped_top(full, 0, full.t.size()).has_value());
+  EXPECT_NE(experiment::saturation_note(full, 0, full.t.size(), 0.59, true).find("no authority left"),
+            std::string::npos);
+  // a stretch too short for a 300 ms lag to settle: still rising, not capped
+  const TrackingRun rising = run_with(1.0, 0.3, 300);
+  EXPECT_FALSE(experiment::capped_top(rising, 0, rising.t.size()).has_value());
+}
+
 // The learning variant's feedforward goes through the shaper the gain trial chose for the
 // compensated loop of the same reference (docs/control.md, section 3, "The feedforward's
 // shaper"): said in its description exactly where the trial chose shaping, and on mpi-pwm's

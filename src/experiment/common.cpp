@@ -105,6 +105,42 @@ TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t t
   return e;
 }
 
+std::string sensor_gap(const TrackingRun& run, std::size_t from, std::size_t to, double frame_mm) {
+  to = std::min({to, run.t.size(), run.actual_mm.size()});
+  if (from >= to) return {};
+  double s2 = 0.0, t2 = 0.0, bias = 0.0;
+  for (std::size_t k = from; k < to; ++k) {
+    const double truth = run.actual_mm[k] + frame_mm;
+    const double ds = run.reference_mm[k] - run.measured_mm[k], dt = run.reference_mm[k] - truth;
+    s2 += ds * ds, t2 += dt * dt, bias += run.measured_mm[k] - truth;
+  }
+  const double n = static_cast<double>(to - from);
+  const double sensor = std::sqrt(s2 / n), truth = std::sqrt(t2 / n);
+  if (!(truth > kSensorGapRatio * sensor && truth - sensor > kSensorGapFloorMm)) return {};
+  return fmt::format("{} ({}) RMS {:.3f} mm by the sensor, {:.3f} mm against the true contraction (the reading {:.3f} "
+                     "mm {} it on average)",
+                     run.variant, run.reference, sensor, truth, std::abs(bias / n), bias >= 0.0 ? "above" : "below");
+}
+
+std::string sensor_gap_note(const std::vector<std::string>& gaps, const PamRigParams& identified,
+                            const PamRigParams& tracked) {
+  if (gaps.empty()) return {};
+  const SensorParams &a = identified.sensors, &b = tracked.sensors;
+  std::string s = fmt::format("the displacement sensor's reading hides part of the tracking error (the true "
+                              "contraction taken in the identified sensor's frame, its offset {:.3f} mm added): ",
+                              a.displacement_offset * 1e3);
+  for (std::size_t i = 0; i < gaps.size(); ++i) s += (i ? "; " : "") + gaps[i];
+  s += ". The errors in this result are the sensor's, as on a real rig, where only the sensor is seen";
+  if (b.displacement_offset != a.displacement_offset)
+    s += fmt::format(": its offset changed after the identification, {:.3f} -> {:.3f} mm (--tracking-plant), and "
+                     "the loops track the reading; re-zero the sensor or identify again",
+                     a.displacement_offset * 1e3, b.displacement_offset * 1e3);
+  else
+    s += fmt::format(": its resolution and range bound what they show ({} bits over {:.0f} mm)", b.displacement_bits,
+                     b.displacement_range * 1e3);
+  return s;
+}
+
 std::string guard_note(const TrackingRun& run, bool rig_changed) {
   const LoopDesign& c = run.controller;
   if (c.guard_cuts == 0 || !c.pid) return "";
@@ -117,7 +153,41 @@ std::string guard_note(const TrackingRun& run, bool rig_changed) {
                                  : "the gain trial's gains are too high for this reference on this rig");
 }
 
-std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to) {
+// Where the command sat at the top for long enough that the pressure reading levelled off (its
+// mean over the last third of the longest stretch within 1 % of kPressureMax of the middle
+// third's) and it levelled off more than kCapMargin below the top, something caps the pressure
+// on the rig tracked on: the supply, regulator or valves, or the pressure sensor's range. A
+// stretch too short to level off (the regulator's lag) says nothing.
+std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, std::size_t to) {
+  const std::vector<double>& p = run.pressure_measured_mpa.size() == run.t.size() ? run.pressure_measured_mpa
+                                                                                   : run.pressure_mpa;
+  std::size_t best_from = 0, best_n = 0;
+  for (std::size_t k = from; k < to;) {
+    if (run.pressure_command_mpa[k] < kPressureMax) {
+      ++k;
+      continue;
+    }
+    std::size_t e = k;
+    while (e < to && run.pressure_command_mpa[e] >= kPressureMax) ++e;
+    if (e - k > best_n) best_from = k, best_n = e - k;
+    k = e;
+  }
+  if (best_n < 30 || p.size() < best_from + best_n) return std::nullopt;
+  const auto mean = [&](std::size_t a, std::size_t b) {
+    double s = 0.0;
+    for (std::size_t k = a; k < b; ++k) s += p[k];
+    return s / static_cast<double>(b - a);
+  };
+  const std::size_t third = best_n / 3;
+  const double middle = mean(best_from + third, best_from + 2 * third);
+  const double last = mean(best_from + best_n - third, best_from + best_n);
+  if (!(std::abs(last - middle) <= 0.01 * kPressureMax) || !(last < (1.0 - kCapMargin) * kPressureMax))
+    return std::nullopt;
+  return CappedTop{last, run.t[best_from + best_n - 1] - run.t[best_from]};
+}
+
+std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to, double reach_mpa,
+                            bool rig_changed) {
   to = std::min(to, run.t.size());
   if (from >= to) return {};
   std::size_t low = 0, high = 0;
@@ -132,13 +202,26 @@ std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_
   if (100 * sat < n) return {};  // brief touches of a limit: no note
   const double rms_in = std::sqrt(in2 / static_cast<double>(sat));
   const double rms_out = sat < n ? std::sqrt(out2 / static_cast<double>(n - sat)) : 0.0;
+  std::string why =
+      "at a limit the loop has no authority left (e.g. the load cannot follow the reference's descent with the "
+      "muscle vented, or the reference needs more pressure than the actuator has)";
+  if (const std::optional<CappedTop> top = capped_top(run, from, to)) {
+    why = fmt::format(
+        "while the command sat at {} MPa ({:.2f} s at most) the pressure reading levelled off at {:.3f} MPa",
+        kPressureMax, top->stretch_s, top->level_mpa);
+    if (reach_mpa > (1.0 + kCapMargin) * top->level_mpa)
+      why += fmt::format(", where the identification run reached {:.3f} MPa", reach_mpa);
+    why += ": the supply, regulator or valves cap the pressure on this rig, or the pressure sensor's range ends "
+           "there, so the reference needs more than the actuator gives";
+    if (rig_changed && reach_mpa > (1.0 + kCapMargin) * top->level_mpa)
+      why += "; the references were fitted to the reach of the identified rig (--plant), not of the rig tracked on "
+             "(--tracking-plant): identify on the rig as it is now";
+  }
   return fmt::format(
       "{} ({}): the pressure command was at a limit on {:.1f} % of the scored samples ({} at 0 MPa, {} at {} MPa); "
-      "RMS error {:.3f} mm there, {:.3f} mm elsewhere: at a limit the loop has no authority left (e.g. the load "
-      "cannot follow the reference's descent with the muscle vented, or the reference needs more pressure than the "
-      "actuator has)",
+      "RMS error {:.3f} mm there, {:.3f} mm elsewhere: {}",
       run.variant, run.reference, 100.0 * static_cast<double>(sat) / static_cast<double>(n), low, high, kPressureMax,
-      rms_in, rms_out);
+      rms_in, rms_out, why);
 }
 
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,

@@ -20,6 +20,9 @@
 namespace hysteron::experiment {
 
 inline constexpr double kPressureMax = 0.6;  // [MPa] actuator limit of every experiment
+// A pressure that levels off more than this fraction below kPressureMax while the command sits
+// there is capped (capped_top), not still rising through the regulator's lag
+inline constexpr double kCapMargin = 0.05;
 
 // What a controller sees each control period and what it commands.
 struct Sample {
@@ -164,14 +167,36 @@ ModelParams straight_line(const IdentificationRun& r);
 // hysteron::Error; `status` (if given) receives the fit's status either way.
 FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, FitStatus* status = nullptr);
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
+// The pressure at which a run's command sat at kPressureMax long enough to level off, where that
+// is more than kCapMargin below it; nullopt otherwise.
+struct CappedTop {
+  double level_mpa = 0.0;  // the reading's mean over the last third of the longest stretch at the top
+  double stretch_s = 0.0;  // that stretch's length
+};
+std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, std::size_t to);
 // A note for the result's messages when the pressure command sat at 0 or kPressureMax on at
-// least 1 % of the samples in [from, to) (their count and the RMS error there and elsewhere);
-// "" otherwise. Uses run.variant and run.reference.
-std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to);
+// least 1 % of the samples in [from, to) (their count, the RMS error there and elsewhere, and
+// the level the pressure was capped at, capped_top); "" otherwise. Uses run.variant and
+// run.reference. reach_mpa: the most the identification run's pressure reached; rig_changed:
+// the run is on --tracking-plant's rig.
+std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to, double reach_mpa,
+                            bool rig_changed);
 // "" unless the run's limit-cycle guard cut its position PID's gains (run.controller.guard_cuts):
 // how often, to which scale, at which period; rig_changed: the run tracked on a rig other than
 // the one it was tuned on (--tracking-plant), the likely cause.
 std::string guard_note(const TrackingRun& run, bool rig_changed);
+// The scored RMS error of a run against the true contraction in the identified sensor's frame
+// (actual_mm + frame_mm, the identified rig's displacement offset: what that sensor would read
+// without noise; the simulator's, which a real rig does not have) where it is above
+// kSensorGapRatio times the sensor's and kSensorGapFloorMm above it: a sensor whose offset
+// changed after the identification, or an ADC too coarse for the errors, hides that much (the
+// sensor's noise alone makes the sensor's error the larger). "" otherwise; else a clause for
+// sensor_gap_note, which gathers a result's clauses into one note ("" if none).
+inline constexpr double kSensorGapRatio = 1.25;
+inline constexpr double kSensorGapFloorMm = 0.01;
+std::string sensor_gap(const TrackingRun& run, std::size_t from, std::size_t to, double frame_mm);
+std::string sensor_gap_note(const std::vector<std::string>& gaps, const PamRigParams& identified,
+                            const PamRigParams& tracked);
 // Runs one tracking experiment: `reference` sampled at the control period, the
 // preview `lead` samples ahead (wrapping around for a periodic reference).
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,

@@ -997,6 +997,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // the tracking rig is not the one identified (--tracking-plant): the notes name that first
   const bool rig_changed = o.tracking_rig && rig_params_to_json(*o.tracking_rig) != rig_params_to_json(o.rig);
   if (rig_changed) res.messages.push_back(changed_rig_note(o.rig, *o.tracking_rig));
+  std::vector<std::string> sensor_gaps;  // runs whose sensor hides part of the error (sensor_gap)
+  const double frame_mm = o.rig.sensors.displacement_offset * 1e3;
   for (const Reference& ref : refs) {
     Context rc = ctx;
     rc.reference = &ref;
@@ -1042,8 +1044,12 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.controller = loop_design(loop, v.preview ? lead : 0, tc, v.preview ? &zv : nullptr);
       run.errors = errors_of(run, ref.score_from, run.t.size());
       run.scored_from_s = ref.score_from < run.t.size() ? run.t[ref.score_from] : 0.0;
-      if (std::string note = saturation_note(run, ref.score_from, run.t.size()); !note.empty())
+      if (std::string note =
+              saturation_note(run, ref.score_from, run.t.size(), res.reach_pressure_max_mpa, rig_changed);
+          !note.empty())
         res.messages.push_back(std::move(note));
+      if (std::string gap = sensor_gap(run, ref.score_from, run.t.size(), frame_mm); !gap.empty())
+        sensor_gaps.push_back(std::move(gap));
       if (std::string note = guard_note(run, rig_changed); !note.empty()) res.messages.push_back(std::move(note));
       res.runs.push_back(std::move(run));
       if (loop.note)
@@ -1055,8 +1061,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           lr->variant = "learning";
           lr->reference = ref.name;
           const std::size_t last = lr->t.size() - std::min(lr->t.size(), ref.period);  // the scored last period
-          if (std::string note = saturation_note(*lr, last, lr->t.size()); !note.empty())
+          if (std::string note = saturation_note(*lr, last, lr->t.size(), res.reach_pressure_max_mpa, rig_changed);
+              !note.empty())
             res.messages.push_back(std::move(note));
+          if (std::string gap = sensor_gap(*lr, last, lr->t.size(), frame_mm); !gap.empty())
+            sensor_gaps.push_back(std::move(gap));
           if (std::string note = guard_note(*lr, rig_changed); !note.empty()) res.messages.push_back(std::move(note));
           // a learning run that ends above the loop it learns on must not look like an improvement
           for (const TrackingRun& base : res.runs)
@@ -1087,6 +1096,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       if (comp && run.variant == "adaptive") say(adaptive_above_note(run, *comp, rig_changed));
     }
   }
+  if (std::string note = sensor_gap_note(sensor_gaps, o.rig, o.tracking_rig ? *o.tracking_rig : o.rig); !note.empty())
+    res.messages.push_back(std::move(note));
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

@@ -465,7 +465,8 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
                         top_half);
   }
   if (!r.cycle.oscillated && r.top > 0.0 && 0.5 * r.top < p0 - r.eps) {
-    first += fmt::format("; around {} MPa first, where the pressure reached at most {:.4f} MPa (the supply caps it)",
+    first += fmt::format("; around {} MPa first, where the pressure reading reached at most {:.4f} MPa (the supply or the "
+                         "valves cap it, or the pressure sensor's range ends there)",
                          p0, r.top);
     p0 = 0.5 * r.top;
     r = pressure_relay_run(rp, seed, tc, p0, h);

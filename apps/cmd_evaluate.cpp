@@ -77,6 +77,8 @@ int run_evaluate(const EvaluateOptions& c) {
       if (std::string w = uniform_time_warning(*rec.t, c.sel.file, sel.time_column); !w.empty())
       warnings.push_back(std::move(w));
   }
+  const InputCoverage coverage = input_coverage(model, rec.x, range);
+  if (std::string w = input_coverage_warning(coverage, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
 
   io::EvaluationDocument doc;
@@ -87,6 +89,7 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.result.file = c.sel.file;
   doc.result.range = range;
   doc.result.metrics = evaluate_scored(model, rec.x, rec.y, range, initial, doc.data.censored, &doc.result.censored);
+  doc.result.outside_input_limits = coverage.outside;
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {

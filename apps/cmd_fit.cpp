@@ -197,8 +197,16 @@ int run_fit(const FitCliOptions& c) {
   const bool fitted = has_model(rep.status);
   if (fitted)
     for (const auto& v : sets)
-      if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored))
-        doc.validation.push_back({v.file, v.range, *m, censored});
+      if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored)) {
+        const InputCoverage cov =
+            input_coverage(rep.model, v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x), v.range);
+        doc.validation.push_back({v.file, v.range, *m, censored, cov.outside});
+        // a validation record beyond the training range scores the model's extrapolation
+        if (std::string w = input_coverage_warning(cov, v.file.empty() ? "validation range" : v.file); !w.empty()) {
+          rep.warnings.push_back(w);
+          doc.fit.warnings.push_back(std::move(w));
+        }
+      }
   if (!sets.empty())
     for (const auto& cand : rep.candidates) {
       std::vector<FitMetrics> row;

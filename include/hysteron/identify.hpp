@@ -121,6 +121,24 @@ FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> 
 // if `censor` (the default of fit and evaluate), else evaluate() with *censored = 0.
 FitMetrics evaluate_scored(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                            IndexRange range, InitialState initial, bool censor, std::size_t* censored = nullptr);
+// How much of a record's input on `range` lies outside the model's input_limits (which fit()
+// sets to the training range's input): a model scored there extrapolates (kp's and Preisach's
+// slope beyond their grid is only q; a PI's operators have all yielded), so a poor score there
+// says more about the record's range than about the model. A sample counts as outside where
+// it is more than kInputCoverageTolerance of the limits' span beyond them (none where the
+// limits are unbounded).
+inline constexpr double kInputCoverageTolerance = 0.02;
+struct InputCoverage {
+  std::size_t outside = 0, n = 0;  // samples outside the limits, of those scored
+  double max_beyond = 0.0;         // the farthest input beyond them [input units]
+  Limits limits;                   // the model's input_limits
+  double fraction() const noexcept { return n ? static_cast<double>(outside) / static_cast<double>(n) : 0.0; }
+};
+InputCoverage input_coverage(const ModelParams& params, std::span<const double> x, IndexRange range = {});
+// The warning for a coverage with more than 1 % of its samples outside ("" otherwise); `what`
+// names the record (e.g. its file).
+std::string input_coverage_warning(const InputCoverage& c, std::string_view what);
+
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0
 // for every contraction below its zero; one whose range ends inside the stroke reads its

@@ -147,6 +147,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         py::dict d = metrics_dict(evaluate_scored(spec, as_span(x), as_span(y), range_from(range),
                                                   initial_state_from(initial_state), censored, &count));
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
+        d["outside_input_limits"] = input_coverage(spec, as_span(x), range_from(range)).outside;
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),
@@ -158,7 +159,12 @@ error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
 censored: where y clips (a sensor's limit, detected from the record), a sample at the limit
 where the model predicts beyond it is no error, as fit() treats such a record and as
 `hysteron fit` / `hysteron evaluate` score it; the dict then also has censored_samples, their
-number in the range. Default False: scored as recorded.)doc");
+number in the range. Default False: scored as recorded.)
+
+outside_input_limits: the samples of the range whose input lies outside the model's
+input_limits (fit() sets them to the training range's input) by more than 2 % of their span:
+the model extrapolates there (hysteron.input_coverage in C++; `hysteron evaluate` warns where
+they are more than 1 %).)doc");
 
   m.def(
       "simulate_record",

@@ -42,7 +42,13 @@ def test_fit_report_fields():
     assert r["candidates"] == []  # only with model="auto"
     # metrics dicts come from the same writer as the fit's
     m = hysteron.evaluate(r["model"], x, y, range=(0, 1200))
-    assert set(m) == METRIC_KEYS
+    assert set(m) == METRIC_KEYS | {"outside_input_limits"}
+    assert m["outside_input_limits"] == 0  # the training range itself
+    # an input beyond the range the model was fitted on is counted (input_limits: that range)
+    lo, hi = r["model"]["input_limits"]
+    wide = 3.0 * np.asarray(x) + 1.0
+    expected = int((np.maximum(lo - wide, wide - hi) > 0.02 * (hi - lo)).sum())
+    assert hysteron.evaluate(r["model"], wide, y)["outside_input_limits"] == expected > 100
 
 
 def test_min_slope_is_validated():

@@ -141,16 +141,21 @@ double huber_rms(const ModelParams& model, std::span<const double> x, std::span<
 // if either is constant (every kind and auto refuse it alike; nullptr otherwise).
 struct TrainingRanges {
   double xlo, xhi, ylo, yhi;
-  const char* constant;
+  std::string constant;  // "" where neither is
 };
 
 TrainingRanges training_ranges(std::span<const double> x, std::span<const double> y, IndexRange tr) {
   const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
   const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
   const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
-  TrainingRanges r{*xl, *xh, *yl, *yh, nullptr};
-  if (!(r.xhi - r.xlo > 0)) r.constant = "fit: the input is constant over the training range";
-  else if (!(r.yhi - r.ylo > 0)) r.constant = "fit: the output is constant over the training range";
+  TrainingRanges r{*xl, *xh, *yl, *yh, {}};
+  // where the range is short, a range in seconds on a time column in other units is a likely cause
+  const auto why = [&](const char* which, double v) {
+    return fmt::format("fit: the {} is constant ({:.6g}) over the training range, samples {}..{} ({} samples)", which,
+                       v, tr.begin, tr.end, tr.end - tr.begin);
+  };
+  if (!(r.xhi - r.xlo > 0)) r.constant = why("input", r.xlo);
+  else if (!(r.yhi - r.ylo > 0)) r.constant = why("output", r.ylo);
   return r;
 }
 
@@ -161,7 +166,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   // moves with an offset, a scale or a sign flip of the data, so the fit is equivariant.
   const auto yt = y.subspan(tr.begin, tr.end - tr.begin);
   const TrainingRanges rg = training_ranges(x, y, tr);
-  if (rg.constant) return invalid(rg.constant, o.model, t0);
+  if (!rg.constant.empty()) return invalid(rg.constant, o.model, t0);
   const double sx = rg.xhi - rg.xlo, sy = rg.yhi - rg.ylo;
   if (!std::isfinite(sx) || !std::isfinite(sy) || !std::isnormal(sx) || !std::isnormal(sy))
     return invalid(fmt::format("fit: the training spans (input {}, output {}) are not representable after normalisation",
@@ -357,7 +362,7 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   // training range, fold 1 the first; a candidate's hold-out error pools both.
   const std::size_t m = tr.end - tr.begin;
   // the same refusals as every explicit kind (fit_one): nothing to choose between on such a record
-  if (const char* why = training_ranges(x, y, tr).constant) return invalid(why, o.model, t0);
+  if (const std::string why = training_ranges(x, y, tr).constant; !why.empty()) return invalid(why, o.model, t0);
   const auto h = static_cast<std::size_t>(std::llround(o.holdout_fraction * static_cast<double>(m)));
   if (h < 1 || h >= m)
     return invalid("fit: auto: the training range is too short to split off a hold-out", o.model, t0);

@@ -415,8 +415,9 @@ class RatePiKind final : public Parametrization {
     names.insert(names.end(), {"c", "tau"});
     values.insert(values.end(), {m.c, m.tau});
     finish(rep, d, m, names, values,
-           fmt::format("golden-section search of c in [0, {:.4g}] (c max(r) <= (tau + dt) / 2) for tau = {:.4g} s (x 1/2, 1, "
-                       "2, 4 of {:.4g} s from the reversal intervals) around bounded linear least squares",
+           fmt::format("golden-section search of c in [0, {:.4g}] (c max(r) <= (tau + dt) / 2) for tau = {:.4g} (x 1/2, 1, "
+                       "2, 4 of {:.4g} from the reversal intervals; in the sample time's unit, the time column's) "
+                       "around bounded linear least squares",
                        cmax, m.tau, tau0),
            solves, o.min_slope);
     rep.parameters.back().held = true;  // tau: chosen from a grid, no standard error

@@ -200,4 +200,27 @@ FitMetrics evaluate_censored(const ModelParams& params, std::span<const double> 
                          std::span<const double>(yp).subspan(r.begin, r.end - r.begin));
 }
 
+InputCoverage input_coverage(const ModelParams& params, std::span<const double> x, IndexRange range) {
+  InputCoverage c;
+  c.limits = input_limits(params);
+  const IndexRange r = detail::check_range(range, x.size(), "input_coverage");
+  c.n = r.end - r.begin;
+  if (!c.limits.bounded()) return c;
+  const double tol = kInputCoverageTolerance * (c.limits.hi - c.limits.lo);
+  for (std::size_t k = r.begin; k < r.end; ++k) {
+    const double beyond = std::max(c.limits.lo - x[k], x[k] - c.limits.hi);
+    if (beyond > tol) ++c.outside;
+    c.max_beyond = std::max(c.max_beyond, beyond);
+  }
+  return c;
+}
+
+std::string input_coverage_warning(const InputCoverage& c, std::string_view what) {
+  if (!(c.fraction() > 0.01)) return {};
+  return fmt::format("{}: {} of the {} scored samples ({:.1f} %) have an input outside the model's input_limits "
+                     "[{:.6g}, {:.6g}] (the input range it was fitted on), up to {:.6g} beyond: the model "
+                     "extrapolates there, and its score says as much about that range as about the model",
+                     what, c.outside, c.n, 100.0 * c.fraction(), c.limits.lo, c.limits.hi, c.max_beyond);
+}
+
 }  // namespace hysteron

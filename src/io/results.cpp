@@ -256,6 +256,7 @@ json to_json(const Evaluation& e) {
   j["file"] = e.file;
   j["range"] = to_json(e.range);
   j["censored_samples"] = e.censored;
+  j["outside_input_limits"] = e.outside_input_limits;
   return j;
 }
 
@@ -265,6 +266,7 @@ void from_json(const json& j, Evaluation& e, std::string_view where) {
   e.range = {};
   if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
   e.censored = j.contains("censored_samples") ? get_size(j, "censored_samples", where) : 0;
+  e.outside_input_limits = j.contains("outside_input_limits") ? get_size(j, "outside_input_limits", where) : 0;
 }
 
 // ---- documents -------------------------------------------------------------------

@@ -124,5 +124,31 @@ expect_rc1 "missing required option (CLI11)" "--data" \
   "$BIN" evaluate --model "$T/m.json" --input input --output output
 "$BIN" evaluate --help > /dev/null 2>&1 || fail "evaluate --help exits non-zero"
 
+# a model fitted on the two smallest loops (input up to 0.2) scored on the whole record (up to
+# 0.6): a warning says how much of it lies outside the fitted input range, the document counts
+# them, the exit stays 0; on its own range: no warning. fit's --validate says the same.
+"$BIN" fit --model gpi --data "$T/data.csv" --input input --output output --train 1200:1800 --threads 1 \
+  --out "$T/small.json" --force > /dev/null 2>&1 || fail "fit on the small loops"
+"$BIN" evaluate --model "$T/small.json" --data "$T/data.csv" --input input --output output --json \
+  > "$T/cov.json" 2> "$T/cov.err" || fail "evaluate beyond the fitted range: non-zero exit"
+grep -q "of the 1800 scored samples .* have an input outside the model's input_limits \[0, 0.2\]" "$T/cov.err" \
+  || { fail "no coverage warning:"; cat "$T/cov.err"; }
+$PY - "$T/cov.json" "$T/data.csv" "$T/small.json" <<'PYEOF' || fail "outside_input_limits in the document"
+import csv, json, sys
+n = json.load(open(sys.argv[1]))["metrics"]["outside_input_limits"]
+x = [float(r["input"]) for r in csv.DictReader(open(sys.argv[2]))]
+lo, hi = json.load(open(sys.argv[3]))["input_limits"]  # the small loops' range, about [0, 0.2]
+assert abs(lo) < 1e-12 and abs(hi - 0.2) < 1e-12, (lo, hi)
+expected = sum(max(lo - v, v - hi) > 0.02 * (hi - lo) for v in x)  # beyond by more than 2 % of the span
+assert n == expected > 500, (n, expected)
+PYEOF
+"$BIN" evaluate --model "$T/small.json" --data "$T/data.csv" --input input --output output --range 1200:1800 \
+  > /dev/null 2> "$T/cov2.err" || fail "evaluate on the fitted range"
+grep -q "outside the model's input_limits" "$T/cov2.err" && fail "coverage warning on the fitted range itself"
+"$BIN" fit --model gpi --data "$T/data.csv" --input input --output output --train 1200:1800 --validate 0:1200 \
+  --threads 1 --out "$T/small2.json" --force > "$T/cov3.txt" 2>&1
+grep -q "validation range: .* outside the model's input_limits" "$T/cov3.txt" \
+  || { fail "fit --validate beyond the training range: no warning"; cat "$T/cov3.txt"; }
+
 if [ $fails -ne 0 ]; then echo "evaluate: $fails failures"; exit 1; fi
 echo "evaluate: ok"

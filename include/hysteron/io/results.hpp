@@ -62,6 +62,7 @@ struct Evaluation {
   IndexRange range{};    // samples scored (resolved: end is a sample index)
   FitMetrics metrics;
   std::size_t censored = 0;  // clipped samples of the range scored as censored (evaluate_censored)
+  std::size_t outside_input_limits = 0;  // samples of the range whose input is outside the model's (input_coverage)
 };
 
 // The document of `hysteron fit --report FILE.json` and `--json`.

@@ -204,7 +204,7 @@ int $P_learning_warm_start($P_learning *l, const double *correction, size_t n)
   size_t i;
   if (n != $U_LEARNING_PERIOD || !correction) return -1;
   for (i = 0; i < n; ++i)
-    if (!isfinite(correction[i])) return -1;
+    if (!$P_finite(correction[i])) return -1;
   $P_learning_reset(l);
   for (i = 0; i < n; ++i)
     l->c[l->cur][i] = $P_clamp(correction[i], -$P_learning_max_correction, $P_learning_max_correction);
@@ -225,7 +225,7 @@ double $P_learning_correction(const $P_learning *l, size_t ahead)
 void $P_learning_step($P_learning *l, double error_m)
 {
   const size_t dh = $P_learning_delay;
-  if (!isfinite(error_m)) {
+  if (!$P_finite(error_m)) {
     error_m = 0.0;
     ++l->faults;
   }

@@ -271,7 +271,8 @@ half-width `half_width`. Each sample: correction(0) (and correction(preview) for
 feedforward), run the loop on r + c, then step(r - y). rise_tolerance, hold_after_cuts and
 max_gain set the supervisor (the learning variant: 0, 3, and up to 0.5: the largest gain
 whose bound holds on the identified loop). step() never allocates; a
-non-finite error is learnt as 0 and counted (faults). Invalid parameters raise
+non-finite error is learnt as 0 and counted (faults), an update that overflows keeps the
+sample's correction of the period before (overflows). Invalid parameters raise
 hysteron.Error naming the field.)doc")
       .def(py::init([](std::size_t period, double gain, std::size_t lead, std::size_t half_width,
                        std::size_t lookahead, double max_correction, double rise_tolerance,
@@ -331,4 +332,7 @@ hysteron.Error naming the field.)doc")
       });
 }
 
+      .def_property_readonly("overflows", &IterativeLearning::overflows,
+                             "Updates whose sum overflowed (finite errors of the order of 1e308): the sample kept "
+                             "its correction of the period before, so a correction is never inf or NaN.")
 }  // namespace hysteron::python

@@ -189,3 +189,33 @@ def test_generated_c_refuses_nan_under_fast_math(tmp_path):
         for k in range(10):
             c.fm_learning_step(learning, nan)  # learnt as 0
         assert c.fm_learning_correction(learning, 0) == 0.0, flags
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
+def test_learning_with_huge_errors_keeps_its_corrections_finite(tmp_path):
+    # errors of 1.2e308 are finite, but L e overflows with L = 1.9 (and alternating signs give
+    # inf - inf): the sample keeps its correction of the period before (counted in overflows), in
+    # the library and in generated C alike
+    ctl = hysteron.loop_of_run(str(RESULT), "learning.triangle")
+    ctl["learning"].update({"gain": 1.9, "max_gain": 0.0, "rise_tolerance": None, "half_width": 2,
+                            "hold_after_cuts": 0})
+    ilc = hysteron.learning_from(ctl)
+    period = ctl["learning"]["period_samples"]
+    c = compile_generated(tmp_path, hysteron.export_c(MODEL, prefix="lp", controller=ctl)["source"], "lp", ["-O2"])
+    c.lp_learning_correction.restype = ctypes.c_double
+    c.lp_learning_correction.argtypes = [ctypes.c_void_p, ctypes.c_size_t]
+    c.lp_learning_step.argtypes = [ctypes.c_void_p, ctypes.c_double]
+    learning = ctypes.create_string_buffer(8 * 6 * period + 4096)
+    c.lp_learning_reset(learning)
+    for k in range(3 * period):
+        e = 1.2e308 if k % 2 else -1.2e308
+        assert np.isfinite(ilc.correction(0)), k
+        assert c.lp_learning_correction(learning, 0) == ilc.correction(0), k
+        ilc.step(e)
+        c.lp_learning_step(learning, e)
+    assert ilc.overflows > 0 and ilc.faults == 0
+    plain = hysteron.IterativeLearning(period=20, gain=1.9, half_width=2)
+    for k in range(80):  # L e alone overflows; alternating signs: inf - inf
+        assert np.isfinite(plain.correction(0)), k
+        plain.step(1.2e308 if k % 2 else -1.2e308)
+    assert plain.overflows > 0

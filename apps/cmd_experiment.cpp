@@ -123,6 +123,7 @@ void add_experiment(CLI::App& app, Action& action) {
     action = [args] {
       check_plant_not_output(args->plant, args->out);
       check_plant_not_output(args->tracking_plant, args->out);
+      io::check_output_directory({"--out", args->out});  // before the run, not after it
       const ExperimentResult r = run_experiment(options_from(*args));
       if (!args->out.empty()) {
         r.write(args->out);
@@ -150,6 +151,7 @@ void add_experiment(CLI::App& app, Action& action) {
   demo->callback([dargs, &action] {
     action = [dargs] {
       for (const auto& name : experiment_names()) check_plant_not_output(dargs->plant, dargs->out + "/" + name);
+      io::check_output_directory({"--out", dargs->out});
       for (const auto& name : experiment_names()) {
         ExperimentArgs a = *dargs;
         a.name = name;

@@ -117,6 +117,8 @@ int run_sweep_command(const SweepArgs& a) {
   io::check_outputs_distinct(outputs, inputs);
   if (a.json && a.out == "-") throw Error("--json and --out - both write to stdout: choose one");
   if (a.report == "-") throw Error("--report -: the HTML page needs a file name");
+  io::check_output_file({"--out", a.out});  // where the table and the page go, before the sweep's runs
+  io::check_output_file({"--report", a.report});
 
   SweepOptions o;
   o.seed = a.seed;

@@ -552,6 +552,39 @@ TEST(Learning, NonFiniteErrorsAreCountedNotLearned) {
   }
 }
 
+// Finite errors of the order of 1e308 overflow the update's sum (L e + c beyond the double
+// range; with alternating signs inf - inf = NaN, which the clamp to max_correction lets through).
+// The sample then keeps its correction of the period before: every correction stays finite and
+// within max_correction, the overflows are counted, and ordinary errors afterwards learn again.
+TEST(Learning, HugeErrorsNeverOverflowTheCorrection) {
+  for (const double limit : {std::numeric_limits<double>::infinity(), 0.01}) {
+    LearningParams p;
+    p.period = 20;
+    p.gain = 1.9;
+    p.half_width = 2;
+    p.max_correction = limit;
+    IterativeLearning ilc(p);
+    const double huge = std::numeric_limits<double>::max() / 1.5;
+    for (std::size_t k = 0; k < 4 * p.period; ++k) {
+      const double c = ilc.correction(0);
+      ASSERT_TRUE(std::isfinite(c)) << "limit " << limit << ", sample " << k << ": " << c;
+      ASSERT_LE(std::abs(c), limit) << "sample " << k;
+      ilc.step(k % 2 ? huge : -huge);
+    }
+    EXPECT_GT(ilc.overflows(), 0u) << "limit " << limit;
+    EXPECT_EQ(ilc.faults(), 0u);  // finite errors: not faults
+    std::size_t overflows = 0;
+    for (std::size_t k = 0; k < 4 * p.period; ++k) {
+      ASSERT_TRUE(std::isfinite(ilc.correction(0)));
+      ilc.step(1e-3);
+      if (k + 1 == p.period) overflows = ilc.overflows();  // the update's window has passed the huge errors
+    }
+    EXPECT_EQ(ilc.overflows(), overflows);  // ordinary errors do not overflow
+    ilc.reset();
+    EXPECT_EQ(ilc.overflows(), 0u);
+  }
+}
+
 TEST(Learning, StepDoesNotAllocate) {
   LearningParams p;
   p.period = 500;

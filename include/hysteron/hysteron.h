@@ -376,9 +376,16 @@ HYSTERON_C_API hysteron_status hysteron_ilc_reset_to(hysteron_ilc* ilc, const do
 HYSTERON_C_API hysteron_status hysteron_ilc_correction(const hysteron_ilc* ilc, size_t ahead, double* correction);
 /* Records the error r - y [the loop's units] of the current sample and advances one sample.
  * A non-finite error is learnt as 0 and counted (the sample still advances, so the phase
- * stays with the reference), and the call returns HYSTERON_ERROR_INVALID_ARGUMENT. Feed 0
- * where the actuator is at a limit (the error there cannot be reduced). Real-time safe. */
+ * stays with the reference), and the call returns HYSTERON_ERROR_INVALID_ARGUMENT. A finite
+ * but huge error (of the order of 1e308) can overflow the update of the correction, which runs
+ * learning_update_delay = lead + h samples behind the errors: that phase then keeps its
+ * correction of the period before (never inf or NaN), the overflow is counted
+ * (hysteron_ilc_overflows) and the call that made the update returns
+ * HYSTERON_ERROR_INVALID_ARGUMENT (the sample still advances). Feed 0 where the actuator is at
+ * a limit (the error there cannot be reduced). Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_ilc_step(hysteron_ilc* ilc, double error);
+/* Updates of the correction that overflowed since the last reset (see hysteron_ilc_step). */
+HYSTERON_C_API hysteron_status hysteron_ilc_overflows(const hysteron_ilc* ilc, size_t* overflows);
 /* Where it is: the phase in the period, completed periods, the L in use, how often the
  * supervisor halved and doubled L, whether it holds the best correction, non-finite errors
  * seen. Any out-pointer may be NULL. */

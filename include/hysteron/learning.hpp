@@ -95,7 +95,9 @@ class IterativeLearning {
   // (ahead <= params.lookahead). Call before step() for the current sample.
   double correction(std::size_t ahead = 0) const noexcept;
   // Records the tracking error e = r - y of the current sample and advances one
-  // sample. A non-finite error is recorded as 0 and counted.
+  // sample. A non-finite error is recorded as 0 and counted (faults()). An update whose sum
+  // overflows the double range (finite errors of the order of 1e308) keeps that sample's
+  // correction of the period before and is counted (overflows()): a correction is never inf or NaN.
   void step(double error) noexcept;
   // Zero corrections, back to phase 0 of period 0.
   void reset() noexcept;
@@ -109,6 +111,7 @@ class IterativeLearning {
   std::size_t phase() const noexcept { return k_; }
   std::size_t iteration() const noexcept { return j_; }  // completed periods
   std::size_t faults() const noexcept { return faults_; }
+  std::size_t overflows() const noexcept { return overflows_; }  // updates that overflowed (see step())
   double gain() const noexcept { return gain_; }             // L in use (params().gain until halved)
   std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor reverted and halved L
   std::size_t gain_raises() const noexcept { return raises_; }  // times it doubled L (max_gain)
@@ -122,7 +125,7 @@ class IterativeLearning {
   std::size_t filter_reach() const noexcept { return reach_; }
 
  private:
-  double update_at(std::size_t i, const double* c, bool tail) const noexcept;
+  double update_at(std::size_t i, const double* c, bool tail) noexcept;  // counts overflows_
   void end_period() noexcept;  // swaps the generations; supervision (see above)
 
   LearningParams p_;
@@ -138,7 +141,7 @@ class IterativeLearning {
   bool skip_tail_ = false;                // c_j is a restored best: complete already
   bool held_ = false;                     // c_cur_ is held: no more updates
   std::vector<double> e_cur_, e_prev_;    // e_j, e_{j-1}
-  std::size_t k_ = 0, j_ = 0, faults_ = 0;
+  std::size_t k_ = 0, j_ = 0, faults_ = 0, overflows_ = 0;
   double gain_ = 0.0;                     // L in use
   double sse_ = 0.0;                      // sum of e^2 over this period so far
   double least_mse_ = 0.0;                // mean squared error of c_best_'s period

@@ -92,7 +92,8 @@ Outputs beyond reach saturate at the input limits (lo, hi).)doc")
       .def(py::init([](const py::object& spec, py::object limits) {
              InverseOptions opt;
              if (!limits.is_none()) {
-               auto l = limits.cast<std::pair<double, double>>();
+               const auto l = cast_arg<std::pair<double, double>>(limits, "Inverse: limits",
+                                                                  "(lo, hi), two numbers, or None for no limits");
                opt.input_limits = {l.first, l.second};
              }
              return Inverse(params_from(spec), opt);

@@ -3,10 +3,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/names.hpp"
 #include "hysteron/io/results.hpp"
 
 namespace hysteron::python {
@@ -16,6 +18,25 @@ std::span<const double> as_finite_span(const DoubleArray& a, const char* what) {
   for (std::size_t i = 0; i < s.size(); ++i)
     if (!std::isfinite(s[i])) throw Error(fmt::format("{}[{}] = {}: not finite", what, i, s[i]));
   return s;
+}
+
+void throw_arg_type(const py::handle& obj, std::string_view what, std::string_view expected) {
+  std::string repr = py::repr(obj).cast<std::string>();
+  if (repr.size() > 80) repr = repr.substr(0, 77) + "...";
+  throw py::type_error(fmt::format("{}: expected {}, got {} {}", what, expected,
+                                   py::str(obj.get_type().attr("__name__")).cast<std::string>(), repr));
+}
+
+void check_dict_keys(const py::dict& d, std::initializer_list<std::string_view> known, std::string_view where) {
+  for (const auto& [k, v] : d) {
+    const std::string key = py::str(k);
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    std::string keys;
+    for (const std::string_view n : known) keys += fmt::format("{}{}", keys.empty() ? "" : ", ", n);
+    const std::string_view hint = io::closest_name(key, known);
+    throw Error(fmt::format("{}: unknown key '{}'{} (the keys: {})", where, key,
+                            hint.empty() ? "" : fmt::format(", did you mean '{}'?", hint), keys));
+  }
 }
 
 double finite_arg(double v, const char* what) {

@@ -59,7 +59,7 @@ PidGuard guard_from(const py::object& o) {
   if (!py::isinstance<py::dict>(o)) throw Error("Pid: guard must be a dict or None");
   for (const auto& [key, value] : o.cast<py::dict>()) {
     const std::string k = py::str(key);
-    const double v = value.cast<double>();
+    const double v = cast_arg<double>(value, fmt::format("Pid: guard[\"{}\"]", k), "a number");
     if (k == "period") g.period = v;
     else if (k == "amplitude") g.amplitude = v;
     else if (k == "count") g.count = v;
@@ -81,6 +81,14 @@ FeedforwardParams ff_params(std::pair<double, double> limits, double model_scale
 }
 
 constexpr double inf = std::numeric_limits<double>::infinity();
+
+// A controller's pid= (or pressure_pid=): a hysteron.Pid; `what` names the argument in errors.
+PidParams pid_arg(const py::object& pid, const char* what) {
+  return cast_arg<const Pid&>(pid, what,
+                              "a hysteron.Pid or None (a dict of its parameters: hysteron.Pid(**d), as Pid.params "
+                              "gives them)")
+      .params();
+}
 
 }  // namespace
 
@@ -176,7 +184,7 @@ are used; default: Pid.gpi_paper()).)doc")
       .def(py::init([](const py::object& model, const py::object& pid, std::pair<double, double> limits, double scale,
                        double lag, double ts) {
              const PidParams pp = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                                : pid.cast<const Pid&>().params();
+                                                : pid_arg(pid, "FeedforwardPidController: pid");
              return FeedforwardPidController(model_spec(model), ff_params(limits, scale, lag, ts), pp);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
@@ -198,7 +206,7 @@ variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
                        std::pair<double, double> limits, double scale, double lag, double ts) {
              OpenLoopParams p;
              p.feedforward = ff_params(limits, scale, lag, ts);
-             if (!pid.is_none()) p.position = pid.cast<const Pid&>().params();
+             if (!pid.is_none()) p.position = pid_arg(pid, "OpenLoopController: pid");
              p.pressure_gain = pressure_gain;
              return OpenLoopController(model_spec(model), p);
            }),
@@ -225,18 +233,19 @@ duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm"
              CascadeParams p;
              p.feedforward = ff_params(limits, scale, lag, ts);
              p.position = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                        : pid.cast<const Pid&>().params();
+                                        : pid_arg(pid, "CascadePwmController: pid");
              if (pressure_pid.is_none()) {
                p.pressure.kp = 20.0;
                p.pressure.sample_time = ts;
              } else {
-               p.pressure = pressure_pid.cast<const Pid&>().params();
+               p.pressure = pid_arg(pressure_pid, "CascadePwmController: pressure_pid");
              }
              if (!pwm.is_none()) {
-               const auto d = pwm.cast<py::dict>();
+               const auto d = cast_arg<py::dict>(pwm, "CascadePwmController: pwm",
+                                                 "a dict of gain, deadband, min_duty, max_duty, resolution, or None");
                for (const auto& [k, v] : d) {
-                 const auto key = k.cast<std::string>();
-                 const double x = v.cast<double>();
+                 const std::string key = py::str(k);
+                 const double x = cast_arg<double>(v, fmt::format("CascadePwmController: pwm[\"{}\"]", key), "a number");
                  if (key == "gain") p.pwm.gain = x;
                  else if (key == "deadband") p.pwm.deadband = x;
                  else if (key == "min_duty") p.pwm.min_duty = x;
@@ -271,7 +280,8 @@ half-width `half_width`. Each sample: correction(0) (and correction(preview) for
 feedforward), run the loop on r + c, then step(r - y). rise_tolerance, hold_after_cuts and
 max_gain set the supervisor (the learning variant: 0, 3, and up to 0.5: the largest gain
 whose bound holds on the identified loop). step() never allocates; a
-non-finite error is learnt as 0 and counted (faults). Invalid parameters raise
+non-finite error is learnt as 0 and counted (faults), an update that overflows keeps the
+sample's correction of the period before (overflows). Invalid parameters raise
 hysteron.Error naming the field.)doc")
       .def(py::init([](std::size_t period, double gain, std::size_t lead, std::size_t half_width,
                        std::size_t lookahead, double max_correction, double rise_tolerance,
@@ -322,6 +332,9 @@ hysteron.Error naming the field.)doc")
                              "Times the supervisor doubled L after a best period.")
       .def_property_readonly("held", &IterativeLearning::held, "True once the best correction is held.")
       .def_property_readonly("faults", &IterativeLearning::faults, "Non-finite errors learnt as 0.")
+      .def_property_readonly("overflows", &IterativeLearning::overflows,
+                             "Updates whose sum overflowed (finite errors of the order of 1e308): the sample kept "
+                             "its correction of the period before, so a correction is never inf or NaN.")
       .def("__repr__", [](const IterativeLearning& l) {
         const LearningParams& q = l.params();
         return fmt::format("IterativeLearning(period={}, gain={}, lead={}, half_width={}, lookahead={}, "

@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <future>
 #include <optional>
 #include <span>
@@ -195,6 +196,15 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
          const std::string& report_path, int learning_periods, bool adaptive, const py::object& tracking_plant,
          const std::string& model, bool paper_references) {
+        // where the outputs go, before the run (minutes): a report whose directory is `out` is
+        // written after `out` was created
+        io::check_output_directory({"run_experiment: out", out});
+        const auto dir = [](const std::string& p) { return std::filesystem::path(p).lexically_normal(); };
+        if (!out.empty() && !report_path.empty() &&
+            dir(report_path).parent_path() == dir(out + "/").parent_path())
+          io::check_output_directory({"run_experiment: report", out});
+        else
+          io::check_output_file({"run_experiment: report", report_path});
         ExperimentOptions o;
         o.model = fit_model_from_name(model);
         o.fit_references = !paper_references;
@@ -304,10 +314,14 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
          const std::string& set, const py::object& plant, std::uint64_t seed, int learning_periods,
          const std::string& model, bool paper_references, bool identify_on_base, unsigned jobs, const std::string& out,
          const std::string& report_path) {
+        io::check_output_file({"run_sweep: out", out});
+        io::check_output_file({"run_sweep: report", report_path});
         SweepOptions o;
-        o.experiments = sweep_experiments(py::isinstance<py::str>(experiments)
-                                              ? std::vector<std::string>{experiments.cast<std::string>()}
-                                              : experiments.cast<std::vector<std::string>>());
+        o.experiments = sweep_experiments(
+            py::isinstance<py::str>(experiments)
+                ? std::vector<std::string>{experiments.cast<std::string>()}
+                : cast_arg<std::vector<std::string>>(experiments, "run_sweep: experiments",
+                                                     "a name of experiment_names(), \"all\", or a list of names"));
         o.seed = seed;
         o.learning_periods = learning_periods;
         o.model = fit_model_from_name(model);
@@ -368,15 +382,21 @@ is recorded in the result (failures > 0), not raised; bad input raises hysteron.
       [](const py::list& series, const std::string& path, const std::string& title, const std::string& xl,
          const std::string& xu, const std::string& yl, const std::string& yu) {
         report::PlotSpec spec{labels(title, xl, xu, yl, yu), {}};
-        for (const auto& s : series) {
-          const auto d = s.cast<py::dict>();
+        for (std::size_t i = 0; i < series.size(); ++i) {
+          const std::string where = fmt::format("plot: series[{}]", i);
+          const auto d = cast_arg<py::dict>(series[i], where, "a dict {label, x, y, style, color, dashed}");
+          check_dict_keys(d, {"label", "x", "y", "style", "color", "dashed"}, where);
+          const auto get = [&]<class T>(const char* key, const char* expected) {
+            if (!d.contains(key)) throw py::value_error(fmt::format("{}: no \"{}\" ({})", where, key, expected));
+            return cast_arg<T>(d[key], fmt::format("{}[\"{}\"]", where, key), expected);
+          };
           report::Series r;
-          r.label = d["label"].cast<std::string>();
-          r.x = vec(d["x"].cast<DoubleArray>());
-          r.y = vec(d["y"].cast<DoubleArray>());
-          if (d.contains("style")) r.style = d["style"].cast<std::string>();
-          if (d.contains("color")) r.color = d["color"].cast<std::string>();
-          if (d.contains("dashed")) r.dashed = d["dashed"].cast<bool>();
+          r.label = get.operator()<std::string>("label", "a str");
+          r.x = vec(get.operator()<DoubleArray>("x", "an array of numbers"));
+          r.y = vec(get.operator()<DoubleArray>("y", "an array of numbers"));
+          if (d.contains("style")) r.style = get.operator()<std::string>("style", "a str");
+          if (d.contains("color")) r.color = get.operator()<std::string>("color", "a str");
+          if (d.contains("dashed")) r.dashed = get.operator()<bool>("dashed", "a bool");
           spec.series.push_back(std::move(r));
         }
         report::plot(spec, path);

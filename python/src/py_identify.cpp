@@ -1,6 +1,7 @@
 // Bindings of identification: fit, evaluate, simulate_record, metrics, RLS.
 #include <fmt/format.h>
 
+#include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/report.hpp"
 #include "more.hpp"
@@ -9,13 +10,21 @@ namespace hysteron::python {
 
 namespace {
 
-IndexRange range_from(const py::object& r) {
+// A sample range (begin, end) of ints >= 0 or None; `what` names the argument in errors.
+IndexRange range_from(const py::object& r, const char* what) {
   if (r.is_none()) return {};
-  auto t = r.cast<std::pair<py::object, py::object>>();
-  IndexRange out;
-  out.begin = t.first.is_none() ? 0 : t.first.cast<std::size_t>();
-  out.end = t.second.is_none() ? IndexRange::npos : t.second.cast<std::size_t>();
-  return out;
+  const auto t = cast_arg<std::pair<py::object, py::object>>(r, what, "(begin, end): two sample indices or None");
+  const auto index = [&](const py::object& v, const char* which, std::size_t none) -> std::size_t {
+    if (v.is_none()) return none;
+    if (py::isinstance<py::bool_>(v) || !PyIndex_Check(v.ptr()))
+      throw_arg_type(v, fmt::format("{}: {}", what, which), "a sample index (an int >= 0) or None");
+    const long long i = cast_arg<long long>(v, fmt::format("{}: {}", what, which), "a sample index (an int >= 0)");
+    if (i < 0)
+      throw py::value_error(fmt::format("{}: {} = {}: a sample index must be >= 0 (None: {})", what, which, i,
+                                        none == 0 ? "from the first sample" : "to the end"));
+    return static_cast<std::size_t>(i);
+  };
+  return {index(t.first, "begin", 0), index(t.second, "end", IndexRange::npos)};
 }
 
 }  // namespace
@@ -29,12 +38,13 @@ void bind_identify(py::module_& m) {
          std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
          int num_threads, int stall_iterations, double stall_tolerance, double min_slope, double sample_time,
          int censor_passes) {
+        io::check_output_file({"fit: report", report});  // before the fit, not after it
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = num_operators;
         o.num_dead_zones = num_dead_zones;
         o.initial_state = initial_state_from(initial_state);
-        o.train = range_from(train);
+        o.train = range_from(train, "fit: train");
         o.huber_delta = huber_delta;
         o.num_starts = num_starts;
         o.seed = seed;
@@ -114,7 +124,7 @@ Invalid options give the status "invalid_input" with the reason in "message".)do
         PiParams p;
         {
           const auto xs = as_span(x), ys = as_span(y);
-          const IndexRange r = range_from(train);
+          const IndexRange r = range_from(train, "reference_pi: train");
           py::gil_scoped_release release;
           p = reference_pi(xs, ys, r, num_operators);
         }
@@ -144,7 +154,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
          const std::string& initial_state, bool censored) {
         const ModelParams spec = model_spec(model);
         std::size_t count = 0;
-        py::dict d = metrics_dict(evaluate_scored(spec, as_span(x), as_span(y), range_from(range),
+        py::dict d = metrics_dict(evaluate_scored(spec, as_span(x), as_span(y), range_from(range, "evaluate: range"),
                                                   initial_state_from(initial_state), censored, &count));
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
         d["outside_input_limits"] = input_coverage(spec, as_span(x), range_from(range)).outside;
@@ -224,7 +234,7 @@ and envelopes and gives the initial weights.)doc")
          const py::object& train) {
         WeightFitOptions o;
         o.initial_state = initial_state_from(initial_state);
-        o.train = range_from(train);
+        o.train = range_from(train, "fit_weights: train");
         return from_json(io::model_to_json(fit_weights(model_spec(model), as_span(x), as_span(y), o)));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("initial_state") = "virgin", py::arg("train") = py::none(),

@@ -35,17 +35,23 @@ py::dict outputs_dict(const RigOutputs& o) {
 
 std::vector<WaveSegment> segments_from(const py::list& segs) {
   std::vector<WaveSegment> out;
-  for (const auto& s : segs) {
-    const auto d = s.cast<py::dict>();
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    const std::string where = fmt::format("wave_sequence: segments[{}]", i);
+    const auto d = cast_arg<py::dict>(segs[i], where, "a dict {waveform, amplitude, period, periods, offset}");
+    check_dict_keys(d, {"waveform", "amplitude", "period", "periods", "offset"}, where);
+    const auto field = [&]<class T>(const char* key, T& v, const char* expected) {
+      if (d.contains(key)) v = cast_arg<T>(d[key], fmt::format("{}[\"{}\"]", where, key), expected);
+    };
     WaveSegment w;
-    const std::string wf = d.contains("waveform") ? d["waveform"].cast<std::string>() : "triangle";
+    std::string wf = "triangle";
+    field("waveform", wf, "'triangle' or 'sine'");
     if (wf == "triangle") w.waveform = Waveform::triangle;
     else if (wf == "sine") w.waveform = Waveform::sine;
     else throw py::value_error("waveform must be 'triangle' or 'sine'");
-    if (d.contains("amplitude")) w.amplitude = d["amplitude"].cast<double>();
-    if (d.contains("period")) w.period = d["period"].cast<double>();
-    if (d.contains("periods")) w.periods = d["periods"].cast<int>();
-    if (d.contains("offset")) w.offset = d["offset"].cast<double>();
+    field("amplitude", w.amplitude, "a number");
+    field("period", w.period, "a number [s]");
+    field("periods", w.periods, "an int");
+    field("offset", w.offset, "a number");
     out.push_back(w);
   }
   return out;

@@ -140,3 +140,82 @@ def test_generated_learning_loop_steps_as_learning_from(tmp_path):
         assert duty.value == d, k
         learnt = max(learnt, abs(c0))
     assert ilc.iteration == 3 and learnt > 1e-4  # three periods, corrections learnt
+
+
+def compile_generated(tmp_path, source, name, flags):
+    """source compiled with gcc -Werror and `flags` as a shared library, loaded with ctypes."""
+    (tmp_path / (name + ".c")).write_text(source)
+    lib = tmp_path / ("lib%s.so" % name)
+    subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", *flags, "-shared", "-fPIC",
+                    str(tmp_path / (name + ".c")), "-o", str(lib), "-lm"], check=True, capture_output=True)
+    return ctypes.CDLL(str(lib))
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
+def test_generated_c_refuses_nan_under_fast_math(tmp_path):
+    # isfinite()/isnan() are folded to constants under -ffast-math (-ffinite-math-only): the
+    # generated checks read the bit pattern, so a NaN is still refused (docs/export.md)
+    ctl = hysteron.loop_of_run(str(RESULT), "learning.triangle")
+    source = hysteron.export_c(MODEL, prefix="fm", controller=ctl)["source"]
+    nan = float("nan")
+    for flags in (["-O2"], ["-O2", "-ffast-math"], ["-O3", "-ffinite-math-only"]):
+        c = compile_generated(tmp_path, source, "fm" + "".join(flags).replace("-", "_"), flags)
+        for f in ("fm_model_step", "fm_inverse_step"):
+            getattr(c, f).restype = ctypes.c_double
+            getattr(c, f).argtypes = [ctypes.c_void_p, ctypes.c_double]
+        c.fm_model_reset_state.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_double), ctypes.c_double]
+        c.fm_loop_step.restype = ctypes.c_double
+        c.fm_loop_step.argtypes = [ctypes.c_void_p] + [ctypes.c_double] * 4 + [ctypes.POINTER(ctypes.c_double)]
+        c.fm_learning_correction.restype = ctypes.c_double
+        c.fm_learning_correction.argtypes = [ctypes.c_void_p, ctypes.c_size_t]
+        c.fm_learning_step.argtypes = [ctypes.c_void_p, ctypes.c_double]
+        model, inverse, loop = (ctypes.create_string_buffer(1 << 16) for _ in range(3))
+        learning = ctypes.create_string_buffer(8 * 6 * ctl["learning"]["period_samples"] + 4096)
+        c.fm_model_reset(model)
+        y = c.fm_model_step(model, 0.3)
+        assert np.isfinite(y) and c.fm_model_step(model, nan) == y, flags  # held
+        state = (ctypes.c_double * 4)(0.1, 0.1, nan, 0.1)
+        assert c.fm_model_reset_state(model, state, 0.2) == -1, flags
+        c.fm_inverse_reset(inverse)
+        x = c.fm_inverse_step(inverse, 10.0)
+        assert 0.0 < x < 0.6 and c.fm_inverse_step(inverse, nan) == x, flags  # held
+        c.fm_loop_reset(loop)
+        duty = ctypes.c_double()
+        for k in range(3):  # the lag compensation's derivative settles at 0
+            u = c.fm_loop_step(loop, 0.016, 0.016, 0.015, 0.3, ctypes.byref(duty))
+        held = c.fm_loop_step(loop, 0.016, 0.016, nan, nan, ctypes.byref(duty))
+        assert np.isfinite(u) and held == u, (flags, u, held)  # the PID holds
+        c.fm_learning_reset(learning)
+        for k in range(10):
+            c.fm_learning_step(learning, nan)  # learnt as 0
+        assert c.fm_learning_correction(learning, 0) == 0.0, flags
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
+def test_learning_with_huge_errors_keeps_its_corrections_finite(tmp_path):
+    # errors of 1.2e308 are finite, but L e overflows with L = 1.9 (and alternating signs give
+    # inf - inf): the sample keeps its correction of the period before (counted in overflows), in
+    # the library and in generated C alike
+    ctl = hysteron.loop_of_run(str(RESULT), "learning.triangle")
+    ctl["learning"].update({"gain": 1.9, "max_gain": 0.0, "rise_tolerance": None, "half_width": 2,
+                            "hold_after_cuts": 0})
+    ilc = hysteron.learning_from(ctl)
+    period = ctl["learning"]["period_samples"]
+    c = compile_generated(tmp_path, hysteron.export_c(MODEL, prefix="lp", controller=ctl)["source"], "lp", ["-O2"])
+    c.lp_learning_correction.restype = ctypes.c_double
+    c.lp_learning_correction.argtypes = [ctypes.c_void_p, ctypes.c_size_t]
+    c.lp_learning_step.argtypes = [ctypes.c_void_p, ctypes.c_double]
+    learning = ctypes.create_string_buffer(8 * 6 * period + 4096)
+    c.lp_learning_reset(learning)
+    for k in range(3 * period):
+        e = 1.2e308 if k % 2 else -1.2e308
+        assert np.isfinite(ilc.correction(0)), k
+        assert c.lp_learning_correction(learning, 0) == ilc.correction(0), k
+        ilc.step(e)
+        c.lp_learning_step(learning, e)
+    assert ilc.overflows > 0 and ilc.faults == 0
+    plain = hysteron.IterativeLearning(period=20, gain=1.9, half_width=2)
+    for k in range(80):  # L e alone overflows; alternating signs: inf - inf
+        assert np.isfinite(plain.correction(0)), k
+        plain.step(1.2e308 if k % 2 else -1.2e308)
+    assert plain.overflows > 0

@@ -1056,6 +1056,7 @@ hysteron_status hysteron_ilc_step(hysteron_ilc* ilc, double error) {
     set_message("hysteron_ilc_step", "argument ilc is NULL");
     return HYSTERON_ERROR_NULL_POINTER;
   }
+  const std::size_t overflows = ilc->ilc.overflows();
   ilc->ilc.step(error);  // a non-finite error is learnt as 0 and counted
   if (!std::isfinite(error)) {
     char text[160];
@@ -1063,7 +1064,20 @@ hysteron_status hysteron_ilc_step(hysteron_ilc* ilc, double error) {
     set_message("hysteron_ilc_step", text);
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
+  if (ilc->ilc.overflows() != overflows) {  // the update of an earlier phase (D samples behind) overflowed
+    set_message("hysteron_ilc_step", "the update of the correction overflowed (errors of the order of 1e308): that "
+                                     "phase kept its correction of the period before (the sample advanced)");
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
   return HYSTERON_OK;
+}
+
+hysteron_status hysteron_ilc_overflows(const hysteron_ilc* ilc, size_t* overflows) {
+  return guard("hysteron_ilc_overflows", HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(ilc);
+    HYSTERON_REQUIRE(overflows);
+    *overflows = ilc->ilc.overflows();
+  });
 }
 
 hysteron_status hysteron_ilc_state(const hysteron_ilc* ilc, size_t* phase, size_t* iteration, double* gain,

@@ -118,7 +118,7 @@ void IterativeLearning::reset() noexcept {
   std::fill(e_cur_.begin(), e_cur_.end(), 0.0);
   std::fill(e_prev_.begin(), e_prev_.end(), 0.0);
   std::fill(c_best_.begin(), c_best_.end(), 0.0);
-  k_ = j_ = faults_ = cuts_ = raises_ = 0;
+  k_ = j_ = faults_ = overflows_ = cuts_ = raises_ = 0;
   gain_ = p_.gain;
   sse_ = 0.0;
   least_mse_ = std::numeric_limits<double>::infinity();
@@ -168,7 +168,7 @@ double weighted_sum(const double* q, const double* c, const double* e, double L,
 // period before) as documented in step(). The taps m = -h..h are summed in contiguous
 // runs: a run ends where the index of c wraps around the period or the error's source
 // changes (at most 3 runs, since the window wraps at most once).
-double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) const noexcept {
+double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) noexcept {
   const auto N = static_cast<std::ptrdiff_t>(p_.period);
   const auto h = static_cast<std::ptrdiff_t>(reach_);  // taps beyond reach_ are negligible
   const auto d = static_cast<std::ptrdiff_t>(p_.lead);
@@ -199,6 +199,13 @@ double IterativeLearning::update_at(std::size_t i, const double* c, bool tail) c
     }
     acc += weighted_sum(q + m, c + ci, e, gain_, len);
     m += len;
+  }
+  // Finite c and e can still overflow the sum (errors of the order of 1e308): then inf, or NaN
+  // from inf - inf, which the clamp does not catch. The sample keeps its correction of the
+  // generation before, c(i), bounded already; counted in overflows().
+  if (!std::isfinite(acc)) {
+    ++overflows_;
+    return c[i];
   }
   return std::clamp(acc, -p_.max_correction, p_.max_correction);
 }

@@ -179,6 +179,38 @@ std::string inverse_body(const FastEnvelope& e) {
   return "  return u;\n";
 }
 
+// Finiteness from the IEEE 754 bit pattern: isfinite()/isnan() are folded to constants under
+// -ffast-math (-ffinite-math-only), and a target's build may use such flags.
+constexpr std::string_view kFinite = R"(
+/* x is finite (not NaN, not +-inf): its exponent bits are not all ones. Read from the bit
+ * pattern, not with isfinite()/isnan(), which compilers fold to constants under -ffast-math
+ * (-ffinite-math-only): the checks on the inputs hold whatever flags the target uses. */
+#if DBL_MANT_DIG == 24 /* a 32-bit double (e.g. avr-gcc's default) */
+typedef uint32_t $P_bits;
+#define $U_EXPONENT_BITS UINT32_C(0x7f800000)
+#define $U_MAGNITUDE_BITS UINT32_C(0x7fffffff)
+#else
+typedef uint64_t $P_bits;
+#define $U_EXPONENT_BITS UINT64_C(0x7ff0000000000000)
+#define $U_MAGNITUDE_BITS UINT64_C(0x7fffffffffffffff)
+#endif
+
+static int $P_finite(double x)
+{
+  $P_bits b;
+  memcpy(&b, &x, sizeof b);
+  return (b & $U_EXPONENT_BITS) != $U_EXPONENT_BITS;
+}
+
+/* x is a NaN: exponent bits all ones, fraction not zero (as $P_finite, not isnan()). */
+static int $P_nan(double x)
+{
+  $P_bits b;
+  memcpy(&b, &x, sizeof b);
+  return (b & $U_MAGNITUDE_BITS) > $U_EXPONENT_BITS;
+}
+)";
+
 constexpr std::string_view kTanh = R"(
 /* tanh(z) as the library computes it (detail::tanh_fast, envelope.hpp): expm1(2|z|) =
  * 2^k (1 + expm1(r)) - 1 with |r| <= ln2/2, expm1(r) by a degree-12 polynomial, then
@@ -527,7 +559,7 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
 
   std::string helpers() const {
     const Structure<double>& s = b.s;
-    std::string t;
+    std::string t(kFinite);
     if (uses_tanh()) t += kTanh;
     if (uses_atanh()) t += kAtanh;
     t += fmt::format(R"(
@@ -547,7 +579,7 @@ static double $P_gamma_inverse(double u)
 /* gamma{}^-1(u); -+HUGE_VAL at or beyond the edges of gamma's range (Envelope::inverse). */
 static double $P_gamma_inverse_checked(double u)
 {{
-  if (isnan(u)) return u;
+  if ($P_nan(u)) return u;
   if (u <= {}) return -HUGE_VAL;
   if (u >= {}) return HUGE_VAL;
   return $P_gamma_inverse(u);
@@ -697,7 +729,7 @@ void $P_model_reset_relaxed($P_model *m, double x0)
 {
   const double u = $P_gamma((x0 - $P_input_origin) / $P_input_scale);
   int i;
-  if (!isfinite(u)) return;
+  if (!$P_finite(u)) return;
   for (i = 0; i < $U_NUM_OPERATORS; ++i) m->y[i] = u;
   m->u = u;
   m->faults = 0;
@@ -708,8 +740,8 @@ int $P_model_reset_state($P_model *m, const double *y, double u)
 {
   int i;
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!isfinite(y[i])) return -1;
-  if (!isfinite(u)) return -1;
+    if (!$P_finite(y[i])) return -1;
+  if (!$P_finite(u)) return -1;
   for (i = 0; i < $U_NUM_OPERATORS; ++i) m->y[i] = y[i];
   m->u = u;
   m->out = 0.0;
@@ -720,7 +752,7 @@ int $P_model_reset_state($P_model *m, const double *y, double u)
 double $P_model_step($P_model *m, double x)
 {
   double xm, v;
-  if (!isfinite(x)) {
+  if (!$P_finite(x)) {
     ++m->faults;
     return m->out;
   }
@@ -756,9 +788,9 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
   double dev[$U_STATE_SIZE], sc[$U_STATE_SIZE];
   double scale = fabs(u), tol, d_prev = 0.0, r_prev = 0.0, v, x;
   int i;
-  if (!isfinite(u)) return -1;
+  if (!$P_finite(u)) return -1;
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!isfinite(y[i])) return -1;
+    if (!$P_finite(y[i])) return -1;
   /* Reachability: |d_1| <= r_1, |d_i - d_{i-1}| <= r_i - r_{i-1} (1-Lipschitz memory curve). */
   for (i = 0; i < $U_NUM_OPERATORS; ++i) scale = scale < fabs(y[i]) ? fabs(y[i]) : scale;
   tol = 1e-9 * (1.0 < scale ? scale : 1.0);
@@ -774,7 +806,7 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
   for (i = 0; i < $U_NUM_OPERATORS; ++i) inv->xi[i] = v - sc[i];  /* x'_i = v - d'_i */
   inv->v_prev = v;
   x = $P_gamma_inverse_checked(u);
-  x = isfinite(x) ? x : 0.0;
+  x = $P_finite(x) ? x : 0.0;
   inv->x = x < $P_lim_lo ? $P_lim_lo : $P_lim_hi < x ? $P_lim_hi : x;
   inv->saturated = 0;
   inv->faults = 0;
@@ -786,7 +818,7 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
   double sc[$U_STATE_SIZE], d[$U_STATE_SIZE];
   double ym, v, u, xm, x;
   int i;
-  if (!isfinite(y_desired)) {
+  if (!$P_finite(y_desired)) {
     ++inv->faults;
     x = $P_input_origin + $P_input_scale * inv->x;
     return x < $P_lim_raw_lo ? $P_lim_raw_lo : $P_lim_raw_hi < x ? $P_lim_raw_hi : x;
@@ -835,12 +867,12 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
 {
   double x;
   int i;
-  if (!isfinite(u)) return -1;
+  if (!$P_finite(u)) return -1;
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!isfinite(y[i])) return -1;
+    if (!$P_finite(y[i])) return -1;
   for (i = 0; i < $U_NUM_OPERATORS; ++i) inv->y[i] = y[i];
   x = $P_gamma_inverse_checked(u);
-  x = isfinite(x) ? x : 0.0;
+  x = $P_finite(x) ? x : 0.0;
   inv->x = x < $P_lim_lo ? $P_lim_lo : $P_lim_hi < x ? $P_lim_hi : x;
   inv->saturated = 0;
   inv->faults = 0;
@@ -851,7 +883,7 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
 {
   double ym, a = $P_lim_lo, b = $P_lim_hi, fa, fb, df = 0.0, x, e[4];
   const double *ex = 0; /* the envelopes at x, once x has been evaluated */
-  if (!isfinite(y_desired)) {
+  if (!$P_finite(y_desired)) {
     ++inv->faults;
     x = $P_input_origin + $P_input_scale * inv->x;
     return x < $P_lim_raw_lo ? $P_lim_raw_lo : $P_lim_raw_hi < x ? $P_lim_raw_hi : x;
@@ -922,8 +954,7 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
     std::string src = banner(false) + model_comment() + " *\n" + parameters_comment();
     if (loop) src += loop->comment;
     src += api_comment();
-    src += "\n#ifndef $U_C_INCLUDED\n#define $U_C_INCLUDED\n\n#include <math.h>\n";
-    if (uses_tanh()) src += "#include <stdint.h>\n";
+    src += "\n#ifndef $U_C_INCLUDED\n#define $U_C_INCLUDED\n\n#include <float.h>\n#include <math.h>\n#include <stdint.h>\n#include <string.h>\n";
     if (o.header_name.empty()) {
       src += declarations();
       if (loop) src += loop->declarations;

@@ -38,6 +38,7 @@ typedef struct $P_learning {
   double sse, least_mse;            /* sum of e^2 over this period; mean e^2 of the best period */
   int tail_from_best, best_valid, skip_tail, held;
   unsigned long faults;             /* non-finite errors, recorded as 0 */
+  unsigned long overflows;          /* updates whose sum overflowed: the correction before kept */
   unsigned long cuts, raises;       /* times the supervisor halved L; doubled it */
 } $P_learning;
 
@@ -57,7 +58,9 @@ int $P_learning_warm_start($P_learning *l, const double *correction, size_t n);
  * $P_learning_step. */
 double $P_learning_correction(const $P_learning *l, size_t ahead);
 /* Records the tracking error e = r - y [m] of the current sample and advances one sample; a
- * non-finite error is recorded as 0 and counted in l->faults. */
+ * non-finite error is recorded as 0 and counted in l->faults. An update whose sum overflows
+ * (errors of the order of 1e308) keeps that sample's correction of the period before and is
+ * counted in l->overflows: a correction is never inf or NaN. */
 void $P_learning_step($P_learning *l, double error_m);
 /* One sample of the learning loop (step(Controller&, IterativeLearning&, ...), loop_design.hpp):
  * $P_loop_step fed reference_m + c(0) and preview_m + c(lead); then the error
@@ -97,7 +100,7 @@ static ptrdiff_t $P_learning_min(ptrdiff_t a, ptrdiff_t b)
 /* c_new(i) = clamp(sum_m q_m [c(i + m) + L e(i + m + d)]) (IterativeLearning::update_at): `c`
  * the previous generation, the errors this period's (measured) or the period's before; the taps
  * are summed in contiguous runs that end where an index wraps around the period. */
-static double $P_learning_update(const $P_learning *l, size_t i, const double *c, int tail)
+static double $P_learning_update($P_learning *l, size_t i, const double *c, int tail)
 {
   const ptrdiff_t N = (ptrdiff_t)$U_LEARNING_PERIOD, h = (ptrdiff_t)$P_learning_reach;
   const ptrdiff_t d = (ptrdiff_t)$P_learning_lead, ii = (ptrdiff_t)i;
@@ -128,6 +131,10 @@ static double $P_learning_update(const $P_learning *l, size_t i, const double *c
     }
     acc += $P_learning_sum(q + m, c + ci, e, l->gain, len);
     m += len;
+  }
+  if (!$P_finite(acc)) { /* overflowed (inf, or NaN from inf - inf): c(i) stays */
+    ++l->overflows;
+    return c[i];
   }
   return $P_clamp(acc, -$P_learning_max_correction, $P_learning_max_correction);
 }
@@ -192,7 +199,7 @@ void $P_learning_reset($P_learning *l)
   l->e_cur = 0;
   l->e_prev = 1;
   l->k = l->j = 0;
-  l->faults = l->cuts = l->raises = 0;
+  l->faults = l->overflows = l->cuts = l->raises = 0;
   l->gain = $P_learning_gain;
   l->sse = 0.0;
   l->least_mse = HUGE_VAL;
@@ -204,7 +211,7 @@ int $P_learning_warm_start($P_learning *l, const double *correction, size_t n)
   size_t i;
   if (n != $U_LEARNING_PERIOD || !correction) return -1;
   for (i = 0; i < n; ++i)
-    if (!isfinite(correction[i])) return -1;
+    if (!$P_finite(correction[i])) return -1;
   $P_learning_reset(l);
   for (i = 0; i < n; ++i)
     l->c[l->cur][i] = $P_clamp(correction[i], -$P_learning_max_correction, $P_learning_max_correction);
@@ -225,7 +232,7 @@ double $P_learning_correction(const $P_learning *l, size_t ahead)
 void $P_learning_step($P_learning *l, double error_m)
 {
   const size_t dh = $P_learning_delay;
-  if (!isfinite(error_m)) {
+  if (!$P_finite(error_m)) {
     error_m = 0.0;
     ++l->faults;
   }

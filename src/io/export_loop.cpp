@@ -87,7 +87,7 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
 static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, double y, double ff)
 {
   double e, scale, prop, d_err, prev_d_error, derivative, v, u, di, integral;
-  if (!isfinite(r) || !isfinite(y) || !isfinite(ff)) {
+  if (!$P_finite(r) || !$P_finite(y) || !$P_finite(ff)) {
     ++s->faults;
     return s->output;
   }
@@ -108,7 +108,7 @@ static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, doub
   } else {                           /* back-calculation */
     integral += di + k->k_t * (u - v);
   }
-  if (!isfinite(v) || !isfinite(derivative) || !isfinite(integral)) {
+  if (!$P_finite(v) || !$P_finite(derivative) || !$P_finite(integral)) {
     ++s->faults;
     return s->output;
   }
@@ -356,7 +356,7 @@ static double $P_clamp(double v, double lo, double hi)
 static double $P_pwm_step($P_loop *c, double u)
 {
   double mag, d = 0.0;
-  if (!isfinite(u)) {
+  if (!$P_finite(u)) {
     ++c->pwm_faults;
     return c->duty;
   }
@@ -397,7 +397,7 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
   const double u = $P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, u_ff);
   (void)pressure_mpa;
   if (duty) *duty = 0.0;
-  return $P_clamp(isfinite(u) ? u : u_ff, $P_pressure_lo, $P_pressure_hi);
+  return $P_clamp($P_finite(u) ? u : u_ff, $P_pressure_lo, $P_pressure_hi);
 }
 )";
       break;
@@ -407,7 +407,7 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
     p_d = $P_clamp(p_d + $P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, 0.0), $P_pressure_lo,
                    $P_pressure_hi);
   /* the pressure loop (pressure_loop_command): without a finite measurement, p_d itself */
-  cmd = isfinite(pressure_mpa) ? p_d + $P_pressure_gain * (p_d - pressure_mpa) : p_d;
+  cmd = $P_finite(pressure_mpa) ? p_d + $P_pressure_gain * (p_d - pressure_mpa) : p_d;
   if (duty) *duty = 0.0;
   return $P_clamp(cmd, $P_pressure_lo, $P_pressure_hi);
 }

@@ -349,4 +349,39 @@ void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::ve
   }
 }
 
+void check_output_file(const NamedPath& output) {
+  const std::string& path = output.path;
+  if (path.empty() || path == "-") return;
+  std::error_code ec;
+  const fs::path p(path);
+  if (fs::is_directory(p, ec))
+    throw Error(fmt::format("{} {}: is a directory; expected a file name", output.option, path));
+  if (fs::exists(p, ec)) return;  // replaced (a read-only file is refused when written, before anything is lost)
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec))
+    throw Error(fmt::format("{} {}: directory {} does not exist (nothing was run or written)", output.option, path,
+                            dir.string()));
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw Error(fmt::format("{} {}: cannot write into directory {}: {} (nothing was run or written)", output.option,
+                            path, dir.string(), std::strerror(errno)));
+}
+
+void check_output_directory(const NamedPath& output) {
+  const std::string& path = output.path;
+  if (path.empty()) return;
+  std::error_code ec;
+  fs::path d = fs::path(path).lexically_normal();
+  if (d.has_filename() == false && d.has_parent_path()) d = d.parent_path();  // "out/" -> "out"
+  // the directory, or the nearest ancestor that exists (the writer creates the rest)
+  fs::path existing = d;
+  while (!existing.empty() && !fs::exists(existing, ec)) existing = existing.parent_path();
+  if (existing.empty()) existing = ".";
+  if (!fs::is_directory(existing, ec))
+    throw Error(fmt::format("{} {}: {} is not a directory (nothing was run or written)", output.option, path,
+                            existing.string()));
+  if (::access(existing.c_str(), W_OK) != 0)
+    throw Error(fmt::format("{} {}: cannot write into directory {}: {} (nothing was run or written)", output.option,
+                            path, existing.string(), std::strerror(errno)));
+}
+
 }  // namespace hysteron::io

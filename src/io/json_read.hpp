@@ -4,7 +4,9 @@
 // as the given value (NaN unless said). Internal to src/io.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <cstddef>
 #include <limits>
 #include <string>
@@ -14,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hysteron/error.hpp"
+#include "hysteron/io/names.hpp"
 
 namespace hysteron::io::json_read {
 
@@ -29,6 +32,20 @@ inline const json& need(const json& j, std::string_view key, std::string_view wh
   const auto it = j.find(key);
   if (it == j.end()) throw Error(fmt::format("{}: missing key \"{}\"", where, key));
   return *it;
+}
+
+// Every key of the object j is one of `known`: else "WHERE: unknown key 'K', did you mean 'C'? (the
+// keys: ...)" (a typo in a hand-written object would be ignored silently, its value the default).
+inline void check_keys(const json& j, std::initializer_list<std::string_view> known, std::string_view where) {
+  if (!j.is_object()) return;  // the readers name a wrong type
+  for (const auto& [key, value] : j.items()) {
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    std::string keys;
+    for (const std::string_view k : known) keys += fmt::format("{}{}", keys.empty() ? "" : ", ", k);
+    const std::string_view hint = closest_name(key, known);
+    throw Error(fmt::format("{}: unknown key '{}'{} (the keys: {})", where, key,
+                            hint.empty() ? "" : fmt::format(", did you mean '{}'?", hint), keys));
+  }
 }
 
 [[noreturn]] inline void wrong_type(const json& v, std::string_view key, std::string_view where, std::string_view expected) {

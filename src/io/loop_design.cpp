@@ -37,6 +37,10 @@ json pid_json(const PidParams& p) {
 }
 
 PidParams pid_from(const json& j, std::string_view where) {
+  check_keys(j,
+             {"kp_mpa_per_m", "ki_mpa_per_m_s", "kd_mpa_s_per_m", "sample_time_s", "derivative_filter_s", "out_min_mpa",
+              "out_max_mpa", "anti_windup", "tracking_time_s", "setpoint_weight_p", "setpoint_weight_d", "guard"},
+             where);
   PidParams p;
   p.kp = get_double(j, "kp_mpa_per_m", where);
   p.ki = get_double(j, "ki_mpa_per_m_s", where);
@@ -57,6 +61,7 @@ PidParams pid_from(const json& j, std::string_view where) {
   if (j.contains("guard")) {  // absent in files written before the guard: off
     const std::string w = key_where(where, "guard");
     const json& g = j["guard"];
+    check_keys(g, {"period_s", "amplitude", "count", "memory_periods", "factor", "min_scale"}, w);
     p.guard.period = get_double(g, "period_s", w);
     p.guard.amplitude = get_double(g, "amplitude", w);
     p.guard.count = get_double(g, "count", w);
@@ -143,6 +148,10 @@ json to_json(const LoopDesign& d) {
 void from_json(const json& j, LoopDesign& d, std::string_view where) {
   d = LoopDesign{};
   if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
+  check_keys(j,
+             {"loop", "feedforward", "pwm", "pid", "guard_final_scale", "guard_cuts", "pressure_pid", "pressure_gain",
+              "feedforward_lead_samples", "sample_time_s", "shaper", "learning", "adaptation"},
+             where);
   if (j.contains("pid")) d.pid = pid_from(j["pid"], key_where(where, "pid"));
   if (j.contains("pressure_pid")) d.pressure_pid = pid_from(j["pressure_pid"], key_where(where, "pressure_pid"));
   d.pressure_gain = opt_double(j, "pressure_gain", where, 0.0);
@@ -156,12 +165,14 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
     d.kind = loop_kind_from(j, where);
     const std::string w = key_where(where, "feedforward");
     const json& f = need(j, "feedforward", where);
+    check_keys(f, {"pressure_min_mpa", "pressure_max_mpa", "model_scale_per_m", "lag_time_constant_s"}, w);
     d.feedforward.pressure_limits = {get_double(f, "pressure_min_mpa", w), get_double(f, "pressure_max_mpa", w)};
     d.feedforward.model_scale = get_double(f, "model_scale_per_m", w);
     d.feedforward.lag_time_constant = get_double(f, "lag_time_constant_s", w);
     if (d.kind == LoopDesign::Kind::cascade_pwm) {
       const std::string wp = key_where(where, "pwm");
       const json& x = need(j, "pwm", where);
+      check_keys(x, {"gain", "deadband", "min_duty", "max_duty", "resolution"}, wp);
       PwmParams p;
       p.gain = get_double(x, "gain", wp);
       p.deadband = get_double(x, "deadband", wp);
@@ -181,6 +192,7 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   if (j.contains("shaper")) {
     const std::string w = key_where(where, "shaper");
     const json& s = j["shaper"];
+    check_keys(s, {"a1", "a2", "delay_samples", "advance_samples"}, w);
     LoopDesign::Shaper z;
     z.a1 = get_double(s, "a1", w);
     z.a2 = get_double(s, "a2", w);
@@ -191,6 +203,11 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   if (j.contains("learning")) {
     const std::string w = key_where(where, "learning");
     const json& x = j["learning"];
+    check_keys(x,
+               {"period_samples", "gain", "lead_samples", "half_width", "lookahead", "max_correction_m",
+                "rise_tolerance", "hold_after_cuts", "max_gain", "contraction_bound", "final_gain", "gain_raises",
+                "gain_cuts", "held"},
+               w);
     LoopDesign::Learning l;
     LearningParams& p = l.params;
     const double inf = std::numeric_limits<double>::infinity();
@@ -213,6 +230,7 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
   if (j.contains("adaptation")) {
     const std::string w = key_where(where, "adaptation");
     const json& x = j["adaptation"];
+    check_keys(x, {"lambda", "delay_samples", "margin"}, w);
     LoopDesign::Adaptation a;
     a.lambda = get_double(x, "lambda", w);
     a.delay = get_size(x, "delay_samples", w);

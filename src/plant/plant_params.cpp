@@ -8,6 +8,8 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -225,14 +227,14 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
       });
       if (!found) {
         // the section's keys, and the closest of them when the key looks like a typo of it
-        std::string keys, hint;
-        std::size_t best = std::numeric_limits<std::size_t>::max();
+        std::string keys;
+        std::vector<std::string_view> names;
         for_each_field(p, [&](const char* sec, const char* name, auto&, Rule) {
           if (section != sec) return;
           keys += (keys.empty() ? "" : ", ") + std::string(name);
-          const std::size_t d = io::edit_distance(key, name);
-          if (d < best && d <= std::max<std::size_t>(2, key.size() / 3)) best = d, hint = name;
+          names.emplace_back(name);
         });
+        const std::string_view hint = io::closest_name(key, names);
         throw Error(fmt::format("{}.{}: unknown key '{}'{} (the keys of {}: {})", where, section, key,
                                 hint.empty() ? "" : fmt::format(", did you mean '{}'?", hint), section, keys));
       }

@@ -261,6 +261,29 @@ static void check_ilc(void) {
   }
   CHECK(warm < 0.2 * rms[0], "warm start: the first period's RMS %g is not below 20 %% of a cold start's, %g", warm, rms[0]);
   printf("ok   ilc: warm start from the 15th period's correction, first period RMS %g (cold %g)\n", warm, rms[0]);
+  /* finite errors of 1.7e308 (c + L e overflows from the third period on, c having grown by
+   * L e each period): every correction stays finite, each overflowing update is reported by the
+   * step that made it (INVALID_ARGUMENT, the sample advanced) and counted */
+  OK(hysteron_ilc_reset(ilc));
+  {
+    size_t reported = 0, overflows = 0;
+    int finite = 1;
+    for (k = 0; k < 4 * N_ILC; ++k) {
+      const hysteron_status st = hysteron_ilc_step(ilc, 1.7e308);
+      OK(hysteron_ilc_correction(ilc, 0, &c));
+      finite = finite && isfinite(c);
+      if (st != HYSTERON_OK) {
+        ++reported;
+        expect_error("ilc step: overflowing update", st, HYSTERON_ERROR_INVALID_ARGUMENT, "overflowed");
+      }
+    }
+    OK(hysteron_ilc_overflows(ilc, &overflows));
+    OK(hysteron_ilc_state(ilc, &phase, &iteration, NULL, NULL, NULL, NULL, &faults));
+    CHECK(finite, "ilc: a correction is not finite after errors of 1.7e308");
+    CHECK(overflows > 0 && reported == overflows && faults == 0 && iteration == 4,
+          "ilc: %zu overflows, %zu reported, %zu faults, %zu periods", overflows, reported, faults, iteration);
+    expect_error("ilc overflows NULL", hysteron_ilc_overflows(ilc, NULL), HYSTERON_ERROR_NULL_POINTER, "overflows");
+  }
   OK(hysteron_ilc_free(ilc));
   OK(hysteron_ilc_free(NULL));
 }

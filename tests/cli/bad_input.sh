@@ -73,6 +73,9 @@ expect_fail "missing option" 'model' -- \
   "$BIN" simulate --input "$T/x.csv" --output "$T/out/new.csv"
 expect_fail "output directory missing" 'does not exist' -- \
   "$BIN" simulate --model "$T/good.json" --input "$T/x.csv" --output "$T/nodir/y.csv"
+expect_fail "experiment --out under a file, refused before the run" \
+  "--out $T/out/keep.csv/run: $T/out/keep.csv is not a directory (nothing was run or written)" -- \
+  "$BIN" experiment gpi-pid --out "$T/out/keep.csv/run"
 
 # nothing was created or overwritten, and no temporary file is left behind
 if [ "$(cat "$T/out/keep.csv")" != "precious" ]; then echo "FAIL: keep.csv was modified"; fails=$((fails + 1)); fi

@@ -54,6 +54,13 @@ printf '{"variants": [{"set": {"load.mass": 35, "load.mass": 10}}]}\n' > "$T/gri
 expect_error "grid: repeated key" "load.mass" "$BIN" sweep gpi-pid --grid "$T/grid_bad3.json"
 expect_error "output is the grid" "--grid" "$BIN" sweep gpi-pid --grid "$T/grid_bad.json" --out "$T/grid_bad.json"
 grep -q nmae "$T/grid_bad.json" || fail "the grid file was overwritten"
+# where the outputs go is checked before anything runs (an unknown experiment would fail at once:
+# the destination's error shows that it came first)
+expect_error "table into a missing directory" "--out $T/missing/t.csv: directory $T/missing does not exist" \
+  "$BIN" sweep gpi-pd --vary load.mass=35 --out "$T/missing/t.csv"
+expect_error "page into a missing directory" "--report $T/missing/t.html: directory" \
+  "$BIN" sweep gpi-pd --vary load.mass=35 --report "$T/missing/t.html"
+[ ! -e "$T/missing" ] || fail "a refused sweep created its output directory"
 [ ! -e "$T/bad.csv" ] || fail "a failed sweep wrote its table"
 ls -A "$T" | grep -q '^\.' && fail "temporary files left: $(ls -A "$T")"
 

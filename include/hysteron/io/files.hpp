@@ -67,5 +67,13 @@ struct NamedPath {
 // same file (an existing one, or the same new path). Empty paths, "-" and non-regular files
 // (devices, FIFOs) are never "the same file". Call it before reading any input.
 void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
+// Before a long computation whose result goes to a file (an experiment's report, a sweep's
+// table): throws hysteron::Error naming the option and the path if it could not be written
+// there, because it is a directory or its directory does not exist or is not writable.
+// Writes nothing. Empty paths and "-" pass.
+void check_output_file(const NamedPath& output);
+// The same for an output directory its writer creates (ExperimentResult::write, with its
+// parents): the directory, or its nearest existing ancestor, must be a writable directory.
+void check_output_directory(const NamedPath& output);
 
 }  // namespace hysteron::io

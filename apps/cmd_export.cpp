@@ -24,6 +24,7 @@ namespace {
 
 struct Options {
   std::string model, out, header, prefix, limits, loop, run;
+  bool prefix_given = false;  // --prefix on the command line (even "")
 };
 
 // Default prefix: the output file's stem with every other character as '_'
@@ -43,11 +44,9 @@ int run_export(const Options& o) {
   io::check_outputs_distinct({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});
   const ModelParams params = read_model_source(o.model);
   io::ExportOptions e;
-  e.prefix = o.prefix.empty() ? default_prefix(o.out) : o.prefix;
-  if (!io::valid_c_prefix(e.prefix))
-    throw Error(fmt::format("--prefix: \"{}\" is not usable: it must be a C identifier (letters, digits, '_'; not "
-                            "starting with a digit or '_'), at most 40 characters, not \"hysteron\" (the C ABI's prefix)",
-                            e.prefix));
+  e.prefix = o.prefix_given ? o.prefix : default_prefix(o.out);
+  if (const std::string why = io::c_prefix_problem(e.prefix); !why.empty())
+    throw Error(fmt::format("--prefix: \"{}\" is not usable: {}", e.prefix, why));
   e.source_name = o.model == "-" ? std::string("<stdin>") : std::filesystem::path(o.model).filename().string();
   if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();
   if (!o.limits.empty()) e.inverse_limits = parse_limits(o.limits);
@@ -82,7 +81,7 @@ void add_export(CLI::App& app, Action& action) {
   sub->add_option("--out,-o", o->out, "C file to write (- for stdout)")->required();
   sub->add_option("--header", o->header,
                   "also write the declarations to this header (the C file #includes it by its file name)");
-  sub->add_option("--prefix", o->prefix,
+  CLI::Option* prefix = sub->add_option("--prefix", o->prefix,
                   "prefix of the C names (default: the --out file's stem, e.g. compensator -> compensator_model_step)");
   sub->add_option("--limits", o->limits,
                   "input limits LO,HI the inverse saturates at (default: the model's input_limits; write "
@@ -93,7 +92,10 @@ void add_export(CLI::App& app, Action& action) {
   sub->add_option("--run", o->run,
                   "the run of the --loop file, e.g. compensated.sine, or learning.sine for the loop with its iterative "
                   "learning (not adaptive runs)");
-  sub->callback([o, &action] { action = [o] { return run_export(*o); }; });
+  sub->callback([o, prefix, &action] {
+    o->prefix_given = prefix->count() > 0;
+    action = [o] { return run_export(*o); };
+  });
 }
 
 }  // namespace hysteron::cli

@@ -110,6 +110,7 @@ struct Script {
   std::size_t forward = 0, inverse = 0;
   bool bounded = false;  // the inverse has finite limits (it can saturate)
   std::size_t saturated = 0, nonfinite = 0, virgin = 0, relaxed = 0, states = 0, unreachable = 0;
+  std::size_t huge = 0, refused_relaxed = 0;  // finite inputs beyond any output (+-1e300.. +-DBL_MAX)
 };
 
 // Random resets and signals, with the library's results.
@@ -129,7 +130,25 @@ Script make_run(const Case& c, std::size_t samples, unsigned seed) {
   while (run.forward < samples) {
     // a reset
     const double pick = unit(rng);
-    if (pick < 0.25) {
+    if (pick < 0.03) {
+      // a refused relaxed start over garbage (the struct never initialised): the virgin state
+      // (-DBL_MAX: refused where the output could overflow, taken by a bounded envelope)
+      const double bad[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                            -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::max()};
+      const double x0 = bad[static_cast<int>(unit(rng) * 4) % 4];
+      const bool accepted = model.reset_relaxed(x0);
+      if (!std::isfinite(x0)) EXPECT_FALSE(accepted) << c.name << ": reset_relaxed accepted " << x0;
+      s += "n " + hex(x0) + "\n";
+      if (accepted) {
+        inv.reset(model.state());
+        run.expected.push_back({'N', 0.0, 0, 0, 0});
+      } else {
+        ++run.refused_relaxed;
+        model.reset();
+        inv.reset();
+        run.expected.push_back({'N', 0.0, -1, -1, 0});
+      }
+    } else if (pick < 0.25) {
       s += "v\n";
       ++run.virgin;
       model.reset();
@@ -191,8 +210,11 @@ Script make_run(const Case& c, std::size_t samples, unsigned seed) {
       if (a < 0.01) x = random_x();
       else x = std::clamp(x + step * (unit(rng) - 0.5), c.x_lo, c.x_hi);
       double xin = x;
+      const double huge[] = {1e300, 1e307, 1e308, std::numeric_limits<double>::max()};
+      auto pick_huge = [&] { return (unit(rng) < 0.5 ? -1.0 : 1.0) * huge[static_cast<int>(unit(rng) * 4) % 4]; };
       if (a > 0.9995) xin = std::numeric_limits<double>::quiet_NaN();
       else if (a > 0.999) xin = -std::numeric_limits<double>::infinity();
+      else if (a > 0.998) xin = pick_huge(), ++run.huge;
       s += "f " + hex(xin) + "\n";
       const double y = model.step(xin);
       out_span = std::max(out_span, std::abs(y));
@@ -202,9 +224,19 @@ Script make_run(const Case& c, std::size_t samples, unsigned seed) {
       const double b = unit(rng);
       if (b < 0.05) yd = y + 3.0 * out_span * (unit(rng) - 0.5);
       else if (b < 0.06) yd = (unit(rng) < 0.5 ? -1.0 : 1.0) * 10.0 * out_span;
+      else if (b < 0.065) yd = pick_huge(), ++run.huge;
       else if (b > 0.9995) yd = std::numeric_limits<double>::quiet_NaN();
       s += "i " + hex(yd) + "\n";
       const double xi = inv.step(yd);
+      EXPECT_TRUE(std::isfinite(y) && std::isfinite(xi)) << c.name << ": x = " << xin << " -> " << y << ", y = " << yd
+                                                         << " -> " << xi;
+      // a desired output of 1e300 or more is beyond any output of these models: the limit in its direction
+      const Limits& lim = inv.limits();
+      if (std::abs(yd) >= 1e300 && std::isfinite(lim.lo) && std::isfinite(lim.hi)) {
+        const bool up = (yd > 0) == (model.structure().units.output_gain > 0);
+        EXPECT_EQ(xi, up ? lim.hi : lim.lo) << c.name << ": y = " << yd;
+        EXPECT_TRUE(inv.saturated()) << c.name << ": y = " << yd;
+      }
       run.expected.push_back({'I', xi, inv.saturated() ? 1 : 0, 0, inv.faults()});
       run.saturated += inv.saturated();
       run.nonfinite += !std::isfinite(xin) + !std::isfinite(yd);
@@ -279,6 +311,11 @@ Compared compare(const Script& run, const std::string& output) {
       ++r.inverse;
       if (sat != e.flag) mismatch(fmt::format("result {}: saturated {} vs {} (x = {} vs {})", k, sat, e.flag, c, e.value));
       if (faults != e.faults) mismatch(fmt::format("result {}: inverse faults {} vs {}", k, faults, e.faults));
+    } else if (e.op == 'N') {
+      int rm = 0, ri = 0;
+      ls >> rm >> ri;
+      if (op != "N" || rm != e.flag || ri != e.flag2)
+        mismatch(fmt::format("result {}: \"{}\", expected N {} {}", k, line, e.flag, e.flag2));
     } else if (e.op == 'R') {
       int rc = 1;
       ls >> rc;
@@ -436,9 +473,14 @@ TEST(ExportCheck, CompilesWithOtherFlags) {
 TEST(ExportCheck, BadOptionsAndModelsAreRefused) {
   const ModelParams pi = io::model_from_json(io::parse_json(R"({"model": "pi", "q": 0.4, "r": [0.1], "p": [0.3]})", "pi"), "pi");
   io::ExportOptions o;
-  for (const char* bad : {"", "1abc", "_x", "a-b", "a b", "a.b", "hysteron"}) {
+  for (const char* bad : {"", "1abc", "_x", "a-b", "a b", "a.b", "hysteron", "hysteron_params", "Hysteron_x", "HYSTERON",
+                          "pam_", "a__b"}) {
     o.prefix = bad;
     EXPECT_THROW(io::generate_c(pi, o), hysteron::Error) << bad;
+  }
+  for (const char* good : {"pam", "pam_left", "hysteronx", "my_hysteron", "a1"}) {
+    o.prefix = good;
+    EXPECT_NO_THROW(io::generate_c(pi, o)) << good;
   }
   o.prefix = "ok";
   o.header_name = "a\"b.h";

@@ -1,5 +1,8 @@
 // Model files (JSON), CSV/.mat tables and atomic writes.
 #include <gtest/gtest.h>
+
+#include <sys/stat.h>
+#include <unistd.h>
 #include <matio.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -206,6 +209,32 @@ TEST(ModelFile, NotJsonNamesFileLineAndColumn) {
 
 // Issue 13: duplicate keys (last one won: this loaded a PI) and bytes after a NUL
 // were accepted silently.
+// A model file is small (max_model_file_bytes, from the largest model the format allows): a
+// device or a huge file is refused by name without reading it all, a FIFO without a writer
+// does not block.
+TEST(ModelFile, ReadIsBoundedAndNeverHangs) {
+  try {
+    io::read_model_file("/dev/zero");
+    FAIL() << "/dev/zero was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/zero"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("more than the"), std::string::npos) << e.what();
+  }
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("hysteron_read_bound_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {  // a sparse regular file just beyond the bound: refused from its size
+    const std::string big = (dir / "big.json").string();
+    std::ofstream(big).put(' ');
+    std::filesystem::resize_file(big, io::max_model_file_bytes + 1);
+    EXPECT_THROW(io::read_model_file(big), Error);
+  }
+  const std::string fifo = (dir / "fifo.json").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_THROW(io::read_model_file(fifo), Error);  // empty, not a hang
+  std::filesystem::remove_all(dir);
+}
+
 TEST(ModelFile, DuplicateKeysAndNulBytesRefused) {
   auto expect_error = [](const std::string& text, const std::string& needle) {
     try {

@@ -17,7 +17,10 @@
  * - Objects are opaque handles created by *_create / hysteron_params_from_*, and
  *   released by the matching *_free (NULL is accepted and ignored). A handle may be
  *   used from any thread, but from one thread at a time; distinct handles are
- *   independent.
+ *   independent. Exception: a hysteron_params is never modified after it is loaded (every
+ *   function takes it as const and only reads or copies it; there is no cache inside),
+ *   so one hysteron_params may be shared by any number of threads at once, e.g. each
+ *   creating its own model or inverse from it, as long as none frees it meanwhile.
  * - Out-pointers are written only on success, except that the per-sample step
  *   functions also write the held (previous) value when an input is not finite.
  * - The per-sample functions (hysteron_model_step, hysteron_inverse_step,
@@ -92,7 +95,8 @@ HYSTERON_C_API hysteron_status hysteron_params_from_json(const char* json, hyste
 HYSTERON_C_API hysteron_status hysteron_params_from_file(const char* path, hysteron_params** out);
 HYSTERON_C_API hysteron_status hysteron_params_free(hysteron_params* params);
 
-/* Model kind: "pi", "gpi", "mpi-deadzone" or "mpi-asym" (valid as long as params). */
+/* Model kind, one of "pi", "gpi", "mpi-deadzone", "mpi-asym", "maxwell-slip", "preisach",
+ * "kp", "bouc-wen", "rate-pi" (docs/model-files.md; valid as long as params). */
 HYSTERON_C_API hysteron_status hysteron_params_kind(const hysteron_params* params, const char** kind);
 /* Number of play operators n (the length of a state vector, see *_reset_state). */
 HYSTERON_C_API hysteron_status hysteron_params_num_operators(const hysteron_params* params, size_t* n);
@@ -108,7 +112,9 @@ HYSTERON_C_API hysteron_status hysteron_model_free(hysteron_model* model);
 
 /* Virgin state: operator outputs 0 (the model at rest at its input_origin). */
 HYSTERON_C_API hysteron_status hysteron_model_reset(hysteron_model* model);
-/* At rest at input x0 [input units], as if x0 had been held forever. x0 finite. */
+/* At rest at input x0 [input units], as if x0 had been held forever. A non-finite x0, or one
+ * that hysteron_model_step would refuse (beyond the input bound, below), is
+ * HYSTERON_ERROR_INVALID_ARGUMENT and changes nothing. */
 HYSTERON_C_API hysteron_status hysteron_model_reset_relaxed(hysteron_model* model, double x0);
 /* Explicit state: n operator outputs y[0..n) (n = hysteron_params_num_operators) and the
  * envelope value u of the last input, all finite, in model coordinates (as returned by
@@ -118,11 +124,14 @@ HYSTERON_C_API hysteron_status hysteron_model_reset_state(hysteron_model* model,
 HYSTERON_C_API hysteron_status hysteron_model_get_state(const hysteron_model* model, double* y, size_t n, double* u);
 
 /* One sample: *y = model output [output units] for input x [input units]. A non-finite
- * x returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the
- * previous output to *y. Real-time safe. */
+ * x, or a finite x so large that the output could overflow (beyond the model's input bound,
+ * about DBL_MAX / 16 / (sum of |weights| |output_gain|) in model coordinates: never a
+ * physical input), returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and
+ * writes the previous output to *y: never an inf or NaN output. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_model_step(hysteron_model* model, double x, double* y);
 /* Batch: y[k] = step(x[k]) for k < n_x; n_y must equal n_x (y may be x). Every x[k] is
- * checked first: on a non-finite one nothing is stepped and the index is in the message. */
+ * checked first: on one that step would refuse nothing is stepped and the index is in the
+ * message. */
 HYSTERON_C_API hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, size_t n_x, double* y,
                                                       size_t n_y);
 
@@ -144,7 +153,11 @@ HYSTERON_C_API hysteron_status hysteron_inverse_limits(const hysteron_inverse* i
 
 /* Virgin state (matches hysteron_model_reset). */
 HYSTERON_C_API hysteron_status hysteron_inverse_reset(hysteron_inverse* inverse);
-/* Start as a forward model at rest at input x0 [input units] (hysteron_model_reset_relaxed). */
+/* Start as a forward model at rest at input x0 [input units] (hysteron_model_reset_relaxed;
+ * the same refusals). x0 outside the inverse's limits is accepted on purpose (a muscle at
+ * rest below the lowest pressure the loop commands): the memory is at rest at x0, the
+ * inverse's last input (*x held on a refused step) is x0 clamped to the limits, and the next
+ * step commands inside the limits as always. */
 HYSTERON_C_API hysteron_status hysteron_inverse_reset_relaxed(hysteron_inverse* inverse, double x0);
 /* Start from a forward model's state (y[0..n), u as from hysteron_model_get_state), so that
  * the inverse continues exactly where that model is. HYSTERON_ERROR_INVALID_ARGUMENT on a
@@ -157,8 +170,11 @@ HYSTERON_C_API hysteron_status hysteron_inverse_get_state(const hysteron_inverse
 
 /* One sample: *x = the input [input units] that makes the model output y_desired
  * [output units], clamped to the limits. *saturated (may be NULL) = 1 if it was clamped,
- * else 0. A non-finite y_desired returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the
- * state unchanged and writes the previous input to *x. Real-time safe. */
+ * else 0; a finite y_desired beyond what the model can output inside the limits, however
+ * large (1e308), saturates at the limit in its direction. A non-finite y_desired (or, only
+ * for an inverse with an unbounded limit, one whose input would overflow) returns
+ * HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the previous
+ * input to *x. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_inverse_step(hysteron_inverse* inverse, double y_desired, double* x,
                                                     int* saturated);
 /* Batch: x[k] = step(y[k]) for k < n_y; n_x must equal n_y (x may be y). *n_saturated (may
@@ -209,7 +225,10 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller
  * (y_d(t + lead) for a known reference, else reference_m); measured_m: sensor [m].
  * *pressure_mpa: the command [MPa]. A non-finite argument returns
  * HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the previous
- * command. Real-time safe. */
+ * command. Finite arguments whose error or PID terms overflow (reference_m = 1e308,
+ * measured_m = -1e308) return HYSTERON_ERROR_INVALID_ARGUMENT too: the PID's state is
+ * unchanged and its previous output held (never a NaN into the integrator). The same holds
+ * for hysteron_open_loop_step and hysteron_cascade_step. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double reference_m, double preview_m,
                                                    double measured_m, double* pressure_mpa);
 

@@ -58,7 +58,8 @@ class Inverse {
   // One sample: the (raw) input that makes the model output y_desired. A model with a
   // negative output_gain is decreasing; its inverse is exact all the same. Never
   // allocates, never throws; a non-finite y_desired holds the last input and
-  // is counted in faults().
+  // is counted in faults(). A finite y_desired beyond what the model can output inside
+  // the limits saturates at the limit in its direction (however large).
   double step(double y_desired) noexcept;
   // Batch. Throws hysteron::Error on unequal sizes or a non-finite value.
   void simulate(std::span<const double> y, std::span<double> x);
@@ -68,6 +69,9 @@ class Inverse {
   bool saturated() const noexcept { return saturated_; }
   double input() const noexcept { return std::clamp(s_.units.from_model(x_), lim_raw_.lo, lim_raw_.hi); }
   std::size_t faults() const noexcept { return faults_; }
+  // Analytical inverse: step() clamps the desired PI output v (model coordinates, after the
+  // dead zones' inverse) to [-output_bound(), output_bound()]; +inf with an unbounded limit.
+  double output_bound() const noexcept { return v_max_; }
   // The equivalent forward-model state after the last step.
   ModelState forward_state() const;
 
@@ -103,6 +107,11 @@ class Inverse {
   Envelope env_;       // gamma (symmetric models)
   FastEnvelope fenv_;  // the same, for step()
   double u_lo_ = 0.0, u_hi_ = 0.0;  // envelope values at the limits
+  // analytical inverse: |v| beyond v_max_ is unreachable at any input inside the limits, so
+  // step() clamps the desired PI output to [-v_max_, v_max_] (saturates the same, and the
+  // inverse-PI sums cannot overflow); +inf if a limit is unbounded
+  double v_max_ = std::numeric_limits<double>::infinity();
+  void update_v_max() noexcept;
   // analytical inverse: inverse-PI parameters and state (Eqs. 9-11)
   double qi_ = 1.0;
   std::vector<double> ri_, pi_;

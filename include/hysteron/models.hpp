@@ -28,6 +28,7 @@
 // curvature, which a classical PI (whose loops are point-symmetric about their
 // centre) cannot produce. Its inverse has no closed form and is computed
 // exactly per sample by monotone bracketing (see inverse.hpp).
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -362,12 +363,22 @@ class Model {
   // Explicit initial state; throws hysteron::Error on a size mismatch or a non-finite value.
   void reset(const ModelState& state);
   // Initial state relaxed at (raw) input x0: y_i = gamma(x0), as if x0 had been held forever.
-  void reset_relaxed(double x0) noexcept;
+  // Returns false and changes nothing if step() would refuse x0 (!accepts(x0)).
+  bool reset_relaxed(double x0) noexcept;
 
-  // One sample. Never allocates, never throws. A non-finite input leaves the
-  // state unchanged, returns the previous output and is counted in faults().
+  // One sample. Never allocates, never throws. A non-finite input, or one so large that
+  // the output could overflow (!accepts(x)), leaves the state unchanged, returns the
+  // previous output and is counted in faults().
   double step(double x) noexcept;
-  // Batch: y[k] = step(x[k]). Throws hysteron::Error on unequal sizes or a non-finite x[k].
+  // Whether step(x) takes x: finite, and |x - input_origin| / input_scale <= input_bound().
+  bool accepts(double x) const noexcept { return std::abs(s_.to_model(x)) <= x_max_; }
+  // The largest |input| in model coordinates whose output (and every intermediate of the
+  // step) stays within DBL_MAX / 16 for every reachable state: derived from the weights,
+  // envelopes and units map (about DBL_MAX / 16 / (sum of |weights| |output_gain|)), far
+  // beyond any physical input.
+  double input_bound() const noexcept { return x_max_; }
+  // Batch: y[k] = step(x[k]). Throws hysteron::Error on unequal sizes or an x[k] that
+  // step() would refuse (non-finite or beyond input_bound()).
   void simulate(std::span<const double> x, std::span<double> y);
   std::vector<double> simulate(std::span<const double> x);
 
@@ -388,6 +399,7 @@ class Model {
   mutable ModelState state_;
   double out_ = 0.0;
   std::size_t faults_ = 0;
+  double x_max_ = 0.0;  // input_bound()
 };
 
 }  // namespace hysteron

@@ -73,7 +73,9 @@ struct hysteron_ilc {
 namespace {
 
 constexpr std::size_t message_size = 1024;
-thread_local char t_message[message_size] = "";
+// initial-exec: static TLS, so that the first error in a new thread of a dlopen'ed library does
+// not malloc its block lazily (glibc's dynamic TLS); 1 KiB of the static TLS surplus.
+__attribute__((tls_model("initial-exec"))) thread_local char t_message[message_size] = "";
 
 // An error with its status, thrown inside guard() by the argument checks.
 struct CError {
@@ -313,7 +315,8 @@ hysteron_status hysteron_model_reset_relaxed(hysteron_model* model, double x0) {
   return guard("hysteron_model_reset_relaxed", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
     HYSTERON_REQUIRE(model);
     require_finite(x0, "x0");
-    model->model.reset_relaxed(x0);
+    if (!model->model.reset_relaxed(x0))
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "x0 = %g is beyond the model's input bound (nothing was changed)", x0);
   });
 }
 
@@ -339,10 +342,14 @@ hysteron_status hysteron_model_step(hysteron_model* model, double x, double* y) 
     set_message("hysteron_model_step", model == nullptr ? "argument model is NULL" : "argument y is NULL");
     return HYSTERON_ERROR_NULL_POINTER;
   }
-  if (!std::isfinite(x)) {
+  if (!model->model.accepts(x)) {  // non-finite, or so large that the output could overflow
     *y = model->model.output();
-    char text[128];
-    std::snprintf(text, sizeof text, "argument x = %g is not finite (state unchanged, previous output held)", x);
+    char text[160];
+    if (!std::isfinite(x))
+      std::snprintf(text, sizeof text, "argument x = %g is not finite (state unchanged, previous output held)", x);
+    else
+      std::snprintf(text, sizeof text, "argument x = %g is beyond the model's input bound, the output would overflow "
+                    "(state unchanged, previous output held)", x);
     set_message("hysteron_model_step", text);
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
@@ -358,6 +365,10 @@ hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, 
     HYSTERON_REQUIRE(x);
     HYSTERON_REQUIRE(y);
     require_finite_array(x, n_x, "x");
+    for (std::size_t k = 0; k < n_x; ++k)
+      if (!model->model.accepts(x[k]))
+        fail(HYSTERON_ERROR_INVALID_ARGUMENT, "x[%zu] = %g is beyond the model's input bound, the output would "
+             "overflow (nothing was changed)", k, x[k]);
     for (std::size_t k = 0; k < n_x; ++k) y[k] = model->model.step(x[k]);
   });
 }
@@ -406,7 +417,8 @@ hysteron_status hysteron_inverse_reset_relaxed(hysteron_inverse* inverse, double
     HYSTERON_REQUIRE(inverse);
     require_finite(x0, "x0");
     hysteron::Model m(inverse->params);
-    m.reset_relaxed(x0);
+    if (!m.reset_relaxed(x0))
+      fail(HYSTERON_ERROR_INVALID_ARGUMENT, "x0 = %g is beyond the model's input bound (nothing was changed)", x0);
     inverse->inverse.reset(m.state());
   });
 }
@@ -443,8 +455,16 @@ hysteron_status hysteron_inverse_step(hysteron_inverse* inverse, double y_desire
     set_message("hysteron_inverse_step", text);
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
+  const std::size_t faults = inverse->inverse.faults();
   *x = inverse->inverse.step(y_desired);
   if (saturated) *saturated = inverse->inverse.saturated() ? 1 : 0;
+  if (inverse->inverse.faults() != faults) {  // only with an unbounded input limit
+    char text[160];
+    std::snprintf(text, sizeof text, "y_desired = %g needs an input beyond what a double holds (the inverse has an "
+                  "unbounded limit; state unchanged, previous input held)", y_desired);
+    set_message("hysteron_inverse_step", text);
+    return HYSTERON_ERROR_INVALID_ARGUMENT;
+  }
   return HYSTERON_OK;
 }
 
@@ -565,6 +585,20 @@ bool finite_step_args(const char* fn, double reference_m, double preview_m, doub
                   reference_m, preview_m, measured_m, held);
   set_message(fn, text);
   return false;
+}
+
+// A PID that counted a fault in this step (Pid::step: an intermediate overflowed, e.g. the error
+// reference_m - measured_m of two huge finite values is inf): its state is unchanged and its
+// last output held; reported as INVALID_ARGUMENT like a non-finite argument.
+hysteron_status pid_overflow(const char* fn, std::size_t faults_before, std::size_t faults_after, double reference_m,
+                             double measured_m) noexcept {
+  if (faults_after == faults_before) return HYSTERON_OK;
+  char text[260];
+  std::snprintf(text, sizeof text,
+                "reference_m = %g, measured_m = %g (or the pressures): the PID's error or terms overflow (its state "
+                "unchanged, its previous output held)", reference_m, measured_m);
+  set_message(fn, text);
+  return HYSTERON_ERROR_INVALID_ARGUMENT;
 }
 
 // ---- a loop from result.json: LoopDesign -> the C structs --------------------------------
@@ -809,9 +843,10 @@ hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double referen
     *pressure_mpa = controller->last;
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
+  const std::size_t faults = controller->controller.pid().faults();
   controller->last = controller->controller.step(reference_m, preview_m, measured_m);
   *pressure_mpa = controller->last;
-  return HYSTERON_OK;
+  return pid_overflow("hysteron_ff_pid_step", faults, controller->controller.pid().faults(), reference_m, measured_m);
 }
 
 // ---- open loop + pressure loop -------------------------------------------------------
@@ -866,9 +901,11 @@ hysteron_status hysteron_open_loop_step(hysteron_open_loop* controller, double r
     *command_mpa = controller->last;
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
+  const std::size_t faults = controller->controller.position().faults();
   controller->last = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
   *command_mpa = controller->last;
-  return HYSTERON_OK;
+  return pid_overflow("hysteron_open_loop_step", faults, controller->controller.position().faults(), reference_m,
+                      measured_m);
 }
 
 // ---- cascade with switching valves -----------------------------------------------------
@@ -938,11 +975,14 @@ hysteron_status hysteron_cascade_step(hysteron_cascade* controller, double refer
     if (desired_pressure_mpa) *desired_pressure_mpa = controller->last_desired;
     return HYSTERON_ERROR_INVALID_ARGUMENT;
   }
+  const hysteron::CascadePwmController& c = controller->controller;
+  const std::size_t faults = c.position().faults() + c.pressure().faults();
   controller->last_duty = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
   controller->last_desired = controller->controller.desired_pressure();
   *duty = controller->last_duty;
   if (desired_pressure_mpa) *desired_pressure_mpa = controller->last_desired;
-  return HYSTERON_OK;
+  return pid_overflow("hysteron_cascade_step", faults, c.position().faults() + c.pressure().faults(), reference_m,
+                      measured_m);
 }
 
 // ---- the position PID's limit-cycle guard ------------------------------------------

@@ -49,6 +49,12 @@ struct Grid {
     w = g.w;
   }
   static std::size_t row(int i) { return static_cast<std::size_t>(i) * static_cast<std::size_t>(i + 1) / 2; }
+  // |q x + sum w_k b_k| with every b_k in [0, 1] (relays, ramps); x - t_k within 2 max(|x|, 1) + |t_k|
+  double amplification() const noexcept {
+    double a = 2.0 + std::abs(q) + std::max(std::abs(t.front()), std::abs(t.back()));
+    for (double wk : w) a += std::abs(wk);
+    return a;
+  }
   std::string invertibility() const {
     if (!(q > 0)) return detail::format("q = {} must be > 0 (the output must rise between switching thresholds)", q);
     for (std::size_t k = 0; k < w.size(); ++k)
@@ -108,6 +114,7 @@ class PreisachKernel final : public Kernel {
   }
   std::string invertibility() const override { return g_.invertibility(); }
   double min_slope() const noexcept override { return g_.q; }
+  double amplification() const noexcept override { return g_.amplification(); }
   std::size_t num_features() const noexcept override { return g_.w.size() + 1; }
   void features(double x, double* out) const noexcept override {
     out[0] = x;
@@ -170,6 +177,7 @@ class KpKernel final : public Kernel {
   }
   std::string invertibility() const override { return g_.invertibility(); }
   double min_slope() const noexcept override { return g_.q; }
+  double amplification() const noexcept override { return g_.amplification(); }
   std::size_t num_features() const noexcept override { return y_.size() + 1; }
   void features(double x, double* out) const noexcept override {
     out[0] = x;
@@ -241,6 +249,8 @@ class BoucWenKernel final : public Kernel {
   }
   // slope kx + kw dw/dx with dw/dx in [0, rho max(1, 2 sigma)] for |w| <= 1
   double min_slope() const noexcept override { return p_.kx + std::min(p_.kw, 0.0) * bouc_wen_max_dwdx(p_.rho, p_.sigma); }
+  // |kx x + kw w| with |w| <= 1; the increment x - x_ within 2 max(|x|, 1)
+  double amplification() const noexcept override { return 2.0 + std::abs(p_.kx) + std::abs(p_.kw); }
   std::string invertibility() const override {
     const double smin = min_slope();
     if (!(smin > 0))
@@ -332,6 +342,13 @@ class RatePiKernel final : public Kernel {
     rate_ = in[y_.size() + 1];
   }
   double min_slope() const noexcept override { return p_.q; }
+  // rate <= 2 max(|x|, 1) / dt, thresholds r_i (1 + c rate), |y_i| <= |x| + r_i (1 + c rate)
+  double amplification() const noexcept override {
+    double w = std::abs(p_.q), rmax = 0.0;
+    for (std::size_t i = 0; i < p_.r.size(); ++i) w += std::abs(p_.p[i]), rmax = std::max(rmax, p_.r[i]);
+    const double f = 1.0 + 2.0 * p_.c / p_.dt;  // 1 + c rate per unit of max(|x|, 1)
+    return std::max({2.0 / p_.dt + 2.0, f, (w + 1.0) * (2.0 + rmax * f)});
+  }
   std::string invertibility() const override {
     if (!(p_.q > 0)) return detail::format("q = {} must be > 0", p_.q);
     for (std::size_t i = 0; i < p_.p.size(); ++i)

@@ -42,6 +42,9 @@ class Kernel {
   // term, which every hysteron with a weight >= 0 only adds to; bouc-wen: kx + min(kw, 0)
   // rho max(1, 2 sigma)). The fit reports the inverse's largest slope from it.
   virtual double min_slope() const noexcept = 0;
+  // A >= 0 with |step(x)| <= A max(|x|, 1), and every intermediate of step() within the
+  // same bound, for |x| and the previous inputs bounded by max(|x|, 1) (Model::input_bound).
+  virtual double amplification() const noexcept = 0;
 };
 
 // The Bouc-Wen state after an input increment dx (models.hpp), integrated by explicit
@@ -71,6 +74,10 @@ T bouc_wen_increment(T w, double dx, const T& rho, const T& sigma, const T& n, V
   for (int i = 0; i < j; ++i) w = step(w, dir * h);
   return step(w, dx - dir * h * j);
 }
+
+// Model::input_bound(): the largest |x_m| whose step keeps the output and every
+// intermediate within DBL_MAX / 16 (kernel: its amplification(), else the structure's).
+double input_bound(const Structure<double>& s, const Kernel* kernel) noexcept;
 
 // Validates the parameters and builds the kernel; nullptr for the kinds with PI
 // structure. Throws hysteron::Error naming the key.

@@ -330,6 +330,55 @@ Structure<double> detail::structure_of(const ModelParams& params) {
   return s;
 }
 
+namespace detail {
+
+namespace {
+// |gamma(x)| <= a |x| + b.
+void envelope_bound(EnvelopeKind kind, const std::array<double, 4>& c, double& a, double& b) {
+  const Envelope e{kind, c};
+  const double lo = e.range_lo(), hi = e.range_hi();
+  if (std::isfinite(lo) && std::isfinite(hi)) {
+    a = 0.0, b = std::max(std::abs(lo), std::abs(hi));
+  } else if (kind == EnvelopeKind::affine) {
+    a = std::abs(c[0]), b = std::abs(c[1]);
+  } else {
+    a = 1.0, b = 0.0;
+  }
+}
+}  // namespace
+
+double input_bound(const Structure<double>& s, const Kernel* kernel) noexcept {
+  double a = 0.0, b = 0.0;  // |model output| and every intermediate <= a X + b for |x_m| <= X
+  if (kernel) {
+    a = b = kernel->amplification();
+  } else {
+    double ea = 0.0, eb = 0.0;
+    envelope_bound(s.asc_kind, s.asc_c, ea, eb);
+    if (s.asymmetric) {
+      double da = 0.0, db = 0.0;
+      envelope_bound(s.desc_kind, s.desc_c, da, db);
+      ea = std::max(ea, da), eb = std::max(eb, db);
+    }
+    double w = std::abs(s.q), rw = 0.0;  // plays: |y_i| <= |u| + r_i
+    for (std::size_t i = 0; i < s.p.size(); ++i) w += std::abs(s.p[i]), rw += std::abs(s.p[i]) * s.r[i];
+    a = w * ea, b = w * eb + rw;
+    if (s.has_dead_zones) {  // |g0 v + sum g_k S(v)| <= (|g0| + sum |g_k|) |v| + sum |g_k z_k|
+      double g = std::abs(s.g0), gz = 0.0;
+      for (std::size_t k = 0; k < s.g.size(); ++k) g += std::abs(s.g[k]), gz += std::abs(s.g[k] * s.z[k]);
+      a *= g, b = g * b + gz;
+    }
+    a = std::max(a, ea), b = std::max(b, eb);  // the envelope value itself
+  }
+  constexpr double big = std::numeric_limits<double>::max() / 16;
+  const double gain = std::max(1.0, std::abs(s.units.output_gain));
+  const double room = (big - std::abs(s.units.output_offset)) / gain - b;
+  if (!(room > 0) || !(a >= 0)) return 0.0;
+  if (!kernel && a == 0) return std::numeric_limits<double>::max();  // bounded envelopes: any finite x_m
+  return std::min(room / std::max(a, 1.0), std::numeric_limits<double>::max());  // |x_m| itself too
+}
+
+}  // namespace detail
+
 void validate_model(const ModelParams& params) {
   (void)detail::structure_of(params);
   (void)detail::make_kernel(params);
@@ -339,6 +388,7 @@ Model::Model(ModelParams params)
     : params_(std::move(params)), s_(detail::structure_of(params_)), env_(Envelope{s_.asc_kind, s_.asc_c}),
       kernel_(detail::make_kernel(params_)) {
   state_.y.assign(kernel_ ? kernel_.get()->state_size() : s_.r.size(), 0.0);
+  x_max_ = detail::input_bound(s_, kernel_.get());
 }
 
 const ModelState& Model::state() const noexcept {
@@ -369,22 +419,23 @@ void Model::reset(const ModelState& state) {
   faults_ = 0;
 }
 
-void Model::reset_relaxed(double x0) noexcept {
+bool Model::reset_relaxed(double x0) noexcept {
+  if (!accepts(x0)) return false;
   if (kernel_) {
     const double xm = s_.units.to_model(x0);
-    if (!std::isfinite(xm)) return;
     kernel_.get()->reset_relaxed(xm);
     state_.u = xm;
     faults_ = 0;
     out_ = 0.0;
-    return;
+    return true;
   }
   const double u = envelope_value<double>(s_.asc_kind, s_.asc_c.data(), s_.units.to_model(x0));
-  if (!std::isfinite(u)) return;
+  if (!std::isfinite(u)) return false;
   std::fill(state_.y.begin(), state_.y.end(), u);
   state_.u = u;
   faults_ = 0;
   out_ = 0.0;
+  return true;
 }
 
 // structure_step<double> for one shared envelope (pi, gpi, mpi-deadzone), with
@@ -397,11 +448,11 @@ inline double Model::step_symmetric(double x, double* y) noexcept {
 }
 
 double Model::step(double x) noexcept {
-  if (!std::isfinite(x)) {
+  const double xm = s_.to_model(x);
+  if (!(std::abs(xm) <= x_max_)) {  // non-finite, or the output could overflow (accepts)
     ++faults_;
     return out_;
   }
-  const double xm = s_.to_model(x);
   if (kernel_) {
     state_.u = xm;
     out_ = s_.units.output(kernel_.get()->step(xm));
@@ -415,8 +466,12 @@ double Model::step(double x) noexcept {
 void Model::simulate(std::span<const double> x, std::span<double> y) {
   if (x.size() != y.size())
     throw Error(detail::format("{}: simulate: input has {} samples but output has room for {}", name(), x.size(), y.size()));
-  for (std::size_t k = 0; k < x.size(); ++k)
+  for (std::size_t k = 0; k < x.size(); ++k) {
     if (!std::isfinite(x[k])) throw Error(detail::format("{}: simulate: input sample {} is not finite ({})", name(), k, x[k]));
+    if (!accepts(x[k]))
+      throw Error(detail::format("{}: simulate: input sample {} = {} is beyond the model's input bound (|x_m| <= {} in "
+                                 "model coordinates; the output would overflow)", name(), k, x[k], x_max_));
+  }
   double* yi = state_.y.data();
   const UnitsMap& um = s_.units;
   if (kernel_) {

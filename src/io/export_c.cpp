@@ -49,6 +49,8 @@ struct Baked {
   Limits lim;      // model coordinates
   Limits lim_raw;  // raw input units
   double u_lo = 0.0, u_hi = 0.0;
+  double x_max = 0.0;   // Model::input_bound()
+  double v_max = kInf;  // Inverse::output_bound()
   double qi = 1.0;
   std::vector<double> ri, pi;
   std::vector<double> zp, dp, sp, zn, dn, sn;
@@ -58,6 +60,8 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
   // The library's own checks first (invertibility, limits), with its messages.
   const Inverse inverse(params, InverseOptions{user_limits});
   Baked b;
+  b.x_max = Model(params).input_bound();
+  b.v_max = inverse.output_bound();
   b.s = canonical_structure(params);
   const Structure<double>& s = b.s;
   b.asc = Envelope{s.asc_kind, s.asc_c};
@@ -473,24 +477,28 @@ void $P_input_limits(double *lo, double *hi);
 
 /* Virgin state: operator outputs 0, at rest at x = input_origin (Model::reset()). */
 void $P_model_reset($P_model *m);
-/* At rest at the raw input x0, as if x0 had been held forever (Model::reset_relaxed). */
-void $P_model_reset_relaxed($P_model *m, double x0);
+/* At rest at the raw input x0, as if x0 had been held forever (Model::reset_relaxed);
+ * returns 0, or -1 if x0 is not finite or beyond the input bound (then the virgin
+ * state of $P_model_reset: never an uninitialised one). */
+int $P_model_reset_relaxed($P_model *m, double x0);
 /* Explicit state: y[0..$U_NUM_OPERATORS) and u (Model::reset(ModelState));
- * returns 0, or -1 (state unchanged) if a value is not finite. */
+ * returns 0, or -1 (then the virgin state) if a value is not finite. */
 int $P_model_reset_state($P_model *m, const double *y, double u);
-/* One sample: raw input x -> raw output (Model::step). A non-finite x is ignored
+/* One sample: raw input x -> raw output (Model::step). A non-finite x, or one whose
+ * output could overflow (|x - input_origin| / input_scale > $P_x_max), is ignored
  * (counted in faults) and the last output returned. */
 double $P_model_step($P_model *m, double x);
 
 /* Virgin state, matching $P_model_reset (Inverse::reset()). */
 void $P_inverse_reset($P_inverse *inv);
 /* Start from a forward state y, u (e.g. a $P_model's m.y, m.u), so that the inverse
- * continues where the model is (Inverse::reset(ModelState)). Returns 0, or -1 (state
- * unchanged) if a value is not finite{}. */
+ * continues where the model is (Inverse::reset(ModelState)). Returns 0, or -1 (then the
+ * virgin state of $P_inverse_reset) if a value is not finite{}. */
 int $P_inverse_reset_state($P_inverse *inv, const double *y, double u);
 /* One sample: desired raw output -> the raw input that produces it (Inverse::step),
- * inside the input limits. A non-finite y_desired is ignored (counted in faults) and
- * the last input returned. */
+ * inside the input limits; beyond what the model can output there, however large, the
+ * limit in its direction (saturated = 1). A non-finite y_desired is ignored (counted in
+ * faults) and the last input returned. */
 double $P_inverse_step($P_inverse *inv, double y_desired);
 
 #ifdef __cplusplus
@@ -537,6 +545,8 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
                      num(b.lim.lo), num(b.lim.hi));
     t += fmt::format("static const double $P_lim_raw_lo = {}, $P_lim_raw_hi = {};  /* input limits, raw units */\n",
                      num(b.lim_raw.lo), num(b.lim_raw.hi));
+    t += fmt::format("static const double $P_x_max = {};  /* |x_m| above: the output could overflow (input_bound) */\n",
+                     num(b.x_max));
     if (s.asymmetric) {
       // Both envelopes and their slopes at the two limits, as Inverse keeps them (constant).
       auto at = [&](double x) {
@@ -553,6 +563,9 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
       t += fmt::format("static const double $P_ri[{}] = {};  /* r'_i (Eq. 11) */\n", size, array_init(b.ri));
       t += fmt::format("static const double $P_pi[{}] = {};  /* p'_i (Eq. 11) */\n", size, array_init(b.pi));
       t += fmt::format("static const double $P_u_lo = {}, $P_u_hi = {};  /* gamma(limits) */\n", num(b.u_lo), num(b.u_hi));
+      if (std::isfinite(b.v_max))
+        t += fmt::format("static const double $P_v_max = {};  /* |v| above it: unreachable inside the limits */\n",
+                         num(b.v_max));
     }
     return t;
   }
@@ -725,23 +738,32 @@ void $P_model_reset($P_model *m)
   m->faults = 0;
 }
 
-void $P_model_reset_relaxed($P_model *m, double x0)
+/* A refused reset leaves the virgin state, never an uninitialised one. */
+static int $P_model_refuse($P_model *m)
+{
+  $P_model_reset(m);
+  return -1;
+}
+
+int $P_model_reset_relaxed($P_model *m, double x0)
 {
   const double u = $P_gamma((x0 - $P_input_origin) / $P_input_scale);
   int i;
-  if (!$P_finite(u)) return;
+  if (!(fabs((x0 - $P_input_origin) * $P_inv_input_scale) <= $P_x_max)) return $P_model_refuse(m);
+  if (!$P_finite(u)) return $P_model_refuse(m);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) m->y[i] = u;
   m->u = u;
   m->faults = 0;
   m->out = 0.0;
+  return 0;
 }
 
 int $P_model_reset_state($P_model *m, const double *y, double u)
 {
   int i;
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!$P_finite(y[i])) return -1;
-  if (!$P_finite(u)) return -1;
+    if (!$P_finite(y[i])) return $P_model_refuse(m);
+  if (!$P_finite(u)) return $P_model_refuse(m);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) m->y[i] = y[i];
   m->u = u;
   m->out = 0.0;
@@ -757,6 +779,10 @@ double $P_model_step($P_model *m, double x)
     return m->out;
   }
   xm = (x - $P_input_origin) * $P_inv_input_scale;  /* units map */
+  if (!(fabs(xm) <= $P_x_max)) {  /* the output could overflow: ignored as a non-finite x */
+    ++m->faults;
+    return m->out;
+  }
 )";
     if (sym) {
       t += R"(  m->u = $P_gamma(xm);                                  /* envelope (Eq. 5) */
@@ -780,6 +806,13 @@ void $P_inverse_reset($P_inverse *inv)
   inv->saturated = 0;
   inv->faults = 0;
 }
+
+/* A refused reset leaves the virgin state, never an uninitialised one. */
+static int $P_inverse_refuse($P_inverse *inv)
+{
+  $P_inverse_reset(inv);
+  return -1;
+}
 )";
     if (sym) {
       t += R"(
@@ -788,15 +821,15 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
   double dev[$U_STATE_SIZE], sc[$U_STATE_SIZE];
   double scale = fabs(u), tol, d_prev = 0.0, r_prev = 0.0, v, x;
   int i;
-  if (!$P_finite(u)) return -1;
+  if (!$P_finite(u)) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!$P_finite(y[i])) return -1;
+    if (!$P_finite(y[i])) return $P_inverse_refuse(inv);
   /* Reachability: |d_1| <= r_1, |d_i - d_{i-1}| <= r_i - r_{i-1} (1-Lipschitz memory curve). */
   for (i = 0; i < $U_NUM_OPERATORS; ++i) scale = scale < fabs(y[i]) ? fabs(y[i]) : scale;
   tol = 1e-9 * (1.0 < scale ? scale : 1.0);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) {
     dev[i] = u - y[i];
-    if (fabs(dev[i] - d_prev) > $P_r[i] - r_prev + tol) return -1;
+    if (fabs(dev[i] - d_prev) > $P_r[i] - r_prev + tol) return $P_inverse_refuse(inv);
     d_prev = dev[i];
     r_prev = $P_r[i];
   }
@@ -826,9 +859,19 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
   ym = (y_desired - $P_output_offset) * $P_inv_output_gain;  /* units map */
 )";
       t += s.has_dead_zones ? "  v = $P_dead_zone_inverse(ym);\n" : "  v = ym;\n";
+      if (std::isfinite(b.v_max))  // unreachable inside the limits: still saturates, and u is never inf - inf
+        t += "  v = v < -$P_v_max ? -$P_v_max : $P_v_max < v ? $P_v_max : v;\n";
       t += R"(  /* Eqs. 9-10 on a tentative state */
   u = $P_qi * v + $P_play_sum(v, $P_ri, $P_pi, inv->xi, sc, $U_NUM_OPERATORS);
-  if (u >= $P_u_lo && u <= $P_u_hi) {
+)";
+      if (!std::isfinite(b.v_max))  // an unbounded limit: an input beyond a double is held (step_analytical)
+        t += R"(  if (!$P_finite(u)) {
+    ++inv->faults;
+    x = $P_input_origin + $P_input_scale * inv->x;
+    return x < $P_lim_raw_lo ? $P_lim_raw_lo : $P_lim_raw_hi < x ? $P_lim_raw_hi : x;
+  }
+)";
+      t += R"(  if (u >= $P_u_lo && u <= $P_u_hi) {
     for (i = 0; i < $U_NUM_OPERATORS; ++i) inv->xi[i] = sc[i];
     inv->v_prev = v;
     inv->saturated = 0;
@@ -867,9 +910,9 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
 {
   double x;
   int i;
-  if (!$P_finite(u)) return -1;
+  if (!$P_finite(u)) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!$P_finite(y[i])) return -1;
+    if (!$P_finite(y[i])) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) inv->y[i] = y[i];
   x = $P_gamma_inverse_checked(u);
   x = $P_finite(x) ? x : 0.0;
@@ -979,20 +1022,35 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
 
 }  // namespace
 
-bool valid_c_prefix(const std::string& name) noexcept {
-  if (name.empty() || name.size() > 40 || name.front() == '_') return false;
-  if (name == "hysteron") return false;  // the C ABI's names (include/hysteron/hysteron.h)
-  if (std::isdigit(static_cast<unsigned char>(name.front()))) return false;
+std::string c_prefix_problem(const std::string& name) {
+  if (name.empty()) return "it is empty";
+  if (name.size() > 40) return fmt::format("it has {} characters, at most 40 are allowed", name.size());
   for (char c : name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80) return false;
-  return true;
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80)
+      return "it is not a C identifier (letters, digits and '_' only)";
+  if (std::isdigit(static_cast<unsigned char>(name.front()))) return "it starts with a digit";
+  if (name.front() == '_') return "it starts with '_' (such names are reserved in C)";
+  if (name.back() == '_') return "it ends with '_' (the names would contain \"__\", reserved in C++)";
+  if (name.find("__") != std::string::npos) return "it contains \"__\" (reserved in C++)";
+  std::string lower = name;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower == "hysteron" || lower.starts_with("hysteron_"))
+    return "hysteron and hysteron_* are the C ABI's names (include/hysteron/hysteron.h, e.g. "
+           "hysteron_params_input_limits, HYSTERON_OK)";
+  return {};
+}
+
+bool valid_c_prefix(const std::string& name) noexcept {
+  try {
+    return c_prefix_problem(name).empty();
+  } catch (...) {
+    return false;
+  }
 }
 
 GeneratedC generate_c(const ModelParams& params, const ExportOptions& options) {
-  if (!valid_c_prefix(options.prefix))
-    throw Error(fmt::format("export: prefix \"{}\" is not usable: it must be a C identifier (letters, digits, '_'; "
-                            "not starting with a digit or '_'), at most 40 characters, not \"hysteron\" (the C ABI's prefix)",
-                            options.prefix));
+  if (const std::string why = c_prefix_problem(options.prefix); !why.empty())
+    throw Error(fmt::format("export: prefix \"{}\" is not usable: {}", options.prefix, why));
   if (options.header_name.find_first_of("\"\\\n\r") != std::string::npos)
     throw Error(fmt::format("export: header name \"{}\" cannot be #included (it contains a quote, backslash or newline)",
                             options.header_name));

@@ -307,7 +307,7 @@ LoopDesign loop_design_of_run(const json& doc, std::string_view run, std::string
 }
 
 LoopDesign read_loop_design(const std::string& path, std::string_view run) {
-  return loop_design_of_run(parse_json(read_text_file(path, "result file"), path), run, path);
+  return loop_design_of_run(parse_json(read_text_file(path, "result file", max_result_file_bytes), path), run, path);
 }
 
 }  // namespace hysteron::io

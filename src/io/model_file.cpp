@@ -13,6 +13,10 @@
 #include <sstream>
 #include <unordered_set>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "hysteron/error.hpp"
 #include "hysteron/io/files.hpp"
 
@@ -322,13 +326,37 @@ struct ToJson {
 
 }  // namespace
 
-std::string read_text_file(const std::string& path, std::string_view what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open {}: {}", path, what, std::strerror(errno)));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error(fmt::format("{}: read error", path));
-  return ss.str();
+std::string read_text_file(const std::string& path, std::string_view what, std::size_t max_bytes) {
+  // O_NONBLOCK: opening a FIFO without a writer returns at once (then reads see EOF) instead of hanging.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw Error(fmt::format("{}: cannot open {}: {}", path, what, std::strerror(errno)));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) throw Error(fmt::format("{}: cannot read {}: {}", path, what, std::strerror(errno)));
+  if (S_ISDIR(st.st_mode)) throw Error(fmt::format("{}: cannot read {}: it is a directory", path, what));
+  const auto too_large = [&](const std::string& size) {
+    return Error(fmt::format("{}: the {} is {}, more than the {} bytes any valid one needs: not read", path, what, size,
+                             max_bytes));
+  };
+  if (S_ISREG(st.st_mode) && static_cast<std::uintmax_t>(st.st_size) > max_bytes)
+    throw too_large(fmt::format("{} bytes", st.st_size));
+  if (const int flags = ::fcntl(fd, F_GETFL); flags >= 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+  std::string text;
+  char buf[65536];
+  for (;;) {
+    const ssize_t got = ::read(fd, buf, sizeof buf);
+    if (got < 0) {
+      if (errno == EINTR) continue;
+      throw Error(fmt::format("{}: read error: {}", path, std::strerror(errno)));
+    }
+    if (got == 0) break;
+    if (text.size() + static_cast<std::size_t>(got) > max_bytes) throw too_large("larger (a device or a pipe?)");
+    text.append(buf, static_cast<std::size_t>(got));
+  }
+  return text;
 }
 
 json parse_json(std::string_view text, std::string_view where) {
@@ -531,7 +559,7 @@ nlohmann::json model_to_json(const ModelParams& params) {
 }
 
 ModelParams read_model_file(const std::string& path) {
-  const json j = parse_json(read_text_file(path, "model file"), path);
+  const json j = parse_json(read_text_file(path, "model file", max_model_file_bytes), path);
   return model_from_json(j, path);
 }
 

@@ -147,6 +147,12 @@ expect_fail "bad prefix" 1 '--prefix: "9lives" is not usable' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix 9lives
 expect_fail "C ABI prefix" 1 '--prefix: "hysteron" is not usable' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix hysteron
+expect_fail "C ABI prefix hysteron_*" 1 '--prefix: "hysteron_params" is not usable' -- \
+  "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix hysteron_params
+expect_fail "empty prefix" 1 '--prefix: "" is not usable: it is empty' -- \
+  "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix ""
+expect_fail "prefix ending in _" 1 '--prefix: "pam_" is not usable' -- \
+  "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix pam_
 expect_fail "bad limits" 1 '--limits: LO = 2 must be < HI = 1' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --limits 2,1
 expect_fail "missing model file" 1 'nope.json: cannot open' -- "$BIN" export --model "$T/nope.json" --out "$T/out/new.c"

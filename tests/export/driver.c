@@ -6,13 +6,17 @@
  * (numbers as C99 hex floats, exact):
  *   v              virgin reset of the model and the inverse          (no output)
  *   r X0           model relaxed at X0, inverse started from its state -> "R rc"
+ *   n X0           the same over garbage structs, with a refused X0    -> "N rc_relaxed rc_state"
+ *                  (then both in the virgin state)
  *   s U Y0..Yn-1   model and inverse started from the state (y, u)     -> "S rc_model rc_inverse"
  *   f X            forward step                                        -> "F out faults"
  *   i Y            inverse step                                        -> "I x saturated faults"
  *   l              input limits                                        -> "L lo hi"
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #ifdef HM_SINGLE
 #include "model.c"
@@ -40,6 +44,16 @@ int main(void)
         hm_model_reset_relaxed(&m, a);
         printf("R %d\n", hm_inverse_reset_state(&inv, m.y, m.u));
         break;
+      case 'n': {
+        int rm, ri;
+        if (scanf("%lf", &a) != 1) return 2;
+        memset(&m, 0xA5, sizeof m); /* as uninitialised stack memory */
+        memset(&inv, 0xA5, sizeof inv);
+        rm = hm_model_reset_relaxed(&m, a);
+        ri = rm == 0 ? hm_inverse_reset_state(&inv, m.y, m.u) : hm_inverse_reset_state(&inv, m.y, NAN);
+        printf("N %d %d\n", rm, ri);
+        break;
+      }
       case 's': {
         int rm, ri;
         if (scanf("%lf", &a) != 1) return 2;

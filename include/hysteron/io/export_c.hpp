@@ -57,6 +57,10 @@ struct GeneratedC {
 // bad prefix).
 GeneratedC generate_c(const ModelParams& params, const ExportOptions& options = {});
 
+// Why `name` cannot be ExportOptions::prefix, or empty if it can: it must be a C identifier
+// of at most 40 characters, not starting or ending with '_', without "__", and neither
+// "hysteron" nor "hysteron_*" in any case (the C ABI's names).
+std::string c_prefix_problem(const std::string& name);
 // True if `name` can be used as ExportOptions::prefix.
 bool valid_c_prefix(const std::string& name) noexcept;
 

@@ -26,9 +26,21 @@ namespace hysteron::io {
 // (model files, rig parameters, reports) is read through this function.
 nlohmann::json parse_json(std::string_view text, std::string_view where);
 
-// The whole file (e.g. a JSON file to parse_json); Error "PATH: cannot open WHAT: REASON" or
-// "PATH: read error".
-std::string read_text_file(const std::string& path, std::string_view what);
+// The largest model file read [bytes]. The largest model the format allows has
+// max_operators = 100000 operators with at most 4 arrays of that length (e.g. r, p, z, g),
+// each number at most 24 characters plus its separator and pretty-printed indentation
+// (~32 bytes): about 13 MB. 64 MB leaves room for any whitespace and notes.
+inline constexpr std::size_t max_model_file_bytes = 64u << 20;
+// The largest result file of an experiment read for its loop (--loop) [bytes]: its learned
+// feedforward has up to kMaxLearningPeriod = 10^7 samples, a few arrays of ~32 bytes each.
+inline constexpr std::size_t max_result_file_bytes = std::size_t{2048} << 20;
+
+// The whole file (e.g. a JSON file to parse_json), at most max_bytes: Error "PATH: cannot
+// open WHAT: REASON", "PATH: read error: REASON", or "PATH: the WHAT is ... more than the N
+// bytes any valid one needs" (also for a device such as /dev/zero). A FIFO without a
+// writer reads as empty instead of blocking.
+std::string read_text_file(const std::string& path, std::string_view what,
+                           std::size_t max_bytes = max_model_file_bytes);
 
 // Current (and only) schema version written to and accepted in "schema".
 inline constexpr int model_schema_version = 1;

@@ -287,9 +287,12 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   // the mean dy/du of the data over the training range (raw units, scales absorbed).
   if (has_pi_structure(rep.model)) {
     const Structure<double> s = canonical_structure(rep.model);
-    const Envelope e{s.asc_kind, s.asc_c};
+    const Envelope e{s.asc_kind, s.asc_c}, ed{s.desc_kind, s.desc_c};
     const UnitsMap& u = s.units;
-    const double uspan = std::abs(e.value(u.to_model(rg.xhi)) - e.value(u.to_model(rg.xlo)));
+    const double xh = u.to_model(rg.xhi), xl = u.to_model(rg.xlo);
+    // mpi-asym: the mean of both envelopes' spans, as the fit's bound (slope_lower)
+    const double uspan = s.asymmetric ? 0.5 * (std::abs(e.value(xh) - e.value(xl)) + std::abs(ed.value(xh) - ed.value(xl)))
+                                      : std::abs(e.value(xh) - e.value(xl));
     const double smin = min_cumulative_slope(s);
     const double bound = o.min_slope * sy / (std::abs(u.output_gain) * uspan);
     if (uspan > 0 && smin <= bound * (1 + 1e-6))

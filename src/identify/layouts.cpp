@@ -57,8 +57,13 @@ std::vector<double> slope_lower(const SlopeLayout& layout, const std::vector<dou
   layout.build(th.data(), s0);
   double uspan = rg.xspan();
   if (layout.env > 0) {
-    uspan = std::abs(envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xhi) -
-                     envelope_value<double>(s0.asc_kind, s0.asc_c.data(), rg.xlo));
+    // mpi-asym: the mean of both envelopes' spans (its slope after a reversal is q (gamma_a' + gamma_d') / 2),
+    // so that the bound does not depend on which branch is called ascending (a negated input swaps them)
+    const auto span_of = [&](EnvelopeKind k, const std::array<double, 4>& c) {
+      return std::abs(envelope_value<double>(k, c.data(), rg.xhi) - envelope_value<double>(k, c.data(), rg.xlo));
+    };
+    uspan = span_of(s0.asc_kind, s0.asc_c);
+    if (s0.asymmetric) uspan = 0.5 * (uspan + span_of(s0.desc_kind, s0.desc_c));
     for (int i : {0, 1, 4, 5})
       if (i < layout.env) lower[static_cast<std::size_t>(i)] = margin * std::abs(th[static_cast<std::size_t>(i)]);
   }

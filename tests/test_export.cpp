@@ -137,7 +137,9 @@ Script make_run(const Case& c, std::size_t samples, unsigned seed) {
                             -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::max()};
       const double x0 = bad[static_cast<int>(unit(rng) * 4) % 4];
       const bool accepted = model.reset_relaxed(x0);
-      if (!std::isfinite(x0)) EXPECT_FALSE(accepted) << c.name << ": reset_relaxed accepted " << x0;
+      if (!std::isfinite(x0)) {
+        EXPECT_FALSE(accepted) << c.name << ": reset_relaxed accepted " << x0;
+      }
       s += "n " + hex(x0) + "\n";
       if (accepted) {
         inv.reset(model.state());

@@ -157,7 +157,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         py::dict d = metrics_dict(evaluate_scored(spec, as_span(x), as_span(y), range_from(range, "evaluate: range"),
                                                   initial_state_from(initial_state), censored, &count));
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
-        d["outside_input_limits"] = input_coverage(spec, as_span(x), range_from(range)).outside;
+        d["outside_input_limits"] = input_coverage(spec, as_span(x), range_from(range, "evaluate: range")).outside;
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),

@@ -34,7 +34,12 @@ std::string default_prefix(const std::string& out) {
   std::string stem = std::filesystem::path(out).stem().string();
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80) c = '_';
-  return io::valid_c_prefix(stem) ? stem : std::string("compensator");
+  if (io::valid_c_prefix(stem)) return stem;
+  // said, so that a user who expected the file's name in the symbols is not left with link errors
+  fmt::print(stderr, "warning: --out's name \"{}\" is not a usable prefix ({}): the prefix is \"compensator\" (--prefix "
+             "sets it)\n",
+             stem, io::c_prefix_problem(stem));
+  return "compensator";
 }
 
 int run_export(const Options& o) {

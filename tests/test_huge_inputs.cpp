@@ -90,6 +90,33 @@ TEST(HugeInputs, InverseSaturatesAtTheLimitInTheDirectionOfTheDesiredOutput) {
   }
 }
 
+// One limit unbounded: a huge desired output toward the bounded one still saturates there (a
+// review found it held instead, with a fault, when the bound was one for both sides); toward
+// the unbounded side the input is finite, or held with a status, never inf or NaN.
+TEST(HugeInputs, OneSidedLimitsSaturateOnTheBoundedSide) {
+  const char* low_only = R"({"model": "pi", "q": 0.5, "r": [0, 0.1, 0.3], "p": [0.3, 0.2, 0.1], "input_limits": [-1, null]})";
+  const char* high_only = R"({"model": "pi", "q": 0.5, "r": [0, 0.1, 0.3], "p": [0.3, 0.2, 0.1], "input_limits": [null, 1.5]})";
+  for (const char* json : {low_only, high_only}) {
+    const bool bounded_low = json == low_only;
+    for (double h : kHuge) {
+      Handles a(json);
+      double lo = 0, hi = 0, x = 0;
+      int sat = -1;
+      ASSERT_EQ(hysteron_inverse_limits(a.inv, &lo, &hi), HYSTERON_OK);
+      ASSERT_EQ(std::isfinite(lo), bounded_low);
+      ASSERT_EQ(std::isfinite(hi), !bounded_low);
+      for (int i = 0; i < 20; ++i) ASSERT_EQ(hysteron_inverse_step(a.inv, 0.3 * std::sin(0.2 * i), &x, &sat), HYSTERON_OK);
+      const double toward_bound = bounded_low ? -h : h;
+      ASSERT_EQ(hysteron_inverse_step(a.inv, toward_bound, &x, &sat), HYSTERON_OK) << toward_bound;
+      EXPECT_EQ(x, bounded_low ? lo : hi) << "y_desired = " << toward_bound;
+      EXPECT_EQ(sat, 1);
+      const hysteron_status st = hysteron_inverse_step(a.inv, -toward_bound, &x, &sat);
+      EXPECT_TRUE(st == HYSTERON_OK || st == HYSTERON_ERROR_INVALID_ARGUMENT) << st;
+      EXPECT_TRUE(std::isfinite(x)) << "y_desired = " << -toward_bound << ": " << x;
+    }
+  }
+}
+
 TEST(HugeInputs, ForwardStepNeverReturnsInfOrNanWithOk) {
   for (const Kind& k : kKinds) {
     for (double h : kHuge) {

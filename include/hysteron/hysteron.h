@@ -27,7 +27,11 @@
  *   hysteron_ff_pid_step, hysteron_open_loop_step, hysteron_cascade_step,
  *   hysteron_ilc_correction, hysteron_ilc_step) never allocate
  *   memory, never block and take a bounded time: they are meant for a real-time loop.
- *   Loading and creating allocate.
+ *   Loading and creating allocate. One exception, outside hysteron's control: where the
+ *   library is loaded with dlopen (ctypes, MATLAB, LabVIEW), glibc allocates a thread's
+ *   block of thread-local storage lazily, once, the first time that thread's error
+ *   message is written (its first failing call, e.g. a NaN input); call
+ *   hysteron_last_error() once in each real-time thread before its loop to take it there.
  *
  * Units: a model maps the actuator input x in the model file's input units
  * (e.g. MPa of pressure, V of a piezo amplifier) to the output y in its output

@@ -70,8 +70,8 @@ class Inverse {
   double input() const noexcept { return std::clamp(s_.units.from_model(x_), lim_raw_.lo, lim_raw_.hi); }
   std::size_t faults() const noexcept { return faults_; }
   // Analytical inverse: step() clamps the desired PI output v (model coordinates, after the
-  // dead zones' inverse) to [-output_bound(), output_bound()]; +inf with an unbounded limit.
-  double output_bound() const noexcept { return v_max_; }
+  // dead zones' inverse) to output_bounds(); a side is infinite where its limit is unbounded.
+  Limits output_bounds() const noexcept { return {v_lo_, v_hi_}; }
   // The equivalent forward-model state after the last step.
   ModelState forward_state() const;
 
@@ -107,11 +107,11 @@ class Inverse {
   Envelope env_;       // gamma (symmetric models)
   FastEnvelope fenv_;  // the same, for step()
   double u_lo_ = 0.0, u_hi_ = 0.0;  // envelope values at the limits
-  // analytical inverse: |v| beyond v_max_ is unreachable at any input inside the limits, so
-  // step() clamps the desired PI output to [-v_max_, v_max_] (saturates the same, and the
-  // inverse-PI sums cannot overflow); +inf if a limit is unbounded
-  double v_max_ = std::numeric_limits<double>::infinity();
-  void update_v_max() noexcept;
+  // analytical inverse: a PI output below v_lo_ (above v_hi_) is unreachable at any input inside
+  // the limits, so step() clamps the desired one to [v_lo_, v_hi_] (it saturates the same, and the
+  // inverse-PI sums cannot overflow); -inf (+inf) where the low (high) limit is unbounded
+  double v_lo_ = -std::numeric_limits<double>::infinity(), v_hi_ = std::numeric_limits<double>::infinity();
+  void update_output_bounds() noexcept;
   // analytical inverse: inverse-PI parameters and state (Eqs. 9-11)
   double qi_ = 1.0;
   std::vector<double> ri_, pi_;

@@ -73,9 +73,11 @@ struct hysteron_ilc {
 namespace {
 
 constexpr std::size_t message_size = 1024;
-// initial-exec: static TLS, so that the first error in a new thread of a dlopen'ed library does
-// not malloc its block lazily (glibc's dynamic TLS); 1 KiB of the static TLS surplus.
-__attribute__((tls_model("initial-exec"))) thread_local char t_message[message_size] = "";
+// The default TLS model, not initial-exec: a dlopen'ed library with 1 KiB of static TLS takes
+// about 2/3 of glibc's surplus and could fail to load beside other such libraries (MATLAB,
+// LabVIEW, Python with OpenMP). The price: in a dlopen'ed library glibc allocates a thread's
+// block lazily, once, at that thread's first error message (hysteron.h, "Errors").
+thread_local char t_message[message_size] = "";
 
 // An error with its status, thrown inside guard() by the argument checks.
 struct CError {
@@ -173,10 +175,11 @@ hysteron_params* make_params(hysteron::ModelParams p) {
   return h;
 }
 
-// The whole file `path` (io::read_text_file; `what` names it): its errors are IO.
-std::string read_file(const char* path, const char* what) {
+// The whole file `path` (io::read_text_file; `what` names it; at most max_bytes): its errors are IO.
+std::string read_file(const char* path, const char* what,
+                      std::size_t max_bytes = hysteron::io::max_model_file_bytes) {
   try {
-    return hysteron::io::read_text_file(path, what);
+    return hysteron::io::read_text_file(path, what, max_bytes);
   } catch (const hysteron::Error& e) {
     fail(HYSTERON_ERROR_IO, "%s", e.what());
   }
@@ -1149,7 +1152,7 @@ hysteron_status hysteron_loop_params_from_file(const char* path, const char* run
   return guard("hysteron_loop_params_from_file", HYSTERON_ERROR_MODEL, [&] {
     HYSTERON_REQUIRE(path);
     HYSTERON_REQUIRE(out);
-    read_loop(read_file(path, "result file"), run, path, *out);
+    read_loop(read_file(path, "result file", hysteron::io::max_result_file_bytes), run, path, *out);
   });
 }
 
@@ -1165,7 +1168,7 @@ hysteron_status hysteron_loop_guard_from_file(const char* path, const char* run,
   return guard("hysteron_loop_guard_from_file", HYSTERON_ERROR_MODEL, [&] {
     HYSTERON_REQUIRE(path);
     HYSTERON_REQUIRE(out);
-    read_guard(read_file(path, "result file"), run, path, *out);
+    read_guard(read_file(path, "result file", hysteron::io::max_result_file_bytes), run, path, *out);
   });
 }
 

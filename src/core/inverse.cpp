@@ -125,7 +125,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     if (std::isinf(lim_.hi) && std::isfinite(span)) lim_.hi = env.inverse(env.range_hi() - 1e-9 * span);
     u_lo_ = std::isinf(lim_.lo) ? -kInf : env.value(lim_.lo);
     u_hi_ = std::isinf(lim_.hi) ? kInf : env.value(lim_.hi);
-    update_v_max();
+    update_output_bounds();
     xi_.assign(n, 0.0);
     scratch_.assign(n, 0.0);
     dev_.assign(n, 0.0);
@@ -263,14 +263,16 @@ double Inverse::step(double y) noexcept {
 
 double Inverse::step_analytical(double y) noexcept {
   const std::size_t n = s_.r.size();
-  // Beyond +-v_max_ the model cannot reach v inside the limits: clamped, it still saturates
-  // at the limit in its direction, and q' v + sum p'_i x'_i cannot overflow to inf - inf.
-  const double v = std::clamp(s_.has_dead_zones ? dead_zone_inverse(y) : y, -v_max_, v_max_);
+  // Beyond [v_lo_, v_hi_] the model cannot reach v inside the limits: clamped, it still
+  // saturates at the limit in its direction, and q' v + sum p'_i x'_i cannot overflow to inf - inf.
+  const double v = std::clamp(s_.has_dead_zones ? dead_zone_inverse(y) : y, v_lo_, v_hi_);
   // Eqs. 9-10 on the tentative state.
   const double* pi = pi_.data();
   double* sc = scratch_.data();
   const double u = qi_ * v + detail::play_weighted_sum(v, ri_.data(), pi, xi_.data(), sc, n);
-  if (!std::isfinite(u)) {  // only with an unbounded limit (v_max_ = inf): held like a non-finite y
+  // u = +-inf toward a bounded limit saturates there below; NaN, or inf toward an unbounded
+  // side (a desired output beyond a double's range there), is held like a non-finite y
+  if (std::isnan(u) || (u == kInf && u_hi_ == kInf) || (u == -kInf && u_lo_ == -kInf)) {
     ++faults_;
     return x_;
   }
@@ -494,17 +496,23 @@ bool Inverse::set_weights(double q, std::span<const double> p) noexcept {
   map_deviations(q, s_.p, d, sc);
   for (std::size_t i = 0; i < n; ++i) xi_[i] = v - sc[i];
   v_prev_ = v;
-  update_v_max();
+  update_output_bounds();
   return true;
 }
 
-void Inverse::update_v_max() noexcept {
-  // Inside the limits |u| <= U, so every play |y_i| <= U + r_i and |v| <= B = |q| U + sum |p_i| (U + r_i).
-  // A desired |v| > B saturates; clamping it to 2 B + 1 keeps the direction and the sums finite.
-  const double big_u = std::max(std::abs(u_lo_), std::abs(u_hi_));
-  double b = std::abs(s_.q) * big_u;
-  for (std::size_t i = 0; i < s_.p.size(); ++i) b += std::abs(s_.p[i]) * (big_u + s_.r[i]);
-  v_max_ = std::isfinite(b) ? 2.0 * b + 1.0 : kInf;
+void Inverse::update_output_bounds() noexcept {
+  // At an input u inside the limits every play |y_i| <= |u| + r_i, so |v(u)| <= B(u) = |q| |u| +
+  // sum |p_i| (|u| + r_i); and the model is increasing, so inside [u_lo, u_hi] v >= v(u_lo) >=
+  // -B(u_lo) and v <= B(u_hi). A desired v beyond saturates; clamping it to 2 B + 1 keeps the
+  // direction and the sums finite.
+  const auto bound = [&](double u) {
+    if (!std::isfinite(u)) return kInf;
+    double b = std::abs(s_.q) * std::abs(u);
+    for (std::size_t i = 0; i < s_.p.size(); ++i) b += std::abs(s_.p[i]) * (std::abs(u) + s_.r[i]);
+    return std::isfinite(b) ? 2.0 * b + 1.0 : kInf;
+  };
+  v_lo_ = -bound(u_lo_);
+  v_hi_ = bound(u_hi_);
 }
 
 }  // namespace hysteron

@@ -206,9 +206,11 @@ std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_
       "at a limit the loop has no authority left (e.g. the load cannot follow the reference's descent with the "
       "muscle vented, or the reference needs more pressure than the actuator has)";
   if (const std::optional<CappedTop> top = capped_top(run, from, to)) {
-    why = fmt::format(
-        "while the command sat at {} MPa ({:.2f} s at most) the pressure reading levelled off at {:.3f} MPa",
-        kPressureMax, top->stretch_s, top->level_mpa);
+    // the cap explains the samples at the top; where those at 0 MPa are more, the generic words stay first
+    why = (high >= low ? std::string() : why + "; and ") +
+          fmt::format("while the command sat at {} MPa (over its longest stretch, {:.2f} s) the pressure reading "
+                      "levelled off at {:.3f} MPa",
+                      kPressureMax, top->stretch_s, top->level_mpa);
     if (reach_mpa > (1.0 + kCapMargin) * top->level_mpa)
       why += fmt::format(", where the identification run reached {:.3f} MPa", reach_mpa);
     why += ": the supply, regulator or valves cap the pressure on this rig, or the pressure sensor's range ends "

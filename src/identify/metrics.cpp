@@ -218,7 +218,7 @@ InputCoverage input_coverage(const ModelParams& params, std::span<const double> 
 std::string input_coverage_warning(const InputCoverage& c, std::string_view what) {
   if (!(c.fraction() > 0.01)) return {};
   return fmt::format("{}: {} of the {} scored samples ({:.1f} %) have an input outside the model's input_limits "
-                     "[{:.6g}, {:.6g}] (the input range it was fitted on), up to {:.6g} beyond: the model "
+                     "[{:.6g}, {:.6g}] (fit() sets them to its training range), up to {:.6g} beyond: the model "
                      "extrapolates there, and its score says as much about that range as about the model",
                      what, c.outside, c.n, 100.0 * c.fraction(), c.limits.lo, c.limits.hi, c.max_beyond);
 }

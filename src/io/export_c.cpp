@@ -50,7 +50,7 @@ struct Baked {
   Limits lim_raw;  // raw input units
   double u_lo = 0.0, u_hi = 0.0;
   double x_max = 0.0;   // Model::input_bound()
-  double v_max = kInf;  // Inverse::output_bound()
+  Limits v_bounds;  // Inverse::output_bounds()
   double qi = 1.0;
   std::vector<double> ri, pi;
   std::vector<double> zp, dp, sp, zn, dn, sn;
@@ -61,7 +61,7 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
   const Inverse inverse(params, InverseOptions{user_limits});
   Baked b;
   b.x_max = Model(params).input_bound();
-  b.v_max = inverse.output_bound();
+  b.v_bounds = inverse.output_bounds();
   b.s = canonical_structure(params);
   const Structure<double>& s = b.s;
   b.asc = Envelope{s.asc_kind, s.asc_c};
@@ -563,9 +563,12 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
       t += fmt::format("static const double $P_ri[{}] = {};  /* r'_i (Eq. 11) */\n", size, array_init(b.ri));
       t += fmt::format("static const double $P_pi[{}] = {};  /* p'_i (Eq. 11) */\n", size, array_init(b.pi));
       t += fmt::format("static const double $P_u_lo = {}, $P_u_hi = {};  /* gamma(limits) */\n", num(b.u_lo), num(b.u_hi));
-      if (std::isfinite(b.v_max))
-        t += fmt::format("static const double $P_v_max = {};  /* |v| above it: unreachable inside the limits */\n",
-                         num(b.v_max));
+      if (std::isfinite(b.v_bounds.lo))
+        t += fmt::format("static const double $P_v_lo = {};  /* v below it: unreachable inside the limits */\n",
+                         num(b.v_bounds.lo));
+      if (std::isfinite(b.v_bounds.hi))
+        t += fmt::format("static const double $P_v_hi = {};  /* v above it: unreachable inside the limits */\n",
+                         num(b.v_bounds.hi));
     }
     return t;
   }
@@ -859,13 +862,17 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
   ym = (y_desired - $P_output_offset) * $P_inv_output_gain;  /* units map */
 )";
       t += s.has_dead_zones ? "  v = $P_dead_zone_inverse(ym);\n" : "  v = ym;\n";
-      if (std::isfinite(b.v_max))  // unreachable inside the limits: still saturates, and u is never inf - inf
-        t += "  v = v < -$P_v_max ? -$P_v_max : $P_v_max < v ? $P_v_max : v;\n";
+      // unreachable inside the limits: still saturates, and u is never inf - inf (Inverse::step_analytical)
+      if (std::isfinite(b.v_bounds.lo)) t += "  v = v < $P_v_lo ? $P_v_lo : v;\n";
+      if (std::isfinite(b.v_bounds.hi)) t += "  v = $P_v_hi < v ? $P_v_hi : v;\n";
       t += R"(  /* Eqs. 9-10 on a tentative state */
   u = $P_qi * v + $P_play_sum(v, $P_ri, $P_pi, inv->xi, sc, $U_NUM_OPERATORS);
 )";
-      if (!std::isfinite(b.v_max))  // an unbounded limit: an input beyond a double is held (step_analytical)
-        t += R"(  if (!$P_finite(u)) {
+      // an unbounded side: a u beyond a double there is held (step_analytical); +-inf toward a
+      // bounded limit saturates there below
+      if (!std::isfinite(b.v_bounds.lo) || !std::isfinite(b.v_bounds.hi))
+        t += R"(  if ($P_nan(u) || )" + std::string(!std::isfinite(b.v_bounds.hi) ? "(u > 0.0 && !$P_finite(u))" : "0") +
+             " || " + std::string(!std::isfinite(b.v_bounds.lo) ? "(u < 0.0 && !$P_finite(u))" : "0") + R"() {
     ++inv->faults;
     x = $P_input_origin + $P_input_scale * inv->x;
     return x < $P_lim_raw_lo ? $P_lim_raw_lo : $P_lim_raw_hi < x ? $P_lim_raw_hi : x;

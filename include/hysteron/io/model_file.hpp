@@ -31,9 +31,10 @@ nlohmann::json parse_json(std::string_view text, std::string_view where);
 // each number at most 24 characters plus its separator and pretty-printed indentation
 // (~32 bytes): about 13 MB. 64 MB leaves room for any whitespace and notes.
 inline constexpr std::size_t max_model_file_bytes = 64u << 20;
-// The largest result file of an experiment read for its loop (--loop) [bytes]: its learned
-// feedforward has up to kMaxLearningPeriod = 10^7 samples, a few arrays of ~32 bytes each.
-inline constexpr std::size_t max_result_file_bytes = std::size_t{2048} << 20;
+// The largest result file of an experiment read for its loop (--loop, the C ABI's loop and
+// guard readers) [bytes]: it holds no per-sample arrays, only numbers and the fitted models
+// (the candidates, the chosen and the paper's: about a dozen, each at most ~13 MB as above).
+inline constexpr std::size_t max_result_file_bytes = std::size_t{256} << 20;
 
 // The whole file (e.g. a JSON file to parse_json), at most max_bytes: Error "PATH: cannot
 // open WHAT: REASON", "PATH: read error: REASON", or "PATH: the WHAT is ... more than the N

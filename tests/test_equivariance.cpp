@@ -132,6 +132,13 @@ std::filesystem::path shared_data() {
   return std::filesystem::path(HYSTERON_SOURCE_DIR) / ".." / "shared" / "data";
 }
 
+// The Festo records' directory; a test that needs them skips where it is absent (a user's checkout).
+std::filesystem::path festo_dir() { return shared_data() / "pam-force-pressure"; }
+#define SKIP_WITHOUT_FESTO()                                                                  \
+  if (!std::filesystem::exists(festo_dir() / "festo10mm_20cm_test8.csv"))                      \
+  GTEST_SKIP() << "measured data not found at " << festo_dir()                                 \
+               << " (../shared/data is absent in this checkout; HYSTERON_SHARED_DATA can name it)"
+
 // Every `step`-th row of columns (in, out) of a shared record (read by hysteron's CSV reader).
 Record shared_record(const std::filesystem::path& file, std::size_t in, std::size_t out, std::size_t step) {
   const std::vector<double> x = io::read_column(file.string(), std::to_string(in));
@@ -232,9 +239,8 @@ TEST(Equivariance, SyntheticRecordsEveryKindEveryTransform) {
 }
 
 TEST(Equivariance, FestoRecordEveryKindEveryTransform) {
-  const auto dir = shared_data() / "pam-force-pressure";
-  if (!std::filesystem::exists(dir / "festo10mm_20cm_test8.csv"))
-    GTEST_SKIP() << "measured data not found at " << dir << " (../shared/data is absent in this checkout)";
+  SKIP_WITHOUT_FESTO();
+  const auto dir = festo_dir();
   const Record train = shared_record(dir / "festo10mm_20cm_test8.csv", 1, 0, 3);
   const Record val = shared_record(dir / "festo10mm_20cm_test9.csv", 1, 0, 3);
   for (FitModel kind : kKinds) {
@@ -295,10 +301,8 @@ TEST(Equivariance, InputNegatedSyntheticEveryKind) {
 }
 
 TEST(Equivariance, InputNegatedFestoEveryKind) {
-  const auto dir = shared_data() / "pam-force-pressure";
-  if (!std::filesystem::exists(dir / "festo10mm_20cm_test8.csv"))
-    GTEST_SKIP() << "measured data not found at " << dir
-                 << " (../shared/data is absent in this checkout; HYSTERON_SHARED_DATA can name it)";
+  SKIP_WITHOUT_FESTO();
+  const auto dir = festo_dir();
   // every 2nd row; trained on test8's rows 3000..15000 of the full record, validated on test9
   const Record train = shared_record(dir / "festo10mm_20cm_test8.csv", 1, 0, 2);
   const Record val = shared_record(dir / "festo10mm_20cm_test9.csv", 1, 0, 2);
@@ -316,10 +320,8 @@ TEST(Equivariance, InputNegatedFestoEveryKind) {
 // test8 rows 3000..15000). The negated fit must be the mirror image of the plain one: the same q and
 // weights, the envelopes swapped and mirrored (c0, c1 alike, c2 and c3 negated), the same prediction.
 TEST(Equivariance, MpiAsymInputNegatedFestoIsTheMirroredModel) {
-  const auto dir = shared_data() / "pam-force-pressure";
-  if (!std::filesystem::exists(dir / "festo10mm_20cm_test8.csv"))
-    GTEST_SKIP() << "measured data not found at " << dir
-                 << " (../shared/data is absent in this checkout; HYSTERON_SHARED_DATA can name it)";
+  SKIP_WITHOUT_FESTO();
+  const auto dir = festo_dir();
   const Record plain = shared_record(dir / "festo10mm_20cm_test8.csv", 1, 0, 1);
   const Record neg = input_negated(plain);
   const Record val = shared_record(dir / "festo10mm_20cm_test9.csv", 1, 0, 1);

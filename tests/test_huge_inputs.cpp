@@ -55,39 +55,44 @@ struct Handles {
 
 bool decreasing(const char* json) { return std::string(json).find("\"output_gain\": -") != std::string::npos; }
 
+// f(kind, v) for every kind and every huge input v of either sign, each on fresh handles
+template <class F>
+void each_kind_and_huge_input(F f) {
+  for (const Kind& k : kKinds)
+    for (double h : kHuge)
+      for (double sign : {1.0, -1.0}) f(k, sign * h);
+}
+
 TEST(HugeInputs, InverseSaturatesAtTheLimitInTheDirectionOfTheDesiredOutput) {
-  for (const Kind& k : kKinds) {
-    for (double h : kHuge) {
-      for (double sign : {1.0, -1.0}) {
-        Handles a(k.json), twin(k.json);
-        double lo = 0, hi = 0;
-        ASSERT_EQ(hysteron_inverse_limits(a.inv, &lo, &hi), HYSTERON_OK);
-        ASSERT_TRUE(std::isfinite(lo) && std::isfinite(hi)) << k.name;
-        // a normal walk first, so that the state is not the virgin one
-        double x = 0, xt = 0;
-        int sat = -1, sat_t = -1;
-        for (int i = 0; i < 50; ++i) {
-          const double y = 0.3 * std::sin(0.2 * i);
-          ASSERT_EQ(hysteron_inverse_step(a.inv, y, &x, &sat), HYSTERON_OK);
-          ASSERT_EQ(hysteron_inverse_step(twin.inv, y, &xt, &sat_t), HYSTERON_OK);
-        }
-        const bool up = (sign > 0) != decreasing(k.json);
-        ASSERT_EQ(hysteron_inverse_step(a.inv, sign * h, &x, &sat), HYSTERON_OK) << k.name << " " << sign * h;
-        EXPECT_EQ(x, up ? hi : lo) << k.name << ": y_desired = " << sign * h;
-        EXPECT_EQ(sat, 1) << k.name << ": y_desired = " << sign * h;
-        // the memory follows that limit: as after any other unreachable desired output on that side
-        const double y_far = sign * 1e6;
-        ASSERT_EQ(hysteron_inverse_step(twin.inv, y_far, &xt, &sat_t), HYSTERON_OK);
-        EXPECT_EQ(xt, x) << k.name;
-        for (int i = 0; i < 50; ++i) {
-          const double y = 0.2 * std::cos(0.3 * i);
-          ASSERT_EQ(hysteron_inverse_step(a.inv, y, &x, &sat), HYSTERON_OK);
-          ASSERT_EQ(hysteron_inverse_step(twin.inv, y, &xt, &sat_t), HYSTERON_OK);
-          ASSERT_EQ(x, xt) << k.name << ": after y_desired = " << sign * h << ", sample " << i;
-        }
-      }
+  each_kind_and_huge_input([](const Kind& k, double huge) {
+    const double sign = huge > 0 ? 1.0 : -1.0, h = std::abs(huge);
+    Handles a(k.json), twin(k.json);
+    double lo = 0, hi = 0;
+    ASSERT_EQ(hysteron_inverse_limits(a.inv, &lo, &hi), HYSTERON_OK);
+    ASSERT_TRUE(std::isfinite(lo) && std::isfinite(hi)) << k.name;
+    // a normal walk first, so that the state is not the virgin one
+    double x = 0, xt = 0;
+    int sat = -1, sat_t = -1;
+    for (int i = 0; i < 50; ++i) {
+      const double y = 0.3 * std::sin(0.2 * i);
+      ASSERT_EQ(hysteron_inverse_step(a.inv, y, &x, &sat), HYSTERON_OK);
+      ASSERT_EQ(hysteron_inverse_step(twin.inv, y, &xt, &sat_t), HYSTERON_OK);
     }
-  }
+    const bool up = (sign > 0) != decreasing(k.json);
+    ASSERT_EQ(hysteron_inverse_step(a.inv, sign * h, &x, &sat), HYSTERON_OK) << k.name << " " << sign * h;
+    EXPECT_EQ(x, up ? hi : lo) << k.name << ": y_desired = " << sign * h;
+    EXPECT_EQ(sat, 1) << k.name << ": y_desired = " << sign * h;
+    // the memory follows that limit: as after any other unreachable desired output on that side
+    const double y_far = sign * 1e6;
+    ASSERT_EQ(hysteron_inverse_step(twin.inv, y_far, &xt, &sat_t), HYSTERON_OK);
+    EXPECT_EQ(xt, x) << k.name;
+    for (int i = 0; i < 50; ++i) {
+      const double y = 0.2 * std::cos(0.3 * i);
+      ASSERT_EQ(hysteron_inverse_step(a.inv, y, &x, &sat), HYSTERON_OK);
+      ASSERT_EQ(hysteron_inverse_step(twin.inv, y, &xt, &sat_t), HYSTERON_OK);
+      ASSERT_EQ(x, xt) << k.name << ": after y_desired = " << sign * h << ", sample " << i;
+    }
+  });
 }
 
 // One limit unbounded: a huge desired output toward the bounded one still saturates there (a
@@ -118,43 +123,40 @@ TEST(HugeInputs, OneSidedLimitsSaturateOnTheBoundedSide) {
 }
 
 TEST(HugeInputs, ForwardStepNeverReturnsInfOrNanWithOk) {
-  for (const Kind& k : kKinds) {
-    for (double h : kHuge) {
-      for (double sign : {1.0, -1.0}) {
-        Handles a(k.json), twin(k.json);
-        double y = 0, yt = 0;
-        for (int i = 0; i < 30; ++i) {
-          const double x = 0.5 * std::sin(0.3 * i);
-          ASSERT_EQ(hysteron_model_step(a.m, x, &y), HYSTERON_OK);
-          ASSERT_EQ(hysteron_model_step(twin.m, x, &yt), HYSTERON_OK);
-        }
-        const double before = y;
-        const hysteron_status st = hysteron_model_step(a.m, sign * h, &y);
-        if (st == HYSTERON_OK) {
-          EXPECT_TRUE(std::isfinite(y)) << k.name << ": x = " << sign * h << " -> " << y;
-          continue;
-        }
-        EXPECT_EQ(st, HYSTERON_ERROR_INVALID_ARGUMENT) << k.name;
-        EXPECT_EQ(y, before) << k.name << ": the previous output held";
-        EXPECT_NE(std::string(hysteron_last_error()).find("hysteron_model_step"), std::string::npos);
-        for (int i = 0; i < 30; ++i) {  // the state unchanged: as if the sample never came
-          const double x = 0.4 * std::cos(0.2 * i);
-          ASSERT_EQ(hysteron_model_step(a.m, x, &y), HYSTERON_OK);
-          ASSERT_EQ(hysteron_model_step(twin.m, x, &yt), HYSTERON_OK);
-          ASSERT_EQ(y, yt) << k.name << ": after x = " << sign * h;
-        }
-        // the batch refuses it before stepping anything, relaxed starts change nothing
-        std::vector<double> xs = {0.1, sign * h}, ys(2, -7.0);
-        EXPECT_EQ(hysteron_model_simulate(a.m, xs.data(), 2, ys.data(), 2), HYSTERON_ERROR_INVALID_ARGUMENT);
-        EXPECT_EQ(ys[0], -7.0);
-        EXPECT_EQ(hysteron_model_reset_relaxed(a.m, sign * h), HYSTERON_ERROR_INVALID_ARGUMENT) << k.name;
-        EXPECT_EQ(hysteron_inverse_reset_relaxed(a.inv, sign * h), HYSTERON_ERROR_INVALID_ARGUMENT) << k.name;
-        ASSERT_EQ(hysteron_model_step(a.m, 0.25, &y), HYSTERON_OK);
-        ASSERT_EQ(hysteron_model_step(twin.m, 0.25, &yt), HYSTERON_OK);
-        EXPECT_EQ(y, yt) << k.name;
-      }
+  each_kind_and_huge_input([](const Kind& k, double huge) {
+    const double sign = huge > 0 ? 1.0 : -1.0, h = std::abs(huge);
+    Handles a(k.json), twin(k.json);
+    double y = 0, yt = 0;
+    for (int i = 0; i < 30; ++i) {
+      const double x = 0.5 * std::sin(0.3 * i);
+      ASSERT_EQ(hysteron_model_step(a.m, x, &y), HYSTERON_OK);
+      ASSERT_EQ(hysteron_model_step(twin.m, x, &yt), HYSTERON_OK);
     }
-  }
+    const double before = y;
+    const hysteron_status st = hysteron_model_step(a.m, sign * h, &y);
+    if (st == HYSTERON_OK) {
+      EXPECT_TRUE(std::isfinite(y)) << k.name << ": x = " << sign * h << " -> " << y;
+      return;
+    }
+    EXPECT_EQ(st, HYSTERON_ERROR_INVALID_ARGUMENT) << k.name;
+    EXPECT_EQ(y, before) << k.name << ": the previous output held";
+    EXPECT_NE(std::string(hysteron_last_error()).find("hysteron_model_step"), std::string::npos);
+    for (int i = 0; i < 30; ++i) {  // the state unchanged: as if the sample never came
+      const double x = 0.4 * std::cos(0.2 * i);
+      ASSERT_EQ(hysteron_model_step(a.m, x, &y), HYSTERON_OK);
+      ASSERT_EQ(hysteron_model_step(twin.m, x, &yt), HYSTERON_OK);
+      ASSERT_EQ(y, yt) << k.name << ": after x = " << sign * h;
+    }
+    // the batch refuses it before stepping anything, relaxed starts change nothing
+    std::vector<double> xs = {0.1, sign * h}, ys(2, -7.0);
+    EXPECT_EQ(hysteron_model_simulate(a.m, xs.data(), 2, ys.data(), 2), HYSTERON_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(ys[0], -7.0);
+    EXPECT_EQ(hysteron_model_reset_relaxed(a.m, sign * h), HYSTERON_ERROR_INVALID_ARGUMENT) << k.name;
+    EXPECT_EQ(hysteron_inverse_reset_relaxed(a.inv, sign * h), HYSTERON_ERROR_INVALID_ARGUMENT) << k.name;
+    ASSERT_EQ(hysteron_model_step(a.m, 0.25, &y), HYSTERON_OK);
+    ASSERT_EQ(hysteron_model_step(twin.m, 0.25, &yt), HYSTERON_OK);
+    EXPECT_EQ(y, yt) << k.name;
+  });
 }
 
 TEST(HugeInputs, AnOverflowingPidErrorIsRefusedWithAStatus) {

@@ -999,6 +999,16 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   if (rig_changed) res.messages.push_back(changed_rig_note(o.rig, *o.tracking_rig));
   std::vector<std::string> sensor_gaps;  // runs whose sensor hides part of the error (sensor_gap)
   const double frame_mm = o.rig.sensors.displacement_offset * 1e3;
+  // the notes of a run scored on [from, end): its saturation and guard, and its sensor's gap
+  const auto run_notes = [&](const TrackingRun& run, std::size_t from) {
+    const auto say = [&](std::string note) {
+      if (!note.empty()) res.messages.push_back(std::move(note));
+    };
+    say(saturation_note(run, from, run.t.size(), res.reach_pressure_max_mpa, rig_changed));
+    say(guard_note(run, rig_changed));
+    if (std::string gap = sensor_gap(run, from, run.t.size(), frame_mm); !gap.empty())
+      sensor_gaps.push_back(std::move(gap));
+  };
   for (const Reference& ref : refs) {
     Context rc = ctx;
     rc.reference = &ref;
@@ -1044,13 +1054,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.controller = loop_design(loop, v.preview ? lead : 0, tc, v.preview ? &zv : nullptr);
       run.errors = errors_of(run, ref.score_from, run.t.size());
       run.scored_from_s = ref.score_from < run.t.size() ? run.t[ref.score_from] : 0.0;
-      if (std::string note =
-              saturation_note(run, ref.score_from, run.t.size(), res.reach_pressure_max_mpa, rig_changed);
-          !note.empty())
-        res.messages.push_back(std::move(note));
-      if (std::string gap = sensor_gap(run, ref.score_from, run.t.size(), frame_mm); !gap.empty())
-        sensor_gaps.push_back(std::move(gap));
-      if (std::string note = guard_note(run, rig_changed); !note.empty()) res.messages.push_back(std::move(note));
+      run_notes(run, ref.score_from);
       res.runs.push_back(std::move(run));
       if (loop.note)
         if (std::string note = loop.note(); !note.empty()) res.messages.push_back(std::move(note));
@@ -1061,12 +1065,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
           lr->variant = "learning";
           lr->reference = ref.name;
           const std::size_t last = lr->t.size() - std::min(lr->t.size(), ref.period);  // the scored last period
-          if (std::string note = saturation_note(*lr, last, lr->t.size(), res.reach_pressure_max_mpa, rig_changed);
-              !note.empty())
-            res.messages.push_back(std::move(note));
-          if (std::string gap = sensor_gap(*lr, last, lr->t.size(), frame_mm); !gap.empty())
-            sensor_gaps.push_back(std::move(gap));
-          if (std::string note = guard_note(*lr, rig_changed); !note.empty()) res.messages.push_back(std::move(note));
+          run_notes(*lr, last);
           // a learning run that ends above the loop it learns on must not look like an improvement
           for (const TrackingRun& base : res.runs)
             if (base.variant == v.name && base.reference == ref.name &&

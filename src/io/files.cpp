@@ -349,6 +349,15 @@ void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::ve
   }
 }
 
+namespace {
+// check_output_file / check_output_directory: `dir` (an existing directory) takes new files
+void require_writable(const NamedPath& output, const fs::path& dir) {
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw Error(fmt::format("{} {}: cannot write into directory {}: {} (nothing was run or written)", output.option,
+                            output.path, dir.string(), std::strerror(errno)));
+}
+}  // namespace
+
 void check_output_file(const NamedPath& output) {
   const std::string& path = output.path;
   if (path.empty() || path == "-") return;
@@ -361,9 +370,7 @@ void check_output_file(const NamedPath& output) {
   if (!fs::is_directory(dir, ec))
     throw Error(fmt::format("{} {}: directory {} does not exist (nothing was run or written)", output.option, path,
                             dir.string()));
-  if (::access(dir.c_str(), W_OK) != 0)
-    throw Error(fmt::format("{} {}: cannot write into directory {}: {} (nothing was run or written)", output.option,
-                            path, dir.string(), std::strerror(errno)));
+  require_writable(output, dir);
 }
 
 void check_output_directory(const NamedPath& output) {
@@ -379,9 +386,7 @@ void check_output_directory(const NamedPath& output) {
   if (!fs::is_directory(existing, ec))
     throw Error(fmt::format("{} {}: {} is not a directory (nothing was run or written)", output.option, path,
                             existing.string()));
-  if (::access(existing.c_str(), W_OK) != 0)
-    throw Error(fmt::format("{} {}: cannot write into directory {}: {} (nothing was run or written)", output.option,
-                            path, existing.string(), std::strerror(errno)));
+  require_writable(output, existing);
 }
 
 }  // namespace hysteron::io

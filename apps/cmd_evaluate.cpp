@@ -40,7 +40,7 @@ struct EvaluateOptions {
 
 int run_evaluate(const EvaluateOptions& c) {
   if (c.json && c.report == "-") throw Error("--report - and --json both write to standard output: choose one");
-  io::check_outputs_distinct({{"--report", c.report}}, {{"--model", c.model}, {"--data", c.sel.file}});
+  io::check_output_files({{"--report", c.report}}, {{"--model", c.model}, {"--data", c.sel.file}});
   const ModelParams model = read_model_source(c.model);
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);

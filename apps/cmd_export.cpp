@@ -46,7 +46,7 @@ int run_export(const Options& o) {
   if (o.out == "-" && !o.header.empty()) throw Error("--header needs --out to name a file (not -)");
   if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
   if (!o.run.empty() && o.loop.empty()) throw Error("--run names a run of the --loop file: give --loop too");
-  io::check_outputs_distinct({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});
+  io::check_output_files({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});
   const ModelParams params = read_model_source(o.model);
   io::ExportOptions e;
   e.prefix = o.prefix_given ? o.prefix : default_prefix(o.out);

@@ -89,7 +89,7 @@ int run_fit(const FitCliOptions& c) {
   {
     std::vector<io::NamedPath> inputs{{"--data", c.sel.file}};
     for (const auto& f : c.validate_data) inputs.push_back({"--validate-data", f});
-    io::check_outputs_distinct({{"--out", c.out}, {"--report", c.report}}, inputs);
+    io::check_output_files({{"--out", c.out}, {"--report", c.report}}, inputs);
   }
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);

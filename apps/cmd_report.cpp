@@ -43,7 +43,7 @@ void add_report(CLI::App& app, Action& action) {
         if (std::filesystem::is_directory(args->input, ec))  // an experiment directory: every file in it
           for (const auto& e : std::filesystem::directory_iterator(args->input, ec))
             inputs.push_back({"INPUT", e.path().string()});
-        io::check_outputs_distinct({{"--out", args->out}}, inputs);
+        io::check_output_files({{"--out", args->out}}, inputs);
       }
       report::write_report_from(args->input, args->out, command_line, args->data);
       fmt::print(stderr, "report: wrote {}\n", args->out);

@@ -115,7 +115,7 @@ double relaxed_input_for(const ModelParams& params, const Limits& lim, double y0
 }
 
 int run_simulate(const Options& o) {
-  io::check_outputs_distinct({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
+  io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
   const io::ReadOptions ro = input_options(o.column, "input");
   Model model(params);
@@ -142,7 +142,7 @@ int run_simulate(const Options& o) {
 }
 
 int run_invert(const Options& o) {
-  io::check_outputs_distinct({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
+  io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
   const io::ReadOptions ro = input_options(o.column, "output");
   InverseOptions opt;

@@ -114,11 +114,9 @@ int run_sweep_command(const SweepArgs& a) {
   if (!a.report.empty()) outputs.push_back({"--report", a.report});
   if (!a.grid.empty()) inputs.push_back({"--grid", a.grid});
   if (!a.plant.empty()) inputs.push_back({"--plant", a.plant});
-  io::check_outputs_distinct(outputs, inputs);
+  io::check_output_files(outputs, inputs);  // where the table and the page go, before the sweep's runs
   if (a.json && a.out == "-") throw Error("--json and --out - both write to stdout: choose one");
   if (a.report == "-") throw Error("--report -: the HTML page needs a file name");
-  io::check_output_file({"--out", a.out});  // where the table and the page go, before the sweep's runs
-  io::check_output_file({"--report", a.report});
 
   SweepOptions o;
   o.seed = a.seed;

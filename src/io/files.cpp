@@ -389,4 +389,9 @@ void check_output_directory(const NamedPath& output) {
   require_writable(output, existing);
 }
 
+void check_output_files(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
+  check_outputs_distinct(outputs, inputs);
+  for (const auto& o : outputs) check_output_file(o);
+}
+
 }  // namespace hysteron::io

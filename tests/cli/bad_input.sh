@@ -73,6 +73,19 @@ expect_fail "missing option" 'model' -- \
   "$BIN" simulate --input "$T/x.csv" --output "$T/out/new.csv"
 expect_fail "output directory missing" 'does not exist' -- \
   "$BIN" simulate --model "$T/good.json" --input "$T/x.csv" --output "$T/nodir/y.csv"
+# an output that cannot be written is refused before anything is read or computed (a fit may take minutes)
+expect_fail "fit --out into a missing directory" "--out $T/nodir/m.json: directory $T/nodir does not exist (nothing was run" -- \
+  "$BIN" fit --model gpi --data "$T/x.csv" -i 0 -y 0 --out "$T/nodir/m.json"
+expect_fail "fit --report into a missing directory" "--report $T/nodir/r.json: directory $T/nodir does not exist (nothing" -- \
+  "$BIN" fit --model gpi --data "$T/x.csv" -i 0 -y 0 --out "$T/out/new.json" --report "$T/nodir/r.json"
+expect_fail "fit --out a directory" "--out $T/out: is a directory" -- \
+  "$BIN" fit --model gpi --data "$T/x.csv" -i 0 -y 0 --out "$T/out"
+expect_fail "evaluate --report into a missing directory" "--report $T/nodir/r.json: directory $T/nodir does not" -- \
+  "$BIN" evaluate --model "$T/good.json" --data "$T/x.csv" -i 0 -y 0 --report "$T/nodir/r.json"
+expect_fail "export --header into a missing directory" "--header $T/nodir/c.h: directory $T/nodir does not" -- \
+  "$BIN" export --model "$T/good.json" --out "$T/out/c.c" --header "$T/nodir/c.h"
+expect_fail "report --out into a missing directory" "--out $T/nodir/r.html: directory $T/nodir does not" -- \
+  "$BIN" report "$T/good.json" --out "$T/nodir/r.html"
 expect_fail "experiment --out under a file, refused before the run" \
   "--out $T/out/keep.csv/run: $T/out/keep.csv is not a directory (nothing was run or written)" -- \
   "$BIN" experiment gpi-pid --out "$T/out/keep.csv/run"

@@ -75,5 +75,8 @@ void check_output_file(const NamedPath& output);
 // The same for an output directory its writer creates (ExperimentResult::write, with its
 // parents): the directory, or its nearest existing ancestor, must be a writable directory.
 void check_output_directory(const NamedPath& output);
+// check_outputs_distinct, then check_output_file on each output: what a command that writes
+// files calls before it reads its inputs or computes anything.
+void check_output_files(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
 
 }  // namespace hysteron::io

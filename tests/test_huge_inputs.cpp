@@ -7,9 +7,16 @@
 #include <cfloat>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "hysteron/error.hpp"
 #include "hysteron/hysteron.h"
+#include "hysteron/inverse.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/models.hpp"
 
 namespace {
 
@@ -211,3 +218,54 @@ TEST(HugeInputs, InverseRelaxedOutsideItsLimitsHoldsTheLimit) {
 }
 
 }  // namespace
+
+// A state set by hand (Model::reset(ModelState), Inverse::reset) so large that the next step
+// could overflow to inf or NaN, e.g. 1e308 in an operator output (rate-pi returned NaN), is
+// refused with hysteron::Error. A state read back from a run is taken, and the run continues
+// from it sample for sample.
+TEST(HugeInputs, AStateNoInputReachesIsRefused) {
+  std::vector<std::pair<std::string, std::string>> kinds;
+  for (const Kind& k : kKinds) kinds.emplace_back(k.name, k.json);
+  kinds.emplace_back("rate-pi", R"({"model": "rate-pi", "q": 0.3, "r": [0.1, 0.2], "p": [0.4, 0.3], "c": 0.12,
+      "tau": 0.1, "dt": 0.001, "input_limits": [-1, 1]})");
+  kinds.emplace_back("bouc-wen", R"({"model": "bouc-wen", "kx": 1.0, "kw": -0.05, "rho": 4, "sigma": 1, "n": 1.5,
+      "input_limits": [-1, 1]})");
+  for (const auto& [name, json] : kinds) {
+    const hysteron::ModelParams params = hysteron::io::model_from_json(nlohmann::json::parse(json), name);
+    hysteron::Model a(params), b(params);
+    for (int i = 0; i < 40; ++i) (void)a.step(0.5 * std::sin(0.3 * i));
+    const hysteron::ModelState reached = a.state();
+    ASSERT_NO_THROW(b.reset(reached)) << name;
+    for (int i = 0; i < 20; ++i) {
+      const double x = 0.4 * std::cos(0.2 * i);
+      ASSERT_EQ(a.step(x), b.step(x)) << name << ": from the state read back";
+    }
+    for (std::size_t j = 0; j <= reached.y.size(); ++j)
+      for (double huge : {1e308, -1e308, DBL_MAX}) {
+        hysteron::ModelState s = reached;
+        (j < s.y.size() ? s.y[j] : s.u) = huge;
+        if (j == s.y.size() && (name == "rate-pi" || name == "bouc-wen")) continue;  // their u is the input, not stored
+        hysteron::Model m(params);
+        bool refused = false;
+        try {
+          m.reset(s);
+        } catch (const hysteron::Error&) {
+          refused = true;
+        }
+        if (!refused) {  // taken: then it must be a state whose steps stay finite
+          for (double x : {0.0, 0.9, -0.9}) EXPECT_TRUE(std::isfinite(m.step(x))) << name << " entry " << j << " = " << huge;
+        }
+        if (name != "bouc-wen" || j == 0) {
+          EXPECT_TRUE(refused) << name << ": entry " << j << " = " << huge << " taken";
+        }
+      }
+    if (hysteron::has_pi_structure(params)) {  // the inverse: every entry huge (deviations 0: reachable in shape)
+      hysteron::ModelState s = reached;
+      for (double& v : s.y) v = 1e308;
+      s.u = 1e308;
+      hysteron::Inverse inv(params);
+      EXPECT_THROW(inv.reset(s), hysteron::Error) << name;
+      EXPECT_THROW(b.reset(s), hysteron::Error) << name;
+    }
+  }
+}

@@ -377,6 +377,10 @@ class Model {
   // envelopes and units map (about DBL_MAX / 16 / (sum of |weights| |output_gain|)), far
   // beyond any physical input.
   double input_bound() const noexcept { return x_max_; }
+  // The PI family: the bound on |u| and |y_i| (model coordinates) of a state from which no
+  // step can overflow (the larger of what the accepted inputs reach and what the weights
+  // can sum below DBL_MAX / 16); reset(ModelState) refuses a state beyond it.
+  double state_bound() const noexcept;
   // Batch: y[k] = step(x[k]). Throws hysteron::Error on unequal sizes or an x[k] that
   // step() would refuse (non-finite or beyond input_bound()).
   void simulate(std::span<const double> x, std::span<double> y);

@@ -176,6 +176,11 @@ def test_generated_c_refuses_nan_under_fast_math(tmp_path):
         assert np.isfinite(y) and c.fm_model_step(model, nan) == y, flags  # held
         state = (ctypes.c_double * 4)(0.1, 0.1, nan, 0.1)
         assert c.fm_model_reset_state(model, state, 0.2) == -1, flags
+        # a state no accepted input reaches (its step would overflow to inf - inf = NaN) is refused
+        c.fm_inverse_reset_state.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_double), ctypes.c_double]
+        big = (ctypes.c_double * 4)(1e308, 1e308, 1e308, 1e308)
+        assert c.fm_model_reset_state(model, big, 1e308) == -1, flags
+        assert c.fm_inverse_reset_state(inverse, big, 1e308) == -1, flags
         c.fm_inverse_reset(inverse)
         x = c.fm_inverse_step(inverse, 10.0)
         assert 0.0 < x < 0.6 and c.fm_inverse_step(inverse, nan) == x, flags  # held

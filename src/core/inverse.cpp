@@ -167,7 +167,7 @@ void Inverse::reset(const ModelState& fs) {
       throw Error(detail::format("{}: inverse start state has {} entries, the model's state has {}", name, fs.y.size(),
                                  k.state_size()));
     if (!std::isfinite(fs.u)) throw Error(detail::format("{}: inverse start state u is not finite", name));
-    k.set_state(fs.y.data());
+    k.set_state(fs.y.data(), detail::input_bound(s_, &k));
     x_ = std::clamp(fs.u, lim_.lo, lim_.hi);
     saturated_ = false;
     faults_ = 0;
@@ -179,6 +179,7 @@ void Inverse::reset(const ModelState& fs) {
   if (!std::isfinite(fs.u)) throw Error(detail::format("{}: inverse start state u is not finite", name));
   for (std::size_t i = 0; i < n; ++i)
     if (!std::isfinite(fs.y[i])) throw Error(detail::format("{}: inverse start state y[{}] is not finite", name, i));
+  detail::check_state_bound(detail::format("{}: inverse start state", name), s_, detail::input_bound(s_, nullptr), fs);
   saturated_ = false;
   faults_ = 0;
   if (s_.asymmetric) {

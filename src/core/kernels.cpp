@@ -106,7 +106,7 @@ class PreisachKernel final : public Kernel {
   void get_state(double* out) const noexcept override {
     for (std::size_t i = 0; i < b_.size(); ++i) out[i] = b_[i];
   }
-  void set_state(const double* in) override {
+  void set_state(const double* in, double /*x_max: the states are bounded by construction*/) override {
     for (std::size_t i = 0; i < b_.size(); ++i)
       if (!(in[i] >= 0 && in[i] <= static_cast<double>(i + 1) && in[i] == std::floor(in[i])))
         throw Error(detail::format("preisach: state[{}] = {} must be an integer count of relays on in 0..{}", i, in[i], i + 1));
@@ -170,7 +170,7 @@ class KpKernel final : public Kernel {
   double step(double x) noexcept override { return eval<true>(*this, x); }
   std::size_t state_size() const noexcept override { return y_.size(); }
   void get_state(double* out) const noexcept override { std::copy(y_.begin(), y_.end(), out); }
-  void set_state(const double* in) override {
+  void set_state(const double* in, double /*x_max: the states are bounded by construction*/) override {
     for (std::size_t k = 0; k < y_.size(); ++k)
       if (!(in[k] >= 0 && in[k] <= 1)) throw Error(detail::format("kp: state[{}] = {} must be in [0, 1]", k, in[k]));
     std::copy(in, in + y_.size(), y_.begin());
@@ -241,8 +241,10 @@ class BoucWenKernel final : public Kernel {
     out[0] = x_;
     out[1] = w_;
   }
-  void set_state(const double* in) override {
-    if (!std::isfinite(in[0])) throw Error(detail::format("bouc-wen: state[0] (last input) = {} must be finite", in[0]));
+  void set_state(const double* in, double x_max) override {
+    if (!(std::abs(in[0]) <= x_max))
+      throw Error(detail::format("bouc-wen: state[0] (last input) = {} must be finite and within the input bound {}", in[0],
+                                 x_max));
     if (!(in[1] >= -1 && in[1] <= 1)) throw Error(detail::format("bouc-wen: state[1] = w = {} must be in [-1, 1]", in[1]));
     x_ = in[0];
     w_ = in[1];
@@ -333,10 +335,22 @@ class RatePiKernel final : public Kernel {
     out[y_.size()] = x_;
     out[y_.size() + 1] = rate_;
   }
-  void set_state(const double* in) override {
+  void set_state(const double* in, double x_max) override {
     for (std::size_t i = 0; i < y_.size() + 2; ++i)
       if (!std::isfinite(in[i])) throw Error(detail::format("rate-pi: state[{}] = {} must be finite", i, in[i]));
     if (!(in[y_.size() + 1] >= 0)) throw Error(detail::format("rate-pi: the rate state = {} must be >= 0", in[y_.size() + 1]));
+    // what inputs within x_max reach (amplification): |x| <= M, rate <= 2 M / dt, |y_i| <= M (1 + r_i f)
+    const double m = std::max(x_max, 1.0), rate_max = 2.0 * m / p_.dt, f = 1.0 + 2.0 * p_.c / p_.dt;
+    if (!(std::abs(in[y_.size()]) <= x_max))
+      throw Error(detail::format("rate-pi: state[{}] (last input) = {} is beyond the input bound {}", y_.size(),
+                                 in[y_.size()], x_max));
+    if (!(in[y_.size() + 1] <= rate_max))
+      throw Error(detail::format("rate-pi: the rate state = {} is beyond what inputs within the input bound reach ({})",
+                                 in[y_.size() + 1], rate_max));
+    for (std::size_t i = 0; i < y_.size(); ++i)
+      if (!(std::abs(in[i]) <= m * (1.0 + p_.r[i] * f)))
+        throw Error(detail::format("rate-pi: state[{}] = {} is beyond what inputs within the input bound reach ({})", i,
+                                   in[i], m * (1.0 + p_.r[i] * f)));
     std::copy(in, in + y_.size(), y_.begin());
     x_ = in[y_.size()];
     rate_ = in[y_.size() + 1];

@@ -28,8 +28,10 @@ class Kernel {
   virtual double step(double x) noexcept = 0;
   virtual std::size_t state_size() const noexcept = 0;
   virtual void get_state(double* out) const noexcept = 0;
-  // Validates (size checked by the caller) and sets the state; throws hysteron::Error.
-  virtual void set_state(const double* in) = 0;
+  // Validates (size checked by the caller) and sets the state; throws hysteron::Error. An
+  // entry beyond what inputs with |x_m| <= x_max (Model::input_bound) reach is refused: the
+  // next step could overflow from it.
+  virtual void set_state(const double* in, double x_max) = 0;
   // Kinds linear in their weights (identification): the regressors of the state after
   // the last step, out[0] = x for the direct term and then one per weight (preisach:
   // relay outputs, kp: ramp outputs, rate-pi: play outputs), num_features() in all.
@@ -78,6 +80,13 @@ T bouc_wen_increment(T w, double dx, const T& rho, const T& sigma, const T& n, V
 // Model::input_bound(): the largest |x_m| whose step keeps the output and every
 // intermediate within DBL_MAX / 16 (kernel: its amplification(), else the structure's).
 double input_bound(const Structure<double>& s, const Kernel* kernel) noexcept;
+// The PI family: a bound on |u| and |y_i| of a state (model coordinates) within which the
+// output of every step with |x_m| <= x_max stays within DBL_MAX / 16: the larger of what
+// those inputs reach and what the weights can sum without overflow.
+double state_bound(const Structure<double>& s, double x_max) noexcept;
+// Throws hysteron::Error (message starting with `what`) if the PI family's state u or a y_i
+// lies beyond state_bound(s, x_max): its next step could overflow to inf or NaN.
+void check_state_bound(std::string_view what, const Structure<double>& s, double x_max, const ModelState& state);
 
 // Validates the parameters and builds the kernel; nullptr for the kinds with PI
 // structure. Throws hysteron::Error naming the key.

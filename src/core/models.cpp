@@ -345,7 +345,45 @@ void envelope_bound(EnvelopeKind kind, const std::array<double, 4>& c, double& a
     a = 1.0, b = 0.0;
   }
 }
+
+// |u| <= ea |x_m| + eb for the envelope value u of any input x_m (both envelopes of mpi-asym).
+void envelopes_bound(const Structure<double>& s, double& ea, double& eb) {
+  envelope_bound(s.asc_kind, s.asc_c, ea, eb);
+  if (s.asymmetric) {
+    double da = 0.0, db = 0.0;
+    envelope_bound(s.desc_kind, s.desc_c, da, db);
+    ea = std::max(ea, da), eb = std::max(eb, db);
+  }
+}
 }  // namespace
+
+double state_bound(const Structure<double>& s, double x_max) noexcept {
+  double ea = 0.0, eb = 0.0;  // what the accepted inputs reach: |u| <= ea x_max + eb
+  envelopes_bound(s, ea, eb);
+  const double reach = ea == 0 ? eb : std::min(ea * x_max + eb, std::numeric_limits<double>::max());
+  // |output| <= |offset| + gain g (w Y + sum |g_k z_k|) for |u|, |y_i| <= Y: within DBL_MAX / 16
+  constexpr double big = std::numeric_limits<double>::max() / 16;
+  double w = std::abs(s.q), g = 1.0, gz = 0.0;
+  for (double p : s.p) w += std::abs(p);
+  if (s.has_dead_zones) {
+    g = std::abs(s.g0);
+    for (std::size_t k = 0; k < s.g.size(); ++k) g += std::abs(s.g[k]), gz += std::abs(s.g[k] * s.z[k]);
+  }
+  const double gain = std::max(1.0, std::abs(s.units.output_gain));
+  const double safe = ((big - std::abs(s.units.output_offset)) / gain / std::max(g, 1.0) - gz) / std::max(w, 1.0);
+  return std::max(reach, safe > 0 ? safe : 0.0);
+}
+
+void check_state_bound(std::string_view what, const Structure<double>& s, double x_max, const ModelState& state) {
+  const double bound = state_bound(s, x_max);
+  if (!(std::abs(state.u) <= bound))
+    throw Error(detail::format("{} u = {} is so large that the model's output could overflow (|u| <= {})", what, state.u,
+                               bound));
+  for (std::size_t i = 0; i < state.y.size(); ++i)
+    if (!(std::abs(state.y[i]) <= bound))
+      throw Error(detail::format("{} y[{}] = {} is so large that the model's output could overflow (|y_i| <= {})", what,
+                                 i, state.y[i], bound));
+}
 
 double input_bound(const Structure<double>& s, const Kernel* kernel) noexcept {
   double a = 0.0, b = 0.0;  // |model output| and every intermediate <= a X + b for |x_m| <= X
@@ -353,12 +391,7 @@ double input_bound(const Structure<double>& s, const Kernel* kernel) noexcept {
     a = b = kernel->amplification();
   } else {
     double ea = 0.0, eb = 0.0;
-    envelope_bound(s.asc_kind, s.asc_c, ea, eb);
-    if (s.asymmetric) {
-      double da = 0.0, db = 0.0;
-      envelope_bound(s.desc_kind, s.desc_c, da, db);
-      ea = std::max(ea, da), eb = std::max(eb, db);
-    }
+    envelopes_bound(s, ea, eb);
     double w = std::abs(s.q), rw = 0.0;  // plays: |y_i| <= |u| + r_i
     for (std::size_t i = 0; i < s.p.size(); ++i) w += std::abs(s.p[i]), rw += std::abs(s.p[i]) * s.r[i];
     a = w * ea, b = w * eb + rw;
@@ -412,12 +445,16 @@ void Model::reset(const ModelState& state) {
   for (std::size_t i = 0; i < state.y.size(); ++i)
     if (!std::isfinite(state.y[i])) throw Error(detail::format("{}: initial state y[{}] is not finite", name(), i));
   if (!std::isfinite(state.u)) throw Error(detail::format("{}: initial state u is not finite", name()));
-  if (kernel_) kernel_.get()->set_state(state.y.data());
+  if (kernel_) kernel_.get()->set_state(state.y.data(), x_max_);
+  else
+    detail::check_state_bound(detail::format("{}: initial state", name()), s_, x_max_, state);
   std::copy(state.y.begin(), state.y.end(), state_.y.begin());
   state_.u = state.u;
   out_ = 0.0;
   faults_ = 0;
 }
+
+double Model::state_bound() const noexcept { return detail::state_bound(s_, x_max_); }
 
 bool Model::reset_relaxed(double x0) noexcept {
   if (!accepts(x0)) return false;

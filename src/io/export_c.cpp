@@ -50,6 +50,7 @@ struct Baked {
   Limits lim_raw;  // raw input units
   double u_lo = 0.0, u_hi = 0.0;
   double x_max = 0.0;   // Model::input_bound()
+  double u_max = 0.0;   // Model::state_bound()
   Limits v_bounds;  // Inverse::output_bounds()
   double qi = 1.0;
   std::vector<double> ri, pi;
@@ -61,6 +62,7 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
   const Inverse inverse(params, InverseOptions{user_limits});
   Baked b;
   b.x_max = Model(params).input_bound();
+  b.u_max = Model(params).state_bound();
   b.v_bounds = inverse.output_bounds();
   b.s = canonical_structure(params);
   const Structure<double>& s = b.s;
@@ -482,7 +484,8 @@ void $P_model_reset($P_model *m);
  * state of $P_model_reset: never an uninitialised one). */
 int $P_model_reset_relaxed($P_model *m, double x0);
 /* Explicit state: y[0..$U_NUM_OPERATORS) and u (Model::reset(ModelState));
- * returns 0, or -1 (then the virgin state) if a value is not finite. */
+ * returns 0, or -1 (then the virgin state) if a value is not finite or so large that the
+ * output could overflow (|u| or |y_i| above $P_u_max). */
 int $P_model_reset_state($P_model *m, const double *y, double u);
 /* One sample: raw input x -> raw output (Model::step). A non-finite x, or one whose
  * output could overflow (|x - input_origin| / input_scale > $P_x_max), is ignored
@@ -493,7 +496,7 @@ double $P_model_step($P_model *m, double x);
 void $P_inverse_reset($P_inverse *inv);
 /* Start from a forward state y, u (e.g. a $P_model's m.y, m.u), so that the inverse
  * continues where the model is (Inverse::reset(ModelState)). Returns 0, or -1 (then the
- * virgin state of $P_inverse_reset) if a value is not finite{}. */
+ * virgin state of $P_inverse_reset) if a value is not finite, above $P_u_max{}. */
 int $P_inverse_reset_state($P_inverse *inv, const double *y, double u);
 /* One sample: desired raw output -> the raw input that produces it (Inverse::step),
  * inside the input limits; beyond what the model can output there, however large, the
@@ -547,6 +550,8 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
                      num(b.lim_raw.lo), num(b.lim_raw.hi));
     t += fmt::format("static const double $P_x_max = {};  /* |x_m| above: the output could overflow (input_bound) */\n",
                      num(b.x_max));
+    t += fmt::format("static const double $P_u_max = {};  /* |u|, |y_i| of a state: no overflow below (state_bound) */\n",
+                     num(b.u_max));
     if (s.asymmetric) {
       // Both envelopes and their slopes at the two limits, as Inverse keeps them (constant).
       auto at = [&](double x) {
@@ -765,8 +770,8 @@ int $P_model_reset_state($P_model *m, const double *y, double u)
 {
   int i;
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!$P_finite(y[i])) return $P_model_refuse(m);
-  if (!$P_finite(u)) return $P_model_refuse(m);
+    if (!$P_finite(y[i]) || !(fabs(y[i]) <= $P_u_max)) return $P_model_refuse(m);  /* its step could overflow */
+  if (!$P_finite(u) || !(fabs(u) <= $P_u_max)) return $P_model_refuse(m);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) m->y[i] = y[i];
   m->u = u;
   m->out = 0.0;
@@ -824,9 +829,9 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
   double dev[$U_STATE_SIZE], sc[$U_STATE_SIZE];
   double scale = fabs(u), tol, d_prev = 0.0, r_prev = 0.0, v, x;
   int i;
-  if (!$P_finite(u)) return $P_inverse_refuse(inv);
+  if (!$P_finite(u) || !(fabs(u) <= $P_u_max)) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!$P_finite(y[i])) return $P_inverse_refuse(inv);
+    if (!$P_finite(y[i]) || !(fabs(y[i]) <= $P_u_max)) return $P_inverse_refuse(inv);
   /* Reachability: |d_1| <= r_1, |d_i - d_{i-1}| <= r_i - r_{i-1} (1-Lipschitz memory curve). */
   for (i = 0; i < $U_NUM_OPERATORS; ++i) scale = scale < fabs(y[i]) ? fabs(y[i]) : scale;
   tol = 1e-9 * (1.0 < scale ? scale : 1.0);
@@ -917,9 +922,9 @@ int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
 {
   double x;
   int i;
-  if (!$P_finite(u)) return $P_inverse_refuse(inv);
+  if (!$P_finite(u) || !(fabs(u) <= $P_u_max)) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
-    if (!$P_finite(y[i])) return $P_inverse_refuse(inv);
+    if (!$P_finite(y[i]) || !(fabs(y[i]) <= $P_u_max)) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) inv->y[i] = y[i];
   x = $P_gamma_inverse_checked(u);
   x = $P_finite(x) ? x : 0.0;

@@ -319,6 +319,28 @@ TEST(Experiment, DisplacementOffsetAfterIdentificationIsNamed) {
   EXPECT_FALSE(test::said(run_experiment(o), "hides part of the tracking error"));
 }
 
+// A --tracking-plant that differs only in what the experiment's actuation never reads (the
+// valves' PWM timing for gpi-pid, which drives the regulator) is no changed rig: the audit of
+// 2026-11-29 saw "differs in 2 parameter(s) ... not re-tuned" on bit-identical results. It
+// is named as such; a parameter the regulator does read is a changed rig.
+TEST(Experiment, TrackingRigChangedOnlyWhereTheActuationDoesNotReadIsNoChange) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  PamRigParams other;
+  other.valves.pwm_frequency = 50.0;
+  other.valves.on_delay = other.valves.off_delay = 2e-3;
+  o.tracking_rig = other;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_FALSE(test::said(r, "which differs from the identified one (--plant) in")) << "a changed rig named";
+  EXPECT_TRUE(test::said(r, "only in parameters this experiment does not drive (valves.off_delay: 0.001 -> 0.002; "
+                            "valves.on_delay: 0.001 -> 0.002; valves.pwm_frequency: 200.0 -> 50.0)"));
+  other.regulator.time_constant = 0.1;
+  o.tracking_rig = other;
+  const ExperimentResult changed = run_experiment(o);
+  EXPECT_TRUE(test::said(changed, "which differs from the identified one (--plant) in 1 parameter(s): "
+                                  "regulator.time_constant: 0.05 -> 0.1;"));
+  EXPECT_FALSE(test::said(changed, "only in parameters this experiment does not drive"));
+}
+
 // A muscle twice as long (1 m) contracts twice as far per kPa: the paper's 5..95 mm sinusoid
 // needs only about 0.34 MPa on the ascent, and the paper's 0..0.6 MPa identification input
 // spends half its range where the loops never go. hysteron's model is then identified on

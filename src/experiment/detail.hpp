@@ -301,8 +301,14 @@ std::string learning_above_note(const TrackingRun& learning, const TrackingRun& 
 std::string above_baseline_note(const TrackingRun& run, const TrackingRun& base, bool rig_changed = false);
 // The note of an adaptive run whose RMS error is above the compensated run's (empty if not).
 std::string adaptive_above_note(const TrackingRun& adaptive, const TrackingRun& compensated, bool rig_changed = false);
+// The note of a compensated run whose RMS error is above the faithful run's (the paper's loop and
+// published gains) on the same reference; empty where it is not above.
+std::string faithful_below_note(const TrackingRun& compensated, const TrackingRun& faithful, bool rig_changed = false);
 // The note of a run tracking on another rig than the identified one: the parameters that differ.
 std::string changed_rig_note(const PamRigParams& identified, const PamRigParams& tracking);
+// "section.key: a -> b; ..." for every rig parameter that differs (count: how many, if given).
+std::string changed_rig_list(const PamRigParams& identified, const PamRigParams& tracking,
+                             std::size_t* count = nullptr);
 // PID from the position relay test, derivative filter T_u / 30:
 //   classic         Ziegler-Nichols (1942)  K_c = 0.6 K_u,  T_i = T_u / 2,  T_d = T_u / 8
 //   some_overshoot  (robust, for learning)  K_c = K_u / 3,  T_i = T_u / 2,  T_d = T_u / 3

@@ -1372,6 +1372,25 @@ TEST(ExperimentTuning, AdaptiveAboveTheCompensatedRunSaysSo) {
             std::string::npos) << rig;
 }
 
+// A fit of the rig's dynamics on the grid's bound says so (a 1 s dead time fitted as 300 ms
+// dead time and 300 ms lag, silently: audit of 2026-11-29); one inside it says nothing.
+TEST(ExperimentTuning, DynamicsOnTheSearchBoundAreNamed) {
+  RigDynamics d;
+  d.dead_time_s = 0.3;
+  d.lag_s = 0.3;
+  const std::string note = experiment::dynamics_bound_note(d, 0.12, 1e-3);
+  EXPECT_NE(note.find("sit on the search's bound of 300 ms (dead time 300 ms, lag 300 ms)"), std::string::npos) << note;
+  d.dead_time_s = 0.012;
+  EXPECT_NE(experiment::dynamics_bound_note(d, 0.3, 1e-3).find("(lag 300 ms, the feedforward's lead 300 ms)"),
+            std::string::npos);
+  d.lag_s = 0.299;  // inside by more than half a sample
+  EXPECT_TRUE(experiment::dynamics_bound_note(d, 0.076, 1e-3).empty());
+  d.lag_s = 0.2995;  // at a 0.5 ms period the grid's last point is 300 ms, and this its last but one
+  EXPECT_TRUE(experiment::dynamics_bound_note(d, 0.076, 0.5e-3).empty());
+  d.lag_s = 0.3;
+  EXPECT_FALSE(experiment::dynamics_bound_note(d, 0.076, 0.5e-3).empty());
+}
+
 // A compensated run above the faithful one (the paper's loop and published gains) says so: an
 // 80 kg load gave gpi-pid compensated 0.654 mm against faithful 0.585 mm, silently (audit of
 // 2026-11-29); one below or equal says nothing.

@@ -211,6 +211,12 @@ namespace hysteron::experiment {
 // over a grid of (theta, tau) on the identification run at the control period;
 // `lead` receives the best pure delay (tau = 0) [samples], the feedforward's preview.
 RigDynamics identify_dynamics(const ModelParams& model, const IdentificationRun& r, double tc, std::size_t& lead);
+// The grid's bound on the dead time, the lag and the lead [s] (identify_dynamics).
+inline constexpr double kMaxDynamicsDelay = 0.3;
+// The note of a fit of identify_dynamics that sits on the grid's bound (a dead time, lag or
+// lead of kMaxDynamicsDelay): the rig is slower than the grid resolves, or the run's response
+// is not a lag (a load that does not follow); empty where none is on it.
+std::string dynamics_bound_note(const RigDynamics& d, double lead_s, double tc);
 // SIMC rule (Skogestad 2003) for the position PI on the FOPDT (K, tau, theta), tight
 // tuning tau_c = theta:  K_c = tau / (K (tau_c + theta)),  T_i = min(tau, 4 (tau_c + theta)).
 PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_max);

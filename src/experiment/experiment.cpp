@@ -975,6 +975,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   }
   res.dynamics = identify_dynamics(dynamics_model, clip ? capped_run : dyn_run, tc, lead);
   res.lead_s = static_cast<double>(lead) * tc;
+  if (std::string note = dynamics_bound_note(res.dynamics, res.lead_s, tc); !note.empty())
+    res.messages.push_back(std::move(note));
   res.dynamics.relay_gain = valves_relay.relay_gain;
   res.dynamics.relay_period_s = valves_relay.relay_period_s;
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;

@@ -111,7 +111,7 @@ RigDynamics identify_dynamics(const ModelParams& model, const IdentificationRun&
   const std::vector<double>& pc = r.pressure_command_mpa;  // [MPa]
   const std::vector<double>& xm = r.contraction_mm;        // [mm]
   const std::vector<double> ys = simulate_record(model, pc);  // [mm]; rate-independent: shifts commute
-  const auto max_delay = static_cast<std::size_t>(std::lround(0.3 / tc));
+  const auto max_delay = static_cast<std::size_t>(std::lround(kMaxDynamicsDelay / tc));
   const std::size_t from = std::min(max_delay, xm.size() / 2);
   std::vector<double> z(ys.size());
   auto a_of = [tc](double tau) { return tc / (tau + tc); };
@@ -154,6 +154,24 @@ RigDynamics identify_dynamics(const ModelParams& model, const IdentificationRun&
   if (!(dyn.gain_m_per_mpa > 0.0) || !std::isfinite(dyn.rms_mm))
     throw Error(fmt::format("experiment: cannot identify the rig's dynamics (slope {} m/MPa)", dyn.gain_m_per_mpa));
   return dyn;
+}
+
+std::string dynamics_bound_note(const RigDynamics& d, double lead_s, double tc) {
+  const double bound = static_cast<double>(std::lround(kMaxDynamicsDelay / tc)) * tc;
+  std::string on;
+  const auto add = [&](const char* what, double s) {
+    if (s >= bound - 0.5 * tc) on += fmt::format("{}{} {:.0f} ms", on.empty() ? "" : ", ", what, s * 1e3);
+  };
+  add("dead time", d.dead_time_s);
+  add("lag", d.lag_s);
+  add("the feedforward's lead", lead_s);
+  if (on.empty()) return {};
+  return fmt::format(
+      "the rig's dynamics fitted on the identification run sit on the search's bound of {:.0f} ms ({}): the rig "
+      "responds more slowly than that bound resolves (a long dead time or lag), or its contraction does not follow "
+      "the pressure as a lag does (a load that sticks or does not return); the gains, the lead and the learning design "
+      "built on them are suspect (docs/control.md, section 1)",
+      bound * 1e3, on);
 }
 
 PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_max) {

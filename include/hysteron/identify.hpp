@@ -265,7 +265,8 @@ enum class FitStatus {
   no_convergence,  // iteration limit reached; the best model so far is reported
   failed,          // the solver failed (e.g. the cost became non-finite)
   poor_fit,        // the solver finished, but the model is useless or worse than the
-                   // reference PI (R^2 < 0 or RMS > poor_fit_ratio x reference); see message
+                   // reference PI (R^2 < 0.5, or RMS > poor_fit_ratio x reference above 0.1 % of
+                   // the output's span); see message
   invalid_input,   // the data or the options were rejected (see message)
 };
 std::string_view fit_status_name(FitStatus status) noexcept;

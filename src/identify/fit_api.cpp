@@ -110,6 +110,40 @@ constexpr double kLineRatio = 0.99498743710662;  // sqrt(0.99)
 constexpr double kNegligible = 0.01;
 constexpr double kLineR2 = 0.9;
 constexpr double kNoiseFactor = 1.2;
+// A fit that explains less than half the output's variance over its training range (R^2 below
+// this) describes none of the record's shape (a butterfly loop, a clockwise loop for a kind
+// with nonnegative weights): a poor fit, whatever the line or the reference PI leave.
+constexpr double kMinR2 = 0.5;
+// An input reversal: the input moves back from its last extremum by more than this fraction of
+// its training span (noise and small wiggles are not reversals).
+constexpr double kReversalFraction = 0.1;
+// A fit whose training RMS is at most this fraction of the output's span is not poor for being
+// some multiple of the reference PI's (a PI record on the reference's own threshold grid,
+// which the reference fits to rounding: a pi fit at 0.032 % of span was refused).
+constexpr double kExcellent = 1e-3;
+
+// The number of reversals of x over [from, to) (kReversalFraction of span).
+std::size_t count_reversals(std::span<const double> x, std::size_t from, std::size_t to, double span) {
+  const double h = kReversalFraction * span;
+  std::size_t n = 0;
+  int dir = 0;  // +1 rising, -1 falling, 0 not yet known (the first move is no reversal)
+  double hi = x[from], lo = x[from];
+  for (std::size_t k = from + 1; k < to; ++k) {
+    const double v = x[k];
+    if (dir == 0) {
+      hi = std::max(hi, v), lo = std::min(lo, v);
+      if (v < hi - h) dir = -1, lo = v;
+      else if (v > lo + h) dir = 1, hi = v;
+    } else if (dir > 0) {
+      if (v > hi) hi = v;
+      else if (v < hi - h) ++n, dir = -1, lo = v;
+    } else {
+      if (v < lo) lo = v;
+      else if (v > lo + h) ++n, dir = 1, hi = v;
+    }
+  }
+  return n;
+}
 
 // The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|);
 // the names are the model file's keys, the factors the kind's (kind_*.cpp).
@@ -142,13 +176,50 @@ double huber_rms(const ModelParams& model, std::span<const double> x, std::span<
 struct TrainingRanges {
   double xlo, xhi, ylo, yhi;
   std::string constant;  // "" where neither is
+  std::string x_outliers, y_outliers;  // outliers_of's description, "" where there are none
 };
+
+// Samples of v[from, to) far outside the bulk of the rest: runs of samples beyond the range of
+// its central 99 % (its 0.5 % and 99.5 % quantiles) by more than half that range's width, that
+// jump there or back by more than that half width in one sample. A glitch, a spike or a
+// sensor's overrange value (9.9e37); never the peaks of a smooth signal (its top 0.5 % of
+// samples lie within a small fraction of its span of each other) nor a start from rest that
+// moves smoothly into the range the rest of the record stays in. The description names the
+// count and the first rows; empty where there are none.
+std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, const char* which) {
+  std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(from), v.begin() + static_cast<std::ptrdiff_t>(to));
+  const std::size_t n = s.size();
+  const auto at = [&](double q) {
+    const auto k = static_cast<std::size_t>(q * static_cast<double>(n - 1));
+    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
+    return s[k];
+  };
+  const double lo = at(0.005), hi = at(0.995);
+  const double margin = 0.5 * (hi - lo);
+  const auto beyond = [&](std::size_t k) { return v[k] < lo - margin || v[k] > hi + margin; };
+  std::size_t count = 0;
+  std::string rows;
+  for (std::size_t a = from; a < to; ++a) {
+    if (!beyond(a)) continue;
+    std::size_t b = a;  // the run [a, b)
+    while (b < to && beyond(b)) ++b;
+    const bool jumps = (a > from && std::abs(v[a] - v[a - 1]) > margin) || (b < to && std::abs(v[b - 1] - v[b]) > margin);
+    if (jumps)
+      for (std::size_t k = a; k < b; ++k)
+        if (++count <= 5) rows += fmt::format("{}{} ({:.6g})", rows.empty() ? "" : ", ", k, v[k]);
+    a = b;
+  }
+  if (count == 0) return {};
+  return fmt::format("{} sample(s) of the training {} lie far outside the rest (sample {}{}; 99 % of the samples lie "
+                     "within [{:.6g}, {:.6g}]): a glitch, a spike or a sensor's overrange value",
+                     count, which, rows, count > 5 ? ", ..." : "", lo, hi);
+}
 
 TrainingRanges training_ranges(std::span<const double> x, std::span<const double> y, IndexRange tr) {
   const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
   const auto [xl, xh] = std::minmax_element(xt.begin(), xt.end());
   const auto [yl, yh] = std::minmax_element(yt.begin(), yt.end());
-  TrainingRanges r{*xl, *xh, *yl, *yh, {}};
+  TrainingRanges r{*xl, *xh, *yl, *yh, {}, {}, {}};
   // where the range is short, a range in seconds on a time column in other units is a likely cause
   const auto why = [&](const char* which, double v) {
     return fmt::format("fit: the {} is constant ({:.6g}) over the training range, samples {}..{} ({} samples)", which,
@@ -156,7 +227,26 @@ TrainingRanges training_ranges(std::span<const double> x, std::span<const double
   };
   if (!(r.xhi - r.xlo > 0)) r.constant = why("input", r.xlo);
   else if (!(r.yhi - r.ylo > 0)) r.constant = why("output", r.ylo);
+  if (!r.constant.empty()) return r;
+  r.x_outliers = outliers_of(x, tr.begin, tr.end, "input");
+  r.y_outliers = outliers_of(y, tr.begin, tr.end, "output");
   return r;
+}
+
+// Why the record cannot be fitted as it is ("" if it can): a constant input or output, or
+// outliers (training_ranges), in the input (they drive the model's memory) or the output (they
+// would set its span, the fit's scale and every metric, a Huber loss's too).
+std::string refusal(const TrainingRanges& r) {
+  if (!r.constant.empty()) return r.constant;
+  if (!r.x_outliers.empty())
+    return fmt::format("fit: {}; the model's memory follows the input, so repair or remove them, or choose a --train "
+                       "range without them",
+                       r.x_outliers);
+  if (!r.y_outliers.empty())
+    return fmt::format("fit: {}; they would set the output's span, the fit's scale and every metric: repair or remove "
+                       "them, or choose a --train range without them",
+                       r.y_outliers);
+  return {};
 }
 
 FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
@@ -166,7 +256,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   // moves with an offset, a scale or a sign flip of the data, so the fit is equivariant.
   const auto yt = y.subspan(tr.begin, tr.end - tr.begin);
   const TrainingRanges rg = training_ranges(x, y, tr);
-  if (!rg.constant.empty()) return invalid(rg.constant, o.model, t0);
+  if (const std::string why = refusal(rg); !why.empty()) return invalid(why, o.model, t0);
   const double sx = rg.xhi - rg.xlo, sy = rg.yhi - rg.ylo;
   if (!std::isfinite(sx) || !std::isfinite(sy) || !std::isnormal(sx) || !std::isnormal(sy))
     return invalid(fmt::format("fit: the training spans (input {}, output {}) are not representable after normalisation",
@@ -267,6 +357,29 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   add_units_parameters(rep);
   rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
   if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
+  {
+    // the loops' orientation: sum y dx over the record (normalised, y rising with x) is minus the
+    // area the loops enclose when they turn the usual way (the output lags: lower on the way up);
+    // over the input's path length sum |dx| / 2 it is their mean width, in spans of the output
+    double area = 0.0, path = 0.0;
+    for (std::size_t k = tr.begin + 1; k < tr.end; ++k) {
+      const double dx = xn[k] - xn[k - 1];
+      area += 0.5 * (yn[k] + yn[k - 1]) * dx, path += std::abs(dx);
+    }
+    if (path > 0 && area / (0.5 * path) > kNegligible)
+      rep.warnings.push_back(
+          "the record's loops turn clockwise in (input, output): the output runs ahead of the input on each branch, "
+          "where hysteresis lags; a time shift between the columns (an input sensor's delay), a rate effect or "
+          "swapped columns can turn them. Kinds with nonnegative weights (gpi, mpi-asym, preisach, kp) cannot follow "
+          "such loops; check the columns' timing, or compare with --model pi");
+  }
+  if (const std::size_t rev = count_reversals(x, tr.begin, tr.end, sx); rev < 2)
+    rep.warnings.push_back(fmt::format(
+        "the training input {} (by more than {:.0f} % of its span): {}; validate on a record with loops "
+        "(--validate-data) before using the model",
+        rev == 0 ? "never reverses" : "reverses once", 100 * kReversalFraction,
+        rev == 0 ? "the fit saw one branch only, and the other branch and every inner loop are extrapolated"
+                 : "the fit saw one rising and one falling branch, and the inner (minor) loops are extrapolated"));
 
   // The reference PI (a plain NNLS script's fit) on the same range.
   std::optional<ModelParams> reference_model;
@@ -326,6 +439,11 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   const bool no_hysteresis = line_rms <= tolerance && rep.train.rms <= tolerance;
   if (!(rep.train.r2 >= 0))
     poor = fmt::format("training R^2 = {:.4g} < 0: worse than a constant", rep.train.r2);
+  else if (rep.train.r2 < kMinR2)
+    poor = fmt::format("training R^2 = {:.4g}: the model explains less than half of the output's variance (RMS {:.6g}, "
+                       "{:.3g} % of the span), so it describes none of the record's shape (a butterfly loop, or loops "
+                       "turning the way this kind cannot)",
+                       rep.train.r2, rep.train.rms, 100 * rep.train.rms / sy);
   else if (no_hysteresis && (rep.train.rms >= 0.5 * line_rms || line_rms <= 1e-6 * sy))
     // both negligible, and the model no better than the line by much (a narrow but real loop, which
     // the model fits several times better than the line, goes on to the checks below)
@@ -346,6 +464,12 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
       poor = fmt::format("training Huber RMS {:.6g} (sqrt of twice the mean Huber loss, delta {:.6g}) is {:.3g}x that of "
                          "the reference PI ({:.6g}; limit {:.3g}x)",
                          hf, o.huber_delta, hf / hr, hr, o.poor_fit_ratio);
+  } else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms &&
+             rep.train.rms <= kExcellent * sy) {
+    rep.warnings.push_back(fmt::format("training RMS {:.6g} is {:.3g}x that of the reference PI ({:.6g}), but within "
+                                       "{:.3g} % of the output's span: kept",
+                                       rep.train.rms, rep.train.rms / rep.reference.rms, rep.reference.rms,
+                                       100 * kExcellent));
   } else if (o.poor_fit_ratio > 0 && rep.reference.n > 0 && rep.train.rms > o.poor_fit_ratio * rep.reference.rms) {
     poor = fmt::format("training RMS {:.6g} is {:.3g}x that of the reference PI ({:.6g}; limit {:.3g}x)", rep.train.rms,
                        rep.train.rms / rep.reference.rms, rep.reference.rms, o.poor_fit_ratio);
@@ -365,7 +489,8 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   // training range, fold 1 the first; a candidate's hold-out error pools both.
   const std::size_t m = tr.end - tr.begin;
   // the same refusals as every explicit kind (fit_one): nothing to choose between on such a record
-  if (const std::string why = training_ranges(x, y, tr).constant; !why.empty()) return invalid(why, o.model, t0);
+  if (const std::string why = refusal(training_ranges(x, y, tr)); !why.empty())
+    return invalid(why, o.model, t0);
   const auto h = static_cast<std::size_t>(std::llround(o.holdout_fraction * static_cast<double>(m)));
   if (h < 1 || h >= m)
     return invalid("fit: auto: the training range is too short to split off a hold-out", o.model, t0);

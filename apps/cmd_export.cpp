@@ -54,7 +54,10 @@ int run_export(const Options& o) {
     throw Error(fmt::format("--prefix: \"{}\" is not usable: {}", e.prefix, why));
   e.source_name = o.model == "-" ? std::string("<stdin>") : std::filesystem::path(o.model).filename().string();
   if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();
-  if (!o.limits.empty()) e.inverse_limits = parse_limits(o.limits);
+  if (!o.limits.empty()) {
+    e.inverse_limits = parse_limits(o.limits);
+    warn_limits_beyond_model(params, e.inverse_limits, "export");
+  }
   if (!o.loop.empty()) {
     e.loop = io::read_loop_design(o.loop, o.run);  // an adaptive run's loop is refused by generate_c
     e.loop_source = fmt::format("\"{}\"{}", std::filesystem::path(o.loop).filename().string(),

@@ -26,6 +26,7 @@
 
 #include "commands.hpp"
 #include "hysteron/error.hpp"
+#include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/table.hpp"
@@ -119,6 +120,21 @@ int run_simulate(const Options& o) {
   const ModelParams params = read_model_source(o.model);
   const io::ReadOptions ro = input_options(o.column, "input");
   Model model(params);
+  InputCoverage coverage;  // summed over the blocks: inputs beyond the model's input_limits
+  coverage.limits = input_limits(params);
+  const auto cover = [&](std::span<const double> x) {
+    const InputCoverage c = input_coverage(params, x);
+    coverage.outside += c.outside, coverage.n += c.n, coverage.max_beyond = std::max(coverage.max_beyond, c.max_beyond);
+  };
+  const auto warn_coverage = [&] {
+    if (coverage.fraction() > 0.01)
+      fmt::print(stderr,
+                 "simulate: warning: {} of the {} samples ({:.1f} %) have an input outside the model's input_limits "
+                 "[{:.6g}, {:.6g}] (fit() sets them to its training range), up to {:.6g} beyond: the output there is "
+                 "extrapolated\n",
+                 coverage.outside, coverage.n, 100.0 * coverage.fraction(), coverage.limits.lo, coverage.limits.hi,
+                 coverage.max_beyond);
+  };
   if (streamed_output(o.output)) {
     io::write_csv_rows(o.output, {"input", "output"}, [&](io::CsvRowWriter& w) {
       std::vector<double> y(8192);
@@ -127,17 +143,21 @@ int run_simulate(const Options& o) {
         if (first && o.relaxed) model.reset_relaxed(x.front());
         first = false;
         model.simulate(x, std::span<double>(y.data(), x.size()));
+        cover(x);
         for (std::size_t k = 0; k < x.size(); ++k) w.row(std::array<double, 2>{x[k], y[k]});
       });
     });
+    warn_coverage();
     return 0;
   }
   const std::vector<double> x = io::read_column(o.input, ro);
   if (o.relaxed && !x.empty()) model.reset_relaxed(x.front());
   const std::vector<double> y = model.simulate(x);
+  cover(x);
   io::WriteOptions wo;
   wo.compress_mat = o.compress;
   io::write_columns(o.output, {"input", "output"}, {x, y}, wo);
+  warn_coverage();
   return 0;
 }
 
@@ -146,9 +166,14 @@ int run_invert(const Options& o) {
   const ModelParams params = read_model_source(o.model);
   const io::ReadOptions ro = input_options(o.column, "output");
   InverseOptions opt;
-  if (!o.limits.empty()) opt.input_limits = parse_limits(o.limits);
+  if (!o.limits.empty()) {
+    opt.input_limits = parse_limits(o.limits);
+    warn_limits_beyond_model(params, opt.input_limits, "invert");
+  }
   Inverse inv(params, opt);
-  std::size_t saturated = 0, samples = 0;
+  Model forward(params);  // the model driven by the inverse's inputs: what they produce
+  std::size_t saturated = 0, samples = 0, missed = 0, miss_at = 0;
+  double max_miss = 0.0, y_scale = 0.0;
   bool first = true;
   // x = inverse(y), sample by sample; the relaxed start needs the first desired output
   auto run = [&](std::span<const double> y, double* x) {
@@ -156,11 +181,21 @@ int run_invert(const Options& o) {
       Model start(params);
       start.reset_relaxed(relaxed_input_for(params, inv.limits(), y.front()));
       inv.reset(start.state());
+      forward = start;
     }
     first = false;
+    for (double v : y) y_scale = std::max(y_scale, std::abs(v));  // this block's too: no 0 scale at a first 0
     for (std::size_t k = 0; k < y.size(); ++k) {
       x[k] = inv.step(y[k]);
-      if (inv.saturated()) ++saturated;
+      const double got = forward.step(x[k]);
+      if (inv.saturated()) {
+        ++saturated;
+      } else if (const double miss = std::abs(got - y[k]); miss > 1e-6 * y_scale) {
+        // reachable inside the limits, yet not reached: a numerical inverse of a model whose
+        // output jumps (preisach's relays) or is flat there
+        if (++missed == 1 || miss > max_miss) miss_at = samples + k;
+        max_miss = std::max(max_miss, miss);
+      }
     }
     samples += y.size();
   };
@@ -186,8 +221,14 @@ int run_invert(const Options& o) {
     io::write_columns(o.output, {"output", "input"}, {y, x}, wo);
   }
   const Limits& l = inv.limits();
-  fmt::print(stderr, "invert: {} of {} samples saturated at the input limits [{}, {}]\n", saturated, samples, l.lo,
-             l.hi);
+  fmt::print(stderr, "invert: {} of {} samples saturated at the input limits [{}, {}]\n", saturated, samples, l.lo + 0.0,
+             l.hi + 0.0);
+  if (missed > 0)
+    fmt::print(stderr,
+               "invert: warning: {} of the {} unsaturated samples miss the desired output by more than 1e-6 of its "
+               "largest magnitude, by up to {:.6g} (sample {}): the model does not output those values anywhere "
+               "inside the limits (its output jumps or is flat there; {} has a numerical inverse)\n",
+               missed, samples - saturated, max_miss, miss_at, model_name(params));
   return 0;
 }
 

@@ -32,6 +32,10 @@ void set_command_line(int argc, char** argv);             // recorded in reports
 const CLI::Validator& non_negative_integer();
 // --limits LO,HI (simulate/invert, export): finite numbers with LO < HI, else hysteron::Error.
 Limits parse_limits(const std::string& text);
+// The warning (on stderr, prefixed by `command`) where --limits reach beyond the model's
+// input_limits (its training range) by more than kInputCoverageTolerance of their span: the
+// inverse then commands inputs the model was never fitted on.
+void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, std::string_view command);
 const std::string& command_line();                        // the recorded command line
 
 // ---- shared by the subcommands (common.cpp) --------------------------------------

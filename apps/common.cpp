@@ -67,6 +67,19 @@ Limits parse_limits(const std::string& text) {
   return l;
 }
 
+void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, std::string_view command) {
+  const Limits& m = input_limits(params);
+  if (!m.bounded()) return;
+  const double tol = kInputCoverageTolerance * (m.hi - m.lo);
+  const double below = m.lo - limits.lo, above = limits.hi - m.hi;
+  if (!(below > tol) && !(above > tol)) return;
+  fmt::print(stderr,
+             "{}: warning: --limits [{:.6g}, {:.6g}] reach beyond the model's input_limits [{:.6g}, {:.6g}] (fit() sets "
+             "them to its training range) by up to {:.6g}: the inverse may command inputs there, where the model "
+             "extrapolates; fit on a record that covers them, or keep --limits within them\n",
+             command, limits.lo, limits.hi, m.lo, m.hi, std::max(below, above));
+}
+
 const CLI::Validator& non_negative_integer() {
   static const CLI::Validator v(
       [](std::string& text) -> std::string {

@@ -319,6 +319,23 @@ TEST(Experiment, DisplacementOffsetAfterIdentificationIsNamed) {
   EXPECT_FALSE(test::said(run_experiment(o), "hides part of the tracking error"));
 }
 
+// A pressure sensor that reads 60 kPa low tops out below the commands like a capped supply, and
+// was named as one ("the supply, regulator or valves cap it"). The reading sits that far below
+// the command all along the run, which a cap does not: the note names the sensor. A supply of
+// 5 bar absolute (a cap at 0.4 MPa) keeps the cap's note.
+TEST(Experiment, APressureSensorThatReadsLowIsNotNamedAsACap) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.rig.sensors.pressure_offset = -60e3;
+  const ExperimentResult low = run_experiment(o);
+  EXPECT_TRUE(test::said(low, "a pressure sensor that reads low (an offset: zero it at atmospheric pressure)"));
+  EXPECT_FALSE(test::said(low, "the supply, regulator or valves cap it"));
+  o.rig = PamRigParams{};
+  o.rig.air.supply_pressure = 5e5;
+  const ExperimentResult capped = run_experiment(o);
+  EXPECT_TRUE(test::said(capped, "the supply, regulator or valves cap it"));
+  EXPECT_FALSE(test::said(capped, "a pressure sensor that reads low"));
+}
+
 // A --tracking-plant that differs only in what the experiment's actuation never reads (the
 // valves' PWM timing for gpi-pid, which drives the regulator) is no changed rig: the audit of
 // 2026-11-29 saw "differs in 2 parameter(s) ... not re-tuned" on bit-identical results. It

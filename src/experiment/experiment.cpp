@@ -386,6 +386,11 @@ struct ActuatorTop {
   bool sensor_limited = false;  // the reading stopped short of the commands, the muscle did not
   double slope_ratio = 0.0;     // the contraction's slope on the command at the reading's top / the run's
   double x_lo_mm = 0.0, x_hi_mm = 0.0, cmd_lo_mpa = 0.0, cmd_hi_mpa = 0.0;  // over those samples
+  // the reading's median shortfall below the command over the run's middle commands (rising
+  // and falling alike, so that the regulator's lag cancels) [MPa]: a sensor that reads low
+  // (or an actuator short everywhere) shows it all along, a cap only at the top
+  double offset_mpa = 0.0;
+  bool reads_low = false;  // offset_mpa is at least half the shortfall at the top
 };
 
 ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
@@ -396,6 +401,17 @@ ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
   const bool short_of_commands = t.reached_mpa < (1.0 - kPressureHeadroom) * std::min(p_cmd_max, kPressureMax);
   if (!short_of_commands || !(t.reached_mpa > 0.0)) return t;
   t.mpa = t.reached_mpa;
+  {
+    std::vector<double> gap;
+    const std::size_t n = std::min(c.size(), id.pressure_mpa.size());
+    for (std::size_t k = 0; k < n; ++k)
+      if (c[k] >= 0.25 * t.reached_mpa && c[k] <= 0.75 * t.reached_mpa) gap.push_back(c[k] - id.pressure_mpa[k]);
+    if (gap.size() >= 20) {
+      std::nth_element(gap.begin(), gap.begin() + static_cast<std::ptrdiff_t>(gap.size() / 2), gap.end());
+      t.offset_mpa = gap[gap.size() / 2];
+      t.reads_low = t.offset_mpa >= 0.5 * (std::min(p_cmd_max, kPressureMax) - t.reached_mpa);
+    }
+  }
   // least-squares slope of x on c over the samples `in` selects
   auto slope = [&](auto in) {
     double n = 0, sc = 0, sx = 0, scc = 0, scx = 0;
@@ -423,6 +439,15 @@ ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
 
 // The note of a top below the commands (fit_to_reach): the actuator's cap, or the sensor's limit.
 std::string top_note(const ActuatorTop& t, double p_cmd_max, double p_limit) {
+  if (t.reads_low)
+    return fmt::format(
+        "the pressure reading of the identification run reached at most {:.3f} MPa while the command went up to "
+        "{:.3f} MPa, but it sat {:.3f} MPa below the command all along the run (the median over its middle commands, "
+        "rising and falling, where the regulator's lag cancels), as much as it falls short at the top: a pressure "
+        "sensor that reads low (an offset: zero it at atmospheric pressure), or an actuator short of its command "
+        "everywhere, not a cap at the top; the models are fitted on the reading and the pressure loops close on it, "
+        "so the rig's reach is measured up to {:.3f} MPa of the reading ({:.0f} % below its top as headroom)",
+        t.reached_mpa, p_cmd_max, t.offset_mpa, p_limit, kPressureHeadroom * 100.0);
   if (!t.sensor_limited)
     return fmt::format(
         "the actuator's pressure reached at most {:.3f} MPa in the identification run, whose command went up to "

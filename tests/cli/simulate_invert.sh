@@ -89,4 +89,38 @@ import csv, sys
 x = [float(r["input"]) for r in csv.DictReader(open(sys.argv[1]))]
 assert min(x) >= -0.2 and max(x) <= 0.2, (min(x), max(x))
 PYEOF
+# an analytical inverse reaches every unsaturated desired output: no miss reported
+! grep -q "miss the desired output" "$T/sat_err"
+# a preisach model's output jumps where a relay switches: a smooth desired output between its
+# steps cannot be reached, which invert says (it reported only the saturated samples before)
+cat > "$T/preisach.json" <<'JSON'
+{"model": "preisach", "q": 0.1, "lo": -1, "hi": 1, "levels": 2, "w": [0.5, 0.4, 0.6], "input_limits": [-1.5, 1.5]}
+JSON
+$PY - "$T/yd.csv" <<'PYEOF'
+import math, sys
+with open(sys.argv[1], "w") as f:
+    f.write("y\n")
+    for k in range(1000):
+        f.write(f"{0.6 * math.sin(0.01 * k)!r}\n")
+PYEOF
+"$BIN" invert --model "$T/preisach.json" --input "$T/yd.csv" --output "$T/xd.csv" 2> "$T/pre_err"
+grep -Eq "^invert: warning: [1-9][0-9]* of the [0-9]+ unsaturated samples miss the desired output" "$T/pre_err" || {
+  cat "$T/pre_err"; exit 1; }
+# inputs beyond the model's input_limits (its training range) are extrapolated: simulate says so
+$PY - "$T/wide.csv" <<'PYEOF'
+import sys
+with open(sys.argv[1], "w") as f:
+    f.write("x\n")
+    for k in range(400):
+        f.write(f"{-3 + 6 * k / 399!r}\n")
+PYEOF
+"$BIN" simulate --model "$T/asym.json" --input "$T/wide.csv" --output "$T/wide_y.csv" 2> "$T/wide_err"
+grep -q "simulate: warning: .* have an input outside the model's input_limits \[-2, 2\]" "$T/wide_err" || {
+  cat "$T/wide_err"; exit 1; }
+"$BIN" simulate --model "$T/asym.json" --input "$T/x.csv" --column x --output "$T/in_y.csv" 2> "$T/in_err"
+! grep -q "outside the model's input_limits" "$T/in_err"
+# --limits beyond them too (invert and export)
+"$BIN" invert --model "$T/asym.json" --input "$T/in_y.csv" --column output --limits=-3,3 --output "$T/l.csv" 2> "$T/l_err"
+grep -q "invert: warning: --limits \[-3, 3\] reach beyond the model's input_limits \[-2, 2\]" "$T/l_err" || {
+  cat "$T/l_err"; exit 1; }
 echo "simulate_invert: ok"

@@ -261,6 +261,10 @@ struct ExperimentResult {
   // the paper's, else the pressure the references need plus headroom (docs/control.md,
   // section 0), below the paper's input's maximum.
   double model_id_top_mpa = 0.0;
+  // The actuator's limit of every run [MPa]: no pressure command left 0..pressure_limit_mpa.
+  // pressure_command_limit of the rig (and of the tracking rig, the less) under the
+  // experiment's actuation: 0.6 on the nominal rig (the DMSP-20's rating, the papers' range).
+  double pressure_limit_mpa = 0.6;
   // The identification run hysteron's model (best_fit) was fitted on, where it is not the
   // paper's run above (model_id_top_mpa > 0: the paper's input scaled to the references'
   // pressures, or extended to the actuator's top); empty where it is the paper's run. write()

@@ -971,3 +971,33 @@ TEST(SweepRun, SmallSweepSerialAndParallel) {
     check_CsvHasOneRowPerTrackingRunAndFailure(&serial, &parallel, progress);
   }
 }
+
+// The sweep checks each run's commands against that run's limit (the rig's muscle.max_pressure,
+// and regulator.max_command for a regulator experiment), not a fixed 0.6 MPa, and writes it.
+TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid", "mpi-pwm"};
+  o.variants = parse_vary("muscle.max_pressure=50000");
+  for (auto& v : parse_vary("regulator.max_command=50000")) o.variants.push_back(v);
+  o.runner = fake_experiment;  // commands up to 0.1 MPa
+  o.jobs = 1;
+  const SweepResult r = run_sweep(o);
+  ASSERT_EQ(r.variants.size(), 3u);
+  EXPECT_EQ(r.run(0, 0).command_limit_mpa, 0.6);
+  EXPECT_EQ(r.run(0, 1).command_limit_mpa, 0.05);
+  EXPECT_EQ(r.run(1, 1).command_limit_mpa, 0.05);
+  EXPECT_EQ(r.run(0, 2).command_limit_mpa, 0.05);  // the regulator's range
+  EXPECT_EQ(r.run(1, 2).command_limit_mpa, 0.6);   // the valves have none
+  std::size_t over = 0;
+  for (const auto& m : r.target_misses())
+    if (contains(m, "leaves 0..0.05 MPa")) {
+      ++over;
+      EXPECT_FALSE(contains(m, "mpi-pwm regulator.max_command")) << m;
+    }
+  EXPECT_EQ(over, 3u * 10u);  // 3 runs x 10 tracking runs, each up to 0.1 MPa
+  // the CSV's last column
+  const std::string csv = r.csv();
+  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa"));
+  EXPECT_TRUE(contains(csv, ",0.050000000000000003\n"));
+  EXPECT_EQ(r.to_json()["runs"][1]["command_limit_mpa"].get<double>(), 0.05);
+}

@@ -8,6 +8,10 @@
 #include <filesystem>
 #include <stdexcept>
 #include <random>
+#include <limits>
+#include <utility>
+
+#include <nlohmann/json.hpp>
 
 #include "alloc_counter.hpp"
 #include "hysteron/compensation.hpp"
@@ -561,4 +565,125 @@ TEST(Experiment, ClippedDisplacementSensorIsDetectedAndKeptOutOfTheReach) {
     };
     EXPECT_LT(true_rms(r, -3.0), 2.5 * true_rms(n, 0.0)) << ref;
   }
+}
+
+// ---- the actuator's limit is the rig's (muscle.max_pressure, regulator.max_command) --------
+
+namespace {
+
+// The most and least pressure command of every logged sample of a result: the identification
+// runs (the paper's and hysteron's model's) and every tracking run, learning included [MPa].
+std::pair<double, double> command_range(const ExperimentResult& r) {
+  double lo = INFINITY, hi = -INFINITY;
+  const auto see = [&](const std::vector<double>& v) {
+    for (double p : v) lo = std::min(lo, p), hi = std::max(hi, p);
+  };
+  see(r.identification.pressure_command_mpa);
+  see(r.model_identification.pressure_command_mpa);
+  for (const TrackingRun& run : r.runs) see(run.pressure_command_mpa);
+  return {lo, hi};
+}
+
+}  // namespace
+
+// A muscle rated 0.4 MPa: no pressure command of any run of the three experiments leaves
+// 0..0.4 MPa (before, every one ran up to the fixed 0.6 MPa), the relays switched inside it,
+// the loops' limits are it, and the result says so. The papers' identification inputs (up to
+// 0.6 MPa) are scaled to it.
+TEST(Experiment, MuscleRatedBelowThePapersRangeIsNeverCommandedAbove) {
+  for (const char* name : {"gpi-pid", "mpi-openloop", "mpi-pwm"}) {
+    SCOPED_TRACE(name);
+    ExperimentOptions o = test::quick_experiment(name, 2);
+    o.adaptive = true;
+    o.rig.muscle.max_pressure = 400e3;  // [Pa]
+    const ExperimentResult r = run_experiment(o);
+    EXPECT_EQ(r.pressure_limit_mpa, 0.4);
+    const auto [lo, hi] = command_range(r);
+    EXPECT_GE(lo, 0.0);
+    EXPECT_LE(hi, 0.4);
+    EXPECT_GT(hi, 0.3);  // the range is used, not shrunk further
+    for (const char* v : {"faithful", "compensated", "learning", "adaptive", "baseline"})
+      EXPECT_TRUE(std::any_of(r.runs.begin(), r.runs.end(), [&](const TrackingRun& t) { return t.variant == v; })) << v;
+    // the relays switched inside the limit
+    EXPECT_LE(r.dynamics.position_relay_level_mpa + r.dynamics.position_relay_amplitude_mpa, 0.4 + 1e-12);
+    EXPECT_LE(r.dynamics.relay_level_mpa, 0.4);
+    // the loops' own limits (result.json "controller")
+    for (const TrackingRun& run : r.runs) {
+      EXPECT_EQ(run.controller.feedforward.pressure_limits.hi, 0.4) << run.variant;
+      if (run.controller.pid) {
+        EXPECT_LE(run.controller.pid->out_max, 0.4) << run.variant;
+      }
+    }
+    EXPECT_TRUE(test::said(r, "the actuator's limit is 0..0.400 MPa")) << name;
+    EXPECT_TRUE(test::said(r, "muscle.max_pressure = 400 kPa")) << name;
+    // the paper's identification input, 0.6 MPa at its top for gpi-pid and mpi-pwm, scaled to the limit
+    if (std::string(name) != "mpi-openloop") {
+      const std::vector<double>& id = r.identification.pressure_command_mpa;
+      EXPECT_NEAR(*std::max_element(id.begin(), id.end()), 0.4, 1e-12);
+    }
+  }
+}
+
+// A regulator whose command range ends at 0.3 MPa: the regulator experiments never command
+// more (before, the identification ran to 0.6 MPa and the rig clipped it without a word); the
+// valves of mpi-pwm have no command range, so its limit stays the muscle's.
+TEST(Experiment, RegulatorCommandRangeBoundsTheRegulatorExperiments) {
+  for (const char* name : {"gpi-pid", "mpi-openloop"}) {
+    SCOPED_TRACE(name);
+    ExperimentOptions o = test::quick_experiment(name);
+    o.rig.regulator.max_command = 300e3;  // [Pa]
+    const ExperimentResult r = run_experiment(o);
+    EXPECT_EQ(r.pressure_limit_mpa, 0.3);
+    const auto [lo, hi] = command_range(r);
+    EXPECT_GE(lo, 0.0);
+    EXPECT_LE(hi, 0.3);
+    EXPECT_TRUE(test::said(r, "regulator.max_command = 300 kPa")) << name;
+  }
+  PamRigParams rig;
+  rig.regulator.max_command = 300e3;
+  EXPECT_EQ(pressure_command_limit(rig, Actuation::regulator), 300e3);
+  EXPECT_EQ(pressure_command_limit(rig, Actuation::switching_valves), 600e3);
+  rig.muscle.max_pressure = 250e3;
+  EXPECT_EQ(pressure_command_limit(rig, Actuation::regulator), 250e3);
+  EXPECT_EQ(pressure_command_limit(rig, Actuation::switching_valves), 250e3);
+}
+
+// A tracking rig (--tracking-plant) rated lower than the identified one bounds every run too.
+TEST(Experiment, TrackingRigRatedLowerBoundsTheRun) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  PamRigParams tracking;
+  tracking.muscle.max_pressure = 450e3;
+  o.tracking_rig = tracking;
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_EQ(r.pressure_limit_mpa, 0.45);
+  const auto [lo, hi] = command_range(r);
+  EXPECT_GE(lo, 0.0);
+  EXPECT_LE(hi, 0.45);
+  EXPECT_TRUE(test::said(r, "the tracking rig's muscle.max_pressure = 450 kPa"));
+}
+
+// An impossible rating is refused, naming the key, from the rig file and from the options.
+TEST(Experiment, ImpossibleMuscleRatingIsRefusedNamingTheKey) {
+  for (const char* text : {R"({"muscle":{"max_pressure":0}})", R"({"muscle":{"max_pressure":-4e5}})",
+                           R"({"muscle":{"max_pressure":"6 bar"}})"}) {
+    const std::string what =
+        test::error_of([&] { (void)rig_params_from_json(nlohmann::json::parse(text), "rig.json"); });
+    EXPECT_NE(what.find("rig.json.muscle.max_pressure"), std::string::npos) << text << ": " << what;
+  }
+  for (double bad : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    ExperimentOptions o = test::quick_experiment("gpi-pid");
+    o.rig.muscle.max_pressure = bad;
+    const std::string what = test::error_of([&] { (void)run_experiment(o); });
+    EXPECT_NE(what.find("muscle.max_pressure"), std::string::npos) << bad << ": " << what;
+    o = test::quick_experiment("gpi-pid");
+    o.tracking_rig = PamRigParams{};
+    o.tracking_rig->muscle.max_pressure = bad;
+    const std::string tracking = test::error_of([&] { (void)run_experiment(o); });
+    EXPECT_NE(tracking.find("tracking rig.muscle.max_pressure"), std::string::npos) << bad << ": " << tracking;
+  }
+  // written and read back
+  PamRigParams p;
+  p.muscle.max_pressure = 8e5;
+  EXPECT_EQ(rig_params_from_json(rig_params_to_json(p), "rig").muscle.max_pressure, 8e5);
+  EXPECT_EQ(rig_params_to_json(PamRigParams{})["muscle"]["max_pressure"].get<double>(), 600e3);
 }

@@ -28,8 +28,16 @@
 
 using namespace hysteron;
 using hysteron::test::error_of;
+// The papers' actuator limit, the nominal rig's (the experiments' tuning functions take the run's).
+constexpr double kPaperMax = experiment::kPaperPressureMax;
+constexpr double kRelayLevel = experiment::relay_level(kPaperMax);
 
 namespace {
+
+// The regulator alone as the experiments' actuator, limited to the papers' 0..0.6 MPa.
+experiment::Actuator plain_regulator() {
+  return [](double p, const RigOutputs&) { return experiment::regulator(p, kPaperMax); };
+}
 
 // A known loop for the unit tests: y(k) = a y(k-1) + (1 - a) u(k - delay), u = r + c.
 struct LagDelay {
@@ -707,7 +715,8 @@ TEST(ExperimentTuning, OpenLoopRigIsIdentifiedThroughItsPressureLoop) {
   const ExperimentResult r = run_experiment(o);
   const IdentificationRun plain = experiment::identification_run(
       slow, o.seed, mpi_identification_pressure(tc), tc,
-      [](double p, const RigOutputs&) { return experiment::regulator(p); });
+      [](double p, const RigOutputs&) { return experiment::regulator(p, kPaperMax); },
+      kPaperMax);
   ASSERT_EQ(plain.pressure_mpa.size(), r.identification.pressure_mpa.size());
   EXPECT_EQ(plain.pressure_command_mpa, r.identification.pressure_command_mpa);
   // the pressure follows the command more closely through the pressure loop
@@ -728,13 +737,13 @@ TEST(ExperimentTuning, OpenLoopRigIsIdentifiedThroughItsPressureLoop) {
 // doubled; the nominal rig keeps the first. Before, the whole experiment failed there.
 TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) {
   const double tc = 1e-3;
-  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  auto make_actuator = [] { return plain_regulator(); };
   RigDynamics nominal, wide_d;
-  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, nominal);
+  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, nominal, kPaperMax, kPaperMax);
   EXPECT_EQ(nominal.position_relay_amplitude_mpa, experiment::kPositionRelayAmplitude);
   PamRigParams wide;
   wide.hysteresis.pressure_band = 40e3;
-  experiment::position_relay_test(wide, 7, tc, make_actuator, wide_d);
+  experiment::position_relay_test(wide, 7, tc, make_actuator, wide_d, kPaperMax, kPaperMax);
   EXPECT_GT(wide_d.position_relay_amplitude_mpa, experiment::kPositionRelayAmplitude);
   EXPECT_GT(wide_d.position_relay_gain, 0.0);
   EXPECT_GT(wide_d.position_relay_period_s, 0.0);
@@ -747,7 +756,8 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
   PamRigParams stuck;
   stuck.hysteresis.pressure_band = 400e3;
   RigDynamics none;
-  const std::string what = error_of([&] { experiment::position_relay_test(stuck, 7, tc, make_actuator, none); });
+  const std::string what =
+      error_of([&] { experiment::position_relay_test(stuck, 7, tc, make_actuator, none, kPaperMax, kPaperMax); });
   EXPECT_NE(what.find("+-0.2 MPa"), std::string::npos) << what;
 }
 
@@ -758,17 +768,17 @@ TEST(ExperimentTuning, RelayAmplitudeGrowsWhereTheHysteresisBandHoldsTheMuscle) 
 TEST(ExperimentTuning, ValveRelayRunsAtFullDutyWhereHalfDutyDoesNotOpenTheValves) {
   const double tc = 1e-3;
   RigDynamics nominal, slow;
-  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal, kPaperMax);
   EXPECT_EQ(nominal.relay_duty, 0.5);
   EXPECT_GT(nominal.relay_gain, 0.0);
   PamRigParams p;
   p.valves.min_pulse = 1.822864e-3;
   p.valves.pwm_frequency = 345.900323424;
-  experiment::relay_test(p, 7, tc, slow);
+  experiment::relay_test(p, 7, tc, slow, kPaperMax);
   EXPECT_EQ(slow.relay_duty, 1.0);
   EXPECT_GT(slow.relay_gain, 0.0);
   EXPECT_GT(slow.relay_period_s, 0.0);
-  EXPECT_NEAR(slow.relay_level_mpa, experiment::kRelayLevel, 1e-12);
+  EXPECT_NEAR(slow.relay_level_mpa, kRelayLevel, 1e-12);
 }
 
 // A heavy load hangs on its rest below a pressure that grows with its weight (the
@@ -781,16 +791,17 @@ TEST(ExperimentTuning, ValveRelayRunsAtFullDutyWhereHalfDutyDoesNotOpenTheValves
 // wherever its lower level is below the pressure that lifts the load.
 TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWouldSetTheLoadDown) {
   const double tc = 1e-3;
-  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  auto make_actuator = [] { return plain_regulator(); };
   PamRigParams heavy;
   heavy.load.mass = 70.0;
   RigDynamics none;
   // (no error at all would mean 0.3 MPa lifts 70 kg: the test's premise would not hold)
-  const std::string at_level = error_of([&] { experiment::position_relay_test(heavy, 7, tc, make_actuator, none); });
+  const std::string at_level =
+      error_of([&] { experiment::position_relay_test(heavy, 7, tc, make_actuator, none, kPaperMax, kPaperMax); });
   EXPECT_NE(at_level.find("around 0.3 MPa: +-0.05 MPa"), std::string::npos) << at_level;
   // a level that cannot fit the first amplitude within the actuator's range is named as such
   const std::string what = error_of([&] {
-    experiment::position_relay_test(heavy, 7, tc, make_actuator, none, experiment::kPressureMax, {0.31, 0.58});
+    experiment::position_relay_test(heavy, 7, tc, make_actuator, none, kPaperMax, kPaperMax, {0.31, 0.58});
   });
   EXPECT_NE(what.find("around 0.58 MPa: no amplitude of at least 0.05 MPa fits"), std::string::npos) << what;
   EXPECT_NE(what.find("off its rest only above 0.310 MPa"), std::string::npos) << what;
@@ -811,7 +822,7 @@ TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWoul
   EXPECT_LT(lift, 0.416) << narrow_what;
   // end to end: the level comes from the identification run, and the loops track
   const ExperimentResult nominal = run_gpi_pid(PamRigParams{}, 0);
-  EXPECT_EQ(nominal.dynamics.position_relay_level_mpa, experiment::kRelayLevel);
+  EXPECT_EQ(nominal.dynamics.position_relay_level_mpa, kRelayLevel);
   for (double mass : {65.0, 70.0}) {
     heavy.load.mass = mass;
     const ExperimentResult r = run_gpi_pid(heavy, 0);
@@ -823,7 +834,7 @@ TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWoul
         p_mid_up = r.identification.pressure_mpa[k];
         break;
       }
-    EXPECT_GT(r.dynamics.position_relay_level_mpa, experiment::kRelayLevel + experiment::kPositionRelayAmplitude);
+    EXPECT_GT(r.dynamics.position_relay_level_mpa, kRelayLevel + experiment::kPositionRelayAmplitude);
     EXPECT_NEAR(r.dynamics.position_relay_level_mpa, p_mid_up, 0.05) << mass;  // within the hysteresis band
     // the free-hanging load's loop: an ultimate gain of the nominal rig's order, not 6x it
     EXPECT_LT(r.dynamics.position_relay_gain, 2.0 * nominal.dynamics.position_relay_gain) << mass;
@@ -843,13 +854,13 @@ TEST(ExperimentTuning, PositionRelayMovesToTheMiddleOfTheStrokeWhereItsLevelWoul
 // settling at p0 widened the hysteresis and the period to 1.6 s; it is 0.65 s now.)
 TEST(ExperimentTuning, RelayRunsLongerWhereTheRigIsSlow) {
   const double tc = 1e-3;
-  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  auto make_actuator = [] { return plain_regulator(); };
   PamRigParams slow;
   slow.regulator.time_constant = 0.3;
   slow.regulator.dead_time = 0.25;
   slow.load.mass = 40.0;
   RigDynamics d;
-  experiment::position_relay_test(slow, 7, tc, make_actuator, d);
+  experiment::position_relay_test(slow, 7, tc, make_actuator, d, kPaperMax, kPaperMax);
   EXPECT_EQ(d.position_relay_amplitude_mpa, experiment::kPositionRelayAmplitude);  // not raised
   EXPECT_GT(d.position_relay_period_s, 1.0);  // 3 cycles do not fit in 2 s
   EXPECT_LT(d.position_relay_period_s, 4.0);  // 3 cycles fit in the longest window, 8 s
@@ -907,10 +918,10 @@ TEST(ExperimentTuning, SaturationIsSaidWhereTheLoadCannotFollow) {
 TEST(ExperimentTuning, RelayPeriodIsNotShortenedBySensorNoise) {
   const double tc = 1e-3;
   RigDynamics nominal, noisy;
-  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal, kPaperMax);
   PamRigParams loud;
   loud.sensors.pressure_noise *= 10.0;
-  experiment::relay_test(loud, 7, tc, noisy);
+  experiment::relay_test(loud, 7, tc, noisy, kPaperMax);
   ASSERT_GT(nominal.relay_period_s, 0.0);
   EXPECT_GE(noisy.relay_period_s, nominal.relay_period_s);
   // the cycle is the valves' fill/vent through the PWM loop: well above 2 samples
@@ -927,30 +938,30 @@ TEST(ExperimentTuning, RelayPeriodIsNotShortenedBySensorNoise) {
 TEST(ExperimentTuning, RelaysRunAtTheMiddleOfThePressureTheSupplyReaches) {
   const double tc = 1e-3;
   RigDynamics nominal;
-  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
-  EXPECT_EQ(nominal.relay_level_mpa, experiment::kRelayLevel);
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal, kPaperMax);
+  EXPECT_EQ(nominal.relay_level_mpa, kRelayLevel);
   PamRigParams low;
   low.air.supply_pressure = 4e5;  // [Pa abs]
   const double cap = (low.air.supply_pressure - low.air.atmospheric_pressure) * 1e-6;  // 0.3 MPa gauge
   RigDynamics d;
-  experiment::relay_test(low, 7, tc, d);
+  experiment::relay_test(low, 7, tc, d, kPaperMax);
   EXPECT_NEAR(d.relay_level_mpa / (0.5 * cap), 1.0, 0.03) << d.relay_level_mpa;
   EXPECT_GT(d.relay_gain, 0.0);
   EXPECT_GT(d.relay_period_s, 10.0 * tc);
   // the position relay around half the top it is given where 0.3 + 0.05 MPa is beyond it; the
   // full range, and a top that still holds 0.35 MPa, keep 0.3 MPa
-  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  auto make_actuator = [] { return plain_regulator(); };
   RigDynamics pos_nominal, pos_low;
-  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, pos_nominal);
-  EXPECT_EQ(pos_nominal.position_relay_level_mpa, experiment::kRelayLevel);
-  experiment::position_relay_test(low, 7, tc, make_actuator, pos_low, cap);
+  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, pos_nominal, kPaperMax, kPaperMax);
+  EXPECT_EQ(pos_nominal.position_relay_level_mpa, kRelayLevel);
+  experiment::position_relay_test(low, 7, tc, make_actuator, pos_low, kPaperMax, cap);
   EXPECT_EQ(pos_low.position_relay_level_mpa, 0.5 * cap);
   RigDynamics pos_mid;
-  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, pos_mid, 0.4);
-  EXPECT_EQ(pos_mid.position_relay_level_mpa, experiment::kRelayLevel);
+  experiment::position_relay_test(PamRigParams{}, 7, tc, make_actuator, pos_mid, kPaperMax, 0.4);
+  EXPECT_EQ(pos_mid.position_relay_level_mpa, kRelayLevel);
   EXPECT_EQ(pos_mid.position_relay_gain, pos_nominal.position_relay_gain);
   EXPECT_GT(pos_low.position_relay_gain, 0.0);
-  EXPECT_THROW(experiment::position_relay_test(low, 7, tc, make_actuator, pos_low, 0.0), Error);
+  EXPECT_THROW(experiment::position_relay_test(low, 7, tc, make_actuator, pos_low, kPaperMax, 0.0), Error);
   // mpi-pwm end to end on that rig: both levels near 0.15 MPa, in the result and its table, a
   // lag well inside the identification's 0.3 s grid, and the compensated loop well below the
   // baseline
@@ -988,13 +999,13 @@ TEST(ExperimentTuning, RelaysRunAtTheMiddleOfThePressureTheSupplyReaches) {
 TEST(ExperimentTuning, RelayCycleDoesNotDependOnThePressureSensorsOffset) {
   const double tc = 1e-3;
   RigDynamics nominal;
-  experiment::relay_test(PamRigParams{}, 7, tc, nominal);
+  experiment::relay_test(PamRigParams{}, 7, tc, nominal, kPaperMax);
   ASSERT_GT(nominal.relay_period_s, 0.0);
   for (double offset : {-10e3, 10e3}) {
     PamRigParams shifted;
     shifted.sensors.pressure_offset = offset;
     RigDynamics d;
-    experiment::relay_test(shifted, 7, tc, d);
+    experiment::relay_test(shifted, 7, tc, d, kPaperMax);
     EXPECT_NEAR(d.relay_period_s / nominal.relay_period_s, 1.0, 0.1) << offset;
     EXPECT_NEAR(d.relay_gain / nominal.relay_gain, 1.0, 0.15) << offset;
   }
@@ -1006,7 +1017,7 @@ TEST(ExperimentTuning, RelayCycleDoesNotDependOnThePressureSensorsOffset) {
 // rig, 2.3x with damping 800 N s/m (the relay then switched late and measured another point).
 TEST(ExperimentTuning, PositionRelayHysteresisIsThreeSigmasOfTheSensorsNoise) {
   const double tc = 1e-3;
-  auto make_actuator = [] { return experiment::Actuator([](double p, const RigOutputs&) { return experiment::regulator(p); }); };
+  auto make_actuator = [] { return plain_regulator(); };
   PamRigParams damped;
   damped.load.damping = 800.0;
   for (const PamRigParams& base : {PamRigParams{}, damped})
@@ -1014,7 +1025,7 @@ TEST(ExperimentTuning, PositionRelayHysteresisIsThreeSigmasOfTheSensorsNoise) {
       PamRigParams rig = base;
       rig.sensors.displacement_noise *= noise_scale;
       RigDynamics d;
-      experiment::position_relay_test(rig, 7, tc, make_actuator, d);
+      experiment::position_relay_test(rig, 7, tc, make_actuator, d, kPaperMax, kPaperMax);
       ASSERT_GT(d.position_relay_gain, 0.0);
       EXPECT_NEAR(d.position_relay_hysteresis_m / (3.0 * rig.sensors.displacement_noise), 1.0, 0.15)
           << "damping " << rig.load.damping << ", noise " << rig.sensors.displacement_noise;
@@ -1282,7 +1293,7 @@ TEST(ExperimentTuning, LearningPidFollowsTheGainTrialWhereItDetunes) {
   const RigDynamics d = relay_identified(0.021, 0.056, 0.197e-3, 13.0, 0.239);
   experiment::Context c{o, res, d, 1e-3, 76, PidParams{}};
   c.learning = true;
-  const PidParams rule = experiment::learning_pid(d, 1e-3);
+  const PidParams rule = experiment::learning_pid(d, 1e-3, kPaperMax);
   for (double scale : {0.5, 0.79, 1.0, 1.26, 1.59}) {
     c.gain_scale = scale;
     const PidParams p = experiment::position_pid(c);
@@ -1419,7 +1430,7 @@ TEST(ExperimentTuning, PressureLevelledOffBelowTheTopIsNamedAsCapped) {
     double p = 0.0;
     for (std::size_t k = 0; k < 2 * stretch; ++k) {
       const bool top = k >= stretch / 2 && k < stretch / 2 + stretch;
-      const double cmd = top ? experiment::kPressureMax : 0.2;
+      const double cmd = top ? kPaperMax : 0.2;
       p += dt / lag_s * (std::min(cmd, level_mpa) - p);  // a first-order lag to what the actuator gives
       r.t.push_back(static_cast<double>(k) * dt);
       r.pressure_command_mpa.push_back(cmd);
@@ -1431,26 +1442,26 @@ TEST(ExperimentTuning, PressureLevelledOffBelowTheTopIsNamedAsCapped) {
   };
   // capped at 0.3 MPa: named, with the identification run's reach and the changed rig
   const TrackingRun capped = run_with(0.3, 0.05, 2000);
-  const std::optional<experiment::CappedTop> c = experiment::capped_top(capped, 0, capped.t.size());
+  const std::optional<experiment::CappedTop> c = experiment::capped_top(capped, 0, capped.t.size(), kPaperMax);
   ASSERT_TRUE(c.has_value());
   EXPECT_NEAR(c->level_mpa, 0.3, 1e-3);
   EXPECT_NEAR(c->stretch_s, 1.999, 1e-9);
-  const std::string note = experiment::saturation_note(capped, 0, capped.t.size(), 0.59, true);
+  const std::string note = experiment::saturation_note(capped, 0, capped.t.size(), 0.59, true, kPaperMax);
   EXPECT_NE(note.find("levelled off at 0.300 MPa, where the identification run reached 0.590 MPa"), std::string::npos)
       << note;
   EXPECT_NE(note.find("identify on the rig as it is now"), std::string::npos) << note;
   // the same cap where the identification run saw it too: no claim about the identified rig
-  const std::string same = experiment::saturation_note(capped, 0, capped.t.size(), 0.3, false);
+  const std::string same = experiment::saturation_note(capped, 0, capped.t.size(), 0.3, false, kPaperMax);
   EXPECT_NE(same.find("levelled off at 0.300 MPa:"), std::string::npos) << same;
   EXPECT_EQ(same.find("identification run reached"), std::string::npos) << same;
   // the actuator reaches the top: the generic wording
   const TrackingRun full = run_with(1.0, 0.05, 2000);
-  EXPECT_FALSE(experiment::capped_top(full, 0, full.t.size()).has_value());
-  EXPECT_NE(experiment::saturation_note(full, 0, full.t.size(), 0.59, true).find("no authority left"),
+  EXPECT_FALSE(experiment::capped_top(full, 0, full.t.size(), kPaperMax).has_value());
+  EXPECT_NE(experiment::saturation_note(full, 0, full.t.size(), 0.59, true, kPaperMax).find("no authority left"),
             std::string::npos);
   // a stretch too short for a 300 ms lag to settle: still rising, not capped
   const TrackingRun rising = run_with(1.0, 0.3, 300);
-  EXPECT_FALSE(experiment::capped_top(rising, 0, rising.t.size()).has_value());
+  EXPECT_FALSE(experiment::capped_top(rising, 0, rising.t.size(), kPaperMax).has_value());
 }
 
 // The learning variant's feedforward goes through the shaper the gain trial chose for the
@@ -1546,7 +1557,7 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
     double worst = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
       const double u = loop.step(ref[k], preview[k], comp.measured_mm[k] * 1e-3);
-      worst = std::max(worst, std::abs(std::clamp(u, 0.0, experiment::kPressureMax) - comp.pressure_command_mpa[k]));
+      worst = std::max(worst, std::abs(std::clamp(u, 0.0, kPaperMax) - comp.pressure_command_mpa[k]));
     }
     EXPECT_LT(worst, 1e-9) << "MPa";
   }
@@ -1563,7 +1574,7 @@ TEST(ExperimentTuning, ControllerNumbersReproduceTheRunsLoops) {
     worst = std::max(worst, std::abs(c - lr.correction_mm[k]));
     largest = std::max(largest, std::abs(c));
     const double cmd = lr.pressure_command_mpa[k];
-    const bool saturated = cmd <= 0.0 || cmd >= experiment::kPressureMax;
+    const bool saturated = cmd <= 0.0 || cmd >= kPaperMax;
     ilc.step(saturated ? 0.0 : (lr.reference_mm[k] - lr.measured_mm[k]) * 1e-3);
   }
   EXPECT_LT(worst, 1e-9) << "mm";
@@ -1606,8 +1617,8 @@ TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
   };
   for (const RigDynamics* d : {&regulator, &valves, &light}) {
     const PidParams rule =
-        experiment::relay_pid(*d, tc, -experiment::kPressureMax, experiment::kPressureMax, experiment::PidRule::some_overshoot);
-    const PidParams p = experiment::learning_pid(*d, tc);
+        experiment::relay_pid(*d, tc, -kPaperMax, kPaperMax, experiment::PidRule::some_overshoot);
+    const PidParams p = experiment::learning_pid(*d, tc, kPaperMax);
     EXPECT_DOUBLE_EQ(p.kp, rule.kp);
     EXPECT_DOUBLE_EQ(p.ki, rule.ki);
     EXPECT_DOUBLE_EQ(p.derivative_filter, rule.derivative_filter);
@@ -1621,18 +1632,18 @@ TEST(ExperimentTuning, LearningDerivativeTimeDampsTheIdentifiedLoop) {
       }
     }
   }
-  const PidParams reg = experiment::learning_pid(regulator, tc);
+  const PidParams reg = experiment::learning_pid(regulator, tc, kPaperMax);
   EXPECT_NEAR(reg.kd / reg.kp, regulator.position_relay_period_s / 3.0, 1e-12);
-  const PidParams val = experiment::learning_pid(valves, tc);
+  const PidParams val = experiment::learning_pid(valves, tc, kPaperMax);
   EXPECT_GT(val.kd / val.kp, valves.position_relay_period_s / 3.0 * 1.2);
   // the light rig: a longer T_d would lower the complementary peak, but raise the sensitivity's
   const PidParams rule_light =
-      experiment::relay_pid(light, tc, -experiment::kPressureMax, experiment::kPressureMax, experiment::PidRule::some_overshoot);
+      experiment::relay_pid(light, tc, -kPaperMax, kPaperMax, experiment::PidRule::some_overshoot);
   const experiment::LoopPeaks half = experiment::loop_peaks(light, with_td(rule_light, 0.5, light.position_relay_period_s), tc);
   const experiment::LoopPeaks third = experiment::loop_peaks(light, rule_light, tc);
   EXPECT_LT(half.complementary, third.complementary);
   EXPECT_GT(half.sensitivity, third.sensitivity);
-  EXPECT_DOUBLE_EQ(experiment::learning_pid(light, tc).kd, rule_light.kd);
+  EXPECT_DOUBLE_EQ(experiment::learning_pid(light, tc, kPaperMax).kd, rule_light.kd);
 }
 
 TEST(ExperimentTuning, LearningNeighboursPassThroughTheRelaysPoint) {

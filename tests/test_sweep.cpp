@@ -487,18 +487,19 @@ TEST(SweepRun, ListsTheRunsWhoseLimitCycleGuardActed) {
   EXPECT_EQ(j.at("guard_acted").at(0).get<std::string>(), cut[0]);
   EXPECT_EQ(j.at("runs").at(2).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 2u);
   EXPECT_EQ(j.at("runs").at(1).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 0u);
-  // the CSV's last two columns: the cut run's, and an untouched run's
+  // the CSV's guard columns (before the limit, the last): the cut run's, and an untouched run's
   const std::string csv = r.csv();
-  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",wall_time_s,guard_cuts,guard_final_scale")) << csv;
+  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",wall_time_s,guard_cuts,guard_final_scale,command_limit_mpa"))
+      << csv;
   std::size_t cut_rows = 0, rows = 0;
   for (std::size_t a = csv.find('\n') + 1; a < csv.size(); a = csv.find('\n', a) + 1) {
     const std::string row = csv.substr(a, csv.find('\n', a) - a);
     ++rows;
     if (contains(row, "load.mass=40,sine,compensated,")) {
-      EXPECT_TRUE(row.ends_with(",2,0.39689999999999998")) << row;
+      EXPECT_TRUE(row.ends_with(",2,0.39689999999999998,0.59999999999999998")) << row;
       ++cut_rows;
     } else {
-      EXPECT_TRUE(row.ends_with(",0,1")) << row;
+      EXPECT_TRUE(row.ends_with(",0,1,0.59999999999999998")) << row;
     }
   }
   EXPECT_EQ(cut_rows, 1u);
@@ -893,10 +894,11 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
     lines.push_back(csv.substr(s, e - s));
   }
   const auto header = csv_fields(lines.at(0));
-  ASSERT_EQ(header.size(), 19u);
+  ASSERT_EQ(header.size(), 20u);
   EXPECT_EQ(header[0], "experiment");
   EXPECT_EQ(header[17], "guard_cuts");
   EXPECT_EQ(header[18], "guard_final_scale");
+  EXPECT_EQ(header[19], "command_limit_mpa");
   EXPECT_EQ(header[7], "rms_mm");
   EXPECT_EQ(header[8], "rms_vs_nominal");
   EXPECT_EQ(header[13], "reference_scale");
@@ -912,6 +914,7 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
       continue;
     }
     EXPECT_EQ(f[14], "ok");
+    EXPECT_EQ(std::stod(f[19]), 0.6);  // the nominal muscle's rating (the regulator's range is above it)
     const SweepRunErrors* x = r.find(0, f[1] == "nominal" ? 0 : 1, f[3], f[4]);
     ASSERT_NE(x, nullptr) << lines[i];
     EXPECT_EQ(std::stoul(f[17]), x->guard_cuts);
@@ -970,4 +973,34 @@ TEST(SweepRun, SmallSweepSerialAndParallel) {
     SCOPED_TRACE("CsvHasOneRowPerTrackingRunAndFailure");
     check_CsvHasOneRowPerTrackingRunAndFailure(&serial, &parallel, progress);
   }
+}
+
+// The sweep checks each run's commands against that run's limit (the rig's muscle.max_pressure,
+// and regulator.max_command for a regulator experiment), not a fixed 0.6 MPa, and writes it.
+TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid", "mpi-pwm"};
+  o.variants = parse_vary("muscle.max_pressure=50000");
+  for (auto& v : parse_vary("regulator.max_command=50000")) o.variants.push_back(v);
+  o.runner = fake_experiment;  // commands up to 0.1 MPa
+  o.jobs = 1;
+  const SweepResult r = run_sweep(o);
+  ASSERT_EQ(r.variants.size(), 3u);
+  EXPECT_EQ(r.run(0, 0).command_limit_mpa, 0.6);
+  EXPECT_EQ(r.run(0, 1).command_limit_mpa, 0.05);
+  EXPECT_EQ(r.run(1, 1).command_limit_mpa, 0.05);
+  EXPECT_EQ(r.run(0, 2).command_limit_mpa, 0.05);  // the regulator's range
+  EXPECT_EQ(r.run(1, 2).command_limit_mpa, 0.6);   // the valves have none
+  std::size_t over = 0;
+  for (const auto& m : r.target_misses())
+    if (contains(m, "leaves 0..0.05 MPa")) {
+      ++over;
+      EXPECT_FALSE(contains(m, "mpi-pwm regulator.max_command")) << m;
+    }
+  EXPECT_EQ(over, 3u * 10u);  // 3 runs x 10 tracking runs, each up to 0.1 MPa
+  // the CSV's last column
+  const std::string csv = r.csv();
+  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa"));
+  EXPECT_TRUE(contains(csv, ",0.050000000000000003\n"));
+  EXPECT_EQ(r.to_json()["runs"][1]["command_limit_mpa"].get<double>(), 0.05);
 }

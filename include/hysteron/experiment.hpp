@@ -80,8 +80,9 @@ struct ExperimentOptions {
   // skipped with a note saying so.
   FitModel model = FitModel::automatic;
   // Keep every reference within the rig's reach, measured on its identification run: from
-  // the contraction at rest to the contraction on its ascent at 95 % of the actuator's
-  // 0.6 MPa (5 % kept as headroom for the position loop). A reference that leaves it is
+  // the contraction at rest to the contraction on its ascent at 95 % of the actuator's limit
+  // (ExperimentResult::pressure_limit_mpa, 0.6 MPa on the nominal rig; 5 % kept as headroom for
+  // the position loop). A reference that leaves it is
   // mapped affinely onto its intersection with the reach (only the end that leaves it
   // moves), and the result says so (ExperimentResult::reference_ranges, messages).
   // false: the papers' references as published, with a note where they are out of reach
@@ -140,7 +141,8 @@ struct RigDynamics {
   double mode_frequency_hz = 0.0;
   double mode_damping = 0.0;
   // The pressures the relays switched around [MPa] (position, and the valves' pressure relay;
-  // 0 if not run): 0.3, the middle of the actuator's 0..0.6 MPa, or half the top the rig
+  // 0 if not run): 0.3, the middle of the actuator's 0..0.6 MPa (half the run's limit where that
+  // is below 0.6 MPa, ExperimentResult::pressure_limit_mpa), or half the top the rig
   // reaches where its supply caps it below that (docs/control.md, section 1).
   double position_relay_level_mpa = 0.0;
   double relay_level_mpa = 0.0;
@@ -261,6 +263,10 @@ struct ExperimentResult {
   // the paper's, else the pressure the references need plus headroom (docs/control.md,
   // section 0), below the paper's input's maximum.
   double model_id_top_mpa = 0.0;
+  // The actuator's limit of every run [MPa]: no pressure command left 0..pressure_limit_mpa.
+  // pressure_command_limit of the rig (and of the tracking rig, the less) under the
+  // experiment's actuation: 0.6 on the nominal rig (the DMSP-20's rating, the papers' range).
+  double pressure_limit_mpa = 0.6;
   // The identification run hysteron's model (best_fit) was fitted on, where it is not the
   // paper's run above (model_id_top_mpa > 0: the paper's input scaled to the references'
   // pressures, or extended to the actuator's top); empty where it is the paper's run. write()
@@ -273,7 +279,7 @@ struct ExperimentResult {
   double reach_max_mm = std::numeric_limits<double>::quiet_NaN();
   // The top of the reach: the least contraction at or above reach_top_pressure_mpa on the
   // identification run (NaN if the run never got there) [mm], that pressure (95 % of the
-  // actuator's top pressure: 0.6 MPa, or the most the measured pressure reached where the
+  // actuator's top pressure: pressure_limit_mpa, or the most the measured pressure reached where the
   // supply caps it below) [MPa], and the most the measured pressure reached (11-sample mean)
   // [MPa]; NaN in results written before them.
   double reach_top_mm = std::numeric_limits<double>::quiet_NaN();

@@ -66,6 +66,9 @@ struct MuscleParams {
   double c1 = 6.477;                    // Festo fit c1 [-]               [F]
   double c2 = 1.321;                    // Festo fit c2 [-]               [F]
   double reference_pressure = 620e3;    // pressure of the fit's P* = 1 [Pa gauge] [F]
+  // Rated maximum operating pressure [Pa gauge]: the experiments never command more
+  // (pressure_command_limit). Not enforced by the simulation.  [F] DMSP-20 datasheet: 6 bar
+  double max_pressure = 600e3;
 };
 
 // Length/pressure hysteresis (P2, P3) and creep (P4).
@@ -197,8 +200,14 @@ enum class Actuation { regulator, switching_valves };
 // valves' PWM frequency, switching delays and minimum pulse (P10). The conductances and critical
 // ratios of both stages are read under either mode: they set the sub-steps (P12). Two rigs
 // that are equal after this give the same outputs, bit for bit, under that mode (test_plant.cpp
-// checks it), so a sweep runs such a variant once (sweep.cpp).
+// checks it), so a sweep runs such a variant once (sweep.cpp). muscle.max_pressure, which the
+// rig never reads, is kept: the experiments read it (pressure_command_limit).
 PamRigParams with_unread_parameters_of(PamRigParams p, Actuation mode, const PamRigParams& other);
+
+// The most pressure a controller may command on the rig under `mode` [Pa gauge]: the muscle's
+// rated maximum (muscle.max_pressure), and under regulator also the end of the regulator's
+// command range (regulator.max_command); the switching valves have no command range.
+double pressure_command_limit(const PamRigParams& p, Actuation mode) noexcept;
 
 struct RigInputs {
   double pressure_command = 0.0;  // regulator setpoint [MPa gauge] (regulator mode)

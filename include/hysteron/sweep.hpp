@@ -163,6 +163,10 @@ struct SweepRun {
   // and ExperimentResult::model_reason.
   std::string model;
   std::string model_reason;
+  // The actuator's limit of the run [MPa] (ExperimentResult::pressure_limit_mpa: the rig's
+  // muscle.max_pressure, and regulator.max_command for a regulator experiment): no pressure
+  // command may leave 0..command_limit_mpa. NaN for an unknown experiment.
+  double command_limit_mpa = 0.6;
 };
 
 struct SweepVariant {
@@ -192,15 +196,16 @@ struct SweepResult {
   // experiment, variant, overrides, reference, kind, max_mm, mae_mm, rms_mm,
   // rms_vs_nominal, rms_vs_baseline, min_command_mpa, max_command_mpa, saturated,
   // reference_scale, status (ok | failed), error, wall_time_s, guard_cuts, guard_final_scale
-  // (what the position PID's limit-cycle guard did; 0 and 1 where it has none). Numbers with
-  // %.17g (exact), NaN as "".
+  // (what the position PID's limit-cycle guard did; 0 and 1 where it has none),
+  // command_limit_mpa (SweepRun::command_limit_mpa). Numbers with %.17g (exact), NaN as "".
   std::string csv() const;
   // A human-readable table (RMS per kind), failures and target misses.
   std::string text() const;
   // Every figure of the table as one JSON document.
   nlohmann::json to_json() const;
   // The misses of issue 11's targets for the variant kind "compensated": RMS above
-  // rms_ratio_limit x nominal, not below the baseline's, a command outside 0..0.6 MPa,
+  // rms_ratio_limit x nominal, not below the baseline's, a command outside 0..the run's
+  // limit (SweepRun::command_limit_mpa),
   // a reference out of the rig's reach (SweepOptions::fit_references false), and every
   // failed run. One line each.
   std::vector<std::string> target_misses() const;

@@ -33,7 +33,7 @@ std::shared_ptr<AdaptiveInverse> adaptive_inverse(const Context& c, bool frozen)
   AdaptiveInverseParams p;
   p.lambda = 1.0 - 1.0 / static_cast<double>(std::max<std::size_t>(memory, 2));
   p.delay = delay;
-  p.input_limits = {0.0, kPressureMax};
+  p.input_limits = {0.0, c.pressure_max};
   p.frozen = frozen;
   p.commit_every_update = false;  // AdaptiveFeedforward commits at the bottom of each loop
   return std::make_shared<AdaptiveInverse>(c.result.best_fit.model, pm, xm, p);
@@ -46,7 +46,7 @@ double AdaptiveFeedforward::step(const Sample& s) noexcept {
   if (r1_ < r2_ && r >= r1_) a_->commit();
   r2_ = r1_;
   r1_ = r;
-  return std::clamp(a_->step(r * 1e3), 0.0, kPressureMax);
+  return std::clamp(a_->step(r * 1e3), 0.0, p_max_);
 }
 
 std::string adaptive_description(const AdaptiveInverse& a) {

@@ -9,10 +9,23 @@
 
 namespace hysteron::experiment {
 
-RigInputs regulator(double p) {
+double run_pressure_limit(const ExperimentOptions& o, bool valves) {
+  const Actuation mode = valves ? Actuation::switching_valves : Actuation::regulator;
+  double pa = pressure_command_limit(o.rig, mode);
+  if (o.tracking_rig) pa = std::min(pa, pressure_command_limit(*o.tracking_rig, mode));
+  return pa / 1e6;  // [MPa], correctly rounded (600e3 Pa: exactly the double 0.6)
+}
+
+std::vector<double> paper_pressure_input(std::vector<double> input, double p_max) {
+  if (p_max < kPaperPressureMax)
+    for (double& v : input) v *= p_max / kPaperPressureMax;
+  return input;
+}
+
+RigInputs regulator(double p, double p_max) {
   RigInputs in;
   in.mode = Actuation::regulator;
-  in.pressure_command = std::clamp(p, 0.0, kPressureMax);
+  in.pressure_command = std::clamp(p, 0.0, p_max);
   return in;
 }
 
@@ -25,13 +38,13 @@ RigInputs valves(double duty, double desired_mpa) {
 }
 
 IdentificationRun identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
-                                     double tc, const Actuator& actuator) {
+                                     double tc, const Actuator& actuator, double p_max) {
   PamRig rig(rp, seed);
   rig.reset();
   IdentificationRun rec;
   std::size_t k = 0;
   rig.run(static_cast<double>(pressure.size()) * tc, tc, [&](const RigOutputs& o) {
-    const double desired = std::clamp(pressure[std::min(k, pressure.size() - 1)], 0.0, kPressureMax);
+    const double desired = std::clamp(pressure[std::min(k, pressure.size() - 1)], 0.0, p_max);
     const RigInputs in = actuator(desired, o);
     rec.t.push_back(o.time);
     rec.pressure_command_mpa.push_back(desired);
@@ -56,7 +69,7 @@ IdentificationRun decimate(const IdentificationRun& r, std::size_t every) {
 
 // Straight line x = a p + b through the record (least squares): the baseline's
 // "inverse without hysteresis".
-ModelParams straight_line(const IdentificationRun& r) {
+ModelParams straight_line(const IdentificationRun& r, double p_max) {
   const auto n = static_cast<double>(r.pressure_mpa.size());
   double sp = 0, sx = 0, spp = 0, spx = 0;
   for (std::size_t i = 0; i < r.pressure_mpa.size(); ++i) {
@@ -73,16 +86,17 @@ ModelParams straight_line(const IdentificationRun& r) {
   g.envelope = Envelope::affine(a, b);
   g.q = 1.0;
   g.n = 0;
-  g.input_limits = {0.0, kPressureMax};
+  g.input_limits = {0.0, p_max};
   return g;
 }
 
-FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, FitStatus* status) {
+FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, double p_max,
+                      FitStatus* status) {
   FitReport rep = fit(r.pressure_mpa, r.contraction_mm, fo);
   if (status) *status = rep.status;
   if (rep.status == FitStatus::invalid_input || rep.status == FitStatus::failed)
     throw Error(fmt::format("experiment: fit of the {} failed: {}", what, rep.message));
-  std::visit([](auto& p) { p.input_limits = {0.0, kPressureMax}; }, rep.model);
+  std::visit([p_max](auto& p) { p.input_limits = {0.0, p_max}; }, rep.model);
   Inverse check(rep.model);  // throws if the fitted model is not invertible
   return rep;
 }
@@ -154,21 +168,21 @@ std::string guard_note(const TrackingRun& run, bool rig_changed) {
 }
 
 // Where the command sat at the top for long enough that the pressure reading levelled off (its
-// mean over the last third of the longest stretch within 1 % of kPressureMax of the middle
+// mean over the last third of the longest stretch within 1 % of p_max of the middle
 // third's) and it levelled off more than kCapMargin below the top, something caps the pressure
 // on the rig tracked on: the supply, regulator or valves, or the pressure sensor's range. A
 // stretch too short to level off (the regulator's lag) says nothing.
-std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, std::size_t to) {
+std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, std::size_t to, double p_max) {
   const std::vector<double>& p = run.pressure_measured_mpa.size() == run.t.size() ? run.pressure_measured_mpa
                                                                                    : run.pressure_mpa;
   std::size_t best_from = 0, best_n = 0;
   for (std::size_t k = from; k < to;) {
-    if (run.pressure_command_mpa[k] < kPressureMax) {
+    if (run.pressure_command_mpa[k] < p_max) {
       ++k;
       continue;
     }
     std::size_t e = k;
-    while (e < to && run.pressure_command_mpa[e] >= kPressureMax) ++e;
+    while (e < to && run.pressure_command_mpa[e] >= p_max) ++e;
     if (e - k > best_n) best_from = k, best_n = e - k;
     k = e;
   }
@@ -181,20 +195,20 @@ std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, st
   const std::size_t third = best_n / 3;
   const double middle = mean(best_from + third, best_from + 2 * third);
   const double last = mean(best_from + best_n - third, best_from + best_n);
-  if (!(std::abs(last - middle) <= 0.01 * kPressureMax) || !(last < (1.0 - kCapMargin) * kPressureMax))
+  if (!(std::abs(last - middle) <= 0.01 * p_max) || !(last < (1.0 - kCapMargin) * p_max))
     return std::nullopt;
   return CappedTop{last, run.t[best_from + best_n - 1] - run.t[best_from]};
 }
 
 std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to, double reach_mpa,
-                            bool rig_changed) {
+                            bool rig_changed, double p_max) {
   to = std::min(to, run.t.size());
   if (from >= to) return {};
   std::size_t low = 0, high = 0;
   double in2 = 0.0, out2 = 0.0;
   for (std::size_t k = from; k < to; ++k) {
     const double d = run.reference_mm[k] - run.measured_mm[k], p = run.pressure_command_mpa[k];
-    const bool at_low = p <= 0.0, at_high = p >= kPressureMax;
+    const bool at_low = p <= 0.0, at_high = p >= p_max;
     low += at_low, high += at_high;
     (at_low || at_high ? in2 : out2) += d * d;
   }
@@ -205,12 +219,12 @@ std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_
   std::string why =
       "at a limit the loop has no authority left (e.g. the load cannot follow the reference's descent with the "
       "muscle vented, or the reference needs more pressure than the actuator has)";
-  if (const std::optional<CappedTop> top = capped_top(run, from, to)) {
+  if (const std::optional<CappedTop> top = capped_top(run, from, to, p_max)) {
     // the cap explains the samples at the top; where those at 0 MPa are more, the generic words stay first
     why = (high >= low ? std::string() : why + "; and ") +
           fmt::format("while the command sat at {} MPa (over its longest stretch, {:.2f} s) the pressure reading "
                       "levelled off at {:.3f} MPa",
-                      kPressureMax, top->stretch_s, top->level_mpa);
+                      p_max, top->stretch_s, top->level_mpa);
     if (reach_mpa > (1.0 + kCapMargin) * top->level_mpa)
       why += fmt::format(", where the identification run reached {:.3f} MPa", reach_mpa);
     why += ": the supply, regulator or valves cap the pressure on this rig, or the pressure sensor's range ends "
@@ -222,12 +236,12 @@ std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_
   return fmt::format(
       "{} ({}): the pressure command was at a limit on {:.1f} % of the scored samples ({} at 0 MPa, {} at {} MPa); "
       "RMS error {:.3f} mm there, {:.3f} mm elsewhere: {}",
-      run.variant, run.reference, 100.0 * static_cast<double>(sat) / static_cast<double>(n), low, high, kPressureMax,
+      run.variant, run.reference, 100.0 * static_cast<double>(sat) / static_cast<double>(n), low, high, p_max,
       rms_in, rms_out, why);
 }
 
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
-                  std::size_t lead, bool periodic, const Law& law) {
+                  std::size_t lead, bool periodic, const Law& law, double p_max) {
   PamRig rig(o.tracking_rig ? *o.tracking_rig : o.rig, seed);
   rig.reset();
   TrackingRun run;
@@ -250,7 +264,7 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
     run.pressure_mpa.push_back(out.pressure * 1e-6);
     run.pressure_measured_mpa.push_back(s.pressure_mpa);
     run.duty.push_back(in.mode == Actuation::switching_valves ? in.pwm_duty : 0.0);
-    if (in.pressure_command <= 0.0 || in.pressure_command >= kPressureMax) ++run.saturated;
+    if (in.pressure_command <= 0.0 || in.pressure_command >= p_max) ++run.saturated;
     ++k;
     return in;
   });

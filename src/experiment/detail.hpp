@@ -19,9 +19,12 @@
 
 namespace hysteron::experiment {
 
-inline constexpr double kPressureMax = 0.6;  // [MPa] actuator limit of every experiment
-// A pressure that levels off more than this fraction below kPressureMax while the command sits
-// there is capped (capped_top), not still rising through the regulator's lag
+// [MPa] The papers' actuator range, 0..0.6 MPa (the Festo DMSP-20's rated maximum operating
+// pressure): the pressures their identification inputs are defined at (paper_pressure_input).
+// A run's own limit is the rig's (run_pressure_limit), carried in Context::pressure_max.
+inline constexpr double kPaperPressureMax = 0.6;
+// A pressure that levels off more than this fraction below the run's limit while the command
+// sits there is capped (capped_top), not still rising through the regulator's lag
 inline constexpr double kCapMargin = 0.05;
 
 // What a controller sees each control period and what it commands.
@@ -31,7 +34,16 @@ struct Sample {
 };
 using Law = std::function<RigInputs(const Sample&)>;
 
-RigInputs regulator(double p_mpa);                     // regulator command, clamped to 0..kPressureMax
+// The actuator limit of a run of `o` [MPa]: pressure_command_limit of its rig, and of its
+// tracking rig if it has one (the less), under the experiment's actuation (valves or regulator).
+double run_pressure_limit(const ExperimentOptions& o, bool valves);
+// A paper's identification input (defined at fixed pressures within 0..kPaperPressureMax)
+// for a run whose limit is p_max [MPa]: scaled by p_max / kPaperPressureMax where the limit is
+// below the papers' range, unchanged otherwise (a rig rated higher keeps the papers' inputs;
+// extended_input_top extends them to its limit where the references need it).
+std::vector<double> paper_pressure_input(std::vector<double> input, double p_max);
+
+RigInputs regulator(double p_mpa, double p_max);       // regulator command, clamped to 0..p_max [MPa]
 RigInputs valves(double duty, double desired_mpa);     // PWM duty, clamped to [-1, 1]
 
 // A reference of one experiment. `period` > 0 marks a periodic reference: ref_m from
@@ -76,6 +88,7 @@ struct Context {
   // The tuned PIDs' limit-cycle guard amplitude [m] (PidGuard; 0: off, as in the gain trial):
   // set from the gain trial's error at the chosen loop (guard_amplitude).
   double guard_amplitude_m = 0.0;
+  double pressure_max = kPaperPressureMax;  // the run's actuator limit [MPa] (run_pressure_limit)
 };
 
 // One variant's loop, built fresh for each run.
@@ -127,7 +140,7 @@ const Spec* find_spec(const std::string& name) noexcept;
 // ---- the adaptive variant (adaptive_loop.cpp, docs/control.md) ----------------------
 // The best fitted model as an AdaptiveInverse for the reference of `c`: forgetting factor
 // lambda = 1 - 1 / N with N the samples of one period of the reference (its whole length if
-// it is not periodic), the identification run as the prior, pressure limits 0..kPressureMax.
+// it is not periodic), the identification run as the prior, pressure limits 0..c.pressure_max.
 // frozen: no adaptation (the compensated loop's inverse, for comparisons).
 std::shared_ptr<AdaptiveInverse> adaptive_inverse(const Context& c, bool frozen = false);
 // The adaptive loops' feedforward: learns from each measured pair (pressure, contraction),
@@ -138,12 +151,14 @@ std::shared_ptr<AdaptiveInverse> adaptive_inverse(const Context& c, bool frozen 
 // loop; on the wide-band rig that was worse than the fixed inverse (docs/control.md).
 class AdaptiveFeedforward {
  public:
-  explicit AdaptiveFeedforward(std::shared_ptr<AdaptiveInverse> a) : a_(std::move(a)) {}
+  // p_max: the run's actuator limit [MPa], the command's clamp
+  AdaptiveFeedforward(std::shared_ptr<AdaptiveInverse> a, double p_max) : a_(std::move(a)), p_max_(p_max) {}
   double step(const Sample& s) noexcept;
   const AdaptiveInverse& model() const noexcept { return *a_; }
 
  private:
   std::shared_ptr<AdaptiveInverse> a_;
+  double p_max_;
   double r1_ = std::numeric_limits<double>::quiet_NaN(), r2_ = std::numeric_limits<double>::quiet_NaN();
 };
 // "adaptive (REF): ..." counters and the guard's verdict, for the result's messages.
@@ -158,29 +173,31 @@ LoopDesign::Adaptation adaptation_of(const AdaptiveInverse& a);
 using Actuator = std::function<RigInputs(double desired_mpa, const RigOutputs&)>;
 // The identification run: `pressure` [MPa] at the control period through `actuator` (the
 // one the experiment's loops use, so that the dynamics identified on it are theirs).
-// Logs the desired pressure as pressure_command_mpa.
+// Logs the desired pressure, clamped to 0..p_max [MPa] (the run's limit), as pressure_command_mpa.
 IdentificationRun identification_run(const PamRigParams& rp, std::uint64_t seed, const std::vector<double>& pressure,
-                                     double tc, const Actuator& actuator);
+                                     double tc, const Actuator& actuator, double p_max);
 IdentificationRun decimate(const IdentificationRun& r, std::size_t every);
-ModelParams straight_line(const IdentificationRun& r);
+// The models' input_limits are 0..p_max [MPa], the run's limit (the inverses saturate there).
+ModelParams straight_line(const IdentificationRun& r, double p_max);
 // fit() with its model checked: a failed fit or a model that cannot be inverted is a
 // hysteron::Error; `status` (if given) receives the fit's status either way.
-FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, FitStatus* status = nullptr);
+FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, double p_max,
+                      FitStatus* status = nullptr);
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
-// The pressure at which a run's command sat at kPressureMax long enough to level off, where that
-// is more than kCapMargin below it; nullopt otherwise.
+// The pressure at which a run's command sat at its limit p_max [MPa] long enough to level off,
+// where that is more than kCapMargin below it; nullopt otherwise.
 struct CappedTop {
   double level_mpa = 0.0;  // the reading's mean over the last third of the longest stretch at the top
   double stretch_s = 0.0;  // that stretch's length
 };
-std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, std::size_t to);
-// A note for the result's messages when the pressure command sat at 0 or kPressureMax on at
+std::optional<CappedTop> capped_top(const TrackingRun& run, std::size_t from, std::size_t to, double p_max);
+// A note for the result's messages when the pressure command sat at 0 or p_max on at
 // least 1 % of the samples in [from, to) (their count, the RMS error there and elsewhere, and
 // the level the pressure was capped at, capped_top); "" otherwise. Uses run.variant and
 // run.reference. reach_mpa: the most the identification run's pressure reached; rig_changed:
 // the run is on --tracking-plant's rig.
 std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_t to, double reach_mpa,
-                            bool rig_changed);
+                            bool rig_changed, double p_max);
 // "" unless the run's limit-cycle guard cut its position PID's gains (run.controller.guard_cuts):
 // how often, to which scale, at which period; rig_changed: the run tracked on a rig other than
 // the one it was tuned on (--tracking-plant), the likely cause.
@@ -198,9 +215,10 @@ std::string sensor_gap(const TrackingRun& run, std::size_t from, std::size_t to,
 std::string sensor_gap_note(const std::vector<std::string>& gaps, const PamRigParams& identified,
                             const PamRigParams& tracked);
 // Runs one tracking experiment: `reference` sampled at the control period, the
-// preview `lead` samples ahead (wrapping around for a periodic reference).
+// preview `lead` samples ahead (wrapping around for a periodic reference); a command at 0 or
+// p_max [MPa] (the run's limit) counts as saturated.
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
-                  std::size_t lead, bool periodic, const Law& law);
+                  std::size_t lead, bool periodic, const Law& law, double p_max);
 
 }  // namespace hysteron::experiment
 
@@ -225,21 +243,26 @@ PidParams simc_pid(const RigDynamics& d, double tc, double out_min, double out_m
 // taken as exact): T = G (z^lead + K (K_p + I(z))) / (1 + G K C(z)), at w [rad/sample].
 std::complex<double> closed_loop(const RigDynamics& d, const PidParams& pid, std::size_t lead, double tc, double w);
 // The level of both relay tests [MPa]: the middle of the pressure range the loops can use,
-// 0..kPressureMax, or 0..top where the supply caps the actuator below kPressureMax.
-inline constexpr double kRelayLevel = 0.5 * kPressureMax;
-// Relay test (Astrom-Hagglund) of the valves' pressure loop: fill to kRelayLevel, then duty
+// 0..p_max (the run's limit), or 0..top where the supply caps the actuator below p_max. A rig
+// rated above the papers' 0.6 MPa keeps 0.3 MPa, the middle of the range their identification
+// inputs (kept, paper_pressure_input) measure: at 0.4 MPa on a 0.8 MPa rating the nominal rig's
+// relay gave other gains, and gpi-pid's compensated RMS rose from 0.364 to 0.416 mm.
+constexpr double relay_level(double p_max) noexcept {
+  return 0.5 * (p_max < kPaperPressureMax ? p_max : kPaperPressureMax);
+}
+// Relay test (Astrom-Hagglund) of the valves' pressure loop: fill to relay_level(p_max), then duty
 // +-h switched on the measured pressure around it with a hysteresis of 3 noise standard
 // deviations (measured with the valves closed). Where that does not oscillate and the highest
 // pressure measured is below twice the level (a supply that caps the rig), the test runs once
 // more around half that highest pressure. Fills relay_gain, relay_period_s and
 // relay_level_mpa of `d`; throws hysteron::Error if it does not oscillate.
-void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d);
+void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d, double p_max);
 // Relay test of the position loop through an actuator (desired pressure [MPa] and the rig's
 // outputs -> the rig's inputs; `make_actuator` gives a fresh one, e.g. with a reset pressure
 // loop, per run): hold p0 until settled, then switch the pressure p0 +- h on the measured
 // contraction around its settled level, with a hysteresis of 3 noise standard deviations.
-// `top` [MPa] is the actuator's usable top pressure (kPressureMax, or less where the
-// identification run found it capped): p0 = kRelayLevel where kRelayLevel + the first h is
+// `top` [MPa] is the actuator's usable top pressure (p_max, the run's limit, or less where the
+// identification run found it capped): p0 = relay_level(p_max) where that + the first h is
 // within it, else top / 2.
 // h = kPositionRelayAmplitude, doubled while the contraction does not oscillate (a rig whose
 // hysteresis band is wider than h) and p0 +- h stays within 0..top. Fills
@@ -262,8 +285,8 @@ struct StrokePressures {
   double floor_mpa = 0.0, mid_mpa = 0.0;
 };
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
-                         const std::function<Actuator()>& make_actuator, RigDynamics& d,
-                         double top = kPressureMax, StrokePressures stroke = {});
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d, double p_max,
+                         double top, StrokePressures stroke = {});
 // The second-order mode through the relay's point (RigDynamics::mode_*): with F the
 // FOPDT at w_u = 2 pi / T_u and 1/H = (1 - r^2) + 2 i zeta r = -F K_u (r = w_u / w_n):
 //   1 - r^2 = Re(-F K_u),  2 zeta r = Im(-F K_u).
@@ -340,7 +363,8 @@ LoopPeaks loop_peaks(const RigDynamics& d, const PidParams& pid, double tc);
 // The learning loop's PID: Ziegler-Nichols "some overshoot" (K_c = K_u / 3, T_i = T_u / 2) with
 // the derivative time of T_u / 3 (the rule's), T_u / 2 or 2 T_u / 3 whose loop has the least
 // complementary peak among those whose sensitivity peak is at most the rule's (ties: the shorter).
-PidParams learning_pid(const RigDynamics& d, double tc);
+// Output limits +-p_max [MPa], the run's limit.
+PidParams learning_pid(const RigDynamics& d, double tc, double p_max);
 // The shaper (ZvShaper, above) for the identified mode. Inactive when no underdamped mode was
 // identified (mode_frequency_hz = 0 or damping >= 1).
 ZvShaper zv_shaper(const RigDynamics& d, double tc);

@@ -98,7 +98,8 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   // reallocation while the rig runs)
   auto applied = std::make_shared<std::vector<double>>();
   applied->reserve(r.size());
-  Law law = [ilc, inner = base.law, lead, applied](const Sample& s) {
+  const double p_max = ctx.pressure_max;
+  Law law = [ilc, inner = base.law, lead, applied, p_max](const Sample& s) {
     Sample m = s;
     const double c = ilc->correction(0);
     applied->push_back(c * 1e3);
@@ -107,12 +108,12 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
     const RigInputs in = inner(m);
     // anti-windup: no learning where the pressure command is at a limit (the error there
     // cannot be reduced, and the Q-filter would spread its integral to the neighbours)
-    const bool saturated = in.pressure_command <= 0.0 || in.pressure_command >= kPressureMax;
+    const bool saturated = in.pressure_command <= 0.0 || in.pressure_command >= p_max;
     ilc->step(saturated ? 0.0 : s.reference_m - s.measured_m);
     return in;
   };
   if (preview) law = with_preview(std::move(law), preview, lead);  // shaped first, the correction added to it
-  TrackingRun run = track(o, seed, r, lead, true, law);
+  TrackingRun run = track(o, seed, r, lead, true, law, p_max);
   for (int j = 0; j < o.learning_periods; ++j) {
     const std::size_t b = static_cast<std::size_t>(j) * ref.period;
     run.periods.push_back(errors_of(run, b, b + ref.period));
@@ -167,7 +168,7 @@ std::optional<TrackingRun> learning_with_fallback(const ExperimentOptions& o, co
   const bool relay_models = with_mode || fit_fopdt_through_relay_point(through);
   const Context lt{lc.options,       lc.result, with_mode ? identified : through, lc.tc,     lc.lead,
                    lc.pressure_loop, true,      lc.gain_scale,                    lc.shaper, lc.reference,
-                   lc.guard_amplitude_m};
+                   lc.guard_amplitude_m, lc.pressure_max};
   // the attempts after the first, in order, and what the result says of the one that runs
   struct Attempt {
     bool on_relay_models;  // on lt (the models through the relay's point), else on lc again
@@ -315,7 +316,7 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
           return inner(s);
         };
       }
-      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law);
+      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law, c.pressure_max);
       rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
       if (!std::isfinite(rms)) rms = inf;
     } catch (const Stopped&) {  // above the best: a lower bound of its RMS
@@ -335,7 +336,7 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
 }
 
 // Pressure headroom kept below the actuator's limit at a reference's top [fraction of
-// kPressureMax]: the position loop needs pressure above the feedforward's to correct an error
+// the run's limit]: the position loop needs pressure above the feedforward's to correct an error
 // there. The papers' references keep more on the nominal rig (gpi-pid's 95 mm top is reached
 // at about 0.56 MPa, docs/control.md section 5).
 constexpr double kPressureHeadroom = 0.05;
@@ -366,9 +367,9 @@ struct SmoothedRun {
   explicit SmoothedRun(const IdentificationRun& id) : x_mm(smoothed(id.contraction_mm)), p(smoothed(id.pressure_mpa)) {}
 };
 
-// The top pressure the loops can use [MPa]: kPressureMax, or the highest the identification
+// The top pressure the loops can use [MPa]: p_max (the run's limit), or the highest the identification
 // run's pressure reading reached (max of sm.p) where that stayed below (1 - kPressureHeadroom)
-// of the run's highest command (at most kPressureMax): the supply, regulator or valves cap the
+// of the run's highest command (at most p_max): the supply, regulator or valves cap the
 // actuator. Unless the muscle went on contracting with the command while the reading stayed at
 // its top: over the samples where the reading is within 1 % of its top and the command rises,
 // the least-squares slope of the contraction on the command is at least kSensorTopSlope of the
@@ -381,7 +382,7 @@ struct SmoothedRun {
 constexpr double kSensorTopSlope = 0.25;
 
 struct ActuatorTop {
-  double mpa = kPressureMax;    // the usable top
+  double mpa = 0.0;             // the usable top
   double reached_mpa = 0.0;     // the reading's top
   bool sensor_limited = false;  // the reading stopped short of the commands, the muscle did not
   double slope_ratio = 0.0;     // the contraction's slope on the command at the reading's top / the run's
@@ -393,12 +394,13 @@ struct ActuatorTop {
   bool reads_low = false;  // offset_mpa is at least half the shortfall at the top
 };
 
-ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
+ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm, double p_max) {
   ActuatorTop t;
+  t.mpa = p_max;
   t.reached_mpa = max_of(sm.p);
   const std::vector<double>& c = id.pressure_command_mpa;
   const double p_cmd_max = max_of(c);
-  const bool short_of_commands = t.reached_mpa < (1.0 - kPressureHeadroom) * std::min(p_cmd_max, kPressureMax);
+  const bool short_of_commands = t.reached_mpa < (1.0 - kPressureHeadroom) * std::min(p_cmd_max, p_max);
   if (!short_of_commands || !(t.reached_mpa > 0.0)) return t;
   t.mpa = t.reached_mpa;
   {
@@ -409,7 +411,7 @@ ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
     if (gap.size() >= 20) {
       std::nth_element(gap.begin(), gap.begin() + static_cast<std::ptrdiff_t>(gap.size() / 2), gap.end());
       t.offset_mpa = gap[gap.size() / 2];
-      t.reads_low = t.offset_mpa >= 0.5 * (std::min(p_cmd_max, kPressureMax) - t.reached_mpa);
+      t.reads_low = t.offset_mpa >= 0.5 * (std::min(p_cmd_max, p_max) - t.reached_mpa);
     }
   }
   // least-squares slope of x on c over the samples `in` selects
@@ -438,7 +440,7 @@ ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm) {
 }
 
 // The note of a top below the commands (fit_to_reach): the actuator's cap, or the sensor's limit.
-std::string top_note(const ActuatorTop& t, double p_cmd_max, double p_limit) {
+std::string top_note(const ActuatorTop& t, double p_cmd_max, double p_limit, double p_max) {
   if (t.reads_low)
     return fmt::format(
         "the pressure reading of the identification run reached at most {:.3f} MPa while the command went up to "
@@ -453,7 +455,7 @@ std::string top_note(const ActuatorTop& t, double p_cmd_max, double p_limit) {
         "the actuator's pressure reached at most {:.3f} MPa in the identification run, whose command went up to "
         "{:.3f} MPa: the supply, regulator or valves cap it below the {:.2f} MPa the loops may command; the "
         "rig's reach is measured up to {:.3f} MPa ({:.0f} % below that top as headroom)",
-        t.reached_mpa, p_cmd_max, kPressureMax, p_limit, kPressureHeadroom * 100.0);
+        t.reached_mpa, p_cmd_max, p_max, p_limit, kPressureHeadroom * 100.0);
   return fmt::format(
       "the pressure reading of the identification run stopped at {:.3f} MPa while the command went up to {:.3f} MPa, "
       "but the muscle went on contracting with the command ({:.1f} to {:.1f} mm while the command rose from {:.3f} to "
@@ -517,18 +519,18 @@ std::string clipping_note(const Clipping& clip) {
 // contraction at rest (the least, vented) to the contraction on the ascent when the
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
 // (the least contraction at or above that pressure). The top pressure p_top is usable_top's
-// (kPressureMax, or the most the measured pressure reached where the supply, the regulator
+// (p_max, the run's limit, or the most the measured pressure reached where the supply, the regulator
 // or the valves cap the actuator, or the pressure sensor's range ends; its note says which). A
 // reference that leaves the reach is mapped affinely onto its intersection with it (only
 // the end that leaves it moves; a reference whose bottom is the rest position keeps it).
 // The ranges and a note per reference out of reach go into the result.
 std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdentificationRun& id, const SmoothedRun& sm,
                                     const ActuatorTop& actuator_top, std::vector<Reference> refs,
-                                    ExperimentResult& res) {
+                                    ExperimentResult& res, double p_max) {
   const std::vector<double>& x = sm.x_mm;
   const double p_top = actuator_top.mpa;
   const double p_limit = (1.0 - kPressureHeadroom) * p_top;
-  if (p_top < kPressureMax) res.messages.push_back(top_note(actuator_top, max_of(id.pressure_command_mpa), p_limit));
+  if (p_top < p_max) res.messages.push_back(top_note(actuator_top, max_of(id.pressure_command_mpa), p_limit, p_max));
   double top = std::numeric_limits<double>::infinity();
   res.reach_min_mm = std::numeric_limits<double>::infinity();
   res.reach_max_mm = -res.reach_min_mm;
@@ -632,7 +634,7 @@ struct IdentificationRange {
 };
 
 IdentificationRange model_identification_range(const SmoothedRun& sm, const std::vector<Reference>& refs,
-                                               const std::vector<double>& input) {
+                                               const std::vector<double>& input, double p_max) {
   IdentificationRange r;
   if (refs.empty() || input.empty() || sm.x_mm.empty()) return r;
   r.input_max_mpa = *std::max_element(input.begin(), input.end());
@@ -649,7 +651,7 @@ IdentificationRange model_identification_range(const SmoothedRun& sm, const std:
   }
   if (!above || p_need < 0.0) return r;
   r.p_need_mpa = p_need;
-  const double p_id = p_need + 2.0 * kPressureHeadroom * kPressureMax;
+  const double p_id = p_need + 2.0 * kPressureHeadroom * p_max;
   if (p_id < r.input_max_mpa) r.p_id_mpa = p_id;
   return r;
 }
@@ -666,18 +668,18 @@ std::vector<double> scaled_to(std::vector<double> input, double top_mpa, bool up
 // Where the paper's identification input stops short of the actuator's top (mpi-openloop's
 // 0.5 MPa of 0.6) and its run never reached the highest reference top, the rig's reach at
 // that top is not known and a model fitted on the run would be extrapolated there (a 0.2 m
-// muscle, a heavy load or a weak muscle): the pressure the input is extended to, kPressureMax,
-// else 0 (the paper's input is kept). Not where the supply caps the actuator below the
-// input's maximum already (p_top < kPressureMax): a larger command would not be delivered.
+// muscle, a heavy load or a weak muscle): the pressure the input is extended to, p_max (the
+// run's limit), else 0 (the paper's input is kept). Not where the supply caps the actuator
+// below the input's maximum already (p_top < p_max): a larger command would not be delivered.
 double extended_input_top(const std::vector<double>& input, const SmoothedRun& sm, const std::vector<Reference>& refs,
-                          double p_top) {
-  if (input.empty() || refs.empty() || sm.x_mm.empty() || p_top < kPressureMax) return 0.0;
+                          double p_top, double p_max) {
+  if (input.empty() || refs.empty() || sm.x_mm.empty() || p_top < p_max) return 0.0;
   const double input_max = *std::max_element(input.begin(), input.end());
-  if (!(input_max < (1.0 - kPressureHeadroom) * kPressureMax)) return 0.0;
+  if (!(input_max < (1.0 - kPressureHeadroom) * p_max)) return 0.0;
   double ref_top = -std::numeric_limits<double>::infinity();
   for (const Reference& ref : refs) ref_top = std::max(ref_top, 1e3 * *std::max_element(ref.ref_m.begin(), ref.ref_m.end()));
   const double reached = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
-  return reached > ref_top ? 0.0 : kPressureMax;
+  return reached > ref_top ? 0.0 : p_max;
 }
 
 // The kinds a run tries for hysteron's model: the one asked for, or (auto) the paper's
@@ -742,7 +744,8 @@ bool pi_family(FitModel k) {
 // Fits the candidates of hysteron's model on `idf` and keeps (res.best_fit) the one with the
 // least RMS on `id2`; fills res.candidates, res.model_choice and res.model_reason.
 void choose_model(const ExperimentOptions& o, const Spec& spec, const IdentificationRun& idf,
-                  const IdentificationRun& id2, const FitOptions& fo, double fit_dt, ExperimentResult& res) {
+                  const IdentificationRun& id2, const FitOptions& fo, double fit_dt, double p_max,
+                  ExperimentResult& res) {
   const bool automatic = o.model == FitModel::automatic;
   res.model_choice = o.model;
   double best_rms = std::numeric_limits<double>::infinity();
@@ -767,7 +770,7 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const Identifica
     FitReport rep;
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      rep = fit_checked(idf, f2, fmt::format("{} model", fit_model_name(kind)), &c.status);
+      rep = fit_checked(idf, f2, fmt::format("{} model", fit_model_name(kind)), p_max, &c.status);
       c.validation = evaluate_censored(rep.model, id2.pressure_mpa, id2.contraction_mm);
       if (!std::isfinite(c.validation.rms))
         throw Error(fmt::format("experiment: the {} model's output on the second identification run is not finite",
@@ -836,6 +839,28 @@ void choose_model(const ExperimentOptions& o, const Spec& spec, const Identifica
   to_control_rate(res.best_fit.model, o.control_period, res.messages);
 }
 
+// The note of a run whose actuator limit is not the papers' 0..0.6 MPa: where it comes from,
+// and what changes (the papers' identification inputs scaled, or kept).
+std::string limit_note(const ExperimentOptions& o, const Spec& spec, double p_max) {
+  const auto of = [&](const PamRigParams& rp, const char* which) {
+    std::string s = fmt::format("{}muscle.max_pressure = {:g} kPa", which, rp.muscle.max_pressure * 1e-3);
+    if (!spec.valves) s += fmt::format(", regulator.max_command = {:g} kPa", rp.regulator.max_command * 1e-3);
+    return s;
+  };
+  std::string from = of(o.rig, "");
+  if (o.tracking_rig) from += "; " + of(*o.tracking_rig, "the tracking rig's ");
+  return fmt::format(
+      "the actuator's limit is 0..{:.3f} MPa, the least of {} ({}), not the papers' 0..{} MPa: no run commands more{}",
+      p_max, from,
+      spec.valves ? "the muscle's rated maximum; the switching valves have no command range"
+                  : "the muscle's rated maximum and the regulator's command range",
+      kPaperPressureMax,
+      p_max < kPaperPressureMax
+          ? fmt::format(", and the papers' identification inputs are scaled by {:.3f} (docs/control.md, section 0)",
+                        p_max / kPaperPressureMax)
+          : std::string("; the papers' identification inputs are kept (docs/control.md, section 0)"));
+}
+
 }  // namespace
 
 void ExperimentOptions::validate() const {
@@ -876,26 +901,32 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.title = spec.title;
   res.seed = o.seed;
   res.published = spec.published;
+  // the actuator's limit: no run commands more (the rig's rating and the regulator's range)
+  const double p_max = run_pressure_limit(o, spec.valves);
+  res.pressure_limit_mpa = p_max;
+  if (p_max != kPaperPressureMax) res.messages.push_back(limit_note(o, spec, p_max));
 
   // 0. the actuator of every run: the regulator, or the valves behind a pressure PI tuned
   //    by a relay test of the valves (first: the identification runs through it too)
   RigDynamics valves_relay;
   PidParams pressure_loop;
   if (spec.valves) {
-    relay_test(o.rig, o.seed + 15485863, tc, valves_relay);
+    relay_test(o.rig, o.seed + 15485863, tc, valves_relay, p_max);
     pressure_loop = tyreus_luyben_pi(valves_relay, tc);
   }
   auto make_actuator = [&]() -> Actuator {
     if (!spec.valves)
-      return [k = spec.pressure_loop_gain](double p, const RigOutputs& out) {
-        return regulator(pressure_loop_command(p, out.pressure_measured * 1e-6, k));
+      return [k = spec.pressure_loop_gain, p_max](double p, const RigOutputs& out) {
+        return regulator(pressure_loop_command(p, out.pressure_measured * 1e-6, k), p_max);
       };
     auto inner = std::make_shared<Pid>(pressure_loop);
     return [inner](double p, const RigOutputs& out) { return valves(inner->step(p, out.pressure_measured * 1e-6), p); };
   };
 
-  // 1. identification run and the paper's fit on the major loop
-  const IdentificationRun id = identification_run(o.rig, o.seed, spec.id_pressure(tc), tc, make_actuator());
+  // 1. identification run and the paper's fit on the major loop (the papers' inputs scaled to a
+  //    limit below their 0..0.6 MPa: paper_pressure_input)
+  const std::vector<double> paper_input = paper_pressure_input(spec.id_pressure(tc), p_max);
+  const IdentificationRun id = identification_run(o.rig, o.seed, paper_input, tc, make_actuator(), p_max);
   res.identification = id;
   res.id_train_end = static_cast<std::size_t>(std::lround(spec.train_seconds / tc));
   const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / (kFitRate * tc))));
@@ -906,7 +937,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   fo.num_operators = spec.operators;
   fo.train = {0, train_end};
   fo.seed = static_cast<unsigned>(o.seed);
-  res.fit = fit_checked(idf, fo, "paper's model");
+  res.fit = fit_checked(idf, fo, "paper's model", p_max);
   res.validation =
       evaluate_censored(res.fit.model, idf.pressure_mpa, idf.contraction_mm, {train_end, IndexRange::npos});
 
@@ -917,15 +948,15 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // Where the paper's input stops short of the actuator's top and its run never reached the
   // references' top, the reach and hysteron's model come from a run of that input extended to
   // the top (extended_input_top); the paper's model stays fitted on the paper's run.
-  const std::vector<double> paper_input = spec.id_pressure(tc);
   std::vector<Reference> refs = spec.references(tc);
   std::optional<IdentificationRun> extended_run, extended_runf;
   {
     const SmoothedRun sm(id);
-    if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, sm).mpa); ext > 0.0) {
+    if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, sm, p_max).mpa, p_max);
+        ext > 0.0) {
       const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
       const double reached_mm = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
-      extended_run = identification_run(o.rig, o.seed, scaled_to(paper_input, ext, true), tc, make_actuator());
+      extended_run = identification_run(o.rig, o.seed, scaled_to(paper_input, ext, true), tc, make_actuator(), p_max);
       extended_runf = decimate(*extended_run, every);
       res.messages.push_back(fmt::format(
           "the paper's identification input goes up to {:.3f} MPa, where this rig's contraction stayed at or below "
@@ -937,31 +968,33 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   }
   const IdentificationRun& id_run = extended_run ? *extended_run : id;  // the run the reach and the model come from
   const IdentificationRun& id_runf = extended_run ? *extended_runf : idf;
-  const std::vector<double> id_input = extended_run ? scaled_to(paper_input, kPressureMax, true) : paper_input;
+  const std::vector<double> id_input = extended_run ? scaled_to(paper_input, p_max, true) : paper_input;
   const SmoothedRun smooth(id_run);
   res.reach_pressure_max_mpa = max_of(smooth.p);
   // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip
-  const ActuatorTop actuator_top = usable_top(id_run, smooth);
+  const ActuatorTop actuator_top = usable_top(id_run, smooth, p_max);
   const double top = actuator_top.mpa;
-  refs = fit_to_reach(o, id_run, smooth, actuator_top, std::move(refs), res);
+  refs = fit_to_reach(o, id_run, smooth, actuator_top, std::move(refs), res, p_max);
   add_pre_roll(refs, tc);
-  const IdentificationRange range = model_identification_range(smooth, refs, id_input);
+  const IdentificationRange range = model_identification_range(smooth, refs, id_input, p_max);
   const bool rescaled = range.p_id_mpa > 0.0;
-  res.model_id_top_mpa = rescaled ? range.p_id_mpa : extended_run ? kPressureMax : 0.0;
+  res.model_id_top_mpa = rescaled ? range.p_id_mpa : extended_run ? p_max : 0.0;
   std::optional<IdentificationRun> scaled_run, scaled_runf;  // the model's identification run, if not the paper's
   if (rescaled) {
     res.messages.push_back(range.note());
-    scaled_run = identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator());
+    scaled_run = identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator(), p_max);
     scaled_runf = decimate(*scaled_run, every);
   }
   const IdentificationRun& ids = rescaled ? *scaled_run : id_run;
   const IdentificationRun& idsf = rescaled ? *scaled_runf : id_runf;
   if (rescaled || extended_run) res.model_identification = ids;  // the model's run, where not the paper's
   const IdentificationRun id2 = decimate(
-      identification_run(o.rig, o.seed + 7919, scaled_to(spec.id2_pressure(tc), range.p_id_mpa), tc, make_actuator()),
+      identification_run(o.rig, o.seed + 7919,
+                         scaled_to(paper_pressure_input(spec.id2_pressure(tc), p_max), range.p_id_mpa), tc,
+                         make_actuator(), p_max),
       every);
-  choose_model(o, spec, idsf, id2, fo, static_cast<double>(every) * tc, res);
-  res.baseline_model = straight_line(id_run);
+  choose_model(o, spec, idsf, id2, fo, static_cast<double>(every) * tc, p_max, res);
+  res.baseline_model = straight_line(id_run, p_max);
 
   // 3. the rig's dynamics through its actuator, from the paper's identification run (or its
   //    extension, above), around hysteron's kind fitted on it (where the model was identified
@@ -974,7 +1007,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     const FitModel kind = res.best_fit.model_kind;
     try {
       FitReport full = fit_checked(id_runf, candidate_fit_options(fo, kind, spec, static_cast<double>(every) * tc),
-                                   fmt::format("{} model", fit_model_name(kind)));
+                                   fmt::format("{} model", fit_model_name(kind)), p_max);
       std::vector<std::string> said_already;  // to_control_rate's note was given for the chosen model
       to_control_rate(full.model, o.control_period, said_already);
       dynamics_model = std::move(full.model);
@@ -993,7 +1026,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   const IdentificationRun& dyn_run = on_paper_run ? id_run : ids;
   const double cmd_max = max_of(dyn_run.pressure_command_mpa);
   IdentificationRun capped_run;
-  const bool clip = top < (1.0 - 2.0 * kPressureHeadroom) * std::min(cmd_max, kPressureMax);
+  const bool clip = top < (1.0 - 2.0 * kPressureHeadroom) * std::min(cmd_max, p_max);
   if (clip) {
     capped_run = dyn_run;
     for (double& v : capped_run.pressure_command_mpa) v = std::min(v, top);
@@ -1006,7 +1039,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics.relay_period_s = valves_relay.relay_period_s;
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;
   res.dynamics.relay_duty = valves_relay.relay_duty;
-  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, top, stroke_pressures(id_run, smooth));
+  position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, p_max, top,
+                      stroke_pressures(id_run, smooth));
   fit_load_mode(res.dynamics);
   if (const RigDynamics fitted = res.dynamics; fit_fopdt_to_relay_phase(res.dynamics))
     res.messages.push_back(fmt::format(
@@ -1017,7 +1051,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         "learning design and the learning loop's PID use them; docs/control.md, section 1)",
         fitted.dead_time_s * 1e3, fitted.lag_s * 1e3, 1.0 / res.dynamics.position_relay_period_s,
         res.dynamics.dead_time_s * 1e3, res.dynamics.lag_s * 1e3));
-  const Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};
+  Context ctx{o, res, res.dynamics, tc, lead, pressure_loop};
+  ctx.pressure_max = p_max;
 
   // 4. tracking
   const std::uint64_t track_seed = o.seed + 104729;
@@ -1041,7 +1076,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     const auto say = [&](std::string note) {
       if (!note.empty()) res.messages.push_back(std::move(note));
     };
-    say(saturation_note(run, from, run.t.size(), res.reach_pressure_max_mpa, rig_changed));
+    say(saturation_note(run, from, run.t.size(), res.reach_pressure_max_mpa, rig_changed, p_max));
     say(guard_note(run, rig_changed));
     if (std::string gap = sensor_gap(run, from, run.t.size(), frame_mm); !gap.empty())
       sensor_gaps.push_back(std::move(gap));
@@ -1084,7 +1119,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         loop.description += fmt::format("; feedforward through a zero-vibration shaper at the identified mode {}",
                                         shaper_timing(zv, tc));
       }
-      TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law);
+      TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law, p_max);
       run.variant = v.name;
       run.reference = ref.name;
       run.description = loop.description;
@@ -1255,7 +1290,7 @@ std::string ExperimentResult::table() const {
   // the relay's amplitude only where it had to be raised (a wide hysteresis band)
   const double h = dynamics.position_relay_amplitude_mpa;
   // ... and its level (and the pressure relay's) only where a capped supply moved it off 0.3 MPa
-  auto moved = [](double level) { return level > 0.0 && std::abs(level - kRelayLevel) > 1e-9; };
+  auto moved = [&](double level) { return level > 0.0 && std::abs(level - relay_level(pressure_limit_mpa)) > 1e-9; };
   std::string amplitude;
   if (moved(dynamics.position_relay_level_mpa))
     amplitude = fmt::format(" (at {:.3f} +-{:g} MPa)", dynamics.position_relay_level_mpa, h);

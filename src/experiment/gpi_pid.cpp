@@ -15,13 +15,15 @@ namespace hysteron::experiment {
 
 namespace {
 
-// FeedforwardPidController on `model` with `pid`.
-Loop ff_pid_loop(const ModelParams& model, double tc, const PidParams& pid, std::string description) {
+// FeedforwardPidController on `model` with `pid`, its pressure limited to 0..p_max [MPa].
+Loop ff_pid_loop(const ModelParams& model, double tc, double p_max, const PidParams& pid, std::string description) {
   FeedforwardParams ff;
   ff.sample_time = tc;
+  ff.pressure_limits = {0.0, p_max};
   auto c = std::make_shared<FeedforwardPidController>(model, ff, pid);
-  Loop loop{[c](const Sample& s) { return regulator(c->step(s.reference_m, s.preview_m, s.measured_m)); },
+  Loop loop{[c, p_max](const Sample& s) { return regulator(c->step(s.reference_m, s.preview_m, s.measured_m), p_max); },
             std::move(description), pid};
+  loop.feedforward = ff;
   loop.position_state = [c] { return c->pid().state(); };
   return loop;
 }
@@ -30,15 +32,16 @@ Loop ff_pid_loop(const ModelParams& model, double tc, const PidParams& pid, std:
 Loop adaptive_ff_pid(const Context& c, bool frozen) {
   const PidParams pid = position_pid(c);
   auto a = adaptive_inverse(c, frozen);
-  auto ff = std::make_shared<AdaptiveFeedforward>(a);
+  const double p_max = c.pressure_max;
+  auto ff = std::make_shared<AdaptiveFeedforward>(a, p_max);
   PidParams q = pid;
   q.out_min = std::max(q.out_min, 0.0);
-  q.out_max = std::min(q.out_max, kPressureMax);
+  q.out_max = std::min(q.out_max, p_max);
   auto fb = std::make_shared<Pid>(q);
-  Law law = [ff, fb](const Sample& s) {
+  Law law = [ff, fb, p_max](const Sample& s) {
     const double u_ff = ff->step(s);
     const double u = fb->step(s.reference_m, s.measured_m, u_ff);
-    return regulator(std::isfinite(u) ? u : u_ff);
+    return regulator(std::isfinite(u) ? u : u_ff, p_max);
   };
   const std::string name = c.reference->name;
   Loop result{std::move(law),
@@ -46,6 +49,7 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
                           "Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                           c.result.lead_s * 1e3, adaptive_description(*a), pid_origin(c), pid.kp, pid.ki, pid.kd),
               pid, [a, name] { return adaptive_note(*a, name); }};
+  result.feedforward.pressure_limits = {0.0, p_max};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
   result.position_state = [fb] { return fb->state(); };
   return result;
@@ -75,14 +79,14 @@ const Spec& gpi_pid_spec() {
     s.variants = {
         {"faithful", false,
          [](const Context& c) {
-           const PidParams paper = gpi_paper_pid(c.tc, -kPressureMax, kPressureMax);
-           return ff_pid_loop(c.result.fit.model, c.tc, paper,
+           const PidParams paper = gpi_paper_pid(c.tc, -c.pressure_max, c.pressure_max);
+           return ff_pid_loop(c.result.fit.model, c.tc, c.pressure_max, paper,
                               "inverse GPI feedforward + PID of Table 3 (Kp = 0.05 V/mm, Ki = 0.01 V/(mm s))");
          }},
         {"compensated", true,
          [](const Context& c) {
            const PidParams pid = position_pid(c);
-           return ff_pid_loop(c.result.best_fit.model, c.tc, pid,
+           return ff_pid_loop(c.result.best_fit.model, c.tc, c.pressure_max, pid,
                               fmt::format("best inverse model fed {:.0f} ms ahead, PID tuned by {} "
                                           "(Kp = {:.3g} MPa/m, Ki = {:.3g} MPa/(m s), Kd = {:.3g} MPa s/m)",
                                           c.result.lead_s * 1e3, pid_origin(c), pid.kp, pid.ki, pid.kd));
@@ -90,8 +94,8 @@ const Spec& gpi_pid_spec() {
         {"adaptive", true, [](const Context& c) { return adaptive_ff_pid(c, false); }},
         {"baseline", false,
          [](const Context& c) {
-           const PidParams paper = gpi_paper_pid(c.tc, -kPressureMax, kPressureMax);
-           return ff_pid_loop(c.result.baseline_model, c.tc, paper,
+           const PidParams paper = gpi_paper_pid(c.tc, -c.pressure_max, c.pressure_max);
+           return ff_pid_loop(c.result.baseline_model, c.tc, c.pressure_max, paper,
                               "straight-line feedforward (no hysteresis) + PID of Table 3");
          }},
     };

@@ -22,8 +22,9 @@ constexpr double kPressureGain = 0.5;  // the paper's k_p of the pressure loop
 // OpenLoopController on `model` with `p`; the loop's numbers (its PID and pressure loop) from p.
 Loop open_loop(const ModelParams& model, const OpenLoopParams& p, std::string description) {
   auto c = std::make_shared<OpenLoopController>(model, p);
-  Law law = [c](const Sample& s) {
-    return regulator(c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa));
+  const double p_max = p.feedforward.pressure_limits.hi;
+  Law law = [c, p_max](const Sample& s) {
+    return regulator(c->step(s.reference_m, s.preview_m, s.measured_m, s.pressure_mpa), p_max);
   };
   Loop loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain,
             LoopDesign::Kind::open_loop, p.feedforward};
@@ -31,9 +32,11 @@ Loop open_loop(const ModelParams& model, const OpenLoopParams& p, std::string de
   return loop;
 }
 
-OpenLoopParams published(double tc) {
+// The paper's loop, its pressure limited to 0..p_max [MPa] (the run's limit).
+OpenLoopParams published(double tc, double p_max) {
   OpenLoopParams p;
   p.feedforward.sample_time = tc;
+  p.feedforward.pressure_limits = {0.0, p_max};
   p.pressure_gain = kPressureGain;
   return p;
 }
@@ -41,20 +44,21 @@ OpenLoopParams published(double tc) {
 // The compensated loop (OpenLoopController with its PID position correction) with the
 // adaptive inverse as its feedforward.
 Loop adaptive_open_loop(const Context& c, bool frozen) {
-  OpenLoopParams p = published(c.tc);
+  OpenLoopParams p = published(c.tc, c.pressure_max);
   p.position = position_pid(c);
   auto a = adaptive_inverse(c, frozen);
-  auto ff = std::make_shared<AdaptiveFeedforward>(a);
+  const double p_max = c.pressure_max;
+  auto ff = std::make_shared<AdaptiveFeedforward>(a, p_max);
   PidParams q = p.position;
-  q.out_min = std::max(q.out_min, -kPressureMax);
-  q.out_max = std::min(q.out_max, kPressureMax);
+  q.out_min = std::max(q.out_min, -p_max);
+  q.out_max = std::min(q.out_max, p_max);
   auto position = std::make_shared<Pid>(q);
   const bool use_position = p.position.kp != 0.0 || p.position.ki != 0.0 || p.position.kd != 0.0;
   const double kp = p.pressure_gain;
-  Law law = [ff, position, use_position, kp](const Sample& s) {
+  Law law = [ff, position, use_position, kp, p_max](const Sample& s) {
     double p_d = ff->step(s);
-    if (use_position) p_d = std::clamp(p_d + position->step(s.reference_m, s.measured_m), 0.0, kPressureMax);
-    return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp));
+    if (use_position) p_d = std::clamp(p_d + position->step(s.reference_m, s.measured_m), 0.0, p_max);
+    return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp), p_max);
   };
   const std::string name = c.reference->name;
   Loop result{std::move(law),
@@ -95,14 +99,14 @@ const Spec& mpi_openloop_spec() {
     s.variants = {
         {"faithful", false,
          [](const Context& c) {
-           return open_loop(c.result.fit.model, published(c.tc),
+           return open_loop(c.result.fit.model, published(c.tc, c.pressure_max),
                             "inverse asymmetric MPI, open loop, proportional pressure loop (k_p = 0.5)");
          }},
         {"compensated", true,
          [](const Context& c) {
            // the paper's pressure loop, through which the rig was identified (Spec::pressure_loop_gain),
            // and the PID from the relay test (and gain trial) on it
-           OpenLoopParams p = published(c.tc);
+           OpenLoopParams p = published(c.tc, c.pressure_max);
            p.position = position_pid(c);
            return open_loop(c.result.best_fit.model, p,
                             fmt::format("best inverse model fed {:.0f} ms ahead, pressure loop (k_p = {:g}) + PID "
@@ -114,7 +118,7 @@ const Spec& mpi_openloop_spec() {
         {"adaptive", true, [](const Context& c) { return adaptive_open_loop(c, false); }},
         {"baseline", false,
          [](const Context& c) {
-           return open_loop(c.result.baseline_model, published(c.tc),
+           return open_loop(c.result.baseline_model, published(c.tc, c.pressure_max),
                             "straight-line open-loop inverse (no hysteresis), proportional pressure loop");
          }},
     };

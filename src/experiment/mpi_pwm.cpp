@@ -30,10 +30,12 @@ Loop cascade(const ModelParams& model, const CascadeParams& p, std::string descr
   return loop;
 }
 
-CascadeParams published(double tc) {
+// The paper's cascade, its desired pressure limited to 0..p_max [MPa] (the run's limit).
+CascadeParams published(double tc, double p_max) {
   CascadeParams p;
   p.feedforward.sample_time = tc;
-  p.position = gpi_paper_pid(tc, -kPressureMax, kPressureMax);
+  p.feedforward.pressure_limits = {0.0, p_max};
+  p.position = gpi_paper_pid(tc, -p_max, p_max);
   p.pressure.kp = 20.0;  // duty per MPa
   p.pressure.sample_time = tc;
   p.pwm.gain = 1.0;
@@ -42,23 +44,24 @@ CascadeParams published(double tc) {
 
 // The compensated cascade (CascadePwmController) with the adaptive inverse as its feedforward.
 Loop adaptive_cascade(const Context& c, bool frozen) {
-  CascadeParams p = published(c.tc);
+  CascadeParams p = published(c.tc, c.pressure_max);
   p.position = position_pid(c);
   p.pressure = c.pressure_loop;
   auto a = adaptive_inverse(c, frozen);
-  auto ff = std::make_shared<AdaptiveFeedforward>(a);
+  const double p_max = c.pressure_max;
+  auto ff = std::make_shared<AdaptiveFeedforward>(a, p_max);
   PidParams qx = p.position;
   qx.out_min = std::max(qx.out_min, 0.0);
-  qx.out_max = std::min(qx.out_max, kPressureMax);
+  qx.out_max = std::min(qx.out_max, p_max);
   PidParams qp = p.pressure;
   qp.out_min = std::max(qp.out_min, -1.0);
   qp.out_max = std::min(qp.out_max, 1.0);
   auto position = std::make_shared<Pid>(qx);
   auto pressure = std::make_shared<Pid>(qp);
   auto pwm = std::make_shared<PwmModulator>(p.pwm);
-  Law law = [ff, position, pressure, pwm](const Sample& s) {
+  Law law = [ff, position, pressure, pwm, p_max](const Sample& s) {
     const double u_ff = ff->step(s);
-    const double p_d = std::clamp(position->step(s.reference_m, s.measured_m, u_ff), 0.0, kPressureMax);
+    const double p_d = std::clamp(position->step(s.reference_m, s.measured_m, u_ff), 0.0, p_max);
     const double u = pressure->step(p_d, s.pressure_mpa);
     return valves(std::clamp(pwm->step(u), -1.0, 1.0), p_d);
   };
@@ -103,12 +106,12 @@ const Spec& mpi_pwm_spec() {
     s.variants = {
         {"faithful", false,
          [](const Context& c) {
-           return cascade(c.result.fit.model, published(c.tc),
+           return cascade(c.result.fit.model, published(c.tc, c.pressure_max),
                           "inverse dead-zone MPI + PID position loop, P pressure loop on PWM switching valves");
          }},
         {"compensated", true,
          [](const Context& c) {
-           CascadeParams p = published(c.tc);
+           CascadeParams p = published(c.tc, c.pressure_max);
            p.position = position_pid(c);
            p.pressure = c.pressure_loop;
            return cascade(c.result.best_fit.model, p,
@@ -121,7 +124,7 @@ const Spec& mpi_pwm_spec() {
         {"adaptive", true, [](const Context& c) { return adaptive_cascade(c, false); }},
         {"baseline", false,
          [](const Context& c) {
-           return cascade(c.result.baseline_model, published(c.tc),
+           return cascade(c.result.baseline_model, published(c.tc, c.pressure_max),
                           "straight-line feedforward (no hysteresis) in the same cascade");
          }},
     };

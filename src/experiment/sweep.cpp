@@ -536,6 +536,8 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.fit_references = options.fit_references;
         eo.complete_gain_trials = false;       // the sweep reports the trial's choice, not its curve
         eo.fit_ineligible_candidates = false;  // ... and the model auto chose, not the others
+        const experiment::Spec* spec = experiment::find_spec(run.experiment);
+        run.command_limit_mpa = spec ? experiment::run_pressure_limit(eo, spec->valves) : nan;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
         for (const auto& tr : er.runs) {
           SweepRunErrors e;
@@ -627,7 +629,7 @@ std::string SweepResult::csv() const {
   std::string out =
       "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,"
       "min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s,guard_cuts,"
-      "guard_final_scale\n";
+      "guard_final_scale,command_limit_mpa\n";
   for (std::size_t e = 0; e < experiments.size(); ++e)
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const SweepRun& run = this->run(e, v);
@@ -636,20 +638,21 @@ std::string SweepResult::csv() const {
       const std::string head = fmt::format("{},{},{},", csv_field(experiments[e]), csv_field(variants[v].variant.name),
                                            csv_field(overrides));
       if (!run.ok) {
-        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,\n", csv_field(run.error), csv_number(run.wall_time_s));
+        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,,{}\n", csv_field(run.error), csv_number(run.wall_time_s),
+                                  csv_number(run.command_limit_mpa));
         continue;
       }
       for (const auto& x : run.runs) {
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");
-        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{}\n", csv_field(x.reference),
+        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{},{}\n", csv_field(x.reference),
                                   csv_field(x.kind), csv_number(x.errors.max_error_mm), csv_number(x.errors.mae_mm),
                                   csv_number(x.errors.rms_error_mm),
                                   csv_number(nom ? ratio(x.errors.rms_error_mm, nom->errors.rms_error_mm) : nan),
                                   csv_number(base ? ratio(x.errors.rms_error_mm, base->errors.rms_error_mm) : nan),
                                   csv_number(x.min_command_mpa), csv_number(x.max_command_mpa), x.saturated,
                                   csv_number(x.reference_scale), csv_number(run.wall_time_s), x.guard_cuts,
-                                  csv_number(x.guard_final_scale));
+                                  csv_number(x.guard_final_scale), csv_number(run.command_limit_mpa));
       }
     }
   return out;
@@ -667,9 +670,11 @@ std::vector<std::string> SweepResult::target_misses() const {
       }
       for (const auto& x : run.runs) {
         const std::string what = fmt::format("{} {} {} {}", experiments[e], vn, x.reference, x.kind);
-        if (std::isfinite(x.min_command_mpa) && (x.min_command_mpa < 0.0 || x.max_command_mpa > 0.6))
-          out.push_back(fmt::format("{}: pressure command {:.4f}..{:.4f} MPa leaves 0..0.6 MPa", what,
-                                    x.min_command_mpa, x.max_command_mpa));
+        // (a limit that is not finite: an unknown experiment, whose runs failed)
+        if (std::isfinite(x.min_command_mpa) &&
+            (x.min_command_mpa < 0.0 || !(x.max_command_mpa <= run.command_limit_mpa)))
+          out.push_back(fmt::format("{}: pressure command {:.4f}..{:.4f} MPa leaves 0..{:g} MPa", what,
+                                    x.min_command_mpa, x.max_command_mpa, run.command_limit_mpa));
         if (x.kind != "compensated") continue;
         if (!x.reachable)
           out.push_back(fmt::format("{}: the reference leaves the rig's reach (--paper-references; the error "
@@ -838,6 +843,7 @@ json SweepResult::to_json() const {
     if (!run.ok) o["error"] = run.error;
     if (run.ok) o["model"] = run.model, o["model_reason"] = run.model_reason;
     o["wall_time_s"] = run.wall_time_s;
+    o["command_limit_mpa"] = number(run.command_limit_mpa);
     o["tracking"] = json::array();
     const std::size_t e = static_cast<std::size_t>(
         std::find(experiments.begin(), experiments.end(), run.experiment) - experiments.begin());

@@ -462,12 +462,12 @@ PressureRelayRun pressure_relay_run(const PamRigParams& rp, std::uint64_t seed, 
 
 }  // namespace
 
-void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d) {
-  // At kRelayLevel first. Where it did not oscillate and the highest pressure that run
+void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d, double p_max) {
+  // At relay_level(p_max) first. Where it did not oscillate and the highest pressure that run
   // measured is below twice its level (a supply that caps the rig at or below the level: the
   // limit cycle has no upper half), once more around half that top, the middle of the range
   // the rig reaches.
-  double p0 = kRelayLevel;  // [MPa]
+  double p0 = relay_level(p_max);  // [MPa]
   PressureRelayRun r = pressure_relay_run(rp, seed, tc, p0);
   std::string first;
   // Valves that barely filled the muscle at duty 0.5 (less than a tenth of the level in the 2 s
@@ -563,14 +563,14 @@ RelayCycle position_relay_run(const PamRigParams& rp, std::uint64_t seed, double
 }  // namespace
 
 void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
-                         const std::function<Actuator()>& make_actuator, RigDynamics& d, double top,
-                         StrokePressures stroke) {
-  if (!(top > 0.0 && top <= kPressureMax))
-    throw Error(fmt::format("experiment: the position relay's top pressure {} MPa must be in (0, {}]", top,
-                            kPressureMax));
-  // [MPa]: kRelayLevel while the relay's first upper level is within reach, else the middle of
-  // the range the rig reaches (a supply that caps the actuator)
-  double p0 = kRelayLevel + kPositionRelayAmplitude <= top ? kRelayLevel : 0.5 * top;
+                         const std::function<Actuator()>& make_actuator, RigDynamics& d, double p_max,
+                         double top, StrokePressures stroke) {
+  if (!(top > 0.0 && top <= p_max))
+    throw Error(fmt::format("experiment: the position relay's top pressure {} MPa must be in (0, {}]", top, p_max));
+  // [MPa]: relay_level(p_max) while the relay's first upper level is within reach, else the
+  // middle of the range the rig reaches (a supply that caps the actuator)
+  const double middle = relay_level(p_max);
+  double p0 = middle + kPositionRelayAmplitude <= top ? middle : 0.5 * top;
   // ... and the middle of the stroke where p0's lower level would let the load down onto its
   // rest: there the contraction cannot fall below its level, or the cycle is cut at the rest
   // and the describing function's K_u is far off (65 kg: 79.5 MPa/m at 0.3 MPa, 6x the
@@ -579,7 +579,7 @@ void position_relay_test(const PamRigParams& rp, std::uint64_t seed, double tc,
   // A relay must overcome the rig's hysteresis to make the muscle reverse: where the
   // pressure band is wider than the amplitude the contraction only creeps and does not
   // cross its level. Then the amplitude is doubled (Astrom and Hagglund adjust it to the
-  // process), while p0 +- h stays within the actuator's 0..kPressureMax. A slow rig (a large
+  // process), while p0 +- h stays within the actuator's 0..top. A slow rig (a large
   // muscle filled through small valves, a heavy load) oscillates with a period too long for
   // 3 cycles in the measured window: where the contraction did cross its level (the relay
   // switched, so it is not the hysteresis that holds it), the run is repeated twice and four
@@ -632,8 +632,8 @@ PidParams relay_pid(const RigDynamics& d, double tc, double out_min, double out_
 
 namespace hysteron::experiment {
 
-PidParams learning_pid(const RigDynamics& d, double tc) {
-  const PidParams rule = relay_pid(d, tc, -kPressureMax, kPressureMax, PidRule::some_overshoot);
+PidParams learning_pid(const RigDynamics& d, double tc, double p_max) {
+  const PidParams rule = relay_pid(d, tc, -p_max, p_max, PidRule::some_overshoot);
   const LoopPeaks at_rule = loop_peaks(d, rule, tc);
   PidParams best = rule;
   double least = at_rule.complementary;
@@ -654,13 +654,13 @@ PidParams position_pid(const Context& c) {
     // overstates the loop's margin, e.g. where a wide hysteresis band takes up the relay's
     // swing), they are scaled down as much (docs/control.md, section 2, "The learning loop's
     // PID and the gain trial"); a scale above 1 leaves the robust rule as it is.
-    PidParams p = learning_pid(c.dynamics, c.tc);
+    PidParams p = learning_pid(c.dynamics, c.tc, c.pressure_max);
     const double s = std::min(1.0, c.gain_scale);
     p.kp *= s, p.ki *= s, p.kd *= s;
     p.guard = pid_guard(c);
     return p;
   }
-  PidParams p = relay_pid(c.dynamics, c.tc, -kPressureMax, kPressureMax, PidRule::classic);
+  PidParams p = relay_pid(c.dynamics, c.tc, -c.pressure_max, c.pressure_max, PidRule::classic);
   p.kp *= c.gain_scale;
   p.ki *= c.gain_scale;
   p.kd *= c.gain_scale;
@@ -713,7 +713,7 @@ std::vector<double> shaped(const std::vector<double>& r, const ZvShaper& z) {
 
 std::string pid_origin(const Context& c) {
   if (c.learning) {
-    const PidParams p = learning_pid(c.dynamics, c.tc);
+    const PidParams p = learning_pid(c.dynamics, c.tc, c.pressure_max);
     const LoopPeaks at = loop_peaks(c.dynamics, p, c.tc);
     return fmt::format("a relay test, Ziegler-Nichols some overshoot with T_d = {:.3g} T_u (of 0.333, 0.5 and "
                        "0.667 T_u, the least complementary sensitivity peak of the identified feedback loop, "

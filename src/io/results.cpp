@@ -467,6 +467,7 @@ json to_json(const ExperimentResult& r) {
   j["baseline_model"] = valid_model_or_null(r.baseline_model);
   j["lead_s"] = number(r.lead_s);
   j["model_identification_top_mpa"] = number(r.model_id_top_mpa);
+  j["pressure_limit_mpa"] = number(r.pressure_limit_mpa);
   j["dynamics"] = {{"dead_time_s", number(r.dynamics.dead_time_s)},
                    {"lag_s", number(r.dynamics.lag_s)},
                    {"gain_m_per_mpa", number(r.dynamics.gain_m_per_mpa)},
@@ -529,6 +530,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
   r.wall_time_s = opt_double(j, "wall_time_s", where, 0.0);
   r.lead_s = opt_double(j, "lead_s", where, 0.0);
   r.model_id_top_mpa = opt_double(j, "model_identification_top_mpa", where, 0.0);  // absent in files before it
+  r.pressure_limit_mpa = opt_double(j, "pressure_limit_mpa", where, 0.6);  // absent before it: the fixed 0.6 MPa
 
   const json& id = need(j, "identification", where);
   const std::string idw = key_where(where, "identification");

@@ -72,6 +72,7 @@ void for_each_field(P& p, F&& f) {
   f("muscle", "c1", m.c1, Rule::nonnegative);
   f("muscle", "c2", m.c2, Rule::nonnegative);
   f("muscle", "reference_pressure", m.reference_pressure, Rule::positive);
+  f("muscle", "max_pressure", m.max_pressure, Rule::positive);
   auto& h = p.hysteresis;
   f("hysteresis", "pressure_band", h.pressure_band, Rule::nonnegative);
   f("hysteresis", "pressure_band_slope", h.pressure_band_slope, Rule::unit_closed);
@@ -182,6 +183,11 @@ PamRigParams with_unread_parameters_of(PamRigParams p, Actuation mode, const Pam
     p.valves.min_pulse = other.valves.min_pulse;
   }
   return p;
+}
+
+double pressure_command_limit(const PamRigParams& p, Actuation mode) noexcept {
+  return mode == Actuation::regulator ? std::min(p.muscle.max_pressure, p.regulator.max_command)
+                                      : p.muscle.max_pressure;
 }
 
 PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where) {

@@ -108,7 +108,12 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
       if (!time) throw Error(fmt::format("{}: a range in seconds (\"{}\") needs --time-column", opt, text));
       if (time->empty()) throw Error(fmt::format("{}: the time column is empty", opt));
       const double t = parse_number(s.substr(0, s.size() - 1), opt);
-      if (t < time->front() || t > time->back())
+      // the range is half-open: its end may lie up to one sample step past the last stamp (a
+      // record of 20 s at 1 kHz ends at 19.999 s, and 12s:20s takes it to its end)
+      const std::size_t m = time->size();
+      const double step = m >= 2 ? time->back() - (*time)[m - 2] : 0.0;
+      const double last = is_end && step > 0 ? time->back() + step : time->back();
+      if (t < time->front() || t > last)
         throw Error(fmt::format("{}: time {} s is outside the record ({} s .. {} s)", opt, t, time->front(),
                                 time->back()));
       idx = static_cast<std::size_t>(std::lower_bound(time->begin(), time->end(), t) - time->begin());

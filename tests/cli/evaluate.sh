@@ -95,6 +95,10 @@ grep -q "pi fit" "$T/pipe.err" || fail "fit --out -: the summary is not on stder
 grep -q "Pressure \[MPa\]" "$T/ev.html" || fail "evaluate html: input label"
 grep -q "Time \[s\]" "$T/ev.html" || fail "evaluate html: time axis"
 grep -q "samples 1200..1700" "$T/ev.html" || fail "evaluate html: 12s:17s is samples 1200..1700"
+# a half-open range in seconds may end one sample step past the last stamp (17.99 s): the record's end
+"$BIN" evaluate --model "$T/m.json" --data "$T/data_t.csv" --input input --output output --time-column t_s \
+  --range 12s:18s > "$T/end.txt" || fail "evaluate --range 12s:18s (the end one step past the last stamp)"
+grep -q "samples 1200..1800" "$T/end.txt" || fail "12s:18s is samples 1200..1800: $(cat "$T/end.txt")"
 "$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output --report "$T/ev2.json" \
   > /dev/null || fail "evaluate --report json"
 $PY -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['metrics']['n'] == 1800" "$T/ev2.json" \
@@ -116,6 +120,9 @@ expect_rc1 "unknown column" "no column named" \
   "$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output force
 expect_rc1 "mixed units in a range" "mixes seconds and sample indices" \
   "$BIN" evaluate --model "$T/m.json" --data "$T/data_t.csv" --input input --output output --time-column t_s --range 0s:10
+expect_rc1 "a range ending beyond the record" "time 18.5 s is outside the record" \
+  "$BIN" evaluate --model "$T/m.json" --data "$T/data_t.csv" --input input --output output --time-column t_s \
+  --range 12s:18.5s
 expect_rc1 "empty stdin" "standard input is empty" \
   "$BIN" evaluate --model - --data "$T/data.csv" --input input --output output < /dev/null
 expect_rc1 "usage error (CLI11)" "--bogus" \

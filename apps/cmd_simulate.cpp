@@ -174,6 +174,15 @@ int run_invert(const Options& o) {
   Model forward(params);  // the model driven by the inverse's inputs: what they produce
   std::size_t saturated = 0, samples = 0, missed = 0, miss_at = 0;
   double max_miss = 0.0, y_scale = 0.0;
+  {  // the scale of a miss: the model's output span between the limits (at rest there); without
+     // finite limits, the largest desired output
+    Model m(params);
+    const Limits& l = inv.limits();
+    if (std::isfinite(l.lo) && std::isfinite(l.hi) && m.reset_relaxed(l.lo)) {
+      const double y_lo = m.step(l.lo);
+      if (m.reset_relaxed(l.hi)) y_scale = std::abs(m.step(l.hi) - y_lo);
+    }
+  }
   bool first = true;
   // x = inverse(y), sample by sample; the relaxed start needs the first desired output
   auto run = [&](std::span<const double> y, double* x) {
@@ -184,7 +193,8 @@ int run_invert(const Options& o) {
       forward = start;
     }
     first = false;
-    for (double v : y) y_scale = std::max(y_scale, std::abs(v));  // this block's too: no 0 scale at a first 0
+    if (!(y_scale > 0.0))  // no span from the limits (unbounded): the desired outputs' magnitude
+      for (double v : y) y_scale = std::max(y_scale, std::abs(v));
     for (std::size_t k = 0; k < y.size(); ++k) {
       x[k] = inv.step(y[k]);
       const double got = forward.step(x[k]);
@@ -225,8 +235,8 @@ int run_invert(const Options& o) {
              l.hi + 0.0);
   if (missed > 0)
     fmt::print(stderr,
-               "invert: warning: {} of the {} unsaturated samples miss the desired output by more than 1e-6 of its "
-               "largest magnitude, by up to {:.6g} (sample {}): the model does not output those values anywhere "
+               "invert: warning: {} of the {} unsaturated samples miss the desired output by more than 1e-6 of the "
+               "model's output span, by up to {:.6g} (sample {}): the model does not output those values anywhere "
                "inside the limits (its output jumps or is flat there; {} has a numerical inverse)\n",
                missed, samples - saturated, max_miss, miss_at, model_name(params));
   return 0;

@@ -90,10 +90,16 @@ TEST(FitQuality, OutliersAreRefusedNamingTheSamples) {
   EXPECT_NE(rep.message.find("of the training input lie far outside the rest (sample 700 (50);"), std::string::npos)
       << rep.message;
   EXPECT_EQ(fit_kind(loops(), FitModel::gpi).status, FitStatus::converged);
-  // from rest at 0 into a range it then stays in, within 12 of 3000 samples: no outlier
-  const Record start = record([](int k) { return k < 12 ? 0.05 * k : 0.6 + 0.3 * std::sin(0.008 * k); }, 3000);
-  const FitReport s = fit_kind(start, FitModel::gpi);
-  EXPECT_NE(s.status, FitStatus::invalid_input) << s.message;
+  // no outliers: a rest at 0 for 12 of 3000 samples, then a step into a range the record stays
+  // in (the review's case: a step from rest, not a ramp); a vent to 0 at the end; a vent of 40
+  // samples in the middle
+  const auto step_from_rest = [](int k) { return k < 12 ? 0.0 : 0.6 + 0.1 * std::sin(0.008 * k); };
+  const auto vent_at_end = [](int k) { return k >= 2988 ? 0.0 : 0.6 + 0.1 * std::sin(0.008 * k); };
+  const auto vent_inside = [](int k) { return k >= 1500 && k < 1540 ? 0.0 : 0.6 + 0.1 * std::sin(0.008 * k); };
+  for (const Record& legit : {record(step_from_rest, 3000), record(vent_at_end, 3000), record(vent_inside, 3000)}) {
+    const FitReport s = fit_kind(legit, FitModel::gpi);
+    EXPECT_NE(s.status, FitStatus::invalid_input) << s.message;
+  }
 }
 
 // A butterfly loop (a magnetostrictive strain, the square of a hysteretic magnetisation) is no
@@ -121,9 +127,15 @@ TEST(FitQuality, ARecordWithoutReversalsSaysWhatTheFitSaw) {
 }
 
 // An output that runs ahead of its input (the input read 150 samples late) turns the loops
-// clockwise, which kinds with nonnegative weights cannot follow: said; the usual loops are not.
+// clockwise, which kinds with nonnegative weights cannot follow: said; the usual loops are not,
+// nor a training range that ends mid-cycle (4.5 cycles ending at the top) or holds one rising
+// branch (the review's cases: an open path's sum y dx is its chord's area, not an orientation).
 TEST(FitQuality, ClockwiseLoopsAreNamed) {
   EXPECT_TRUE(warned(fit_kind(loops(150), FitModel::kp), "turn clockwise"));
   EXPECT_FALSE(warned(fit_kind(loops(), FitModel::kp), "turn clockwise"));
-  EXPECT_FALSE(warned(fit_kind(loops(-0), FitModel::mpi_asym), "turn clockwise"));
+  const double w = 2.0 * std::acos(-1.0) / 1000.0;  // 1000 samples per cycle
+  const Record open = record([&](int k) { return 0.5 - 0.4 * std::cos(w * k); }, 4500);  // 4.5 cycles: ends on top
+  EXPECT_FALSE(warned(fit_kind(open, FitModel::kp), "turn clockwise"));
+  const Record rising = record([&](int k) { return 0.5 - 0.4 * std::cos(w * k); }, 500);  // one rising branch
+  EXPECT_FALSE(warned(fit_kind(rising, FitModel::gpi), "turn clockwise"));
 }

@@ -122,27 +122,30 @@ constexpr double kReversalFraction = 0.1;
 // which the reference fits to rounding: a pi fit at 0.032 % of span was refused).
 constexpr double kExcellent = 1e-3;
 
-// The number of reversals of x over [from, to) (kReversalFraction of span).
-std::size_t count_reversals(std::span<const double> x, std::size_t from, std::size_t to, double span) {
+// The reversals of x over [from, to) (by more than kReversalFraction of span): the sample of
+// each turning extremum and +1 for a maximum, -1 for a minimum.
+std::vector<std::pair<std::size_t, int>> reversals(std::span<const double> x, std::size_t from, std::size_t to,
+                                                   double span) {
   const double h = kReversalFraction * span;
-  std::size_t n = 0;
+  std::vector<std::pair<std::size_t, int>> out;
   int dir = 0;  // +1 rising, -1 falling, 0 not yet known (the first move is no reversal)
-  double hi = x[from], lo = x[from];
+  std::size_t ihi = from, ilo = from;
   for (std::size_t k = from + 1; k < to; ++k) {
     const double v = x[k];
     if (dir == 0) {
-      hi = std::max(hi, v), lo = std::min(lo, v);
-      if (v < hi - h) dir = -1, lo = v;
-      else if (v > lo + h) dir = 1, hi = v;
+      if (v > x[ihi]) ihi = k;
+      if (v < x[ilo]) ilo = k;
+      if (v < x[ihi] - h) dir = -1, ilo = k;
+      else if (v > x[ilo] + h) dir = 1, ihi = k;
     } else if (dir > 0) {
-      if (v > hi) hi = v;
-      else if (v < hi - h) ++n, dir = -1, lo = v;
+      if (v > x[ihi]) ihi = k;
+      else if (v < x[ihi] - h) out.emplace_back(ihi, 1), dir = -1, ilo = k;
     } else {
-      if (v < lo) lo = v;
-      else if (v > lo + h) ++n, dir = 1, hi = v;
+      if (v < x[ilo]) ilo = k;
+      else if (v > x[ilo] + h) out.emplace_back(ilo, -1), dir = 1, ihi = k;
     }
   }
-  return n;
+  return out;
 }
 
 // The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|);
@@ -179,13 +182,15 @@ struct TrainingRanges {
   std::string x_outliers, y_outliers;  // outliers_of's description, "" where there are none
 };
 
-// Samples of v[from, to) far outside the bulk of the rest: runs of samples beyond the range of
-// its central 99 % (its 0.5 % and 99.5 % quantiles) by more than half that range's width, that
-// jump there or back by more than that half width in one sample. A glitch, a spike or a
-// sensor's overrange value (9.9e37); never the peaks of a smooth signal (its top 0.5 % of
-// samples lie within a small fraction of its span of each other) nor a start from rest that
-// moves smoothly into the range the rest of the record stays in. The description names the
-// count and the first rows; empty where there are none.
+// Samples of v[from, to) far outside the bulk of the rest, beyond the range of its central 99 %
+// (its 0.5 % and 99.5 % quantiles) by more than half that range's width: a glitch, a spike or a
+// sensor's overrange value (9.9e37). A run of such samples is one when it is short (at most 5
+// samples or 0.05 % of them) inside the range and jumps there and back by more than that half
+// width in one sample each way, or when it lies beyond the bulk by more than 10 of its widths
+// anywhere. Never the peaks of a smooth signal (its top 0.5 % of samples lie within a small
+// fraction of its span of each other), a rest at the start or the end, a step from rest, or a
+// vent of more than a few samples. The description names the count and the first rows; empty
+// where there are none.
 std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, const char* which) {
   std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(from), v.begin() + static_cast<std::ptrdiff_t>(to));
   const std::size_t n = s.size();
@@ -196,15 +201,19 @@ std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t
   };
   const double lo = at(0.005), hi = at(0.995);
   const double margin = 0.5 * (hi - lo);
+  if (!(margin > 0.0)) return {};  // a column constant over 99 % of the record: nothing to tell them by
   const auto beyond = [&](std::size_t k) { return v[k] < lo - margin || v[k] > hi + margin; };
   std::size_t count = 0;
   std::string rows;
+  const std::size_t short_run = std::max<std::size_t>(5, n / 2000);
   for (std::size_t a = from; a < to; ++a) {
     if (!beyond(a)) continue;
     std::size_t b = a;  // the run [a, b)
-    while (b < to && beyond(b)) ++b;
-    const bool jumps = (a > from && std::abs(v[a] - v[a - 1]) > margin) || (b < to && std::abs(v[b - 1] - v[b]) > margin);
-    if (jumps)
+    double far = 0.0;   // its farthest distance beyond the bulk
+    while (b < to && beyond(b)) far = std::max({far, lo - v[b], v[b] - hi}), ++b;
+    const bool spike = a > from && b < to && b - a <= short_run && std::abs(v[a] - v[a - 1]) > margin &&
+                       std::abs(v[b - 1] - v[b]) > margin;
+    if (spike || far > 20.0 * margin)
       for (std::size_t k = a; k < b; ++k)
         if (++count <= 5) rows += fmt::format("{}{} ({:.6g})", rows.empty() ? "" : ", ", k, v[k]);
     a = b;
@@ -357,12 +366,22 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   add_units_parameters(rep);
   rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
   if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
-  {
-    // the loops' orientation: sum y dx over the record (normalised, y rising with x) is minus the
-    // area the loops enclose when they turn the usual way (the output lags: lower on the way up);
-    // over the input's path length sum |dx| / 2 it is their mean width, in spans of the output
-    double area = 0.0, path = 0.0;
-    for (std::size_t k = tr.begin + 1; k < tr.end; ++k) {
+  const auto turns = reversals(x, tr.begin, tr.end, sx);
+  // the loops' orientation, over whole cycles: from the first reversal to the last one of the
+  // same kind, sum y dx (normalised, y rising with x) closed by the chord back to the start is
+  // minus the area the loops enclose when they turn the usual way (the output lags: lower on
+  // the way up); over the input's path length sum |dx| / 2 it is their mean width, in spans of
+  // the output. Fewer than two reversals of a kind: no whole cycle, no orientation.
+  std::size_t c0 = 0, c1 = 0;
+  for (std::size_t i = 0; i < turns.size() && c1 <= c0; ++i)
+    for (std::size_t j = turns.size(); j-- > i + 1;)
+      if (turns[j].second == turns[i].second) {
+        c0 = turns[i].first, c1 = turns[j].first;
+        break;
+      }
+  if (c1 > c0) {
+    double area = 0.5 * (yn[c1] + yn[c0]) * (xn[c0] - xn[c1]), path = 0.0;
+    for (std::size_t k = c0 + 1; k <= c1; ++k) {
       const double dx = xn[k] - xn[k - 1];
       area += 0.5 * (yn[k] + yn[k - 1]) * dx, path += std::abs(dx);
     }
@@ -373,7 +392,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
           "swapped columns can turn them. Kinds with nonnegative weights (gpi, mpi-asym, preisach, kp) cannot follow "
           "such loops; check the columns' timing, or compare with --model pi");
   }
-  if (const std::size_t rev = count_reversals(x, tr.begin, tr.end, sx); rev < 2)
+  if (const std::size_t rev = turns.size(); rev < 2)
     rep.warnings.push_back(fmt::format(
         "the training input {} (by more than {:.0f} % of its span): {}; validate on a record with loops "
         "(--validate-data) before using the model",

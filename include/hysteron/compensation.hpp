@@ -19,7 +19,7 @@ namespace hysteron {
 // difference at the sample time (the reference is smooth and known ahead, so
 // the dead time is best handled by feeding a previewed reference).
 struct FeedforwardParams {
-  Limits pressure_limits{0.0, 0.6};  // [MPa]
+  Limits pressure_limits{0.0, 0.6};  // [MPa]; 0.6: the papers' DMSP-20 rating: set your actuator's limits
   double model_scale = 1000.0;       // model output units per metre
   double lag_time_constant = 0.0;    // tau [s] to compensate, >= 0
   double sample_time = 1e-3;         // [s], > 0

@@ -32,7 +32,7 @@ struct LoopDesign {
   // The inverse feedforward's pressure limits [MPa], model units per metre and the lag it
   // compensates [s] (FeedforwardParams without the sample time: that is sample_time below).
   struct Feedforward {
-    Limits pressure_limits{0.0, 0.6};
+    Limits pressure_limits{0.0, 0.6};  // [MPa]; the papers' default: the experiments set the rig's
     double model_scale = 1000.0;
     double lag_time_constant = 0.0;
   };

@@ -96,24 +96,23 @@ PYEOF
 cat > "$T/preisach.json" <<'JSON'
 {"model": "preisach", "q": 0.1, "lo": -1, "hi": 1, "levels": 2, "w": [0.5, 0.4, 0.6], "input_limits": [-1.5, 1.5]}
 JSON
-$PY - "$T/yd.csv" <<'PYEOF'
+# one_column FILE NAME N EXPR: a CSV with the header NAME and EXPR (Python, of k) for k < N
+one_column() {
+  $PY - "$@" <<'PYEOF'
 import math, sys
-with open(sys.argv[1], "w") as f:
-    f.write("y\n")
-    for k in range(1000):
-        f.write(f"{0.6 * math.sin(0.01 * k)!r}\n")
+path, name, n, expr = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+with open(path, "w") as f:
+    f.write(name + "\n")
+    for k in range(n):
+        f.write(f"{eval(expr, {'math': math, 'k': k})!r}\n")
 PYEOF
+}
+one_column "$T/yd.csv" y 1000 "0.6 * math.sin(0.01 * k)"
 "$BIN" invert --model "$T/preisach.json" --input "$T/yd.csv" --output "$T/xd.csv" 2> "$T/pre_err"
 grep -Eq "^invert: warning: [1-9][0-9]* of the [0-9]+ unsaturated samples miss the desired output" "$T/pre_err" || {
   cat "$T/pre_err"; exit 1; }
 # inputs beyond the model's input_limits (its training range) are extrapolated: simulate says so
-$PY - "$T/wide.csv" <<'PYEOF'
-import sys
-with open(sys.argv[1], "w") as f:
-    f.write("x\n")
-    for k in range(400):
-        f.write(f"{-3 + 6 * k / 399!r}\n")
-PYEOF
+one_column "$T/wide.csv" x 400 "-3 + 6 * k / 399"
 "$BIN" simulate --model "$T/asym.json" --input "$T/wide.csv" --output "$T/wide_y.csv" 2> "$T/wide_err"
 grep -q "simulate: warning: .* have an input outside the model's input_limits \[-2, 2\]" "$T/wide_err" || {
   cat "$T/wide_err"; exit 1; }

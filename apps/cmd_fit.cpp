@@ -264,16 +264,16 @@ int run_fit(const FitCliOptions& c) {
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {
     text += "candidates (chosen by the hold-out score: over the first and the last part of the training range, the "
-            "geometric mean of the RMS over the best kind's):\n";
-    std::string head = fmt::format("  {:<13} {:<15} {:>12} {:>12} {:>9}", "kind", "status", "train RMS", "hold-out RMS",
-                                   "score");
+            "geometric mean of the RMS over the best kind's; within 2 % of the least score, the fewest parameters):\n";
+    std::string head = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", "kind", "status", "params", "train RMS",
+                                   "hold-out RMS", "score");
     for (const auto& v : sets) head += fmt::format(" {:>14}", v.file.empty() ? std::string("validate RMS") : "validate RMS");
     text += head + fmt::format(" {:>9}\n", "time [s]");
     for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
       const auto& cand = rep.candidates[i];
       const auto cell = [](double v, const char* f) { return std::isfinite(v) ? fmt::format(fmt::runtime(f), v) : "-"; };
-      std::string line = fmt::format("  {:<13} {:<15} {:>12} {:>12} {:>9}", fit_model_name(cand.kind),
-                                     fit_status_name(cand.status), cell(cand.train.rms, "{:.6g}"),
+      std::string line = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", fit_model_name(cand.kind),
+                                     fit_status_name(cand.status), cand.num_parameters, cell(cand.train.rms, "{:.6g}"),
                                      cell(cand.holdout.rms, "{:.6g}"), cell(cand.holdout_score, "{:.4g}"));
       for (std::size_t k = 0; k < sets.size(); ++k) {
         const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();

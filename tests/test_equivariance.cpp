@@ -18,6 +18,7 @@
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
+#include "../src/identify/detail.hpp"
 
 using namespace hysteron;
 
@@ -564,15 +565,46 @@ TEST(FitAuto, ChoosesOnTheHoldOutAndValidatesNearTheBestKind) {
   }
   ASSERT_EQ(chosen, 1);
   EXPECT_EQ(rep.model_kind, best->kind);
+  // the least score, or within 2 % of it with fewer parameters than every kind scored there
+  double least = INFINITY;
   for (const auto& c : rep.candidates)
-    if (std::isfinite(c.holdout_score)) {
-      EXPECT_LE(best->holdout_score, c.holdout_score) << fit_model_name(c.kind);
+    if (std::isfinite(c.holdout_score)) least = std::min(least, c.holdout_score);
+  EXPECT_LE(best->holdout_score, 1.02 * least);
+  for (const auto& c : rep.candidates) {
+    EXPECT_GT(c.num_parameters, 0u) << fit_model_name(c.kind);
+    if (std::isfinite(c.holdout_score) && c.holdout_score <= 1.02 * least) {
+      EXPECT_LE(best->num_parameters, c.num_parameters) << fit_model_name(c.kind);
     }
+  }
   EXPECT_GE(best->holdout_score, 1.0);
   const double e_auto = evaluate(rep.model, val.x, val.y).rms_percent_span;
   double e_best = std::numeric_limits<double>::infinity();
   for (FitModel kind : kKinds) e_best = std::min(e_best, validation_error(kind, train, val));
   EXPECT_LE(e_auto, 1.05 * e_best) << "auto chose " << fit_model_name(rep.model_kind);
+}
+
+// Two folds cannot tell apart kinds whose scores differ by a few per cent (gpi and kp on the
+// Festo record, 0.3 % apart, swapped their order when kp's least squares used other rows):
+// within 2 % of the least score the kind with the fewest parameters is chosen.
+TEST(FitAuto, ATieOnTheHoldOutGoesToTheFewestParameters) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto choose = [](std::vector<double> s, std::vector<std::size_t> p) {
+    return detail::auto_choice(s, p, 0.02);
+  };
+  auto c = choose({1.808, 1.802, 1.87}, {12, 60, 56});
+  EXPECT_EQ(c.by_score, 1u);
+  EXPECT_EQ(c.chosen, 0u);
+  c = choose({1.85, 1.802, 1.81}, {12, 60, 30});  // 2.7 % is no tie; 0.4 % is
+  EXPECT_EQ(c.by_score, 1u);
+  EXPECT_EQ(c.chosen, 2u);
+  c = choose({1.0, 1.01, 1.005}, {10, 10, 10});  // equal counts: the least score
+  EXPECT_EQ(c.chosen, 0u);
+  c = choose({nan, 1.3, 1.0, nan}, {1, 20, 20, 2});  // no score, no choice
+  EXPECT_EQ(c.by_score, 2u);
+  EXPECT_EQ(c.chosen, 2u);
+  c = choose({nan, nan}, {1, 2});
+  EXPECT_EQ(c.by_score, 2u);
+  EXPECT_EQ(c.chosen, 2u);
 }
 
 // With --huber the candidates are scored on the hold-outs under the Huber loss (sqrt of twice

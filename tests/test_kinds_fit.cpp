@@ -157,3 +157,31 @@ TEST(KindsFit, RatePiPredictsAnUnseenRateWherePiCannot) {
   EXPECT_EQ(none.status, FitStatus::invalid_input);
   EXPECT_NE(none.message.find("sample time"), std::string::npos) << none.message;
 }
+
+// The linear kinds' least squares use a subset of the rows of a long record (one per block,
+// FitOptions::max_ls_rows). Rows at a fixed position in each block aliased with a periodic
+// input: a dither of period 4 with blocks of 4 samples put every row at one phase of it, and
+// kp (which cannot follow the PI that made the record exactly) fitted that phase only.
+TEST(KindsFit, RowSubsetDoesNotAliasWithAPeriodicInput) {
+  PiParams truth;
+  truth.q = 0.5;
+  for (int i = 0; i < 10; ++i) {
+    truth.r.push_back(0.04 * i);
+    truth.p.push_back(0.3 * std::exp(-0.16 * i));
+  }
+  const int n = 24000;
+  std::vector<double> x(n);
+  for (int k = 0; k < n; ++k)
+    x[static_cast<std::size_t>(k)] = 0.5 + 0.4 * std::sin(2 * M_PI * k / 5000.0) * std::exp(-double(k) / n) +
+                                     (k % 4 < 2 ? 0.1 : -0.1);
+  const auto y = simulate_record(truth, x);
+  auto rms = [&](std::size_t rows) {
+    FitOptions o = options(FitModel::kp, 10);
+    o.max_ls_rows = rows;
+    const FitReport r = fit(x, y, o);
+    EXPECT_NE(r.status, FitStatus::failed) << r.full_report();
+    return evaluate(r.model, x, y).rms;
+  };
+  const double all = rms(0), subset = rms(6000);  // blocks of 4 samples, the dither's period
+  EXPECT_LT(subset, 1.25 * all) << "all rows " << all << ", one in four " << subset;
+}

@@ -43,8 +43,9 @@ namespace hysteron {
 //                q and n weights on fixed thresholds, all refined by LM.
 //   automatic    every kind above is scored on a hold-out of the training range: fitted
 //                without its last holdout_fraction and scored there, and fitted without its
-//                first holdout_fraction and scored there (two folds, errors pooled); the
-//                kind with the lowest hold-out RMS is refitted on the whole training
+//                first holdout_fraction and scored there (two folds; FitCandidate::
+//                holdout_score); the kind with the lowest score (of those within 2 % of
+//                it, the one with the fewest parameters) is refitted on the whole training
 //                range and returned (FitReport::model_kind is that kind, the table of
 //                every candidate is FitReport::candidates).
 //   preisach     relays on a triangular grid of num_operators levels over the training
@@ -239,6 +240,10 @@ struct FitOptions {
   // Sample time of the record [s] (rate-pi only: its rates are per second; 0 = unknown,
   // then rate-pi is refused). The CLI takes it from the time column or --sample-time.
   double sample_time = 0.0;
+  // preisach, kp, maxwell-slip, rate-pi: rows of the training range in their bounded linear
+  // least squares; a longer range gives one row drawn per block of its samples (the model is
+  // still simulated through every sample and scored on all of them). 0: every row.
+  std::size_t max_ls_rows = 20000;
   // automatic: the first and the last holdout_fraction of the training range score the candidates.
   double holdout_fraction = 0.2;
   // A fit whose training RMS exceeds poor_fit_ratio x that of the reference PI
@@ -295,6 +300,9 @@ struct FitCandidate {
   // hold-out RMS divided by the best kind's on that fold (1: best on both). Each fold
   // counts alike, whatever its scale; NaN if a fold gave this kind no model.
   double holdout_score = std::numeric_limits<double>::quiet_NaN();
+  // Fitted parameters of fold 0's fit (held ones excluded): among the kinds whose scores are
+  // within 2 % of the best, auto chooses the one with the fewest (a tie on two folds).
+  std::size_t num_parameters = 0;
   double time_s = 0.0;  // both folds
   bool chosen = false;
   ModelParams model;   // the candidate's model of fold 0

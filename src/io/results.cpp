@@ -119,6 +119,7 @@ json to_json(const FitCandidate& c) {
           {"train", to_json(c.train)},
           {"holdout", to_json(c.holdout)},
           {"holdout_score", number(c.holdout_score)},
+          {"num_parameters", c.num_parameters},
           {"time_s", number(c.time_s)},
           {"chosen", c.chosen},
           {"model", model_or_null(c.status, c.model)}};
@@ -131,6 +132,7 @@ void from_json(const json& j, FitCandidate& c, std::string_view where) {
   from_json(need(j, "train", where), c.train, key_where(where, "train"));
   from_json(need(j, "holdout", where), c.holdout, key_where(where, "holdout"));
   c.holdout_score = opt_double(j, "holdout_score", where, nan);  // absent in files before it
+  c.num_parameters = j.contains("num_parameters") ? get_size(j, "num_parameters", where) : 0;  // likewise
   c.time_s = get_double(j, "time_s", where);
   c.chosen = get_bool(j, "chosen", where);
   c.model = ModelParams{};

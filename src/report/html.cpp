@@ -599,7 +599,7 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
 
   if (!fit.candidates.empty()) {
     page.raw("<h3>Candidates (--model auto)</h3>\n");
-    std::vector<std::string> header = {"kind", "status", "train RMS" + yu, "hold-out RMS" + yu,
+    std::vector<std::string> header = {"kind", "status", "parameters", "train RMS" + yu, "hold-out RMS" + yu,
                                        "hold-out RMS [% of span]", "hold-out score"};
     for (const auto& v : vals) header.push_back(fmt::format("validation RMS{} ({})", yu, validation_name(*v.v)));
     header.insert(header.end(), {"time [s]", "chosen"});
@@ -607,7 +607,7 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
     std::vector<std::string> classes;
     for (const auto& c : fit.candidates) {
       std::vector<std::string> row = {html_escape(fit_model_name(c.kind)), html_escape(fit_status_name(c.status)),
-                                      num(c.train.rms, 5), num(c.holdout.rms, 5), num(c.holdout.rms_percent_span, 4),
+                                      std::to_string(c.num_parameters), num(c.train.rms, 5), num(c.holdout.rms, 5), num(c.holdout.rms_percent_span, 4),
                                       num(c.holdout_score, 4)};
       const bool usable = c.status != FitStatus::failed && c.status != FitStatus::invalid_input &&
                           c.status != FitStatus::not_run;

@@ -59,13 +59,11 @@ struct AutoChoice {
 };
 AutoChoice auto_choice(std::span<const double> score, std::span<const std::size_t> num_parameters, double tie);
 
-// A subset of a record's samples, one per block of `stride` (the screening of starts, the
-// rows of a linear kind's least squares): the offset in block b of a range of m samples, a
+// A subset of a record's samples, one per block of `stride` (the rows of a linear kind's
+// least squares): the offset in block b of a range of m samples, a
 // hash of b (splitmix64) modulo the block's length. A fixed offset aliased with whatever
-// repeats in the record at a multiple of the stride (a dither of period 4; the pressure steps
-// of a Festo record tiled 10 times, every screened sample at one phase of their transients,
-// which made every start of a gpi fit hysteresis-free: converged at 1.13 % of span after 3
-// iterations against 0.89 %). It depends on b only: a transformed record gets the same rows.
+// repeats in the record at a multiple of the stride (a dither of period 4). It depends on b
+// only: a transformed record gets the same rows.
 inline std::size_t block_offset(std::size_t b, std::size_t stride, std::size_t m) {
   std::uint64_t z = (static_cast<std::uint64_t>(b) + 1) * 0x9e3779b97f4a7c15ULL;
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;

@@ -15,9 +15,8 @@ namespace hysteron::fitting {
 
 namespace {
 
-// decimate(): the screening of start candidates runs on about kDecimatedSamples samples, one
-// per block at detail::block_offset (the operators are rate independent, so the ranking is
-// nearly that of the full record).
+// decimate(): the screening of start candidates runs on about kDecimatedSamples samples
+// (the operators are rate independent, so the ranking is nearly that of the full record).
 constexpr std::size_t kDecimatedSamples = 2500;
 // The alpha grid of the starts: kAlphas threshold spacings, log-spaced from
 // kAlphaLow to kAlphaLow kAlphaRatio (gpi, gpi free weights; mpi-asym: kAsymAlphaRatio) times half
@@ -301,16 +300,11 @@ Decimated decimate(const Data& d) {
   const std::size_t m = d.train.end - d.train.begin;
   const std::size_t st = std::max<std::size_t>(1, m / kDecimatedSamples);
   Decimated out;
-  std::size_t before = 0;  // picked samples before the training range
-  for (std::size_t b = 0; b * st < d.train.end; ++b) {
-    const std::size_t k = b * st + detail::block_offset(b, st, d.train.end);
-    out.x.push_back(d.x[k]), out.y.push_back(d.y[k]);
-    before += k < d.train.begin;
-  }
+  for (std::size_t k = 0; k < d.train.end; k += st) out.x.push_back(d.x[k]), out.y.push_back(d.y[k]);
   out.d = d;
   out.d.x = out.x;
   out.d.y = out.y;
-  out.d.train = {before, out.x.size()};
+  out.d.train = {(d.train.begin + st - 1) / st, out.x.size()};
   out.d.huber = 0;
   return out;
 }

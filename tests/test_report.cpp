@@ -119,6 +119,26 @@ TEST(Plot, SvgAndPngWithLabelsAndNoTempFilesLeft) {
   else ::unsetenv("TMPDIR");
 }
 
+// A signal riding on a large offset (a sensor reading 1e6 +- 0.001) is plotted relative to a
+// round reference named in the axis label: with the values written to 9 digits it was a flat
+// line, and gnuplot's tick labels all read 1e+06.
+TEST(Plot, ASignalOnALargeOffsetIsPlottedRelativeToAReference) {
+  Tmp tmp;
+  std::vector<double> t(2000), y(2000);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    t[i] = 1e-3 * static_cast<double>(i);
+    y[i] = 1e6 + 1e-3 * std::sin(6 * t[i]);
+  }
+  plot_tracking(t, y, y, kLabels, tmp / "o.svg");
+  const std::string svg = slurp(tmp / "o.svg");
+  EXPECT_NE(svg.find("Contraction [mm] - 1000000"), std::string::npos);
+  EXPECT_NE(svg.find("Time [s]<"), std::string::npos);  // the time axis is not shifted
+  // the y tick labels: distinct values around 0 (before: "1e+06" on every tick)
+  EXPECT_EQ(svg.find(">1e+06<"), std::string::npos);
+  EXPECT_NE(svg.find(">-0.001<"), std::string::npos);
+  EXPECT_NE(svg.find("> 0.001<"), std::string::npos);
+}
+
 TEST(Plot, NoDataIsAClearError) {
   Tmp tmp;
   const std::vector<double> none;

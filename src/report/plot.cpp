@@ -67,6 +67,10 @@ std::string quote(std::string_view s) {
   return out + "'";
 }
 
+// An axis is plotted relative to a reference when its largest magnitude exceeds this many
+// spans (script()).
+constexpr double kOffsetRatio = 1e3;
+
 std::string axis_text(const Axis& a) { return a.unit.empty() ? a.label : fmt::format("{} [{}]", a.label, a.unit); }
 
 // Min/max bucket decimation keeping the order of the samples.
@@ -121,6 +125,37 @@ std::string script(const PlotSpec& spec, std::string_view format, const std::str
   }
   if (finite == 0) throw Error(fmt::format("plot '{}': no finite data to plot (empty or all NaN)", l.title));
 
+  // An axis whose values ride on an offset far beyond their span (a sensor 1e6 +- 0.001) is
+  // plotted relative to a round reference named in its label: written with 9 digits, or
+  // labelled by gnuplot's ticks, the signal itself was lost (a flat line at 1e+06).
+  const auto offset_of = [](double a, double b) {
+    if (!(b > a) || std::max(std::abs(a), std::abs(b)) <= kOffsetRatio * (b - a)) return 0.0;
+    const double step = std::pow(10.0, std::floor(std::log10(b - a)) + 1);  // above the span's digits
+    return std::round(0.5 * (a + b) / step) * step;
+  };
+  const auto range_of = [&](bool y) {
+    double a = std::numeric_limits<double>::infinity(), b = -a;
+    for (const Series& s : spec.series)
+      for (std::size_t i = 0; i < s.x.size(); ++i)
+        if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+          const double v = y ? s.y[i] : s.x[i];
+          a = std::min(a, v), b = std::max(b, v);
+        }
+    return std::pair{a, b};
+  };
+  double x0 = 0, y0 = 0;
+  if (spec.equal_axes) {
+    x0 = y0 = offset_of(lo, hi);
+    lo -= x0, hi -= x0;
+  } else {
+    const auto [xa, xb] = range_of(false);
+    const auto [ya, yb] = range_of(true);
+    x0 = offset_of(xa, xb), y0 = offset_of(ya, yb);
+  }
+  const auto label = [](const Axis& a, double ref) {
+    return ref == 0 ? axis_text(a) : fmt::format("{} {} {:.15g}", axis_text(a), ref > 0 ? "-" : "+", std::abs(ref));
+  };
+
   std::string g;
   if (format == "svg")
     g += fmt::format("set terminal svg size {},{} enhanced font 'Helvetica,13' background '#ffffff'\n", spec.width,
@@ -130,8 +165,8 @@ std::string script(const PlotSpec& spec, std::string_view format, const std::str
                      spec.height);
   g += fmt::format("set output {}\n", quote(out));
   g += fmt::format("set title {} noenhanced\n", quote(l.title));
-  g += fmt::format("set xlabel {} noenhanced\n", quote(axis_text(l.x)));
-  g += fmt::format("set ylabel {} noenhanced\n", quote(axis_text(l.y)));
+  g += fmt::format("set xlabel {} noenhanced\n", quote(label(l.x, x0)));
+  g += fmt::format("set ylabel {} noenhanced\n", quote(label(l.y, y0)));
   g += "set grid lc rgb '#dddddd'\nset key top left box opaque noenhanced samplen 2\nset border lw 1\n";
   if (spec.equal_axes && hi > lo) {
     const double pad = 0.03 * (hi - lo);
@@ -144,7 +179,7 @@ std::string script(const PlotSpec& spec, std::string_view format, const std::str
     bool any = false;
     for (std::size_t i : decimate(s, spec.max_points)) {
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
-        g += fmt::format("{:.9g} {:.9g}\n", s.x[i], s.y[i]);
+        g += fmt::format("{:.9g} {:.9g}\n", s.x[i] - x0, s.y[i] - y0);
         any = true;
       } else {
         g += "\n";

@@ -85,14 +85,15 @@ for a given seed.)doc")
              // the C++ clamps to what the supply can give; a value outside is a mistake (often MPa given as Pa)
              const AirParams& a = r.params().air;
              const double hi = a.supply_pressure - a.atmospheric_pressure;
-             const bool mpa = p > 0 && p < 10;
-             if (p < 0 || p > hi || mpa)
-               throw Error(fmt::format("PamRig.reset_at_pressure: p_gauge = {} Pa is outside 0 .. {} Pa (gauge "
-                                       "pressure in pascals, up to the rig's air.supply_pressure {} Pa abs minus "
-                                       "air.atmospheric_pressure {} Pa){}",
-                                       p, hi, a.supply_pressure, a.atmospheric_pressure,
-                                       mpa ? fmt::format(": the unit is Pa, not MPa (for {} MPa give {:g})", p, p * 1e6)
-                                           : std::string()));
+             const std::string range = fmt::format("0 .. {} Pa, gauge pressure in pascals up to the rig's "
+                                                   "air.supply_pressure {} Pa abs minus air.atmospheric_pressure {} Pa",
+                                                   hi, a.supply_pressure, a.atmospheric_pressure);
+             if (p > 0 && p < 10)
+               throw Error(fmt::format("PamRig.reset_at_pressure: p_gauge = {} Pa: the unit is Pa, not MPa (for {} "
+                                       "MPa give {:g}; {})",
+                                       p, p, p * 1e6, range));
+             if (p < 0 || p > hi)
+               throw Error(fmt::format("PamRig.reset_at_pressure: p_gauge = {} Pa is outside {}", p, range));
              r.reset_at_pressure(p);
            },
            py::arg("p_gauge"),

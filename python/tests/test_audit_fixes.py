@@ -179,7 +179,7 @@ def test_reset_at_pressure_checks_its_range_in_pascals():
     for p in (-1e6, 1e9, top * 1.01):
         with pytest.raises(hysteron.Error, match=r"PamRig.reset_at_pressure: p_gauge = .* Pa is outside 0 \.\. "):
             rig.reset_at_pressure(p)
-    with pytest.raises(hysteron.Error, match=r"the unit is Pa, not MPa \(for 0.3 MPa give 300000\)"):
+    with pytest.raises(hysteron.Error, match=r"p_gauge = 0.3 Pa: the unit is Pa, not MPa \(for 0.3 MPa give 300000;"):
         rig.reset_at_pressure(0.3)
     rig.reset_at_pressure(3e5)
     assert rig.state["pressure"] == pytest.approx(air["atmospheric_pressure"] + 3e5)

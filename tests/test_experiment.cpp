@@ -140,6 +140,41 @@ TEST(Compensation, InvalidParametersAreRejected) {
   EXPECT_THROW(OpenLoopController(rig_like_gpi(), ol), Error);
 }
 
+// A PID at another sample time than the loop's integrated with its own T_s without a word.
+TEST(Compensation, PidAtAnotherSampleTimeIsRejected) {
+  FeedforwardParams ff;
+  ff.sample_time = 0.01;
+  const auto message = [](auto&& make) -> std::string {
+    try {
+      make();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string m = message([&] { FeedforwardPidController(rig_like_gpi(), ff, gpi_paper_pid(1e-3)); });
+  EXPECT_NE(m.find("pid.sample_time = 0.001 s differs from the loop's sample_time = 0.01 s"), std::string::npos) << m;
+  EXPECT_NO_THROW(FeedforwardPidController(rig_like_gpi(), ff, gpi_paper_pid(0.01)));
+  OpenLoopParams ol;
+  ol.feedforward = ff;  // the position PID unused (no gains): its sample time does not matter
+  EXPECT_NO_THROW(OpenLoopController(rig_like_gpi(), ol));
+  ol.position = gpi_paper_pid(1e-3);
+  EXPECT_NE(message([&] { OpenLoopController(rig_like_gpi(), ol); }).find("position.sample_time"), std::string::npos);
+  ol.position.sample_time = 0.01;
+  EXPECT_NO_THROW(OpenLoopController(rig_like_gpi(), ol));
+  CascadeParams cp;
+  cp.feedforward = ff;
+  cp.position = gpi_paper_pid(0.01);
+  cp.pressure.kp = 20;  // sample_time left at 1e-3
+  EXPECT_NE(message([&] { CascadePwmController(rig_like_gpi(), cp); }).find("pressure.sample_time"),
+            std::string::npos);
+  cp.pressure.sample_time = 0.01;
+  EXPECT_NO_THROW(CascadePwmController(rig_like_gpi(), cp));
+  cp.position.sample_time = 1e-3;
+  EXPECT_NE(message([&] { CascadePwmController(rig_like_gpi(), cp); }).find("position.sample_time"),
+            std::string::npos);
+}
+
 TEST(Experiment, UnknownNameAndBadOptionsAreRejected) {
   ExperimentOptions o;
   o.name = "gpi-pdi";

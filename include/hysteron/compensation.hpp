@@ -47,6 +47,7 @@ class InverseFeedforward {
 // its feedforward term, so the clamp and the integrator agree).
 class FeedforwardPidController {
  public:
+  // Throws hysteron::Error if pid.sample_time is not ff.sample_time (one sample time for the loop).
   FeedforwardPidController(const ModelParams& model, const FeedforwardParams& ff, const PidParams& pid);
   // reference_m: y_d(t); preview_m: the reference fed to the inverse (y_d(t + lead)
   // for a known reference, else reference_m); measured_m: sensor. Returns MPa.
@@ -80,6 +81,8 @@ inline double pressure_loop_command(double p_d, double pressure_mpa, double k_p)
 
 class OpenLoopController {
  public:
+  // Throws hysteron::Error if the position PID is used (a gain non-zero) at another sample time than
+  // feedforward.sample_time.
   OpenLoopController(const ModelParams& model, const OpenLoopParams& params);
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;
@@ -110,6 +113,8 @@ struct CascadeParams {
 
 class CascadePwmController {
  public:
+  // Throws hysteron::Error if position.sample_time or pressure.sample_time is not
+  // feedforward.sample_time (one sample time for the loop).
   CascadePwmController(const ModelParams& model, const CascadeParams& params);
   // Returns the PWM duty in [-1, 1]; desired_pressure() is the outer loop's output.
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;

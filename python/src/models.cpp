@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "bindings.hpp"
+#include "more.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -11,7 +12,7 @@ namespace hysteron::python {
 
 // A Python dict/list (numpy scalars and arrays included, via their tolist())
 // as JSON. NaN, infinities and objects JSON cannot hold are hysteron.Error.
-nlohmann::json to_json(const py::handle& obj) {
+nlohmann::json to_json(const py::handle& obj, std::string_view what) {
   using namespace pybind11::literals;
   const auto dumps = py::module_::import("json").attr("dumps");
   const py::cpp_function numpy_to_python([](py::handle o) -> py::object {
@@ -23,26 +24,18 @@ nlohmann::json to_json(const py::handle& obj) {
   try {
     text = dumps(obj, "default"_a = numpy_to_python, "allow_nan"_a = false).cast<std::string>();
   } catch (py::error_already_set& e) {
-    const std::string what = e.what();
-    if (what.find("Out of range float") != std::string::npos)
-      throw Error("Python object: a value is NaN or infinite (JSON and model files hold finite numbers only)");
-    throw Error(fmt::format("Python object: cannot convert to JSON: {}", what));
+    // the exception's own message, not e.what() (which carries a Python traceback)
+    const std::string message = py::str(e.value()).cast<std::string>();
+    if (message.find("Out of range float") != std::string::npos)
+      throw Error(fmt::format("{}: a value is NaN or infinite (JSON and model files hold finite numbers only)", what));
+    throw Error(fmt::format("{}: cannot convert to JSON: {}", what, message));
   }
-  return io::parse_json(text, "Python object");
+  return io::parse_json(text, std::string(what));
 }
 
 py::object from_json(const nlohmann::json& j) {
   return py::module_::import("json").attr("loads")(j.dump());
 }
-
-namespace {
-
-ModelParams params_from(const py::handle& spec) {
-  if (py::isinstance<py::str>(spec)) return io::read_model_file(spec.cast<std::string>());
-  return io::model_from_json(to_json(spec), "model");
-}
-
-}  // namespace
 
 void bind_models(py::module_& m) {
   py::register_exception<Error>(m, "Error", PyExc_ValueError);
@@ -56,16 +49,25 @@ rate-pi) run sample by sample.
 
 Model(spec) takes a dict with the model-file keys, e.g.
 ``{"model": "gpi", "n": 10, "c": [c0, c1, c2, c3], "q": q, "rho": rho, "tau": tau, "alpha": alpha}``,
-or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
-      .def(py::init([](const py::object& spec) { return Model(params_from(spec)); }), py::arg("spec"))
+the path of a model JSON file (a str or an os.PathLike such as pathlib.Path), or a
+hysteron.Model (a copy of its parameters, in the virgin state). Starts in the virgin state
+y_i0 = 0.)doc")
+      .def(py::init([](const py::object& spec) { return Model(model_spec(spec, "Model: spec")); }), py::arg("spec"))
       .def_property_readonly("name", [](const Model& s) { return std::string(s.name()); },
-                             "The model kind: 'pi', 'gpi', 'mpi-deadzone' or 'mpi-asym'.")
+                             "The model kind: 'pi', 'gpi', 'mpi-deadzone', 'mpi-asym', 'preisach', 'kp', 'bouc-wen', "
+                             "'maxwell-slip' or 'rate-pi'.")
       .def_property_readonly("num_operators", &Model::num_operators, "Number of play operators.")
-      .def("step", &Model::step, py::arg("x"), "One sample: the output for input x (updates the state).")
+      .def("step", &Model::step, py::arg("x"),
+           "One sample: the output for input x (updates the state). A NaN or infinite x (or one so large the "
+           "output could overflow) leaves the state unchanged, returns the previous output and is counted in "
+           "faults; simulate() raises hysteron.Error on such an input instead.")
+      .def_property_readonly("faults", &Model::faults,
+                             "Number of inputs step() ignored (NaN, infinite or beyond the model's input bound) "
+                             "since the last reset (reset() and reset_relaxed() set it to 0).")
       .def(
           "simulate",
-          [](Model& s, const DoubleArray& x) { return to_numpy(s.simulate(as_span(x))); }, py::arg("x"),
-          "Outputs for an input array, continuing from the current state.")
+          [](Model& s, const DoubleArray& x) { return to_numpy(s.simulate(as_span(x, "Model.simulate: x"))); },
+          py::arg("x"), "Outputs for an input array, continuing from the current state.")
       .def("reset", py::overload_cast<>(&Model::reset), "Back to the virgin state.")
       .def(
           "reset_relaxed", [](Model& self, double x0) { self.reset_relaxed(finite_arg(x0, "Model.reset_relaxed: x0")); },
@@ -75,9 +77,11 @@ or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
       .def("to_dict", [](const Model& s) { return from_json(io::model_to_json(s.params())); },
            "The model's parameters as a dict with the model-file keys (docs/model-files.md); "
            "Model(m.to_dict()) is the same model.")
-      .def("save", [](const Model& s, const std::string& path) { io::write_model_file(path, s.params()); },
+      .def(
+          "save", [](const Model& s, const PathArg& path) { io::write_model_file(path.string(), s.params()); },
            py::arg("path"),
-           "Write the model file (JSON) to path, atomically: on an error the old file is left as it was.")
+           "Write the model file (JSON) to path (a str or an os.PathLike), atomically: on an error the old "
+           "file is left as it was.")
       .def("__repr__", [](const Model& s) {
         if (!has_pi_structure(s.params()))
           return fmt::format("<hysteron.Model {} with {} state entries>", s.name(), s.state().y.size());
@@ -88,7 +92,8 @@ or the path of a model JSON file. Starts in the virgin state y_i0 = 0.)doc")
 Exact inverse of a model: desired output -> input. Analytical for pi, gpi and
 mpi-deadzone, maxwell-slip (Eqs. 9-11), exact per-sample bracketing for mpi-asym,
 preisach, kp, bouc-wen and rate-pi.
-Outputs beyond reach saturate at the input limits (lo, hi).)doc")
+Outputs beyond reach saturate at the input limits (lo, hi).
+Inverse(spec, limits=None): spec as for Model (a dict, a model file path, or a hysteron.Model).)doc")
       .def(py::init([](const py::object& spec, py::object limits) {
              InverseOptions opt;
              if (!limits.is_none()) {
@@ -96,16 +101,21 @@ Outputs beyond reach saturate at the input limits (lo, hi).)doc")
                                                                   "(lo, hi), two numbers, or None for no limits");
                opt.input_limits = {l.first, l.second};
              }
-             return Inverse(params_from(spec), opt);
+             return Inverse(model_spec(spec, "Inverse: spec"), opt);
            }),
            py::arg("spec"), py::arg("limits") = py::none())
       .def("step", &Inverse::step, py::arg("y_desired"),
            "One sample: the input that makes the model reach y_desired (clamped to the limits; "
-           "updates the state). A NaN holds the previous input.")
+           "updates the state). A finite y_desired beyond reach, however large, saturates at the limit in its "
+           "direction; a NaN or an infinite y_desired (+inf and -inf too) holds the previous input, leaves the "
+           "state unchanged and is counted in faults; simulate() raises hysteron.Error on such a value instead.")
+      .def_property_readonly("faults", &Inverse::faults,
+                             "Number of non-finite y_desired step() ignored (or desired outputs beyond a double's "
+                             "range) since the last reset (reset() and start_from() set it to 0).")
       .def(
           "simulate",
-          [](Inverse& s, const DoubleArray& y) { return to_numpy(s.simulate(as_span(y))); }, py::arg("y"),
-          "Inputs for an array of desired outputs, continuing from the current state.")
+          [](Inverse& s, const DoubleArray& y) { return to_numpy(s.simulate(as_span(y, "Inverse.simulate: y"))); },
+          py::arg("y"), "Inputs for an array of desired outputs, continuing from the current state.")
       .def("reset", py::overload_cast<>(&Inverse::reset), "Back to the virgin state.")
       .def(
           "start_from",

@@ -13,8 +13,31 @@
 
 namespace hysteron::python {
 
+std::span<const double> as_span(const DoubleArray& a, std::string_view what) {
+  const auto n = static_cast<std::size_t>(a.size());
+  if (a.ndim() == 1 || (a.ndim() == 2 && (a.shape(0) == 1 || a.shape(1) == 1))) return {a.data(), n};
+  std::string shape;
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += fmt::format("{}{}", i ? ", " : "", a.shape(i));
+  if (a.ndim() == 1) shape += ",";
+  throw Error(fmt::format("{}: expected a one-dimensional array (or a column (N, 1) or a row (1, N)), got {}", what,
+                          a.ndim() == 0 ? std::string("a scalar (shape ())") : fmt::format("shape ({})", shape)));
+}
+
+bool is_path(const py::handle& obj) {
+  return py::isinstance<py::str>(obj) || py::hasattr(obj, "__fspath__");
+}
+
+std::string path_arg(const py::handle& obj, std::string_view what) {
+  if (py::isinstance<py::str>(obj)) return obj.cast<std::string>();
+  if (py::hasattr(obj, "__fspath__")) {
+    const py::module_ os = py::module_::import("os");
+    return py::str(os.attr("fsdecode")(os.attr("fspath")(obj))).cast<std::string>();
+  }
+  throw_arg_type(obj, what, "a path (a str or an os.PathLike such as pathlib.Path)");
+}
+
 std::span<const double> as_finite_span(const DoubleArray& a, const char* what) {
-  const std::span<const double> s = as_span(a);
+  const std::span<const double> s = as_span(a, what);
   for (std::size_t i = 0; i < s.size(); ++i)
     if (!std::isfinite(s[i])) throw Error(fmt::format("{}[{}] = {}: not finite", what, i, s[i]));
   return s;
@@ -44,10 +67,32 @@ double finite_arg(double v, const char* what) {
   return v;
 }
 
-ModelParams model_spec(const py::handle& spec) {
-  if (py::isinstance<py::str>(spec)) return io::read_model_file(spec.cast<std::string>());
+ModelParams model_spec(const py::handle& spec, std::string_view what) {
+  if (is_path(spec)) return io::read_model_file(path_arg(spec, what));
   if (py::isinstance<Model>(spec)) return spec.cast<const Model&>().params();
-  return io::model_from_json(to_json(spec), "model");
+  if (!py::isinstance<py::dict>(spec))
+    throw_arg_type(spec, what, "a model dict (the model-file keys), a model file path or a hysteron.Model");
+  return io::model_from_json(to_json(spec, what), std::string(what));
+}
+
+std::uint64_t uint_arg(const py::handle& obj, std::string_view what, std::uint64_t min) {
+  const std::string_view expected = min == 1 ? "a positive integer" : "an integer >= 0";
+  if (py::isinstance<py::bool_>(obj) || !PyIndex_Check(obj.ptr())) throw_arg_type(obj, what, expected);
+  const auto i = py::reinterpret_steal<py::int_>(PyNumber_Index(obj.ptr()));
+  if (!i) throw py::error_already_set();
+  const int below = PyObject_RichCompareBool(i.ptr(), py::int_(min).ptr(), Py_LT);
+  if (below < 0) throw py::error_already_set();
+  const std::string text = py::repr(i).cast<std::string>();
+  if (below) throw py::value_error(fmt::format("{} must be {}, got {}", what, expected, text));
+  try {
+    return i.cast<std::uint64_t>();
+  } catch (const py::cast_error&) {
+    throw py::value_error(fmt::format("{} = {} is too large (at most 2**64 - 1)", what, text));
+  }
+}
+
+std::pair<double, double> pair_arg(const py::handle& obj, std::string_view what) {
+  return cast_arg<std::pair<double, double>>(obj, what, "(lo, hi), two numbers");
 }
 
 InitialState initial_state_from(const std::string& name) {

@@ -3,6 +3,7 @@
 // update.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <span>
@@ -82,12 +83,29 @@ FeedforwardParams ff_params(std::pair<double, double> limits, double model_scale
 
 constexpr double inf = std::numeric_limits<double>::infinity();
 
-// A controller's pid= (or pressure_pid=): a hysteron.Pid; `what` names the argument in errors.
-PidParams pid_arg(const py::object& pid, const char* what) {
-  return cast_arg<const Pid&>(pid, what,
-                              "a hysteron.Pid or None (a dict of its parameters: hysteron.Pid(**d), as Pid.params "
-                              "gives them)")
-      .params();
+// A controller's pid= (or pressure_pid=): a hysteron.Pid at the controller's sample_time ts [s];
+// `what` names the argument in errors. A Pid at another sample time (its default 1e-3 s in a
+// 10 ms loop) would integrate with its own: refused, naming both.
+PidParams pid_arg(const py::object& pid, const char* what, double ts) {
+  const PidParams p = cast_arg<const Pid&>(pid, what,
+                                           "a hysteron.Pid or None (a dict of its parameters: hysteron.Pid(**d), as "
+                                           "Pid.params gives them)")
+                          .params();
+  if (!(std::abs(p.sample_time - ts) <= 1e-9 * std::abs(ts)))
+    throw Error(fmt::format("{}.sample_time {} s differs from sample_time {} s: set Pid(sample_time={}) (one sample "
+                            "time for the loop)",
+                            what, p.sample_time, ts, ts));
+  return p;
+}
+
+// pressure_limits=: (lo, hi) [MPa].
+std::pair<double, double> limits_arg(const py::object& limits, const char* where) {
+  return pair_arg(limits, fmt::format("{}: pressure_limits", where));
+}
+
+// A count of IterativeLearning(...): an int >= min.
+std::size_t count_arg(const py::object& v, const char* name, std::uint64_t min = 0) {
+  return static_cast<std::size_t>(uint_arg(v, fmt::format("IterativeLearning: {}", name), min));
 }
 
 }  // namespace
@@ -161,8 +179,10 @@ weights. step() never allocates; a non-finite input holds the last output.)doc")
 Inverse-model feedforward: desired contraction [m] -> pressure command [MPa],
 clamped to pressure_limits; model output units are model_scale per metre (1000
 for a model fitted in mm); optional compensation of a first-order lag.)doc")
-      .def(py::init([](const py::object& model, std::pair<double, double> limits, double scale, double lag,
-                       double ts) { return InverseFeedforward(model_spec(model), ff_params(limits, scale, lag, ts)); }),
+      .def(py::init([](const py::object& model, const py::object& limits, double scale, double lag, double ts) {
+             return InverseFeedforward(model_spec(model, "InverseFeedforward: model"),
+                                       ff_params(limits_arg(limits, "InverseFeedforward"), scale, lag, ts));
+           }),
            py::arg("model"), py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
            py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &InverseFeedforward::step, py::arg("desired_m"), "Pressure [MPa] for the desired contraction [m].")
@@ -181,11 +201,13 @@ for a model fitted in mm); optional compensation of a first-order lag.)doc")
 GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)) [MPa], the PID's
 anti-windup aware of the total command. pid: a hysteron.Pid (its parameters
 are used; default: Pid.gpi_paper()).)doc")
-      .def(py::init([](const py::object& model, const py::object& pid, std::pair<double, double> limits, double scale,
+      .def(py::init([](const py::object& model, const py::object& pid, const py::object& limits_obj, double scale,
                        double lag, double ts) {
+             const auto limits = limits_arg(limits_obj, "FeedforwardPidController");
              const PidParams pp = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                                : pid_arg(pid, "FeedforwardPidController: pid");
-             return FeedforwardPidController(model_spec(model), ff_params(limits, scale, lag, ts), pp);
+                                                : pid_arg(pid, "FeedforwardPidController: pid", ts);
+             return FeedforwardPidController(model_spec(model, "FeedforwardPidController: model"),
+                                             ff_params(limits, scale, lag, ts), pp);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
            py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
@@ -203,12 +225,13 @@ FF(preview) (+ PID(y_d - y), clamped, if pid is given: hysteron's compensated
 variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
 (result.json "loop": "open_loop"; docs/deploy.md).)doc")
       .def(py::init([](const py::object& model, const py::object& pid, double pressure_gain,
-                       std::pair<double, double> limits, double scale, double lag, double ts) {
+                       const py::object& limits, double scale, double lag, double ts) {
              OpenLoopParams p;
-             p.feedforward = ff_params(limits, scale, lag, ts);
-             if (!pid.is_none()) p.position = pid_arg(pid, "OpenLoopController: pid");
+             p.feedforward = ff_params(limits_arg(limits, "OpenLoopController"), scale, lag, ts);
+             p.position.sample_time = ts;  // (unused without gains)
+             if (!pid.is_none()) p.position = pid_arg(pid, "OpenLoopController: pid", ts);
              p.pressure_gain = pressure_gain;
-             return OpenLoopController(model_spec(model), p);
+             return OpenLoopController(model_spec(model, "OpenLoopController: model"), p);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_gain") = 0.5,
            py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
@@ -229,16 +252,17 @@ kp = 20 per MPa); then the PWM modulator (pwm: a dict of gain, deadband, min_dut
 max_duty, resolution; missing keys take the defaults 1, 0, 0, 1, 0). step() returns the
 duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm").)doc")
       .def(py::init([](const py::object& model, const py::object& pid, const py::object& pressure_pid,
-                       const py::object& pwm, std::pair<double, double> limits, double scale, double lag, double ts) {
+                       const py::object& pwm, const py::object& limits_obj, double scale, double lag, double ts) {
+             const auto limits = limits_arg(limits_obj, "CascadePwmController");
              CascadeParams p;
              p.feedforward = ff_params(limits, scale, lag, ts);
              p.position = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                        : pid_arg(pid, "CascadePwmController: pid");
+                                        : pid_arg(pid, "CascadePwmController: pid", ts);
              if (pressure_pid.is_none()) {
                p.pressure.kp = 20.0;
                p.pressure.sample_time = ts;
              } else {
-               p.pressure = pid_arg(pressure_pid, "CascadePwmController: pressure_pid");
+               p.pressure = pid_arg(pressure_pid, "CascadePwmController: pressure_pid", ts);
              }
              if (!pwm.is_none()) {
                const auto d = cast_arg<py::dict>(pwm, "CascadePwmController: pwm",
@@ -257,7 +281,7 @@ duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm"
                                                      key));
                }
              }
-             return CascadePwmController(model_spec(model), p);
+             return CascadePwmController(model_spec(model, "CascadePwmController: model"), p);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_pid") = py::none(),
            py::arg("pwm") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
@@ -283,18 +307,18 @@ whose bound holds on the identified loop). step() never allocates; a
 non-finite error is learnt as 0 and counted (faults), an update that overflows keeps the
 sample's correction of the period before (overflows). Invalid parameters raise
 hysteron.Error naming the field.)doc")
-      .def(py::init([](std::size_t period, double gain, std::size_t lead, std::size_t half_width,
-                       std::size_t lookahead, double max_correction, double rise_tolerance,
-                       std::size_t hold_after_cuts, double max_gain) {
+      .def(py::init([](const py::object& period, double gain, const py::object& lead, const py::object& half_width,
+                       const py::object& lookahead, double max_correction, double rise_tolerance,
+                       const py::object& hold_after_cuts, double max_gain) {
              LearningParams p;
-             p.period = period;
+             p.period = count_arg(period, "period", 1);
              p.gain = gain;
-             p.lead = lead;
-             p.half_width = half_width;
-             p.lookahead = lookahead;
+             p.lead = count_arg(lead, "lead");
+             p.half_width = count_arg(half_width, "half_width");
+             p.lookahead = count_arg(lookahead, "lookahead");
              p.max_correction = max_correction;
              p.rise_tolerance = rise_tolerance;
-             p.hold_after_cuts = hold_after_cuts;
+             p.hold_after_cuts = count_arg(hold_after_cuts, "hold_after_cuts");
              p.max_gain = max_gain;
              return IterativeLearning(p);
            }),

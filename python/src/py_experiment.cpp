@@ -58,8 +58,8 @@ SweepResult run_sweep_interruptible(SweepOptions o) {
 }
 
 
-std::vector<double> vec(const DoubleArray& a) {
-  const auto s = as_span(a);
+std::vector<double> vec(const DoubleArray& a, const std::string& what) {
+  const auto s = as_span(a, what);
   return {s.begin(), s.end()};
 }
 
@@ -81,8 +81,8 @@ py::dict id_run_dict(const IdentificationRun& run) {
 
 // A rig from a JSON file's path or a parameter dict (`where` names the argument in errors).
 PamRigParams rig_from(const py::object& plant, const char* where) {
-  return py::isinstance<py::str>(plant) ? load_rig_params(plant.cast<std::string>())
-                                        : rig_params_from_json(to_json(plant), where);
+  return is_path(plant) ? load_rig_params(path_arg(plant, where))
+                                        : rig_params_from_json(to_json(plant, where), where);
 }
 
 // Keyword arguments shared by the plot functions.
@@ -98,7 +98,7 @@ void bind_experiment(py::module_& m) {
       "controller_from",
       [](const py::object& controller, const py::object& model) {
         const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
-        Controller c = make_controller(d, model_spec(model));
+        Controller c = make_controller(d, model_spec(model, "controller_from: model"));
         return std::visit([](auto& loop) { return py::cast(std::move(loop)); }, c);
       },
       py::arg("controller"), py::arg("model"),
@@ -119,7 +119,7 @@ inverse is fixed. hysteron.Error names a missing or invalid key. docs/deploy.md.
         o.source_name = source_name;
         if (limits) o.inverse_limits = Limits{limits->first, limits->second};
         if (!controller.is_none()) o.loop = io::from_json<LoopDesign>(to_json(controller), "controller");
-        const io::GeneratedC g = io::generate_c(model_spec(model), o);
+        const io::GeneratedC g = io::generate_c(model_spec(model, "export_c: model"), o);
         py::dict out;
         out["source"] = g.source;
         out["header"] = g.header;
@@ -193,11 +193,13 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       "compensated, learning, adaptive, baseline) and published_source (\"\" where the paper gives no figures).");
   m.def(
       "run_experiment",
-      [](const std::string& name, std::uint64_t seed, const py::object& plant, const std::string& out,
-         const std::string& report_path, int learning_periods, bool adaptive, const py::object& tracking_plant,
+      [](const std::string& name, const py::object& seed_arg, const py::object& plant, const PathArg& out_arg,
+         const PathArg& report_arg, int learning_periods, bool adaptive, const py::object& tracking_plant,
          const std::string& model, bool paper_references) {
         // where the outputs go, before the run (minutes): a report whose directory is `out` is
         // written after `out` was created
+        const std::string out = out_arg.string(), report_path = report_arg.string();
+        const std::uint64_t seed = uint_arg(seed_arg, "run_experiment: seed");
         io::check_output_directory({"run_experiment: out", out});
         const auto dir = [](const std::string& p) { return std::filesystem::path(p).lexically_normal(); };
         if (!out.empty() && !report_path.empty() &&
@@ -311,9 +313,10 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
   m.def(
       "run_sweep",
       [](const py::object& experiments, const std::vector<std::string>& vary, const py::object& grid,
-         const std::string& set, const py::object& plant, std::uint64_t seed, int learning_periods,
-         const std::string& model, bool paper_references, bool identify_on_base, unsigned jobs, const std::string& out,
-         const std::string& report_path) {
+         const std::string& set, const py::object& plant, const py::object& seed, int learning_periods,
+         const std::string& model, bool paper_references, bool identify_on_base, const py::object& jobs,
+         const PathArg& out_arg, const PathArg& report_arg) {
+        const std::string out = out_arg.string(), report_path = report_arg.string();
         io::check_output_file({"run_sweep: out", out});
         io::check_output_file({"run_sweep: report", report_path});
         SweepOptions o;
@@ -322,20 +325,22 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
                 ? std::vector<std::string>{experiments.cast<std::string>()}
                 : cast_arg<std::vector<std::string>>(experiments, "run_sweep: experiments",
                                                      "a name of experiment_names(), \"all\", or a list of names"));
-        o.seed = seed;
+        o.seed = uint_arg(seed, "run_sweep: seed");
         o.learning_periods = learning_periods;
         o.model = fit_model_from_name(model);
         o.fit_references = !paper_references;
         o.identify_on_base = identify_on_base;
-        o.jobs = jobs;
+        const std::uint64_t n_jobs = uint_arg(jobs, "run_sweep: jobs");
+        if (n_jobs > 0xffffffffu) throw py::value_error(fmt::format("run_sweep: jobs = {} is too large", n_jobs));
+        o.jobs = static_cast<unsigned>(n_jobs);
         if (!plant.is_none()) o.base = rig_from(plant, "plant");
         if (!set.empty())
           for (auto& v : variant_set(set, "run_sweep: set")) o.variants.push_back(std::move(v));
         for (const auto& spec : vary)
           for (auto& v : parse_vary(spec)) o.variants.push_back(std::move(v));
         if (!grid.is_none())
-          for (auto& v : py::isinstance<py::str>(grid) ? read_variant_grid(grid.cast<std::string>())
-                                                       : variant_grid_from_json(to_json(grid), "grid"))
+          for (auto& v : is_path(grid) ? read_variant_grid(path_arg(grid, "run_sweep: grid"))
+                                       : variant_grid_from_json(to_json(grid, "run_sweep: grid"), "grid"))
             o.variants.push_back(std::move(v));
         if (o.variants.empty())
           throw Error(fmt::format("run_sweep: no variants: give vary=['PATH=V1,V2,...'], grid= or set='{}'",
@@ -371,7 +376,8 @@ is recorded in the result (failures > 0), not raised; bad input raises hysteron.
 
   m.def(
       "write_report",
-      [](const std::string& input, const std::string& out) {
+      [](const PathArg& input_arg, const PathArg& out_arg) {
+        const std::string input = input_arg.string(), out = out_arg.string();
         report::write_report_from(input, out, fmt::format("hysteron.write_report('{}', '{}')", input, out));
       },
       py::arg("input"), py::arg("out"),
@@ -379,7 +385,7 @@ is recorded in the result (failures > 0), not raised; bad input raises hysteron.
 
   m.def(
       "plot",
-      [](const py::list& series, const std::string& path, const std::string& title, const std::string& xl,
+      [](const py::list& series, const PathArg& path, const std::string& title, const std::string& xl,
          const std::string& xu, const std::string& yl, const std::string& yu) {
         report::PlotSpec spec{labels(title, xl, xu, yl, yu), {}};
         for (std::size_t i = 0; i < series.size(); ++i) {
@@ -392,73 +398,84 @@ is recorded in the result (failures > 0), not raised; bad input raises hysteron.
           };
           report::Series r;
           r.label = get.operator()<std::string>("label", "a str");
-          r.x = vec(get.operator()<DoubleArray>("x", "an array of numbers"));
-          r.y = vec(get.operator()<DoubleArray>("y", "an array of numbers"));
+          r.x = vec(get.operator()<DoubleArray>("x", "an array of numbers"), where + "[\"x\"]");
+          r.y = vec(get.operator()<DoubleArray>("y", "an array of numbers"), where + "[\"y\"]");
           if (d.contains("style")) r.style = get.operator()<std::string>("style", "a str");
           if (d.contains("color")) r.color = get.operator()<std::string>("color", "a str");
           if (d.contains("dashed")) r.dashed = get.operator()<bool>("dashed", "a bool");
           spec.series.push_back(std::move(r));
         }
-        report::plot(spec, path);
+        report::plot(spec, path.string());
       },
       py::arg("series"), HYSTERON_PLOT_ARGS("hysteron plot", "x", "", "y", ""),
       "Generic plot (gnuplot) to .svg or .png; series: dicts {label, x, y, style, color, dashed}.");
   m.def(
       "plot_hysteresis_loops",
-      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const std::string& path,
+      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu, std::size_t major_end) {
-        report::plot_hysteresis_loops(as_span(x), as_span(y), as_span(model), labels(title, xl, xu, yl, yu), path,
-                                      major_end);
+        report::plot_hysteresis_loops(as_span(x, "plot_hysteresis_loops: input"),
+                                      as_span(y, "plot_hysteresis_loops: measured"),
+                                      as_span(model, "plot_hysteresis_loops: model"), labels(title, xl, xu, yl, yu),
+                                      path.string(), major_end);
       },
       py::arg("input"), py::arg("measured"), py::arg("model"),
       HYSTERON_PLOT_ARGS("Hysteresis loops", "Pressure", "MPa", "Contraction", "mm"), py::arg("major_end") = 0,
       "Measured (and model, if non-empty) output against input; [0, major_end) drawn as the major loop.");
   m.def(
       "plot_identification_input",
-      [](const DoubleArray& t, const DoubleArray& cmd, const DoubleArray& meas, const std::string& path,
+      [](const DoubleArray& t, const DoubleArray& cmd, const DoubleArray& meas, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
-        report::plot_identification_input(as_span(t), as_span(cmd), as_span(meas), labels(title, xl, xu, yl, yu),
-                                          path);
+        report::plot_identification_input(as_span(t, "plot_identification_input: t"),
+                                          as_span(cmd, "plot_identification_input: command"),
+                                          as_span(meas, "plot_identification_input: measured"),
+                                          labels(title, xl, xu, yl, yu), path.string());
       },
       py::arg("t"), py::arg("command"), py::arg("measured"),
       HYSTERON_PLOT_ARGS("Identification input", "Time", "s", "Pressure", "MPa"),
       "Identification input against time (Fig. 4).");
   m.def(
       "plot_tracking",
-      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const std::string& path,
+      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
-        report::plot_tracking(as_span(t), as_span(d), as_span(a), labels(title, xl, xu, yl, yu), path);
+        report::plot_tracking(as_span(t, "plot_tracking: t"), as_span(d, "plot_tracking: desired"),
+                              as_span(a, "plot_tracking: actual"), labels(title, xl, xu, yl, yu), path.string());
       },
       py::arg("t"), py::arg("desired"), py::arg("actual"),
       HYSTERON_PLOT_ARGS("Trajectory tracking", "Time", "s", "Contraction", "mm"),
       "Desired and actual output against time (Fig. 11).");
   m.def(
       "plot_tracking_error",
-      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const std::string& path,
+      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
-        report::plot_tracking_error(as_span(t), as_span(d), as_span(a), labels(title, xl, xu, yl, yu), path);
+        report::plot_tracking_error(as_span(t, "plot_tracking_error: t"), as_span(d, "plot_tracking_error: desired"),
+                                    as_span(a, "plot_tracking_error: actual"), labels(title, xl, xu, yl, yu),
+                                    path.string());
       },
       py::arg("t"), py::arg("desired"), py::arg("actual"),
       HYSTERON_PLOT_ARGS("Tracking error", "Time", "s", "Error", "mm"), "Tracking error against time (Fig. 12).");
   m.def(
       "plot_desired_vs_actual",
-      [](const DoubleArray& d, const DoubleArray& a, const std::string& path, const std::string& title,
+      [](const DoubleArray& d, const DoubleArray& a, const PathArg& path, const std::string& title,
          const std::string& xl, const std::string& xu, const std::string& yl, const std::string& yu) {
-        report::plot_desired_vs_actual(as_span(d), as_span(a), labels(title, xl, xu, yl, yu), path);
+        report::plot_desired_vs_actual(as_span(d, "plot_desired_vs_actual: desired"),
+                                       as_span(a, "plot_desired_vs_actual: actual"), labels(title, xl, xu, yl, yu),
+                                       path.string());
       },
       py::arg("desired"), py::arg("actual"),
       HYSTERON_PLOT_ARGS("Desired vs actual", "Desired contraction", "mm", "Actual contraction", "mm"),
       "Actual against desired output with the line y = x (Fig. 13).");
   m.def(
       "plot_fit_residuals",
-      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const std::string& path,
+      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
-        report::plot_fit_residuals(as_span(x), as_span(y), as_span(model), labels(title, xl, xu, yl, yu), path);
+        report::plot_fit_residuals(as_span(x, "plot_fit_residuals: x"), as_span(y, "plot_fit_residuals: measured"),
+                                   as_span(model, "plot_fit_residuals: model"), labels(title, xl, xu, yl, yu),
+                                   path.string());
       },
       py::arg("x"), py::arg("measured"), py::arg("model"),
       HYSTERON_PLOT_ARGS("Fit residuals", "Sample", "", "Residual", "mm"),

@@ -33,11 +33,13 @@ void bind_identify(py::module_& m) {
   m.def(
       "fit",
       [](const DoubleArray& x, const DoubleArray& y, const std::string& model, int num_operators, int num_dead_zones,
-         const std::string& initial_state, const py::object& train, double huber_delta, int num_starts, unsigned seed,
-         int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const std::string& report,
+         const std::string& initial_state, const py::object& train, double huber_delta, int num_starts,
+         const py::object& seed,
+         int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const PathArg& report_arg,
          std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
          int num_threads, int stall_iterations, double stall_tolerance, double min_slope, double sample_time,
          int censor_passes) {
+        const std::string report = report_arg.string();
         io::check_output_file({"fit: report", report});  // before the fit, not after it
         FitOptions o;
         o.model = fit_model_from_name(model);
@@ -47,7 +49,10 @@ void bind_identify(py::module_& m) {
         o.train = range_from(train, "fit: train");
         o.huber_delta = huber_delta;
         o.num_starts = num_starts;
-        o.seed = seed;
+        const std::uint64_t seed_value = uint_arg(seed, "fit: seed");
+        if (seed_value > 0xffffffffu)
+          throw py::value_error(fmt::format("fit: seed = {} is too large (at most 2**32 - 1)", seed_value));
+        o.seed = static_cast<unsigned>(seed_value);
         o.max_iterations = max_iterations;
         o.gpi_fix_scale = fix_scale;
         o.gpi_free_weights = free_weights;
@@ -58,7 +63,7 @@ void bind_identify(py::module_& m) {
         o.min_slope = min_slope;
         o.sample_time = sample_time;
         o.censor_passes = censor_passes;
-        const auto xs = as_span(x), ys = as_span(y);
+        const auto xs = as_span(x, "fit: x"), ys = as_span(y, "fit: y");
         FitReport r;
         {
           py::gil_scoped_release release;
@@ -123,7 +128,7 @@ Invalid options give the status "invalid_input" with the reason in "message".)do
       [](const DoubleArray& x, const DoubleArray& y, const py::object& train, int num_operators) {
         PiParams p;
         {
-          const auto xs = as_span(x), ys = as_span(y);
+          const auto xs = as_span(x, "reference_pi: x"), ys = as_span(y, "reference_pi: y");
           const IndexRange r = range_from(train, "reference_pi: train");
           py::gil_scoped_release release;
           p = reference_pi(xs, ys, r, num_operators);
@@ -152,12 +157,13 @@ usable by hysteron.Model (it may not be invertible).)doc");
       "evaluate",
       [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const py::object& range,
          const std::string& initial_state, bool censored) {
-        const ModelParams spec = model_spec(model);
+        const ModelParams spec = model_spec(model, "evaluate: model");
         std::size_t count = 0;
-        py::dict d = metrics_dict(evaluate_scored(spec, as_span(x), as_span(y), range_from(range, "evaluate: range"),
+        const auto xs = as_span(x, "evaluate: x"), ys = as_span(y, "evaluate: y");
+        py::dict d = metrics_dict(evaluate_scored(spec, xs, ys, range_from(range, "evaluate: range"),
                                                   initial_state_from(initial_state), censored, &count));
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
-        d["outside_input_limits"] = input_coverage(spec, as_span(x), range_from(range, "evaluate: range")).outside;
+        d["outside_input_limits"] = input_coverage(spec, xs, range_from(range, "evaluate: range")).outside;
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),
@@ -179,7 +185,8 @@ they are more than 1 %).)doc");
   m.def(
       "simulate_record",
       [](const py::object& model, const DoubleArray& x, const std::string& initial_state) {
-        return to_numpy(simulate_record(model_spec(model), as_span(x), initial_state_from(initial_state)));
+        return to_numpy(simulate_record(model_spec(model, "simulate_record: model"), as_span(x, "simulate_record: x"),
+                                        initial_state_from(initial_state)));
       },
       py::arg("model"), py::arg("x"), py::arg("initial_state") = "virgin",
       "Model output over a whole record, starting as fit() does (virgin or relaxed).");
@@ -187,17 +194,24 @@ they are more than 1 %).)doc");
   m.def(
       "compute_metrics",
       [](const DoubleArray& measured, const DoubleArray& predicted) {
-        return metrics_dict(
-            compute_metrics(as_finite_span(measured, "measured"), as_finite_span(predicted, "predicted")));
+        const auto ym = as_finite_span(measured, "compute_metrics: measured");
+        const auto yp = as_finite_span(predicted, "compute_metrics: predicted");
+        // zeros for no samples would read as a perfect fit (evaluate refuses an empty record too)
+        if (ym.empty() && yp.empty())
+          throw Error("compute_metrics: measured and predicted are empty: no samples to score");
+        return metrics_dict(compute_metrics(ym, yp));
       },
-      py::arg("measured"), py::arg("predicted"), "Error metrics of predicted against measured (equal lengths).");
+      py::arg("measured"), py::arg("predicted"),
+      "Error metrics of predicted against measured (equal lengths, at least one sample; hysteron.Error otherwise).");
 
   py::class_<Rls>(m, "Rls", R"doc(
 Recursive least squares with forgetting factor lam for the weights [q, p_1..p_n]
 of a model whose output is linear in them (pi, mpi-asym, gpi with free weights).
 Rls(model, lam=1.0, p0=1e6): model (dict, file path or Model) fixes thresholds
 and envelopes and gives the initial weights.)doc")
-      .def(py::init([](const py::object& model, double lam, double p0) { return Rls(model_spec(model), lam, p0); }),
+      .def(py::init([](const py::object& model, double lam, double p0) {
+             return Rls(model_spec(model, "Rls: model"), lam, p0);
+           }),
            py::arg("model"), py::arg("lam") = 1.0, py::arg("p0") = 1e6)
       .def("step", &Rls::step, py::arg("x"), py::arg("y"),
            "One sample: update with input x and measured y; returns the a-priori prediction.")
@@ -223,7 +237,8 @@ and envelopes and gives the initial weights.)doc")
       [](const py::object& model, const DoubleArray& x, const DoubleArray& y, double lam, int passes,
          const std::string& initial_state) {
         return from_json(io::model_to_json(
-            rls_fit(model_spec(model), as_span(x), as_span(y), lam, passes, initial_state_from(initial_state))));
+            rls_fit(model_spec(model, "rls_fit: model"), as_span(x, "rls_fit: x"), as_span(y, "rls_fit: y"), lam,
+                    passes, initial_state_from(initial_state))));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("lam") = 1.0, py::arg("passes") = 1,
       py::arg("initial_state") = "virgin", "Run Rls over the record `passes` times; returns the model dict.");
@@ -235,7 +250,8 @@ and envelopes and gives the initial weights.)doc")
         WeightFitOptions o;
         o.initial_state = initial_state_from(initial_state);
         o.train = range_from(train, "fit_weights: train");
-        return from_json(io::model_to_json(fit_weights(model_spec(model), as_span(x), as_span(y), o)));
+        return from_json(io::model_to_json(fit_weights(model_spec(model, "fit_weights: model"),
+                                                       as_span(x, "fit_weights: x"), as_span(y, "fit_weights: y"), o)));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
       "Constrained linear least squares for the weights of a model with fixed thresholds/envelopes.");

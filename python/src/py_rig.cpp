@@ -15,8 +15,8 @@ namespace {
 
 PamRigParams rig_params_from(const py::object& params) {
   if (params.is_none()) return {};
-  if (py::isinstance<py::str>(params)) return load_rig_params(params.cast<std::string>());
-  return rig_params_from_json(to_json(params), "params");
+  if (is_path(params)) return load_rig_params(path_arg(params, "PamRig: params"));
+  return rig_params_from_json(to_json(params, "params"), "params");
 }
 
 py::dict outputs_dict(const RigOutputs& o) {
@@ -74,13 +74,33 @@ PamRig(params=None, seed=1): params is a dict with optional sections "muscle",
 (see hysteron.rig_params()), or the path of such a JSON file. SI units inside;
 run_pressure takes and returns MPa and mm. Runs are reproducible bit for bit
 for a given seed.)doc")
-      .def(py::init([](const py::object& params, std::uint64_t seed) { return PamRig(rig_params_from(params), seed); }),
+      .def(py::init([](const py::object& params, const py::object& seed) {
+             return PamRig(rig_params_from(params), uint_arg(seed, "PamRig: seed"));
+           }),
            py::arg("params") = py::none(), py::arg("seed") = 1)
       .def("reset", &PamRig::reset, "Vented muscle at rest, t = 0, RNG re-seeded.")
       .def("reset_at_pressure",
-           [](PamRig& r, double p) { r.reset_at_pressure(finite_arg(p, "PamRig.reset_at_pressure: p_gauge")); },
+           [](PamRig& r, double p) {
+             finite_arg(p, "PamRig.reset_at_pressure: p_gauge");
+             // the C++ clamps to what the supply can give; a value outside is a mistake (often MPa given as Pa)
+             const AirParams& a = r.params().air;
+             const double hi = a.supply_pressure - a.atmospheric_pressure;
+             const std::string range = fmt::format("0 .. {} Pa, gauge pressure in pascals up to the rig's "
+                                                   "air.supply_pressure {} Pa abs minus air.atmospheric_pressure {} Pa",
+                                                   hi, a.supply_pressure, a.atmospheric_pressure);
+             if (p > 0 && p < 10)
+               throw Error(fmt::format("PamRig.reset_at_pressure: p_gauge = {} Pa: the unit is Pa, not MPa (for {} "
+                                       "MPa give {:g}; {})",
+                                       p, p, p * 1e6, range));
+             if (p < 0 || p > hi)
+               throw Error(fmt::format("PamRig.reset_at_pressure: p_gauge = {} Pa is outside {}", p, range));
+             r.reset_at_pressure(p);
+           },
            py::arg("p_gauge"),
-           "Static equilibrium at gauge pressure p_gauge [Pa].")
+           "Static equilibrium at gauge pressure p_gauge [Pa] (pascals, unlike run_pressure's MPa): 0 (vented) up "
+           "to the supply's gauge pressure (params['air']['supply_pressure'] - "
+           "params['air']['atmospheric_pressure']); hysteron.Error outside, and for 0 < p_gauge < 10 (MPa given as "
+           "Pa).")
       .def(
           "step",
           [](PamRig& r, double pressure_command, double pwm_duty, const std::string& mode) {

@@ -29,6 +29,14 @@ InverseOptions inverse_options(const FeedforwardParams& p) {
   o.input_limits = p.pressure_limits;
   return o;
 }
+// A loop runs at one sample time: a PID at another would integrate and differentiate with the wrong
+// T_s without a word (a Pid left at its default 1e-3 s in a 10 ms loop: its integral 10 times too weak).
+void check_sample_time(const PidParams& pid, const FeedforwardParams& ff, const char* where, const char* which) {
+  if (std::abs(pid.sample_time - ff.sample_time) <= 1e-9 * std::abs(ff.sample_time)) return;
+  throw Error(detail::format("{}: {}.sample_time = {} s differs from the loop's sample_time = {} s (one sample time "
+                             "for the loop: set the PID's to {} s)",
+                             where, which, pid.sample_time, ff.sample_time, ff.sample_time));
+}
 }  // namespace
 
 InverseFeedforward::InverseFeedforward(const ModelParams& model, const FeedforwardParams& params)
@@ -57,7 +65,9 @@ FeedforwardPidController::FeedforwardPidController(const ModelParams& model, con
         q.out_max = std::min(q.out_max, ff.pressure_limits.hi);
         return q;
       }()),
-      lim_(ff.pressure_limits) {}
+      lim_(ff.pressure_limits) {
+  check_sample_time(pid, ff, "feedforward-PID controller", "pid");
+}
 
 void FeedforwardPidController::reset() noexcept {
   ff_.reset();
@@ -81,6 +91,7 @@ OpenLoopController::OpenLoopController(const ModelParams& model, const OpenLoopP
       use_position_(params.position.kp != 0.0 || params.position.ki != 0.0 || params.position.kd != 0.0) {
   if (!(params.pressure_gain >= 0) || !std::isfinite(params.pressure_gain))
     throw Error(detail::format("open-loop controller: pressure_gain must be >= 0, got {}", params.pressure_gain));
+  if (use_position_) check_sample_time(params.position, params.feedforward, "open-loop controller", "position");
 }
 
 void OpenLoopController::reset() noexcept {
@@ -109,7 +120,10 @@ CascadePwmController::CascadePwmController(const ModelParams& model, const Casca
         q.out_max = std::min(q.out_max, 1.0);
         return q;
       }()),
-      pwm_(params.pwm) {}
+      pwm_(params.pwm) {
+  check_sample_time(params.position, params.feedforward, "cascade PWM controller", "position");
+  check_sample_time(params.pressure, params.feedforward, "cascade PWM controller", "pressure");
+}
 
 void CascadePwmController::reset() noexcept {
   ff_.reset();

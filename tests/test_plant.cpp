@@ -373,6 +373,13 @@ TEST(PamRigParams, JsonRoundTripAndErrors) {
   EXPECT_NE(msg(R"({"sensors": {"pressure_bits": 12.5}})").find("sensors.pressure_bits"), std::string::npos);
   EXPECT_NE(msg(R"({"simulation": {"dt": 1e-3}})").find("simulation.dt"), std::string::npos);
   EXPECT_NE(msg(R"({"air": {"supply_pressure": 5e4}})").find("air.supply_pressure"), std::string::npos);
+  // physically impossible air: vacuum around the rig, a supply of 10 kbar
+  EXPECT_NE(msg(R"({"air": {"atmospheric_pressure": 1}})").find("rig.json.air.atmospheric_pressure = 1: must be within"),
+            std::string::npos);
+  EXPECT_NE(msg(R"({"air": {"supply_pressure": 1e9}})").find("rig.json.air.supply_pressure = 1000000000: must be <="),
+            std::string::npos);
+  EXPECT_NO_THROW(rig_params_from_json(
+      nlohmann::json::parse(R"({"air": {"supply_pressure": 1.7e6, "atmospheric_pressure": 7e4}})"), "x"));
   EXPECT_NE(msg(R"([1, 2])").find("expected a JSON object"), std::string::npos);
   // A muscle whose stroke (0.25 x 0.7 m) exceeds the displacement sensor's range (0.15 m): the
   // message names the key to change and why; a longer sensor makes the same rig valid.

@@ -146,6 +146,15 @@ void validate(const PamRigParams& p, std::string_view where) {
   if (p.air.supply_pressure <= p.air.atmospheric_pressure)
     fail(where, "air.supply_pressure", p.air.supply_pressure,
          fmt::format("> air.atmospheric_pressure = {}", p.air.atmospheric_pressure));
+  // The ambient air of a rig on Earth (30-110 kPa from a mountain top to sea level) and a supply
+  // within what pneumatic components are built for (at most 16-25 bar): 1 Pa or 1e9 Pa were
+  // accepted and simulated as an ideal gas.
+  if (p.air.atmospheric_pressure < 10e3 || p.air.atmospheric_pressure > 200e3)
+    fail(where, "air.atmospheric_pressure", p.air.atmospheric_pressure,
+         "within 10e3 .. 200e3 Pa abs (the ambient air: about 1e5 Pa at sea level)");
+  if (p.air.supply_pressure > 5e6)
+    fail(where, "air.supply_pressure", p.air.supply_pressure,
+         "<= 5e6 Pa abs (50 bar; pneumatic muscles and valves are rated for at most 6-25 bar)");
   if (p.air.linear_ratio <= p.regulator.critical_ratio || p.air.linear_ratio <= p.valves.critical_ratio)
     fail(where, "air.linear_ratio", p.air.linear_ratio,
          "> regulator.critical_ratio and > valves.critical_ratio");

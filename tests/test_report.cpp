@@ -178,7 +178,7 @@ TEST(Report, FitJsonRoundTripAndHtml) {
   f.model_kind = FitModel::gpi;
   f.model = model;
   f.parameters = {{"c0", 40.0, 0.0, true}, {"q", 1.0, 0.01, false}, {"rho", 0.4, std::nan(""), false}};
-  f.train = compute_metrics(y, simulate_record(model, x));
+  f.train = evaluate(model, x, y, {0, 1000});  // the training range's, as `fit` reports them
   FitData data;
   data.input = {"Pressure", "MPa"};
   data.output = {"Contraction", "mm"};
@@ -219,6 +219,17 @@ TEST(Report, FitJsonRoundTripAndHtml) {
   io::write_text_file(tmp / "nodata.json", bad.dump());
   EXPECT_NE(error_of([&] { write_report_from(tmp / "nodata.json", tmp / "x.html", ""); }).find("nope.csv"),
             std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp / "x.html"));
+  // data given by hand (-d) that are not the fit's record: swapped columns, another record
+  const std::string swapped =
+      error_of([&] { write_report_from(tmp / "fit.json", tmp / "x.html", "", {"data.csv", "length", "", "pressure"}); });
+  EXPECT_NE(swapped.find("does not reproduce the fit's training RMS"), std::string::npos) << swapped;
+  std::vector<double> y2 = y;
+  for (double& v : y2) v += 0.05;
+  io::write_columns(tmp / "other.csv", {"pressure", "length"}, {x, y2});
+  const std::string other =
+      error_of([&] { write_report_from(tmp / "fit.json", tmp / "x.html", "", {"other.csv", "pressure", "", "length"}); });
+  EXPECT_NE(other.find("not the record the fit used"), std::string::npos) << other;
   EXPECT_FALSE(fs::exists(tmp / "x.html"));
 }
 

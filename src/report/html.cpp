@@ -819,6 +819,22 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
   out.data.initial_state = d.initial_state;
   out.data.train = d.train;
   out.data.censor_clipped = d.censored;
+  // The data must be the record the fit used (-d names a file and columns by hand): another
+  // record, or swapped columns, gave a report of the fit against data it never saw, silently.
+  if (const FitMetrics& t = out.fit.train; t.n > 0) {
+    const IndexRange tr = d.train.end > d.train.begin ? d.train : IndexRange{0, out.data.x.size()};
+    if (tr.end > out.data.x.size())
+      throw Error(fmt::format("{}: the fit's training range [{}, {}) lies beyond the {} samples of {}: not the record "
+                              "the fit used",
+                              dw, tr.begin, tr.end, out.data.x.size(), out.data.source));
+    const FitMetrics again =
+        evaluate_scored(out.fit.model, out.data.x, out.data.y, tr, d.initial_state, d.censored, nullptr);
+    if (!(std::abs(again.rms - t.rms) <= 1e-6 * std::max(t.rms, again.rms) + 1e-300) || again.n != t.n)
+      throw Error(fmt::format("{}: {} does not reproduce the fit's training RMS ({:.6g} over {} samples; the fit "
+                              "reported {:.6g} over {}): not the record the fit used; give the data file and columns "
+                              "the fit read (--data, --input, --output)",
+                              dw, out.data.source, again.rms, again.n, t.rms, t.n));
+  }
   for (const auto& e : doc.validation) {
     ValidationData v;
     v.name = e.file;

@@ -403,10 +403,41 @@ TEST(Csv, BadNumberNamesFileLineColumnAndHeader) {
   const auto noh = dir.write("noh.csv", "0,1\n1,abc\n");
   // the second line is data, so "abc" is a bad number, not a header
   expect_error([&] { io::read_column(noh, "1"); }, {noh + ":2:2", "\"abc\""});
-  const auto comma = dir.write("decimal_comma.csv", "a;b\n1;2,5\n");
-  expect_error([&] { io::read_column(comma, "b"); }, {comma + ":2:2", "2,5"});
+  // a decimal comma that the first data row does not announce (Csv.ExcelExports reads one that it does)
+  const auto comma = dir.write("decimal_comma.csv", "a;b\n1;2\n1;2,5\n");
+  expect_error([&] { io::read_column(comma, "b"); }, {comma + ":3:2", "2,5", "decimal comma"});
   const auto big = dir.write("big.csv", "1\n1e999\n");
   expect_error([&] { io::read_column(big, ""); }, {big + ":2:1", "range"});
+}
+
+// What spreadsheets write: Excel's "sep=;" line, a decimal comma with ';' (European locales),
+// UTF-16 text ("Unicode text"). The first two are read; UTF-16 is named, not "not a number".
+TEST(Csv, ExcelExports) {
+  TempDir dir;
+  const std::vector<double> expect{1.25, -3, 4e-5};
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"sep.csv", "sep=;\na;b\n0;1.25\n1;-3\n2;4e-5\n"},
+      {"sep_comma.csv", "sep=,\r\na,b\r\n0,1.25\r\n1,-3\r\n2,4e-5\r\n"},
+      {"decimal_comma.csv", "a;b\n0;1,25\n1;-3\n2;0,00004\n"},
+      {"decimal_comma_tab.tsv", "a\tb\n0,0\t1,25\n1\t-3\n2\t4e-5\n"},
+      {"sep_decimal_comma.csv", "sep=;\na;b\n0;1,25\n1;-3\n2;4e-5\n"},
+  };
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    const auto path = dir.write(name, text);
+    EXPECT_EQ(io::read_column(path, "b"), expect);
+    EXPECT_EQ(io::read_column(path, "a"), (std::vector<double>{0, 1, 2}));
+  }
+  // without a header the first row is data, not a header, with a decimal comma
+  const auto noh = dir.write("noh.csv", "0;1,25\n1;-3\n");
+  EXPECT_EQ(io::read_column(noh, "1"), (std::vector<double>{1.25, -3}));
+  const auto declared = dir.write("declared.csv", "sep=|\na|b\n");
+  expect_error([&] { io::read_column(declared, "b"); }, {declared + ":1", "unsupported separator"});
+  const std::string u16 = std::string("\xFF\xFE", 2) + std::string("a\0,\0b\0\n\0" "1\0,\0" "2\0\n\0", 16);
+  const auto utf16 = dir.write("utf16.csv", u16);
+  expect_error([&] { io::read_column(utf16, "b"); }, {utf16, "UTF-16", "FF FE"});
+  const auto nobom = dir.write("utf16_nobom.csv", u16.substr(2));
+  expect_error([&] { io::read_column(nobom, "b"); }, {nobom + ":1", "NUL byte"});
 }
 
 TEST(Csv, NanAndInfinityRefused) {

@@ -265,6 +265,10 @@ class FileLines {
     if (first_) {
       first_ = false;
       if (end_ >= 3 && std::memcmp(buf_.get(), "\xEF\xBB\xBF", 3) == 0) begin_ = 3;
+      if (end_ >= 2 && (std::memcmp(buf_.get(), "\xFF\xFE", 2) == 0 || std::memcmp(buf_.get(), "\xFE\xFF", 2) == 0))
+        throw Error(fmt::format("{}: the file is UTF-16 encoded (byte-order mark {}): save it as UTF-8 text or "
+                                "\"CSV UTF-8\"",
+                                path_, buf_[0] == '\xFF' ? "FF FE" : "FE FF"));
     }
   }
 
@@ -287,8 +291,23 @@ class TextParser {
   // One line, without its line end. True if it is a data row.
   bool parse(std::string_view line) {
     ++lineno_;
+    if (line.find('\0') != std::string_view::npos)
+      throw Error(fmt::format("{}:{}: a NUL byte: the file is binary or UTF-16 encoded; save it as UTF-8 text",
+                              path_, lineno_));
     const std::string_view tl = trim(line);
     if (tl.empty() || tl.front() == '#') return false;
+    // Excel's separator directive ("sep=;") before the header
+    if (first_ && tl.size() == 5 && tl.substr(0, 4) == "sep=") {
+      const char c = tl[4];
+      if (c != ',' && c != ';' && c != '\t' && c != ' ')
+        throw Error(fmt::format("{}:{}: unsupported separator '{}' (use ',', ';', tab or ' ')", path_, lineno_,
+                                shown(tl.substr(4))));
+      if (sep_ != 0 && sep_ != c)
+        throw Error(fmt::format("{}:{}: the file declares separator '{}', the options ask for '{}'", path_, lineno_,
+                                shown(tl.substr(4)), shown({&sep_, 1})));
+      sep_ = c;
+      return false;
+    }
     if (first_) return first_line(line);
     split(line, sep_, fields_);
     if (fields_.size() != nfields_) {
@@ -298,7 +317,7 @@ class TextParser {
     }
     for (std::size_t c = 0; c < nfields_; ++c) {
       double v = 0.0;
-      switch (parse_number(fields_[c], v)) {
+      switch (parse_field(fields_[c], v)) {
         case Parse::ok:
           if (filled_[c] != rows_) {
             throw Error(fmt::format("{}:{}:{}{}: empty field (the column has values on other lines)", path_,
@@ -316,8 +335,11 @@ class TextParser {
           present_[c] = 0;
           break;
         case Parse::malformed:
-          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number", path_, lineno_, c + 1,
-                                  column_label(names_, c), shown(fields_[c])));
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number{}", path_, lineno_, c + 1,
+                                  column_label(names_, c), shown(fields_[c]),
+                                  fields_[c].find(',') == std::string_view::npos
+                                      ? ""
+                                      : " (a decimal comma is read only when the first data row has one)"));
         case Parse::non_finite:
           throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a finite number (NaN and infinity are refused)", path_,
                                   lineno_, c + 1, column_label(names_, c), shown(fields_[c])));
@@ -361,7 +383,10 @@ class TextParser {
     first_ = false;
     bool header = opt_.header == HeaderMode::present;
     if (opt_.header == HeaderMode::autodetect)
-      header = std::any_of(fields_.begin(), fields_.end(), [](std::string_view f) { return !looks_numeric(f); });
+      header = std::any_of(fields_.begin(), fields_.end(), [&](std::string_view f) {
+        double v = 0.0;
+        return !looks_numeric(f) && !(sep_ != ',' && parse_comma(f, v) != Parse::malformed);
+      });
     filled_.assign(nfields_, 0);
     first_empty_line_.assign(nfields_, 0);
     values_.assign(nfields_, 0.0);
@@ -404,6 +429,23 @@ class TextParser {
     return found;
   }
 
+  // A number with a decimal comma ("13,123"): parse_number of the field with ',' read as '.'.
+  static Parse parse_comma(std::string_view f, double& v) {
+    if (f.find(',') == std::string_view::npos || f.size() > 128) return Parse::malformed;
+    char tmp[128];
+    std::copy(f.begin(), f.end(), tmp);
+    std::replace(tmp, tmp + f.size(), ',', '.');
+    return parse_number({tmp, f.size()}, v);
+  }
+  // A field of a data row: a decimal comma is read in a file not separated by ',' whose first
+  // data row has one (European spreadsheets: "13,123;8,18"); the whole file is then read so.
+  Parse parse_field(std::string_view f, double& v) {
+    const Parse p = parse_number(f, v);
+    if (p != Parse::malformed || sep_ == ',') return p;
+    if (!decimal_comma_ && rows_ == 0 && parse_comma(f, v) != Parse::malformed) decimal_comma_ = true;
+    return decimal_comma_ ? parse_comma(f, v) : p;
+  }
+
   // The first line is a data row: parse it as one.
   bool parse_again(std::string_view line) {
     --lineno_;
@@ -413,7 +455,7 @@ class TextParser {
   const std::string& path_;
   const ReadOptions& opt_;
   char sep_;
-  bool first_ = true;
+  bool first_ = true, decimal_comma_ = false;
   std::size_t nfields_ = 0, first_line_ = 0, rows_ = 0, lineno_ = 0;
   std::vector<std::string> names_;
   std::vector<std::string_view> fields_;

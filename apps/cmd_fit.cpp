@@ -273,7 +273,9 @@ int run_fit(const FitCliOptions& c) {
       const auto& cand = rep.candidates[i];
       const auto cell = [](double v, const char* f) { return std::isfinite(v) ? fmt::format(fmt::runtime(f), v) : "-"; };
       std::string line = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", fit_model_name(cand.kind),
-                                     fit_status_name(cand.status), cand.num_parameters, cell(cand.train.rms, "{:.6g}"),
+                                     fit_status_name(cand.status),
+                                     cand.num_parameters ? std::to_string(cand.num_parameters) : "-",
+                                     cell(cand.train.rms, "{:.6g}"),
                                      cell(cand.holdout.rms, "{:.6g}"), cell(cand.holdout_score, "{:.4g}"));
       for (std::size_t k = 0; k < sets.size(); ++k) {
         const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();

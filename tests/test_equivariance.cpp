@@ -599,6 +599,8 @@ TEST(FitAuto, ATieOnTheHoldOutGoesToTheFewestParameters) {
   EXPECT_EQ(c.chosen, 2u);
   c = choose({1.0, 1.01, 1.005}, {10, 10, 10});  // equal counts: the least score
   EXPECT_EQ(c.chosen, 0u);
+  c = choose({1.015, 1.0, 1.002}, {10, 20, 10});  // of the fewest, the least score
+  EXPECT_EQ(c.chosen, 2u);
   c = choose({nan, 1.3, 1.0, nan}, {1, 20, 20, 2});  // no score, no choice
   EXPECT_EQ(c.by_score, 2u);
   EXPECT_EQ(c.chosen, 2u);

@@ -142,7 +142,7 @@ TEST(FitQuality, ClockwiseLoopsAreNamed) {
 
 // A model whose loops are far narrower than the record's, or turn the other way, has lost the
 // hysteresis the record shows (a gpi fit on a record of exact repeats stopped after 3 iterations
-// with its play operators unused); the fit says so. maxwell-slip makes clockwise loops only.
+// with its play operators unused); the fit says so. maxwell-slip makes clockwise loops or none.
 TEST(FitQuality, AModelWithoutTheRecordsLoopsIsNamed) {
   const Record r = loops();
   const FitReport pi = fit_kind(r, FitModel::pi);

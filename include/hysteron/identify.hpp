@@ -242,7 +242,8 @@ struct FitOptions {
   double sample_time = 0.0;
   // preisach, kp, maxwell-slip, rate-pi: rows of the training range in their bounded linear
   // least squares; a longer range gives one row drawn per block of its samples (the model is
-  // still simulated through every sample and scored on all of them). 0: every row.
+  // still simulated through every sample and scored on all of them); also at most 2e7 design
+  // entries (rows x regressors, 160 MB) but never fewer than 6000 rows. 0: every row, no cap.
   std::size_t max_ls_rows = 20000;
   // automatic: the first and the last holdout_fraction of the training range score the candidates.
   double holdout_fraction = 0.2;

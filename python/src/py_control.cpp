@@ -91,7 +91,9 @@ PidParams pid_arg(const py::object& pid, const char* what, double ts) {
                                            "a hysteron.Pid or None (a dict of its parameters: hysteron.Pid(**d), as "
                                            "Pid.params gives them)")
                           .params();
-  if (!(std::abs(p.sample_time - ts) <= 1e-9 * std::abs(ts)))
+  // (a PID without gains is not run: OpenLoopController's position PID, as in C++)
+  const bool used = p.kp != 0.0 || p.ki != 0.0 || p.kd != 0.0;
+  if (used && !(std::abs(p.sample_time - ts) <= 1e-9 * std::abs(ts)))
     throw Error(fmt::format("{}.sample_time {} s differs from sample_time {} s: set Pid(sample_time={}) (one sample "
                             "time for the loop)",
                             what, p.sample_time, ts, ts));

@@ -97,7 +97,9 @@ void bind_identify(py::module_& m) {
 x, y: input and measured output (1-D arrays of equal length).
 model: "gpi", "pi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen",
 "maxwell-slip", "rate-pi" or "auto" (every kind fitted, the one
-with the lowest hold-out RMS (pooled over the first and the last part of the training range, each predicted by a fit on the rest) chosen; the table is in
+chosen by the hold-out score: over the first and the last part of the training range, each predicted by a fit on
+the rest, the geometric mean of its RMS over the best kind's; within 2 % of the least score, the kind with the fewest
+fitted parameters; the table is in
 "candidates"); num_operators: n.
 min_slope: minimum slope of the model relative to span(y)/span(x) over the training
 range (bounds the inverse's slope).
@@ -120,8 +122,9 @@ model dict usable by hysteron.Model), "parameters" (list of {name, value,
 std_error, held, at_bound}), "train" and "reference" metrics (the reference PI on the
 training range), "inverse" ({max_slope, max_jump, max_input_step, increasing}),
 "warnings" (list of str), "candidates" (model="auto": list of {kind, status,
-message, train, holdout, time_s, chosen, model}), costs, iterations and "report" (text).
-Invalid options give the status "invalid_input" with the reason in "message".)doc");
+message, train, holdout, holdout_score, num_parameters, time_s, chosen, model}), costs, iterations and
+"report" (text). Invalid options give the status "invalid_input" with the reason in "message"; arguments of the wrong
+type, and a negative seed, raise TypeError / ValueError.)doc");
 
   m.def(
       "reference_pi",

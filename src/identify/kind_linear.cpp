@@ -24,7 +24,10 @@ namespace {
 // one row per block of `stride` samples at detail::block_offset (the model is still simulated
 // through every sample; the final cost uses all of them). A fixed position per block aliased
 // with a periodic input (a dither of period 4 on 24000 rows: every row at one phase of it,
-// kp 1.88 % of span against 0.75 %).
+// kp 1.88 % of span against 0.75 %). The design holds at most kMaxDesignEntries doubles (160 MB),
+// but never fewer than kMinRows rows.
+constexpr std::size_t kMaxDesignEntries = 20'000'000;
+constexpr std::size_t kMinRows = 6000;
 // Huber loss: iteratively reweighted least squares passes.
 constexpr int kIrlsPasses = 6;
 
@@ -38,9 +41,13 @@ Design design(const ModelParams& mp, const Data& d, std::size_t max_rows) {
   auto k = detail::make_kernel(mp);
   if (d.initial == InitialState::relaxed) k->reset_relaxed(d.x[0]); else k->reset();
   const std::size_t m = d.train.end - d.train.begin;
-  const std::size_t stride = max_rows == 0 ? 1 : (m + max_rows - 1) / max_rows;
-  const std::size_t rows = (m + stride - 1) / stride;
   const std::size_t nf = k->num_features();
+  // at most kMaxDesignEntries entries (never fewer rows than kMinRows): a 60-level preisach has
+  // 1831 regressors
+  if (max_rows != 0)
+    max_rows = std::min(max_rows, std::max(kMinRows, kMaxDesignEntries / std::max<std::size_t>(nf, 1)));
+  const std::size_t stride = max_rows == 0 || m <= max_rows ? 1 : (m - 1) / max_rows + 1;
+  const std::size_t rows = m == 0 ? 0 : (m - 1) / stride + 1;
   Design D{Eigen::MatrixXd(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(nf)),
            Eigen::VectorXd(static_cast<Eigen::Index>(rows))};
   std::vector<double> f(nf);

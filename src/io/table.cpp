@@ -265,10 +265,6 @@ class FileLines {
     if (first_) {
       first_ = false;
       if (end_ >= 3 && std::memcmp(buf_.get(), "\xEF\xBB\xBF", 3) == 0) begin_ = 3;
-      if (end_ >= 2 && (std::memcmp(buf_.get(), "\xFF\xFE", 2) == 0 || std::memcmp(buf_.get(), "\xFE\xFF", 2) == 0))
-        throw Error(fmt::format("{}: the file is UTF-16 encoded (byte-order mark {}): save it as UTF-8 text or "
-                                "\"CSV UTF-8\"",
-                                path_, buf_[0] == '\xFF' ? "FF FE" : "FE FF"));
     }
   }
 
@@ -291,6 +287,11 @@ class TextParser {
   // One line, without its line end. True if it is a data row.
   bool parse(std::string_view line) {
     ++lineno_;
+    // (here, not in a reader: the file's and the in-memory reader must agree)
+    if (lineno_ == 1 && line.size() >= 2 && (line.substr(0, 2) == "\xFF\xFE" || line.substr(0, 2) == "\xFE\xFF"))
+      throw Error(fmt::format("{}: the file is UTF-16 encoded (byte-order mark {}): save it as UTF-8 text or "
+                              "\"CSV UTF-8\"",
+                              path_, line[0] == '\xFF' ? "FF FE" : "FE FF"));
     if (line.find('\0') != std::string_view::npos)
       throw Error(fmt::format("{}:{}: a NUL byte: the file is binary or UTF-16 encoded; save it as UTF-8 text",
                               path_, lineno_));

@@ -83,21 +83,13 @@ FeedforwardParams ff_params(std::pair<double, double> limits, double model_scale
 
 constexpr double inf = std::numeric_limits<double>::infinity();
 
-// A controller's pid= (or pressure_pid=): a hysteron.Pid at the controller's sample_time ts [s];
-// `what` names the argument in errors. A Pid at another sample time (its default 1e-3 s in a
-// 10 ms loop) would integrate with its own: refused, naming both.
-PidParams pid_arg(const py::object& pid, const char* what, double ts) {
-  const PidParams p = cast_arg<const Pid&>(pid, what,
-                                           "a hysteron.Pid or None (a dict of its parameters: hysteron.Pid(**d), as "
-                                           "Pid.params gives them)")
-                          .params();
-  // (a PID without gains is not run: OpenLoopController's position PID, as in C++)
-  const bool used = p.kp != 0.0 || p.ki != 0.0 || p.kd != 0.0;
-  if (used && !(std::abs(p.sample_time - ts) <= 1e-9 * std::abs(ts)))
-    throw Error(fmt::format("{}.sample_time {} s differs from sample_time {} s: set Pid(sample_time={}) (one sample "
-                            "time for the loop)",
-                            what, p.sample_time, ts, ts));
-  return p;
+// A controller's pid= (or pressure_pid=): a hysteron.Pid; `what` names the argument in errors.
+// (A Pid at another sample time than the controller's is refused by the C++ constructors.)
+PidParams pid_arg(const py::object& pid, const char* what) {
+  return cast_arg<const Pid&>(pid, what,
+                              "a hysteron.Pid or None (a dict of its parameters: hysteron.Pid(**d), as "
+                              "Pid.params gives them)")
+      .params();
 }
 
 // pressure_limits=: (lo, hi) [MPa].
@@ -207,7 +199,7 @@ are used; default: Pid.gpi_paper()).)doc")
                        double lag, double ts) {
              const auto limits = limits_arg(limits_obj, "FeedforwardPidController");
              const PidParams pp = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                                : pid_arg(pid, "FeedforwardPidController: pid", ts);
+                                                : pid_arg(pid, "FeedforwardPidController: pid");
              return FeedforwardPidController(model_spec(model, "FeedforwardPidController: model"),
                                              ff_params(limits, scale, lag, ts), pp);
            }),
@@ -231,7 +223,7 @@ variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
              OpenLoopParams p;
              p.feedforward = ff_params(limits_arg(limits, "OpenLoopController"), scale, lag, ts);
              p.position.sample_time = ts;  // (unused without gains)
-             if (!pid.is_none()) p.position = pid_arg(pid, "OpenLoopController: pid", ts);
+             if (!pid.is_none()) p.position = pid_arg(pid, "OpenLoopController: pid");
              p.pressure_gain = pressure_gain;
              return OpenLoopController(model_spec(model, "OpenLoopController: model"), p);
            }),
@@ -259,12 +251,12 @@ duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm"
              CascadeParams p;
              p.feedforward = ff_params(limits, scale, lag, ts);
              p.position = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                        : pid_arg(pid, "CascadePwmController: pid", ts);
+                                        : pid_arg(pid, "CascadePwmController: pid");
              if (pressure_pid.is_none()) {
                p.pressure.kp = 20.0;
                p.pressure.sample_time = ts;
              } else {
-               p.pressure = pid_arg(pressure_pid, "CascadePwmController: pressure_pid", ts);
+               p.pressure = pid_arg(pressure_pid, "CascadePwmController: pressure_pid");
              }
              if (!pwm.is_none()) {
                const auto d = cast_arg<py::dict>(pwm, "CascadePwmController: pwm",

@@ -28,15 +28,15 @@ def ramp():
     lambda pid, ts: hysteron.CascadePwmController(GPI, pid=pid, sample_time=ts),
 ])
 def test_a_pid_at_another_sample_time_than_the_controller_is_refused(make):
-    with pytest.raises(hysteron.Error, match=r": pid.sample_time 0.001 s differs from sample_time 0.01 s: "
-                                             r"set Pid\(sample_time=0.01\)"):
+    with pytest.raises(hysteron.Error, match=r"\.sample_time = 0\.001 s differs from the loop's sample_time = 0\.01 s "
+                                             r"\(one sample time for the loop: set the PID's to 0\.01 s\)"):
         make(hysteron.Pid(kp=1.0, ki=1.0, out_min=-1, out_max=1), 0.01)
     make(hysteron.Pid(kp=1.0, ki=1.0, out_min=-1, out_max=1, sample_time=0.01), 0.01)  # the same: fine
     make(None, 0.01)  # the default PID takes the controller's sample time
 
 
 def test_the_cascades_pressure_pid_at_another_sample_time_is_refused():
-    with pytest.raises(hysteron.Error, match=r"CascadePwmController: pressure_pid.sample_time 0.001 s differs"):
+    with pytest.raises(hysteron.Error, match=r"cascade PWM controller: pressure\.sample_time = 0\.001 s differs"):
         hysteron.CascadePwmController(GPI, pressure_pid=hysteron.Pid(kp=20, out_min=-1, out_max=1), sample_time=0.01)
 
 

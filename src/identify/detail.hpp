@@ -2,9 +2,7 @@
 // Internal helpers shared by the identification sources (not installed).
 #include <Eigen/Core>
 
-#include <algorithm>
 #include <chrono>
-#include <cstdint>
 #include <functional>
 #include <span>
 #include <string>
@@ -58,19 +56,6 @@ struct AutoChoice {
   std::size_t chosen = 0, by_score = 0;
 };
 AutoChoice auto_choice(std::span<const double> score, std::span<const std::size_t> num_parameters, double tie);
-
-// A subset of a record's samples, one per block of `stride` (the rows of a linear kind's
-// least squares): the offset in block b of a range of m samples, a
-// hash of b (splitmix64) modulo the block's length. A fixed offset aliased with whatever
-// repeats in the record at a multiple of the stride (a dither of period 4). It depends on b
-// only: a transformed record gets the same rows.
-inline std::size_t block_offset(std::size_t b, std::size_t stride, std::size_t m) {
-  std::uint64_t z = (static_cast<std::uint64_t>(b) + 1) * 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  z ^= z >> 31;
-  return static_cast<std::size_t>(z % std::min(stride, m - b * stride));
-}
 
 // A report with status invalid_input, the message, and the time since t0.
 FitReport invalid_report(std::string message, FitModel kind, std::chrono::steady_clock::time_point t0);

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "../core/kernels.hpp"
@@ -21,7 +22,7 @@ namespace hysteron::fitting {
 namespace {
 
 // Rows of the least squares: all of the training range up to FitOptions::max_ls_rows; beyond,
-// one row per block of `stride` samples at detail::block_offset (the model is still simulated
+// one row per block of `stride` samples at block_offset (the model is still simulated
 // through every sample; the final cost uses all of them). A fixed position per block aliased
 // with a periodic input (a dither of period 4 on 24000 rows: every row at one phase of it,
 // kp 1.88 % of span against 0.75 %). The design holds at most kMaxDesignEntries doubles (160 MB),
@@ -30,6 +31,17 @@ constexpr std::size_t kMaxDesignEntries = 20'000'000;
 constexpr std::size_t kMinRows = 6000;
 // Huber loss: iteratively reweighted least squares passes.
 constexpr int kIrlsPasses = 6;
+
+// The row of block b (of `stride` samples) of a range of m samples: a hash of b (splitmix64)
+// modulo the block's length, so no periodic input can alias with it. It depends on b only: a
+// transformed record (offset, scale, sign) gets the same rows.
+std::size_t block_offset(std::size_t b, std::size_t stride, std::size_t m) {
+  std::uint64_t z = (static_cast<std::uint64_t>(b) + 1) * 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  z ^= z >> 31;
+  return static_cast<std::size_t>(z % std::min(stride, m - b * stride));
+}
 
 struct Design {
   Eigen::MatrixXd A;
@@ -57,7 +69,7 @@ Design design(const ModelParams& mp, const Data& d, std::size_t max_rows) {
     k->step(d.x[i]);
     if (i < d.train.begin) continue;
     const std::size_t t = i - d.train.begin;
-    if (t % stride == 0) chosen = t + detail::block_offset(t / stride, stride, m);
+    if (t % stride == 0) chosen = t + block_offset(t / stride, stride, m);
     if (t == chosen) {
       k->features(d.x[i], f.data());
       for (std::size_t j = 0; j < nf; ++j) D.A(row, static_cast<Eigen::Index>(j)) = f[j];

@@ -18,7 +18,6 @@ std::span<const double> as_span(const DoubleArray& a, std::string_view what) {
   if (a.ndim() == 1 || (a.ndim() == 2 && (a.shape(0) == 1 || a.shape(1) == 1))) return {a.data(), n};
   std::string shape;
   for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += fmt::format("{}{}", i ? ", " : "", a.shape(i));
-  if (a.ndim() == 1) shape += ",";
   throw Error(fmt::format("{}: expected a one-dimensional array (or a column (N, 1) or a row (1, N)), got {}", what,
                           a.ndim() == 0 ? std::string("a scalar (shape ())") : fmt::format("shape ({})", shape)));
 }

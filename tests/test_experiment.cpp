@@ -267,6 +267,35 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   EXPECT_TRUE(test::said(paper, "out of this rig's reach"));
 }
 
+// A muscle whose stroke ends below the papers' references (15 % of 0.5 m: a hard stop at 75
+// mm, reached at about 0.42 MPa): the reach's top was taken at 0.57 MPa, i.e. on the stop, and
+// the references were mapped onto the stop, where the contraction no longer answers the
+// pressure (compensated max 1.86 mm against 0.93 nominal). The stop is found in the
+// identification run and the reach keeps the pressure headroom below it, as below the
+// actuator's top; the nominal rig (its stroke, 25 %, beyond the reach) is not flagged, in each
+// experiment.
+TEST(Experiment, AStrokeEndBelowTheReferencesIsKeptOutOfTheReach) {
+  for (const char* name : {"gpi-pid", "mpi-pwm"}) {
+    SCOPED_TRACE(name);
+    ExperimentOptions o = test::quick_experiment(name);
+    o.rig.muscle.max_contraction = std::string(name) == "gpi-pid" ? 0.15 : 0.08;
+    const double stop_mm = 1e3 * o.rig.muscle.max_contraction * o.rig.muscle.rest_length;
+    const ExperimentResult r = run_experiment(o);
+    EXPECT_TRUE(test::said(r, "stops growing at")) << name;
+    EXPECT_NEAR(r.reach_max_mm, stop_mm, 0.5);
+    // the top where the ascent reached 95 % of the stop's pressure: below the stop by more than
+    // the noise, and at a pressure below the actuator's headroom line
+    EXPECT_LT(r.reach_top_mm, stop_mm - 1.0);
+    EXPECT_LT(r.reach_top_pressure_mpa, 0.95 * r.pressure_limit_mpa);
+    for (const ReferenceRange& rr : r.reference_ranges) {
+      EXPECT_TRUE(rr.scaled) << rr.reference;
+      EXPECT_LE(rr.max_mm, r.reach_top_mm + 1e-9) << rr.reference;
+    }
+    const ExperimentResult nominal = run_experiment(test::quick_experiment(name));
+    EXPECT_FALSE(test::said(nominal, "stops growing")) << name;
+  }
+}
+
 // A supply of 5 bar absolute (0.4 MPa gauge) caps the muscle's pressure below the 0.6 MPa the
 // loops may command: the identification run commands 0.6 MPa but measures at most about 0.4,
 // so the reach's top is taken at 95 % of the pressure measured there, not at 0.57 MPa (which

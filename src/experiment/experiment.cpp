@@ -515,6 +515,39 @@ std::string clipping_note(const Clipping& clip) {
                : "a sensor whose range ends inside the stroke reads its limit beyond it");
 }
 
+// Where the contraction stops growing on the ascent while the pressure still rises: the muscle's
+// stroke end, a hard stop, or a load come to rest on a support. Over the samples of the
+// identification run whose command rises, p_mpa is the least (11-sample mean) pressure at which
+// the (11-sample mean) contraction lies within a band of its largest, x_mm: 3 noise widths of
+// the displacement record (detect_clipping's sigma) or 0.1 % of the reached span, whichever is
+// larger. A stop where that pressure lies below the headroom line, (1 - kPressureHeadroom) of
+// the usable top: the contraction stayed put while the pressure rose by more than the headroom
+// (without a stop the largest contraction is reached at the top pressure, and within the band
+// only just below it). The reach then ends where the ascent reached (1 - kPressureHeadroom) of
+// p_mpa, so that the position loop keeps that headroom below the stop as it does below the
+// actuator's top; a reference mapped onto the stop itself is tracked where the contraction no
+// longer answers the pressure (a 15 % stroke: compensated max 1.86 mm against 0.93 nominal).
+struct StrokeEnd {
+  double x_mm = 0.0, p_mpa = 0.0;  // the stop's contraction, the least pressure that reaches it
+  bool found = false;
+};
+
+StrokeEnd stroke_end(const IdentificationRun& id, const SmoothedRun& sm, double p_top) {
+  StrokeEnd s;
+  const std::vector<double>& c = id.pressure_command_mpa;
+  const std::size_t n = std::min({c.size(), sm.x_mm.size(), sm.p.size()});
+  if (n < 100) return s;
+  const auto [lo_it, hi_it] = std::minmax_element(sm.x_mm.begin(), sm.x_mm.begin() + static_cast<std::ptrdiff_t>(n));
+  s.x_mm = *hi_it;
+  const double band = std::max(3.0 * detect_clipping(id.contraction_mm).sigma, 1e-3 * (*hi_it - *lo_it));
+  double p_at = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 1; k < n; ++k)
+    if (c[k] > c[k - 1] && sm.x_mm[k] >= s.x_mm - band) p_at = std::min(p_at, sm.p[k]);
+  s.p_mpa = p_at;
+  s.found = std::isfinite(p_at) && p_at > 0.0 && p_at < (1.0 - kPressureHeadroom) * p_top;
+  return s;
+}
+
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
 // measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
@@ -529,8 +562,18 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
                                     ExperimentResult& res, double p_max) {
   const std::vector<double>& x = sm.x_mm;
   const double p_top = actuator_top.mpa;
-  const double p_limit = (1.0 - kPressureHeadroom) * p_top;
+  double p_limit = (1.0 - kPressureHeadroom) * p_top;
   if (p_top < p_max) res.messages.push_back(top_note(actuator_top, max_of(id.pressure_command_mpa), p_limit, p_max));
+  const StrokeEnd stop = stroke_end(id, sm, p_top);
+  if (stop.found) {
+    p_limit = (1.0 - kPressureHeadroom) * stop.p_mpa;
+    res.messages.push_back(fmt::format(
+        "the contraction stops growing at {:.1f} mm in the identification run, reached at {:.3f} MPa on the ascent "
+        "while the pressure rose on to {:.3f} MPa: the muscle's stroke end or a hard stop; the reach ends where the "
+        "ascent reached {:.3f} MPa ({:.0f} % below the stop's pressure as headroom for the position loop), as below "
+        "the actuator's top",
+        stop.x_mm, stop.p_mpa, max_of(sm.p), p_limit, kPressureHeadroom * 100.0));
+  }
   double top = std::numeric_limits<double>::infinity();
   res.reach_min_mm = std::numeric_limits<double>::infinity();
   res.reach_max_mm = -res.reach_min_mm;
@@ -563,9 +606,10 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
     if (above || below) {
       const std::string why = fmt::format(
           "the rig's reach in its identification run is {:.1f} mm at rest to {} on its ascent at {:.2f} MPa "
-          "({:.0f} % of the actuator's {:.2f} MPa kept as headroom for the position loop; {:.1f} mm at most)",
+          "({:.0f} % of the {} {:.2f} MPa kept as headroom for the position loop; {:.1f} mm at most)",
           res.reach_min_mm, known_top ? fmt::format("{:.1f} mm", top) : std::string("an unknown contraction (never reached)"),
-          p_limit, kPressureHeadroom * 100.0, p_top, res.reach_max_mm);
+          p_limit, kPressureHeadroom * 100.0, stop.found ? "stroke end's" : "actuator's",
+          stop.found ? stop.p_mpa : p_top, res.reach_max_mm);
       const double new_lo = below ? floor_mm : rr.paper_min_mm, new_hi = above ? top : rr.paper_max_mm;
       if (o.fit_references && new_hi > new_lo && rr.paper_max_mm > rr.paper_min_mm) {
         const double s = (new_hi - new_lo) / (rr.paper_max_mm - rr.paper_min_mm);

@@ -295,6 +295,16 @@ TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   EXPECT_EQ(count(html, "<svg"), 6u);  // Fig. 4, loops, residuals, Figs. 11, 12, 13
   EXPECT_NE(html.find("2.659"), std::string::npos);  // published figure
   EXPECT_NE(html.find("the faithful loop"), std::string::npos);
+  // the run's actuator limit and reach, from result.json (a 0.4 MPa muscle: not the papers' 0.6)
+  r.pressure_limit_mpa = 0.4;
+  r.reach_min_mm = 0.0, r.reach_max_mm = 75.0, r.reach_top_mm = 69.6, r.reach_top_pressure_mpa = 0.401;
+  r.write(dir);
+  write_report_from(dir, tmp / "exp.html", "hysteron report exp --out exp.html");
+  const std::string limits = slurp(tmp / "exp.html");
+  EXPECT_NE(limits.find("within 0..0.400 MPa"), std::string::npos);
+  EXPECT_NE(limits.find("reached 0.0..75.0 mm; the references are kept below 69.6 mm, where its ascent reached "
+                        "0.401 MPa"),
+            std::string::npos);
 
   // write_experiment_report directly gives the same figures
   write_experiment_report(r, tmp / "direct.html", "experiment");

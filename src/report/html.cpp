@@ -202,6 +202,20 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
   page.para(fmt::format("Simulated rig, noise seed {}; the experiment took {:.1f} s of wall time. Positions are "
                         "muscle contractions in mm, pressures gauge pressures in MPa.",
                         r.seed, r.wall_time_s));
+  // the run's actuator limit and reach (docs/control.md, sections 0 and 5)
+  std::string limits;
+  if (std::isfinite(r.pressure_limit_mpa) && r.pressure_limit_mpa > 0.0)
+    limits = fmt::format("Every pressure command lies within 0..{:.3f} MPa, this rig's actuator limit.",
+                         r.pressure_limit_mpa);
+  if (std::isfinite(r.reach_min_mm) && std::isfinite(r.reach_max_mm))
+    limits += fmt::format("{}The identification run reached {:.1f}..{:.1f} mm{}.", limits.empty() ? "" : " ",
+                          r.reach_min_mm, r.reach_max_mm,
+                          std::isfinite(r.reach_top_mm)
+                              ? fmt::format("; the references are kept below {:.1f} mm, where its ascent reached "
+                                            "{:.3f} MPa",
+                                            r.reach_top_mm, r.reach_top_pressure_mpa)
+                              : std::string());
+  if (!limits.empty()) page.para(limits);
 
   // tracking errors beside the published figures
   page.heading("Tracking errors");

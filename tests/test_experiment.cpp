@@ -745,6 +745,17 @@ TEST(Experiment, ImpossibleMuscleRatingIsRefusedNamingTheKey) {
     const std::string tracking = test::error_of([&] { (void)run_experiment(o); });
     EXPECT_NE(tracking.find("tracking rig.muscle.max_pressure"), std::string::npos) << bad << ": " << tracking;
   }
+  // a rig without a return force (a horizontal rig: load.gravity = 0) is refused, naming the key
+  for (const bool tracking : {false, true}) {
+    ExperimentOptions o = test::quick_experiment("mpi-pwm");
+    if (tracking) o.tracking_rig = PamRigParams{};
+    (tracking ? *o.tracking_rig : o.rig).load.gravity = 0.0;
+    const std::string what = test::error_of([&] { (void)run_experiment(o); });
+    EXPECT_NE(what.find(tracking ? "tracking rig.load.gravity = 0: nothing extends the muscle"
+                                 : "rig.load.gravity = 0: nothing extends the muscle"),
+              std::string::npos)
+        << what;
+  }
   // written and read back
   PamRigParams p;
   p.muscle.max_pressure = 8e5;

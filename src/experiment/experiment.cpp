@@ -905,6 +905,21 @@ std::string limit_note(const ExperimentOptions& o, const Spec& spec, double p_ma
           : std::string("; the papers' identification inputs are kept (docs/control.md, section 0)"));
 }
 
+// An experiment needs a force that extends the vented muscle: the simulated rig's only one is
+// the load's weight (the muscle pulls nothing at 0 gauge pressure, P1, and the rig has no
+// spring). Without it (load.gravity = 0, a horizontal rig) the muscle contracts once and never
+// extends again: every variant sat near the top, 45 mm RMS "ok" (a sweep outside the
+// documented set, 2026-11-30).
+void check_return_force(const PamRigParams& rig, const char* which) {
+  if (rig.load.mass * rig.load.gravity > 0.0) return;
+  throw Error(fmt::format(
+      "experiment: {}.load.gravity = {:g}: nothing extends the muscle when it is vented (the muscle pulls nothing at "
+      "0 gauge pressure and the simulated rig's only return force is the load's weight, load.mass x load.gravity), "
+      "so after its first contraction it never returns and no reference can be tracked; a horizontal rig needs a "
+      "return spring, which the simulated rig does not model (docs/plant.md, P5)",
+      which, rig.load.gravity));
+}
+
 }  // namespace
 
 void ExperimentOptions::validate() const {
@@ -917,6 +932,7 @@ void ExperimentOptions::validate() const {
                             list));
   }
   hysteron::validate(rig, "experiment: rig");
+  check_return_force(rig, "rig");
   if (!(control_period >= rig.simulation.dt) || !(control_period <= 0.02))
     throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, 0.02 s]",
                             control_period, rig.simulation.dt));
@@ -924,6 +940,7 @@ void ExperimentOptions::validate() const {
     throw Error(fmt::format("experiment: learning_periods = {} must be within 0..1000", learning_periods));
   if (tracking_rig) {
     hysteron::validate(*tracking_rig, "experiment: tracking rig");
+    check_return_force(*tracking_rig, "tracking rig");
     if (!(control_period >= tracking_rig->simulation.dt))
       throw Error(fmt::format("experiment: control_period = {} s is shorter than the tracking rig's dt = {} s",
                               control_period, tracking_rig->simulation.dt));

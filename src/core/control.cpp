@@ -106,6 +106,7 @@ void Pid::set_guard(const PidGuard& g) {
   s_.guard_iae = 0.0;
   s_.guard_samples = 0;
   s_.guard_count = 0.0;
+  s_.guard_last = 0.0;
 }
 
 void Pid::reset(double u0) noexcept {
@@ -166,8 +167,11 @@ void Pid::guard_step(double e) noexcept {
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
   if (sign != 0 && sign != s_.guard_sign) {  // a half-cycle ended
     const double length = static_cast<double>(s_.guard_samples) * p_.sample_time;
-    if (s_.guard_sign != 0 && length <= g.period && s_.guard_iae > guard_iae_limit_)
-      s_.guard_count += 1.0;
+    const double severity = s_.guard_sign != 0 && length <= g.period && s_.guard_iae > guard_iae_limit_
+                                ? s_.guard_iae / guard_iae_limit_
+                                : 0.0;
+    if (severity > 0.0) s_.guard_count += std::max(1.0, std::min({severity, s_.guard_last, g.count}));
+    s_.guard_last = severity;
     s_.guard_sign = sign;
     s_.guard_iae = 0.0;
     s_.guard_samples = 0;

@@ -53,7 +53,9 @@ std::string pid_comment(const char* name, const Pid& pid) {
 constexpr std::string_view kPidStep = R"(
 /* The limit-cycle guard (hysteron::Pid, PidGuard): half-cycles of e between its sign changes
  * (hysteresis amplitude / 4) no longer than T_u with an integral of |e| dt above a T_u / pi
- * count; the count decays by guard_decay per sample; at guard_count it cuts the gains. */
+ * count by their severity (that integral over a T_u / pi, at most the previous half-cycle's and
+ * at most guard_count); the count decays by guard_decay per sample; at guard_count it cuts the
+ * gains. */
 static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
 {
   const double h = 0.25 * k->guard_amplitude;
@@ -62,7 +64,13 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
   if ((double)s->guard_samples * k->ts <= k->guard_period) ++s->guard_samples;  /* no wrap-around */
   if (sign != 0 && sign != s->guard_sign) {
     const double length = (double)s->guard_samples * k->ts;
-    if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit) s->guard_count += 1.0;
+    double severity = 0.0, add;
+    if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit)
+      severity = s->guard_iae / k->guard_iae_limit;
+    add = severity < s->guard_last ? severity : s->guard_last;
+    if (add > k->guard_count) add = k->guard_count;
+    if (severity > 0.0) s->guard_count += add > 1.0 ? add : 1.0;
+    s->guard_last = severity;
     s->guard_sign = sign;
     s->guard_iae = 0.0;
     s->guard_samples = 0;
@@ -137,6 +145,7 @@ static void $P_pid_reset($P_pid_state *s, const $P_pid_gains *k)
   s->guard_iae = 0.0;
   s->guard_samples = 0;
   s->guard_count = 0.0;
+  s->guard_last = 0.0;
 }
 
 /* The inverse feedforward (hysteron::InverseFeedforward::step): the pressure [MPa] the model
@@ -258,6 +267,7 @@ typedef struct $P_pid_state {{
   double guard_iae;             /* its integral of |e| dt */
   unsigned long guard_samples;  /* its length [samples] */
   double guard_count;           /* decaying count of half-cycles like a limit cycle */
+  double guard_last;            /* the last half-cycle's severity (0: not like one) */
 }} $P_pid_state;
 
 /* The loop's state. Set with $P_loop_reset before the first step. */

@@ -212,8 +212,10 @@ std::pair<double, double> ultimate(double tau, double theta) {
   return {2.0 * std::numbers::pi / w, std::sqrt(1.0 + w * tau * w * tau)};
 }
 
-// Error of `pid` tracking r(t) on the dead-time loop, one value per sample.
-std::vector<double> errors_on_dead_time_loop(Pid& pid, double seconds, double (*r)(double), double noise = 0.0) {
+// Error of `pid` tracking r(t) on the dead-time loop, one value per sample; `first_cut` receives
+// the sample after which the guard first cut the gains (0: never).
+std::vector<double> errors_on_dead_time_loop(Pid& pid, double seconds, double (*r)(double), double noise = 0.0,
+                                             std::size_t* first_cut = nullptr) {
   const double ts = pid.params().sample_time;
   DeadTimeLag plant(0.05, ts, 50);
   std::mt19937_64 rng(3);
@@ -225,6 +227,7 @@ std::vector<double> errors_on_dead_time_loop(Pid& pid, double seconds, double (*
     const double ym = y + (noise > 0.0 ? n(rng) : 0.0);
     e.push_back(r(t) - y);
     y = plant.step(pid.step(r(t), ym));
+    if (first_cut && *first_cut == 0 && pid.state().guard_cuts > 0) *first_cut = k;
   }
   return e;
 }
@@ -297,18 +300,8 @@ TEST(PidGuard, CutsAGrowingRingBeforeItReachesTheLimits) {
   const std::vector<double> ring = errors_on_dead_time_loop(unguarded, 5.0, step_reference);
   p.guard = PidGuard{.period = tu, .amplitude = 0.05};
   Pid guarded(p);
-  const double seconds = 5.0;
-  std::vector<double> held;
   std::size_t first_cut = 0;
-  {
-    DeadTimeLag plant(0.05, ts, 50);
-    double y = 0.0;
-    for (std::size_t k = 0; k < static_cast<std::size_t>(seconds / ts); ++k) {
-      held.push_back(1.0 - y);
-      y = plant.step(guarded.step(1.0, y));
-      if (first_cut == 0 && guarded.state().guard_cuts > 0) first_cut = k;
-    }
-  }
+  const std::vector<double> held = errors_on_dead_time_loop(guarded, 5.0, step_reference, 0.0, &first_cut);
   ASSERT_GT(first_cut, 0u);
   EXPECT_LT(static_cast<double>(first_cut) * ts, 2.0 * tu);
   EXPECT_LT(max_abs(held, 1000), 0.2 * max_abs(ring, 1000));  // counted by half-cycles: 0.96

@@ -5,7 +5,9 @@
 // that never allocates, never throws and is deterministic.
 #include <cstddef>
 #include <limits>
+#include <span>
 #include <string_view>
+#include <vector>
 
 namespace hysteron {
 
@@ -123,6 +125,13 @@ class Pid {
   Coefficients coefficients() const noexcept { return {a_d_, b_d_, k_t_, guard_decay_, guard_iae_limit_}; }
   double output() const noexcept { return s_.output; }
   std::size_t faults() const noexcept { return faults_; }
+
+  // Everything step() changes, as numbers: the PidState fields in their order (the flags 0/1)
+  // and faults(). restore(snapshot()) on a Pid of the same parameters steps exactly as this one
+  // from here on (a running PID saved and loaded again, e.g. Python's pickle). restore throws
+  // hysteron::Error, the PID unchanged, on a snapshot of another size or a value out of range.
+  std::vector<double> snapshot() const;
+  void restore(std::span<const double> snapshot);
 
  private:
   PidParams p_;

@@ -43,6 +43,10 @@ class Inverse {
   // (e.g. "q + p_1 + ... + p_3 = -0.1 must be > 0").
   explicit Inverse(ModelParams params, InverseOptions options = {});
 
+  // The parameters and options it was made from (set_weights does not change them):
+  // Inverse(params(), options()) is the same inverse in the virgin state.
+  const ModelParams& params() const noexcept { return params_; }
+  const InverseOptions& options() const noexcept { return options_; }
   const Structure<double>& structure() const noexcept { return s_; }
   // The input limits the inverse saturates at (raw input units).
   const Limits& limits() const noexcept { return lim_raw_; }
@@ -88,6 +92,15 @@ class Inverse {
   // q > 0 and p_i >= 0), or the model is not of the PI family.
   bool set_weights(double q, std::span<const double> p) noexcept;
 
+  // Everything step() changes, as numbers (the inverse's operator or kernel state, the last
+  // input, saturated() and faults()). restore(snapshot()) on an inverse of the same parameters
+  // and options steps exactly as this one from here on (a running inverse saved and loaded
+  // again, e.g. Python's pickle). restore throws hysteron::Error, the inverse unchanged, on a
+  // snapshot of another size, a non-finite value, an input outside the limits or a state the
+  // model cannot reach (as reset(const ModelState&) checks it).
+  std::vector<double> snapshot() const;
+  void restore(std::span<const double> snapshot);
+
  private:
   double step_analytical(double y) noexcept;
   double step_numerical(double y) noexcept;
@@ -101,6 +114,7 @@ class Inverse {
   double forward_tentative(const EnvelopesAt& e, double* dfdx) const noexcept;
 
   ModelParams params_;
+  InverseOptions options_;
   Structure<double> s_;
   Limits lim_;      // in model coordinates (see UnitsMap)
   Limits lim_raw_;  // the same in raw input units

@@ -393,6 +393,14 @@ class Model {
   double output() const noexcept { return out_; }
   std::size_t faults() const noexcept { return faults_; }
 
+  // Everything step() changes, as numbers: state().y, state().u, output() and faults().
+  // restore(snapshot()) on a model of the same parameters steps exactly as this one from here
+  // on, faults() included (a running model saved and loaded again, e.g. Python's pickle).
+  // restore throws hysteron::Error, the model unchanged, on a snapshot of another size, a state
+  // that reset(const ModelState&) refuses, a non-finite output or a fault count that is no count.
+  std::vector<double> snapshot() const;
+  void restore(std::span<const double> snapshot);
+
  private:
   double step_symmetric(double x, double* y) noexcept;
 

@@ -38,12 +38,31 @@ py::object from_json(const nlohmann::json& j) {
 }
 
 void bind_models(py::module_& m) {
-  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+  static PyObject* error_type = py::register_exception<Error>(m, "Error", PyExc_ValueError).ptr();
+  // (registered after, so tried first) the message decoded as os.fsdecode does: a file name
+  // that is not UTF-8 appears as the str the caller passed, not as a UnicodeDecodeError
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      const std::string_view text = e.what();
+      const auto message = py::reinterpret_steal<py::object>(
+          PyUnicode_DecodeUTF8(text.data(), static_cast<py::ssize_t>(text.size()), "surrogateescape"));
+      if (message) PyErr_SetObject(error_type, message.ptr());
+    }
+  });
   m.attr("Error").attr("__doc__") =
       "Every error of hysteron (bad input, bad parameters, unreadable or unwritable files), with the C++ message "
       "naming what and where. A subclass of ValueError.";
 
-  py::class_<Model>(m, "Model", R"doc(
+  // pickle: the model file's JSON (io::model_to_json, io::model_from_json) and Model::snapshot()
+  const auto model_json = [](const ModelParams& p) { return io::model_to_json(p).dump(); };
+  const auto model_from = [](const py::handle& text) {
+    return io::model_from_json(io::parse_json(cast_arg<std::string>(text, "pickled model", "a str"), "pickled model"),
+                               "pickled model");
+  };
+
+  auto model_class = def_copy(py::class_<Model>(m, "Model", R"doc(
 A hysteresis model (pi, gpi, mpi-deadzone, mpi-asym, preisach, kp, bouc-wen, maxwell-slip,
 rate-pi) run sample by sample.
 
@@ -51,7 +70,11 @@ Model(spec) takes a dict with the model-file keys, e.g.
 ``{"model": "gpi", "n": 10, "c": [c0, c1, c2, c3], "q": q, "rho": rho, "tau": tau, "alpha": alpha}``,
 the path of a model JSON file (a str or an os.PathLike such as pathlib.Path), or a
 hysteron.Model (a copy of its parameters, in the virgin state). Starts in the virgin state
-y_i0 = 0.)doc")
+y_i0 = 0. copy.copy, copy.deepcopy and pickle keep the state too (bit for bit: the parameters
+through the model file's JSON, the state, last output and fault count as numbers).)doc"));
+  def_pickle(model_class, "Model", [=](const Model& s) { return model_json(s.params()); },
+             [=](const py::handle& spec) { return Model(model_from(spec)); });
+  model_class
       .def(py::init([](const py::object& spec) { return Model(model_spec(spec, "Model: spec")); }), py::arg("spec"))
       .def_property_readonly("name", [](const Model& s) { return std::string(s.name()); },
                              "The model kind: 'pi', 'gpi', 'mpi-deadzone', 'mpi-asym', 'preisach', 'kp', 'bouc-wen', "
@@ -66,7 +89,7 @@ y_i0 = 0.)doc")
                              "since the last reset (reset() and reset_relaxed() set it to 0).")
       .def(
           "simulate",
-          [](Model& s, const DoubleArray& x) { return to_numpy(s.simulate(as_span(x, "Model.simulate: x"))); },
+          [](Model& s, const ArrayArg& x) { return to_numpy(s.simulate(as_span(x, "Model.simulate: x"))); },
           py::arg("x"), "Outputs for an input array, continuing from the current state.")
       .def("reset", py::overload_cast<>(&Model::reset), "Back to the virgin state.")
       .def(
@@ -78,7 +101,10 @@ y_i0 = 0.)doc")
            "The model's parameters as a dict with the model-file keys (docs/model-files.md); "
            "Model(m.to_dict()) is the same model.")
       .def(
-          "save", [](const Model& s, const PathArg& path) { io::write_model_file(path.string(), s.params()); },
+          "save",
+          [](const Model& s, const PathArg& path) {
+            io::write_model_file(path_arg(path, "Model.save: path"), s.params());
+          },
            py::arg("path"),
            "Write the model file (JSON) to path (a str or an os.PathLike), atomically: on an error the old "
            "file is left as it was.")
@@ -88,20 +114,35 @@ y_i0 = 0.)doc")
         return fmt::format("<hysteron.Model {} with {} operators>", s.name(), s.num_operators());
       });
 
-  py::class_<Inverse>(m, "Inverse", R"doc(
+  auto inverse_class = def_copy(py::class_<Inverse>(m, "Inverse", R"doc(
 Exact inverse of a model: desired output -> input. Analytical for pi, gpi and
 mpi-deadzone, maxwell-slip (Eqs. 9-11), exact per-sample bracketing for mpi-asym,
 preisach, kp, bouc-wen and rate-pi.
 Outputs beyond reach saturate at the input limits (lo, hi).
-Inverse(spec, limits=None): spec as for Model (a dict, a model file path, or a hysteron.Model).)doc")
+Inverse(spec, limits=None): spec as for Model (a dict, a model file path, or a hysteron.Model),
+limits None for the model's input_limits; or a hysteron.Inverse: its model and limits (limits=
+replaces them), in the virgin state. copy.copy, copy.deepcopy and pickle keep the state too (bit
+for bit).)doc"));
+  def_pickle(
+      inverse_class, "Inverse",
+      [=](const Inverse& s) {
+        const Limits& l = s.options().input_limits;
+        return py::make_tuple(model_json(s.params()), l.lo, l.hi);
+      },
+      [=](const py::handle& spec) {
+        const auto t = cast_arg<std::tuple<py::object, double, double>>(spec, "pickled Inverse", "(model, lo, hi)");
+        return Inverse(model_from(std::get<0>(t)), InverseOptions{{std::get<1>(t), std::get<2>(t)}});
+      });
+  inverse_class
       .def(py::init([](const py::object& spec, py::object limits) {
-             InverseOptions opt;
+             const bool copy = py::isinstance<Inverse>(spec);  // (the C++ Inverse keeps its params and options)
+             InverseOptions opt = copy ? spec.cast<const Inverse&>().options() : InverseOptions{};
              if (!limits.is_none()) {
                const auto l = cast_arg<std::pair<double, double>>(limits, "Inverse: limits",
                                                                   "(lo, hi), two numbers, or None for no limits");
                opt.input_limits = {l.first, l.second};
              }
-             return Inverse(model_spec(spec, "Inverse: spec"), opt);
+             return Inverse(copy ? spec.cast<const Inverse&>().params() : model_spec(spec, "Inverse: spec"), opt);
            }),
            py::arg("spec"), py::arg("limits") = py::none())
       .def("step", &Inverse::step, py::arg("y_desired"),
@@ -114,7 +155,7 @@ Inverse(spec, limits=None): spec as for Model (a dict, a model file path, or a h
                              "range) since the last reset (reset() and start_from() set it to 0).")
       .def(
           "simulate",
-          [](Inverse& s, const DoubleArray& y) { return to_numpy(s.simulate(as_span(y, "Inverse.simulate: y"))); },
+          [](Inverse& s, const ArrayArg& y) { return to_numpy(s.simulate(as_span(y, "Inverse.simulate: y"))); },
           py::arg("y"), "Inputs for an array of desired outputs, continuing from the current state.")
       .def("reset", py::overload_cast<>(&Inverse::reset), "Back to the virgin state.")
       .def(

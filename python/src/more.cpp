@@ -13,29 +13,51 @@
 
 namespace hysteron::python {
 
-std::span<const double> as_span(const DoubleArray& a, std::string_view what) {
-  const auto n = static_cast<std::size_t>(a.size());
-  if (a.ndim() == 1 || (a.ndim() == 2 && (a.shape(0) == 1 || a.shape(1) == 1))) return {a.data(), n};
+// A contiguous float64 array of any array-like (a copy where it is not one already).
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::span<const double> as_span(const ArrayArg& a, std::string_view what) {
+  if (!a.values) {
+    // the dtype first: numpy casts a complex array to float64 with a ComplexWarning only
+    py::array any;
+    try {
+      any = py::module_::import("numpy").attr("asarray")(a.obj);
+    } catch (py::error_already_set& e) {  // a ragged list
+      if (!e.matches(PyExc_TypeError) && !e.matches(PyExc_ValueError)) throw;
+      throw_arg_type(a.obj, what, "an array of real numbers");
+    }
+    if (any.dtype().kind() == 'c')
+      throw py::type_error(fmt::format("{}: a complex array (dtype {}): expected real numbers (numpy would drop the "
+                                       "imaginary part; pass .real or abs() of it)",
+                                       what, py::str(any.dtype()).cast<std::string>()));
+    auto values = DoubleArray::ensure(any);
+    if (!values) throw_arg_type(a.obj, what, "an array of real numbers");
+    a.values = std::move(values);
+  }
+  const auto& v = py::reinterpret_borrow<DoubleArray>(a.values);
+  const auto n = static_cast<std::size_t>(v.size());
+  if (v.ndim() == 1 || (v.ndim() == 2 && (v.shape(0) == 1 || v.shape(1) == 1))) return {v.data(), n};
   std::string shape;
-  for (py::ssize_t i = 0; i < a.ndim(); ++i) shape += fmt::format("{}{}", i ? ", " : "", a.shape(i));
+  for (py::ssize_t i = 0; i < v.ndim(); ++i) shape += fmt::format("{}{}", i ? ", " : "", v.shape(i));
   throw Error(fmt::format("{}: expected a one-dimensional array (or a column (N, 1) or a row (1, N)), got {}", what,
-                          a.ndim() == 0 ? std::string("a scalar (shape ())") : fmt::format("shape ({})", shape)));
+                          v.ndim() == 0 ? std::string("a scalar (shape ())") : fmt::format("shape ({})", shape)));
+}
+
+std::vector<double> as_vector(const ArrayArg& a, std::string_view what) {
+  const auto s = as_span(a, what);
+  return {s.begin(), s.end()};
 }
 
 bool is_path(const py::handle& obj) {
-  return py::isinstance<py::str>(obj) || py::hasattr(obj, "__fspath__");
+  return py::isinstance<py::str>(obj) || py::isinstance<py::bytes>(obj) || py::hasattr(obj, "__fspath__");
 }
 
 std::string path_arg(const py::handle& obj, std::string_view what) {
-  if (py::isinstance<py::str>(obj)) return obj.cast<std::string>();
-  if (py::hasattr(obj, "__fspath__")) {
-    const py::module_ os = py::module_::import("os");
-    return py::str(os.attr("fsdecode")(os.attr("fspath")(obj))).cast<std::string>();
-  }
-  throw_arg_type(obj, what, "a path (a str or an os.PathLike such as pathlib.Path)");
+  if (!is_path(obj)) throw_arg_type(obj, what, "a path (a str, bytes or an os.PathLike such as pathlib.Path)");
+  return py::module_::import("os").attr("fsencode")(obj).cast<std::string>();  // (bytes: as they are)
 }
 
-std::span<const double> as_finite_span(const DoubleArray& a, const char* what) {
+std::span<const double> as_finite_span(const ArrayArg& a, const char* what) {
   const std::span<const double> s = as_span(a, what);
   for (std::size_t i = 0; i < s.size(); ++i)
     if (!std::isfinite(s[i])) throw Error(fmt::format("{}[{}] = {}: not finite", what, i, s[i]));
@@ -47,6 +69,14 @@ void throw_arg_type(const py::handle& obj, std::string_view what, std::string_vi
   if (repr.size() > 80) repr = repr.substr(0, 77) + "...";
   throw py::type_error(fmt::format("{}: expected {}, got {} {}", what, expected,
                                    py::str(obj.get_type().attr("__name__")).cast<std::string>(), repr));
+}
+
+void throw_pickle_state(const py::handle& state, std::string_view what) {
+  std::string repr = py::repr(state).cast<std::string>();
+  if (repr.size() > 80) repr = repr.substr(0, 77) + "...";
+  throw Error(fmt::format("{}: not a pickled state of this version of hysteron (expected ({}, parameters, "
+                          "snapshot)), got {}",
+                          what, pickle_format, repr));
 }
 
 void check_dict_keys(const py::dict& d, std::initializer_list<std::string_view> known, std::string_view where) {
@@ -74,20 +104,21 @@ ModelParams model_spec(const py::handle& spec, std::string_view what) {
   return io::model_from_json(to_json(spec, what), std::string(what));
 }
 
-std::uint64_t uint_arg(const py::handle& obj, std::string_view what, std::uint64_t min) {
-  const std::string_view expected = min == 1 ? "a positive integer" : "an integer >= 0";
+std::uint64_t uint_arg(const py::handle& obj, std::string_view what, std::uint64_t min, std::uint64_t max) {
+  const std::string expected = min == 1 ? "a positive integer" : fmt::format("an integer >= {}", min);
   if (py::isinstance<py::bool_>(obj) || !PyIndex_Check(obj.ptr())) throw_arg_type(obj, what, expected);
   const auto i = py::reinterpret_steal<py::int_>(PyNumber_Index(obj.ptr()));
   if (!i) throw py::error_already_set();
-  const int below = PyObject_RichCompareBool(i.ptr(), py::int_(min).ptr(), Py_LT);
-  if (below < 0) throw py::error_already_set();
+  const auto compare = [&](std::uint64_t bound, int op) {
+    const int r = PyObject_RichCompareBool(i.ptr(), py::int_(bound).ptr(), op);
+    if (r < 0) throw py::error_already_set();
+    return r != 0;
+  };
   const std::string text = py::repr(i).cast<std::string>();
-  if (below) throw py::value_error(fmt::format("{} must be {}, got {}", what, expected, text));
-  try {
-    return i.cast<std::uint64_t>();
-  } catch (const py::cast_error&) {
-    throw py::value_error(fmt::format("{} = {} is too large (at most 2**64 - 1)", what, text));
-  }
+  // (hysteron.Error, a ValueError, as the C++ range checks the binding used to leave it to)
+  if (compare(min, Py_LT)) throw Error(fmt::format("{} must be {}, got {}", what, expected, text));
+  if (compare(max, Py_GT)) throw Error(fmt::format("{} = {} is too large (at most {})", what, text, max));
+  return i.cast<std::uint64_t>();
 }
 
 std::pair<double, double> pair_arg(const py::handle& obj, std::string_view what) {

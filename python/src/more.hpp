@@ -10,10 +10,6 @@ namespace hysteron::python {
 // hysteron.Model; `what` names the argument in errors ("InverseFeedforward: model").
 ModelParams model_spec(const py::handle& spec, std::string_view what);
 InitialState initial_state_from(const std::string& name);
-// An integer argument >= min (a Python int or a numpy integer; not a bool, not a float):
-// TypeError "WHAT: expected an int, got float 2.5", ValueError "WHAT must be a positive integer,
-// got -1" (min 1) or "WHAT must be an integer >= 0, got -1".
-std::uint64_t uint_arg(const py::handle& obj, std::string_view what, std::uint64_t min = 0);
 // A (lo, hi) pair of numbers: TypeError naming WHAT otherwise.
 std::pair<double, double> pair_arg(const py::handle& obj, std::string_view what);
 py::dict metrics_dict(const FitMetrics& m);

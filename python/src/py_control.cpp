@@ -98,17 +98,25 @@ std::pair<double, double> limits_arg(const py::object& limits, const char* where
 }
 
 // A count of IterativeLearning(...): an int >= min.
-std::size_t count_arg(const py::object& v, const char* name, std::uint64_t min = 0) {
+std::size_t count_arg(const IntArg& v, const char* name, std::uint64_t min = 0) {
   return static_cast<std::size_t>(uint_arg(v, fmt::format("IterativeLearning: {}", name), min));
 }
 
 }  // namespace
 
 void bind_control(py::module_& m) {
-  py::class_<Pid>(m, "Pid", R"doc(
+  auto pid_class = def_copy(py::class_<Pid>(m, "Pid", R"doc(
 Discrete PID (Eq. 17 of the GPI paper) with output limits, anti-windup
 ("none", "conditional", "back_calculation"), derivative filter and setpoint
-weights. step() never allocates; a non-finite input holds the last output.)doc")
+weights. step() never allocates; a non-finite input holds the last output. copy.copy,
+copy.deepcopy and pickle keep the state too (pickle: the parameters as Pid.params and the
+state as numbers).)doc"));
+  def_pickle(
+      pid_class, "Pid", [](const Pid& p) { return pid_dict(p.params()); },
+      [](const py::handle& params) {
+        return py::type::of<Pid>()(**cast_arg<py::dict>(params, "pickled Pid", "a dict")).cast<Pid>();
+      });
+  pid_class
       .def(py::init([](double kp, double ki, double kd, double sample_time, double derivative_filter, double out_min,
                        double out_max, const std::string& anti_windup, double tracking_time, double b, double c,
                        const py::object& guard) {
@@ -169,10 +177,10 @@ weights. step() never allocates; a non-finite input holds the last output.)doc")
                            q.ki, q.kd, q.sample_time, q.out_min, q.out_max, anti_windup_name(q.anti_windup));
       });
 
-  py::class_<InverseFeedforward>(m, "InverseFeedforward", R"doc(
+  def_copy(py::class_<InverseFeedforward>(m, "InverseFeedforward", R"doc(
 Inverse-model feedforward: desired contraction [m] -> pressure command [MPa],
 clamped to pressure_limits; model output units are model_scale per metre (1000
-for a model fitted in mm); optional compensation of a first-order lag.)doc")
+for a model fitted in mm); optional compensation of a first-order lag.)doc"))
       .def(py::init([](const py::object& model, const py::object& limits, double scale, double lag, double ts) {
              return InverseFeedforward(model_spec(model, "InverseFeedforward: model"),
                                        ff_params(limits_arg(limits, "InverseFeedforward"), scale, lag, ts));
@@ -191,10 +199,10 @@ for a model fitted in mm); optional compensation of a first-order lag.)doc")
                            q.sample_time);
       });
 
-  py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
+  def_copy(py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
 GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)) [MPa], the PID's
 anti-windup aware of the total command. pid: a hysteron.Pid (its parameters
-are used; default: Pid.gpi_paper()).)doc")
+are used; default: Pid.gpi_paper()).)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, const py::object& limits_obj, double scale,
                        double lag, double ts) {
              const auto limits = limits_arg(limits_obj, "FeedforwardPidController");
@@ -212,12 +220,12 @@ are used; default: Pid.gpi_paper()).)doc")
         return std::string("FeedforwardPidController(inverse feedforward + PID, GPI paper Fig. 10)");
       });
 
-  py::class_<OpenLoopController>(m, "OpenLoopController", R"doc(
+  def_copy(py::class_<OpenLoopController>(m, "OpenLoopController", R"doc(
 Asymmetric-MPI paper, Fig. 6: open-loop inverse compensation with a proportional
 pressure loop, p_cmd = clamp(p_d + pressure_gain (p_d - p_measured)) [MPa], p_d =
 FF(preview) (+ PID(y_d - y), clamped, if pid is given: hysteron's compensated
 variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
-(result.json "loop": "open_loop"; docs/deploy.md).)doc")
+(result.json "loop": "open_loop"; docs/deploy.md).)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, double pressure_gain,
                        const py::object& limits, double scale, double lag, double ts) {
              OpenLoopParams p;
@@ -238,13 +246,13 @@ variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
         return std::string("OpenLoopController(inverse feedforward + pressure loop, asymmetric-MPI paper Fig. 6)");
       });
 
-  py::class_<CascadePwmController>(m, "CascadePwmController", R"doc(
+  def_copy(py::class_<CascadePwmController>(m, "CascadePwmController", R"doc(
 Dead-zone MPI paper: cascade on fast switching valves. Outer loop p_d =
 clamp(FF(preview) + pid(y_d - y)) [MPa] (default pid: Pid.gpi_paper()); inner loop
 u = pressure_pid(p_d - p_measured) limited to [-1, 1] (default: the paper's P loop,
 kp = 20 per MPa); then the PWM modulator (pwm: a dict of gain, deadband, min_duty,
 max_duty, resolution; missing keys take the defaults 1, 0, 0, 1, 0). step() returns the
-duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm").)doc")
+duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm").)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, const py::object& pressure_pid,
                        const py::object& pwm, const py::object& limits_obj, double scale, double lag, double ts) {
              const auto limits = limits_arg(limits_obj, "CascadePwmController");
@@ -289,7 +297,7 @@ duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm"
         return std::string("CascadePwmController(feedforward + PID position loop, PI pressure loop, PWM valves)");
       });
 
-  py::class_<IterativeLearning>(m, "IterativeLearning", R"doc(
+  def_copy(py::class_<IterativeLearning>(m, "IterativeLearning", R"doc(
 Iterative learning control for a periodic reference of `period` samples (docs/control.md,
 section 3): a correction c is added to a closed loop's reference (and its feedforward's
 preview) and learnt from the tracking error over the periods,
@@ -300,10 +308,10 @@ max_gain set the supervisor (the learning variant: 0, 3, and up to 0.5: the larg
 whose bound holds on the identified loop). step() never allocates; a
 non-finite error is learnt as 0 and counted (faults), an update that overflows keeps the
 sample's correction of the period before (overflows). Invalid parameters raise
-hysteron.Error naming the field.)doc")
-      .def(py::init([](const py::object& period, double gain, const py::object& lead, const py::object& half_width,
-                       const py::object& lookahead, double max_correction, double rise_tolerance,
-                       const py::object& hold_after_cuts, double max_gain) {
+hysteron.Error naming the field.)doc"))
+      .def(py::init([](const IntArg& period, double gain, const IntArg& lead, const IntArg& half_width,
+                       const IntArg& lookahead, double max_correction, double rise_tolerance,
+                       const IntArg& hold_after_cuts, double max_gain) {
              LearningParams p;
              p.period = count_arg(period, "period", 1);
              p.gain = gain;
@@ -321,7 +329,8 @@ hysteron.Error naming the field.)doc")
            py::arg("hold_after_cuts") = 0, py::arg("max_gain") = 0.0)
       .def(
           "correction",
-          [](const IterativeLearning& l, std::size_t ahead) {
+          [](const IterativeLearning& l, const IntArg& ahead_arg) {
+            const std::uint64_t ahead = uint_arg(ahead_arg, "IterativeLearning.correction: ahead");
             if (ahead > l.params().lookahead)
               throw py::value_error(fmt::format("correction: ahead = {} is beyond lookahead = {}", ahead,
                                                 l.params().lookahead));
@@ -333,8 +342,9 @@ hysteron.Error naming the field.)doc")
            "Records the tracking error r - y of the current sample and advances one sample.")
       .def(
           "reset",
-          [](IterativeLearning& l, std::optional<std::vector<double>> correction) {
-            if (correction) l.reset(std::span<const double>(*correction)); else l.reset();
+          [](IterativeLearning& l, const std::optional<ArrayArg>& correction) {
+            if (correction) l.reset(as_span(*correction, "IterativeLearning.reset: correction"));
+            else l.reset();
           },
           py::arg("correction") = py::none(),
           "Zero corrections, back to phase 0 of period 0. With correction (period values, the loop's units): "

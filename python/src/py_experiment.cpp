@@ -58,11 +58,6 @@ SweepResult run_sweep_interruptible(SweepOptions o) {
 }
 
 
-std::vector<double> vec(const DoubleArray& a, const std::string& what) {
-  const auto s = as_span(a, what);
-  return {s.begin(), s.end()};
-}
-
 report::Labels labels(const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
                       const std::string& yu) {
   return {title, {xl, xu}, {yl, yu}};
@@ -143,7 +138,7 @@ inverse adapted online) or a loop generated C cannot hold.)doc");
       [](const py::object& result, const std::string& run) {
         const LoopDesign d = py::isinstance<py::dict>(result)
                                  ? io::loop_design_of_run(to_json(result), run, "result")
-                                 : io::read_loop_design(py::str(result).cast<std::string>(), run);  // str or os.PathLike
+                                 : io::read_loop_design(path_arg(result, "loop_of_run: result"), run);
         return from_json(io::to_json(d));
       },
       py::arg("result"), py::arg("run"),
@@ -166,7 +161,7 @@ supervision included), from period 0 with zero corrections: ilc.reset(correction
 from a run's last correction_mm period (in m). hysteron.Error if the run has no learning.)doc");
   m.def(
       "feedforward_preview",
-      [](const py::object& controller, const DoubleArray& reference) {
+      [](const py::object& controller, const ArrayArg& reference) {
         const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
         return to_numpy(feedforward_preview(d, as_finite_span(reference, "feedforward_preview: reference")));
       },
@@ -193,12 +188,13 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       "compensated, learning, adaptive, baseline) and published_source (\"\" where the paper gives no figures).");
   m.def(
       "run_experiment",
-      [](const std::string& name, const py::object& seed_arg, const py::object& plant, const PathArg& out_arg,
-         const PathArg& report_arg, int learning_periods, bool adaptive, const py::object& tracking_plant,
+      [](const std::string& name, const IntArg& seed_arg, const py::object& plant, const PathArg& out_arg,
+         const PathArg& report_arg, const IntArg& learning_periods, bool adaptive, const py::object& tracking_plant,
          const std::string& model, bool paper_references) {
         // where the outputs go, before the run (minutes): a report whose directory is `out` is
         // written after `out` was created
-        const std::string out = out_arg.string(), report_path = report_arg.string();
+        const std::string out = path_arg(out_arg, "run_experiment: out");
+        const std::string report_path = path_arg(report_arg, "run_experiment: report");
         const std::uint64_t seed = uint_arg(seed_arg, "run_experiment: seed");
         io::check_output_directory({"run_experiment: out", out});
         const auto dir = [](const std::string& p) { return std::filesystem::path(p).lexically_normal(); };
@@ -212,7 +208,7 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         o.fit_references = !paper_references;
         o.name = name;
         o.seed = seed;
-        o.learning_periods = learning_periods;
+        o.learning_periods = int_arg(learning_periods, "run_experiment: learning_periods");
         o.adaptive = adaptive;
         if (!plant.is_none()) o.rig = rig_from(plant, "plant");
         if (!tracking_plant.is_none()) o.tracking_rig = rig_from(tracking_plant, "tracking_plant");
@@ -313,10 +309,11 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
   m.def(
       "run_sweep",
       [](const py::object& experiments, const std::vector<std::string>& vary, const py::object& grid,
-         const std::string& set, const py::object& plant, const py::object& seed, int learning_periods,
-         const std::string& model, bool paper_references, bool identify_on_base, const py::object& jobs,
+         const std::string& set, const py::object& plant, const IntArg& seed, const IntArg& learning_periods,
+         const std::string& model, bool paper_references, bool identify_on_base, const IntArg& jobs,
          const PathArg& out_arg, const PathArg& report_arg) {
-        const std::string out = out_arg.string(), report_path = report_arg.string();
+        const std::string out = path_arg(out_arg, "run_sweep: out");
+        const std::string report_path = path_arg(report_arg, "run_sweep: report");
         io::check_output_file({"run_sweep: out", out});
         io::check_output_file({"run_sweep: report", report_path});
         SweepOptions o;
@@ -326,13 +323,11 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
                 : cast_arg<std::vector<std::string>>(experiments, "run_sweep: experiments",
                                                      "a name of experiment_names(), \"all\", or a list of names"));
         o.seed = uint_arg(seed, "run_sweep: seed");
-        o.learning_periods = learning_periods;
+        o.learning_periods = int_arg(learning_periods, "run_sweep: learning_periods");
         o.model = fit_model_from_name(model);
         o.fit_references = !paper_references;
         o.identify_on_base = identify_on_base;
-        const std::uint64_t n_jobs = uint_arg(jobs, "run_sweep: jobs");
-        if (n_jobs > 0xffffffffu) throw py::value_error(fmt::format("run_sweep: jobs = {} is too large", n_jobs));
-        o.jobs = static_cast<unsigned>(n_jobs);
+        o.jobs = static_cast<unsigned>(uint_arg(jobs, "run_sweep: jobs", 0, 0xffffffffu));
         if (!plant.is_none()) o.base = rig_from(plant, "plant");
         if (!set.empty())
           for (auto& v : variant_set(set, "run_sweep: set")) o.variants.push_back(std::move(v));
@@ -358,7 +353,7 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
       py::arg("experiments"), py::kw_only(), py::arg("vary") = std::vector<std::string>{}, py::arg("grid") = py::none(),
       py::arg("set") = "", py::arg("plant") = py::none(), py::arg("seed") = 1, py::arg("learning_periods") = 10,
       py::arg("model") = "auto", py::arg("paper_references") = false, py::arg("identify_on_base") = false,
-      py::arg("jobs") = 0u, py::arg("out") = "", py::arg("report") = "",
+      py::arg("jobs") = 0, py::arg("out") = "", py::arg("report") = "",
       R"doc(Run experiments over plant variants on all cores, as `hysteron sweep` (docs/plant.md).
 experiments: a name of experiment_names(), "all", or a list of them. Variants (at least one
 source): vary, a list of "PATH=V1,V2,..." (e.g. "load.mass=10,35", "muscle.force_620=-15%");
@@ -377,7 +372,8 @@ is recorded in the result (failures > 0), not raised; bad input raises hysteron.
   m.def(
       "write_report",
       [](const PathArg& input_arg, const PathArg& out_arg) {
-        const std::string input = input_arg.string(), out = out_arg.string();
+        const std::string input = path_arg(input_arg, "write_report: input");
+        const std::string out = path_arg(out_arg, "write_report: out");
         report::write_report_from(input, out, fmt::format("hysteron.write_report('{}', '{}')", input, out));
       },
       py::arg("input"), py::arg("out"),
@@ -398,84 +394,87 @@ is recorded in the result (failures > 0), not raised; bad input raises hysteron.
           };
           report::Series r;
           r.label = get.operator()<std::string>("label", "a str");
-          r.x = vec(get.operator()<DoubleArray>("x", "an array of numbers"), where + "[\"x\"]");
-          r.y = vec(get.operator()<DoubleArray>("y", "an array of numbers"), where + "[\"y\"]");
+          r.x = as_vector(get.operator()<ArrayArg>("x", "an array of numbers"), where + "[\"x\"]");
+          r.y = as_vector(get.operator()<ArrayArg>("y", "an array of numbers"), where + "[\"y\"]");
           if (d.contains("style")) r.style = get.operator()<std::string>("style", "a str");
           if (d.contains("color")) r.color = get.operator()<std::string>("color", "a str");
           if (d.contains("dashed")) r.dashed = get.operator()<bool>("dashed", "a bool");
           spec.series.push_back(std::move(r));
         }
-        report::plot(spec, path.string());
+        report::plot(spec, path_arg(path, "plot: path"));
       },
       py::arg("series"), HYSTERON_PLOT_ARGS("hysteron plot", "x", "", "y", ""),
       "Generic plot (gnuplot) to .svg or .png; series: dicts {label, x, y, style, color, dashed}.");
   m.def(
       "plot_hysteresis_loops",
-      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const PathArg& path,
+      [](const ArrayArg& x, const ArrayArg& y, const ArrayArg& model, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
-         const std::string& yu, std::size_t major_end) {
+         const std::string& yu, const IntArg& major_end) {
         report::plot_hysteresis_loops(as_span(x, "plot_hysteresis_loops: input"),
                                       as_span(y, "plot_hysteresis_loops: measured"),
                                       as_span(model, "plot_hysteresis_loops: model"), labels(title, xl, xu, yl, yu),
-                                      path.string(), major_end);
+                                      path_arg(path, "plot_hysteresis_loops: path"),
+                                      uint_arg(major_end, "plot_hysteresis_loops: major_end"));
       },
       py::arg("input"), py::arg("measured"), py::arg("model"),
       HYSTERON_PLOT_ARGS("Hysteresis loops", "Pressure", "MPa", "Contraction", "mm"), py::arg("major_end") = 0,
       "Measured (and model, if non-empty) output against input; [0, major_end) drawn as the major loop.");
   m.def(
       "plot_identification_input",
-      [](const DoubleArray& t, const DoubleArray& cmd, const DoubleArray& meas, const PathArg& path,
+      [](const ArrayArg& t, const ArrayArg& cmd, const ArrayArg& meas, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
         report::plot_identification_input(as_span(t, "plot_identification_input: t"),
                                           as_span(cmd, "plot_identification_input: command"),
                                           as_span(meas, "plot_identification_input: measured"),
-                                          labels(title, xl, xu, yl, yu), path.string());
+                                          labels(title, xl, xu, yl, yu),
+                                          path_arg(path, "plot_identification_input: path"));
       },
       py::arg("t"), py::arg("command"), py::arg("measured"),
       HYSTERON_PLOT_ARGS("Identification input", "Time", "s", "Pressure", "MPa"),
       "Identification input against time (Fig. 4).");
   m.def(
       "plot_tracking",
-      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const PathArg& path,
+      [](const ArrayArg& t, const ArrayArg& d, const ArrayArg& a, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
         report::plot_tracking(as_span(t, "plot_tracking: t"), as_span(d, "plot_tracking: desired"),
-                              as_span(a, "plot_tracking: actual"), labels(title, xl, xu, yl, yu), path.string());
+                              as_span(a, "plot_tracking: actual"), labels(title, xl, xu, yl, yu),
+                              path_arg(path, "plot_tracking: path"));
       },
       py::arg("t"), py::arg("desired"), py::arg("actual"),
       HYSTERON_PLOT_ARGS("Trajectory tracking", "Time", "s", "Contraction", "mm"),
       "Desired and actual output against time (Fig. 11).");
   m.def(
       "plot_tracking_error",
-      [](const DoubleArray& t, const DoubleArray& d, const DoubleArray& a, const PathArg& path,
+      [](const ArrayArg& t, const ArrayArg& d, const ArrayArg& a, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
         report::plot_tracking_error(as_span(t, "plot_tracking_error: t"), as_span(d, "plot_tracking_error: desired"),
                                     as_span(a, "plot_tracking_error: actual"), labels(title, xl, xu, yl, yu),
-                                    path.string());
+                                    path_arg(path, "plot_tracking_error: path"));
       },
       py::arg("t"), py::arg("desired"), py::arg("actual"),
       HYSTERON_PLOT_ARGS("Tracking error", "Time", "s", "Error", "mm"), "Tracking error against time (Fig. 12).");
   m.def(
       "plot_desired_vs_actual",
-      [](const DoubleArray& d, const DoubleArray& a, const PathArg& path, const std::string& title,
+      [](const ArrayArg& d, const ArrayArg& a, const PathArg& path, const std::string& title,
          const std::string& xl, const std::string& xu, const std::string& yl, const std::string& yu) {
         report::plot_desired_vs_actual(as_span(d, "plot_desired_vs_actual: desired"),
                                        as_span(a, "plot_desired_vs_actual: actual"), labels(title, xl, xu, yl, yu),
-                                       path.string());
+                                       path_arg(path, "plot_desired_vs_actual: path"));
       },
       py::arg("desired"), py::arg("actual"),
       HYSTERON_PLOT_ARGS("Desired vs actual", "Desired contraction", "mm", "Actual contraction", "mm"),
       "Actual against desired output with the line y = x (Fig. 13).");
   m.def(
       "plot_fit_residuals",
-      [](const DoubleArray& x, const DoubleArray& y, const DoubleArray& model, const PathArg& path,
+      [](const ArrayArg& x, const ArrayArg& y, const ArrayArg& model, const PathArg& path,
          const std::string& title, const std::string& xl, const std::string& xu, const std::string& yl,
          const std::string& yu) {
         report::plot_fit_residuals(as_span(x, "plot_fit_residuals: x"), as_span(y, "plot_fit_residuals: measured"),
                                    as_span(model, "plot_fit_residuals: model"), labels(title, xl, xu, yl, yu),
-                                   path.string());
+                                   path_arg(path, "plot_fit_residuals: path"));
       },
       py::arg("x"), py::arg("measured"), py::arg("model"),
       HYSTERON_PLOT_ARGS("Fit residuals", "Sample", "", "Residual", "mm"),

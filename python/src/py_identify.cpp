@@ -32,38 +32,35 @@ IndexRange range_from(const py::object& r, const char* what) {
 void bind_identify(py::module_& m) {
   m.def(
       "fit",
-      [](const DoubleArray& x, const DoubleArray& y, const std::string& model, int num_operators, int num_dead_zones,
-         const std::string& initial_state, const py::object& train, double huber_delta, int num_starts,
-         const py::object& seed,
-         int max_iterations, bool fix_scale, bool free_weights, bool compute_covariance, const PathArg& report_arg,
-         std::pair<std::string, std::string> input_axis, std::pair<std::string, std::string> output_axis,
-         int num_threads, int stall_iterations, double stall_tolerance, double min_slope, double sample_time,
-         int censor_passes) {
-        const std::string report = report_arg.string();
+      [](const ArrayArg& x, const ArrayArg& y, const std::string& model, const IntArg& num_operators,
+         const IntArg& num_dead_zones, const std::string& initial_state, const py::object& train, double huber_delta,
+         const IntArg& num_starts, const IntArg& seed, const IntArg& max_iterations, bool fix_scale, bool free_weights,
+         bool compute_covariance, const PathArg& report_arg, std::pair<std::string, std::string> input_axis,
+         std::pair<std::string, std::string> output_axis, const IntArg& num_threads, const IntArg& stall_iterations,
+         double stall_tolerance, double min_slope, double sample_time, const IntArg& censor_passes) {
+        const std::string report = path_arg(report_arg, "fit: report");
         io::check_output_file({"fit: report", report});  // before the fit, not after it
         FitOptions o;
         o.model = fit_model_from_name(model);
-        o.num_operators = num_operators;
-        o.num_dead_zones = num_dead_zones;
+        o.num_operators = int_arg(num_operators, "fit: num_operators");
+        o.num_dead_zones = int_arg(num_dead_zones, "fit: num_dead_zones");
         o.initial_state = initial_state_from(initial_state);
         o.train = range_from(train, "fit: train");
         o.huber_delta = huber_delta;
-        o.num_starts = num_starts;
-        const std::uint64_t seed_value = uint_arg(seed, "fit: seed");
-        if (seed_value > 0xffffffffu)
-          throw py::value_error(fmt::format("fit: seed = {} is too large (at most 2**32 - 1)", seed_value));
-        o.seed = static_cast<unsigned>(seed_value);
-        o.max_iterations = max_iterations;
+        o.num_starts = int_arg(num_starts, "fit: num_starts");
+        o.seed = static_cast<unsigned>(uint_arg(seed, "fit: seed", 0, 0xffffffffu));
+        o.max_iterations = int_arg(max_iterations, "fit: max_iterations");
         o.gpi_fix_scale = fix_scale;
         o.gpi_free_weights = free_weights;
         o.compute_covariance = compute_covariance;
-        o.num_threads = num_threads;
-        o.stall_iterations = stall_iterations;
+        o.num_threads = int_arg(num_threads, "fit: num_threads");
+        o.stall_iterations = int_arg(stall_iterations, "fit: stall_iterations");
         o.stall_tolerance = stall_tolerance;
         o.min_slope = min_slope;
         o.sample_time = sample_time;
-        o.censor_passes = censor_passes;
-        const auto xs = as_span(x, "fit: x"), ys = as_span(y, "fit: y");
+        o.censor_passes = int_arg(censor_passes, "fit: censor_passes");
+        // copies: another thread may change the caller's arrays while the fit runs without the GIL
+        std::vector<double> xs = as_vector(x, "fit: x"), ys = as_vector(y, "fit: y");
         FitReport r;
         {
           py::gil_scoped_release release;
@@ -71,21 +68,21 @@ void bind_identify(py::module_& m) {
         }
         if (!report.empty()) {
           report::FitData data;
-          data.x.assign(xs.begin(), xs.end());
-          data.y.assign(ys.begin(), ys.end());
+          data.x = std::move(xs);
+          data.y = std::move(ys);
           data.input = {input_axis.first, input_axis.second};
           data.output = {output_axis.first, output_axis.second};
           data.initial_state = o.initial_state;
           data.train = o.train;
           data.source = "numpy arrays (Python)";
           report::write_fit_report(r, data, report, fmt::format("hysteron.fit(x, y, model='{}', num_operators={})",
-                                                                model, num_operators));
+                                                                model, o.num_operators));
         }
         return fit_dict(r);
       },
       py::arg("x"), py::arg("y"), py::arg("model") = "gpi", py::arg("num_operators") = 10,
       py::arg("num_dead_zones") = 4, py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
-      py::arg("huber_delta") = 0.0, py::arg("num_starts") = 2, py::arg("seed") = 0u, py::arg("max_iterations") = 200,
+      py::arg("huber_delta") = 0.0, py::arg("num_starts") = 2, py::arg("seed") = 0, py::arg("max_iterations") = 200,
       py::arg("fix_scale") = true, py::arg("free_weights") = false, py::arg("compute_covariance") = true, py::arg("report") = "",
       py::arg("input_axis") = std::make_pair(std::string("Input"), std::string()),
       py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()), py::arg("num_threads") = 0,
@@ -124,17 +121,19 @@ training range), "inverse" ({max_slope, max_jump, max_input_step, increasing}),
 "warnings" (list of str), "candidates" (model="auto": list of {kind, status,
 message, train, holdout, holdout_score, num_parameters, time_s, chosen, model}), costs, iterations and
 "report" (text). Invalid options give the status "invalid_input" with the reason in "message"; arguments of the wrong
-type, and a negative seed, raise TypeError / ValueError.)doc");
+type (a complex array, a float count), and a negative integer argument, raise TypeError / ValueError naming it.
+x and y are copied first: the fit runs without the GIL, and another thread may change the arrays meanwhile.)doc");
 
   m.def(
       "reference_pi",
-      [](const DoubleArray& x, const DoubleArray& y, const py::object& train, int num_operators) {
+      [](const ArrayArg& x, const ArrayArg& y, const py::object& train, const IntArg& num_operators) {
         PiParams p;
         {
-          const auto xs = as_span(x, "reference_pi: x"), ys = as_span(y, "reference_pi: y");
+          const auto xs = as_vector(x, "reference_pi: x"), ys = as_vector(y, "reference_pi: y");  // (no GIL below)
           const IndexRange r = range_from(train, "reference_pi: train");
+          const int n = int_arg(num_operators, "reference_pi: num_operators");
           py::gil_scoped_release release;
-          p = reference_pi(xs, ys, r, num_operators);
+          p = reference_pi(xs, ys, r, n);
         }
         return from_json(io::model_to_json(ModelParams{p}));
       },
@@ -158,7 +157,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
 
   m.def(
       "evaluate",
-      [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const py::object& range,
+      [](const py::object& model, const ArrayArg& x, const ArrayArg& y, const py::object& range,
          const std::string& initial_state, bool censored) {
         const ModelParams spec = model_spec(model, "evaluate: model");
         std::size_t count = 0;
@@ -187,7 +186,7 @@ they are more than 1 %).)doc");
 
   m.def(
       "simulate_record",
-      [](const py::object& model, const DoubleArray& x, const std::string& initial_state) {
+      [](const py::object& model, const ArrayArg& x, const std::string& initial_state) {
         return to_numpy(simulate_record(model_spec(model, "simulate_record: model"), as_span(x, "simulate_record: x"),
                                         initial_state_from(initial_state)));
       },
@@ -196,7 +195,7 @@ they are more than 1 %).)doc");
 
   m.def(
       "compute_metrics",
-      [](const DoubleArray& measured, const DoubleArray& predicted) {
+      [](const ArrayArg& measured, const ArrayArg& predicted) {
         const auto ym = as_finite_span(measured, "compute_metrics: measured");
         const auto yp = as_finite_span(predicted, "compute_metrics: predicted");
         // zeros for no samples would read as a perfect fit (evaluate refuses an empty record too)
@@ -207,11 +206,11 @@ they are more than 1 %).)doc");
       py::arg("measured"), py::arg("predicted"),
       "Error metrics of predicted against measured (equal lengths, at least one sample; hysteron.Error otherwise).");
 
-  py::class_<Rls>(m, "Rls", R"doc(
+  def_copy(py::class_<Rls>(m, "Rls", R"doc(
 Recursive least squares with forgetting factor lam for the weights [q, p_1..p_n]
 of a model whose output is linear in them (pi, mpi-asym, gpi with free weights).
 Rls(model, lam=1.0, p0=1e6): model (dict, file path or Model) fixes thresholds
-and envelopes and gives the initial weights.)doc")
+and envelopes and gives the initial weights.)doc"))
       .def(py::init([](const py::object& model, double lam, double p0) {
              return Rls(model_spec(model, "Rls: model"), lam, p0);
            }),
@@ -237,18 +236,18 @@ and envelopes and gives the initial weights.)doc")
 
   m.def(
       "rls_fit",
-      [](const py::object& model, const DoubleArray& x, const DoubleArray& y, double lam, int passes,
+      [](const py::object& model, const ArrayArg& x, const ArrayArg& y, double lam, const IntArg& passes,
          const std::string& initial_state) {
         return from_json(io::model_to_json(
             rls_fit(model_spec(model, "rls_fit: model"), as_span(x, "rls_fit: x"), as_span(y, "rls_fit: y"), lam,
-                    passes, initial_state_from(initial_state))));
+                    int_arg(passes, "rls_fit: passes"), initial_state_from(initial_state))));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("lam") = 1.0, py::arg("passes") = 1,
       py::arg("initial_state") = "virgin", "Run Rls over the record `passes` times; returns the model dict.");
 
   m.def(
       "fit_weights",
-      [](const py::object& model, const DoubleArray& x, const DoubleArray& y, const std::string& initial_state,
+      [](const py::object& model, const ArrayArg& x, const ArrayArg& y, const std::string& initial_state,
          const py::object& train) {
         WeightFitOptions o;
         o.initial_state = initial_state_from(initial_state);

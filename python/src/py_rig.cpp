@@ -50,7 +50,7 @@ std::vector<WaveSegment> segments_from(const py::list& segs) {
     else throw py::value_error("waveform must be 'triangle' or 'sine'");
     field("amplitude", w.amplitude, "a number");
     field("period", w.period, "a number [s]");
-    field("periods", w.periods, "an int");
+    if (d.contains("periods")) w.periods = int_arg(d["periods"], fmt::format("{}[\"periods\"]", where));
     field("offset", w.offset, "a number");
     out.push_back(w);
   }
@@ -65,7 +65,7 @@ void bind_rig(py::module_& m) {
       py::arg("params") = py::none(),
       "Complete rig parameter dict (defaults filled in) from a partial dict, a JSON file path or None.");
 
-  py::class_<PamRig>(m, "PamRig", R"doc(
+  def_copy(py::class_<PamRig>(m, "PamRig", R"doc(
 Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass, fed
 by a proportional pressure regulator or by PWM switching valves (docs/plant.md).
 
@@ -73,8 +73,8 @@ PamRig(params=None, seed=1): params is a dict with optional sections "muscle",
 "hysteresis", "air", "regulator", "valves", "load", "sensors", "simulation"
 (see hysteron.rig_params()), or the path of such a JSON file. SI units inside;
 run_pressure takes and returns MPa and mm. Runs are reproducible bit for bit
-for a given seed.)doc")
-      .def(py::init([](const py::object& params, const py::object& seed) {
+for a given seed.)doc"))
+      .def(py::init([](const py::object& params, const IntArg& seed) {
              return PamRig(rig_params_from(params), uint_arg(seed, "PamRig: seed"));
            }),
            py::arg("params") = py::none(), py::arg("seed") = 1)
@@ -117,8 +117,9 @@ for a given seed.)doc")
           "(switching_valves). Returns the outputs (SI units: m, Pa gauge).")
       .def(
           "run_pressure",
-          [](PamRig& r, const DoubleArray& profile, double control_period) {
-            const auto p = as_finite_span(profile, "run_pressure: profile");
+          [](PamRig& r, const ArrayArg& profile, double control_period) {
+            const auto checked = as_finite_span(profile, "run_pressure: profile");
+            const std::vector<double> p(checked.begin(), checked.end());  // a copy: the run is without the GIL
             // A period that is not a whole number of rig steps was rounded silently.
             const double ratio = control_period / r.dt();
             const long every = std::isfinite(ratio) && ratio < 1e12 ? std::lround(ratio) : 0;
@@ -207,10 +208,17 @@ Raises hysteron.Error if the simulation diverges.)doc")
       py::arg("dt"), py::arg("duration"), py::arg("rest_length") = 0.5,
       "GPI paper Eq. 18 / Table 4 reference as a contraction [m].");
   m.def(
-      "mpi_triangle_contraction", [](double dt, int n) { return to_numpy(mpi_triangle_contraction(dt, n)); },
+      "mpi_triangle_contraction",
+      [](double dt, const IntArg& n) {
+        return to_numpy(mpi_triangle_contraction(dt, int_arg(n, "mpi_triangle_contraction: periods_each")));
+      },
       py::arg("dt"), py::arg("periods_each") = 1, "Asymmetric-MPI paper triangle references 40/35/30 mm [m].");
   m.def(
-      "mpi_sine_contraction", [](double dt, int n) { return to_numpy(mpi_sine_contraction(dt, n)); }, py::arg("dt"),
+      "mpi_sine_contraction",
+      [](double dt, const IntArg& n) {
+        return to_numpy(mpi_sine_contraction(dt, int_arg(n, "mpi_sine_contraction: periods_each")));
+      },
+      py::arg("dt"),
       py::arg("periods_each") = 1, "Asymmetric-MPI paper sine references 40/35/30 mm [m].");
 }
 

@@ -91,7 +91,7 @@ def test_a_model_of_the_wrong_type_is_named_without_a_traceback():
         (lambda: hysteron.Model(3), r"Model: spec: expected a model dict .* got int 3"),
         (lambda: hysteron.Inverse([1, 2]), r"Inverse: spec: expected a model dict .* got list"),
         (lambda: hysteron.evaluate(object(), [0.1], [0.1]), r"evaluate: model: expected a model dict .* got object"),
-        (lambda: hysteron.InverseFeedforward(b"model.json"), r"InverseFeedforward: model: expected .* got bytes"),
+        (lambda: hysteron.InverseFeedforward(3.5), r"InverseFeedforward: model: expected .* got float 3.5"),
     ]:
         with pytest.raises(TypeError, match=message) as e:
             call()

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "format.hpp"
+#include "validate.hpp"
 
 #include "hysteron/error.hpp"
 
@@ -116,6 +117,39 @@ void Pid::reset(double u0) noexcept {
     s_.integral = p_.ki > 0.0 ? u0 : 0.0;
     s_.output = u0;
   }
+}
+
+std::vector<double> Pid::snapshot() const {
+  const PidState& s = s_;
+  return {s.integral, s.derivative, s.prev_d_error, s.output, s.initialized ? 1.0 : 0.0, s.saturated ? 1.0 : 0.0,
+          s.gain_scale, static_cast<double>(s.guard_cuts), static_cast<double>(s.guard_sign), s.guard_iae,
+          static_cast<double>(s.guard_samples), s.guard_count, static_cast<double>(faults_)};
+}
+
+void Pid::restore(std::span<const double> v) {
+  const std::string_view what = "pid: snapshot";
+  detail::check_snapshot_size(v, 13, what);
+  for (double x : v) detail::snapshot_finite(x, what);
+  PidState s;
+  s.integral = v[0];
+  s.derivative = v[1];
+  s.prev_d_error = v[2];
+  s.output = v[3];
+  if (!(s.output >= p_.out_min && s.output <= p_.out_max))
+    throw Error(detail::format("{}: output {} is outside [out_min, out_max] = [{}, {}]", what, s.output, p_.out_min,
+                               p_.out_max));
+  s.initialized = detail::snapshot_count(v[4], "pid: snapshot initialized", 1.0) == 1;
+  s.saturated = detail::snapshot_count(v[5], "pid: snapshot saturated", 1.0) == 1;
+  s.gain_scale = v[6];
+  if (!(s.gain_scale > 0 && s.gain_scale <= 1))
+    throw Error(detail::format("{}: gain_scale {} must be in (0, 1]", what, s.gain_scale));
+  s.guard_cuts = detail::snapshot_count(v[7], "pid: snapshot guard_cuts");
+  s.guard_sign = static_cast<int>(detail::snapshot_count(v[8] + 1.0, "pid: snapshot guard_sign + 1", 2.0)) - 1;
+  s.guard_iae = v[9];
+  s.guard_samples = detail::snapshot_count(v[10], "pid: snapshot guard_samples");
+  s.guard_count = v[11];
+  faults_ = detail::snapshot_count(v[12], "pid: snapshot faults");
+  s_ = s;
 }
 
 double Pid::step(double r, double y, double ff) noexcept {

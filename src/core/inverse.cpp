@@ -9,6 +9,7 @@
 #include "hysteron/error.hpp"
 #include "kernels.hpp"
 #include "play_kernel.hpp"
+#include "validate.hpp"
 
 namespace hysteron {
 
@@ -33,7 +34,8 @@ void map_deviations(double q, const std::vector<double>& p, const double* d, dou
 }  // namespace
 
 Inverse::Inverse(ModelParams params, InverseOptions options)
-    : params_(std::move(params)), s_(detail::structure_of(params_)), kernel_(detail::make_kernel(params_)) {
+    : params_(std::move(params)), options_(options), s_(detail::structure_of(params_)),
+      kernel_(detail::make_kernel(params_)) {
   const std::string_view name = model_name(params_);
   const Limits& ml = input_limits(params_);
   lim_.lo = std::isinf(options.input_limits.lo) ? ml.lo : options.input_limits.lo;
@@ -211,6 +213,46 @@ void Inverse::reset(const ModelState& fs) {
   const Envelope env{s_.asc_kind, s_.asc_c};
   const double x = env.inverse(fs.u);
   x_ = std::clamp(std::isfinite(x) ? x : 0.0, lim_.lo, lim_.hi);
+}
+
+// Layout: the kernel's state (kinds without PI structure), or x'_1..x'_n and v (analytical), or the
+// forward operator outputs y_1..y_n (mpi-asym); then the last input (model coordinates),
+// saturated (0/1) and faults.
+std::vector<double> Inverse::snapshot() const {
+  std::vector<double> s;
+  if (kernel_) {
+    s.resize(kernel_.get()->state_size());
+    kernel_.get()->get_state(s.data());
+  } else if (s_.asymmetric) {
+    s = y_;
+  } else {
+    s = xi_;
+    s.push_back(v_prev_);
+  }
+  s.insert(s.end(), {x_, saturated_ ? 1.0 : 0.0, static_cast<double>(faults_)});
+  return s;
+}
+
+void Inverse::restore(std::span<const double> s) {
+  const std::string what = detail::format("{}: inverse snapshot", model_name(params_));
+  const std::size_t m = kernel_ ? kernel_.get()->state_size() : s_.asymmetric ? y_.size() : xi_.size() + 1;
+  detail::check_snapshot_size(s, m + 3, what);
+  for (std::size_t i = 0; i < m + 1; ++i) detail::snapshot_finite(s[i], detail::format("{}[{}]", what, i));
+  if (!(s[m] >= lim_.lo && s[m] <= lim_.hi))
+    throw Error(detail::format("{}: the last input {} is outside the limits [{}, {}] (model coordinates)", what, s[m],
+                               lim_.lo, lim_.hi));
+  Inverse next(*this);
+  if (kernel_) next.kernel_.get()->set_state(s.data(), detail::input_bound(s_, kernel_.get()));  // checks it
+  else if (s_.asymmetric) std::copy(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(m), next.y_.begin());
+  else {
+    std::copy(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(m - 1), next.xi_.begin());
+    next.v_prev_ = s[m - 1];
+  }
+  next.x_ = s[m];
+  next.saturated_ = detail::snapshot_count(s[m + 1], what + " saturated", 1.0) == 1;
+  next.faults_ = detail::snapshot_count(s[m + 2], what + " faults");
+  if (!kernel_) Inverse(next).reset(next.forward_state());  // a state the model can reach (throws otherwise)
+  *this = std::move(next);
 }
 
 ModelState Inverse::forward_state() const {

@@ -454,6 +454,23 @@ void Model::reset(const ModelState& state) {
   faults_ = 0;
 }
 
+std::vector<double> Model::snapshot() const {
+  std::vector<double> s = state().y;
+  s.insert(s.end(), {state_.u, out_, static_cast<double>(faults_)});
+  return s;
+}
+
+void Model::restore(std::span<const double> s) {
+  const std::string what = detail::format("{}: snapshot", name());
+  const std::size_t n = state_.y.size();
+  detail::check_snapshot_size(s, n + 3, what);
+  const double out = detail::snapshot_finite(s[n + 1], what + " output");
+  const std::size_t faults = detail::snapshot_count(s[n + 2], what + " faults");
+  reset(ModelState{{s.begin(), s.begin() + static_cast<std::ptrdiff_t>(n)}, s[n]});  // checks the state
+  out_ = out;
+  faults_ = faults;
+}
+
 double Model::state_bound() const noexcept { return detail::state_bound(s_, x_max_); }
 
 bool Model::reset_relaxed(double x0) noexcept {

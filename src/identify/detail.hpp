@@ -57,7 +57,7 @@ struct Grid {
 Grid grid_of(std::span<const double> v);
 
 // A sensor that clips: runs (at least 3 samples) of column a sitting exactly at its least ([0]) or largest ([1])
-// value over `range` during which column b moves (its range over the run) by more than `bound`: the largest of 3x
+// value over `range` during which column b moves (its range over the run) by more than the largest of 3x
 // the most b moves during any run of a at another value (a held command's creep or settling, a coarse sensor's
 // step), 8 noise widths of b (detect_clipping's sigma) and 10 % of b's span (a creep where a holds only at its
 // ends). A clipped sensor's true value went on beyond its range while its reading stayed. (fit_api.cpp)
@@ -65,7 +65,7 @@ struct Pinned {
   double value = 0.0;                            // a's least or largest value
   std::size_t samples = 0, first = 0, last = 0;  // samples in the flagged runs; the first one is [first, last)
   double moved = 0.0;                            // the most b moves in them
-  double moves = 0.0, bound = 0.0;               // the most b moves during another run of a; the bound
+  double moves = 0.0;                            // the most b moves during any run of a at another value
 };
 std::array<Pinned, 2> pinned_runs(std::span<const double> a, std::span<const double> b, IndexRange range);
 

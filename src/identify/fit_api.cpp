@@ -289,7 +289,7 @@ std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std
   const double sigma = detect_clipping(b.subspan(r.begin, r.end - r.begin)).sigma;
   const double bound = std::max({kPinnedRatio * moves, kPinnedNoise * sigma, kPinnedSpan * (bhi - blo)});
   std::array<Pinned, 2> out;
-  for (int k : {0, 1}) out[k].value = k ? hi : lo, out[k].moves = moves, out[k].bound = bound;
+  for (int k : {0, 1}) out[k].value = k ? hi : lo, out[k].moves = moves;
   for_each_run(a, r, [&](std::size_t s, std::size_t e) {
     if (e - s < 3 || (a[s] != lo && a[s] != hi)) return;
     const auto [l, h] = minmax_of(b, s, e);
@@ -848,8 +848,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   FitReport rep = run(y);
   if (!has_model(rep.status)) return rep;
   Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
-  // An output pinned at its least or largest value while the input goes up and back (pinned_runs), where
-  // detect_clipping saw no limit (fewer than 100 samples, no noise to tell it by): a limit as well.
+  // An output pinned at its least or largest value while the input moves on (pinned_runs), where detect_clipping
+  // saw no limit (fewer than 50 samples at it or 100 in all, no noise to tell it by): a limit as well.
   const auto y_pinned = detail::pinned_runs(y, x, tr);
   bool pinned_only[2] = {false, false};
   for (int k : {0, 1})
@@ -876,7 +876,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
                                "beyond it count as no error, and the metrics are on that record)",
                                passes, censored)
                  : std::string("the model is fitted to the limit there, not to the actuator");
-  // a run of one column pinned at its extreme while the other rises and falls back (pinned_runs)
+  // a column pinned at its extreme while the other moves on (pinned_runs)
   const auto pinned = [&](const detail::Pinned& p, bool input, bool high) {
     const char* const a = input ? "input" : "output";
     const char* const b = input ? "output" : "input";

@@ -2,6 +2,7 @@
 // Internal helpers shared by the identification sources (not installed).
 #include <Eigen/Core>
 
+#include <array>
 #include <chrono>
 #include <functional>
 #include <span>
@@ -42,6 +43,31 @@ ModelParams with_weights(const ModelParams& model, const Structure<double>& s, d
                          const std::vector<double>& p);
 
 double span_of(std::span<const double> v);
+
+// The grid a column was recorded on (an ADC's or a printout's resolution): step = the least spacing of its
+// distinct values (values within 1e-9 of their magnitude are one: rounding after an offset or a scale; levels
+// left unused are no matter), refined to span / round(span / spacing), when every value lies within a tenth of a
+// step of min + k step and there are at least 4 samples per level; {0, 0} otherwise (a column off any grid, or
+// too short to tell). levels = span / step + 1.
+// (fit_api.cpp)
+struct Grid {
+  double step = 0.0;
+  std::size_t levels = 0;
+};
+Grid grid_of(std::span<const double> v);
+
+// A sensor that clips: runs (at least 3 samples) of column a sitting exactly at its least ([0]) or largest ([1])
+// value over `range` during which column b moves (its range over the run) by more than the largest of 3x
+// the most b moves during any run of a at another value (a held command's creep or settling, a coarse sensor's
+// step), 8 noise widths of b (detect_clipping's sigma) and 10 % of b's span (a creep where a holds only at its
+// ends). A clipped sensor's true value went on beyond its range while its reading stayed. (fit_api.cpp)
+struct Pinned {
+  double value = 0.0;                            // a's least or largest value
+  std::size_t samples = 0, first = 0, last = 0;  // samples in the flagged runs; the first one is [first, last)
+  double moved = 0.0;                            // the most b moves in them
+  double moves = 0.0;                            // the most b moves during any run of a at another value
+};
+std::array<Pinned, 2> pinned_runs(std::span<const double> a, std::span<const double> b, IndexRange range);
 
 // Runs fn(k) for k = 0..count-1, spread over up to `threads` threads (0: one per
 // hardware thread; 1: in order on this thread). Each k must be independent, so the

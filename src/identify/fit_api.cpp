@@ -108,7 +108,8 @@ constexpr double kLineRatio = 0.99498743710662;  // sqrt(0.99)
 // good as it is not useless. That is the case when both the line and the fit leave an error that
 // is negligible: at most kNegligible of the output's span over the training range, or, when the
 // line explains at least kLineR2 of the output's variance (the output is not noise), at most
-// kNoiseFactor times the output's noise (detect_clipping's sigma, from its second differences).
+// kNoiseFactor times the output's noise (detect_clipping's sigma, from its second differences) or,
+// where larger, the RMS error its resolution leaves (grid_of: step / sqrt(12)).
 constexpr double kNegligible = 0.01;
 constexpr double kLineR2 = 0.9;
 constexpr double kNoiseFactor = 1.2;
@@ -226,6 +227,125 @@ std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t
   return fmt::format("{} sample(s) of the training {} lie far outside the rest (sample {}{}; 99 % of the samples lie "
                      "within [{:.6g}, {:.6g}]): a glitch, a spike or a sensor's overrange value",
                      count, which, rows, count > 5 ? ", ..." : "", lo, hi);
+}
+
+// pinned_runs's bound (detail.hpp): multiples of the most b moves during another run of a and of b's noise, and a
+// fraction of b's span.
+constexpr double kPinnedRatio = 3.0, kPinnedNoise = 8.0, kPinnedSpan = 0.1;
+// A column on at most this many levels over the training range (6 bits) has a coarse resolution: its step is at
+// least 1/63 of its span, and step / sqrt(12) at least 0.46 % of it, as much as a model leaves on a good record.
+constexpr std::size_t kCoarseLevels = 64;
+// A fit whose RMS is within this factor of the resolution's floor is limited by it (the floor is then at least
+// 64 % of its mean square error).
+constexpr double kResolutionNear = 1.25;
+// A coarse input is a sensor's reading (not a held command, a staircase) when the output, over the second half of
+// the input's runs at one level, moves by at least this fraction of what one step means (step x mean slope).
+constexpr double kHeldMoves = 0.25;
+
+// f(s, e) for each run [s, e) of equal values of a over r.
+template <class F>
+void for_each_run(std::span<const double> a, IndexRange r, F f) {
+  for (std::size_t s = r.begin, e; s < r.end; s = e) {
+    for (e = s + 1; e < r.end && a[e] == a[s];) ++e;
+    f(s, e);
+  }
+}
+
+// b's least and largest values over [s, e)
+std::pair<double, double> minmax_of(std::span<const double> b, std::size_t s, std::size_t e) {
+  const auto [l, h] = std::minmax_element(b.begin() + static_cast<std::ptrdiff_t>(s),
+                                          b.begin() + static_cast<std::ptrdiff_t>(e));
+  return {*l, *h};
+}
+
+}  // namespace
+
+detail::Grid detail::grid_of(std::span<const double> v) {
+  std::vector<double> s(v.begin(), v.end());
+  std::sort(s.begin(), s.end());
+  if (s.empty()) return {};
+  const double lo = s.front(), hi = s.back(), tol = 1e-9 * std::max(std::abs(lo), std::abs(hi));
+  double gap = hi - lo;  // the least spacing of distinct values
+  for (std::size_t k = 1; k < s.size(); ++k)
+    if (s[k] - s[k - 1] > tol) gap = std::min(gap, s[k] - s[k - 1]);
+  const double m = std::round((hi - lo) / gap);  // steps across the span
+  if (!(m >= 1) || static_cast<double>(s.size()) < 4 * (m + 1)) return {};
+  const double q = (hi - lo) / m;
+  for (double x : s)
+    if (std::abs((x - lo) / q - std::round((x - lo) / q)) > 0.1) return {};
+  return {q, static_cast<std::size_t>(m) + 1};
+}
+
+std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std::span<const double> b,
+                                                  IndexRange r) {
+  const auto [lo, hi] = minmax_of(a, r.begin, r.end);
+  const auto [blo, bhi] = minmax_of(b, r.begin, r.end);
+  double moves = 0.0;
+  for_each_run(a, r, [&](std::size_t s, std::size_t e) {
+    if (a[s] == lo || a[s] == hi) return;
+    const auto [l, h] = minmax_of(b, s, e);
+    moves = std::max(moves, h - l);
+  });
+  const double sigma = detect_clipping(b.subspan(r.begin, r.end - r.begin)).sigma;
+  const double bound = std::max({kPinnedRatio * moves, kPinnedNoise * sigma, kPinnedSpan * (bhi - blo)});
+  std::array<Pinned, 2> out;
+  for (int k : {0, 1}) out[k].value = k ? hi : lo, out[k].moves = moves;
+  for_each_run(a, r, [&](std::size_t s, std::size_t e) {
+    if (e - s < 3 || (a[s] != lo && a[s] != hi)) return;
+    const auto [l, h] = minmax_of(b, s, e);
+    Pinned& p = out[a[s] == hi ? 1 : 0];
+    if (!(h - l > bound)) return;
+    if (p.samples == 0) p.first = s, p.last = e;
+    p.samples += e - s;
+    p.moved = std::max(p.moved, h - l);
+  });
+  return out;
+}
+
+namespace {
+
+// The warnings on the sensors' resolution (grid_of, detail.hpp): a column on at most kCoarseLevels levels, the
+// RMS error that step alone leaves (step / sqrt(12); for the input, in the output's units through the record's
+// mean slope span(y) / span(x), and only where the output keeps moving while the input holds a level: a sensor's
+// reading, not a held command; an estimate: the local slope and where the input dwells change it), and whether the
+// fit's training RMS is near the output's floor.
+std::vector<std::string> resolution_warnings(std::span<const double> x, std::span<const double> y, IndexRange tr,
+                                             double rms) {
+  std::vector<std::string> out;
+  const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
+  const double sx = detail::span_of(xt), sy = detail::span_of(yt), root12 = std::sqrt(12.0);
+  const detail::Grid gy = detail::grid_of(yt), gx = detail::grid_of(xt);
+  const auto coarse = [](const detail::Grid& g) { return g.levels > 0 && g.levels <= kCoarseLevels; };
+  if (coarse(gy)) {
+    const double floor = gy.step / root12;
+    out.push_back(fmt::format("the output is recorded on {} levels over the training range (step {:.4g}, {:.3g} % "
+                              "of its span): that resolution alone leaves an RMS error of about step/sqrt(12) = "
+                              "{:.4g} ({:.3g} % of the span)",
+                              gy.levels, gy.step, 100 * gy.step / sy, floor, 100 * floor / sy));
+    if (rms <= kResolutionNear * floor)
+      out.push_back(fmt::format("the fit's training RMS {:.4g} is within {}x of {:.4g}, what the output sensor's "
+                                "resolution alone leaves: the fit is limited by the sensor's resolution rather than "
+                                "by the model; a sensor with finer steps over the signal's span would let it go lower",
+                                rms, kResolutionNear, floor));
+  }
+  if (!coarse(gx)) return out;
+  double held = 0.0;  // the output's range over the second half of the input's runs (at least 4 samples)
+  std::size_t runs = 0;
+  for_each_run(x, tr, [&](std::size_t s, std::size_t e) {
+    if (e - s < 4) return;
+    const auto [l, h] = minmax_of(y, s + (e - s) / 2, e);
+    held += h - l, ++runs;
+  });
+  const double per_step = gx.step * sy / sx;  // the output's change over one input step, at the mean slope
+  if (runs > 0 && held / static_cast<double>(runs) >= kHeldMoves * per_step)
+    out.push_back(fmt::format("the input is recorded on {} levels over the training range (step {:.4g}, {:.3g} % of "
+                              "its span), and the output keeps moving while the input holds a level (a sensor's "
+                              "resolution, not a held command): that alone leaves an RMS error of up to about "
+                              "{:.4g} in the output ({:.3g} % of its span; step/sqrt(12) times the record's mean "
+                              "slope {:.4g})",
+                              gx.levels, gx.step, 100 * gx.step / sx, per_step / root12,
+                              100 * per_step / root12 / sy, sy / sx));
+  return out;
 }
 
 TrainingRanges training_ranges(std::span<const double> x, std::span<const double> y, IndexRange tr) {
@@ -483,9 +603,11 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
     ym /= static_cast<double>(yt.size());
     for (double v : yt) var += (v - ym) * (v - ym);
     var /= static_cast<double>(yt.size());
-    const double sigma = detect_clipping(yt).sigma;
-    if (std::isfinite(sigma) && line_rms * line_rms <= (1 - kLineR2) * var)
-      tolerance = std::max(tolerance, kNoiseFactor * sigma);
+    // the noise, or where larger the error the output's resolution alone leaves (grid_of: step / sqrt(12)), so that
+    // a coarse sensor's floor does not make a record without hysteresis a poor fit
+    const double noise = std::max(detect_clipping(yt).sigma, detail::grid_of(yt).step / std::sqrt(12.0));
+    if (std::isfinite(noise) && line_rms * line_rms <= (1 - kLineR2) * var)
+      tolerance = std::max(tolerance, kNoiseFactor * noise);
   }
   const bool no_hysteresis = line_rms <= tolerance && rep.train.rms <= tolerance;
   if (!(rep.train.r2 >= 0))
@@ -724,13 +846,22 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     return options.model == FitModel::automatic ? fit_auto(x, yy, options, tr, t0) : fit_one(x, yy, options, tr, t0);
   };
   FitReport rep = run(y);
-  const Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
-  if (!clip.any()) return rep;
+  if (!has_model(rep.status)) return rep;
+  Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
+  // An output pinned at its least or largest value while the input moves on (pinned_runs), where detect_clipping
+  // saw no limit (fewer than 50 samples at it or 100 in all, no noise to tell it by): a limit as well.
+  const auto y_pinned = detail::pinned_runs(y, x, tr);
+  bool pinned_only[2] = {false, false};
+  for (int k : {0, 1})
+    if (bool& flag = k ? clip.high : clip.low; y_pinned[k].samples > 0 && !flag) {
+      flag = pinned_only[k] = true;
+      (k ? clip.hi : clip.lo) = y_pinned[k].value;
+    }
   // A clipped output (FitOptions::censor_passes): refitted on the record whose clipped samples
   // take the model's prediction where it lies beyond the limit.
   std::size_t censored = 0;
   int passes = 0;
-  for (; passes < options.censor_passes && has_model(rep.status); ++passes) {
+  for (; clip.any() && passes < options.censor_passes && has_model(rep.status); ++passes) {
     std::size_t n = 0;
     const std::vector<double> yc =
         censored_output(y, simulate_record(rep.model, x, options.initial_state), clip, &n);
@@ -740,17 +871,51 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     rep = std::move(next);
     censored = n;
   }
-  for (const bool low : {true, false})
-    if (low ? clip.low : clip.high)
+  const std::string censoring =
+      passes > 0 ? fmt::format("fitted as censored data ({} refit(s); {} samples at a limit where the model predicts "
+                               "beyond it count as no error, and the metrics are on that record)",
+                               passes, censored)
+                 : std::string("the model is fitted to the limit there, not to the actuator");
+  // a column pinned at its extreme while the other moves on (pinned_runs)
+  const auto pinned = [&](const detail::Pinned& p, bool input, bool high) {
+    const char* const a = input ? "input" : "output";
+    const char* const b = input ? "output" : "input";
+    return fmt::format("the training {} sits exactly at its {} value {:.6g} for {} samples (first run: samples {}:{}) "
+                       "while the {} moves by up to {:.4g} ({:.3g} % of its span; during any other run of one {} value "
+                       "it moves by at most {:.4g}): the {} sensor clips there, its true value went beyond its range; ",
+                       a, high ? "largest" : "least", p.value, p.samples, p.first, p.last, b, p.moved,
+                       100 * p.moved / detail::span_of((input ? y : x).subspan(tr.begin, tr.end - tr.begin)), a,
+                       p.moves, a);
+  };
+  for (const bool low : {true, false}) {
+    if (!(low ? clip.low : clip.high)) continue;
+    if (pinned_only[low ? 0 : 1])
+      rep.warnings.push_back(pinned(y_pinned[low ? 0 : 1], false, !low) + censoring +
+                             "; exclude these rows (the --train and --validate ranges) or re-record with the "
+                             "sensor's range covering the signal");
+    else
       rep.warnings.push_back(fmt::format(
           "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "
           "of it, where noise alone would put about half: a sensor's limit (or a stop recorded without noise); {}",
           low ? "least" : "largest", low ? clip.lo : clip.hi, 100.0 * (low ? clip.low_share : clip.high_share),
-          clip.sigma,
-          passes > 0 ? fmt::format("fitted as censored data ({} refit(s); {} samples at a limit where the model "
-                                   "predicts beyond it count as no error, and the metrics are on that record)",
-                                   passes, censored)
-                     : std::string("the model is fitted to the limit there, not to the actuator")));
+          clip.sigma, censoring));
+  }
+  // A clipped input: the model is fitted to an input that was not applied, and nothing repairs that: never
+  // `converged`.
+  const auto x_pinned = detail::pinned_runs(x, y, tr);
+  for (int k : {0, 1}) {
+    if (x_pinned[k].samples == 0) continue;
+    rep.warnings.push_back(pinned(x_pinned[k], true, k == 1) +
+                           "the model is fitted to an input that was not applied there: exclude these rows (the "
+                           "--train and --validate ranges) or re-record with the sensor's range covering the signal");
+    if (rep.status == FitStatus::converged) {
+      rep.status = FitStatus::poor_fit;
+      rep.message = fmt::format("poor fit: the training input clips at {:.6g} (see the warnings), and the model is "
+                                "fitted to an input that was not applied there (solver: converged: {})",
+                                x_pinned[k].value, rep.message);
+    }
+  }
+  for (std::string& w : resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return rep;
 }

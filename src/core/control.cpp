@@ -123,12 +123,12 @@ std::vector<double> Pid::snapshot() const {
   const PidState& s = s_;
   return {s.integral, s.derivative, s.prev_d_error, s.output, s.initialized ? 1.0 : 0.0, s.saturated ? 1.0 : 0.0,
           s.gain_scale, static_cast<double>(s.guard_cuts), static_cast<double>(s.guard_sign), s.guard_iae,
-          static_cast<double>(s.guard_samples), s.guard_count, static_cast<double>(faults_)};
+          static_cast<double>(s.guard_samples), s.guard_count, s.guard_last, static_cast<double>(faults_)};
 }
 
 void Pid::restore(std::span<const double> v) {
   const std::string_view what = "pid: snapshot";
-  detail::check_snapshot_size(v, 13, what);
+  detail::check_snapshot_size(v, 14, what);
   for (double x : v) detail::snapshot_finite(x, what);
   PidState s;
   s.integral = v[0];
@@ -148,7 +148,8 @@ void Pid::restore(std::span<const double> v) {
   s.guard_iae = v[9];
   s.guard_samples = detail::snapshot_count(v[10], "pid: snapshot guard_samples");
   s.guard_count = v[11];
-  faults_ = detail::snapshot_count(v[12], "pid: snapshot faults");
+  s.guard_last = v[12];
+  faults_ = detail::snapshot_count(v[13], "pid: snapshot faults");
   s_ = s;
 }
 

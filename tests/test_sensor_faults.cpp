@@ -285,3 +285,30 @@ TEST(SensorFaults, TheFestoRecordClippedAndQuantised) {
   EXPECT_NE(warning_with(rq, "the output is recorded on 8 levels over the training range"), "") << with_warnings(rq);
   EXPECT_NE(warning_with(rq, "limited by the sensor's resolution"), "") << with_warnings(rq);
 }
+
+// Not a clip (the review's records): the input resting exactly at its least value while the output settles from
+// an earlier state (a vented muscle, a commanded 0) by 12-24 % of its span, and a staircase command with 1 % noise
+// on its output. The first was a poor fit "the training input clips at 0" (the output moved by more than 10 % of
+// its span during the rest, and no other run of one input value moved it); a clip makes the output turn back
+// inside the run, a settle does not. The second warned of a coarse input sensor from the noise's range at the
+// holds; the holds' drift is now a trend of quarter means.
+TEST(SensorFaults, ARestAtTheInputsLeastValueAndANoisyStaircaseAreNoSensorFault) {
+  for (const double settle : {0.12, 0.24}) {
+    Record r = loops();
+    const auto [lo, hi] = std::minmax_element(r.y.begin(), r.y.end());
+    const double span = *hi - *lo, x0 = *std::min_element(r.x.begin(), r.x.end()) - 0.05;
+    Record rest;
+    for (int k = 0; k < 600; ++k) {  // x0 below the record's least input: the rest is the training range's least
+      rest.x.push_back(x0);
+      rest.y.push_back(r.y.front() + settle * span * std::exp(-k / 120.0) + 0.002 * std::sin(0.37 * k));
+    }
+    rest.x.insert(rest.x.end(), r.x.begin(), r.x.end());
+    rest.y.insert(rest.y.end(), r.y.begin(), r.y.end());
+    const FitReport f = fit_gpi(rest);
+    EXPECT_EQ(warning_with(f, "sensor clips"), "") << settle << "\n" << with_warnings(f);
+    EXPECT_EQ(f.status, FitStatus::converged) << settle << "\n" << with_warnings(f);
+  }
+  Record s = staircase();
+  for (std::size_t k = 0; k < s.y.size(); ++k) s.y[k] += 0.01 * std::sin(2.3 * static_cast<double>(k) + 1.1 * std::cos(0.7 * k));
+  EXPECT_EQ(warning_with(fit_gpi(s), "levels over the training range"), "");
+}

@@ -60,7 +60,9 @@ Grid grid_of(std::span<const double> v);
 // value over `range` during which column b moves (its range over the run) by more than the largest of 3x
 // the most b moves during any run of a at another value (a held command's creep or settling, a coarse sensor's
 // step), 8 noise widths of b (detect_clipping's sigma) and 10 % of b's span (a creep where a holds only at its
-// ends). A clipped sensor's true value went on beyond its range while its reading stayed. (fit_api.cpp)
+// ends), and in which b turns back: its extreme inside the run lies beyond both of the run's ends by more than 8
+// noise widths and 5 % of its range there (an output that settles while the input rests at 0 is monotone). A
+// clipped sensor's true value went on beyond its range and came back while its reading stayed. (fit_api.cpp)
 struct Pinned {
   double value = 0.0;                            // a's least or largest value
   std::size_t samples = 0, first = 0, last = 0;  // samples in the flagged runs; the first one is [first, last)

@@ -330,6 +330,28 @@ TEST(PidGuard, LeavesAStableLoopAlone) {
   }
 }
 
+TEST(PidGuard, LeavesTheOvershootOfAStableLoopsStepsAlone) {
+  // The loop above at 0.60-0.70 K_u (overshoot 6-10 %), tracking a square wave of period 2 s with steps
+  // 5 to 100 times the guard's amplitude: a step's rise and its overshoot are each large half-cycles,
+  // but no ring follows, so the severity (at most the two previous half-cycles') adds 1 each and the
+  // gains stay (the review found a cut at 0.65-0.70 K_u where the severity was bounded by the previous
+  // half-cycle alone). The guard counted half-cycles (1 each) never cut here either.
+  const double ts = 1e-3;
+  const auto [tu, ku] = ultimate(0.05, 0.05);
+  static double amp = 0.0;
+  auto square = [](double t) { return std::fmod(t, 2.0) < 1.0 ? amp : -amp; };
+  for (const double frac : {0.6, 0.65, 0.7})
+    for (const double a : {0.125, 0.25, 1.0, 2.5}) {
+      amp = a;
+      PidParams p{.kp = frac * ku, .ki = frac * ku / (2.0 * tu), .sample_time = ts, .derivative_filter = tu / 30.0,
+                  .out_min = -5.0, .out_max = 5.0};
+      p.guard = PidGuard{.period = tu, .amplitude = 0.05};
+      Pid pid(p);
+      (void)errors_on_dead_time_loop(pid, 6.0, +square);
+      EXPECT_EQ(pid.state().guard_cuts, 0u) << frac << " K_u, steps of " << 2 * a;
+    }
+}
+
 TEST(Pwm, Modulation) {
   PwmModulator m(PwmParams{.gain = 2.0, .deadband = 0.01, .min_duty = 0.05, .max_duty = 0.9, .resolution = 0.01});
   EXPECT_EQ(m.step(0.005), 0.0);

@@ -27,11 +27,11 @@ AntiWindup anti_windup_from_name(std::string_view name);
 // The error e = r - y is split into half-cycles at its sign changes, with a hysteresis of
 // amplitude / 4 (noise around zero ends none). A half-cycle that lasts at most T_u and whose
 // integral of |e| dt exceeds amplitude T_u / pi (a half-sine of that amplitude at period T_u)
-// adds to a count that decays with time constant memory T_u: 1, or its severity where larger
-// (that integral over the limit, but at most the previous half-cycle's, so that a single
-// transient adds 1, and at most `count`): a ring 5 times the amplitude cuts at its second
-// half-cycle instead of its fifth, before it grows, and a ring near the amplitude counts 1 per
-// half-cycle as before (2026-11-30); when the count reaches `count`,
+// adds to a count that decays with time constant memory T_u: 1, or where the ring grows (three
+// half-cycles in a row counted, this one's integral at least that of the one of its sign before)
+// its severity, that integral over the limit (at most `count`): a growing ring several times the
+// amplitude is cut within a period instead of after 2.5, before it reaches the limits, and a
+// step's decaying transient counts 1 per half-cycle as before (2026-11-30); when the count reaches `count`,
 // K_p, K_i and K_d are multiplied by `factor` (not below min_scale times the tuned gains) and
 // the count restarts. The cut gains stay until reset(). period = 0: off (the default).
 struct PidGuard {
@@ -83,14 +83,14 @@ struct PidState {
   // The limit-cycle guard (PidParams::guard): the factor on K_p, K_i, K_d in use, the times it
   // cut them, the sign (-1, 0, 1) of the current half-cycle of e, its integral of |e| dt and
   // length [samples], the decaying count of half-cycles that looked like a limit cycle, and the
-  // severity of the last half-cycle (0 where it did not look like one).
+  // severities of the last two half-cycles (0 where one did not look like one).
   double gain_scale = 1.0;
   std::size_t guard_cuts = 0;
   int guard_sign = 0;
   double guard_iae = 0.0;
   std::size_t guard_samples = 0;
   double guard_count = 0.0;
-  double guard_last = 0.0;
+  double guard_last = 0.0, guard_last2 = 0.0;
 };
 
 class Pid {

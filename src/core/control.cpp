@@ -107,7 +107,7 @@ void Pid::set_guard(const PidGuard& g) {
   s_.guard_iae = 0.0;
   s_.guard_samples = 0;
   s_.guard_count = 0.0;
-  s_.guard_last = 0.0;
+  s_.guard_last = s_.guard_last2 = 0.0;
 }
 
 void Pid::reset(double u0) noexcept {
@@ -123,12 +123,13 @@ std::vector<double> Pid::snapshot() const {
   const PidState& s = s_;
   return {s.integral, s.derivative, s.prev_d_error, s.output, s.initialized ? 1.0 : 0.0, s.saturated ? 1.0 : 0.0,
           s.gain_scale, static_cast<double>(s.guard_cuts), static_cast<double>(s.guard_sign), s.guard_iae,
-          static_cast<double>(s.guard_samples), s.guard_count, s.guard_last, static_cast<double>(faults_)};
+          static_cast<double>(s.guard_samples), s.guard_count, s.guard_last, s.guard_last2,
+          static_cast<double>(faults_)};
 }
 
 void Pid::restore(std::span<const double> v) {
   const std::string_view what = "pid: snapshot";
-  detail::check_snapshot_size(v, 14, what);
+  detail::check_snapshot_size(v, 15, what);
   for (double x : v) detail::snapshot_finite(x, what);
   PidState s;
   s.integral = v[0];
@@ -149,7 +150,8 @@ void Pid::restore(std::span<const double> v) {
   s.guard_samples = detail::snapshot_count(v[10], "pid: snapshot guard_samples");
   s.guard_count = v[11];
   s.guard_last = v[12];
-  faults_ = detail::snapshot_count(v[13], "pid: snapshot faults");
+  s.guard_last2 = v[13];
+  faults_ = detail::snapshot_count(v[14], "pid: snapshot faults");
   s_ = s;
 }
 
@@ -205,7 +207,11 @@ void Pid::guard_step(double e) noexcept {
     const double severity = s_.guard_sign != 0 && length <= g.period && s_.guard_iae > guard_iae_limit_
                                 ? s_.guard_iae / guard_iae_limit_
                                 : 0.0;
-    if (severity > 0.0) s_.guard_count += std::max(1.0, std::min({severity, s_.guard_last, g.count}));
+    // a ring that grows (three half-cycles in a row counted, this one at least the one of its sign
+    // before) adds its severity; any other counted half-cycle 1 (a step's decaying transient)
+    const bool growing = s_.guard_last > 0.0 && s_.guard_last2 > 0.0 && severity >= s_.guard_last2;
+    if (severity > 0.0) s_.guard_count += growing ? std::clamp(severity, 1.0, g.count) : 1.0;
+    s_.guard_last2 = s_.guard_last;
     s_.guard_last = severity;
     s_.guard_sign = sign;
     s_.guard_iae = 0.0;

@@ -53,8 +53,8 @@ std::string pid_comment(const char* name, const Pid& pid) {
 constexpr std::string_view kPidStep = R"(
 /* The limit-cycle guard (hysteron::Pid, PidGuard): half-cycles of e between its sign changes
  * (hysteresis amplitude / 4) no longer than T_u with an integral of |e| dt above a T_u / pi
- * count by their severity (that integral over a T_u / pi, at most the previous half-cycle's and
- * at most guard_count); the count decays by guard_decay per sample; at guard_count it cuts the
+ * count 1, or where the ring grows (three counted in a row, this one's integral at least that of the
+ * one of its sign before) their severity (that integral over a T_u / pi, at most guard_count); the count decays by guard_decay per sample; at guard_count it cuts the
  * gains. */
 static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
 {
@@ -67,9 +67,11 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
     double severity = 0.0, add;
     if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit)
       severity = s->guard_iae / k->guard_iae_limit;
-    add = severity < s->guard_last ? severity : s->guard_last;
-    if (add > k->guard_count) add = k->guard_count;
-    if (severity > 0.0) s->guard_count += add > 1.0 ? add : 1.0;
+    add = 1.0; /* a growing ring (three in a row, this one at least the one of its sign before): its severity */
+    if (s->guard_last > 0.0 && s->guard_last2 > 0.0 && severity >= s->guard_last2)
+      add = severity > k->guard_count ? k->guard_count : (severity < 1.0 ? 1.0 : severity);
+    if (severity > 0.0) s->guard_count += add;
+    s->guard_last2 = s->guard_last;
     s->guard_last = severity;
     s->guard_sign = sign;
     s->guard_iae = 0.0;
@@ -146,6 +148,7 @@ static void $P_pid_reset($P_pid_state *s, const $P_pid_gains *k)
   s->guard_samples = 0;
   s->guard_count = 0.0;
   s->guard_last = 0.0;
+  s->guard_last2 = 0.0;
 }
 
 /* The inverse feedforward (hysteron::InverseFeedforward::step): the pressure [MPa] the model
@@ -268,6 +271,7 @@ typedef struct $P_pid_state {{
   unsigned long guard_samples;  /* its length [samples] */
   double guard_count;           /* decaying count of half-cycles like a limit cycle */
   double guard_last;            /* the last half-cycle's severity (0: not like one) */
+  double guard_last2;           /* the one before's */
 }} $P_pid_state;
 
 /* The loop's state. Set with $P_loop_reset before the first step. */

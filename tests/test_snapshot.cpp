@@ -135,5 +135,13 @@ TEST(Snapshot, PidContinuesBitForBitWithItsGuard) {
   s = a.snapshot();
   s[8] = 3.0;  // the guard's sign is -1, 0 or 1
   EXPECT_FALSE(test::error_of([&] { b.restore(s); }).empty());
+  // the guard's scale below its min_scale (1e-300 left the loop open for good), a negative count or
+  // severity, a count at the one that cuts (the review's states)
+  for (const auto& [at, bad] : std::vector<std::pair<std::size_t, double>>{
+           {6, 1e-300}, {6, 0.2}, {11, -1e300}, {11, 2.0}, {12, -5.0}, {13, -1.0}, {9, -1.0}}) {
+    s = a.snapshot();
+    s[at] = bad;
+    EXPECT_FALSE(test::error_of([&] { b.restore(s); }).empty()) << at << " = " << bad;
+  }
   EXPECT_EQ(b.snapshot(), a.snapshot());
 }

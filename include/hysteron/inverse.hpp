@@ -43,8 +43,9 @@ class Inverse {
   // (e.g. "q + p_1 + ... + p_3 = -0.1 must be > 0").
   explicit Inverse(ModelParams params, InverseOptions options = {});
 
-  // The parameters and options it was made from (set_weights does not change them):
-  // Inverse(params(), options()) is the same inverse in the virgin state.
+  // The parameters and options it was made from (set_weights does not change them, so after
+  // set_weights Inverse(params(), options()) is the inverse of the original weights; before, it
+  // is the same inverse in the virgin state).
   const ModelParams& params() const noexcept { return params_; }
   const InverseOptions& options() const noexcept { return options_; }
   const Structure<double>& structure() const noexcept { return s_; }
@@ -97,7 +98,8 @@ class Inverse {
   // and options steps exactly as this one from here on (a running inverse saved and loaded
   // again, e.g. Python's pickle). restore throws hysteron::Error, the inverse unchanged, on a
   // snapshot of another size, a non-finite value, an input outside the limits or a state the
-  // model cannot reach (as reset(const ModelState&) checks it).
+  // model cannot reach, as far as reset(const ModelState&) checks it (pi, gpi, mpi-deadzone: not
+  // mpi-asym, whose reset checks no reachability).
   std::vector<double> snapshot() const;
   void restore(std::span<const double> snapshot);
 

@@ -142,8 +142,12 @@ void Pid::restore(std::span<const double> v) {
   s.initialized = detail::snapshot_count(v[4], "pid: snapshot initialized", 1.0) == 1;
   s.saturated = detail::snapshot_count(v[5], "pid: snapshot saturated", 1.0) == 1;
   s.gain_scale = v[6];
-  if (!(s.gain_scale > 0 && s.gain_scale <= 1))
-    throw Error(detail::format("{}: gain_scale {} must be in (0, 1]", what, s.gain_scale));
+  // the guard's scale lies within [min_scale, 1] (1 without the guard: nothing else ever sets it), its integrals
+  // and severities are >= 0 and its count below the count that cuts (a scale of 1e-300 left the loop open for good)
+  const double min_scale = p_.guard.enabled() ? p_.guard.min_scale : 1.0;
+  if (!(s.gain_scale >= min_scale && s.gain_scale <= 1))
+    throw Error(detail::format("{}: gain_scale {} must be in [{}, 1] (the guard's min_scale)", what, s.gain_scale,
+                               min_scale));
   s.guard_cuts = detail::snapshot_count(v[7], "pid: snapshot guard_cuts");
   s.guard_sign = static_cast<int>(detail::snapshot_count(v[8] + 1.0, "pid: snapshot guard_sign + 1", 2.0)) - 1;
   s.guard_iae = v[9];
@@ -151,6 +155,11 @@ void Pid::restore(std::span<const double> v) {
   s.guard_count = v[11];
   s.guard_last = v[12];
   s.guard_last2 = v[13];
+  if (!(s.guard_iae >= 0 && s.guard_last >= 0 && s.guard_last2 >= 0 && s.guard_count >= 0 &&
+        (!p_.guard.enabled() || s.guard_count < p_.guard.count)))
+    throw Error(detail::format("{}: the guard's integral {}, severities {} and {} must be >= 0 and its count {} within "
+                               "[0, {})",
+                               what, s.guard_iae, s.guard_last, s.guard_last2, s.guard_count, p_.guard.count));
   faults_ = detail::snapshot_count(v[14], "pid: snapshot faults");
   s_ = s;
 }

@@ -289,9 +289,9 @@ TEST(PidGuard, CutsAGrowingRingBeforeItReachesTheLimits) {
   // The loop above at 3 K_u: each half-cycle of its ring is many times the guard's a T_u / pi.
   // Counting half-cycles (1 each, 5 to a cut, 3 cuts to x0.25) let it grow to the output's
   // limits first (a rig whose load damping fell to a quarter after its tuning rang at 38 mm for
-  // 3 s); counted by their severity (at most the previous half-cycle's) it is cut at its second
-  // large half-cycle: within 2 T_u of the step (0.13 s; 0.51 s counting half-cycles), and after
-  // 1 s the error is below a fifth of the unguarded ring's.
+  // 3 s); a growing ring's half-cycles count by their severity, so it is cut within 2 T_u of the
+  // step (0.51 s counting half-cycles), and after 1 s the error is below a fifth of the unguarded
+  // ring's (0.96 of it counting half-cycles).
   const double ts = 1e-3;
   const auto [tu, ku] = ultimate(0.05, 0.05);
   PidParams p{.kp = 3.0 * ku, .ki = 3.0 * ku / (2.0 * tu), .sample_time = ts, .out_min = -20.0, .out_max = 20.0};

@@ -11,28 +11,20 @@
 
 #include "hysteron/identify.hpp"
 #include "hysteron/models.hpp"
+#include "pi_record.hpp"
 
 using namespace hysteron;
 
 namespace {
 
-struct Record {
-  std::vector<double> x, y;
-};
-
-PiParams truth() {
-  PiParams p;
-  p.q = 0.5;
-  p.r = {0.05, 0.1, 0.2, 0.3};
-  p.p = {0.4, 0.3, 0.2, 0.1};
-  return p;
-}
+using test::Record;
+using test::pi_truth;
 
 // x(t) through the PI above, the output read `lead` samples ahead of the input (lead > 0: the
 // output leads, as with a delayed input sensor).
 template <class X>
 Record record(X x_of, int n, int lead = 0) {
-  Model model(truth());
+  Model model(pi_truth());
   std::vector<double> x, y;
   for (int k = 0; k < n + lead; ++k) {
     x.push_back(x_of(k));

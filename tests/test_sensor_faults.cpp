@@ -14,28 +14,20 @@
 #include "hysteron/identify.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
+#include "pi_record.hpp"
 #include "../src/identify/detail.hpp"
 
 using namespace hysteron;
 
 namespace {
 
-struct Record {
-  std::vector<double> x, y;
-};
-
-PiParams truth() {
-  PiParams p;
-  p.q = 0.5;
-  p.r = {0.05, 0.1, 0.2, 0.3};
-  p.p = {0.4, 0.3, 0.2, 0.1};
-  return p;
-}
+using test::Record;
+using test::pi_truth;
 
 // x_of(k) through the PI above, with a small deterministic wiggle on the output
 template <class X>
 Record record(X x_of, int n) {
-  Model model(truth());
+  Model model(pi_truth());
   Record r;
   for (int k = 0; k < n; ++k) {
     r.x.push_back(x_of(k));
@@ -104,7 +96,7 @@ std::string longest_run_at(const std::vector<double>& v, double value) {
 // settling to the PI's after each step (a lag of 25 samples) with noise of 0.3 % of its span: a hold at the top
 // and the bottom too, where the output drifts one way only.
 Record staircase() {
-  Model model(truth());
+  Model model(pi_truth());
   Record r;
   double y = 0.0;
   for (int k = 0; k < 8000; ++k) {

@@ -219,7 +219,8 @@ void Pid::guard_step(double e) noexcept {
     // a ring that grows (three half-cycles in a row counted, this one at least the one of its sign
     // before) adds its severity; any other counted half-cycle 1 (a step's decaying transient)
     const bool growing = s_.guard_last > 0.0 && s_.guard_last2 > 0.0 && severity >= s_.guard_last2;
-    if (severity > 0.0) s_.guard_count += growing ? std::clamp(severity, 1.0, g.count) : 1.0;
+    // at least 1, as any counted half-cycle (not std::clamp: count may be below 1)
+    if (severity > 0.0) s_.guard_count += growing ? std::max(1.0, std::min(severity, g.count)) : 1.0;
     s_.guard_last2 = s_.guard_last;
     s_.guard_last = severity;
     s_.guard_sign = sign;

@@ -68,8 +68,10 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
     if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit)
       severity = s->guard_iae / k->guard_iae_limit;
     add = 1.0; /* a growing ring (three in a row, this one at least the one of its sign before): its severity */
-    if (s->guard_last > 0.0 && s->guard_last2 > 0.0 && severity >= s->guard_last2)
-      add = severity > k->guard_count ? k->guard_count : (severity < 1.0 ? 1.0 : severity);
+    if (s->guard_last > 0.0 && s->guard_last2 > 0.0 && severity >= s->guard_last2) {
+      add = severity < k->guard_count ? severity : k->guard_count;
+      if (add < 1.0) add = 1.0;
+    }
     if (severity > 0.0) s->guard_count += add;
     s->guard_last2 = s->guard_last;
     s->guard_last = severity;

@@ -751,10 +751,18 @@ TEST(Experiment, ImpossibleMuscleRatingIsRefusedNamingTheKey) {
     if (tracking) o.tracking_rig = PamRigParams{};
     (tracking ? *o.tracking_rig : o.rig).load.gravity = 0.0;
     const std::string what = test::error_of([&] { (void)run_experiment(o); });
-    EXPECT_NE(what.find(tracking ? "tracking rig.load.gravity = 0: nothing extends the muscle"
-                                 : "rig.load.gravity = 0: nothing extends the muscle"),
+    EXPECT_NE(what.find(tracking ? "tracking rig.load.gravity = 0 with no return spring"
+                                 : "rig.load.gravity = 0 with no return spring"),
               std::string::npos)
         << what;
+    EXPECT_NE(what.find("nothing extends the muscle"), std::string::npos) << what;
+  }
+  // ... and accepted with a return spring, either part of it (P5)
+  for (const bool preload : {false, true}) {
+    ExperimentOptions o = test::quick_experiment("mpi-pwm");
+    o.rig.load.gravity = 0.0;
+    (preload ? o.rig.load.spring_preload : o.rig.load.spring_rate) = 100.0;
+    EXPECT_NO_THROW(o.validate()) << preload;
   }
   // written and read back
   PamRigParams p;

@@ -133,6 +133,41 @@ TEST(PamRig, StaticEquilibriumMatchesForceMap) {
   EXPECT_NEAR(f, prm.load.mass * prm.load.gravity, 0.05);
 }
 
+// A horizontal rig (no weight) with a return spring: the spring, not gravity, balances the
+// muscle (P5), and it extends the vented muscle again.
+TEST(PamRig, AReturnSpringBalancesAHorizontalRig) {
+  PamRigParams prm;
+  prm.load.gravity = 0.0;
+  prm.load.spring_preload = 150.0;  // [N]
+  prm.load.spring_rate = 3000.0;    // [N/m]
+  PamRig rig(prm, 1);
+  std::vector<double> u;
+  for (int k = 0; k < 300000; ++k) u.push_back(std::min(0.4, 0.2 * k * 1e-4));  // to 0.4 MPa, hold 28 s
+  const auto y = run_regulator(rig, u);
+  const double p = y.back().pressure, x = y.back().contraction;
+  EXPECT_NEAR(rig.state().velocity, 0.0, 1e-6);
+  EXPECT_GT(x, 0.01);
+  const double f = festo_force(prm.muscle, p - prm.hysteresis.pressure_band * rig.state().bouc_wen,
+                               x / prm.muscle.rest_length);
+  EXPECT_NEAR(f, 150.0 + 3000.0 * x, 0.1);  // the spring's force at x, not a weight
+  EXPECT_NEAR(x, static_contraction(prm, p, rig.state().bouc_wen), 1e-5);
+  // the same rig without the spring would not hold the load there: it contracts to the stop
+  PamRigParams free = prm;
+  free.load.spring_preload = free.load.spring_rate = 0.0;
+  EXPECT_NEAR(static_contraction(free, p, rig.state().bouc_wen), free.muscle.max_contraction * free.muscle.rest_length,
+              1e-9);
+  // vented, the spring extends the muscle again, to where the vented muscle's force meets it
+  const auto back = run_regulator(rig, std::vector<double>(100000, 0.0));
+  EXPECT_LT(back.back().contraction, 0.25 * x);
+  EXPECT_NEAR(back.back().contraction, static_contraction(prm, back.back().pressure, rig.state().bouc_wen), 2e-4);
+  // written and read back
+  const PamRigParams again = rig_params_from_json(rig_params_to_json(prm), "rig");
+  EXPECT_EQ(again.load.spring_rate, 3000.0);
+  EXPECT_EQ(again.load.spring_preload, 150.0);
+  prm.load.spring_rate = -1.0;
+  EXPECT_THROW(validate(prm), Error);
+}
+
 TEST(PamRig, LengthPressureLoopIsWideAndAsymmetric) {
   PamRig rig(PamRigParams{}, 7);
   const auto u = gpi_identification_pressure(1e-4);

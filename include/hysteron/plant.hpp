@@ -116,7 +116,7 @@ struct SwitchingValveParams {
   double min_pulse = 0.0;               // pulses of |d| T <= min_pulse are dropped [s] [E]
 };
 
-// Hanging load (P5).
+// Hanging load (P5), with an optional return spring in parallel with its weight.
 struct LoadParams {
   // 20 kg: the GPI paper's sinusoid (5..95 mm contraction) is reachable within
   // 0..0.6 MPa (static contraction ~104 mm at 0.6 MPa, 0 at 0 MPa; see docs/plant.md). [E]
@@ -126,7 +126,17 @@ struct LoadParams {
   // which that paper's rig did not: real muscles add rubber and braid damping.
   double damping = 400.0;               // c [N s/m]                      [E]
   double gravity = 9.81;                // g [m/s^2]                      [F]
+  // A return spring pulling the load back toward the muscle's rest length, as on a
+  // horizontal rig (gravity 0) or a spring-loaded one: F_s = spring_preload + spring_rate x,
+  // x the contraction. 0 and 0: no spring (the papers' hanging load).
+  double spring_rate = 0.0;             // k_s [N/m]                      [E]
+  double spring_preload = 0.0;          // F_s0 [N] at x = 0              [E]
 };
+
+// P5: the force pulling the load back, its weight plus the return spring's, at contraction x [m].
+inline double return_force(const LoadParams& l, double x) noexcept {
+  return l.mass * l.gravity + l.spring_preload + l.spring_rate * x;
+}
 
 // Sensors (P11). Noise values are standard deviations.
 struct SensorParams {
@@ -186,7 +196,7 @@ double muscle_volume_derivative(const MuscleParams& m, double eps) noexcept;
 // P8: ISO 6358 mass flow [kg/s] from p_up to p_down [Pa abs] (0 if p_down >= p_up).
 double iso6358_mass_flow(double conductance, double critical_ratio, double p_up, double p_down,
                          double t_up, const AirParams& air) noexcept;
-// Static equilibrium: contraction [m] where F(p - dP_h z, eps) = m g, clamped to
+// Static equilibrium: contraction [m] where F(p - dP_h z, eps) = return_force(eps L0), clamped to
 // the stroke (0 if the muscle cannot lift the load; creep relaxed).
 double static_contraction(const PamRigParams& params, double p_gauge, double z = 0.0) noexcept;
 

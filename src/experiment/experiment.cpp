@@ -905,19 +905,20 @@ std::string limit_note(const ExperimentOptions& o, const Spec& spec, double p_ma
           : std::string("; the papers' identification inputs are kept (docs/control.md, section 0)"));
 }
 
-// An experiment needs a force that extends the vented muscle: the simulated rig's only one is
-// the load's weight (the muscle pulls nothing at 0 gauge pressure, P1, and the rig has no
-// spring). Without it (load.gravity = 0, a horizontal rig) the muscle contracts once and never
-// extends again: every variant sat near the top, 45 mm RMS "ok" (a sweep outside the
-// documented set, 2026-11-30).
+// An experiment needs a force that extends the vented muscle: the load's weight or the return
+// spring's (P5; the muscle pulls nothing at 0 gauge pressure, P1). Without either (load.gravity
+// = 0, a horizontal rig, and no spring) the muscle contracts once and never extends again: every
+// variant sat near the top, 45 mm RMS "ok" (a sweep outside the documented set, 2026-11-30).
 void check_return_force(const PamRigParams& rig, const char* which) {
-  if (rig.load.mass * rig.load.gravity > 0.0) return;
+  const LoadParams& l = rig.load;
+  if (return_force(l, 0.0) > 0.0 || l.spring_rate > 0.0) return;
   throw Error(fmt::format(
-      "experiment: {}.load.gravity = {:g}: nothing extends the muscle when it is vented (the muscle pulls nothing at "
-      "0 gauge pressure and the simulated rig's only return force is the load's weight, load.mass x load.gravity), "
-      "so after its first contraction it never returns and no reference can be tracked; a horizontal rig needs a "
-      "return spring, which the simulated rig does not model (docs/plant.md, P5)",
-      which, rig.load.gravity));
+      "experiment: {0}.load.gravity = {1:g} with no return spring ({0}.load.spring_rate = {2:g} N/m, "
+      "{0}.load.spring_preload = {3:g} N): nothing extends the muscle when it is vented (the muscle pulls nothing at "
+      "0 gauge pressure, and the rig's return force is the load's weight, load.mass x load.gravity, plus the "
+      "spring's), so after its first contraction it never returns and no reference can be tracked; a horizontal rig "
+      "needs a return spring: set load.spring_rate and/or load.spring_preload (docs/plant.md, P5)",
+      which, l.gravity, l.spring_rate, l.spring_preload));
 }
 
 }  // namespace

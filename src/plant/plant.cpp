@@ -83,14 +83,14 @@ double static_contraction(const PamRigParams& p, double p_gauge, double z) noexc
   const auto& m = p.muscle;
   const double band = p.hysteresis.pressure_band + p.hysteresis.pressure_band_slope * std::max(0.0, p_gauge);
   const double p_eff = p_gauge - band * z;
-  const double weight = p.load.mass * p.load.gravity;
-  // F(p, eps) is non-increasing in eps >= 0: bisection on [0, eps_max].
+  // F(p, eps) - return_force(eps L0) is non-increasing in eps >= 0: bisection on [0, eps_max].
+  const auto net = [&](double eps) { return festo_force(m, p_eff, eps) - return_force(p.load, eps * m.rest_length); };
   double lo = 0.0, hi = m.max_contraction;
-  if (festo_force(m, p_eff, lo) <= weight) return 0.0;
-  if (festo_force(m, p_eff, hi) >= weight) return hi * m.rest_length;
+  if (net(lo) <= 0.0) return 0.0;
+  if (net(hi) >= 0.0) return hi * m.rest_length;
   for (int i = 0; i < 200 && hi - lo > 1e-15; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (festo_force(m, p_eff, mid) > weight ? lo : hi) = mid;
+    (net(mid) > 0.0 ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi) * m.rest_length;
 }
@@ -139,9 +139,11 @@ PamRig::PamRig(PamRigParams params, std::uint64_t seed) : p_(params), seed_(seed
                         std::max(dm_reg, dm_valves);
   // ... and the load's: its damping rate c / m (a light load on a heavily damped guide) and its
   // stiffest mode sqrt(k / m), k the force map's stiffness at rest, F620 c0 c1 / (eps620 L0),
-  // plus the creep element's (without them a 0.5 kg load with 20 kN s/m diverged at run time).
+  // plus the creep element's and the return spring's (without them a 0.5 kg load with 20 kN s/m
+  // diverged at run time).
   const auto& mu = p_.muscle;
-  const double k_max = mu.force_620 * mu.c0 * mu.c1 / (mu.eps_620 * mu.rest_length) + p_.hysteresis.creep_stiffness;
+  const double k_max = mu.force_620 * mu.c0 * mu.c1 / (mu.eps_620 * mu.rest_length) +
+                       p_.hysteresis.creep_stiffness + p_.load.spring_rate;
   const double lambda_load = p_.load.damping / p_.load.mass + std::sqrt(k_max / p_.load.mass);
   const double needed = std::ceil(dt * std::max(lambda, lambda_load) / 1.0);
   if (needed > p_.simulation.max_substeps) {
@@ -207,7 +209,7 @@ void PamRig::derivative(const RigState& s, const Flow& f, double p_set, Deriv& d
   const double force = festo_force(m, p_gauge - band * s.bouc_wen, eps) -
                        h.creep_stiffness * (s.contraction - s.creep);
   d.contraction = s.velocity;
-  d.velocity = (force - p_.load.mass * p_.load.gravity - p_.load.damping * s.velocity) / p_.load.mass;
+  d.velocity = (force - return_force(p_.load, s.contraction) - p_.load.damping * s.velocity) / p_.load.mass;
   const double zn = bouc_wen_power(std::abs(s.bouc_wen), h.exponent);
   const double sgn = (s.bouc_wen * eps_dot > 0.0) ? 1.0 : -1.0;
   d.bouc_wen = eps_dot / h.transition_strain * (1.0 - zn * (h.beta * sgn + 1.0 - h.beta));

@@ -110,6 +110,8 @@ void for_each_field(P& p, F&& f) {
   f("load", "mass", l.mass, Rule::positive);
   f("load", "damping", l.damping, Rule::nonnegative);
   f("load", "gravity", l.gravity, Rule::nonnegative);
+  f("load", "spring_rate", l.spring_rate, Rule::nonnegative);
+  f("load", "spring_preload", l.spring_preload, Rule::nonnegative);
   auto& s = p.sensors;
   f("sensors", "pressure_noise", s.pressure_noise, Rule::nonnegative);
   f("sensors", "pressure_offset", s.pressure_offset, Rule::finite);

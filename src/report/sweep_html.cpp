@@ -27,6 +27,7 @@ namespace {
 std::string unit_of(const std::string& path) {
   static const std::map<std::string, std::string> units = {
       {"load.mass", "kg"},          {"load.damping", "N s/m"},           {"load.gravity", "m/s^2"},
+      {"load.spring_rate", "N/m"},  {"load.spring_preload", "N"},
       {"muscle.force_620", "N"},    {"muscle.rest_length", "m"},         {"muscle.effective_radius", "m"},
       {"muscle.dead_volume", "m^3"}, {"muscle.reference_pressure", "Pa"}, {"muscle.rest_braid_angle", "rad"},
       {"hysteresis.pressure_band", "Pa"}, {"hysteresis.creep_stiffness", "N/m"}, {"hysteresis.creep_time", "s"},

@@ -656,6 +656,44 @@ void add_pre_roll(std::vector<Reference>& refs, double tc) {
   }
 }
 
+// The note of references that descend faster than the load can fall (empty if none does). With
+// the muscle vented it pulls nothing (P1), so the load falls at most as fast as its return force,
+// weight plus spring, drives it against the damping: v_max(x) = (m g + F_s0 + k_s x) / c (P5;
+// the muscle's remaining force and the load's inertia only slow it). Where a reference descends
+// faster, no controller can follow it: the errors there are the rig's, and the command sits at
+// 0 MPa (the saturation notes). On the rig the references are tracked on (a --tracking-plant
+// rig, or the identified one); a load without damping can fall at any speed.
+std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& refs, double tc) {
+  const LoadParams& l = rig.load;
+  if (!(l.damping > 0.0)) return {};
+  std::vector<std::string> parts;
+  for (const Reference& ref : refs) {
+    double worst = 1.0, v_at = 0.0, x_at = 0.0, faster_s = 0.0;
+    for (std::size_t k = std::max<std::size_t>(ref.score_from, 1); k < ref.ref_m.size(); ++k) {
+      const double v = (ref.ref_m[k - 1] - ref.ref_m[k]) / tc;  // descent speed [m/s]
+      const double v_max = return_force(l, std::max(0.0, ref.ref_m[k])) / l.damping;
+      if (!(v > v_max)) continue;
+      faster_s += tc;
+      if (v / v_max > worst) {
+        worst = v / v_max;
+        v_at = v;
+        x_at = ref.ref_m[k];
+      }
+    }
+    if (faster_s > 0.0)
+      parts.push_back(fmt::format("{} descends at {:.1f} mm/s at {:.1f} mm, where the load falls at most {:.1f} mm/s "
+                                  "({:.1f} s of the scored reference faster than the load can fall)",
+                                  ref.name, v_at * 1e3, x_at * 1e3, v_at / worst * 1e3, faster_s));
+  }
+  if (parts.empty()) return {};
+  return fmt::format(
+      "the references descend faster than the load can fall with the muscle vented, (load.mass x load.gravity + "
+      "load.spring_preload + load.spring_rate x contraction) / load.damping = ({:g} + {:g} + {:g} x) N / {:g} N s/m: {}; "
+      "there no controller can follow them, the command sits at 0 MPa and the error is the rig's (a heavier load, a "
+      "stiffer return spring, less damping or a slower reference; docs/plant.md, P5)",
+      l.mass * l.gravity, l.spring_preload, l.spring_rate, l.damping, fmt::join(parts, "; "));
+}
+
 // The pressure hysteron's model is identified up to (docs/control.md, section 0): the
 // papers' identification inputs span the actuator's range for *their* muscle and load; on
 // another rig the references may need much less (a longer muscle, mpi-openloop's 40 mm
@@ -1038,6 +1076,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   const double top = actuator_top.mpa;
   refs = fit_to_reach(o, id_run, smooth, actuator_top, std::move(refs), res, p_max);
   add_pre_roll(refs, tc);
+  if (std::string note = descent_note(o.tracking_rig ? *o.tracking_rig : o.rig, refs, tc); !note.empty())
+    res.messages.push_back(std::move(note));
   const IdentificationRange range = model_identification_range(smooth, refs, id_input, p_max);
   const bool rescaled = range.p_id_mpa > 0.0;
   res.model_id_top_mpa = rescaled ? range.p_id_mpa : extended_run ? p_max : 0.0;

@@ -27,6 +27,7 @@ void add_report(CLI::App& app, Action& action);           // cmd_report.cpp: rep
 void add_evaluate(CLI::App& app, Action& action);         // cmd_evaluate.cpp: evaluate
 void add_export(CLI::App& app, Action& action);           // cmd_export.cpp: export (generated C)
 void add_sweep(CLI::App& app, Action& action);            // cmd_sweep.cpp: sweep (plant variants)
+void add_rig(CLI::App& app, Action& action);              // cmd_rig.cpp: rig (a rig's parameters and statics)
 void set_command_line(int argc, char** argv);             // recorded in reports
 // CLI11 validator: a decimal integer >= 0 ("-1" would wrap to 2^64 - 1 in an unsigned).
 const CLI::Validator& non_negative_integer();

@@ -1,4 +1,4 @@
-// hysteron command-line tool: simulate, invert, fit, evaluate, experiment, report, demo, export.
+// hysteron command-line tool: simulate, invert, fit, evaluate, experiment, report, demo, export, sweep, rig.
 //
 // Exit codes (README, "Command line"): 0 success; 1 error: bad input, bad usage (CLI11's
 // parse errors, which CLI11 itself would report as 105-109, are mapped to 1), unreadable
@@ -122,6 +122,7 @@ int main(int argc, char** argv) {
   hysteron::cli::add_report(app, action);
   hysteron::cli::add_export(app, action);
   hysteron::cli::add_sweep(app, action);
+  hysteron::cli::add_rig(app, action);
   if (const int rc = check_names(app, argc, argv); rc >= 0) return rc;
   try {
     app.parse(argc, argv);

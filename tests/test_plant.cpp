@@ -168,6 +168,55 @@ TEST(PamRig, AReturnSpringBalancesAHorizontalRig) {
   EXPECT_THROW(validate(prm), Error);
 }
 
+// rig_statics (hysteron rig) against the force balance P1-P5 written out here: at the lift-off
+// pressure the rising branch's force at rest meets the return force; every contraction of the
+// table between the stops balances the force map against the weight and the spring.
+TEST(PamRig, StaticsBalanceTheForceMapAgainstTheReturnForce) {
+  for (const bool spring : {false, true}) {
+    PamRigParams prm;
+    if (spring) {
+      prm.load.gravity = 0.0;
+      prm.load.spring_preload = 120.0;
+      prm.load.spring_rate = 2500.0;
+    }
+    SCOPED_TRACE(spring);
+    const RigStatics s = rig_statics(prm);
+    const auto& m = prm.muscle;
+    const double rest = prm.load.mass * prm.load.gravity + prm.load.spring_preload;
+    EXPECT_DOUBLE_EQ(s.return_force_rest_n, rest);
+    EXPECT_DOUBLE_EQ(s.fall_speed_m_s, rest / prm.load.damping);
+    EXPECT_DOUBLE_EQ(s.stroke_m, m.max_contraction * m.rest_length);
+    const double band = prm.hysteresis.pressure_band;  // its slope is 0 on this rig
+    EXPECT_NEAR(festo_force(m, s.lift_off_pa - band, 0.0), rest, 1e-3);
+    ASSERT_GE(s.pressure_pa.size(), 7u);
+    EXPECT_EQ(s.pressure_pa.back(), 6e5);
+    int interior = 0;
+    for (std::size_t i = 0; i < s.pressure_pa.size(); ++i) {
+      for (const double z : {1.0, -1.0}) {
+        const double x = z > 0 ? s.rising_m[i] : s.falling_m[i];
+        if (!(x > 1e-6 && x < s.stroke_m - 1e-6)) continue;
+        ++interior;
+        const double f = festo_force(m, s.pressure_pa[i] - band * z, x / m.rest_length);
+        EXPECT_NEAR(f, prm.load.mass * prm.load.gravity + prm.load.spring_preload + prm.load.spring_rate * x, 1e-3)
+            << s.pressure_pa[i] << " " << z;
+      }
+      EXPECT_LE(s.rising_m[i], s.falling_m[i]);  // the rising branch lies below the falling one
+    }
+    EXPECT_GE(interior, 8);
+  }
+  // every parameter has a unit, and the list is the JSON form's
+  const auto list = rig_parameters(PamRigParams{});
+  const nlohmann::json j = rig_params_to_json(PamRigParams{});
+  std::size_t keys = 0;
+  for (const auto& [section, body] : j.items()) keys += body.size();
+  EXPECT_EQ(list.size(), keys);
+  for (const RigParameter& r : list) {
+    EXPECT_FALSE(r.unit.empty()) << r.path;
+    const auto dot = r.path.find('.');
+    EXPECT_EQ(j.at(r.path.substr(0, dot)).at(r.path.substr(dot + 1)).get<double>(), r.value) << r.path;
+  }
+}
+
 TEST(PamRig, LengthPressureLoopIsWideAndAsymmetric) {
   PamRig rig(PamRigParams{}, 7);
   const auto u = gpi_identification_pressure(1e-4);

@@ -183,6 +183,15 @@ void validate(const PamRigParams& params, std::string_view where = "rig");
 // `where` and the key path.
 PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where);
 nlohmann::json rig_params_to_json(const PamRigParams& params);
+// Every parameter in the order of the JSON form: its path ("load.mass"), value, SI unit ("-":
+// dimensionless) and what it must be ("a finite number > 0"). The one table behind validate
+// and the JSON form.
+struct RigParameter {
+  std::string path;
+  double value = 0.0;
+  std::string unit, rule;
+};
+std::vector<RigParameter> rig_parameters(const PamRigParams& params);
 PamRigParams load_rig_params(const std::filesystem::path& file);
 void save_rig_params(const PamRigParams& params, const std::filesystem::path& file);
 
@@ -199,6 +208,24 @@ double iso6358_mass_flow(double conductance, double critical_ratio, double p_up,
 // Static equilibrium: contraction [m] where F(p - dP_h z, eps) = return_force(eps L0), clamped to
 // the stroke (0 if the muscle cannot lift the load; creep relaxed).
 double static_contraction(const PamRigParams& params, double p_gauge, double z = 0.0) noexcept;
+
+// What a rig's parameters imply at rest (`hysteron rig`; P1-P5 with the creep relaxed): the
+// static map on the rising (z = +1) and falling (z = -1) branches at 0, 0.1, 0.2 ... MPa up to
+// the regulator path's command limit (and at the limit), capped by the supply.
+struct RigStatics {
+  double stroke_m = 0.0;                // eps_max L0: the hard stop
+  double weight_n = 0.0;                // m g
+  double return_force_rest_n = 0.0;     // P5 at x = 0 (weight + spring preload)
+  double return_force_stroke_n = 0.0;   // P5 at the stroke end
+  double fall_speed_m_s = 0.0;          // return force at rest / load.damping: the vented load's
+                                        // fastest fall (inf without damping; 0 without a return force)
+  double lift_off_pa = 0.0;             // the least gauge pressure at which the rising branch
+                                        // contracts (inf: not within the supply)
+  double regulator_limit_pa = 0.0;      // pressure_command_limit(regulator)
+  double valves_limit_pa = 0.0;         // pressure_command_limit(switching_valves)
+  std::vector<double> pressure_pa, rising_m, falling_m;
+};
+RigStatics rig_statics(const PamRigParams& params);
 
 // ---- the rig -------------------------------------------------------------------
 

@@ -56,77 +56,78 @@ bool satisfies(Rule r, double v) {
   return false;
 }
 
-// Calls f(section, name, field&, rule) for every parameter; field is double& or int&.
+// Calls f(section, name, field&, rule, unit) for every parameter; field is double& or int&, unit
+// its SI unit ("-": dimensionless).
 // The one table used by validation, JSON reading and JSON writing.
 template <class P, class F>
 void for_each_field(P& p, F&& f) {
   auto& m = p.muscle;
-  f("muscle", "rest_length", m.rest_length, Rule::positive);
-  f("muscle", "max_contraction", m.max_contraction, Rule::unit_open);
-  f("muscle", "rest_braid_angle", m.rest_braid_angle, Rule::braid_angle);
-  f("muscle", "effective_radius", m.effective_radius, Rule::positive);
-  f("muscle", "dead_volume", m.dead_volume, Rule::nonnegative);
-  f("muscle", "force_620", m.force_620, Rule::positive);
-  f("muscle", "eps_620", m.eps_620, Rule::unit_open);
-  f("muscle", "c0", m.c0, Rule::nonnegative);
-  f("muscle", "c1", m.c1, Rule::nonnegative);
-  f("muscle", "c2", m.c2, Rule::nonnegative);
-  f("muscle", "reference_pressure", m.reference_pressure, Rule::positive);
-  f("muscle", "max_pressure", m.max_pressure, Rule::positive);
+  f("muscle", "rest_length", m.rest_length, Rule::positive, "m");
+  f("muscle", "max_contraction", m.max_contraction, Rule::unit_open, "-");
+  f("muscle", "rest_braid_angle", m.rest_braid_angle, Rule::braid_angle, "rad");
+  f("muscle", "effective_radius", m.effective_radius, Rule::positive, "m");
+  f("muscle", "dead_volume", m.dead_volume, Rule::nonnegative, "m^3");
+  f("muscle", "force_620", m.force_620, Rule::positive, "N");
+  f("muscle", "eps_620", m.eps_620, Rule::unit_open, "-");
+  f("muscle", "c0", m.c0, Rule::nonnegative, "-");
+  f("muscle", "c1", m.c1, Rule::nonnegative, "-");
+  f("muscle", "c2", m.c2, Rule::nonnegative, "-");
+  f("muscle", "reference_pressure", m.reference_pressure, Rule::positive, "Pa");
+  f("muscle", "max_pressure", m.max_pressure, Rule::positive, "Pa");
   auto& h = p.hysteresis;
-  f("hysteresis", "pressure_band", h.pressure_band, Rule::nonnegative);
-  f("hysteresis", "pressure_band_slope", h.pressure_band_slope, Rule::unit_closed);
-  f("hysteresis", "transition_strain", h.transition_strain, Rule::positive);
-  f("hysteresis", "exponent", h.exponent, Rule::positive);
-  f("hysteresis", "beta", h.beta, Rule::unit_closed);
-  f("hysteresis", "creep_stiffness", h.creep_stiffness, Rule::nonnegative);
-  f("hysteresis", "creep_time", h.creep_time, Rule::positive);
+  f("hysteresis", "pressure_band", h.pressure_band, Rule::nonnegative, "Pa");
+  f("hysteresis", "pressure_band_slope", h.pressure_band_slope, Rule::unit_closed, "-");
+  f("hysteresis", "transition_strain", h.transition_strain, Rule::positive, "-");
+  f("hysteresis", "exponent", h.exponent, Rule::positive, "-");
+  f("hysteresis", "beta", h.beta, Rule::unit_closed, "-");
+  f("hysteresis", "creep_stiffness", h.creep_stiffness, Rule::nonnegative, "N/m");
+  f("hysteresis", "creep_time", h.creep_time, Rule::positive, "s");
   auto& a = p.air;
-  f("air", "gas_constant", a.gas_constant, Rule::positive);
-  f("air", "temperature", a.temperature, Rule::positive);
-  f("air", "k_in", a.k_in, Rule::positive);
-  f("air", "k_out", a.k_out, Rule::positive);
-  f("air", "k", a.k, Rule::positive);
-  f("air", "rho0", a.rho0, Rule::positive);
-  f("air", "t0", a.t0, Rule::positive);
-  f("air", "supply_pressure", a.supply_pressure, Rule::positive);
-  f("air", "atmospheric_pressure", a.atmospheric_pressure, Rule::positive);
-  f("air", "linear_ratio", a.linear_ratio, Rule::unit_open);
+  f("air", "gas_constant", a.gas_constant, Rule::positive, "J/(kg K)");
+  f("air", "temperature", a.temperature, Rule::positive, "K");
+  f("air", "k_in", a.k_in, Rule::positive, "-");
+  f("air", "k_out", a.k_out, Rule::positive, "-");
+  f("air", "k", a.k, Rule::positive, "-");
+  f("air", "rho0", a.rho0, Rule::positive, "kg/m^3");
+  f("air", "t0", a.t0, Rule::positive, "K");
+  f("air", "supply_pressure", a.supply_pressure, Rule::positive, "Pa");
+  f("air", "atmospheric_pressure", a.atmospheric_pressure, Rule::positive, "Pa");
+  f("air", "linear_ratio", a.linear_ratio, Rule::unit_open, "-");
   auto& r = p.regulator;
-  f("regulator", "time_constant", r.time_constant, Rule::positive);
-  f("regulator", "dead_time", r.dead_time, Rule::nonnegative);
-  f("regulator", "max_command", r.max_command, Rule::positive);
-  f("regulator", "sonic_conductance", r.sonic_conductance, Rule::positive);
-  f("regulator", "critical_ratio", r.critical_ratio, Rule::unit_open);
-  f("regulator", "proportional_band", r.proportional_band, Rule::positive);
+  f("regulator", "time_constant", r.time_constant, Rule::positive, "s");
+  f("regulator", "dead_time", r.dead_time, Rule::nonnegative, "s");
+  f("regulator", "max_command", r.max_command, Rule::positive, "Pa");
+  f("regulator", "sonic_conductance", r.sonic_conductance, Rule::positive, "m^3/(s Pa)");
+  f("regulator", "critical_ratio", r.critical_ratio, Rule::unit_open, "-");
+  f("regulator", "proportional_band", r.proportional_band, Rule::positive, "Pa");
   auto& v = p.valves;
-  f("valves", "sonic_conductance", v.sonic_conductance, Rule::positive);
-  f("valves", "critical_ratio", v.critical_ratio, Rule::unit_open);
-  f("valves", "pwm_frequency", v.pwm_frequency, Rule::positive);
-  f("valves", "on_delay", v.on_delay, Rule::nonnegative);
-  f("valves", "off_delay", v.off_delay, Rule::nonnegative);
-  f("valves", "min_pulse", v.min_pulse, Rule::nonnegative);
+  f("valves", "sonic_conductance", v.sonic_conductance, Rule::positive, "m^3/(s Pa)");
+  f("valves", "critical_ratio", v.critical_ratio, Rule::unit_open, "-");
+  f("valves", "pwm_frequency", v.pwm_frequency, Rule::positive, "Hz");
+  f("valves", "on_delay", v.on_delay, Rule::nonnegative, "s");
+  f("valves", "off_delay", v.off_delay, Rule::nonnegative, "s");
+  f("valves", "min_pulse", v.min_pulse, Rule::nonnegative, "s");
   auto& l = p.load;
-  f("load", "mass", l.mass, Rule::positive);
-  f("load", "damping", l.damping, Rule::nonnegative);
-  f("load", "gravity", l.gravity, Rule::nonnegative);
-  f("load", "spring_rate", l.spring_rate, Rule::nonnegative);
-  f("load", "spring_preload", l.spring_preload, Rule::nonnegative);
+  f("load", "mass", l.mass, Rule::positive, "kg");
+  f("load", "damping", l.damping, Rule::nonnegative, "N s/m");
+  f("load", "gravity", l.gravity, Rule::nonnegative, "m/s^2");
+  f("load", "spring_rate", l.spring_rate, Rule::nonnegative, "N/m");
+  f("load", "spring_preload", l.spring_preload, Rule::nonnegative, "N");
   auto& s = p.sensors;
-  f("sensors", "pressure_noise", s.pressure_noise, Rule::nonnegative);
-  f("sensors", "pressure_offset", s.pressure_offset, Rule::finite);
-  f("sensors", "pressure_range", s.pressure_range, Rule::positive);
-  f("sensors", "pressure_bits", s.pressure_bits, Rule::bits);
-  f("sensors", "pressure_time_constant", s.pressure_time_constant, Rule::nonnegative);
-  f("sensors", "displacement_noise", s.displacement_noise, Rule::nonnegative);
-  f("sensors", "displacement_offset", s.displacement_offset, Rule::finite);
-  f("sensors", "displacement_range", s.displacement_range, Rule::positive);
-  f("sensors", "displacement_bits", s.displacement_bits, Rule::bits);
+  f("sensors", "pressure_noise", s.pressure_noise, Rule::nonnegative, "Pa");
+  f("sensors", "pressure_offset", s.pressure_offset, Rule::finite, "Pa");
+  f("sensors", "pressure_range", s.pressure_range, Rule::positive, "Pa");
+  f("sensors", "pressure_bits", s.pressure_bits, Rule::bits, "bits");
+  f("sensors", "pressure_time_constant", s.pressure_time_constant, Rule::nonnegative, "s");
+  f("sensors", "displacement_noise", s.displacement_noise, Rule::nonnegative, "m");
+  f("sensors", "displacement_offset", s.displacement_offset, Rule::finite, "m");
+  f("sensors", "displacement_range", s.displacement_range, Rule::positive, "m");
+  f("sensors", "displacement_bits", s.displacement_bits, Rule::bits, "bits");
   auto& sim = p.simulation;
-  f("simulation", "dt", sim.dt, Rule::positive);
-  f("simulation", "max_substeps", sim.max_substeps, Rule::positive);
-  f("simulation", "pressure_tolerance", sim.pressure_tolerance, Rule::positive);
-  f("simulation", "position_tolerance", sim.position_tolerance, Rule::positive);
+  f("simulation", "dt", sim.dt, Rule::positive, "s");
+  f("simulation", "max_substeps", sim.max_substeps, Rule::positive, "-");
+  f("simulation", "pressure_tolerance", sim.pressure_tolerance, Rule::positive, "-");
+  f("simulation", "position_tolerance", sim.position_tolerance, Rule::positive, "m");
 }
 
 constexpr const char* kSections[] = {"muscle", "regulator", "hysteresis", "air",
@@ -140,7 +141,7 @@ constexpr const char* kSections[] = {"muscle", "regulator", "hysteresis", "air",
 }  // namespace
 
 void validate(const PamRigParams& p, std::string_view where) {
-  for_each_field(p, [&](const char* section, const char* name, const auto& value, Rule rule) {
+  for_each_field(p, [&](const char* section, const char* name, const auto& value, Rule rule, const char*) {
     const double v = static_cast<double>(value);
     if (!satisfies(rule, v)) fail(where, fmt::format("{}.{}", section, name), v, describe(rule));
   });
@@ -201,6 +202,39 @@ double pressure_command_limit(const PamRigParams& p, Actuation mode) noexcept {
                                       : p.muscle.max_pressure;
 }
 
+RigStatics rig_statics(const PamRigParams& p) {
+  validate(p, "rig");
+  RigStatics s;
+  const LoadParams& l = p.load;
+  s.stroke_m = p.muscle.max_contraction * p.muscle.rest_length;
+  s.weight_n = l.mass * l.gravity;
+  s.return_force_rest_n = return_force(l, 0.0);
+  s.return_force_stroke_n = return_force(l, s.stroke_m);
+  s.fall_speed_m_s = l.damping > 0.0 ? s.return_force_rest_n / l.damping : std::numeric_limits<double>::infinity();
+  s.regulator_limit_pa = pressure_command_limit(p, Actuation::regulator);
+  s.valves_limit_pa = pressure_command_limit(p, Actuation::switching_valves);
+  const double supply = p.air.supply_pressure - p.air.atmospheric_pressure;  // [Pa gauge]
+  // the rising branch contracts where F(P - dP_h, 0) exceeds the return force at rest: monotone in
+  // P (dP_h's slope is below 1 or the effective pressure never grows), so bisection on [0, supply]
+  const auto lifts = [&](double pa) { return static_contraction(p, pa, 1.0) > 0.0; };
+  if (!lifts(supply)) {
+    s.lift_off_pa = std::numeric_limits<double>::infinity();
+  } else {
+    double lo = 0.0, hi = supply;
+    for (int i = 0; i < 100 && hi - lo > 1e-6; ++i) (lifts(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+    s.lift_off_pa = hi;
+  }
+  const double top = std::min(s.regulator_limit_pa, supply);
+  for (int i = 0;; ++i) {
+    const double pa = std::min(1e5 * i, top);
+    s.pressure_pa.push_back(pa);
+    s.rising_m.push_back(static_contraction(p, pa, 1.0));
+    s.falling_m.push_back(static_contraction(p, pa, -1.0));
+    if (pa >= top) break;
+  }
+  return s;
+}
+
 PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where) {
   if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
   PamRigParams p;
@@ -220,7 +254,7 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
       const std::string& key = key_it.key();
       const nlohmann::json& value = key_it.value();
       bool found = false;
-      for_each_field(p, [&](const char* sec, const char* name, auto& field, Rule rule) {
+      for_each_field(p, [&](const char* sec, const char* name, auto& field, Rule rule, const char*) {
         if (found || section != sec || key != name) return;
         found = true;
         const std::string path = fmt::format("{}.{}.{}", where, sec, name);
@@ -246,7 +280,7 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
         // the section's keys, and the closest of them when the key looks like a typo of it
         std::string keys;
         std::vector<std::string_view> names;
-        for_each_field(p, [&](const char* sec, const char* name, auto&, Rule) {
+        for_each_field(p, [&](const char* sec, const char* name, auto&, Rule, const char*) {
           if (section != sec) return;
           keys += (keys.empty() ? "" : ", ") + std::string(name);
           names.emplace_back(name);
@@ -263,10 +297,18 @@ PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view wher
 
 nlohmann::json rig_params_to_json(const PamRigParams& params) {
   nlohmann::json j = nlohmann::json::object();
-  for_each_field(params, [&](const char* section, const char* name, const auto& value, Rule) {
+  for_each_field(params, [&](const char* section, const char* name, const auto& value, Rule, const char*) {
     j[section][name] = value;
   });
   return j;
+}
+
+std::vector<RigParameter> rig_parameters(const PamRigParams& params) {
+  std::vector<RigParameter> out;
+  for_each_field(params, [&](const char* section, const char* name, const auto& value, Rule rule, const char* unit) {
+    out.push_back({fmt::format("{}.{}", section, name), static_cast<double>(value), unit, describe(rule)});
+  });
+  return out;
 }
 
 PamRigParams load_rig_params(const std::filesystem::path& file) {

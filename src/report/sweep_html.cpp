@@ -23,18 +23,15 @@ using detail::variant_color;
 
 namespace {
 
-// The unit of a rig parameter in its JSON form (SI), for the plots' axes.
+// The unit of a rig parameter in its JSON form (SI), for the plots' axes: the rig's parameter
+// table's (rig_parameters); none for a dimensionless one or a path that is no parameter.
 std::string unit_of(const std::string& path) {
-  static const std::map<std::string, std::string> units = {
-      {"load.mass", "kg"},          {"load.damping", "N s/m"},           {"load.gravity", "m/s^2"},
-      {"load.spring_rate", "N/m"},  {"load.spring_preload", "N"},
-      {"muscle.force_620", "N"},    {"muscle.rest_length", "m"},         {"muscle.effective_radius", "m"},
-      {"muscle.dead_volume", "m^3"}, {"muscle.reference_pressure", "Pa"}, {"muscle.rest_braid_angle", "rad"},
-      {"hysteresis.pressure_band", "Pa"}, {"hysteresis.creep_stiffness", "N/m"}, {"hysteresis.creep_time", "s"},
-      {"regulator.time_constant", "s"}, {"regulator.dead_time", "s"},     {"regulator.max_command", "Pa"},
-      {"regulator.proportional_band", "Pa"}, {"valves.pwm_frequency", "Hz"}, {"valves.on_delay", "s"},
-      {"valves.off_delay", "s"},    {"valves.min_pulse", "s"},           {"air.supply_pressure", "Pa"},
-      {"sensors.pressure_noise", "Pa"}, {"sensors.displacement_noise", "m"}};
+  static const std::map<std::string, std::string> units = [] {
+    std::map<std::string, std::string> m;
+    for (const RigParameter& p : rig_parameters(PamRigParams{}))
+      if (p.unit != "-") m.emplace(p.path, p.unit);
+    return m;
+  }();
   const auto it = units.find(path);
   return it == units.end() ? std::string() : it->second;
 }

@@ -1,0 +1,121 @@
+// hysteron rig: a rig's parameters, every one with its unit, and what they imply at rest.
+//
+//   hysteron rig [FILE] [--json] [--out FULL.json]
+// Without FILE the nominal rig (docs/plant.md). FILE is read as `--plant` reads it (unknown keys,
+// wrong types and impossible values are errors naming the key); --out writes the complete rig,
+// every key, as a template to edit.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/io/files.hpp"
+#include "hysteron/plant.hpp"
+
+namespace hysteron::cli {
+
+namespace {
+
+struct Options {
+  std::string file, out;
+  bool json = false;
+};
+
+// A finite number as JSON, else null (an infinite fall speed or lift-off).
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+std::string mm(double m) { return fmt::format("{:.1f} mm", m * 1e3); }
+
+int run_rig(const Options& o) {
+  if (o.json && o.out == "-") throw Error("--json and --out - both print on stdout: give --out a file");
+  io::check_output_files({{"--out", o.out}}, {{"FILE", o.file}});
+  const PamRigParams p = o.file.empty() ? PamRigParams{} : load_rig_params(o.file);
+  const RigStatics s = rig_statics(p);
+  const std::string source = o.file.empty() ? std::string("the nominal rig") : o.file;
+  if (!o.out.empty()) save_rig_params(p, o.out);
+  if (o.out == "-") return exit_ok;  // stdout holds the rig's JSON alone
+  // no return force: the experiments refuse the rig (experiment.cpp, check_return_force)
+  const bool no_return = !(s.return_force_rest_n > 0.0) && !(p.load.spring_rate > 0.0);
+  if (o.json) {
+    nlohmann::json j;
+    j["rig"] = source;
+    j["parameters"] = rig_params_to_json(p);
+    nlohmann::json units = nlohmann::json::object();
+    for (const RigParameter& r : rig_parameters(p)) units[r.path] = r.unit;
+    j["units"] = units;
+    nlohmann::json t = nlohmann::json::array();
+    for (std::size_t i = 0; i < s.pressure_pa.size(); ++i)
+      t.push_back({{"pressure_pa", s.pressure_pa[i]}, {"rising_m", s.rising_m[i]}, {"falling_m", s.falling_m[i]}});
+    j["statics"] = {{"stroke_m", s.stroke_m},
+                    {"weight_n", s.weight_n},
+                    {"return_force_rest_n", s.return_force_rest_n},
+                    {"return_force_stroke_n", s.return_force_stroke_n},
+                    {"fall_speed_m_s", finite_or_null(s.fall_speed_m_s)},
+                    {"lift_off_pa", finite_or_null(s.lift_off_pa)},
+                    {"regulator_limit_pa", s.regulator_limit_pa},
+                    {"valves_limit_pa", s.valves_limit_pa},
+                    {"static_map", t},
+                    {"experiments_refuse", no_return}};
+    fmt::print("{}\n", j.dump(2));
+    return exit_ok;
+  }
+  const PamRigParams nominal;
+  const auto defaults = rig_parameters(nominal);
+  const auto params = rig_parameters(p);
+  fmt::print("rig: {} (* differs from the nominal rig; docs/plant.md)\n", source);
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    const RigParameter& r = params[i];
+    fmt::print("  {:1}{:<32} {:>14.7g}{}\n", r.value != defaults[i].value ? "*" : "", r.path, r.value,
+               r.unit == "-" ? "" : " " + r.unit);
+  }
+  fmt::print("at rest (P1-P5, the creep relaxed):\n");
+  fmt::print("  stroke end (hard stop)        {}\n", mm(s.stroke_m));
+  fmt::print("  return force                  {:.1f} N at rest, {:.1f} N at the stroke end (weight {:.1f} N, spring "
+             "{:g} N + {:g} N/m x contraction)\n",
+             s.return_force_rest_n, s.return_force_stroke_n, s.weight_n, p.load.spring_preload, p.load.spring_rate);
+  if (std::isfinite(s.fall_speed_m_s))
+    fmt::print("  vented, the load falls at most {:.1f} mm/s at rest (return force / load.damping)\n",
+               s.fall_speed_m_s * 1e3);
+  else
+    fmt::print("  vented, the load's fall is not limited by damping (load.damping = 0)\n");
+  fmt::print("  pressure command limit        {:.3f} MPa with the regulator, {:.3f} MPa with the switching valves\n",
+             s.regulator_limit_pa * 1e-6, s.valves_limit_pa * 1e-6);
+  if (std::isfinite(s.lift_off_pa))
+    fmt::print("  lift-off                      the rising branch contracts above {:.3f} MPa\n", s.lift_off_pa * 1e-6);
+  else
+    fmt::print("  lift-off                      none: the muscle cannot lift the load within the supply's pressure\n");
+  fmt::print("  static contraction [mm]:\n    {:>9} {:>9} {:>9}\n", "P [MPa]", "rising", "falling");
+  for (std::size_t i = 0; i < s.pressure_pa.size(); ++i)
+    fmt::print("    {:>9.3f} {:>9.2f} {:>9.2f}\n", s.pressure_pa[i] * 1e-6, s.rising_m[i] * 1e3, s.falling_m[i] * 1e3);
+  if (no_return)
+    fmt::print("warning: no return force (load.gravity = 0 and no spring): nothing extends the vented muscle, and the "
+               "experiments refuse this rig; set load.spring_rate and/or load.spring_preload\n");
+  if (!s.rising_m.empty() && s.rising_m.back() >= s.stroke_m)
+    fmt::print("note: the rising branch reaches the stroke end ({}) within the command limit: the muscle rests on its "
+               "hard stop at the top\n",
+               mm(s.stroke_m));
+  if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
+  return exit_ok;
+}
+
+}  // namespace
+
+void add_rig(CLI::App& app, Action& action) {
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = app.add_subcommand(
+      "rig", "print a rig's parameters (every key, with its unit) and its static map; check a --plant file");
+  sub->add_option("file", o->file,
+                  "rig parameters (JSON, as --plant of experiment and sweep; default: the nominal rig)");
+  sub->add_flag("--json", o->json, "print one JSON object (parameters, units, statics) instead of the text");
+  sub->add_option("--out,-o", o->out,
+                  "also write the complete rig, every key, as JSON (a template to edit; - prints it alone on stdout)");
+  sub->callback([o, &action] { action = [o] { return run_rig(*o); }; });
+}
+
+}  // namespace hysteron::cli

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# hysteron rig: the nominal rig lists every parameter with its unit and its static map; a rig
+# file is read as --plant reads it (a typo or an impossible value is exit 1 naming the key,
+# nothing written); --out writes the complete rig, which reads back to the same parameters and
+# is accepted by experiment; a horizontal rig without a spring is warned as the experiments
+# refuse it, and with a spring its lift-off moves with the spring's preload.
+# Usage: bash rig.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+PY=/usr/bin/python3
+
+"$BIN" rig > "$T/nominal.txt" 2> "$T/err.txt" || fail "nominal rig: exit $?"
+for key in muscle.rest_length load.mass load.spring_rate sensors.displacement_bits simulation.dt; do
+  grep -q "$key" "$T/nominal.txt" || fail "nominal rig: $key not listed"
+done
+grep -q "load.mass *20 kg" "$T/nominal.txt" || fail "nominal rig: load.mass without its unit: $(grep load.mass "$T/nominal.txt")"
+grep -q '^  \*' "$T/nominal.txt" && fail "nominal rig: a parameter marked as changed"
+
+# a typo and an impossible value: exit 1, the key named, --out not written
+echo '{"load": {"mas": 35}}' > "$T/typo.json"
+"$BIN" rig "$T/typo.json" --out "$T/full.json" > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "typo: exit $rc"
+grep -q "did you mean 'mass'" "$T/err.txt" || fail "typo: $(cat "$T/err.txt")"
+[ -e "$T/full.json" ] && fail "typo: --out written"
+echo '{"load": {"spring_rate": -1}}' > "$T/neg.json"
+"$BIN" rig "$T/neg.json" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "negative spring: not exit 1"
+grep -q "load.spring_rate" "$T/err.txt" || fail "negative spring: $(cat "$T/err.txt")"
+# --out the input file itself: refused, the file kept
+cp "$T/typo.json" "$T/same.json"
+"$BIN" rig "$T/same.json" --out "$T/same.json" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--out = FILE: not exit 1"
+cmp -s "$T/typo.json" "$T/same.json" || fail "--out = FILE: the input changed"
+
+# a changed rig: marked, written complete, read back the same, accepted by experiment
+echo '{"load": {"mass": 35}, "muscle": {"rest_length": 0.6}}' > "$T/heavy.json"
+"$BIN" rig "$T/heavy.json" --out "$T/full.json" > "$T/heavy.txt" 2> /dev/null || fail "heavy: exit $?"
+grep -q '^  \*load.mass *35 kg' "$T/heavy.txt" || fail "heavy: load.mass not marked: $(grep load.mass "$T/heavy.txt")"
+"$BIN" rig "$T/full.json" --json > "$T/a.json" || fail "full: exit $?"
+"$BIN" rig "$T/heavy.json" --json > "$T/b.json" || fail "heavy --json: exit $?"
+$PY - "$T/a.json" "$T/b.json" "$T/full.json" <<'PYEOF' || fail "round trip"
+import json, sys
+a, b, full = (json.load(open(f)) for f in sys.argv[1:])
+assert a["parameters"] == b["parameters"], "the written rig reads back differently"
+n = sum(len(v) for v in full.values())
+assert n == len(a["units"]) and n >= 50, (n, len(a["units"]))
+assert a["parameters"]["load"]["mass"] == 35 and a["parameters"]["muscle"]["rest_length"] == 0.6
+s = a["statics"]
+assert abs(s["return_force_rest_n"] - 35 * 9.81) < 1e-9, s["return_force_rest_n"]
+assert abs(s["fall_speed_m_s"] - 35 * 9.81 / 400) < 1e-9, s["fall_speed_m_s"]
+assert not s["experiments_refuse"]
+rising = [r["rising_m"] for r in s["static_map"]]
+assert rising == sorted(rising) and rising[-1] > 0, rising
+PYEOF
+"$BIN" experiment gpi-pid --plant "$T/full.json" --learning-periods 0 --no-adaptive > /dev/null 2> "$T/err.txt" \
+  || fail "experiment on the written rig: $(cat "$T/err.txt")"
+
+# horizontal: without a spring warned (and refused by experiment), with one the preload sets lift-off
+echo '{"load": {"gravity": 0}}' > "$T/flat.json"
+"$BIN" rig "$T/flat.json" > "$T/flat.txt" 2>&1 || fail "flat: exit $?"
+grep -q "no return force" "$T/flat.txt" || fail "flat: no warning"
+"$BIN" experiment gpi-pid --plant "$T/flat.json" --learning-periods 0 > /dev/null 2>&1 && fail "flat: experiment ran"
+echo '{"load": {"gravity": 0, "spring_preload": 98.1}}' > "$T/half.json"
+echo '{"load": {"gravity": 0, "spring_preload": 392.4}}' > "$T/double.json"
+"$BIN" rig "$T/half.json" --json > "$T/half.out" || fail "half: exit $?"
+"$BIN" rig "$T/double.json" --json > "$T/double.out" || fail "double: exit $?"
+$PY - "$T/half.out" "$T/double.out" <<'PYEOF' || fail "horizontal spring rigs"
+import json, sys
+h, d = (json.load(open(f))["statics"] for f in sys.argv[1:])
+assert h["weight_n"] == 0 and abs(h["return_force_rest_n"] - 98.1) < 1e-9
+assert h["lift_off_pa"] < d["lift_off_pa"], (h["lift_off_pa"], d["lift_off_pa"])
+assert not h["experiments_refuse"]
+PYEOF
+
+[ $fails -eq 0 ] && echo "rig.sh: all passed"
+exit $((fails > 0))

@@ -57,6 +57,14 @@ std::vector<double> clipped(std::vector<double> v, double f) {
   return v;
 }
 
+// v clipped at lo + f (hi - lo) from below
+std::vector<double> clipped_below(std::vector<double> v, double f) {
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  const double c = *lo + f * (*hi - *lo);
+  for (double& t : v) t = std::max(t, c);
+  return v;
+}
+
 // a + b v
 std::vector<double> affine(std::vector<double> v, double a, double b) {
   for (double& t : v) t = a + b * t;
@@ -175,6 +183,39 @@ TEST(SensorFaults, AClippedInputIsNamedAndNeverConverged) {
     EXPECT_EQ(warning_with(rc, "levels over the training range"), "") << with_warnings(rc);
     EXPECT_NE(rc.status, FitStatus::poor_fit) << rc.message;
   }
+}
+
+// An input sensor that clips at both ends (10 % and 90 % of the span): one warning names both values, each with its
+// samples and first run, and the fit is a poor one naming both. A continuous input (ramps: no value held but at the
+// clip) clipped at one end: the warning says it holds no other value, not that the output "moves by at most 0" there
+// (what pinned_runs measured over no runs at all).
+TEST(SensorFaults, AnInputClippedAtBothEndsNamesBothAndNoHoldsIsNoMeasurement) {
+  Record r = loops();
+  r.x = clipped_below(clipped(r.x, 0.9), 0.1);
+  const auto [lo, hi] = std::minmax_element(r.x.begin(), r.x.end());
+  const double bottom = *lo, top = *hi;
+  const auto samples_at = [&](double v) { return std::count(r.x.begin(), r.x.end(), v); };
+  ASSERT_GT(samples_at(bottom), 100);
+  ASSERT_GT(samples_at(top), 100);
+  const FitReport rep = fit_gpi(r);
+  const std::string w = warning_with(rep, "the training input sits exactly at its");
+  for (const double v : {bottom, top}) {
+    EXPECT_NE(w.find(fmt::format("value {:.6g} for ", v)), std::string::npos) << v << "\n" << with_warnings(rep);
+    EXPECT_NE(w.find(fmt::format("(first run: samples {})", longest_run_at(r.x, v))), std::string::npos)
+        << v << "\n" << with_warnings(rep);
+    EXPECT_NE(rep.message.find(fmt::format("{:.6g}", v)), std::string::npos) << rep.message;
+  }
+  EXPECT_EQ(rep.status, FitStatus::poor_fit) << rep.message;
+
+  // a triangle of ramps, 400 samples a period, through the PI; then its input read clipped at 85 % of its span
+  Record ramps = record([](int k) { return 0.05 + 0.9 * std::abs((k % 400) / 200.0 - 1.0); }, 4000);
+  ramps.x = clipped(ramps.x, 0.85);
+  const FitReport rr = fit_gpi(ramps);
+  const std::string wr = warning_with(rr, "the training input sits exactly at its largest value");
+  ASSERT_NE(wr, "") << with_warnings(rr);
+  EXPECT_EQ(wr.find("at most 0"), std::string::npos) << wr;
+  EXPECT_NE(wr.find("the input holds no other value"), std::string::npos) << wr;
+  EXPECT_EQ(rr.status, FitStatus::poor_fit) << rr.message;
 }
 
 // An output sensor that clips on a short record (a decaying sine in 300 samples; 18 at the limit, too few for

@@ -145,3 +145,48 @@ TEST(Snapshot, PidContinuesBitForBitWithItsGuard) {
   }
   EXPECT_EQ(b.snapshot(), a.snapshot());
 }
+
+// mpi-asym's numerical inverse refuses operator outputs its model cannot reach, by the necessary conditions of
+// docs/models.md (y_1 >= u_a - r_1 of the last input; |y_i - y_{i-1}| <= r_i - r_{i-1}), naming the operator, the
+// inverse unchanged; it took any finite state before. What it reaches from the virgin state, a relaxed one (here
+// where the envelopes cross, y_i above u_d + r_i) and a driven one restores and continues bit for bit.
+TEST(Snapshot, MpiAsymInverseRefusesAnUnreachableOperatorState) {
+  const ModelParams mp = every_kind()[3];
+  ASSERT_EQ(model_name(mp), "mpi-asym");
+  const double r1 = 0.05, r2 = 0.1;                                        // its thresholds
+  const auto u_a = [](double x) { return std::tanh(2 * x - 0.6) + 0.6; };  // its ascending envelope
+  Inverse virgin(mp), copy(mp);
+  EXPECT_NO_THROW(copy.restore(virgin.snapshot())) << "u_a(0) = " << u_a(0.0) << " > r_1";
+  Model relaxed(mp);
+  ASSERT_TRUE(relaxed.reset_relaxed(0.9));
+  EXPECT_NO_THROW(copy.reset(relaxed.state()));
+
+  std::mt19937_64 rng(8);
+  Model m(mp);
+  Inverse a(mp);
+  for (double x : test::random_walk(rng, 400, -1.0, 1.0)) a.step(m.step(x));
+  EXPECT_NO_THROW(copy.reset(m.state()));
+  const std::vector<double> good = a.snapshot();  // y_1, y_2, the last input, saturated, faults
+  ASSERT_EQ(good.size(), 5u);
+  Inverse b(mp);
+  b.restore(good);
+  const std::vector<double> ys = test::random_walk(rng, 300, -0.5, 1.5);
+  for (double y : ys) ASSERT_EQ(a.step(y), b.step(y));
+  b.restore(good);
+
+  std::vector<double> s = good;
+  s[1] = s[0] + (r2 - r1) + 0.01;  // operator 2 further from operator 1 than r_2 - r_1
+  std::string e = test::error_of([&] { b.restore(s); });
+  EXPECT_TRUE(test::has(e, "not reachable") && test::has(e, "operator 2") && test::has(e, "r_2 - r_1")) << e;
+  s = good;
+  s[0] = s[1] = u_a(good[2]) - r1 - 0.01;  // both below u_a - r_1 of the last input
+  e = test::error_of([&] { b.restore(s); });
+  EXPECT_TRUE(test::has(e, "not reachable") && test::has(e, "operator 1") && test::has(e, "u - r_1")) << e;
+  ModelState st = m.state();
+  st.y[1] = st.y[0] - (r2 - r1) - 0.01;
+  EXPECT_TRUE(test::has(test::error_of([&] { b.reset(st); }), "operator 2"));
+  EXPECT_EQ(b.snapshot(), good);
+  Inverse c(mp);
+  c.restore(good);
+  for (double y : ys) ASSERT_EQ(b.step(y), c.step(y));
+}

@@ -57,7 +57,9 @@ class Inverse {
   void reset() noexcept;
   // Start consistently from a forward model's state. Throws hysteron::Error if the
   // state has the wrong size, is not finite, or cannot be reached by the model
-  // (operator outputs whose spread breaks |d_i - d_j| <= r_j - r_i).
+  // (pi, gpi, mpi-deadzone: operator outputs whose spread breaks |d_i - d_j| <= r_j - r_i;
+  // mpi-asym, necessary conditions only: y_1 < u - r_1, or |y_i - y_j| > r_j - r_i;
+  // docs/models.md).
   void reset(const ModelState& forward_state);
 
   // One sample: the (raw) input that makes the model output y_desired. A model with a
@@ -98,8 +100,8 @@ class Inverse {
   // and options steps exactly as this one from here on (a running inverse saved and loaded
   // again, e.g. Python's pickle). restore throws hysteron::Error, the inverse unchanged, on a
   // snapshot of another size, a non-finite value, an input outside the limits or a state the
-  // model cannot reach, as far as reset(const ModelState&) checks it (pi, gpi, mpi-deadzone: not
-  // mpi-asym, whose reset checks no reachability).
+  // model cannot reach, as far as reset(const ModelState&) checks it (mpi-asym: necessary
+  // conditions only, see there).
   std::vector<double> snapshot() const;
   void restore(std::span<const double> snapshot);
 

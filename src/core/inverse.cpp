@@ -182,6 +182,29 @@ void Inverse::reset(const ModelState& fs) {
   for (std::size_t i = 0; i < n; ++i)
     if (!std::isfinite(fs.y[i])) throw Error(detail::format("{}: inverse start state y[{}] is not finite", name, i));
   detail::check_state_bound(detail::format("{}: inverse start state", name), s_, detail::input_bound(s_, nullptr), fs);
+  double scale = std::abs(fs.u);
+  for (double v : fs.y) scale = std::max(scale, std::abs(v));
+  const double tol = 1e-9 * std::max(1.0, scale);
+  if (s_.asymmetric) {
+    // Reachability, necessary conditions (docs/models.md): a step sets y_i = max(u_a - r_i, min(u_d + r_i, y_i)), so
+    // y_1 >= u - r_1 for u = u_a of the last input, and (max and min being 1-Lipschitz)
+    // |y_i - y_{i-1}| <= r_i - r_{i-1} holds on from the virgin (all 0) and relaxed (all u) states. The virgin
+    // operators pair with any u (the model's is 0, the inverse's the envelope of its start input): the first
+    // condition is not checked on them. The upper bound y_i <= max(u_a - r_i, u_d + r_i) is not checked (see there).
+    bool virgin = true;
+    for (double v : fs.y) virgin = virgin && v == 0.0;
+    if (n > 0 && !virgin && fs.y[0] < fs.u - s_.r[0] - tol)
+      throw Error(detail::format("{}: inverse start state is not reachable by the model: operator 1 (r = {}) has "
+                                 "y_1 = {} below u - r_1 = {} (every input sets it to at least u_a - r_1)",
+                                 name, s_.r[0], fs.y[0], fs.u - s_.r[0]));
+    for (std::size_t i = 1; i < n; ++i)
+      if (std::abs(fs.y[i] - fs.y[i - 1]) > s_.r[i] - s_.r[i - 1] + tol)
+        throw Error(detail::format("{}: inverse start state is not reachable by the model: operator {} (r = {}) is "
+                                   "{} from operator {} (y_{} = {}, y_{} = {}), more than r_{} - r_{} = {} (no "
+                                   "input takes two operators further apart than their thresholds differ)",
+                                   name, i + 1, s_.r[i], fs.y[i] - fs.y[i - 1], i, i + 1, fs.y[i], i, fs.y[i - 1],
+                                   i + 1, i, s_.r[i] - s_.r[i - 1]));
+  }
   saturated_ = false;
   faults_ = 0;
   if (s_.asymmetric) {
@@ -192,9 +215,6 @@ void Inverse::reset(const ModelState& fs) {
     return;
   }
   // Reachability: |d_1| <= r_1 and |d_i - d_{i-1}| <= r_i - r_{i-1} (1-Lipschitz memory curve).
-  double scale = std::abs(fs.u);
-  for (double v : fs.y) scale = std::max(scale, std::abs(v));
-  const double tol = 1e-9 * std::max(1.0, scale);
   double d_prev = 0.0, r_prev = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     dev_[i] = fs.u - fs.y[i];

@@ -68,6 +68,7 @@ struct Pinned {
   std::size_t samples = 0, first = 0, last = 0;  // samples in the flagged runs; the first one is [first, last)
   double moved = 0.0;                            // the most b moves in them
   double moves = 0.0;                            // the most b moves during any run of a at another value
+  std::size_t holds = 0;  // runs of a at another value of 2 samples or more (none: `moves` is 0, no measurement)
 };
 std::array<Pinned, 2> pinned_runs(std::span<const double> a, std::span<const double> b, IndexRange range);
 

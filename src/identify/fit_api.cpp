@@ -285,15 +285,17 @@ std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std
   const auto [lo, hi] = minmax_of(a, r.begin, r.end);
   const auto [blo, bhi] = minmax_of(b, r.begin, r.end);
   double moves = 0.0;
+  std::size_t holds = 0;
   for_each_run(a, r, [&](std::size_t s, std::size_t e) {
     if (a[s] == lo || a[s] == hi) return;
     const auto [l, h] = minmax_of(b, s, e);
     moves = std::max(moves, h - l);
+    holds += e - s >= 2;
   });
   const double sigma = detect_clipping(b.subspan(r.begin, r.end - r.begin)).sigma;
   const double bound = std::max({kPinnedRatio * moves, kPinnedNoise * sigma, kPinnedSpan * (bhi - blo)});
   std::array<Pinned, 2> out;
-  for (int k : {0, 1}) out[k].value = k ? hi : lo, out[k].moves = moves;
+  for (int k : {0, 1}) out[k].value = k ? hi : lo, out[k].moves = moves, out[k].holds = holds;
   for_each_run(a, r, [&](std::size_t s, std::size_t e) {
     if (e - s < 3 || (a[s] != lo && a[s] != hi)) return;
     const auto [l, h] = minmax_of(b, s, e);
@@ -892,21 +894,36 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
                                "beyond it count as no error, and the metrics are on that record)",
                                passes, censored)
                  : std::string("the model is fitted to the limit there, not to the actuator");
-  // a column pinned at its extreme while the other moves on (pinned_runs)
-  const auto pinned = [&](const detail::Pinned& p, bool input, bool high) {
+  // a column pinned at its least value (lo_end), its largest (hi_end) or both (null: that end does not clip) while
+  // the other moves on (pinned_runs), both ends in one sentence
+  const auto pinned = [&](const detail::Pinned* lo_end, const detail::Pinned* hi_end, bool input) {
     const char* const a = input ? "input" : "output";
     const char* const b = input ? "output" : "input";
-    return fmt::format("the training {} sits exactly at its {} value {:.6g} for {} samples (first run: samples {}:{}) "
-                       "while the {} moves by up to {:.4g} ({:.3g} % of its span; during any other run of one {} value "
-                       "it moves by at most {:.4g}): the {} sensor clips there, its true value went beyond its range; ",
-                       a, high ? "largest" : "least", p.value, p.samples, p.first, p.last, b, p.moved,
-                       100 * p.moved / detail::span_of((input ? y : x).subspan(tr.begin, tr.end - tr.begin)), a,
-                       p.moves, a);
+    const double span = detail::span_of((input ? y : x).subspan(tr.begin, tr.end - tr.begin));
+    const bool both = lo_end && hi_end;
+    const detail::Pinned& any = lo_end ? *lo_end : *hi_end;
+    // what b does during a's other runs: `moves` is only a measurement where a holds another value (holds)
+    const std::string others =
+        any.holds > 0
+            ? fmt::format("during any {} of one {} value{} it moves by at most {:.4g}", both ? "run" : "other run", a,
+                          both ? " between them" : "", any.moves)
+            : fmt::format("the {} holds no {} for two samples or more", a, both ? "value between them" : "other value");
+    std::string at;
+    for (const detail::Pinned* p : {lo_end, hi_end}) {
+      if (!p) continue;
+      at += fmt::format("{}at its {} value {:.6g} for {} samples (first run: samples {}:{}) while the {} moves by "
+                        "up to {:.4g} ({:.3g} % of its span{})",
+                        at.empty() ? "" : ", and ", p == hi_end ? "largest" : "least", p->value, p->samples, p->first,
+                        p->last, b, p->moved, 100 * p->moved / span, both ? "" : "; " + others);
+    }
+    return fmt::format("the training {} sits exactly {}{}: the {} sensor clips {}, its true value went beyond its "
+                       "range; ",
+                       a, at, both ? "; " + others : "", a, both ? "at both ends" : "there");
   };
   for (const bool low : {true, false}) {
     if (!(low ? clip.low : clip.high)) continue;
     if (pinned_only[low ? 0 : 1])
-      rep.warnings.push_back(pinned(y_pinned[low ? 0 : 1], false, !low) + censoring +
+      rep.warnings.push_back(pinned(low ? &y_pinned[0] : nullptr, low ? nullptr : &y_pinned[1], false) + censoring +
                              "; exclude these rows (the --train and --validate ranges) or re-record with the "
                              "sensor's range covering the signal");
     else
@@ -919,16 +936,19 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   // A clipped input: the model is fitted to an input that was not applied, and nothing repairs that: never
   // `converged`.
   const auto x_pinned = detail::pinned_runs(x, y, tr);
-  for (int k : {0, 1}) {
-    if (x_pinned[k].samples == 0) continue;
-    rep.warnings.push_back(pinned(x_pinned[k], true, k == 1) +
+  const bool x_low = x_pinned[0].samples > 0, x_high = x_pinned[1].samples > 0;
+  if (x_low || x_high) {  // one warning, naming both ends where both clip
+    rep.warnings.push_back(pinned(x_low ? &x_pinned[0] : nullptr, x_high ? &x_pinned[1] : nullptr, true) +
                            "the model is fitted to an input that was not applied there: exclude these rows (the "
                            "--train and --validate ranges) or re-record with the sensor's range covering the signal");
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
-      rep.message = fmt::format("poor fit: the training input clips at {:.6g} (see the warnings), and the model is "
+      rep.message = fmt::format("poor fit: the training input clips at {} (see the warnings), and the model is "
                                 "fitted to an input that was not applied there (solver: converged: {})",
-                                x_pinned[k].value, rep.message);
+                                x_low && x_high ? fmt::format("{:.6g} and at {:.6g}", x_pinned[0].value,
+                                                              x_pinned[1].value)
+                                                : fmt::format("{:.6g}", x_pinned[x_low ? 0 : 1].value),
+                                rep.message);
     }
   }
   if (has_model(rep.status))

@@ -65,8 +65,36 @@ void bind_rig(py::module_& m) {
       py::arg("params") = py::none(),
       "Complete rig parameter dict (defaults filled in) from a partial dict, a JSON file path or None.");
 
+  m.def(
+      "rig_statics",
+      [](const py::object& params) {
+        const RigStatics s = rig_statics(rig_params_from(params));
+        py::dict d;
+        d["stroke_m"] = s.stroke_m;
+        d["weight_n"] = s.weight_n;
+        d["return_force_rest_n"] = s.return_force_rest_n;
+        d["return_force_stroke_n"] = s.return_force_stroke_n;
+        d["fall_speed_m_s"] = s.fall_speed_m_s;
+        d["lift_off_pa"] = s.lift_off_pa;
+        d["regulator_limit_pa"] = s.regulator_limit_pa;
+        d["valves_limit_pa"] = s.valves_limit_pa;
+        d["pressure_pa"] = to_numpy(s.pressure_pa);
+        d["rising_m"] = to_numpy(s.rising_m);
+        d["falling_m"] = to_numpy(s.falling_m);
+        py::dict units;
+        for (const RigParameter& r : rig_parameters(PamRigParams{})) units[py::str(r.path)] = r.unit;
+        d["units"] = units;
+        return d;
+      },
+      py::arg("params") = py::none(),
+      "What a rig's parameters imply at rest (as `hysteron rig`; docs/plant.md): stroke end, return force (weight "
+      "+ spring) at rest and at the stroke end, the vented load's fastest fall (inf without damping), the command "
+      "limits, the rising branch's lift-off pressure (inf: none within the supply), the static map on the rising and "
+      "falling branches (SI units), and every parameter's unit ('units', by path).");
+
   def_copy(py::class_<PamRig>(m, "PamRig", R"doc(
-Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass, fed
+Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass (and an
+optional return spring: load.spring_rate, load.spring_preload), fed
 by a proportional pressure regulator or by PWM switching valves (docs/plant.md).
 
 PamRig(params=None, seed=1): params is a dict with optional sections "muscle",

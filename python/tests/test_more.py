@@ -104,6 +104,24 @@ def test_rig_params_from_dict_and_errors():
         hysteron.PamRig({"load": {"nonsense": 1.0}})
 
 
+def test_rig_statics_with_a_return_spring():
+    # a horizontal rig whose spring matches the nominal weight balances like the hanging load;
+    # a stiffer spring holds the muscle shorter on both branches and lifts off at the same pressure
+    nominal = hysteron.rig_statics()
+    flat = hysteron.rig_statics({"load": {"gravity": 0.0, "spring_preload": 20.0 * 9.81}})
+    stiff = hysteron.rig_statics({"load": {"gravity": 0.0, "spring_preload": 20.0 * 9.81, "spring_rate": 3000.0}})
+    np.testing.assert_allclose(flat["rising_m"], nominal["rising_m"], rtol=1e-9, atol=1e-12)
+    assert flat["weight_n"] == 0.0 and flat["return_force_rest_n"] == pytest.approx(196.2)
+    assert stiff["lift_off_pa"] == pytest.approx(nominal["lift_off_pa"], rel=1e-6)
+    moving = nominal["rising_m"] > 0
+    assert np.all(stiff["rising_m"][moving] < nominal["rising_m"][moving])
+    assert stiff["return_force_stroke_n"] == pytest.approx(196.2 + 3000.0 * stiff["stroke_m"])
+    assert nominal["fall_speed_m_s"] == pytest.approx(196.2 / 400.0)
+    assert nominal["units"]["load.spring_rate"] == "N/m" and nominal["units"]["load.mass"] == "kg"
+    with pytest.raises(hysteron.Error, match="spring_rate"):
+        hysteron.rig_statics({"load": {"spring_rate": -1.0}})
+
+
 def test_pid_limits_and_antiwindup():
     pid = hysteron.Pid(kp=100.0, ki=10.0, out_min=-1.0, out_max=2.0)
     assert pid.step(10.0, 0.0) == 2.0 and pid.saturated

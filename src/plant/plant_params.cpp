@@ -312,6 +312,9 @@ std::vector<RigParameter> rig_parameters(const PamRigParams& params) {
 }
 
 PamRigParams load_rig_params(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw Error(fmt::format("{}: is a directory, not a rig parameter file (JSON)", file.string()));
   std::ifstream in(file, std::ios::binary);
   if (!in) throw Error(fmt::format("{}: cannot open for reading", file.string()));
   std::ostringstream text;

@@ -31,6 +31,13 @@ echo '{"load": {"spring_rate": -1}}' > "$T/neg.json"
 "$BIN" rig "$T/neg.json" > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "negative spring: not exit 1"
 grep -q "load.spring_rate" "$T/err.txt" || fail "negative spring: $(cat "$T/err.txt")"
+# a directory and a missing file: exit 1, said
+"$BIN" rig "$T" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "directory: not exit 1"
+grep -q "is a directory" "$T/err.txt" || fail "directory: $(cat "$T/err.txt")"
+"$BIN" rig "$T/none.json" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "missing file: not exit 1"
+grep -q "cannot open" "$T/err.txt" || fail "missing file: $(cat "$T/err.txt")"
 # --out the input file itself: refused, the file kept
 cp "$T/typo.json" "$T/same.json"
 "$BIN" rig "$T/same.json" --out "$T/same.json" > /dev/null 2> "$T/err.txt"

@@ -317,6 +317,23 @@ TEST(Experiment, ADescentFasterThanTheLoadCanFallIsSaid) {
   EXPECT_FALSE(test::said(run_experiment(test::quick_experiment("gpi-pid")), "descend faster"));
 }
 
+// A displacement sensor 30 times noisier than the nominal one (0.3 mm): every RMS the sensor
+// reads has the noise in it, and the result says how wide it is, estimated from the
+// identification run (within 15 % of the rig's 0.3 mm); the nominal 0.01 mm sensor gets no note.
+TEST(Experiment, ADisplacementSensorsNoiseFloorIsSaid) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.rig.sensors.displacement_noise = 3e-4;  // [m]
+  const ExperimentResult noisy = run_experiment(o);
+  std::string note;
+  for (const std::string& m : noisy.messages)
+    if (m.find("the displacement sensor's noise, about") != std::string::npos) note = m;
+  ASSERT_FALSE(note.empty()) << fmt::format("{}", fmt::join(noisy.messages, "\n"));
+  const double sigma_mm = std::stod(note.substr(note.find("about ") + 6));
+  EXPECT_NEAR(sigma_mm, 0.3, 0.045) << note;
+  for (const TrackingRun& run : noisy.runs) EXPECT_GT(run.errors.rms_error_mm, 0.9 * sigma_mm) << run.variant;
+  EXPECT_FALSE(test::said(run_experiment(test::quick_experiment("gpi-pid")), "the displacement sensor's noise"));
+}
+
 // A supply of 5 bar absolute (0.4 MPa gauge) caps the muscle's pressure below the 0.6 MPa the
 // loops may command: the identification run commands 0.6 MPa but measures at most about 0.4,
 // so the reach's top is taken at 95 % of the pressure measured there, not at 0.57 MPa (which

@@ -694,6 +694,31 @@ std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& 
       l.mass * l.gravity, l.spring_preload, l.spring_rate, l.damping, fmt::join(parts, "; "));
 }
 
+// The displacement sensor's noise is in every RMS error the sensor measures: with noise of
+// width sigma independent of the loop's true error e, the reading's RMS is about
+// sqrt(e^2 + sigma^2), so no loop reads below sigma, and learning cannot learn what is noise.
+// Where sigma is at least half the least RMS of the compensating runs (their true error then at
+// most 0.87 of what the reading shows), a note says so. sigma is estimated as the fit does
+// (detect_clipping: the MAD of the second differences) on the identification run's contraction,
+// the user's own record; empty where the floor is below that.
+std::string noise_floor_note(const ExperimentResult& res, const IdentificationRun& id) {
+  const double sigma = detect_clipping(id.contraction_mm).sigma;
+  if (!(sigma > 0.0)) return {};
+  const TrackingRun* least = nullptr;
+  for (const TrackingRun& run : res.runs)
+    if ((run.variant == "compensated" || run.variant == "learning" || run.variant == "adaptive") &&
+        (!least || run.errors.rms_error_mm < least->errors.rms_error_mm))
+      least = &run;
+  if (!least || !(sigma >= 0.5 * least->errors.rms_error_mm)) return {};
+  return fmt::format(
+      "the displacement sensor's noise, about {:.3f} mm wide (estimated on the identification run: the median "
+      "absolute second difference of its contraction), is in every RMS error of this result, which that sensor "
+      "measures: a loop without error would read about {:.3f} mm RMS, and the least here is {:.3f} mm ({}, {}), so "
+      "the runs' true errors are smaller than they read and differences between them of the order of the noise are "
+      "not the loops'; nor can learning learn it away (a finer sensor, docs/control.md section 5)",
+      sigma, sigma, least->errors.rms_error_mm, least->variant, least->reference);
+}
+
 // The pressure hysteron's model is identified up to (docs/control.md, section 0): the
 // papers' identification inputs span the actuator's range for *their* muscle and load; on
 // another rig the references may need much less (a longer muscle, mpi-openloop's 40 mm
@@ -1273,6 +1298,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   }
   if (std::string note = sensor_gap_note(sensor_gaps, o.rig, o.tracking_rig ? *o.tracking_rig : o.rig); !note.empty())
     res.messages.push_back(std::move(note));
+  if (std::string note = noise_floor_note(res, id); !note.empty()) res.messages.push_back(std::move(note));
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

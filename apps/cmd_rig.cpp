@@ -36,12 +36,14 @@ int run_rig(const Options& o) {
   if (o.json && o.out == "-") throw Error("--json and --out - both print on stdout: give --out a file");
   io::check_output_files({{"--out", o.out}}, {{"FILE", o.file}});
   const PamRigParams p = o.file.empty() ? PamRigParams{} : load_rig_params(o.file);
+  (void)PamRig(p, 1);  // what only the simulator checks: the sub-steps its dynamics need
   const RigStatics s = rig_statics(p);
   const std::string source = o.file.empty() ? std::string("the nominal rig") : o.file;
   if (!o.out.empty()) save_rig_params(p, o.out);
   if (o.out == "-") return exit_ok;  // stdout holds the rig's JSON alone
-  // no return force: the experiments refuse the rig (experiment.cpp, check_return_force)
-  const bool no_return = !(s.return_force_rest_n > 0.0) && !(p.load.spring_rate > 0.0);
+  if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
+  // why the experiments refuse the rig, if they do (rig_unusable_reason)
+  const std::string unusable = rig_unusable_reason(p, "rig");
   if (o.json) {
     nlohmann::json j;
     j["rig"] = source;
@@ -56,12 +58,13 @@ int run_rig(const Options& o) {
                     {"weight_n", s.weight_n},
                     {"return_force_rest_n", s.return_force_rest_n},
                     {"return_force_stroke_n", s.return_force_stroke_n},
-                    {"fall_speed_m_s", finite_or_null(s.fall_speed_m_s)},
+                    {"fall_speed_rest_m_s", finite_or_null(s.fall_speed_rest_m_s)},
+                    {"fall_speed_stroke_m_s", finite_or_null(s.fall_speed_stroke_m_s)},
                     {"lift_off_pa", finite_or_null(s.lift_off_pa)},
                     {"regulator_limit_pa", s.regulator_limit_pa},
                     {"valves_limit_pa", s.valves_limit_pa},
                     {"static_map", t},
-                    {"experiments_refuse", no_return}};
+                    {"experiments_refuse", unusable.empty() ? nlohmann::json(nullptr) : nlohmann::json(unusable)}};
     fmt::print("{}\n", j.dump(2));
     return exit_ok;
   }
@@ -79,28 +82,27 @@ int run_rig(const Options& o) {
   fmt::print("  return force                  {:.1f} N at rest, {:.1f} N at the stroke end (weight {:.1f} N, spring "
              "{:g} N + {:g} N/m x contraction)\n",
              s.return_force_rest_n, s.return_force_stroke_n, s.weight_n, p.load.spring_preload, p.load.spring_rate);
-  if (std::isfinite(s.fall_speed_m_s))
-    fmt::print("  vented, the load falls at most {:.1f} mm/s at rest (return force / load.damping)\n",
-               s.fall_speed_m_s * 1e3);
+  if (std::isfinite(s.fall_speed_rest_m_s))
+    fmt::print("  vented fall                   terminal speed {:.1f} mm/s at rest, {:.1f} mm/s at the stroke end (return "
+               "force / load.damping; the creep's pull and the load's momentum add for a while)\n",
+               s.fall_speed_rest_m_s * 1e3, s.fall_speed_stroke_m_s * 1e3);
   else
-    fmt::print("  vented, the load's fall is not limited by damping (load.damping = 0)\n");
+    fmt::print("  vented fall                   not limited by damping (load.damping = 0)\n");
   fmt::print("  pressure command limit        {:.3f} MPa with the regulator, {:.3f} MPa with the switching valves\n",
              s.regulator_limit_pa * 1e-6, s.valves_limit_pa * 1e-6);
   if (std::isfinite(s.lift_off_pa))
-    fmt::print("  lift-off                      the rising branch contracts above {:.3f} MPa\n", s.lift_off_pa * 1e-6);
+    fmt::print("  lift-off                      the rising branch contracts above {:.3f} MPa{}\n", s.lift_off_pa * 1e-6,
+               s.lift_off_pa > s.regulator_limit_pa ? " (above the regulator path's command limit)" : "");
   else
     fmt::print("  lift-off                      none: the muscle cannot lift the load within the supply's pressure\n");
   fmt::print("  static contraction [mm]:\n    {:>9} {:>9} {:>9}\n", "P [MPa]", "rising", "falling");
   for (std::size_t i = 0; i < s.pressure_pa.size(); ++i)
     fmt::print("    {:>9.3f} {:>9.2f} {:>9.2f}\n", s.pressure_pa[i] * 1e-6, s.rising_m[i] * 1e3, s.falling_m[i] * 1e3);
-  if (no_return)
-    fmt::print("warning: no return force (load.gravity = 0 and no spring): nothing extends the vented muscle, and the "
-               "experiments refuse this rig; set load.spring_rate and/or load.spring_preload\n");
+  if (!unusable.empty()) fmt::print("warning: the experiments refuse this rig: {}\n", unusable);
   if (!s.rising_m.empty() && s.rising_m.back() >= s.stroke_m)
     fmt::print("note: the rising branch reaches the stroke end ({}) within the command limit: the muscle rests on its "
                "hard stop at the top\n",
                mm(s.stroke_m));
-  if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
   return exit_ok;
 }
 

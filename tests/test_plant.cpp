@@ -184,7 +184,9 @@ TEST(PamRig, StaticsBalanceTheForceMapAgainstTheReturnForce) {
     const auto& m = prm.muscle;
     const double rest = prm.load.mass * prm.load.gravity + prm.load.spring_preload;
     EXPECT_DOUBLE_EQ(s.return_force_rest_n, rest);
-    EXPECT_DOUBLE_EQ(s.fall_speed_m_s, rest / prm.load.damping);
+    EXPECT_DOUBLE_EQ(s.fall_speed_rest_m_s, rest / prm.load.damping);
+    EXPECT_DOUBLE_EQ(s.fall_speed_stroke_m_s,
+                     (rest + prm.load.spring_rate * m.max_contraction * m.rest_length) / prm.load.damping);
     EXPECT_DOUBLE_EQ(s.stroke_m, m.max_contraction * m.rest_length);
     const double band = prm.hysteresis.pressure_band;  // its slope is 0 on this rig
     EXPECT_NEAR(festo_force(m, s.lift_off_pa - band, 0.0), rest, 1e-3);
@@ -343,8 +345,14 @@ TEST(PamRig, ExcessiveStiffnessRejectedAtConstruction) {
   light.load.mass = 5e-4;
   light.load.damping = 2e4;
   const std::string m2 = error_of([&] { PamRig rig(light, 1); });
-  EXPECT_NE(m2.find("load.damping / load.mass"), std::string::npos) << m2;
+  EXPECT_NE(m2.find("load.damping c = 2e+04"), std::string::npos) << m2;
   EXPECT_NE(m2.find("max_substeps"), std::string::npos) << m2;
+  // and a return spring far too stiff for the step (1e14 N/m on 20 kg), named with its rate
+  PamRigParams stiff;
+  stiff.load.spring_rate = 1e14;
+  const std::string m3 = error_of([&] { PamRig rig(stiff, 1); });
+  EXPECT_NE(m3.find("load.spring_rate 1e+14"), std::string::npos) << m3;
+  EXPECT_NE(m3.find("a softer return spring"), std::string::npos) << m3;
 }
 
 // A light load on a heavily damped guide (0.5 kg, 20 kN s/m: c / m = 4e4 1/s, beyond RK4's

@@ -14,8 +14,9 @@
 //                      bounded: |z| <= 1; z -> +1 while shortening (the braid
 //                      friction then needs a higher pressure for the same force)
 //   P4  creep          F_muscle = F_h - k_c (x - x_c),  dx_c/dt = (x - x_c) / tau_c
-//   P5  load           m dv/dt = F_muscle - m g - c v,  dx/dt = v,  hard stops at
-//                      0 <= x <= eps_max L0 (velocity set to 0 at a stop)
+//   P5  load           m dv/dt = F_muscle - (m g + F_s0 + k_s x) - c v,  dx/dt = v (the weight
+//                      and an optional return spring), hard stops at 0 <= x <= eps_max L0
+//                      (velocity set to 0 at a stop)
 //   P6  volume         V(eps) = pi r0^2 L0 (1 - eps)[1 - (1 - eps)^2 cos^2 theta0] / sin^2 theta0 + V_dead
 //   P7  chamber        dP/dt = (R T / V)(k_in m_in - k_out m_out) - k P (dV/dt) / V
 //   P8  ISO 6358       m = C rho0 p1 sqrt(T0/T1) phi(p2/p1), phi = 1 for r <= b,
@@ -217,8 +218,12 @@ struct RigStatics {
   double weight_n = 0.0;                // m g
   double return_force_rest_n = 0.0;     // P5 at x = 0 (weight + spring preload)
   double return_force_stroke_n = 0.0;   // P5 at the stroke end
-  double fall_speed_m_s = 0.0;          // return force at rest / load.damping: the vented load's
-                                        // fastest fall (inf without damping; 0 without a return force)
+  // The vented load's terminal speed under its return force against the damping, return force /
+  // load.damping, at rest and at the stroke end (inf without damping): with the muscle pulling
+  // nothing it falls at about these; the creep element's pull (up to creep_stiffness x) and the
+  // load's momentum where the spring's force drops add to it for a while.
+  double fall_speed_rest_m_s = 0.0;
+  double fall_speed_stroke_m_s = 0.0;
   double lift_off_pa = 0.0;             // the least gauge pressure at which the rising branch
                                         // contracts (inf: not within the supply)
   double regulator_limit_pa = 0.0;      // pressure_command_limit(regulator)
@@ -226,6 +231,11 @@ struct RigStatics {
   std::vector<double> pressure_pa, rising_m, falling_m;
 };
 RigStatics rig_statics(const PamRigParams& params);
+// Why no reference can be tracked on this rig, empty if one can (the experiments refuse such a
+// rig with it; `hysteron rig` warns): nothing extends the vented muscle (no weight and no return
+// spring), or the muscle cannot lift its load even at the most pressure it is rated for and
+// supplied with. Keys are named with the prefix `where` ("rig": "rig.load.gravity").
+std::string rig_unusable_reason(const PamRigParams& params, std::string_view where);
 
 // ---- the rig -------------------------------------------------------------------
 

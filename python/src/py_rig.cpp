@@ -68,13 +68,16 @@ void bind_rig(py::module_& m) {
   m.def(
       "rig_statics",
       [](const py::object& params) {
-        const RigStatics s = rig_statics(rig_params_from(params));
+        const PamRigParams rig = rig_params_from(params);
+        const RigStatics s = rig_statics(rig);
         py::dict d;
         d["stroke_m"] = s.stroke_m;
         d["weight_n"] = s.weight_n;
         d["return_force_rest_n"] = s.return_force_rest_n;
         d["return_force_stroke_n"] = s.return_force_stroke_n;
-        d["fall_speed_m_s"] = s.fall_speed_m_s;
+        d["fall_speed_rest_m_s"] = s.fall_speed_rest_m_s;
+        d["fall_speed_stroke_m_s"] = s.fall_speed_stroke_m_s;
+        d["unusable"] = rig_unusable_reason(rig, "rig");
         d["lift_off_pa"] = s.lift_off_pa;
         d["regulator_limit_pa"] = s.regulator_limit_pa;
         d["valves_limit_pa"] = s.valves_limit_pa;
@@ -88,9 +91,11 @@ void bind_rig(py::module_& m) {
       },
       py::arg("params") = py::none(),
       "What a rig's parameters imply at rest (as `hysteron rig`; docs/plant.md): stroke end, return force (weight "
-      "+ spring) at rest and at the stroke end, the vented load's fastest fall (inf without damping), the command "
+      "+ spring) at rest and at the stroke end, the vented load's terminal speed under it at rest and at the stroke end "
+      "(inf without damping), the command "
       "limits, the rising branch's lift-off pressure (inf: none within the supply), the static map on the rising and "
-      "falling branches (SI units), and every parameter's unit ('units', by path).");
+      "falling branches (SI units), every parameter's unit ('units', by path), and 'unusable': why the experiments "
+      "refuse the rig ('' if they do not).");
 
   def_copy(py::class_<PamRig>(m, "PamRig", R"doc(
 Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass (and an

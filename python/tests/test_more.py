@@ -116,7 +116,10 @@ def test_rig_statics_with_a_return_spring():
     moving = nominal["rising_m"] > 0
     assert np.all(stiff["rising_m"][moving] < nominal["rising_m"][moving])
     assert stiff["return_force_stroke_n"] == pytest.approx(196.2 + 3000.0 * stiff["stroke_m"])
-    assert nominal["fall_speed_m_s"] == pytest.approx(196.2 / 400.0)
+    assert nominal["fall_speed_rest_m_s"] == pytest.approx(196.2 / 400.0)
+    assert stiff["fall_speed_stroke_m_s"] == pytest.approx((196.2 + 3000.0 * stiff["stroke_m"]) / 400.0)
+    assert nominal["unusable"] == ""
+    assert "cannot lift" in hysteron.rig_statics({"load": {"spring_preload": 5000.0}})["unusable"]
     assert nominal["units"]["load.spring_rate"] == "N/m" and nominal["units"]["load.mass"] == "kg"
     with pytest.raises(hysteron.Error, match="spring_rate"):
         hysteron.rig_statics({"load": {"spring_rate": -1.0}})

@@ -656,13 +656,15 @@ void add_pre_roll(std::vector<Reference>& refs, double tc) {
   }
 }
 
-// The note of references that descend faster than the load can fall (empty if none does). With
-// the muscle vented it pulls nothing (P1), so the load falls at most as fast as its return force,
-// weight plus spring, drives it against the damping: v_max(x) = (m g + F_s0 + k_s x) / c (P5;
-// the muscle's remaining force and the load's inertia only slow it). Where a reference descends
-// faster, no controller can follow it: the errors there are the rig's, and the command sits at
-// 0 MPa (the saturation notes). On the rig the references are tracked on (a --tracking-plant
-// rig, or the identified one); a load without damping can fall at any speed.
+// The note of references that descend faster than the vented load's terminal speed (empty if
+// none does). With the muscle vented it pulls at most what its hysteresis band leaves (P1-P2),
+// and its return force, weight plus spring, drives the load down against the damping at the
+// terminal speed v_t(x) = (m g + F_s0 + k_s x) / c (P5). It is no strict bound: the creep
+// element's pull (up to k_c x after a quick rise, P4) and the momentum of a load whose spring
+// force drops as it falls add to it for a while (a 20 N load fell at 84.9 mm/s after a 0.5 s
+// rise where v_t was 50). So the note says where the reference asks for more than v_t: there
+// the loop has the command at 0 MPa and little authority left. On the rig the references are
+// tracked on (a --tracking-plant rig, or the identified one); a load without damping has none.
 std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& refs, double tc) {
   const LoadParams& l = rig.load;
   if (!(l.damping > 0.0)) return {};
@@ -671,26 +673,27 @@ std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& 
     double worst = 1.0, v_at = 0.0, x_at = 0.0, faster_s = 0.0;
     for (std::size_t k = std::max<std::size_t>(ref.score_from, 1); k < ref.ref_m.size(); ++k) {
       const double v = (ref.ref_m[k - 1] - ref.ref_m[k]) / tc;  // descent speed [m/s]
-      const double v_max = return_force(l, std::max(0.0, ref.ref_m[k])) / l.damping;
-      if (!(v > v_max)) continue;
+      const double v_t = return_force(l, std::max(0.0, ref.ref_m[k])) / l.damping;
+      if (!(v > v_t)) continue;
       faster_s += tc;
-      if (v / v_max > worst) {
-        worst = v / v_max;
+      if (v / v_t > worst) {
+        worst = v / v_t;
         v_at = v;
         x_at = ref.ref_m[k];
       }
     }
     if (faster_s > 0.0)
-      parts.push_back(fmt::format("{} descends at {:.1f} mm/s at {:.1f} mm, where the load falls at most {:.1f} mm/s "
-                                  "({:.1f} s of the scored reference faster than the load can fall)",
+      parts.push_back(fmt::format("{} descends at {:.1f} mm/s at {:.1f} mm, where the terminal speed is {:.1f} mm/s "
+                                  "({:.1f} s of the scored reference faster than it)",
                                   ref.name, v_at * 1e3, x_at * 1e3, v_at / worst * 1e3, faster_s));
   }
   if (parts.empty()) return {};
   return fmt::format(
-      "the references descend faster than the load can fall with the muscle vented, (load.mass x load.gravity + "
-      "load.spring_preload + load.spring_rate x contraction) / load.damping = ({:g} + {:g} + {:g} x) N / {:g} N s/m: {}; "
-      "there no controller can follow them, the command sits at 0 MPa and the error is the rig's (a heavier load, a "
-      "stiffer return spring, less damping or a slower reference; docs/plant.md, P5)",
+      "the references descend faster than the vented load's terminal speed under its return force, (load.mass x "
+      "load.gravity + load.spring_preload + load.spring_rate x contraction) / load.damping = ({:g} + {:g} + {:g} x) "
+      "N / {:g} N s/m: {}; there the command sits at 0 MPa and the loop has little authority left (only the creep "
+      "element's pull and the load's momentum add to that speed for a while), so the error is mostly the rig's (a "
+      "heavier load, a stiffer return spring, less damping or a slower reference; docs/plant.md, P5)",
       l.mass * l.gravity, l.spring_preload, l.spring_rate, l.damping, fmt::join(parts, "; "));
 }
 
@@ -968,20 +971,14 @@ std::string limit_note(const ExperimentOptions& o, const Spec& spec, double p_ma
           : std::string("; the papers' identification inputs are kept (docs/control.md, section 0)"));
 }
 
-// An experiment needs a force that extends the vented muscle: the load's weight or the return
-// spring's (P5; the muscle pulls nothing at 0 gauge pressure, P1). Without either (load.gravity
-// = 0, a horizontal rig, and no spring) the muscle contracts once and never extends again: every
-// variant sat near the top, 45 mm RMS "ok" (a sweep outside the documented set, 2026-11-30).
+// An experiment needs a force that extends the vented muscle (the load's weight or the return
+// spring's, P5) and a muscle that can lift its load: without the first (load.gravity = 0, a
+// horizontal rig, and no spring) every variant sat near the top, 45 mm RMS "ok" (a sweep
+// outside the documented set, 2026-11-30); without the second the position relay failed with
+// a message that did not name the load (rig_unusable_reason).
 void check_return_force(const PamRigParams& rig, const char* which) {
-  const LoadParams& l = rig.load;
-  if (return_force(l, 0.0) > 0.0 || l.spring_rate > 0.0) return;
-  throw Error(fmt::format(
-      "experiment: {0}.load.gravity = {1:g} with no return spring ({0}.load.spring_rate = {2:g} N/m, "
-      "{0}.load.spring_preload = {3:g} N): nothing extends the muscle when it is vented (the muscle pulls nothing at "
-      "0 gauge pressure, and the rig's return force is the load's weight, load.mass x load.gravity, plus the "
-      "spring's), so after its first contraction it never returns and no reference can be tracked; a horizontal rig "
-      "needs a return spring: set load.spring_rate and/or load.spring_preload (docs/plant.md, P5)",
-      which, l.gravity, l.spring_rate, l.spring_preload));
+  if (std::string why = rig_unusable_reason(rig, which); !why.empty())
+    throw Error(fmt::format("experiment: {}", why));
 }
 
 }  // namespace

@@ -907,7 +907,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
         any.holds > 0
             ? fmt::format("during any {} of one {} value{} it moves by at most {:.4g}", both ? "run" : "other run", a,
                           both ? " between them" : "", any.moves)
-            : fmt::format("the {} holds no {} for two samples or more", a, both ? "value between them" : "other value");
+            : fmt::format("the {} holds no {} for two samples or more", a,
+                          both ? "value between them" : "value other than its least and largest");
     std::string at;
     for (const detail::Pinned* p : {lo_end, hi_end}) {
       if (!p) continue;

@@ -149,10 +149,12 @@ PamRig::PamRig(PamRigParams params, std::uint64_t seed) : p_(params), seed_(seed
   if (needed > p_.simulation.max_substeps) {
     if (lambda_load > lambda)
       throw Error(fmt::format(
-          "rig: the load's dynamics (load.damping / load.mass = {:.4g} / {:.4g} kg, rate {:.4g} 1/s with its stiffest "
-          "mode) need {} sub-steps per dt = {} s, more than simulation.max_substeps = {}; a heavier load, less "
-          "damping or a smaller simulation.dt",
-          p_.load.damping, p_.load.mass, lambda_load, needed, dt, p_.simulation.max_substeps));
+          "rig: the load's dynamics (rate c / m + sqrt(k / m) = {:.4g} 1/s: load.damping c = {:.4g} N s/m, load.mass "
+          "m = {:.4g} kg, stiffness k = {:.4g} N/m, the muscle's at rest plus hysteresis.creep_stiffness {:.4g} plus "
+          "load.spring_rate {:.4g}) need {} sub-steps per dt = {} s, more than simulation.max_substeps = {}; a heavier "
+          "load, less damping, a softer return spring or a smaller simulation.dt",
+          lambda_load, p_.load.damping, p_.load.mass, k_max, p_.hysteresis.creep_stiffness, p_.load.spring_rate,
+          needed, dt, p_.simulation.max_substeps));
     throw Error(fmt::format(
         "rig: the air dynamics (rate {:.4g} 1/s) need {} sub-steps per dt = {} s, more than "
         "simulation.max_substeps = {}; reduce simulation.dt or a valve conductance",

@@ -59,8 +59,8 @@ assert n == len(a["units"]) and n >= 50, (n, len(a["units"]))
 assert a["parameters"]["load"]["mass"] == 35 and a["parameters"]["muscle"]["rest_length"] == 0.6
 s = a["statics"]
 assert abs(s["return_force_rest_n"] - 35 * 9.81) < 1e-9, s["return_force_rest_n"]
-assert abs(s["fall_speed_m_s"] - 35 * 9.81 / 400) < 1e-9, s["fall_speed_m_s"]
-assert not s["experiments_refuse"]
+assert abs(s["fall_speed_rest_m_s"] - 35 * 9.81 / 400) < 1e-9, s["fall_speed_rest_m_s"]
+assert s["experiments_refuse"] is None
 rising = [r["rising_m"] for r in s["static_map"]]
 assert rising == sorted(rising) and rising[-1] > 0, rising
 PYEOF
@@ -70,7 +70,8 @@ PYEOF
 # horizontal: without a spring warned (and refused by experiment), with one the preload sets lift-off
 echo '{"load": {"gravity": 0}}' > "$T/flat.json"
 "$BIN" rig "$T/flat.json" > "$T/flat.txt" 2>&1 || fail "flat: exit $?"
-grep -q "no return force" "$T/flat.txt" || fail "flat: no warning"
+grep -q "the experiments refuse this rig: rig.load.gravity = 0 with no return spring" "$T/flat.txt" \
+  || fail "flat: no warning: $(cat "$T/flat.txt")"
 "$BIN" experiment gpi-pid --plant "$T/flat.json" --learning-periods 0 > /dev/null 2>&1 && fail "flat: experiment ran"
 echo '{"load": {"gravity": 0, "spring_preload": 98.1}}' > "$T/half.json"
 echo '{"load": {"gravity": 0, "spring_preload": 392.4}}' > "$T/double.json"
@@ -81,8 +82,18 @@ import json, sys
 h, d = (json.load(open(f))["statics"] for f in sys.argv[1:])
 assert h["weight_n"] == 0 and abs(h["return_force_rest_n"] - 98.1) < 1e-9
 assert h["lift_off_pa"] < d["lift_off_pa"], (h["lift_off_pa"], d["lift_off_pa"])
-assert not h["experiments_refuse"]
+assert h["experiments_refuse"] is None
 PYEOF
+# a load the muscle cannot lift: warned, and said by experiment; a spring too stiff to simulate: exit 1
+echo '{"load": {"spring_preload": 5000}}' > "$T/heavy2.json"
+"$BIN" rig "$T/heavy2.json" > "$T/heavy2.txt" 2>&1 || fail "heavy2: exit $?"
+grep -q "the experiments refuse this rig: the muscle cannot lift its load" "$T/heavy2.txt" || fail "heavy2: no warning"
+"$BIN" experiment gpi-pid --plant "$T/heavy2.json" --learning-periods 0 > /dev/null 2> "$T/err.txt" && fail "heavy2 ran"
+grep -q "the muscle cannot lift its load" "$T/err.txt" || fail "heavy2 experiment: $(cat "$T/err.txt")"
+echo '{"load": {"spring_rate": 1e14}}' > "$T/stiff.json"
+"$BIN" rig "$T/stiff.json" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "stiff: not exit 1"
+grep -q "load.spring_rate 1e+14" "$T/err.txt" || fail "stiff: $(cat "$T/err.txt")"
 
 [ $fails -eq 0 ] && echo "rig.sh: all passed"
 exit $((fails > 0))

@@ -202,64 +202,6 @@ double pressure_command_limit(const PamRigParams& p, Actuation mode) noexcept {
                                       : p.muscle.max_pressure;
 }
 
-RigStatics rig_statics(const PamRigParams& p) {
-  validate(p, "rig");
-  RigStatics s;
-  const LoadParams& l = p.load;
-  s.stroke_m = p.muscle.max_contraction * p.muscle.rest_length;
-  s.weight_n = l.mass * l.gravity;
-  s.return_force_rest_n = return_force(l, 0.0);
-  s.return_force_stroke_n = return_force(l, s.stroke_m);
-  const double inf = std::numeric_limits<double>::infinity();
-  s.fall_speed_rest_m_s = l.damping > 0.0 ? s.return_force_rest_n / l.damping : inf;
-  s.fall_speed_stroke_m_s = l.damping > 0.0 ? s.return_force_stroke_n / l.damping : inf;
-  s.regulator_limit_pa = pressure_command_limit(p, Actuation::regulator);
-  s.valves_limit_pa = pressure_command_limit(p, Actuation::switching_valves);
-  const double supply = p.air.supply_pressure - p.air.atmospheric_pressure;  // [Pa gauge]
-  // the rising branch contracts where F(P - dP_h, 0) exceeds the return force at rest: monotone in
-  // P (dP_h's slope is below 1 or the effective pressure never grows), so bisection on [0, supply]
-  const auto lifts = [&](double pa) { return static_contraction(p, pa, 1.0) > 0.0; };
-  if (!lifts(supply)) {
-    s.lift_off_pa = std::numeric_limits<double>::infinity();
-  } else {
-    double lo = 0.0, hi = supply;
-    for (int i = 0; i < 100 && hi - lo > 1e-6; ++i) (lifts(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
-    s.lift_off_pa = hi;
-  }
-  const double top = std::min(s.regulator_limit_pa, supply);
-  for (int i = 0;; ++i) {
-    const double pa = std::min(1e5 * i, top);
-    s.pressure_pa.push_back(pa);
-    s.rising_m.push_back(static_contraction(p, pa, 1.0));
-    s.falling_m.push_back(static_contraction(p, pa, -1.0));
-    if (pa >= top) break;
-  }
-  return s;
-}
-
-std::string rig_unusable_reason(const PamRigParams& p, std::string_view where) {
-  const LoadParams& l = p.load;
-  if (!(return_force(l, 0.0) > 0.0) && !(l.spring_rate > 0.0))
-    return fmt::format(
-        "{0}.load.gravity = {1:g} with no return spring ({0}.load.spring_rate = {2:g} N/m, {0}.load.spring_preload = "
-        "{3:g} N): nothing extends the muscle when it is vented (at 0 gauge pressure it pulls at most what its "
-        "hysteresis band leaves, and the rig's return force is the load's weight, load.mass x load.gravity, plus the "
-        "spring's), so after its first contraction it never returns and no reference can be tracked; a horizontal rig "
-        "needs a return spring: set load.spring_rate and/or load.spring_preload (docs/plant.md, P5)",
-        where, l.gravity, l.spring_rate, l.spring_preload);
-  // the most pressure the muscle gets: its rating, or the supply where that is lower
-  const double top = std::min(p.muscle.max_pressure, p.air.supply_pressure - p.air.atmospheric_pressure);
-  if (static_contraction(p, top, 1.0) > 0.0) return {};
-  const double band = p.hysteresis.pressure_band + p.hysteresis.pressure_band_slope * top;
-  return fmt::format(
-      "the muscle cannot lift its load: at {1:.3f} MPa, the most it gets ({0}.muscle.max_pressure = {2:g} Pa, "
-      "{0}.air.supply_pressure = {3:g} Pa abs), it pulls {4:.1f} N at rest on its rising branch, less than the return "
-      "force there, {5:.1f} N ({0}.load.mass x {0}.load.gravity = {6:.1f} N, {0}.load.spring_preload = {7:g} N); a "
-      "lighter load, a weaker return spring, a stronger muscle or more pressure",
-      where, top * 1e-6, p.muscle.max_pressure, p.air.supply_pressure, festo_force(p.muscle, top - band, 0.0),
-      return_force(l, 0.0), l.mass * l.gravity, l.spring_preload);
-}
-
 PamRigParams rig_params_from_json(const nlohmann::json& j, std::string_view where) {
   if (!j.is_object()) throw Error(fmt::format("{}: expected a JSON object, got {}", where, j.type_name()));
   PamRigParams p;

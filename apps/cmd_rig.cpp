@@ -27,9 +27,6 @@ struct Options {
   bool json = false;
 };
 
-// A finite number as JSON, else null (an infinite fall speed or lift-off).
-nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
 std::string mm(double m) { return fmt::format("{:.1f} mm", m * 1e3); }
 
 int run_rig(const Options& o) {
@@ -42,29 +39,11 @@ int run_rig(const Options& o) {
   if (!o.out.empty()) save_rig_params(p, o.out);
   if (o.out == "-") return exit_ok;  // stdout holds the rig's JSON alone
   if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
-  // why the experiments refuse the rig, if they do (rig_unusable_reason)
-  const std::string unusable = rig_unusable_reason(p, "rig");
   if (o.json) {
-    nlohmann::json j;
-    j["rig"] = source;
-    j["parameters"] = rig_params_to_json(p);
-    nlohmann::json units = nlohmann::json::object();
-    for (const RigParameter& r : rig_parameters(p)) units[r.path] = r.unit;
-    j["units"] = units;
-    nlohmann::json t = nlohmann::json::array();
-    for (std::size_t i = 0; i < s.pressure_pa.size(); ++i)
-      t.push_back({{"pressure_pa", s.pressure_pa[i]}, {"rising_m", s.rising_m[i]}, {"falling_m", s.falling_m[i]}});
-    j["statics"] = {{"stroke_m", s.stroke_m},
-                    {"weight_n", s.weight_n},
-                    {"return_force_rest_n", s.return_force_rest_n},
-                    {"return_force_stroke_n", s.return_force_stroke_n},
-                    {"fall_speed_rest_m_s", finite_or_null(s.fall_speed_rest_m_s)},
-                    {"fall_speed_stroke_m_s", finite_or_null(s.fall_speed_stroke_m_s)},
-                    {"lift_off_pa", finite_or_null(s.lift_off_pa)},
-                    {"regulator_limit_pa", s.regulator_limit_pa},
-                    {"valves_limit_pa", s.valves_limit_pa},
-                    {"static_map", t},
-                    {"experiments_refuse", unusable.empty() ? nlohmann::json(nullptr) : nlohmann::json(unusable)}};
+    const nlohmann::json j = {{"rig", source},
+                              {"parameters", rig_params_to_json(p)},
+                              {"units", rig_units_to_json()},
+                              {"statics", rig_statics_to_json(s)}};
     fmt::print("{}\n", j.dump(2));
     return exit_ok;
   }
@@ -98,7 +77,7 @@ int run_rig(const Options& o) {
   fmt::print("  static contraction [mm]:\n    {:>9} {:>9} {:>9}\n", "P [MPa]", "rising", "falling");
   for (std::size_t i = 0; i < s.pressure_pa.size(); ++i)
     fmt::print("    {:>9.3f} {:>9.2f} {:>9.2f}\n", s.pressure_pa[i] * 1e-6, s.rising_m[i] * 1e3, s.falling_m[i] * 1e3);
-  if (!unusable.empty()) fmt::print("warning: the experiments refuse this rig: {}\n", unusable);
+  if (!s.unusable.empty()) fmt::print("warning: the experiments refuse this rig: {}\n", s.unusable);
   if (!s.rising_m.empty() && s.rising_m.back() >= s.stroke_m)
     fmt::print("note: the rising branch reaches the stroke end ({}) within the command limit: the muscle rests on its "
                "hard stop at the top\n",

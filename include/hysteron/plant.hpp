@@ -229,8 +229,14 @@ struct RigStatics {
   double regulator_limit_pa = 0.0;      // pressure_command_limit(regulator)
   double valves_limit_pa = 0.0;         // pressure_command_limit(switching_valves)
   std::vector<double> pressure_pa, rising_m, falling_m;
+  std::string unusable;                 // rig_unusable_reason(params, "rig"): "" if the experiments run
 };
 RigStatics rig_statics(const PamRigParams& params);
+// The one JSON form of RigStatics (`hysteron rig --json`, Python's rig_statics): its fields by
+// name, the static map as three arrays, an infinite speed or lift-off as null.
+nlohmann::json rig_statics_to_json(const RigStatics& statics);
+// Every parameter's SI unit by its path ("load.mass": "kg"; "-": dimensionless).
+nlohmann::json rig_units_to_json();
 // Why no reference can be tracked on this rig, empty if one can (the experiments refuse such a
 // rig with it; `hysteron rig` warns): nothing extends the vented muscle (no weight and no return
 // spring), or the muscle cannot lift its load even at the most pressure it is rated for and

@@ -68,32 +68,17 @@ void bind_rig(py::module_& m) {
   m.def(
       "rig_statics",
       [](const py::object& params) {
-        const PamRigParams rig = rig_params_from(params);
-        const RigStatics s = rig_statics(rig);
-        py::dict d;
-        d["stroke_m"] = s.stroke_m;
-        d["weight_n"] = s.weight_n;
-        d["return_force_rest_n"] = s.return_force_rest_n;
-        d["return_force_stroke_n"] = s.return_force_stroke_n;
-        d["fall_speed_rest_m_s"] = s.fall_speed_rest_m_s;
-        d["fall_speed_stroke_m_s"] = s.fall_speed_stroke_m_s;
-        d["unusable"] = rig_unusable_reason(rig, "rig");
-        d["lift_off_pa"] = s.lift_off_pa;
-        d["regulator_limit_pa"] = s.regulator_limit_pa;
-        d["valves_limit_pa"] = s.valves_limit_pa;
-        d["pressure_pa"] = to_numpy(s.pressure_pa);
-        d["rising_m"] = to_numpy(s.rising_m);
-        d["falling_m"] = to_numpy(s.falling_m);
-        py::dict units;
-        for (const RigParameter& r : rig_parameters(PamRigParams{})) units[py::str(r.path)] = r.unit;
-        d["units"] = units;
+        py::dict d = from_json(rig_statics_to_json(rig_statics(rig_params_from(params))));
+        for (const char* column : {"pressure_pa", "rising_m", "falling_m"})
+          d[column] = py::array_t<double>(py::cast<py::sequence>(d[column]));
+        d["units"] = from_json(rig_units_to_json());
         return d;
       },
       py::arg("params") = py::none(),
       "What a rig's parameters imply at rest (as `hysteron rig`; docs/plant.md): stroke end, return force (weight "
       "+ spring) at rest and at the stroke end, the vented load's terminal speed under it at rest and at the stroke end "
-      "(inf without damping), the command "
-      "limits, the rising branch's lift-off pressure (inf: none within the supply), the static map on the rising and "
+      "(None without damping), the command "
+      "limits, the rising branch's lift-off pressure (None: none within the supply), the static map on the rising and "
       "falling branches (SI units), every parameter's unit ('units', by path), and 'unusable': why the experiments "
       "refuse the rig ('' if they do not).");
 

@@ -132,6 +132,7 @@ RigStatics rig_statics(const PamRigParams& p) {
     s.falling_m.push_back(static_contraction(p, pa, -1.0));
     if (pa >= top) break;
   }
+  s.unusable = rig_unusable_reason(p, "rig");
   return s;
 }
 

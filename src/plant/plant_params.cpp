@@ -278,6 +278,29 @@ std::vector<RigParameter> rig_parameters(const PamRigParams& params) {
   return out;
 }
 
+nlohmann::json rig_statics_to_json(const RigStatics& s) {
+  const auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  return {{"stroke_m", s.stroke_m},
+          {"weight_n", s.weight_n},
+          {"return_force_rest_n", s.return_force_rest_n},
+          {"return_force_stroke_n", s.return_force_stroke_n},
+          {"fall_speed_rest_m_s", finite_or_null(s.fall_speed_rest_m_s)},
+          {"fall_speed_stroke_m_s", finite_or_null(s.fall_speed_stroke_m_s)},
+          {"lift_off_pa", finite_or_null(s.lift_off_pa)},
+          {"regulator_limit_pa", s.regulator_limit_pa},
+          {"valves_limit_pa", s.valves_limit_pa},
+          {"pressure_pa", s.pressure_pa},
+          {"rising_m", s.rising_m},
+          {"falling_m", s.falling_m},
+          {"unusable", s.unusable}};
+}
+
+nlohmann::json rig_units_to_json() {
+  nlohmann::json j = nlohmann::json::object();
+  for (const RigParameter& r : rig_parameters(PamRigParams{})) j[r.path] = r.unit;
+  return j;
+}
+
 PamRigParams load_rig_params(const std::filesystem::path& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))

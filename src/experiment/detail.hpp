@@ -1,6 +1,7 @@
 #pragma once
 // Private to the experiments (src/experiment/): the rig runs, fits and tracking
 // loop every experiment shares, and the spec each experiment registers.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -276,7 +277,7 @@ inline constexpr double kPositionRelayAmplitude = 0.05;  // [MPa], the first h t
 // for white noise: a slow drift (a load still settling) adds little, where the samples' spread
 // around their mean would count it. Needs to - from >= 2.
 double first_difference_sigma(const std::vector<double>& y, std::size_t from, std::size_t to);
-// The pressures of an identification run's stroke [MPa] (stroke_pressures in experiment.cpp):
+// The pressures of an identification run's stroke [MPa] (stroke_pressures in reach.cpp):
 // floor_mpa, the least at which the contraction is off its rest (above its least by 2 % of
 // its span and by 3 noise sigmas; on the descent, where the hysteresis puts it lowest);
 // mid_mpa, the mean where the contraction is within 5 % of its span of the middle of the
@@ -410,5 +411,74 @@ double learning_growth_limit(const RigDynamics& d, const PidParams& pid, std::si
 LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::size_t lead, std::size_t period,
                                double tc, double& contraction, Neighbours which = Neighbours::all,
                                FilterWindow window = FilterWindow::whole);
+
+
+// ---- The rig's reach and the model's identification range (reach.cpp) ----
+
+// Pressure headroom kept below the actuator's limit at a reference's top [fraction of
+// the run's limit]: the position loop needs pressure above the feedforward's to correct an error
+// there. The papers' references keep more on the nominal rig (gpi-pid's 95 mm top is reached
+// at about 0.56 MPa, docs/control.md section 5).
+inline constexpr double kPressureHeadroom = 0.05;
+
+// The largest element of v; 0 where v is empty.
+inline double max_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+
+// Centred 11-sample moving mean [mm or MPa] (reach.cpp).
+std::vector<double> smoothed(const std::vector<double>& x);
+
+// The identification run's contraction [mm] and measured pressure [MPa], each as its
+// centred 11-sample mean: what the reach and the model's identification range are read from.
+struct SmoothedRun {
+  std::vector<double> x_mm, p;
+  explicit SmoothedRun(const IdentificationRun& id) : x_mm(smoothed(id.contraction_mm)), p(smoothed(id.pressure_mpa)) {}
+};
+
+// The top pressure the loops can use and why (usable_top, reach.cpp).
+struct ActuatorTop {
+  double mpa = 0.0;             // the usable top
+  double reached_mpa = 0.0;     // the reading's top
+  bool sensor_limited = false;  // the reading stopped short of the commands, the muscle did not
+  double slope_ratio = 0.0;     // the contraction's slope on the command at the reading's top / the run's
+  double x_lo_mm = 0.0, x_hi_mm = 0.0, cmd_lo_mpa = 0.0, cmd_hi_mpa = 0.0;  // over those samples
+  // the reading's median shortfall below the command over the run's middle commands (rising
+  // and falling alike, so that the regulator's lag cancels) [MPa]: a sensor that reads low
+  // (or an actuator short everywhere) shows it all along, a cap only at the top
+  double offset_mpa = 0.0;
+  bool reads_low = false;  // offset_mpa is at least half the shortfall at the top
+};
+ActuatorTop usable_top(const IdentificationRun& id, const SmoothedRun& sm, double p_max);
+StrokePressures stroke_pressures(const IdentificationRun& id, const SmoothedRun& sm);
+// ExperimentOptions::fit_references: the references mapped onto the rig's reach (notes into `res`).
+std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const IdentificationRun& id, const SmoothedRun& sm,
+                                    const ActuatorTop& actuator_top, std::vector<Reference> refs,
+                                    ExperimentResult& res, double p_max);
+void add_pre_roll(std::vector<Reference>& refs, double tc);
+
+// The pressure hysteron's model is identified up to (model_identification_range, reach.cpp).
+struct IdentificationRange {
+  double top_mm = 0.0, p_need_mpa = 0.0, p_id_mpa = 0.0, input_max_mpa = 0.0;
+  std::string note() const;  // the result's message
+};
+IdentificationRange model_identification_range(const SmoothedRun& sm, const std::vector<Reference>& refs,
+                                               const std::vector<double>& input, double p_max);
+// `input` scaled so that its maximum is top_mpa: down only, or with `up_too` either way.
+std::vector<double> scaled_to(std::vector<double> input, double top_mpa, bool up_too = false);
+double extended_input_top(const std::vector<double>& input, const SmoothedRun& sm, const std::vector<Reference>& refs,
+                          double p_top, double p_max);
+
+// ---- hysteron's model for the compensated variants (model_choice.cpp) ----
+
+// The fit options of a candidate kind: the paper's options with the kind, its number of
+// operators, the decimated record's sample time and the whole record.
+FitOptions candidate_fit_options(const FitOptions& paper, FitModel kind, const Spec& spec, double fit_dt);
+// A rate-pi fitted at the decimated record's sample period, run at the control period tc (a note
+// into `messages`); other kinds unchanged.
+void to_control_rate(ModelParams& m, double tc, std::vector<std::string>& messages);
+// Fits the candidates on `idf` and keeps (res.best_fit) the one with the least RMS on `id2`;
+// fills res.candidates, res.model_choice and res.model_reason.
+void choose_model(const ExperimentOptions& o, const Spec& spec, const IdentificationRun& idf,
+                  const IdentificationRun& id2, const FitOptions& fo, double fit_dt, double p_max,
+                  ExperimentResult& res);
 
 }  // namespace hysteron::experiment

@@ -1,0 +1,176 @@
+// ExperimentResult's files (identification and tracking CSVs, model files, result.json,
+// report.html) and its text table.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "detail.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/experiment.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
+#include "hysteron/io/table.hpp"
+
+namespace hysteron {
+
+using namespace experiment;
+
+bool ExperimentResult::is_output_file(const std::string& f) {
+  for (const char* name : {"identification.csv", "model_identification.csv", "model.json", "best_model.json",
+                           "result.json", "report.html"})
+    if (f == name) return true;
+  return f.starts_with("tracking_") && f.ends_with(".csv");
+}
+
+namespace {
+
+// Writes the run's files into `d`; returns their names.
+std::vector<std::string> write_files(const ExperimentResult& r, const std::filesystem::path& d) {
+  std::vector<std::string> written = {"model.json", "best_model.json", "result.json"};
+  // an identification run's columns (read back by report::read_experiment_dir)
+  auto write_id_run = [&](const char* name, const IdentificationRun& run) {
+    written.push_back(name);
+    io::write_columns((d / name).string(), {"t_s", "pressure_command_mpa", "pressure_mpa", "contraction_mm"},
+                      {run.t, run.pressure_command_mpa, run.pressure_mpa, run.contraction_mm});
+  };
+  write_id_run("identification.csv", r.identification);
+  if (!r.model_identification.empty()) write_id_run("model_identification.csv", r.model_identification);
+  for (const auto& run : r.runs) {
+    std::vector<std::string> names = {"t_s",      "reference_mm", "measured_mm", "actual_mm", "pressure_command_mpa",
+                                      "pressure_mpa", "pwm_duty"};
+    std::vector<std::vector<double>> columns = {run.t, run.reference_mm, run.measured_mm, run.actual_mm,
+                                                run.pressure_command_mpa, run.pressure_mpa, run.duty};
+    if (!run.pressure_measured_mpa.empty()) {  // the pressure sensor's reading the loop was given
+      names.push_back("pressure_measured_mpa");
+      columns.push_back(run.pressure_measured_mpa);
+    }
+    if (!run.correction_mm.empty()) {  // learning runs: the correction added to the reference
+      names.push_back("correction_mm");
+      columns.push_back(run.correction_mm);
+    }
+    written.push_back(fmt::format("tracking_{}_{}.csv", run.variant, run.reference));
+    io::write_columns((d / written.back()).string(), names, columns);
+  }
+  io::write_model_file((d / "model.json").string(), r.fit.model);
+  io::write_model_file((d / "best_model.json").string(), r.best_fit.model,
+                       r.model_reason.empty()
+                           ? nlohmann::json{}
+                           : nlohmann::json{{"note", fmt::format("hysteron experiment {}: the model of the "
+                                                                 "compensated variants; {}",
+                                                                 r.name, r.model_reason)}});
+  io::write_text_file((d / "result.json").string(), io::to_json(r).dump(2) + "\n");
+  return written;
+}
+
+}  // namespace
+
+void ExperimentResult::write(const std::string& dir) const {
+  namespace fs = std::filesystem;
+  const fs::path d(dir);
+  std::error_code ec;
+  const bool existed = fs::is_directory(d, ec);
+  fs::create_directories(d, ec);
+  if (ec) throw Error(fmt::format("experiment: cannot create output directory {}: {}", dir, ec.message()));
+  const bool earlier_run = fs::exists(d / "result.json", ec);
+  std::vector<std::string> written;
+  try {
+    io::FileBatch batch;  // every file complete before any is replaced
+    written = write_files(*this, d);
+    batch.commit();
+  } catch (...) {
+    if (!existed) fs::remove(d, ec);  // the directory it created, if still empty
+    throw;
+  }
+  if (!earlier_run) return;
+  // The earlier run's files this one does not have (a variant it did not run, its report).
+  std::vector<fs::path> stale;
+  for (const auto& e : fs::directory_iterator(d, ec)) {
+    const std::string f = e.path().filename().string();
+    if (is_output_file(f) && std::find(written.begin(), written.end(), f) == written.end()) stale.push_back(e.path());
+  }
+  for (const fs::path& p : stale) fs::remove(p, ec);
+}
+
+std::string ExperimentResult::table() const {
+  std::string s = fmt::format("{}: {}\n", name, title);
+  s += fmt::format("  identification: {} fitted on the major loop, RMS {:.3f} mm train, {:.3f} mm ({:.2f} % of span) "
+                   "on the minor loops; best model {} ({:.3f} mm RMS on a second run)\n",
+                   fit_model_name(fit.model_kind), fit.train.rms, validation.rms, validation.rms_percent_span,
+                   fit_model_name(best_fit.model_kind), best_validation.rms);
+  if (!model_reason.empty()) s += fmt::format("  model of the compensated variants: {}\n", model_reason);
+  if (candidates.size() > 1) {
+    s += "  candidates (RMS on the second run [mm], fit time [s]):";
+    for (const auto& c : candidates)
+      s += c.ok ? fmt::format(" {}{} {:.3f} ({:.2f} s);", fit_model_name(c.kind), c.chosen ? "*" : "", c.validation.rms,
+                              c.fit_time_s)
+                : fmt::format(" {} skipped;", fit_model_name(c.kind));
+    s.back() = '\n';
+  }
+  s += fmt::format("  {:<10} {:<12} {:>9} {:>9} {:>9}\n", "reference", "variant", "max [mm]", "MAE [mm]", "RMS [mm]");
+  for (const auto& r : runs)
+    s += fmt::format("  {:<10} {:<12} {:>9.3f} {:>9.4f} {:>9.4f}{}\n", r.reference, r.variant, r.errors.max_error_mm,
+                     r.errors.mae_mm, r.errors.rms_error_mm,
+                     r.periods.empty() ? "" : fmt::format("   (period {})", r.periods.size()));
+  if (!published.empty()) {
+    auto cell = [](double v, int digits) {
+      return std::isfinite(v) ? fmt::format("{:>9.{}f}", v, digits) : fmt::format("{:>9}", "-");
+    };
+    for (const auto& e : published.errors)
+      s += fmt::format("  {:<10} {:<12} {} {} {}\n", e.reference.empty() ? "paper" : e.reference, "published",
+                       cell(e.max_error_mm, 3), cell(e.mae_mm, 4), cell(e.rms_error_mm, 4));
+  } else {
+    s += "  (the paper's text ends before its results: no published figures)\n";
+  }
+  for (const auto& r : runs) {
+    if (r.periods.empty()) continue;
+    s += fmt::format("  learning, {}: RMS [mm] of each period:", r.reference);
+    for (const auto& e : r.periods) s += fmt::format(" {:.3f}", e.rms_error_mm);
+    s += "\n";
+  }
+  // the relay's amplitude only where it had to be raised (a wide hysteresis band)
+  const double h = dynamics.position_relay_amplitude_mpa;
+  // ... and its level (and the pressure relay's) only where a capped supply moved it off 0.3 MPa
+  auto moved = [&](double level) { return level > 0.0 && std::abs(level - relay_level(pressure_limit_mpa)) > 1e-9; };
+  std::string amplitude;
+  if (moved(dynamics.position_relay_level_mpa))
+    amplitude = fmt::format(" (at {:.3f} +-{:g} MPa)", dynamics.position_relay_level_mpa, h);
+  else if (h > kPositionRelayAmplitude * (1.0 + 1e-9))
+    amplitude = fmt::format(" (+-{:g} MPa)", h);
+  s += fmt::format("  identified: dead time {:.0f} ms, lag {:.0f} ms, slope {:.3f} mm/kPa; position relay{} K_u = {:.3g} "
+                   "MPa/m, T_u = {:.0f} ms, mode {:.2f} Hz (damping {:.2f}){}\n",
+                   dynamics.dead_time_s * 1e3, dynamics.lag_s * 1e3, dynamics.gain_m_per_mpa, amplitude,
+                   dynamics.position_relay_gain, dynamics.position_relay_period_s * 1e3,
+                   dynamics.mode_frequency_hz, dynamics.mode_damping,
+                   dynamics.relay_gain > 0
+                       ? fmt::format(", pressure relay{}{} K_u = {:.3g}/MPa, T_u = {:.1f} ms",
+                                     moved(dynamics.relay_level_mpa)
+                                         ? fmt::format(" (at {:.3f} MPa)", dynamics.relay_level_mpa)
+                                         : std::string(),
+                                     dynamics.relay_duty > 0.5 ? fmt::format(" (duty +-{:g}: the valves did not "
+                                                                             "open at +-0.5)", dynamics.relay_duty)
+                                                               : std::string(),
+                                     dynamics.relay_gain, dynamics.relay_period_s * 1e3)
+                       : std::string());
+  for (const auto& g : gain_trials) {
+    s += fmt::format("  gain trial, {}: PID gains x{:.2f}{}; RMS [mm] on the trapezoid per scale:", g.reference, g.scale,
+                     g.shaped ? ", shaped feedforward" : "");
+    for (std::size_t i = 0; i < g.scales.size(); ++i)
+      s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], !g.shaped && g.scales[i] == g.scale ? "*" : "", g.rms_mm[i]);
+    if (!g.rms_shaped_mm.empty()) {
+      s += "; shaped:";
+      for (std::size_t i = 0; i < g.scales.size(); ++i)
+        s += fmt::format(" x{:.2f}{} {:.3f}", g.scales[i], g.shaped && g.scales[i] == g.scale ? "*" : "",
+                         g.rms_shaped_mm[i]);
+    }
+    if (g.early_stop) s += " (stopped early above the best: those RMS are lower bounds)";
+    s += "\n";
+  }
+  for (const auto& m : messages) s += fmt::format("  note: {}\n", m);
+  return s;
+}
+
+}  // namespace hysteron

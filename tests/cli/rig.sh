@@ -3,7 +3,8 @@
 # file is read as --plant reads it (a typo or an impossible value is exit 1 naming the key,
 # nothing written); --out writes the complete rig, which reads back to the same parameters and
 # is accepted by experiment; a horizontal rig without a spring is warned as the experiments
-# refuse it, and with a spring its lift-off moves with the spring's preload.
+# refuse it, and with a spring its lift-off moves with the spring's preload; a weak return force
+# is warned.
 # Usage: bash rig.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 BIN=$1
@@ -95,6 +96,25 @@ echo '{"load": {"spring_rate": 1e14}}' > "$T/stiff.json"
 "$BIN" rig "$T/stiff.json" > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "stiff: not exit 1"
 grep -q "load.spring_rate 1e+14" "$T/err.txt" || fail "stiff: $(cat "$T/err.txt")"
+
+# a weak return force (horizontal, 1 N preload): the creep element holds the vented muscle near the top
+# (docs/plant.md, "A weak return force"): warned on stderr, and in --json; the stall is where the creep's
+# pull, 150 N/m x (top - x), meets the 1 N (the vented muscle pulls nothing there): top - 1/150 m
+echo '{"load": {"gravity": 0, "spring_preload": 1}}' > "$T/weak.json"
+"$BIN" rig "$T/weak.json" > "$T/weak.txt" 2> "$T/err.txt" || fail "weak: exit $?"
+grep -q "^rig: warning: the return force is weak against the creep element" "$T/err.txt" \
+  || fail "weak: no warning on stderr: $(cat "$T/err.txt")"
+"$BIN" rig "$T/weak.json" --json > "$T/weak.out" 2> /dev/null || fail "weak --json: exit $?"
+$PY - "$T/weak.out" "$T/half.out" "$T/a.json" <<'PYEOF' || fail "weak return in --json"
+import json, sys
+w, h, a = (json.load(open(f))["statics"] for f in sys.argv[1:])
+assert w["weak_return"].startswith("the return force is weak"), w["weak_return"]
+assert abs(w["vented_stall_m"] - (w["rising_m"][-1] - 1 / 150)) < 1e-6, w["vented_stall_m"]
+assert abs(w["creep_return_speed_m_s"] - 1 / (400 + 150 * 4)) < 1e-12, w["creep_return_speed_m_s"]
+assert h["weak_return"] == "" and a["weak_return"] == "", (h["weak_return"], a["weak_return"])
+PYEOF
+"$BIN" rig "$T/half.json" > /dev/null 2> "$T/err.txt" || fail "half: exit $?"
+[ -s "$T/err.txt" ] && fail "half: warned: $(cat "$T/err.txt")"
 
 [ $fails -eq 0 ] && echo "rig.sh: all passed"
 exit $((fails > 0))

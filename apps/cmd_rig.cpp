@@ -30,15 +30,18 @@ struct Options {
 std::string mm(double m) { return fmt::format("{:.1f} mm", m * 1e3); }
 
 int run_rig(const Options& o) {
-  if (o.json && o.out == "-") throw Error("--json and --out - both print on stdout: give --out a file");
+  // --out naming stdout (-, /dev/stdout, or the file stdout is redirected to) prints the rig's JSON alone
+  const bool out_stdout = names_stdout(o.out);
+  if (o.json && out_stdout)
+    throw Error(fmt::format("--json and --out {} both print on stdout: give --out another file", o.out));
   io::check_output_files({{"--out", o.out}}, {{"FILE", o.file}});
   const PamRigParams p = o.file.empty() ? PamRigParams{} : load_rig_params(o.file);
   (void)PamRig(p, 1);  // what only the simulator checks: the sub-steps its dynamics need
   const RigStatics s = rig_statics(p);
   const std::string source = o.file.empty() ? std::string("the nominal rig") : o.file;
-  if (!o.out.empty()) save_rig_params(p, o.out);
+  if (!o.out.empty()) save_rig_params(p, out_stdout ? std::string("-") : o.out);
   if (!s.weak_return.empty()) fmt::print(stderr, "rig: warning: {}\n", s.weak_return);
-  if (o.out == "-") return exit_ok;  // stdout holds the rig's JSON alone
+  if (out_stdout) return exit_ok;  // stdout holds the rig's JSON alone
   if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
   if (o.json) {
     const nlohmann::json j = {{"rig", source},

@@ -4,7 +4,7 @@
 # nothing written); --out writes the complete rig, which reads back to the same parameters and
 # is accepted by experiment; a horizontal rig without a spring is warned as the experiments
 # refuse it, and with a spring its lift-off moves with the spring's preload; a weak return force
-# is warned.
+# is warned; --out naming stdout is handled as --out -.
 # Usage: bash rig.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 BIN=$1
@@ -115,6 +115,20 @@ assert h["weak_return"] == "" and a["weak_return"] == "", (h["weak_return"], a["
 PYEOF
 "$BIN" rig "$T/half.json" > /dev/null 2> "$T/err.txt" || fail "half: exit $?"
 [ -s "$T/err.txt" ] && fail "half: warned: $(cat "$T/err.txt")"
+
+# --out naming stdout (/dev/stdout, or the file stdout is redirected to) is handled as --out -: with
+# --json refused (two JSON documents), without it the template alone on stdout
+"$BIN" rig --json --out /dev/stdout > "$T/two.out" 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--json --out /dev/stdout: not exit 1"
+grep -q "both print on stdout" "$T/err.txt" || fail "--json --out /dev/stdout: $(cat "$T/err.txt")"
+[ -s "$T/two.out" ] && fail "--json --out /dev/stdout: stdout written: $(head -c 200 "$T/two.out")"
+"$BIN" rig --json --out "$T/same.out" > "$T/same.out" 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--json --out (stdout's file): not exit 1"
+grep -q "both print on stdout" "$T/err.txt" || fail "--json --out (stdout's file): $(cat "$T/err.txt")"
+"$BIN" rig --out /dev/stdout > "$T/one.out" 2> /dev/null || fail "--out /dev/stdout: exit $?"
+"$BIN" rig --out - > "$T/dash.out" 2> /dev/null || fail "--out -: exit $?"
+cmp -s "$T/one.out" "$T/dash.out" || fail "--out /dev/stdout differs from --out -: $(tail -3 "$T/one.out")"
+$PY -c 'import json, sys; json.load(open(sys.argv[1]))' "$T/one.out" || fail "--out /dev/stdout: not one JSON document"
 
 [ $fails -eq 0 ] && echo "rig.sh: all passed"
 exit $((fails > 0))

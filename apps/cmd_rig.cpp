@@ -74,7 +74,8 @@ int run_rig(const Options& o) {
   // after a hold at the top longer than the creep time (RigStatics::vented_stall_m); 1 um: the bisection's noise
   if (s.vented_stall_m > s.falling_m.front() + 1e-6)
     fmt::print("  vented, held at the top       falls to {} on the load's time scale, where the creep element (held at "
-               "the top) pulls as hard as the return force, then at about {:.1f} mm/s as the creep relaxes (rest: {})\n",
+               "the top) pulls as hard as the return force, then at about {:.1f} mm/s as the creep relaxes (rest: "
+               "{})\n",
                mm(s.vented_stall_m), s.creep_return_speed_m_s * 1e3, mm(s.falling_m.front()));
   else
     fmt::print("  vented, held at the top       falls to its rest, {}, on the load's time scale (the return force "

@@ -710,7 +710,8 @@ std::string weak_return_note(const PamRigParams& rig, std::string_view which, co
   std::vector<std::string> below;
   for (const Reference& ref : refs) {
     if (ref.score_from >= ref.ref_m.size()) continue;
-    const double lo = *std::min_element(ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.score_from), ref.ref_m.end());
+    const auto scored = ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.score_from);
+    const double lo = *std::min_element(scored, ref.ref_m.end());
     if (lo < s.vented_stall_m) below.push_back(fmt::format("{} down to {:.1f} mm", ref.name, lo * 1e3));
   }
   return fmt::format("{}: {}: {}; the results below {:.1f} mm are the rig's, not the controller's", which, why,

@@ -39,7 +39,10 @@ struct EvaluateOptions {
 };
 
 int run_evaluate(const EvaluateOptions& c) {
-  if (c.json && c.report == "-") throw Error("--report - and --json both write to standard output: choose one");
+  // a --report naming stdout (-, /dev/stdout, the file stdout is redirected to) is handled as - is
+  const bool report_stdout = names_stdout(c.report);
+  if (c.json && report_stdout)
+    throw Error(fmt::format("--report {} and --json both write to standard output: choose one", c.report));
   io::check_output_files({{"--report", c.report}}, {{"--model", c.model}, {"--data", c.sel.file}});
   const ModelParams model = read_model_source(c.model);
   const DataSelection& sel = c.sel;
@@ -114,8 +117,8 @@ int run_evaluate(const EvaluateOptions& c) {
     text += fmt::format("note: the output clips (a sensor's limit): {} samples at the limit where the model predicts "
                         "beyond it are scored as censored, no error (--uncensored: as recorded)\n",
                         doc.result.censored);
-  if (!c.report.empty() && c.report != "-") text += fmt::format("report written to {}\n", c.report);
-  std::fputs(text.c_str(), c.report == "-" ? stderr : stdout);
+  if (!c.report.empty() && !report_stdout) text += fmt::format("report written to {}\n", c.report);
+  std::fputs(text.c_str(), report_stdout ? stderr : stdout);
   return exit_ok;
 }
 

@@ -81,11 +81,15 @@ struct ValidationSet {
 };
 
 int run_fit(const FitCliOptions& c) {
-  if (c.out == "-" && c.json)
-    throw Error("--out - and --json both write to standard output: choose one (e.g. --json with --out FILE, or "
-                "--out - with --report FILE.json)");
-  if (c.report == "-" && (c.out == "-" || c.json))
-    throw Error("--report - and --out - / --json would both write to standard output: choose one");
+  // an output naming stdout (-, /dev/stdout, the file stdout is redirected to) is handled as - is
+  const bool out_stdout = names_stdout(c.out), report_stdout = names_stdout(c.report);
+  if (out_stdout && c.json)
+    throw Error(fmt::format("--out {} and --json both write to standard output: choose one (e.g. --json with --out "
+                            "FILE, or --out - with --report FILE.json)",
+                            c.out));
+  if (report_stdout && (out_stdout || c.json))
+    throw Error(fmt::format("--report {} and --out {} / --json would both write to standard output: choose one",
+                            c.report, c.out.empty() ? std::string("FILE") : c.out));
   {
     std::vector<io::NamedPath> inputs{{"--data", c.sel.file}};
     for (const auto& f : c.validate_data) inputs.push_back({"--validate-data", f});
@@ -297,13 +301,13 @@ int run_fit(const FitCliOptions& c) {
                                                      "(--censor-passes 0: as recorded)",
                                                      e.censored)
                                        : std::string());
-  if (write && c.out != "-")
+  if (write && !out_stdout)
     text += fmt::format("model written to {}\n", c.out);
   else if (!write)
     text += fmt::format("model NOT written ({}{})\n", fit_status_name(rep.status),
                         fitted ? "; use --force to write it anyway" : "");
-  if (!c.report.empty() && c.report != "-") text += fmt::format("report written to {}\n", c.report);
-  std::fputs(text.c_str(), c.out == "-" || c.report == "-" ? stderr : stdout);
+  if (!c.report.empty() && !report_stdout) text += fmt::format("report written to {}\n", c.report);
+  std::fputs(text.c_str(), out_stdout || report_stdout ? stderr : stdout);
   return code;
 }
 

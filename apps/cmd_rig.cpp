@@ -30,14 +30,18 @@ struct Options {
 std::string mm(double m) { return fmt::format("{:.1f} mm", m * 1e3); }
 
 int run_rig(const Options& o) {
-  if (o.json && o.out == "-") throw Error("--json and --out - both print on stdout: give --out a file");
+  // --out naming stdout (-, /dev/stdout, or the file stdout is redirected to) prints the rig's JSON alone
+  const bool out_stdout = names_stdout(o.out);
+  if (o.json && out_stdout)
+    throw Error(fmt::format("--json and --out {} both print on stdout: give --out another file", o.out));
   io::check_output_files({{"--out", o.out}}, {{"FILE", o.file}});
   const PamRigParams p = o.file.empty() ? PamRigParams{} : load_rig_params(o.file);
   (void)PamRig(p, 1);  // what only the simulator checks: the sub-steps its dynamics need
   const RigStatics s = rig_statics(p);
   const std::string source = o.file.empty() ? std::string("the nominal rig") : o.file;
-  if (!o.out.empty()) save_rig_params(p, o.out);
-  if (o.out == "-") return exit_ok;  // stdout holds the rig's JSON alone
+  if (!o.out.empty()) save_rig_params(p, out_stdout ? std::string("-") : o.out);
+  if (!s.weak_return.empty()) fmt::print(stderr, "rig: warning: {}\n", s.weak_return);
+  if (out_stdout) return exit_ok;  // stdout holds the rig's JSON alone
   if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
   if (o.json) {
     const nlohmann::json j = {{"rig", source},
@@ -67,6 +71,16 @@ int run_rig(const Options& o) {
                s.fall_speed_rest_m_s * 1e3, s.fall_speed_stroke_m_s * 1e3);
   else
     fmt::print("  vented fall                   not limited by damping (load.damping = 0)\n");
+  // after a hold at the top longer than the creep time (RigStatics::vented_stall_m); 1 um: the bisection's noise
+  if (s.vented_stall_m > s.falling_m.front() + 1e-6)
+    fmt::print("  vented, held at the top       falls to {} on the load's time scale, where the creep element (held at "
+               "the top) pulls as hard as the return force, then at about {:.1f} mm/s as the creep relaxes (rest: "
+               "{})\n",
+               mm(s.vented_stall_m), s.creep_return_speed_m_s * 1e3, mm(s.falling_m.front()));
+  else
+    fmt::print("  vented, held at the top       falls to its rest, {}, on the load's time scale (the return force "
+               "exceeds the creep element's pull)\n",
+               mm(s.falling_m.front()));
   fmt::print("  pressure command limit        {:.3f} MPa with the regulator, {:.3f} MPa with the switching valves\n",
              s.regulator_limit_pa * 1e-6, s.valves_limit_pa * 1e-6);
   if (std::isfinite(s.lift_off_pa))

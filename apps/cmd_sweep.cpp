@@ -115,8 +115,10 @@ int run_sweep_command(const SweepArgs& a) {
   if (!a.grid.empty()) inputs.push_back({"--grid", a.grid});
   if (!a.plant.empty()) inputs.push_back({"--plant", a.plant});
   io::check_output_files(outputs, inputs);  // where the table and the page go, before the sweep's runs
-  if (a.json && a.out == "-") throw Error("--json and --out - both write to stdout: choose one");
-  if (a.report == "-") throw Error("--report -: the HTML page needs a file name");
+  // an output naming stdout (-, /dev/stdout, the file stdout is redirected to) is handled as - is
+  const bool out_stdout = names_stdout(a.out);
+  if (a.json && out_stdout) throw Error(fmt::format("--json and --out {} both write to stdout: choose one", a.out));
+  if (names_stdout(a.report)) throw Error(fmt::format("--report {}: the HTML page needs a file name", a.report));
 
   SweepOptions o;
   o.seed = a.seed;
@@ -160,7 +162,7 @@ int run_sweep_command(const SweepArgs& a) {
   if (!a.report.empty()) io::write_text_file(a.report, html);
   if (a.json)
     fmt::print("{}\n", r.to_json().dump(2));
-  else if (a.out != "-")
+  else if (!out_stdout)
     fmt::print("{}", r.text());
   if (r.failures() > 0) {
     fmt::print(stderr, "hysteron sweep: {} of {} run(s) failed (see the table)\n", r.failures(), r.runs.size());

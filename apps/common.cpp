@@ -10,6 +10,9 @@
 #include <iterator>
 #include <string>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -142,6 +145,14 @@ report::Axis parse_axis(const std::string& text, const std::string& fallback) {
     return {label, unit};
   }
   return {t, ""};
+}
+
+bool names_stdout(const std::string& path) {
+  if (path == "-") return true;
+  if (path.empty()) return false;
+  struct stat out {}, named {};
+  if (::fstat(STDOUT_FILENO, &out) != 0 || ::stat(path.c_str(), &named) != 0) return false;
+  return out.st_dev == named.st_dev && out.st_ino == named.st_ino;
 }
 
 bool is_html_path(const std::string& path) {

@@ -318,6 +318,22 @@ TEST(Experiment, ADescentFasterThanTheLoadCanFallIsSaid) {
   EXPECT_FALSE(test::said(run_experiment(test::quick_experiment("gpi-pid")), "descend faster"));
 }
 
+// A horizontal rig with a 1 N return spring: the vented muscle, held by the creep element, falls
+// only at the creep's pace below the upper part of its reach (docs/plant.md, "A weak return
+// force"); the result says so, naming the reference that goes below the stall. The nominal rig
+// gets no such note.
+TEST(Experiment, AWeakReturnForceIsSaid) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.rig.load.gravity = 0.0;
+  o.rig.load.spring_preload = 1.0;
+  const ExperimentResult weak = run_experiment(o);
+  EXPECT_TRUE(test::said(weak, "the return force is weak against the creep element"))
+      << fmt::format("{}", fmt::join(weak.messages, "\n"));
+  EXPECT_TRUE(test::said(weak, "the references go below the stall (sine down to 5.0 mm)"))
+      << fmt::format("{}", fmt::join(weak.messages, "\n"));
+  EXPECT_FALSE(test::said(run_experiment(test::quick_experiment("gpi-pid")), "weak against the creep"));
+}
+
 // A displacement sensor 30 times noisier than the nominal one (0.3 mm): every RMS the sensor
 // reads has the noise in it, and the result says how wide it is, estimated from the
 // identification run (within 15 % of the rig's 0.3 mm); the nominal 0.01 mm sensor gets no note.

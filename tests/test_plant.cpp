@@ -168,6 +168,53 @@ TEST(PamRig, AReturnSpringBalancesAHorizontalRig) {
   EXPECT_THROW(validate(prm), Error);
 }
 
+// A weak return force (a horizontal rig, a 1 N preload): held at the top of its reach for 20 s (5
+// creep times: the creep element relaxed, x_c at the top) and vented, the muscle pulls nothing up
+// there (F(dP_h, eps) = 0, checked), so it falls only to where the creep element's pull meets the
+// preload, top - F_s0 / k_c = top - 6.7 mm, then crawls as the creep relaxes, at F_s0 / (c + k_c tau_c)
+// = 1 mm/s (P4: a spring k_c in series with a dashpot k_c tau_c, in parallel with the damping c).
+// The simulated rig does so: still in the upper half of its reach 10 s after venting (the static
+// map, the creep relaxed, puts its rest at 1.9 mm), and rig_statics warns. Light but usable rigs
+// (5 kg; gravity 0 with a 50 or 200 N preload; 100 N and 2000 N/m) are back below a tenth of their
+// reach 2 s after venting, as the nominal rig, and are not warned.
+TEST(PamRig, AWeakReturnForceLeavesTheVentedMuscleToTheCreep) {
+  const auto hold_and_vent = [](const PamRigParams& prm, int vented_steps) {
+    PamRig rig(prm, 1);
+    const double top = pressure_command_limit(prm, Actuation::regulator) * 1e-6;  // [MPa]
+    for (int k = 0; k < 200000; ++k) rig.step({top, 0.0, Actuation::regulator});
+    for (int k = 0; k < vented_steps; ++k) rig.step({0.0, 0.0, Actuation::regulator});
+    return rig.state().contraction;
+  };
+  PamRigParams weak;
+  weak.load.gravity = 0.0;
+  weak.load.spring_preload = 1.0;  // [N]
+  const RigStatics s = rig_statics(weak);
+  const double top = s.rising_m.back(), k_c = weak.hysteresis.creep_stiffness;
+  EXPECT_EQ(festo_force(weak.muscle, weak.hysteresis.pressure_band, (top - 1.0 / k_c) / weak.muscle.rest_length), 0.0);
+  EXPECT_NEAR(s.vented_stall_m, top - 1.0 / k_c, 1e-9);
+  EXPECT_NEAR(s.creep_return_speed_m_s, 1.0 / (weak.load.damping + k_c * weak.hysteresis.creep_time), 1e-12);
+  EXPECT_LT(s.falling_m.front(), 0.02 * top);  // what the static map shows: a rest near 0
+  EXPECT_NE(s.weak_return.find("the return force is weak against the creep element"), std::string::npos)
+      << s.weak_return;
+  EXPECT_NE(s.weak_return.find("rig.load.spring_preload = 1 N"), std::string::npos) << s.weak_return;
+  EXPECT_EQ(rig_statics_to_json(s).at("weak_return"), s.weak_return);
+  EXPECT_GT(hold_and_vent(weak, 100000), 0.5 * top);
+
+  std::vector<PamRigParams> usable(5);
+  usable[1].load.mass = 5.0;
+  for (int i : {2, 3, 4}) usable[i].load.gravity = 0.0;
+  usable[2].load.spring_preload = 50.0;
+  usable[3].load.spring_preload = 200.0;
+  usable[4].load.spring_preload = 100.0;
+  usable[4].load.spring_rate = 2000.0;
+  for (const PamRigParams& prm : usable) {
+    SCOPED_TRACE(rig_params_to_json(prm).at("load").dump());
+    const RigStatics u = rig_statics(prm);
+    EXPECT_EQ(u.weak_return, "");
+    EXPECT_LT(hold_and_vent(prm, 20000), 0.1 * u.rising_m.back());
+  }
+}
+
 // rig_statics (hysteron rig) against the force balance P1-P5 written out here: at the lift-off
 // pressure the rising branch's force at rest meets the return force; every contraction of the
 // table between the stops balances the force map against the weight and the spring.

@@ -230,6 +230,18 @@ struct RigStatics {
   double valves_limit_pa = 0.0;         // pressure_command_limit(switching_valves)
   std::vector<double> pressure_pa, rising_m, falling_m;
   std::string unusable;                 // rig_unusable_reason(params, "rig"): "" if the experiments run
+  // The vented muscle after a hold at the top of its reach (rising_m.back()) longer than the creep
+  // time (P4: x_c at the top): where its fall stops on the load's time scale, the falling branch at
+  // 0 gauge (P2, z = -1) plus the creep element's pull k_c (top - x) against the return force (P5);
+  // near falling_m[0] (its rest) where the return force exceeds that pull. Below it the muscle only
+  // follows the creep's relaxation, at about creep_return_speed_m_s = the return force at the stall /
+  // (load.damping + creep_stiffness x creep_time) (P4 is a spring k_c in series with a dashpot
+  // k_c tau_c, in parallel with the load's damping; slower below where a spring's force drops).
+  double vented_stall_m = 0.0;
+  double creep_return_speed_m_s = 0.0;
+  // rig_weak_return_reason: "" unless the stall lies in the upper half of the reach (docs/plant.md,
+  // "A weak return force"); `hysteron rig` warns with it, the experiments note it.
+  std::string weak_return;
 };
 RigStatics rig_statics(const PamRigParams& params);
 // The one JSON form of RigStatics (`hysteron rig --json`, Python's rig_statics): its fields by
@@ -242,6 +254,11 @@ nlohmann::json rig_units_to_json();
 // spring), or the muscle cannot lift its load even at the most pressure it is rated for and
 // supplied with. Keys are named with the prefix `where` ("rig": "rig.load.gravity").
 std::string rig_unusable_reason(const PamRigParams& params, std::string_view where);
+// Why the vented muscle cannot return through its reach at the load's pace, empty if it can: after a
+// hold at the top of its reach its fall stalls (RigStatics::vented_stall_m) at half the reach above
+// its rest or higher, where the creep element's pull balances the return force; keys are named with
+// the prefix `where`. Empty where rig_unusable_reason is not, or the muscle never lifts its load.
+std::string rig_weak_return_reason(const PamRigParams& params, const RigStatics& statics, std::string_view where);
 
 // ---- the rig -------------------------------------------------------------------
 

@@ -79,8 +79,9 @@ void bind_rig(py::module_& m) {
       "+ spring) at rest and at the stroke end, the vented load's terminal speed under it at rest and at the stroke end "
       "(None without damping), the command "
       "limits, the rising branch's lift-off pressure (None: none within the supply), the static map on the rising and "
-      "falling branches (SI units), every parameter's unit ('units', by path), and 'unusable': why the experiments "
-      "refuse the rig ('' if they do not).");
+      "falling branches (SI units), every parameter's unit ('units', by path), 'unusable': why the experiments "
+      "refuse the rig ('' if they do not), and where the vented muscle stalls after a hold at the top of its reach "
+      "('vented_stall_m', 'creep_return_speed_m_s', 'weak_return': the warning, '' if none; docs/plant.md).");
 
   def_copy(py::class_<PamRig>(m, "PamRig", R"doc(
 Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass (and an

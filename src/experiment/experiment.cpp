@@ -373,6 +373,29 @@ std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& 
       l.mass * l.gravity, l.spring_preload, l.spring_rate, l.damping, fmt::join(parts, "; "));
 }
 
+// The note of a rig whose vented muscle, held at the top of its reach longer than the creep time,
+// stalls in the upper half of its reach where the creep element's pull meets the return force
+// (rig_weak_return_reason, the warning of `hysteron rig`; docs/plant.md, "A weak return force"),
+// naming the references whose scored part goes below the stall; empty if the rig's return is not
+// weak. Not a refusal: the vented muscle does get below the stall, only at the creep's pace, and a
+// reference the rig cannot follow is noted, as where it leaves the reach (fit_to_reach).
+std::string weak_return_note(const PamRigParams& rig, std::string_view which, const std::vector<Reference>& refs) {
+  const RigStatics s = rig_statics(rig);
+  const std::string why = rig_weak_return_reason(rig, s, which);
+  if (why.empty()) return {};
+  std::vector<std::string> below;
+  for (const Reference& ref : refs) {
+    if (ref.score_from >= ref.ref_m.size()) continue;
+    const auto scored = ref.ref_m.begin() + static_cast<std::ptrdiff_t>(ref.score_from);
+    const double lo = *std::min_element(scored, ref.ref_m.end());
+    if (lo < s.vented_stall_m) below.push_back(fmt::format("{} down to {:.1f} mm", ref.name, lo * 1e3));
+  }
+  return fmt::format("{}: {}: {}; the results below {:.1f} mm are the rig's, not the controller's", which, why,
+                     below.empty() ? std::string("no reference goes below the stall")
+                                   : fmt::format("the references go below the stall ({})", fmt::join(below, ", ")),
+                     s.vented_stall_m * 1e3);
+}
+
 // The displacement sensor's noise is in every RMS error the sensor measures: with noise of
 // width sigma independent of the loop's true error e, the reading's RMS is about
 // sqrt(e^2 + sigma^2), so no loop reads below sigma, and learning cannot learn what is noise.
@@ -549,6 +572,10 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   add_pre_roll(refs, tc);
   if (std::string note = descent_note(o.tracking_rig ? *o.tracking_rig : o.rig, refs, tc); !note.empty())
     res.messages.push_back(std::move(note));
+  if (std::string note = weak_return_note(o.rig, "rig", refs); !note.empty()) res.messages.push_back(std::move(note));
+  if (o.tracking_rig)
+    if (std::string note = weak_return_note(*o.tracking_rig, "tracking rig", refs); !note.empty())
+      res.messages.push_back(std::move(note));
   const IdentificationRange range = model_identification_range(smooth, refs, id_input, p_max);
   const bool rescaled = range.p_id_mpa > 0.0;
   res.model_id_top_mpa = rescaled ? range.p_id_mpa : extended_run ? p_max : 0.0;

@@ -133,7 +133,50 @@ RigStatics rig_statics(const PamRigParams& p) {
     if (pa >= top) break;
   }
   s.unusable = rig_unusable_reason(p, "rig");
+  // the vented muscle held at the top longer than the creep time: F(dP_h(0), x) + k_c (top - x) = R(x),
+  // the left side minus the right non-increasing in x, so bisection on [0, top]
+  const double held = s.rising_m.back();
+  const auto& m = p.muscle;
+  const auto net = [&](double x) {
+    return festo_force(m, p.hysteresis.pressure_band, x / m.rest_length) + p.hysteresis.creep_stiffness * (held - x) -
+           return_force(l, x);
+  };
+  if (!(net(0.0) > 0.0)) {
+    s.vented_stall_m = 0.0;
+  } else if (net(held) >= 0.0) {
+    s.vented_stall_m = held;
+  } else {
+    double lo = 0.0, hi = held;
+    for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) (net(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
+    s.vented_stall_m = 0.5 * (lo + hi);
+  }
+  s.creep_return_speed_m_s =
+      return_force(l, s.vented_stall_m) / (l.damping + p.hysteresis.creep_stiffness * p.hysteresis.creep_time);
+  s.weak_return = rig_weak_return_reason(p, s, "rig");
   return s;
+}
+
+std::string rig_weak_return_reason(const PamRigParams& p, const RigStatics& s, std::string_view where) {
+  if (!s.unusable.empty() || s.rising_m.empty() || s.falling_m.empty()) return {};
+  const double top = s.rising_m.back(), rest = s.falling_m.front();
+  if (!(top > rest)) return {};  // the muscle never lifts its load within the command limit
+  // Half the reach: a muscle whose creep settled at the middle of its reach (under a reference
+  // about it, a sine, held longer than the creep time) then stalls above its rest (docs/plant.md).
+  const double fraction = (s.vented_stall_m - rest) / (top - rest);
+  if (!(fraction >= 0.5)) return {};
+  const HysteresisParams& h = p.hysteresis;
+  return fmt::format(
+      "the return force is weak against the creep element: held at the top of its reach ({1:.1f} mm at {2:.3f} MPa) "
+      "for longer than {0}.hysteresis.creep_time = {3:g} s and vented, the muscle falls only to {4:.1f} mm ({5:.0f} % "
+      "of its reach above its rest at {6:.1f} mm), where the creep element's pull, {0}.hysteresis.creep_stiffness = "
+      "{7:g} N/m x ({1:.1f} mm - contraction), meets the return force ({8:.1f} N at rest: {0}.load.mass x "
+      "{0}.load.gravity = {9:.1f} N, {0}.load.spring_preload = {10:g} N, {0}.load.spring_rate = {11:g} N/m); below "
+      "that it returns only as the creep relaxes, at about {12:.1f} mm/s (the return force there / ({0}.load.damping + "
+      "creep_stiffness x creep_time)), so the lower part of a reference cannot be tracked on its way down: a heavier "
+      "load or a stronger return spring (docs/plant.md, \"A weak return force\")",
+      where, top * 1e3, s.pressure_pa.back() * 1e-6, h.creep_time, s.vented_stall_m * 1e3, fraction * 100.0,
+      rest * 1e3, h.creep_stiffness, s.return_force_rest_n, s.weight_n, p.load.spring_preload, p.load.spring_rate,
+      s.creep_return_speed_m_s * 1e3);
 }
 
 std::string rig_unusable_reason(const PamRigParams& p, std::string_view where) {

@@ -292,7 +292,10 @@ nlohmann::json rig_statics_to_json(const RigStatics& s) {
           {"pressure_pa", s.pressure_pa},
           {"rising_m", s.rising_m},
           {"falling_m", s.falling_m},
-          {"unusable", s.unusable}};
+          {"unusable", s.unusable},
+          {"vented_stall_m", s.vented_stall_m},
+          {"creep_return_speed_m_s", s.creep_return_speed_m_s},
+          {"weak_return", s.weak_return}};
 }
 
 nlohmann::json rig_units_to_json() {

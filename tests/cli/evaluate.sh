@@ -44,6 +44,14 @@ rc=$?
 [ $rc -eq 0 ] || fail "fit exit $rc"
 [ -s "$T/m.json" ] || fail "fit wrote no model"
 
+# --report naming stdout (/dev/stdout, or the file stdout is redirected to) with --json: refused as --report -
+for r in - /dev/stdout "$T/ev2.json"; do
+  "$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output --json --report "$r" \
+    > "$T/ev2.json" 2> "$T/err"
+  [ $? -eq 1 ] || fail "--report $r with --json: not exit 1"
+  grep -q "both write to standard output" "$T/err" || fail "--report $r with --json: $(cat "$T/err")"
+done
+
 # 1. evaluate on the validation range reproduces the fit's validation metrics
 "$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output --range 1200:1800 --json \
   > "$T/ev.json"

@@ -88,6 +88,18 @@ $PY -c "import json,sys; m=json.load(open(sys.argv[1])); assert m['model']=='pi'
 grep -q "pi fit" "$T/summary.txt" || fail "--out -: no summary on stderr"
 "$BIN" fit --data "$T/a.csv" --input p --output y --out - --json > /dev/null 2> "$T/err"
 [ $? -eq 1 ] || fail "--out - with --json must be an error (two documents on stdout)"
+# --out naming stdout otherwise (/dev/stdout, the file stdout is redirected to) is --out -: refused with --json
+"$BIN" fit --data "$T/a.csv" --input p --output y --out /dev/stdout --json > "$T/two.out" 2> "$T/err"
+[ $? -eq 1 ] || fail "--out /dev/stdout with --json must be an error (two documents on stdout)"
+grep -q "both write to standard output" "$T/err" || fail "--out /dev/stdout --json: $(cat "$T/err")"
+"$BIN" fit --data "$T/a.csv" --input p --output y --out "$T/two.out" --json > "$T/two.out" 2> "$T/err"
+[ $? -eq 1 ] || fail "--out (stdout's file) with --json must be an error"
+# and its summary goes to stderr, as with --out -
+"$BIN" fit --model pi --data "$T/a.csv" --input p --output y --train 0:1200 --threads 1 --force --out /dev/stdout \
+  > "$T/model_devstdout.json" 2> "$T/summary2.txt"
+$PY -c "import json,sys; m=json.load(open(sys.argv[1])); assert m['model']=='pi'" "$T/model_devstdout.json" \
+  || fail "--out /dev/stdout: stdout is not one model JSON: $(tail -3 "$T/model_devstdout.json")"
+grep -q "pi fit" "$T/summary2.txt" || fail "--out /dev/stdout: no summary on stderr"
 
 # 4. --model auto: candidates in text and JSON, chosen kind in model_kind, validation RMS per candidate
 "$BIN" fit --model auto --data "$T/a.csv" --input p --output y --train 0:1200 --validate-data "$T/b.csv" \

@@ -3,7 +3,8 @@
 # file is read as --plant reads it (a typo or an impossible value is exit 1 naming the key,
 # nothing written); --out writes the complete rig, which reads back to the same parameters and
 # is accepted by experiment; a horizontal rig without a spring is warned as the experiments
-# refuse it, and with a spring its lift-off moves with the spring's preload.
+# refuse it, and with a spring its lift-off moves with the spring's preload; a weak return force
+# is warned; --out naming stdout is handled as --out -.
 # Usage: bash rig.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 BIN=$1
@@ -95,6 +96,39 @@ echo '{"load": {"spring_rate": 1e14}}' > "$T/stiff.json"
 "$BIN" rig "$T/stiff.json" > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "stiff: not exit 1"
 grep -q "load.spring_rate 1e+14" "$T/err.txt" || fail "stiff: $(cat "$T/err.txt")"
+
+# a weak return force (horizontal, 1 N preload): the creep element holds the vented muscle near the top
+# (docs/plant.md, "A weak return force"): warned on stderr, and in --json; the stall is where the creep's
+# pull, 150 N/m x (top - x), meets the 1 N (the vented muscle pulls nothing there): top - 1/150 m
+echo '{"load": {"gravity": 0, "spring_preload": 1}}' > "$T/weak.json"
+"$BIN" rig "$T/weak.json" > "$T/weak.txt" 2> "$T/err.txt" || fail "weak: exit $?"
+grep -q "^rig: warning: the return force is weak against the creep element" "$T/err.txt" \
+  || fail "weak: no warning on stderr: $(cat "$T/err.txt")"
+"$BIN" rig "$T/weak.json" --json > "$T/weak.out" 2> /dev/null || fail "weak --json: exit $?"
+$PY - "$T/weak.out" "$T/half.out" "$T/a.json" <<'PYEOF' || fail "weak return in --json"
+import json, sys
+w, h, a = (json.load(open(f))["statics"] for f in sys.argv[1:])
+assert w["weak_return"].startswith("the return force is weak"), w["weak_return"]
+assert abs(w["vented_stall_m"] - (w["rising_m"][-1] - 1 / 150)) < 1e-6, w["vented_stall_m"]
+assert abs(w["creep_return_speed_m_s"] - 1 / (400 + 150 * 4)) < 1e-12, w["creep_return_speed_m_s"]
+assert h["weak_return"] == "" and a["weak_return"] == "", (h["weak_return"], a["weak_return"])
+PYEOF
+"$BIN" rig "$T/half.json" > /dev/null 2> "$T/err.txt" || fail "half: exit $?"
+[ -s "$T/err.txt" ] && fail "half: warned: $(cat "$T/err.txt")"
+
+# --out naming stdout (/dev/stdout, or the file stdout is redirected to) is handled as --out -: with
+# --json refused (two JSON documents), without it the template alone on stdout
+"$BIN" rig --json --out /dev/stdout > "$T/two.out" 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--json --out /dev/stdout: not exit 1"
+grep -q "both print on stdout" "$T/err.txt" || fail "--json --out /dev/stdout: $(cat "$T/err.txt")"
+[ -s "$T/two.out" ] && fail "--json --out /dev/stdout: stdout written: $(head -c 200 "$T/two.out")"
+"$BIN" rig --json --out "$T/same.out" > "$T/same.out" 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--json --out (stdout's file): not exit 1"
+grep -q "both print on stdout" "$T/err.txt" || fail "--json --out (stdout's file): $(cat "$T/err.txt")"
+"$BIN" rig --out /dev/stdout > "$T/one.out" 2> /dev/null || fail "--out /dev/stdout: exit $?"
+"$BIN" rig --out - > "$T/dash.out" 2> /dev/null || fail "--out -: exit $?"
+cmp -s "$T/one.out" "$T/dash.out" || fail "--out /dev/stdout differs from --out -: $(tail -3 "$T/one.out")"
+$PY -c 'import json, sys; json.load(open(sys.argv[1]))' "$T/one.out" || fail "--out /dev/stdout: not one JSON document"
 
 [ $fails -eq 0 ] && echo "rig.sh: all passed"
 exit $((fails > 0))

@@ -61,6 +61,13 @@ expect_error "table into a missing directory" "--out $T/missing/t.csv: directory
 expect_error "page into a missing directory" "--report $T/missing/t.html: directory" \
   "$BIN" sweep gpi-pd --vary load.mass=35 --report "$T/missing/t.html"
 [ ! -e "$T/missing" ] || fail "a refused sweep created its output directory"
+# an output naming stdout (/dev/stdout here: stdout is $T/out.txt) is handled as -, before anything runs
+expect_error "--json --out /dev/stdout" "--json and --out /dev/stdout both write to stdout" \
+  "$BIN" sweep gpi-pid --vary load.mass=35 --json --out /dev/stdout
+expect_error "--json --out (stdout's file)" "both write to stdout" \
+  "$BIN" sweep gpi-pid --vary load.mass=35 --json --out "$T/out.txt"
+expect_error "--report /dev/stdout" "--report /dev/stdout: the HTML page needs a file name" \
+  "$BIN" sweep gpi-pid --vary load.mass=35 --report /dev/stdout
 [ ! -e "$T/bad.csv" ] || fail "a failed sweep wrote its table"
 ls -A "$T" | grep -q '^\.' && fail "temporary files left: $(ls -A "$T")"
 

@@ -58,7 +58,7 @@ bool is_html_path(const std::string& path);
 // An output path that names standard output: "-", or an existing file that is the one stdout is
 // open on (the same st_dev and st_ino: /dev/stdout, /dev/fd/1, or the file or pipe stdout is
 // redirected to). A command that prints on stdout treats such an output as it treats "-", so
-// stdout never gets two documents.
+// stdout never gets two documents. Not the null device (--out /dev/null > /dev/null discards both).
 bool names_stdout(const std::string& path);
 
 // What fit and evaluate read from a data file and how the reports describe it.

@@ -152,7 +152,10 @@ bool names_stdout(const std::string& path) {
   if (path.empty()) return false;
   struct stat out {}, named {};
   if (::fstat(STDOUT_FILENO, &out) != 0 || ::stat(path.c_str(), &named) != 0) return false;
-  return out.st_dev == named.st_dev && out.st_ino == named.st_ino;
+  if (out.st_dev != named.st_dev || out.st_ino != named.st_ino) return false;
+  // the null device discards both documents: nobody reads two of them (--out /dev/null > /dev/null)
+  struct stat null {};
+  return !(S_ISCHR(named.st_mode) && ::stat("/dev/null", &null) == 0 && null.st_rdev == named.st_rdev);
 }
 
 bool is_html_path(const std::string& path) {

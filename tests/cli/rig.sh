@@ -129,6 +129,8 @@ grep -q "both print on stdout" "$T/err.txt" || fail "--json --out (stdout's file
 "$BIN" rig --out - > "$T/dash.out" 2> /dev/null || fail "--out -: exit $?"
 cmp -s "$T/one.out" "$T/dash.out" || fail "--out /dev/stdout differs from --out -: $(tail -3 "$T/one.out")"
 $PY -c 'import json, sys; json.load(open(sys.argv[1]))' "$T/one.out" || fail "--out /dev/stdout: not one JSON document"
+# the null device as both is no conflict: nothing reads the two documents
+"$BIN" rig --json --out /dev/null > /dev/null 2> "$T/err.txt" || fail "--json --out /dev/null > /dev/null: $(cat "$T/err.txt")"
 
 [ $fails -eq 0 ] && echo "rig.sh: all passed"
 exit $((fails > 0))

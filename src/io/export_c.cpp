@@ -80,15 +80,7 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
     b.qi = 1.0 / s.q;
     b.ri.resize(n);
     b.pi.resize(n);
-    double prev = s.q;
-    for (std::size_t i = 0; i < n; ++i) {
-      double r = s.q * s.r[i];
-      for (std::size_t j = 0; j < i; ++j) r += s.p[j] * (s.r[i] - s.r[j]);
-      const double cur = prev + s.p[i];
-      b.ri[i] = r;
-      b.pi[i] = -s.p[i] / (cur * prev);
-      prev = cur;
-    }
+    hysteron::detail::inverse_pi_parameters(s.q, s.r, s.p, b.ri.data(), b.pi.data());  // Eq. 11, as Inverse
     if (s.has_dead_zones) {
       b.zp = {0.0};
       b.dp = {0.0};

@@ -90,6 +90,17 @@ void BM_GpiForwardPlusInverse(benchmark::State& st) {
                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
+// Constructing an inverse (Eq. 11's parameters; the C ABI's hysteron_inverse_create does the same) at n = 10^3 ..
+// 10^5 operators: ms per construction. Run: ./build/hysteron-bench --benchmark_filter=InverseConstruct
+void BM_InverseConstruct(benchmark::State& st) {
+  const auto params = make_model(static_cast<int>(st.range(0)), static_cast<int>(st.range(1)));
+  for (auto _ : st) {
+    Inverse inv(params);
+    benchmark::DoNotOptimize(inv.limits());
+  }
+  st.SetLabel(kNames[st.range(0)]);
+}
+
 void model_args(benchmark::internal::Benchmark* b) {
   for (int kind = 0; kind < 4; ++kind)
     for (int n : {10, 20, 50}) b->Args({kind, n});
@@ -101,3 +112,7 @@ BENCHMARK(BM_ModelStep)->Apply(model_args);
 BENCHMARK(BM_ModelSimulate)->Apply(model_args);
 BENCHMARK(BM_InverseStep)->Apply(model_args);
 BENCHMARK(BM_GpiForwardPlusInverse)->Arg(10)->Arg(20)->Arg(50);
+BENCHMARK(BM_InverseConstruct)
+    ->ArgsProduct({{0, 1, 2, 3}, {1000, 10000, 100000}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.2);

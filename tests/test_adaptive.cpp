@@ -5,6 +5,7 @@
 // wider than the one its model was fitted on.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <random>
@@ -133,6 +134,38 @@ TEST(InverseSetWeights, RoundTripsAForwardModelWithTheSameWeights) {
     }
     EXPECT_LT(worst, 1e-8);
     EXPECT_LT(worst_fresh, 1e-8);
+  }
+}
+
+// set_weights with the weights an inverse was built with, from its virgin state (operator outputs 0, the same after
+// the re-derivation), changes nothing: Eq. 11's parameters are computed by the constructor's arithmetic, so the
+// inverse then steps bit for bit as a new one (they were computed by another formula until 2026-11-30).
+TEST(InverseSetWeights, TheConstructorsWeightsGiveTheSameBits) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int t = 0; t < 20; ++t) {
+    PiParams pi;
+    pi.q = 0.05 + unit(rng);
+    double last = 0.0;
+    for (int i = 0; i < 60; ++i) {
+      last += 0.001 + 0.02 * unit(rng);
+      pi.r.push_back(last);
+      pi.p.push_back(0.02 + 0.3 * unit(rng));
+    }
+    pi.input_limits = {-2.0, 2.0};
+    Inverse fresh(pi), reset_weights(pi);
+    const double q = fresh.structure().q;  // canonical: the same as pi's here (no zero thresholds)
+    const std::vector<double> p = fresh.structure().p;
+    ASSERT_TRUE(reset_weights.set_weights(q, p));
+    Model m(pi);
+    std::size_t differ = 0;
+    double x = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+      x = std::clamp(x + 0.2 * (unit(rng) - 0.5), -1.8, 1.8);
+      const double y = m.step(x);
+      differ += fresh.step(y) != reset_weights.step(y);
+    }
+    EXPECT_EQ(differ, 0u) << "model " << t;
   }
 }
 

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "hysteron/error.hpp"
@@ -379,6 +381,58 @@ TEST(Inverse, GpiEq11ParametersMatchPaperFormulas) {
     for (int i = 1; i <= g.n; ++i) ref += g.rho * std::exp(-g.tau * g.alpha * i) * std::max(0.0, x - g.alpha * i);
     ASSERT_NEAR(y, ref, 1e-14);
     ASSERT_NEAR(inv.step(y), x, 1e-14);
+  }
+}
+
+// Eq. 11's r'_i = q r_i + sum_{j<i} p_j (r_i - r_j) and p'_i = -p_i / ((q + sum_{j<=i} p_j)(q + sum_{j<i} p_j)),
+// written here as the paper's sums (O(n^2)), against the O(n) detail::inverse_pi_parameters the inverse uses.
+// Dyadic models (thresholds multiples of 1/64, weights of 1/16, small): every operation of both is exact, so the
+// bits are equal. Random doubles: within 8 (i + 2) eps (q + sum_j |p_j|) r_i of the sum in long double (both
+// are sums of i + 1 rounded terms of that scale; the O(n) one's are nonnegative).
+TEST(Inverse, Eq11ParametersInLinearTimeEqualThePapersSums) {
+  std::mt19937_64 rng(2026);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto pick = [&](int lo, int hi) { return lo + static_cast<int>(unit(rng) * (hi - lo + 1)); };
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  for (int t = 0; t < 400; ++t) {
+    const bool dyadic = t % 2 == 0;
+    const std::size_t n = 1 + static_cast<std::size_t>(unit(rng) * 300);
+    std::vector<double> r(n), p(n);
+    const double q = dyadic ? pick(1, 64) / 16.0 : 0.01 + 2.0 * unit(rng);
+    double last = 0.0, sum = q;
+    for (std::size_t i = 0; i < n; ++i) {
+      last += dyadic ? pick(1, 64) / 64.0 : 1e-3 + unit(rng);
+      r[i] = last;
+      // weights of both signs, every partial sum q + p_1 + ... + p_i > 0 (Eq. 11)
+      double w = dyadic ? pick(-32, 32) / 16.0 : 2.0 * unit(rng) - 1.0;
+      if (!(sum + w > 0)) w = -w;
+      if (!(sum + w > 0)) w = dyadic ? 1.0 / 16.0 : 0.01;
+      p[i] = w;
+      sum += w;
+    }
+    std::vector<double> ri(n), pi(n);
+    detail::inverse_pi_parameters(q, r, p, ri.data(), pi.data());
+    double abs_p = q;
+    for (std::size_t i = 0; i < n; ++i) {
+      double ref = q * r[i], after = q, before = q;  // the paper's sums, in the paper's order
+      long double ref_l = static_cast<long double>(q) * r[i];
+      for (std::size_t j = 0; j < i; ++j) {
+        ref += p[j] * (r[i] - r[j]);
+        ref_l += static_cast<long double>(p[j]) * (static_cast<long double>(r[i]) - r[j]);
+        before += p[j];
+      }
+      after = before + p[i];
+      abs_p += std::abs(p[i]);
+      const double ref_p = -p[i] / (after * before);
+      ASSERT_EQ(pi[i], ref_p) << "model " << t << ", operator " << i;  // the same operations in the same order
+      if (dyadic) {
+        ASSERT_EQ(ri[i], ref) << "model " << t << ", operator " << i;
+      } else {
+        const double tol = 8.0 * static_cast<double>(i + 2) * eps * abs_p * r[i];
+        ASSERT_NEAR(ri[i], static_cast<double>(ref_l), tol) << "model " << t << ", operator " << i;
+        ASSERT_NEAR(ref, static_cast<double>(ref_l), tol) << "model " << t << ", operator " << i << " (the sum)";
+      }
+    }
   }
 }
 

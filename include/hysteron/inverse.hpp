@@ -37,6 +37,16 @@ struct InverseOptions {
   Limits input_limits;
 };
 
+namespace detail {
+// Eq. 11's inverse-PI thresholds r'_i and weights p'_i, in O(n), written to r_inv and p_inv (r.size() each), for a PI
+// with direct weight q, thresholds 0 < r_1 < r_2 ... and weights p whose sums q + p_1 + ... + p_i are all > 0:
+//   r'_i = r'_{i-1} + (q + p_1 + ... + p_{i-1}) (r_i - r_{i-1})  (r'_0 = r_0 = 0),
+// equal to q r_i + sum_{j<i} p_j (r_i - r_j) in exact arithmetic, summed from nonnegative terms (the slopes of the
+// loading curve times the threshold gaps). Inverse (construction, set_weights) and the generated C use it.
+void inverse_pi_parameters(double q, std::span<const double> r, std::span<const double> p, double* r_inv,
+                           double* p_inv) noexcept;
+}  // namespace detail
+
 class Inverse {
  public:
   // Throws hysteron::Error if the model is not invertible, naming the condition

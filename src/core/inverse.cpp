@@ -33,6 +33,19 @@ void map_deviations(double q, const std::vector<double>& p, const double* d, dou
 
 }  // namespace
 
+void detail::inverse_pi_parameters(double q, std::span<const double> r, std::span<const double> p, double* r_inv,
+                                   double* p_inv) noexcept {
+  double prev = q, r_sum = 0.0, r_prev = 0.0;  // prev = q + sum_{j<i} p_j, the loading curve's slope before r_i
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    r_sum += prev * (r[i] - r_prev);
+    r_prev = r[i];
+    const double cur = prev + p[i];
+    r_inv[i] = r_sum;
+    p_inv[i] = -p[i] / (cur * prev);
+    prev = cur;
+  }
+}
+
 Inverse::Inverse(ModelParams params, InverseOptions options)
     : params_(std::move(params)), options_(options), s_(detail::structure_of(params_)),
       kernel_(detail::make_kernel(params_)) {
@@ -77,15 +90,7 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     qi_ = 1.0 / s_.q;
     ri_.resize(n);
     pi_.resize(n);
-    double prev = s_.q;  // q + sum_{j<i} p_j
-    for (std::size_t i = 0; i < n; ++i) {
-      double r = s_.q * s_.r[i];
-      for (std::size_t j = 0; j < i; ++j) r += s_.p[j] * (s_.r[i] - s_.r[j]);
-      const double cur = prev + s_.p[i];
-      ri_[i] = r;
-      pi_[i] = -s_.p[i] / (cur * prev);
-      prev = cur;
-    }
+    detail::inverse_pi_parameters(s_.q, s_.r, s_.p, ri_.data(), pi_.data());  // Eq. 11, O(n)
     if (s_.has_dead_zones) {
       if (!(s_.g0 > 0))
         throw Error(detail::format("{}: not invertible: g0 (plus weights of zero dead zones) = {} must be > 0", name, s_.g0));
@@ -536,19 +541,11 @@ bool Inverse::set_weights(double q, std::span<const double> p) noexcept {
     u += pi_[i] * xi_[i];
   }
   map_deviations(qi_, pi_, d, sc);  // sc = forward deviations u - y_i
-  // Eq. 11 with the new weights, O(n): r'_i = (q + P_{i-1}) r_i - R_{i-1}, with the
-  // running sums P_{i-1} = sum_{j<i} p_j and R_{i-1} = sum_{j<i} p_j r_j.
+  // Eq. 11 with the new weights, as the constructor computes it (the same bits for the same weights).
   s_.q = q;
   std::copy(p.begin(), p.end(), s_.p.begin());
   qi_ = 1.0 / q;
-  double prev = q, rsum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    ri_[i] = prev * s_.r[i] - rsum;
-    const double cur = prev + p[i];
-    pi_[i] = -p[i] / (cur * prev);
-    rsum += p[i] * s_.r[i];
-    prev = cur;
-  }
+  detail::inverse_pi_parameters(q, s_.r, s_.p, ri_.data(), pi_.data());
   // The inverse's state from the same forward state with the new weights (as in reset(state)):
   // v = q u + sum p_i y_i, x'_i = v - map(q, p)(d)_i.
   double v = q * u;

@@ -80,15 +80,7 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
     b.qi = 1.0 / s.q;
     b.ri.resize(n);
     b.pi.resize(n);
-    double prev = s.q;
-    for (std::size_t i = 0; i < n; ++i) {
-      double r = s.q * s.r[i];
-      for (std::size_t j = 0; j < i; ++j) r += s.p[j] * (s.r[i] - s.r[j]);
-      const double cur = prev + s.p[i];
-      b.ri[i] = r;
-      b.pi[i] = -s.p[i] / (cur * prev);
-      prev = cur;
-    }
+    hysteron::detail::inverse_pi_parameters(s.q, s.r, s.p, b.ri.data(), b.pi.data());  // Eq. 11, as Inverse
     if (s.has_dead_zones) {
       b.zp = {0.0};
       b.dp = {0.0};
@@ -513,7 +505,8 @@ double $P_inverse_step($P_inverse *inv, double y_desired);
                                                   "  double v_prev;         /* last PI output v */\n",
                                                   size)
                                     : fmt::format("  double y[{}];          /* forward operator outputs driven by the inverse's input */\n", size),
-                                sym ? " or not reachable by the model (|d_i - d_j| <= r_j - r_i\n * broken for the deviations d_i = u - y_i)" : "");
+                                sym ? " or not reachable by the model (|d_i - d_j| <= r_j - r_i\n * broken for the deviations d_i = u - y_i)"
+                                    : " or not reachable by the model (necessary conditions:\n * y_1 >= u - r_1 off the virgin state, |y_i - y_j| <= r_j - r_i)");
     return t;
   }
 
@@ -920,11 +913,21 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
       t += R"(
 int $P_inverse_reset_state($P_inverse *inv, const double *y, double u)
 {
-  double x;
-  int i;
+  double x, scale = fabs(u), tol;
+  int i, virgin = 1;
   if (!$P_finite(u) || !(fabs(u) <= $P_u_max)) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i)
     if (!$P_finite(y[i]) || !(fabs(y[i]) <= $P_u_max)) return $P_inverse_refuse(inv);
+  /* Reachability, necessary conditions (Inverse::reset(ModelState), docs/models.md): y_1 >= u - r_1 (not on the
+     virgin operators, all 0) and |y_i - y_{i-1}| <= r_i - r_{i-1}. */
+  for (i = 0; i < $U_NUM_OPERATORS; ++i) {
+    scale = scale < fabs(y[i]) ? fabs(y[i]) : scale;
+    virgin = virgin && y[i] == 0.0;
+  }
+  tol = 1e-9 * (1.0 < scale ? scale : 1.0);
+  if ($U_NUM_OPERATORS > 0 && !virgin && y[0] < u - $P_r[0] - tol) return $P_inverse_refuse(inv);
+  for (i = 1; i < $U_NUM_OPERATORS; ++i)
+    if (fabs(y[i] - y[i - 1]) > $P_r[i] - $P_r[i - 1] + tol) return $P_inverse_refuse(inv);
   for (i = 0; i < $U_NUM_OPERATORS; ++i) inv->y[i] = y[i];
   x = $P_gamma_inverse_checked(u);
   x = $P_finite(x) ? x : 0.0;

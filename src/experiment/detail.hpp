@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <complex>
@@ -319,6 +320,17 @@ std::vector<RigDynamics> learning_neighbours(const RigDynamics& d, Neighbours wh
 // Tests only: whether the learning variant's feedforward goes through the shaper the gain
 // trial chose for the compensated loop (default true). Returns the previous setting.
 bool set_learning_shaper(bool on);
+// ---- The notes of a result (notes.cpp; each empty where there is nothing to say) ----
+// References that descend faster than the vented load's terminal speed on `rig`.
+std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& refs, double tc);
+// A rig (`which`: "rig" or "tracking rig") whose vented muscle stalls high in its reach after a hold at the top.
+std::string weak_return_note(const PamRigParams& rig, std::string_view which, const std::vector<Reference>& refs);
+// A displacement sensor whose noise (estimated on `id`) is at least half the least RMS of the compensating runs.
+std::string noise_floor_note(const ExperimentResult& res, const IdentificationRun& id);
+// A run whose actuator limit is not the papers' 0..0.6 MPa: where it comes from, and what changes.
+std::string limit_note(const ExperimentOptions& o, const Spec& spec, double p_max);
+// Throws hysteron::Error where nothing extends the vented muscle or the muscle cannot lift its load.
+void check_return_force(const PamRigParams& rig, const char* which);
 // The note for a learning run whose last period's RMS error is above `base`'s (the loop it
 // learns on): whether it was still falling and, at the last period's rate of decrease, how many
 // more periods would bring it below (or that it would not within 100: it has stalled); and why:

@@ -513,8 +513,9 @@ TEST(ExportCheck, MpiAsymInverseRefusesTheStatesTheLibraryRefuses) {
       }
       (rc == 0 ? accepted : refused) += 1;
       expected.push_back(rc);
-      script += "s " + hex(st.u);
-      for (double v : st.y) script += " " + hex(v);
+      script += "s ";
+      script += hex(st.u);
+      for (double v : st.y) (script += " ") += hex(v);
       script += "\n";
     }
     std::istringstream out(run_driver(dir.path, script));

@@ -28,9 +28,9 @@ struct Options {
 };
 
 // Default prefix: the output file's stem with every other character as '_'
-// ("my-comp.c" -> "my_comp"), or "compensator" if that is not a usable prefix.
+// ("my-comp.c" -> "my_comp"), or "compensator" if that is not a usable prefix or the output is stdout.
 std::string default_prefix(const std::string& out) {
-  if (out == "-") return "compensator";
+  if (names_stdout(out)) return "compensator";  // - or /dev/stdout: no file name to take it from
   std::string stem = std::filesystem::path(out).stem().string();
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_') || static_cast<unsigned char>(c) >= 0x80) c = '_';

@@ -40,6 +40,7 @@ int run_rig(const Options& o) {
   const RigStatics s = rig_statics(p);
   const std::string source = o.file.empty() ? std::string("the nominal rig") : o.file;
   if (!o.out.empty()) save_rig_params(p, out_stdout ? std::string("-") : o.out);
+  if (!s.unusable.empty()) fmt::print(stderr, "rig: warning: the experiments refuse this rig: {}\n", s.unusable);
   if (!s.weak_return.empty()) fmt::print(stderr, "rig: warning: {}\n", s.weak_return);
   if (out_stdout) return exit_ok;  // stdout holds the rig's JSON alone
   if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
@@ -91,7 +92,6 @@ int run_rig(const Options& o) {
   fmt::print("  static contraction [mm]:\n    {:>9} {:>9} {:>9}\n", "P [MPa]", "rising", "falling");
   for (std::size_t i = 0; i < s.pressure_pa.size(); ++i)
     fmt::print("    {:>9.3f} {:>9.2f} {:>9.2f}\n", s.pressure_pa[i] * 1e-6, s.rising_m[i] * 1e3, s.falling_m[i] * 1e3);
-  if (!s.unusable.empty()) fmt::print("warning: the experiments refuse this rig: {}\n", s.unusable);
   if (!s.rising_m.empty() && s.rising_m.back() >= s.stroke_m)
     fmt::print("note: the rising branch reaches the stroke end ({}) within the command limit: the muscle rests on its "
                "hard stop at the top\n",

@@ -128,6 +128,9 @@ grep -q 'hm_lim_raw_lo = -1.5, hm_lim_raw_hi = 1.25' "$T/lim.c" || fail "--limit
 grep -q 'compensator_model_step' "$T/hysteron.c" || fail "hysteron.c: the default prefix is not compensator"
 grep -q 'hm_inverse_step' "$T/stdout.c" || fail "--out - printed no C"
 grep -q 'from the model file "<stdin>"' "$T/stdout.c" || fail "--model - not named <stdin>"
+# --out naming stdout (/dev/stdout) takes the default prefix of -, not the device's name
+"$BIN" export --model "$T/gpi.json" --out /dev/stdout > "$T/devstdout.c" 2> /dev/null || fail "export --out /dev/stdout"
+grep -q 'compensator_inverse_step' "$T/devstdout.c" || fail "--out /dev/stdout: the default prefix is not compensator"
 
 # bad input: exit 1, a message, no file written, an existing file untouched
 mkdir "$T/out"

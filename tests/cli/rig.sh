@@ -71,9 +71,12 @@ PYEOF
 
 # horizontal: without a spring warned (and refused by experiment), with one the preload sets lift-off
 echo '{"load": {"gravity": 0}}' > "$T/flat.json"
-"$BIN" rig "$T/flat.json" > "$T/flat.txt" 2>&1 || fail "flat: exit $?"
-grep -q "the experiments refuse this rig: rig.load.gravity = 0 with no return spring" "$T/flat.txt" \
-  || fail "flat: no warning: $(cat "$T/flat.txt")"
+"$BIN" rig "$T/flat.json" > "$T/flat.txt" 2> "$T/flat.err" || fail "flat: exit $?"
+grep -q "^rig: warning: the experiments refuse this rig: rig.load.gravity = 0 with no return spring" "$T/flat.err" \
+  || fail "flat: no warning on stderr: $(cat "$T/flat.err")"
+"$BIN" rig "$T/flat.json" --json 2> "$T/flat.err" | $PY -c 'import json, sys; json.load(sys.stdin)' \
+  || fail "flat --json: not one JSON document on stdout"
+grep -q "^rig: warning: the experiments refuse this rig" "$T/flat.err" || fail "flat --json: no warning on stderr"
 "$BIN" experiment gpi-pid --plant "$T/flat.json" --learning-periods 0 > /dev/null 2>&1 && fail "flat: experiment ran"
 echo '{"load": {"gravity": 0, "spring_preload": 98.1}}' > "$T/half.json"
 echo '{"load": {"gravity": 0, "spring_preload": 392.4}}' > "$T/double.json"
@@ -88,8 +91,9 @@ assert h["unusable"] == ""
 PYEOF
 # a load the muscle cannot lift: warned, and said by experiment; a spring too stiff to simulate: exit 1
 echo '{"load": {"spring_preload": 5000}}' > "$T/heavy2.json"
-"$BIN" rig "$T/heavy2.json" > "$T/heavy2.txt" 2>&1 || fail "heavy2: exit $?"
-grep -q "the experiments refuse this rig: the muscle cannot lift its load" "$T/heavy2.txt" || fail "heavy2: no warning"
+"$BIN" rig "$T/heavy2.json" > "$T/heavy2.txt" 2> "$T/heavy2.err" || fail "heavy2: exit $?"
+grep -q "^rig: warning: the experiments refuse this rig: the muscle cannot lift its load" "$T/heavy2.err" \
+  || fail "heavy2: no warning on stderr"
 "$BIN" experiment gpi-pid --plant "$T/heavy2.json" --learning-periods 0 > /dev/null 2> "$T/err.txt" && fail "heavy2 ran"
 grep -q "the muscle cannot lift its load" "$T/err.txt" || fail "heavy2 experiment: $(cat "$T/err.txt")"
 echo '{"load": {"spring_rate": 1e14}}' > "$T/stiff.json"

@@ -173,6 +173,104 @@ TEST(Pid, OverflowingGainsRefusedOrHeld) {
   }
 }
 
+// Review s17: with setpoint weights 0, conditional anti-windup, K_p <= 1 and the limit-cycle guard,
+// r = 1e308, y = -1e308 (e = r - y overflows) was committed without a fault, and on the second such
+// sample the guard's integral of |e| dt became inf: restore(snapshot()) then refused the state. For
+// every combination of setpoint weights 0/1, anti-windup rule, guard on/off, K_p <= 1 and > 1, K_i T_s
+// < 1 and > 1, extreme finite inputs (+-1e308, alternating) must leave a finite state that restores,
+// and every held sample is a fault: a fault leaves the state and output unchanged, and a sample whose
+// error e = r - y, weighted errors b r - y, c r - y or difference of c r - y from the last one overflows
+// (IEEE: the double result is inf) is a fault.
+TEST(Pid, ExtremeFiniteInputsHeldAndCounted) {
+  const double big = 1e308;
+  std::vector<std::pair<double, double>> inputs;  // (r, y)
+  for (int k = 0; k < 30; ++k) {
+    const double s = k % 2 == 0 ? 1.0 : -1.0;
+    inputs.push_back({s * big, -s * big});  // e overflows
+    inputs.push_back({s * big, -s * big});
+    inputs.push_back({s * big, s * big});   // e = 0, b r - y = -y with b = 0
+    inputs.push_back({s * big, 0.0});
+    inputs.push_back({0.0, s * big});
+    inputs.push_back({0.01 * s, 0.0});      // a normal sample
+  }
+  std::size_t configs = 0, overflowing = 0, held_total = 0;
+  for (double b : {0.0, 1.0})
+    for (double c : {0.0, 1.0})
+      for (auto aw : {AntiWindup::none, AntiWindup::conditional, AntiWindup::back_calculation})
+        for (bool guard : {false, true})
+          for (double kp : {0.5, 2.0})
+            for (double ki : {1.0, 3000.0}) {  // K_i T_s = 1e-3 and 3
+              PidParams p{.kp = kp, .ki = ki, .kd = 0.01, .sample_time = 1e-3, .derivative_filter = 0.01,
+                          .out_min = -1.0, .out_max = 1.0, .anti_windup = aw, .setpoint_weight_p = b,
+                          .setpoint_weight_d = c};
+              if (guard) p.guard = PidGuard{.period = 0.3, .amplitude = 0.002, .count = 1.5, .memory = 10.0};
+              const std::string what = "b " + std::to_string(b) + " c " + std::to_string(c) + " anti-windup " +
+                                       std::string(anti_windup_name(aw)) + (guard ? " guarded" : "") + " kp " +
+                                       std::to_string(kp) + " ki " + std::to_string(ki);
+              Pid pid(p);
+              ++configs;
+              for (std::size_t k = 0; k < inputs.size(); ++k) {
+                const auto [r, y] = inputs[k];
+                const std::vector<double> before = pid.snapshot();
+                const double d_prev = pid.state().initialized ? pid.state().prev_d_error : c * r - y;
+                const bool overflows = std::isinf(r - y) || std::isinf(b * r - y) || std::isinf(c * r - y) ||
+                                       std::isinf((c * r - y) - d_prev);
+                overflowing += overflows;
+                const double u = pid.step(r, y);
+                const std::vector<double> after = pid.snapshot();
+                ASSERT_TRUE(u >= -1.0 && u <= 1.0) << what << ", sample " << k << ": " << u;
+                ASSERT_EQ(after.size(), before.size());
+                const double faults = after.back() - before.back();
+                ASSERT_TRUE(faults == 0.0 || faults == 1.0) << what << ", sample " << k;
+                if (overflows) EXPECT_EQ(faults, 1.0) << what << ", sample " << k << ": r " << r << ", y " << y;
+                if (faults == 1.0) {  // held: the output and every other number as before
+                  ++held_total;
+                  EXPECT_EQ(u, before[3]) << what << ", sample " << k;
+                  for (std::size_t i = 0; i + 1 < after.size(); ++i)
+                    EXPECT_EQ(after[i], before[i]) << what << ", sample " << k << ", snapshot[" << i << "]";
+                }
+                for (std::size_t i = 0; i < after.size(); ++i)
+                  ASSERT_TRUE(std::isfinite(after[i])) << what << ", sample " << k << ": snapshot[" << i << "] = "
+                                                       << after[i];
+                // the state restores, and the copy steps as the original
+                Pid copy(p);
+                ASSERT_NO_THROW(copy.restore(after)) << what << ", sample " << k;
+                EXPECT_EQ(copy.snapshot(), after) << what << ", sample " << k;
+              }
+              // a copy restored after the extremes steps as the original on normal samples
+              Pid copy(p);
+              copy.restore(pid.snapshot());
+              const std::size_t faults = pid.faults();
+              for (int k = 0; k < 50; ++k) {
+                const double r = 0.01 * std::sin(0.1 * k);
+                ASSERT_EQ(copy.step(r, 0.0), pid.step(r, 0.0)) << what << ", normal sample " << k;
+              }
+              EXPECT_EQ(copy.snapshot(), pid.snapshot()) << what;
+              EXPECT_EQ(pid.faults(), faults) << what << ": normal samples after the extremes were held";
+            }
+  EXPECT_EQ(configs, 96u);
+  EXPECT_GT(overflowing, 96u * 30u) << "the inputs do not overflow: the test exercises nothing";
+  EXPECT_GE(held_total, overflowing);
+}
+
+// The review's reproduction: two samples r = 1e308, y = -1e308 are two faults, the state as before.
+TEST(Pid, OverflowingErrorIsAFaultWithTheGuard) {
+  PidParams p{.kp = 0.5, .ki = 1.0, .out_min = -1.0, .out_max = 1.0, .anti_windup = AntiWindup::conditional,
+              .setpoint_weight_p = 0.0, .setpoint_weight_d = 0.0};
+  p.guard = PidGuard{.period = 0.3, .amplitude = 0.002};
+  Pid pid(p);
+  pid.step(0.01, 0.0);
+  const std::vector<double> before = pid.snapshot();
+  EXPECT_EQ(pid.step(1e308, -1e308), before[3]);
+  EXPECT_EQ(pid.step(1e308, -1e308), before[3]);
+  EXPECT_EQ(pid.faults(), 2u);
+  std::vector<double> after = pid.snapshot();
+  after.back() = before.back();
+  EXPECT_EQ(after, before);
+  Pid copy(p);
+  EXPECT_NO_THROW(copy.restore(pid.snapshot()));
+}
+
 TEST(Pid, Deterministic) {
   auto run = [] {
     Pid pid(PidParams{.kp = 1.0, .ki = 5.0, .kd = 0.01, .sample_time = 1e-3, .derivative_filter = 5e-3});
@@ -259,6 +357,17 @@ TEST(PidGuard, ValidatesParams) {
   p.guard.count = NAN;
   EXPECT_NE(error_of(p).find("pid.guard.count"), std::string::npos);
   p.guard = PidGuard{.period = 0.0, .amplitude = NAN};  // off: the rest is not used
+  EXPECT_EQ(error_of(p), "");
+  // step() divides the integral of |e| dt by a T_u / pi and adds counts up to 2 count: neither may overflow
+  p.guard = PidGuard{.period = 0.2, .amplitude = 5e-324};  // a T_u / pi = 0
+  EXPECT_NE(error_of(p).find("pid.guard.amplitude = 5e-324: must be such that amplitude * period / pi"),
+            std::string::npos) << error_of(p);
+  p.guard = PidGuard{.period = 1e10, .amplitude = 1e308};  // a T_u / pi = inf
+  EXPECT_NE(error_of(p).find("pid.guard.amplitude"), std::string::npos) << error_of(p);
+  p.guard = PidGuard{.period = 0.2, .amplitude = 0.1, .count = 1e308};
+  EXPECT_NE(error_of(p).find("pid.guard.count = 1e+308: must be such that 2 count is finite"), std::string::npos)
+      << error_of(p);
+  p.guard.count = 1e307;
   EXPECT_EQ(error_of(p), "");
 }
 

@@ -188,6 +188,7 @@ struct Compared {
   double worst_command = 0.0, worst_duty = 0.0, worst_preview = 0.0;
   std::size_t exact = 0, n = 0, at_limits = 0, nonzero_duty = 0;
   std::size_t guard_cuts = 0;  // the most cuts of the library's position PID between two resets
+  std::size_t position_faults = 0;  // the most faults of the library's position PID between two resets
 };
 
 // The position PID of whichever loop `c` holds.
@@ -217,6 +218,7 @@ Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, cons
     }
     const LoopOutput o = step(ctl, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
     r.guard_cuts = std::max(r.guard_cuts, position_pid(ctl).state().guard_cuts);
+    r.position_faults = std::max(r.position_faults, position_pid(ctl).faults());
     r.worst_command = std::max(r.worst_command, std::abs(o.command_mpa - got.command[k]));
     r.worst_duty = std::max(r.worst_duty, std::abs(o.duty - got.duty[k]));
     r.exact += o.command_mpa == got.command[k] && o.duty == got.duty[k];
@@ -270,6 +272,56 @@ TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
 
 INSTANTIATE_TEST_SUITE_P(Export, ExportLoop, ::testing::ValuesIn(cases()),
                          [](const ::testing::TestParamInfo<Case>& p) { return p.param.name; });
+
+// Extreme finite inputs (review s17): among the samples of make_inputs, every 7th from sample 100 on
+// has the reference and the measurement at +-1e308 of opposite signs (the PID's error r - y overflows),
+// or one of reference, measurement, pressure at +-1e308, alternating. The generated C must hold
+// exactly the samples the library's PIDs hold (faults) and step bit for bit as the library's loop,
+// also for the review's configuration: setpoint weights 0, conditional anti-windup, K_p <= 1, guarded.
+TEST(ExportLoopCheck, ExtremeFiniteInputsStepAsTheLibrarysLoop) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found: generated C not compiled";
+  std::vector<Case> all = cases();
+  {
+    LoopDesign d;
+    d.kind = LoopDesign::Kind::feedforward_pid;
+    d.pid = pid(0.5, 20, 0.01, 0.01, AntiWindup::conditional);
+    d.pid->setpoint_weight_p = 0.0;
+    d.pid->setpoint_weight_d = 0.0;
+    d.pid->guard = PidGuard{.period = 0.3, .amplitude = 0.002, .count = 1.5, .memory = 10.0};
+    all.push_back({"ff_pid_weights_0_guarded", d, M::pi, false});
+  }
+  Inputs in = make_inputs(3000, 4242u);
+  const double big = 1e308;
+  for (std::size_t k = 100; k < in.reference.size(); k += 7) {
+    const double s = (k / 7) % 2 == 0 ? 1.0 : -1.0;
+    switch ((k / 7) % 5) {
+      case 0:
+      case 1: in.reference[k] = s * big; in.measured[k] = -s * big; break;
+      case 2: in.measured[k] = s * big; break;
+      case 3: in.reference[k] = s * big; break;
+      default: in.pressure[k] = s * big; break;
+    }
+  }
+  for (const Case& c : all) {
+    test::TempDir dir;
+    const std::vector<double> preview = feedforward_preview(c.design, in.reference);
+    const test::LoopRun got = test::run_generated_loop(c.design, model_of(c.model), dir.file("."), c.single,
+                                                       in.reference, preview, in.measured, in.pressure, in.resets);
+    ASSERT_EQ(got.error, "") << c.name;
+    ASSERT_EQ(got.command.size(), in.reference.size()) << c.name;
+    const Compared r = compare(c, in, got, preview);
+    EXPECT_LE(r.worst_command, 1e-12) << c.name << " [MPa]";
+    EXPECT_LE(r.worst_duty, 1e-12) << c.name;
+#if defined(__x86_64__) && defined(__SSE2__)
+    EXPECT_EQ(r.exact, r.n) << c.name << ": not bit-identical to the library's loop";
+#endif
+    if (c.design.pid) {
+      EXPECT_GT(r.position_faults, 50u) << c.name << ": the extremes held no sample of the position PID";
+    }
+    std::printf("  %s: %zu samples with extremes: bit-identical %zu, position PID faults %zu (most between resets)\n",
+                c.name.c_str(), r.n, r.exact, r.position_faults);
+  }
+}
 
 // The comparison can fail: the C file of a loop whose K_p, pressure PID K_i or shaper weight
 // is 1e-9 off (relative), compared with the library's loop, differs.

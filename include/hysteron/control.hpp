@@ -36,8 +36,8 @@ AntiWindup anti_windup_from_name(std::string_view name);
 // the count restarts. The cut gains stay until reset(). period = 0: off (the default).
 struct PidGuard {
   double period = 0.0;     // T_u [s]: 0 (off) or >= 4 sample times
-  double amplitude = 0.0;  // a [error units], > 0 where period > 0
-  double count = 5.0;      // half-cycles (decayed) that cut the gains, > 0
+  double amplitude = 0.0;  // a [error units], > 0 where period > 0 (a T_u / pi finite and > 0)
+  double count = 5.0;      // half-cycles (decayed) that cut the gains, > 0 (2 count finite)
   double memory = 5.0;     // the count's decay time constant [T_u], > 0
   double factor = 0.63;    // in (0, 1)
   double min_scale = 0.25; // in (0, 1]
@@ -107,9 +107,12 @@ class Pid {
   // Not for the real-time loop's step: a setup call.
   void set_guard(const PidGuard& guard);
   // One sample. A non-finite setpoint, measurement or feedforward, or a
-  // non-finite intermediate (an overflow of large gains on a large error), holds
-  // the last output, leaves the state unchanged and is counted in faults():
-  // the output is always finite and inside [out_min, out_max].
+  // non-finite intermediate (an overflow of large gains on a large error, or of
+  // extreme finite inputs: the error r - y of r = 1e308, y = -1e308, the weighted
+  // errors, the integral's increment, the derivative, the limit-cycle guard's
+  // integral of |e| dt over its limit, its count), holds the last output, leaves
+  // the state unchanged and is counted in faults(): the output is always finite and
+  // inside [out_min, out_max], the state always finite (restore(snapshot()) takes it).
   double step(double setpoint, double measurement, double feedforward = 0.0) noexcept;
 
   const PidParams& params() const noexcept { return p_; }
@@ -141,7 +144,9 @@ class Pid {
   double guard_decay_ = 0.0;      // exp(-T_s / (memory T_u))
   double guard_iae_limit_ = 0.0;  // a T_u / pi
   std::size_t faults_ = 0;
-  void guard_step(double e) noexcept;
+  // The guard's update of the candidate state s for the error e; false where one of its quantities overflows
+  // (s is then to be discarded).
+  bool guard_step(PidState& s, double e) const noexcept;
 };
 
 // Turns a continuous command u (e.g. a PID output) into the PWM duty of the

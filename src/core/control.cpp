@@ -91,11 +91,17 @@ void Pid::set_guard(const PidGuard& g) {
                                                        "period cannot be seen at this sample time", 4.0 * p_.sample_time).c_str());
     if (!std::isfinite(g.amplitude) || g.amplitude <= 0.0) bad("pid.guard.amplitude", g.amplitude, "finite and > 0");
     if (!std::isfinite(g.count) || g.count <= 0.0) bad("pid.guard.count", g.count, "finite and > 0");
+    // the count reaches at most count + max(1, count) before it is compared: no overflow in step()
+    if (!std::isfinite(2.0 * g.count)) bad("pid.guard.count", g.count, "such that 2 count is finite");
     if (!std::isfinite(g.memory) || g.memory <= 0.0) bad("pid.guard.memory", g.memory, "finite and > 0");
     if (!(g.factor > 0.0 && g.factor < 1.0)) bad("pid.guard.factor", g.factor, "in (0, 1)");
     if (!(g.min_scale > 0.0 && g.min_scale <= 1.0)) bad("pid.guard.min_scale", g.min_scale, "in (0, 1]");
     decay = std::exp(-p_.sample_time / (g.memory * g.period));
     limit = g.amplitude * g.period / std::numbers::pi;
+    // step() divides the integral of |e| dt by it (0: inf or NaN; inf: nothing is ever counted)
+    if (!std::isfinite(limit) || limit <= 0.0)
+      bad("pid.guard.amplitude", g.amplitude,
+          detail::format("such that amplitude * period / pi (period {} s) is finite and > 0", g.period).c_str());
   }
   p_.guard = g;
   guard_decay_ = decay;
@@ -175,8 +181,12 @@ double Pid::step(double r, double y, double ff) noexcept {
   const double d_err = p_.setpoint_weight_d * r - y;
   const double prev_d_error = s_.initialized ? s_.prev_d_error : d_err;  // no derivative kick
   // Candidate state; committed only if every intermediate is finite (large but
-  // valid gains can still overflow on a large error): otherwise the last output
-  // is held, the state is left unchanged and the sample is counted as a fault.
+  // valid gains can still overflow on a large error, and e = r - y on extreme finite
+  // inputs, r = 1e308, y = -1e308): otherwise the last output is held, the state is
+  // left unchanged and the sample is counted as a fault. A non-finite b r - y makes
+  // prop and so v non-finite, a non-finite c r - y or d_err - prev_d_error the
+  // derivative (inf, or NaN with K_d = 0); e and di are checked themselves, as the
+  // conditional rule may not add di and the guard takes e.
   const double derivative = a_d_ * s_.derivative + scale * b_d_ * (d_err - prev_d_error);
   const double v = prop + s_.integral + derivative + ff;
   const double u = std::clamp(v, p_.out_min, p_.out_max);
@@ -190,52 +200,64 @@ double Pid::step(double r, double y, double ff) noexcept {
       break;
     case AntiWindup::back_calculation: integral += di + k_t_ * (u - v); break;
   }
-  if (!std::isfinite(v) || !std::isfinite(derivative) || !std::isfinite(integral)) {
+  if (!std::isfinite(e) || !std::isfinite(d_err) || !std::isfinite(di) || !std::isfinite(v) ||
+      !std::isfinite(derivative) || !std::isfinite(integral)) {
     ++faults_;
     return s_.output;
   }
-  s_.initialized = true;
-  s_.derivative = derivative;
-  s_.prev_d_error = d_err;
-  s_.integral = integral;
-  s_.saturated = u != v;
-  s_.output = u;
-  if (p_.guard.enabled()) guard_step(e);
+  PidState s = s_;
+  s.initialized = true;
+  s.derivative = derivative;
+  s.prev_d_error = d_err;
+  s.integral = integral;
+  s.saturated = u != v;
+  s.output = u;
+  if (p_.guard.enabled() && !guard_step(s, e)) {
+    ++faults_;
+    return s_.output;
+  }
+  s_ = s;
   return u;
 }
 
-void Pid::guard_step(double e) noexcept {
+bool Pid::guard_step(PidState& s, double e) const noexcept {
   const PidGuard& g = p_.guard;
-  s_.guard_iae += std::abs(e) * p_.sample_time;
+  s.guard_iae += std::abs(e) * p_.sample_time;
+  // the severity of a half-cycle ending here, its integral over the limit, must be finite: it is checked on
+  // every sample (a held sample leaves the integral where it was), or an integral that grew too large on
+  // extreme errors would hold every sample that ends its half-cycle, for good
+  if (!std::isfinite(s.guard_iae / guard_iae_limit_)) return false;
   // its length, counted until it is longer than T_u (which it then stays: no wrap-around)
-  if (static_cast<double>(s_.guard_samples) * p_.sample_time <= g.period) ++s_.guard_samples;
+  if (static_cast<double>(s.guard_samples) * p_.sample_time <= g.period) ++s.guard_samples;
   const double h = 0.25 * g.amplitude;
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
-  if (sign != 0 && sign != s_.guard_sign) {  // a half-cycle ended
-    const double length = static_cast<double>(s_.guard_samples) * p_.sample_time;
-    const double severity = s_.guard_sign != 0 && length <= g.period && s_.guard_iae > guard_iae_limit_
-                                ? s_.guard_iae / guard_iae_limit_
+  if (sign != 0 && sign != s.guard_sign) {  // a half-cycle ended
+    const double length = static_cast<double>(s.guard_samples) * p_.sample_time;
+    const double severity = s.guard_sign != 0 && length <= g.period && s.guard_iae > guard_iae_limit_
+                                ? s.guard_iae / guard_iae_limit_
                                 : 0.0;
     // a ring that grows (three half-cycles in a row counted, this one at least the one of its sign
     // before) adds its severity; any other counted half-cycle 1 (a step's decaying transient)
-    const bool growing = s_.guard_last > 0.0 && s_.guard_last2 > 0.0 && severity >= s_.guard_last2;
+    const bool growing = s.guard_last > 0.0 && s.guard_last2 > 0.0 && severity >= s.guard_last2;
     // at least 1, as any counted half-cycle (not std::clamp: count may be below 1)
-    if (severity > 0.0) s_.guard_count += growing ? std::max(1.0, std::min(severity, g.count)) : 1.0;
-    s_.guard_last2 = s_.guard_last;
-    s_.guard_last = severity;
-    s_.guard_sign = sign;
-    s_.guard_iae = 0.0;
-    s_.guard_samples = 0;
+    if (severity > 0.0) s.guard_count += growing ? std::max(1.0, std::min(severity, g.count)) : 1.0;
+    s.guard_last2 = s.guard_last;
+    s.guard_last = severity;
+    s.guard_sign = sign;
+    s.guard_iae = 0.0;
+    s.guard_samples = 0;
   }
-  s_.guard_count *= guard_decay_;
-  if (s_.guard_count >= g.count) {
-    s_.guard_count = 0.0;
-    const double next = std::max(g.min_scale, s_.gain_scale * g.factor);
-    if (next < s_.gain_scale) {
-      s_.gain_scale = next;
-      ++s_.guard_cuts;
+  s.guard_count *= guard_decay_;
+  if (!std::isfinite(s.guard_count)) return false;  // not with a validated count (below 2 count); kept as a check
+  if (s.guard_count >= g.count) {
+    s.guard_count = 0.0;
+    const double next = std::max(g.min_scale, s.gain_scale * g.factor);
+    if (next < s.gain_scale) {
+      s.gain_scale = next;
+      ++s.guard_cuts;
     }
   }
+  return true;
 }
 
 PwmModulator::PwmModulator(const PwmParams& p) : p_(p) {

@@ -55,12 +55,14 @@ constexpr std::string_view kPidStep = R"(
  * (hysteresis amplitude / 4) no longer than T_u with an integral of |e| dt above a T_u / pi
  * count 1, or where the ring grows (three counted in a row, this one's integral at least that of the
  * one of its sign before) their severity (that integral over a T_u / pi, at most guard_count); the count decays by guard_decay per sample; at guard_count it cuts the
- * gains. */
-static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
+ * gains. Updates the candidate state s; 0 where the integral over a T_u / pi or the count overflows
+ * (s then discarded: the sample is held). */
+static int $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
 {
   const double h = 0.25 * k->guard_amplitude;
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
   s->guard_iae += fabs(e) * k->ts;
+  if (!$P_finite(s->guard_iae / k->guard_iae_limit)) return 0;  /* the severity of a half-cycle ending here */
   if ((double)s->guard_samples * k->ts <= k->guard_period) ++s->guard_samples;  /* no wrap-around */
   if (sign != 0 && sign != s->guard_sign) {
     const double length = (double)s->guard_samples * k->ts;
@@ -80,6 +82,7 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
     s->guard_samples = 0;
   }
   s->guard_count *= k->guard_decay;
+  if (!$P_finite(s->guard_count)) return 0;
   if (s->guard_count >= k->guard_count) {
     double next = s->gain_scale * k->guard_factor;
     if (next < k->guard_min_scale) next = k->guard_min_scale;
@@ -89,16 +92,19 @@ static void $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
       ++s->guard_cuts;
     }
   }
+  return 1;
 }
 
 /* Discrete PID (hysteron::Pid::step, control.hpp; Eq. 17 of gpi-lm-feedforward-pid.txt):
  *   P = s K_p (b r - y),  D = a_d D + s b_d (d - d_prev), d = c r - y,  v = P + I + D + ff,
  *   u = clamp(v, out_min, out_max),  I += s K_i T_s (r - y) by the anti-windup rule,
  * s the limit-cycle guard's scale (1 unless it cut the gains; docs/control.md, section 2).
- * A non-finite input or intermediate holds the last output (counted in faults). */
+ * A non-finite input or intermediate (r - y of r = 1e308, y = -1e308, the integral's increment,
+ * the guard's) holds the last output and leaves the state as it was (counted in faults). */
 static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, double y, double ff)
 {
   double e, scale, prop, d_err, prev_d_error, derivative, v, u, di, integral;
+  $P_pid_state n;
   if (!$P_finite(r) || !$P_finite(y) || !$P_finite(ff)) {
     ++s->faults;
     return s->output;
@@ -120,17 +126,23 @@ static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, doub
   } else {                           /* back-calculation */
     integral += di + k->k_t * (u - v);
   }
-  if (!$P_finite(v) || !$P_finite(derivative) || !$P_finite(integral)) {
+  if (!$P_finite(e) || !$P_finite(d_err) || !$P_finite(di) || !$P_finite(v) || !$P_finite(derivative) ||
+      !$P_finite(integral)) {
     ++s->faults;
     return s->output;
   }
-  s->initialized = 1;
-  s->derivative = derivative;
-  s->prev_d_error = d_err;
-  s->integral = integral;
-  s->saturated = u != v;
-  s->output = u;
-  if (k->guard_period > 0.0) $P_pid_guard(s, k, e);
+  n = *s;  /* the candidate state */
+  n.initialized = 1;
+  n.derivative = derivative;
+  n.prev_d_error = d_err;
+  n.integral = integral;
+  n.saturated = u != v;
+  n.output = u;
+  if (k->guard_period > 0.0 && !$P_pid_guard(&n, k, e)) {
+    ++s->faults;
+    return s->output;
+  }
+  *s = n;
   return u;
 }
 

@@ -222,7 +222,9 @@ TEST(Pid, ExtremeFiniteInputsHeldAndCounted) {
                 ASSERT_EQ(after.size(), before.size());
                 const double faults = after.back() - before.back();
                 ASSERT_TRUE(faults == 0.0 || faults == 1.0) << what << ", sample " << k;
-                if (overflows) EXPECT_EQ(faults, 1.0) << what << ", sample " << k << ": r " << r << ", y " << y;
+                if (overflows) {
+                  EXPECT_EQ(faults, 1.0) << what << ", sample " << k << ": r " << r << ", y " << y;
+                }
                 if (faults == 1.0) {  // held: the output and every other number as before
                   ++held_total;
                   EXPECT_EQ(u, before[3]) << what << ", sample " << k;

@@ -118,7 +118,9 @@ int run_sweep_command(const SweepArgs& a) {
   // an output naming stdout (-, /dev/stdout, the file stdout is redirected to) is handled as - is
   const bool out_stdout = names_stdout(a.out);
   if (a.json && out_stdout) throw Error(fmt::format("--json and --out {} both write to stdout: choose one", a.out));
-  if (names_stdout(a.report)) throw Error(fmt::format("--report {}: the HTML page needs a file name", a.report));
+  if (names_stdout(a.report))
+    throw Error(fmt::format(
+        "--report {}: the HTML page needs a file of its own, not stdout (where the table is printed)", a.report));
 
   SweepOptions o;
   o.seed = a.seed;

@@ -364,6 +364,8 @@ TEST(PidGuard, ValidatesParams) {
   p.guard = PidGuard{.period = 0.2, .amplitude = 5e-324};  // a T_u / pi = 0
   EXPECT_NE(error_of(p).find("pid.guard.amplitude = 5e-324: must be such that amplitude * period / pi"),
             std::string::npos) << error_of(p);
+  p.guard = PidGuard{.period = 1.0, .amplitude = 1e-310};  // a T_u / pi subnormal: |e| dt / it overflows
+  EXPECT_NE(error_of(p).find("not subnormal"), std::string::npos) << error_of(p);
   p.guard = PidGuard{.period = 1e10, .amplitude = 1e308};  // a T_u / pi = inf
   EXPECT_NE(error_of(p).find("pid.guard.amplitude"), std::string::npos) << error_of(p);
   p.guard = PidGuard{.period = 0.2, .amplitude = 0.1, .count = 1e308};

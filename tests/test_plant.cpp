@@ -213,6 +213,19 @@ TEST(PamRig, AWeakReturnForceLeavesTheVentedMuscleToTheCreep) {
     EXPECT_EQ(u.weak_return, "");
     EXPECT_LT(hold_and_vent(prm, 20000), 0.1 * u.rising_m.back());
   }
+
+  // nothing resists the fall (no damping, no creep stiffness) and no force at the stall (a
+  // spring without preload, vented at rest): the crawl speed is infinite, as the fall speeds,
+  // not 0 / 0 = NaN, and null in JSON
+  PamRigParams free;
+  free.load.gravity = 0.0;
+  free.load.damping = 0.0;
+  free.load.spring_rate = 2000.0;
+  free.hysteresis.creep_stiffness = 0.0;
+  free.hysteresis.pressure_band = 0.0;
+  const RigStatics f = rig_statics(free);
+  EXPECT_TRUE(std::isinf(f.creep_return_speed_m_s)) << f.creep_return_speed_m_s;
+  EXPECT_TRUE(rig_statics_to_json(f).at("creep_return_speed_m_s").is_null());
 }
 
 // rig_statics (hysteron rig) against the force balance P1-P5 written out here: at the lift-off

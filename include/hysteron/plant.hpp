@@ -238,7 +238,7 @@ struct RigStatics {
   // (load.damping + creep_stiffness x creep_time) (P4 is a spring k_c in series with a dashpot
   // k_c tau_c, in parallel with the load's damping; slower below where a spring's force drops).
   double vented_stall_m = 0.0;
-  double creep_return_speed_m_s = 0.0;
+  double creep_return_speed_m_s = 0.0;  // inf without damping and creep stiffness (null in JSON)
   // rig_weak_return_reason: "" unless the stall lies in the upper half of the reach (docs/plant.md,
   // "A weak return force"); `hysteron rig` warns with it, the experiments note it.
   std::string weak_return;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "format.hpp"
@@ -98,10 +99,13 @@ void Pid::set_guard(const PidGuard& g) {
     if (!(g.min_scale > 0.0 && g.min_scale <= 1.0)) bad("pid.guard.min_scale", g.min_scale, "in (0, 1]");
     decay = std::exp(-p_.sample_time / (g.memory * g.period));
     limit = g.amplitude * g.period / std::numbers::pi;
-    // step() divides the integral of |e| dt by it (0: inf or NaN; inf: nothing is ever counted)
-    if (!std::isfinite(limit) || limit <= 0.0)
+    // step() divides the integral of |e| dt by it (0: inf or NaN; subnormal: the quotient overflows on a
+    // small integral, and a sample whose quotient overflows is held; inf: nothing is ever counted)
+    if (!std::isfinite(limit) || !(limit >= std::numeric_limits<double>::min()))
       bad("pid.guard.amplitude", g.amplitude,
-          detail::format("such that amplitude * period / pi (period {} s) is finite and > 0", g.period).c_str());
+          detail::format("such that amplitude * period / pi (period {} s) is finite and at least {} (not subnormal)",
+                         g.period, std::numeric_limits<double>::min())
+              .c_str());
   }
   p_.guard = g;
   guard_decay_ = decay;

@@ -150,8 +150,9 @@ RigStatics rig_statics(const PamRigParams& p) {
     for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) (net(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
     s.vented_stall_m = 0.5 * (lo + hi);
   }
-  s.creep_return_speed_m_s =
-      return_force(l, s.vented_stall_m) / (l.damping + p.hysteresis.creep_stiffness * p.hysteresis.creep_time);
+  // infinite where nothing resists the fall (no damping, no creep stiffness), as the fall speeds
+  const double resistance = l.damping + p.hysteresis.creep_stiffness * p.hysteresis.creep_time;  // [N s/m]
+  s.creep_return_speed_m_s = resistance > 0.0 ? return_force(l, s.vented_stall_m) / resistance : inf;
   s.weak_return = rig_weak_return_reason(p, s, "rig");
   return s;
 }

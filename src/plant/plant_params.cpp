@@ -294,7 +294,7 @@ nlohmann::json rig_statics_to_json(const RigStatics& s) {
           {"falling_m", s.falling_m},
           {"unusable", s.unusable},
           {"vented_stall_m", s.vented_stall_m},
-          {"creep_return_speed_m_s", s.creep_return_speed_m_s},
+          {"creep_return_speed_m_s", finite_or_null(s.creep_return_speed_m_s)},
           {"weak_return", s.weak_return}};
 }
 

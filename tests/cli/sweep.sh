@@ -66,7 +66,7 @@ expect_error "--json --out /dev/stdout" "--json and --out /dev/stdout both write
   "$BIN" sweep gpi-pid --vary load.mass=35 --json --out /dev/stdout
 expect_error "--json --out (stdout's file)" "both write to stdout" \
   "$BIN" sweep gpi-pid --vary load.mass=35 --json --out "$T/out.txt"
-expect_error "--report /dev/stdout" "--report /dev/stdout: the HTML page needs a file name" \
+expect_error "--report /dev/stdout" "--report /dev/stdout: the HTML page needs a file of its own, not stdout" \
   "$BIN" sweep gpi-pid --vary load.mass=35 --report /dev/stdout
 [ ! -e "$T/bad.csv" ] || fail "a failed sweep wrote its table"
 ls -A "$T" | grep -q '^\.' && fail "temporary files left: $(ls -A "$T")"

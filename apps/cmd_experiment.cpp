@@ -1,6 +1,8 @@
 // hysteron experiment NAME (the registry's names, experiment.hpp) and hysteron demo.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -93,6 +95,17 @@ void check_plant_not_output(const std::string& plant, const std::string& dir) {
   for (const auto& o : outputs) io::check_outputs_distinct({o}, {{"--plant", plant}});
 }
 
+// exit_poor_fit (3), with the runs named on stderr, where one of hysteron's loops ended at or above the
+// baseline: the results are written and printed, but a compensation no better than a straight line
+// must not exit as a success (README, Exit codes).
+int not_below_baseline_exit(const ExperimentResult& r) {
+  const std::vector<std::string> useless = r.not_below_baseline();
+  if (useless.empty()) return exit_ok;
+  fmt::print(stderr, "experiment: {}: not below the baseline's RMS error: {} (its notes say why; exit {})\n", r.name,
+             fmt::join(useless, ", "), exit_poor_fit);
+  return exit_poor_fit;
+}
+
 }  // namespace
 
 void set_command_line(int argc, char** argv) { g_command = join_args(argc, argv); }
@@ -133,7 +146,7 @@ void add_experiment(CLI::App& app, Action& action) {
         fmt::print("{}\n", io::to_json(r).dump(2));
       else
         fmt::print("{}", r.table());
-      return 0;
+      return not_below_baseline_exit(r);
     };
   });
 
@@ -152,6 +165,7 @@ void add_experiment(CLI::App& app, Action& action) {
     action = [dargs] {
       for (const auto& name : experiment_names()) check_plant_not_output(dargs->plant, dargs->out + "/" + name);
       io::check_output_directory({"--out", dargs->out});
+      int code = exit_ok;
       for (const auto& name : experiment_names()) {
         ExperimentArgs a = *dargs;
         a.name = name;
@@ -161,8 +175,9 @@ void add_experiment(CLI::App& app, Action& action) {
         report::write_experiment_report(r, dir + "/report.html", g_command);
         fmt::print("{}  outputs: {}/   report: {}/report.html\n\n", r.table(), dir, dir);
         std::fflush(stdout);
+        code = std::max(code, not_below_baseline_exit(r));
       }
-      return 0;
+      return code;
     };
   });
 }

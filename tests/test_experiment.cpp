@@ -331,7 +331,45 @@ TEST(Experiment, AWeakReturnForceIsSaid) {
       << fmt::format("{}", fmt::join(weak.messages, "\n"));
   EXPECT_TRUE(test::said(weak, "the references go below the stall (sine down to 5.0 mm)"))
       << fmt::format("{}", fmt::join(weak.messages, "\n"));
-  EXPECT_FALSE(test::said(run_experiment(test::quick_experiment("gpi-pid")), "weak against the creep"));
+  // no loop gets the vented muscle down: the compensation is not below the baseline, and says so
+  EXPECT_EQ(weak.not_below_baseline(), std::vector<std::string>{"compensated (sine)"}) << weak.table();
+  EXPECT_EQ(weak.to_json()["status"], "not_below_baseline");
+  EXPECT_NE(weak.table().find("NOT BELOW THE BASELINE: compensated (sine)"), std::string::npos);
+  const ExperimentResult nominal = run_experiment(test::quick_experiment("gpi-pid"));
+  EXPECT_FALSE(test::said(nominal, "weak against the creep"));
+  EXPECT_TRUE(nominal.not_below_baseline().empty()) << nominal.table();
+  EXPECT_EQ(nominal.to_json()["status"], "ok");
+}
+
+// Which runs are not below the baseline: hysteron's loops only (not the paper's faithful one), each
+// against the baseline of its own reference; equal or NaN is not below.
+TEST(Experiment, NotBelowBaselineNamesHysteronsLoopsAgainstTheirReferencesBaseline) {
+  ExperimentResult r;
+  const auto add = [&](const char* variant, const char* reference, double rms) {
+    TrackingRun run;
+    run.variant = variant;
+    run.reference = reference;
+    run.errors.rms_error_mm = rms;
+    r.runs.push_back(run);
+  };
+  add("faithful", "sine", 5.0);       // above its baseline: the paper's loop, not counted
+  add("compensated", "sine", 0.5);    // below
+  add("learning", "sine", 2.0);       // equal: not below
+  add("adaptive", "sine", std::nan(""));
+  add("baseline", "sine", 2.0);
+  add("compensated", "triangle", 1.5);  // below the triangle's baseline, above the sine's
+  add("baseline", "triangle", 3.0);
+  EXPECT_EQ(r.not_below_baseline(), (std::vector<std::string>{"learning (sine)", "adaptive (sine)"}));
+  const nlohmann::json j = r.to_json();
+  EXPECT_EQ(j["status"], "not_below_baseline");
+  EXPECT_EQ(j["not_below_baseline"], nlohmann::json({"learning (sine)", "adaptive (sine)"}));
+  r.runs[2].errors.rms_error_mm = 1.999;
+  r.runs[3].errors.rms_error_mm = 0.1;
+  EXPECT_TRUE(r.not_below_baseline().empty());
+  EXPECT_EQ(r.to_json()["status"], "ok");
+  r.runs.erase(r.runs.begin() + 4);  // no baseline for the sine: nothing to compare with
+  r.runs[1].errors.rms_error_mm = 9.0;
+  EXPECT_TRUE(r.not_below_baseline().empty());
 }
 
 // A displacement sensor 30 times noisier than the nominal one (0.3 mm): every RMS the sensor

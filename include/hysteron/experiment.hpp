@@ -311,6 +311,13 @@ struct ExperimentResult {
   static bool is_output_file(const std::string& filename);
   // Human-readable table beside the paper's figures.
   std::string table() const;
+  // The runs of hysteron's own loops (compensated, learning, adaptive) whose RMS error is not
+  // below the baseline's on the same reference (NaN counts as not below), as "variant
+  // (reference)"; empty where each beats it or no baseline ran. A compensation that does no
+  // better than a straight line for the hysteresis must not look like one: `hysteron
+  // experiment` and `demo` exit 3 where this is not empty (README, Exit codes), and to_json()
+  // gives it with a status. Derived from runs (not stored).
+  std::vector<std::string> not_below_baseline() const;
 };
 
 // Throws hysteron::Error on invalid options or a diverging rig.

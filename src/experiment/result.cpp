@@ -169,8 +169,24 @@ std::string ExperimentResult::table() const {
     if (g.early_stop) s += " (stopped early above the best: those RMS are lower bounds)";
     s += "\n";
   }
+  if (const auto useless = not_below_baseline(); !useless.empty())
+    s += fmt::format("  NOT BELOW THE BASELINE: {}: on this rig the compensation does no better than a straight line "
+                     "for the hysteresis (the notes say why)\n",
+                     fmt::join(useless, ", "));
   for (const auto& m : messages) s += fmt::format("  note: {}\n", m);
   return s;
+}
+
+std::vector<std::string> ExperimentResult::not_below_baseline() const {
+  std::vector<std::string> out;
+  for (const TrackingRun& run : runs) {
+    if (run.variant != "compensated" && run.variant != "learning" && run.variant != "adaptive") continue;
+    for (const TrackingRun& base : runs)
+      if (base.variant == "baseline" && base.reference == run.reference &&
+          !(run.errors.rms_error_mm < base.errors.rms_error_mm))
+        out.push_back(fmt::format("{} ({})", run.variant, run.reference));
+  }
+  return out;
 }
 
 }  // namespace hysteron

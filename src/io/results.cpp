@@ -442,6 +442,10 @@ json to_json(const ExperimentResult& r) {
     }
     j[variant] = v;
   }
+  // derived from the runs (the reader does not read it back): "ok", or "not_below_baseline" with the runs
+  const std::vector<std::string> useless = r.not_below_baseline();
+  j["status"] = useless.empty() ? "ok" : "not_below_baseline";
+  j["not_below_baseline"] = useless;
   j["published"] = to_json(r.published);
   j["identification"] = {{"model", std::string(fit_model_name(r.fit.model_kind))},
                          {"train_end", r.id_train_end},

@@ -1,5 +1,6 @@
 // Self-contained HTML reports of experiments and fits (plots as inline SVG).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -237,6 +238,10 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
              classes);
   if (r.published.empty())
     page.para("The paper's text ends before its results: there are no published figures to compare.");
+  if (const auto useless = r.not_below_baseline(); !useless.empty())
+    page.raw(fmt::format("<p><strong>Not below the baseline:</strong> {}. On this rig the compensation does no better "
+                         "than a straight line for the hysteresis; the notes below say why.</p>\n",
+                         html_escape(fmt::format("{}", fmt::join(useless, ", ")))));
   if (!r.messages.empty()) {
     // e.g. a reference mapped into the rig's reach (docs/control.md, section 5), a skipped variant
     page.raw("<h3>Notes of the run</h3>\n<ul>\n");

@@ -117,6 +117,19 @@ assert abs(w["vented_stall_m"] - (w["rising_m"][-1] - 1 / 150)) < 1e-6, w["vente
 assert abs(w["creep_return_speed_m_s"] - 1 / (400 + 150 * 4)) < 1e-12, w["creep_return_speed_m_s"]
 assert h["weak_return"] == "" and a["weak_return"] == "", (h["weak_return"], a["weak_return"])
 PYEOF
+# ... where no loop gets the vented muscle down: the compensation is not below the baseline, so
+# experiment exits 3 naming the run (README, Exit codes), with its results written all the same
+"$BIN" experiment gpi-pid --plant "$T/weak.json" --learning-periods 0 --no-adaptive --out "$T/weak_run" \
+  > "$T/weak_exp.txt" 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 3 ] || fail "weak experiment: exit $rc, not 3"
+grep -q "^experiment: gpi-pid: not below the baseline's RMS error: compensated (sine)" "$T/err.txt" \
+  || fail "weak experiment: stderr $(cat "$T/err.txt")"
+grep -q "NOT BELOW THE BASELINE: compensated (sine)" "$T/weak_exp.txt" || fail "weak experiment: table"
+$PY -c 'import json, sys; j = json.load(open(sys.argv[1])); assert j["status"] == "not_below_baseline", j["status"]' \
+  "$T/weak_run/result.json" || fail "weak experiment: result.json"
+grep -q "<strong>Not below the baseline:</strong> compensated (sine)" "$T/weak_run/report.html" \
+  || fail "weak experiment: report.html"
 "$BIN" rig "$T/half.json" > /dev/null 2> "$T/err.txt" || fail "half: exit $?"
 [ -s "$T/err.txt" ] && fail "half: warned: $(cat "$T/err.txt")"
 

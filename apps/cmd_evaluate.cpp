@@ -82,6 +82,10 @@ int run_evaluate(const EvaluateOptions& c) {
   }
   const InputCoverage coverage = input_coverage(model, rec.x, range);
   if (std::string w = input_coverage_warning(coverage, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
+  // a record whose output differs from the training record's by a sign, a unit or a zero scores poorly
+  // for that, not for the model's hysteresis: say so where the affine map explains it
+  const OutputMap map = output_map(model, rec.x, rec.y, range, initial);
+  if (std::string w = output_map_warning(map, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
 
   io::EvaluationDocument doc;
@@ -93,6 +97,7 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.result.range = range;
   doc.result.metrics = evaluate_scored(model, rec.x, rec.y, range, initial, doc.data.censored, &doc.result.censored);
   doc.result.outside_input_limits = coverage.outside;
+  doc.result.output_map = map;
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {

@@ -202,14 +202,19 @@ int run_fit(const FitCliOptions& c) {
   if (fitted)
     for (const auto& v : sets)
       if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored)) {
-        const InputCoverage cov =
-            input_coverage(rep.model, v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x), v.range);
-        doc.validation.push_back({v.file, v.range, *m, censored, cov.outside});
-        // a validation record beyond the training range scores the model's extrapolation
-        if (std::string w = input_coverage_warning(cov, v.file.empty() ? "validation range" : v.file); !w.empty()) {
-          rep.warnings.push_back(w);
-          doc.fit.warnings.push_back(std::move(w));
-        }
+        const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
+        const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
+        const InputCoverage cov = input_coverage(rep.model, vx, v.range);
+        const OutputMap map = output_map(rep.model, vx, vy, v.range, o.initial_state);
+        doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
+        const std::string what = v.file.empty() ? "validation range" : v.file;
+        // a validation record beyond the training range scores the model's extrapolation; one whose output
+        // differs by a sign, a unit or a zero scores that
+        for (std::string w : {input_coverage_warning(cov, what), output_map_warning(map, what)})
+          if (!w.empty()) {
+            rep.warnings.push_back(w);
+            doc.fit.warnings.push_back(std::move(w));
+          }
       }
   if (!sets.empty())
     for (const auto& cand : rep.candidates) {

@@ -653,6 +653,63 @@ TEST(IdentifyInput, InputCoverageCountsSamplesBeyondTheFittedRange) {
   EXPECT_EQ(input_coverage(open, x).outside, 0u);
 }
 
+// A record whose output differs from the model's by a sign, a unit or a zero (audit of 2026-11-30:
+// a Festo model scored on test9 with its force negated gave R^2 -8.4 with nothing saying why):
+// output_map gives the least-squares y ~ gain * prediction + offset, and the warning names a
+// flipped sign, or a scale or zero, where the map explains what the prediction does not. The
+// model's own output, or with noise, gets none; a constant output no map.
+TEST(IdentifyInput, OutputMapNamesASignAUnitOrAZero) {
+  const auto x = decaying_triangle({6, 5, 4, 3, 2, 1}, 200);
+  const ModelParams model = true_gpi();
+  const auto y = simulate_record(model, x);
+  const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
+  const double span = *hi - *lo;
+  const auto mapped = [&](double a, double b) {
+    std::vector<double> v(y);
+    for (double& e : v) e = a * e + b;
+    return v;
+  };
+  const auto expect_map = [&](const std::vector<double>& v, double a, double b, const char* words) {
+    const OutputMap m = output_map(model, x, v);
+    EXPECT_NEAR(m.gain, a, 1e-9 * std::abs(a)) << words;
+    EXPECT_NEAR(m.offset, b, 1e-9 * (std::abs(b) + span * std::abs(a))) << words;
+    EXPECT_NEAR(m.r2_mapped, 1.0, 1e-12) << words;
+    EXPECT_NEAR(m.rms_mapped, 0.0, 1e-9 * span * std::abs(a)) << words;
+    const std::string w = output_map_warning(m, "rec.csv");
+    if (*words == '\0') {
+      EXPECT_TRUE(w.empty()) << w;
+    } else {
+      EXPECT_EQ(w.rfind("rec.csv: the record's output matches", 0), 0u) << w;
+      EXPECT_NE(w.find(words), std::string::npos) << w;
+    }
+  };
+  expect_map(y, 1.0, 0.0, "");
+  expect_map(mapped(-1.0, 0.0), -1.0, 0.0, "is its sign flipped");  // R^2 far below 0
+  expect_map(mapped(1000.0, 0.0), 1000.0, 0.0, "by a scale (another unit");
+  expect_map(mapped(1.0, 0.3 * span), 1.0, 0.3 * span, "or a zero (a sensor offset)");  // R^2 still 0.9 or so
+  expect_map(mapped(1.0, 0.005 * span), 1.0, 0.005 * span, "");  // within 1 % of the span: no warning
+  {  // the prediction's own R^2 and RMS, against the definitions
+    const auto v = mapped(1.0, 0.3 * span);
+    const OutputMap m = output_map(model, x, v);
+    EXPECT_NEAR(m.rms, 0.3 * span, 1e-9 * span);
+    double mean = 0.0, var = 0.0;
+    for (double e : v) mean += e / static_cast<double>(v.size());
+    for (double e : v) var += (e - mean) * (e - mean);
+    EXPECT_NEAR(m.r2, 1.0 - static_cast<double>(v.size()) * 0.09 * span * span / var, 1e-9);
+    EXPECT_DOUBLE_EQ(m.span, span);
+  }
+  // noise: the map explains no more than the prediction does
+  const auto noisy = with_noise(y, 0.02 * span, 5);
+  EXPECT_TRUE(output_map_warning(output_map(model, x, noisy), "rec.csv").empty());
+  // a constant output: no map, no warning
+  const OutputMap flat = output_map(model, x, std::vector<double>(x.size(), 3.0));
+  EXPECT_TRUE(std::isnan(flat.gain));
+  EXPECT_TRUE(output_map_warning(flat, "rec.csv").empty());
+  // the range: scored only there
+  const OutputMap part = output_map(model, x, mapped(-2.0, 1.0), {100, 700});
+  EXPECT_NEAR(part.gain, -2.0, 1e-9);
+}
+
 TEST(IdentifyInput, HuberLossResistsOutliers) {
   const auto x = decaying_triangle({6, 5, 4, 3, 2, 1}, 200);
   const auto clean = simulate_record(true_gpi(), x);

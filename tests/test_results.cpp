@@ -219,7 +219,8 @@ TEST(Results, FitDocumentRoundTrip) {
   d.data.initial_state = InitialState::relaxed;
   d.data.train = {10, 1200};
   d.data.censored = false;
-  d.validation = {{"", {1200, 1800}, metrics(0.04, 600), 0}, {"other.csv", {0, 900}, metrics(0.05, 900), 37}};
+  d.validation = {{"", {1200, 1800}, metrics(0.04, 600), 0, 0, {}},
+                  {"other.csv", {0, 900}, metrics(0.05, 900), 37, 0, {-0.98, 12.5, -7.5, 0.99, 420.0, 13.1, 380.0}}};
   d.candidate_validation = {{metrics(0.041, 600), metrics(0.051, 900)}, {metrics(nan_v, 600), metrics(nan_v, 900)}};
   d.model_written = true;
   d.model_file = "model.json";
@@ -245,6 +246,14 @@ TEST(Results, FitDocumentRoundTrip) {
     EXPECT_EQ(back.validation[i].range.begin, d.validation[i].range.begin);
     EXPECT_EQ(back.validation[i].range.end, d.validation[i].range.end);
     expect_same(back.validation[i].metrics, d.validation[i].metrics);
+    const auto map_fields = [](const OutputMap& m) {
+      return std::vector<double>{m.gain, m.offset, m.r2, m.r2_mapped, m.rms, m.rms_mapped, m.span};
+    };
+    if (i == 0) {  // no map: NaN, written as null, read back as NaN
+      for (double v : map_fields(back.validation[i].output_map)) EXPECT_TRUE(std::isnan(v));
+    } else {
+      EXPECT_EQ(map_fields(back.validation[i].output_map), map_fields(d.validation[i].output_map));
+    }
   }
   ASSERT_EQ(back.candidate_validation.size(), d.candidate_validation.size());
   for (std::size_t i = 0; i < d.candidate_validation.size(); ++i) {
@@ -295,7 +304,7 @@ TEST(Results, EvaluationDocumentRoundTrip) {
   d.data.input_column = "p";
   d.data.output_column = "y";
   d.data.train = {100, 900};
-  d.result = {"today.csv", {100, 900}, metrics(0.07, 800)};
+  d.result = {"today.csv", {100, 900}, metrics(0.07, 800), 0, 0, {1.0, 0.5, 0.9, 0.95, 2.0, 1.5, 30.0}};
   const io::EvaluationDocument back = round_trip(d);
   EXPECT_EQ(back.model_file, d.model_file);
   expect_same(back.model, d.model);
@@ -308,6 +317,9 @@ TEST(Results, EvaluationDocumentRoundTrip) {
   EXPECT_EQ(back.result.range.begin, 100u);
   EXPECT_EQ(back.result.range.end, 900u);
   expect_same(back.result.metrics, d.result.metrics);
+  EXPECT_EQ(back.result.output_map.gain, 1.0);
+  EXPECT_EQ(back.result.output_map.offset, 0.5);
+  EXPECT_EQ(back.result.output_map.span, 30.0);
 }
 
 TEST(Results, ExperimentResultRoundTrip) {

@@ -140,6 +140,34 @@ InputCoverage input_coverage(const ModelParams& params, std::span<const double> 
 // names the record (e.g. its file).
 std::string input_coverage_warning(const InputCoverage& c, std::string_view what);
 
+// A fit that explains less than this share of its output's variance (R^2) is poor_fit whatever
+// else it beats; a model scored on another record below it (output_map_warning) is asked why.
+inline constexpr double kMinFitR2 = 0.5;
+// The affine map y ~ gain * y_model + offset (least squares on `range`) between a model's
+// prediction over a record (simulated from its start, as evaluate()) and the record's output, and
+// the share of the output's variance it explains (r2_mapped: the squared correlation) beside the
+// prediction's own R^2 (r2). Where a model that fitted its training record scores poorly on another
+// record but the map explains it, the records differ by a sign (gain < 0: a sensor mounted the
+// other way), a unit or scale (gain far from 1) or a zero (offset), not by their hysteresis. NaN
+// where the prediction or the output is constant on the range.
+struct OutputMap {
+  double gain = std::numeric_limits<double>::quiet_NaN();
+  double offset = std::numeric_limits<double>::quiet_NaN();      // [output units]
+  double r2 = std::numeric_limits<double>::quiet_NaN();          // of the prediction as it is
+  double r2_mapped = std::numeric_limits<double>::quiet_NaN();   // of gain * prediction + offset
+  double rms = std::numeric_limits<double>::quiet_NaN();         // of the prediction as it is [output units]
+  double rms_mapped = std::numeric_limits<double>::quiet_NaN();  // of gain * prediction + offset
+  double span = std::numeric_limits<double>::quiet_NaN();        // of the output on the range
+};
+OutputMap output_map(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                     IndexRange range = {}, InitialState initial = InitialState::virgin);
+// The warning ("" if none; `what` names the record) where the map explains what the prediction does
+// not: the prediction's R^2 is below kMinFitR2 and the map's at least kMinFitR2 (a sign, a unit), or
+// the map at least halves an RMS error above 1 % of the output's span (a zero: on the Festo
+// records, fitted on test8, the map leaves 0.88-0.92 of the RMS; with 40 N added to test9's force,
+// 0.26).
+std::string output_map_warning(const OutputMap& m, std::string_view what);
+
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0
 // for every contraction below its zero; one whose range ends inside the stroke reads its

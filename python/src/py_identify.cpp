@@ -166,6 +166,19 @@ usable by hysteron.Model (it may not be invertible).)doc");
                                                   initial_state_from(initial_state), censored, &count));
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
         d["outside_input_limits"] = input_coverage(spec, xs, range_from(range, "evaluate: range")).outside;
+        // y ~ gain * prediction + offset, and the warning where that map explains a poor score
+        const OutputMap map =
+            output_map(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state));
+        py::dict om;
+        om["gain"] = map.gain;
+        om["offset"] = map.offset;
+        om["r2"] = map.r2;
+        om["r2_mapped"] = map.r2_mapped;
+        om["rms"] = map.rms;
+        om["rms_mapped"] = map.rms_mapped;
+        om["span"] = map.span;
+        d["output_map"] = om;
+        d["output_map_warning"] = output_map_warning(map, "evaluate");
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),
@@ -177,7 +190,13 @@ error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
 censored: where y clips (a sensor's limit, detected from the record), a sample at the limit
 where the model predicts beyond it is no error, as fit() treats such a record and as
 `hysteron fit` / `hysteron evaluate` score it; the dict then also has censored_samples, their
-number in the range. Default False: scored as recorded.)
+number in the range. Default False: scored as recorded.
+
+output_map: {gain, offset, r2, r2_mapped, rms, rms_mapped, span}, y ~ gain * prediction +
+offset by least squares on the range; output_map_warning: non-empty where the prediction's R^2
+is below 0.5 and the map's at least 0.5, or where the map at least halves an RMS error above
+1 % of the output's span (the record's sign, unit or zero differs from the training record's:
+a negative gain is a flipped sign).)
 
 outside_input_limits: the samples of the range whose input lies outside the model's
 input_limits (fit() sets them to the training range's input) by more than 2 % of their span:

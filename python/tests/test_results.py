@@ -168,3 +168,22 @@ def test_evaluate_scores_a_clipped_record_as_censored_when_asked():
     assert "censored_samples" not in plain and plain["rms"] > cens["rms"]
     unclipped = hysteron.evaluate(model, x, truth + rng.normal(0.0, 0.02, truth.size), censored=True)
     assert unclipped["censored_samples"] == 0
+
+
+def test_evaluate_names_a_record_whose_output_is_negated_or_offset():
+    """evaluate(): output_map is the least-squares y ~ gain * prediction + offset (checked with
+    numpy here), and output_map_warning names a flipped sign or a zero where that map explains
+    what the prediction does not; the model's own output gets none."""
+    x, truth = record()
+    model = hysteron.fit(x, truth, model="pi", num_operators=6)["model"]
+    pred = hysteron.simulate_record(model, x)
+    span = truth.max() - truth.min()
+    own = hysteron.evaluate(model, x, truth)
+    assert own["output_map_warning"] == "", own["output_map_warning"]
+    for y, words in ((-truth, "is its sign flipped"), (truth + 0.3 * span, "or a zero (a sensor offset)")):
+        d = hysteron.evaluate(model, x, y)
+        gain, offset = np.polyfit(pred, y, 1)
+        m = d["output_map"]
+        assert abs(m["gain"] - gain) <= 1e-9 * abs(gain) and abs(m["offset"] - offset) <= 1e-9 * span, (m, gain, offset)
+        assert abs(m["rms"] - d["rms"]) <= 1e-12 * span and m["rms_mapped"] < 0.5 * m["rms"], m
+        assert words in d["output_map_warning"], d["output_map_warning"]

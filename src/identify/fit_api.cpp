@@ -116,7 +116,7 @@ constexpr double kNoiseFactor = 1.2;
 // A fit that explains less than half the output's variance over its training range (R^2 below
 // this) describes none of the record's shape (a butterfly loop, a clockwise loop for a kind
 // with nonnegative weights): a poor fit, whatever the line or the reference PI leave.
-constexpr double kMinR2 = 0.5;
+constexpr double kMinR2 = kMinFitR2;
 // An input reversal: the input moves back from its last extremum by more than this fraction of
 // its training span (noise and small wiggles are not reversals).
 constexpr double kReversalFraction = 0.1;

@@ -223,4 +223,62 @@ std::string input_coverage_warning(const InputCoverage& c, std::string_view what
                      what, c.outside, c.n, 100.0 * c.fraction(), c.limits.lo, c.limits.hi, c.max_beyond);
 }
 
+OutputMap output_map(const ModelParams& params, std::span<const double> x, std::span<const double> y, IndexRange range,
+                     InitialState initial) {
+  detail::check_record(x, y, "output_map");
+  const IndexRange r = detail::check_range(range, x.size(), "output_map");
+  OutputMap m;
+  const std::size_t n = r.end - r.begin;
+  if (n < 2) return m;
+  const std::vector<double> yp = simulate_record(params, x, initial);
+  double mp = 0.0, my = 0.0;
+  for (std::size_t k = r.begin; k < r.end; ++k) {
+    mp += yp[k];
+    my += y[k];
+  }
+  mp /= static_cast<double>(n);
+  my /= static_cast<double>(n);
+  double spp = 0.0, spy = 0.0, syy = 0.0, see = 0.0;  // centred sums; see: the prediction's squared error
+  for (std::size_t k = r.begin; k < r.end; ++k) {
+    const double dp = yp[k] - mp, dy = y[k] - my;
+    spp += dp * dp;
+    spy += dp * dy;
+    syy += dy * dy;
+    see += (y[k] - yp[k]) * (y[k] - yp[k]);
+  }
+  if (!(spp > 0.0) || !(syy > 0.0) || !std::isfinite(spp) || !std::isfinite(syy) || !std::isfinite(see)) return m;
+  m.gain = spy / spp;
+  m.offset = my - m.gain * mp;
+  m.r2 = 1.0 - see / syy;
+  m.r2_mapped = std::min(1.0, spy / spp * spy / syy);
+  const double nd = static_cast<double>(n);
+  m.rms = std::sqrt(see / nd);
+  double smm = 0.0;  // the map's squared error, summed directly (syy - spy^2 / spp cancels to sqrt(eps) * span)
+  for (std::size_t k = r.begin; k < r.end; ++k) {
+    const double d = y[k] - (m.gain * yp[k] + m.offset);
+    smm += d * d;
+  }
+  m.rms_mapped = std::sqrt(smm / nd);
+  const auto [lo, hi] = std::minmax_element(y.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                                            y.begin() + static_cast<std::ptrdiff_t>(r.end));
+  m.span = *hi - *lo;
+  return m;
+}
+
+std::string output_map_warning(const OutputMap& m, std::string_view what) {
+  const bool poor_made_good = m.r2 < kMinFitR2 && m.r2_mapped >= kMinFitR2;
+  const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
+  if (!poor_made_good && !halved) return {};
+  const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS error "
+                                      "{:.4g}, R^2 {:.3f}, against {:.4g} and {:.3f} for the prediction as it is)",
+                                      m.gain, m.offset, m.rms_mapped, m.r2_mapped, m.rms, m.r2);
+  if (m.gain < 0.0)
+    return fmt::format("{}: {}: the output runs against the model's; is its sign flipped (a sensor mounted the other "
+                       "way, or the other signal's convention) relative to the record the model was fitted on?",
+                       what, fit);
+  return fmt::format("{}: {}: it differs from the record the model was fitted on by a scale (another unit, a gain) or a "
+                     "zero (a sensor offset) more than by its hysteresis, or the actuator changed",
+                     what, fit);
+}
+
 }  // namespace hysteron

@@ -259,6 +259,13 @@ json to_json(const Evaluation& e) {
   j["range"] = to_json(e.range);
   j["censored_samples"] = e.censored;
   j["outside_input_limits"] = e.outside_input_limits;
+  j["output_map"] = {{"gain", number(e.output_map.gain)},
+                     {"offset", number(e.output_map.offset)},
+                     {"r2", number(e.output_map.r2)},
+                     {"r2_mapped", number(e.output_map.r2_mapped)},
+                     {"rms", number(e.output_map.rms)},
+                     {"rms_mapped", number(e.output_map.rms_mapped)},
+                     {"span", number(e.output_map.span)}};
   return j;
 }
 
@@ -269,6 +276,15 @@ void from_json(const json& j, Evaluation& e, std::string_view where) {
   if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
   e.censored = j.contains("censored_samples") ? get_size(j, "censored_samples", where) : 0;
   e.outside_input_limits = j.contains("outside_input_limits") ? get_size(j, "outside_input_limits", where) : 0;
+  e.output_map = {};
+  if (j.contains("output_map")) {  // absent in files before it
+    const json& m = j["output_map"];
+    const std::string mw = key_where(where, "output_map");
+    e.output_map = {opt_double(m, "gain", mw, nan),      opt_double(m, "offset", mw, nan),
+                    opt_double(m, "r2", mw, nan),        opt_double(m, "r2_mapped", mw, nan),
+                    opt_double(m, "rms", mw, nan),       opt_double(m, "rms_mapped", mw, nan),
+                    opt_double(m, "span", mw, nan)};
+  }
 }
 
 // ---- documents -------------------------------------------------------------------
@@ -324,7 +340,7 @@ void from_json(const json& j, FitDocument& d, std::string_view where) {
     for (std::size_t i = 0; i < a.size(); ++i)
       d.validation.push_back(from_json<Evaluation>(a[i], fmt::format("{}.validate_files[{}]", where, i)));
   } else if (j.contains("validate") && !j["validate"].is_null()) {
-    d.validation.push_back({"", {}, from_json<FitMetrics>(j["validate"], key_where(where, "validate"))});
+    d.validation.push_back({"", {}, from_json<FitMetrics>(j["validate"], key_where(where, "validate")), 0, 0, {}});
   }
   d.model_written = opt_bool(j, "model_written", where, false);
   d.model_file = opt_string(j, "model_file", where);

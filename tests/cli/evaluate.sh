@@ -73,6 +73,41 @@ assert m["rms_percent_span"] < 0.5, m
 print("evaluate == fit validation: rms", m["rms"])
 PYEOF
 
+# 1b. the same record with its output negated, or offset: scored as it is (exit 0), and the warning says
+# the record's output matches the prediction by a sign / a zero; the record itself gets no such warning
+$PY - "$T/data.csv" "$T/neg.csv" "$T/off.csv" <<'PYEOF'
+import sys
+rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n")[1:] if r]
+ys = [float(r[1]) for r in rows]
+span = max(ys) - min(ys)
+for name, f in ((sys.argv[2], lambda v: -v), (sys.argv[3], lambda v: v + 0.3 * span)):
+    with open(name, "w") as o:
+        o.write("input,output\n")
+        for r in rows:
+            o.write(f"{r[0]},{f(float(r[1]))!r}\n")
+PYEOF
+"$BIN" evaluate --model "$T/m.json" --data "$T/data.csv" --input input --output output > /dev/null 2> "$T/err" \
+  || fail "evaluate own record: exit $?"
+grep -q "the record's output matches" "$T/err" && fail "own record: an output-map warning: $(cat "$T/err")"
+"$BIN" evaluate --model "$T/m.json" --data "$T/neg.csv" --input input --output output --json > "$T/ev_neg.json" \
+  2> "$T/err" || fail "evaluate negated: exit $?"
+grep -q "^warning: $T/neg.csv: the record's output matches -1 x the model's prediction.*is its sign flipped" "$T/err" \
+  || fail "negated: no sign warning: $(cat "$T/err")"
+$PY -c 'import json, sys; m = json.load(open(sys.argv[1]))["metrics"]["output_map"]; assert abs(m["gain"] + 1) < 1e-3 and m["r2"] < 0 < 0.99 < m["r2_mapped"], m' \
+  "$T/ev_neg.json" || fail "negated: output_map in --json"
+"$BIN" evaluate --model "$T/m.json" --data "$T/off.csv" --input input --output output > /dev/null 2> "$T/err" \
+  || fail "evaluate offset: exit $?"
+grep -q "the record's output matches 1 x the model's prediction +.*or a zero (a sensor offset)" "$T/err" \
+  || fail "offset: no zero warning: $(cat "$T/err")"
+# fit --validate-data says the same of a validation record, in its warnings
+"$BIN" fit --model gpi --data "$T/data.csv" --input input --output output --train 0:1200 --threads 1 \
+  --validate-data "$T/neg.csv" --out "$T/m2.json" --report "$T/fit2.json" > "$T/fit2.txt" 2> "$T/err" \
+  || fail "fit2: exit $?"
+grep -q "^warning: $T/neg.csv: the record's output matches .*is its sign flipped" "$T/fit2.txt" \
+  || fail "fit --validate-data negated: $(cat "$T/fit2.txt")"
+$PY -c 'import json, sys; d = json.load(open(sys.argv[1])); assert any("sign flipped" in w for w in d["warnings"]), d["warnings"]' \
+  "$T/fit2.json" || fail "fit --validate-data negated: the report's warnings"
+
 # 2. the same model on another actuator's record is much worse (the numbers are real)
 "$BIN" evaluate --model "$T/m.json" --data "$T/new.csv" --input input --output output --json > "$T/ev_new.json" \
   || fail "evaluate on new data"

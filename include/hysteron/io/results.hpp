@@ -63,6 +63,7 @@ struct Evaluation {
   FitMetrics metrics;
   std::size_t censored = 0;  // clipped samples of the range scored as censored (evaluate_censored)
   std::size_t outside_input_limits = 0;  // samples of the range whose input is outside the model's (input_coverage)
+  OutputMap output_map;  // the record's output against the prediction (output_map; NaN in files before it)
 };
 
 // The document of `hysteron fit --report FILE.json` and `--json`.

@@ -273,6 +273,27 @@ TEST(Pid, OverflowingErrorIsAFaultWithTheGuard) {
   EXPECT_NO_THROW(copy.restore(pid.snapshot()));
 }
 
+// Review s18: Pid::reset kept faults() while the generated C's pid_reset (and Model, Inverse,
+// IterativeLearning's resets) zero their counts. A reset is a fresh start: state, guard and counts.
+TEST(Pid, ResetRestartsTheFaultCountAndTheGuard) {
+  PidParams p{.kp = 2.0, .ki = 10.0, .out_min = -1.0, .out_max = 1.0};
+  p.guard = PidGuard{.period = 0.3, .amplitude = 0.002, .count = 1.5, .memory = 10.0};
+  Pid pid(p);
+  pid.step(0.01, 0.0);
+  pid.step(NAN, 0.0);
+  pid.step(1e308, -1e308);
+  ASSERT_EQ(pid.faults(), 2u);
+  pid.reset(0.5);
+  EXPECT_EQ(pid.faults(), 0u);
+  EXPECT_EQ(pid.snapshot().back(), 0.0) << "the snapshot's fault count";
+  EXPECT_EQ(pid.output(), 0.5);
+  EXPECT_EQ(pid.state().gain_scale, 1.0);
+  EXPECT_EQ(pid.state().guard_cuts, 0u);
+  pid.step(0.0, INFINITY);
+  EXPECT_EQ(pid.faults(), 1u);
+  EXPECT_EQ(pid.output(), 0.5);
+}
+
 TEST(Pid, Deterministic) {
   auto run = [] {
     Pid pid(PidParams{.kp = 1.0, .ki = 5.0, .kd = 0.01, .sample_time = 1e-3, .derivative_filter = 5e-3});
@@ -475,6 +496,12 @@ TEST(Pwm, Modulation) {
   EXPECT_EQ(m.step(10.0), 0.9);
   EXPECT_EQ(m.step(-10.0), -0.9);
   EXPECT_EQ(m.step(NAN), -0.9);
+  EXPECT_EQ(m.faults(), 1u);
+  // a reset is a fresh start: duty 0 and no faults (as the generated C's loop_reset: pwm_faults = 0)
+  m.reset();
+  EXPECT_EQ(m.duty(), 0.0);
+  EXPECT_EQ(m.faults(), 0u);
+  EXPECT_EQ(m.step(NAN), 0.0);
   EXPECT_EQ(m.faults(), 1u);
 }
 

@@ -100,7 +100,7 @@ class Pid {
   explicit Pid(const PidParams& params);
 
   // Zero state; optionally start bumplessly at output u0 (integral = clamp(u0)). The gains are
-  // the tuned ones again (the guard's scale 1).
+  // the tuned ones again (the guard's scale 1, no cuts) and faults() is 0 (as the generated C's pid_reset).
   void reset(double u0 = 0.0) noexcept;
   // Replaces the limit-cycle guard (params().guard) and restarts it: the gains as tuned, no
   // half-cycles counted. Throws hysteron::Error naming the field ("pid.guard.factor = 1: ...").
@@ -127,6 +127,7 @@ class Pid {
   };
   Coefficients coefficients() const noexcept { return {a_d_, b_d_, k_t_, guard_decay_, guard_iae_limit_}; }
   double output() const noexcept { return s_.output; }
+  // Samples held since construction or the last reset().
   std::size_t faults() const noexcept { return faults_; }
 
   // Everything step() changes, as numbers: the PidState fields in their order (the flags 0/1)
@@ -168,7 +169,8 @@ class PwmModulator {
   explicit PwmModulator(const PwmParams& params);  // throws hysteron::Error
   // Duty in [-max_duty, max_duty]; a non-finite u holds the last duty (counted in faults()).
   double step(double u) noexcept;
-  void reset() noexcept { duty_ = 0.0; }
+  // Duty 0 and faults() 0 (as the generated C's loop_reset: pwm_faults = 0).
+  void reset() noexcept;
   const PwmParams& params() const noexcept { return p_; }
   double duty() const noexcept { return duty_; }
   std::size_t faults() const noexcept { return faults_; }

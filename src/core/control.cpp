@@ -122,6 +122,7 @@ void Pid::set_guard(const PidGuard& g) {
 
 void Pid::reset(double u0) noexcept {
   s_ = PidState{};
+  faults_ = 0;  // a fresh start: counts restart (as Model, Inverse, IterativeLearning and the generated C's pid_reset)
   if (std::isfinite(u0)) {
     u0 = std::clamp(u0, p_.out_min, p_.out_max);
     s_.integral = p_.ki > 0.0 ? u0 : 0.0;
@@ -272,6 +273,11 @@ PwmModulator::PwmModulator(const PwmParams& p) : p_(p) {
     bad("pwm.min_duty", p.min_duty, "in [0, max_duty]");
   if (!std::isfinite(p.resolution) || p.resolution < 0.0 || p.resolution > 1.0)
     bad("pwm.resolution", p.resolution, "in [0, 1]");
+}
+
+void PwmModulator::reset() noexcept {
+  duty_ = 0.0;
+  faults_ = 0;  // a fresh start, as Pid::reset
 }
 
 double PwmModulator::step(double u) noexcept {

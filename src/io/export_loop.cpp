@@ -277,7 +277,7 @@ typedef struct $P_pid_state {{
   double output;         /* last output, held on a fault */
   int initialized;       /* 0 until the first finite sample (no derivative kick) */
   int saturated;         /* 1 if the last output was clamped */
-  unsigned long faults;  /* samples held: a non-finite input or intermediate */
+  unsigned long faults;  /* samples held since the last reset: a non-finite input or intermediate */
   double gain_scale;     /* the limit-cycle guard's factor on the gains (1: as tuned) */
   unsigned long guard_cuts;     /* times the guard cut the gains */
   int guard_sign;               /* sign of the current half-cycle of e (0: none yet) */

@@ -387,6 +387,74 @@ TEST(ExportLoopCheck, ExtremeFiniteInputsStepAsTheLibrarysLoop) {
   }
 }
 
+// Review s18: a limit-cycle guard whose limit a T_u / pi is just above DBL_MIN (a = 1e-307 at T_u = 1 s, and
+// limits within 1.0000001 DBL_MIN) held every sample once its integral of |e| dt exceeded about 4 (the integral
+// over the limit overflowed), in the library and the generated C alike. Driven by ordinary errors (a constant
+// error of 1 m, or a pressure error of 20 MPa, for 10 s, then square waves of +-20 with half-cycles of T_u / 2),
+// the guarded PIDs of the generated C and the library hold no sample, step bit for bit alike, with the same counts,
+// and the square waves make them cut their gains.
+TEST(ExportLoopCheck, GuardNearDblMinKeepsSteppingAsTheLibrarysLoop) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found: generated C not compiled";
+  const double dbl_min = std::numeric_limits<double>::min();
+  for (const auto& [tu, a] : {std::pair{1.0, 1e-307}, std::pair{0.3, 1.0000001 * dbl_min * M_PI / 0.3}}) {
+    const PidGuard guard{.period = tu, .amplitude = a};
+    std::vector<Case> all;
+    {
+      LoopDesign d;
+      d.kind = LoopDesign::Kind::feedforward_pid;
+      d.pid = pid(0.001, 0.001, 0.0, 0.0, AntiWindup::none);
+      d.pid->guard = guard;
+      all.push_back({"ff_pid_guard_near_dbl_min", d, M::pi, false});
+    }
+    {
+      LoopDesign d;
+      d.kind = LoopDesign::Kind::cascade_pwm;
+      d.pid = pid(0.001, 0.001, 0.0, 0.0, AntiWindup::none);
+      d.pid->guard = guard;
+      PidParams pp = pid(0.001, 0.001, 0.0, 0.0, AntiWindup::none);
+      pp.out_min = -1;
+      pp.out_max = 1;
+      pp.guard = guard;
+      d.pressure_pid = pp;
+      d.pwm = PwmParams{1.0, 0.0, 0.0, 1.0, 0.0};
+      all.push_back({"cascade_guards_near_dbl_min", d, M::pi, true});
+    }
+    const std::size_t n = 20000, half = static_cast<std::size_t>(std::lround(tu / 2 / 1e-3));
+    Inputs in;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double r = 0.016 + 0.004 * std::sin(2 * M_PI * static_cast<double>(k) / 2000);
+      const double sq = ((k - n / 2) / half) % 2 == 0 ? 20.0 : -20.0;
+      in.reference.push_back(r);
+      in.measured.push_back(k < n / 2 ? r - 1.0 : r + sq);  // e = 1 m, then -+20 m
+      in.pressure.push_back(k < n / 2 ? -20.0 : sq);        // p_d - p about 20 MPa, then -+20 MPa
+    }
+    for (const Case& c : all) {
+      const std::string what = c.name + fmt::format(", T_u {} s, a {}", tu, a);
+      test::TempDir dir;
+      const std::vector<double> preview = feedforward_preview(c.design, in.reference);
+      const test::LoopRun got = test::run_generated_loop(c.design, model_of(c.model), dir.file("."), c.single,
+                                                         in.reference, preview, in.measured, in.pressure);
+      ASSERT_EQ(got.error, "") << what;
+      ASSERT_EQ(got.counts.size(), n) << what;
+      const Compared r = compare(c, in, got, preview);
+#if defined(__x86_64__) && defined(__SSE2__)
+      EXPECT_EQ(r.exact, r.n) << what << ": not bit-identical to the library's loop";
+#endif
+      EXPECT_EQ(r.counts_differ, 0u) << what << ": first: " << r.first_counts_difference;
+      // the generated C's own counts at the end: no sample held, the gains cut
+      const std::vector<double>& last = got.counts.back();
+      EXPECT_EQ(last[0], 0.0) << what << ": the position PID held samples";
+      EXPECT_GE(last[1], 1.0) << what << ": the position PID's guard never cut";
+      if (c.design.kind == LoopDesign::Kind::cascade_pwm) {
+        EXPECT_EQ(last[4], 0.0) << what << ": the pressure PID held samples";
+        EXPECT_GE(last[5], 1.0) << what << ": the pressure PID's guard never cut";
+      }
+      std::printf("  %s: bit-identical %zu / %zu, final counts %s\n", what.c_str(), r.exact, r.n,
+                  counts_text(last).c_str());
+    }
+  }
+}
+
 // The comparison can fail: the C file of a loop whose K_p, pressure PID K_i or shaper weight
 // is 1e-9 off (relative), compared with the library's loop, differs.
 TEST(ExportLoopCheck, PerturbedNumberIsDetected) {

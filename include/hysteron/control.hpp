@@ -29,14 +29,15 @@ AntiWindup anti_windup_from_name(std::string_view name);
 // integral of |e| dt exceeds amplitude T_u / pi (a half-sine of that amplitude at period T_u)
 // adds to a count that decays with time constant memory T_u: 1, or where the ring grows (three
 // half-cycles in a row counted, this one's integral at least that of the one of its sign before)
-// its severity, that integral over the limit (at most `count`): a growing ring several times the
+// its severity, that integral over the limit (at most `count`; the severity itself at most 2^1023, so it is
+// finite for every finite integral, also over a limit near DBL_MIN): a growing ring several times the
 // amplitude is cut within a period instead of after 2.5, before it reaches the limits, and a
 // step's decaying transient counts 1 per half-cycle as before (2026-11-30); when the count reaches `count`,
 // K_p, K_i and K_d are multiplied by `factor` (not below min_scale times the tuned gains) and
 // the count restarts. The cut gains stay until reset(). period = 0: off (the default).
 struct PidGuard {
   double period = 0.0;     // T_u [s]: 0 (off) or >= 4 sample times
-  double amplitude = 0.0;  // a [error units], > 0 where period > 0 (a T_u / pi finite and > 0)
+  double amplitude = 0.0;  // a [error units], > 0 where period > 0 (a T_u / pi finite and normal: >= DBL_MIN)
   double count = 5.0;      // half-cycles (decayed) that cut the gains, > 0 (2 count finite)
   double memory = 5.0;     // the count's decay time constant [T_u], > 0
   double factor = 0.63;    // in (0, 1)
@@ -110,7 +111,7 @@ class Pid {
   // non-finite intermediate (an overflow of large gains on a large error, or of
   // extreme finite inputs: the error r - y of r = 1e308, y = -1e308, the weighted
   // errors, the integral's increment, the derivative, the limit-cycle guard's
-  // integral of |e| dt over its limit, its count), holds the last output, leaves
+  // integral of |e| dt, its count), holds the last output, leaves
   // the state unchanged and is counted in faults(): the output is always finite and
   // inside [out_min, out_max], the state always finite (restore(snapshot()) takes it).
   double step(double setpoint, double measurement, double feedforward = 0.0) noexcept;

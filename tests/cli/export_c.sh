@@ -165,6 +165,19 @@ cp "$T/gpi.json" "$T/out/m.json"
 expect_fail "out over the model file" 1 'out/m.json' -- "$BIN" export --model "$T/out/m.json" --out "$T/out/m.json"
 rm "$T/out/m.json"
 expect_fail "header with --out -" 1 '--header needs --out' -- "$BIN" export --model "$T/gpi.json" --out - --header "$T/out/new.h"
+# an --out that names stdout as - does (review s18: /dev/stdout, the file stdout is redirected to) is refused the same
+# way, and writes no header (expect_fail sends stdout to $T/stdout: /dev/stdout and $T/stdout both name it)
+for o in /dev/stdout "$T/stdout"; do
+  why="--header needs --out to name a file, not stdout (--out $o): the C file #includes the header by its file name"
+  expect_fail "header with --out $o" 1 "$why" -- \
+    "$BIN" export --model "$T/gpi.json" --out "$o" --header "$T/out/new.h"
+  [ -s "$T/stdout" ] && fail "header with --out $o: printed C on stdout"
+  [ -e "$T/out/new.h" ] && fail "header with --out $o: wrote the header"
+done
+# /dev/null is no stdout (nothing reads it): --out /dev/null > /dev/null with --header writes the header
+"$BIN" export --model "$T/gpi.json" --out /dev/null --header "$T/null.h" > /dev/null 2> /dev/null \
+  || fail "export --out /dev/null --header: refused"
+grep -q 'null_inverse_step' "$T/null.h" || fail "--out /dev/null --header: no header written"
 expect_fail "no --out" 1 '--out is required' -- "$BIN" export --model "$T/gpi.json"
 expect_fail "unwritable directory" 1 'nodir/new.c' -- "$BIN" export --model "$T/gpi.json" --out "$T/nodir/new.c"
 

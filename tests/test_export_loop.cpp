@@ -224,7 +224,10 @@ std::vector<double> library_counts(const Controller& c) {
 
 std::string counts_text(const std::vector<double>& v) {
   std::string t;
-  for (double x : v) t += (t.empty() ? "" : " ") + fmt::format("{}", x);
+  for (double x : v) {
+    if (!t.empty()) t += ' ';
+    t += fmt::format("{}", x);
+  }
   return t;
 }
 

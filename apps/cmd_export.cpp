@@ -2,7 +2,8 @@
 //
 //   hysteron export --model M.json --out compensator.c [--header compensator.h] [--prefix NAME] [--limits=LO,HI]
 //                   [--loop result.json --run RUN]
-// --model - reads the model JSON from stdin; --out - writes the C file to stdout (not with --header).
+// --model - reads the model JSON from stdin; --out - (or a path naming stdout) writes the C file to stdout (not with
+// --header).
 #include <fmt/format.h>
 
 #include <cctype>
@@ -43,7 +44,12 @@ std::string default_prefix(const std::string& out) {
 }
 
 int run_export(const Options& o) {
-  if (o.out == "-" && !o.header.empty()) throw Error("--header needs --out to name a file (not -)");
+  // the C file #includes the header by its file name: the C file must be a file too, not stdout (-, /dev/stdout
+  // or the file stdout is redirected to: names_stdout), as for every output that names stdout
+  if (!o.header.empty() && names_stdout(o.out))
+    throw Error(fmt::format("--header needs --out to name a file, not stdout (--out {}): the C file #includes the "
+                            "header by its file name",
+                            o.out));
   if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
   if (!o.run.empty() && o.loop.empty()) throw Error("--run names a run of the --loop file: give --loop too");
   io::check_output_files({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});

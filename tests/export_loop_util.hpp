@@ -31,6 +31,9 @@ struct LoopRun {
   std::string error;                 // "" or what failed (generation, compiler, driver)
   std::vector<double> preview;       // lp_loop_preview of the reference
   std::vector<double> command, duty; // lp_loop_step (lp_loop_learning_step) of every sample
+  // after every lp_loop_step: the position PID's faults, guard_cuts, gain_scale, the inverse's faults and, in a
+  // cascade_pwm loop, the pressure PID's faults, guard_cuts, gain_scale and pwm_faults (loop_driver.c)
+  std::vector<std::vector<double>> counts;
   std::vector<double> correction;    // with learning: lp_learning_correction(0) before every step
   int warm_status = 0;               // lp_learning_warm_start's return value, if called
 };
@@ -63,7 +66,8 @@ inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model,
   const std::string driver = std::string(HYSTERON_SOURCE_DIR) + "/tests/export/loop_driver.c";
   const std::string cc = fmt::format(
       "gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 {} {} -I'{}' '{}' {} -o '{}' -lm > '{}' 2>&1",
-      single ? "-DLP_SINGLE" : "", d.learning ? "-DLP_LEARNING" : "", dir.string(), driver, single ? "" : "'" + (dir / "loop.c").string() + "'",
+      std::string(single ? "-DLP_SINGLE" : "") + (d.kind == LoopDesign::Kind::cascade_pwm ? " -DLP_CASCADE" : ""),
+      d.learning ? "-DLP_LEARNING" : "", dir.string(), driver, single ? "" : "'" + (dir / "loop.c").string() + "'",
       (dir / "loop_driver").string(), (dir / "gcc.log").string());
   if (std::system(cc.c_str()) != 0) {
     std::ifstream log(dir / "gcc.log");
@@ -108,6 +112,8 @@ inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model,
     } else if (tag == "S" && (ls >> a >> b)) {
       out.command.push_back(std::strtod(a.c_str(), nullptr));
       out.duty.push_back(std::strtod(b.c_str(), nullptr));
+      std::vector<double>& n = out.counts.emplace_back();
+      while (ls >> a) n.push_back(std::strtod(a.c_str(), nullptr));
     } else if (std::string c; tag == "L" && (ls >> a >> b >> c)) {
       out.command.push_back(std::strtod(a.c_str(), nullptr));
       out.duty.push_back(std::strtod(b.c_str(), nullptr));

@@ -1,7 +1,10 @@
 // PID and PWM modulator (control.hpp), alone and in closed loop with the rig.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -273,6 +276,27 @@ TEST(Pid, OverflowingErrorIsAFaultWithTheGuard) {
   EXPECT_NO_THROW(copy.restore(pid.snapshot()));
 }
 
+// Review s18: Pid::reset kept faults() while the generated C's pid_reset (and Model, Inverse,
+// IterativeLearning's resets) zero their counts. A reset is a fresh start: state, guard and counts.
+TEST(Pid, ResetRestartsTheFaultCountAndTheGuard) {
+  PidParams p{.kp = 2.0, .ki = 10.0, .out_min = -1.0, .out_max = 1.0};
+  p.guard = PidGuard{.period = 0.3, .amplitude = 0.002, .count = 1.5, .memory = 10.0};
+  Pid pid(p);
+  pid.step(0.01, 0.0);
+  pid.step(NAN, 0.0);
+  pid.step(1e308, -1e308);
+  ASSERT_EQ(pid.faults(), 2u);
+  pid.reset(0.5);
+  EXPECT_EQ(pid.faults(), 0u);
+  EXPECT_EQ(pid.snapshot().back(), 0.0) << "the snapshot's fault count";
+  EXPECT_EQ(pid.output(), 0.5);
+  EXPECT_EQ(pid.state().gain_scale, 1.0);
+  EXPECT_EQ(pid.state().guard_cuts, 0u);
+  pid.step(0.0, INFINITY);
+  EXPECT_EQ(pid.faults(), 1u);
+  EXPECT_EQ(pid.output(), 0.5);
+}
+
 TEST(Pid, Deterministic) {
   auto run = [] {
     Pid pid(PidParams{.kp = 1.0, .ki = 5.0, .kd = 0.01, .sample_time = 1e-3, .derivative_filter = 5e-3});
@@ -364,7 +388,7 @@ TEST(PidGuard, ValidatesParams) {
   p.guard = PidGuard{.period = 0.2, .amplitude = 5e-324};  // a T_u / pi = 0
   EXPECT_NE(error_of(p).find("pid.guard.amplitude = 5e-324: must be such that amplitude * period / pi"),
             std::string::npos) << error_of(p);
-  p.guard = PidGuard{.period = 1.0, .amplitude = 1e-310};  // a T_u / pi subnormal: |e| dt / it overflows
+  p.guard = PidGuard{.period = 1.0, .amplitude = 1e-310};  // a T_u / pi subnormal: fewer than 53 bits
   EXPECT_NE(error_of(p).find("not subnormal"), std::string::npos) << error_of(p);
   p.guard = PidGuard{.period = 1e10, .amplitude = 1e308};  // a T_u / pi = inf
   EXPECT_NE(error_of(p).find("pid.guard.amplitude"), std::string::npos) << error_of(p);
@@ -373,6 +397,59 @@ TEST(PidGuard, ValidatesParams) {
       << error_of(p);
   p.guard.count = 1e307;
   EXPECT_EQ(error_of(p), "");
+}
+
+// Review s18: with a limit a T_u / pi just above DBL_MIN (a = 1e-307, T_u = 1 s), the guard's integral of |e| dt
+// over it overflowed once the integral exceeded DBL_MAX DBL_MIN = 4 (error units x s), and the per-sample check
+// then held every later sample: the loop stopped. Now the severity is at most 2^1023 and only an integral that
+// overflows is held. For limits within a factor 1.0000001 of DBL_MIN and amplitude 1e-307:
+// - a constant error of 1 for 20 s (integral 20, no half-cycle ends): no fault, and every output equals the
+//   unguarded PID's (the guard never acts where no half-cycle ends);
+// - then a square wave of +-20 with half-cycles of T_u / 2 (integral 10 T_u each): no fault, the guard cuts
+//   (a ring ~1e308 times its amplitude), the last severity is min(integral / limit, 2^1023) as computed in
+//   long double (no overflow there: x86's 15-bit exponent), and the state restores.
+TEST(PidGuard, ALimitNearDblMinKeepsStepping) {
+  const double dbl_min = std::numeric_limits<double>::min();
+  std::vector<std::pair<double, double>> guards;  // (T_u, a)
+  guards.push_back({1.0, 1e-307});
+  for (double tu : {0.004, 0.3, 1.0, 7.0}) guards.push_back({tu, 1.0000001 * dbl_min * std::numbers::pi / tu});
+  for (const auto& [tu, a] : guards) {
+    std::ostringstream what_text;
+    what_text << "T_u " << tu << " s, a " << a;
+    const std::string what = what_text.str();
+    PidParams p{.kp = 0.5, .ki = 2.0, .sample_time = 1e-3, .out_min = -1e9, .out_max = 1e9};
+    Pid plain(p);
+    p.guard = PidGuard{.period = tu, .amplitude = a};
+    Pid guarded(p);  // validation accepts it: a T_u / pi >= DBL_MIN
+    const double limit = guarded.coefficients().guard_iae_limit;
+    ASSERT_GE(limit, dbl_min) << what;
+    ASSERT_LT(limit, 4 * dbl_min) << what;
+    for (int k = 0; k < 20000; ++k) {
+      const double r = 1.0 + 1e-3 * k;  // e = 1
+      ASSERT_EQ(guarded.step(r, r - 1.0), plain.step(r, r - 1.0)) << what << ", sample " << k;
+    }
+    EXPECT_EQ(guarded.faults(), 0u) << what;
+    EXPECT_GT(guarded.state().guard_iae, 19.0) << what;
+    EXPECT_EQ(guarded.state().guard_cuts, 0u) << what;
+    const long half = std::max(2L, std::lround(tu / 2 / p.sample_time));
+    double last = guarded.output();
+    std::size_t moved = 0;
+    for (long k = 0; k < 40 * half; ++k) {
+      const double e = (k / half) % 2 == 0 ? -20.0 : 20.0;
+      const double u = guarded.step(e, 0.0);
+      moved += u != last;
+      last = u;
+    }
+    EXPECT_EQ(guarded.faults(), 0u) << what << ": samples held";
+    EXPECT_EQ(moved, static_cast<std::size_t>(40 * half)) << what << ": the output did not move on every sample";
+    EXPECT_GE(guarded.state().guard_cuts, 1u) << what;
+    // the last ended half-cycle: half samples of |e| = 20 (integral 20 half T_s, up to rounding)
+    const long double severity = std::min(20.0L * half * 1e-3L / limit, 0x1p1023L);
+    EXPECT_NEAR(static_cast<double>(guarded.state().guard_last / severity), 1.0, 1e-9) << what;
+    EXPECT_TRUE(std::isfinite(guarded.state().guard_last)) << what;
+    Pid copy(p);
+    EXPECT_NO_THROW(copy.restore(guarded.snapshot())) << what;
+  }
 }
 
 TEST(PidGuard, CutsTheGainsOfALoopThatRings) {
@@ -475,6 +552,12 @@ TEST(Pwm, Modulation) {
   EXPECT_EQ(m.step(10.0), 0.9);
   EXPECT_EQ(m.step(-10.0), -0.9);
   EXPECT_EQ(m.step(NAN), -0.9);
+  EXPECT_EQ(m.faults(), 1u);
+  // a reset is a fresh start: duty 0 and no faults (as the generated C's loop_reset: pwm_faults = 0)
+  m.reset();
+  EXPECT_EQ(m.duty(), 0.0);
+  EXPECT_EQ(m.faults(), 0u);
+  EXPECT_EQ(m.step(NAN), 0.0);
   EXPECT_EQ(m.faults(), 1u);
 }
 

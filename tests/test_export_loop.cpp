@@ -189,6 +189,11 @@ struct Compared {
   std::size_t exact = 0, n = 0, at_limits = 0, nonzero_duty = 0;
   std::size_t guard_cuts = 0;  // the most cuts of the library's position PID between two resets
   std::size_t position_faults = 0;  // the most faults of the library's position PID between two resets
+  // the counts after each step (loop_driver.c's order) that differ from the library's, the first such
+  std::size_t counts_differ = 0;
+  std::string first_counts_difference;
+  // resets where a count of the library's loop was > 0 just before (the resets the comparison exercises)
+  std::size_t resets_with_faults = 0, resets_with_cuts = 0;
 };
 
 // The position PID of whichever loop `c` holds.
@@ -203,6 +208,29 @@ const Pid& position_pid(const Controller& c) {
       c);
 }
 
+// The library's counts in loop_driver.c's order: the position PID's faults, guard_cuts, gain_scale, the inverse's
+// faults and, with the valves, the pressure PID's faults, guard_cuts, gain_scale and the PWM's faults.
+std::vector<double> library_counts(const Controller& c) {
+  const Pid& pos = position_pid(c);
+  std::vector<double> v{static_cast<double>(pos.faults()), static_cast<double>(pos.state().guard_cuts),
+                        pos.state().gain_scale};
+  std::visit([&](const auto& l) { v.push_back(static_cast<double>(l.feedforward().faults())); }, c);
+  if (const auto* cas = std::get_if<CascadePwmController>(&c))
+    v.insert(v.end(), {static_cast<double>(cas->pressure().faults()),
+                       static_cast<double>(cas->pressure().state().guard_cuts), cas->pressure().state().gain_scale,
+                       static_cast<double>(cas->pwm().faults())});
+  return v;
+}
+
+std::string counts_text(const std::vector<double>& v) {
+  std::string t;
+  for (double x : v) {
+    if (!t.empty()) t += ' ';
+    t += fmt::format("{}", x);
+  }
+  return t;
+}
+
 // The library's loop on the same inputs (the reference's finite values previewed, as a user
 // would: the preview of a non-finite sample is fed as is).
 Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, const std::vector<double>& preview) {
@@ -213,10 +241,28 @@ Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, cons
   std::size_t next = 0;
   for (std::size_t k = 0; k < in.reference.size() && k < got.command.size(); ++k) {
     while (next < in.resets.size() && in.resets[next] <= k) {
-      if (in.resets[next] == k) reset(ctl);
+      if (in.resets[next] == k) {
+        const std::vector<double> before = library_counts(ctl);
+        bool faults = before[0] > 0 || before[3] > 0, cuts = before[1] > 0;
+        if (before.size() > 4) {
+          faults = faults || before[4] > 0 || before[7] > 0;
+          cuts = cuts || before[5] > 0;
+        }
+        r.resets_with_faults += faults;
+        r.resets_with_cuts += cuts;
+        reset(ctl);
+      }
       ++next;
     }
     const LoopOutput o = step(ctl, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
+    if (k < got.counts.size()) {
+      const std::vector<double> lib = library_counts(ctl);
+      if (lib != got.counts[k]) {
+        if (r.counts_differ++ == 0)
+          r.first_counts_difference = "sample " + std::to_string(k) + ": library " + counts_text(lib) +
+                                      ", generated C " + counts_text(got.counts[k]);
+      }
+    }
     r.guard_cuts = std::max(r.guard_cuts, position_pid(ctl).state().guard_cuts);
     r.position_faults = std::max(r.position_faults, position_pid(ctl).faults());
     r.worst_command = std::max(r.worst_command, std::abs(o.command_mpa - got.command[k]));
@@ -255,19 +301,27 @@ TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
 #if defined(__x86_64__) && defined(__SSE2__)
   EXPECT_EQ(r.exact, r.n) << "not bit-identical to the library's loop";
 #endif
+  // the fault counts and the guard's cuts agree after every step, across the resets too (review s18: the
+  // library's Pid::reset kept faults, the generated C's pid_reset zeroed them)
+  ASSERT_EQ(got.counts.size(), r.n);
+  EXPECT_EQ(got.counts[0].size(), c.design.kind == LoopDesign::Kind::cascade_pwm ? 8u : 4u);
+  EXPECT_EQ(r.counts_differ, 0u) << "first: " << r.first_counts_difference;
   // what the inputs exercised
   EXPECT_GT(in.nonfinite, 10u);
+  EXPECT_GE(r.resets_with_faults, 2u) << "no reset after a fault: the reset of the counts is not compared";
   EXPECT_GT(r.at_limits, 10u) << "the loop never commanded a pressure limit";
   if (c.design.kind == LoopDesign::Kind::cascade_pwm) {
     EXPECT_GT(r.nonzero_duty, r.n / 10);
   }
   if (c.design.pid && c.design.pid->guard.enabled()) {
     EXPECT_GE(r.guard_cuts, 1u) << "the limit-cycle guard never cut the gains";
+    EXPECT_GE(r.resets_with_cuts, 1u) << "no reset after a cut: the reset of the cut gains is not compared";
   }
-  std::printf("  %s: %zu samples (%zu non-finite inputs, %zu at a pressure limit, %zu resets): largest difference "
-              "%.3g MPa, %.3g duty, %.3g preview; bit-identical %zu / %zu\n",
-              c.name.c_str(), r.n, in.nonfinite, r.at_limits, in.resets.size(), r.worst_command, r.worst_duty,
-              r.worst_preview, r.exact, r.n);
+  std::printf("  %s: %zu samples (%zu non-finite inputs, %zu at a pressure limit, %zu resets, %zu after faults, %zu "
+              "after cuts): largest difference %.3g MPa, %.3g duty, %.3g preview; bit-identical %zu / %zu; counts "
+              "differ after %zu steps\n",
+              c.name.c_str(), r.n, in.nonfinite, r.at_limits, in.resets.size(), r.resets_with_faults,
+              r.resets_with_cuts, r.worst_command, r.worst_duty, r.worst_preview, r.exact, r.n, r.counts_differ);
 }
 
 INSTANTIATE_TEST_SUITE_P(Export, ExportLoop, ::testing::ValuesIn(cases()),
@@ -302,6 +356,18 @@ TEST(ExportLoopCheck, ExtremeFiniteInputsStepAsTheLibrarysLoop) {
       default: in.pressure[k] = s * big; break;
     }
   }
+  // the samples whose error r - y overflows (each a fault of the position PID), the most between two resets
+  // (a reset restarts the count)
+  std::size_t overflowing = 0, cur = 0, next = 0;
+  for (std::size_t k = 0; k < in.reference.size(); ++k) {
+    if (next < in.resets.size() && in.resets[next] == k) {
+      cur = 0;
+      ++next;
+    }
+    cur += std::isinf(in.reference[k] - in.measured[k]);
+    overflowing = std::max(overflowing, cur);
+  }
+  ASSERT_GT(overflowing, 40u);
   for (const Case& c : all) {
     test::TempDir dir;
     const std::vector<double> preview = feedforward_preview(c.design, in.reference);
@@ -316,10 +382,79 @@ TEST(ExportLoopCheck, ExtremeFiniteInputsStepAsTheLibrarysLoop) {
     EXPECT_EQ(r.exact, r.n) << c.name << ": not bit-identical to the library's loop";
 #endif
     if (c.design.pid) {
-      EXPECT_GT(r.position_faults, 50u) << c.name << ": the extremes held no sample of the position PID";
+      EXPECT_GE(r.position_faults, overflowing) << c.name << ": the extremes held too few samples of the position PID";
     }
+    EXPECT_EQ(r.counts_differ, 0u) << c.name << ": first: " << r.first_counts_difference;
     std::printf("  %s: %zu samples with extremes: bit-identical %zu, position PID faults %zu (most between resets)\n",
                 c.name.c_str(), r.n, r.exact, r.position_faults);
+  }
+}
+
+// Review s18: a limit-cycle guard whose limit a T_u / pi is just above DBL_MIN (a = 1e-307 at T_u = 1 s, and
+// limits within 1.0000001 DBL_MIN) held every sample once its integral of |e| dt exceeded about 4 (the integral
+// over the limit overflowed), in the library and the generated C alike. Driven by ordinary errors (a constant
+// error of 1 m, or a pressure error of 20 MPa, for 10 s, then square waves of +-20 with half-cycles of T_u / 2),
+// the guarded PIDs of the generated C and the library hold no sample, step bit for bit alike, with the same counts,
+// and the square waves make them cut their gains.
+TEST(ExportLoopCheck, GuardNearDblMinKeepsSteppingAsTheLibrarysLoop) {
+  if (!test::have_gcc()) GTEST_SKIP() << "gcc not found: generated C not compiled";
+  const double dbl_min = std::numeric_limits<double>::min();
+  for (const auto& [tu, a] : {std::pair{1.0, 1e-307}, std::pair{0.3, 1.0000001 * dbl_min * M_PI / 0.3}}) {
+    const PidGuard guard{.period = tu, .amplitude = a};
+    std::vector<Case> all;
+    {
+      LoopDesign d;
+      d.kind = LoopDesign::Kind::feedforward_pid;
+      d.pid = pid(0.001, 0.001, 0.0, 0.0, AntiWindup::none);
+      d.pid->guard = guard;
+      all.push_back({"ff_pid_guard_near_dbl_min", d, M::pi, false});
+    }
+    {
+      LoopDesign d;
+      d.kind = LoopDesign::Kind::cascade_pwm;
+      d.pid = pid(0.001, 0.001, 0.0, 0.0, AntiWindup::none);
+      d.pid->guard = guard;
+      PidParams pp = pid(0.001, 0.001, 0.0, 0.0, AntiWindup::none);
+      pp.out_min = -1;
+      pp.out_max = 1;
+      pp.guard = guard;
+      d.pressure_pid = pp;
+      d.pwm = PwmParams{1.0, 0.0, 0.0, 1.0, 0.0};
+      all.push_back({"cascade_guards_near_dbl_min", d, M::pi, true});
+    }
+    const std::size_t n = 20000, half = static_cast<std::size_t>(std::lround(tu / 2 / 1e-3));
+    Inputs in;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double r = 0.016 + 0.004 * std::sin(2 * M_PI * static_cast<double>(k) / 2000);
+      const double sq = ((k - n / 2) / half) % 2 == 0 ? 20.0 : -20.0;
+      in.reference.push_back(r);
+      in.measured.push_back(k < n / 2 ? r - 1.0 : r + sq);  // e = 1 m, then -+20 m
+      in.pressure.push_back(k < n / 2 ? -20.0 : sq);        // p_d - p about 20 MPa, then -+20 MPa
+    }
+    for (const Case& c : all) {
+      const std::string what = c.name + fmt::format(", T_u {} s, a {}", tu, a);
+      test::TempDir dir;
+      const std::vector<double> preview = feedforward_preview(c.design, in.reference);
+      const test::LoopRun got = test::run_generated_loop(c.design, model_of(c.model), dir.file("."), c.single,
+                                                         in.reference, preview, in.measured, in.pressure);
+      ASSERT_EQ(got.error, "") << what;
+      ASSERT_EQ(got.counts.size(), n) << what;
+      const Compared r = compare(c, in, got, preview);
+#if defined(__x86_64__) && defined(__SSE2__)
+      EXPECT_EQ(r.exact, r.n) << what << ": not bit-identical to the library's loop";
+#endif
+      EXPECT_EQ(r.counts_differ, 0u) << what << ": first: " << r.first_counts_difference;
+      // the generated C's own counts at the end: no sample held, the gains cut
+      const std::vector<double>& last = got.counts.back();
+      EXPECT_EQ(last[0], 0.0) << what << ": the position PID held samples";
+      EXPECT_GE(last[1], 1.0) << what << ": the position PID's guard never cut";
+      if (c.design.kind == LoopDesign::Kind::cascade_pwm) {
+        EXPECT_EQ(last[4], 0.0) << what << ": the pressure PID held samples";
+        EXPECT_GE(last[5], 1.0) << what << ": the pressure PID's guard never cut";
+      }
+      std::printf("  %s: bit-identical %zu / %zu, final counts %s\n", what.c_str(), r.exact, r.n,
+                  counts_text(last).c_str());
+    }
   }
 }
 

@@ -33,6 +33,8 @@ class InverseFeedforward {
   double step(double desired_m) noexcept;
   void reset() noexcept;
   bool saturated() const noexcept { return inverse_.saturated(); }
+  // The inverse's faults (non-finite desired outputs ignored) since construction or the last reset().
+  std::size_t faults() const noexcept { return inverse_.faults(); }
   const FeedforwardParams& params() const noexcept { return p_; }
 
  private:
@@ -55,6 +57,7 @@ class FeedforwardPidController {
   void reset() noexcept;
   // The PID as built (its output limits narrowed to the pressure limits).
   const Pid& pid() const noexcept { return pid_; }
+  const InverseFeedforward& feedforward() const noexcept { return ff_; }
   // Replaces the PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { pid_.set_guard(guard); }
 
@@ -91,6 +94,7 @@ class OpenLoopController {
   // step() uses it (a gain is non-zero).
   const Pid& position() const noexcept { return position_; }
   bool uses_position() const noexcept { return use_position_; }
+  const InverseFeedforward& feedforward() const noexcept { return ff_; }
   // Replaces the position PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { position_.set_guard(guard); }
 
@@ -118,13 +122,15 @@ class CascadePwmController {
   CascadePwmController(const ModelParams& model, const CascadeParams& params);
   // Returns the PWM duty in [-1, 1]; desired_pressure() is the outer loop's output.
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
-  void reset() noexcept;
+  void reset() noexcept;  // every part, its fault counts and the guard's cuts included
   double desired_pressure() const noexcept { return p_d_; }
   const CascadeParams& params() const noexcept { return p_; }
   // The PIDs as built: the position PID's output limits narrowed to the pressure limits, the
   // pressure PID's to [-1, 1].
   const Pid& position() const noexcept { return position_; }
   const Pid& pressure() const noexcept { return pressure_; }
+  const PwmModulator& pwm() const noexcept { return pwm_; }
+  const InverseFeedforward& feedforward() const noexcept { return ff_; }
   // Replaces the position PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { position_.set_guard(guard); }
 

@@ -29,14 +29,15 @@ AntiWindup anti_windup_from_name(std::string_view name);
 // integral of |e| dt exceeds amplitude T_u / pi (a half-sine of that amplitude at period T_u)
 // adds to a count that decays with time constant memory T_u: 1, or where the ring grows (three
 // half-cycles in a row counted, this one's integral at least that of the one of its sign before)
-// its severity, that integral over the limit (at most `count`): a growing ring several times the
+// its severity, that integral over the limit (at most `count`; the severity itself at most 2^1023, so it is
+// finite for every finite integral, also over a limit near DBL_MIN): a growing ring several times the
 // amplitude is cut within a period instead of after 2.5, before it reaches the limits, and a
 // step's decaying transient counts 1 per half-cycle as before (2026-11-30); when the count reaches `count`,
 // K_p, K_i and K_d are multiplied by `factor` (not below min_scale times the tuned gains) and
 // the count restarts. The cut gains stay until reset(). period = 0: off (the default).
 struct PidGuard {
   double period = 0.0;     // T_u [s]: 0 (off) or >= 4 sample times
-  double amplitude = 0.0;  // a [error units], > 0 where period > 0 (a T_u / pi finite and > 0)
+  double amplitude = 0.0;  // a [error units], > 0 where period > 0 (a T_u / pi finite and normal: >= DBL_MIN)
   double count = 5.0;      // half-cycles (decayed) that cut the gains, > 0 (2 count finite)
   double memory = 5.0;     // the count's decay time constant [T_u], > 0
   double factor = 0.63;    // in (0, 1)
@@ -100,7 +101,7 @@ class Pid {
   explicit Pid(const PidParams& params);
 
   // Zero state; optionally start bumplessly at output u0 (integral = clamp(u0)). The gains are
-  // the tuned ones again (the guard's scale 1).
+  // the tuned ones again (the guard's scale 1, no cuts) and faults() is 0 (as the generated C's pid_reset).
   void reset(double u0 = 0.0) noexcept;
   // Replaces the limit-cycle guard (params().guard) and restarts it: the gains as tuned, no
   // half-cycles counted. Throws hysteron::Error naming the field ("pid.guard.factor = 1: ...").
@@ -110,7 +111,7 @@ class Pid {
   // non-finite intermediate (an overflow of large gains on a large error, or of
   // extreme finite inputs: the error r - y of r = 1e308, y = -1e308, the weighted
   // errors, the integral's increment, the derivative, the limit-cycle guard's
-  // integral of |e| dt over its limit, its count), holds the last output, leaves
+  // integral of |e| dt, its count), holds the last output, leaves
   // the state unchanged and is counted in faults(): the output is always finite and
   // inside [out_min, out_max], the state always finite (restore(snapshot()) takes it).
   double step(double setpoint, double measurement, double feedforward = 0.0) noexcept;
@@ -127,6 +128,7 @@ class Pid {
   };
   Coefficients coefficients() const noexcept { return {a_d_, b_d_, k_t_, guard_decay_, guard_iae_limit_}; }
   double output() const noexcept { return s_.output; }
+  // Samples held since construction or the last reset().
   std::size_t faults() const noexcept { return faults_; }
 
   // Everything step() changes, as numbers: the PidState fields in their order (the flags 0/1)
@@ -168,7 +170,8 @@ class PwmModulator {
   explicit PwmModulator(const PwmParams& params);  // throws hysteron::Error
   // Duty in [-max_duty, max_duty]; a non-finite u holds the last duty (counted in faults()).
   double step(double u) noexcept;
-  void reset() noexcept { duty_ = 0.0; }
+  // Duty 0 and faults() 0 (as the generated C's loop_reset: pwm_faults = 0).
+  void reset() noexcept;
   const PwmParams& params() const noexcept { return p_; }
   double duty() const noexcept { return duty_; }
   std::size_t faults() const noexcept { return faults_; }

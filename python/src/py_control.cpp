@@ -147,13 +147,15 @@ state as numbers).)doc"));
            "One sample; returns the clamped output.")
       .def(
           "reset", [](Pid& p, double u0) { p.reset(finite_arg(u0, "Pid.reset: u0")); }, py::arg("u0") = 0.0,
-          "Zero state, optionally starting bumplessly at output u0 (finite).")
+          "Zero state, optionally starting bumplessly at output u0 (finite); the gains as tuned, faults and "
+          "guard_cuts 0.")
       .def_property_readonly("output", &Pid::output, "The last (clamped) output.")
       .def_property_readonly("integral", [](const Pid& p) { return p.state().integral; },
                              "The integrator's state (in output units).")
       .def_property_readonly("saturated", [](const Pid& p) { return p.state().saturated; },
                              "True if the last output was clamped.")
-      .def_property_readonly("faults", &Pid::faults, "Number of non-finite inputs ignored.")
+      .def_property_readonly("faults", &Pid::faults,
+                             "Samples held (a non-finite input or an overflow) since construction or the last reset.")
       .def(
           "set_guard",
           [](Pid& p, double period, double amplitude, double count, double memory, double factor, double min_scale) {

@@ -13,6 +13,9 @@
 
 namespace hysteron {
 namespace {
+// The largest severity of a half-cycle of the limit-cycle guard (its integral of |e| dt over a T_u / pi): 2^1023.
+constexpr double kGuardSeverityMax = 0x1p1023;
+
 [[noreturn]] void bad(const char* key, double v, const char* expected) {
   throw Error(detail::format("{} = {}: must be {}", key, v, expected));
 }
@@ -99,8 +102,8 @@ void Pid::set_guard(const PidGuard& g) {
     if (!(g.min_scale > 0.0 && g.min_scale <= 1.0)) bad("pid.guard.min_scale", g.min_scale, "in (0, 1]");
     decay = std::exp(-p_.sample_time / (g.memory * g.period));
     limit = g.amplitude * g.period / std::numbers::pi;
-    // step() divides the integral of |e| dt by it (0: inf or NaN; subnormal: the quotient overflows on a
-    // small integral, and a sample whose quotient overflows is held; inf: nothing is ever counted)
+    // step() compares the integral of |e| dt with it and divides by it (0: every half-cycle counts; inf: none
+    // ever does; subnormal: fewer than 53 significant bits, a T_u / pi not what was asked for)
     if (!std::isfinite(limit) || !(limit >= std::numeric_limits<double>::min()))
       bad("pid.guard.amplitude", g.amplitude,
           detail::format("such that amplitude * period / pi (period {} s) is finite and at least {} (not subnormal)",
@@ -122,6 +125,7 @@ void Pid::set_guard(const PidGuard& g) {
 
 void Pid::reset(double u0) noexcept {
   s_ = PidState{};
+  faults_ = 0;  // a fresh start: counts restart (as Model, Inverse, IterativeLearning and the generated C's pid_reset)
   if (std::isfinite(u0)) {
     u0 = std::clamp(u0, p_.out_min, p_.out_max);
     s_.integral = p_.ki > 0.0 ? u0 : 0.0;
@@ -227,18 +231,22 @@ double Pid::step(double r, double y, double ff) noexcept {
 bool Pid::guard_step(PidState& s, double e) const noexcept {
   const PidGuard& g = p_.guard;
   s.guard_iae += std::abs(e) * p_.sample_time;
-  // the severity of a half-cycle ending here, its integral over the limit, must be finite: it is checked on
-  // every sample (a held sample leaves the integral where it was), or an integral that grew too large on
-  // extreme errors would hold every sample that ends its half-cycle, for good
-  if (!std::isfinite(s.guard_iae / guard_iae_limit_)) return false;
+  // only an integral that overflows (errors near 1e308 for long) is held; the severity below is finite for any
+  // finite integral
+  if (!std::isfinite(s.guard_iae)) return false;
   // its length, counted until it is longer than T_u (which it then stays: no wrap-around)
   if (static_cast<double>(s.guard_samples) * p_.sample_time <= g.period) ++s.guard_samples;
   const double h = 0.25 * g.amplitude;
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
   if (sign != 0 && sign != s.guard_sign) {  // a half-cycle ended
     const double length = static_cast<double>(s.guard_samples) * p_.sample_time;
+    // the severity, the integral over the limit, at most 2^1023: the quotient overflowed where a limit near
+    // DBL_MIN (a = 1e-307) met an integral above about 4, and that sample and every later one were held. The
+    // test compares the integral with 2^1023 limit (exact: a power of 2 times a normal double; inf where
+    // the limit is >= 2, when the quotient is below 2^1023 anyway), so a quotient up to 2^1023 is as before.
     const double severity = s.guard_sign != 0 && length <= g.period && s.guard_iae > guard_iae_limit_
-                                ? s.guard_iae / guard_iae_limit_
+                                ? (s.guard_iae > kGuardSeverityMax * guard_iae_limit_ ? kGuardSeverityMax
+                                                                                       : s.guard_iae / guard_iae_limit_)
                                 : 0.0;
     // a ring that grows (three half-cycles in a row counted, this one at least the one of its sign
     // before) adds its severity; any other counted half-cycle 1 (a step's decaying transient)
@@ -272,6 +280,11 @@ PwmModulator::PwmModulator(const PwmParams& p) : p_(p) {
     bad("pwm.min_duty", p.min_duty, "in [0, max_duty]");
   if (!std::isfinite(p.resolution) || p.resolution < 0.0 || p.resolution > 1.0)
     bad("pwm.resolution", p.resolution, "in [0, 1]");
+}
+
+void PwmModulator::reset() noexcept {
+  duty_ = 0.0;
+  faults_ = 0;  // a fresh start, as Pid::reset
 }
 
 double PwmModulator::step(double u) noexcept {

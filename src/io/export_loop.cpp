@@ -54,21 +54,22 @@ constexpr std::string_view kPidStep = R"(
 /* The limit-cycle guard (hysteron::Pid, PidGuard): half-cycles of e between its sign changes
  * (hysteresis amplitude / 4) no longer than T_u with an integral of |e| dt above a T_u / pi
  * count 1, or where the ring grows (three counted in a row, this one's integral at least that of the
- * one of its sign before) their severity (that integral over a T_u / pi, at most guard_count); the count decays by guard_decay per sample; at guard_count it cuts the
- * gains. Updates the candidate state s; 0 where the integral over a T_u / pi or the count overflows
+ * one of its sign before) their severity (that integral over a T_u / pi, at most 2^1023 (no overflow on a
+ * limit near DBL_MIN), added at most guard_count); the count decays by guard_decay per sample; at guard_count it
+ * cuts the gains. Updates the candidate state s; 0 where the integral of |e| dt or the count overflows
  * (s then discarded: the sample is held). */
 static int $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
 {
   const double h = 0.25 * k->guard_amplitude;
   const int sign = e > h ? 1 : (e < -h ? -1 : 0);
   s->guard_iae += fabs(e) * k->ts;
-  if (!$P_finite(s->guard_iae / k->guard_iae_limit)) return 0;  /* the severity of a half-cycle ending here */
+  if (!$P_finite(s->guard_iae)) return 0;  /* only an integral that overflows is held */
   if ((double)s->guard_samples * k->ts <= k->guard_period) ++s->guard_samples;  /* no wrap-around */
   if (sign != 0 && sign != s->guard_sign) {
     const double length = (double)s->guard_samples * k->ts;
     double severity = 0.0, add;
-    if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit)
-      severity = s->guard_iae / k->guard_iae_limit;
+    if (s->guard_sign != 0 && length <= k->guard_period && s->guard_iae > k->guard_iae_limit)  /* at most 2^1023: */
+      severity = s->guard_iae > 0x1p1023 * k->guard_iae_limit ? 0x1p1023 : s->guard_iae / k->guard_iae_limit;
     add = 1.0; /* a growing ring (three in a row, this one at least the one of its sign before): its severity */
     if (s->guard_last > 0.0 && s->guard_last2 > 0.0 && severity >= s->guard_last2) {
       add = severity < k->guard_count ? severity : k->guard_count;
@@ -277,7 +278,7 @@ typedef struct $P_pid_state {{
   double output;         /* last output, held on a fault */
   int initialized;       /* 0 until the first finite sample (no derivative kick) */
   int saturated;         /* 1 if the last output was clamped */
-  unsigned long faults;  /* samples held: a non-finite input or intermediate */
+  unsigned long faults;  /* samples held since the last reset: a non-finite input or intermediate */
   double gain_scale;     /* the limit-cycle guard's factor on the gains (1: as tuned) */
   unsigned long guard_cuts;     /* times the guard cut the gains */
   int guard_sign;               /* sign of the current half-cycle of e (0: none yet) */

@@ -165,6 +165,19 @@ cp "$T/gpi.json" "$T/out/m.json"
 expect_fail "out over the model file" 1 'out/m.json' -- "$BIN" export --model "$T/out/m.json" --out "$T/out/m.json"
 rm "$T/out/m.json"
 expect_fail "header with --out -" 1 '--header needs --out' -- "$BIN" export --model "$T/gpi.json" --out - --header "$T/out/new.h"
+# an --out that names stdout as - does (review s18: /dev/stdout, the file stdout is redirected to) is refused the same
+# way, and writes no header (expect_fail sends stdout to $T/stdout: /dev/stdout and $T/stdout both name it)
+for o in /dev/stdout "$T/stdout"; do
+  why="--header needs --out to name a file, not stdout (--out $o): the C file #includes the header by its file name"
+  expect_fail "header with --out $o" 1 "$why" -- \
+    "$BIN" export --model "$T/gpi.json" --out "$o" --header "$T/out/new.h"
+  [ -s "$T/stdout" ] && fail "header with --out $o: printed C on stdout"
+  [ -e "$T/out/new.h" ] && fail "header with --out $o: wrote the header"
+done
+# /dev/null is no stdout (nothing reads it): --out /dev/null > /dev/null with --header writes the header
+"$BIN" export --model "$T/gpi.json" --out /dev/null --header "$T/null.h" > /dev/null 2> /dev/null \
+  || fail "export --out /dev/null --header: refused"
+grep -q 'null_inverse_step' "$T/null.h" || fail "--out /dev/null --header: no header written"
 expect_fail "no --out" 1 '--out is required' -- "$BIN" export --model "$T/gpi.json"
 expect_fail "unwritable directory" 1 'nodir/new.c' -- "$BIN" export --model "$T/gpi.json" --out "$T/nodir/new.c"
 
@@ -193,7 +206,7 @@ export_loop() {
     fail "--loop $run: the generated loop does not compile cleanly"; cat "$dir/gcc.log"; return 1
   fi
 }
-if export_loop "$T/loop" compensated.sine lp_loop_step; then
+if export_loop "$T/loop" compensated.sine lp_loop_step -DLP_CASCADE; then
   # a few steps and a preview: finite commands in the pressure limits, duties in [-1, 1]
   printf 'p 3 0x1p-7 0x1p-6 0x1p-5\ns 0x1p-7 0x1p-7 0 0.1\ns 0x1p-6 0x1p-6 nan 0.2\nr\ns 0x1p-5 0x1p-5 0x1p-5 inf\n' |
     "$T/loop/driver" > "$T/loop/out.txt" || fail "--loop: the driver failed"
@@ -203,9 +216,14 @@ lines = open(sys.argv[1]).read().split("\n")
 assert lines[0].startswith("P ") and len(lines[0].split()) == 4, lines[0]
 steps = [l.split() for l in lines[1:] if l]
 assert len(steps) == 3, steps
-for _, u, d in steps:
-    u, d = float.fromhex(u), float.fromhex(d)
+for s in steps:
+    u, d = float.fromhex(s[1]), float.fromhex(s[2])
     assert math.isfinite(u) and 0 <= u <= 0.6 and -1 <= d <= 1, (u, d)
+# the counts after each step (loop_driver.c, a cascade_pwm loop): the position PID's faults, cuts, scale, the
+# inverse's faults, the pressure PID's faults, cuts, scale, the PWM's faults. The NaN measurement is a fault of
+# the position PID; the reset zeroes it; the inf pressure is a fault of the pressure PID.
+faults = [(int(s[3]), int(s[7])) for s in steps]
+assert faults == [(0, 0), (1, 0), (0, 1)], faults
 print("ok: --loop: the generated loop compiles with -Werror and steps (" + "; ".join(" ".join(s[1:]) for s in steps) + ")")
 PY
 fi

@@ -4,7 +4,10 @@
  *   gcc -std=c99 ... -I DIR -DLP_SINGLE loop_driver.c -lm         (#includes DIR/loop.c)
  * Reads commands from stdin and prints one line per result (C99 hex floats, exact):
  *   r                       reset                                  (no output)
- *   s REF PREV MEAS PRESS   one step of lp_loop_step               -> "S command duty"
+ *   s REF PREV MEAS PRESS   one step of lp_loop_step               -> "S command duty" and the counts
+ *                           after it: the position PID's faults, guard_cuts, gain_scale, the inverse's
+ *                           faults; with -DLP_CASCADE (a cascade_pwm loop) also the pressure PID's
+ *                           faults, guard_cuts, gain_scale and pwm_faults
  *   p N V0 .. VN-1          lp_loop_preview of N values            -> "P v0 .. vN-1"
  * With -DLP_LEARNING (a loop exported with its learning), also
  *   l REF PREV MEAS PRESS   one step of lp_loop_learning_step      -> "L command duty c0"
@@ -68,7 +71,12 @@ int main(void)
         double duty = -2.0, u;
         if (scanf("%lf %lf %lf %lf", &a[0], &a[1], &a[2], &a[3]) != 4) return 2;
         u = lp_loop_step(&c, a[0], a[1], a[2], a[3], &duty);
-        printf("S %a %a\n", u, duty);
+        printf("S %a %a %lu %lu %a %lu", u, duty, c.position.faults, c.position.guard_cuts, c.position.gain_scale,
+               c.inverse.faults);
+#ifdef LP_CASCADE
+        printf(" %lu %lu %a %lu", c.pressure.faults, c.pressure.guard_cuts, c.pressure.gain_scale, c.pwm_faults);
+#endif
+        printf("\n");
         break;
       }
       case 'p': {

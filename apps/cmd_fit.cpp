@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -336,7 +337,7 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_flag("--json", c->json, "print the report as one JSON document");
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
   sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)")
-      ->check(non_negative_integer());
+      ->check(non_negative_integer(std::numeric_limits<unsigned>::max()));
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
   sub->add_option("--threads", c->threads,
                   "threads refining the starts concurrently (default 0: one per hardware thread, fewer on a long "

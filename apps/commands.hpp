@@ -4,6 +4,9 @@
 // user errors are thrown as hysteron::Error and reported by main() (exit 1).
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
+#include <limits>
+
 #include <functional>
 #include <string>
 #include <string_view>
@@ -30,7 +33,9 @@ void add_sweep(CLI::App& app, Action& action);            // cmd_sweep.cpp: swee
 void add_rig(CLI::App& app, Action& action);              // cmd_rig.cpp: rig (a rig's parameters and statics)
 void set_command_line(int argc, char** argv);             // recorded in reports
 // CLI11 validator: a decimal integer >= 0 ("-1" would wrap to 2^64 - 1 in an unsigned).
-const CLI::Validator& non_negative_integer();
+// A decimal integer in 0..max (the option's type's largest value: 2^32 - 1 for an unsigned seed), else the
+// message "TEXT is not an integer in 0..MAX".
+CLI::Validator non_negative_integer(std::uint64_t max = std::numeric_limits<std::uint64_t>::max());
 // --limits LO,HI (simulate/invert, export): finite numbers with LO < HI, else hysteron::Error.
 Limits parse_limits(const std::string& text);
 // The warning (on stderr, prefixed by `command`) where --limits reach beyond the model's

@@ -83,15 +83,17 @@ void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, s
              command, limits.lo, limits.hi, m.lo, m.hi, std::max(below, above));
 }
 
-const CLI::Validator& non_negative_integer() {
-  static const CLI::Validator v(
-      [](std::string& text) -> std::string {
-        const bool digits = !text.empty() && text.size() <= 19 &&
+CLI::Validator non_negative_integer(std::uint64_t max) {
+  return CLI::Validator(
+      [max](std::string& text) -> std::string {
+        std::uint64_t v = 0;
+        const bool digits = !text.empty() &&
                             std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
-        return digits ? std::string() : fmt::format("{} is not an integer in 0..9999999999999999999", text);
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+        const bool ok = digits && ec == std::errc() && end == text.data() + text.size() && v <= max;
+        return ok ? std::string() : fmt::format("{} is not an integer in 0..{}", text, max);
       },
       "INT>=0");
-  return v;
 }
 
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n) {

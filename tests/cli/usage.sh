@@ -31,6 +31,12 @@ expect "mistyped command suggested" 1 'unknown command "fitt" (did you mean fit?
 expect "unrelated command lists the commands" 1 "commands: simulate, invert, fit" -- "$BIN" frobnicate
 expect "negative seed refused" 1 "--seed: -1 is not an integer" -- "$BIN" experiment gpi-pid --seed -1
 expect "fractional seed refused" 1 "--seed: 1.5 is not an integer" -- "$BIN" fit --seed=1.5
+# the bound said is the option's own: fit's seed is 32-bit, the rig's noise seed 64-bit
+expect "fit seed beyond 32 bits: its bound" 1 "--seed: 4294967296 is not an integer in 0..4294967295" -- \
+  "$BIN" fit --seed 4294967296
+expect "experiment seed beyond 64 bits: its bound" 1 \
+  "--seed: 18446744073709551616 is not an integer in 0..18446744073709551615" -- \
+  "$BIN" experiment gpi-pid --seed 18446744073709551616
 expect "missing value is a usage error (1, not CLI11's 10x)" 1 "--model" -- "$BIN" simulate --model
 expect "no command" 1 "" -- "$BIN"
 # Negative numbers and "-" are values, not options.

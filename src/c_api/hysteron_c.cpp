@@ -635,6 +635,12 @@ void check_pid_limits(const hysteron::PidParams& p, double applied_lo, double ap
   if (p.sample_time != sample_time)
     fail(HYSTERON_ERROR_MODEL, "%s.sample_time_s = %g differs from the loop's sample_time_s = %g", where,
          p.sample_time, sample_time);
+  if ((std::isinf(applied_lo) && p.out_min > applied_lo) || (std::isinf(applied_hi) && p.out_max < applied_hi))
+    fail(HYSTERON_ERROR_MODEL,
+         "%s: output limits [%g, %g]: the loop leaves its pressure limits to the model's input_limits (null in "
+         "feedforward), which the C controller then applies to the PID; whether they are as narrow is not known "
+         "here: name the pressure limits, or leave the PID's unbounded (not representable)",
+         where, p.out_min, p.out_max);
   if (!(p.out_min <= applied_lo) || !(p.out_max >= applied_hi))
     fail(HYSTERON_ERROR_MODEL,
          "%s: output limits [%g, %g] are narrower than the [%g, %g] the C controller applies (not representable)",

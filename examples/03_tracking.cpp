@@ -36,9 +36,11 @@ int main() {
   fmt::print("identification: {}\n", fit.brief_report());
   if (fit.status == hysteron::FitStatus::invalid_input || fit.status == hysteron::FitStatus::failed) return 1;
 
-  // 2. tracking: inverse feedforward + PID, pressure command clamped to 0..0.6 MPa
+  // 2. tracking: inverse feedforward + PID, pressure command clamped to the muscle's rating
+  // (0..0.6 MPa); left unset, the limits would be the model's input range (the fit's measured pressures)
   hysteron::FeedforwardParams ff;
   ff.sample_time = ts;
+  ff.pressure_limits = {0.0, rig.params().muscle.max_pressure * 1e-6};  // [MPa]
   hysteron::FeedforwardPidController ctl(fit.model, ff, hysteron::gpi_paper_pid(ts));
   const std::vector<double> ref = hysteron::gpi_sinusoid_reference(ts, 10.0);  // contraction [m]
   rig.reset();

@@ -17,7 +17,11 @@ print(f"identification: {fit['status']}, RMS {fit['train']['rms']:.3f} mm")
 if fit["status"] in ("invalid_input", "failed"):
     sys.exit(1)
 
-ctl = hysteron.FeedforwardPidController(fit["model"], hysteron.Pid.gpi_paper(ts), sample_time=ts)
+# pressure commands clamped to the muscle's rating (0..0.6 MPa); left unset, the limits would be the
+# model's input range (the fit's measured pressures)
+p_max = rig.params["muscle"]["max_pressure"] * 1e-6  # [MPa]
+ctl = hysteron.FeedforwardPidController(fit["model"], hysteron.Pid.gpi_paper(ts), pressure_limits=(0.0, p_max),
+                                        sample_time=ts)
 ref = hysteron.gpi_sinusoid_reference(ts, 10.0)  # contraction [m]
 rig.reset()
 steps = round(ts / rig.dt)

@@ -51,9 +51,9 @@ int main() {
   auto track = [&](bool warm) {
     hysteron::IterativeLearning ilc(q);
     if (warm) ilc.reset(learnt);
-    hysteron::FeedforwardParams ff;
-    ff.sample_time = ts;
+    hysteron::FeedforwardParams ff = ctl.feedforward_params();  // the run's pressure limits, scale, lag, T_s
     hysteron::FeedforwardPidController fb(res.best_fit.model, ff, *ctl.pid);
+    const hysteron::Limits lim = fb.pressure_limits();  // [MPa]
     hysteron::PamRig rig(hysteron::PamRigParams{}, 7);
     rig.reset();
     const int every = static_cast<int>(std::lround(ts / rig.dt()));
@@ -65,9 +65,8 @@ int main() {
       for (std::size_t k = 0; k < n; ++k) {
         const double e = r[k] - y;
         if (k >= skip) e2 += e * e;
-        const double cmd = std::clamp(fb.step(r[k] + ilc.correction(0), preview[(k + lead) % n] + ilc.correction(lead), y),
-                                      0.0, 0.6);
-        ilc.step(cmd <= 0.0 || cmd >= 0.6 ? 0.0 : e);  // no learning at a pressure limit
+        const double cmd = fb.step(r[k] + ilc.correction(0), preview[(k + lead) % n] + ilc.correction(lead), y);
+        ilc.step(cmd <= lim.lo || cmd >= lim.hi ? 0.0 : e);  // no learning at a pressure limit
         hysteron::RigOutputs out;
         for (int s = 0; s < every; ++s) out = rig.step({cmd, 0.0, hysteron::Actuation::regulator});
         y = out.contraction_measured;

@@ -57,7 +57,11 @@ def track(warm):
                                      hold_after_cuts=q["hold_after_cuts"], max_gain=q["max_gain"])
     if warm:
         ilc.reset(learnt)
-    fb = hysteron.FeedforwardPidController(best_model_json, pid, sample_time=ts)
+    ff = ctl["feedforward"]  # the run's pressure limits [MPa], model scale and lag
+    lo, hi = ff["pressure_min_mpa"], ff["pressure_max_mpa"]
+    fb = hysteron.FeedforwardPidController(best_model_json, pid, pressure_limits=(lo, hi),
+                                           model_scale=ff["model_scale_per_m"],
+                                           lag_time_constant=ff["lag_time_constant_s"], sample_time=ts)
     rig = hysteron.PamRig(seed=7)
     rig.reset()
     substeps = round(ts / rig.dt)
@@ -70,8 +74,7 @@ def track(warm):
             if k >= skip:
                 e2 += e * e
             cmd = fb.step(r[k] + ilc.correction(0), preview[(k + lead) % n] + ilc.correction(lead), y)
-            cmd = min(max(cmd, 0.0), 0.6)
-            ilc.step(0.0 if cmd <= 0.0 or cmd >= 0.6 else e)  # no learning at a pressure limit
+            ilc.step(0.0 if cmd <= lo or cmd >= hi else e)  # no learning at a pressure limit
             for _ in range(substeps):
                 o = rig.step(pressure_command=cmd)
             y = o["contraction_measured"]

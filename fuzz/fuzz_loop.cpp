@@ -46,7 +46,10 @@ void run(const hysteron::LoopDesign& d) {
   } catch (const hysteron::Error&) {
     return;
   }
-  const hysteron::Limits lim = d.feedforward.pressure_limits;
+  // the limits the loop applies: d's, each unset (infinite) side the model's input_limits [0, 0.6]
+  const hysteron::Limits lim = hysteron::pressure_limits(*c);
+  const hysteron::Limits& given = d.feedforward.pressure_limits;
+  check(lim.lo == (std::isinf(given.lo) ? 0.0 : given.lo) && lim.hi == (std::isinf(given.hi) ? 0.6 : given.hi));
   const double inputs[][4] = {{0.0, 0.0, 0.0, 0.0},     {0.01, 0.012, 0.009, 0.2}, {0.05, 0.05, -0.02, 0.7},
                               {1e3, -1e3, 1e6, -1e6},   {-0.01, 0.3, 0.02, 0.1},   {1e-300, 1e300, -1e300, 5e-324},
                               {0.02, 0.02, 0.02, 0.3}};

@@ -322,11 +322,23 @@ TEST(CApiLoops, CascadeRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
 // the pressure PID (which the C ABI cannot set), refused with the path and the field.
 TEST(CApiLoops, GuardIsReadCheckedLikeTheLoop) {
   LoopDesign d;
+  d.feedforward.pressure_limits = {0.0, 0.6};  // as the experiments write them
   d.pid = PidParams{.kp = 9.8, .ki = 82.0, .out_min = 0.0, .out_max = 0.6};
   d.pid->guard = PidGuard{.period = 0.239, .amplitude = 2.15e-3};
   hysteron_pid_guard g{};
   const std::string ok = io::to_json(d).dump();
   ASSERT_EQ(hysteron_loop_guard_from_json(ok.c_str(), nullptr, &g), HYSTERON_OK) << hysteron_last_error();
+  {
+    // pressure limits left to the model (null) with a bounded PID: whether the C controller's
+    // limits (the model's) match the PID's is not known from the file: refused, saying why
+    LoopDesign unset = d;
+    unset.feedforward.pressure_limits = {};
+    const std::string u = io::to_json(unset).dump();
+    EXPECT_EQ(hysteron_loop_guard_from_json(u.c_str(), nullptr, &g), HYSTERON_ERROR_MODEL);
+    EXPECT_NE(std::string(hysteron_last_error()).find("the loop leaves its pressure limits to the model"),
+              std::string::npos)
+        << hysteron_last_error();
+  }
   EXPECT_EQ(g.period, 0.239);
   EXPECT_EQ(g.amplitude, 2.15e-3);
   EXPECT_EQ(g.factor, PidGuard{}.factor);

@@ -208,6 +208,14 @@ TEST(Experiment, GpiPidEndToEnd) {
   EXPECT_LT(j["faithful"]["rms_error_mm"].get<double>(), j["baseline"]["rms_error_mm"].get<double>());
   // The variants, in the registry's order, with the learning run's periods.
   EXPECT_EQ(j["variants"], nlohmann::json({"faithful", "compensated", "learning", "adaptive", "baseline"}));
+  // every run's loop names the rig's pressure limits: result.json never leaves them to the model
+  ASSERT_FALSE(r.runs.empty());
+  for (const TrackingRun& run : r.runs)
+    EXPECT_EQ(run.controller.feedforward.pressure_limits, (Limits{0.0, r.pressure_limit_mpa})) << run.variant;
+  for (const char* v : {"faithful", "compensated", "learning", "adaptive", "baseline"}) {
+    EXPECT_TRUE(j[v]["controller"]["feedforward"]["pressure_min_mpa"].is_number()) << v;
+    EXPECT_EQ(j[v]["controller"]["feedforward"]["pressure_max_mpa"].get<double>(), r.pressure_limit_mpa) << v;
+  }
   ASSERT_EQ(j["learning"]["periods"].size(), 2u);
   EXPECT_EQ(experiments().front().variants,
             std::vector<std::string>({"faithful", "compensated", "learning", "adaptive", "baseline"}));

@@ -237,7 +237,7 @@ Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, cons
   Compared r;
   const ModelParams model = model_of(c.model);
   Controller ctl = make_controller(c.design, model);
-  const Limits lim = c.design.feedforward.pressure_limits;
+  const Limits lim = pressure_limits(ctl);  // the design's, or where unset (most cases) the model's [0, 0.6]
   std::size_t next = 0;
   for (std::size_t k = 0; k < in.reference.size() && k < got.command.size(); ++k) {
     while (next < in.resets.size() && in.resets[next] <= k) {

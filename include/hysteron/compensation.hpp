@@ -4,7 +4,8 @@
 // interface: positions in metres, pressures in MPa gauge; the model maps
 // pressure [MPa] to contraction in model units (model_scale per metre, 1000
 // for models fitted in mm). Every step() is allocation-free, noexcept and
-// deterministic; every pressure command is clamped to the pressure limits.
+// deterministic; every pressure command is clamped to the pressure limits, which
+// default to the model's input_limits (resolve_pressure_limits).
 #include <cmath>
 #include <cstddef>
 
@@ -19,15 +20,26 @@ namespace hysteron {
 // difference at the sample time (the reference is smooth and known ahead, so
 // the dead time is best handled by feeding a previewed reference).
 struct FeedforwardParams {
-  Limits pressure_limits{0.0, 0.6};  // [MPa]; 0.6: the papers' DMSP-20 rating: set your actuator's limits
+  // [MPa], the command limits and the inverse's saturation limits. An infinite side (unset, the
+  // default) is the model's input_limits on that side: a fitted model's training input range
+  // (resolve_pressure_limits). Set your actuator's where the model was not fitted up to them.
+  Limits pressure_limits;
   double model_scale = 1000.0;       // model output units per metre
   double lag_time_constant = 0.0;    // tau [s] to compensate, >= 0
   double sample_time = 1e-3;         // [s], > 0
   void validate() const;             // throws hysteron::Error
 };
 
+// The pressure limits [MPa] a controller on `model` clamps to: `given` (FeedforwardParams::
+// pressure_limits), each infinite side replaced by the model's input_limits on that side (raw
+// input units: MPa for these controllers). Throws hysteron::Error if a side is NaN, if a side is
+// still infinite (the model has no finite input_limits there, e.g. a hand-written model file:
+// pressure_limits must be given) or if the result is not lo < hi.
+Limits resolve_pressure_limits(const ModelParams& model, const Limits& given);
+
 class InverseFeedforward {
  public:
+  // params.pressure_limits resolved on the model (resolve_pressure_limits; throws hysteron::Error).
   InverseFeedforward(const ModelParams& model, const FeedforwardParams& params);
   // Pressure [MPa] that makes the model reach desired_m [m] (within limits).
   double step(double desired_m) noexcept;
@@ -35,7 +47,9 @@ class InverseFeedforward {
   bool saturated() const noexcept { return inverse_.saturated(); }
   // The inverse's faults (non-finite desired outputs ignored) since construction or the last reset().
   std::size_t faults() const noexcept { return inverse_.faults(); }
+  // The parameters with the resolved pressure limits (never infinite).
   const FeedforwardParams& params() const noexcept { return p_; }
+  const Limits& pressure_limits() const noexcept { return p_.pressure_limits; }
 
  private:
   FeedforwardParams p_;
@@ -49,7 +63,8 @@ class InverseFeedforward {
 // its feedforward term, so the clamp and the integrator agree).
 class FeedforwardPidController {
  public:
-  // Throws hysteron::Error if pid.sample_time is not ff.sample_time (one sample time for the loop).
+  // Throws hysteron::Error if pid.sample_time is not ff.sample_time (one sample time for the loop)
+  // or the pressure limits cannot be resolved (resolve_pressure_limits).
   FeedforwardPidController(const ModelParams& model, const FeedforwardParams& ff, const PidParams& pid);
   // reference_m: y_d(t); preview_m: the reference fed to the inverse (y_d(t + lead)
   // for a known reference, else reference_m); measured_m: sensor. Returns MPa.
@@ -58,6 +73,8 @@ class FeedforwardPidController {
   // The PID as built (its output limits narrowed to the pressure limits).
   const Pid& pid() const noexcept { return pid_; }
   const InverseFeedforward& feedforward() const noexcept { return ff_; }
+  // The resolved pressure limits [MPa] the command is clamped to.
+  const Limits& pressure_limits() const noexcept { return lim_; }
   // Replaces the PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { pid_.set_guard(guard); }
 
@@ -85,11 +102,13 @@ inline double pressure_loop_command(double p_d, double pressure_mpa, double k_p)
 class OpenLoopController {
  public:
   // Throws hysteron::Error if the position PID is used (a gain non-zero) at another sample time than
-  // feedforward.sample_time.
+  // feedforward.sample_time, or the pressure limits cannot be resolved (resolve_pressure_limits).
   OpenLoopController(const ModelParams& model, const OpenLoopParams& params);
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;
+  // The parameters with the resolved pressure limits.
   const OpenLoopParams& params() const noexcept { return p_; }
+  const Limits& pressure_limits() const noexcept { return p_.feedforward.pressure_limits; }
   // The position PID as built (output limits narrowed to +-the pressure span) and whether
   // step() uses it (a gain is non-zero).
   const Pid& position() const noexcept { return position_; }
@@ -118,13 +137,16 @@ struct CascadeParams {
 class CascadePwmController {
  public:
   // Throws hysteron::Error if position.sample_time or pressure.sample_time is not
-  // feedforward.sample_time (one sample time for the loop).
+  // feedforward.sample_time (one sample time for the loop), or the pressure limits cannot be
+  // resolved (resolve_pressure_limits).
   CascadePwmController(const ModelParams& model, const CascadeParams& params);
   // Returns the PWM duty in [-1, 1]; desired_pressure() is the outer loop's output.
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;  // every part, its fault counts and the guard's cuts included
   double desired_pressure() const noexcept { return p_d_; }
+  // The parameters with the resolved pressure limits.
   const CascadeParams& params() const noexcept { return p_; }
+  const Limits& pressure_limits() const noexcept { return p_.feedforward.pressure_limits; }
   // The PIDs as built: the position PID's output limits narrowed to the pressure limits, the
   // pressure PID's to [-1, 1].
   const Pid& position() const noexcept { return position_; }

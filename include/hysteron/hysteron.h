@@ -200,8 +200,12 @@ typedef enum hysteron_anti_windup {
 /* Fill with hysteron_ff_pid_default_params(), then change what you need. */
 typedef struct hysteron_ff_pid_params {
   double sample_time;       /* T_s [s], > 0 (default 1e-3) */
-  double pressure_min;      /* command limits [MPa], finite, min < max (default 0) */
-  double pressure_max;      /*   (default 0.6); also the inverse's saturation limits */
+  /* pressure_min, pressure_max: the command limits [MPa], min < max, also the inverse's saturation
+   * limits. An infinite side, -HUGE_VAL / +HUGE_VAL (the default, as hysteron_inverse_create), is
+   * the model file's input_limits on that side: a fitted model's training input range. A model
+   * without finite ones there: *_create is HYSTERON_ERROR_INVALID_ARGUMENT (set your actuator's). */
+  double pressure_min;
+  double pressure_max;
   double model_scale;       /* model output units per metre (default 1000: model in mm) */
   double lag_time_constant; /* tau [s] >= 0 of the actuator lag to compensate (default 0) */
   double kp;                /* K_p [MPa/m] (default 0) */
@@ -218,7 +222,8 @@ typedef struct hysteron_ff_pid hysteron_ff_pid;
 
 HYSTERON_C_API hysteron_status hysteron_ff_pid_default_params(hysteron_ff_pid_params* params);
 /* A controller for the model `params` (copied: params may be freed afterwards). Invalid
- * controller parameters are HYSTERON_ERROR_INVALID_ARGUMENT (the field is named). */
+ * controller parameters are HYSTERON_ERROR_INVALID_ARGUMENT (the field is named), and so are
+ * unset pressure limits that the model's input_limits cannot give. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_create(const hysteron_params* params,
                                                      const hysteron_ff_pid_params* controller,
                                                      hysteron_ff_pid** out);

@@ -32,7 +32,9 @@ struct LoopDesign {
   // The inverse feedforward's pressure limits [MPa], model units per metre and the lag it
   // compensates [s] (FeedforwardParams without the sample time: that is sample_time below).
   struct Feedforward {
-    Limits pressure_limits{0.0, 0.6};  // [MPa]; the papers' default: the experiments set the rig's
+    // [MPa]; an infinite side (unset, the default; null in JSON): the model's input_limits
+    // (resolve_pressure_limits). The experiments always record the rig's.
+    Limits pressure_limits;
     double model_scale = 1000.0;
     double lag_time_constant = 0.0;
   };
@@ -96,12 +98,15 @@ struct LoopDesign {
 // best_model.json for the compensated and learning loops, model.json for the faithful one;
 // docs/deploy.md), by d.kind: FeedforwardPidController (the PID's limits the pressure limits),
 // OpenLoopController or CascadePwmController. Without d.pid the position loop is off (the open
-// loop as published; the other two get a zero PID). Throws Error on invalid numbers. The
+// loop as published; the other two get a zero PID). Unset pressure limits are the model's
+// (resolve_pressure_limits: an Error where it has none). Throws Error on invalid numbers. The
 // learning is not part of it (an IterativeLearning from d.learning->params adds its correction
 // to the reference and the preview).
 // A loop with d.adaptation (an adaptive run's) is refused: make_controller's inverse is fixed.
 using Controller = std::variant<FeedforwardPidController, OpenLoopController, CascadePwmController>;
 Controller make_controller(const LoopDesign& d, const ModelParams& model);
+// The pressure limits [MPa] the loop `c` clamps to, resolved on its model.
+const Limits& pressure_limits(const Controller& c) noexcept;
 // Why a loop with an adaptation cannot be rebuilt with a fixed inverse ("" without one): the
 // message make_controller and the C ABI's reader give.
 std::string adaptation_refusal(const LoopDesign& d);
@@ -119,7 +124,7 @@ LoopOutput step(Controller& c, double reference_m, double preview_m, double meas
 // One sample of a learning loop (the learning variant of `hysteron experiment`; docs/control.md,
 // section 3): `c` fed the reference plus the correction c_j(k) (ilc.correction(0)) and the preview
 // plus the correction d.feedforward_lead samples ahead; then `ilc` records the error
-// reference_m - measured_m, or 0 where the command is at one of d's pressure limits (there the
+// reference_m - measured_m, or 0 where the command is at one of c's pressure limits (there the
 // loop has no authority left, and the Q-filter would spread the error's integral). `ilc` is built
 // from d.learning->params. Real-time safe: no allocation, no exception.
 LoopOutput step(Controller& c, IterativeLearning& ilc, const LoopDesign& d, double reference_m, double preview_m,

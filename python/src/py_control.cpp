@@ -72,9 +72,9 @@ PidGuard guard_from(const py::object& o) {
   return g;
 }
 
-FeedforwardParams ff_params(std::pair<double, double> limits, double model_scale, double lag, double ts) {
+FeedforwardParams ff_params(const Limits& limits, double model_scale, double lag, double ts) {
   FeedforwardParams f;
-  f.pressure_limits = {limits.first, limits.second};
+  f.pressure_limits = limits;
   f.model_scale = model_scale;
   f.lag_time_constant = lag;
   f.sample_time = ts;
@@ -92,10 +92,25 @@ PidParams pid_arg(const py::object& pid, const char* what) {
       .params();
 }
 
-// pressure_limits=: (lo, hi) [MPa].
-std::pair<double, double> limits_arg(const py::object& limits, const char* where) {
-  return pair_arg(limits, fmt::format("{}: pressure_limits", where));
+// pressure_limits=: (lo, hi) [MPa]; None (the default): unset, both sides the model's (a TypeError
+// for anything else).
+Limits limits_arg(const py::object& limits, const char* where) {
+  if (limits.is_none()) return {};
+  const auto [lo, hi] = pair_arg(limits, fmt::format("{}: pressure_limits", where));
+  return {lo, hi};
 }
+
+// The given limits resolved on the model (resolve_pressure_limits): an infinite side is the
+// model's input_limits; hysteron.Error naming pressure_limits where it has none.
+Limits resolved_limits(const ModelParams& model, const Limits& given, const char* where) {
+  try {
+    return resolve_pressure_limits(model, given);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", where, e.what()));
+  }
+}
+
+std::pair<double, double> limits_pair(const Limits& l) { return {l.lo, l.hi}; }
 
 // A count of IterativeLearning(...): an int >= min.
 std::size_t count_arg(const IntArg& v, const char* name, std::uint64_t min = 0) {
@@ -182,14 +197,21 @@ state as numbers).)doc"));
   def_copy(py::class_<InverseFeedforward>(m, "InverseFeedforward", R"doc(
 Inverse-model feedforward: desired contraction [m] -> pressure command [MPa],
 clamped to pressure_limits; model output units are model_scale per metre (1000
-for a model fitted in mm); optional compensation of a first-order lag.)doc"))
+for a model fitted in mm); optional compensation of a first-order lag.
+pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the model's
+input_limits (a fitted model's training input range); a model without them (a hand-written
+model file) raises hysteron.Error: give your actuator's.)doc"))
       .def(py::init([](const py::object& model, const py::object& limits, double scale, double lag, double ts) {
-             return InverseFeedforward(model_spec(model, "InverseFeedforward: model"),
-                                       ff_params(limits_arg(limits, "InverseFeedforward"), scale, lag, ts));
+             const ModelParams mp = model_spec(model, "InverseFeedforward: model");
+             const Limits given = limits_arg(limits, "InverseFeedforward");
+             return InverseFeedforward(mp, ff_params(resolved_limits(mp, given, "InverseFeedforward"), scale, lag, ts));
            }),
-           py::arg("model"), py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
+           py::arg("model"), py::arg("pressure_limits") = py::none(), py::arg("model_scale") = 1000.0,
            py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &InverseFeedforward::step, py::arg("desired_m"), "Pressure [MPa] for the desired contraction [m].")
+      .def_property_readonly(
+          "pressure_limits", [](const InverseFeedforward& c) { return limits_pair(c.pressure_limits()); },
+          "The (lo, hi) [MPa] the commands are clamped to: the given ones, or the model's.")
       .def("reset", &InverseFeedforward::reset, "Back to the virgin state of the inverse (and no lag history).")
       .def_property_readonly("saturated", &InverseFeedforward::saturated,
                              "True if the last command was clamped to pressure_limits.")
@@ -204,19 +226,27 @@ for a model fitted in mm); optional compensation of a first-order lag.)doc"))
   def_copy(py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
 GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)) [MPa], the PID's
 anti-windup aware of the total command. pid: a hysteron.Pid (its parameters
-are used; default: Pid.gpi_paper()).)doc"))
+are used; default: Pid.gpi_paper(), output limits +-pressure_limits[1]).
+pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the model's
+input_limits (a fitted model's training input range); a model without them (a hand-written
+model file) raises hysteron.Error: give your actuator's.)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, const py::object& limits_obj, double scale,
                        double lag, double ts) {
-             const auto limits = limits_arg(limits_obj, "FeedforwardPidController");
-             const PidParams pp = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                                : pid_arg(pid, "FeedforwardPidController: pid");
-             return FeedforwardPidController(model_spec(model, "FeedforwardPidController: model"),
-                                             ff_params(limits, scale, lag, ts), pp);
+             const ModelParams mp = model_spec(model, "FeedforwardPidController: model");
+             const Limits given = limits_arg(limits_obj, "FeedforwardPidController");
+             std::optional<PidParams> pp;
+             if (!pid.is_none()) pp = pid_arg(pid, "FeedforwardPidController: pid");
+             const Limits limits = resolved_limits(mp, given, "FeedforwardPidController");
+             if (!pp) pp = gpi_paper_pid(ts, -limits.hi, limits.hi);
+             return FeedforwardPidController(mp, ff_params(limits, scale, lag, ts), *pp);
            }),
-           py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
+           py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_limits") = py::none(),
            py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &FeedforwardPidController::step, py::arg("reference_m"), py::arg("preview_m"),
            py::arg("measured_m"), "One control sample; returns the pressure command [MPa].")
+      .def_property_readonly(
+          "pressure_limits", [](const FeedforwardPidController& c) { return limits_pair(c.pressure_limits()); },
+          "The (lo, hi) [MPa] the commands are clamped to: the given ones, or the model's.")
       .def("reset", &FeedforwardPidController::reset, "Back to the virgin state (inverse, lag history and PID).")
       .def("__repr__", [](const FeedforwardPidController&) {
         return std::string("FeedforwardPidController(inverse feedforward + PID, GPI paper Fig. 10)");
@@ -227,22 +257,30 @@ Asymmetric-MPI paper, Fig. 6: open-loop inverse compensation with a proportional
 pressure loop, p_cmd = clamp(p_d + pressure_gain (p_d - p_measured)) [MPa], p_d =
 FF(preview) (+ PID(y_d - y), clamped, if pid is given: hysteron's compensated
 variant; its output limited to +-(p_max - p_min)). mpi-openloop's loops
-(result.json "loop": "open_loop"; docs/deploy.md).)doc"))
+(result.json "loop": "open_loop"; docs/deploy.md).
+pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the model's
+input_limits (a fitted model's training input range); a model without them (a hand-written
+model file) raises hysteron.Error: give your actuator's.)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, double pressure_gain,
                        const py::object& limits, double scale, double lag, double ts) {
+             const ModelParams mp = model_spec(model, "OpenLoopController: model");
+             const Limits given = limits_arg(limits, "OpenLoopController");
              OpenLoopParams p;
-             p.feedforward = ff_params(limits_arg(limits, "OpenLoopController"), scale, lag, ts);
              p.position.sample_time = ts;  // (unused without gains)
              if (!pid.is_none()) p.position = pid_arg(pid, "OpenLoopController: pid");
+             p.feedforward = ff_params(resolved_limits(mp, given, "OpenLoopController"), scale, lag, ts);
              p.pressure_gain = pressure_gain;
-             return OpenLoopController(model_spec(model, "OpenLoopController: model"), p);
+             return OpenLoopController(mp, p);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_gain") = 0.5,
-           py::arg("pressure_limits") = std::make_pair(0.0, 0.6), py::arg("model_scale") = 1000.0,
+           py::arg("pressure_limits") = py::none(), py::arg("model_scale") = 1000.0,
            py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &OpenLoopController::step, py::arg("reference_m"), py::arg("preview_m"), py::arg("measured_m"),
            py::arg("pressure_mpa"),
            "One control sample (pressure_mpa: the measured gauge pressure); returns the regulator's command [MPa].")
+      .def_property_readonly(
+          "pressure_limits", [](const OpenLoopController& c) { return limits_pair(c.pressure_limits()); },
+          "The (lo, hi) [MPa] the commands are clamped to: the given ones, or the model's.")
       .def("reset", &OpenLoopController::reset, "Back to the virgin state (inverse, lag history and PID).")
       .def("__repr__", [](const OpenLoopController&) {
         return std::string("OpenLoopController(inverse feedforward + pressure loop, asymmetric-MPI paper Fig. 6)");
@@ -254,14 +292,16 @@ clamp(FF(preview) + pid(y_d - y)) [MPa] (default pid: Pid.gpi_paper()); inner lo
 u = pressure_pid(p_d - p_measured) limited to [-1, 1] (default: the paper's P loop,
 kp = 20 per MPa); then the PWM modulator (pwm: a dict of gain, deadband, min_duty,
 max_duty, resolution; missing keys take the defaults 1, 0, 0, 1, 0). step() returns the
-duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm").)doc"))
+duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm").
+pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the model's
+input_limits (a fitted model's training input range); a model without them (a hand-written
+model file) raises hysteron.Error: give your actuator's.)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, const py::object& pressure_pid,
                        const py::object& pwm, const py::object& limits_obj, double scale, double lag, double ts) {
-             const auto limits = limits_arg(limits_obj, "CascadePwmController");
+             const ModelParams mp = model_spec(model, "CascadePwmController: model");
+             const Limits given = limits_arg(limits_obj, "CascadePwmController");
              CascadeParams p;
-             p.feedforward = ff_params(limits, scale, lag, ts);
-             p.position = pid.is_none() ? gpi_paper_pid(ts, -limits.second, limits.second)
-                                        : pid_arg(pid, "CascadePwmController: pid");
+             if (!pid.is_none()) p.position = pid_arg(pid, "CascadePwmController: pid");
              if (pressure_pid.is_none()) {
                p.pressure.kp = 20.0;
                p.pressure.sample_time = ts;
@@ -285,15 +325,21 @@ duty in [-1, 1] (> 0 inlet, < 0 exhaust). mpi-pwm's loops ("loop": "cascade_pwm"
                                                      key));
                }
              }
-             return CascadePwmController(model_spec(model, "CascadePwmController: model"), p);
+             const Limits limits = resolved_limits(mp, given, "CascadePwmController");
+             p.feedforward = ff_params(limits, scale, lag, ts);
+             if (pid.is_none()) p.position = gpi_paper_pid(ts, -limits.hi, limits.hi);
+             return CascadePwmController(mp, p);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_pid") = py::none(),
-           py::arg("pwm") = py::none(), py::arg("pressure_limits") = std::make_pair(0.0, 0.6),
+           py::arg("pwm") = py::none(), py::arg("pressure_limits") = py::none(),
            py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &CascadePwmController::step, py::arg("reference_m"), py::arg("preview_m"), py::arg("measured_m"),
            py::arg("pressure_mpa"), "One control sample; returns the PWM duty in [-1, 1].")
       .def_property_readonly("desired_pressure", &CascadePwmController::desired_pressure,
                              "The outer loop's p_d [MPa] of the last step.")
+      .def_property_readonly(
+          "pressure_limits", [](const CascadePwmController& c) { return limits_pair(c.pressure_limits()); },
+          "The (lo, hi) [MPa] the commands are clamped to: the given ones, or the model's.")
       .def("reset", &CascadePwmController::reset, "Back to the virgin state (inverse, both PIDs, the duty).")
       .def("__repr__", [](const CascadePwmController&) {
         return std::string("CascadePwmController(feedforward + PID position loop, PI pressure loop, PWM valves)");

@@ -65,7 +65,8 @@ def test_repr_names_the_parameters():
     ff = hysteron.InverseFeedforward(gpi, pressure_limits=(0.0, 0.5), model_scale=1000.0)
     assert repr(ff) == ("InverseFeedforward(pressure_limits=(0, 0.5), model_scale=1000, lag_time_constant=0, "
                         "sample_time=0.001)")
-    assert repr(hysteron.FeedforwardPidController(gpi)).startswith("FeedforwardPidController(")
+    ctl = hysteron.FeedforwardPidController(gpi, pressure_limits=(0.0, 0.5))  # gpi has no input_limits
+    assert repr(ctl).startswith("FeedforwardPidController(")
     pi = {"model": "pi", "q": 0.4, "r": [0.05, 0.1, 0.25], "p": [0.3, 0.2, 0.15]}  # q and 3 weights
     assert repr(hysteron.Rls(pi, lam=0.99)) == "Rls(model='pi', weights=4, lam=0.99)"
     rig = hysteron.PamRig(seed=7)

@@ -569,6 +569,25 @@ void check_controller(const hysteron::FeedforwardParams& ff, const hysteron::Pid
     fail(HYSTERON_ERROR_INVALID_ARGUMENT, "pressure_gain = %g: expected a finite value >= 0", pressure_gain);
 }
 
+// ff's pressure limits resolved on the model: an unset (infinite) side is its input_limits there
+// (hysteron::resolve_pressure_limits). A side the model cannot give, or a resolved lo >= hi, is the
+// caller's argument: INVALID_ARGUMENT naming `prefix`pressure_min / pressure_max.
+void resolve_limits(const hysteron_params& model, hysteron::FeedforwardParams& ff, const char* prefix) {
+  const hysteron::Limits given = ff.pressure_limits;
+  const hysteron::Limits& ml = hysteron::input_limits(model.params);
+  if ((std::isinf(given.lo) && !std::isfinite(ml.lo)) || (std::isinf(given.hi) && !std::isfinite(ml.hi)))
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
+         "%spressure_min = %g, %spressure_max = %g: the pressure limits must be given (your actuator's, in MPa): the "
+         "model has no finite input_limits [%g, %g] to take the unset (infinite) ones from (a fitted model has its "
+         "training input range)",
+         prefix, given.lo, prefix, given.hi, ml.lo, ml.hi);
+  try {
+    ff.pressure_limits = hysteron::resolve_pressure_limits(model.params, given);
+  } catch (const hysteron::Error& e) {
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%spressure_min, %spressure_max: %s", prefix, prefix, e.what());
+  }
+}
+
 // "arguments ... not all finite" for the controllers' step functions (no allocation).
 bool finite_step_args(const char* fn, double reference_m, double preview_m, double measured_m, const double* pressure,
                       const char* held) noexcept {
@@ -616,6 +635,12 @@ void check_pid_limits(const hysteron::PidParams& p, double applied_lo, double ap
   if (p.sample_time != sample_time)
     fail(HYSTERON_ERROR_MODEL, "%s.sample_time_s = %g differs from the loop's sample_time_s = %g", where,
          p.sample_time, sample_time);
+  if ((std::isinf(applied_lo) && p.out_min > applied_lo) || (std::isinf(applied_hi) && p.out_max < applied_hi))
+    fail(HYSTERON_ERROR_MODEL,
+         "%s: output limits [%g, %g]: the loop leaves its pressure limits to the model's input_limits (null in "
+         "feedforward), which the C controller then applies to the PID; whether they are as narrow is not known "
+         "here: name the pressure limits, or leave the PID's unbounded (not representable)",
+         where, p.out_min, p.out_max);
   if (!(p.out_min <= applied_lo) || !(p.out_max >= applied_hi))
     fail(HYSTERON_ERROR_MODEL,
          "%s: output limits [%g, %g] are narrower than the [%g, %g] the C controller applies (not representable)",
@@ -812,12 +837,13 @@ hysteron_status hysteron_ff_pid_create(const hysteron_params* params, const hyst
     HYSTERON_REQUIRE(params);
     HYSTERON_REQUIRE(controller);
     HYSTERON_REQUIRE(out);
-    const hysteron::FeedforwardParams ff = to_feedforward(*controller);
+    hysteron::FeedforwardParams ff = to_feedforward(*controller);
     hysteron::PidParams pid = to_pid(*controller);
-    pid.out_min = ff.pressure_limits.lo;  // the controller clamps to the pressure limits anyway
-    pid.out_max = ff.pressure_limits.hi;
     // Controller parameters first (their errors are the caller's arguments), then the model.
     check_controller(ff, pid);
+    resolve_limits(*params, ff, "");
+    pid.out_min = ff.pressure_limits.lo;  // the controller clamps to the pressure limits anyway
+    pid.out_max = ff.pressure_limits.hi;
     *out = new hysteron_ff_pid{hysteron::FeedforwardPidController(params->params, ff, pid), 0.0};
   });
 }
@@ -871,11 +897,12 @@ hysteron_status hysteron_open_loop_create(const hysteron_params* params, const h
     hysteron::OpenLoopParams p;
     p.feedforward = to_feedforward(controller->loop);
     p.position = to_pid(controller->loop);
+    p.pressure_gain = controller->pressure_gain;
+    check_controller(p.feedforward, p.position, nullptr, nullptr, p.pressure_gain);
+    resolve_limits(*params, p.feedforward, "loop.");
     const double span = p.feedforward.pressure_limits.hi - p.feedforward.pressure_limits.lo;
     p.position.out_min = -span;  // the controller's limits of the correction
     p.position.out_max = span;
-    p.pressure_gain = controller->pressure_gain;
-    check_controller(p.feedforward, p.position, nullptr, nullptr, p.pressure_gain);
     *out = new hysteron_open_loop{hysteron::OpenLoopController(params->params, p), 0.0};
   });
 }
@@ -943,12 +970,13 @@ hysteron_status hysteron_cascade_create(const hysteron_params* params, const hys
     hysteron::CascadeParams p;
     p.feedforward = to_feedforward(controller->outer);
     p.position = to_pid(controller->outer);
-    p.position.out_min = p.feedforward.pressure_limits.lo;  // the controller clamps p_d to them
-    p.position.out_max = p.feedforward.pressure_limits.hi;
     p.pressure = to_pid(controller->pressure, controller->outer.sample_time, "pressure");
     const hysteron_pwm_params& w = controller->pwm;
     p.pwm = {w.gain, w.deadband, w.min_duty, w.max_duty, w.resolution};
     check_controller(p.feedforward, p.position, &p.pressure, &p.pwm);
+    resolve_limits(*params, p.feedforward, "outer.");
+    p.position.out_min = p.feedforward.pressure_limits.lo;  // the controller clamps p_d to them
+    p.position.out_max = p.feedforward.pressure_limits.hi;
     *out = new hysteron_cascade{hysteron::CascadePwmController(params->params, p), 0.0, 0.0};
   });
 }

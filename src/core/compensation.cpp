@@ -4,16 +4,27 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hysteron/error.hpp"
 
 namespace hysteron {
 
+namespace {
+// The given pressure limits: numbers, an infinite side only the unset one (-inf below, +inf above),
+// lo < hi where both are finite.
+void check_given_limits(const Limits& l) {
+  const double inf = std::numeric_limits<double>::infinity();
+  if (std::isnan(l.lo) || std::isnan(l.hi) || l.lo == inf || l.hi == -inf ||
+      (std::isfinite(l.lo) && std::isfinite(l.hi) && !(l.lo < l.hi)))
+    throw Error(detail::format("feedforward: pressure_limits must be numbers with lo < hi (an infinite side, -inf "
+                               "below or +inf above: the model's input_limits), got [{}, {}]",
+                               l.lo, l.hi));
+}
+}  // namespace
+
 void FeedforwardParams::validate() const {
-  if (!(pressure_limits.lo < pressure_limits.hi) || !std::isfinite(pressure_limits.lo) ||
-      !std::isfinite(pressure_limits.hi))
-    throw Error(detail::format("feedforward: pressure_limits must be finite with lo < hi, got [{}, {}]",
-                            pressure_limits.lo, pressure_limits.hi));
+  check_given_limits(pressure_limits);
   if (!(model_scale > 0) || !std::isfinite(model_scale))
     throw Error(detail::format("feedforward: model_scale must be > 0, got {}", model_scale));
   if (!(lag_time_constant >= 0) || !std::isfinite(lag_time_constant))
@@ -22,9 +33,30 @@ void FeedforwardParams::validate() const {
     throw Error(detail::format("feedforward: sample_time must be > 0, got {}", sample_time));
 }
 
+Limits resolve_pressure_limits(const ModelParams& model, const Limits& given) {
+  check_given_limits(given);
+  const Limits& ml = input_limits(model);
+  const Limits r{std::isinf(given.lo) ? ml.lo : given.lo, std::isinf(given.hi) ? ml.hi : given.hi};
+  if (!std::isfinite(r.lo) || !std::isfinite(r.hi))
+    throw Error(detail::format("feedforward: pressure_limits must be given (your actuator's [lo, hi] in MPa): the "
+                               "model ({}) has no finite input_limits to take them from (its input_limits [{}, {}]; "
+                               "a fitted model has its training input range)",
+                               model_name(model), ml.lo, ml.hi));
+  if (!(r.lo < r.hi))
+    throw Error(detail::format("feedforward: pressure_limits [{}, {}] (given [{}, {}], an infinite side the model's "
+                               "input_limits [{}, {}]) must satisfy lo < hi",
+                               r.lo, r.hi, given.lo, given.hi, ml.lo, ml.hi));
+  return r;
+}
+
 namespace {
-InverseOptions inverse_options(const FeedforwardParams& p) {
+// p validated, its pressure limits resolved on the model.
+FeedforwardParams resolved(const ModelParams& model, FeedforwardParams p) {
   p.validate();
+  p.pressure_limits = resolve_pressure_limits(model, p.pressure_limits);
+  return p;
+}
+InverseOptions inverse_options(const FeedforwardParams& p) {
   InverseOptions o;
   o.input_limits = p.pressure_limits;
   return o;
@@ -40,7 +72,7 @@ void check_sample_time(const PidParams& pid, const FeedforwardParams& ff, const 
 }  // namespace
 
 InverseFeedforward::InverseFeedforward(const ModelParams& model, const FeedforwardParams& params)
-    : p_(params), inverse_(model, inverse_options(params)) {}
+    : p_(resolved(model, params)), inverse_(model, inverse_options(p_)) {}
 
 void InverseFeedforward::reset() noexcept {
   inverse_.reset();
@@ -61,11 +93,11 @@ FeedforwardPidController::FeedforwardPidController(const ModelParams& model, con
                                                    const PidParams& pid)
     : ff_(model, ff), pid_([&] {
         PidParams q = pid;
-        q.out_min = std::max(q.out_min, ff.pressure_limits.lo);
-        q.out_max = std::min(q.out_max, ff.pressure_limits.hi);
+        q.out_min = std::max(q.out_min, ff_.pressure_limits().lo);
+        q.out_max = std::min(q.out_max, ff_.pressure_limits().hi);
         return q;
       }()),
-      lim_(ff.pressure_limits) {
+      lim_(ff_.pressure_limits()) {
   check_sample_time(pid, ff, "feedforward-PID controller", "pid");
 }
 
@@ -83,12 +115,13 @@ double FeedforwardPidController::step(double reference_m, double preview_m, doub
 OpenLoopController::OpenLoopController(const ModelParams& model, const OpenLoopParams& params)
     : p_(params), ff_(model, params.feedforward), position_([&] {
         PidParams q = params.position;
-        const double span = params.feedforward.pressure_limits.hi - params.feedforward.pressure_limits.lo;
+        const double span = ff_.pressure_limits().hi - ff_.pressure_limits().lo;
         q.out_min = std::max(q.out_min, -span);
         q.out_max = std::min(q.out_max, span);
         return q;
       }()),
       use_position_(params.position.kp != 0.0 || params.position.ki != 0.0 || params.position.kd != 0.0) {
+  p_.feedforward = ff_.params();  // the resolved pressure limits
   if (!(params.pressure_gain >= 0) || !std::isfinite(params.pressure_gain))
     throw Error(detail::format("open-loop controller: pressure_gain must be >= 0, got {}", params.pressure_gain));
   if (use_position_) check_sample_time(params.position, params.feedforward, "open-loop controller", "position");
@@ -110,8 +143,8 @@ double OpenLoopController::step(double reference_m, double preview_m, double mea
 CascadePwmController::CascadePwmController(const ModelParams& model, const CascadeParams& params)
     : p_(params), ff_(model, params.feedforward), position_([&] {
         PidParams q = params.position;
-        q.out_min = std::max(q.out_min, params.feedforward.pressure_limits.lo);
-        q.out_max = std::min(q.out_max, params.feedforward.pressure_limits.hi);
+        q.out_min = std::max(q.out_min, ff_.pressure_limits().lo);
+        q.out_max = std::min(q.out_max, ff_.pressure_limits().hi);
         return q;
       }()),
       pressure_([&] {
@@ -121,6 +154,7 @@ CascadePwmController::CascadePwmController(const ModelParams& model, const Casca
         return q;
       }()),
       pwm_(params.pwm) {
+  p_.feedforward = ff_.params();  // the resolved pressure limits
   check_sample_time(params.position, params.feedforward, "cascade PWM controller", "position");
   check_sample_time(params.pressure, params.feedforward, "cascade PWM controller", "pressure");
 }

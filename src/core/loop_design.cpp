@@ -50,6 +50,10 @@ Controller make_controller(const LoopDesign& d, const ModelParams& model) {
   throw Error("controller: unknown loop kind");
 }
 
+const Limits& pressure_limits(const Controller& c) noexcept {
+  return std::visit([](const auto& loop) -> const Limits& { return loop.pressure_limits(); }, c);
+}
+
 LoopOutput step(Controller& c, double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept {
   return std::visit(
       [&](auto& loop) -> LoopOutput {
@@ -70,7 +74,7 @@ LoopOutput step(Controller& c, IterativeLearning& ilc, const LoopDesign& d, doub
                 double measured_m, double pressure_mpa) noexcept {
   const LoopOutput o = step(c, reference_m + ilc.correction(0), preview_m + ilc.correction(d.feedforward_lead),
                             measured_m, pressure_mpa);
-  const Limits& lim = d.feedforward.pressure_limits;
+  const Limits& lim = pressure_limits(c);  // d's, or where unset the model's
   const bool saturated = o.command_mpa <= lim.lo || o.command_mpa >= lim.hi;
   ilc.step(saturated ? 0.0 : reference_m - measured_m);
   return o;

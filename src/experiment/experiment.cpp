@@ -49,6 +49,9 @@ std::string shaper_timing(const ZvShaper& z, double tc) {
 LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvShaper* zv) {
   LoopDesign d;
   d.kind = loop.kind;
+  // a run's loop names its pressure limits (the rig's): result.json must not leave them to the model
+  if (!loop.feedforward.pressure_limits.bounded())
+    throw Error(fmt::format("internal: the loop \"{}\" has no pressure limits of its own", loop.description));
   d.feedforward = {loop.feedforward.pressure_limits, loop.feedforward.model_scale, loop.feedforward.lag_time_constant};
   d.pwm = loop.pwm;
   const PidParams& pid = loop.position;

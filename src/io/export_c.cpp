@@ -1072,19 +1072,19 @@ GeneratedC generate_c(const ModelParams& params, const ExportOptions& options) {
   Limits inverse_limits = options.inverse_limits;
   std::optional<detail::LoopC> loop;
   if (options.loop) {
-    // the loop's inverse saturates at its pressure limits (InverseFeedforward)
-    const Limits& pl = options.loop->feedforward.pressure_limits;
-    const bool unset = std::isinf(inverse_limits.lo) && std::isinf(inverse_limits.hi);
-    if (!unset && !(inverse_limits == pl))
-      throw Error(fmt::format("the limits [{}, {}] differ from the loop's pressure limits [{}, {}], at which "
-                              "its inverse saturates: leave the limits out",
-                              inverse_limits.lo, inverse_limits.hi, pl.lo, pl.hi));
     try {
       loop = detail::loop_c(*options.loop, params);
     } catch (const Error& e) {
       throw Error(fmt::format("the loop{}: {}",
                               options.loop_source.empty() ? std::string() : " of " + options.loop_source, e.what()));
     }
+    // the loop's inverse saturates at its pressure limits (InverseFeedforward), resolved on the model
+    const Limits& pl = loop->pressure_limits;
+    const bool unset = std::isinf(inverse_limits.lo) && std::isinf(inverse_limits.hi);
+    if (!unset && !(inverse_limits == pl))
+      throw Error(fmt::format("the limits [{}, {}] differ from the loop's pressure limits [{}, {}], at which "
+                              "its inverse saturates: leave the limits out",
+                              inverse_limits.lo, inverse_limits.hi, pl.lo, pl.hi));
     inverse_limits = pl;
   }
   const Baked b = bake(params, inverse_limits);

@@ -201,8 +201,10 @@ LoopC loop_c(const LoopDesign& d, const ModelParams& model) {
     advance = count_literal(d.shaper->advance, "shaper.advance");
     delay = count_literal(d.shaper->delay, "shaper.delay");
   }
-  const FeedforwardParams ff = d.feedforward_params();
+  FeedforwardParams ff = d.feedforward_params();
+  ff.pressure_limits = pressure_limits(ctl);  // resolved: unset sides the model's
   LoopC out;
+  out.pressure_limits = ff.pressure_limits;
 
   // ---- the comment: the loop's structure and its numbers
   std::string& cm = out.comment;

@@ -15,6 +15,7 @@ struct LoopC {
   std::string comment;       // lines " * ..." for the file's leading comment
   std::string declarations;  // types and prototypes (the header's part)
   std::string definitions;   // constants and functions (the .c file's part)
+  Limits pressure_limits;    // [MPa] baked in: d's, each unset side the model's (resolve_pressure_limits)
 };
 
 // Checks that the loop can be built on `model` (make_controller's checks) and that the

@@ -96,8 +96,9 @@ LoopDesign::Kind loop_kind_from(const json& j, std::string_view where) {
 json to_json(const LoopDesign& d) {
   json j = json::object();
   j["loop"] = std::string(loop_kind_name(d.kind));
-  j["feedforward"] = {{"pressure_min_mpa", d.feedforward.pressure_limits.lo},
-                      {"pressure_max_mpa", d.feedforward.pressure_limits.hi},
+  // null: unset, the model's input_limits (the experiments always write the rig's)
+  j["feedforward"] = {{"pressure_min_mpa", number(d.feedforward.pressure_limits.lo)},
+                      {"pressure_max_mpa", number(d.feedforward.pressure_limits.hi)},
                       {"model_scale_per_m", d.feedforward.model_scale},
                       {"lag_time_constant_s", d.feedforward.lag_time_constant}};
   if (d.pwm)
@@ -166,7 +167,10 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
     const std::string w = key_where(where, "feedforward");
     const json& f = need(j, "feedforward", where);
     check_keys(f, {"pressure_min_mpa", "pressure_max_mpa", "model_scale_per_m", "lag_time_constant_s"}, w);
-    d.feedforward.pressure_limits = {get_double(f, "pressure_min_mpa", w), get_double(f, "pressure_max_mpa", w)};
+    // null: unset, the model's input_limits (resolve_pressure_limits)
+    const double inf = std::numeric_limits<double>::infinity();
+    d.feedforward.pressure_limits = {get_double(f, "pressure_min_mpa", w, -inf),
+                                     get_double(f, "pressure_max_mpa", w, inf)};
     d.feedforward.model_scale = get_double(f, "model_scale_per_m", w);
     d.feedforward.lag_time_constant = get_double(f, "lag_time_constant_s", w);
     if (d.kind == LoopDesign::Kind::cascade_pwm) {
@@ -183,7 +187,9 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
     }
   } else {
     // Written before "loop" (2026-11-26): every experiment used the default feedforward and
-    // PWM, and the structure follows from the pressure loops.
+    // PWM, and the structure follows from the pressure loops. The feedforward's pressure
+    // limits were then always 0..0.6 MPa (its default at the time): recorded as such.
+    d.feedforward.pressure_limits = {0.0, 0.6};
     d.kind = d.pressure_pid ? LoopDesign::Kind::cascade_pwm
              : d.pressure_gain > 0.0 ? LoopDesign::Kind::open_loop
                                      : LoopDesign::Kind::feedforward_pid;

@@ -38,7 +38,8 @@ struct ExportOptions {
   // A compensating loop around the inverse (hysteron export --loop; docs/export.md "The loop"):
   // the file then also has $P_loop, $P_loop_reset, $P_loop_step and $P_loop_preview, which
   // step exactly as make_controller(*loop, params) with step(). The inverse then saturates at
-  // the loop's pressure limits (inverse_limits must be unset or equal to them). A loop with
+  // the loop's pressure limits, an unset side the model's input_limits (resolve_pressure_limits),
+  // and inverse_limits must be unset or equal to them. A loop with
   // learning (a learning run's) also gets $P_learning and $P_loop_learning_step, which step
   // exactly as an IterativeLearning of its parameters with step(Controller&, IterativeLearning&, ...).
   std::optional<LoopDesign> loop;

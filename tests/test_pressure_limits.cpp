@@ -1,0 +1,436 @@
+// The compensating controllers' pressure limits where the caller names none: the model's
+// input_limits (a fitted model's training input range), never the nominal rig's 0..0.6 MPa; a
+// model without finite ones is refused naming the parameter; given limits win. For every
+// controller kind, make_controller and the loop's JSON, the generated C and the C ABI.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "export_loop_util.hpp"
+#include "hysteron/compensation.hpp"
+#include "hysteron/error.hpp"
+#include "hysteron/hysteron.h"
+#include "hysteron/identify.hpp"
+#include "hysteron/io/export_c.hpp"
+#include "hysteron/io/loop_design.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/learning.hpp"
+#include "hysteron/loop_design.hpp"
+#include "temp_dir.hpp"
+
+using namespace hysteron;
+
+namespace {
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+constexpr double tc = 1e-3;  // [s]
+
+// A GPI in MPa -> mm of the DMSP-20-500 rig's magnitude (about 100 mm at 0.6 MPa), with the
+// given input_limits [MPa].
+GpiParams gpi_on(Limits limits) {
+  GpiParams g;
+  g.envelope = Envelope::tanh(60.0, 3.0, -0.9, 45.0);
+  g.q = 0.8;
+  g.n = 10;
+  g.alpha = 1.0;
+  g.rho = 0.05;
+  g.tau = 0.1;
+  g.input_limits = limits;
+  return g;
+}
+
+// Table 3's gains with unbounded output limits: only the pressure limits bound the command.
+PidParams pid_table3() {
+  PidParams p;
+  p.kp = 5.0;
+  p.ki = 1.0;
+  p.sample_time = tc;
+  return p;
+}
+
+struct Range {
+  double lo = inf, hi = -inf;
+  void add(double v) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+};
+
+// The reference of the drives below: 2 s at 1 m (ten times the muscle's stroke, the measured
+// contraction at 0) then 2 s at -1 m (measured 0.1 m): every loop is pushed into both limits.
+double drive_reference(int k) { return k < 2000 ? 1.0 : -1.0; }
+double drive_measured(int k) { return k < 2000 ? 0.0 : 0.1; }
+
+// The pressure commands [MPa] of each controller kind (the cascade's: its desired pressure) on
+// `model` with `ff` over the drive.
+std::vector<Range> command_ranges(const ModelParams& model, const FeedforwardParams& ff) {
+  InverseFeedforward inv(model, ff);
+  FeedforwardPidController fp(model, ff, pid_table3());
+  OpenLoopParams pure;  // as published: no position PID
+  pure.feedforward = ff;
+  OpenLoopController ol_pure(model, pure);
+  OpenLoopParams olp;
+  olp.feedforward = ff;
+  olp.position = pid_table3();
+  OpenLoopController ol(model, olp);
+  CascadeParams cp;
+  cp.feedforward = ff;
+  cp.position = pid_table3();
+  cp.pressure.kp = 20.0;
+  cp.pressure.sample_time = tc;
+  CascadePwmController cc(model, cp);
+  std::vector<Range> r(5);
+  double p_pure = 0.0, p_ol = 0.0, p_cc = 0.0;  // measured: each loop's last command (one sample late)
+  for (int k = 0; k < 4000; ++k) {
+    const double ref = drive_reference(k), y = drive_measured(k);
+    r[0].add(inv.step(ref));
+    r[1].add(fp.step(ref, ref, y));
+    r[2].add(p_pure = ol_pure.step(ref, ref, y, p_pure));
+    r[3].add(p_ol = ol.step(ref, ref, y, p_ol));
+    cc.step(ref, ref, y, p_cc);
+    r[4].add(p_cc = cc.desired_pressure());
+  }
+  // the resolved limits each controller reports are the ones it clamps to
+  for (const Limits& l : {inv.pressure_limits(), fp.pressure_limits(), ol_pure.pressure_limits(), ol.pressure_limits(),
+                          cc.pressure_limits(), ol.params().feedforward.pressure_limits,
+                          cc.params().feedforward.pressure_limits, inv.params().pressure_limits}) {
+    EXPECT_EQ(l.lo, r[0].lo);
+    EXPECT_EQ(l.hi, r[0].hi);
+  }
+  return r;
+}
+
+const char* const kinds[] = {"InverseFeedforward", "FeedforwardPidController", "OpenLoopController (no PID)",
+                             "OpenLoopController", "CascadePwmController (p_d)"};
+
+// Every kind commanded exactly [lo, hi] over the drive.
+void expect_ranges(const std::vector<Range>& r, double lo, double hi, const std::string& what) {
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    EXPECT_EQ(r[i].lo, lo) << kinds[i] << ", " << what;
+    EXPECT_EQ(r[i].hi, hi) << kinds[i] << ", " << what;
+  }
+}
+
+std::string error_of(auto&& make) {
+  try {
+    make();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// A muscle rated 0.4 MPa, its model identified on 0..0.4 MPa: no command above 0.4 MPa (the
+// nominal rig's 0.6 used to be the default); one rated 0.8 MPa: commands up to 0.8, not capped
+// at 0.6.
+TEST(PressureLimits, DefaultIsTheModelsInputLimits) {
+  const FeedforwardParams ff;  // no limits named
+  EXPECT_FALSE(ff.pressure_limits.bounded());
+  expect_ranges(command_ranges(gpi_on({0.0, 0.4}), ff), 0.0, 0.4, "model on 0..0.4 MPa");
+  expect_ranges(command_ranges(gpi_on({0.0, 0.8}), ff), 0.0, 0.8, "model on 0..0.8 MPa");
+  expect_ranges(command_ranges(gpi_on({0.05, 0.35}), ff), 0.05, 0.35, "model on 0.05..0.35 MPa");
+}
+
+// The same with a model fit() identified on a record whose pressure spans 0..0.4 MPa: its
+// input_limits are that range, and so are the commands.
+TEST(PressureLimits, AFittedModelsTrainingRangeBoundsTheCommands) {
+  Model truth(gpi_on({0.0, 0.4}));
+  std::vector<double> x, y;
+  for (double a : {0.4, 0.3, 0.2, 0.1})
+    for (int k = 0; k <= 400; ++k) {
+      x.push_back(a * (1.0 - std::abs(2.0 * k / 400.0 - 1.0)));  // triangles [MPa]
+      y.push_back(truth.step(x.back()));
+    }
+  FitOptions o;
+  o.model = FitModel::pi;
+  o.num_operators = 8;
+  const FitReport fit = hysteron::fit(x, y, o);
+  ASSERT_TRUE(fit.status != FitStatus::invalid_input && fit.status != FitStatus::failed) << fit.full_report();
+  const Limits& fitted = input_limits(fit.model);
+  ASSERT_EQ(fitted.lo, 0.0);  // the record's range: 0 and 0.4 are samples of it
+  ASSERT_EQ(fitted.hi, 0.4);
+  expect_ranges(command_ranges(fit.model, FeedforwardParams{}), 0.0, 0.4, "fitted on 0..0.4 MPa");
+}
+
+// A hand-written model without finite input_limits and no limits named: refused, naming the
+// parameter (it used to get 0..0.6 MPa).
+TEST(PressureLimits, AModelWithoutInputLimitsNeedsThemGiven) {
+  for (const Limits& ml : {Limits{}, Limits{0.0, inf}, Limits{-inf, 0.5}}) {
+    const ModelParams model = gpi_on(ml);
+    FeedforwardParams ff;  // none named: the model's side that is finite is not enough
+    const std::string why = fmt::format("[{}, {}]", ml.lo, ml.hi);
+    OpenLoopParams olp;
+    olp.feedforward = ff;
+    CascadeParams cp;
+    cp.feedforward = ff;
+    cp.position = pid_table3();
+    cp.pressure.kp = 20.0;
+    cp.pressure.sample_time = tc;
+    for (const std::string& m : {error_of([&] { InverseFeedforward(model, ff); }),
+                                 error_of([&] { FeedforwardPidController(model, ff, pid_table3()); }),
+                                 error_of([&] { OpenLoopController(model, olp); }),
+                                 error_of([&] { CascadePwmController(model, cp); }),
+                                 error_of([&] { resolve_pressure_limits(model, ff.pressure_limits); })})
+      EXPECT_NE(m.find("pressure_limits must be given"), std::string::npos) << why << ": " << m;
+    // named, they are used
+    ff.pressure_limits = {0.0, 0.5};
+    expect_ranges(command_ranges(model, ff), 0.0, 0.5, "given on a model without limits " + why);
+  }
+}
+
+// Limits named by the caller win, also wider than the model's input_limits (the user's choice);
+// a side left infinite is the model's; NaN, or lo >= hi once resolved, is refused.
+TEST(PressureLimits, GivenLimitsWin) {
+  const ModelParams model = gpi_on({0.0, 0.4});
+  FeedforwardParams ff;
+  ff.pressure_limits = {0.05, 0.5};
+  expect_ranges(command_ranges(model, ff), 0.05, 0.5, "given 0.05..0.5");
+  ff.pressure_limits = {0.0, 0.3};
+  expect_ranges(command_ranges(model, ff), 0.0, 0.3, "given 0..0.3");
+  ff.pressure_limits = {0.1, inf};
+  expect_ranges(command_ranges(model, ff), 0.1, 0.4, "given 0.1..(the model's)");
+  ff.pressure_limits = {-inf, 0.3};
+  expect_ranges(command_ranges(model, ff), 0.0, 0.3, "given (the model's)..0.3");
+  for (const Limits& bad : {Limits{0.5, inf}, Limits{0.3, 0.1}, Limits{std::nan(""), 0.4}, Limits{0.0, std::nan("")},
+                            Limits{inf, inf}, Limits{-inf, -inf}}) {
+    ff.pressure_limits = bad;
+    const std::string m = error_of([&] { InverseFeedforward(model, ff); });
+    EXPECT_NE(m.find("pressure_limits"), std::string::npos) << bad.lo << ", " << bad.hi << ": " << m;
+  }
+}
+
+// A loop design without limits (null in its JSON) is rebuilt with the model's: make_controller,
+// the learning step's saturation test and pressure_limits(Controller); its JSON keeps them
+// unset, a file written before "loop" existed had 0..0.6 MPa.
+TEST(PressureLimits, LoopDesignWithoutLimitsTakesTheModels) {
+  LoopDesign d;
+  EXPECT_FALSE(d.feedforward.pressure_limits.bounded());
+  d.pid = pid_table3();
+  d.sample_time = tc;
+  const nlohmann::json j = io::to_json(d);
+  EXPECT_TRUE(j["feedforward"]["pressure_min_mpa"].is_null()) << j.dump();
+  EXPECT_TRUE(j["feedforward"]["pressure_max_mpa"].is_null()) << j.dump();
+  LoopDesign back;
+  io::from_json(j, back, "controller");
+  EXPECT_EQ(back.feedforward.pressure_limits, Limits{});
+  // named limits are written as numbers and read back
+  LoopDesign named = d;
+  named.feedforward.pressure_limits = {0.0, 0.45};
+  io::from_json(io::to_json(named), back, "controller");
+  EXPECT_EQ(back.feedforward.pressure_limits, (Limits{0.0, 0.45}));
+  // a file from before "loop" (2026-11-26): the default feedforward of the time, 0..0.6 MPa
+  nlohmann::json old = j;
+  old.erase("loop");
+  old.erase("feedforward");
+  io::from_json(old, back, "controller");
+  EXPECT_EQ(back.feedforward.pressure_limits, (Limits{0.0, 0.6}));
+
+  for (const double top : {0.4, 0.8}) {
+    const ModelParams model = gpi_on({0.0, top});
+    for (const LoopDesign::Kind kind :
+         {LoopDesign::Kind::feedforward_pid, LoopDesign::Kind::open_loop, LoopDesign::Kind::cascade_pwm}) {
+      LoopDesign k = d;
+      k.kind = kind;
+      if (kind == LoopDesign::Kind::open_loop) k.pressure_gain = 0.5;
+      if (kind == LoopDesign::Kind::cascade_pwm) {
+        k.pressure_pid = PidParams{};
+        k.pressure_pid->kp = 20.0;
+        k.pressure_pid->sample_time = tc;
+        k.pwm = PwmParams{};
+      }
+      Controller c = make_controller(k, model);
+      EXPECT_EQ(pressure_limits(c), (Limits{0.0, top}));
+      Range r;
+      for (int s = 0; s < 4000; ++s)
+        r.add(step(c, drive_reference(s), drive_reference(s), drive_measured(s), 0.0).command_mpa);
+      EXPECT_EQ(r.lo, 0.0) << static_cast<int>(kind);
+      EXPECT_EQ(r.hi, top) << static_cast<int>(kind);
+    }
+    // the learning step learns nothing where the command is at the model's limit
+    LoopDesign l = d;
+    LearningParams lp;
+    lp.period = 100;
+    lp.gain = 0.5;
+    l.learning = LoopDesign::Learning{lp};
+    Controller c = make_controller(l, model);
+    IterativeLearning ilc(lp);
+    for (int s = 0; s < 300; ++s) {
+      const LoopOutput o = step(c, ilc, l, 1.0, 1.0, 0.0, 0.0);
+      EXPECT_EQ(o.command_mpa, top);
+    }
+    for (std::size_t s = 0; s < lp.period; ++s) EXPECT_EQ(ilc.correction(s), 0.0) << s;
+  }
+  EXPECT_NE(error_of([&] { make_controller(d, gpi_on({})); }).find("pressure_limits must be given"),
+            std::string::npos);
+}
+
+// Generated C bakes in the resolved limits: the loop's, or where unset the model's; it commands
+// what make_controller's loop commands.
+TEST(PressureLimits, GeneratedLoopBakesInTheResolvedLimits) {
+  LoopDesign d;
+  d.pid = pid_table3();
+  d.sample_time = tc;
+  const ModelParams model = gpi_on({0.0, 0.4});
+  io::ExportOptions o;
+  o.prefix = "lp";
+  o.loop = d;
+  const io::GeneratedC g = io::generate_c(model, o);
+  EXPECT_NE(g.source.find("lp_pressure_lo = 0.0, lp_pressure_hi = 0.4;"), std::string::npos);
+  // the inverse's limits must be the loop's resolved ones
+  o.inverse_limits = {0.0, 0.6};
+  const std::string m = error_of([&] { io::generate_c(model, o); });
+  EXPECT_NE(m.find("differ from the loop's pressure limits [0, 0.4]"), std::string::npos) << m;
+  o.inverse_limits = {0.0, 0.4};
+  EXPECT_NO_THROW(io::generate_c(model, o));
+  o.inverse_limits = {};
+  o.loop->feedforward.pressure_limits = {0.0, 0.3};
+  EXPECT_NE(io::generate_c(model, o).source.find("lp_pressure_lo = 0.0, lp_pressure_hi = 0.3;"), std::string::npos);
+  io::ExportOptions bare;
+  bare.loop = d;
+  EXPECT_NE(error_of([&] { io::generate_c(gpi_on({}), bare); }).find("pressure_limits must be given"), std::string::npos);
+
+  if (!test::have_gcc()) GTEST_SKIP() << "no gcc";
+  std::vector<double> ref, meas, pressure(4000, 0.0);
+  for (int k = 0; k < 4000; ++k) {
+    ref.push_back(drive_reference(k));
+    meas.push_back(drive_measured(k));
+  }
+  test::TempDir dir;
+  const test::LoopRun run = test::run_generated_loop(d, model, dir.path(), true, ref, ref, meas, pressure);
+  ASSERT_EQ(run.error, "");
+  ASSERT_EQ(run.command.size(), ref.size());
+  Controller c = make_controller(d, model);
+  for (std::size_t k = 0; k < ref.size(); ++k)
+    ASSERT_EQ(run.command[k], step(c, ref[k], ref[k], meas[k], 0.0).command_mpa) << k;
+  EXPECT_EQ(*std::max_element(run.command.begin(), run.command.end()), 0.4);
+  EXPECT_EQ(*std::min_element(run.command.begin(), run.command.end()), 0.0);
+}
+
+namespace {
+
+hysteron_params* c_model(const Limits& limits) {
+  const std::string text = io::model_to_json(gpi_on(limits)).dump();
+  hysteron_params* p = nullptr;
+  EXPECT_EQ(hysteron_params_from_json(text.c_str(), &p), HYSTERON_OK) << hysteron_last_error();
+  return p;
+}
+
+// The C ABI's three loops on `model` with `f` (default or given limits): their command ranges
+// over the drive (the cascade's desired pressure), or the status and message of the first
+// create that failed.
+struct CRun {
+  hysteron_status status = HYSTERON_OK;
+  std::string message;
+  std::vector<Range> ranges;
+};
+CRun c_ranges(const hysteron_params* model, const hysteron_ff_pid_params& f) {
+  CRun out;
+  hysteron_open_loop_params op;
+  hysteron_cascade_params cp;
+  EXPECT_EQ(hysteron_open_loop_default_params(&op), HYSTERON_OK);
+  EXPECT_EQ(hysteron_cascade_default_params(&cp), HYSTERON_OK);
+  op.loop = f;
+  cp.outer = f;
+  hysteron_ff_pid* fp = nullptr;
+  hysteron_open_loop* ol = nullptr;
+  hysteron_cascade* cc = nullptr;
+  const auto note = [&](hysteron_status s) {  // the first failure's status and message
+    if (s != HYSTERON_OK && out.status == HYSTERON_OK) {
+      out.status = s;
+      out.message = hysteron_last_error();
+    }
+  };
+  note(hysteron_ff_pid_create(model, &f, &fp));
+  note(hysteron_open_loop_create(model, &op, &ol));
+  note(hysteron_cascade_create(model, &cp, &cc));
+  if (fp && ol && cc) {
+    out.ranges.resize(3);
+    double p_ol = 0.0, p_d = 0.0;  // measured: each loop's last command (one sample late)
+    for (int k = 0; k < 4000; ++k) {
+      const double ref = drive_reference(k), y = drive_measured(k);
+      double u = 0.0, duty = 0.0;
+      EXPECT_EQ(hysteron_ff_pid_step(fp, ref, ref, y, &u), HYSTERON_OK);
+      out.ranges[0].add(u);
+      EXPECT_EQ(hysteron_open_loop_step(ol, ref, ref, y, p_ol, &p_ol), HYSTERON_OK);
+      out.ranges[1].add(p_ol);
+      EXPECT_EQ(hysteron_cascade_step(cc, ref, ref, y, p_d, &duty, &p_d), HYSTERON_OK);
+      out.ranges[2].add(p_d);
+    }
+  }
+  hysteron_ff_pid_free(fp);
+  hysteron_open_loop_free(ol);
+  hysteron_cascade_free(cc);
+  return out;
+}
+
+}  // namespace
+
+// The C ABI: the default limits are -HUGE_VAL / +HUGE_VAL, the model file's input_limits (as
+// hysteron_inverse_create's); a model without them is INVALID_ARGUMENT naming pressure_min /
+// pressure_max; given limits win; a loop read from JSON with null limits takes the model's.
+TEST(PressureLimits, CApiDefaultIsTheModelsInputLimits) {
+  hysteron_ff_pid_params f;
+  ASSERT_EQ(hysteron_ff_pid_default_params(&f), HYSTERON_OK);
+  EXPECT_EQ(f.pressure_min, -inf);
+  EXPECT_EQ(f.pressure_max, inf);
+  f.kp = 5.0;
+  f.ki = 1.0;
+  for (const double top : {0.4, 0.8}) {
+    hysteron_params* model = c_model({0.0, top});
+    const CRun r = c_ranges(model, f);
+    ASSERT_EQ(r.status, HYSTERON_OK) << r.message;
+    for (const Range& x : r.ranges) {
+      EXPECT_EQ(x.lo, 0.0) << top;
+      EXPECT_EQ(x.hi, top) << top;
+    }
+    hysteron_ff_pid_params given = f;
+    given.pressure_min = 0.05;
+    given.pressure_max = 0.5;  // wider than the model's 0.4: the user's choice
+    const CRun g = c_ranges(model, given);
+    ASSERT_EQ(g.status, HYSTERON_OK) << g.message;
+    for (const Range& x : g.ranges) {
+      EXPECT_EQ(x.lo, 0.05);
+      EXPECT_EQ(x.hi, 0.5);
+    }
+    hysteron_params_free(model);
+  }
+  hysteron_params* bare = c_model({});
+  const CRun e = c_ranges(bare, f);
+  EXPECT_EQ(e.status, HYSTERON_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(e.message.find("pressure_min = -inf, pressure_max = inf: the pressure limits must be given"),
+            std::string::npos)
+      << e.message;
+  hysteron_ff_pid_params given = f;
+  given.pressure_min = 0.0;
+  given.pressure_max = 0.5;
+  const CRun g = c_ranges(bare, given);
+  ASSERT_EQ(g.status, HYSTERON_OK) << g.message;
+  for (const Range& x : g.ranges) EXPECT_EQ(x.hi, 0.5);
+  hysteron_params_free(bare);
+
+  // a loop with null limits, read through the C ABI, then created on a 0..0.4 MPa model
+  LoopDesign d;
+  d.sample_time = tc;
+  d.pid = pid_table3();
+  const std::string text = io::to_json(d).dump();
+  hysteron_loop_params lp;
+  ASSERT_EQ(hysteron_loop_params_from_json(text.c_str(), nullptr, &lp), HYSTERON_OK) << hysteron_last_error();
+  EXPECT_EQ(lp.ff_pid.pressure_min, -inf);
+  EXPECT_EQ(lp.ff_pid.pressure_max, inf);
+  hysteron_params* model = c_model({0.0, 0.4});
+  const CRun l = c_ranges(model, lp.ff_pid);
+  ASSERT_EQ(l.status, HYSTERON_OK) << l.message;
+  EXPECT_EQ(l.ranges[0].hi, 0.4);
+  hysteron_params_free(model);
+}

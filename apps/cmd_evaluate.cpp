@@ -84,7 +84,7 @@ int run_evaluate(const EvaluateOptions& c) {
   if (std::string w = input_coverage_warning(coverage, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
   // a record whose output differs from the training record's by a sign, a unit or a zero scores poorly
   // for that, not for the model's hysteresis: say so where the affine map explains it
-  const OutputMap map = output_map(model, rec.x, rec.y, range, initial);
+  const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
   if (std::string w = output_map_warning(map, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
 

@@ -206,7 +206,7 @@ int run_fit(const FitCliOptions& c) {
         const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
         const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
         const InputCoverage cov = input_coverage(rep.model, vx, v.range);
-        const OutputMap map = output_map(rep.model, vx, vy, v.range, o.initial_state);
+        const OutputMap map = output_map(rep.model, vx, vy, v.range, o.initial_state, censor);
         doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
         const std::string what = v.file.empty() ? "validation range" : v.file;
         // a validation record beyond the training range scores the model's extrapolation; one whose output

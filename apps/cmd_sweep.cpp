@@ -216,7 +216,7 @@ void add_sweep(CLI::App& app, Action& action) {
                 "its identification (another load, a wider band), the loops not re-tuned (docs/plant.md); default: "
                 "each variant identified and tuned on its own rig");
   cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
-      ->check(non_negative_integer())
+      ->check(non_negative_integer(1024))
       ->check(CLI::Range(1u, 1024u));
   cmd->add_option("--out", args->out, "The table (CSV): one row per experiment, variant, reference and kind");
   cmd->add_option("--report", args->report, "HTML page: every error, target misses, RMS against each parameter");

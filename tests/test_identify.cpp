@@ -708,6 +708,24 @@ TEST(IdentifyInput, OutputMapNamesASignAUnitOrAZero) {
   // the range: scored only there
   const OutputMap part = output_map(model, x, mapped(-2.0, 1.0), {100, 700});
   EXPECT_NEAR(part.gain, -2.0, 1e-9);
+  // an output that clips (a sensor's limit at its lower third): scored as censored, as evaluate and fit
+  // score it, the map leaves the censored samples out and finds nothing to say; as recorded, the flat
+  // stretch is a scale and a zero (review of 2026-11-30: the warning quoted an RMS 65 times the score's)
+  std::vector<double> sorted(y);
+  std::sort(sorted.begin(), sorted.end());
+  int warned_as_recorded = 0;
+  for (const double fraction : {0.33, 0.5, 0.67, 0.8}) {
+    const double limit = sorted[static_cast<std::size_t>(fraction * static_cast<double>(sorted.size()))];
+    std::vector<double> clipped = with_noise(y, 0.002 * span, 7);
+    for (double& v : clipped) v = std::max(v, limit);
+    std::size_t censored = 0;
+    (void)evaluate_censored(model, x, clipped, {}, InitialState::virgin, &censored);
+    ASSERT_GT(censored, x.size() / 10) << fraction;
+    const std::string w = output_map_warning(output_map(model, x, clipped, {}, InitialState::virgin, true), "rec.csv");
+    EXPECT_TRUE(w.empty()) << fraction << ": " << w;
+    warned_as_recorded += !output_map_warning(output_map(model, x, clipped), "rec.csv").empty();
+  }
+  EXPECT_GT(warned_as_recorded, 0);  // the case the censoring is for
 }
 
 TEST(IdentifyInput, HuberLossResistsOutliers) {

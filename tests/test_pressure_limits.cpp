@@ -434,3 +434,46 @@ TEST(PressureLimits, CApiDefaultIsTheModelsInputLimits) {
   EXPECT_EQ(l.ranges[0].hi, 0.4);
   hysteron_params_free(model);
 }
+
+// A non-finite argument on the first sample (and the first after a reset) holds the command the
+// controller starts from: 0 within its pressure limits. With limits resolved from a model fitted
+// above 0 MPa (0.05..0.4) the C ABI held 0, below the lower limit, where the library holds 0.05
+// (review of 2026-11-30).
+TEST(PressureLimits, CApiFirstSampleFaultHoldsACommandWithinTheLimits) {
+  hysteron_params* model = c_model({0.05, 0.4});
+  const double nan = std::nan("");
+  hysteron_ff_pid_params f;
+  ASSERT_EQ(hysteron_ff_pid_default_params(&f), HYSTERON_OK);
+  f.kp = 5.0;
+  hysteron_ff_pid* fp = nullptr;
+  ASSERT_EQ(hysteron_ff_pid_create(model, &f, &fp), HYSTERON_OK) << hysteron_last_error();
+  hysteron_open_loop_params o;
+  ASSERT_EQ(hysteron_open_loop_default_params(&o), HYSTERON_OK);
+  hysteron_open_loop* ol = nullptr;
+  ASSERT_EQ(hysteron_open_loop_create(model, &o, &ol), HYSTERON_OK) << hysteron_last_error();
+  hysteron_cascade_params c;
+  ASSERT_EQ(hysteron_cascade_default_params(&c), HYSTERON_OK);
+  hysteron_cascade* cs = nullptr;
+  ASSERT_EQ(hysteron_cascade_create(model, &c, &cs), HYSTERON_OK) << hysteron_last_error();
+  for (int pass = 0; pass < 2; ++pass) {  // at create, then after a step and a reset
+    double u = -1.0, duty = -2.0, pd = -1.0;
+    EXPECT_EQ(hysteron_ff_pid_step(fp, nan, 0.0, 0.0, &u), HYSTERON_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(u, 0.05) << pass;
+    u = -1.0;
+    EXPECT_EQ(hysteron_open_loop_step(ol, nan, 0.0, 0.0, 0.0, &u), HYSTERON_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(u, 0.05) << pass;
+    EXPECT_EQ(hysteron_cascade_step(cs, nan, 0.0, 0.0, 0.0, &duty, &pd), HYSTERON_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(duty, 0.0) << pass;
+    EXPECT_EQ(pd, 0.05) << pass;
+    EXPECT_EQ(hysteron_ff_pid_step(fp, 0.01, 0.01, 0.0, &u), HYSTERON_OK);
+    EXPECT_EQ(hysteron_open_loop_step(ol, 0.01, 0.01, 0.0, 0.1, &u), HYSTERON_OK);
+    EXPECT_EQ(hysteron_cascade_step(cs, 0.01, 0.01, 0.0, 0.1, &duty, &pd), HYSTERON_OK);
+    ASSERT_EQ(hysteron_ff_pid_reset(fp), HYSTERON_OK);
+    ASSERT_EQ(hysteron_open_loop_reset(ol), HYSTERON_OK);
+    ASSERT_EQ(hysteron_cascade_reset(cs), HYSTERON_OK);
+  }
+  hysteron_ff_pid_free(fp);
+  hysteron_open_loop_free(ol);
+  hysteron_cascade_free(cs);
+  hysteron_params_free(model);
+}

@@ -159,8 +159,10 @@ struct OutputMap {
   double rms_mapped = std::numeric_limits<double>::quiet_NaN();  // of gain * prediction + offset
   double span = std::numeric_limits<double>::quiet_NaN();        // of the output on the range
 };
+// censor: as evaluate_scored's (the default of fit and evaluate), the samples a clipping output
+// censors (censor_clipped) are left out of the map and of its prediction's R^2 and RMS.
 OutputMap output_map(const ModelParams& params, std::span<const double> x, std::span<const double> y,
-                     IndexRange range = {}, InitialState initial = InitialState::virgin);
+                     IndexRange range = {}, InitialState initial = InitialState::virgin, bool censor = false);
 // The warning ("" if none; `what` names the record) where the map explains what the prediction does
 // not: the prediction's R^2 is below kMinFitR2 and the map's at least kMinFitR2 (a sign, a unit), or
 // the map at least halves an RMS error above 1 % of the output's span (a zero: on the Festo

@@ -168,7 +168,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         d["outside_input_limits"] = input_coverage(spec, xs, range_from(range, "evaluate: range")).outside;
         // y ~ gain * prediction + offset, and the warning where that map explains a poor score
         const OutputMap map =
-            output_map(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state));
+            output_map(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state), censored);
         py::dict om;
         om["gain"] = map.gain;
         om["offset"] = map.offset;

@@ -66,6 +66,13 @@ struct hysteron_cascade {
   double last_duty = 0.0, last_desired = 0.0;  // held on a non-finite argument
 };
 
+namespace {
+// The command held on a non-finite argument before any step (at create and after reset): 0 within the
+// controller's pressure limits, which the model's input_limits may put above 0 (the library then holds
+// its clamped 0 too; a command outside the limits must never leave the controller).
+double start_command(const hysteron::Limits& lim) { return std::clamp(0.0, lim.lo, lim.hi); }
+}  // namespace
+
 struct hysteron_ilc {
   hysteron::IterativeLearning ilc;
 };
@@ -844,7 +851,9 @@ hysteron_status hysteron_ff_pid_create(const hysteron_params* params, const hyst
     resolve_limits(*params, ff, "");
     pid.out_min = ff.pressure_limits.lo;  // the controller clamps to the pressure limits anyway
     pid.out_max = ff.pressure_limits.hi;
-    *out = new hysteron_ff_pid{hysteron::FeedforwardPidController(params->params, ff, pid), 0.0};
+    hysteron::FeedforwardPidController c(params->params, ff, pid);
+    const double start = start_command(c.pressure_limits());
+    *out = new hysteron_ff_pid{std::move(c), start};
   });
 }
 
@@ -857,7 +866,7 @@ hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller) {
   return guard("hysteron_ff_pid_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(controller);
     controller->controller.reset();
-    controller->last = 0.0;
+    controller->last = start_command(controller->controller.pressure_limits());
   });
 }
 
@@ -903,7 +912,9 @@ hysteron_status hysteron_open_loop_create(const hysteron_params* params, const h
     const double span = p.feedforward.pressure_limits.hi - p.feedforward.pressure_limits.lo;
     p.position.out_min = -span;  // the controller's limits of the correction
     p.position.out_max = span;
-    *out = new hysteron_open_loop{hysteron::OpenLoopController(params->params, p), 0.0};
+    hysteron::OpenLoopController c(params->params, p);
+    const double start = start_command(c.pressure_limits());
+    *out = new hysteron_open_loop{std::move(c), start};
   });
 }
 
@@ -916,7 +927,7 @@ hysteron_status hysteron_open_loop_reset(hysteron_open_loop* controller) {
   return guard("hysteron_open_loop_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(controller);
     controller->controller.reset();
-    controller->last = 0.0;
+    controller->last = start_command(controller->controller.pressure_limits());
   });
 }
 
@@ -977,7 +988,9 @@ hysteron_status hysteron_cascade_create(const hysteron_params* params, const hys
     resolve_limits(*params, p.feedforward, "outer.");
     p.position.out_min = p.feedforward.pressure_limits.lo;  // the controller clamps p_d to them
     p.position.out_max = p.feedforward.pressure_limits.hi;
-    *out = new hysteron_cascade{hysteron::CascadePwmController(params->params, p), 0.0, 0.0};
+    hysteron::CascadePwmController c(params->params, p);
+    const double start = start_command(c.pressure_limits());
+    *out = new hysteron_cascade{std::move(c), 0.0, start};
   });
 }
 
@@ -990,7 +1003,8 @@ hysteron_status hysteron_cascade_reset(hysteron_cascade* controller) {
   return guard("hysteron_cascade_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(controller);
     controller->controller.reset();
-    controller->last_duty = controller->last_desired = 0.0;
+    controller->last_duty = 0.0;
+    controller->last_desired = start_command(controller->controller.pressure_limits());
   });
 }
 

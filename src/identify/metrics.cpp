@@ -224,44 +224,55 @@ std::string input_coverage_warning(const InputCoverage& c, std::string_view what
 }
 
 OutputMap output_map(const ModelParams& params, std::span<const double> x, std::span<const double> y, IndexRange range,
-                     InitialState initial) {
+                     InitialState initial, bool censor) {
   detail::check_record(x, y, "output_map");
   const IndexRange r = detail::check_range(range, x.size(), "output_map");
   OutputMap m;
-  const std::size_t n = r.end - r.begin;
-  if (n < 2) return m;
   const std::vector<double> yp = simulate_record(params, x, initial);
-  double mp = 0.0, my = 0.0;
-  for (std::size_t k = r.begin; k < r.end; ++k) {
-    mp += yp[k];
-    my += y[k];
+  // the samples scored: every one, or those a clipping output does not censor (censor_clipped replaces them)
+  std::vector<char> use(x.size(), 1);
+  if (censor) {
+    const std::vector<double> yc = censor_clipped(y, yp);
+    for (std::size_t k = r.begin; k < r.end; ++k) use[k] = yc[k] == y[k];
   }
-  mp /= static_cast<double>(n);
-  my /= static_cast<double>(n);
+  std::size_t n = 0;
+  double mp = 0.0, my = 0.0;
+  for (std::size_t k = r.begin; k < r.end; ++k)
+    if (use[k]) {
+      ++n;
+      mp += yp[k];
+      my += y[k];
+    }
+  if (n < 2) return m;
+  const double nd = static_cast<double>(n);
+  mp /= nd;
+  my /= nd;
   double spp = 0.0, spy = 0.0, syy = 0.0, see = 0.0;  // centred sums; see: the prediction's squared error
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t k = r.begin; k < r.end; ++k) {
+    if (!use[k]) continue;
     const double dp = yp[k] - mp, dy = y[k] - my;
     spp += dp * dp;
     spy += dp * dy;
     syy += dy * dy;
     see += (y[k] - yp[k]) * (y[k] - yp[k]);
+    lo = std::min(lo, y[k]);
+    hi = std::max(hi, y[k]);
   }
   if (!(spp > 0.0) || !(syy > 0.0) || !std::isfinite(spp) || !std::isfinite(syy) || !std::isfinite(see)) return m;
   m.gain = spy / spp;
   m.offset = my - m.gain * mp;
   m.r2 = 1.0 - see / syy;
   m.r2_mapped = std::min(1.0, spy / spp * spy / syy);
-  const double nd = static_cast<double>(n);
-  m.rms = std::sqrt(see / nd);
   double smm = 0.0;  // the map's squared error, summed directly (syy - spy^2 / spp cancels to sqrt(eps) * span)
   for (std::size_t k = r.begin; k < r.end; ++k) {
+    if (!use[k]) continue;
     const double d = y[k] - (m.gain * yp[k] + m.offset);
     smm += d * d;
   }
+  m.rms = std::sqrt(see / nd);
   m.rms_mapped = std::sqrt(smm / nd);
-  const auto [lo, hi] = std::minmax_element(y.begin() + static_cast<std::ptrdiff_t>(r.begin),
-                                            y.begin() + static_cast<std::ptrdiff_t>(r.end));
-  m.span = *hi - *lo;
+  m.span = hi - lo;
   return m;
 }
 
@@ -270,7 +281,7 @@ std::string output_map_warning(const OutputMap& m, std::string_view what) {
   const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
   if (!poor_made_good && !halved) return {};
   const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS error "
-                                      "{:.4g}, R^2 {:.3f}, against {:.4g} and {:.3f} for the prediction as it is)",
+                                      "{:.4g}, R^2 {:.3f}, against {:.4g} and {:.4g} for the prediction as it is)",
                                       m.gain, m.offset, m.rms_mapped, m.r2_mapped, m.rms, m.r2);
   if (m.gain < 0.0)
     return fmt::format("{}: {}: the output runs against the model's; is its sign flipped (a sensor mounted the other "

@@ -184,12 +184,13 @@ int run_fit(const FitCliOptions& c) {
   // (--censor-passes 0: as recorded); `censored` receives the count. The documents and the
   // HTML report say and do the same (data.censored, FitData::censor_clipped).
   const bool censor = o.censor_passes > 0;
+  // a validation set's record: its file's, or (a range of) the fit's
+  const auto input_of = [&](const ValidationSet& v) { return std::span<const double>(v.file.empty() ? x : v.x); };
+  const auto output_of = [&](const ValidationSet& v) { return std::span<const double>(v.file.empty() ? y : v.y); };
   auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v,
                          std::size_t* censored = nullptr) -> std::optional<FitMetrics> {
     try {
-      const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
-      const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
-      return evaluate_scored(m, vx, vy, v.range, o.initial_state, censor, censored);
+      return evaluate_scored(m, input_of(v), output_of(v), v.range, o.initial_state, censor, censored);
     } catch (const Error&) {
       return std::nullopt;
     }
@@ -203,10 +204,8 @@ int run_fit(const FitCliOptions& c) {
   if (fitted)
     for (const auto& v : sets)
       if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored)) {
-        const std::span<const double> vx = v.file.empty() ? std::span<const double>(x) : std::span<const double>(v.x);
-        const std::span<const double> vy = v.file.empty() ? std::span<const double>(y) : std::span<const double>(v.y);
-        const InputCoverage cov = input_coverage(rep.model, vx, v.range);
-        const OutputMap map = output_map(rep.model, vx, vy, v.range, o.initial_state, censor);
+        const InputCoverage cov = input_coverage(rep.model, input_of(v), v.range);
+        const OutputMap map = output_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor);
         doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
         const std::string what = v.file.empty() ? "validation range" : v.file;
         // a validation record beyond the training range scores the model's extrapolation; one whose output

@@ -29,18 +29,7 @@ using namespace hysteron;
 
 namespace {
 
-// A GPI in MPa -> mm of the right magnitude for the DMSP-20-500 rig.
-GpiParams rig_like_gpi() {
-  GpiParams g;
-  g.envelope = Envelope::tanh(60.0, 3.0, -0.9, 45.0);
-  g.q = 0.8;
-  g.n = 10;
-  g.alpha = 1.0;
-  g.rho = 0.05;
-  g.tau = 0.1;
-  g.input_limits = {0.0, 0.6};
-  return g;
-}
+using test::rig_like_gpi;
 
 }  // namespace
 

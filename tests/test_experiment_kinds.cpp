@@ -25,6 +25,7 @@
 #include "hysteron/io/results.hpp"
 #include "hysteron/sweep.hpp"
 #include "temp_dir.hpp"
+#include "test_util.hpp"
 
 using namespace hysteron;
 
@@ -231,13 +232,7 @@ TEST(ExperimentKinds, UnknownKindsAreErrors) {
 // or producing a non-finite command: the per-sample step of the compensated variants.
 TEST(ExperimentKinds, CompensatingStepsDoNotAllocateForAnyKind) {
   // a hysteretic record in MPa -> mm: a GPI driven by decaying triangles at 100 Hz
-  GpiParams g;
-  g.envelope = Envelope::tanh(60.0, 3.0, -0.9, 45.0);
-  g.q = 0.8;
-  g.n = 10;
-  g.alpha = 1.0;
-  g.rho = 0.05;
-  g.tau = 0.1;
+  const GpiParams g = test::rig_like_gpi(Limits{});
   std::vector<double> x;
   for (int k = 0; k < 3000; ++k) {
     const double t = 0.01 * k, a = 0.28 * (1.0 - t / 40.0);

@@ -26,6 +26,7 @@
 #include "hysteron/learning.hpp"
 #include "hysteron/loop_design.hpp"
 #include "temp_dir.hpp"
+#include "test_util.hpp"
 
 using namespace hysteron;
 
@@ -34,19 +35,6 @@ namespace {
 constexpr double inf = std::numeric_limits<double>::infinity();
 constexpr double tc = 1e-3;  // [s]
 
-// A GPI in MPa -> mm of the DMSP-20-500 rig's magnitude (about 100 mm at 0.6 MPa), with the
-// given input_limits [MPa].
-GpiParams gpi_on(Limits limits) {
-  GpiParams g;
-  g.envelope = Envelope::tanh(60.0, 3.0, -0.9, 45.0);
-  g.q = 0.8;
-  g.n = 10;
-  g.alpha = 1.0;
-  g.rho = 0.05;
-  g.tau = 0.1;
-  g.input_limits = limits;
-  return g;
-}
 
 // Table 3's gains with unbounded output limits: only the pressure limits bound the command.
 PidParams pid_table3() {
@@ -120,15 +108,6 @@ void expect_ranges(const std::vector<Range>& r, double lo, double hi, const std:
   }
 }
 
-std::string error_of(auto&& make) {
-  try {
-    make();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
-
 }  // namespace
 
 // A muscle rated 0.4 MPa, its model identified on 0..0.4 MPa: no command above 0.4 MPa (the
@@ -137,15 +116,15 @@ std::string error_of(auto&& make) {
 TEST(PressureLimits, DefaultIsTheModelsInputLimits) {
   const FeedforwardParams ff;  // no limits named
   EXPECT_FALSE(ff.pressure_limits.bounded());
-  expect_ranges(command_ranges(gpi_on({0.0, 0.4}), ff), 0.0, 0.4, "model on 0..0.4 MPa");
-  expect_ranges(command_ranges(gpi_on({0.0, 0.8}), ff), 0.0, 0.8, "model on 0..0.8 MPa");
-  expect_ranges(command_ranges(gpi_on({0.05, 0.35}), ff), 0.05, 0.35, "model on 0.05..0.35 MPa");
+  expect_ranges(command_ranges(test::rig_like_gpi({0.0, 0.4}), ff), 0.0, 0.4, "model on 0..0.4 MPa");
+  expect_ranges(command_ranges(test::rig_like_gpi({0.0, 0.8}), ff), 0.0, 0.8, "model on 0..0.8 MPa");
+  expect_ranges(command_ranges(test::rig_like_gpi({0.05, 0.35}), ff), 0.05, 0.35, "model on 0.05..0.35 MPa");
 }
 
 // The same with a model fit() identified on a record whose pressure spans 0..0.4 MPa: its
 // input_limits are that range, and so are the commands.
 TEST(PressureLimits, AFittedModelsTrainingRangeBoundsTheCommands) {
-  Model truth(gpi_on({0.0, 0.4}));
+  Model truth(test::rig_like_gpi({0.0, 0.4}));
   std::vector<double> x, y;
   for (double a : {0.4, 0.3, 0.2, 0.1})
     for (int k = 0; k <= 400; ++k) {
@@ -167,7 +146,7 @@ TEST(PressureLimits, AFittedModelsTrainingRangeBoundsTheCommands) {
 // parameter (it used to get 0..0.6 MPa).
 TEST(PressureLimits, AModelWithoutInputLimitsNeedsThemGiven) {
   for (const Limits& ml : {Limits{}, Limits{0.0, inf}, Limits{-inf, 0.5}}) {
-    const ModelParams model = gpi_on(ml);
+    const ModelParams model = test::rig_like_gpi(ml);
     FeedforwardParams ff;  // none named: the model's side that is finite is not enough
     const std::string why = fmt::format("[{}, {}]", ml.lo, ml.hi);
     OpenLoopParams olp;
@@ -177,11 +156,11 @@ TEST(PressureLimits, AModelWithoutInputLimitsNeedsThemGiven) {
     cp.position = pid_table3();
     cp.pressure.kp = 20.0;
     cp.pressure.sample_time = tc;
-    for (const std::string& m : {error_of([&] { InverseFeedforward(model, ff); }),
-                                 error_of([&] { FeedforwardPidController(model, ff, pid_table3()); }),
-                                 error_of([&] { OpenLoopController(model, olp); }),
-                                 error_of([&] { CascadePwmController(model, cp); }),
-                                 error_of([&] { resolve_pressure_limits(model, ff.pressure_limits); })})
+    for (const std::string& m : {test::error_of([&] { InverseFeedforward(model, ff); }),
+                                 test::error_of([&] { FeedforwardPidController(model, ff, pid_table3()); }),
+                                 test::error_of([&] { OpenLoopController(model, olp); }),
+                                 test::error_of([&] { CascadePwmController(model, cp); }),
+                                 test::error_of([&] { resolve_pressure_limits(model, ff.pressure_limits); })})
       EXPECT_NE(m.find("pressure_limits must be given"), std::string::npos) << why << ": " << m;
     // named, they are used
     ff.pressure_limits = {0.0, 0.5};
@@ -192,7 +171,7 @@ TEST(PressureLimits, AModelWithoutInputLimitsNeedsThemGiven) {
 // Limits named by the caller win, also wider than the model's input_limits (the user's choice);
 // a side left infinite is the model's; NaN, or lo >= hi once resolved, is refused.
 TEST(PressureLimits, GivenLimitsWin) {
-  const ModelParams model = gpi_on({0.0, 0.4});
+  const ModelParams model = test::rig_like_gpi({0.0, 0.4});
   FeedforwardParams ff;
   ff.pressure_limits = {0.05, 0.5};
   expect_ranges(command_ranges(model, ff), 0.05, 0.5, "given 0.05..0.5");
@@ -205,7 +184,7 @@ TEST(PressureLimits, GivenLimitsWin) {
   for (const Limits& bad : {Limits{0.5, inf}, Limits{0.3, 0.1}, Limits{std::nan(""), 0.4}, Limits{0.0, std::nan("")},
                             Limits{inf, inf}, Limits{-inf, -inf}}) {
     ff.pressure_limits = bad;
-    const std::string m = error_of([&] { InverseFeedforward(model, ff); });
+    const std::string m = test::error_of([&] { InverseFeedforward(model, ff); });
     EXPECT_NE(m.find("pressure_limits"), std::string::npos) << bad.lo << ", " << bad.hi << ": " << m;
   }
 }
@@ -237,7 +216,7 @@ TEST(PressureLimits, LoopDesignWithoutLimitsTakesTheModels) {
   EXPECT_EQ(back.feedforward.pressure_limits, (Limits{0.0, 0.6}));
 
   for (const double top : {0.4, 0.8}) {
-    const ModelParams model = gpi_on({0.0, top});
+    const ModelParams model = test::rig_like_gpi({0.0, top});
     for (const LoopDesign::Kind kind :
          {LoopDesign::Kind::feedforward_pid, LoopDesign::Kind::open_loop, LoopDesign::Kind::cascade_pwm}) {
       LoopDesign k = d;
@@ -271,7 +250,7 @@ TEST(PressureLimits, LoopDesignWithoutLimitsTakesTheModels) {
     }
     for (std::size_t s = 0; s < lp.period; ++s) EXPECT_EQ(ilc.correction(s), 0.0) << s;
   }
-  EXPECT_NE(error_of([&] { make_controller(d, gpi_on({})); }).find("pressure_limits must be given"),
+  EXPECT_NE(test::error_of([&] { make_controller(d, test::rig_like_gpi({})); }).find("pressure_limits must be given"),
             std::string::npos);
 }
 
@@ -281,7 +260,7 @@ TEST(PressureLimits, GeneratedLoopBakesInTheResolvedLimits) {
   LoopDesign d;
   d.pid = pid_table3();
   d.sample_time = tc;
-  const ModelParams model = gpi_on({0.0, 0.4});
+  const ModelParams model = test::rig_like_gpi({0.0, 0.4});
   io::ExportOptions o;
   o.prefix = "lp";
   o.loop = d;
@@ -289,7 +268,7 @@ TEST(PressureLimits, GeneratedLoopBakesInTheResolvedLimits) {
   EXPECT_NE(g.source.find("lp_pressure_lo = 0.0, lp_pressure_hi = 0.4;"), std::string::npos);
   // the inverse's limits must be the loop's resolved ones
   o.inverse_limits = {0.0, 0.6};
-  const std::string m = error_of([&] { io::generate_c(model, o); });
+  const std::string m = test::error_of([&] { io::generate_c(model, o); });
   EXPECT_NE(m.find("differ from the loop's pressure limits [0, 0.4]"), std::string::npos) << m;
   o.inverse_limits = {0.0, 0.4};
   EXPECT_NO_THROW(io::generate_c(model, o));
@@ -298,7 +277,7 @@ TEST(PressureLimits, GeneratedLoopBakesInTheResolvedLimits) {
   EXPECT_NE(io::generate_c(model, o).source.find("lp_pressure_lo = 0.0, lp_pressure_hi = 0.3;"), std::string::npos);
   io::ExportOptions bare;
   bare.loop = d;
-  EXPECT_NE(error_of([&] { io::generate_c(gpi_on({}), bare); }).find("pressure_limits must be given"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { io::generate_c(test::rig_like_gpi({}), bare); }).find("pressure_limits must be given"), std::string::npos);
 
   if (!test::have_gcc()) GTEST_SKIP() << "no gcc";
   std::vector<double> ref, meas, pressure(4000, 0.0);
@@ -320,7 +299,7 @@ TEST(PressureLimits, GeneratedLoopBakesInTheResolvedLimits) {
 namespace {
 
 hysteron_params* c_model(const Limits& limits) {
-  const std::string text = io::model_to_json(gpi_on(limits)).dump();
+  const std::string text = io::model_to_json(test::rig_like_gpi(limits)).dump();
   hysteron_params* p = nullptr;
   EXPECT_EQ(hysteron_params_from_json(text.c_str(), &p), HYSTERON_OK) << hysteron_last_error();
   return p;
@@ -408,7 +387,7 @@ TEST(PressureLimits, CApiDefaultIsTheModelsInputLimits) {
   hysteron_params* bare = c_model({});
   const CRun e = c_ranges(bare, f);
   EXPECT_EQ(e.status, HYSTERON_ERROR_INVALID_ARGUMENT);
-  EXPECT_NE(e.message.find("pressure_min = -inf, pressure_max = inf: the pressure limits must be given"),
+  EXPECT_NE(e.message.find("pressure_min = -inf, pressure_max = inf: feedforward: pressure_limits must be given"),
             std::string::npos)
       << e.message;
   hysteron_ff_pid_params given = f;

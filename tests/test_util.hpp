@@ -1,7 +1,7 @@
 #pragma once
 // Small helpers shared by the tests: a file's bytes, the message of an expected error, a
-// random input path with reversals, a note in an experiment's result, and the options of a
-// quick experiment run.
+// random input path with reversals, a note in an experiment's result, a GPI of the rig's magnitude
+// and the options of a quick experiment run.
 #include <gtest/gtest.h>
 
 #include <cstddef>
@@ -63,6 +63,20 @@ inline bool said(const ExperimentResult& r, const std::string& part) {
 
 // A quick run of experiment `name` on the nominal rig: mpi-asym pinned (no auto fits of every
 // kind), no adaptive variant, `learning_periods` periods of the learning variant.
+// A GPI in MPa -> mm of the DMSP-20-500 rig's magnitude (about 100 mm at 0.6 MPa), with the given
+// input_limits [MPa] (unset: unbounded).
+inline GpiParams rig_like_gpi(Limits input_limits = {0.0, 0.6}) {
+  GpiParams g;
+  g.envelope = Envelope::tanh(60.0, 3.0, -0.9, 45.0);
+  g.q = 0.8;
+  g.n = 10;
+  g.alpha = 1.0;
+  g.rho = 0.05;
+  g.tau = 0.1;
+  g.input_limits = input_limits;
+  return g;
+}
+
 inline ExperimentOptions quick_experiment(const std::string& name, int learning_periods = 0) {
   ExperimentOptions o;
   o.name = name;

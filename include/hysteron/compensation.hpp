@@ -74,14 +74,13 @@ class FeedforwardPidController {
   const Pid& pid() const noexcept { return pid_; }
   const InverseFeedforward& feedforward() const noexcept { return ff_; }
   // The resolved pressure limits [MPa] the command is clamped to.
-  const Limits& pressure_limits() const noexcept { return lim_; }
+  const Limits& pressure_limits() const noexcept { return ff_.pressure_limits(); }
   // Replaces the PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { pid_.set_guard(guard); }
 
  private:
   InverseFeedforward ff_;
   Pid pid_;
-  Limits lim_;
 };
 
 // Asymmetric-MPI paper (Fig. 6): open-loop inverse compensation with a

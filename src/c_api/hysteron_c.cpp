@@ -581,17 +581,11 @@ void check_controller(const hysteron::FeedforwardParams& ff, const hysteron::Pid
 // caller's argument: INVALID_ARGUMENT naming `prefix`pressure_min / pressure_max.
 void resolve_limits(const hysteron_params& model, hysteron::FeedforwardParams& ff, const char* prefix) {
   const hysteron::Limits given = ff.pressure_limits;
-  const hysteron::Limits& ml = hysteron::input_limits(model.params);
-  if ((std::isinf(given.lo) && !std::isfinite(ml.lo)) || (std::isinf(given.hi) && !std::isfinite(ml.hi)))
-    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
-         "%spressure_min = %g, %spressure_max = %g: the pressure limits must be given (your actuator's, in MPa): the "
-         "model has no finite input_limits [%g, %g] to take the unset (infinite) ones from (a fitted model has its "
-         "training input range)",
-         prefix, given.lo, prefix, given.hi, ml.lo, ml.hi);
   try {
     ff.pressure_limits = hysteron::resolve_pressure_limits(model.params, given);
   } catch (const hysteron::Error& e) {
-    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%spressure_min, %spressure_max: %s", prefix, prefix, e.what());
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%spressure_min = %g, %spressure_max = %g: %s", prefix, given.lo, prefix,
+         given.hi, e.what());
   }
 }
 

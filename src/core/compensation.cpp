@@ -96,8 +96,7 @@ FeedforwardPidController::FeedforwardPidController(const ModelParams& model, con
         q.out_min = std::max(q.out_min, ff_.pressure_limits().lo);
         q.out_max = std::min(q.out_max, ff_.pressure_limits().hi);
         return q;
-      }()),
-      lim_(ff_.pressure_limits()) {
+      }()) {
   check_sample_time(pid, ff, "feedforward-PID controller", "pid");
 }
 
@@ -109,7 +108,8 @@ void FeedforwardPidController::reset() noexcept {
 double FeedforwardPidController::step(double reference_m, double preview_m, double measured_m) noexcept {
   const double u_ff = ff_.step(preview_m);
   const double u = pid_.step(reference_m, measured_m, u_ff);
-  return std::clamp(std::isfinite(u) ? u : u_ff, lim_.lo, lim_.hi);
+  const Limits& lim = ff_.pressure_limits();
+  return std::clamp(std::isfinite(u) ? u : u_ff, lim.lo, lim.hi);
 }
 
 OpenLoopController::OpenLoopController(const ModelParams& model, const OpenLoopParams& params)

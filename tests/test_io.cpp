@@ -698,6 +698,39 @@ TEST(Mat, ExactNameWinsAndOnlyMatrixNeedsAColumn) {
   EXPECT_EQ(io::read_table(only).names, (std::vector<std::string>{"M:0", "M:1"}));
 }
 
+// ReadOptions::preferred_column picks a .mat variable as it picks a CSV column (simulate takes
+// "input", invert "output"): the same columns written both ways read the same way.
+TEST(Mat, PreferredVariableAsForACsvColumn) {
+  TempDir dir;
+  const std::vector<double> t{0, 0.5, 1}, x{0.1, -0.2, 0.3}, y{4, 5, 6};
+  const auto mat = dir.file("rec.mat"), csv = dir.file("rec.csv");
+  io::write_columns(mat, {"time", "input", "output"}, {t, x, y});
+  io::write_columns(csv, {"time", "input", "output"}, {t, x, y});
+  auto opts = [](std::string spec, std::string preferred) {
+    io::ReadOptions o;
+    o.column_spec = std::move(spec);
+    o.preferred_column = std::move(preferred);
+    return o;
+  };
+  for (const auto& path : {mat, csv}) {
+    SCOPED_TRACE(path);
+    EXPECT_EQ(io::read_column(path, opts("", "input")), x);
+    EXPECT_EQ(io::read_column(path, opts("", "output")), y);
+    EXPECT_EQ(io::read_column(path, opts("time", "input")), t);  // a named column wins
+    std::vector<double> streamed;
+    io::for_each_value(path, opts("", "output"), [&](double v) { streamed.push_back(v); });
+    EXPECT_EQ(streamed, y);
+    expect_error([&] { io::read_column(path, opts("", "")); }, {path, "3 "});
+  }
+  // several variables, none of the preferred name: the error of no choice, saying so
+  expect_error([&] { io::read_column(mat, opts("", "u")); },
+               {mat, "3 variables", "\"time\"", "none named \"u\"", "choose one by name"});
+  // one variable: it is read whatever its name, as a CSV file's only column is
+  const auto one = dir.file("one.mat");
+  io::write_columns(one, {"v"}, {y});
+  EXPECT_EQ(io::read_column(one, opts("", "input")), y);
+}
+
 // In a CSV file a colon is part of a header name: a header match wins, and NAME:INDEX is not
 // a column selector there (the error says so).
 TEST(Table, ColonInCsvHeaderIsAName) {

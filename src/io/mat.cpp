@@ -891,20 +891,25 @@ std::string choose_column_hint(const std::string& name, const MatArray& a) {
 
 }  // namespace
 
-// A .mat column spec: "" (the file's only variable), a variable name (a vector, or an N x 1 /
-// 1 x N matrix), or NAME:INDEX (column INDEX, 0-based, of the 2-D matrix NAME). A variable whose
-// name is the whole spec wins over the NAME:INDEX reading (MATLAB names cannot hold ':', but
-// other writers' files may).
-std::vector<double> read_mat_variable(const std::string& path, const std::string& spec) {
+// A .mat column spec: "" (the file's only variable; of several, the one named `preferred` if
+// any, as select_column does for a text file), a variable name (a vector, or an N x 1 / 1 x N
+// matrix), or NAME:INDEX (column INDEX, 0-based, of the 2-D matrix NAME). A variable whose name
+// is the whole spec wins over the NAME:INDEX reading (MATLAB names cannot hold ':', but other
+// writers' files may).
+std::vector<double> read_mat_variable(const std::string& path, const std::string& spec, const std::string& preferred) {
   check_mat_file(path);
   std::string name = spec;
   std::optional<std::size_t> col;
   if (name.empty()) {
     const auto names = mat_variable_names(path);
-    if (names.size() != 1)
-      throw Error(fmt::format("{}: has {} variables ({}); choose one by name (NAME:INDEX for a column of a matrix)",
-                              path, names.size(), list_names(names)));
-    name = names[0];
+    const bool has_preferred =
+        !preferred.empty() && std::find(names.begin(), names.end(), preferred) != names.end();
+    if (names.size() != 1 && !has_preferred) {
+      const std::string none = preferred.empty() ? std::string() : fmt::format(", none named \"{}\"", shown(preferred));
+      throw Error(fmt::format("{}: has {} variables ({}){}; choose one by name (NAME:INDEX for a column of a matrix)",
+                              path, names.size(), list_names(names), none));
+    }
+    name = names.size() == 1 ? names[0] : preferred;
   } else if (const auto colon = spec.rfind(':'); colon != std::string::npos) {
     const auto names = mat_variable_names(path);
     if (std::find(names.begin(), names.end(), spec) == names.end()) {

@@ -18,8 +18,10 @@ std::string shown(std::string_view s);
 // mat.cpp
 // read_table for a .mat file.
 Table read_mat_table(const std::string& path);
-// read_column for a .mat file: spec "" (the only variable), NAME, or NAME:INDEX.
-std::vector<double> read_mat_variable(const std::string& path, const std::string& spec);
+// read_column for a .mat file: spec "" (the only variable; of several, the one named `preferred`
+// if there is one, as for a text file's column), NAME, or NAME:INDEX.
+std::vector<double> read_mat_variable(const std::string& path, const std::string& spec,
+                                      const std::string& preferred = {});
 bool is_matlab_identifier(std::string_view s);
 // Writes Nx1 double variables as MAT v5 to `tmp`, then re-checks what was written.
 void write_mat(const std::string& tmp, const std::vector<std::string>& names,

@@ -66,6 +66,12 @@ done
 "$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --column x --output "$T/y.mat"
 "$BIN" invert --model "$T/gpi.json" --input "$T/y.mat" --column output --output - 2> /dev/null > "$T/x_mat.csv"
 check "$T/x.csv" x "$T/x_mat.csv" input 1e-12 "gpi via .mat and stdout"
+# without --column a .mat file of several variables gives the one named output (invert) / input
+# (simulate), as a CSV file's column of that name does (y.mat holds the variables input, output)
+"$BIN" invert --model "$T/gpi.json" --input "$T/y.mat" --output "$T/x_mat_default.csv" 2> /dev/null
+check "$T/x.csv" x "$T/x_mat_default.csv" input 1e-12 "invert takes the .mat variable output"
+"$BIN" simulate --model "$T/gpi.json" --input "$T/y.mat" --output "$T/y_mat_default.csv"
+check "$T/y_gpi.csv" output "$T/y_mat_default.csv" output 0 "simulate takes the .mat variable input"
 
 # the real piezo file (leading empty column) if the shared data are present
 PIEZO="$2/../shared/data/piezo-sine/piezo_150V_1Hz.csv"

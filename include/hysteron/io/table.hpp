@@ -57,8 +57,9 @@ struct ReadOptions {
   // Field separator: 0 = autodetect, else ',', ';', '\t' or ' ' (runs of blanks).
   char separator = 0;
   HeaderMode header = HeaderMode::autodetect;
-  // With an empty column_spec and a file of several non-empty columns: the column with this
-  // header name, if there is one (e.g. "input" for `hysteron simulate`).
+  // With an empty column_spec and a file of several non-empty columns (a .mat file of several
+  // variables): the column with this header name (the variable of this name), if there is one
+  // (e.g. "input" for `hysteron simulate`); if none has it, the error of an empty column_spec.
   std::string preferred_column;
 };
 

@@ -3,8 +3,10 @@
 //   hysteron export --model M.json --out compensator.c [--header compensator.h] [--prefix NAME] [--limits=LO,HI]
 //                   [--loop result.json --run RUN]
 // --model - reads the model JSON from stdin; --out - (or a path naming stdout) writes the C file to stdout (not with
-// --header).
+// --header). --header names a regular file (or a new path): never stdout, a descriptor, a device or a FIFO.
 #include <fmt/format.h>
+
+#include <sys/stat.h>
 
 #include <cctype>
 #include <charconv>
@@ -43,6 +45,19 @@ std::string default_prefix(const std::string& out) {
   return "compensator";
 }
 
+// Why `path` cannot be the header the C file #includes (empty: it can): it names stdout or a
+// descriptor, or is a device, FIFO or socket (a directory is refused by check_output_files).
+std::string header_path_problem(const std::string& path) {
+  if (names_stdout(path)) return "names stdout";
+  if (path == "/dev/stdout" || path == "/dev/stderr" || path.starts_with("/dev/fd/") ||
+      path.starts_with("/proc/self/fd/"))
+    return "names a file descriptor, not a file";
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode))
+    return "is not a regular file (a device, FIFO or socket)";
+  return {};
+}
+
 int run_export(const Options& o) {
   // the C file #includes the header by its file name: the C file must be a file too, not stdout (-, /dev/stdout
   // or the file stdout is redirected to: names_stdout), as for every output that names stdout
@@ -50,6 +65,14 @@ int run_export(const Options& o) {
     throw Error(fmt::format("--header needs --out to name a file, not stdout (--out {}): the C file #includes the "
                             "header by its file name",
                             o.out));
+  // and the header must be a file of that name: stdout (- or any path names_stdout sees: #include "-" or
+  // "stdout"), a device, a FIFO or a descriptor path gives the C file an #include of nothing
+  if (!o.header.empty()) {
+    if (const std::string why = header_path_problem(o.header); !why.empty())
+      throw Error(fmt::format("--header {}: {}; the C file #includes the header by its file name, so --header must "
+                              "name a regular file (nothing was written)",
+                              o.header, why));
+  }
   if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
   if (!o.run.empty() && o.loop.empty()) throw Error("--run names a run of the --loop file: give --loop too");
   io::check_output_files({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});

@@ -174,6 +174,21 @@ for o in /dev/stdout "$T/stdout"; do
   [ -s "$T/stdout" ] && fail "header with --out $o: printed C on stdout"
   [ -e "$T/out/new.h" ] && fail "header with --out $o: wrote the header"
 done
+# a --header that names stdout (review s19: the C file then did #include "-" or "stdout") or that is no regular file
+# (a device, a FIFO: #include "null") is refused before anything is written: no C file, nothing on stdout
+for h in - /dev/stdout "$T/stdout" /dev/null; do
+  case $h in /dev/null) why="is not a regular file (a device, FIFO or socket)" ;; *) why="names stdout" ;; esac
+  expect_fail "header $h" 1 "--header $h: $why; the C file #includes the header by its file name" -- \
+    "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --header "$h"
+  [ -s "$T/stdout" ] && fail "header $h: printed on stdout"
+  [ -e "$T/out/new.c" ] && fail "header $h: wrote the C file"
+done
+# /dev/stdout with stdout on /dev/null (not stdout for names_stdout) is still no file to #include
+"$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --header /dev/stdout > /dev/null 2> "$T/stderr" \
+  && fail "header /dev/stdout > /dev/null: accepted"
+grep -qF -- '--header /dev/stdout: names a file descriptor' "$T/stderr" || {
+  fail "header /dev/stdout > /dev/null:"; cat "$T/stderr"; }
+[ -e "$T/out/new.c" ] && fail "header /dev/stdout > /dev/null: wrote the C file"
 # /dev/null is no stdout (nothing reads it): --out /dev/null > /dev/null with --header writes the header
 "$BIN" export --model "$T/gpi.json" --out /dev/null --header "$T/null.h" > /dev/null 2> /dev/null \
   || fail "export --out /dev/null --header: refused"

@@ -229,7 +229,7 @@ struct RigStatics {
   double regulator_limit_pa = 0.0;      // pressure_command_limit(regulator)
   double valves_limit_pa = 0.0;         // pressure_command_limit(switching_valves)
   std::vector<double> pressure_pa, rising_m, falling_m;
-  std::string unusable;                 // rig_unusable_reason(params, "rig"): "" if the experiments run
+  std::string unusable;                 // rig_unusable_reason(params, where): "" if the experiments run
   // The vented muscle after a hold at the top of its reach (rising_m.back()) longer than the creep
   // time (P4: x_c at the top): where its fall stops on the load's time scale, the falling branch at
   // 0 gauge (P2, z = -1) plus the creep element's pull k_c (top - x) against the return force (P5);
@@ -239,11 +239,13 @@ struct RigStatics {
   // k_c tau_c, in parallel with the load's damping; slower below where a spring's force drops).
   double vented_stall_m = 0.0;
   double creep_return_speed_m_s = 0.0;  // inf without damping and creep stiffness (null in JSON)
-  // rig_weak_return_reason: "" unless the stall lies in the upper half of the reach (docs/plant.md,
-  // "A weak return force"); `hysteron rig` warns with it, the experiments note it.
+  // rig_weak_return_reason(params, *this, where): "" unless the stall lies in the upper half of the
+  // reach (docs/plant.md, "A weak return force"); `hysteron rig` warns with it, the experiments note it.
   std::string weak_return;
 };
-RigStatics rig_statics(const PamRigParams& params);
+// Keys in `unusable` and `weak_return` (and validate's errors) are named with the prefix `where`
+// ("tracking rig": "tracking rig.load.mass").
+RigStatics rig_statics(const PamRigParams& params, std::string_view where = "rig");
 // The one JSON form of RigStatics (`hysteron rig --json`, Python's rig_statics): its fields by
 // name, the static map as three arrays, an infinite speed or lift-off as null.
 nlohmann::json rig_statics_to_json(const RigStatics& statics);

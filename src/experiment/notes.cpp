@@ -65,8 +65,8 @@ std::string descent_note(const PamRigParams& rig, const std::vector<Reference>& 
 // weak. Not a refusal: the vented muscle does get below the stall, only at the creep's pace, and a
 // reference the rig cannot follow is noted, as where it leaves the reach (fit_to_reach).
 std::string weak_return_note(const PamRigParams& rig, std::string_view which, const std::vector<Reference>& refs) {
-  const RigStatics s = rig_statics(rig);
-  const std::string why = rig_weak_return_reason(rig, s, which);
+  const RigStatics s = rig_statics(rig, which);  // its weak_return is the reason, keys named after `which`
+  const std::string& why = s.weak_return;
   if (why.empty()) return {};
   std::vector<std::string> below;
   for (const Reference& ref : refs) {

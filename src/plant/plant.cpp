@@ -100,8 +100,8 @@ double static_contraction(const PamRigParams& p, double p_gauge, double z) noexc
 
 // rig_statics and rig_unusable_reason live here, with the physics they call: plant_params.cpp is
 // built alone into the rig-file fuzzer.
-RigStatics rig_statics(const PamRigParams& p) {
-  validate(p, "rig");
+RigStatics rig_statics(const PamRigParams& p, std::string_view where) {
+  validate(p, where);
   RigStatics s;
   const LoadParams& l = p.load;
   s.stroke_m = p.muscle.max_contraction * p.muscle.rest_length;
@@ -132,7 +132,7 @@ RigStatics rig_statics(const PamRigParams& p) {
     s.falling_m.push_back(static_contraction(p, pa, -1.0));
     if (pa >= top) break;
   }
-  s.unusable = rig_unusable_reason(p, "rig");
+  s.unusable = rig_unusable_reason(p, where);
   // the vented muscle held at the top longer than the creep time: F(dP_h(0), x) + k_c (top - x) = R(x),
   // the left side minus the right non-increasing in x, so bisection on [0, top]
   const double held = s.rising_m.back();
@@ -153,7 +153,7 @@ RigStatics rig_statics(const PamRigParams& p) {
   // infinite where nothing resists the fall (no damping, no creep stiffness), as the fall speeds
   const double resistance = l.damping + p.hysteresis.creep_stiffness * p.hysteresis.creep_time;  // [N s/m]
   s.creep_return_speed_m_s = resistance > 0.0 ? return_force(l, s.vented_stall_m) / resistance : inf;
-  s.weak_return = rig_weak_return_reason(p, s, "rig");
+  s.weak_return = rig_weak_return_reason(p, s, where);
   return s;
 }
 

@@ -99,6 +99,17 @@ expect_fail "char" label:0 'variable "label"' "not numeric" "char"
 expect_fail "3-D" cube:0 'variable "cube"' "3-D array" "2x2x2"
 expect_fail "complex" z:0 'variable "z"' "complex"
 expect_fail "sparse" S:1 'variable "S"' "sparse" "full()"
+# simulate / invert without --column on a file of several variables, none named input / output: the error lists
+# them and says which name was looked for (a variable of that name would be taken: cli/simulate_invert.sh)
+for cmd in simulate:input invert:output; do
+  "$BIN" "${cmd%%:*}" --model "$T/pi.json" --input "$T/rec.mat" --output "$T/never.csv" > /dev/null 2> "$T/err"
+  rc=$?
+  [ $rc -eq 1 ] || fail "${cmd%%:*} without --column: exit $rc"
+  grep -qF "$T/rec.mat: has 7 variables (" "$T/err" && grep -qF "\"xrow\"" "$T/err" \
+    && grep -qF "), none named \"${cmd#*:}\"; choose one by name" "$T/err" \
+    || fail "${cmd%%:*} without --column: message: $(cat "$T/err")"
+  [ -e "$T/never.csv" ] && fail "${cmd%%:*} without --column: wrote an output"
+done
 # NAME:INDEX in a CSV file: not a matrix column (a header named so would win)
 "$BIN" fit --model pi --data "$T/rec.csv" --input data:1 --output y --out "$T/never.json" > /dev/null 2> "$T/err"
 rc=$?

@@ -410,6 +410,28 @@ TEST(IdentifyAll, StationaryCostEndsTheFitAsConverged) {
   }
 }
 
+// gpi's LM runs in two passes (a probe, then the rest with the parameters on their bounds
+// held): a fit that ends on the iteration limit says the whole count, as `iterations` does
+// (the message said Ceres' "Number of iterations: 3." of the second pass for 43 in all).
+TEST(IdentifyGpi, IterationLimitMessageCountsBothPasses) {
+  // a record gpi cannot fit exactly (a ripple in the input): LM still moves after 40 iterations
+  const auto x = decaying_triangle({6, 4, 2, 5, 1, 3}, 100);
+  auto y = with_noise(simulate_record(true_gpi(), x), 0.2, 5);
+  for (std::size_t k = 0; k < x.size(); ++k) y[k] += 0.5 * std::sin(7.0 * x[k]);
+  FitOptions o;
+  o.model = FitModel::gpi;
+  o.num_starts = 1;
+  o.compute_covariance = false;
+  o.stall_tolerance = 0.0;  // only the iteration limit ends it
+  o.function_tolerance = o.gradient_tolerance = o.parameter_tolerance = 0.0;
+  o.max_iterations = 43;  // above the probe's 40: a second pass
+  const FitReport r = fit(x, y, o);
+  ASSERT_EQ(r.status, FitStatus::no_convergence) << r.full_report();
+  EXPECT_EQ(r.iterations, 43) << r.full_report();
+  EXPECT_NE(r.message.find("43 in all"), std::string::npos) << r.message;
+  EXPECT_EQ(r.message.find("Number of iterations: 3."), std::string::npos) << r.message;
+}
+
 // The same confounding for the kinds fitted in the cumulative-slope layout with envelopes
 // (mpi-asym: two, gpi --free-weights: one): from a relaxed start a common shift of the c[3]s
 // is the output offset. The other parameters keep their standard errors.

@@ -156,6 +156,13 @@ Solved solve(const LmProblem& lm, const Data& d, const std::vector<double>& thet
   Solved again = solve_once(lm, d, at, lower, bound ? active : held, o, start, left);
   if (again.usable && again.final_cost <= out.final_cost) {
     again.initial_cost = out.initial_cost;
+    // Ceres' "Number of iterations: N" counts the second pass only: say the whole count
+    if (again.termination == ceres::NO_CONVERGENCE)
+      again.message = fmt::format("Maximum number of iterations reached: {} in all ({} before and {} after {})",
+                                  out.iterations + again.iterations, out.iterations, again.iterations,
+                                  bound ? fmt::format("holding {} parameter(s) on their lower bounds",
+                                                      active.size() - held.size())
+                                        : std::string("a restart from the first pass's end"));
     again.iterations += out.iterations;
     if (bound) again.at_bound.assign(active.begin() + static_cast<std::ptrdiff_t>(held.size()), active.end());
     return again;

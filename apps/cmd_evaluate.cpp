@@ -2,7 +2,7 @@
 // week can be checked on today's record.
 //
 //   hysteron evaluate --model m.json|- --data D.csv --input COL --output COL
-//                     [--range A:B | --train A:B] [--time-column T]
+//                     [--range A:B | --train A:B] [--time-column T [--time-unit s|ms|us]]
 //                     [--sample-time S] [--relaxed]
 //                     [--report r.html|r.json] [--json] [--uncensored] [--input-label "Pressure [kPa]"]
 //                     [--output-label "..."]

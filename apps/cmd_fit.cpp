@@ -136,6 +136,15 @@ int run_fit(const FitCliOptions& c) {
       time_warnings.push_back(fmt::format("{}: auto's rate-pi candidate is not fitted", e.what()));
     }
   }
+  // rate-pi's dt is in seconds: a record sampled slower than 10 Hz is rare for it, a column in ms common
+  if (rate && o.sample_time > 0.1)
+    time_warnings.push_back(fmt::format(
+        "{}: rate-pi's sample time is {:.6g} s ({}), above 0.1 s: is the time column in ms? see --time-unit "
+        "(--sample-time and the model's dt are in seconds)",
+        c.sel.file, o.sample_time,
+        c.sample_time > 0 ? std::string("--sample-time")
+                          : fmt::format("the median step of the time column {} in {}", c.sel.time_column,
+                                        c.sel.time_unit)));
   // a range in seconds looks its ends up in the time column: it must not go backwards
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
   if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))

@@ -69,16 +69,18 @@ bool names_stdout(const std::string& path);
 // What fit and evaluate read from a data file and how the reports describe it.
 struct DataSelection {
   std::string file, input, output, time_column;  // time_column empty: no time axis
+  std::string time_unit = "s";                   // of the time column: s, ms or us (read as seconds)
   std::string input_label, output_label;         // "Pressure [kPa]"; empty: the column name
 };
 struct DataColumns {
   std::vector<double> x, y;
   std::optional<std::vector<double>> t;
 };
-// Registers --data, --input, --output, --time-column, --input-label, --output-label.
+// Registers --data, --input, --output, --time-column, --time-unit, --input-label, --output-label.
 void add_data_options(CLI::App* sub, DataSelection& sel);
-// The input, output and (if named) time columns of `file`, of equal lengths; throws
-// hysteron::Error naming the file otherwise.
+// The input, output and (if named) time columns of `file`, of equal lengths, the time column in
+// seconds (sel.time_unit converted here, the one place it is read); throws hysteron::Error naming
+// the file otherwise.
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel);
 // Time columns (rate-pi's sample time, ranges in seconds): throws hysteron::Error naming the file,
 // the column and the first sample whose time stamp is not a number or below the one before

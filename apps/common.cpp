@@ -176,7 +176,11 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
                   "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a "
                   "matrix)")
       ->required();
-  sub->add_option("--time-column", sel.time_column, "time column: ranges in seconds, time axis of the HTML report");
+  CLI::Option* time = sub->add_option("--time-column", sel.time_column,
+                                      "time column: ranges in seconds, time axis of the HTML report");
+  sub->add_option("--time-unit", sel.time_unit, "unit of the time column: s (default), ms or us; read as seconds")
+      ->check(CLI::IsMember({"s", "ms", "us"}))
+      ->needs(time);
   sub->add_option("--input-label", sel.input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
   sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");
 }
@@ -191,6 +195,9 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
     d.t = io::read_column(file, sel.time_column);
     if (d.t->size() != d.x.size())
       throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));
+    const double to_s = sel.time_unit == "ms" ? 1e-3 : sel.time_unit == "us" ? 1e-6 : 1.0;
+    if (to_s != 1.0)
+      for (double& v : *d.t) v *= to_s;
   }
   return d;
 }
@@ -201,8 +208,8 @@ void check_sample_time_agrees(double sample_time, const std::vector<double>* t, 
   const double step = median_time_step(*t);  // s
   if (!(step > 0.0) || std::abs(sample_time - step) <= kSampleTimeTolerance * step) return;
   throw Error(fmt::format("{}: --sample-time {:.6g} s disagrees with the median step {:.6g} s of the time column {} "
-                          "(by {:.3g} %, more than the {:g} % allowed): one of them is wrong (a rate, or a unit); give the "
-                          "right one alone",
+                          "(by {:.3g} %, more than the {:g} % allowed): one of them is wrong (a rate, or a unit: see "
+                          "--time-unit); give the right one alone",
                           file, sample_time, step, column, 100.0 * std::abs(sample_time - step) / step,
                           100.0 * kSampleTimeTolerance));
 }

@@ -5,6 +5,7 @@
 # time: --sample-time and a time column that disagree by more than 1 % are refused (fit,
 # evaluate); fit's --validate-data files get evaluate's check against the model's dt; evaluate
 # without a time column, simulate and invert say the model's dt is assumed.
+# --time-unit ms|us reads the time column as seconds; fit asks about a sample time above 0.1 s.
 # Usage: bash time_base.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 BIN=$1
@@ -138,6 +139,29 @@ cut -d, -f2 "$T/sim.csv" > "$T/yd.csv"
 grep -q "^invert: warning: .*the rate-pi model's dt 0.001 s is assumed" "$T/err.txt" || fail "invert rate-pi: $(cat "$T/err.txt")"
 "$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/sim.csv" 2> "$T/err.txt" || fail "simulate gpi"
 grep -q "the record's sample time" "$T/err.txt" && fail "simulate gpi warned: $(cat "$T/err.txt")"
+
+# ---- F2: --time-unit ms|us: read as seconds; a sample time above 0.1 s asks whether the column is in ms ----
+fit --data "$T/rms.csv" --time-column t --time-unit ms --out "$T/ms.json" > "$T/out.txt" 2>&1
+[ "$(model_dt "$T/ms.json")" = "0.001" ] || fail "--time-unit ms: dt $(model_dt "$T/ms.json")"
+grep -q "see --time-unit" "$T/out.txt" && fail "--time-unit ms: still warned"
+fit --data "$T/rus.csv" --time-column t --time-unit us --out "$T/us.json" > /dev/null 2>&1
+[ "$(model_dt "$T/us.json")" = "0.001" ] || fail "--time-unit us: dt $(model_dt "$T/us.json")"
+fit --data "$T/rms.csv" --time-column t --out "$T/ms1.json" > "$T/out.txt" 2>&1
+grep -q "rate-pi's sample time is 1 s (the median step of the time column t in s), above 0.1 s: is the time column in ms? see --time-unit" \
+  "$T/out.txt" || fail "ms column read as s: no warning: $(grep -i warn "$T/out.txt")"
+# ranges in seconds are seconds: 0.1 s .. 0.3 s of a 1 ms record in ms = samples 100..300
+"$BIN" fit --model pi --data "$T/rms.csv" --input p --output y --time-column t --time-unit ms --train 0.1s:0.3s \
+  --threads 1 --force --out "$T/pi.json" --json > "$T/out.json" 2> /dev/null
+$PY -c "import json,sys; d=json.load(open(sys.argv[1]))['data']['train']; assert d == [100, 300], d" \
+  "$T/out.json" || fail "--time-unit ms --train 0.1s:0.3s"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit ms \
+  > /dev/null 2> "$T/err.txt" || fail "evaluate --time-unit ms: exit $?"
+grep -q "the record's sample time" "$T/err.txt" && fail "evaluate --time-unit ms warned: $(cat "$T/err.txt")"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-unit ms > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--time-unit without --time-column: not exit 1"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit min \
+  > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--time-unit min: not exit 1"
 
 [ $fails -eq 0 ] && echo "time_base: all passed"
 exit $fails

@@ -2,7 +2,8 @@
 // week can be checked on today's record.
 //
 //   hysteron evaluate --model m.json|- --data D.csv --input COL --output COL
-//                     [--range A:B | --train A:B] [--time-column T] [--relaxed]
+//                     [--range A:B | --train A:B] [--time-column T [--time-unit s|ms|us]]
+//                     [--sample-time S] [--relaxed]
 //                     [--report r.html|r.json] [--json] [--uncensored] [--input-label "Pressure [kPa]"]
 //                     [--output-label "..."]
 //
@@ -35,6 +36,7 @@ namespace {
 struct EvaluateOptions {
   std::string model, range, report;
   DataSelection sel;
+  double sample_time = 0.0;  // s; 0: the time column's median step, or unknown
   bool json = false, relaxed = false, uncensored = false;
 };
 
@@ -56,30 +58,9 @@ int run_evaluate(const EvaluateOptions& c) {
     throw Error(fmt::format("{}: {} sample(s) in the evaluated range [{}, {}): too few to score (need at least 2)",
                             c.sel.file, range.end - range.begin, range.begin, range.end));
   std::vector<std::string> warnings;
-  if (const auto* rp = std::get_if<RatePiParams>(&model); rp && rec.t && rec.t->size() > 1) {
-    // rate-pi's rates are per second through its dt: a record sampled otherwise is run at the wrong
-    // rates. The time column's faults are warnings here (the model's dt is what runs it)
-    try {
-      if (std::string w = require_increasing_time(*rec.t, c.sel.file, sel.time_column, "rate-pi's sample time");
-          !w.empty())
-        warnings.push_back(std::move(w));
-    } catch (const Error& e) {
-      warnings.push_back(fmt::format("{}: the record's sample time is uncertain", e.what()));
-    }
-    const double dt = median_time_step(*rec.t);
-    if (!(dt > 0.0))
-      warnings.push_back(fmt::format("{}: the time column {} has no positive median step: the record's sample time "
-                                     "is unknown",
-                                     c.sel.file, sel.time_column));
-    else if (std::abs(dt - rp->dt) > 0.1 * rp->dt)
-      warnings.push_back(fmt::format("{}: the record's sample time {:.6g} s (median step of the time column {}) differs "
-                                     "from the rate-pi model's dt {:.6g} s: the model runs its rates {:.3g}x too {}",
-                                     c.sel.file, dt, sel.time_column, rp->dt, std::max(dt, rp->dt) / std::min(dt, rp->dt),
-                                     dt > rp->dt ? "slow" : "fast"));
-    if (warnings.empty())
-      if (std::string w = uniform_time_warning(*rec.t, c.sel.file, sel.time_column); !w.empty())
-      warnings.push_back(std::move(w));
-  }
+  // rate-pi's rates are per second through its dt: a record sampled otherwise is run at the wrong rates
+  check_sample_time_agrees(c.sample_time, rec.t ? &*rec.t : nullptr, c.sel.file, sel.time_column);
+  warnings = rate_time_warnings(model, rec.t ? &*rec.t : nullptr, c.sample_time, c.sel.file, sel.time_column);
   const InputCoverage coverage = input_coverage(model, rec.x, range);
   if (std::string w = input_coverage_warning(coverage, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
   // a record whose output differs from the training record's by a sign, a unit or a zero scores poorly
@@ -137,6 +118,10 @@ void add_evaluate(CLI::App& app, Action& action) {
   add_data_options(sub, c->sel);
   sub->add_option("--range,--train", c->range,
                   "samples scored: A:B (sample indices, half-open) or As:Bs (seconds); default: the whole record");
+  sub->add_option("--sample-time", c->sample_time,
+                  "sample time of the record in s, checked against a rate-pi model's dt (default: the median step "
+                  "of --time-column; with both they must agree)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--report", c->report, "write a report: HTML if the name ends in .html/.htm, else JSON");
   sub->add_flag("--json", c->json, "print the result as one JSON document");
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");

@@ -117,6 +117,8 @@ int run_fit(const FitCliOptions& c) {
   o.censor_passes = c.censor_passes;
   std::vector<std::string> time_warnings;
   const bool rate = o.model == FitModel::rate_pi || o.model == FitModel::automatic;
+  // both given: they must agree (--sample-time silently overrode a column of another step)
+  check_sample_time_agrees(o.sample_time, time ? &*time : nullptr, c.sel.file, c.sel.time_column);
   if (rate && o.sample_time == 0.0 && time && time->size() > 1) {
     // rate-pi: the median step of the time column, which must increase and should be uniform.
     // auto: only its rate-pi candidate needs it; a column that cannot give it leaves that
@@ -134,6 +136,15 @@ int run_fit(const FitCliOptions& c) {
       time_warnings.push_back(fmt::format("{}: auto's rate-pi candidate is not fitted", e.what()));
     }
   }
+  // rate-pi's dt is in seconds: a record sampled slower than 10 Hz is rare for it, a column in ms common
+  if (rate && o.sample_time > 0.1)
+    time_warnings.push_back(fmt::format(
+        "{}: rate-pi's sample time is {:.6g} s ({}), above 0.1 s: is the time column in ms? see --time-unit "
+        "(--sample-time and the model's dt are in seconds)",
+        c.sel.file, o.sample_time,
+        c.sample_time > 0 ? std::string("--sample-time")
+                          : fmt::format("the median step of the time column {} in {}", c.sel.time_column,
+                                        c.sel.time_unit)));
   // a range in seconds looks its ends up in the time column: it must not go backwards
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
   if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))
@@ -209,8 +220,15 @@ int run_fit(const FitCliOptions& c) {
         doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
         const std::string what = v.file.empty() ? "validation range" : v.file;
         // a validation record beyond the training range scores the model's extrapolation; one whose output
-        // differs by a sign, a unit or a zero scores that
-        for (std::string w : {input_coverage_warning(cov, what), output_map_warning(map, what)})
+        // differs by a sign, a unit or a zero scores that; another file sampled otherwise runs rate-pi's
+        // rates wrong (as evaluate says)
+        std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what)};
+        if (!v.file.empty()) {
+          auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
+                                       v.file, c.sel.time_column);
+          ws.insert(ws.end(), rw.begin(), rw.end());
+        }
+        for (std::string& w : ws)
           if (!w.empty()) {
             rep.warnings.push_back(w);
             doc.fit.warnings.push_back(std::move(w));

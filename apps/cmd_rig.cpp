@@ -42,6 +42,11 @@ int run_rig(const Options& o) {
   if (!o.out.empty()) save_rig_params(p, out_stdout ? std::string("-") : o.out);
   if (!s.unusable.empty()) fmt::print(stderr, "rig: warning: the experiments refuse this rig: {}\n", s.unusable);
   if (!s.weak_return.empty()) fmt::print(stderr, "rig: warning: {}\n", s.weak_return);
+  try {  // the experiments' 1 ms control period must be a whole number of rig steps
+    control_steps(1e-3, p.simulation.dt, "the experiments' control period");
+  } catch (const Error& e) {
+    fmt::print(stderr, "rig: warning: the experiments refuse this rig: {}\n", e.what());
+  }
   if (out_stdout) return exit_ok;  // stdout holds the rig's JSON alone
   if (!o.out.empty()) fmt::print(stderr, "rig: the complete rig written to {}\n", o.out);
   if (o.json) {

@@ -118,6 +118,8 @@ double relaxed_input_for(const ModelParams& params, const Limits& lim, double y0
 int run_simulate(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
+  for (const auto& w : rate_time_warnings(params, nullptr, 0.0, o.input, ""))  // no time column read here
+    fmt::print(stderr, "{}: warning: {}\n", "simulate", w);
   const io::ReadOptions ro = input_options(o.column, "input");
   Model model(params);
   InputCoverage coverage;  // summed over the blocks: inputs beyond the model's input_limits
@@ -164,6 +166,8 @@ int run_simulate(const Options& o) {
 int run_invert(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
+  for (const auto& w : rate_time_warnings(params, nullptr, 0.0, o.input, ""))  // no time column read here
+    fmt::print(stderr, "{}: warning: {}\n", "invert", w);
   const io::ReadOptions ro = input_options(o.column, "output");
   InverseOptions opt;
   if (!o.limits.empty()) {

@@ -69,16 +69,18 @@ bool names_stdout(const std::string& path);
 // What fit and evaluate read from a data file and how the reports describe it.
 struct DataSelection {
   std::string file, input, output, time_column;  // time_column empty: no time axis
+  std::string time_unit = "s";                   // of the time column: s, ms or us (read as seconds)
   std::string input_label, output_label;         // "Pressure [kPa]"; empty: the column name
 };
 struct DataColumns {
   std::vector<double> x, y;
   std::optional<std::vector<double>> t;
 };
-// Registers --data, --input, --output, --time-column, --input-label, --output-label.
+// Registers --data, --input, --output, --time-column, --time-unit, --input-label, --output-label.
 void add_data_options(CLI::App* sub, DataSelection& sel);
-// The input, output and (if named) time columns of `file`, of equal lengths; throws
-// hysteron::Error naming the file otherwise.
+// The input, output and (if named) time columns of `file`, of equal lengths, the time column in
+// seconds (sel.time_unit converted here, the one place it is read); throws hysteron::Error naming
+// the file otherwise.
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel);
 // Time columns (rate-pi's sample time, ranges in seconds): throws hysteron::Error naming the file,
 // the column and the first sample whose time stamp is not a number or below the one before
@@ -92,6 +94,19 @@ double median_time_step(const std::vector<double>& t);
 // "" if every step of an increasing time column lies within 0.4 .. 1.9 times the median step, else
 // a warning that names the file, the column and the sample of the widest (a gap) or narrowest step.
 std::string uniform_time_warning(const std::vector<double>& t, const std::string& file, const std::string& column);
+// --sample-time and --time-column both given must agree: throws hysteron::Error naming both values
+// when `sample_time` (> 0; 0: not given) and the median step of `t` (if any, and > 0) differ by more
+// than kSampleTimeTolerance of the median step.
+inline constexpr double kSampleTimeTolerance = 0.01;
+void check_sample_time_agrees(double sample_time, const std::vector<double>* t, const std::string& file,
+                              const std::string& column);
+// A rate-dependent model (rate-pi: its rates per second through its dt) run at its dt on the record
+// `file`: warnings for a record sampled otherwise (more than 10 % from dt), for the time column's
+// faults, and for a record whose sample time is unknown (no time column `t`, `sample_time` 0: the
+// model's dt is assumed). The record's sample time is `sample_time` if > 0, else the median step of
+// `t`. Empty for a rate-independent model. Used by evaluate and by fit's --validate-data files.
+std::vector<std::string> rate_time_warnings(const ModelParams& model, const std::vector<double>* t,
+                                            double sample_time, const std::string& file, const std::string& column);
 // The data section of a fit/evaluation document and the plot data of its HTML report.
 io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range);
 report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range);

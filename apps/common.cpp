@@ -176,7 +176,11 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
                   "output column: header name or 0-based index; .mat: variable or NAME:INDEX (0-based column of a "
                   "matrix)")
       ->required();
-  sub->add_option("--time-column", sel.time_column, "time column: ranges in seconds, time axis of the HTML report");
+  CLI::Option* time = sub->add_option("--time-column", sel.time_column,
+                                      "time column: ranges in seconds, time axis of the HTML report");
+  sub->add_option("--time-unit", sel.time_unit, "unit of the time column: s (default), ms or us; read as seconds")
+      ->check(CLI::IsMember({"s", "ms", "us"}))
+      ->needs(time);
   sub->add_option("--input-label", sel.input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
   sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");
 }
@@ -191,8 +195,61 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
     d.t = io::read_column(file, sel.time_column);
     if (d.t->size() != d.x.size())
       throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));
+    const double to_s = sel.time_unit == "ms" ? 1e-3 : sel.time_unit == "us" ? 1e-6 : 1.0;
+    if (to_s != 1.0)
+      for (double& v : *d.t) v *= to_s;
   }
   return d;
+}
+
+void check_sample_time_agrees(double sample_time, const std::vector<double>* t, const std::string& file,
+                              const std::string& column) {
+  if (!(sample_time > 0.0) || !t || t->size() < 2) return;
+  const double step = median_time_step(*t);  // s
+  if (!(step > 0.0) || std::abs(sample_time - step) <= kSampleTimeTolerance * step) return;
+  throw Error(fmt::format("{}: --sample-time {:.6g} s disagrees with the median step {:.6g} s of the time column {} "
+                          "(by {:.3g} %, more than the {:g} % allowed): one of them is wrong (a rate, or a unit: see "
+                          "--time-unit); give the right one alone",
+                          file, sample_time, step, column, 100.0 * std::abs(sample_time - step) / step,
+                          100.0 * kSampleTimeTolerance));
+}
+
+std::vector<std::string> rate_time_warnings(const ModelParams& model, const std::vector<double>* t,
+                                            double sample_time, const std::string& file, const std::string& column) {
+  std::vector<std::string> warnings;
+  const auto* rp = std::get_if<RatePiParams>(&model);
+  if (!rp) return warnings;
+  if (!(sample_time > 0.0) && (!t || t->size() < 2)) {
+    warnings.push_back(fmt::format("{}: the record's sample time is unknown (no time column): the rate-pi model's "
+                                   "dt {:.6g} s is assumed (its rates are per second through it)",
+                                   file, rp->dt));
+    return warnings;
+  }
+  double dt = sample_time;  // s
+  std::string from = "--sample-time";
+  if (!(dt > 0.0)) {
+    // The time column's faults are warnings here (the model's dt is what runs it)
+    try {
+      if (std::string w = require_increasing_time(*t, file, column, "rate-pi's sample time"); !w.empty())
+        warnings.push_back(std::move(w));
+    } catch (const Error& e) {
+      warnings.push_back(fmt::format("{}: the record's sample time is uncertain", e.what()));
+    }
+    dt = median_time_step(*t);
+    from = fmt::format("median step of the time column {}", column);
+  }
+  if (!(dt > 0.0))
+    warnings.push_back(fmt::format("{}: the time column {} has no positive median step: the record's sample time "
+                                   "is unknown",
+                                   file, column));
+  else if (std::abs(dt - rp->dt) > 0.1 * rp->dt)
+    warnings.push_back(fmt::format("{}: the record's sample time {:.6g} s ({}) differs from the rate-pi model's dt "
+                                   "{:.6g} s: the model runs its rates {:.3g}x too {}",
+                                   file, dt, from, rp->dt, std::max(dt, rp->dt) / std::min(dt, rp->dt),
+                                   dt > rp->dt ? "slow" : "fast"));
+  if (warnings.empty() && t && !(sample_time > 0.0))
+    if (std::string w = uniform_time_warning(*t, file, column); !w.empty()) warnings.push_back(std::move(w));
+  return warnings;
 }
 
 std::string require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,

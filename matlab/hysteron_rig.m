@@ -16,7 +16,8 @@ function out = hysteron_rig(pressure_mpa, varargin)
 %                      (see hysteron_rig_params()), or a JSON file name
 %     seed             seed of the sensor noise (default 1); a run is reproducible
 %                      bit for bit for a seed
-%     control_period   seconds per value of P (default 1e-3)
+%     control_period   seconds per value of P (default 1e-3); a whole multiple of the
+%                      rig's simulation.dt (an error names the nearest dt that divides it)
 %   The same as the Python hysteron.PamRig(params, seed).run_pressure(P).
 %
 %   Example:

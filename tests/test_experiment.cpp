@@ -176,6 +176,25 @@ TEST(Experiment, UnknownNameAndBadOptionsAreRejected) {
   EXPECT_THROW(run_experiment(o), Error);
 }
 
+TEST(Experiment, ARigWhoseDtDoesNotDivideTheControlPeriodIsRefused) {
+  // it ran every 11 steps of 9.52e-5 s (1.0472 ms) with controllers discretised at 1 ms
+  ExperimentOptions o;
+  o.name = "gpi-pid";
+  o.rig.simulation.dt = 9.52e-5;
+  std::string msg = test::error_of([&] { o.validate(); });
+  EXPECT_NE(msg.find("experiment: rig: control_period = 0.001 s is not a whole multiple of the rig's simulation.dt = "
+                     "9.52e-05 s"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("nearest dt that divides it is 9.09091e-05 s"), std::string::npos) << msg;
+  o.rig.simulation.dt = 5e-5;  // 20 steps
+  EXPECT_NO_THROW(o.validate());
+  o.tracking_rig = o.rig;
+  o.tracking_rig->simulation.dt = 9.52e-5;
+  msg = test::error_of([&] { o.validate(); });
+  EXPECT_NE(msg.find("experiment: tracking rig: control_period = 0.001 s"), std::string::npos) << msg;
+}
+
 TEST(Experiment, GpiPidEndToEnd) {
   ExperimentOptions o;
   o.name = "gpi-pid";

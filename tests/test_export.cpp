@@ -590,6 +590,20 @@ TEST(ExportCheck, BadOptionsAndModelsAreRefused) {
   EXPECT_THROW(io::generate_c(asym, o), hysteron::Error);
   o.inverse_limits = Limits{-2.0, 2.0};
   EXPECT_NO_THROW(io::generate_c(asym, o));
+  // rate-pi is made of plays: refused as rate-dependent, not as a model without a play structure
+  const ModelParams rate = io::model_from_json(
+      io::parse_json(R"({"model": "rate-pi", "q": 0.4, "r": [0.1], "p": [0.3], "c": 0.01, "tau": 0.05, "dt": 0.001})",
+                     "rp"),
+      "rp");
+  try {
+    io::generate_c(rate, o);
+    FAIL() << "rate-pi was exported";
+  } catch (const hysteron::Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("rate-pi: rate-dependent"), std::string::npos) << m;
+    EXPECT_NE(m.find("not supported"), std::string::npos) << m;
+    EXPECT_EQ(m.find("no play structure"), std::string::npos) << m;
+  }
 }
 
 TEST(ExportCheck, ConstantsRoundTripAndCommentsNameTheSource) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -449,6 +450,38 @@ TEST(PamRig, StepAndRunDoNotAllocate) {
 // the controller must see bit for bit what it sees with an observer (which measures every
 // step), with the regulator and with the valves, a control period of 10 and of 7 rig steps
 // (one that does not divide the duration) and a sensor filter.
+TEST(PamRig, AControlPeriodMustBeAWholeNumberOfRigSteps) {
+  EXPECT_EQ(control_steps(1e-3, 1e-4, "x"), 10);
+  EXPECT_EQ(control_steps(1e-3, 5e-5, "x"), 20);
+  EXPECT_EQ(control_steps(7e-4, 1e-4, "x"), 7);
+  EXPECT_EQ(control_steps(1e-4, 1e-4, "x"), 1);
+  // 1e-3 / 9.52e-5 = 10.504 steps, rounded to 11: the loop ran every 11 x 9.52e-5 = 1.0472 ms. The dts
+  // dividing 1 ms either side: 1e-3/10 = 1e-4 (4.8e-6 s away) and 1e-3/11 = 9.0909e-5 (4.29e-6 s away), the nearer
+  const std::string msg = error_of([] { control_steps(1e-3, 9.52e-5, "experiment: rig"); });
+  EXPECT_EQ(msg.rfind("experiment: rig: control_period = 0.001 s", 0), 0u) << msg;
+  EXPECT_NE(msg.find("simulation.dt = 9.52e-05 s"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("nearest dt that divides it is 9.09091e-05 s (11 steps)"), std::string::npos) << msg;
+  // 1e-3 / 1.2e-4 = 8.33: 1e-3/8 = 1.25e-4 (5e-6 away) is nearer than 1e-3/9 = 1.111e-4 (8.9e-6 away)
+  EXPECT_NE(error_of([] { control_steps(1e-3, 1.2e-4, "x"); }).find("is 0.000125 s (8 steps)"), std::string::npos);
+  // shorter than dt: no longer run every step, refused (the nearest dt is the period itself)
+  EXPECT_NE(error_of([] { control_steps(5e-5, 1e-4, "x"); }).find("is 5e-05 s (1 steps)"), std::string::npos);
+  for (double bad : {0.0, -1e-3, std::nan(""), std::numeric_limits<double>::infinity(), 1e9})
+    EXPECT_NE(error_of([bad] { control_steps(bad, 1e-4, "x"); }).find("whole multiple"), std::string::npos) << bad;
+
+  // run() refuses such a period before the first step (it ran every 11 steps, 1.0472 ms)
+  PamRigParams p;
+  p.simulation.dt = 9.52e-5;
+  PamRig rig(p, 1);
+  int calls = 0;
+  const std::string run_msg = error_of([&] {
+    rig.run(0.01, 1e-3, [&](const RigOutputs&) { ++calls; return RigInputs{0.2, 0.0, Actuation::regulator}; });
+  });
+  EXPECT_NE(run_msg.find("PamRig::run: control_period = 0.001 s is not a whole multiple"), std::string::npos)
+      << run_msg;
+  EXPECT_EQ(calls, 0);
+  EXPECT_EQ(rig.time(), 0.0);
+}
+
 TEST(PamRig, RunWithoutObserverSeesWhatRunWithObserverSees) {
   PamRigParams p;
   p.sensors.pressure_time_constant = 2e-3;

@@ -177,6 +177,13 @@ struct PamRigParams {
 // "rig.load.mass = -1: must be > 0") prefixed by `where`.
 void validate(const PamRigParams& params, std::string_view where = "rig");
 
+// Rig steps of `dt` in one control period: control_period / dt, which must be a whole number
+// within 1..1e12 (to 1e-9 relative) - a period rounded to whole steps would run the loop at
+// another rate than the one its controllers are discretised for. Throws hysteron::Error
+// "<where>: control_period = ... s is not a whole multiple of the rig's simulation.dt = ... s
+// (... steps); the nearest dt that divides it is ... s".
+std::int64_t control_steps(double control_period, double dt, std::string_view where);
+
 // JSON: an object with optional sections "muscle", "hysteresis", "air",
 // "regulator", "valves", "load", "sensors", "simulation", each an object with
 // the field names above. Missing keys keep their default; an unknown key, a
@@ -325,7 +332,7 @@ class PamRig {
   RigOutputs step(const RigInputs& in) noexcept;
 
   // Calls controller(const RigOutputs& last) -> RigInputs every `control_period`
-  // seconds (rounded to whole rig steps; <= dt means every step), holds its
+  // seconds (a whole multiple of dt, see control_steps; else throws), holds its
   // inputs in between, and observer(const RigInputs&, const RigOutputs&) after
   // every rig step, for `duration` seconds. Throws hysteron::Error (via check())
   // if the simulation diverges. Returns the last outputs.
@@ -419,8 +426,7 @@ RigOutputs PamRig::run(double duration, double control_period, Controller&& cont
   check();
   const double h = p_.simulation.dt;
   const auto steps = static_cast<std::int64_t>(duration / h + 0.5);
-  std::int64_t every = static_cast<std::int64_t>(control_period / h + 0.5);
-  if (every < 1) every = 1;
+  const std::int64_t every = control_steps(control_period, h, "PamRig::run");
   RigInputs in = last_in_;
   constexpr bool observed = !std::is_same_v<std::remove_cvref_t<Observer>, Unobserved>;
   for (std::int64_t k = 0; k < steps; ++k) {

@@ -470,14 +470,19 @@ void cmd_rig(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   if (!(control_period > 0))
     throw MexError(id_bad_argument, fmt::format("{}: must be > 0, got {}", opt.where("control_period"), control_period));
   PamRig rig(params, seed);
-  const long every = std::max<long>(1, std::lround(control_period / rig.dt()));
+  std::int64_t every = 1;  // rig steps per sample: a whole number, as the experiments and Python check
+  try {
+    every = control_steps(control_period, rig.dt(), opt.where("control_period"));
+  } catch (const Error& e) {
+    throw MexError(id_bad_argument, e.what());
+  }
   std::vector<double> t, cmd, pr, x, xm;
   for (auto* v : {&t, &cmd, &pr, &x, &xm}) v->reserve(p.size());
   RigInputs in;
   for (double u : p) {
     in.pressure_command = u;
     RigOutputs o;
-    for (long k = 0; k < every; ++k) o = rig.step(in);
+    for (std::int64_t k = 0; k < every; ++k) o = rig.step(in);
     t.push_back(o.time);
     cmd.push_back(u);
     pr.push_back(o.pressure_measured * 1e-6);

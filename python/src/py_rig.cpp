@@ -140,12 +140,7 @@ for a given seed.)doc"))
             const auto checked = as_finite_span(profile, "run_pressure: profile");
             const std::vector<double> p(checked.begin(), checked.end());  // a copy: the run is without the GIL
             // A period that is not a whole number of rig steps was rounded silently.
-            const double ratio = control_period / r.dt();
-            const long every = std::isfinite(ratio) && ratio < 1e12 ? std::lround(ratio) : 0;
-            if (!(control_period > 0) || every < 1 || std::abs(ratio - static_cast<double>(every)) > 1e-9 * ratio)
-              throw Error(fmt::format("run_pressure: control_period = {} s must be a whole multiple (1..1e12) of the "
-                                      "rig step dt = {} s",
-                                      control_period, r.dt()));
+            const auto every = control_steps(control_period, r.dt(), "run_pressure");
             std::vector<double> t, cmd, pr, x, xm;
             for (auto* v : {&t, &cmd, &pr, &x, &xm}) v->reserve(p.size());
             {

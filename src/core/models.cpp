@@ -297,9 +297,12 @@ bool has_pi_structure(const ModelParams& params) noexcept { return !detail::has_
 
 Structure<double> canonical_structure(const ModelParams& params) {
   if (!has_pi_structure(params))
-    throw Error(detail::format("{}: not a model of the Prandtl-Ishlinskii family (it has no play structure); this "
-                               "operation supports pi, gpi, mpi-deadzone, mpi-asym and maxwell-slip",
-                               model_name(params)));
+    throw Error(detail::format(
+        "{}: {}; this operation supports pi, gpi, mpi-deadzone, mpi-asym and maxwell-slip", model_name(params),
+        std::holds_alternative<RatePiParams>(params)
+            ? "rate-dependent (its plays' thresholds move with the input's rate, through its dt): not supported, "
+              "the fixed play structure of the Prandtl-Ishlinskii family it needs does not hold"
+            : "not a model of the Prandtl-Ishlinskii family (it has no play structure)"));
   Structure<double> s = std::visit(CanonicalVisitor{}, params);
   check_units(units_map(params), model_name(params));
   s.units = units_map(params);

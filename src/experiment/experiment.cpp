@@ -352,6 +352,7 @@ void ExperimentOptions::validate() const {
   if (!(control_period >= rig.simulation.dt) || !(control_period <= 0.02))
     throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, 0.02 s]",
                             control_period, rig.simulation.dt));
+  control_steps(control_period, rig.simulation.dt, "experiment: rig");  // a whole number of rig steps
   if (learning_periods < 0 || learning_periods > 1000)
     throw Error(fmt::format("experiment: learning_periods = {} must be within 0..1000", learning_periods));
   if (tracking_rig) {
@@ -360,6 +361,7 @@ void ExperimentOptions::validate() const {
     if (!(control_period >= tracking_rig->simulation.dt))
       throw Error(fmt::format("experiment: control_period = {} s is shorter than the tracking rig's dt = {} s",
                               control_period, tracking_rig->simulation.dt));
+    control_steps(control_period, tracking_rig->simulation.dt, "experiment: tracking rig");
   }
   if (!find_spec(name)) {
     std::string list;

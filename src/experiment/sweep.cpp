@@ -410,6 +410,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
   try {
     validate(options.base, "base rig");
+    control_steps(ExperimentOptions{}.control_period, options.base.simulation.dt, "base rig");
   } catch (const Error& e) {
     throw Error(fmt::format("sweep: {}", e.what()));
   }
@@ -431,6 +432,7 @@ SweepResult run_sweep(const SweepOptions& options) {
     SweepVariant sv;
     sv.variant = v;
     sv.rig = apply_overrides(options.base, v.overrides, where);
+    control_steps(ExperimentOptions{}.control_period, sv.rig.simulation.dt, where);  // as the runs will check
     json j = rig_params_to_json(sv.rig);
     for (const auto& o : v.overrides) sv.values.push_back(find_leaf(j, o.path)->get<double>());
     if (j == base_json) {

@@ -582,6 +582,24 @@ void PamRig::advance(const RigInputs& in_raw) noexcept {
   detect_divergence();
 }
 
+std::int64_t control_steps(double control_period, double dt, std::string_view where) {
+  const double ratio = control_period / dt;
+  const bool usable = control_period > 0 && dt > 0 && std::isfinite(ratio);
+  const double n = usable ? std::round(ratio) : 0.0;
+  if (usable && n >= 1 && n <= 1e12 && std::abs(ratio - n) <= 1e-9 * ratio) return static_cast<std::int64_t>(n);
+  if (!usable || ratio > 1e12)
+    throw Error(fmt::format("{}: control_period = {} s must be a whole multiple (1..1e12) of the rig's simulation.dt "
+                            "= {} s",
+                            where, control_period, dt));
+  // the dt nearest the given one that divides the period: period / floor(ratio) or period / ceil(ratio)
+  const double lo = std::max(1.0, std::floor(ratio)), hi = std::max(1.0, std::ceil(ratio));
+  const double near = std::abs(control_period / lo - dt) <= std::abs(control_period / hi - dt) ? lo : hi;
+  throw Error(fmt::format("{}: control_period = {} s is not a whole multiple of the rig's simulation.dt = {} s "
+                          "({:.6g} steps; the loop would run every {:.6g} s); the nearest dt that divides it is {:.6g} "
+                          "s ({:.0f} steps)",
+                          where, control_period, dt, ratio, std::max(1.0, n) * dt, control_period / near, near));
+}
+
 void PamRig::check() const {
   if (ok_) return;
   throw Error(fmt::format(

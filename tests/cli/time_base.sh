@@ -1,0 +1,167 @@
+#!/usr/bin/env bash
+# The time base: a rig whose simulation.dt does not divide the 1 ms control period is refused by
+# experiment, demo and sweep (exit 1, before anything runs, naming both values and the nearest
+# dt that divides the period) and warned by `rig`; a dt that divides it runs. rate-pi's sample
+# time: --sample-time and a time column that disagree by more than 1 % are refused (fit,
+# evaluate); fit's --validate-data files get evaluate's check against the model's dt; evaluate
+# without a time column, simulate and invert say the model's dt is assumed.
+# --time-unit ms|us reads the time column as seconds; fit asks about a sample time above 0.1 s.
+# Usage: bash time_base.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+BIN=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+PY=/usr/bin/python3
+
+# ---- F1: the rig's dt against the control period ----
+"$BIN" rig -o - > "$T/rig.json" || fail "rig -o -: exit $?"
+set_dt() { $PY -c "import json,sys; j=json.load(open(sys.argv[1])); j['simulation']['dt']=float(sys.argv[2]); json.dump(j,open(sys.argv[3],'w'))" "$T/rig.json" "$1" "$2"; }
+set_dt 9.52e-5 "$T/rig952.json"
+set_dt 5e-5 "$T/rig5.json"
+# 1e-3 / 9.52e-5 = 10.504 steps; the dts dividing 1 ms nearest it: 1e-3/10 = 1e-4 (4.8e-6 away) and
+# 1e-3/11 = 9.0909e-5 (4.3e-6 away): the nearest is 9.09091e-05 s
+check_refusal() {  # $1: what, $2: stderr file
+  grep -q "0.001 s" "$2" || fail "$1: the control period not named: $(cat "$2")"
+  grep -q "9.52e-05 s" "$2" || fail "$1: the rig's dt not named: $(cat "$2")"
+  grep -q "nearest dt that divides it is 9.09091e-05 s" "$2" || fail "$1: no nearest dt: $(cat "$2")"
+}
+"$BIN" experiment gpi-pid --model gpi --learning-periods 0 --no-adaptive --plant "$T/rig952.json" --out "$T/ex952" \
+  > "$T/out.txt" 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "experiment on dt 9.52e-5: exit $rc (expected 1)"
+check_refusal "experiment" "$T/err.txt"
+[ -e "$T/ex952/result.json" ] && fail "experiment on dt 9.52e-5: result.json written"
+# the tracking rig is checked too
+"$BIN" experiment gpi-pid --model gpi --learning-periods 0 --no-adaptive --tracking-plant "$T/rig952.json" \
+  > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "experiment, tracking rig on dt 9.52e-5: exit $rc (expected 1)"
+grep -q "tracking rig" "$T/err.txt" || fail "tracking rig not named: $(cat "$T/err.txt")"
+check_refusal "experiment --tracking-plant" "$T/err.txt"
+"$BIN" demo --model gpi --learning-periods 0 --plant "$T/rig952.json" --out "$T/demo952" > "$T/out.txt" 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "demo on dt 9.52e-5: exit $rc (expected 1)"
+check_refusal "demo" "$T/err.txt"
+ls "$T"/demo952/*/result.json > /dev/null 2>&1 && fail "demo on dt 9.52e-5: a result written"
+"$BIN" sweep gpi-pid --model gpi --learning-periods 0 --plant "$T/rig952.json" --vary load.mass=25 > "$T/out.txt" 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "sweep --plant dt 9.52e-5: exit $rc (expected 1)"
+grep -q "base rig" "$T/err.txt" || fail "sweep: the base rig not named: $(cat "$T/err.txt")"
+check_refusal "sweep --plant" "$T/err.txt"
+"$BIN" sweep gpi-pid --model gpi --learning-periods 0 --vary simulation.dt=9.52e-5 > "$T/out.txt" 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "sweep --vary simulation.dt=9.52e-5: exit $rc (expected 1)"
+grep -q "variant" "$T/err.txt" || fail "sweep: the variant not named: $(cat "$T/err.txt")"
+check_refusal "sweep --vary" "$T/err.txt"
+[ -s "$T/out.txt" ] && fail "sweep --vary: a table printed: $(head -3 "$T/out.txt")"
+"$BIN" rig "$T/rig952.json" > /dev/null 2> "$T/err.txt" || fail "rig on dt 9.52e-5: exit $?"
+grep -q "^rig: warning: the experiments refuse this rig: .*nearest dt that divides it is 9.09091e-05 s" "$T/err.txt" \
+  || fail "rig: no warning: $(cat "$T/err.txt")"
+# a dt that divides the period: runs, the results at 1 ms
+"$BIN" experiment gpi-pid --model gpi --learning-periods 0 --no-adaptive --plant "$T/rig5.json" --out "$T/ex5" \
+  > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -le 0 ] || [ $rc -eq 3 ] || fail "experiment on dt 5e-5: exit $rc: $(cat "$T/err.txt")"
+$PY - "$T/ex5/tracking_faithful_sine.csv" <<'PYEOF' || fail "dt 5e-5: the loop not at 1 ms"
+import csv, sys
+t = [float(r["t_s"]) for r in csv.DictReader(open(sys.argv[1]))]
+steps = {round(b - a, 9) for a, b in zip(t, t[1:])}
+assert steps == {0.001}, sorted(steps)[:5]
+PYEOF
+"$BIN" rig "$T/rig5.json" > /dev/null 2> "$T/err.txt"
+grep -q "control period" "$T/err.txt" && fail "rig on dt 5e-5 warned: $(cat "$T/err.txt")"
+
+# ---- records for rate-pi: 400 samples of 1 ms (t in s, ms and us), one of 2 ms, one without time ----
+rec() {  # $1: file, $2: time step in the column's unit, $3: header of the time column
+  awk -v step="$2" -v head="$3" 'BEGIN { print head ",p,y"; for (k = 0; k < 400; ++k) { \
+    p = 50 + 40 * sin(k / 20); printf "%.10g,%.10g,%.10g\n", k * step, p, 0.3 * p + 2 + 3 * sin(k / 20 + 0.4) } }' > "$1"
+}
+rec "$T/r.csv" 0.001 t
+rec "$T/r2.csv" 0.002 t
+rec "$T/rms.csv" 1 t
+rec "$T/rus.csv" 1000 t
+cut -d, -f2- "$T/r.csv" > "$T/rnot.csv"
+fit() { "$BIN" fit --model rate-pi --input p --output y --threads 1 --force "$@"; }
+model_dt() { $PY -c "import json,sys; print('%.9g' % json.load(open(sys.argv[1]))['dt'])" "$1"; }  # to 9 digits
+fit --data "$T/r.csv" --time-column t --out "$T/rp.json" > /dev/null 2> "$T/err.txt" || true
+[ "$(model_dt "$T/rp.json")" = "0.001" ] || fail "rate-pi on 1 ms: dt $(model_dt "$T/rp.json"): $(cat "$T/err.txt")"
+"$BIN" fit --model gpi --data "$T/r.csv" --input p --output y --threads 1 --force --out "$T/gpi.json" > /dev/null 2>&1
+
+# ---- F3: --sample-time and a time column that disagree: refused, both named ----
+fit --data "$T/r.csv" --time-column t --sample-time 0.002 --out "$T/st.json" > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "fit --sample-time 0.002 on a 1 ms column: exit $rc (expected 1)"
+grep -q -- "--sample-time 0.002 s disagrees with the median step 0.001 s of the time column t (by 100 %, more than the 1 % allowed)" \
+  "$T/err.txt" || fail "fit --sample-time 0.002: $(cat "$T/err.txt")"
+[ -e "$T/st.json" ] && fail "fit --sample-time 0.002: model written"
+# within 1 % (0.5 %): --sample-time is taken
+fit --data "$T/r.csv" --time-column t --sample-time 0.001005 --out "$T/st.json" > /dev/null 2> "$T/err.txt" || true
+[ "$(model_dt "$T/st.json")" = "0.001005" ] || fail "fit --sample-time 0.001005: $(cat "$T/err.txt")"
+# evaluate checks them alike
+"$BIN" evaluate --model "$T/rp.json" --data "$T/r.csv" --input p --output y --time-column t --sample-time 0.002 \
+  > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "evaluate --sample-time 0.002 on a 1 ms column: exit $rc (expected 1)"
+grep -q -- "--sample-time 0.002 s disagrees with the median step 0.001 s" "$T/err.txt" || fail "evaluate: $(cat "$T/err.txt")"
+
+# ---- F4: fit's --validate-data files get evaluate's check of the record's sample time ----
+fit --data "$T/r.csv" --time-column t --validate-data "$T/r2.csv" --out "$T/v.json" > "$T/out.txt" 2>&1
+grep -q "r2.csv: the record's sample time 0.002 s (median step of the time column t) differs from the rate-pi model's dt 0.001 s: the model runs its rates 2x too slow" \
+  "$T/out.txt" || fail "fit --validate-data of 2 ms: no warning: $(grep -i warn "$T/out.txt")"
+fit --data "$T/r.csv" --time-column t --validate-data "$T/r.csv" --out "$T/v.json" --json > "$T/out.json" 2>&1
+grep -q "the record's sample time" "$T/out.json" && fail "fit --validate-data of 1 ms: warned: $(grep "sample time" "$T/out.json")"
+# the same warning as evaluate's
+"$BIN" evaluate --model "$T/rp.json" --data "$T/r2.csv" --input p --output y --time-column t > /dev/null 2> "$T/err.txt"
+grep -q "the model runs its rates 2x too slow" "$T/err.txt" || fail "evaluate on 2 ms: $(cat "$T/err.txt")"
+
+# ---- F5: no time column: the model's dt assumed, said; --sample-time checked as a column is ----
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rnot.csv" --input p --output y > /dev/null 2> "$T/err.txt" \
+  || fail "evaluate without time: exit $?"
+grep -q "^warning: .*rnot.csv: the record's sample time is unknown (no time column): the rate-pi model's dt 0.001 s is assumed" \
+  "$T/err.txt" || fail "evaluate without time: $(cat "$T/err.txt")"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rnot.csv" --input p --output y --sample-time 0.001 > /dev/null \
+  2> "$T/err.txt" || fail "evaluate --sample-time 0.001: exit $?"
+grep -q "the record's sample time" "$T/err.txt" && fail "evaluate --sample-time 0.001 warned: $(cat "$T/err.txt")"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rnot.csv" --input p --output y --sample-time 0.002 > /dev/null \
+  2> "$T/err.txt"
+grep -q "sample time 0.002 s (--sample-time) differs from the rate-pi model's dt 0.001 s: the model runs its rates 2x too slow" \
+  "$T/err.txt" || fail "evaluate --sample-time 0.002: $(cat "$T/err.txt")"
+"$BIN" evaluate --model "$T/gpi.json" --data "$T/rnot.csv" --input p --output y > /dev/null 2> "$T/err.txt"
+grep -q "the record's sample time" "$T/err.txt" && fail "evaluate gpi without time warned: $(cat "$T/err.txt")"
+cut -d, -f2 "$T/r.csv" > "$T/x.csv"
+"$BIN" simulate --model "$T/rp.json" --input "$T/x.csv" --output "$T/sim.csv" 2> "$T/err.txt" || fail "simulate: exit $?"
+grep -q "^simulate: warning: .*x.csv: the record's sample time is unknown (no time column): the rate-pi model's dt 0.001 s is assumed" \
+  "$T/err.txt" || fail "simulate rate-pi: $(cat "$T/err.txt")"
+cut -d, -f2 "$T/sim.csv" > "$T/yd.csv"
+"$BIN" invert --model "$T/rp.json" --input "$T/yd.csv" --output "$T/inv.csv" 2> "$T/err.txt" || fail "invert: exit $?"
+grep -q "^invert: warning: .*the rate-pi model's dt 0.001 s is assumed" "$T/err.txt" || fail "invert rate-pi: $(cat "$T/err.txt")"
+"$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/sim.csv" 2> "$T/err.txt" || fail "simulate gpi"
+grep -q "the record's sample time" "$T/err.txt" && fail "simulate gpi warned: $(cat "$T/err.txt")"
+
+# ---- F2: --time-unit ms|us: read as seconds; a sample time above 0.1 s asks whether the column is in ms ----
+fit --data "$T/rms.csv" --time-column t --time-unit ms --out "$T/ms.json" > "$T/out.txt" 2>&1
+[ "$(model_dt "$T/ms.json")" = "0.001" ] || fail "--time-unit ms: dt $(model_dt "$T/ms.json")"
+grep -q "see --time-unit" "$T/out.txt" && fail "--time-unit ms: still warned"
+fit --data "$T/rus.csv" --time-column t --time-unit us --out "$T/us.json" > /dev/null 2>&1
+[ "$(model_dt "$T/us.json")" = "0.001" ] || fail "--time-unit us: dt $(model_dt "$T/us.json")"
+fit --data "$T/rms.csv" --time-column t --out "$T/ms1.json" > "$T/out.txt" 2>&1
+grep -q "rate-pi's sample time is 1 s (the median step of the time column t in s), above 0.1 s: is the time column in ms? see --time-unit" \
+  "$T/out.txt" || fail "ms column read as s: no warning: $(grep -i warn "$T/out.txt")"
+# ranges in seconds are seconds: 0.1 s .. 0.3 s of a 1 ms record in ms = samples 100..300
+"$BIN" fit --model pi --data "$T/rms.csv" --input p --output y --time-column t --time-unit ms --train 0.1s:0.3s \
+  --threads 1 --force --out "$T/pi.json" --json > "$T/out.json" 2> /dev/null
+$PY -c "import json,sys; d=json.load(open(sys.argv[1]))['data']['train']; assert d == [100, 300], d" \
+  "$T/out.json" || fail "--time-unit ms --train 0.1s:0.3s"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit ms \
+  > /dev/null 2> "$T/err.txt" || fail "evaluate --time-unit ms: exit $?"
+grep -q "the record's sample time" "$T/err.txt" && fail "evaluate --time-unit ms warned: $(cat "$T/err.txt")"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-unit ms > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--time-unit without --time-column: not exit 1"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit min \
+  > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "--time-unit min: not exit 1"
+
+[ $fails -eq 0 ] && echo "time_base: all passed"
+exit $fails

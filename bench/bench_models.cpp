@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "hysteron/inverse.hpp"
@@ -90,6 +91,64 @@ void BM_GpiForwardPlusInverse(benchmark::State& st) {
                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
+// Where BM_GpiForwardPlusInverse's time goes (README, "GPI forward + inverse"):
+// - the same steps with the dependency cut: the inverse on the desired output, the forward model on the
+//   input that produced it (the steps of BM_GpiForwardPlusInverse on inputs of the same range, but a
+//   sample's forward step no longer waits for its inverse step);
+// - the chained steps of a pi (identity envelope, no tanh / atanh), same thresholds and weights;
+// - the envelope functions alone on the benchmark's arguments: throughput (independent calls) and
+//   latency (each call's argument waits for the previous result).
+void BM_GpiForwardPlusInverseUnchained(benchmark::State& st) {
+  const auto params = make_model(1, static_cast<int>(st.range(0)));
+  Model m(params);
+  const auto x = input_signal(0.0, 0.6);
+  const auto yd = Model(params).simulate(x);
+  Inverse inv(params);
+  for (auto _ : st) {
+    for (std::size_t k = 0; k < kSamples; ++k) {
+      benchmark::DoNotOptimize(inv.step(yd[k]));
+      benchmark::DoNotOptimize(m.step(x[k]));
+    }
+  }
+  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_PiForwardPlusInverse(benchmark::State& st) {
+  const auto params = make_model(0, static_cast<int>(st.range(0)));
+  Model m(params);
+  const auto yd = Model(params).simulate(input_signal(0.0, 0.6));
+  Inverse inv(params);
+  for (auto _ : st) {
+    for (double y : yd) benchmark::DoNotOptimize(m.step(inv.step(y)));
+  }
+  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// range(0): 0 tanh_fast, 1 atanh_ratio; range(1): 0 throughput, 1 latency. ns per call.
+void BM_EnvelopeFunction(benchmark::State& st) {
+  const bool atanh = st.range(0) == 1, chained = st.range(1) == 1;
+  std::vector<double> a = input_signal(0.0, 0.6);  // the GPI's envelope tanh(2 x - 0.6) + 0.6, c0 = 1
+  for (double& v : a) v = atanh ? detail::tanh_fast(2.0 * v - 0.6) : 2.0 * v - 0.6;
+  for (auto _ : st) {
+    double carry = 0.0;  // carry * 1e-300 (below 1e-300) orders the calls without changing their work
+    if (chained && atanh) {
+      for (double v : a) carry = detail::atanh_ratio(v + carry * 1e-300, 1.0);
+    } else if (chained) {
+      for (double v : a) carry = detail::tanh_fast(v + carry * 1e-300);
+    } else if (atanh) {
+      for (double v : a) benchmark::DoNotOptimize(detail::atanh_ratio(v, 1.0));
+    } else {
+      for (double v : a) benchmark::DoNotOptimize(detail::tanh_fast(v));
+    }
+    benchmark::DoNotOptimize(carry);
+  }
+  st.SetLabel(std::string(atanh ? "atanh_ratio" : "tanh_fast") + (chained ? " latency" : " throughput"));
+  st.counters["ns/call"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
+                                              benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 // Constructing an inverse (Eq. 11's parameters; the C ABI's hysteron_inverse_create does the same) at n = 10^3 ..
 // 10^5 operators: ms per construction. Run: ./build/hysteron-bench --benchmark_filter=InverseConstruct
 void BM_InverseConstruct(benchmark::State& st) {
@@ -112,6 +171,9 @@ BENCHMARK(BM_ModelStep)->Apply(model_args);
 BENCHMARK(BM_ModelSimulate)->Apply(model_args);
 BENCHMARK(BM_InverseStep)->Apply(model_args);
 BENCHMARK(BM_GpiForwardPlusInverse)->Arg(10)->Arg(20)->Arg(50);
+BENCHMARK(BM_GpiForwardPlusInverseUnchained)->Arg(10);
+BENCHMARK(BM_PiForwardPlusInverse)->Arg(10);
+BENCHMARK(BM_EnvelopeFunction)->ArgsProduct({{0, 1}, {0, 1}});
 BENCHMARK(BM_InverseConstruct)
     ->ArgsProduct({{0, 1, 2, 3}, {1000, 10000, 100000}})
     ->Unit(benchmark::kMillisecond)

@@ -16,7 +16,7 @@
 int main() {
   const double ts = 1e-3;  // control period [s]
   hysteron::PamRig rig(hysteron::PamRigParams{}, 1);
-  const int every = static_cast<int>(std::lround(ts / rig.dt()));
+  const auto every = hysteron::control_steps(ts, rig.dt(), "example");  // rig steps per control period
 
   // 1. identification run, logged at 100 Hz: measured pressure [MPa] -> contraction [mm]
   std::vector<double> p, x;

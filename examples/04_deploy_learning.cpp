@@ -56,7 +56,7 @@ int main() {
     const hysteron::Limits lim = fb.pressure_limits();  // [MPa]
     hysteron::PamRig rig(hysteron::PamRigParams{}, 7);
     rig.reset();
-    const int every = static_cast<int>(std::lround(ts / rig.dt()));
+    const auto every = hysteron::control_steps(ts, rig.dt(), "example");  // rig steps per control period
     const auto skip = static_cast<std::size_t>(std::lround(1.0 / ts));
     double y = 0.0;
     std::vector<double> rms;

@@ -227,14 +227,17 @@ std::vector<std::string> rate_time_warnings(const ModelParams& model, const std:
   }
   double dt = sample_time;  // s
   std::string from = "--sample-time";
-  if (!(dt > 0.0)) {
-    // The time column's faults are warnings here (the model's dt is what runs it)
+  // The time column's faults are warnings here (the model's dt is what runs it), also where
+  // --sample-time gives the step: a gap or a backwards stamp is still the record's
+  if (t && t->size() > 1) {
     try {
       if (std::string w = require_increasing_time(*t, file, column, "rate-pi's sample time"); !w.empty())
         warnings.push_back(std::move(w));
     } catch (const Error& e) {
       warnings.push_back(fmt::format("{}: the record's sample time is uncertain", e.what()));
     }
+  }
+  if (!(dt > 0.0)) {
     dt = median_time_step(*t);
     from = fmt::format("median step of the time column {}", column);
   }
@@ -247,7 +250,7 @@ std::vector<std::string> rate_time_warnings(const ModelParams& model, const std:
                                    "{:.6g} s: the model runs its rates {:.3g}x too {}",
                                    file, dt, from, rp->dt, std::max(dt, rp->dt) / std::min(dt, rp->dt),
                                    dt > rp->dt ? "slow" : "fast"));
-  if (warnings.empty() && t && !(sample_time > 0.0))
+  if (warnings.empty() && t && t->size() > 1)
     if (std::string w = uniform_time_warning(*t, file, column); !w.empty()) warnings.push_back(std::move(w));
   return warnings;
 }

@@ -460,7 +460,14 @@ TEST(PamRig, AControlPeriodMustBeAWholeNumberOfRigSteps) {
   const std::string msg = error_of([] { control_steps(1e-3, 9.52e-5, "experiment: rig"); });
   EXPECT_EQ(msg.rfind("experiment: rig: control_period = 0.001 s", 0), 0u) << msg;
   EXPECT_NE(msg.find("simulation.dt = 9.52e-05 s"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("nearest dt that divides it is 9.09091e-05 s (11 steps)"), std::string::npos) << msg;
+  // the suggested dt, as printed, is accepted (printed to 6 digits, 9.09091e-05, it was refused in turn)
+  const std::string near = "nearest dt that divides it is ";
+  const std::size_t at = msg.find(near);
+  ASSERT_NE(at, std::string::npos) << msg;
+  const double suggested = std::stod(msg.substr(at + near.size()));
+  EXPECT_NEAR(suggested, 9.0909e-5, 1e-9) << msg;
+  EXPECT_EQ(control_steps(1e-3, suggested, "x"), 11) << msg;
+  EXPECT_NE(msg.find(" s (11 steps)", at), std::string::npos) << msg;
   // 1e-3 / 1.2e-4 = 8.33: 1e-3/8 = 1.25e-4 (5e-6 away) is nearer than 1e-3/9 = 1.111e-4 (8.9e-6 away)
   EXPECT_NE(error_of([] { control_steps(1e-3, 1.2e-4, "x"); }).find("is 0.000125 s (8 steps)"), std::string::npos);
   // shorter than dt: no longer run every step, refused (the nearest dt is the period itself)

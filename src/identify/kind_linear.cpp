@@ -441,7 +441,7 @@ class RatePiKind final : public Parametrization {
     values.insert(values.end(), {m.c, m.tau});
     finish(rep, d, m, names, values,
            fmt::format("golden-section search of c in [0, {:.4g}] (c max(r) <= (tau + dt) / 2) for tau = {:.4g} (x 1/2, 1, "
-                       "2, 4 of {:.4g} from the reversal intervals; in the sample time's unit, the time column's) "
+                       "2, 4 of {:.4g} from the reversal intervals; in the sample time's unit, s from the CLI) "
                        "around bounded linear least squares",
                        cmax, m.tau, tau0),
            solves, o.min_slope);

@@ -595,7 +595,7 @@ std::int64_t control_steps(double control_period, double dt, std::string_view wh
   const double lo = std::max(1.0, std::floor(ratio)), hi = std::max(1.0, std::ceil(ratio));
   const double near = std::abs(control_period / lo - dt) <= std::abs(control_period / hi - dt) ? lo : hi;
   throw Error(fmt::format("{}: control_period = {} s is not a whole multiple of the rig's simulation.dt = {} s "
-                          "({:.6g} steps; the loop would run every {:.6g} s); the nearest dt that divides it is {:.6g} "
+                          "({:.6g} steps; the loop would run every {:.6g} s); the nearest dt that divides it is {} "
                           "s ({:.0f} steps)",
                           where, control_period, dt, ratio, std::max(1.0, n) * dt, control_period / near, near));
 }

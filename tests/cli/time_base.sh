@@ -25,7 +25,7 @@ set_dt 5e-5 "$T/rig5.json"
 check_refusal() {  # $1: what, $2: stderr file
   grep -q "0.001 s" "$2" || fail "$1: the control period not named: $(cat "$2")"
   grep -q "9.52e-05 s" "$2" || fail "$1: the rig's dt not named: $(cat "$2")"
-  grep -q "nearest dt that divides it is 9.09091e-05 s" "$2" || fail "$1: no nearest dt: $(cat "$2")"
+  grep -q "nearest dt that divides it is 9.09090909090909[0-9]e-05 s" "$2" || fail "$1: no nearest dt: $(cat "$2")"
 }
 "$BIN" experiment gpi-pid --model gpi --learning-periods 0 --no-adaptive --plant "$T/rig952.json" --out "$T/ex952" \
   > "$T/out.txt" 2> "$T/err.txt"
@@ -57,7 +57,7 @@ grep -q "variant" "$T/err.txt" || fail "sweep: the variant not named: $(cat "$T/
 check_refusal "sweep --vary" "$T/err.txt"
 [ -s "$T/out.txt" ] && fail "sweep --vary: a table printed: $(head -3 "$T/out.txt")"
 "$BIN" rig "$T/rig952.json" > /dev/null 2> "$T/err.txt" || fail "rig on dt 9.52e-5: exit $?"
-grep -q "^rig: warning: the experiments refuse this rig: .*nearest dt that divides it is 9.09091e-05 s" "$T/err.txt" \
+grep -q "^rig: warning: the experiments refuse this rig: .*nearest dt that divides it is 9.09090909090909[0-9]e-05 s" "$T/err.txt" \
   || fail "rig: no warning: $(cat "$T/err.txt")"
 # a dt that divides the period: runs, the results at 1 ms
 "$BIN" experiment gpi-pid --model gpi --learning-periods 0 --no-adaptive --plant "$T/rig5.json" --out "$T/ex5" \
@@ -162,6 +162,21 @@ grep -q "the record's sample time" "$T/err.txt" && fail "evaluate --time-unit ms
 "$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit min \
   > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "--time-unit min: not exit 1"
+
+# a column in s read with --time-unit ms: dt 1e-6 s, asked about too (below 1 us)
+fit --data "$T/r.csv" --time-column t --time-unit ms --out "$T/msw.json" > "$T/out.txt" 2>&1
+grep -q "rate-pi's sample time is 1e-06 s (the median step of the time column t in ms), below 1 us: is the time column in s or another unit? see --time-unit" \
+  "$T/out.txt" || fail "s column read as ms: no warning: $(grep -i warn "$T/out.txt")"
+
+# ---- an agreeing --sample-time does not hide the time column's faults (a gap) ----
+awk -F, 'NR == 1 || NR <= 201 { print; next } { printf "%.10g,%s,%s\n", $1 + 1, $2, $3 }' "$T/r.csv" > "$T/rgap.csv"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rgap.csv" --input p --output y --time-column t --sample-time 0.001 \
+  > /dev/null 2> "$T/err.txt"
+grep -q "rgap.csv: the time column t is not uniformly sampled" "$T/err.txt" \
+  || fail "evaluate --sample-time on a gap: no warning: $(cat "$T/err.txt")"
+fit --data "$T/rgap.csv" --time-column t --sample-time 0.001 --out "$T/gap.json" > "$T/out.txt" 2>&1
+grep -q "rgap.csv: the time column t is not uniformly sampled" "$T/out.txt" \
+  || fail "fit --sample-time on a gap: no warning: $(grep -i warn "$T/out.txt")"
 
 [ $fails -eq 0 ] && echo "time_base: all passed"
 exit $fails

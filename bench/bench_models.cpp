@@ -78,9 +78,10 @@ void BM_InverseStep(benchmark::State& st) {
                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
-// The real-time budget of the issue: GPI forward + inverse per sample.
-void BM_GpiForwardPlusInverse(benchmark::State& st) {
-  const auto params = make_model(1, static_cast<int>(st.range(0)));
+// Forward + inverse per sample, chained: the inverse on a desired output, the forward model on its
+// input. kind: make_model's index (0 pi, 1 gpi).
+void forward_plus_inverse(benchmark::State& st, int kind) {
+  const auto params = make_model(kind, static_cast<int>(st.range(0)));
   Model m(params);
   const auto yd = Model(params).simulate(input_signal(0.0, 0.6));
   Inverse inv(params);
@@ -90,6 +91,9 @@ void BM_GpiForwardPlusInverse(benchmark::State& st) {
   st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
+
+// The real-time budget of the issue: GPI forward + inverse per sample.
+void BM_GpiForwardPlusInverse(benchmark::State& st) { forward_plus_inverse(st, 1); }
 
 // Where BM_GpiForwardPlusInverse's time goes (README, "GPI forward + inverse"):
 // - the same steps with the dependency cut: the inverse on the desired output, the forward model on the
@@ -114,17 +118,7 @@ void BM_GpiForwardPlusInverseUnchained(benchmark::State& st) {
                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
-void BM_PiForwardPlusInverse(benchmark::State& st) {
-  const auto params = make_model(0, static_cast<int>(st.range(0)));
-  Model m(params);
-  const auto yd = Model(params).simulate(input_signal(0.0, 0.6));
-  Inverse inv(params);
-  for (auto _ : st) {
-    for (double y : yd) benchmark::DoNotOptimize(m.step(inv.step(y)));
-  }
-  st.counters["ns/sample"] = benchmark::Counter(static_cast<double>(st.iterations() * kSamples),
-                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-}
+void BM_PiForwardPlusInverse(benchmark::State& st) { forward_plus_inverse(st, 0); }
 
 // range(0): 0 tanh_fast, 1 atanh_ratio; range(1): 0 throughput, 1 latency. ns per call.
 void BM_EnvelopeFunction(benchmark::State& st) {

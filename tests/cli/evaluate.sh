@@ -5,12 +5,7 @@
 # reports, and the exit codes (0 evaluated, 1 bad input or usage).
 # Usage: bash evaluate.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-BIN=$1
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
-PY=/usr/bin/python3
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 
 cat > "$T/gpi.json" <<'JSON'
 {"model": "gpi", "c": [60, 4, -0.5, 30], "q": 0.8, "n": 10, "rho": 0.4, "tau": 0.1, "alpha": 2}

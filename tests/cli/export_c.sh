@@ -5,13 +5,8 @@
 # The exhaustive comparison with the library (10^5 samples per kind) is tests/test_export.cpp.
 # Usage: bash export_c.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-BIN=$1
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 SRC=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-PY=/usr/bin/python3
-fails=0
-fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
 
 # expect_fail <description> <exit code> <substring expected in stderr> -- command...
 expect_fail() {

@@ -7,12 +7,7 @@
 # The .mat file is written by scipy (another writer than hysteron's matio).
 # Usage: bash mat_matrix.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-BIN=$1
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
-PY=/usr/bin/python3
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 
 cat > "$T/pi.json" <<'JSON'
 {"model": "pi", "r": [0, 0.1, 0.2, 0.3], "p": [1.0, 0.5, 0.3, 0.2]}

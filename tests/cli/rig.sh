@@ -7,12 +7,7 @@
 # is warned; --out naming stdout is handled as --out -.
 # Usage: bash rig.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-BIN=$1
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
-PY=/usr/bin/python3
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 
 "$BIN" rig > "$T/nominal.txt" 2> "$T/err.txt" || fail "nominal rig: exit $?"
 for key in muscle.rest_length load.mass load.spring_rate sensors.displacement_bits simulation.dt; do

@@ -7,12 +7,7 @@
 # variant is the nominal rig exits 0. Learning runs are switched off (--learning-periods 0) for speed.
 # Usage: bash sweep.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-BIN=$1
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
-PY=/usr/bin/python3
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 
 # expect_error "what" "part of the message" command...: exit 1, the message on stderr
 expect_error() {

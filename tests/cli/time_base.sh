@@ -8,12 +8,7 @@
 # --time-unit ms|us reads the time column as seconds; fit asks about a sample time above 0.1 s.
 # Usage: bash time_base.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-BIN=$1
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
-PY=/usr/bin/python3
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 
 # ---- F1: the rig's dt against the control period ----
 "$BIN" rig -o - > "$T/rig.json" || fail "rig -o -: exit $?"

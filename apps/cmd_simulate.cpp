@@ -115,11 +115,16 @@ double relaxed_input_for(const ModelParams& params, const Limits& lim, double y0
   return std::abs(relaxed_output(params, lo) - y0) <= std::abs(relaxed_output(params, hi) - y0) ? lo : hi;
 }
 
+// rate-pi run on a record without time stamps: its dt is assumed (said once the input was read
+// and run: a read error is the only message then).
+void warn_assumed_dt(const ModelParams& params, const std::string& input, const char* command) {
+  for (const auto& w : rate_time_warnings(params, nullptr, 0.0, input, ""))  // no time column read here
+    fmt::print(stderr, "{}: warning: {}\n", command, w);
+}
+
 int run_simulate(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
-  for (const auto& w : rate_time_warnings(params, nullptr, 0.0, o.input, ""))  // no time column read here
-    fmt::print(stderr, "{}: warning: {}\n", "simulate", w);
   const io::ReadOptions ro = input_options(o.column, "input");
   Model model(params);
   InputCoverage coverage;  // summed over the blocks: inputs beyond the model's input_limits
@@ -128,7 +133,8 @@ int run_simulate(const Options& o) {
     const InputCoverage c = input_coverage(params, x);
     coverage.outside += c.outside, coverage.n += c.n, coverage.max_beyond = std::max(coverage.max_beyond, c.max_beyond);
   };
-  const auto warn_coverage = [&] {
+  const auto warn_after_run = [&] {  // the input read and run: rate-pi's assumed dt, the coverage
+    warn_assumed_dt(params, o.input, "simulate");
     if (coverage.fraction() > 0.01)
       fmt::print(stderr,
                  "simulate: warning: {} of the {} samples ({:.1f} %) have an input outside the model's input_limits "
@@ -149,7 +155,7 @@ int run_simulate(const Options& o) {
         for (std::size_t k = 0; k < x.size(); ++k) w.row(std::array<double, 2>{x[k], y[k]});
       });
     });
-    warn_coverage();
+    warn_after_run();
     return 0;
   }
   const std::vector<double> x = io::read_column(o.input, ro);
@@ -159,15 +165,13 @@ int run_simulate(const Options& o) {
   io::WriteOptions wo;
   wo.compress_mat = o.compress;
   io::write_columns(o.output, {"input", "output"}, {x, y}, wo);
-  warn_coverage();
+  warn_after_run();
   return 0;
 }
 
 int run_invert(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
   const ModelParams params = read_model_source(o.model);
-  for (const auto& w : rate_time_warnings(params, nullptr, 0.0, o.input, ""))  // no time column read here
-    fmt::print(stderr, "{}: warning: {}\n", "invert", w);
   const io::ReadOptions ro = input_options(o.column, "output");
   InverseOptions opt;
   if (!o.limits.empty()) {
@@ -234,6 +238,7 @@ int run_invert(const Options& o) {
     wo.compress_mat = o.compress;
     io::write_columns(o.output, {"output", "input"}, {y, x}, wo);
   }
+  warn_assumed_dt(params, o.input, "invert");
   const Limits& l = inv.limits();
   fmt::print(stderr, "invert: {} of {} samples saturated at the input limits [{}, {}]\n", saturated, samples, l.lo + 0.0,
              l.hi + 0.0);

@@ -132,6 +132,20 @@ grep -q "^simulate: warning: .*x.csv: the record's sample time is unknown (no ti
 cut -d, -f2 "$T/sim.csv" > "$T/yd.csv"
 "$BIN" invert --model "$T/rp.json" --input "$T/yd.csv" --output "$T/inv.csv" 2> "$T/err.txt" || fail "invert: exit $?"
 grep -q "^invert: warning: .*the rate-pi model's dt 0.001 s is assumed" "$T/err.txt" || fail "invert rate-pi: $(cat "$T/err.txt")"
+# a read error is the only message: the dt is said once the input was read (streamed to a file, or to stdout)
+awk 'NR == 200 { print "oops"; next } { print }' "$T/x.csv" > "$T/xbad.csv"
+for out in "$T/simbad.csv" -; do
+  for cmd in simulate invert; do
+    "$BIN" $cmd --model "$T/rp.json" --input "$T/xbad.csv" --output "$out" > /dev/null 2> "$T/err.txt"
+    rc=$?
+    [ $rc -eq 1 ] || fail "$cmd of a bad input to $out: exit $rc (expected 1)"
+    grep -q "xbad.csv" "$T/err.txt" || fail "$cmd of a bad input to $out: no error naming it: $(cat "$T/err.txt")"
+    grep -q "is assumed" "$T/err.txt" && fail "$cmd of a bad input to $out: said the dt: $(cat "$T/err.txt")"
+  done
+done
+"$BIN" simulate --model "$T/rp.json" --input "$T/x.csv" --output - > /dev/null 2> "$T/err.txt" || fail "simulate to -"
+grep -q "^simulate: warning: .*x.csv: .*the rate-pi model's dt 0.001 s is assumed" "$T/err.txt" \
+  || fail "simulate rate-pi to -: $(cat "$T/err.txt")"
 "$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/sim.csv" 2> "$T/err.txt" || fail "simulate gpi"
 grep -q "the record's sample time" "$T/err.txt" && fail "simulate gpi warned: $(cat "$T/err.txt")"
 

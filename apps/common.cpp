@@ -195,7 +195,7 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
     d.t = io::read_column(file, sel.time_column);
     if (d.t->size() != d.x.size())
       throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));
-    const double to_s = sel.time_unit == "ms" ? 1e-3 : sel.time_unit == "us" ? 1e-6 : 1.0;
+    const double to_s = io::time_unit_seconds(sel.time_unit, file + ": --time-unit");
     if (to_s != 1.0)
       for (double& v : *d.t) v *= to_s;
   }
@@ -327,6 +327,7 @@ io::DataDescription describe_data(const DataSelection& sel, InitialState initial
   d.input_column = sel.input;
   d.output_column = sel.output;
   d.time_column = sel.time_column;
+  d.time_unit = sel.time_unit;
   d.input_label = in.label;
   d.input_unit = in.unit;
   d.output_label = out.label;

@@ -139,7 +139,8 @@ ExperimentResult read_experiment_dir(const std::string& dir);
 // hysteron/io/results.hpp; the "data" object names the files and columns:
 //   "data": {"input": {"file", "column"}, "output": {"file", "column"},
 //            "input_axis": {"label", "unit"}, "output_axis": {"label", "unit"},
-//            "time_column" (optional), "initial_state": "virgin" | "relaxed", "train": [begin, end|null]}
+//            "time_column" (optional), "time_unit": "s" | "ms" | "us" (of the time column, drawn in
+//            seconds; absent: "s"), "initial_state": "virgin" | "relaxed", "train": [begin, end|null]}
 // Data file paths are stored as given; relative paths are resolved against the
 // JSON file's directory first, then the current directory.
 inline constexpr int fit_report_schema = 1;

@@ -213,6 +213,13 @@ void from_json(const json& j, IndexRange& r, std::string_view where) {
   r.end = j[1].is_null() ? IndexRange::npos : as_size(j[1], "[1]", where);
 }
 
+double time_unit_seconds(std::string_view unit, std::string_view where) {
+  if (unit == "s") return 1.0;
+  if (unit == "ms") return 1e-3;
+  if (unit == "us") return 1e-6;
+  throw Error(fmt::format("{}: unknown time unit \"{}\" (expected s, ms or us)", where, unit));
+}
+
 json to_json(const DataDescription& d) {
   json j = {{"input", {{"file", d.input_file}, {"column", d.input_column}}},
             {"output", {{"file", d.output_file.empty() ? d.input_file : d.output_file}, {"column", d.output_column}}},
@@ -221,7 +228,10 @@ json to_json(const DataDescription& d) {
             {"initial_state", std::string(initial_state_name(d.initial_state))},
             {"train", to_json(d.train)},
             {"censored", d.censored}};
-  if (!d.time_column.empty()) j["time_column"] = d.time_column;
+  if (!d.time_column.empty()) {
+    j["time_column"] = d.time_column;
+    j["time_unit"] = d.time_unit;
+  }
   return j;
 }
 
@@ -234,6 +244,9 @@ void from_json(const json& j, DataDescription& d, std::string_view where) {
   d.output_file = get_string(out, "file", key_where(where, "output"));
   d.output_column = opt_string(out, "column", key_where(where, "output"));
   d.time_column = opt_string(j, "time_column", where);
+  // documents before 2026-11-30 have no time_unit: their time columns were in seconds or drawn as such
+  d.time_unit = opt_string(j, "time_unit", where, "s");
+  (void)time_unit_seconds(d.time_unit, key_where(where, "time_unit"));
   if (j.contains("input_axis")) {
     d.input_label = opt_string(j["input_axis"], "label", key_where(where, "input_axis"), d.input_label);
     d.input_unit = opt_string(j["input_axis"], "unit", key_where(where, "input_axis"));

@@ -827,8 +827,16 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
     throw Error(fmt::format("{}: input and output have different lengths ({} and {})", dw, x.size(), y.size()));
   out.data.x = std::move(x);
   out.data.y = std::move(y);
+  // the time axis in seconds: the column in its unit (--time-unit) times its seconds
+  const double to_s = io::time_unit_seconds(d.time_unit, dw + ".time_unit");
+  const auto read_time = [&](const std::string& file) {
+    std::vector<double> t = io::read_column(file, d.time_column);
+    if (to_s != 1.0)
+      for (double& v : t) v *= to_s;
+    return t;
+  };
   if (!d.time_column.empty()) {
-    out.data.t = io::read_column(xf, d.time_column);
+    out.data.t = read_time(xf);
     if (out.data.t.size() != out.data.x.size()) out.data.t.clear();
   }
   out.data.source = fmt::format("input {} (column {}), output {} (column {})", xf,
@@ -866,7 +874,7 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
       const std::string vf = resolve(e.file);
       v.x = io::read_column(vf, d.input_column);
       v.y = io::read_column(vf, d.output_column);
-      if (!d.time_column.empty()) v.t = io::read_column(vf, d.time_column);
+      if (!d.time_column.empty()) v.t = read_time(vf);
     }
     out.data.validation.push_back(std::move(v));
   }

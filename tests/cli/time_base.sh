@@ -187,5 +187,36 @@ fit --data "$T/rgap.csv" --time-column t --sample-time 0.001 --out "$T/gap.json"
 grep -q "rgap.csv: the time column t is not uniformly sampled" "$T/out.txt" \
   || fail "fit --sample-time on a gap: no warning: $(grep -i warn "$T/out.txt")"
 
+# ---- the report of a fit document of a --time-unit ms record draws its time in seconds ----
+# the same record in s and in ms, each fitted and reported beside its document: the same figures
+# (the HTML's table has the fit's wall time), the time axis to 0.399 s
+figures() { $PY -c "import re,sys; print(''.join(re.findall(r'<svg.*?</svg>', open(sys.argv[1]).read(), re.S)))" "$1"; }
+for u in s ms old; do
+  mkdir -p "$T/rep_$u"
+  cp "$T/$([ $u = ms ] && echo rms || echo r).csv" "$T/rep_$u/rec.csv"
+  (cd "$T/rep_$u" && "$BIN" fit --model pi --data rec.csv --input p --output y --time-column t \
+    --time-unit $([ $u = ms ] && echo ms || echo s) --threads 1 --force --out m.json --report fit.json > /dev/null 2>&1) \
+    || fail "fit --time-unit $u --report fit.json: exit $?"
+  # old: a document of before 2026-11-30, without time_unit (its time column in s): the same report
+  [ $u = old ] && $PY -c "import json,sys; d=json.load(open(sys.argv[1])); del d['data']['time_unit']; \
+    json.dump(d,open(sys.argv[1],'w'))" "$T/rep_old/fit.json"
+  (cd "$T/rep_$u" && "$BIN" report fit.json --out r.html 2> err.txt) || fail "report of the $u fit: $(cat "$T/rep_$u/err.txt")"
+  figures "$T/rep_$u/r.html" > "$T/rep_$u/figures.txt"
+done
+grep -q '"time_unit": "ms"' "$T/rep_ms/fit.json" || fail "the fit document of a --time-unit ms record has no time_unit"
+[ "$(grep -c '<svg' "$T/rep_s/figures.txt")" -ge 3 ] || fail "the report of the fit in s: no figures"
+grep -q '> 0.4</tspan>' "$T/rep_s/figures.txt" || fail "the report of the fit in s: no tick at 0.4 s"
+cmp -s "$T/rep_s/figures.txt" "$T/rep_ms/figures.txt" || fail "the report of a --time-unit ms record differs from that in s"
+cmp -s "$T/rep_s/figures.txt" "$T/rep_old/figures.txt" || fail "a document without time_unit reported otherwise"
+# an unknown unit is refused, naming it
+$PY -c "import json,sys; d=json.load(open(sys.argv[1])); d['data']['time_unit']='min'; json.dump(d,open(sys.argv[2],'w'))" \
+  "$T/rep_s/fit.json" "$T/rep_s/min.json"
+(cd "$T/rep_s" && "$BIN" report min.json --out min.html > /dev/null 2> err.txt)
+[ $? -eq 1 ] || fail "report of time_unit min: not exit 1"
+grep -q 'min.json.data.time_unit: unknown time unit "min" (expected s, ms or us)' "$T/rep_s/err.txt" \
+  || fail "time_unit min: $(cat "$T/rep_s/err.txt")"
+"$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit ms --json \
+  2> /dev/null | grep -q '"time_unit": "ms"' || fail "the evaluation document of a --time-unit ms record has no time_unit"
+
 [ $fails -eq 0 ] && echo "time_base: all passed"
 exit $fails

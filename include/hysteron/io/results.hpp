@@ -47,6 +47,7 @@ struct DataDescription {
   std::string input_file, input_column;
   std::string output_file, output_column;  // output_file empty: the input file
   std::string time_column;                 // empty: no time axis
+  std::string time_unit = "s";             // of the time column: s, ms or us (time_unit_seconds)
   std::string input_label = "Input", input_unit;
   std::string output_label = "Output", output_unit;
   InitialState initial_state = InitialState::virgin;
@@ -55,6 +56,10 @@ struct DataDescription {
   // evaluate: not --uncensored); a report regenerated from the document scores it the same.
   bool censored = true;
 };
+
+// Seconds in one unit of a time column: "s" 1, "ms" 1e-3, "us" 1e-6; throws hysteron::Error naming
+// `where` and the unit for any other.
+double time_unit_seconds(std::string_view unit, std::string_view where);
 
 // A model checked on (a range of) a record.
 struct Evaluation {

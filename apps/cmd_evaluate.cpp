@@ -36,7 +36,7 @@ namespace {
 struct EvaluateOptions {
   std::string model, range, report;
   DataSelection sel;
-  double sample_time = 0.0;  // s; 0: the time column's median step, or unknown
+  double sample_time = 0.0;  // s; 0: the time column's mean step, or unknown
   bool json = false, relaxed = false, uncensored = false;
 };
 
@@ -119,7 +119,7 @@ void add_evaluate(CLI::App& app, Action& action) {
   sub->add_option("--range,--train", c->range,
                   "samples scored: A:B (sample indices, half-open) or As:Bs (seconds); default: the whole record");
   sub->add_option("--sample-time", c->sample_time,
-                  "sample time of the record in s, checked against a rate-pi model's dt (default: the median step "
+                  "sample time of the record in s, checked against a rate-pi model's dt (default: the mean step "
                   "of --time-column; with both they must agree)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--report", c->report, "write a report: HTML if the name ends in .html/.htm, else JSON");

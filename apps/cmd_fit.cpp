@@ -120,10 +120,10 @@ int run_fit(const FitCliOptions& c) {
   // both given: they must agree (--sample-time silently overrode a column of another step)
   check_sample_time_agrees(o.sample_time, time ? &*time : nullptr, c.sel.file, c.sel.time_column);
   if (rate && time && time->size() > 1) {
-    // rate-pi: the median step of the time column, which must increase and should be uniform.
+    // rate-pi: the mean step of the time column, which must increase and should be uniform.
     // auto: only its rate-pi candidate needs it; a column that cannot give it leaves that
     // candidate unfitted (no sample time), with the reason as a warning, instead of refusing the fit.
-    // With --sample-time (which agrees with the column's median step) the column's faults are warnings.
+    // With --sample-time (which agrees with the column's mean step) the column's faults are warnings.
     const bool given = o.sample_time > 0.0;
     try {
       if (std::string w = require_increasing_time(*time, c.sel.file, c.sel.time_column,
@@ -132,7 +132,7 @@ int run_fit(const FitCliOptions& c) {
         time_warnings.push_back(std::move(w));
       if (std::string w = uniform_time_warning(*time, c.sel.file, c.sel.time_column); !w.empty())
         time_warnings.push_back(std::move(w));
-      if (!given) o.sample_time = median_time_step(*time);
+      if (!given) o.sample_time = mean_time_step(*time);
     } catch (const Error& e) {
       if (given)
         time_warnings.push_back(fmt::format("{}: --sample-time {} s is used", e.what(), o.sample_time));
@@ -142,17 +142,18 @@ int run_fit(const FitCliOptions& c) {
         time_warnings.push_back(fmt::format("{}: auto's rate-pi candidate is not fitted", e.what()));
     }
   }
-  // rate-pi's dt is in seconds: a record sampled slower than 10 Hz or faster than 1 MHz is rare for it, a time
-  // column in another unit (or a wrong --time-unit) common
-  if (rate && o.sample_time > 0.0 && (o.sample_time > 0.1 || o.sample_time < 1e-6))
+  // rate-pi's dt is in seconds: a record sampled slower than 10 Hz or at 1 MHz or faster is rare for it, a time
+  // column in another unit (or a wrong --time-unit) common; 1 us within the 1 % tolerance: a 1 kHz column in s read
+  // as ms gives 1 us give or take the stamps' rounding
+  if (rate && o.sample_time > 0.0 && (o.sample_time > 0.1 || o.sample_time <= 1e-6 * (1 + kSampleTimeTolerance)))
     time_warnings.push_back(fmt::format(
         "{}: rate-pi's sample time is {:.6g} s ({}), {}: is the time column in {}? see --time-unit "
         "(--sample-time and the model's dt are in seconds)",
         c.sel.file, o.sample_time,
         c.sample_time > 0 ? std::string("--sample-time")
-                          : fmt::format("the median step of the time column {} in {}", c.sel.time_column,
+                          : fmt::format("the mean step of the time column {} in {}", c.sel.time_column,
                                         c.sel.time_unit),
-        o.sample_time > 0.1 ? "above 0.1 s" : "below 1 us",
+        o.sample_time > 0.1 ? "above 0.1 s" : "1 us or below",
         o.sample_time > 0.1 ? (c.sel.time_unit == "s" ? "ms" : "another unit") : "s or another unit"));
   // a range in seconds looks its ends up in the time column: it must not go backwards
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
@@ -374,7 +375,7 @@ void add_fit(CLI::App& app, Action& action) {
                   fmt::format("minimum slope of the model relative to span(y)/span(x), bounds the inverse's slope "
                               "(default {})", FitOptions{}.min_slope));
   sub->add_option("--sample-time", c->sample_time,
-                  "rate-pi: sample time of the record in s (default: the median step of --time-column)")
+                  "rate-pi: sample time of the record in s (default: the mean step of --time-column)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--censor-passes", c->censor_passes,
                   fmt::format("an output that clips (a sensor's limit, detected from the record) is fitted as censored "

@@ -205,9 +205,9 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
 void check_sample_time_agrees(double sample_time, const std::vector<double>* t, const std::string& file,
                               const std::string& column) {
   if (!(sample_time > 0.0) || !t || t->size() < 2) return;
-  const double step = median_time_step(*t);  // s
+  const double step = mean_time_step(*t);  // s
   if (!(step > 0.0) || std::abs(sample_time - step) <= kSampleTimeTolerance * step) return;
-  throw Error(fmt::format("{}: --sample-time {:.6g} s disagrees with the median step {:.6g} s of the time column {} "
+  throw Error(fmt::format("{}: --sample-time {:.6g} s disagrees with the mean step {:.6g} s of the time column {} "
                           "(by {:.3g} %, more than the {:g} % allowed): one of them is wrong (a rate, or a unit: see "
                           "--time-unit); give the right one alone",
                           file, sample_time, step, column, 100.0 * std::abs(sample_time - step) / step,
@@ -238,11 +238,11 @@ std::vector<std::string> rate_time_warnings(const ModelParams& model, const std:
     }
   }
   if (!(dt > 0.0)) {
-    dt = median_time_step(*t);
-    from = fmt::format("median step of the time column {}", column);
+    dt = mean_time_step(*t);
+    from = fmt::format("mean step of the time column {}", column);
   }
   if (!(dt > 0.0))
-    warnings.push_back(fmt::format("{}: the time column {} has no positive median step: the record's sample time "
+    warnings.push_back(fmt::format("{}: the time column {} has no positive step: the record's sample time "
                                    "is unknown",
                                    file, column));
   else if (std::abs(dt - rp->dt) > 0.1 * rp->dt)
@@ -280,25 +280,42 @@ std::string require_increasing_time(const std::vector<double>& t, const std::str
                                         t[first_repeat]);
   if (!repeats_ok && 100 * repeats > t.size() - 1)
     throw Error(fmt::format("{}; {} needs increasing time stamps", where, why));
-  return where + "; the median step is used";
+  return where + "; the mean step is used";
 }
 
 namespace {
 // Steps of a uniformly sampled column: within these multiples of the median step (a step of 2
 // sample times or more has lost a sample; stamps rounded to a clock's tick vary by up to 1/2).
 constexpr double kMaxStep = 1.9, kMinStep = 0.4;
-}  // namespace
+// A gap, for the record's time step: a step above this multiple of the median step. Stamps rounded
+// to a tick no longer than the step (longer ones repeat stamps) step by at most one tick more than
+// the median, which is at least one tick: at most 2 medians (1.4 ms rounded to 1 ms: 1 and 2 ms).
+constexpr double kGapStep = 2.5;
 
-double median_time_step(const std::vector<double>& t) {
+double median_step(const std::vector<double>& t) {
   if (t.size() < 2) return 0.0;
   std::vector<double> dts(t.size() - 1);
   for (std::size_t k = 1; k < t.size(); ++k) dts[k - 1] = t[k] - t[k - 1];
   std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
   return dts[dts.size() / 2];
 }
+}  // namespace
+
+double mean_time_step(const std::vector<double>& t) {
+  const double median = median_step(t);  // s
+  if (!(median > 0.0)) return median;
+  // the mean of the steps from 0 to kGapStep medians: over each stretch between gaps (and
+  // backward steps) the span over its steps, so a repeated stamp and the step after it count
+  // as the two steps they stand for, and stamps rounded to a tick average out
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t k = 1; k < t.size(); ++k)
+    if (const double step = t[k] - t[k - 1]; step >= 0.0 && step <= kGapStep * median) sum += step, ++n;
+  return sum / static_cast<double>(n);  // n > 0: half the steps are the median or below
+}
 
 std::string uniform_time_warning(const std::vector<double>& t, const std::string& file, const std::string& column) {
-  const double dt = median_time_step(t);  // s
+  const double dt = median_step(t);  // s
   if (t.size() < 3 || !(dt > 0)) return {};
   // repeated stamps (require_increasing_time's warning) are not steps: the smallest positive one
   std::size_t widest = 0, narrowest = 0;

@@ -8,7 +8,7 @@ Validation RMS in % of the measured span; the reference PI is bench/reference_pi
   Piezo: input voltage col 3, output displacement col 2; fit on rows 21286:33143 (the sine's 2nd to
          3.4th period; the step from rest at row 16286 excites a ~0.15 s dynamic transient that is
          not rate-independent hysteresis), validate on 33143:50001 (simulated from row 0).
-  rate-pi needs the sample time: Festo from its time column (col 2, median step 2 ms, passed as
+  rate-pi needs the sample time: Festo from its time column (col 2, stamped to 1 ms, mean step 1.887 ms, passed as
          --time-column), piezo --sample-time 0.0002 (5 kHz, ../shared/data/README.md).
 Usage: bench/real_data_table.py [HYSTERON_CLI] [--runs N]   (default: build/hysteron, 1 run;
        with N > 1 every fit runs N times and the time table gives median (min-max))

@@ -211,7 +211,8 @@ TEST(Results, FitDocumentRoundTrip) {
   d.data.input_column = "pressure_kpa";
   d.data.output_file = "rig.csv";
   d.data.output_column = "force";
-  d.data.time_column = "t_s";
+  d.data.time_column = "t_ms";
+  d.data.time_unit = "ms";
   d.data.input_label = "Pressure";
   d.data.input_unit = "kPa";
   d.data.output_label = "Force";
@@ -231,6 +232,7 @@ TEST(Results, FitDocumentRoundTrip) {
   EXPECT_EQ(back.data.output_file, d.data.output_file);
   EXPECT_EQ(back.data.output_column, d.data.output_column);
   EXPECT_EQ(back.data.time_column, d.data.time_column);
+  EXPECT_EQ(back.data.time_unit, "ms");
   EXPECT_EQ(back.data.input_label, d.data.input_label);
   EXPECT_EQ(back.data.input_unit, d.data.input_unit);
   EXPECT_EQ(back.data.output_label, d.data.output_label);
@@ -641,6 +643,35 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "controller.shaper: missing key \"delay_samples\"");
   }
+}
+
+// The time column's unit: a document without it (before 2026-11-30) is in s; another is refused.
+TEST(Results, DataTimeUnit) {
+  io::DataDescription d;
+  d.input_file = "rig.csv";
+  d.time_column = "t";
+  d.time_unit = "us";
+  nlohmann::json j = io::to_json(d);
+  EXPECT_EQ(j["time_unit"], "us");
+  io::DataDescription back;
+  io::from_json(j, back, "fit.json.data");
+  EXPECT_EQ(back.time_unit, "us");
+  j.erase("time_unit");
+  io::from_json(j, back, "fit.json.data");
+  EXPECT_EQ(back.time_unit, "s");
+  j["time_unit"] = "min";
+  try {
+    io::from_json(j, back, "fit.json.data");
+    FAIL() << "time unit min accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "fit.json.data.time_unit: unknown time unit \"min\" (expected s, ms or us)");
+  }
+  EXPECT_EQ(io::time_unit_seconds("s", "x"), 1.0);
+  EXPECT_EQ(io::time_unit_seconds("ms", "x"), 1e-3);
+  EXPECT_EQ(io::time_unit_seconds("us", "x"), 1e-6);
+  // no time column: no unit written (the documents without a time axis are unchanged)
+  d.time_column.clear();
+  EXPECT_FALSE(io::to_json(d).contains("time_unit"));
 }
 
 TEST(Results, ErrorsNameWhereAndKey) {

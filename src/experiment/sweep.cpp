@@ -402,9 +402,6 @@ SweepResult run_sweep(const SweepOptions& options) {
   {
     ExperimentOptions eo;
     eo.learning_periods = options.learning_periods;
-    eo.control_period = options.control_period;  // within [dt, 0.02 s] of the base rig (its dt checked below)
-    if (options.base.simulation.dt > 0.0 && options.base.simulation.dt <= eo.rig.simulation.dt)
-      eo.rig.simulation.dt = options.base.simulation.dt;
     eo.model = options.model;
     try {
       eo.validate();
@@ -414,6 +411,10 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
   try {
     validate(options.base, "base rig");
+    // the period as run_experiment checks it (ExperimentOptions::validate), on the base rig
+    if (!(options.control_period >= options.base.simulation.dt) || !(options.control_period <= 0.02))
+      throw Error(fmt::format("control_period = {} s must be within [base rig dt = {} s, 0.02 s]",
+                              options.control_period, options.base.simulation.dt));
     control_steps(options.control_period, options.base.simulation.dt, "base rig");
   } catch (const Error& e) {
     throw Error(fmt::format("sweep: {}", e.what()));

@@ -38,9 +38,9 @@ done
 mkdir -p "$T/keep" && echo old > "$T/keep/result.json"
 "$BIN" experiment gpi-pid --control-period 0.00025 --out "$T/keep" > /dev/null 2>&1
 [ "$(cat "$T/keep/result.json")" = old ] || fail "a rejected period changed an existing --out"
-expect_error "sweep not whole steps" "sweep: experiment: rig: control_period = 0.00025 s is not a whole multiple" "$T/s.csv" \
+expect_error "sweep not whole steps" "sweep: base rig: control_period = 0.00025 s is not a whole multiple" "$T/s.csv" \
   "$BIN" sweep gpi-pid --vary load.mass=35 --control-period 0.00025 --out "$T/s.csv"
-expect_error "sweep too slow" "control_period = 0.05 s must be within" "$T/s.csv" \
+expect_error "sweep too slow" "sweep: control_period = 0.05 s must be within [base rig dt = 0.0001 s, 0.02 s]" "$T/s.csv" \
   "$BIN" sweep gpi-pid --vary load.mass=35 --control-period 0.05 --out "$T/s.csv"
 # a variant's rig whose dt does not divide the period
 expect_error "sweep variant dt" "variant 'simulation.dt=3e-05': control_period = 0.0005 s is not a whole multiple" \

@@ -27,6 +27,7 @@ struct ExperimentArgs {
   bool no_adaptive = false;
   std::uint64_t seed = 1;
   int learning_periods = 10;
+  double control_period = ExperimentOptions{}.control_period;  // [s]
   bool json = false;
   std::string out;
   std::string model = "auto";
@@ -51,6 +52,7 @@ std::string model_help() {
 }
 
 void add_model_options(CLI::App* cmd, ExperimentArgs& args) {
+  add_control_period_option(cmd, args.control_period);
   cmd->add_option("--model", args.model, model_help())->check(CLI::IsMember(model_choices()))->default_val("auto");
   cmd->add_flag("--paper-references", args.paper_references,
                 "Track the papers' references as published even where they leave the contraction range this "
@@ -63,6 +65,7 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   o.name = a.name;
   o.seed = a.seed;
   o.learning_periods = a.learning_periods;
+  o.control_period = a.control_period;
   if (!a.plant.empty()) o.rig = load_rig_params(a.plant);
   if (!a.tracking_plant.empty()) o.tracking_rig = load_rig_params(a.tracking_plant);
   o.adaptive = !a.no_adaptive;
@@ -165,6 +168,11 @@ void add_experiment(CLI::App& app, Action& action) {
     action = [dargs] {
       for (const auto& name : experiment_names()) check_plant_not_output(dargs->plant, dargs->out + "/" + name);
       io::check_output_directory({"--out", dargs->out});
+      for (const auto& name : experiment_names()) {  // every option checked before the first run writes
+        ExperimentArgs a = *dargs;
+        a.name = name;
+        options_from(a).validate();
+      }
       int code = exit_ok;
       for (const auto& name : experiment_names()) {
         ExperimentArgs a = *dargs;

@@ -31,6 +31,7 @@ struct SweepArgs {
   std::string plant;
   std::uint64_t seed = 1;
   int learning_periods = ExperimentOptions{}.learning_periods;
+  double control_period = ExperimentOptions{}.control_period;  // [s]
   std::string model = "auto";
   bool paper_references = false;
   bool identify_on_base = false;
@@ -125,6 +126,7 @@ int run_sweep_command(const SweepArgs& a) {
   SweepOptions o;
   o.seed = a.seed;
   o.learning_periods = a.learning_periods;
+  o.control_period = a.control_period;
   o.model = fit_model_from_name(a.model);
   o.fit_references = !a.paper_references;
   o.identify_on_base = a.identify_on_base;
@@ -194,6 +196,7 @@ void add_sweep(CLI::App& app, Action& action) {
   cmd->add_option("--learning-periods", args->learning_periods,
                   "Periods of the learning variant in every run (0: no learning runs; default as experiment)")
       ->check(CLI::Range(0, 1000));
+  add_control_period_option(cmd, args->control_period);
   {
     std::vector<std::string> choices{std::string(fit_model_name(FitModel::automatic))};
     std::string kinds;

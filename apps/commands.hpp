@@ -36,6 +36,9 @@ void set_command_line(int argc, char** argv);             // recorded in reports
 // A decimal integer in 0..max (the option's type's largest value: 2^32 - 1 for an unsigned seed), else the
 // message "TEXT is not an integer in 0..MAX".
 CLI::Validator non_negative_integer(std::uint64_t max = std::numeric_limits<std::uint64_t>::max());
+// --control-period S (experiment, demo, sweep): the loop's sample time [s] into `period`
+// (ExperimentOptions::control_period, which checks it before anything runs or is written).
+void add_control_period_option(CLI::App* cmd, double& period);
 // --limits LO,HI (simulate/invert, export): finite numbers with LO < HI, else hysteron::Error.
 Limits parse_limits(const std::string& text);
 // The warning (on stderr, prefixed by `command`) where --limits reach beyond the model's

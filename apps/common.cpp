@@ -96,6 +96,14 @@ CLI::Validator non_negative_integer(std::uint64_t max) {
       "INT>=0");
 }
 
+void add_control_period_option(CLI::App* cmd, double& period) {
+  cmd->add_option("--control-period", period,
+                  "The controller's sample time [s], also the logging period (default 0.001): within "
+                  "[rig dt, 0.02] and a whole number of the rig's time steps (dt 1e-4 s by default); every "
+                  "gain, lead and filter is derived at this period, and result.json's \"controller\" records it "
+                  "(docs/control.md)");
+}
+
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n) {
   const auto colon = text.find(':');
   if (colon == std::string::npos)

@@ -232,6 +232,7 @@ void check_replay(const ExperimentOptions& o, LoopDesign::Kind expected, bool ex
   bool shaped = false, corrected = false;
   int learnt = 0, guard_cut = 0;
   for (const TrackingRun& run : back.runs) {
+    EXPECT_EQ(run.controller.sample_time, o.control_period) << run.variant << " " << run.reference;
     if (run.variant == "learning") {
       hysteron_loop_params c;
       const std::string where = run.variant + "." + run.reference;
@@ -308,6 +309,14 @@ void check_replay(const ExperimentOptions& o, LoopDesign::Kind expected, bool ex
 
 TEST(CApiLoops, FeedforwardPidRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
   check_replay(test::quick_experiment("gpi-pid", 2), LoopDesign::Kind::feedforward_pid);
+}
+
+// At 0.5 ms (2 kHz): result.json's loop, every count in samples of 0.5 ms, rebuilt through the C ABI
+// and the generated C, commands what the run commanded, sample by sample (learning included).
+TEST(CApiLoops, FeedforwardPidAtHalfAMillisecondRebuiltFromResultJsonCommandsWhatTheRunCommanded) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid", 2);
+  o.control_period = 5e-4;
+  check_replay(o, LoopDesign::Kind::feedforward_pid);
 }
 
 TEST(CApiLoops, OpenLoopRebuiltFromResultJsonCommandsWhatTheRunCommanded) {

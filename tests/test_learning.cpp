@@ -1933,3 +1933,54 @@ TEST(ExperimentTuning, LearningBandEndsAtTheRelaysUltimateFrequency) {
     EXPECT_EQ(run.controller.pid.has_value(), run.variant != "faithful" && run.variant != "baseline") << run.variant;
   }
 }
+
+// The learning design at another control period designs the same Q-filter in seconds. Its band
+// ends at the position relay's frequency w_u = 2 pi T_s / T_u [rad/sample], |Q(w_u)| =
+// cos^(2h)(w_u / 2) <= 1/sqrt(2) (docs/control.md, section 3), so h grows as 1 / T_s^2 (the
+// binomial filter's sigma, sqrt(h / 2) samples, is a fixed time). Counting its whole window,
+// 2h + 1 taps, in the loop's own samples capped h at half the period, 1 / T_s: at 0.5 ms (gpi-pid's
+// identified loop, a 5 s period) the floor no longer fitted, the band passed w_u (|Q(w_u)| =
+// 0.82) and the learning run was 2x worse than at 1 ms (0.073 against 0.034 mm RMS).
+TEST(ExperimentTuning, LearningFilterIsTheSameInSecondsAtEveryControlPeriod) {
+  const RigDynamics d = relay_identified(0.021, 0.056, 0.197, 13.05, 0.239);
+  const double q_limit = 1.0 / std::numbers::sqrt2;
+  double band_hz_1ms = 0.0;
+  for (const double tc : {1e-3, 5e-4, 2e-4}) {
+    SCOPED_TRACE(fmt::format("T_s = {} s", tc));
+    const PidParams pid = experiment::relay_pid(d, tc, -0.6, 0.6, experiment::PidRule::some_overshoot);
+    const auto samples = [tc](double s) { return static_cast<std::size_t>(std::lround(s / tc)); };
+    double rho = 0.0;
+    const LearningParams lp = experiment::design_learning(d, pid, samples(0.076), samples(5.0), tc, rho);
+    EXPECT_LT(rho, 0.98);
+    const double wu = 2.0 * std::numbers::pi * tc / d.position_relay_period_s;
+    const double h = static_cast<double>(lp.half_width);
+    EXPECT_LE(std::pow(std::cos(0.5 * wu), 2.0 * h), q_limit * (1.0 + 1e-12)) << "h = " << lp.half_width;
+    // the band's edge |Q| = 1/sqrt(2) in Hz: cos^(2h)(pi f T_s) = 1/sqrt(2)
+    const double band_hz = std::acos(std::pow(q_limit, 1.0 / (2.0 * h))) / (std::numbers::pi * tc);
+    if (tc == 1e-3) band_hz_1ms = band_hz;
+    // the design steps h by a quarter: the band's edge within sqrt(1.25) of the 1 ms one
+    EXPECT_NEAR(band_hz / band_hz_1ms, 1.0, std::sqrt(1.25) - 1.0) << band_hz << " Hz at 1 ms: " << band_hz_1ms;
+  }
+}
+
+// The reach is read from a centred moving mean over 11 ms of the identification run (11 samples
+// at 1 ms), at every control period: a unit step at 1 s shows in the mean from 5 ms before it
+// (the window's half) and not 6 ms before. An 11-sample mean at 0.5 ms reached only 2.5 ms.
+TEST(ExperimentReach, SmoothingWindowIsTheSameInSecondsAtEveryControlPeriod) {
+  for (const double tc : {1e-3, 5e-4, 2e-4}) {
+    SCOPED_TRACE(fmt::format("T_s = {} s", tc));
+    IdentificationRun id;
+    const auto at = [tc](double s) { return static_cast<std::size_t>(std::lround(s / tc)); };
+    for (std::size_t k = 0; k < at(2.0); ++k) {
+      id.t.push_back(static_cast<double>(k) * tc);
+      id.contraction_mm.push_back(k >= at(1.0) ? 1.0 : 0.0);
+      id.pressure_mpa.push_back(k >= at(1.0) ? 0.3 : 0.0);
+      id.pressure_command_mpa.push_back(id.pressure_mpa.back());
+    }
+    const experiment::SmoothedRun sm(id, tc);
+    EXPECT_GT(sm.x_mm[at(1.0 - 0.004)], 0.0);
+    EXPECT_EQ(sm.x_mm[at(1.0 - 0.006)], 0.0);
+    EXPECT_GT(sm.p[at(1.0 - 0.004)], 0.0);
+    EXPECT_DOUBLE_EQ(sm.x_mm[at(1.5)], 1.0);
+  }
+}

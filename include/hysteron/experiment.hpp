@@ -273,14 +273,14 @@ struct ExperimentResult {
   // puts it into model_identification.csv.
   IdentificationRun model_identification;
   RigDynamics dynamics;           // identified from the identification run
-  // The contraction the rig reached in the identification run (min and max of an 11-sample
-  // moving mean of the measurement) [mm]; NaN in results written before it existed.
+  // The contraction the rig reached in the identification run (min and max of an 11 ms
+  // moving mean of the measurement: 11 samples at 1 ms) [mm]; NaN in results written before it existed.
   double reach_min_mm = std::numeric_limits<double>::quiet_NaN();
   double reach_max_mm = std::numeric_limits<double>::quiet_NaN();
   // The top of the reach: the least contraction at or above reach_top_pressure_mpa on the
   // identification run (NaN if the run never got there) [mm], that pressure (95 % of the
   // actuator's top pressure: pressure_limit_mpa, or the most the measured pressure reached where the
-  // supply caps it below) [MPa], and the most the measured pressure reached (11-sample mean)
+  // supply caps it below) [MPa], and the most the measured pressure reached (11 ms mean)
   // [MPa]; NaN in results written before them.
   double reach_top_mm = std::numeric_limits<double>::quiet_NaN();
   double reach_top_pressure_mpa = std::numeric_limits<double>::quiet_NaN();

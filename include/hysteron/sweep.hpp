@@ -108,6 +108,8 @@ struct SweepOptions {
   std::vector<PlantVariant> variants;     // the base rig itself is always run first, as "nominal"
   std::uint64_t seed = 1;                 // rig noise seed of every run
   int learning_periods = ExperimentOptions{}.learning_periods;  // of every run (0: no learning runs)
+  // ExperimentOptions::control_period of every run [s]: a whole number of every rig's dt
+  double control_period = ExperimentOptions{}.control_period;
   // ExperimentOptions::model of every run: automatic (each run chooses among every kind on
   // its own rig; fits 9 kinds per run) or one kind pinned for every run.
   FitModel model = ExperimentOptions{}.model;
@@ -185,6 +187,7 @@ struct SweepResult {
   FitModel model = FitModel::automatic;  // SweepOptions::model
   bool fit_references = true;            // SweepOptions::fit_references
   bool identify_on_base = false;         // SweepOptions::identify_on_base
+  double control_period = 1e-3;          // SweepOptions::control_period [s]
   double wall_time_s = 0.0;
 
   std::size_t failures() const noexcept;

@@ -190,7 +190,7 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       "run_experiment",
       [](const std::string& name, const IntArg& seed_arg, const py::object& plant, const PathArg& out_arg,
          const PathArg& report_arg, const IntArg& learning_periods, bool adaptive, const py::object& tracking_plant,
-         const std::string& model, bool paper_references) {
+         const std::string& model, bool paper_references, double control_period) {
         // where the outputs go, before the run (minutes): a report whose directory is `out` is
         // written after `out` was created
         const std::string out = path_arg(out_arg, "run_experiment: out");
@@ -210,6 +210,7 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         o.seed = seed;
         o.learning_periods = int_arg(learning_periods, "run_experiment: learning_periods");
         o.adaptive = adaptive;
+        o.control_period = control_period;  // checked by run_experiment before anything is run or written
         if (!plant.is_none()) o.rig = rig_from(plant, "plant");
         if (!tracking_plant.is_none()) o.tracking_rig = rig_from(tracking_plant, "tracking_plant");
         ExperimentResult r;
@@ -286,6 +287,7 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
       py::arg("report") = "", py::arg("learning_periods") = 10, py::arg("adaptive") = true,
       py::arg("tracking_plant") = py::none(), py::arg("model") = "auto", py::arg("paper_references") = false,
+      py::arg("control_period") = ExperimentOptions{}.control_period,
       R"doc(Run one of the registered experiments (experiment_names(): "gpi-pid", "mpi-openloop",
 "mpi-pwm") on the simulated rig. plant: rig parameter dict or JSON path (None: defaults).
 model: kind of hysteron's model, the one the compensated, learning and adaptive variants
@@ -294,6 +296,8 @@ one kind of fit_models() (hysteron.Error if unknown or if it cannot be fitted or
 the adaptive variant needs the PI family and is skipped (a note in "messages") otherwise.
 learning_periods: periods of the learning variant (0: none; 0..1000).
 adaptive: run the adaptive variant (online RLS of the inverse's weights).
+control_period: the controller's sample time [s] (default 0.001): within [rig dt, 0.02] and a
+whole number of the rig's time steps, else hysteron.Error before anything runs or is written.
 tracking_plant: rig parameters of the tracking runs if the rig changed after its
 identification (None: the identified rig).
 paper_references: track the papers' references as published even above the contraction the
@@ -311,7 +315,7 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
       [](const py::object& experiments, const std::vector<std::string>& vary, const py::object& grid,
          const std::string& set, const py::object& plant, const IntArg& seed, const IntArg& learning_periods,
          const std::string& model, bool paper_references, bool identify_on_base, const IntArg& jobs,
-         const PathArg& out_arg, const PathArg& report_arg) {
+         const PathArg& out_arg, const PathArg& report_arg, double control_period) {
         const std::string out = path_arg(out_arg, "run_sweep: out");
         const std::string report_path = path_arg(report_arg, "run_sweep: report");
         io::check_output_file({"run_sweep: out", out});
@@ -324,6 +328,7 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
                                                      "a name of experiment_names(), \"all\", or a list of names"));
         o.seed = uint_arg(seed, "run_sweep: seed");
         o.learning_periods = int_arg(learning_periods, "run_sweep: learning_periods");
+        o.control_period = control_period;
         o.model = fit_model_from_name(model);
         o.fit_references = !paper_references;
         o.identify_on_base = identify_on_base;
@@ -354,6 +359,7 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
       py::arg("set") = "", py::arg("plant") = py::none(), py::arg("seed") = 1, py::arg("learning_periods") = 10,
       py::arg("model") = "auto", py::arg("paper_references") = false, py::arg("identify_on_base") = false,
       py::arg("jobs") = 0, py::arg("out") = "", py::arg("report") = "",
+      py::arg("control_period") = ExperimentOptions{}.control_period,
       R"doc(Run experiments over plant variants on all cores, as `hysteron sweep` (docs/plant.md).
 experiments: a name of experiment_names(), "all", or a list of them. Variants (at least one
 source): vary, a list of "PATH=V1,V2,..." (e.g. "load.mass=10,35", "muscle.force_620=-15%");
@@ -361,8 +367,8 @@ grid, a grid file's path or its dict ({"variants": [{"name": ..., "set": {PATH: 
 set="documented", issue 11's documented set. plant: the base rig (dict or JSON path; None:
 nominal), always run first as "nominal". identify_on_base: identify and tune every run on the
 base rig and track on the variant's (a rig that changed after its identification; default:
-each variant identified on its own rig). seed, learning_periods, model, paper_references: as
-run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run and raises
+each variant identified on its own rig). seed, learning_periods, model, paper_references,
+control_period: as run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run and raises
 KeyboardInterrupt once the runs under way end (seconds to tens of seconds; nothing written). out: the CSV table,
 report: the HTML page (written after every run finished). Returns the JSON document of
 `hysteron sweep --json` as a dict (variants, runs with their tracking errors, target_misses,

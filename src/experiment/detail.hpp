@@ -404,10 +404,18 @@ inline constexpr std::size_t kLearningHoldAfterCuts = 3;
 // Which Q-filters the learning design tries (half-width h; the window, with the lead and the
 // loop's preview, must fit in one period).
 enum class FilterWindow {
-  whole,        // the filter's whole window, 2h + 1 taps: the widest bands
+  whole,        // the filter's whole window, 2h + 1 taps at kLearningWindowPeriod (below): the widest bands
   summed_taps,  // the taps the update sums, 2 binomial_reach(h) + 1 (about 13 sqrt(h)): also
                 // the narrower bands that end below a lightly damped mode
 };
+// [s] The sample time FilterWindow::whole counts the filter's window at. The binomial Q-filter of
+// half-width h is about a Gaussian of sigma = sqrt(h / 2) samples: the same filter in seconds
+// has h ~ 1 / T_s^2, its whole window 2h + 1 samples ~ 1 / T_s^2 while the period has ~ 1 / T_s
+// samples. Counted at the loop's own T_s the rule would cap the band lower the faster the loop
+// (at 0.5 ms it kept the band above the relay's floor: gpi-pid's learning 2x worse than at 1 ms).
+// Counted at this fixed period (the loops' default), the window is 2h (T_s / 1 ms) samples of
+// the loop: the same filter in seconds at every rate, the rule unchanged at 1 ms.
+inline constexpr double kLearningWindowPeriod = 1e-3;
 // LearningParams::max_gain of the learning variant for the design `p`: the largest gain of
 // kLearningGains (at least p.gain) whose contraction bound, with p's lead and Q-filter, is below 1
 // on the loop `d` itself. The design's L contracts on every neighbour of d, a worst case; the
@@ -436,14 +444,22 @@ inline constexpr double kPressureHeadroom = 0.05;
 // The largest element of v; 0 where v is empty.
 inline double max_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
 
-// Centred 11-sample moving mean [mm or MPa] (reach.cpp).
-std::vector<double> smoothed(const std::vector<double>& x);
+// [s] Half the window of the centred moving mean the reach is read from: 5 samples at 1 ms (an
+// 11-sample mean), 10 at 0.5 ms; the same 11 ms of the record at every control period.
+inline constexpr double kSmoothingHalfWindow = 5e-3;
+// Centred moving mean of 2 h + 1 samples [mm or MPa] (reach.cpp).
+std::vector<double> smoothed(const std::vector<double>& x, std::size_t h);
+// h of a record sampled every tc [s]: kSmoothingHalfWindow / tc, at least 1.
+std::size_t smoothing_half_width(double tc);
 
-// The identification run's contraction [mm] and measured pressure [MPa], each as its
-// centred 11-sample mean: what the reach and the model's identification range are read from.
+// The identification run's contraction [mm] and measured pressure [MPa], each as its centred
+// moving mean over 11 ms (kSmoothingHalfWindow; 11 samples at 1 ms): what the reach and the
+// model's identification range are read from.
 struct SmoothedRun {
   std::vector<double> x_mm, p;
-  explicit SmoothedRun(const IdentificationRun& id) : x_mm(smoothed(id.contraction_mm)), p(smoothed(id.pressure_mpa)) {}
+  SmoothedRun(const IdentificationRun& id, double tc)
+      : x_mm(smoothed(id.contraction_mm, smoothing_half_width(tc))),
+        p(smoothed(id.pressure_mpa, smoothing_half_width(tc))) {}
 };
 
 // The top pressure the loops can use and why (usable_top, reach.cpp).

@@ -430,7 +430,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   std::vector<Reference> refs = spec.references(tc);
   std::optional<IdentificationRun> extended_run, extended_runf;
   {
-    const SmoothedRun sm(id);
+    const SmoothedRun sm(id, tc);
     if (const double ext = extended_input_top(paper_input, sm, refs, usable_top(id, sm, p_max).mpa, p_max);
         ext > 0.0) {
       const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
@@ -448,7 +448,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   const IdentificationRun& id_run = extended_run ? *extended_run : id;  // the run the reach and the model come from
   const IdentificationRun& id_runf = extended_run ? *extended_runf : idf;
   const std::vector<double> id_input = extended_run ? scaled_to(paper_input, p_max, true) : paper_input;
-  const SmoothedRun smooth(id_run);
+  const SmoothedRun smooth(id_run, tc);
   res.reach_pressure_max_mpa = max_of(smooth.p);
   // the actuator's usable top: the reach, the position relay's level and the FOPDT's clip
   const ActuatorTop actuator_top = usable_top(id_run, smooth, p_max);

@@ -13,10 +13,14 @@
 
 namespace hysteron::experiment {
 
-// Centred 11-sample moving mean of the measured contraction (the sensor's noise does not
+std::size_t smoothing_half_width(double tc) {
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(kSmoothingHalfWindow / tc)));
+}
+
+// Centred moving mean of 2 h + 1 samples of the measured contraction (the sensor's noise does not
 // widen the reach) [mm].
-std::vector<double> smoothed(const std::vector<double>& x) {
-  const std::size_t n = x.size(), h = 5;
+std::vector<double> smoothed(const std::vector<double>& x, std::size_t h) {
+  const std::size_t n = x.size();
   if (n <= 2 * h) return x;
   std::vector<double> m(n);
   double sum = 0.0;

@@ -383,6 +383,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   r.model = options.model;
   r.fit_references = options.fit_references;
   r.identify_on_base = options.identify_on_base;
+  r.control_period = options.control_period;
   if (options.experiments.empty()) throw Error("sweep: no experiment given");
   const std::vector<std::string> known = experiment_names();
   for (const auto& name : options.experiments) {
@@ -410,7 +411,11 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
   try {
     validate(options.base, "base rig");
-    control_steps(ExperimentOptions{}.control_period, options.base.simulation.dt, "base rig");
+    // the period as run_experiment checks it (ExperimentOptions::validate), on the base rig
+    if (!(options.control_period >= options.base.simulation.dt) || !(options.control_period <= 0.02))
+      throw Error(fmt::format("control_period = {} s must be within [base rig dt = {} s, 0.02 s]",
+                              options.control_period, options.base.simulation.dt));
+    control_steps(options.control_period, options.base.simulation.dt, "base rig");
   } catch (const Error& e) {
     throw Error(fmt::format("sweep: {}", e.what()));
   }
@@ -432,7 +437,10 @@ SweepResult run_sweep(const SweepOptions& options) {
     SweepVariant sv;
     sv.variant = v;
     sv.rig = apply_overrides(options.base, v.overrides, where);
-    control_steps(ExperimentOptions{}.control_period, sv.rig.simulation.dt, where);  // as the runs will check
+    if (!(options.control_period >= sv.rig.simulation.dt))  // as the runs will check
+      throw Error(fmt::format("{}: control_period = {} s is shorter than the rig's dt = {} s", where,
+                              options.control_period, sv.rig.simulation.dt));
+    control_steps(options.control_period, sv.rig.simulation.dt, where);
     json j = rig_params_to_json(sv.rig);
     for (const auto& o : v.overrides) sv.values.push_back(find_leaf(j, o.path)->get<double>());
     if (j == base_json) {
@@ -491,7 +499,7 @@ SweepResult run_sweep(const SweepOptions& options) {
     std::vector<std::size_t> cost(r.experiments.size(), 1);
     for (std::size_t e = 0; e < cost.size(); ++e)
       if (const experiment::Spec* spec = experiment::find_spec(r.experiments[e]); spec && spec->references)
-        cost[e] = spec->references(1e-3).size();
+        cost[e] = spec->references(options.control_period).size();
     std::vector<std::size_t> ex(r.experiments.size());
     for (std::size_t e = 0; e < ex.size(); ++e) ex[e] = e;
     std::stable_sort(ex.begin(), ex.end(), [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
@@ -534,6 +542,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         }
         eo.seed = options.seed;
         eo.learning_periods = options.learning_periods;
+        eo.control_period = options.control_period;
         eo.model = options.model;
         eo.fit_references = options.fit_references;
         eo.complete_gain_trials = false;       // the sweep reports the trial's choice, not its curve
@@ -820,6 +829,7 @@ json SweepResult::to_json() const {
   j["model_choice"] = std::string(fit_model_name(model));
   j["fit_references"] = fit_references;
   j["identify_on_base"] = identify_on_base;
+  j["control_period_s"] = control_period;
   j["identification_note"] = identification_note();
   j["experiments"] = experiments;
   j["failures"] = failures();

@@ -350,9 +350,20 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   // the least bound seen, for the message where none is below 0.98
   double least = std::numeric_limits<double>::infinity(), least_gain = 0.0;
   std::size_t least_shift = 0, least_h = 0;
-  // the window that must fit: the filter's 2h + 1 taps, or the 2 reach + 1 the update sums
-  const auto fits = [window, budget](std::size_t shift, std::size_t h) {
-    return h <= kMaxLearningHalfWidth && shift + 2 * (window == FilterWindow::whole ? h : binomial_reach(h)) <= budget;
+  // the window that must fit: the filter's 2h + 1 taps counted at kLearningWindowPeriod (2h T_s / 1 ms
+  // samples of this loop: the same filter in seconds at every rate), or the 2 reach + 1 the update sums
+  const double per_tap = tc / kLearningWindowPeriod;  // 1 at 1 ms, exactly
+  const auto window_of = [window, per_tap](std::size_t h) {
+    return window == FilterWindow::whole ? 2.0 * static_cast<double>(h) * per_tap
+                                         : 2.0 * static_cast<double>(binomial_reach(h));
+  };
+  const auto fits = [window_of, budget](std::size_t shift, std::size_t h) {
+    return h <= kMaxLearningHalfWidth && static_cast<double>(shift) + window_of(h) <= static_cast<double>(budget);
+  };
+  // the largest half-width whose whole window fits after `shift` (the summed taps: as many as the period)
+  const auto widest_fit = [window, per_tap, budget](std::size_t shift) {
+    const double room = static_cast<double>(budget - shift) / 2.0;
+    return static_cast<std::size_t>(window == FilterWindow::whole ? std::floor(room / per_tap) : std::floor(room));
   };
   for (double gain : kLearningGains) {
     if (found) break;
@@ -369,7 +380,7 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
         worst[l % kGrid] = std::max(worst[l % kGrid], std::isfinite(a) ? a : 1e300);
       }
       // smallest half-width (widest band) that contracts with a 2 % margin
-      const std::size_t h0 = std::min(h_floor, (budget - shift) / 2);  // the floor, or as near as the period allows
+      const std::size_t h0 = std::min(h_floor, widest_fit(shift));  // the floor, or as near as the period allows
       for (std::size_t h = h0; fits(shift, h); h = h < 4 ? h + 1 : h + h / 4) {
         if (found && h > best.half_width) break;
         const std::vector<double>& q = q_of(h);

@@ -92,10 +92,10 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
 // Festo record test9 has one) are returned as a warning ("" if none).
 std::string require_increasing_time(const std::vector<double>& t, const std::string& file, const std::string& column,
                                     std::string_view why, bool repeats_ok = false);
-// The time step of an increasing time column (s): the mean of its steps left after the gaps (steps
-// above 2.5 times the median step) and backward steps, so that stamps rounded to a clock's tick or
-// jittered give the record's mean rate (Festo test8: 1, 2 and 3 ms steps of 1.887 ms on average,
-// median 2 ms) and a gap does not count. The median step if it is not positive (too many repeats).
+// The time step of an increasing time column (s): the mean of its steps within 0.5 .. 1.5 times the
+// median step, so that stamps rounded to a clock's tick or jittered give the record's mean rate
+// (Festo test8: 1, 2 and 3 ms steps of 1.887 ms on average, median 2 ms) and a lost sample, a gap,
+// a repeated stamp or a backward step does not count. The median step if it is not positive.
 double mean_time_step(const std::vector<double>& t);
 // "" if every step of an increasing time column lies within 0.4 .. 1.9 times the median step, else
 // a warning that names the file, the column and the sample of the widest (a gap) or narrowest step.

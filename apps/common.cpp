@@ -99,9 +99,9 @@ CLI::Validator non_negative_integer(std::uint64_t max) {
 void add_control_period_option(CLI::App* cmd, double& period) {
   cmd->add_option("--control-period", period,
                   "The controller's sample time [s], also the logging period (default 0.001): within "
-                  "[rig dt, 0.02] and a whole number of the rig's time steps (dt 1e-4 s by default); every "
-                  "gain, lead and filter is derived at this period, and result.json's \"controller\" records it "
-                  "(docs/control.md)");
+                  "[rig dt, 0.01] and a whole number of the rig's time steps (dt 1e-4 s by default); every "
+                  "gain, lead and filter is derived at this period (an experiment's result.json \"controller\" "
+                  "and a sweep's JSON record it; docs/control.md)");
 }
 
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n) {
@@ -215,6 +215,10 @@ void check_sample_time_agrees(double sample_time, const std::vector<double>* t, 
   if (!(sample_time > 0.0) || !t || t->size() < 2) return;
   const double step = mean_time_step(*t);  // s
   if (!(step > 0.0) || std::abs(sample_time - step) <= kSampleTimeTolerance * step) return;
+  // or the overall mean step, lost samples counted as steps: stamps on a tick coarser than half
+  // the step (1.4 ms stamped to 1 ms) look like lost samples to mean_time_step
+  const double overall = (t->back() - t->front()) / static_cast<double>(t->size() - 1);  // s
+  if (std::abs(sample_time - overall) <= kSampleTimeTolerance * overall) return;
   throw Error(fmt::format("{}: --sample-time {:.6g} s disagrees with the mean step {:.6g} s of the time column {} "
                           "(by {:.3g} %, more than the {:g} % allowed): one of them is wrong (a rate, or a unit: see "
                           "--time-unit); give the right one alone",
@@ -295,10 +299,15 @@ namespace {
 // Steps of a uniformly sampled column: within these multiples of the median step (a step of 2
 // sample times or more has lost a sample; stamps rounded to a clock's tick vary by up to 1/2).
 constexpr double kMaxStep = 1.9, kMinStep = 0.4;
-// A gap, for the record's time step: a step above this multiple of the median step. Stamps rounded
-// to a tick no longer than the step (longer ones repeat stamps) step by at most one tick more than
-// the median, which is at least one tick: at most 2 medians (1.4 ms rounded to 1 ms: 1 and 2 ms).
-constexpr double kGapStep = 2.5;
+// The steps the record's time step is the mean of: within these multiples of the median step,
+// both ends included (to 1e-6). Symmetric, so jitter averages out; stamps rounded to a tick of at
+// most half the step differ from the median by at most one tick, so by at most half a median
+// (Festo test8: 1, 2 and 3 ms around 2 ms); a lost sample (2 medians), a gap, a repeated stamp
+// and the double step after it, a backward step do not count. A coarser tick (1.4 ms stamped to
+// 1 ms: steps of 1 and 2 ms) cannot be told from lost samples by the steps: the median's step
+// is taken, the column is warned as non-uniform, and --sample-time may give the rate (it is
+// checked against the column's overall mean step too, check_sample_time_agrees).
+constexpr double kMeanStepLo = 0.5, kMeanStepHi = 1.5;
 
 double median_step(const std::vector<double>& t) {
   if (t.size() < 2) return 0.0;
@@ -312,14 +321,14 @@ double median_step(const std::vector<double>& t) {
 double mean_time_step(const std::vector<double>& t) {
   const double median = median_step(t);  // s
   if (!(median > 0.0)) return median;
-  // the mean of the steps from 0 to kGapStep medians: over each stretch between gaps (and
-  // backward steps) the span over its steps, so a repeated stamp and the step after it count
-  // as the two steps they stand for, and stamps rounded to a tick average out
+  // the mean of the steps from kMeanStepLo to kMeanStepHi medians, so stamps rounded to a tick or
+  // jittered average out to the record's rate
+  const double lo = kMeanStepLo * median * (1.0 - 1e-6), hi = kMeanStepHi * median * (1.0 + 1e-6);
   double sum = 0.0;
   std::size_t n = 0;
   for (std::size_t k = 1; k < t.size(); ++k)
-    if (const double step = t[k] - t[k - 1]; step >= 0.0 && step <= kGapStep * median) sum += step, ++n;
-  return sum / static_cast<double>(n);  // n > 0: half the steps are the median or below
+    if (const double step = t[k] - t[k - 1]; step >= lo && step <= hi) sum += step, ++n;
+  return sum / static_cast<double>(n);  // n > 0: the median step itself counts
 }
 
 std::string uniform_time_warning(const std::vector<double>& t, const std::string& file, const std::string& column) {

@@ -296,7 +296,7 @@ one kind of fit_models() (hysteron.Error if unknown or if it cannot be fitted or
 the adaptive variant needs the PI family and is skipped (a note in "messages") otherwise.
 learning_periods: periods of the learning variant (0: none; 0..1000).
 adaptive: run the adaptive variant (online RLS of the inverse's weights).
-control_period: the controller's sample time [s] (default 0.001): within [rig dt, 0.02] and a
+control_period: the controller's sample time [s] (default 0.001): within [rig dt, 0.01] and a
 whole number of the rig's time steps, else hysteron.Error before anything runs or is written.
 tracking_plant: rig parameters of the tracking runs if the rig changed after its
 identification (None: the identified rig).

@@ -414,7 +414,9 @@ enum class FilterWindow {
 // samples. Counted at the loop's own T_s the rule would cap the band lower the faster the loop
 // (at 0.5 ms it kept the band above the relay's floor: gpi-pid's learning 2x worse than at 1 ms).
 // Counted at this fixed period (the loops' default), the window is 2h (T_s / 1 ms) samples of
-// the loop: the same filter in seconds at every rate, the rule unchanged at 1 ms.
+// the loop: the same filter in seconds at every rate, the rule unchanged at 1 ms. Counting a slower
+// loop's own 2h + 1 taps instead was tried (2026-11-30): gpi-pid's learning at 10 ms ended at
+// 0.083 mm RMS against 0.065 counted at 1 ms (mpi-openloop, mpi-pwm the same).
 inline constexpr double kLearningWindowPeriod = 1e-3;
 // LearningParams::max_gain of the learning variant for the design `p`: the largest gain of
 // kLearningGains (at least p.gain) whose contraction bound, with p's lead and Q-filter, is below 1
@@ -445,7 +447,8 @@ inline constexpr double kPressureHeadroom = 0.05;
 inline double max_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
 
 // [s] Half the window of the centred moving mean the reach is read from: 5 samples at 1 ms (an
-// 11-sample mean), 10 at 0.5 ms; the same 11 ms of the record at every control period.
+// 11-sample mean), 10 at 0.5 ms: (2 lround(5 ms / T_s) + 1) T_s, 10.5-11 ms at 1 ms and faster
+// (14 ms at 2 ms, 30 ms at 10 ms, where the half-window is 1 sample).
 inline constexpr double kSmoothingHalfWindow = 5e-3;
 // Centred moving mean of 2 h + 1 samples [mm or MPa] (reach.cpp).
 std::vector<double> smoothed(const std::vector<double>& x, std::size_t h);
@@ -453,7 +456,7 @@ std::vector<double> smoothed(const std::vector<double>& x, std::size_t h);
 std::size_t smoothing_half_width(double tc);
 
 // The identification run's contraction [mm] and measured pressure [MPa], each as its centred
-// moving mean over 11 ms (kSmoothingHalfWindow; 11 samples at 1 ms): what the reach and the
+// moving mean over about 11 ms (kSmoothingHalfWindow; 11 samples at 1 ms): what the reach and the
 // model's identification range are read from.
 struct SmoothedRun {
   std::vector<double> x_mm, p;

@@ -349,9 +349,9 @@ void ExperimentOptions::validate() const {
   }
   hysteron::validate(rig, "experiment: rig");
   check_return_force(rig, "rig");
-  if (!(control_period >= rig.simulation.dt) || !(control_period <= 0.02))
-    throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, 0.02 s]",
-                            control_period, rig.simulation.dt));
+  if (!(control_period >= rig.simulation.dt) || !(control_period <= kMaxControlPeriod))
+    throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, {} s]", control_period,
+                            rig.simulation.dt, kMaxControlPeriod));
   control_steps(control_period, rig.simulation.dt, "experiment: rig");  // a whole number of rig steps
   if (learning_periods < 0 || learning_periods > 1000)
     throw Error(fmt::format("experiment: learning_periods = {} must be within 0..1000", learning_periods));

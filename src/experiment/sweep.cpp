@@ -412,9 +412,9 @@ SweepResult run_sweep(const SweepOptions& options) {
   try {
     validate(options.base, "base rig");
     // the period as run_experiment checks it (ExperimentOptions::validate), on the base rig
-    if (!(options.control_period >= options.base.simulation.dt) || !(options.control_period <= 0.02))
-      throw Error(fmt::format("control_period = {} s must be within [base rig dt = {} s, 0.02 s]",
-                              options.control_period, options.base.simulation.dt));
+    if (!(options.control_period >= options.base.simulation.dt) || !(options.control_period <= kMaxControlPeriod))
+      throw Error(fmt::format("control_period = {} s must be within [base rig dt = {} s, {} s]",
+                              options.control_period, options.base.simulation.dt, kMaxControlPeriod));
     control_steps(options.control_period, options.base.simulation.dt, "base rig");
   } catch (const Error& e) {
     throw Error(fmt::format("sweep: {}", e.what()));

@@ -32,6 +32,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -63,6 +64,11 @@ std::vector<std::string> experiment_names();
 // mpi-openloop's 29-parameter fit had too few above 0.0172 s (a demo at 0.02 s wrote gpi-pid and
 // then failed); at 0.02 s the learning design's floor no longer fitted in gpi-pid's period.
 inline constexpr double kMaxControlPeriod = 0.01;
+// Refuses (hysteron::Error) a control period outside [dt, kMaxControlPeriod] or not a whole number
+// of the rig's steps dt (control_steps): "<where>: control_period = ... s must be within [<rig> dt
+// = ... s, 0.01 s]" or "<where>: <rig>: control_period = ... s is not a whole multiple ...". One
+// check for the experiment's rig and tracking rig and a sweep's base and variant rigs.
+void check_control_period(double control_period, double dt, std::string_view where, std::string_view rig);
 
 struct ExperimentOptions {
   std::string name = "gpi-pid";  // one of experiment_names()

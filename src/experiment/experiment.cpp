@@ -338,6 +338,13 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
 
 }  // namespace
 
+void check_control_period(double control_period, double dt, std::string_view where, std::string_view rig) {
+  if (!(control_period >= dt) || !(control_period <= kMaxControlPeriod))
+    throw Error(fmt::format("{}: control_period = {} s must be within [{} dt = {} s, {} s]", where, control_period, rig,
+                            dt, kMaxControlPeriod));
+  control_steps(control_period, dt, fmt::format("{}: {}", where, rig));  // a whole number of the rig's steps
+}
+
 void ExperimentOptions::validate() const {
   if (model != FitModel::automatic &&
       std::find(std::begin(fit_model_kinds), std::end(fit_model_kinds), model) == std::end(fit_model_kinds))
@@ -349,19 +356,13 @@ void ExperimentOptions::validate() const {
   }
   hysteron::validate(rig, "experiment: rig");
   check_return_force(rig, "rig");
-  if (!(control_period >= rig.simulation.dt) || !(control_period <= kMaxControlPeriod))
-    throw Error(fmt::format("experiment: control_period = {} s must be within [rig dt = {} s, {} s]", control_period,
-                            rig.simulation.dt, kMaxControlPeriod));
-  control_steps(control_period, rig.simulation.dt, "experiment: rig");  // a whole number of rig steps
+  check_control_period(control_period, rig.simulation.dt, "experiment", "rig");
   if (learning_periods < 0 || learning_periods > 1000)
     throw Error(fmt::format("experiment: learning_periods = {} must be within 0..1000", learning_periods));
   if (tracking_rig) {
     hysteron::validate(*tracking_rig, "experiment: tracking rig");
     check_return_force(*tracking_rig, "tracking rig");
-    if (!(control_period >= tracking_rig->simulation.dt))
-      throw Error(fmt::format("experiment: control_period = {} s is shorter than the tracking rig's dt = {} s",
-                              control_period, tracking_rig->simulation.dt));
-    control_steps(control_period, tracking_rig->simulation.dt, "experiment: tracking rig");
+    check_control_period(control_period, tracking_rig->simulation.dt, "experiment", "tracking rig");
   }
   if (!find_spec(name)) {
     std::string list;

@@ -411,14 +411,11 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
   try {
     validate(options.base, "base rig");
-    // the period as run_experiment checks it (ExperimentOptions::validate), on the base rig
-    if (!(options.control_period >= options.base.simulation.dt) || !(options.control_period <= kMaxControlPeriod))
-      throw Error(fmt::format("control_period = {} s must be within [base rig dt = {} s, {} s]",
-                              options.control_period, options.base.simulation.dt, kMaxControlPeriod));
-    control_steps(options.control_period, options.base.simulation.dt, "base rig");
   } catch (const Error& e) {
     throw Error(fmt::format("sweep: {}", e.what()));
   }
+  // the period as run_experiment checks it (ExperimentOptions::validate)
+  check_control_period(options.control_period, options.base.simulation.dt, "sweep", "base rig");
 
   // the variants' rigs, all checked before anything runs
   const json base_json = rig_params_to_json(options.base);
@@ -437,10 +434,7 @@ SweepResult run_sweep(const SweepOptions& options) {
     SweepVariant sv;
     sv.variant = v;
     sv.rig = apply_overrides(options.base, v.overrides, where);
-    if (!(options.control_period >= sv.rig.simulation.dt))  // as the runs will check
-      throw Error(fmt::format("{}: control_period = {} s is shorter than the rig's dt = {} s", where,
-                              options.control_period, sv.rig.simulation.dt));
-    control_steps(options.control_period, sv.rig.simulation.dt, where);
+    check_control_period(options.control_period, sv.rig.simulation.dt, where, "rig");  // as the runs will check
     json j = rig_params_to_json(sv.rig);
     for (const auto& o : v.overrides) sv.values.push_back(find_leaf(j, o.path)->get<double>());
     if (j == base_json) {

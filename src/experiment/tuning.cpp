@@ -351,8 +351,8 @@ LearningParams design_learning(const RigDynamics& d, const PidParams& pid, std::
   double least = std::numeric_limits<double>::infinity(), least_gain = 0.0;
   std::size_t least_shift = 0, least_h = 0;
   // the window that must fit: the filter's 2h + 1 taps counted at kLearningWindowPeriod (2h T_s / 1 ms
-  // samples; up to kMaxControlPeriod: at 20 ms the floor h = 6 took 247 of a period's 244 samples)
-  // samples of this loop: the same filter in seconds at every rate), or the 2 reach + 1 the update sums
+  // samples of this loop: the same filter in seconds at every rate up to kMaxControlPeriod; at 20 ms the
+  // floor h = 6 took 247 of a period's 244 samples), or the 2 reach + 1 the update sums
   const double per_tap = tc / kLearningWindowPeriod;  // 1 at 1 ms, exactly
   const auto window_of = [window, per_tap](std::size_t h) {
     return window == FilterWindow::whole ? 2.0 * static_cast<double>(h) * per_tap

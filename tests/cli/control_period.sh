@@ -46,7 +46,7 @@ expect_error "sweep not whole steps" "sweep: base rig: control_period = 0.00025 
 expect_error "sweep too slow" "sweep: control_period = 0.05 s must be within [base rig dt = 0.0001 s, 0.01 s]" "$T/s.csv" \
   "$BIN" sweep gpi-pid --vary load.mass=35 --control-period 0.05 --out "$T/s.csv"
 # a variant's rig whose dt does not divide the period
-expect_error "sweep variant dt" "variant 'simulation.dt=3e-05': control_period = 0.0005 s is not a whole multiple" \
+expect_error "sweep variant dt" "variant 'simulation.dt=3e-05': rig: control_period = 0.0005 s is not a whole multiple" \
   "$T/s.csv" "$BIN" sweep gpi-pid --vary simulation.dt=3e-5 --control-period 0.0005 --out "$T/s.csv"
 
 # 1 ms (the default) and 0.5 ms

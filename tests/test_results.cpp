@@ -473,6 +473,42 @@ TEST(Results, ExperimentResultRoundTrip) {
   EXPECT_EQ(r.to_json(), io::to_json(r));
 }
 
+// The control period comes back, the table and a file from before it say it: read from the
+// runs' controllers (the sample time every loop ran at), else the 1 ms of then; a bad one is named.
+TEST(Results, ExperimentControlPeriod) {
+  ExperimentResult r;
+  r.name = "gpi-pid";
+  r.title = "t";
+  r.seed = 3;
+  r.control_period_s = 5e-4;
+  for (const char* variant : {"compensated", "baseline"}) {
+    TrackingRun run;
+    run.variant = variant;
+    run.reference = "sine";
+    run.errors = {1.0, 0.25, 0.5};
+    run.controller.sample_time = 5e-4;
+    r.runs.push_back(run);
+  }
+  nlohmann::json j = io::to_json(r);
+  EXPECT_EQ(j["control_period_s"], 5e-4);
+  const ExperimentResult back = round_trip(r);
+  EXPECT_EQ(back.control_period_s, 5e-4);
+  EXPECT_NE(back.table().find("control period 0.5 ms, rig noise seed 3\n"), std::string::npos) << back.table();
+  j.erase("control_period_s");
+  EXPECT_EQ(io::from_json<ExperimentResult>(j, "old").control_period_s, 5e-4);
+  for (const char* v : {"compensated", "baseline"}) j[v].erase("controller");
+  EXPECT_EQ(io::from_json<ExperimentResult>(j, "older").control_period_s, 1e-3);
+  for (const nlohmann::json bad : {nlohmann::json(0.0), nlohmann::json(-1e-3), nlohmann::json(nullptr)}) {
+    j["control_period_s"] = bad;
+    try {
+      (void)io::from_json<ExperimentResult>(j, "f.json");
+      ADD_FAILURE() << "control_period_s " << bad.dump() << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("f.json: key \"control_period_s\""), std::string::npos) << e.what();
+    }
+  }
+}
+
 // A run's "controller": every field back as written (unbounded limits and an unsupervised
 // learning's infinities as null), absent parts absent, and a bad value named with its path.
 TEST(Results, LoopDesignRoundTripAndErrors) {

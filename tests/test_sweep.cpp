@@ -894,11 +894,12 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
     lines.push_back(csv.substr(s, e - s));
   }
   const auto header = csv_fields(lines.at(0));
-  ASSERT_EQ(header.size(), 20u);
+  ASSERT_EQ(header.size(), 21u);
   EXPECT_EQ(header[0], "experiment");
   EXPECT_EQ(header[17], "guard_cuts");
   EXPECT_EQ(header[18], "guard_final_scale");
   EXPECT_EQ(header[19], "command_limit_mpa");
+  EXPECT_EQ(header[20], "control_period_s");
   EXPECT_EQ(header[7], "rms_mm");
   EXPECT_EQ(header[8], "rms_vs_nominal");
   EXPECT_EQ(header[13], "reference_scale");
@@ -908,6 +909,7 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
   for (std::size_t i = 1; i < lines.size(); ++i) {
     const auto f = csv_fields(lines[i]);
     ASSERT_EQ(f.size(), header.size()) << lines[i];
+    EXPECT_EQ(std::stod(f[20]), r.control_period) << lines[i];  // failed rows too
     if (f[14] == "failed") {
       ++failed;
       EXPECT_TRUE(contains(f[15], "max_substeps")) << f[15];

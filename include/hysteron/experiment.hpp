@@ -257,6 +257,9 @@ struct ExperimentResult {
   std::string name;
   std::string title;
   std::uint64_t seed = 0;
+  // The controller's period of every run [s] (ExperimentOptions::control_period); results written
+  // before it was recorded read it from their runs' "controller" (sample_time_s), else 1 ms.
+  double control_period_s = 1e-3;
   IdentificationRun identification;  // the paper's identification input, run on this rig
   std::size_t id_train_end = 0;   // samples [0, id_train_end) are the major loop
   FitReport fit;                  // the paper's model, fitted on the major loop

@@ -200,7 +200,8 @@ struct SweepResult {
   // rms_vs_nominal, rms_vs_baseline, min_command_mpa, max_command_mpa, saturated,
   // reference_scale, status (ok | failed), error, wall_time_s, guard_cuts, guard_final_scale
   // (what the position PID's limit-cycle guard did; 0 and 1 where it has none),
-  // command_limit_mpa (SweepRun::command_limit_mpa). Numbers with %.17g (exact), NaN as "".
+  // command_limit_mpa (SweepRun::command_limit_mpa), control_period_s (every run's controller
+  // period, SweepOptions::control_period). Numbers with %.17g (exact), NaN as "".
   std::string csv() const;
   // A human-readable table (RMS per kind), failures and target misses.
   std::string text() const;

@@ -380,6 +380,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.name = spec.name;
   res.title = spec.title;
   res.seed = o.seed;
+  res.control_period_s = tc;
   res.published = spec.published;
   // the actuator's limit: no run commands more (the rig's rating and the regulator's range)
   const double p_max = run_pressure_limit(o, spec.valves);

@@ -97,6 +97,7 @@ void ExperimentResult::write(const std::string& dir) const {
 
 std::string ExperimentResult::table() const {
   std::string s = fmt::format("{}: {}\n", name, title);
+  s += fmt::format("  control period {:g} ms, rig noise seed {}\n", control_period_s * 1e3, seed);
   s += fmt::format("  identification: {} fitted on the major loop, RMS {:.3f} mm train, {:.3f} mm ({:.2f} % of span) "
                    "on the minor loops; best model {} ({:.3f} mm RMS on a second run)\n",
                    fit_model_name(fit.model_kind), fit.train.rms, validation.rms, validation.rms_percent_span,

@@ -634,7 +634,7 @@ std::string SweepResult::csv() const {
   std::string out =
       "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,"
       "min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s,guard_cuts,"
-      "guard_final_scale,command_limit_mpa\n";
+      "guard_final_scale,command_limit_mpa,control_period_s\n";
   for (std::size_t e = 0; e < experiments.size(); ++e)
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const SweepRun& run = this->run(e, v);
@@ -643,21 +643,22 @@ std::string SweepResult::csv() const {
       const std::string head = fmt::format("{},{},{},", csv_field(experiments[e]), csv_field(variants[v].variant.name),
                                            csv_field(overrides));
       if (!run.ok) {
-        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,,{}\n", csv_field(run.error), csv_number(run.wall_time_s),
-                                  csv_number(run.command_limit_mpa));
+        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,,{},{}\n", csv_field(run.error), csv_number(run.wall_time_s),
+                                  csv_number(run.command_limit_mpa), csv_number(control_period));
         continue;
       }
       for (const auto& x : run.runs) {
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");
-        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{},{}\n", csv_field(x.reference),
+        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{},{},{}\n", csv_field(x.reference),
                                   csv_field(x.kind), csv_number(x.errors.max_error_mm), csv_number(x.errors.mae_mm),
                                   csv_number(x.errors.rms_error_mm),
                                   csv_number(nom ? ratio(x.errors.rms_error_mm, nom->errors.rms_error_mm) : nan),
                                   csv_number(base ? ratio(x.errors.rms_error_mm, base->errors.rms_error_mm) : nan),
                                   csv_number(x.min_command_mpa), csv_number(x.max_command_mpa), x.saturated,
                                   csv_number(x.reference_scale), csv_number(run.wall_time_s), x.guard_cuts,
-                                  csv_number(x.guard_final_scale), csv_number(run.command_limit_mpa));
+                                  csv_number(x.guard_final_scale), csv_number(run.command_limit_mpa),
+                                  csv_number(control_period));
       }
     }
   return out;
@@ -748,8 +749,9 @@ std::string SweepResult::text() const {
   const std::vector<std::string> kinds = kinds_of(*this);
   std::size_t wv = 7;
   for (const auto& v : variants) wv = std::max(wv, v.variant.name.size());
-  std::string out = fmt::format("Sweep: {} experiment(s) x {} rig(s), seed {}, {} thread(s), {:.1f} s wall time\n",
-                                experiments.size(), variants.size(), seed, jobs, wall_time_s);
+  std::string out = fmt::format("Sweep: {} experiment(s) x {} rig(s), seed {}, control period {:g} ms, {} thread(s), "
+                                "{:.1f} s wall time\n",
+                                experiments.size(), variants.size(), seed, control_period * 1e3, jobs, wall_time_s);
   out += "RMS tracking error [mm] per variant kind; comp/nom = compensated RMS / its nominal value;\n"
          "comp/base = compensated / baseline RMS; command = min..max pressure command over every kind [MPa];\n";
   out += "ref xS = the reference mapped into the rig's reach, its span scaled by S (docs/control.md, section 5);\n";

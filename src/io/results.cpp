@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -446,6 +447,7 @@ json to_json(const ExperimentResult& r) {
   j["experiment"] = r.name;
   j["title"] = r.title;
   j["seed"] = r.seed;
+  j["control_period_s"] = number(r.control_period_s);
   std::vector<std::string> refs, variants;
   for (const auto& run : r.runs) {
     if (std::find(refs.begin(), refs.end(), run.reference) == refs.end()) refs.push_back(run.reference);
@@ -703,6 +705,7 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       variants.push_back(x.get<std::string>());
     }
   }
+  std::optional<double> period_of_runs;  // the first run's controller sample time
   for (const auto& variant : variants) {
     if (!j.contains(variant)) continue;
     const json& v = j[variant];
@@ -715,7 +718,10 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
       run.saturated = e.contains("saturated_samples") ? get_size(e, "saturated_samples", w) : 0;
       run.scored_from_s = opt_double(e, "scored_from_s", w, 0.0);
       from_json(e, run.errors, w);
-      if (e.contains("controller")) from_json(e["controller"], run.controller, key_where(w, "controller"));
+      if (e.contains("controller")) {
+        from_json(e["controller"], run.controller, key_where(w, "controller"));
+        if (!period_of_runs) period_of_runs = run.controller.sample_time;
+      }
       if (e.contains("periods")) {
         const json& per = e["periods"];
         const std::string pw = key_where(w, "periods");
@@ -735,6 +741,10 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
         if (e.is_object()) add(e, key, key_where(vw, key));
     }
   }
+  // the control period (files before it: their runs' controller period, else the 1 ms of then)
+  r.control_period_s = opt_double(j, "control_period_s", where, period_of_runs.value_or(1e-3));
+  if (!(r.control_period_s > 0.0) || !std::isfinite(r.control_period_s))
+    throw Error(fmt::format("{}: key \"control_period_s\" = {}: must be a finite period > 0 s", where, r.control_period_s));
 }
 
 }  // namespace hysteron::io

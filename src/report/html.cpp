@@ -200,9 +200,10 @@ std::vector<double> column(const io::Table& t, const std::string& name, const st
 void write_experiment_report(const ExperimentResult& r, const std::string& html_path,
                              const std::string& command_line) {
   Page page(fmt::format("hysteron experiment {}: {}", r.name, r.title), command_line);
-  page.para(fmt::format("Simulated rig, noise seed {}; the experiment took {:.1f} s of wall time. Positions are "
-                        "muscle contractions in mm, pressures gauge pressures in MPa.",
-                        r.seed, r.wall_time_s));
+  page.para(fmt::format("Simulated rig, noise seed {}; every loop ran at a control period of {:g} ms; the experiment "
+                        "took {:.1f} s of wall time. Positions are muscle contractions in mm, pressures gauge pressures "
+                        "in MPa.",
+                        r.seed, r.control_period_s * 1e3, r.wall_time_s));
   // the run's actuator limit and reach (docs/control.md, sections 0 and 5)
   std::string limits;
   if (std::isfinite(r.pressure_limit_mpa) && r.pressure_limit_mpa > 0.0)

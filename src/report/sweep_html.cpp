@@ -57,7 +57,8 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
                                     "tr.nominal td { background: #f3f8ee; }\n"
                                     "tr.failed td { background: #fde0e0; }\n");
   h += fmt::format(
-      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig, rig noise seed {}, {} at a "
+      "<p>Each experiment ran end to end (identification, fits, tracking) on every rig, rig noise seed {}, every loop "
+      "at a control period of {:g} ms, {} at a "
       "time: {:.1f} s of wall time for {} runs. Errors are contraction tracking errors in mm (reference against the "
       "displacement sensor); the command range is the minimum and maximum pressure command in MPa over every variant "
       "kind. <i>comp/nom</i>: the compensated RMS over its value on the nominal rig; <i>comp/base</i>: over the "
@@ -67,7 +68,7 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
       "limit times nominal (1.5, 2 for the worst combination) and below the baseline's, commands inside 0 MPa "
       "to the rig's actuator limit (muscle.max_pressure, and regulator.max_command for the regulator experiments: 0.6 "
       "MPa on the nominal rig), the reference within the rig's reach.</p>\n",
-      r.seed, r.jobs, r.wall_time_s, r.runs.size());
+      r.seed, r.control_period * 1e3, r.jobs, r.wall_time_s, r.runs.size());
   if (const std::string note = r.identification_note(); !note.empty())
     h += fmt::format("<p class=\"warn\">{}.</p>\n", html_escape(note));
 

@@ -2,8 +2,9 @@
 # --control-period S of hysteron experiment, demo and sweep: a bad period (NaN, <= 0, above
 # 0.01 s, not a whole number of the rig's 1e-4 s steps, not a number) is exit 1 with the
 # library's message and nothing written; a run at 0.5 ms (2 kHz) records that sample time in
-# every loop of result.json, logs every 0.5 ms, and its feedforward lead, counted in samples,
-# is about twice the 1 ms run's (the same lead in seconds). Learning and adaptive runs are off
+# every loop of result.json, logs every 0.5 ms, says its period in the table, report.html and
+# result.json, and its feedforward lead, counted in samples, is about twice the 1 ms run's (the
+# same lead in seconds). Learning and adaptive runs are off
 # and the model pinned, for speed.
 # Usage: bash control_period.sh <hysteron-binary> <source-dir>
 set -uo pipefail
@@ -57,6 +58,12 @@ rc=$?
 "$BIN" experiment gpi-pid "${fast[@]}" --control-period 0.0005 --out "$T/ms05" > "$T/ms05.txt" 2>&1
 rc=$?
 [ $rc -eq 0 ] || fail "0.5 ms run: exit $rc: $(tail -3 "$T/ms05.txt")"
+# the table and the report say the period (a 0.5 ms run must not look like a 1 ms one)
+grep -qF "  control period 0.5 ms, rig noise seed 1" "$T/ms05.txt" || fail "0.5 ms table: $(head -3 "$T/ms05.txt")"
+grep -qF "  control period 1 ms, rig noise seed 1" "$T/ms1.txt" || fail "1 ms table: $(head -3 "$T/ms1.txt")"
+grep -qF "at a control period of 0.5 ms" "$T/ms05/report.html" || fail "0.5 ms report.html does not say the period"
+"$BIN" report "$T/ms05" --out "$T/rep05.html" > "$T/rep05.txt" 2>&1 || fail "report of the 0.5 ms run: $(cat "$T/rep05.txt")"
+grep -qF "at a control period of 0.5 ms" "$T/rep05.html" || fail "hysteron report of the 0.5 ms result.json does not say the period"
 "$PY" - "$T/ms1" "$T/ms05" <<'PY' || fail "0.5 ms run's result.json and CSVs"
 import csv, json, sys
 one, half = (json.load(open(d + "/result.json")) for d in sys.argv[1:3])
@@ -86,6 +93,8 @@ for v, ref, c in loops(half):
         bad.append(f"lead_s {half['lead_s']} is not {b} samples of 0.5 ms")
 rows = list(csv.DictReader(open(sys.argv[2] + "/tracking_compensated_sine.csv")))
 steps = {round(float(b["t_s"]) - float(a["t_s"]), 12) for a, b in zip(rows, rows[1:])}
+if half.get("control_period_s") != 0.0005 or one.get("control_period_s") != 0.001:
+    bad.append(f"control_period_s {half.get('control_period_s')} / {one.get('control_period_s')}")
 if steps != {0.0005}:
     bad.append(f"CSV time steps {sorted(steps)[:5]}")
 print("\n".join(bad))

@@ -474,7 +474,14 @@ PressureRelayRun pressure_relay_run(const PamRigParams& rp, std::uint64_t seed, 
 
 }  // namespace
 
-void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d, double p_max) {
+double relay_decision_period(double tc) {
+  const long n = std::max(1L, std::lround(kRelayDecisionPeriod / tc));
+  return static_cast<double>(n) * tc;
+}
+
+void relay_test(const PamRigParams& rp, std::uint64_t seed, double loop_tc, RigDynamics& d, double p_max) {
+  // the relay's own sample time (kRelayDecisionPeriod): at most one decision per 1 ms
+  const double tc = relay_decision_period(loop_tc);
   // At relay_level(p_max) first. Where it did not oscillate and the highest pressure that run
   // measured is below twice its level (a supply that caps the rig at or below the level: the
   // limit cycle has no upper half), once more around half that top, the middle of the range

@@ -754,7 +754,7 @@ void evaluation_page(const ModelParams& model, const std::string& model_file, co
     const OutputMap& m = recorded->output_map;
     page.raw("<h3>Recorded by the evaluation</h3>\n");
     const std::vector<std::pair<std::string, std::string>> recorded_rows = {
-        {"samples scored as censored (clipped output)", fmt::format("{}", recorded->censored)},
+        {"censored samples (output at its clip limit, no error)", fmt::format("{}", recorded->censored)},
         {"samples outside the model's input limits", fmt::format("{}", recorded->outside_input_limits)},
         {"output map: gain (record's output against the prediction)", num(m.gain, 6)},
         {"output map: offset" + yu, num(m.offset, 6)},

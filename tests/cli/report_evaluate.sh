@@ -73,7 +73,7 @@ b, e = m["range"]
 row = (f"samples {b}..{e} [N]</td><td>{m['rms']:.4g}</td><td>{m['max']:.4g}</td><td>{m['mae']:.4g}</td>"
        f"<td>{m['rms_percent_span']:.3g}</td><td>{m['r2']:.5g}</td><td>{m['n']}</td>")
 assert row in html, row
-for label, v in (("samples scored as censored (clipped output)", str(m["censored_samples"])),
+for label, v in (("censored samples (output at its clip limit, no error)", str(m["censored_samples"])),
                  ("samples outside the model&#39;s input limits", str(m["outside_input_limits"])),
                  ("output map: gain (record&#39;s output against the prediction)", f"{m['output_map']['gain']:.6g}"),
                  ("output map: R² mapped", f"{m['output_map']['r2_mapped']:.5g}")):

@@ -13,7 +13,8 @@
 // validation: a sample at the limit where the model predicts beyond it is no error
 // (--uncensored: as recorded); the text and the document say how many. Text summary on
 // stdout, or one JSON document with --json; the report is HTML (metrics, loops,
-// residuals) if its name ends in .html/.htm, else the JSON document.
+// residuals) if its name ends in .html/.htm, else the JSON document (`hysteron report` turns it
+// into the same page).
 // Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files).
 #include <fmt/format.h>
 
@@ -84,7 +85,7 @@ int run_evaluate(const EvaluateOptions& c) {
     if (is_html_path(c.report)) {
       report::FitData data = plot_data(sel, rec, initial, range);
       data.censor_clipped = doc.data.censored;
-      report::write_evaluation_report(model, doc.model_file, data, c.report, command_line());
+      report::write_evaluation_report(doc, data, c.report, command_line());  // the page `report ev.json` gives
     } else {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");
     }

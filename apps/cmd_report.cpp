@@ -1,5 +1,6 @@
 // hysteron report INPUT --out report.html: one self-contained HTML file from the
-// output of `experiment --out DIR` (a directory) or `fit --report FILE.json`.
+// output of `experiment --out DIR` (a directory), `fit --report FILE.json` or
+// `evaluate --report FILE.json` (told apart by the document's "format").
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -25,12 +26,12 @@ void add_report(CLI::App& app, Action& action) {
   auto args = std::make_shared<ReportArgs>();
   auto* cmd = app.add_subcommand(
       "report", "Write one self-contained HTML report (plots, tables, published figures) from the output of "
-                "`experiment --out DIR` or `fit --report FILE.json`");
-  cmd->add_option("input", args->input, "Experiment output directory or fit report JSON file")->required();
+                "`experiment --out DIR`, `fit --report FILE.json` or `evaluate --report FILE.json`");
+  cmd->add_option("input", args->input, "Experiment output directory, fit report or evaluation JSON file")->required();
   cmd->add_option("-o,--out", args->out, "HTML file to write (atomically)")->capture_default_str();
-  cmd->add_option("--data,-d", args->data.input_file, "Fit reports: the data file (.csv or .mat) the fit used");
-  cmd->add_option("--input,-i", args->data.input_column, "Fit reports: input column (name or 0-based index; .mat: NAME:INDEX for a matrix column)");
-  cmd->add_option("--output,-y", args->data.output_column, "Fit reports: output column (name or 0-based index)");
+  cmd->add_option("--data,-d", args->data.input_file, "Fit and evaluation documents: the data file (.csv or .mat) the fit or evaluation used");
+  cmd->add_option("--input,-i", args->data.input_column, "Fit and evaluation documents: input column (name or 0-based index; .mat: NAME:INDEX for a matrix column)");
+  cmd->add_option("--output,-y", args->data.output_column, "Fit and evaluation documents: output column (name or 0-based index)");
   cmd->callback([args, &action] {
     action = [args] {
       std::string command_line = fmt::format("hysteron report {} --out {}", args->input, args->out);

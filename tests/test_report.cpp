@@ -165,6 +165,68 @@ TEST(Plot, MissingGnuplotIsAClearError) {
   EXPECT_NE(e.find("/nonexistent/gnuplot"), std::string::npos) << e;
 }
 
+// An evaluation document (`hysteron evaluate --report ev.json`): read back with its record (the
+// time column in ms as data.time_unit says), drawn by write_report_from; a document whose record
+// does not give its RMS, or whose data file is missing, is refused before anything is written.
+TEST(Report, EvaluationJsonAndHtml) {
+  Tmp tmp;
+  const std::vector<double> x = test_input(1500);
+  const ModelParams model = test_gpi();
+  std::vector<double> y = simulate_record(model, x);
+  for (std::size_t i = 0; i < y.size(); ++i) y[i] += 0.01 * std::sin(1.7 * static_cast<double>(i));
+  std::vector<double> t_ms(x.size());
+  for (std::size_t i = 0; i < t_ms.size(); ++i) t_ms[i] = 2.0 * static_cast<double>(i);  // 2 ms samples
+  io::write_columns(tmp / "track.csv", {"t_ms", "pressure", "length"}, {t_ms, x, y});
+  io::EvaluationDocument doc;
+  doc.model_file = "m.json";
+  doc.model = model;
+  doc.data.input_file = doc.data.output_file = "track.csv";  // beside the document
+  doc.data.input_column = "pressure";
+  doc.data.output_column = "length";
+  doc.data.time_column = "t_ms";
+  doc.data.time_unit = "ms";
+  doc.data.output_unit = "mm";
+  doc.data.train = {300, 1200};
+  doc.result.file = "track.csv";
+  doc.result.range = {300, 1200};
+  doc.result.metrics = evaluate_scored(model, x, y, doc.result.range, InitialState::virgin, true, &doc.result.censored);
+  io::write_text_file(tmp / "ev.json", io::to_json(doc).dump(2));
+  const LoadedEvaluation le = read_evaluation_json(tmp / "ev.json");
+  EXPECT_EQ(le.data.x, x);
+  EXPECT_EQ(le.data.y, y);
+  ASSERT_EQ(le.data.t.size(), x.size());
+  EXPECT_DOUBLE_EQ(le.data.t.back(), 0.002 * static_cast<double>(x.size() - 1));  // s
+  EXPECT_EQ(le.document.result.metrics.n, 900u);
+  EXPECT_EQ(le.data.train.begin, 300u);
+  write_report_from(tmp / "ev.json", tmp / "ev.html", "hysteron report ev.json --out ev.html");
+  const std::string html = slurp(tmp / "ev.html");
+  EXPECT_EQ(count(html, "<svg"), 3u);
+  EXPECT_NE(html.find("samples 300..1200 [mm]"), std::string::npos);
+  EXPECT_NE(html.find("Recorded by the evaluation"), std::string::npos);
+  EXPECT_NE(html.find("Model: m.json"), std::string::npos);
+  // the fit reader refuses it, and the page reader refuses another format by name
+  EXPECT_NE(error_of([&] { (void)read_fit_report_json(tmp / "ev.json"); }).find("not a hysteron fit report"),
+            std::string::npos);
+  nlohmann::json j = io::to_json(doc);
+  j["format"] = "hysteron-other";
+  io::write_text_file(tmp / "other.json", j.dump());
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "other.json", tmp / "x.html", ""); })
+                .find("other.json: unknown document format \"hysteron-other\""),
+            std::string::npos);
+  // a missing data file is named; another record's RMS is refused
+  j = io::to_json(doc);
+  j["data"]["input"]["file"] = j["data"]["output"]["file"] = "gone.csv";
+  io::write_text_file(tmp / "gone.json", j.dump());
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "gone.json", tmp / "x.html", ""); }).find("data file gone.csv not found"),
+            std::string::npos);
+  for (double& v : y) v += 0.05;
+  io::write_columns(tmp / "other.csv", {"t_ms", "pressure", "length"}, {t_ms, x, y});
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "ev.json", tmp / "x.html", "", {"other.csv", "pressure", "", "length"}); })
+                .find("not the record the evaluation used"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp / "x.html"));
+}
+
 TEST(Report, FitJsonRoundTripAndHtml) {
   Tmp tmp;
   const std::vector<double> x = test_input(1500);

@@ -25,6 +25,7 @@
 
 #include "hysteron/experiment.hpp"
 #include "hysteron/identify.hpp"
+#include "hysteron/io/results.hpp"  // io::EvaluationDocument
 
 namespace hysteron::report {
 
@@ -129,6 +130,11 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
 // the evaluated range): metrics, loops, output over the record, residuals.
 void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
                              const std::string& html_path, const std::string& command_line);
+// The same page from an evaluation document (`hysteron evaluate --report x.html`, `hysteron report
+// ev.json`): the evaluated range's metrics are the document's, and the page adds what it records
+// besides (censored samples, samples outside the model's input limits, the output map).
+void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& data, const std::string& html_path,
+                             const std::string& command_line);
 
 // Reads a directory written by ExperimentResult::write (result.json,
 // identification.csv, tracking_<variant>_<reference>.csv, model.json,
@@ -159,8 +165,22 @@ struct LoadedFit {
 };
 LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& data_override = {});
 
-// `hysteron report INPUT --out report.html`: INPUT is an experiment directory or
-// a fit report JSON file (data_override: see read_fit_report_json).
+// Evaluation JSON ("hysteron evaluate --report ev.json" or --json): io::to_json(io::EvaluationDocument),
+// "format": "hysteron-evaluation"; its "data" object as a fit report's (the evaluated range in
+// "train"). Loads the record it names as read_fit_report_json does (the same data_override, paths,
+// time_unit) and checks that the model scored on it again gives the document's RMS over the same
+// number of samples. Throws hysteron::Error naming the file (malformed JSON, other format or
+// schema, missing keys, a missing or unreadable data file, data that are not the record evaluated).
+struct LoadedEvaluation {
+  io::EvaluationDocument document;
+  FitData data;
+};
+LoadedEvaluation read_evaluation_json(const std::string& path, const FitDataSource& data_override = {});
+
+// `hysteron report INPUT --out report.html`: INPUT is an experiment directory, a fit report
+// or an evaluation JSON file, told apart by its "format" key (a fit report of an older
+// hysteron has none); another format is an error naming it (data_override: see
+// read_fit_report_json).
 void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line,
                        const FitDataSource& data_override = {});
 

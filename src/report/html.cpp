@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -714,8 +715,13 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   io::write_text_file(html_path, page.finish());
 }
 
-void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
-                             const std::string& html_path, const std::string& command_line) {
+namespace {
+
+// The evaluation page: `recorded` (a document's result, or null) gives the evaluated range's
+// metrics and what the document records besides (censored samples, samples outside the model's
+// input limits, the output map); without it they are computed here.
+void evaluation_page(const ModelParams& model, const std::string& model_file, const FitData& data,
+                     const io::Evaluation* recorded, const std::string& html_path, const std::string& command_line) {
   Page page(fmt::format("hysteron evaluate: {} model", model_name(model)), command_line);
   page.para(fmt::format("Model: {}", model_file));
   if (!data.source.empty()) page.para("Data: " + data.source);
@@ -726,27 +732,65 @@ void write_evaluation_report(const ModelParams& model, const std::string& model_
   page.heading("Errors");
   if (y.size() == n && range.end <= n && range.begin < range.end) {
     // a record whose output clips: scored as censored, as `hysteron evaluate` scores it
-    const std::span<const double> recorded = std::span(data.y).first(n);
+    const std::span<const double> recorded_y = std::span(data.y).first(n);
     std::size_t censored = 0;
-    const std::vector<double> measured = data.censor_clipped ? censor_clipped(recorded, y, {}, &censored)
-                                                             : std::vector<double>(recorded.begin(), recorded.end());
+    const std::vector<double> measured = data.censor_clipped ? censor_clipped(recorded_y, y, {}, &censored)
+                                                             : std::vector<double>(recorded_y.begin(), recorded_y.end());
+    const FitMetrics scored =
+        recorded ? recorded->metrics
+                 : compute_metrics(std::span(measured).subspan(range.begin, range.end - range.begin),
+                                   std::span(y).subspan(range.begin, range.end - range.begin));
     std::vector<std::vector<std::string>> rows = {
-        metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu),
-                     compute_metrics(std::span(measured).subspan(range.begin, range.end - range.begin),
-                                     std::span(y).subspan(range.begin, range.end - range.begin)))};
+        metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu), scored)};
     if (range.begin > 0 || range.end < n) rows.push_back(metric_cells("whole record" + yu, compute_metrics(measured, y)));
     page.table(metric_header, rows);
+    if (recorded) censored = recorded->censored;
     if (censored > 0)
-      page.para(fmt::format("The output clips (a sensor's limit): {} samples of the record at the limit where the model "
+      page.para(fmt::format("The output clips (a sensor's limit): {} samples of the {} at the limit where the model "
                             "predicts beyond it are scored as censored, no error (--uncensored: as recorded).",
-                            censored));
+                            censored, recorded ? "evaluated range" : "record"));
+  }
+  if (recorded) {
+    // the rest of what `hysteron evaluate` recorded (io::Evaluation)
+    const OutputMap& m = recorded->output_map;
+    page.raw("<h3>Recorded by the evaluation</h3>\n");
+    const std::vector<std::pair<std::string, std::string>> recorded_rows = {
+        {"censored samples (output at its clip limit, no error)", fmt::format("{}", recorded->censored)},
+        {"samples outside the model's input limits", fmt::format("{}", recorded->outside_input_limits)},
+        {"output map: gain (record's output against the prediction)", num(m.gain, 6)},
+        {"output map: offset" + yu, num(m.offset, 6)},
+        {"output map: R² as recorded", num(m.r2, 5)},
+        {"output map: R² mapped", num(m.r2_mapped, 5)},
+        {"output map: RMS as recorded" + yu, num(m.rms, 6)},
+        {"output map: RMS mapped" + yu, num(m.rms_mapped, 6)},
+        {"output span on the range" + yu, num(m.span, 6)}};
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& [what, value] : recorded_rows) rows.push_back({html_escape(what), value});
+    page.table({"quantity", "value"}, rows);
   }
   page.raw("<h3>Model file</h3>\n");
   page.table({"key", "value"}, model_rows(model));
   page.heading("Figures");
-  record_figures(page, {"", std::span(data.x).first(n), std::span(data.y).first(n), data.t}, y,
-                 std::string(model_name(model)), data, fmt::format("scored samples {}..{} of {}", range.begin, range.end, n));
+  if (n == 0) {
+    page.para("No data were given: no figures.", "warn");
+  } else {
+    record_figures(page, {"", std::span(data.x).first(n), std::span(data.y).first(n), data.t}, y,
+                   std::string(model_name(model)), data,
+                   fmt::format("scored samples {}..{} of {}", range.begin, range.end, n));
+  }
   io::write_text_file(html_path, page.finish());
+}
+
+}  // namespace
+
+void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
+                             const std::string& html_path, const std::string& command_line) {
+  evaluation_page(model, model_file, data, nullptr, html_path, command_line);
+}
+
+void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& data, const std::string& html_path,
+                             const std::string& command_line) {
+  evaluation_page(doc.model, doc.model_file, data, &doc.result, html_path, command_line);
 }
 
 json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source) {
@@ -778,16 +822,103 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
   return io::to_json(d);
 }
 
-LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& data_override) {
-  const json j = parse_json_file(path);
+namespace {
+
+// ---- the data a fit or evaluation document names ---------------------------------
+
+// data_override (hysteron report --data/--input/--output) replaces the document's files and columns.
+void apply_data_override(io::DataDescription& d, const FitDataSource& data_override) {
+  if (data_override.input_file.empty()) return;
+  d.input_file = data_override.input_file;
+  d.input_column = data_override.input_column;
+  d.output_file = data_override.output_file.empty() ? data_override.input_file : data_override.output_file;
+  d.output_column = data_override.output_column;
+}
+
+// A data file a document names: a relative path beside the document first, then from the
+// current directory. Throws naming the document and the file.
+std::string resolve_data_file(const std::string& doc_path, const std::string& file) {
+  const std::string dw = doc_path + ": data";
+  if (file.empty()) throw Error(fmt::format("{}: empty data file name", dw));
+  const fs::path p(file);
+  if (p.is_relative()) {
+    const fs::path beside = fs::path(doc_path).parent_path() / p;
+    if (fs::exists(beside)) return beside.string();
+  }
+  if (!fs::exists(p))
+    throw Error(fmt::format("{}: data file {} not found (looked beside {} and in the current directory)", dw, file,
+                            doc_path));
+  return file;
+}
+
+// The time column of `file` in seconds: the column in its unit (data.time_unit; "s" in documents
+// without it) times its seconds.
+std::vector<double> read_time_seconds(const std::string& doc_path, const io::DataDescription& d,
+                                      const std::string& file) {
+  const double to_s = io::time_unit_seconds(d.time_unit, doc_path + ": data.time_unit");
+  std::vector<double> t = io::read_column(file, d.time_column);
+  if (to_s != 1.0)
+    for (double& v : t) v *= to_s;
+  return t;
+}
+
+// The record a document's "data" object names (input, output, time in s), its axes, initial state,
+// range (data.train) and censoring, read again. Throws naming the document and the file.
+FitData load_document_record(const std::string& doc_path, const io::DataDescription& d) {
+  if (d.input_file.empty())
+    throw Error(fmt::format("{}: the report does not name its data: pass them (hysteron report {} --data FILE "
+                            "--input COLUMN --output COLUMN)", doc_path, doc_path));
+  const std::string dw = doc_path + ": data";
+  const std::string xf = resolve_data_file(doc_path, d.input_file);
+  const std::string yf = resolve_data_file(doc_path, d.output_file.empty() ? d.input_file : d.output_file);
+  FitData out;
+  out.x = io::read_column(xf, d.input_column);
+  out.y = io::read_column(yf, d.output_column);
+  if (out.x.size() != out.y.size())
+    throw Error(fmt::format("{}: input and output have different lengths ({} and {})", dw, out.x.size(), out.y.size()));
+  if (!d.time_column.empty()) {
+    out.t = read_time_seconds(doc_path, d, xf);
+    if (out.t.size() != out.x.size()) out.t.clear();
+  }
+  out.source = fmt::format("input {} (column {}), output {} (column {})", xf,
+                           d.input_column.empty() ? "-" : d.input_column, yf,
+                           d.output_column.empty() ? "-" : d.output_column);
+  out.input = {d.input_label, d.input_unit};
+  out.output = {d.output_label, d.output_unit};
+  out.initial_state = d.initial_state;
+  out.train = d.train;
+  out.censor_clipped = d.censored;
+  return out;
+}
+
+// ---- the documents hysteron report reads -------------------------------------------
+
+enum class DocumentKind { fit, evaluation };
+
+// A document's kind by its "format" key (a fit report of an older hysteron has none). Throws
+// naming the file and an unknown format.
+DocumentKind document_kind(const json& j, const std::string& path) {
+  if (j.is_object() && j.contains("format")) {
+    const json& f = j["format"];
+    if (f == std::string(io::fit_document_format)) return DocumentKind::fit;
+    if (f == std::string(io::evaluation_document_format)) return DocumentKind::evaluation;
+    throw Error(fmt::format("{}: unknown document format {} (hysteron report reads \"{}\", written by `hysteron fit "
+                            "... --report FILE.json`, and \"{}\", written by `hysteron evaluate ... --report "
+                            "FILE.json`)",
+                            path, f.dump(), io::fit_document_format, io::evaluation_document_format));
+  }
+  const bool old_cli = j.is_object() && j.contains("status") && j.contains("model_kind") &&
+                       j.contains("parameters") && j.contains("model");
+  if (!old_cli)
+    throw Error(fmt::format("{}: not a hysteron fit report or evaluation document (expected the output of `hysteron "
+                            "fit ... --report FILE.json` or `hysteron evaluate ... --report FILE.json`)", path));
+  return DocumentKind::fit;
+}
+
+LoadedFit read_fit_document(const json& j, const std::string& path, const FitDataSource& data_override) {
   // the document of `hysteron fit --report` ("format": "hysteron-fit-report"), or the
   // report of older versions (no "format"; the data then come from data_override)
-  const bool ours = j.is_object() && j.value("format", std::string()) == io::fit_document_format;
-  const bool old_cli = j.is_object() && !j.contains("format") && j.contains("status") && j.contains("model_kind") &&
-                       j.contains("parameters") && j.contains("model");
-  if (!ours && !old_cli)
-    throw Error(fmt::format("{}: not a hysteron fit report (expected the output of `hysteron fit ... --report "
-                            "FILE.json`)", path));
+  const bool ours = j.is_object() && j.contains("format");
   if (ours && (!j.contains("schema") || j["schema"] != fit_report_schema))
     throw Error(fmt::format("{}: unsupported fit report schema {} (this hysteron reads schema {})", path,
                             j.value("schema", json()).dump(), fit_report_schema));
@@ -797,57 +928,11 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
   LoadedFit out;
   out.fit = doc.fit;
   io::DataDescription& d = doc.data;
-  if (!data_override.input_file.empty()) {
-    d.input_file = data_override.input_file;
-    d.input_column = data_override.input_column;
-    d.output_file = data_override.output_file.empty() ? data_override.input_file : data_override.output_file;
-    d.output_column = data_override.output_column;
-  }
-  if (d.input_file.empty())
-    throw Error(fmt::format("{}: the report does not name its data: pass them (hysteron report {} --data FILE "
-                            "--input COLUMN --output COLUMN)", path, path));
-  if (!j.contains("data") && j.contains("train") && j["train"].contains("range"))
+  apply_data_override(d, data_override);
+  if (!d.input_file.empty() && !j.contains("data") && j.contains("train") && j["train"].contains("range"))
     io::from_json(j["train"]["range"], d.train, path + ": train.range");
   const std::string dw = path + ": data";
-  auto resolve = [&](const std::string& file) {
-    if (file.empty()) throw Error(fmt::format("{}: empty data file name", dw));
-    const fs::path p(file);
-    if (p.is_relative()) {
-      const fs::path beside = fs::path(path).parent_path() / p;
-      if (fs::exists(beside)) return beside.string();
-    }
-    if (!fs::exists(p)) throw Error(fmt::format("{}: data file {} not found (looked beside {} and in the current "
-                                                "directory)", dw, file, path));
-    return file;
-  };
-  const std::string xf = resolve(d.input_file);
-  const std::string yf = resolve(d.output_file.empty() ? d.input_file : d.output_file);
-  std::vector<double> x = io::read_column(xf, d.input_column);
-  std::vector<double> y = io::read_column(yf, d.output_column);
-  if (x.size() != y.size())
-    throw Error(fmt::format("{}: input and output have different lengths ({} and {})", dw, x.size(), y.size()));
-  out.data.x = std::move(x);
-  out.data.y = std::move(y);
-  // the time axis in seconds: the column in its unit (--time-unit) times its seconds
-  const double to_s = io::time_unit_seconds(d.time_unit, dw + ".time_unit");
-  const auto read_time = [&](const std::string& file) {
-    std::vector<double> t = io::read_column(file, d.time_column);
-    if (to_s != 1.0)
-      for (double& v : t) v *= to_s;
-    return t;
-  };
-  if (!d.time_column.empty()) {
-    out.data.t = read_time(xf);
-    if (out.data.t.size() != out.data.x.size()) out.data.t.clear();
-  }
-  out.data.source = fmt::format("input {} (column {}), output {} (column {})", xf,
-                                d.input_column.empty() ? "-" : d.input_column, yf,
-                                d.output_column.empty() ? "-" : d.output_column);
-  out.data.input = {d.input_label, d.input_unit};
-  out.data.output = {d.output_label, d.output_unit};
-  out.data.initial_state = d.initial_state;
-  out.data.train = d.train;
-  out.data.censor_clipped = d.censored;
+  out.data = load_document_record(path, d);
   // The data must be the record the fit used (-d names a file and columns by hand): another
   // record, or swapped columns, gave a report of the fit against data it never saw, silently.
   if (const FitMetrics& t = out.fit.train; t.n > 0) {
@@ -872,14 +957,56 @@ LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& dat
     v.name = e.file;
     v.range = e.range;
     if (!e.file.empty()) {
-      const std::string vf = resolve(e.file);
+      const std::string vf = resolve_data_file(path, e.file);
       v.x = io::read_column(vf, d.input_column);
       v.y = io::read_column(vf, d.output_column);
-      if (!d.time_column.empty()) v.t = read_time(vf);
+      if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf);
     }
     out.data.validation.push_back(std::move(v));
   }
   return out;
+}
+
+LoadedEvaluation read_evaluation_document(const json& j, const std::string& path, const FitDataSource& data_override) {
+  LoadedEvaluation out;
+  out.document = io::from_json<io::EvaluationDocument>(j, path);
+  io::DataDescription& d = out.document.data;
+  apply_data_override(d, data_override);
+  out.data = load_document_record(path, d);
+  // The data must be the record evaluated (as for a fit: -d by hand, or a file changed since):
+  // the model scored on it again gives the document's metrics.
+  const io::Evaluation& r = out.document.result;
+  const std::string dw = path + ": data";
+  if (r.range.end > out.data.x.size() || r.range.begin >= r.range.end)
+    throw Error(fmt::format("{}: the evaluated range [{}, {}) lies beyond the {} samples of {}: not the record the "
+                            "evaluation used",
+                            dw, r.range.begin, r.range.end, out.data.x.size(), out.data.source));
+  const FitMetrics again =
+      evaluate_scored(out.document.model, out.data.x, out.data.y, r.range, d.initial_state, d.censored, nullptr);
+  const double tol = 1e-6;
+  if (!(std::abs(again.rms - r.metrics.rms) <= tol * std::max(r.metrics.rms, again.rms) + 1e-300) ||
+      again.n != r.metrics.n)
+    throw Error(fmt::format("{}: {} does not reproduce the evaluation's RMS ({:.6g} over {} samples; the document "
+                            "records {:.6g} over {}): not the record the evaluation used; give the data file and "
+                            "columns it read (--data, --input, --output)",
+                            dw, out.data.source, again.rms, again.n, r.metrics.rms, r.metrics.n));
+  return out;
+}
+
+}  // namespace
+
+LoadedFit read_fit_report_json(const std::string& path, const FitDataSource& data_override) {
+  const json j = parse_json_file(path);
+  if (document_kind(j, path) != DocumentKind::fit)
+    throw Error(fmt::format("{}: not a hysteron fit report (an evaluation document: `hysteron report` reads it)", path));
+  return read_fit_document(j, path, data_override);
+}
+
+LoadedEvaluation read_evaluation_json(const std::string& path, const FitDataSource& data_override) {
+  const json j = parse_json_file(path);
+  if (document_kind(j, path) != DocumentKind::evaluation)
+    throw Error(fmt::format("{}: not a hysteron evaluation document (a fit report: `hysteron report` reads it)", path));
+  return read_evaluation_document(j, path, data_override);
 }
 
 void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line,
@@ -887,11 +1014,17 @@ void write_report_from(const std::string& input, const std::string& html_path, c
   if (fs::is_directory(input)) {
     write_experiment_report(read_experiment_dir(input), html_path, command_line);
   } else if (fs::is_regular_file(input)) {
-    const LoadedFit f = read_fit_report_json(input, data_override);
-    write_fit_report(f.fit, f.data, html_path, command_line);
+    const json j = parse_json_file(input);
+    if (document_kind(j, input) == DocumentKind::evaluation) {
+      const LoadedEvaluation e = read_evaluation_document(j, input, data_override);
+      write_evaluation_report(e.document, e.data, html_path, command_line);
+    } else {
+      const LoadedFit f = read_fit_document(j, input, data_override);
+      write_fit_report(f.fit, f.data, html_path, command_line);
+    }
   } else {
-    throw Error(fmt::format("{}: no such file or directory (expected an experiment output directory or a fit "
-                            "report JSON file)", input));
+    throw Error(fmt::format("{}: no such file or directory (expected an experiment output directory, a fit report "
+                            "or an evaluation JSON file)", input));
   }
 }
 

@@ -487,7 +487,7 @@ TEST(SweepRun, ListsTheRunsWhoseLimitCycleGuardActed) {
   EXPECT_EQ(j.at("guard_acted").at(0).get<std::string>(), cut[0]);
   EXPECT_EQ(j.at("runs").at(2).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 2u);
   EXPECT_EQ(j.at("runs").at(1).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 0u);
-  // the CSV's guard columns (before the limit, the last): the cut run's, and an untouched run's
+  // the CSV's guard columns (before the limit and the control period, the last): the cut run's, and an untouched run's
   const std::string csv = r.csv();
   EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",wall_time_s,guard_cuts,guard_final_scale,command_limit_mpa"))
       << csv;
@@ -496,10 +496,10 @@ TEST(SweepRun, ListsTheRunsWhoseLimitCycleGuardActed) {
     const std::string row = csv.substr(a, csv.find('\n', a) - a);
     ++rows;
     if (contains(row, "load.mass=40,sine,compensated,")) {
-      EXPECT_TRUE(row.ends_with(",2,0.39689999999999998,0.59999999999999998")) << row;
+      EXPECT_TRUE(row.ends_with(",2,0.39689999999999998,0.59999999999999998,0.001")) << row;
       ++cut_rows;
     } else {
-      EXPECT_TRUE(row.ends_with(",0,1,0.59999999999999998")) << row;
+      EXPECT_TRUE(row.ends_with(",0,1,0.59999999999999998,0.001")) << row;
     }
   }
   EXPECT_EQ(cut_rows, 1u);
@@ -1000,9 +1000,9 @@ TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
       EXPECT_FALSE(contains(m, "mpi-pwm regulator.max_command")) << m;
     }
   EXPECT_EQ(over, 3u * 10u);  // 3 runs x 10 tracking runs, each up to 0.1 MPa
-  // the CSV's last column
+  // the CSV's last columns: the limit, the control period
   const std::string csv = r.csv();
-  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa"));
-  EXPECT_TRUE(contains(csv, ",0.050000000000000003\n"));
+  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa,control_period_s"));
+  EXPECT_TRUE(contains(csv, ",0.050000000000000003,0.001\n"));
   EXPECT_EQ(r.to_json()["runs"][1]["command_limit_mpa"].get<double>(), 0.05);
 }

@@ -23,6 +23,9 @@ def test_run_experiment_runs_at_the_period_given(tmp_path):
     half = {x["variant"]: x["controller"]["feedforward_lead_samples"] for x in r["runs"]}
     assert lead["compensated"] >= 10
     assert abs(2 * lead["compensated"] - half["compensated"]) <= 2, (lead, half)
+    # the period is said where a reader looks: the summary (result.json's) and the table
+    assert r["summary"]["control_period_s"] == 0.0005 and one["summary"]["control_period_s"] == 0.001
+    assert "control period 0.5 ms" in r["table"] and "control period 1 ms" in one["table"]
 
 
 @pytest.mark.parametrize("period, message", [

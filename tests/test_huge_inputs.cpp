@@ -2,6 +2,7 @@
 // inverse saturates at the limit in the direction of the desired output, the forward model
 // never returns inf or NaN with HYSTERON_OK (it refuses, state unchanged), the PID refuses an
 // overflowing error with a status, and a refused relaxed start changes nothing.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cfloat>
@@ -267,5 +268,59 @@ TEST(HugeInputs, AStateNoInputReachesIsRefused) {
       EXPECT_THROW(inv.reset(s), hysteron::Error) << name;
       EXPECT_THROW(b.reset(s), hysteron::Error) << name;
     }
+  }
+}
+
+// The C ABI's state functions for every kind: hysteron_params_num_operators is the length of
+// the state vector (it was 0 for kp, preisach, maxwell-slip, rate-pi and bouc-wen, whose
+// Model::num_operators() is 0, so their states could be neither read nor set: "initial state
+// has 0 entries, the model has 11"); a state read back after a run is taken by a fresh model
+// and inverse, which go on sample for sample; a wrong n is refused naming both sizes.
+TEST(HugeInputs, CApiStateOfEveryKindRoundTrips) {
+  std::vector<std::pair<std::string, std::string>> kinds;
+  for (const Kind& k : kKinds) kinds.emplace_back(k.name, k.json);
+  kinds.emplace_back("rate-pi", R"({"model": "rate-pi", "q": 0.3, "r": [0.1, 0.2], "p": [0.4, 0.3], "c": 0.12,
+      "tau": 0.1, "dt": 0.001, "input_limits": [-1, 1]})");
+  kinds.emplace_back("bouc-wen", R"({"model": "bouc-wen", "kx": 1.0, "kw": -0.05, "rho": 4, "sigma": 1, "n": 1.5,
+      "input_limits": [-1, 1]})");
+  kinds.emplace_back("kp", R"({"model": "kp", "q": 0.5, "lo": -1, "hi": 1, "levels": 2, "w": [0.2, 0.1, 0.3],
+      "input_limits": [-1.5, 1.5]})");
+  kinds.emplace_back("preisach", R"({"model": "preisach", "q": 0.5, "lo": -1, "hi": 1, "levels": 2,
+      "w": [0.2, 0.1, 0.3], "input_limits": [-1.5, 1.5]})");
+  kinds.emplace_back("maxwell-slip", R"({"model": "maxwell-slip", "k0": 0.4, "k": [0.3, 0.5], "delta": [0.1, 0.25],
+      "input_limits": [-1.5, 1.5]})");
+  for (const auto& [name, json] : kinds) {
+    SCOPED_TRACE(name);
+    const hysteron::ModelParams params = hysteron::io::model_from_json(nlohmann::json::parse(json), name);
+    const std::size_t entries = hysteron::Model(params).state().y.size();
+    Handles a(json.c_str()), b(json.c_str());
+    std::size_t n = 99;
+    ASSERT_EQ(hysteron_params_num_operators(a.p, &n), HYSTERON_OK);
+    EXPECT_EQ(n, entries);
+    EXPECT_GT(n, 0u);
+    double out_a = 0, out_b = 0;
+    for (int i = 0; i < 40; ++i) ASSERT_EQ(hysteron_model_step(a.m, 0.5 * std::sin(0.3 * i), &out_a), HYSTERON_OK);
+    std::vector<double> y(n + 1);
+    double u = 0;
+    ASSERT_EQ(hysteron_model_get_state(a.m, y.data(), n, &u), HYSTERON_OK) << hysteron_last_error();
+    ASSERT_EQ(hysteron_model_reset_state(b.m, y.data(), n, u), HYSTERON_OK) << hysteron_last_error();
+    for (int i = 0; i < 20; ++i) {
+      const double x = 0.4 * std::cos(0.2 * i);
+      ASSERT_EQ(hysteron_model_step(a.m, x, &out_a), HYSTERON_OK);
+      ASSERT_EQ(hysteron_model_step(b.m, x, &out_b), HYSTERON_OK);
+      ASSERT_EQ(out_a, out_b) << "sample " << i << " from the state read back";
+    }
+    // a wrong n: refused, naming both sizes
+    EXPECT_EQ(hysteron_model_reset_state(b.m, y.data(), n + 1, u), HYSTERON_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hysteron_last_error()).find(fmt::format("n = {}, but the model's state has {} entries", n + 1, n)),
+              std::string::npos) << hysteron_last_error();
+    EXPECT_EQ(hysteron_model_get_state(b.m, y.data(), n - 1, &u), HYSTERON_ERROR_INVALID_ARGUMENT);
+    // the inverse starts from the forward model's state and gives it back
+    ASSERT_EQ(hysteron_model_get_state(a.m, y.data(), n, &u), HYSTERON_OK);
+    ASSERT_EQ(hysteron_inverse_reset_state(a.inv, y.data(), n, u), HYSTERON_OK) << hysteron_last_error();
+    std::vector<double> back(n);
+    double u_back = 0;
+    ASSERT_EQ(hysteron_inverse_get_state(a.inv, back.data(), n, &u_back), HYSTERON_OK) << hysteron_last_error();
+    for (std::size_t i = 0; i < n; ++i) EXPECT_NEAR(back[i], y[i], 1e-12 * (1.0 + std::abs(y[i]))) << "entry " << i;  // through the inverse's coordinates
   }
 }

@@ -102,7 +102,10 @@ HYSTERON_C_API hysteron_status hysteron_params_free(hysteron_params* params);
 /* Model kind, one of "pi", "gpi", "mpi-deadzone", "mpi-asym", "maxwell-slip", "preisach",
  * "kp", "bouc-wen", "rate-pi" (docs/model-files.md; valid as long as params). */
 HYSTERON_C_API hysteron_status hysteron_params_kind(const hysteron_params* params, const char** kind);
-/* Number of play operators n (the length of a state vector, see *_reset_state). */
+/* Length n of a state vector (*_reset_state, *_get_state): the number of play operators of
+ * the PI family (pi, gpi, mpi-deadzone, mpi-asym), the state entries of the other kinds (kp,
+ * preisach, maxwell-slip, rate-pi, bouc-wen; before 2026-11-30 this was 0 for them, and their
+ * states could not be set or read). */
 HYSTERON_C_API hysteron_status hysteron_params_num_operators(const hysteron_params* params, size_t* n);
 /* The model file's "input_limits" in input units; -HUGE_VAL / +HUGE_VAL for an unbounded side. */
 HYSTERON_C_API hysteron_status hysteron_params_input_limits(const hysteron_params* params, double* lo, double* hi);
@@ -120,9 +123,10 @@ HYSTERON_C_API hysteron_status hysteron_model_reset(hysteron_model* model);
  * that hysteron_model_step would refuse (beyond the input bound, below), is
  * HYSTERON_ERROR_INVALID_ARGUMENT and changes nothing. */
 HYSTERON_C_API hysteron_status hysteron_model_reset_relaxed(hysteron_model* model, double x0);
-/* Explicit state: n operator outputs y[0..n) (n = hysteron_params_num_operators) and the
- * envelope value u of the last input, all finite, in model coordinates (as returned by
- * hysteron_model_get_state). HYSTERON_ERROR_INVALID_ARGUMENT on a wrong n. */
+/* Explicit state: n entries y[0..n) (n = hysteron_params_num_operators: the operator outputs
+ * of the PI family, the kernel's entries of the other kinds) and the envelope value u of the
+ * last input, all finite, in model coordinates (as returned by hysteron_model_get_state).
+ * HYSTERON_ERROR_INVALID_ARGUMENT on a wrong n or a state no input reaches. */
 HYSTERON_C_API hysteron_status hysteron_model_reset_state(hysteron_model* model, const double* y, size_t n, double u);
 /* Copies the current state out (y: array of n; u may be NULL). */
 HYSTERON_C_API hysteron_status hysteron_model_get_state(const hysteron_model* model, double* y, size_t n, double* u);

@@ -38,7 +38,7 @@
 struct hysteron_params {
   hysteron::ModelParams params;
   std::string kind;  // "gpi", ... (NUL-terminated for hysteron_params_kind)
-  std::size_t num_operators = 0;
+  std::size_t num_operators = 0;  // the length of a state vector (Model::state().y), every kind
 };
 
 struct hysteron_model {
@@ -167,14 +167,19 @@ void require_finite_array(const double* v, std::size_t n, const char* name) {
 
 void require_state_size(std::size_t n, std::size_t expected) {
   if (n != expected)
-    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "state size n = %zu, but the model has %zu operators", n, expected);
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
+         "state size n = %zu, but the model's state has %zu entries (its operators; hysteron_params_num_operators)", n,
+         expected);
 }
 
 hysteron_params* make_params(hysteron::ModelParams p) {
   auto* h = new hysteron_params{std::move(p), {}, 0};
   h->kind = std::string(hysteron::model_name(h->params));
   try {
-    h->num_operators = hysteron::Model(h->params).num_operators();
+    // the state's length: the play operators of the PI family, the kernel's entries of the other
+    // kinds (kp, rate-pi, bouc-wen, ...), whose Model::num_operators() is 0 (before 2026-11-30 this
+    // gave 0 for them and their *_reset_state / *_get_state could not be used)
+    h->num_operators = hysteron::Model(h->params).state().y.size();
   } catch (...) {
     delete h;
     throw;
@@ -334,7 +339,7 @@ hysteron_status hysteron_model_reset_state(hysteron_model* model, const double* 
   return guard("hysteron_model_reset_state", HYSTERON_ERROR_INVALID_ARGUMENT, [&] {
     HYSTERON_REQUIRE(model);
     if (n > 0) HYSTERON_REQUIRE(y);
-    require_state_size(n, model->model.num_operators());
+    require_state_size(n, model->model.state().y.size());
     model->model.reset(make_state(y, n, u));
   });
 }

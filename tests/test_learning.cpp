@@ -1012,24 +1012,29 @@ TEST(ExperimentTuning, RelayCycleDoesNotDependOnThePressureSensorsOffset) {
 }
 
 // The valves' pressure relay measures the same limit cycle in seconds at every control period:
-// it decides at kRelayDecisionPeriod (1 ms), not at every sample of a faster loop. Deciding at
+// it runs at kRelayDecisionPeriod (1 ms; also for 0.3 and 0.7 ms loops, whose samples do not
+// add up to 1 ms: a review found them at 0.9 and 0.7 ms), not at every sample of a faster loop. Deciding at
 // every sample, 25 decisions per 5 ms PWM period at 0.2 ms switched the relay on the sensor's
 // noise and the PWM ripple (its hysteresis, 3 sigma, bounds a switch on noise per decision):
 // T_u 26.8 ms and K_u 137 /MPa for 32.5 ms and 151 at 1 ms (mpi-pwm --seed 1's relay), a
 // pressure PI of Kp 42.8 / Ki 725 for 47.1 / 660, and mpi-pwm's compensated triangle 0.293 mm
 // RMS for 0.192 (docs/control.md, section 7). At 0.5 ms: T_u 28.4 ms, Ki 771.
 TEST(ExperimentTuning, ValvesRelayIsTheSameInSecondsAtEveryControlPeriod) {
-  EXPECT_EQ(experiment::relay_decision_period(1e-3), 1e-3);
-  EXPECT_EQ(experiment::relay_decision_period(2e-3), 2e-3);
-  EXPECT_EQ(experiment::relay_decision_period(1e-2), 1e-2);
-  EXPECT_EQ(experiment::relay_decision_period(5e-4), 1e-3);  // every 2nd sample
-  EXPECT_EQ(experiment::relay_decision_period(2e-4), 1e-3);  // every 5th sample
+  const double dt = PamRigParams{}.simulation.dt;  // 1e-4 s
+  EXPECT_EQ(experiment::relay_decision_period(1e-3, dt), 1e-3);
+  EXPECT_EQ(experiment::relay_decision_period(2e-3, dt), 2e-3);
+  EXPECT_EQ(experiment::relay_decision_period(1e-2, dt), 1e-2);
+  // faster loops: the 1 ms test, also where 1 ms is no whole number of the loop's samples
+  for (const double tc : {5e-4, 2e-4, 3e-4, 7e-4, 8e-4, 1e-4})
+    EXPECT_EQ(experiment::relay_decision_period(tc, dt), 1e-3) << tc;
+  // a rig whose dt does not divide 1 ms: the whole number of loop samples nearest it
+  EXPECT_DOUBLE_EQ(experiment::relay_decision_period(3e-4, 3e-5), 9e-4);
   const std::uint64_t seed = 1 + 15485863;  // the relay of mpi-pwm --seed 1
   RigDynamics at_1ms;
   experiment::relay_test(PamRigParams{}, seed, 1e-3, at_1ms, kPaperMax);
   ASSERT_GT(at_1ms.relay_period_s, 0.0);
   const PidParams pi_1ms = experiment::tyreus_luyben_pi(at_1ms, 1e-3);
-  for (const double tc : {5e-4, 2e-4}) {
+  for (const double tc : {5e-4, 2e-4, 7e-4}) {
     SCOPED_TRACE(fmt::format("T_s = {} s", tc));
     RigDynamics d;
     experiment::relay_test(PamRigParams{}, seed, tc, d, kPaperMax);

@@ -986,6 +986,7 @@ TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
   for (auto& v : parse_vary("regulator.max_command=50000")) o.variants.push_back(v);
   o.runner = fake_experiment;  // commands up to 0.1 MPa
   o.jobs = 1;
+  o.control_period = 5e-4;  // recorded in every row, the text and the page
   const SweepResult r = run_sweep(o);
   ASSERT_EQ(r.variants.size(), 3u);
   EXPECT_EQ(r.run(0, 0).command_limit_mpa, 0.6);
@@ -1003,6 +1004,9 @@ TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
   // the CSV's last columns: the limit, the control period
   const std::string csv = r.csv();
   EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa,control_period_s"));
-  EXPECT_TRUE(contains(csv, ",0.050000000000000003,0.001\n"));
+  EXPECT_TRUE(contains(csv, ",0.050000000000000003,0.00050000000000000001\n"));
+  EXPECT_FALSE(contains(csv, ",0.001\n"));
+  EXPECT_TRUE(contains(r.text(), ", control period 0.5 ms,")) << r.text();
+  EXPECT_TRUE(contains(report::sweep_report_html(r, "cmd"), "at a control period of 0.5 ms"));
   EXPECT_EQ(r.to_json()["runs"][1]["command_limit_mpa"].get<double>(), 0.05);
 }

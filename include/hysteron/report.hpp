@@ -114,6 +114,9 @@ struct FitData {
   // A validation (or evaluated) record whose output clips is scored as censored
   // (evaluate_censored), as `hysteron fit` and `hysteron evaluate` score it by default.
   bool censor_clipped = true;
+  // The data files read for it (read_fit_report_json, read_evaluation_json): `hysteron report`
+  // never writes its page over one of them.
+  std::vector<std::string> files;
 };
 
 // HTML report of an experiment (what `hysteron experiment NAME --out DIR` computed).

@@ -258,7 +258,7 @@ constexpr double relay_level(double p_max) noexcept {
 // pressure measured is below twice the level (a supply that caps the rig), the test runs once
 // more around half that highest pressure. Fills relay_gain, relay_period_s and
 // relay_level_mpa of `d`; throws hysteron::Error if it does not oscillate.
-// The relay switches at relay_decision_period(tc), not at every sample of a faster loop
+// The relay switches at relay_decision_period(tc, dt), not at every sample of a faster loop
 // (kRelayDecisionPeriod); K_u and T_u are a limit cycle's, the same in seconds at every rate.
 void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynamics& d, double p_max);
 // [s] The period the valves' pressure relay (relay_test) decides at in a faster loop. The valves
@@ -269,9 +269,11 @@ void relay_test(const PamRigParams& rp, std::uint64_t seed, double tc, RigDynami
 // a pressure PI of Kp 42.8, Ki 725 for 47.1, 660, and mpi-pwm's compensated triangle 0.293 mm
 // RMS for 0.192 (docs/control.md, section 7). Decided at this period the test is the 1 ms one.
 inline constexpr double kRelayDecisionPeriod = 1e-3;
-// The sample time relay_test runs its relay at for a loop of sample time tc [s]: the whole
-// number of tc nearest kRelayDecisionPeriod, at least tc (tc itself at 1 ms and above).
-double relay_decision_period(double tc);
+// The sample time relay_test runs its relay (its own rig run) at for a loop of sample time tc
+// [s] on a rig of step dt [s]: tc itself at 1 ms and above; below, kRelayDecisionPeriod where
+// it is a whole number of dt (0.2, 0.3, 0.5, 0.7 ms loops on the 1e-4 s rig: all the 1 ms
+// test), else the whole number of tc nearest it.
+double relay_decision_period(double tc, double dt);
 // Relay test of the position loop through an actuator (desired pressure [MPa] and the rig's
 // outputs -> the rig's inputs; `make_actuator` gives a fresh one, e.g. with a reset pressure
 // loop, per run): hold p0 until settled, then switch the pressure p0 +- h on the measured

@@ -475,14 +475,20 @@ PressureRelayRun pressure_relay_run(const PamRigParams& rp, std::uint64_t seed, 
 
 }  // namespace
 
-double relay_decision_period(double tc) {
-  const long n = std::max(1L, std::lround(kRelayDecisionPeriod / tc));
+double relay_decision_period(double tc, double dt) {
+  if (tc >= kRelayDecisionPeriod) return tc;  // 1 ms and slower: the loop's own period
+  // the test's own rig run at 1 ms where that is a whole number of the rig's steps (the
+  // criterion of control_steps), so 0.3 and 0.7 ms loops get the 1 ms test too
+  const double steps = kRelayDecisionPeriod / dt;
+  if (dt > 0.0 && std::isfinite(steps) && steps >= 1.0 && std::abs(steps - std::round(steps)) <= 1e-9 * steps)
+    return kRelayDecisionPeriod;
+  const long n = std::max(1L, std::lround(kRelayDecisionPeriod / tc));  // else the whole tc nearest 1 ms
   return static_cast<double>(n) * tc;
 }
 
 void relay_test(const PamRigParams& rp, std::uint64_t seed, double loop_tc, RigDynamics& d, double p_max) {
-  // the relay's own sample time (kRelayDecisionPeriod): at most one decision per 1 ms
-  const double tc = relay_decision_period(loop_tc);
+  // the relay's own sample time (kRelayDecisionPeriod, relay_decision_period): its own rig run
+  const double tc = relay_decision_period(loop_tc, rp.simulation.dt);
   // At relay_level(p_max) first. Where it did not oscillate and the highest pressure that run
   // measured is below twice its level (a supply that caps the rig at or below the level: the
   // limit cycle has no upper half), once more around half that top, the middle of the range

@@ -375,8 +375,9 @@ void from_json(const json& j, EvaluationDocument& d, std::string_view where) {
   if (!j.is_object() || j.value("format", std::string()) != evaluation_document_format)
     throw Error(fmt::format("{}: not a hysteron evaluation (expected \"format\": \"{}\")", where,
                             evaluation_document_format));
-  if (j.value("schema", 0) != results_schema_version)
-    throw Error(fmt::format("{}: unsupported evaluation schema {}", where, j.value("schema", json()).dump()));
+  if (!j.contains("schema") || !j["schema"].is_number_integer() || j["schema"] != results_schema_version)
+    throw Error(fmt::format("{}: unsupported evaluation schema {} (this hysteron reads schema {})", where,
+                            j.value("schema", json()).dump(), results_schema_version));
   d = EvaluationDocument{};
   d.model_file = opt_string(j, "model_file", where);
   d.model = model_from_json(need(j, "model", where), key_where(where, "model"));

@@ -719,7 +719,8 @@ namespace {
 
 // The evaluation page: `recorded` (a document's result, or null) gives the evaluated range's
 // metrics and what the document records besides (censored samples, samples outside the model's
-// input limits, the output map); without it they are computed here.
+// input limits, the output map); without it the metrics are computed here and the rest is not
+// shown.
 void evaluation_page(const ModelParams& model, const std::string& model_file, const FitData& data,
                      const io::Evaluation* recorded, const std::string& html_path, const std::string& command_line) {
   Page page(fmt::format("hysteron evaluate: {} model", model_name(model)), command_line);
@@ -880,6 +881,7 @@ FitData load_document_record(const std::string& doc_path, const io::DataDescript
     out.t = read_time_seconds(doc_path, d, xf);
     if (out.t.size() != out.x.size()) out.t.clear();
   }
+  out.files = {xf, yf};
   out.source = fmt::format("input {} (column {}), output {} (column {})", xf,
                            d.input_column.empty() ? "-" : d.input_column, yf,
                            d.output_column.empty() ? "-" : d.output_column);
@@ -958,6 +960,7 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
     v.range = e.range;
     if (!e.file.empty()) {
       const std::string vf = resolve_data_file(path, e.file);
+      out.data.files.push_back(vf);
       v.x = io::read_column(vf, d.input_column);
       v.y = io::read_column(vf, d.output_column);
       if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf);
@@ -990,7 +993,19 @@ LoadedEvaluation read_evaluation_document(const json& j, const std::string& path
                             "records {:.6g} over {}): not the record the evaluation used; give the data file and "
                             "columns it read (--data, --input, --output)",
                             dw, out.data.source, again.rms, again.n, r.metrics.rms, r.metrics.n));
+  out.data.train = r.range;  // the page's range label: the range the metrics are of
   return out;
+}
+
+// The page must not replace a data file the document named (`report ev.json --out track.csv`
+// wrote HTML over the record). Throws naming both.
+void refuse_data_file_as_output(const std::string& html_path, const std::string& input,
+                                const std::vector<std::string>& files) {
+  std::error_code ec;
+  for (const std::string& f : files)
+    if (fs::equivalent(html_path, f, ec))
+      throw Error(fmt::format("{}: --out {} is the data file {} names ({}): nothing was written", html_path,
+                              html_path, input, f));
 }
 
 }  // namespace
@@ -1017,9 +1032,11 @@ void write_report_from(const std::string& input, const std::string& html_path, c
     const json j = parse_json_file(input);
     if (document_kind(j, input) == DocumentKind::evaluation) {
       const LoadedEvaluation e = read_evaluation_document(j, input, data_override);
+      refuse_data_file_as_output(html_path, input, e.data.files);
       write_evaluation_report(e.document, e.data, html_path, command_line);
     } else {
       const LoadedFit f = read_fit_document(j, input, data_override);
+      refuse_data_file_as_output(html_path, input, f.data.files);
       write_fit_report(f.fit, f.data, html_path, command_line);
     }
   } else {

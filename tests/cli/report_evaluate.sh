@@ -145,6 +145,24 @@ grep -q "not the record the evaluation used" "$T/err" || fail "another record by
 # ... and the record itself by hand gives the page
 "$BIN" report "$T/ev.json" --data "$T/track.csv" --input 1 --output 0 --out "$T/x.html" 2> "$T/err" \
   || fail "report ev.json --data track.csv: $(cat "$T/err")"
+# the page never replaces the record the document names (it wrote HTML over it), nor a fit's
+chmod u+w "$T/track.csv"  # (a copy of a read-only shared file: refused as read-only, not as the data)
+cp "$T/track.csv" "$T/track.before"
+(cd "$T" && "$BIN" report ev.json --out track.csv) 2> "$T/err"
+[ $? -eq 1 ] || fail "--out the document's data file: not exit 1"
+grep -q "is the data file ev.json names" "$T/err" || fail "--out the document's data file: $(cat "$T/err")"
+cmp -s "$T/track.csv" "$T/track.before" || fail "--out the document's data file: the record was replaced"
+# a schema that is not a number: the file named, exit 1 (was an internal error, exit 4)
+$PY - "$T/ev.json" "$T/schema.json" <<'PYEOF'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["schema"] = "1"
+json.dump(d, open(sys.argv[2], "w"))
+PYEOF
+"$BIN" report "$T/schema.json" --out "$T/x2.html" 2> "$T/err"
+[ $? -eq 1 ] || fail "schema \"1\": not exit 1: $(cat "$T/err")"
+grep -q 'schema.json: unsupported evaluation schema "1"' "$T/err" || fail "schema \"1\": $(cat "$T/err")"
+[ ! -e "$T/x2.html" ] || fail "schema \"1\": a page was written"
 
 [ $fails -eq 0 ] && echo "report_evaluate: all passed"
 exit $fails

@@ -35,6 +35,11 @@ grep -q "nodata.json: the report does not name its data" "$T/err"
 "$BIN" report "$T/fit.json" --data "$T/data.csv" --input input --output output --out "$T/r.html"
 [ "$(grep -o '<svg' "$T/r.html" | wc -l)" -eq 3 ]
 grep -q "after training (validation)" "$T/r.html"
+# the page never replaces the record the fit report names (it wrote HTML over it)
+cp "$T/data.csv" "$T/data.before"
+if "$BIN" report "$T/fit.json" --out "$T/data.csv" 2> "$T/err"; then echo "report --out the fit's data file should fail"; exit 1; fi
+grep -q "is the data file $T/fit.json names" "$T/err" || { echo "report --out the fit's data file: $(cat "$T/err")"; exit 1; }
+cmp -s "$T/data.csv" "$T/data.before" || { echo "report --out the fit's data file: the record was replaced"; exit 1; }
 # malformed JSON names the file
 echo '{"status": ' > "$T/bad.json"
 if "$BIN" report "$T/bad.json" --out "$T/x.html" 2> "$T/err"; then exit 1; fi

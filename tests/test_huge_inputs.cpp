@@ -218,6 +218,26 @@ TEST(HugeInputs, InverseRelaxedOutsideItsLimitsHoldsTheLimit) {
   EXPECT_EQ(x, lo);
 }
 
+// (name, model file) of the PI family above, rate-pi and bouc-wen, and with `kernels` also kp,
+// preisach and maxwell-slip: every kind whose state a user can read and set
+std::vector<std::pair<std::string, std::string>> kinds_with_state(bool kernels) {
+  std::vector<std::pair<std::string, std::string>> kinds;
+  for (const Kind& k : kKinds) kinds.emplace_back(k.name, k.json);
+  kinds.emplace_back("rate-pi", R"({"model": "rate-pi", "q": 0.3, "r": [0.1, 0.2], "p": [0.4, 0.3], "c": 0.12,
+      "tau": 0.1, "dt": 0.001, "input_limits": [-1, 1]})");
+  kinds.emplace_back("bouc-wen", R"({"model": "bouc-wen", "kx": 1.0, "kw": -0.05, "rho": 4, "sigma": 1, "n": 1.5,
+      "input_limits": [-1, 1]})");
+  if (kernels) {
+    kinds.emplace_back("kp", R"({"model": "kp", "q": 0.5, "lo": -1, "hi": 1, "levels": 2, "w": [0.2, 0.1, 0.3],
+        "input_limits": [-1.5, 1.5]})");
+    kinds.emplace_back("preisach", R"({"model": "preisach", "q": 0.5, "lo": -1, "hi": 1, "levels": 2,
+        "w": [0.2, 0.1, 0.3], "input_limits": [-1.5, 1.5]})");
+    kinds.emplace_back("maxwell-slip", R"({"model": "maxwell-slip", "k0": 0.4, "k": [0.3, 0.5], "delta": [0.1, 0.25],
+        "input_limits": [-1.5, 1.5]})");
+  }
+  return kinds;
+}
+
 }  // namespace
 
 // A state set by hand (Model::reset(ModelState), Inverse::reset) so large that the next step
@@ -225,13 +245,7 @@ TEST(HugeInputs, InverseRelaxedOutsideItsLimitsHoldsTheLimit) {
 // refused with hysteron::Error. A state read back from a run is taken, and the run continues
 // from it sample for sample.
 TEST(HugeInputs, AStateNoInputReachesIsRefused) {
-  std::vector<std::pair<std::string, std::string>> kinds;
-  for (const Kind& k : kKinds) kinds.emplace_back(k.name, k.json);
-  kinds.emplace_back("rate-pi", R"({"model": "rate-pi", "q": 0.3, "r": [0.1, 0.2], "p": [0.4, 0.3], "c": 0.12,
-      "tau": 0.1, "dt": 0.001, "input_limits": [-1, 1]})");
-  kinds.emplace_back("bouc-wen", R"({"model": "bouc-wen", "kx": 1.0, "kw": -0.05, "rho": 4, "sigma": 1, "n": 1.5,
-      "input_limits": [-1, 1]})");
-  for (const auto& [name, json] : kinds) {
+  for (const auto& [name, json] : kinds_with_state(false)) {
     const hysteron::ModelParams params = hysteron::io::model_from_json(nlohmann::json::parse(json), name);
     hysteron::Model a(params), b(params);
     for (int i = 0; i < 40; ++i) (void)a.step(0.5 * std::sin(0.3 * i));
@@ -277,19 +291,7 @@ TEST(HugeInputs, AStateNoInputReachesIsRefused) {
 // has 0 entries, the model has 11"); a state read back after a run is taken by a fresh model
 // and inverse, which go on sample for sample; a wrong n is refused naming both sizes.
 TEST(HugeInputs, CApiStateOfEveryKindRoundTrips) {
-  std::vector<std::pair<std::string, std::string>> kinds;
-  for (const Kind& k : kKinds) kinds.emplace_back(k.name, k.json);
-  kinds.emplace_back("rate-pi", R"({"model": "rate-pi", "q": 0.3, "r": [0.1, 0.2], "p": [0.4, 0.3], "c": 0.12,
-      "tau": 0.1, "dt": 0.001, "input_limits": [-1, 1]})");
-  kinds.emplace_back("bouc-wen", R"({"model": "bouc-wen", "kx": 1.0, "kw": -0.05, "rho": 4, "sigma": 1, "n": 1.5,
-      "input_limits": [-1, 1]})");
-  kinds.emplace_back("kp", R"({"model": "kp", "q": 0.5, "lo": -1, "hi": 1, "levels": 2, "w": [0.2, 0.1, 0.3],
-      "input_limits": [-1.5, 1.5]})");
-  kinds.emplace_back("preisach", R"({"model": "preisach", "q": 0.5, "lo": -1, "hi": 1, "levels": 2,
-      "w": [0.2, 0.1, 0.3], "input_limits": [-1.5, 1.5]})");
-  kinds.emplace_back("maxwell-slip", R"({"model": "maxwell-slip", "k0": 0.4, "k": [0.3, 0.5], "delta": [0.1, 0.25],
-      "input_limits": [-1.5, 1.5]})");
-  for (const auto& [name, json] : kinds) {
+  for (const auto& [name, json] : kinds_with_state(true)) {
     SCOPED_TRACE(name);
     const hysteron::ModelParams params = hysteron::io::model_from_json(nlohmann::json::parse(json), name);
     const std::size_t entries = hysteron::Model(params).state().y.size();

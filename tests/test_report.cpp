@@ -82,6 +82,13 @@ std::vector<double> test_input(std::size_t n) {
   return x;
 }
 
+// The model's output for x with a small deterministic "noise" (a record the model does not fit exactly).
+std::vector<double> measured_output(const ModelParams& model, const std::vector<double>& x) {
+  std::vector<double> y = simulate_record(model, x);
+  for (std::size_t i = 0; i < y.size(); ++i) y[i] += 0.01 * std::sin(1.7 * static_cast<double>(i));
+  return y;
+}
+
 const Labels kLabels{"Tracking", {"Time", "s"}, {"Contraction", "mm"}};
 
 }  // namespace
@@ -172,8 +179,7 @@ TEST(Report, EvaluationJsonAndHtml) {
   Tmp tmp;
   const std::vector<double> x = test_input(1500);
   const ModelParams model = test_gpi();
-  std::vector<double> y = simulate_record(model, x);
-  for (std::size_t i = 0; i < y.size(); ++i) y[i] += 0.01 * std::sin(1.7 * static_cast<double>(i));
+  const std::vector<double> y = measured_output(model, x);
   std::vector<double> t_ms(x.size());
   for (std::size_t i = 0; i < t_ms.size(); ++i) t_ms[i] = 2.0 * static_cast<double>(i);  // 2 ms samples
   io::write_columns(tmp / "track.csv", {"t_ms", "pressure", "length"}, {t_ms, x, y});
@@ -219,8 +225,9 @@ TEST(Report, EvaluationJsonAndHtml) {
   io::write_text_file(tmp / "gone.json", j.dump());
   EXPECT_NE(error_of([&] { write_report_from(tmp / "gone.json", tmp / "x.html", ""); }).find("data file gone.csv not found"),
             std::string::npos);
-  for (double& v : y) v += 0.05;
-  io::write_columns(tmp / "other.csv", {"t_ms", "pressure", "length"}, {t_ms, x, y});
+  std::vector<double> other = y;
+  for (double& v : other) v += 0.05;
+  io::write_columns(tmp / "other.csv", {"t_ms", "pressure", "length"}, {t_ms, x, other});
   EXPECT_NE(error_of([&] { write_report_from(tmp / "ev.json", tmp / "x.html", "", {"other.csv", "pressure", "", "length"}); })
                 .find("not the record the evaluation used"),
             std::string::npos);
@@ -231,8 +238,7 @@ TEST(Report, FitJsonRoundTripAndHtml) {
   Tmp tmp;
   const std::vector<double> x = test_input(1500);
   const ModelParams model = test_gpi();
-  std::vector<double> y = simulate_record(model, x);
-  for (std::size_t i = 0; i < y.size(); ++i) y[i] += 0.01 * std::sin(1.7 * static_cast<double>(i));
+  const std::vector<double> y = measured_output(model, x);
   io::write_columns(tmp / "data.csv", {"pressure", "length"}, {x, y});
   FitReport f;
   f.status = FitStatus::converged;

@@ -129,13 +129,11 @@ void write_experiment_report(const ExperimentResult& result, const std::string& 
 // vs model loops, residuals (against time if data.t is given).
 void write_fit_report(const FitReport& fit, const FitData& data, const std::string& html_path,
                       const std::string& command_line);
-// HTML report of `hysteron evaluate`: a saved model against a record (data.train is
-// the evaluated range): metrics, loops, output over the record, residuals.
-void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
-                             const std::string& html_path, const std::string& command_line);
-// The same page from an evaluation document (`hysteron evaluate --report x.html`, `hysteron report
-// ev.json`): the evaluated range's metrics are the document's, and the page adds what it records
-// besides (censored samples, samples outside the model's input limits, the output map).
+// HTML report of `hysteron evaluate` from its document (`evaluate --report x.html`, `hysteron
+// report ev.json`): a saved model against a record (data.train is the evaluated range); the
+// evaluated range's metrics are the document's (and the whole record's where the range is a
+// part), with what it records besides (censored samples, samples outside the model's input
+// limits, the output map), the model file's keys, loops, output over the record, residuals.
 void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& data, const std::string& html_path,
                              const std::string& command_line);
 

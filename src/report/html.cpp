@@ -715,16 +715,15 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   io::write_text_file(html_path, page.finish());
 }
 
-namespace {
-
-// The evaluation page: `recorded` (a document's result, or null) gives the evaluated range's
-// metrics and what the document records besides (censored samples, samples outside the model's
-// input limits, the output map); without it the metrics are computed here and the rest is not
-// shown.
-void evaluation_page(const ModelParams& model, const std::string& model_file, const FitData& data,
-                     const io::Evaluation* recorded, const std::string& html_path, const std::string& command_line) {
+// The evaluation page: the evaluated range's metrics are the document's (doc.result), and it
+// shows what the document records besides (censored samples, samples outside the model's input
+// limits, the output map).
+void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& data, const std::string& html_path,
+                             const std::string& command_line) {
+  const ModelParams& model = doc.model;
+  const io::Evaluation& recorded = doc.result;
   Page page(fmt::format("hysteron evaluate: {} model", model_name(model)), command_line);
-  page.para(fmt::format("Model: {}", model_file));
+  page.para(fmt::format("Model: {}", doc.model_file));
   if (!data.source.empty()) page.para("Data: " + data.source);
   const std::size_t n = std::min(data.x.size(), data.y.size());
   const IndexRange range = data.train.resolved(n);
@@ -734,30 +733,25 @@ void evaluation_page(const ModelParams& model, const std::string& model_file, co
   if (y.size() == n && range.end <= n && range.begin < range.end) {
     // a record whose output clips: scored as censored, as `hysteron evaluate` scores it
     const std::span<const double> recorded_y = std::span(data.y).first(n);
-    std::size_t censored = 0;
-    const std::vector<double> measured = data.censor_clipped ? censor_clipped(recorded_y, y, {}, &censored)
+    const std::vector<double> measured = data.censor_clipped ? censor_clipped(recorded_y, y, {}, nullptr)
                                                              : std::vector<double>(recorded_y.begin(), recorded_y.end());
-    const FitMetrics scored =
-        recorded ? recorded->metrics
-                 : compute_metrics(std::span(measured).subspan(range.begin, range.end - range.begin),
-                                   std::span(y).subspan(range.begin, range.end - range.begin));
     std::vector<std::vector<std::string>> rows = {
-        metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu), scored)};
+        metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu), recorded.metrics)};
     if (range.begin > 0 || range.end < n) rows.push_back(metric_cells("whole record" + yu, compute_metrics(measured, y)));
     page.table(metric_header, rows);
-    if (recorded) censored = recorded->censored;
-    if (censored > 0)
-      page.para(fmt::format("The output clips (a sensor's limit): {} samples of the {} at the limit where the model "
-                            "predicts beyond it are scored as censored, no error (--uncensored: as recorded).",
-                            censored, recorded ? "evaluated range" : "record"));
+    if (recorded.censored > 0)
+      page.para(fmt::format("The output clips (a sensor's limit): {} samples of the evaluated range at the limit where "
+                            "the model predicts beyond it are scored as censored, no error (--uncensored: as "
+                            "recorded).",
+                            recorded.censored));
   }
-  if (recorded) {
+  {
     // the rest of what `hysteron evaluate` recorded (io::Evaluation)
-    const OutputMap& m = recorded->output_map;
+    const OutputMap& m = recorded.output_map;
     page.raw("<h3>Recorded by the evaluation</h3>\n");
     const std::vector<std::pair<std::string, std::string>> recorded_rows = {
-        {"censored samples (output at its clip limit, no error)", fmt::format("{}", recorded->censored)},
-        {"samples outside the model's input limits", fmt::format("{}", recorded->outside_input_limits)},
+        {"censored samples (output at its clip limit, no error)", fmt::format("{}", recorded.censored)},
+        {"samples outside the model's input limits", fmt::format("{}", recorded.outside_input_limits)},
         {"output map: gain (record's output against the prediction)", num(m.gain, 6)},
         {"output map: offset" + yu, num(m.offset, 6)},
         {"output map: R² as recorded", num(m.r2, 5)},
@@ -780,18 +774,6 @@ void evaluation_page(const ModelParams& model, const std::string& model_file, co
                    fmt::format("scored samples {}..{} of {}", range.begin, range.end, n));
   }
   io::write_text_file(html_path, page.finish());
-}
-
-}  // namespace
-
-void write_evaluation_report(const ModelParams& model, const std::string& model_file, const FitData& data,
-                             const std::string& html_path, const std::string& command_line) {
-  evaluation_page(model, model_file, data, nullptr, html_path, command_line);
-}
-
-void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& data, const std::string& html_path,
-                             const std::string& command_line) {
-  evaluation_page(doc.model, doc.model_file, data, &doc.result, html_path, command_line);
 }
 
 json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source) {

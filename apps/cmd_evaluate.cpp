@@ -73,7 +73,7 @@ int run_evaluate(const EvaluateOptions& c) {
   io::EvaluationDocument doc;
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
   doc.model = model;
-  doc.data = describe_data(sel, initial, range);
+  doc.data = describe_data(sel, rec, initial, range);
   doc.data.censored = !c.uncensored;  // the document, the text and the HTML report score alike
   doc.result.file = c.sel.file;
   doc.result.range = range;

@@ -152,9 +152,9 @@ int run_fit(const FitCliOptions& c) {
         c.sel.file, o.sample_time,
         c.sample_time > 0 ? std::string("--sample-time")
                           : fmt::format("the mean step of the time column {} in {}", c.sel.time_column,
-                                        c.sel.time_unit),
+                                        rec.time_unit),
         o.sample_time > 0.1 ? "above 0.1 s" : "1 us or below",
-        o.sample_time > 0.1 ? (c.sel.time_unit == "s" ? "ms" : "another unit") : "s or another unit"));
+        o.sample_time > 0.1 ? (rec.time_unit == "s" ? "ms" : "another unit") : "s or another unit"));
   // a range in seconds looks its ends up in the time column: it must not go backwards
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
   if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))
@@ -219,7 +219,7 @@ int run_fit(const FitCliOptions& c) {
 
   io::FitDocument doc;
   doc.fit = rep;
-  doc.data = describe_data(sel, o.initial_state, train);
+  doc.data = describe_data(sel, rec, o.initial_state, train);
   doc.data.censored = censor;
   const bool fitted = has_model(rep.status);
   if (fitted)

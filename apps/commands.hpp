@@ -72,18 +72,22 @@ bool names_stdout(const std::string& path);
 // What fit and evaluate read from a data file and how the reports describe it.
 struct DataSelection {
   std::string file, input, output, time_column;  // time_column empty: no time axis
-  std::string time_unit = "s";                   // of the time column: s, ms or us (read as seconds)
+  std::string time_unit;                         // --time-unit: s, ms or us; "": the column's own, else s
   std::string input_label, output_label;         // "Pressure [kPa]"; empty: the column name
 };
 struct DataColumns {
   std::vector<double> x, y;
   std::optional<std::vector<double>> t;
+  std::string time_unit = "s";  // the time column's unit as read: --time-unit, else its header's, else s
+  // the columns' header names and units ("pressure", "kPa"; from a units row or "pressure [kPa]")
+  std::string input_name, input_unit, output_name, output_unit;
 };
 // Registers --data, --input, --output, --time-column, --time-unit, --input-label, --output-label.
 void add_data_options(CLI::App* sub, DataSelection& sel);
 // The input, output and (if named) time columns of `file`, of equal lengths, the time column in
-// seconds (sel.time_unit converted here, the one place it is read); throws hysteron::Error naming
-// the file otherwise.
+// seconds (converted here, the one place its unit is read: --time-unit, else the unit its header
+// or units row gives, else s; the two disagreeing, or a time unit other than s, ms, us, is an
+// error); throws hysteron::Error naming the file otherwise.
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel);
 // Time columns (rate-pi's sample time, ranges in seconds): throws hysteron::Error naming the file,
 // the column and the first sample whose time stamp is not a number or below the one before
@@ -114,7 +118,12 @@ void check_sample_time_agrees(double sample_time, const std::vector<double>* t, 
 std::vector<std::string> rate_time_warnings(const ModelParams& model, const std::vector<double>* t,
                                             double sample_time, const std::string& file, const std::string& column);
 // The data section of a fit/evaluation document and the plot data of its HTML report.
-io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range);
+io::DataDescription describe_data(const DataSelection& sel, const DataColumns& d, InitialState initial,
+                                  IndexRange range);
+// The time unit (s, ms, us) a column's unit text names ("ms", "msec", "[s]", "seconds", ...); "" if
+// it names none; throws hysteron::Error ("`where` is in ...") for a time unit that is not read (min,
+// h, ns).
+std::string time_unit_of(const std::string& unit, const std::string& where);
 report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range);
 
 }  // namespace hysteron::cli

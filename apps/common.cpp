@@ -186,24 +186,70 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
       ->required();
   CLI::Option* time = sub->add_option("--time-column", sel.time_column,
                                       "time column: ranges in seconds, time axis of the HTML report");
-  sub->add_option("--time-unit", sel.time_unit, "unit of the time column: s (default), ms or us; read as seconds")
+  sub->add_option("--time-unit", sel.time_unit,
+                  "unit of the time column: s, ms or us (default: the unit its header or units row gives, as in "
+                  "\"t [ms]\", else s); read as seconds")
       ->check(CLI::IsMember({"s", "ms", "us"}))
       ->needs(time);
   sub->add_option("--input-label", sel.input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
   sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");
 }
 
+std::string time_unit_of(const std::string& unit, const std::string& where) {
+  std::string u = trim(unit);
+  if (u.size() >= 2 && ((u.front() == '[' && u.back() == ']') || (u.front() == '(' && u.back() == ')')))
+    u = trim(std::string_view(u).substr(1, u.size() - 2));
+  if (u == "\xC2\xB5s" || u == "\xCE\xBCs") return "us";  // micro sign, Greek mu
+  std::transform(u.begin(), u.end(), u.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  const auto any = [&](std::initializer_list<std::string_view> names) {
+    return std::find(names.begin(), names.end(), u) != names.end();
+  };
+  if (any({"s", "sec", "secs", "second", "seconds"})) return "s";
+  if (any({"ms", "msec", "msecs", "millisecond", "milliseconds"})) return "ms";
+  if (any({"us", "usec", "usecs", "microsecond", "microseconds"})) return "us";
+  if (any({"ns", "nsec", "nanosecond", "nanoseconds", "min", "mins", "minute", "minutes", "h", "hr", "hrs", "hour",
+           "hours", "d", "day", "days"}))
+    throw Error(fmt::format("{} is in \"{}\", a time unit that is not read: give the column in s, ms or us", where,
+                            trim(unit)));
+  return std::string();
+}
+
+namespace {
+io::ReadOptions column_options(const std::string& spec) {
+  io::ReadOptions o;
+  o.column_spec = spec;
+  return o;
+}
+}  // namespace
+
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel) {
   DataColumns d;
-  d.x = io::read_column(file, sel.input);
-  d.y = io::read_column(file, sel.output);
+  {
+    io::NamedColumn in = io::read_named_column(file, column_options(sel.input));
+    io::NamedColumn out = io::read_named_column(file, column_options(sel.output));
+    d.x = std::move(in.values);
+    d.y = std::move(out.values);
+    d.input_name = std::move(in.name);
+    d.input_unit = std::move(in.unit);
+    d.output_name = std::move(out.name);
+    d.output_unit = std::move(out.unit);
+  }
   if (d.x.size() != d.y.size())
     throw Error(fmt::format("{}: input column has {} values, output column {}", file, d.x.size(), d.y.size()));
   if (!sel.time_column.empty()) {
-    d.t = io::read_column(file, sel.time_column);
+    io::NamedColumn t = io::read_named_column(file, column_options(sel.time_column));
+    d.t = std::move(t.values);
     if (d.t->size() != d.x.size())
       throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));
-    const double to_s = io::time_unit_seconds(sel.time_unit, file + ": --time-unit");
+    // the unit the file gives the time column ("t [ms]", a units row): a record in ms read as
+    // seconds would run rate-pi 1000 times slow and put ranges in seconds 1000 times off
+    const std::string named = time_unit_of(t.unit, fmt::format("{}: the time column {}", file, sel.time_column));
+    if (!sel.time_unit.empty() && !named.empty() && named != sel.time_unit)
+      throw Error(fmt::format("{}: --time-unit {} but the file gives the time column {} the unit \"{}\": one of "
+                              "them is wrong (drop --time-unit if the file is right)",
+                              file, sel.time_unit, sel.time_column, t.unit));
+    d.time_unit = !sel.time_unit.empty() ? sel.time_unit : !named.empty() ? named : std::string("s");
+    const double to_s = io::time_unit_seconds(d.time_unit, file + ": --time-unit");
     if (to_s != 1.0)
       for (double& v : *d.t) v *= to_s;
   }
@@ -354,14 +400,25 @@ std::string uniform_time_warning(const std::vector<double>& t, const std::string
                      gap ? "a gap, or lost samples" : "jittered sampling");
 }
 
-io::DataDescription describe_data(const DataSelection& sel, InitialState initial, IndexRange range) {
-  const report::Axis in = parse_axis(sel.input_label, sel.input), out = parse_axis(sel.output_label, sel.output);
+namespace {
+// --input-label if given, else the column's header name and unit ("pressure", "kPa"), else its spec.
+report::Axis data_axis(const std::string& label, const std::string& spec, const std::string& name,
+                       const std::string& unit) {
+  if (!trim(label).empty()) return parse_axis(label, spec);
+  return {name.empty() ? (spec.empty() ? std::string("value") : spec) : name, unit};
+}
+}  // namespace
+
+io::DataDescription describe_data(const DataSelection& sel, const DataColumns& rec, InitialState initial,
+                                  IndexRange range) {
+  const report::Axis in = data_axis(sel.input_label, sel.input, rec.input_name, rec.input_unit),
+                     out = data_axis(sel.output_label, sel.output, rec.output_name, rec.output_unit);
   io::DataDescription d;
   d.input_file = d.output_file = sel.file;
   d.input_column = sel.input;
   d.output_column = sel.output;
   d.time_column = sel.time_column;
-  d.time_unit = sel.time_unit;
+  d.time_unit = rec.time_unit;
   d.input_label = in.label;
   d.input_unit = in.unit;
   d.output_label = out.label;
@@ -376,8 +433,8 @@ report::FitData plot_data(const DataSelection& sel, const DataColumns& d, Initia
   data.x = d.x;
   data.y = d.y;
   if (d.t) data.t = *d.t;
-  data.input = parse_axis(sel.input_label, sel.input);
-  data.output = parse_axis(sel.output_label, sel.output);
+  data.input = data_axis(sel.input_label, sel.input, d.input_name, d.input_unit);
+  data.output = data_axis(sel.output_label, sel.output, d.output_name, d.output_unit);
   data.source = fmt::format("{} (input column {}, output column {})", sel.file, sel.input, sel.output);
   data.initial_state = initial;
   data.train = range;

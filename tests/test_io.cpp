@@ -744,6 +744,66 @@ TEST(Table, ColonInCsvHeaderIsAName) {
   expect_error([&] { io::read_column(path, "x"); }, {path, "no column named \"x\""});
 }
 
+// A units row below the header ("s,kPa,N", a DAQ export's second header line) gives the columns'
+// units and is not data; so does a header name ending in [unit] or (unit). A row of numbers and
+// empty fields is data, and a non-number in a later data row is still an error.
+TEST(Table, UnitsRowAndUnitsInTheHeader) {
+  TempDir dir;
+  const auto spec = [](const char* column) {
+    io::ReadOptions o;
+    o.column_spec = column;
+    return o;
+  };
+  for (const char* text : {"time,pressure,force\ns,kPa,N\n0,1,2\n0.1,3,4\n",
+                           "time;pressure;force\n[s];[kPa];(N)\n0,0;1;2\n0,1;3;4\n",
+                           "# rig 3\ntime,pressure,force\n\n# units\n\"s\",\"kPa\",\"N\"\n0,1,2\n0.1,3,4\n"}) {
+    SCOPED_TRACE(text);
+    const auto path = dir.write("units.csv", text);
+    const io::Table t = io::read_table(path);
+    ASSERT_EQ(t.num_rows(), 2u);
+    EXPECT_EQ(t.columns[1], (std::vector<double>{1, 3}));
+    EXPECT_EQ(io::column_unit(t, 0), "s");
+    EXPECT_EQ(io::column_unit(t, 1), "kPa");
+    EXPECT_EQ(io::column_unit(t, 2), "N");
+    EXPECT_EQ(io::column_quantity(t, 1), "pressure");
+    const io::NamedColumn c = io::read_named_column(path, spec("force"));
+    EXPECT_EQ(c.values, (std::vector<double>{2, 4}));
+    EXPECT_EQ(c.name, "force");
+    EXPECT_EQ(c.unit, "N");
+    std::vector<double> streamed;
+    io::for_each_value(path, spec("pressure"), [&](double v) { streamed.push_back(v); });
+    EXPECT_EQ(streamed, (std::vector<double>{1, 3}));
+  }
+  // units in the header names; a units row, where given, wins; a bracket that is no unit stays
+  const auto named = dir.write("named.csv", "t [ms],pressure (kPa),force,x()\n0,1,2,3\n");
+  const io::Table n = io::read_table(named);
+  EXPECT_EQ(io::column_unit(n, 0), "ms");
+  EXPECT_EQ(io::column_quantity(n, 0), "t");
+  EXPECT_EQ(io::column_unit(n, 1), "kPa");
+  EXPECT_EQ(io::column_quantity(n, 1), "pressure");
+  EXPECT_EQ(io::column_unit(n, 2), "");
+  EXPECT_EQ(io::column_quantity(n, 2), "force");
+  EXPECT_EQ(io::column_unit(n, 3), "");
+  const io::Table w = io::read_table(dir.write("wins.csv", "t [ms],p\ns,bar\n0,1\n"));
+  EXPECT_EQ(io::column_unit(w, 0), "s");
+  EXPECT_EQ(io::column_unit(w, 1), "bar");
+  // a row of numbers and empty fields is data, not units
+  const io::Table d = io::read_table(dir.write("data.csv", "a,b,c\n1,,3\n4,,6\n"));
+  EXPECT_TRUE(d.units.empty());
+  EXPECT_EQ(d.num_rows(), 2u);
+  // only the line right after the header can be a units row
+  const auto late = dir.write("late.csv", "a,b\n1,2\ns,kPa\n");
+  expect_error([&] { io::read_table(late); }, {late, ":3:1", "\"s\" is not a number"});
+  // a units row with a field missing is a short row, named as such
+  const auto short_row = dir.write("short.csv", "a,b,c\ns,kPa\n1,2,3\n");
+  expect_error([&] { io::read_table(short_row); }, {short_row, ":2", "2 fields, expected 3"});
+  // no header: no units row (a file of text lines is no table)
+  io::ReadOptions none;
+  none.header = io::HeaderMode::absent;
+  const auto bare = dir.write("bare.csv", "s,kPa\n1,2\n");
+  expect_error([&] { io::read_table(bare, none); }, {bare, ":1:1"});
+}
+
 // ---- corrupt and hostile .mat input (issue 13, item 2) ---------------------------------------
 
 namespace {

@@ -311,6 +311,10 @@ class TextParser {
     }
     if (first_) return first_line(line);
     split(line, sep_, fields_);
+    if (units_pending_) {
+      units_pending_ = false;
+      if (units_line()) return false;
+    }
     if (fields_.size() != nfields_) {
       if (fields_.size() > max_text_columns) too_many_columns();
       throw Error(fmt::format("{}:{}: row has {} fields, expected {} (as on line {})", path_, lineno_, fields_.size(),
@@ -361,6 +365,7 @@ class TextParser {
   std::size_t num_fields() const { return nfields_; }
   std::size_t rows() const { return rows_; }
   const std::vector<std::string>& names() const { return names_; }
+  const std::vector<std::string>& units() const { return units_; }
   double value(std::size_t c) const { return values_[c]; }
   bool present(std::size_t c) const { return present_[c] != 0; }
 
@@ -397,6 +402,7 @@ class TextParser {
       return parse_again(line);
     }
     for (auto f : fields_) names_.emplace_back(unquote(f));
+    units_pending_ = true;
     // A name given twice would select the first column silently (empty names may repeat). The
     // error names the smallest repeated name (in std::string order) and its first two columns.
     std::size_t dup_first = 0, dup_second = 0;
@@ -404,6 +410,23 @@ class TextParser {
       throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
                               lineno_, shown(names_[dup_second]), dup_first + 1, dup_second + 1));
     return false;
+  }
+
+  // The line after the header (in fields_) is a units row ("s,kPa,N", "[s];[bar];[mm]") if it has
+  // the header's number of fields, at least one of them not empty, and none a number (a data
+  // row has only numbers and empty fields).
+  bool units_line() {
+    if (fields_.size() != nfields_) return false;
+    bool any = false;
+    for (const std::string_view f : fields_) {
+      double v = 0.0;
+      if (parse_field(f, v) != Parse::malformed && !unquote(f).empty()) return false;
+      any = any || !unquote(f).empty();
+    }
+    if (!any) return false;
+    units_.clear();
+    for (const std::string_view f : fields_) units_.emplace_back(unquote(f));
+    return true;
   }
 
   // Finds the smallest non-empty name that appears more than once and the 0-based columns of its
@@ -456,9 +479,9 @@ class TextParser {
   const std::string& path_;
   const ReadOptions& opt_;
   char sep_;
-  bool first_ = true, decimal_comma_ = false;
+  bool first_ = true, decimal_comma_ = false, units_pending_ = false;
   std::size_t nfields_ = 0, first_line_ = 0, rows_ = 0, lineno_ = 0;
-  std::vector<std::string> names_;
+  std::vector<std::string> names_, units_;  // units_: a units row's fields, else empty
   std::vector<std::string_view> fields_;
   std::vector<std::size_t> filled_, first_empty_line_;  // non-empty fields per column; first empty one's line
   std::vector<double> values_;
@@ -480,6 +503,7 @@ Table read_text_lines(Lines& lines, const std::string& path, const ReadOptions& 
   Table t;
   t.source = path;
   t.names = parser.names();
+  t.units = parser.units();
   cols.resize(parser.num_fields());
   t.columns = std::move(cols);
   return t;
@@ -619,6 +643,57 @@ std::vector<double> read_column(const std::string& path, const ReadOptions& opti
   const std::size_t i = select_column(t, options);
   check_column_has_data(t, i);
   return std::move(t.columns[i]);
+}
+
+namespace {
+// "name [unit]" / "name (unit)": the position of the bracket that opens a trailing unit, else npos.
+std::size_t unit_bracket(std::string_view name) {
+  name = trim(name);
+  if (name.size() < 3) return std::string_view::npos;
+  const char close = name.back();
+  if (close != ']' && close != ')') return std::string_view::npos;
+  const std::size_t open = name.rfind(close == ']' ? '[' : '(');
+  if (open == std::string_view::npos || open + 2 > name.size() - 1) return std::string_view::npos;
+  return open;
+}
+std::string strip_brackets(std::string_view u) {
+  u = trim(u);
+  if (u.size() >= 2 && ((u.front() == '[' && u.back() == ']') || (u.front() == '(' && u.back() == ')')))
+    u = trim(u.substr(1, u.size() - 2));
+  return std::string(u);
+}
+}  // namespace
+
+std::string column_unit(const Table& t, std::size_t i) {
+  if (i < t.units.size() && !trim(t.units[i]).empty()) return strip_brackets(t.units[i]);
+  if (i >= t.names.size()) return std::string();
+  const std::string_view name = trim(t.names[i]);
+  const std::size_t open = unit_bracket(name);
+  if (open == std::string_view::npos) return std::string();
+  return std::string(trim(name.substr(open + 1, name.size() - open - 2)));
+}
+
+std::string column_quantity(const Table& t, std::size_t i) {
+  if (i >= t.names.size()) return std::string();
+  const std::string_view name = trim(t.names[i]);
+  const std::size_t open = unit_bracket(name);
+  return std::string(open == std::string_view::npos || open == 0 ? name : trim(name.substr(0, open)));
+}
+
+NamedColumn read_named_column(const std::string& path, const ReadOptions& options) {
+  NamedColumn c;
+  if (is_mat_path(path)) {
+    c.values = detail::read_mat_variable(path, options.column_spec, options.preferred_column);
+    c.name = options.column_spec;
+    return c;
+  }
+  Table t = read_text_table(path, options);
+  const std::size_t i = select_column(t, options);
+  check_column_has_data(t, i);
+  c.name = column_quantity(t, i);
+  c.unit = column_unit(t, i);
+  c.values = std::move(t.columns[i]);
+  return c;
 }
 
 std::vector<double> read_column(const std::string& path, const std::string& column) {

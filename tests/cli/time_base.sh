@@ -6,6 +6,7 @@
 # evaluate); fit's --validate-data files get evaluate's check against the model's dt; evaluate
 # without a time column, simulate and invert say the model's dt is assumed.
 # --time-unit ms|us reads the time column as seconds; fit asks about a sample time above 0.1 s.
+# A unit the file gives ("t [ms]", a units row) is read without --time-unit and checked against it.
 # The report of a --time-unit ms fit draws its time axis in seconds. A time column's step is the
 # mean step without its gaps (stamps rounded to 1 ms average out). simulate and invert say rate-pi's
 # dt is assumed only once the input was read.
@@ -174,6 +175,42 @@ grep -q "the record's sample time" "$T/err.txt" && fail "evaluate --time-unit ms
 "$BIN" evaluate --model "$T/rp.json" --data "$T/rms.csv" --input p --output y --time-column t --time-unit min \
   > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "--time-unit min: not exit 1"
+
+# the file's own unit: "t [ms]" or a units row below the header reads the column in it without
+# --time-unit; --time-unit agreeing is fine, disagreeing an error naming both; a time unit that is
+# not read (min) an error; a bracket that is no time unit is not one; the axes take the header's units
+# (columns by index; fit exits 3 on these records' poor fit, writing the model all the same: --force)
+fitc() { "$BIN" fit --model rate-pi --input 1 --output 2 --threads 1 --force "$@"; }
+sed '1s/.*/t [ms],p (kPa),y/' "$T/rms.csv" > "$T/rhead.csv"
+{ echo "time,p,y"; echo "msec,kPa,mm"; tail -n +2 "$T/rms.csv"; } > "$T/rrow.csv"
+for f in rhead rrow; do
+  fitc --data "$T/$f.csv" --time-column 0 --out "$T/$f.json" --report "$T/$f-fit.json" > "$T/out.txt" 2>&1 \
+    || [ $? -eq 3 ] || fail "$f: exit $?: $(cat "$T/out.txt")"
+  [ "$(model_dt "$T/$f.json")" = "0.001" ] || fail "$f: the unit the file gives not read: dt $(model_dt "$T/$f.json")"
+  grep -q "see --time-unit" "$T/out.txt" && fail "$f: warned as a column in s"
+  $PY -c "import json,sys; d=json.load(open(sys.argv[1]))['data']; assert d['time_unit'] == 'ms', d; \
+    assert d['input_axis'] == {'label': 'p', 'unit': 'kPa'}, d['input_axis']" "$T/$f-fit.json" \
+    || fail "$f: the fit document's time unit or input axis"
+  fitc --data "$T/$f.csv" --time-column 0 --time-unit ms --out "$T/${f}2.json" > /dev/null 2>&1 \
+    || [ $? -eq 3 ] || fail "$f --time-unit ms (agreeing): exit $?"
+  fitc --data "$T/$f.csv" --time-column 0 --time-unit s --out "$T/${f}s.json" > /dev/null 2> "$T/err.txt"
+  rc=$?
+  [ $rc -eq 1 ] || fail "$f --time-unit s (disagreeing): exit $rc (expected 1)"
+  grep -q "$f.csv: --time-unit s but the file gives the time column 0 the unit" "$T/err.txt" \
+    || fail "$f --time-unit s: $(cat "$T/err.txt")"
+  [ -e "$T/${f}s.json" ] && fail "$f --time-unit s: a model written"
+  "$BIN" evaluate --model "$T/rp.json" --data "$T/$f.csv" --input 1 --output 2 --time-column 0 > /dev/null 2> "$T/err.txt" \
+    || fail "evaluate $f: exit $?: $(cat "$T/err.txt")"
+  grep -q "the record's sample time" "$T/err.txt" && fail "evaluate $f: read as seconds: $(cat "$T/err.txt")"
+done
+sed '1s/.*/t (min),p,y/' "$T/rms.csv" > "$T/rmin.csv"
+fitc --data "$T/rmin.csv" --time-column 0 --out "$T/rmin.json" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "a time column in min: not exit 1"
+grep -q 'rmin.csv: the time column 0 is in "min", a time unit that is not read' "$T/err.txt" \
+  || fail "a time column in min: $(cat "$T/err.txt")"
+sed '1s/.*/t (corrected),p,y/' "$T/r.csv" > "$T/rcorr.csv"
+fitc --data "$T/rcorr.csv" --time-column 0 --out "$T/rcorr.json" > /dev/null 2>&1
+[ "$(model_dt "$T/rcorr.json")" = "0.001" ] || fail "t (corrected): dt $(model_dt "$T/rcorr.json")"
 
 # a column in s read with --time-unit ms: dt 1e-6 s, asked about too (1 us or below)
 fit --data "$T/r.csv" --time-column t --time-unit ms --out "$T/msw.json" > "$T/out.txt" 2>&1

@@ -6,6 +6,9 @@
 //    is not a number ("nan"/"inf" count as numbers, and are then refused);
 //  - one separator per file, detected from the first non-empty line: tab if it
 //    has one, else ';', else ',', else runs of blanks;
+//  - a units row may follow the header: a line with the header's number of fields, none of them a
+//    number and not all empty ("s,kPa,N", "[s];[bar];[mm]"); it gives the columns' units
+//    (column_unit), as does a header name ending in "[unit]" or "(unit)";
 //  - a UTF-8 BOM, blank lines and lines starting with '#' are ignored; lines end with
 //    LF, CRLF or a lone CR; fields are trimmed of blanks and of one pair of double quotes;
 //  - a column that is empty in every row (e.g. the leading "," of every line)
@@ -68,6 +71,7 @@ struct ReadOptions {
 struct Table {
   std::string source;                         // file path, for messages
   std::vector<std::string> names;             // header names (or .mat variables); "" if no header
+  std::vector<std::string> units;             // a units row's fields; empty if the file has none
   std::vector<std::vector<double>> columns;
 
   std::size_t num_columns() const noexcept { return columns.size(); }
@@ -79,6 +83,12 @@ struct Table {
   // the column is empty in every row.
   const std::vector<double>& column(std::string_view spec) const;
 };
+
+// Column i's unit: its units-row field, else a trailing "[unit]" or "(unit)" of its header name;
+// brackets are stripped ("[kPa]" -> "kPa"). "" if it has none.
+std::string column_unit(const Table& t, std::size_t i);
+// Column i's header name without a trailing "[unit]" / "(unit)" ("pressure [kPa]" -> "pressure").
+std::string column_quantity(const Table& t, std::size_t i);
 
 // A text table held in memory (the rules above); `source` names it in errors.
 Table parse_text_table(std::string_view text, const std::string& source, const ReadOptions& options = {});
@@ -93,6 +103,13 @@ Table read_table(const std::string& path, const ReadOptions& options = {});
 // file (options.column_spec; empty = the file's only variable, which must be a vector).
 std::vector<double> read_column(const std::string& path, const ReadOptions& options);
 std::vector<double> read_column(const std::string& path, const std::string& column);
+// The same column with its header name and unit (column_quantity, column_unit; a .mat variable:
+// the spec, no unit).
+struct NamedColumn {
+  std::vector<double> values;
+  std::string name, unit;
+};
+NamedColumn read_named_column(const std::string& path, const ReadOptions& options);
 
 // Streams one column (selected as read_column does, preferred_column included) of a text file:
 // on_value(v) for each row in order, in bounded memory (the file is read in chunks). The whole

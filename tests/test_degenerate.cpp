@@ -88,3 +88,27 @@ TEST(Degenerate, TinyHuberIsNotConvergedAtItsStart) {
   EXPECT_GT(rep.total_iterations, 0) << rep.message;
   EXPECT_TRUE(std::isfinite(rep.train.rms));
 }
+
+// A record too short for a kind's parameters (10 samples each) is refused with the operator count
+// that fits it: fitted with that count the same record is not refused, with one more it is.
+TEST(Degenerate, TooShortARecordNamesTheOperatorCountThatFits) {
+  Record r = pi_record();
+  r.x.resize(140);  // 0.56 s of the decaying sine: one rise and part of the fall
+  r.y.resize(140);
+  for (const FitModel kind : {FitModel::preisach, FitModel::kp, FitModel::mpi_asym, FitModel::mpi_deadzone}) {
+    SCOPED_TRACE(fit_model_name(kind));
+    FitOptions o;
+    o.model = kind;
+    const FitReport rep = fit(r.x, r.y, o);
+    ASSERT_EQ(rep.status, FitStatus::invalid_input) << rep.message;
+    const auto at = rep.message.find("--n ");
+    ASSERT_NE(at, std::string::npos) << rep.message;
+    const int n = std::stoi(rep.message.substr(at + 4));
+    ASSERT_GE(n, 1);
+    ASSERT_LT(n, o.num_operators);
+    o.num_operators = n;
+    EXPECT_EQ(fit(r.x, r.y, o).message.find("too few"), std::string::npos) << "--n " << n;
+    o.num_operators = n + 1;
+    EXPECT_NE(fit(r.x, r.y, o).message.find("too few"), std::string::npos) << "--n " << n + 1;
+  }
+}

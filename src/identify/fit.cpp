@@ -127,9 +127,21 @@ FitReport detail::fit_core(std::span<const double> x, std::span<const double> y,
   if (!kind) return invalid(fmt::format("fit: no parametrization for the model {}", fit_model_name(o.model)), o.model, t0);
   const int np = kind->num_parameters(o);
   const std::size_t m = tr.end - tr.begin;
-  if (m < 10 * static_cast<std::size_t>(np))
-    return invalid(fmt::format("fit: {} training samples are too few for {} parameters (need at least {})", m, np, 10 * np),
+  if (m < 10 * static_cast<std::size_t>(np)) {
+    // the largest operator count whose parameters these samples support, if the kind has one
+    std::string hint;
+    for (int n = o.num_operators - 1; n >= 1 && hint.empty(); --n) {
+      FitOptions fewer = o;
+      fewer.num_operators = n;
+      if (fewer.is_valid(nullptr) && m >= 10 * static_cast<std::size_t>(kind->num_parameters(fewer)))
+        hint = fmt::format("; with {} operator{} (num_operators, --n {}) it has {}", n, n == 1 ? "" : "s", n,
+                           kind->num_parameters(fewer));
+    }
+    return invalid(fmt::format("fit: {} training samples are too few for {} parameters (need at least {}, 10 per "
+                               "parameter){}",
+                               m, np, 10 * np, hint),
                    o.model, t0);
+  }
   fitting::Data d{x, y, tr, o.initial_state, o.huber_delta};
   d.free_offset = free_offset && o.huber_delta == 0.0;
   const fitting::Ranges rg = fitting::ranges_of(d);

@@ -47,9 +47,11 @@ int run_evaluate(const EvaluateOptions& c) {
   if (c.json && report_stdout)
     throw Error(fmt::format("--report {} and --json both write to standard output: choose one", c.report));
   io::check_output_files({{"--report", c.report}}, {{"--model", c.model}, {"--data", c.sel.file}});
-  const ModelParams model = read_model_source(c.model);
+  ModelUnits units;
+  const ModelParams model = read_model_source(c.model, &units);
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);
+  check_units_agree(units, fmt::format("the model {}", c.model == "-" ? "<stdin>" : c.model), rec, sel, c.sel.file);
   if (rec.t && c.range.find('s') != std::string::npos)
     (void)require_increasing_time(*rec.t, c.sel.file, sel.time_column, "a range in seconds", true);
   const IndexRange range = c.range.empty() ? IndexRange{0, rec.x.size()}

@@ -171,6 +171,8 @@ int run_fit(const FitCliOptions& c) {
     ValidationSet v;
     v.file = file;
     DataColumns d = read_data_columns(file, sel);
+    check_units_agree({rec.input_unit, rec.output_unit}, fmt::format("the training record {}", c.sel.file), d, sel,
+                      file);
     v.x = std::move(d.x);
     v.y = std::move(d.y);
     if (d.t) v.t = std::move(*d.t);
@@ -262,7 +264,11 @@ int run_fit(const FitCliOptions& c) {
                                  ? fmt::format("hysteron fit --model auto (chose {}) on {}",
                                                fit_model_name(rep.model_kind), c.sel.file)
                                  : fmt::format("hysteron fit --model {} on {}", c.model, c.sel.file);
-    io::write_model_file(c.out, rep.model, {{"note", note}});
+    nlohmann::json extra{{"note", note}};
+    // the units the record's columns or --input-label / --output-label name: evaluate checks a record against them
+    if (!doc.data.input_unit.empty()) extra["units"]["input"] = doc.data.input_unit;
+    if (!doc.data.output_unit.empty()) extra["units"]["output"] = doc.data.output_unit;
+    io::write_model_file(c.out, rep.model, extra);
   }
   doc.model_written = write;
   doc.model_file = write ? c.out : std::string();

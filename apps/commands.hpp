@@ -55,7 +55,12 @@ const std::string& command_line();                        // the recorded comman
 inline constexpr int exit_ok = 0, exit_error = 1, exit_not_converged = 2, exit_poor_fit = 3, exit_internal = 4;
 
 // A model file, or the model JSON on stdin for "-". Throws hysteron::Error.
-ModelParams read_model_source(const std::string& path);
+// The units a model file records, its "units": {"input": ..., "output": ...} (fit writes them where
+// the record names them); "" where it records none.
+struct ModelUnits {
+  std::string input, output;
+};
+ModelParams read_model_source(const std::string& path, ModelUnits* units = nullptr);
 // "A:B" (sample indices, half-open; either side may be empty) or "As:Bs" (seconds, needs
 // `time`); both sides in the same unit. Throws hysteron::Error naming `opt`.
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n);
@@ -120,6 +125,12 @@ std::vector<std::string> rate_time_warnings(const ModelParams& model, const std:
 // The data section of a fit/evaluation document and the plot data of its HTML report.
 io::DataDescription describe_data(const DataSelection& sel, const DataColumns& d, InitialState initial,
                                   IndexRange range);
+// Throws hysteron::Error where a record's input or output column (DataColumns' units, from its
+// header or units row) and `units` (of `source`: "the model m.json", "the training record r.csv")
+// name different units for the same signal ("kPa" and "bar"; compared without brackets and case):
+// its scores or outputs would be off by the units' ratio. Silent where either does not say.
+void check_units_agree(const ModelUnits& units, const std::string& source, const DataColumns& rec,
+                       const DataSelection& sel, const std::string& file);
 // The time unit (s, ms, us) a column's unit text names ("ms", "msec", "[s]", "seconds", ...); "" if
 // it names none; throws hysteron::Error ("`where` is in ...") for a time unit that is not read (min,
 // h, ns).

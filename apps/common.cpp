@@ -13,6 +13,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -39,11 +41,49 @@ std::string trim(std::string_view s) {
 
 }  // namespace
 
-ModelParams read_model_source(const std::string& path) {
-  if (path != "-") return io::read_model_file(path);
-  const std::string text{std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
-  if (trim(text).empty()) throw Error("--model -: standard input is empty (expected a model file's JSON)");
-  return io::model_from_json(io::parse_json(text, "<stdin>"), "<stdin>");
+ModelParams read_model_source(const std::string& path, ModelUnits* units) {
+  std::string text, where = path;
+  if (path != "-") {
+    text = io::read_text_file(path, "model file", io::max_model_file_bytes);
+  } else {
+    text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
+    if (trim(text).empty()) throw Error("--model -: standard input is empty (expected a model file's JSON)");
+    where = "<stdin>";
+  }
+  const nlohmann::json j = io::parse_json(text, where);
+  ModelParams params = io::model_from_json(j, where);  // validates "units" too: an object of strings
+  if (units) {
+    *units = {};
+    if (const auto u = j.find("units"); u != j.end()) {
+      if (const auto in = u->find("input"); in != u->end()) units->input = in->get<std::string>();
+      if (const auto out = u->find("output"); out != u->end()) units->output = out->get<std::string>();
+    }
+  }
+  return params;
+}
+
+namespace {
+// A unit as compared: no blanks, brackets or case ("[kPa]" and "kpa" agree).
+std::string unit_key(std::string_view u) {
+  std::string k = trim(u);
+  if (k.size() >= 2 && ((k.front() == '[' && k.back() == ']') || (k.front() == '(' && k.back() == ')')))
+    k = trim(std::string_view(k).substr(1, k.size() - 2));
+  std::transform(k.begin(), k.end(), k.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  return k;
+}
+}  // namespace
+
+void check_units_agree(const ModelUnits& units, const std::string& source, const DataColumns& rec,
+                       const DataSelection& sel, const std::string& file) {
+  const auto check = [&](std::string_view what, const std::string& column, const std::string& in_file,
+                         const std::string& in_source) {
+    if (unit_key(in_file).empty() || unit_key(in_source).empty() || unit_key(in_file) == unit_key(in_source)) return;
+    throw Error(fmt::format("{}: the {} column {} is in {}, but {}'s {} is in {}: every value would be off by the "
+                            "ratio of the two units; convert one of them",
+                            file, what, column, in_file, source, what, in_source));
+  };
+  check("input", sel.input, rec.input_unit, units.input);
+  check("output", sel.output, rec.output_unit, units.output);
 }
 
 namespace {

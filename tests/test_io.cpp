@@ -784,6 +784,13 @@ TEST(Table, UnitsRowAndUnitsInTheHeader) {
   EXPECT_EQ(io::column_unit(n, 2), "");
   EXPECT_EQ(io::column_quantity(n, 2), "force");
   EXPECT_EQ(io::column_unit(n, 3), "");
+  // a column is selected by its name without the unit, an exact name and an index first
+  EXPECT_EQ(io::read_column(named, "pressure"), (std::vector<double>{1}));
+  EXPECT_EQ(io::read_column(named, "pressure (kPa)"), (std::vector<double>{1}));
+  EXPECT_EQ(io::read_column(named, "t"), (std::vector<double>{0}));
+  const auto two = dir.write("two.csv", "p [kPa],p [bar],1 [s]\n1,0.01,5\n");
+  expect_error([&] { io::read_column(two, "p"); }, {two, "2 columns are named \"p\" with a unit"});
+  EXPECT_EQ(io::read_column(two, "1"), (std::vector<double>{0.01}));  // an index, not "1 [s]"
   const io::Table w = io::read_table(dir.write("wins.csv", "t [ms],p\ns,bar\n0,1\n"));
   EXPECT_EQ(io::column_unit(w, 0), "s");
   EXPECT_EQ(io::column_unit(w, 1), "bar");

@@ -55,13 +55,14 @@ std::vector<std::string> write_files(const ExperimentResult& r, const std::files
     written.push_back(fmt::format("tracking_{}_{}.csv", run.variant, run.reference));
     io::write_columns((d / written.back()).string(), names, columns);
   }
-  io::write_model_file((d / "model.json").string(), r.fit.model);
-  io::write_model_file((d / "best_model.json").string(), r.best_fit.model,
-                       r.model_reason.empty()
-                           ? nlohmann::json{}
-                           : nlohmann::json{{"note", fmt::format("hysteron experiment {}: the model of the "
-                                                                 "compensated variants; {}",
-                                                                 r.name, r.model_reason)}});
+  // the rig's signals: pressure [MPa] in, contraction [mm] out (`hysteron evaluate` checks a record against them)
+  const nlohmann::json units{{"units", {{"input", "MPa"}, {"output", "mm"}}}};
+  io::write_model_file((d / "model.json").string(), r.fit.model, units);
+  nlohmann::json best = units;
+  if (!r.model_reason.empty())
+    best["note"] = fmt::format("hysteron experiment {}: the model of the compensated variants; {}", r.name,
+                               r.model_reason);
+  io::write_model_file((d / "best_model.json").string(), r.best_fit.model, best);
   io::write_text_file((d / "result.json").string(), io::to_json(r).dump(2) + "\n");
   return written;
 }

@@ -612,6 +612,20 @@ std::size_t Table::column_index(std::string_view spec) const {
                               columns.size(), describe()));
     return idx;
   }
+  // the name without its unit: "pressure" selects "pressure [kPa]" if no other column is "pressure [...]"
+  {
+    std::size_t found = names.size(), count = 0;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] != column_quantity(*this, i) && column_quantity(*this, i) == spec) {
+        found = i;
+        ++count;
+      }
+    if (count == 1) return found;
+    if (count > 1)
+      throw Error(fmt::format("{}: {} columns are named \"{}\" with a unit; choose one by its whole name or its "
+                              "0-based index; columns are: {}",
+                              source, count, spec, describe()));
+  }
   // NAME:INDEX selects a column of a .mat matrix variable (read_column); in a text file a colon is
   // an ordinary character of a header name
   const std::string hint = spec.find(':') != std::string_view::npos && !is_mat_path(source)

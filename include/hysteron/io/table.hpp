@@ -76,7 +76,8 @@ struct Table {
 
   std::size_t num_columns() const noexcept { return columns.size(); }
   std::size_t num_rows() const noexcept;
-  // Index of a column by name, else by 0-based index; empty spec = the only
+  // Index of a column by name, else by its name without a unit ("pressure" for a column
+  // "pressure [kPa]", if only one has it), else by 0-based index; empty spec = the only
   // non-empty column. Throws hysteron::Error listing the columns that exist.
   std::size_t column_index(std::string_view spec) const;
   // The column's values; throws hysteron::Error as column_index() does, and if

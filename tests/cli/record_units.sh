@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# A record's units (docs/data-files.md, "Units"): a header "p [kPa]" or a units row below the
+# header names them. `fit` writes them into the model file ("units"), a --validate-data file
+# whose columns name other units is refused, and so is `evaluate` of a record in units other
+# than the model's (a record in bar scored by a model fitted in kPa: every value 100x off,
+# silently); agreeing units, or a record or model that names none, are not checked. A column is
+# selected by its name without the unit ("p" for "p [kPa]"). The experiments' models record
+# MPa / mm.
+# Usage: bash record_units.sh <hysteron-binary> <source-dir>
+set -uo pipefail
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
+
+# a PI-like record: input in kPa, output in N (the header), the same in bar, and one without units
+$PY - "$T" <<'PYEOF'
+import math, sys
+d = sys.argv[1]
+rows = [300 + 250 * math.sin(k / 80) * (0.5 + 0.5 * math.cos(k / 900)) for k in range(3000)]
+y = []
+z = rows[0]
+for k, p in enumerate(rows):  # one play of width 40 kPa plus a linear term, a little noise
+    z = min(max(z, p - 40), p + 40)
+    y.append(0.8 * p + 0.5 * z + 3 * math.sin(k / 7))
+def write(name, head, scale, units=None):
+    with open(f"{d}/{name}", "w") as f:
+        f.write(head + "\n")
+        if units:
+            f.write(units + "\n")
+        f.writelines(f"{k * 0.001!r},{rows[k] * scale!r},{y[k]!r}\n" for k in range(len(rows)))
+write("kpa.csv", "t [s],p [kPa],F [N]", 1)
+write("row.csv", "t,p,F", 1, "s,kPa,N")
+write("bar.csv", "t [s],p [bar],F [N]", 0.01)
+write("plain.csv", "t,p,F", 1)
+PYEOF
+
+"$BIN" fit --model pi --data "$T/kpa.csv" --input p --output F --time-column t --out "$T/m.json" > /dev/null 2> "$T/err.txt" \
+  || fail "fit on p [kPa] selected as p: exit $?: $(cat "$T/err.txt")"
+$PY -c "import json,sys; u=json.load(open(sys.argv[1])).get('units'); assert u == {'input': 'kPa', 'output': 'N'}, u" \
+  "$T/m.json" || fail "the model file does not record the record's units"
+"$BIN" fit --model pi --data "$T/plain.csv" --input p --output F --out "$T/plain.json" > /dev/null 2>&1 \
+  || fail "fit on a record without units: exit $?"
+$PY -c "import json,sys; assert 'units' not in json.load(open(sys.argv[1]))" "$T/plain.json" \
+  || fail "a model fitted on a record without units records some"
+"$BIN" fit --model pi --data "$T/plain.csv" --input p --output F --input-label "Pressure [psi]" --out "$T/psi.json" \
+  > /dev/null 2>&1 || fail "fit --input-label: exit $?"
+$PY -c "import json,sys; u=json.load(open(sys.argv[1])).get('units'); assert u == {'input': 'psi'}, u" "$T/psi.json" \
+  || fail "fit --input-label [psi]: the model's units"
+
+# evaluate: the same units (header or units row, any case of brackets) pass; other units are refused
+for f in kpa row plain; do
+  "$BIN" evaluate --model "$T/m.json" --data "$T/$f.csv" --input p --output F > /dev/null 2> "$T/err.txt" \
+    || fail "evaluate $f.csv: exit $?: $(cat "$T/err.txt")"
+done
+"$BIN" evaluate --model "$T/m.json" --data "$T/bar.csv" --input p --output F --report "$T/ev.json" > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "evaluate of a record in bar with a model in kPa: exit $rc (expected 1)"
+grep -q "bar.csv: the input column p is in bar, but the model .*m.json's input is in kPa" "$T/err.txt" \
+  || fail "evaluate bar: $(cat "$T/err.txt")"
+[ -e "$T/ev.json" ] && fail "evaluate bar: a report written"
+"$BIN" evaluate --model "$T/plain.json" --data "$T/bar.csv" --input p --output F > /dev/null 2>&1 \
+  || fail "evaluate with a model without units: checked"
+
+# fit --validate-data in other units than the training record's: refused, nothing written
+"$BIN" fit --model pi --data "$T/kpa.csv" --input p --output F --validate-data "$T/bar.csv" --out "$T/v.json" \
+  > /dev/null 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "fit --validate-data in bar: exit $rc (expected 1)"
+grep -q "bar.csv: the input column p is in bar, but the training record .*kpa.csv's input is in kPa" "$T/err.txt" \
+  || fail "fit --validate-data bar: $(cat "$T/err.txt")"
+[ -e "$T/v.json" ] && fail "fit --validate-data bar: a model written"
+"$BIN" fit --model pi --data "$T/kpa.csv" --input p --output F --validate-data "$T/row.csv" --out "$T/v.json" \
+  > /dev/null 2>&1 || fail "fit --validate-data with the same units in a units row: exit $?"
+
+# two columns with the same name and different units: the bare name is ambiguous, named as such
+{ echo "p [kPa],p [bar],F"; echo "1,0.01,2"; echo "2,0.02,3"; } > "$T/two.csv"
+"$BIN" evaluate --model "$T/plain.json" --data "$T/two.csv" --input p --output F > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "an ambiguous bare name: not exit 1"
+grep -q '2 columns are named "p" with a unit' "$T/err.txt" || fail "ambiguous bare name: $(cat "$T/err.txt")"
+
+# the experiments' models record the rig's units
+"$BIN" experiment gpi-pid --model gpi --learning-periods 0 --no-adaptive --out "$T/ex" > /dev/null 2>&1 \
+  || fail "experiment: exit $?"
+for m in model best_model; do
+  $PY -c "import json,sys; u=json.load(open(sys.argv[1])).get('units'); assert u == {'input': 'MPa', 'output': 'mm'}, u" \
+    "$T/ex/$m.json" || fail "experiment's $m.json: units"
+done
+
+[ $fails -eq 0 ] && echo "record_units: all passed"
+exit $fails

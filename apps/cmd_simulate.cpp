@@ -124,8 +124,10 @@ void warn_assumed_dt(const ModelParams& params, const std::string& input, const 
 
 int run_simulate(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
-  const ModelParams params = read_model_source(o.model);
+  ModelUnits units;
+  const ModelParams params = read_model_source(o.model, &units);
   const io::ReadOptions ro = input_options(o.column, "input");
+  check_column_unit(o.input, ro, units.input, o.model, "input");
   Model model(params);
   InputCoverage coverage;  // summed over the blocks: inputs beyond the model's input_limits
   coverage.limits = input_limits(params);
@@ -171,8 +173,10 @@ int run_simulate(const Options& o) {
 
 int run_invert(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
-  const ModelParams params = read_model_source(o.model);
+  ModelUnits units;
+  const ModelParams params = read_model_source(o.model, &units);
   const io::ReadOptions ro = input_options(o.column, "output");
+  check_column_unit(o.input, ro, units.output, o.model, "output");
   InverseOptions opt;
   if (!o.limits.empty()) {
     opt.input_limits = parse_limits(o.limits);

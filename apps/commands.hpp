@@ -16,6 +16,7 @@
 
 #include "hysteron/identify.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
 #include "hysteron/report.hpp"
 
@@ -131,6 +132,10 @@ io::DataDescription describe_data(const DataSelection& sel, const DataColumns& d
 // its scores or outputs would be off by the units' ratio. Silent where either does not say.
 void check_units_agree(const ModelUnits& units, const std::string& source, const DataColumns& rec,
                        const DataSelection& sel, const std::string& file);
+// The same for one column of `file` (read up to its first data row) against the model's unit of
+// the signal `what` ("input" or "output").
+void check_column_unit(const std::string& file, const io::ReadOptions& options, const std::string& model_unit,
+                       const std::string& model_file, std::string_view what);
 // The time unit (s, ms, us) a column's unit text names ("ms", "msec", "[s]", "seconds", ...); "" if
 // it names none; throws hysteron::Error ("`where` is in ...") for a time unit that is not read (min,
 // h, ns).

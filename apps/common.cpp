@@ -86,6 +86,19 @@ void check_units_agree(const ModelUnits& units, const std::string& source, const
   check("output", sel.output, rec.output_unit, units.output);
 }
 
+void check_column_unit(const std::string& file, const io::ReadOptions& options, const std::string& model_unit,
+                       const std::string& model_file, std::string_view what) {
+  // a pipe, FIFO or device cannot be read twice: only a regular file's header is read ahead
+  struct stat st {};
+  if (unit_key(model_unit).empty() || ::stat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  const io::NamedColumn c = io::column_header(file, options);
+  if (unit_key(c.unit).empty() || unit_key(c.unit) == unit_key(model_unit)) return;
+  throw Error(fmt::format("{}: the column {} is in {}, but the model {}'s {} is in {}: every value would be off by "
+                          "the ratio of the two units; convert one of them",
+                          file, c.name.empty() ? options.column_spec : c.name, c.unit,
+                          model_file == "-" ? std::string("<stdin>") : model_file, what, model_unit));
+}
+
 namespace {
 double parse_limit(std::string_view s, std::string_view what) {
   while (!s.empty() && s.front() == ' ') s.remove_prefix(1);

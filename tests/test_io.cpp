@@ -770,6 +770,10 @@ TEST(Table, UnitsRowAndUnitsInTheHeader) {
     EXPECT_EQ(c.values, (std::vector<double>{2, 4}));
     EXPECT_EQ(c.name, "force");
     EXPECT_EQ(c.unit, "N");
+    const io::NamedColumn h = io::column_header(path, spec("force"));
+    EXPECT_TRUE(h.values.empty());
+    EXPECT_EQ(h.name, "force");
+    EXPECT_EQ(h.unit, "N");
     std::vector<double> streamed;
     io::for_each_value(path, spec("pressure"), [&](double v) { streamed.push_back(v); });
     EXPECT_EQ(streamed, (std::vector<double>{1, 3}));

@@ -519,9 +519,15 @@ std::size_t select_column(const Table& t, const ReadOptions& opt) {
   if (opt.column_spec.empty() && !opt.preferred_column.empty()) {
     std::size_t nonempty = 0;
     for (const auto& c : t.columns) nonempty += c.empty() ? 0 : 1;
-    if (nonempty != 1)
+    if (nonempty != 1) {
       for (std::size_t i = 0; i < t.names.size(); ++i)
         if (t.names[i] == opt.preferred_column) return i;
+      // or the one column so named with a unit ("output [mm]")
+      std::size_t found = t.names.size(), count = 0;
+      for (std::size_t i = 0; i < t.names.size(); ++i)
+        if (t.names[i] != column_quantity(t, i) && column_quantity(t, i) == opt.preferred_column) found = i, ++count;
+      if (count == 1) return found;
+    }
   }
   return t.column_index(opt.column_spec);
 }
@@ -707,6 +713,32 @@ NamedColumn read_named_column(const std::string& path, const ReadOptions& option
   c.name = column_quantity(t, i);
   c.unit = column_unit(t, i);
   c.values = std::move(t.columns[i]);
+  return c;
+}
+
+NamedColumn column_header(const std::string& path, const ReadOptions& options) {
+  NamedColumn c;
+  if (is_mat_path(path)) {
+    c.name = options.column_spec;
+    return c;
+  }
+  FileLines lines(path);
+  TextParser parser(path, options);
+  std::string_view line;
+  bool data = false;
+  while (!data && lines.next(line)) data = parser.parse(line);
+  parser.finish();
+  Table probe;
+  probe.source = path;
+  probe.names = parser.names();
+  probe.units = parser.units();
+  probe.columns.resize(parser.num_fields());
+  for (std::size_t k = 0; k < probe.columns.size() && data; ++k)
+    if (parser.present(k)) probe.columns[k].push_back(parser.value(k));
+  const std::size_t i = select_column(probe, options);
+  if (data) check_column_has_data(probe, i);
+  c.name = column_quantity(probe, i);
+  c.unit = column_unit(probe, i);
   return c;
 }
 

@@ -5,7 +5,7 @@
 # than the model's (a record in bar scored by a model fitted in kPa: every value 100x off,
 # silently); agreeing units, or a record or model that names none, are not checked. A column is
 # selected by its name without the unit ("p" for "p [kPa]"). The experiments' models record
-# MPa / mm.
+# MPa / mm. simulate and invert check their input column against the model's units too.
 # Usage: bash record_units.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
@@ -69,6 +69,26 @@ grep -q "bar.csv: the input column p is in bar, but the training record .*kpa.cs
 [ -e "$T/v.json" ] && fail "fit --validate-data bar: a model written"
 "$BIN" fit --model pi --data "$T/kpa.csv" --input p --output F --validate-data "$T/row.csv" --out "$T/v.json" \
   > /dev/null 2>&1 || fail "fit --validate-data with the same units in a units row: exit $?"
+
+# simulate / invert: the input column against the model's input (simulate) or output (invert) unit;
+# without --column the column "input" ("output") is found with its unit; a pipe is not read ahead
+{ echo "t,input [bar],x"; tail -n +2 "$T/plain.csv"; } > "$T/sim_bar.csv"
+{ echo "t,input [KPA],x"; tail -n +2 "$T/plain.csv"; } > "$T/sim_kpa.csv"
+"$BIN" simulate --model "$T/m.json" --input "$T/sim_bar.csv" --output "$T/sim.csv" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "simulate of an input in bar with a model in kPa: not exit 1"
+grep -q "sim_bar.csv: the column input is in bar, but the model .*m.json's input is in kPa" "$T/err.txt" \
+  || fail "simulate bar: $(cat "$T/err.txt")"
+[ -e "$T/sim.csv" ] && fail "simulate bar: an output written"
+"$BIN" simulate --model "$T/m.json" --input "$T/sim_kpa.csv" --output "$T/sim.csv" > /dev/null 2> "$T/err.txt" \
+  || fail "simulate of input [KPA] without --column: exit $?: $(cat "$T/err.txt")"
+[ "$(wc -l < "$T/sim.csv")" -eq 3001 ] || fail "simulate of input [KPA]: $(wc -l < "$T/sim.csv") lines"
+"$BIN" simulate --model "$T/m.json" --input <(cat "$T/sim_bar.csv") --output "$T/simp.csv" > /dev/null 2>&1 \
+  || fail "simulate from a pipe: exit $?"
+{ echo "t,p,output [mm]"; tail -n +2 "$T/plain.csv"; } > "$T/inv_mm.csv"
+"$BIN" invert --model "$T/m.json" --input "$T/inv_mm.csv" --output "$T/inv.csv" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "invert of an output in mm with a model in N: not exit 1"
+grep -q "inv_mm.csv: the column output is in mm, but the model .*m.json's output is in N" "$T/err.txt" \
+  || fail "invert mm: $(cat "$T/err.txt")"
 
 # two columns with the same name and different units: the bare name is ambiguous, named as such
 { echo "p [kPa],p [bar],F"; echo "1,0.01,2"; echo "2,0.02,3"; } > "$T/two.csv"

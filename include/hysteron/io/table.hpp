@@ -111,6 +111,10 @@ struct NamedColumn {
   std::string name, unit;
 };
 NamedColumn read_named_column(const std::string& path, const ReadOptions& options);
+// The name and unit of the column read_column would read (no values): a text file is read up to its
+// first data row (the column is chosen there, as for_each_value chooses it); a .mat file: the spec,
+// no unit. Throws hysteron::Error as read_column does for a missing column or an empty file.
+NamedColumn column_header(const std::string& path, const ReadOptions& options);
 
 // Streams one column (selected as read_column does, preferred_column included) of a text file:
 // on_value(v) for each row in order, in bounded memory (the file is read in chunks). The whole

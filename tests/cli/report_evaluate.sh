@@ -186,13 +186,13 @@ mkdir -p "$T/moved" && cp "$T/track.csv" "$T/moved/track.csv"
 grep -q "Time \[s\]" "$T/in_only.html" 2>/dev/null || fail "report --data: the document's time column not drawn"
 # a file without the document's time column (column 2): refused naming both, with what to give
 cut -d, -f1,2 "$T/track.csv" > "$T/moved/notime.csv"
-"$BIN" report "$T/ev.json" --data "$T/moved/notime.csv" --out "$T/x3.html" 2> "$T/err"
+"$BIN" report "$T/ev.json" --data "$T/moved/notime.csv" --input 1 --output 0 --out "$T/x3.html" 2> "$T/err"
 [ $? -eq 1 ] || fail "--data without the time column: not exit 1"
 for s in "ev.json: data: time column 2" "moved/notime.csv" "--time-column" "--no-time"; do
   grep -q -- "$s" "$T/err" || fail "--data without the time column: no '$s' in: $(cat "$T/err")"
 done
 [ ! -e "$T/x3.html" ] || fail "--data without the time column: a page was written"
-"$BIN" report "$T/ev.json" --data "$T/moved/notime.csv" --no-time --out "$T/notime.html" 2> "$T/err" \
+"$BIN" report "$T/ev.json" --data "$T/moved/notime.csv" --input 1 --output 0 --no-time --out "$T/notime.html" 2> "$T/err" \
   || fail "report --data --no-time: $(cat "$T/err")"
 grep -q "Sample" "$T/notime.html" && ! grep -q "Time \[s\]" "$T/notime.html" \
   || fail "report --no-time: not drawn against the sample index"

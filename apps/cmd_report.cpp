@@ -38,7 +38,7 @@ void add_report(CLI::App& app, Action& action) {
       "Fit and evaluation documents: time column of the data (default: the document's, looked up in --data's file too)");
   cmd->add_option("--time-unit", args->data.time_unit,
                   "Fit and evaluation documents: unit of the time column, s, ms or us (default: the document's for its "
-                  "own column, s for --time-column)")
+                  "own column; for --time-column the unit the file gives it, else s)")
       ->check(CLI::IsMember({"s", "ms", "us"}));
   cmd->add_flag("--no-time", args->data.no_time,
                 "Fit and evaluation documents: draw against the sample index, not the document's time column")

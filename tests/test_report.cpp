@@ -439,6 +439,17 @@ TEST(Report, DataOverrideKeepsTheRestOfTheDocument) {
   const LoadedEvaluation timed = read_evaluation_json(tmp / "ev.json", own_time);
   ASSERT_EQ(timed.data.t.size(), x.size());
   EXPECT_DOUBLE_EQ(timed.data.t[1], 0.002);
+  // ... or one whose header gives its unit (read in it, as fit and evaluate read it)
+  std::vector<double> t_ms(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) t_ms[i] = 2.0 * static_cast<double>(i);
+  io::write_columns(tmp / "moved/header_ms.csv", {"t [ms]", "pressure", "length"}, {t_ms, x, y});
+  FitDataSource header_unit;
+  header_unit.input_file = tmp / "moved/header_ms.csv";
+  header_unit.time_column = "0";
+  const LoadedEvaluation in_ms = read_evaluation_json(tmp / "ev.json", header_unit);
+  ASSERT_EQ(in_ms.data.t.size(), x.size());
+  EXPECT_DOUBLE_EQ(in_ms.data.t[1], 0.002);
+  EXPECT_NE(in_ms.data.source.find("time column 0 in ms"), std::string::npos) << in_ms.data.source;
   FitDataSource no_time = no_such_time;
   no_time.no_time = true;
   EXPECT_TRUE(read_evaluation_json(tmp / "ev.json", no_time).data.t.empty());

@@ -154,7 +154,8 @@ inline constexpr int fit_report_schema = 1;
 // As an override (hysteron report --data/--input/--output/--time-column/--time-unit/--no-time),
 // each non-empty field replaces the document's own and the others are kept: --data FILE replaces
 // the input and output files (output_file empty: FILE), --input only the input column, --output
-// only the output column, --time-column the time column (in time_unit, default s), --time-unit
+// only the output column, --time-column the time column (in time_unit; empty: the unit the file's
+// header gives it, else s, as fit and evaluate read it), --time-unit
 // alone the unit of the document's time column; no_time draws against the sample index. The
 // document's time column is looked up in the file given by --data too, an error if it is not there.
 struct FitDataSource {

@@ -835,7 +835,7 @@ void apply_data_override(io::DataDescription& d, const FitDataSource& o) {
     d.time_unit = "s";
   } else if (!o.time_column.empty()) {
     d.time_column = o.time_column;
-    d.time_unit = o.time_unit.empty() ? "s" : o.time_unit;  // as fit and evaluate read --time-column
+    d.time_unit = o.time_unit;  // empty: the unit the file gives the column, else s (read_time_seconds)
   } else if (!o.time_unit.empty()) {
     d.time_unit = o.time_unit;  // the document's column, in another unit than it records (or s)
   }
@@ -857,13 +857,15 @@ std::string resolve_data_file(const std::string& doc_path, const std::string& fi
   return file;
 }
 
-// One column of a data file a document names; a read error names the document, the column and
-// (through the reader's message) the file.
-std::vector<double> read_document_column(const std::string& doc_path, const std::string& file,
-                                         const std::string& column, std::string_view what,
-                                         std::string_view remedy = {}) {
+// One column of a data file a document names (with its header's name and unit); a read error
+// names the document, the column and (through the reader's message) the file.
+io::NamedColumn read_named_document_column(const std::string& doc_path, const std::string& file,
+                                           const std::string& column, std::string_view what,
+                                           std::string_view remedy = {}) {
   try {
-    return io::read_column(file, column);
+    io::ReadOptions o;
+    o.column_spec = column;
+    return io::read_named_column(file, o);
   } catch (const Error& e) {
     const std::string msg = e.what();
     // the readers' messages start with the file; where one does not, name it
@@ -873,15 +875,29 @@ std::vector<double> read_document_column(const std::string& doc_path, const std:
   }
 }
 
+std::vector<double> read_document_column(const std::string& doc_path, const std::string& file,
+                                         const std::string& column, std::string_view what) {
+  return read_named_document_column(doc_path, file, column, what).values;
+}
+
 // The time column of `file` in seconds: the column in its unit (data.time_unit; "s" in documents
-// without it) times its seconds; n values (the input's).
+// without it; empty, a --time-column without --time-unit: the unit the file gives the column
+// ("t [ms]", a units row), else s; `unit` receives it) times its seconds; n values (the input's).
 std::vector<double> read_time_seconds(const std::string& doc_path, const io::DataDescription& d,
-                                      const std::string& file, std::size_t n) {
-  const double to_s = io::time_unit_seconds(d.time_unit, doc_path + ": data.time_unit");
+                                      const std::string& file, std::size_t n, std::string* unit = nullptr) {
   const std::string_view remedy =
       "; give the file's time column (hysteron report --time-column NAME [--time-unit s|ms|us]) or draw against the "
       "sample index (--no-time)";
-  std::vector<double> t = read_document_column(doc_path, file, d.time_column, "time", remedy);
+  io::NamedColumn c = read_named_document_column(doc_path, file, d.time_column, "time", remedy);
+  const std::string u = !d.time_unit.empty() ? d.time_unit : !c.unit.empty() ? c.unit : std::string("s");
+  const double to_s = io::time_unit_seconds(
+      u, d.time_unit.empty()
+             ? fmt::format("{}: data: time column {} of {} (the unit its header gives; --time-unit s|ms|us to give "
+                           "another)",
+                           doc_path, d.time_column, file)
+             : doc_path + ": data.time_unit");
+  if (unit) *unit = u;
+  std::vector<double> t = std::move(c.values);
   if (t.size() != n)
     throw Error(fmt::format("{}: data: time column {}: {} has {} values and {} input samples{}", doc_path,
                             d.time_column, file, t.size(), n, remedy));
@@ -922,9 +938,10 @@ FitData load_document_record(const std::string& doc_path, const io::DataDescript
   if (out.x.size() != out.y.size())
     throw Error(fmt::format("{}: input and output have different lengths ({} in {}, {} in {})", dw, out.x.size(), xf,
                             out.y.size(), yf));
-  if (!d.time_column.empty()) out.t = read_time_seconds(doc_path, d, xf, out.x.size());
+  io::DataDescription as_read = d;  // the time column's unit as read (--time-column without --time-unit)
+  if (!d.time_column.empty()) out.t = read_time_seconds(doc_path, d, xf, out.x.size(), &as_read.time_unit);
   out.files = {xf, yf};
-  out.source = data_source_line(d);
+  out.source = data_source_line(as_read);
   out.input = {d.input_label, d.input_unit};
   out.output = {d.output_label, d.output_unit};
   out.initial_state = d.initial_state;

@@ -20,6 +20,7 @@ struct ReportArgs {
   std::string out = "report.html";
   report::FitDataSource data;
 };
+using report::FitDataSource;
 }  // namespace
 
 void add_report(CLI::App& app, Action& action) {
@@ -32,12 +33,26 @@ void add_report(CLI::App& app, Action& action) {
   cmd->add_option("--data,-d", args->data.input_file, "Fit and evaluation documents: the data file (.csv or .mat) the fit or evaluation used");
   cmd->add_option("--input,-i", args->data.input_column, "Fit and evaluation documents: input column (name or 0-based index; .mat: NAME:INDEX for a matrix column)");
   cmd->add_option("--output,-y", args->data.output_column, "Fit and evaluation documents: output column (name or 0-based index)");
+  auto* time_column = cmd->add_option(
+      "--time-column", args->data.time_column,
+      "Fit and evaluation documents: time column of the data (default: the document's, looked up in --data's file too)");
+  cmd->add_option("--time-unit", args->data.time_unit,
+                  "Fit and evaluation documents: unit of the time column, s, ms or us (default: the document's for its "
+                  "own column; for --time-column the unit the file gives it, else s)")
+      ->check(CLI::IsMember({"s", "ms", "us"}));
+  cmd->add_flag("--no-time", args->data.no_time,
+                "Fit and evaluation documents: draw against the sample index, not the document's time column")
+      ->excludes(time_column);
   cmd->callback([args, &action] {
     action = [args] {
+      // every override given (each replaces only its own part of the document's data)
       std::string command_line = fmt::format("hysteron report {} --out {}", args->input, args->out);
-      if (!args->data.input_file.empty())
-        command_line += fmt::format(" --data {} --input {} --output {}", args->data.input_file,
-                                    args->data.input_column, args->data.output_column);
+      const FitDataSource& o = args->data;
+      for (const auto& [flag, value] : {std::pair{"--data", o.input_file}, {"--input", o.input_column},
+                                        {"--output", o.output_column}, {"--time-column", o.time_column},
+                                        {"--time-unit", o.time_unit}})
+        if (!value.empty()) command_line += fmt::format(" {} {}", flag, value);
+      if (o.no_time) command_line += " --no-time";
       {
         std::vector<io::NamedPath> inputs{{"INPUT", args->input}, {"--data", args->data.input_file}};
         std::error_code ec;

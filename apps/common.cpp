@@ -488,7 +488,7 @@ report::FitData plot_data(const DataSelection& sel, const DataColumns& d, Initia
   if (d.t) data.t = *d.t;
   data.input = data_axis(sel.input_label, sel.input, d.input_name, d.input_unit);
   data.output = data_axis(sel.output_label, sel.output, d.output_name, d.output_unit);
-  data.source = fmt::format("{} (input column {}, output column {})", sel.file, sel.input, sel.output);
+  data.source = report::data_source_line(describe_data(sel, d, initial, range));  // as `hysteron report` words it
   data.initial_state = initial;
   data.train = range;
   return data;

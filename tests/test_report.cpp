@@ -91,6 +91,15 @@ std::vector<double> measured_output(const ModelParams& model, const std::vector<
 
 const Labels kLabels{"Tracking", {"Time", "s"}, {"Contraction", "mm"}};
 
+// A data file and its columns (hysteron report --data FILE --input IN --output OUT).
+FitDataSource by_hand(const std::string& file, const std::string& in, const std::string& out) {
+  FitDataSource s;
+  s.input_file = file;
+  s.input_column = in;
+  s.output_column = out;
+  return s;
+}
+
 }  // namespace
 
 TEST(Plot, SvgAndPngWithLabelsAndNoTempFilesLeft) {
@@ -228,9 +237,229 @@ TEST(Report, EvaluationJsonAndHtml) {
   std::vector<double> other = y;
   for (double& v : other) v += 0.05;
   io::write_columns(tmp / "other.csv", {"t_ms", "pressure", "length"}, {t_ms, x, other});
-  EXPECT_NE(error_of([&] { write_report_from(tmp / "ev.json", tmp / "x.html", "", {"other.csv", "pressure", "", "length"}); })
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "ev.json", tmp / "x.html", "", by_hand("other.csv", "pressure", "length")); })
                 .find("not the record the evaluation used"),
             std::string::npos);
+  EXPECT_FALSE(fs::exists(tmp / "x.html"));
+}
+
+namespace {
+
+// An evaluation document of `model` on track.csv (columns t_ms, pressure, length; 2 ms samples) in
+// `dir`, scored over `range` as evaluate scores it (censored unless `censor` is false).
+io::EvaluationDocument evaluation_on(const std::string& dir, const ModelParams& model, const std::vector<double>& x,
+                                     const std::vector<double>& y, IndexRange range, bool censor = true) {
+  std::vector<double> t_ms(x.size());
+  for (std::size_t i = 0; i < t_ms.size(); ++i) t_ms[i] = 2.0 * static_cast<double>(i);
+  io::write_columns((fs::path(dir) / "track.csv").string(), {"t_ms", "pressure", "length"}, {t_ms, x, y});
+  io::EvaluationDocument doc;
+  doc.model_file = "m.json";
+  doc.model = model;
+  doc.data.input_file = doc.data.output_file = "track.csv";
+  doc.data.input_column = "pressure";
+  doc.data.output_column = "length";
+  doc.data.time_column = "t_ms";
+  doc.data.time_unit = "ms";
+  doc.data.output_unit = "mm";
+  doc.data.train = range;
+  doc.data.censored = censor;
+  doc.result.file = "track.csv";
+  doc.result.range = range;
+  doc.result.metrics = evaluate_scored(model, x, y, range, InitialState::virgin, censor, &doc.result.censored);
+  doc.result.outside_input_limits = input_coverage(model, x, range).outside;
+  return doc;
+}
+
+// The value cell of a row of the page's "Recorded by the evaluation" table.
+std::string recorded_cell(const std::string& html, const std::string& label) {
+  const std::string key = html_escape(label) + "</td><td>";
+  const auto p = html.find(key);
+  if (p == std::string::npos) return "<no row " + label + ">";
+  const auto b = p + key.size();
+  return html.substr(b, html.find("</td>", b) - b);
+}
+
+}  // namespace
+
+// An evaluation document written before the counts were recorded (no "censored_samples", no
+// "outside_input_limits") says so on the page: unknown, not 0 (it showed 0). Written again, the
+// keys stay absent.
+TEST(Report, EvaluationCountsNotRecordedAreNotZero) {
+  Tmp tmp;
+  const std::vector<double> x = test_input(1500);
+  const ModelParams model = test_gpi();
+  const io::EvaluationDocument doc = evaluation_on(tmp.dir, model, x, measured_output(model, x), {300, 1200});
+  nlohmann::json j = io::to_json(doc);
+  ASSERT_TRUE(j["metrics"].contains("censored_samples"));
+  j["metrics"].erase("censored_samples");
+  j["metrics"].erase("outside_input_limits");
+  io::write_text_file(tmp / "ev.json", j.dump(2));
+  write_report_from(tmp / "ev.json", tmp / "ev.html", "");
+  const std::string html = slurp(tmp / "ev.html");
+  EXPECT_EQ(recorded_cell(html, "censored samples (output at its clip limit, no error)"), "not recorded in this document");
+  EXPECT_EQ(recorded_cell(html, "samples outside the model's input limits"), "not recorded in this document");
+  const io::EvaluationDocument back = io::from_json<io::EvaluationDocument>(j, "ev.json");
+  EXPECT_FALSE(back.result.censored_recorded);
+  EXPECT_FALSE(back.result.outside_input_limits_recorded);
+  EXPECT_FALSE(io::to_json(back)["metrics"].contains("censored_samples"));
+  EXPECT_FALSE(io::to_json(back)["metrics"].contains("outside_input_limits"));
+  // a current document's counts are shown as recorded
+  io::write_text_file(tmp / "now.json", io::to_json(doc).dump(2));
+  write_report_from(tmp / "now.json", tmp / "now.html", "");
+  const std::string now = slurp(tmp / "now.html");
+  EXPECT_EQ(recorded_cell(now, "samples outside the model's input limits"),
+            std::to_string(doc.result.outside_input_limits));
+  EXPECT_EQ(recorded_cell(now, "censored samples (output at its clip limit, no error)"),
+            std::to_string(doc.result.censored));
+}
+
+// A document written before censored scoring (hysteron before 2026-11-26: neither data.censored nor
+// metrics.censored_samples) of a record whose output clips was scored as recorded: it is read as
+// such (it was refused as "not the record the evaluation used") and the page says so. A current
+// document whose metrics are not its scoring's is still refused.
+TEST(Report, EvaluationBeforeCensoredScoringOfAClippingRecord) {
+  Tmp tmp;
+  const std::vector<double> x = test_input(1500);
+  const ModelParams model = test_gpi();
+  std::vector<double> y = measured_output(model, x);
+  std::vector<double> sorted = y;
+  std::sort(sorted.begin(), sorted.end());
+  const double limit = sorted[sorted.size() / 3];  // a sensor's limit at the lower third
+  for (double& v : y) v = std::max(v, limit);
+  const IndexRange range{100, 1400};
+  std::size_t censored = 0;
+  const FitMetrics as_censored = evaluate_censored(model, x, y, range, InitialState::virgin, &censored);
+  const FitMetrics as_recorded = evaluate(model, x, y, range, InitialState::virgin);
+  ASSERT_GT(censored, 0u) << "the record must clip for this test";
+  ASSERT_GT(std::abs(as_censored.rms - as_recorded.rms), 1e-3 * as_recorded.rms);
+
+  const io::EvaluationDocument doc = evaluation_on(tmp.dir, model, x, y, range, /*censor=*/false);
+  nlohmann::json old = io::to_json(doc);  // as hysteron wrote it then: scored as recorded, no keys
+  old["data"].erase("censored");
+  old["metrics"].erase("censored_samples");
+  old["metrics"].erase("outside_input_limits");
+  old["metrics"].erase("output_map");
+  io::write_text_file(tmp / "old.json", old.dump(2));
+  const LoadedEvaluation le = read_evaluation_json(tmp / "old.json");
+  EXPECT_FALSE(le.document.data.censored);
+  EXPECT_FALSE(le.data.censor_clipped);
+  write_report_from(tmp / "old.json", tmp / "old.html", "");
+  const std::string html = slurp(tmp / "old.html");
+  EXPECT_NE(html.find("written before hysteron scored a record whose output clips as censored"), std::string::npos);
+  EXPECT_EQ(recorded_cell(html, "censored samples (output at its clip limit, no error)"), "not recorded in this document");
+
+  // data.censored present (true) with metrics scored as recorded: not what that document says, refused
+  nlohmann::json wrong = old;
+  wrong["data"]["censored"] = true;
+  io::write_text_file(tmp / "wrong.json", wrong.dump(2));
+  EXPECT_NE(error_of([&] { write_report_from(tmp / "wrong.json", tmp / "x.html", ""); })
+                .find("not the record the evaluation used"),
+            std::string::npos);
+  // a document of the hour between (censored_samples, no data.censored) was scored censored
+  const io::EvaluationDocument now = evaluation_on(tmp.dir, model, x, y, range, /*censor=*/true);
+  nlohmann::json between = io::to_json(now);
+  between["data"].erase("censored");
+  io::write_text_file(tmp / "between.json", between.dump(2));
+  EXPECT_TRUE(read_evaluation_json(tmp / "between.json").data.censor_clipped);
+  EXPECT_FALSE(fs::exists(tmp / "x.html"));
+}
+
+// metrics.range missing or empty: said as such, with the file (both said "lies beyond").
+TEST(Report, EvaluationRangeMissingOrEmpty) {
+  Tmp tmp;
+  const std::vector<double> x = test_input(1500);
+  const ModelParams model = test_gpi();
+  const nlohmann::json j = io::to_json(evaluation_on(tmp.dir, model, x, measured_output(model, x), {300, 1200}));
+  nlohmann::json missing = j;
+  missing["metrics"].erase("range");
+  io::write_text_file(tmp / "missing.json", missing.dump());
+  const std::string m = error_of([&] { write_report_from(tmp / "missing.json", tmp / "x.html", ""); });
+  EXPECT_NE(m.find("missing.json: metrics.range is missing"), std::string::npos) << m;
+  EXPECT_EQ(m.find("lies beyond"), std::string::npos) << m;
+  nlohmann::json empty = j;
+  empty["metrics"]["range"] = nlohmann::json::array({700, 700});
+  io::write_text_file(tmp / "empty.json", empty.dump());
+  const std::string e = error_of([&] { write_report_from(tmp / "empty.json", tmp / "x.html", ""); });
+  EXPECT_NE(e.find("empty.json: metrics.range [700, 700) is empty"), std::string::npos) << e;
+  EXPECT_EQ(e.find("lies beyond"), std::string::npos) << e;
+  // beyond the record: still said so
+  nlohmann::json beyond = j;
+  beyond["metrics"]["range"] = nlohmann::json::array({300, 2000});
+  io::write_text_file(tmp / "beyond.json", beyond.dump());
+  const std::string b = error_of([&] { write_report_from(tmp / "beyond.json", tmp / "x.html", ""); });
+  EXPECT_NE(b.find("beyond.json: data: the evaluated range [300, 2000) (metrics.range) lies beyond the 1500 samples"),
+            std::string::npos) << b;
+  EXPECT_FALSE(fs::exists(tmp / "x.html"));
+}
+
+// hysteron report DOC --data/--input/--output/--time-column: each replaces only its own part of the
+// document's data (--input alone cleared the output column); the document's time column is looked
+// up in the file given and, where it is not there, refused with what to do; every read error
+// names the document and the file.
+TEST(Report, DataOverrideKeepsTheRestOfTheDocument) {
+  Tmp tmp;
+  const std::vector<double> x = test_input(1500);
+  const ModelParams model = test_gpi();
+  const std::vector<double> y = measured_output(model, x);
+  io::write_text_file(tmp / "ev.json", io::to_json(evaluation_on(tmp.dir, model, x, y, {300, 1200})).dump(2));
+  fs::create_directory(tmp.dir / "moved");
+  fs::copy_file(tmp / "track.csv", tmp / "moved/track.csv");
+  const std::string moved = tmp / "moved/track.csv";
+  // one column given, the other the document's
+  FitDataSource only_input;
+  only_input.input_file = moved;
+  only_input.input_column = "pressure";
+  EXPECT_EQ(read_evaluation_json(tmp / "ev.json", only_input).data.y, y);
+  FitDataSource only_output;
+  only_output.input_file = moved;
+  only_output.output_column = "length";
+  EXPECT_EQ(read_evaluation_json(tmp / "ev.json", only_output).data.x, x);
+  // the file given, the document's time column (t_ms, in ms) read from it
+  FitDataSource file_only;
+  file_only.input_file = moved;
+  const LoadedEvaluation same = read_evaluation_json(tmp / "ev.json", file_only);
+  ASSERT_EQ(same.data.t.size(), x.size());
+  EXPECT_DOUBLE_EQ(same.data.t[1], 0.002);
+  EXPECT_EQ(same.data.files.front(), moved);
+  // a file without the document's time column: refused, naming both and what to give
+  std::vector<double> t_s(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) t_s[i] = 0.002 * static_cast<double>(i);
+  io::write_columns(tmp / "moved/other_time.csv", {"time", "pressure", "length"}, {t_s, x, y});
+  FitDataSource no_such_time;
+  no_such_time.input_file = tmp / "moved/other_time.csv";
+  const std::string e = error_of([&] { write_report_from(tmp / "ev.json", tmp / "x.html", "", no_such_time); });
+  EXPECT_NE(e.find(tmp / "ev.json"), std::string::npos) << e;
+  EXPECT_NE(e.find("other_time.csv"), std::string::npos) << e;
+  EXPECT_NE(e.find("time column t_ms"), std::string::npos) << e;
+  EXPECT_NE(e.find("--time-column"), std::string::npos) << e;
+  EXPECT_NE(e.find("--no-time"), std::string::npos) << e;
+  // ... its own time column (in s), or none
+  FitDataSource own_time = no_such_time;
+  own_time.time_column = "time";
+  const LoadedEvaluation timed = read_evaluation_json(tmp / "ev.json", own_time);
+  ASSERT_EQ(timed.data.t.size(), x.size());
+  EXPECT_DOUBLE_EQ(timed.data.t[1], 0.002);
+  // ... or one whose header gives its unit (read in it, as fit and evaluate read it)
+  std::vector<double> t_ms(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) t_ms[i] = 2.0 * static_cast<double>(i);
+  io::write_columns(tmp / "moved/header_ms.csv", {"t [ms]", "pressure", "length"}, {t_ms, x, y});
+  FitDataSource header_unit;
+  header_unit.input_file = tmp / "moved/header_ms.csv";
+  header_unit.time_column = "0";
+  const LoadedEvaluation in_ms = read_evaluation_json(tmp / "ev.json", header_unit);
+  ASSERT_EQ(in_ms.data.t.size(), x.size());
+  EXPECT_DOUBLE_EQ(in_ms.data.t[1], 0.002);
+  EXPECT_NE(in_ms.data.source.find("time column 0 in ms"), std::string::npos) << in_ms.data.source;
+  FitDataSource no_time = no_such_time;
+  no_time.no_time = true;
+  EXPECT_TRUE(read_evaluation_json(tmp / "ev.json", no_time).data.t.empty());
+  // a column the file lacks: the document and the file named
+  FitDataSource bad_column = file_only;
+  bad_column.input_column = "nosuch";
+  const std::string c = error_of([&] { (void)read_evaluation_json(tmp / "ev.json", bad_column); });
+  EXPECT_NE(c.find(tmp / "ev.json"), std::string::npos) << c;
+  EXPECT_NE(c.find(moved), std::string::npos) << c;
+  EXPECT_NE(c.find("nosuch"), std::string::npos) << c;
   EXPECT_FALSE(fs::exists(tmp / "x.html"));
 }
 
@@ -251,7 +480,7 @@ TEST(Report, FitJsonRoundTripAndHtml) {
   data.input = {"Pressure", "MPa"};
   data.output = {"Contraction", "mm"};
   data.train = {0, 1000};
-  const nlohmann::json j = fit_report_to_json(f, data, {"data.csv", "pressure", "data.csv", "length"});
+  const nlohmann::json j = fit_report_to_json(f, data, by_hand("data.csv", "pressure", "length"));
   io::write_text_file(tmp / "fit.json", j.dump(2));
   const LoadedFit lf = read_fit_report_json(tmp / "fit.json");  // data path resolved beside the JSON
   EXPECT_EQ(lf.data.x, x);
@@ -290,13 +519,13 @@ TEST(Report, FitJsonRoundTripAndHtml) {
   EXPECT_FALSE(fs::exists(tmp / "x.html"));
   // data given by hand (-d) that are not the fit's record: swapped columns, another record
   const std::string swapped =
-      error_of([&] { write_report_from(tmp / "fit.json", tmp / "x.html", "", {"data.csv", "length", "", "pressure"}); });
+      error_of([&] { write_report_from(tmp / "fit.json", tmp / "x.html", "", by_hand("data.csv", "length", "pressure")); });
   EXPECT_NE(swapped.find("does not reproduce the fit's training RMS"), std::string::npos) << swapped;
   std::vector<double> y2 = y;
   for (double& v : y2) v += 0.05;
   io::write_columns(tmp / "other.csv", {"pressure", "length"}, {x, y2});
   const std::string other =
-      error_of([&] { write_report_from(tmp / "fit.json", tmp / "x.html", "", {"other.csv", "pressure", "", "length"}); });
+      error_of([&] { write_report_from(tmp / "fit.json", tmp / "x.html", "", by_hand("other.csv", "pressure", "length")); });
   EXPECT_NE(other.find("not the record the fit used"), std::string::npos) << other;
   EXPECT_FALSE(fs::exists(tmp / "x.html"));
 }

@@ -151,15 +151,27 @@ ExperimentResult read_experiment_dir(const std::string& dir);
 // Data file paths are stored as given; relative paths are resolved against the
 // JSON file's directory first, then the current directory.
 inline constexpr int fit_report_schema = 1;
+// As an override (hysteron report --data/--input/--output/--time-column/--time-unit/--no-time),
+// each non-empty field replaces the document's own and the others are kept: --data FILE replaces
+// the input and output files (output_file empty: FILE), --input only the input column, --output
+// only the output column, --time-column the time column (in time_unit; empty: the unit the file's
+// header gives it, else s, as fit and evaluate read it), --time-unit
+// alone the unit of the document's time column; no_time draws against the sample index. The
+// document's time column is looked up in the file given by --data too, an error if it is not there.
 struct FitDataSource {
   std::string input_file, input_column, output_file, output_column;
+  std::string time_column, time_unit;
+  bool no_time = false;
 };
+// The "Data:" line of a fit or evaluation page: the files and columns as the document names them
+// (`fit` / `evaluate --report x.html` and `hysteron report x.json` word it alike).
+std::string data_source_line(const io::DataDescription& d);
 nlohmann::json fit_report_to_json(const FitReport& fit, const FitData& data, const FitDataSource& source);
 // Parses such a file and loads its data (and its validation files). Also reads the JSON
 // of older versions of `hysteron fit --report` (no "format", no "data": the data then
-// come from data_override; non-empty data_override.input_file always overrides "data";
-// an empty output_file means the input file). Throws hysteron::Error naming the
-// file (malformed JSON, other format or schema, missing keys, unreadable data).
+// come from data_override; see FitDataSource for how it overrides "data"). Throws
+// hysteron::Error naming the file (malformed JSON, other format or schema, missing keys,
+// unreadable data: then the data file too).
 struct LoadedFit {
   FitReport fit;
   FitData data;

@@ -271,8 +271,8 @@ json to_json(const Evaluation& e) {
   json j = to_json(e.metrics);
   j["file"] = e.file;
   j["range"] = to_json(e.range);
-  j["censored_samples"] = e.censored;
-  j["outside_input_limits"] = e.outside_input_limits;
+  if (e.censored_recorded) j["censored_samples"] = e.censored;
+  if (e.outside_input_limits_recorded) j["outside_input_limits"] = e.outside_input_limits;
   j["output_map"] = {{"gain", number(e.output_map.gain)},
                      {"offset", number(e.output_map.offset)},
                      {"r2", number(e.output_map.r2)},
@@ -288,8 +288,11 @@ void from_json(const json& j, Evaluation& e, std::string_view where) {
   e.file = opt_string(j, "file", where);
   e.range = {};
   if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
-  e.censored = j.contains("censored_samples") ? get_size(j, "censored_samples", where) : 0;
-  e.outside_input_limits = j.contains("outside_input_limits") ? get_size(j, "outside_input_limits", where) : 0;
+  // absent in documents before they were recorded: unknown (not 0)
+  e.censored_recorded = j.contains("censored_samples");
+  e.censored = e.censored_recorded ? get_size(j, "censored_samples", where) : 0;
+  e.outside_input_limits_recorded = j.contains("outside_input_limits");
+  e.outside_input_limits = e.outside_input_limits_recorded ? get_size(j, "outside_input_limits", where) : 0;
   e.output_map = {};
   if (j.contains("output_map")) {  // absent in files before it
     const json& m = j["output_map"];
@@ -382,7 +385,19 @@ void from_json(const json& j, EvaluationDocument& d, std::string_view where) {
   d.model_file = opt_string(j, "model_file", where);
   d.model = model_from_json(need(j, "model", where), key_where(where, "model"));
   from_json(need(j, "data", where), d.data, key_where(where, "data"));
-  from_json(need(j, "metrics", where), d.result, key_where(where, "metrics"));
+  const json& metrics = need(j, "metrics", where);
+  from_json(metrics, d.result, key_where(where, "metrics"));
+  // the evaluated range: every evaluate writes it (the fit document's validations may lack one)
+  if (!metrics.contains("range"))
+    throw Error(fmt::format("{}: metrics.range is missing (the evaluated range [begin, end] the metrics are of)", where));
+  if (d.result.range.begin >= d.result.range.end)
+    throw Error(fmt::format("{}: metrics.range [{}, {}) is empty (the evaluated range [begin, end) the metrics are "
+                            "of holds no sample)",
+                            where, d.result.range.begin, d.result.range.end));
+  // before censored scoring (2026-11-26) evaluate scored a clipping record as recorded and wrote
+  // neither key; from then on both (data.censored a little later: censored_samples alone means
+  // the default, censored)
+  if (!j["data"].contains("censored") && !d.result.censored_recorded) d.data.censored = false;
 }
 
 // ---- experiment ------------------------------------------------------------------

@@ -715,6 +715,9 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   io::write_text_file(html_path, page.finish());
 }
 
+// What the evaluation page shows for a count its document does not record.
+constexpr std::string_view kNotRecorded = "not recorded in this document";
+
 // The evaluation page: the evaluated range's metrics are the document's (doc.result), and it
 // shows what the document records besides (censored samples, samples outside the model's input
 // limits, the output map).
@@ -739,6 +742,10 @@ void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& d
         metric_cells(fmt::format("samples {}..{}{}", range.begin, range.end, yu), recorded.metrics)};
     if (range.begin > 0 || range.end < n) rows.push_back(metric_cells("whole record" + yu, compute_metrics(measured, y)));
     page.table(metric_header, rows);
+    if (!doc.data.censored && !recorded.censored_recorded)
+      page.para("This document was written before hysteron scored a record whose output clips as censored data "
+                "(it records neither data.censored nor metrics.censored_samples): its metrics, and this page's, "
+                "score the record as recorded.");
     if (recorded.censored > 0)
       page.para(fmt::format("The output clips (a sensor's limit): {} samples of the evaluated range at the limit where "
                             "the model predicts beyond it are scored as censored, no error (--uncensored: as "
@@ -746,12 +753,17 @@ void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& d
                             recorded.censored));
   }
   {
-    // the rest of what `hysteron evaluate` recorded (io::Evaluation)
+    // the rest of what `hysteron evaluate` recorded (io::Evaluation); a count a document from
+    // before it was recorded lacks is unknown, not 0
+    auto count_cell = [](bool was_recorded, std::size_t count) {
+      return was_recorded ? fmt::format("{}", count) : std::string(kNotRecorded);
+    };
     const OutputMap& m = recorded.output_map;
     page.raw("<h3>Recorded by the evaluation</h3>\n");
     const std::vector<std::pair<std::string, std::string>> recorded_rows = {
-        {"censored samples (output at its clip limit, no error)", fmt::format("{}", recorded.censored)},
-        {"samples outside the model's input limits", fmt::format("{}", recorded.outside_input_limits)},
+        {"censored samples (output at its clip limit, no error)", count_cell(recorded.censored_recorded, recorded.censored)},
+        {"samples outside the model's input limits",
+         count_cell(recorded.outside_input_limits_recorded, recorded.outside_input_limits)},
         {"output map: gain (record's output against the prediction)", num(m.gain, 6)},
         {"output map: offset" + yu, num(m.offset, 6)},
         {"output map: R² as recorded", num(m.r2, 5)},
@@ -809,13 +821,24 @@ namespace {
 
 // ---- the data a fit or evaluation document names ---------------------------------
 
-// data_override (hysteron report --data/--input/--output) replaces the document's files and columns.
-void apply_data_override(io::DataDescription& d, const FitDataSource& data_override) {
-  if (data_override.input_file.empty()) return;
-  d.input_file = data_override.input_file;
-  d.input_column = data_override.input_column;
-  d.output_file = data_override.output_file.empty() ? data_override.input_file : data_override.output_file;
-  d.output_column = data_override.output_column;
+// data_override (hysteron report --data/--input/--output/--time-column/--time-unit/--no-time):
+// each given field replaces the document's own, the others are kept (FitDataSource).
+void apply_data_override(io::DataDescription& d, const FitDataSource& o) {
+  if (!o.input_file.empty()) {
+    d.input_file = o.input_file;
+    d.output_file = o.output_file.empty() ? o.input_file : o.output_file;
+  }
+  if (!o.input_column.empty()) d.input_column = o.input_column;
+  if (!o.output_column.empty()) d.output_column = o.output_column;
+  if (o.no_time) {
+    d.time_column.clear();
+    d.time_unit = "s";
+  } else if (!o.time_column.empty()) {
+    d.time_column = o.time_column;
+    d.time_unit = o.time_unit;  // empty: the unit the file gives the column, else s (read_time_seconds)
+  } else if (!o.time_unit.empty()) {
+    d.time_unit = o.time_unit;  // the document's column, in another unit than it records (or s)
+  }
 }
 
 // A data file a document names: a relative path beside the document first, then from the
@@ -834,16 +857,71 @@ std::string resolve_data_file(const std::string& doc_path, const std::string& fi
   return file;
 }
 
+// One column of a data file a document names (with its header's name and unit); a read error
+// names the document, the column and (through the reader's message) the file.
+io::NamedColumn read_named_document_column(const std::string& doc_path, const std::string& file,
+                                           const std::string& column, std::string_view what,
+                                           std::string_view remedy = {}) {
+  try {
+    io::ReadOptions o;
+    o.column_spec = column;
+    return io::read_named_column(file, o);
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    // the readers' messages start with the file; where one does not, name it
+    const std::string named = msg.starts_with(file) ? msg : fmt::format("{}: {}", file, msg);
+    throw Error(fmt::format("{}: data: {} column {}: {}{}", doc_path, what, column.empty() ? "(none given)" : column,
+                            named, remedy));
+  }
+}
+
+std::vector<double> read_document_column(const std::string& doc_path, const std::string& file,
+                                         const std::string& column, std::string_view what) {
+  return read_named_document_column(doc_path, file, column, what).values;
+}
+
 // The time column of `file` in seconds: the column in its unit (data.time_unit; "s" in documents
-// without it) times its seconds.
+// without it; empty, a --time-column without --time-unit: the unit the file gives the column
+// ("t [ms]", a units row), else s; `unit` receives it) times its seconds; n values (the input's).
 std::vector<double> read_time_seconds(const std::string& doc_path, const io::DataDescription& d,
-                                      const std::string& file) {
-  const double to_s = io::time_unit_seconds(d.time_unit, doc_path + ": data.time_unit");
-  std::vector<double> t = io::read_column(file, d.time_column);
+                                      const std::string& file, std::size_t n, std::string* unit = nullptr) {
+  const std::string_view remedy =
+      "; give the file's time column (hysteron report --time-column NAME [--time-unit s|ms|us]) or draw against the "
+      "sample index (--no-time)";
+  io::NamedColumn c = read_named_document_column(doc_path, file, d.time_column, "time", remedy);
+  const std::string u = !d.time_unit.empty() ? d.time_unit : !c.unit.empty() ? c.unit : std::string("s");
+  const double to_s = io::time_unit_seconds(
+      u, d.time_unit.empty()
+             ? fmt::format("{}: data: time column {} of {} (the unit its header gives; --time-unit s|ms|us to give "
+                           "another)",
+                           doc_path, d.time_column, file)
+             : doc_path + ": data.time_unit");
+  if (unit) *unit = u;
+  std::vector<double> t = std::move(c.values);
+  if (t.size() != n)
+    throw Error(fmt::format("{}: data: time column {}: {} has {} values and {} input samples{}", doc_path,
+                            d.time_column, file, t.size(), n, remedy));
   if (to_s != 1.0)
     for (double& v : t) v *= to_s;
   return t;
 }
+
+}  // namespace
+
+std::string data_source_line(const io::DataDescription& d) {
+  const std::string& yf = d.output_file.empty() ? d.input_file : d.output_file;
+  auto col = [](const std::string& c) { return c.empty() ? std::string("-") : c; };
+  const std::string time = d.time_column.empty()
+                               ? std::string()
+                               : fmt::format(", time column {} in {}", d.time_column, d.time_unit);
+  if (yf == d.input_file)
+    return fmt::format("{} (input column {}, output column {}{})", d.input_file, col(d.input_column),
+                       col(d.output_column), time);
+  return fmt::format("input {} (column {}{}), output {} (column {})", d.input_file, col(d.input_column), time, yf,
+                     col(d.output_column));
+}
+
+namespace {
 
 // The record a document's "data" object names (input, output, time in s), its axes, initial state,
 // range (data.train) and censoring, read again. Throws naming the document and the file.
@@ -855,18 +933,15 @@ FitData load_document_record(const std::string& doc_path, const io::DataDescript
   const std::string xf = resolve_data_file(doc_path, d.input_file);
   const std::string yf = resolve_data_file(doc_path, d.output_file.empty() ? d.input_file : d.output_file);
   FitData out;
-  out.x = io::read_column(xf, d.input_column);
-  out.y = io::read_column(yf, d.output_column);
+  out.x = read_document_column(doc_path, xf, d.input_column, "input");
+  out.y = read_document_column(doc_path, yf, d.output_column, "output");
   if (out.x.size() != out.y.size())
-    throw Error(fmt::format("{}: input and output have different lengths ({} and {})", dw, out.x.size(), out.y.size()));
-  if (!d.time_column.empty()) {
-    out.t = read_time_seconds(doc_path, d, xf);
-    if (out.t.size() != out.x.size()) out.t.clear();
-  }
+    throw Error(fmt::format("{}: input and output have different lengths ({} in {}, {} in {})", dw, out.x.size(), xf,
+                            out.y.size(), yf));
+  io::DataDescription as_read = d;  // the time column's unit as read (--time-column without --time-unit)
+  if (!d.time_column.empty()) out.t = read_time_seconds(doc_path, d, xf, out.x.size(), &as_read.time_unit);
   out.files = {xf, yf};
-  out.source = fmt::format("input {} (column {}), output {} (column {})", xf,
-                           d.input_column.empty() ? "-" : d.input_column, yf,
-                           d.output_column.empty() ? "-" : d.output_column);
+  out.source = data_source_line(as_read);
   out.input = {d.input_label, d.input_unit};
   out.output = {d.output_label, d.output_unit};
   out.initial_state = d.initial_state;
@@ -943,9 +1018,9 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
     if (!e.file.empty()) {
       const std::string vf = resolve_data_file(path, e.file);
       out.data.files.push_back(vf);
-      v.x = io::read_column(vf, d.input_column);
-      v.y = io::read_column(vf, d.output_column);
-      if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf);
+      v.x = read_document_column(path, vf, d.input_column, "validation input");
+      v.y = read_document_column(path, vf, d.output_column, "validation output");
+      if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf, v.x.size());
     }
     out.data.validation.push_back(std::move(v));
   }
@@ -959,22 +1034,27 @@ LoadedEvaluation read_evaluation_document(const json& j, const std::string& path
   apply_data_override(d, data_override);
   out.data = load_document_record(path, d);
   // The data must be the record evaluated (as for a fit: -d by hand, or a file changed since):
-  // the model scored on it again gives the document's metrics.
-  const io::Evaluation& r = out.document.result;
+  // the model scored on it again gives the document's metrics. (from_json refuses a missing or
+  // empty metrics.range; an end of null is the record's end.)
+  io::Evaluation& r = out.document.result;
   const std::string dw = path + ": data";
-  if (r.range.end > out.data.x.size() || r.range.begin >= r.range.end)
-    throw Error(fmt::format("{}: the evaluated range [{}, {}) lies beyond the {} samples of {}: not the record the "
-                            "evaluation used",
-                            dw, r.range.begin, r.range.end, out.data.x.size(), out.data.source));
+  const std::size_t n = out.data.x.size();
+  if (r.range.end == IndexRange::npos) r.range.end = n;
+  if (r.range.end > n || r.range.begin >= r.range.end)
+    throw Error(fmt::format("{}: the evaluated range [{}, {}) (metrics.range) lies beyond the {} samples of {}: not "
+                            "the record the evaluation used",
+                            dw, r.range.begin, r.range.end, n, out.data.source));
   const FitMetrics again =
       evaluate_scored(out.document.model, out.data.x, out.data.y, r.range, d.initial_state, d.censored, nullptr);
   const double tol = 1e-6;
   if (!(std::abs(again.rms - r.metrics.rms) <= tol * std::max(r.metrics.rms, again.rms) + 1e-300) ||
       again.n != r.metrics.n)
-    throw Error(fmt::format("{}: {} does not reproduce the evaluation's RMS ({:.6g} over {} samples; the document "
-                            "records {:.6g} over {}): not the record the evaluation used; give the data file and "
-                            "columns it read (--data, --input, --output)",
-                            dw, out.data.source, again.rms, again.n, r.metrics.rms, r.metrics.n));
+    throw Error(fmt::format("{}: {} does not reproduce the evaluation's RMS ({:.6g} over {} samples, scored {}; the "
+                            "document records {:.6g} over {}): not the record the evaluation used; give the data "
+                            "file and columns it read (--data, --input, --output)",
+                            dw, out.data.source, again.rms, again.n,
+                            d.censored ? "censored where the output clips" : "as recorded", r.metrics.rms,
+                            r.metrics.n));
   out.data.train = r.range;  // the page's range label: the range the metrics are of
   return out;
 }

@@ -6,6 +6,10 @@
 # column in ms (data.time_unit) draws the page the one in s draws, as does a document without
 # time_unit (s). Errors: an unknown "format" is named; a missing data file is named, exit 1,
 # nothing written and an existing --out left as it was; another record given by --data is refused.
+# evaluate's own page words its "Data:" line as report's; --data with --input or --output alone
+# keeps the other column, the document's time column is looked up in --data's file (refused,
+# naming both, where it is not there; --time-column / --time-unit / --no-time), and a read
+# error of the data given names the document and the file.
 # Usage: bash report_evaluate.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
@@ -163,6 +167,51 @@ PYEOF
 [ $? -eq 1 ] || fail "schema \"1\": not exit 1: $(cat "$T/err")"
 grep -q 'schema.json: unsupported evaluation schema "1"' "$T/err" || fail "schema \"1\": $(cat "$T/err")"
 [ ! -e "$T/x2.html" ] || fail "schema \"1\": a page was written"
+
+# 4. the page's "Data:" line: `evaluate --report x.html` and `report ev.json` word it alike
+(cd "$T" && "$BIN" evaluate --model m.json --data track.csv --input 1 --output 0 --time-column 2 --range "$RANGE" \
+  --input-label "Pressure [kPa]" --output-label "Force [N]" --report direct.html > /dev/null 2> "$T/err") \
+  || fail "evaluate --report direct.html: $(cat "$T/err")"
+dataline() { grep -o '<p>Data: [^<]*</p>' "$1"; }
+[ -n "$(dataline "$T/direct.html")" ] || fail "Data line: none on evaluate's page"
+[ "$(dataline "$T/direct.html")" = "$(dataline "$T/ev.html")" ] \
+  || fail "Data line: evaluate's '$(dataline "$T/direct.html")', report's '$(dataline "$T/ev.html")'"
+
+# 5. report --data/--input/--output/--time-column/--no-time: each replaces only its own part
+mkdir -p "$T/moved" && cp "$T/track.csv" "$T/moved/track.csv"
+"$BIN" report "$T/ev.json" --data "$T/moved/track.csv" --input 1 --out "$T/in_only.html" 2> "$T/err" \
+  || fail "report --data --input (no --output): $(cat "$T/err")"
+"$BIN" report "$T/ev.json" --data "$T/moved/track.csv" --output 0 --out "$T/out_only.html" 2> "$T/err" \
+  || fail "report --data --output (no --input): $(cat "$T/err")"
+grep -q "Time \[s\]" "$T/in_only.html" 2>/dev/null || fail "report --data: the document's time column not drawn"
+# a file without the document's time column (column 2): refused naming both, with what to give
+cut -d, -f1,2 "$T/track.csv" > "$T/moved/notime.csv"
+"$BIN" report "$T/ev.json" --data "$T/moved/notime.csv" --input 1 --output 0 --out "$T/x3.html" 2> "$T/err"
+[ $? -eq 1 ] || fail "--data without the time column: not exit 1"
+for s in "ev.json: data: time column 2" "moved/notime.csv" "--time-column" "--no-time"; do
+  grep -q -- "$s" "$T/err" || fail "--data without the time column: no '$s' in: $(cat "$T/err")"
+done
+[ ! -e "$T/x3.html" ] || fail "--data without the time column: a page was written"
+"$BIN" report "$T/ev.json" --data "$T/moved/notime.csv" --input 1 --output 0 --no-time --out "$T/notime.html" 2> "$T/err" \
+  || fail "report --data --no-time: $(cat "$T/err")"
+grep -q "Sample" "$T/notime.html" && ! grep -q "Time \[s\]" "$T/notime.html" \
+  || fail "report --no-time: not drawn against the sample index"
+# its own time column, given in ms
+$PY - "$T/track.csv" "$T/moved/swapped.csv" <<'PYEOF'
+import sys
+with open(sys.argv[2], "w") as f:
+    for r in open(sys.argv[1]).read().split("\n"):
+        if r:
+            c = r.split(",")
+            f.write(",".join([repr(float(c[2]) * 1000.0), c[1], c[0]]) + "\n")
+PYEOF
+"$BIN" report "$T/ev.json" --data "$T/moved/swapped.csv" --input 1 --output 2 --time-column 0 --time-unit ms \
+  --out "$T/swapped.html" 2> "$T/err" || fail "report --time-column --time-unit: $(cat "$T/err")"
+[ "$(ticks "$T/swapped.html")" = "$(ticks "$T/ev.html")" ] || fail "report --time-column 0 --time-unit ms: other axes"
+# a read error of the data given names the document and the file
+"$BIN" report "$T/ev.json" --data "$T/moved/track.csv" --input 7 --out "$T/x3.html" 2> "$T/err"
+[ $? -eq 1 ] || fail "--input 7: not exit 1"
+grep -q "ev.json: data: input column 7: .*moved/track.csv" "$T/err" || fail "--input 7: $(cat "$T/err")"
 
 [ $fails -eq 0 ] && echo "report_evaluate: all passed"
 exit $fails

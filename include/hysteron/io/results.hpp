@@ -69,6 +69,10 @@ struct Evaluation {
   std::size_t censored = 0;  // clipped samples of the range scored as censored (evaluate_censored)
   std::size_t outside_input_limits = 0;  // samples of the range whose input is outside the model's (input_coverage)
   OutputMap output_map;  // the record's output against the prediction (output_map; NaN in files before it)
+  // false where a document predates the count ("censored_samples" / "outside_input_limits" absent):
+  // the count is unknown, not 0 (to_json then leaves the key out again)
+  bool censored_recorded = true;
+  bool outside_input_limits_recorded = true;
 };
 
 // The document of `hysteron fit --report FILE.json` and `--json`.
@@ -84,7 +88,9 @@ struct FitDocument {
   std::string model_file;
 };
 
-// The document of `hysteron evaluate --json / --report FILE.json`.
+// The document of `hysteron evaluate --json / --report FILE.json`. from_json of a document written
+// before censored scoring (hysteron before 2026-11-26: neither "data.censored" nor
+// "metrics.censored_samples") sets data.censored = false: it was scored as recorded.
 struct EvaluationDocument {
   std::string model_file;
   ModelParams model;

@@ -136,10 +136,7 @@ void check_units_agree(const ModelUnits& units, const std::string& source, const
 // the signal `what` ("input" or "output").
 void check_column_unit(const std::string& file, const io::ReadOptions& options, const std::string& model_unit,
                        const std::string& model_file, std::string_view what);
-// The time unit (s, ms, us) a column's unit text names ("ms", "msec", "[s]", "seconds", ...); "" if
-// it names none; throws hysteron::Error ("`where` is in ...") for a time unit that is not read (min,
-// h, ns).
-std::string time_unit_of(const std::string& unit, const std::string& where);
+
 report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range);
 
 }  // namespace hysteron::cli

@@ -248,24 +248,6 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
   sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");
 }
 
-std::string time_unit_of(const std::string& unit, const std::string& where) {
-  std::string u = trim(unit);
-  if (u.size() >= 2 && ((u.front() == '[' && u.back() == ']') || (u.front() == '(' && u.back() == ')')))
-    u = trim(std::string_view(u).substr(1, u.size() - 2));
-  if (u == "\xC2\xB5s" || u == "\xCE\xBCs") return "us";  // micro sign, Greek mu
-  std::transform(u.begin(), u.end(), u.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  const auto any = [&](std::initializer_list<std::string_view> names) {
-    return std::find(names.begin(), names.end(), u) != names.end();
-  };
-  if (any({"s", "sec", "secs", "second", "seconds"})) return "s";
-  if (any({"ms", "msec", "msecs", "millisecond", "milliseconds"})) return "ms";
-  if (any({"us", "usec", "usecs", "microsecond", "microseconds"})) return "us";
-  if (any({"ns", "nsec", "nanosecond", "nanoseconds", "min", "mins", "minute", "minutes", "h", "hr", "hrs", "hour",
-           "hours", "d", "day", "days"}))
-    throw Error(fmt::format("{} is in \"{}\", a time unit that is not read: give the column in s, ms or us", where,
-                            trim(unit)));
-  return std::string();
-}
 
 namespace {
 io::ReadOptions column_options(const std::string& spec) {
@@ -296,7 +278,7 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
       throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));
     // the unit the file gives the time column ("t [ms]", a units row): a record in ms read as
     // seconds would run rate-pi 1000 times slow and put ranges in seconds 1000 times off
-    const std::string named = time_unit_of(t.unit, fmt::format("{}: the time column {}", file, sel.time_column));
+    const std::string named = io::time_unit_named(t.unit, fmt::format("{}: the time column {}", file, sel.time_column));
     if (!sel.time_unit.empty() && !named.empty() && named != sel.time_unit)
       throw Error(fmt::format("{}: --time-unit {} but the file gives the time column {} the unit \"{}\": one of "
                               "them is wrong (drop --time-unit if the file is right)",

@@ -498,7 +498,7 @@ TEST(Results, ExperimentControlPeriod) {
   EXPECT_EQ(io::from_json<ExperimentResult>(j, "old").control_period_s, 5e-4);
   for (const char* v : {"compensated", "baseline"}) j[v].erase("controller");
   EXPECT_EQ(io::from_json<ExperimentResult>(j, "older").control_period_s, 1e-3);
-  for (const nlohmann::json bad : {nlohmann::json(0.0), nlohmann::json(-1e-3), nlohmann::json(nullptr)}) {
+  for (const nlohmann::json& bad : {nlohmann::json(0.0), nlohmann::json(-1e-3), nlohmann::json(nullptr)}) {
     j["control_period_s"] = bad;
     try {
       (void)io::from_json<ExperimentResult>(j, "f.json");

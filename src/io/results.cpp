@@ -221,6 +221,31 @@ double time_unit_seconds(std::string_view unit, std::string_view where) {
   throw Error(fmt::format("{}: unknown time unit \"{}\" (expected s, ms or us)", where, unit));
 }
 
+std::string time_unit_named(std::string_view unit, std::string_view where) {
+  const auto trimmed = [](std::string_view v) {
+    while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
+    while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
+    return v;
+  };
+  std::string_view v = trimmed(unit);
+  if (v.size() >= 2 && ((v.front() == '[' && v.back() == ']') || (v.front() == '(' && v.back() == ')')))
+    v = trimmed(v.substr(1, v.size() - 2));
+  if (v == "\xC2\xB5s" || v == "\xCE\xBCs") return "us";  // micro sign, Greek mu
+  std::string u(v);
+  std::transform(u.begin(), u.end(), u.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  const auto any = [&](std::initializer_list<std::string_view> names) {
+    return std::find(names.begin(), names.end(), u) != names.end();
+  };
+  if (any({"s", "sec", "secs", "second", "seconds"})) return "s";
+  if (any({"ms", "msec", "msecs", "millisecond", "milliseconds"})) return "ms";
+  if (any({"us", "usec", "usecs", "microsecond", "microseconds"})) return "us";
+  if (any({"ns", "nsec", "nanosecond", "nanoseconds", "min", "mins", "minute", "minutes", "h", "hr", "hrs", "hour",
+           "hours", "d", "day", "days"}))
+    throw Error(fmt::format("{} is in \"{}\", a time unit that is not read: give the column in s, ms or us", where,
+                            trimmed(unit)));
+  return std::string();
+}
+
 json to_json(const DataDescription& d) {
   json j = {{"input", {{"file", d.input_file}, {"column", d.input_column}}},
             {"output", {{"file", d.output_file.empty() ? d.input_file : d.output_file}, {"column", d.output_column}}},

@@ -889,13 +889,12 @@ std::vector<double> read_time_seconds(const std::string& doc_path, const io::Dat
       "; give the file's time column (hysteron report --time-column NAME [--time-unit s|ms|us]) or draw against the "
       "sample index (--no-time)";
   io::NamedColumn c = read_named_document_column(doc_path, file, d.time_column, "time", remedy);
-  const std::string u = !d.time_unit.empty() ? d.time_unit : !c.unit.empty() ? c.unit : std::string("s");
-  const double to_s = io::time_unit_seconds(
-      u, d.time_unit.empty()
-             ? fmt::format("{}: data: time column {} of {} (the unit its header gives; --time-unit s|ms|us to give "
-                           "another)",
-                           doc_path, d.time_column, file)
-             : doc_path + ": data.time_unit");
+  std::string u = d.time_unit;
+  if (u.empty()) {  // as fit and evaluate read it (io::time_unit_named)
+    u = io::time_unit_named(c.unit, fmt::format("{}: data: the time column {} of {}", doc_path, d.time_column, file));
+    if (u.empty()) u = "s";
+  }
+  const double to_s = io::time_unit_seconds(u, doc_path + ": data.time_unit");
   if (unit) *unit = u;
   std::vector<double> t = std::move(c.values);
   if (t.size() != n)

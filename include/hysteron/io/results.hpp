@@ -60,6 +60,10 @@ struct DataDescription {
 // Seconds in one unit of a time column: "s" 1, "ms" 1e-3, "us" 1e-6; throws hysteron::Error naming
 // `where` and the unit for any other.
 double time_unit_seconds(std::string_view unit, std::string_view where);
+// The time unit (s, ms or us) a column's unit text names ("ms", "msec", "[s]", "seconds", "µs", ...;
+// io::column_unit gives the text); "" if it names none; throws hysteron::Error ("`where` is in
+// ...") for a time unit that is not read (min, h, ns).
+std::string time_unit_named(std::string_view unit, std::string_view where);
 
 // A model checked on (a range of) a record.
 struct Evaluation {

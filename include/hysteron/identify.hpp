@@ -364,8 +364,8 @@ struct FitReport {
   double initial_cost = 0.0;  // 0.5 sum r^2 of the best start, before LM
   double final_cost = 0.0;    // 0.5 sum r^2 after LM (with Huber: 0.5 sum rho(r^2))
   int iterations = 0;         // LM iterations of the best start
-  int total_iterations = 0;   // over all starts
-  int num_starts = 0;         // starts refined by LM
+  int total_iterations = 0;   // over all starts (mpi-asym: of both orientations of the input)
+  int num_starts = 0;         // starts refined by LM (mpi-asym: in both orientations)
   double time_s = 0.0;        // wall time of fit()
   ModelParams model;          // the fitted model (input_limits = training input range)
   std::vector<FitParameter> parameters;

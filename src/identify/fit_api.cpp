@@ -724,7 +724,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   for (std::size_t k = 0; k < x.size(); ++k) xm[k] = -x[k];
   // Both run concurrently (their starts on threads of their own as num_threads allows); a
   // progress callback is still called one call at a time, the mirrored fit's starts numbered
-  // after the plain fit's.
+  // after the plain fit's (the report's num_starts and total_iterations count both).
   std::mutex progress_mutex;
   FitReport runs[2];
   detail::parallel_for(2, o.num_threads, [&](std::size_t j) {
@@ -743,7 +743,8 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
                              (!has_model(plain.status) || mirrored.final_cost < plain.final_cost);
   FitReport& rep = take_mirrored ? mirrored : plain;
   const FitReport& other = take_mirrored ? plain : mirrored;
-  rep.total_iterations += other.total_iterations;
+  rep.total_iterations += other.total_iterations;  // every LM iteration and start that ran
+  rep.num_starts += other.num_starts;
   if (has_model(plain.status) && has_model(mirrored.status))
     rep.message += fmt::format(
         "; {} (training cost {:.6g}, the {} orientation's {:.6g})",

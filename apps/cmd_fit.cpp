@@ -6,7 +6,7 @@
 //                                      of a range in the same unit)
 //                --out model.json|- [--report fit.json|fit.html] [--json] [--huber DELTA] [--seed S]
 //                [--starts K] [--threads T] [--max-iterations M] [--min-slope S] [--relaxed]
-//                [--free-weights] [--force] [--input-label "Pressure [kPa]"] [--output-label "..."]
+//                [--free-weights] [--no-mirror] [--force] [--input-label "Pressure [kPa]"] [--output-label "..."]
 //
 // --out - prints only the model JSON on stdout (the summary goes to stderr); --json prints
 // exactly one JSON document on stdout (the report, as --report FILE.json writes it). The
@@ -49,7 +49,7 @@ struct FitCliOptions {
   int n = 10, dead_zones = 4, starts = 2, threads = 0, max_iterations = 200, censor_passes = FitOptions{}.censor_passes;
   double huber = 0.0, min_slope = FitOptions{}.min_slope, sample_time = 0.0;
   unsigned seed = 0;
-  bool json = false, relaxed = false, force = false, free_weights = false;
+  bool json = false, relaxed = false, force = false, free_weights = false, no_mirror = false;
 };
 
 std::vector<std::string> model_names() {
@@ -113,6 +113,7 @@ int run_fit(const FitCliOptions& c) {
   o.seed = c.seed;
   o.initial_state = c.relaxed ? InitialState::relaxed : InitialState::virgin;
   o.gpi_free_weights = c.free_weights;
+  o.mpi_asym_mirror = !c.no_mirror;
   o.sample_time = c.sample_time;
   o.censor_passes = c.censor_passes;
   std::vector<std::string> time_warnings;
@@ -392,6 +393,9 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_flag("--relaxed", c->relaxed, "start from rest at the first sample instead of the virgin state");
   sub->add_flag("--free-weights", c->free_weights,
                 "gpi: the free-weight variant (tanh envelope, q and n free weights) instead of Eq. 8's exponential law");
+  sub->add_flag("--no-mirror", c->no_mirror,
+                "mpi-asym: fit the input as recorded only (by default the mirrored input is fitted too and the "
+                "orientation with the lower training cost kept)");
   sub->add_flag("--force", c->force, "write the model even if the fit did not converge or is a poor fit");
   sub->callback([c, &action] { action = [c] { return run_fit(*c); }; });
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Fits every model kind (and auto) on the measured records of ../shared/data, on the
 records as published and transformed as a user's sensor may differ (an offset, a flipped
-sign, absolute instead of gauge pressure), and prints the README's real-data tables.
+sign of the output or of the input, absolute instead of gauge pressure), and prints the README's real-data tables.
 Validation RMS in % of the measured span; the reference PI is bench/reference_pi.py
 (numpy + scipy nnls, independent of the C++ code).
   Festo muscle: fit on test8, validate on test9 and test10 (input pressure col 1 [kPa], output force col 0 [N]).
@@ -29,7 +29,8 @@ if "--runs" in args:
     runs = int(args[k + 1])
     del args[k:k + 2]
 cli = args[0] if args else os.path.join(root, "build", "hysteron")
-data = os.path.join(root, "..", "shared", "data")
+# ../shared/data next to the checkout, or $HYSTERON_SHARED_DATA (a worktree elsewhere; as the tests)
+data = os.environ.get("HYSTERON_SHARED_DATA") or os.path.join(root, "..", "shared", "data")
 if not os.path.isdir(data):
     print(f"real_data_table: {data} not found; skipped")
     sys.exit(0)
@@ -44,6 +45,7 @@ piezo_dt = ["--sample-time", "0.0002"]
 records = [
     ("Festo test8 -> test9 / test10", festo, 1, 0, None, None, [], festo_dt),
     ("  same, force negated, absolute pressure", festo, 1, 0, lambda x: x + 101.325, lambda y: -y, [], festo_dt),
+    ("  same, pressure negated", festo, 1, 0, lambda x: -x, None, [], festo_dt),
     ("piezo 21286:33143 -> 33143:50001", [piezo], 3, 2, None, None, ["--train", "21286:33143", "--validate", "33143:50001"], piezo_dt),
     ("  same, sensor offset -100 um, x1000 (nm)", [piezo], 3, 2, None, lambda y: 1000 * (y - 100), ["--train", "21286:33143", "--validate", "33143:50001"], piezo_dt),
 ]

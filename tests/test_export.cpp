@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -77,6 +78,19 @@ std::vector<Case> all_cases() {
                  "descending": {"envelope": "tanh", "c": [1.1, 0.9, -0.1, 0.05]},
                  "input_origin": 0.2, "input_scale": 0.3, "output_offset": 5, "output_gain": -2,
                  "input_limits": [-0.3, 0.8]})", -0.5, 1.0, none},
+      // mirrored inputs (input_scale < 0): the descending bound takes priority where the envelopes
+      // cross; the limits swap in model coordinates
+      {"mpi_asym_mirrored", R"({"model": "mpi-asym", "q": 0.5, "r": [0.1, 0.2, 0.35], "p": [0.3, 0.2, 0.1],
+                 "ascending": {"envelope": "tanh", "c": [2, 0.5, -0.5, 1]},
+                 "descending": {"envelope": "tanh", "c": [1.8, 0.45, -0.3, 1]},
+                 "input_origin": 0.2, "input_scale": -0.3, "output_offset": 5, "output_gain": -2,
+                 "input_limits": [-0.3, 0.8]})", -0.5, 1.0, none},
+      {"gpi_tanh_mirrored_decreasing", R"({"model": "gpi", "envelope": "tanh", "c": [1.3, 1.7, -0.4, 0.1], "q": 0.6,
+                 "n": 9, "rho": 0.4, "tau": 2.0, "alpha": 0.06, "input_origin": 8.18, "input_scale": -616.12,
+                 "output_offset": -40.0, "output_gain": 25.5, "input_limits": [-600, 8.18]})", -700.0, 50.0, none},
+      {"pi_mirrored_unbounded", R"({"model": "pi", "q": 0.09, "r": [28.8, 57.6, 80, 130], "p": [0.72, -0.04, 0.1, 0.2],
+                 "input_origin": 8.18, "input_scale": -1, "output_offset": -40.0, "output_gain": -1})", -200.0, 650.0,
+                 Limits{-150.0, std::numeric_limits<double>::infinity()}},
       {"mpi_asym_equal_envelopes", R"({"model": "mpi-asym", "q": 0.6, "r": [0.05, 0.15], "p": [0.2, 0.1],
                  "ascending": {"envelope": "tanh", "c": [1, 1.3, 0.05, 0.01]},
                  "descending": {"envelope": "tanh", "c": [1, 1.3, 0.05, 0.01]}, "input_limits": [-2, 2]})", -2.5, 2.5, none},
@@ -235,7 +249,7 @@ Script make_run(const Case& c, std::size_t samples, unsigned seed) {
       // a desired output of 1e300 or more is beyond any output of these models: the limit in its direction
       const Limits& lim = inv.limits();
       if (std::abs(yd) >= 1e300 && std::isfinite(lim.lo) && std::isfinite(lim.hi)) {
-        const bool up = (yd > 0) == (model.structure().units.output_gain > 0);
+        const bool up = (yd > 0) == model.structure().units.increasing();
         EXPECT_EQ(xi, up ? lim.hi : lim.lo) << c.name << ": y = " << yd;
         EXPECT_TRUE(inv.saturated()) << c.name << ": y = " << yd;
       }

@@ -227,6 +227,34 @@ TEST(Kinds, InverseSaturatesAtTheLimits) {
   }
 }
 
+// A mirrored input (input_scale < 0): the kernels' numerical inverse brackets the input between the
+// raw limits, which swap in model coordinates; it inverts the model and saturates at the limit in the
+// output's direction.
+TEST(Kinds, MirroredInputInvertsAndSaturates) {
+  std::mt19937_64 rng(7);
+  for (ModelParams mp : random_models(rng)) {
+    SCOPED_TRACE(std::string(model_name(mp)));
+    UnitsMap& um = units_map(mp);
+    um.input_scale = -um.input_scale;
+    ASSERT_TRUE(um.mirrored());
+    Model fwd(mp);
+    Inverse inv(mp);
+    EXPECT_EQ(inv.limits().lo, -1.5);
+    EXPECT_EQ(inv.limits().hi, 1.5);
+    for (double xk : random_walk(rng, 2000, -1.2, 1.4)) {
+      const double xi = inv.step(fwd.step(xk));
+      ASSERT_NEAR(xi, xk, 1e-9);
+      ASSERT_FALSE(inv.saturated());
+    }
+    const bool inc = um.increasing();
+    EXPECT_EQ(inc, um.output_gain < 0);
+    EXPECT_EQ(inv.step(inc ? 1e6 : -1e6), inv.limits().hi);
+    EXPECT_TRUE(inv.saturated());
+    EXPECT_EQ(inv.step(inc ? -1e6 : 1e6), inv.limits().lo);
+    EXPECT_TRUE(inv.saturated());
+  }
+}
+
 TEST(Kinds, StepsDoNotAllocate) {
   std::mt19937_64 rng(6);
   for (const ModelParams& mp : random_models(rng)) {

@@ -249,6 +249,12 @@ struct FitOptions {
   // (c0..c3), q and n free weights p_i on thresholds r_i = alpha i (alpha from the
   // start grid, then fixed); the partial sums q + p_1 + ... + p_i stay > 0 (Eq. 11).
   bool gpi_free_weights = false;
+  // mpi-asym only: also fit the record with its input mirrored (negated) and keep the
+  // orientation with the lower training cost (ties: the plain one). The kind's play lets the
+  // ascending bound win where the envelopes cross by more than 2 r; the mirrored model
+  // (input_scale < 0 in its units map) lets the descending bound win, so the fit is
+  // equivariant to the input's sign. false: the plain orientation only (half the time).
+  bool mpi_asym_mirror = true;
   // Compute standard errors (ceres::Covariance).
   bool compute_covariance = true;
   // Minimum of q and of the partial sums q + p_1 + ... + p_i (relative to the
@@ -348,7 +354,7 @@ struct InverseCheck {
   // (what an inverse feedforward would command), and the same of the measured input.
   double max_jump = 0.0;
   double max_input_step = 0.0;
-  bool increasing = true;  // false: the model decreases (negative output gain)
+  bool increasing = true;  // false: the model decreases (output_gain / input_scale < 0)
 };
 
 struct FitReport {
@@ -358,8 +364,8 @@ struct FitReport {
   double initial_cost = 0.0;  // 0.5 sum r^2 of the best start, before LM
   double final_cost = 0.0;    // 0.5 sum r^2 after LM (with Huber: 0.5 sum rho(r^2))
   int iterations = 0;         // LM iterations of the best start
-  int total_iterations = 0;   // over all starts
-  int num_starts = 0;         // starts refined by LM
+  int total_iterations = 0;   // over all starts (mpi-asym: of both orientations of the input)
+  int num_starts = 0;         // starts refined by LM (mpi-asym: in both orientations)
   double time_s = 0.0;        // wall time of fit()
   ModelParams model;          // the fitted model (input_limits = training input range)
   std::vector<FitParameter> parameters;

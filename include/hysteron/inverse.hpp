@@ -72,8 +72,8 @@ class Inverse {
   // docs/models.md).
   void reset(const ModelState& forward_state);
 
-  // One sample: the (raw) input that makes the model output y_desired. A model with a
-  // negative output_gain is decreasing; its inverse is exact all the same. Never
+  // One sample: the (raw) input that makes the model output y_desired. A model with
+  // output_gain / input_scale < 0 is decreasing; its inverse is exact all the same. Never
   // allocates, never throws; a non-finite y_desired holds the last input and
   // is counted in faults(). A finite y_desired beyond what the model can output inside
   // the limits saturates at the limit in its direction (however large).

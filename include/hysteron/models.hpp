@@ -62,18 +62,35 @@ inline constexpr std::size_t max_operators = 100000;
 //   y   = output_offset + output_gain * M(x_m)          raw output
 // where M is the kind's model below (its virgin state is "at rest at x = input_origin").
 // fit() writes it so that one fit is equivariant to offsets, scales and the output's
-// sign: a negative output_gain gives a decreasing model. Identity by default (old model
-// files have none); input_limits stay in raw input units.
+// sign: a negative output_gain gives a decreasing model. A negative input_scale mirrors the
+// input (M sees it negated): the model increases with x when output_gain / input_scale > 0.
+// fit() writes one for an mpi-asym whose descending bound takes priority where the envelopes
+// cross (the mirror image of the kind's form). Identity by default (old model files have
+// none); input_limits stay in raw input units.
 struct UnitsMap {
   double input_origin = 0.0;
-  double input_scale = 1.0;  // > 0
+  double input_scale = 1.0;  // != 0; < 0: mirrored input
   double output_offset = 0.0;
   double output_gain = 1.0;  // != 0
   bool identity() const noexcept {
     return input_origin == 0.0 && input_scale == 1.0 && output_offset == 0.0 && output_gain == 1.0;
   }
+  bool mirrored() const noexcept { return input_scale < 0; }
+  // True when the raw output increases with the raw input (M increasing).
+  bool increasing() const noexcept { return (output_gain > 0) == (input_scale > 0); }
   double to_model(double x) const noexcept { return (x - input_origin) / input_scale; }
   double from_model(double xm) const noexcept { return input_origin + input_scale * xm; }
+  // Raw input limits in model coordinates (lo and hi swap when mirrored; infinite stay infinite) and back.
+  Limits to_model(const Limits& raw) const noexcept {
+    const double a = std::isinf(raw.lo) ? (mirrored() ? -raw.lo : raw.lo) : to_model(raw.lo);
+    const double b = std::isinf(raw.hi) ? (mirrored() ? -raw.hi : raw.hi) : to_model(raw.hi);
+    return mirrored() ? Limits{b, a} : Limits{a, b};
+  }
+  Limits from_model(const Limits& m) const noexcept {
+    const double a = std::isinf(m.lo) ? (mirrored() ? -m.lo : m.lo) : from_model(m.lo);
+    const double b = std::isinf(m.hi) ? (mirrored() ? -m.hi : m.hi) : from_model(m.hi);
+    return mirrored() ? Limits{b, a} : Limits{a, b};
+  }
   double output(double m) const noexcept { return output_offset + output_gain * m; }
   double model_output(double y) const noexcept { return (y - output_offset) / output_gain; }
   bool operator==(const UnitsMap&) const = default;
@@ -231,13 +248,14 @@ const Limits& input_limits(const ModelParams& params) noexcept;
 const UnitsMap& units_map(const ModelParams& params) noexcept;
 UnitsMap& units_map(ModelParams& params) noexcept;
 
-// The same model with input_scale = 1 and output_gain = +-1: the scales are absorbed
-// into the kind's own parameters, so that they read in the user's units
+// The same model with input_scale = +-1 and output_gain = +-1: the scales' magnitudes are
+// absorbed into the kind's own parameters, so that they read in the user's units
 //   identity envelope (pi, mpi-deadzone):  r -> a r,  q, p -> (b / a) q, p,  z -> b z
 //   other envelopes (gpi, mpi-asym):       gamma(x) -> b gamma(x / a),  r -> b r,
 //                                          alpha -> b alpha,  tau -> tau / b
-// with a = input_scale, b = |output_gain| (an identity envelope of gpi/mpi-asym becomes
-// affine). input_origin and output_offset stay. Exact up to rounding.
+// with a = |input_scale|, b = |output_gain| (an identity envelope of gpi/mpi-asym becomes
+// affine); the signs stay (a mirrored model stays mirrored). input_origin and output_offset
+// stay. Exact up to rounding.
 ModelParams absorb_scales(const ModelParams& params);
 
 // The canonical structure every model reduces to (see the top of this file),

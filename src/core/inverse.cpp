@@ -55,10 +55,10 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   lim_.hi = std::isinf(options.input_limits.hi) ? ml.hi : options.input_limits.hi;
   if (std::isnan(lim_.lo) || std::isnan(lim_.hi) || !(lim_.lo < lim_.hi))
     throw Error(detail::format("{}: inverse input limits must satisfy lo < hi, got [{}, {}]", name, lim_.lo, lim_.hi));
-  // From here on lim_ is in model coordinates (input_scale > 0 keeps the order).
+  // From here on lim_ is in model coordinates (a mirrored input, input_scale < 0, swaps lo and hi).
   const UnitsMap& um = s_.units;
   const Limits raw = lim_;
-  lim_ = Limits{std::isinf(lim_.lo) ? lim_.lo : um.to_model(lim_.lo), std::isinf(lim_.hi) ? lim_.hi : um.to_model(lim_.hi)};
+  lim_ = um.to_model(lim_);
 
   if (kernel_) {
     if (const std::string why = kernel_.get()->invertibility(); !why.empty())
@@ -67,8 +67,8 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
       throw Error(detail::format("{}: the numerical inverse needs finite input_limits [lo, hi] to bracket the input (a "
                                  "fitted model has them: its training input range)",
                                  name));
-    lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : um.from_model(lim_.lo),
-                      std::isfinite(raw.hi) ? raw.hi : um.from_model(lim_.hi)};
+    const Limits back = um.from_model(lim_);
+    lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : back.lo, std::isfinite(raw.hi) ? raw.hi : back.hi};
     reset();
     return;
   }
@@ -151,8 +151,8 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
     env_hi_ = envelopes_at(lim_.hi);
   }
   // Raw limits: the caller's where given (a command never leaves them by rounding).
-  lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : std::isinf(lim_.lo) ? lim_.lo : um.from_model(lim_.lo),
-                    std::isfinite(raw.hi) ? raw.hi : std::isinf(lim_.hi) ? lim_.hi : um.from_model(lim_.hi)};
+  const Limits back = um.from_model(lim_);  // infinite limits stay infinite
+  lim_raw_ = Limits{std::isfinite(raw.lo) ? raw.lo : back.lo, std::isfinite(raw.hi) ? raw.hi : back.hi};
   reset();
 }
 
@@ -325,7 +325,8 @@ double Inverse::step(double y) noexcept {
   }
   const double ym = s_.model_output(y);
   const double xm = kernel_ ? step_kernel(ym) : s_.asymmetric ? step_numerical(ym) : step_analytical(ym);
-  if (saturated_) return xm >= lim_.hi ? lim_raw_.hi : lim_raw_.lo;  // the limit itself, not a rounding of it
+  // the limit itself, not a rounding of it (model hi is raw lo when mirrored)
+  if (saturated_) return (xm >= lim_.hi) != s_.units.mirrored() ? lim_raw_.hi : lim_raw_.lo;
   return std::clamp(s_.units.from_model(xm), lim_raw_.lo, lim_raw_.hi);
 }
 

@@ -64,7 +64,8 @@ void check_units(const UnitsMap& u, std::string_view model) {
   require_finite(u.output_offset, model, "output_offset");
   require_finite(u.input_scale, model, "input_scale");
   require_finite(u.output_gain, model, "output_gain");
-  if (!(u.input_scale > 0)) throw Error(detail::format("{}: input_scale must be > 0, got {}", model, u.input_scale));
+  if (u.input_scale == 0.0)
+    throw Error(detail::format("{}: input_scale must be != 0 (< 0 mirrors the input), got 0", model));
   if (u.output_gain == 0.0) throw Error(detail::format("{}: output_gain must be != 0 (the output would be constant)", model));
 }
 
@@ -285,10 +286,10 @@ struct AbsorbVisitor {
 
 ModelParams absorb_scales(const ModelParams& params) {
   const UnitsMap u = units_map(params);
-  const double a = u.input_scale, b = std::abs(u.output_gain);
+  const double a = std::abs(u.input_scale), b = std::abs(u.output_gain);
   if (a == 1.0 && b == 1.0) return params;
   ModelParams out = std::visit(AbsorbVisitor{a, b}, params);
-  units_map(out).input_scale = 1.0;
+  units_map(out).input_scale = u.input_scale < 0 ? -1.0 : 1.0;
   units_map(out).output_gain = u.output_gain < 0 ? -1.0 : 1.0;
   return out;
 }

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <exception>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <thread>
 
@@ -77,12 +78,11 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
                            IndexRange tr) {
   InverseCheck c;
   const UnitsMap& um = units_map(model);
-  c.increasing = um.output_gain > 0;
-  const Limits& lim = input_limits(model);
-  const double mslope = has_pi_structure(model)
-                            ? min_model_slope(canonical_structure(model), um.to_model(lim.lo), um.to_model(lim.hi))
-                            : detail::make_kernel(model)->min_slope();
-  const double slope = mslope * std::abs(um.output_gain) / um.input_scale;
+  c.increasing = um.increasing();
+  const Limits lim = um.to_model(input_limits(model));  // model coordinates (swapped when mirrored)
+  const double mslope = has_pi_structure(model) ? min_model_slope(canonical_structure(model), lim.lo, lim.hi)
+                                                : detail::make_kernel(model)->min_slope();
+  const double slope = mslope * std::abs(um.output_gain / um.input_scale);
   c.max_slope = slope > 0 ? 1.0 / slope : std::numeric_limits<double>::infinity();
   for (std::size_t k = tr.begin + 1; k < tr.end; ++k) c.max_input_step = std::max(c.max_input_step, std::abs(x[k] - x[k - 1]));
   try {
@@ -401,7 +401,13 @@ std::string refusal(const TrainingRanges& r) {
 }
 
 FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
-                  Clock::time_point t0) {
+                  Clock::time_point t0);
+
+constexpr std::string_view kDecreasingWarning = "the output decreases with the input: the model has a negative output_gain";
+
+// One orientation of the record: the input as it is.
+FitReport fit_oriented(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
+                       Clock::time_point t0) {
   // Normalisation: x_m = (x - x[0]) / span(x), y_m = sign (y - y[0]) / span(y) over the
   // training range, sign that of the least-squares line of y on x. Every constant here
   // moves with an offset, a scale or a sign flip of the data, so the fit is equivariant.
@@ -507,7 +513,7 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   rep.final_cost *= sy * sy;
   add_units_parameters(rep);
   rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
-  if (sign < 0) rep.warnings.push_back("the output decreases with the input: the model has a negative output_gain");
+  if (sign < 0) rep.warnings.emplace_back(kDecreasingWarning);
   const auto turns = reversals(x, tr.begin, tr.end, sx);
   // the loops' orientation, over whole cycles: from the first reversal to the last one of the
   // same kind, sum y dx (normalised, y rising with x) closed by the chord back to the start is
@@ -688,6 +694,69 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   }
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return rep;
+}
+
+// The mirrored model of a fit on the negated input -x: the same model of x with the units
+// map's input negated, M((x - (-o)) / (-s)), and its input limits [-hi, -lo].
+void mirror_report(FitReport& rep) {
+  UnitsMap& u = units_map(rep.model);
+  u.input_origin = -u.input_origin;
+  u.input_scale = -u.input_scale;
+  std::visit([](auto& m) { m.input_limits = Limits{-m.input_limits.hi, -m.input_limits.lo}; }, rep.model);
+  for (auto& p : rep.parameters)
+    if (p.name == "input_origin" || p.name == "input_scale") p.value = -p.value;
+  rep.inverse.increasing = !rep.inverse.increasing;  // max_slope, max_jump: magnitudes, unchanged
+  // the output's direction is the record's, not the negated input's
+  const auto it = std::find(rep.warnings.begin(), rep.warnings.end(), kDecreasingWarning);
+  if (it != rep.warnings.end()) rep.warnings.erase(it);
+  else
+    rep.warnings.insert(rep.warnings.begin(), "the output decreases with the input: the model's output_gain and "
+                                              "input_scale have opposite signs");
+}
+
+// fit_oriented, and for mpi-asym (FitOptions::mpi_asym_mirror) also on the mirrored input:
+// the orientation with the lower training cost is kept (ties: the plain one), so that the fit
+// of a record with its input negated is the mirror image of this one.
+FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
+                  Clock::time_point t0) {
+  if (o.model != FitModel::mpi_asym || !o.mpi_asym_mirror) return fit_oriented(x, y, o, tr, t0);
+  std::vector<double> xm(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) xm[k] = -x[k];
+  // Both run concurrently (their starts on threads of their own as num_threads allows); a
+  // progress callback is still called one call at a time, the mirrored fit's starts numbered
+  // after the plain fit's (the report's num_starts and total_iterations count both).
+  std::mutex progress_mutex;
+  FitReport runs[2];
+  detail::parallel_for(2, o.num_threads, [&](std::size_t j) {
+    FitOptions oj = o;
+    if (o.progress)
+      oj.progress = [&, j](int start, int iteration, double cost) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        o.progress(start + static_cast<int>(j) * std::max(1, o.num_starts), iteration, cost);
+      };
+    runs[j] = fit_oriented(j == 0 ? x : std::span<const double>(xm), y, oj, tr, t0);
+  });
+  FitReport& plain = runs[0];
+  FitReport& mirrored = runs[1];
+  if (has_model(mirrored.status)) mirror_report(mirrored);
+  const bool take_mirrored = has_model(mirrored.status) &&
+                             (!has_model(plain.status) || mirrored.final_cost < plain.final_cost);
+  FitReport& rep = take_mirrored ? mirrored : plain;
+  const FitReport& other = take_mirrored ? plain : mirrored;
+  rep.total_iterations += other.total_iterations;  // every LM iteration and start that ran
+  rep.num_starts += other.num_starts;
+  if (has_model(plain.status) && has_model(mirrored.status))
+    rep.message += fmt::format(
+        "; {} (training cost {:.6g}, the {} orientation's {:.6g})",
+        take_mirrored ? "mirrored: the descending bound takes priority where the envelopes cross (the input is "
+                        "negated in the model: input_scale < 0)"
+                      : "plain: the ascending bound takes priority where the envelopes cross",
+        rep.final_cost, take_mirrored ? "plain" : "mirrored", other.final_cost);
+  else if (take_mirrored)
+    rep.message += "; mirrored: the descending bound takes priority where the envelopes cross (the plain orientation "
+                   "gave no model: " + plain.message + ")";
+  rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return std::move(rep);
 }
 
 FitReport fit_auto(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,

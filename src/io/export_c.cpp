@@ -74,7 +74,7 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
   Limits lim{std::isinf(user_limits.lo) ? ml.lo : user_limits.lo, std::isinf(user_limits.hi) ? ml.hi : user_limits.hi};
   const UnitsMap& um = s.units;
   const Limits raw = lim;
-  lim = Limits{std::isinf(lim.lo) ? lim.lo : um.to_model(lim.lo), std::isinf(lim.hi) ? lim.hi : um.to_model(lim.hi)};
+  lim = um.to_model(lim);  // model coordinates (a mirrored input swaps lo and hi)
   const std::size_t n = s.r.size();
   if (!s.asymmetric) {
     b.qi = 1.0 / s.q;
@@ -110,8 +110,8 @@ Baked bake(const ModelParams& params, const Limits& user_limits) {
     b.u_hi = std::isinf(lim.hi) ? kInf : b.asc.value(lim.hi);
   }
   b.lim = lim;
-  b.lim_raw = Limits{std::isfinite(raw.lo) ? raw.lo : std::isinf(lim.lo) ? lim.lo : um.from_model(lim.lo),
-                     std::isfinite(raw.hi) ? raw.hi : std::isinf(lim.hi) ? lim.hi : um.from_model(lim.hi)};
+  const Limits back = um.from_model(lim);
+  b.lim_raw = Limits{std::isfinite(raw.lo) ? raw.lo : back.lo, std::isfinite(raw.hi) ? raw.hi : back.hi};
   if (!(b.lim_raw == inverse.limits()))
     throw std::logic_error(fmt::format("export: the inverse's limits [{}, {}] differ from the library's [{}, {}]",
                                        b.lim_raw.lo, b.lim_raw.hi, inverse.limits().lo, inverse.limits().hi));
@@ -480,7 +480,7 @@ int $P_model_reset_relaxed($P_model *m, double x0);
  * output could overflow (|u| or |y_i| above $P_u_max). */
 int $P_model_reset_state($P_model *m, const double *y, double u);
 /* One sample: raw input x -> raw output (Model::step). A non-finite x, or one whose
- * output could overflow (|x - input_origin| / input_scale > $P_x_max), is ignored
+ * output could overflow (|x - input_origin| / |input_scale| > $P_x_max), is ignored
  * (counted in faults) and the last output returned. */
 double $P_model_step($P_model *m, double x);
 

@@ -213,7 +213,8 @@ UnitsMap units_of(const Reader& r) {
   u.input_scale = r.number_or("input_scale", 1.0);
   u.output_offset = r.number_or("output_offset", 0.0);
   u.output_gain = r.number_or("output_gain", 1.0);
-  if (!(u.input_scale > 0)) r.fail("input_scale", fmt::format("expected a number > 0, got {}", u.input_scale));
+  if (u.input_scale == 0.0)
+    r.fail("input_scale", "expected a non-zero number (< 0 mirrors the input; 0 would divide by zero)");
   if (u.output_gain == 0.0) r.fail("output_gain", "expected a non-zero number (0 makes the output constant)");
   return u;
 }

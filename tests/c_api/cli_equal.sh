@@ -17,7 +17,7 @@ with open(sys.argv[1], "w") as f:
         f.write(f"{x!r}\n")
 PYEOF
 
-for m in gpi pi dz asym; do
+for m in gpi pi dz asym asym_mirrored; do
   "$BIN" simulate --model "$DIR/$m.json" --input "$T/x.csv" --column x --output "$T/y_$m.csv"
   # desired outputs, one per line, for the C program
   $PY -c 'import csv,sys; [print(r["output"]) for r in csv.DictReader(open(sys.argv[1]))]' "$T/y_$m.csv" > "$T/y_$m.txt"

@@ -4,7 +4,7 @@ function test_cli_invert(cli, c_api_dir)
 % relative), for every model kind, with and without --limits; hysteron_simulate the
 % same as `hysteron simulate`. CLI: the hysteron executable (skipped if absent).
 % C_API_DIR (optional): the model files the C ABI's tests use (tests/c_api/{gpi,pi,dz,
-% asym}.json): the same comparison on them, with the input of tests/c_api/cli_equal.sh,
+% asym,asym_mirrored}.json): the same comparison on them, with the input of tests/c_api/cli_equal.sh,
 % so that the C program, the ctypes script and Octave are checked on the same files.
   if nargin < 1 || isempty(cli) || ~exist(cli, 'file')
     fprintf('SKIP: the hysteron command line (%s) is not built\n', cli);
@@ -25,6 +25,10 @@ function test_cli_invert(cli, c_api_dir)
                       'alpha', 2, 'input_limits', [0 0.6]);
   models.pi_decreasing = struct('model', 'pi', 'q', 0.09, 'r', [0.05 0.1 0.2], 'p', [0.72 -0.04 0.1], ...
                                 'input_origin', 0.05, 'input_scale', 2, 'output_offset', -40, 'output_gain', -1);
+  models.mpi_asym_mirrored = struct('model', 'mpi-asym', 'q', 1, 'r', [0.05 0.1 0.2], 'p', [0.3 0.2 0.1], ...
+                                    'ascending', struct('envelope', 'tanh', 'c', [1 2 0 0]), ...
+                                    'descending', struct('envelope', 'affine', 'c', [0.8 0]), ...
+                                    'input_origin', 0.6, 'input_scale', -1, 'output_gain', -1, 'input_limits', [0 0.6]);
   models.mpi_deadzone = struct('model', 'mpi-deadzone', 'q', 0.8, 'r', [0.1 0.2], 'p', [0.3 0.1], ...
                                'g0', 1, 'z', [-0.5 0.25], 'g', [0.2 0.3]);
   models.mpi_asym = struct('model', 'mpi-asym', 'q', 1, 'r', [0.05 0.1 0.2], 'p', [0.3 0.2 0.1], ...
@@ -39,7 +43,7 @@ function test_cli_invert(cli, c_api_dir)
   fails = fails + compare_all(cli, dir, names, files, x, limits);
   % the C ABI tests' model files, on their input signal
   if nargin >= 2 && ~isempty(c_api_dir)
-    shared = {'gpi', 'pi', 'dz', 'asym'};
+    shared = {'gpi', 'pi', 'dz', 'asym', 'asym_mirrored'};
     shared_files = cellfun(@(n) fullfile(c_api_dir, [n '.json']), shared, 'UniformOutput', false);
     present = cellfun(@(f) exist(f, 'file') == 2, shared_files);
     if any(present)

@@ -37,7 +37,7 @@ void bind_identify(py::module_& m) {
          const IntArg& num_starts, const IntArg& seed, const IntArg& max_iterations, bool fix_scale, bool free_weights,
          bool compute_covariance, const PathArg& report_arg, std::pair<std::string, std::string> input_axis,
          std::pair<std::string, std::string> output_axis, const IntArg& num_threads, const IntArg& stall_iterations,
-         double stall_tolerance, double min_slope, double sample_time, const IntArg& censor_passes) {
+         double stall_tolerance, double min_slope, double sample_time, const IntArg& censor_passes, bool mirror) {
         const std::string report = path_arg(report_arg, "fit: report");
         io::check_output_file({"fit: report", report});  // before the fit, not after it
         FitOptions o;
@@ -59,6 +59,7 @@ void bind_identify(py::module_& m) {
         o.min_slope = min_slope;
         o.sample_time = sample_time;
         o.censor_passes = int_arg(censor_passes, "fit: censor_passes");
+        o.mpi_asym_mirror = mirror;
         // copies: another thread may change the caller's arrays while the fit runs without the GIL
         std::vector<double> xs = as_vector(x, "fit: x"), ys = as_vector(y, "fit: y");
         FitReport r;
@@ -88,7 +89,7 @@ void bind_identify(py::module_& m) {
       py::arg("output_axis") = std::make_pair(std::string("Output"), std::string()), py::arg("num_threads") = 0,
       py::arg("stall_iterations") = 25, py::arg("stall_tolerance") = 1e-5,
       py::arg("min_slope") = FitOptions{}.min_slope, py::arg("sample_time") = 0.0,
-      py::arg("censor_passes") = FitOptions{}.censor_passes,
+      py::arg("censor_passes") = FitOptions{}.censor_passes, py::arg("mirror") = FitOptions{}.mpi_asym_mirror,
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
 
 x, y: input and measured output (1-D arrays of equal length).
@@ -103,6 +104,8 @@ range (bounds the inverse's slope).
 sample_time: seconds between samples (rate-pi only; 0 = unknown, then rate-pi is refused).
 censor_passes: an output that clips (a sensor's limit, detected from the record) is fitted as
 censored data over this many refits (0: fitted to the limit as recorded).
+mirror: mpi-asym: also fit the input negated (the descending bound taking priority where the
+envelopes cross) and keep the orientation with the lower training cost (docs/models.md).
 train: (begin, end) sample range entering the cost (None = all; end None = to the end).
 num_starts: initial guesses refined by LM, on up to num_threads threads (0: one per
 hardware thread, 1: sequential; the result does not depend on it). max_iterations:

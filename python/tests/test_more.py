@@ -54,8 +54,11 @@ def test_fit_threads_and_stationarity_options():
     par = hysteron.fit(x, y, model="mpi-asym", num_starts=2, num_threads=2)
     assert par["final_cost"] == seq["final_cost"] and par["total_iterations"] == seq["total_iterations"]
     # any decrease passes a huge tolerance: each start ends after stall_iterations iterations
-    r = hysteron.fit(x, y, model="mpi-asym", num_starts=1, stall_iterations=3, stall_tolerance=1e300)
+    r = hysteron.fit(x, y, model="mpi-asym", num_starts=1, stall_iterations=3, stall_tolerance=1e300, mirror=False)
     assert r["status"] == "converged" and r["total_iterations"] == 3 and "stationary" in r["message"]
+    # mpi-asym fits both orientations of the input by default: 3 iterations in each
+    r = hysteron.fit(x, y, model="mpi-asym", num_starts=1, stall_iterations=3, stall_tolerance=1e300)
+    assert r["status"] == "converged" and r["total_iterations"] == 6 and r["num_starts"] == 2
     bad = hysteron.fit(x, y, stall_tolerance=-1.0)
     assert bad["status"] == "invalid_input" and "stall_tolerance" in bad["message"]
 

@@ -148,14 +148,18 @@ int run_fit(const FitCliOptions& c) {
   // as ms gives 1 us give or take the stamps' rounding
   if (rate && o.sample_time > 0.0 && (o.sample_time > 0.1 || o.sample_time <= 1e-6 * (1 + kSampleTimeTolerance)))
     time_warnings.push_back(fmt::format(
-        "{}: rate-pi's sample time is {:.6g} s ({}), {}: is the time column in {}? see --time-unit "
-        "(--sample-time and the model's dt are in seconds)",
+        "{}: rate-pi's sample time is {:.6g} s ({}), {}: is the time column in {}? {} (--sample-time and the model's "
+        "dt are in seconds)",
         c.sel.file, o.sample_time,
         c.sample_time > 0 ? std::string("--sample-time")
                           : fmt::format("the mean step of the time column {} in {}", c.sel.time_column,
                                         rec.time_unit),
         o.sample_time > 0.1 ? "above 0.1 s" : "1 us or below",
-        o.sample_time > 0.1 ? (rec.time_unit == "s" ? "ms" : "another unit") : "s or another unit"));
+        o.sample_time > 0.1 ? (rec.time_unit == "s" ? "ms" : "another unit") : "s or another unit",
+        c.sample_time == 0 && rec.time_unit_from_file
+            ? fmt::format("the file gives it the unit {}: correct its header or units row if that is wrong",
+                          rec.time_unit)
+            : std::string("see --time-unit")));
   // a range in seconds looks its ends up in the time column: it must not go backwards
   const auto in_seconds = [](const std::string& r) { return r.find('s') != std::string::npos; };
   if (time && (in_seconds(c.train) || (c.validate_data.empty() && in_seconds(c.validate))))

@@ -85,6 +85,7 @@ struct DataColumns {
   std::vector<double> x, y;
   std::optional<std::vector<double>> t;
   std::string time_unit = "s";  // the time column's unit as read: --time-unit, else its header's, else s
+  bool time_unit_from_file = false;  // the file names it (header or units row)
   // the columns' header names and units ("pressure", "kPa"; from a units row or "pressure [kPa]")
   std::string input_name, input_unit, output_name, output_unit;
 };

@@ -63,40 +63,38 @@ ModelParams read_model_source(const std::string& path, ModelUnits* units) {
 }
 
 namespace {
-// A unit as compared: no blanks, brackets or case ("[kPa]" and "kpa" agree).
-std::string unit_key(std::string_view u) {
-  std::string k = trim(u);
-  if (k.size() >= 2 && ((k.front() == '[' && k.back() == ']') || (k.front() == '(' && k.back() == ')')))
-    k = trim(std::string_view(k).substr(1, k.size() - 2));
-  std::transform(k.begin(), k.end(), k.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  return k;
+// A record's column and a model (or the training record) naming two different units of one kind.
+void refuse_other_units(const std::string& file, std::string_view column_what, const std::string& column,
+                        const std::string& in_file, const std::string& source, std::string_view what,
+                        const std::string& in_source) {
+  const std::string a = io::canonical_unit(in_file), b = io::canonical_unit(in_source);
+  if (a.empty() || b.empty() || a == b) return;  // free text, or the same unit, is not refused
+  throw Error(fmt::format("{}: the {}column {} is in {}, but {}'s {} is in {}: every value would be off by the ratio "
+                          "of the two units; convert one of them",
+                          file, column_what, column, in_file, source, what, in_source));
 }
 }  // namespace
 
 void check_units_agree(const ModelUnits& units, const std::string& source, const DataColumns& rec,
                        const DataSelection& sel, const std::string& file) {
-  const auto check = [&](std::string_view what, const std::string& column, const std::string& in_file,
-                         const std::string& in_source) {
-    if (unit_key(in_file).empty() || unit_key(in_source).empty() || unit_key(in_file) == unit_key(in_source)) return;
-    throw Error(fmt::format("{}: the {} column {} is in {}, but {}'s {} is in {}: every value would be off by the "
-                            "ratio of the two units; convert one of them",
-                            file, what, column, in_file, source, what, in_source));
-  };
-  check("input", sel.input, rec.input_unit, units.input);
-  check("output", sel.output, rec.output_unit, units.output);
+  refuse_other_units(file, "input ", sel.input, rec.input_unit, source, "input", units.input);
+  refuse_other_units(file, "output ", sel.output, rec.output_unit, source, "output", units.output);
 }
 
 void check_column_unit(const std::string& file, const io::ReadOptions& options, const std::string& model_unit,
                        const std::string& model_file, std::string_view what) {
   // a pipe, FIFO or device cannot be read twice: only a regular file's header is read ahead
   struct stat st {};
-  if (unit_key(model_unit).empty() || ::stat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
-  const io::NamedColumn c = io::column_header(file, options);
-  if (unit_key(c.unit).empty() || unit_key(c.unit) == unit_key(model_unit)) return;
-  throw Error(fmt::format("{}: the column {} is in {}, but the model {}'s {} is in {}: every value would be off by "
-                          "the ratio of the two units; convert one of them",
-                          file, c.name.empty() ? options.column_spec : c.name, c.unit,
-                          model_file == "-" ? std::string("<stdin>") : model_file, what, model_unit));
+  if (io::canonical_unit(model_unit).empty() || ::stat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  io::NamedColumn c;
+  try {
+    c = io::column_header(file, options);
+  } catch (const Error&) {
+    return;  // the run's own read of the file says what is wrong with it
+  }
+  refuse_other_units(file, "", c.name.empty() ? options.column_spec : c.name, c.unit,
+                     fmt::format("the model {}", model_file == "-" ? std::string("<stdin>") : model_file), what,
+                     model_unit);
 }
 
 namespace {
@@ -200,14 +198,11 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
 report::Axis parse_axis(const std::string& text, const std::string& fallback) {
   const std::string t = trim(text);
   if (t.empty()) return {fallback.empty() ? std::string("value") : fallback, ""};
-  const auto open = t.rfind('[');
-  if (open != std::string::npos && t.back() == ']') {
-    std::string label = trim(std::string_view(t).substr(0, open));
-    const std::string unit = trim(std::string_view(t).substr(open + 1, t.size() - open - 2));
-    if (label.empty()) label = fallback.empty() ? std::string("value") : fallback;
-    return {label, unit};
-  }
-  return {t, ""};
+  const std::string unit = io::trailing_unit(t);  // "Pressure [kPa]", "Pressure (kPa)"
+  if (unit.empty()) return {t, ""};
+  std::string label = io::without_unit(t);
+  if (label.empty() || label == t) label = fallback.empty() ? std::string("value") : fallback;
+  return {label, unit};
 }
 
 bool names_stdout(const std::string& path) {
@@ -271,6 +266,11 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
   }
   if (d.x.size() != d.y.size())
     throw Error(fmt::format("{}: input column has {} values, output column {}", file, d.x.size(), d.y.size()));
+  // a label's unit is the axis's and the model's: one the column's own contradicts is refused
+  refuse_other_units(file, "input ", sel.input, d.input_unit, "--input-label", "unit",
+                     parse_axis(sel.input_label, sel.input).unit);
+  refuse_other_units(file, "output ", sel.output, d.output_unit, "--output-label", "unit",
+                     parse_axis(sel.output_label, sel.output).unit);
   if (!sel.time_column.empty()) {
     io::NamedColumn t = io::read_named_column(file, column_options(sel.time_column));
     d.t = std::move(t.values);
@@ -284,6 +284,7 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
                               "them is wrong (drop --time-unit if the file is right)",
                               file, sel.time_unit, sel.time_column, t.unit));
     d.time_unit = !sel.time_unit.empty() ? sel.time_unit : !named.empty() ? named : std::string("s");
+    d.time_unit_from_file = !named.empty();
     const double to_s = io::time_unit_seconds(d.time_unit, file + ": --time-unit");
     if (to_s != 1.0)
       for (double& v : *d.t) v *= to_s;

@@ -798,6 +798,27 @@ TEST(Table, UnitsRowAndUnitsInTheHeader) {
   const io::Table w = io::read_table(dir.write("wins.csv", "t [ms],p\ns,bar\n0,1\n"));
   EXPECT_EQ(io::column_unit(w, 0), "s");
   EXPECT_EQ(io::column_unit(w, 1), "bar");
+  // brackets that are no unit: no blank before them ("x[0]", "sin(t)"), or digits only
+  const io::Table b = io::read_table(dir.write("brackets.csv", "x[0],sin(t),p [3],q (raw)\n1,2,3,4\n"));
+  EXPECT_EQ(io::column_unit(b, 0), "");
+  EXPECT_EQ(io::column_unit(b, 1), "");
+  EXPECT_EQ(io::column_unit(b, 2), "");
+  EXPECT_EQ(io::column_quantity(b, 0), "x[0]");
+  EXPECT_EQ(io::column_unit(b, 3), "raw");  // a unit by its form; canonical_unit does not know it
+  // the units compared: symbols of known units, spellings of one unit alike; free text is none
+  EXPECT_EQ(io::canonical_unit("KPa"), "kPa");
+  EXPECT_EQ(io::canonical_unit("Pressure [kPa]"), "kPa");
+  EXPECT_EQ(io::canonical_unit("(bar)"), "bar");
+  EXPECT_EQ(io::canonical_unit("\xC2\xB5m"), "um");
+  EXPECT_EQ(io::canonical_unit("MPa"), "MPa");
+  EXPECT_EQ(io::canonical_unit("mPa"), "");  // not MPa
+  EXPECT_EQ(io::canonical_unit("raw"), "");
+  EXPECT_EQ(io::canonical_unit("kPa (gauge)"), "");
+  // a placeholder row ("-", "NA") or the header repeated is no units row: left to the data rows
+  for (const char* text : {"a,b\n-,-\n1,2\n", "a,b\nNA,NA\n1,2\n", "a,b\na,b\n1,2\n"}) {
+    const auto path = dir.write("placeholder.csv", text);
+    expect_error([&] { io::read_table(path); }, {path, ":2:1", "is not a number"});
+  }
   // a row of numbers and empty fields is data, not units
   const io::Table d = io::read_table(dir.write("data.csv", "a,b,c\n1,,3\n4,,6\n"));
   EXPECT_TRUE(d.units.empty());

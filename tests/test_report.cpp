@@ -450,6 +450,19 @@ TEST(Report, DataOverrideKeepsTheRestOfTheDocument) {
   ASSERT_EQ(in_ms.data.t.size(), x.size());
   EXPECT_DOUBLE_EQ(in_ms.data.t[1], 0.002);
   EXPECT_NE(in_ms.data.source.find("time column 0 in ms"), std::string::npos) << in_ms.data.source;
+  // a file whose header gives the document's column another unit is read in the file's (the
+  // document's ms would draw it 1000x off); a --time-unit that disagrees with the file is refused
+  io::write_columns(tmp / "moved/header_s.csv", {"t_ms [s]", "pressure", "length"}, {t_s, x, y});
+  FitDataSource in_file_unit;
+  in_file_unit.input_file = tmp / "moved/header_s.csv";
+  const LoadedEvaluation in_s = read_evaluation_json(tmp / "ev.json", in_file_unit);
+  ASSERT_EQ(in_s.data.t.size(), x.size());
+  EXPECT_DOUBLE_EQ(in_s.data.t[1], 0.002);
+  FitDataSource contradicting = header_unit;
+  contradicting.time_unit = "s";
+  const std::string u = error_of([&] { (void)read_evaluation_json(tmp / "ev.json", contradicting); });
+  EXPECT_NE(u.find("--time-unit s but"), std::string::npos) << u;
+  EXPECT_NE(u.find("header_ms.csv"), std::string::npos) << u;
   FitDataSource no_time = no_such_time;
   no_time.no_time = true;
   EXPECT_TRUE(read_evaluation_json(tmp / "ev.json", no_time).data.t.empty());

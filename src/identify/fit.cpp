@@ -134,7 +134,7 @@ FitReport detail::fit_core(std::span<const double> x, std::span<const double> y,
       FitOptions fewer = o;
       fewer.num_operators = n;
       if (fewer.is_valid(nullptr) && m >= 10 * static_cast<std::size_t>(kind->num_parameters(fewer)))
-        hint = fmt::format("; with {} operator{} (num_operators, --n {}) it has {}", n, n == 1 ? "" : "s", n,
+        hint = fmt::format("; with num_operators = {} (hysteron fit --n {}) it has {} parameters", n, n,
                            kind->num_parameters(fewer));
     }
     return invalid(fmt::format("fit: {} training samples are too few for {} parameters (need at least {}, 10 per "

@@ -10,6 +10,7 @@
 
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/table.hpp"
 #include "json_read.hpp"
 
 namespace hysteron::io {
@@ -222,16 +223,8 @@ double time_unit_seconds(std::string_view unit, std::string_view where) {
 }
 
 std::string time_unit_named(std::string_view unit, std::string_view where) {
-  const auto trimmed = [](std::string_view v) {
-    while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
-    while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
-    return v;
-  };
-  std::string_view v = trimmed(unit);
-  if (v.size() >= 2 && ((v.front() == '[' && v.back() == ']') || (v.front() == '(' && v.back() == ')')))
-    v = trimmed(v.substr(1, v.size() - 2));
-  if (v == "\xC2\xB5s" || v == "\xCE\xBCs") return "us";  // micro sign, Greek mu
-  std::string u(v);
+  std::string u = strip_unit_brackets(unit);
+  if (u == "\xC2\xB5s" || u == "\xCE\xBCs") return "us";  // micro sign, Greek mu
   std::transform(u.begin(), u.end(), u.begin(), [](unsigned char ch) { return std::tolower(ch); });
   const auto any = [&](std::initializer_list<std::string_view> names) {
     return std::find(names.begin(), names.end(), u) != names.end();
@@ -242,7 +235,7 @@ std::string time_unit_named(std::string_view unit, std::string_view where) {
   if (any({"ns", "nsec", "nanosecond", "nanoseconds", "min", "mins", "minute", "minutes", "h", "hr", "hrs", "hour",
            "hours", "d", "day", "days"}))
     throw Error(fmt::format("{} is in \"{}\", a time unit that is not read: give the column in s, ms or us", where,
-                            trimmed(unit)));
+                            strip_unit_brackets(unit)));
   return std::string();
 }
 

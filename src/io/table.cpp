@@ -13,6 +13,7 @@
 #include <limits>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <bit>
 #include <cerrno>
@@ -417,16 +418,29 @@ class TextParser {
   // row has only numbers and empty fields).
   bool units_line() {
     if (fields_.size() != nfields_) return false;
-    bool any = false;
-    for (const std::string_view f : fields_) {
+    bool any = false, repeats_header = true;
+    for (std::size_t c = 0; c < fields_.size(); ++c) {
+      const std::string_view f = unquote(fields_[c]);
       double v = 0.0;
-      if (parse_field(f, v) != Parse::malformed && !unquote(f).empty()) return false;
-      any = any || !unquote(f).empty();
+      if (parse_field(fields_[c], v) != Parse::malformed && !f.empty()) return false;
+      if (!f.empty() && !looks_like_unit(f)) return false;  // "-", "NA": a placeholder, left to the data rows
+      any = any || !f.empty();
+      repeats_header = repeats_header && f == names_[c];
     }
-    if (!any) return false;
+    if (!any || repeats_header) return false;
     units_.clear();
     for (const std::string_view f : fields_) units_.emplace_back(unquote(f));
     return true;
+  }
+
+  // A units row's field: a letter, '%' or a non-ASCII byte (µ, °) in it, and not a placeholder.
+  static bool looks_like_unit(std::string_view f) {
+    for (const std::string_view p : {"NA", "N/A", "n/a", "na", "null", "NULL", "none", "None"})
+      if (f == p) return false;
+    return std::any_of(f.begin(), f.end(), [](char ch) {
+      const auto u = static_cast<unsigned char>(ch);
+      return std::isalpha(u) || ch == '%' || u >= 0x80;
+    });
   }
 
   // Finds the smallest non-empty name that appears more than once and the 0-based columns of its
@@ -667,6 +681,7 @@ std::vector<double> read_column(const std::string& path, const ReadOptions& opti
 
 namespace {
 // "name [unit]" / "name (unit)": the position of the bracket that opens a trailing unit, else npos.
+// The bracket follows a blank ("x[0]", "sin(t)" have none) and holds more than digits ("p [3]").
 std::size_t unit_bracket(std::string_view name) {
   name = trim(name);
   if (name.size() < 3) return std::string_view::npos;
@@ -674,30 +689,58 @@ std::size_t unit_bracket(std::string_view name) {
   if (close != ']' && close != ')') return std::string_view::npos;
   const std::size_t open = name.rfind(close == ']' ? '[' : '(');
   if (open == std::string_view::npos || open + 2 > name.size() - 1) return std::string_view::npos;
+  if (open > 0 && name[open - 1] != ' ' && name[open - 1] != '\t') return std::string_view::npos;
+  const std::string_view inside = trim(name.substr(open + 1, name.size() - open - 2));
+  if (inside.empty() || std::all_of(inside.begin(), inside.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return std::string_view::npos;
   return open;
 }
-std::string strip_brackets(std::string_view u) {
+}  // namespace
+
+std::string strip_unit_brackets(std::string_view u) {
   u = trim(u);
   if (u.size() >= 2 && ((u.front() == '[' && u.back() == ']') || (u.front() == '(' && u.back() == ')')))
     u = trim(u.substr(1, u.size() - 2));
   return std::string(u);
 }
-}  // namespace
+
+std::string trailing_unit(std::string_view text) {
+  text = trim(text);
+  const std::size_t open = unit_bracket(text);
+  if (open == std::string_view::npos) return std::string();
+  return std::string(trim(text.substr(open + 1, text.size() - open - 2)));
+}
+
+std::string without_unit(std::string_view text) {
+  text = trim(text);
+  const std::size_t open = unit_bracket(text);
+  return std::string(open == std::string_view::npos || open == 0 ? text : trim(text.substr(0, open)));
+}
+
+std::string canonical_unit(std::string_view unit) {
+  const std::string u = strip_unit_brackets(trailing_unit(unit).empty() ? unit : std::string_view(trailing_unit(unit)));
+  // symbols as written, and spellings that name one unit only (no "mpa": MPa or mPa?)
+  static constexpr std::pair<std::string_view, std::string_view> table[] = {
+      {"Pa", "Pa"},     {"hPa", "hPa"},   {"kPa", "kPa"},   {"KPa", "kPa"},   {"kpa", "kPa"},  {"KPA", "kPa"},
+      {"MPa", "MPa"},   {"MPA", "MPa"},   {"Mpa", "MPa"},   {"bar", "bar"},   {"Bar", "bar"},  {"BAR", "bar"},
+      {"mbar", "mbar"}, {"psi", "psi"},   {"PSI", "psi"},   {"Psi", "psi"},   {"atm", "atm"},  {"m", "m"},
+      {"cm", "cm"},     {"mm", "mm"},     {"um", "um"},     {"\xC2\xB5m", "um"}, {"\xCE\xBCm", "um"},
+      {"nm", "nm"},     {"in", "in"},     {"N", "N"},       {"kN", "kN"},     {"mN", "mN"},    {"lbf", "lbf"},
+      {"V", "V"},       {"mV", "mV"},     {"kV", "kV"},     {"A", "A"},       {"mA", "mA"},    {"s", "s"},
+      {"ms", "ms"},     {"us", "us"},     {"\xC2\xB5s", "us"}, {"\xCE\xBCs", "us"}, {"%", "%"}};
+  for (const auto& [spelling, symbol] : table)
+    if (u == spelling) return std::string(symbol);
+  return std::string();
+}
 
 std::string column_unit(const Table& t, std::size_t i) {
-  if (i < t.units.size() && !trim(t.units[i]).empty()) return strip_brackets(t.units[i]);
+  if (i < t.units.size() && !trim(t.units[i]).empty()) return strip_unit_brackets(t.units[i]);
   if (i >= t.names.size()) return std::string();
-  const std::string_view name = trim(t.names[i]);
-  const std::size_t open = unit_bracket(name);
-  if (open == std::string_view::npos) return std::string();
-  return std::string(trim(name.substr(open + 1, name.size() - open - 2)));
+  return trailing_unit(t.names[i]);
 }
 
 std::string column_quantity(const Table& t, std::size_t i) {
-  if (i >= t.names.size()) return std::string();
-  const std::string_view name = trim(t.names[i]);
-  const std::size_t open = unit_bracket(name);
-  return std::string(open == std::string_view::npos || open == 0 ? name : trim(name.substr(0, open)));
+  return i < t.names.size() ? without_unit(t.names[i]) : std::string();
 }
 
 NamedColumn read_named_column(const std::string& path, const ReadOptions& options) {
@@ -732,11 +775,9 @@ NamedColumn column_header(const std::string& path, const ReadOptions& options) {
   probe.source = path;
   probe.names = parser.names();
   probe.units = parser.units();
-  probe.columns.resize(parser.num_fields());
-  for (std::size_t k = 0; k < probe.columns.size() && data; ++k)
-    if (parser.present(k)) probe.columns[k].push_back(parser.value(k));
+  // every column taken as present: the first row's empty fields say nothing of the others
+  probe.columns.assign(parser.num_fields(), std::vector<double>(data ? 1 : 0, 0.0));
   const std::size_t i = select_column(probe, options);
-  if (data) check_column_has_data(probe, i);
   c.name = column_quantity(probe, i);
   c.unit = column_unit(probe, i);
   return c;

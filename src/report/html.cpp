@@ -884,16 +884,22 @@ std::vector<double> read_document_column(const std::string& doc_path, const std:
 // without it; empty, a --time-column without --time-unit: the unit the file gives the column
 // ("t [ms]", a units row), else s; `unit` receives it) times its seconds; n values (the input's).
 std::vector<double> read_time_seconds(const std::string& doc_path, const io::DataDescription& d,
-                                      const std::string& file, std::size_t n, std::string* unit = nullptr) {
+                                      const std::string& file, std::size_t n, bool unit_given,
+                                      std::string* unit = nullptr) {
   const std::string_view remedy =
       "; give the file's time column (hysteron report --time-column NAME [--time-unit s|ms|us]) or draw against the "
       "sample index (--no-time)";
   io::NamedColumn c = read_named_document_column(doc_path, file, d.time_column, "time", remedy);
-  std::string u = d.time_unit;
-  if (u.empty()) {  // as fit and evaluate read it (io::time_unit_named)
-    u = io::time_unit_named(c.unit, fmt::format("{}: data: the time column {} of {}", doc_path, d.time_column, file));
-    if (u.empty()) u = "s";
-  }
+  // as fit and evaluate read it: the unit the file gives the column (io::time_unit_named) wherever it
+  // gives one (each --validate-data file in its own), else the document's, else s; a --time-unit
+  // given here that disagrees with the file is refused, as fit's and evaluate's is
+  const std::string named =
+      io::time_unit_named(c.unit, fmt::format("{}: data: the time column {} of {}", doc_path, d.time_column, file));
+  if (unit_given && !named.empty() && named != d.time_unit)
+    throw Error(fmt::format("{}: data: --time-unit {} but {} gives the time column {} the unit \"{}\": one of them "
+                            "is wrong (drop --time-unit if the file is right)",
+                            doc_path, d.time_unit, file, d.time_column, c.unit));
+  std::string u = !named.empty() ? named : !d.time_unit.empty() ? d.time_unit : std::string("s");
   const double to_s = io::time_unit_seconds(u, doc_path + ": data.time_unit");
   if (unit) *unit = u;
   std::vector<double> t = std::move(c.values);
@@ -924,7 +930,7 @@ namespace {
 
 // The record a document's "data" object names (input, output, time in s), its axes, initial state,
 // range (data.train) and censoring, read again. Throws naming the document and the file.
-FitData load_document_record(const std::string& doc_path, const io::DataDescription& d) {
+FitData load_document_record(const std::string& doc_path, const io::DataDescription& d, bool time_unit_given) {
   if (d.input_file.empty())
     throw Error(fmt::format("{}: the report does not name its data: pass them (hysteron report {} --data FILE "
                             "--input COLUMN --output COLUMN)", doc_path, doc_path));
@@ -938,7 +944,8 @@ FitData load_document_record(const std::string& doc_path, const io::DataDescript
     throw Error(fmt::format("{}: input and output have different lengths ({} in {}, {} in {})", dw, out.x.size(), xf,
                             out.y.size(), yf));
   io::DataDescription as_read = d;  // the time column's unit as read (--time-column without --time-unit)
-  if (!d.time_column.empty()) out.t = read_time_seconds(doc_path, d, xf, out.x.size(), &as_read.time_unit);
+  if (!d.time_column.empty())
+    out.t = read_time_seconds(doc_path, d, xf, out.x.size(), time_unit_given, &as_read.time_unit);
   out.files = {xf, yf};
   out.source = data_source_line(as_read);
   out.input = {d.input_label, d.input_unit};
@@ -990,7 +997,7 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
   if (!d.input_file.empty() && !j.contains("data") && j.contains("train") && j["train"].contains("range"))
     io::from_json(j["train"]["range"], d.train, path + ": train.range");
   const std::string dw = path + ": data";
-  out.data = load_document_record(path, d);
+  out.data = load_document_record(path, d, !data_override.time_unit.empty());
   // The data must be the record the fit used (-d names a file and columns by hand): another
   // record, or swapped columns, gave a report of the fit against data it never saw, silently.
   if (const FitMetrics& t = out.fit.train; t.n > 0) {
@@ -1019,7 +1026,7 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
       out.data.files.push_back(vf);
       v.x = read_document_column(path, vf, d.input_column, "validation input");
       v.y = read_document_column(path, vf, d.output_column, "validation output");
-      if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf, v.x.size());
+      if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf, v.x.size(), !data_override.time_unit.empty());
     }
     out.data.validation.push_back(std::move(v));
   }
@@ -1031,7 +1038,7 @@ LoadedEvaluation read_evaluation_document(const json& j, const std::string& path
   out.document = io::from_json<io::EvaluationDocument>(j, path);
   io::DataDescription& d = out.document.data;
   apply_data_override(d, data_override);
-  out.data = load_document_record(path, d);
+  out.data = load_document_record(path, d, !data_override.time_unit.empty());
   // The data must be the record evaluated (as for a fit: -d by hand, or a file changed since):
   // the model scored on it again gives the document's metrics. (from_json refuses a missing or
   // empty metrics.range; an end of null is the record's end.)

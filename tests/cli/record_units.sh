@@ -90,6 +90,29 @@ grep -q "sim_bar.csv: the column input is in bar, but the model .*m.json's input
 grep -q "inv_mm.csv: the column output is in mm, but the model .*m.json's output is in N" "$T/err.txt" \
   || fail "invert mm: $(cat "$T/err.txt")"
 
+# what is not compared: free text in the model's "units" ("Pressure [kPa]" is kPa, "kPa (gauge)" no
+# known unit), brackets that are no unit ("x[0]"), prefixes of another case (mPa is not MPa)
+$PY -c "import json,sys; d=json.load(open(sys.argv[1])); d['units']={'input': 'Pressure [kPa]', 'output': 'N (gauge)'}; \
+  json.dump(d,open(sys.argv[2],'w'))" "$T/m.json" "$T/free.json"
+"$BIN" evaluate --model "$T/free.json" --data "$T/kpa.csv" --input p --output F > /dev/null 2> "$T/err.txt" \
+  || fail "evaluate with free-text units: exit $?: $(cat "$T/err.txt")"
+"$BIN" evaluate --model "$T/free.json" --data "$T/bar.csv" --input p --output F > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "evaluate bar with 'Pressure [kPa]' in the model: not refused"
+{ echo "t,x[0],x[1]"; tail -n +2 "$T/plain.csv"; } > "$T/vec.csv"
+{ echo "t,u[1],y[1]"; tail -n +2 "$T/plain.csv"; } > "$T/vec2.csv"
+"$BIN" fit --model pi --data "$T/vec.csv" --input "x[0]" --output "x[1]" --out "$T/vec.json" > /dev/null 2>&1 \
+  || fail "fit on x[0]: exit $?"
+$PY -c "import json,sys; assert 'units' not in json.load(open(sys.argv[1]))" "$T/vec.json" || fail "x[0]: a unit recorded"
+"$BIN" evaluate --model "$T/vec.json" --data "$T/vec2.csv" --input "u[1]" --output "y[1]" > /dev/null 2>&1 \
+  || fail "evaluate u[1] with a model fitted on x[0]: exit $?"
+# a label whose unit contradicts the column's: refused (the model would record the wrong one)
+"$BIN" fit --model pi --data "$T/bar.csv" --input p --output F --input-label "Pressure [kPa]" --out "$T/lab.json" \
+  > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "fit --input-label [kPa] on a column in bar: not exit 1"
+grep -q "bar.csv: the input column p is in bar, but --input-label's unit is in kPa" "$T/err.txt" \
+  || fail "label against column: $(cat "$T/err.txt")"
+[ -e "$T/lab.json" ] && fail "fit --input-label [kPa] on bar: a model written"
+
 # two columns with the same name and different units: the bare name is ambiguous, named as such
 { echo "p [kPa],p [bar],F"; echo "1,0.01,2"; echo "2,0.02,3"; } > "$T/two.csv"
 "$BIN" evaluate --model "$T/plain.json" --data "$T/two.csv" --input p --output F > /dev/null 2> "$T/err.txt"

@@ -85,10 +85,22 @@ struct Table {
   const std::vector<double>& column(std::string_view spec) const;
 };
 
-// Column i's unit: its units-row field, else a trailing "[unit]" or "(unit)" of its header name;
-// brackets are stripped ("[kPa]" -> "kPa"). "" if it has none.
+// "[kPa]" / "(kPa)" -> "kPa" (one pair of brackets, and blanks, stripped).
+std::string strip_unit_brackets(std::string_view unit);
+// The unit a header name or axis label ends in, " [unit]" or " (unit)" after a blank: "Pressure
+// [kPa]" -> "kPa"; "" for none ("x[0]", "sin(t)": no blank before the bracket; "p [3]": digits).
+std::string trailing_unit(std::string_view text);
+// The text without that unit ("Pressure [kPa]" -> "Pressure").
+std::string without_unit(std::string_view text);
+// A unit as compared (evaluate, simulate, invert against a model's "units"): the symbol of a unit
+// of pressure, length, force, voltage, current or time ("kPa" for "kPa", "KPa", "[kPa]",
+// "Pressure [kPa]"; "um" for "µm"), "" for any other text (free text is not compared). Prefixes
+// keep their case: "mPa" is not "MPa".
+std::string canonical_unit(std::string_view unit);
+// Column i's unit: its units-row field, else trailing_unit of its header name; brackets are
+// stripped ("[kPa]" -> "kPa"). "" if it has none.
 std::string column_unit(const Table& t, std::size_t i);
-// Column i's header name without a trailing "[unit]" / "(unit)" ("pressure [kPa]" -> "pressure").
+// Column i's header name without_unit ("pressure [kPa]" -> "pressure").
 std::string column_quantity(const Table& t, std::size_t i);
 
 // A text table held in memory (the rules above); `source` names it in errors.

@@ -672,11 +672,7 @@ Table read_table(const std::string& path, const ReadOptions& options) {
 }
 
 std::vector<double> read_column(const std::string& path, const ReadOptions& options) {
-  if (is_mat_path(path)) return detail::read_mat_variable(path, options.column_spec, options.preferred_column);
-  Table t = read_text_table(path, options);
-  const std::size_t i = select_column(t, options);
-  check_column_has_data(t, i);
-  return std::move(t.columns[i]);
+  return read_named_column(path, options).values;
 }
 
 namespace {

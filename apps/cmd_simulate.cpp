@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <cctype>
 
 #include <charconv>
@@ -66,18 +67,23 @@ bool streamed_output(const std::string& path) {
 }
 
 // Runs f on blocks of at most 8192 input samples of the chosen column (bounded memory).
+// `unit_check` sees the column's name and unit before its first value.
 template <class F>
-void for_each_block(const std::string& path, const io::ReadOptions& ro, F&& f) {
+void for_each_block(const std::string& path, const io::ReadOptions& ro, F&& f,
+                    const std::function<void(const io::NamedColumn&)>& unit_check) {
   constexpr std::size_t kBlock = 8192;
   std::vector<double> block;
   block.reserve(kBlock);
-  io::for_each_value(path, ro, [&](double v) {
-    block.push_back(v);
-    if (block.size() == kBlock) {
-      f(std::span<const double>(block));
-      block.clear();
-    }
-  });
+  io::for_each_value(
+      path, ro,
+      [&](double v) {
+        block.push_back(v);
+        if (block.size() == kBlock) {
+          f(std::span<const double>(block));
+          block.clear();
+        }
+      },
+      unit_check);
   if (!block.empty()) f(std::span<const double>(block));
 }
 
@@ -127,7 +133,7 @@ int run_simulate(const Options& o) {
   ModelUnits units;
   const ModelParams params = read_model_source(o.model, &units);
   const io::ReadOptions ro = input_options(o.column, "input");
-  check_column_unit(o.input, ro, units.input, o.model, "input");
+  const auto unit_check = [&](const io::NamedColumn& c) { check_column_unit(c, o.input, ro, units.input, o.model, "input"); };
   Model model(params);
   InputCoverage coverage;  // summed over the blocks: inputs beyond the model's input_limits
   coverage.limits = input_limits(params);
@@ -149,18 +155,23 @@ int run_simulate(const Options& o) {
     io::write_csv_rows(o.output, {"input", "output"}, [&](io::CsvRowWriter& w) {
       std::vector<double> y(8192);
       bool first = true;
-      for_each_block(o.input, ro, [&](std::span<const double> x) {
-        if (first && o.relaxed) model.reset_relaxed(x.front());
-        first = false;
-        model.simulate(x, std::span<double>(y.data(), x.size()));
-        cover(x);
-        for (std::size_t k = 0; k < x.size(); ++k) w.row(std::array<double, 2>{x[k], y[k]});
-      });
+      for_each_block(
+          o.input, ro,
+          [&](std::span<const double> x) {
+            if (first && o.relaxed) model.reset_relaxed(x.front());
+            first = false;
+            model.simulate(x, std::span<double>(y.data(), x.size()));
+            cover(x);
+            for (std::size_t k = 0; k < x.size(); ++k) w.row(std::array<double, 2>{x[k], y[k]});
+          },
+          unit_check);
     });
     warn_after_run();
     return 0;
   }
-  const std::vector<double> x = io::read_column(o.input, ro);
+  io::NamedColumn in = io::read_named_column(o.input, ro);
+  unit_check(in);
+  const std::vector<double> x = std::move(in.values);
   if (o.relaxed && !x.empty()) model.reset_relaxed(x.front());
   const std::vector<double> y = model.simulate(x);
   cover(x);
@@ -176,7 +187,9 @@ int run_invert(const Options& o) {
   ModelUnits units;
   const ModelParams params = read_model_source(o.model, &units);
   const io::ReadOptions ro = input_options(o.column, "output");
-  check_column_unit(o.input, ro, units.output, o.model, "output");
+  const auto unit_check = [&](const io::NamedColumn& c) {
+    check_column_unit(c, o.input, ro, units.output, o.model, "output");
+  };
   InverseOptions opt;
   if (!o.limits.empty()) {
     opt.input_limits = parse_limits(o.limits);
@@ -227,14 +240,19 @@ int run_invert(const Options& o) {
   if (streamed_output(o.output)) {
     io::write_csv_rows(o.output, {"output", "input"}, [&](io::CsvRowWriter& w) {
       std::vector<double> x(8192);
-      for_each_block(o.input, ro, [&](std::span<const double> y) {
-        run(y, x.data());
-        for (std::size_t k = 0; k < y.size(); ++k) w.row(std::array<double, 2>{y[k], x[k]});
-      });
+      for_each_block(
+          o.input, ro,
+          [&](std::span<const double> y) {
+            run(y, x.data());
+            for (std::size_t k = 0; k < y.size(); ++k) w.row(std::array<double, 2>{y[k], x[k]});
+          },
+          unit_check);
       check_faults();
     });
   } else {
-    const std::vector<double> y = io::read_column(o.input, ro);
+    io::NamedColumn out = io::read_named_column(o.input, ro);
+    unit_check(out);
+    const std::vector<double> y = std::move(out.values);
     std::vector<double> x(y.size());
     run(y, x.data());
     check_faults();

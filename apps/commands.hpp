@@ -133,10 +133,10 @@ io::DataDescription describe_data(const DataSelection& sel, const DataColumns& d
 // its scores or outputs would be off by the units' ratio. Silent where either does not say.
 void check_units_agree(const ModelUnits& units, const std::string& source, const DataColumns& rec,
                        const DataSelection& sel, const std::string& file);
-// The same for one column of `file` (read up to its first data row) against the model's unit of
-// the signal `what` ("input" or "output").
-void check_column_unit(const std::string& file, const io::ReadOptions& options, const std::string& model_unit,
-                       const std::string& model_file, std::string_view what);
+// The same for one column `c` of `file` (its name and unit, as the reader chose it) against the
+// model's unit of the signal `what` ("input" or "output").
+void check_column_unit(const io::NamedColumn& c, const std::string& file, const io::ReadOptions& options,
+                       const std::string& model_unit, const std::string& model_file, std::string_view what);
 
 report::FitData plot_data(const DataSelection& sel, const DataColumns& d, InitialState initial, IndexRange range);
 

@@ -81,17 +81,8 @@ void check_units_agree(const ModelUnits& units, const std::string& source, const
   refuse_other_units(file, "output ", sel.output, rec.output_unit, source, "output", units.output);
 }
 
-void check_column_unit(const std::string& file, const io::ReadOptions& options, const std::string& model_unit,
-                       const std::string& model_file, std::string_view what) {
-  // a pipe, FIFO or device cannot be read twice: only a regular file's header is read ahead
-  struct stat st {};
-  if (io::canonical_unit(model_unit).empty() || ::stat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
-  io::NamedColumn c;
-  try {
-    c = io::column_header(file, options);
-  } catch (const Error&) {
-    return;  // the run's own read of the file says what is wrong with it
-  }
+void check_column_unit(const io::NamedColumn& c, const std::string& file, const io::ReadOptions& options,
+                       const std::string& model_unit, const std::string& model_file, std::string_view what) {
   refuse_other_units(file, "", c.name.empty() ? options.column_spec : c.name, c.unit,
                      fmt::format("the model {}", model_file == "-" ? std::string("<stdin>") : model_file), what,
                      model_unit);

@@ -770,13 +770,17 @@ TEST(Table, UnitsRowAndUnitsInTheHeader) {
     EXPECT_EQ(c.values, (std::vector<double>{2, 4}));
     EXPECT_EQ(c.name, "force");
     EXPECT_EQ(c.unit, "N");
-    const io::NamedColumn h = io::column_header(path, spec("force"));
-    EXPECT_TRUE(h.values.empty());
-    EXPECT_EQ(h.name, "force");
-    EXPECT_EQ(h.unit, "N");
+    // streamed: the column's name and unit once, before its first value
     std::vector<double> streamed;
-    io::for_each_value(path, spec("pressure"), [&](double v) { streamed.push_back(v); });
+    std::vector<std::string> seen;
+    io::for_each_value(
+        path, spec("pressure"), [&](double v) { streamed.push_back(v); },
+        [&](const io::NamedColumn& h) {
+          EXPECT_TRUE(streamed.empty());
+          seen.push_back(h.name + "/" + h.unit);
+        });
     EXPECT_EQ(streamed, (std::vector<double>{1, 3}));
+    EXPECT_EQ(seen, (std::vector<std::string>{"pressure/kPa"}));
   }
   // units in the header names; a units row, where given, wins; a bracket that is no unit stays
   const auto named = dir.write("named.csv", "t [ms],pressure (kPa),force,x()\n0,1,2,3\n");

@@ -755,39 +755,18 @@ NamedColumn read_named_column(const std::string& path, const ReadOptions& option
   return c;
 }
 
-NamedColumn column_header(const std::string& path, const ReadOptions& options) {
-  NamedColumn c;
-  if (is_mat_path(path)) {
-    c.name = options.column_spec;
-    return c;
-  }
-  FileLines lines(path);
-  TextParser parser(path, options);
-  std::string_view line;
-  bool data = false;
-  while (!data && lines.next(line)) data = parser.parse(line);
-  parser.finish();
-  Table probe;
-  probe.source = path;
-  probe.names = parser.names();
-  probe.units = parser.units();
-  // every column taken as present: the first row's empty fields say nothing of the others
-  probe.columns.assign(parser.num_fields(), std::vector<double>(data ? 1 : 0, 0.0));
-  const std::size_t i = select_column(probe, options);
-  c.name = column_quantity(probe, i);
-  c.unit = column_unit(probe, i);
-  return c;
-}
-
 std::vector<double> read_column(const std::string& path, const std::string& column) {
   ReadOptions o;
   o.column_spec = column;
   return read_column(path, o);
 }
 
-void for_each_value(const std::string& path, const ReadOptions& options, const std::function<void(double)>& on_value) {
+void for_each_value(const std::string& path, const ReadOptions& options, const std::function<void(double)>& on_value,
+                    const std::function<void(const NamedColumn&)>& on_column) {
   if (is_mat_path(path)) {
-    for (const double v : read_column(path, options)) on_value(v);
+    NamedColumn c = read_named_column(path, options);
+    if (on_column) on_column({{}, c.name, c.unit});
+    for (const double v : c.values) on_value(v);
     return;
   }
   FileLines lines(path);
@@ -803,6 +782,10 @@ void for_each_value(const std::string& path, const ReadOptions& options, const s
       if (parser.present(c)) probe.columns[c].push_back(parser.value(c));
     const std::size_t i = select_column(probe, options);
     check_column_has_data(probe, i);
+    if (on_column) {
+      probe.units = parser.units();
+      on_column({{}, column_quantity(probe, i), column_unit(probe, i)});
+    }
     return i;
   };
   constexpr std::size_t none = static_cast<std::size_t>(-1);

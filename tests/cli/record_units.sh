@@ -5,7 +5,7 @@
 # than the model's (a record in bar scored by a model fitted in kPa: every value 100x off,
 # silently); agreeing units, or a record or model that names none, are not checked. A column is
 # selected by its name without the unit ("p" for "p [kPa]"). The experiments' models record
-# MPa / mm. simulate and invert check their input column against the model's units too.
+# MPa / mm. simulate and invert check their input column against the model's units too (a pipe too).
 # Usage: bash record_units.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
@@ -71,7 +71,7 @@ grep -q "bar.csv: the input column p is in bar, but the training record .*kpa.cs
   > /dev/null 2>&1 || fail "fit --validate-data with the same units in a units row: exit $?"
 
 # simulate / invert: the input column against the model's input (simulate) or output (invert) unit;
-# without --column the column "input" ("output") is found with its unit; a pipe is not read ahead
+# without --column the column "input" ("output") is found with its unit; a pipe is checked as it is read
 { echo "t,input [bar],x"; tail -n +2 "$T/plain.csv"; } > "$T/sim_bar.csv"
 { echo "t,input [KPA],x"; tail -n +2 "$T/plain.csv"; } > "$T/sim_kpa.csv"
 "$BIN" simulate --model "$T/m.json" --input "$T/sim_bar.csv" --output "$T/sim.csv" > /dev/null 2> "$T/err.txt"
@@ -82,8 +82,17 @@ grep -q "sim_bar.csv: the column input is in bar, but the model .*m.json's input
 "$BIN" simulate --model "$T/m.json" --input "$T/sim_kpa.csv" --output "$T/sim.csv" > /dev/null 2> "$T/err.txt" \
   || fail "simulate of input [KPA] without --column: exit $?: $(cat "$T/err.txt")"
 [ "$(wc -l < "$T/sim.csv")" -eq 3001 ] || fail "simulate of input [KPA]: $(wc -l < "$T/sim.csv") lines"
-"$BIN" simulate --model "$T/m.json" --input <(cat "$T/sim_bar.csv") --output "$T/simp.csv" > /dev/null 2>&1 \
-  || fail "simulate from a pipe: exit $?"
+# a pipe is checked as it is read, before anything is written; to stdout alike
+"$BIN" simulate --model "$T/m.json" --input <(cat "$T/sim_bar.csv") --output "$T/simp.csv" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "simulate of an input in bar from a pipe: not exit 1"
+grep -q "the column input is in bar, but the model .*m.json's input is in kPa" "$T/err.txt" \
+  || fail "simulate bar from a pipe: $(cat "$T/err.txt")"
+[ -e "$T/simp.csv" ] && fail "simulate bar from a pipe: an output written"
+"$BIN" simulate --model "$T/m.json" --input "$T/sim_bar.csv" --output - > "$T/out.txt" 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "simulate of an input in bar to stdout: not exit 1"
+[ -s "$T/out.txt" ] && fail "simulate bar to stdout: rows printed"
+"$BIN" simulate --model "$T/m.json" --input <(cat "$T/sim_kpa.csv") --output "$T/simp.csv" > /dev/null 2>&1 \
+  || fail "simulate of input [KPA] from a pipe: exit $?"
 { echo "t,p,output [mm]"; tail -n +2 "$T/plain.csv"; } > "$T/inv_mm.csv"
 "$BIN" invert --model "$T/m.json" --input "$T/inv_mm.csv" --output "$T/inv.csv" > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "invert of an output in mm with a model in N: not exit 1"

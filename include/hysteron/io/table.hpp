@@ -123,16 +123,15 @@ struct NamedColumn {
   std::string name, unit;
 };
 NamedColumn read_named_column(const std::string& path, const ReadOptions& options);
-// The name and unit of the column read_column would read (no values): a text file is read up to its
-// first data row (the column is chosen there, as for_each_value chooses it); a .mat file: the spec,
-// no unit. Throws hysteron::Error as read_column does for a missing column or an empty file.
-NamedColumn column_header(const std::string& path, const ReadOptions& options);
 
 // Streams one column (selected as read_column does, preferred_column included) of a text file:
 // on_value(v) for each row in order, in bounded memory (the file is read in chunks). The whole
 // file is checked as read_column checks it, so an error can come after earlier values were
 // delivered. A .mat file is read whole, then delivered the same way.
-void for_each_value(const std::string& path, const ReadOptions& options, const std::function<void(double)>& on_value);
+// on_column (if given) is called once with the chosen column's name and unit (no values), before
+// the first value: a caller can refuse the column there, before any value was delivered.
+void for_each_value(const std::string& path, const ReadOptions& options, const std::function<void(double)>& on_value,
+                    const std::function<void(const NamedColumn&)>& on_column = {});
 
 struct WriteOptions {
   bool compress_mat = false;  // .mat: zlib-compressed variables (smaller, several times slower)

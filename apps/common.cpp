@@ -189,9 +189,13 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
 report::Axis parse_axis(const std::string& text, const std::string& fallback) {
   const std::string t = trim(text);
   if (t.empty()) return {fallback.empty() ? std::string("value") : fallback, ""};
-  const std::string unit = io::trailing_unit(t);  // "Pressure [kPa]", "Pressure (kPa)"
+  // "Pressure [kPa]", "Pressure (kPa)"; a label the user gives may also write "Pressure[kPa]"
+  std::string unit = io::trailing_unit(t), label = io::without_unit(t);
+  if (const auto open = t.rfind('['); unit.empty() && open != std::string::npos && t.back() == ']') {
+    unit = trim(std::string_view(t).substr(open + 1, t.size() - open - 2));
+    label = trim(std::string_view(t).substr(0, open));
+  }
   if (unit.empty()) return {t, ""};
-  std::string label = io::without_unit(t);
   if (label.empty() || label == t) label = fallback.empty() ? std::string("value") : fallback;
   return {label, unit};
 }
@@ -233,7 +237,6 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
   sub->add_option("--input-label", sel.input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
   sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");
 }
-
 
 namespace {
 io::ReadOptions column_options(const std::string& spec) {

@@ -261,10 +261,16 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
   if (d.x.size() != d.y.size())
     throw Error(fmt::format("{}: input column has {} values, output column {}", file, d.x.size(), d.y.size()));
   // a label's unit is the axis's and the model's: one the column's own contradicts is refused
-  refuse_other_units(file, "input ", sel.input, d.input_unit, "--input-label", "unit",
-                     parse_axis(sel.input_label, sel.input).unit);
-  refuse_other_units(file, "output ", sel.output, d.output_unit, "--output-label", "unit",
-                     parse_axis(sel.output_label, sel.output).unit);
+  const auto label_agrees = [&](std::string_view what, const std::string& column, const std::string& unit,
+                                const std::string& label) {
+    const std::string a = io::canonical_unit(unit), b = io::canonical_unit(parse_axis(label, column).unit);
+    if (!a.empty() && !b.empty() && a != b)
+      throw Error(fmt::format("{}: the {} column {} is in {}, but --{}-label \"{}\" says {}: give the label the "
+                              "column's unit (or none)",
+                              file, what, column, unit, what, label, parse_axis(label, column).unit));
+  };
+  label_agrees("input", sel.input, d.input_unit, sel.input_label);
+  label_agrees("output", sel.output, d.output_unit, sel.output_label);
   if (!sel.time_column.empty()) {
     io::NamedColumn t = io::read_named_column(file, column_options(sel.time_column));
     d.t = std::move(t.values);
@@ -449,6 +455,7 @@ io::DataDescription describe_data(const DataSelection& sel, const DataColumns& r
   d.output_column = sel.output;
   d.time_column = sel.time_column;
   d.time_unit = rec.time_unit;
+  d.time_unit_given = !sel.time_unit.empty();  // else the file's header gave it, or none (s)
   d.input_label = in.label;
   d.input_unit = in.unit;
   d.output_label = out.label;

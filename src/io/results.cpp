@@ -250,6 +250,7 @@ json to_json(const DataDescription& d) {
   if (!d.time_column.empty()) {
     j["time_column"] = d.time_column;
     j["time_unit"] = d.time_unit;
+    j["time_unit_given"] = d.time_unit_given;
   }
   return j;
 }
@@ -266,6 +267,7 @@ void from_json(const json& j, DataDescription& d, std::string_view where) {
   // documents before 2026-11-30 have no time_unit: their time columns were in seconds or drawn as such
   d.time_unit = opt_string(j, "time_unit", where, "s");
   (void)time_unit_seconds(d.time_unit, key_where(where, "time_unit"));
+  d.time_unit_given = opt_bool(j, "time_unit_given", where, true);
   if (j.contains("input_axis")) {
     d.input_label = opt_string(j["input_axis"], "label", key_where(where, "input_axis"), d.input_label);
     d.input_unit = opt_string(j["input_axis"], "unit", key_where(where, "input_axis"));

@@ -899,7 +899,9 @@ std::vector<double> read_time_seconds(const std::string& doc_path, const io::Dat
     throw Error(fmt::format("{}: data: --time-unit {} but {} gives the time column {} the unit \"{}\": one of them "
                             "is wrong (drop --time-unit if the file is right)",
                             doc_path, d.time_unit, file, d.time_column, c.unit));
-  std::string u = !named.empty() ? named : !d.time_unit.empty() ? d.time_unit : std::string("s");
+  // a file that names no unit: the user's --time-unit (fit's or this report's), else s, as fit read it
+  const bool given = unit_given || d.time_unit_given;
+  std::string u = !named.empty() ? named : given && !d.time_unit.empty() ? d.time_unit : std::string("s");
   const double to_s = io::time_unit_seconds(u, doc_path + ": data.time_unit");
   if (unit) *unit = u;
   std::vector<double> t = std::move(c.values);

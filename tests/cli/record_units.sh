@@ -118,7 +118,7 @@ $PY -c "import json,sys; assert 'units' not in json.load(open(sys.argv[1]))" "$T
 "$BIN" fit --model pi --data "$T/bar.csv" --input p --output F --input-label "Pressure [kPa]" --out "$T/lab.json" \
   > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "fit --input-label [kPa] on a column in bar: not exit 1"
-grep -q "bar.csv: the input column p is in bar, but --input-label's unit is in kPa" "$T/err.txt" \
+grep -q 'bar.csv: the input column p is in bar, but --input-label "Pressure \[kPa\]" says kPa' "$T/err.txt" \
   || fail "label against column: $(cat "$T/err.txt")"
 [ -e "$T/lab.json" ] && fail "fit --input-label [kPa] on bar: a model written"
 

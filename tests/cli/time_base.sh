@@ -206,6 +206,23 @@ for f in rhead rrow; do
     || fail "evaluate $f: exit $?: $(cat "$T/err.txt")"
   grep -q "the record's sample time" "$T/err.txt" && fail "evaluate $f: read as seconds: $(cat "$T/err.txt")"
 done
+# the figures of a report page (its SVGs)
+figures() { $PY -c "import re,sys; print(''.join(re.findall(r'<svg.*?</svg>', open(sys.argv[1]).read(), re.S)))" "$1"; }
+# the report of a fit on a "t [ms]" record validated on records in s, one saying so ("t [s]") and
+# one not ("t"): both validation files are drawn in seconds, as fit read them (the same figures)
+sed '1s/.*/t [s],p,y/' "$T/r.csv" > "$T/rsec.csv"
+for v in r rsec; do
+  mkdir -p "$T/val_$v"
+  cp "$T/rhead.csv" "$T/val_$v/"
+  cp "$T/$v.csv" "$T/val_$v/val.csv"  # one name: the page names the file
+  (cd "$T/val_$v" && "$BIN" fit --model pi --data rhead.csv --input 1 --output 2 --time-column 0 --validate-data val.csv \
+    --threads 1 --force --out m.json --report fit.json > /dev/null 2>&1 && "$BIN" report fit.json --out r.html 2> err.txt) \
+    || fail "fit/report validated on $v.csv: $(cat "$T/val_$v/err.txt")"
+  figures "$T/val_$v/r.html" > "$T/val_$v/figures.txt"
+done
+grep -q '> 0.4</tspan>' "$T/val_r/figures.txt" || fail "validation in s under a document in ms: no tick at 0.4 s"
+cmp -s "$T/val_r/figures.txt" "$T/val_rsec/figures.txt" \
+  || fail "a validation file without a time unit is drawn otherwise than one in s (under a document in ms)"
 sed '1s/.*/t (min),p,y/' "$T/rms.csv" > "$T/rmin.csv"
 fitc --data "$T/rmin.csv" --time-column 0 --out "$T/rmin.json" > /dev/null 2> "$T/err.txt"
 [ $? -eq 1 ] || fail "a time column in min: not exit 1"
@@ -233,7 +250,6 @@ grep -q "rgap.csv: the time column t is not uniformly sampled" "$T/out.txt" \
 # ---- the report of a fit document of a --time-unit ms record draws its time in seconds ----
 # the same record in s and in ms, each fitted and reported beside its document: the same figures
 # (the HTML's table has the fit's wall time), the time axis to 0.399 s
-figures() { $PY -c "import re,sys; print(''.join(re.findall(r'<svg.*?</svg>', open(sys.argv[1]).read(), re.S)))" "$1"; }
 for u in s ms old; do
   mkdir -p "$T/rep_$u"
   cp "$T/$([ $u = ms ] && echo rms || echo r).csv" "$T/rep_$u/rec.csv"

@@ -48,6 +48,9 @@ struct DataDescription {
   std::string output_file, output_column;  // output_file empty: the input file
   std::string time_column;                 // empty: no time axis
   std::string time_unit = "s";             // of the time column: s, ms or us (time_unit_seconds)
+  // time_unit is the user's --time-unit, for every file (documents before 2026-12-01: always);
+  // false: the training file's header gave it, and a file that names no unit is in s
+  bool time_unit_given = true;
   std::string input_label = "Input", input_unit;
   std::string output_label = "Output", output_unit;
   InitialState initial_state = InitialState::virgin;

@@ -64,11 +64,16 @@ ModelParams read_model_source(const std::string& path, ModelUnits* units) {
 
 namespace {
 // A record's column and a model (or the training record) naming two different units of one kind.
+// Two unit texts that name different known units (free text, or the same unit, does not).
+bool units_differ(std::string_view a, std::string_view b) {
+  const std::string ca = io::canonical_unit(a), cb = io::canonical_unit(b);
+  return !ca.empty() && !cb.empty() && ca != cb;
+}
+
 void refuse_other_units(const std::string& file, std::string_view column_what, const std::string& column,
                         const std::string& in_file, const std::string& source, std::string_view what,
                         const std::string& in_source) {
-  const std::string a = io::canonical_unit(in_file), b = io::canonical_unit(in_source);
-  if (a.empty() || b.empty() || a == b) return;  // free text, or the same unit, is not refused
+  if (!units_differ(in_file, in_source)) return;
   throw Error(fmt::format("{}: the {}column {} is in {}, but {}'s {} is in {}: every value would be off by the ratio "
                           "of the two units; convert one of them",
                           file, column_what, column, in_file, source, what, in_source));
@@ -263,8 +268,7 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
   // a label's unit is the axis's and the model's: one the column's own contradicts is refused
   const auto label_agrees = [&](std::string_view what, const std::string& column, const std::string& unit,
                                 const std::string& label) {
-    const std::string a = io::canonical_unit(unit), b = io::canonical_unit(parse_axis(label, column).unit);
-    if (!a.empty() && !b.empty() && a != b)
+    if (units_differ(unit, parse_axis(label, column).unit))
       throw Error(fmt::format("{}: the {} column {} is in {}, but --{}-label \"{}\" says {}: give the label the "
                               "column's unit (or none)",
                               file, what, column, unit, what, label, parse_axis(label, column).unit));

@@ -154,6 +154,35 @@ Record shared_record(const std::filesystem::path& file, std::size_t in, std::siz
 
 // ---- the units map ---------------------------------------------------------------
 
+namespace {
+// The mapped model on the raw inputs um.from_model(xm) (returned in xr) against the core on xm
+// mapped to raw output: the largest relative deviation.
+double map_deviation(const ModelParams& core, const ModelParams& mapped, const UnitsMap& um,
+                     const std::vector<double>& xm, std::vector<double>& xr) {
+  Model m0(core), m1(mapped);
+  xr.clear();
+  double worst = 0;
+  for (double v : xm) {
+    const double raw = um.from_model(v);
+    xr.push_back(raw);
+    const double expected = um.output(m0.step(v));
+    worst = std::max(worst, std::abs(m1.step(raw) - expected) / (1 + std::abs(expected)));
+  }
+  return worst;
+}
+
+// Two models on the same inputs: the largest deviation of a from b, relative to 1 + |b|.
+double relative_deviation(const ModelParams& a, const ModelParams& b, const std::vector<double>& x) {
+  Model ma(a), mb(b);
+  double dev = 0;
+  for (double v : x) {
+    const double ya = ma.step(v), yb = mb.step(v);
+    dev = std::max(dev, std::abs(ya - yb) / (1 + std::abs(yb)));
+  }
+  return dev;
+}
+}  // namespace
+
 TEST(UnitsMap, ModelAndInverseApplyTheMapExactly) {
   const UnitsMap um{3.0, 2.5, -7.0, -4.0};
   const std::vector<double> x = wandering_sine(3000, 8.0);
@@ -161,16 +190,8 @@ TEST(UnitsMap, ModelAndInverseApplyTheMapExactly) {
     ModelParams mapped = core;
     units_map(mapped) = um;
     if (std::holds_alternative<MpiAsymParams>(mapped)) std::get<MpiAsymParams>(mapped).input_limits = Limits{-22, 28};
-    Model m0(core), m1(mapped);
     std::vector<double> xr;
-    double worst = 0;
-    for (double v : x) {
-      const double raw = um.from_model(v);
-      xr.push_back(raw);
-      const double expected = um.output(m0.step(v));
-      worst = std::max(worst, std::abs(m1.step(raw) - expected) / (1 + std::abs(expected)));
-    }
-    EXPECT_LT(worst, 1e-12) << model_name(core);
+    EXPECT_LT(map_deviation(core, mapped, um, x, xr), 1e-12) << model_name(core);
     // a negative gain makes the model decreasing; its inverse is still exact
     Model fwd(mapped);
     Inverse inv(mapped);
@@ -181,13 +202,7 @@ TEST(UnitsMap, ModelAndInverseApplyTheMapExactly) {
     const ModelParams absorbed = absorb_scales(mapped);
     EXPECT_EQ(units_map(absorbed).input_scale, 1.0);
     EXPECT_EQ(units_map(absorbed).output_gain, -1.0);
-    Model ma(absorbed), mb(mapped);
-    double dev = 0;
-    for (double v : xr) {
-      const double a = ma.step(v), b = mb.step(v);
-      dev = std::max(dev, std::abs(a - b) / (1 + std::abs(b)));
-    }
-    EXPECT_LT(dev, 1e-11) << model_name(core);
+    EXPECT_LT(relative_deviation(absorbed, mapped, xr), 1e-11) << model_name(core);
   }
 }
 
@@ -208,16 +223,8 @@ TEST(UnitsMap, NegativeInputScaleMirrorsTheInput) {
       ASSERT_NO_THROW(validate_model(mapped));
       EXPECT_TRUE(um.mirrored());
       EXPECT_EQ(um.increasing(), um.output_gain < 0);
-      Model m0(core), m1(mapped);
       std::vector<double> xr;
-      double worst = 0;
-      for (double v : xm) {
-        const double x = um.from_model(v);
-        xr.push_back(x);
-        const double expected = um.output(m0.step(um.to_model(x)));
-        worst = std::max(worst, std::abs(m1.step(x) - expected) / (1 + std::abs(expected)));
-      }
-      EXPECT_LT(worst, 1e-12);
+      EXPECT_LT(map_deviation(core, mapped, um, xm, xr), 1e-12);
       // the inverse inverts it and respects the raw limits
       Model fwd(mapped);
       Inverse inv(mapped);
@@ -239,13 +246,7 @@ TEST(UnitsMap, NegativeInputScaleMirrorsTheInput) {
       const ModelParams absorbed = absorb_scales(mapped);
       EXPECT_EQ(units_map(absorbed).input_scale, -1.0);
       EXPECT_EQ(units_map(absorbed).output_gain, um.output_gain < 0 ? -1.0 : 1.0);
-      Model ma(absorbed), mb(mapped);
-      double dev = 0;
-      for (double v : xr) {
-        const double a = ma.step(v), b = mb.step(v);
-        dev = std::max(dev, std::abs(a - b) / (1 + std::abs(b)));
-      }
-      EXPECT_LT(dev, 1e-11);
+      EXPECT_LT(relative_deviation(absorbed, mapped, xr), 1e-11);
       // the model file keeps it (and a round trip gives the same outputs)
       const ModelParams back = io::model_from_json(io::parse_json(io::model_to_json(mapped).dump(), "t"), "t");
       EXPECT_EQ(units_map(back), um);

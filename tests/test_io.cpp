@@ -823,6 +823,51 @@ TEST(Table, UnitsRowAndUnitsInTheHeader) {
     const auto path = dir.write("placeholder.csv", text);
     expect_error([&] { io::read_table(path); }, {path, ":2:1", "is not a number"});
   }
+  // a placeholder for a column without a unit beside units: a units row, the column's unit empty
+  for (const char* text : {"t,p,f\ns,kPa,-\n0,1,2\n", "t;p;f\n[s];NA;[N]\n0;1;2\n", "t,p,f\ns,,N\n0,1,2\n"}) {
+    SCOPED_TRACE(text);
+    const io::Table t = io::read_table(dir.write("some.csv", text));
+    ASSERT_EQ(t.num_rows(), 1u);
+    EXPECT_EQ(io::column_unit(t, 0), "s");
+    EXPECT_EQ(io::column_unit(t, 1), std::string(text).find("kPa") != std::string::npos ? "kPa" : "");
+    EXPECT_EQ(io::column_unit(t, 2), std::string(text).find("-") != std::string::npos ? "" : "N");
+  }
+  // a line of units that is no units row says why (a number, a field count); a data row does not
+  const auto one = dir.write("one.csv", "t,p,f\ns,kPa,1\n0,1,2\n");
+  expect_error([&] { io::read_table(one); },
+               {one, ":2:1", "\"s\" is not a number", "line 2 is not read as a units row", "field 3 \"1\" is a number",
+                "write \"-\""});
+  const auto count = dir.write("count.csv", "t,p,f\ns,kPa\n0,1,2\n");
+  expect_error([&] { io::read_table(count); }, {count, ":2:", "row has 2 fields", "it has 2 fields, the header 3"});
+  const auto typo = dir.write("typo.csv", "t,p,f\n0,x1,2\n");
+  try {
+    io::read_table(typo);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("\"x1\" is not a number"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("units row"), std::string::npos) << e.what();
+  }
+  // a blank-separated header keeps a name's unit with it ("input [kPa]": one column, not two),
+  // unless the data rows have a field for each part as written
+  const io::Table one_column = io::read_table(dir.write("one.txt", "input [kPa]\n0.1\n0.2\n"));
+  ASSERT_EQ(one_column.columns.size(), 1u);
+  EXPECT_EQ(one_column.columns[0], (std::vector<double>{0.1, 0.2}));
+  EXPECT_EQ(io::column_unit(one_column, 0), "kPa");
+  EXPECT_EQ(io::column_quantity(one_column, 0), "input");
+  const auto blanks = dir.write("blanks.txt", "t (s)   p [kPa] force\n0 1 2\n0.1 3 4\n");
+  const io::Table tp = io::read_table(blanks);
+  ASSERT_EQ(tp.columns.size(), 3u);
+  EXPECT_EQ(io::column_unit(tp, 0), "s");
+  EXPECT_EQ(io::column_unit(tp, 1), "kPa");
+  EXPECT_EQ(io::column_quantity(tp, 2), "force");
+  EXPECT_EQ(io::read_column(blanks, "p"), (std::vector<double>{1, 3}));
+  std::vector<double> streamed;
+  io::for_each_value(blanks, spec("p"), [&](double v) { streamed.push_back(v); });
+  EXPECT_EQ(streamed, (std::vector<double>{1, 3}));
+  const io::Table as_written = io::read_table(dir.write("written.txt", "a (b) c\n1 2 3\n"));
+  ASSERT_EQ(as_written.columns.size(), 3u);
+  EXPECT_EQ(as_written.names[1], "(b)");
+  EXPECT_EQ(io::read_column(dir.write("written2.txt", "a (b) c\n1 2 3\n"), "c"), (std::vector<double>{3}));
   // a row of numbers and empty fields is data, not units
   const io::Table d = io::read_table(dir.write("data.csv", "a,b,c\n1,,3\n4,,6\n"));
   EXPECT_TRUE(d.units.empty());

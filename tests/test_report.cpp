@@ -466,6 +466,16 @@ TEST(Report, DataOverrideKeepsTheRestOfTheDocument) {
   FitDataSource no_time = no_such_time;
   no_time.no_time = true;
   EXPECT_TRUE(read_evaluation_json(tmp / "ev.json", no_time).data.t.empty());
+  // a --time-unit where no time column is left would be ignored: refused, naming the document
+  FitDataSource unit_without_column = no_time;
+  unit_without_column.time_unit = "ms";
+  const std::string w = error_of([&] { (void)read_evaluation_json(tmp / "ev.json", unit_without_column); });
+  EXPECT_NE(w.find(tmp / "ev.json"), std::string::npos) << w;
+  EXPECT_NE(w.find("--time-unit ms but --no-time"), std::string::npos) << w;
+  // an experiment directory draws its own records: an override there would be ignored, refused
+  const std::string d = error_of([&] { write_report_from(tmp / "moved", tmp / "x.html", "", file_only); });
+  EXPECT_NE(d.find("an experiment directory"), std::string::npos) << d;
+  EXPECT_NE(d.find("--data"), std::string::npos) << d;
   // a column the file lacks: the document and the file named
   FitDataSource bad_column = file_only;
   bad_column.input_column = "nosuch";

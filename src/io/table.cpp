@@ -315,11 +315,21 @@ class TextParser {
     if (units_pending_) {
       units_pending_ = false;
       if (units_line()) return false;
+    } else {
+      units_refusal_.clear();  // said of the line after the header only
+    }
+    if (!split_names_.empty()) {  // the first data row after a header whose units were joined
+      if (fields_.size() != nfields_ && fields_.size() == split_names_.size()) {
+        names_ = std::move(split_names_);
+        resize_columns(names_.size());
+        check_repeated_names(first_line_);
+      }
+      split_names_.clear();
     }
     if (fields_.size() != nfields_) {
       if (fields_.size() > max_text_columns) too_many_columns();
-      throw Error(fmt::format("{}:{}: row has {} fields, expected {} (as on line {})", path_, lineno_, fields_.size(),
-                              nfields_, first_line_));
+      throw Error(fmt::format("{}:{}: row has {} fields, expected {} (as on line {}){}", path_, lineno_,
+                              fields_.size(), nfields_, first_line_, units_refusal_));
     }
     for (std::size_t c = 0; c < nfields_; ++c) {
       double v = 0.0;
@@ -341,14 +351,16 @@ class TextParser {
           present_[c] = 0;
           break;
         case Parse::malformed:
-          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number{}", path_, lineno_, c + 1,
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a number{}{}", path_, lineno_, c + 1,
                                   column_label(names_, c), shown(fields_[c]),
                                   fields_[c].find(',') == std::string_view::npos
                                       ? ""
-                                      : " (a decimal comma is read only when the first data row has one)"));
+                                      : " (a decimal comma is read only when the first data row has one)",
+                                  units_refusal_));
         case Parse::non_finite:
-          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a finite number (NaN and infinity are refused)", path_,
-                                  lineno_, c + 1, column_label(names_, c), shown(fields_[c])));
+          throw Error(fmt::format("{}:{}:{}{}: \"{}\" is not a finite number (NaN and infinity are refused){}",
+                                  path_, lineno_, c + 1, column_label(names_, c), shown(fields_[c]),
+                                  units_refusal_));
         case Parse::out_of_range:
           throw Error(fmt::format("{}:{}:{}{}: \"{}\" is out of the range of a double", path_, lineno_, c + 1,
                                   column_label(names_, c), shown(fields_[c])));
@@ -403,40 +415,103 @@ class TextParser {
       return parse_again(line);
     }
     for (auto f : fields_) names_.emplace_back(unquote(f));
+    if (sep_ == ' ') join_header_units();
     units_pending_ = true;
-    // A name given twice would select the first column silently (empty names may repeat). The
-    // error names the smallest repeated name (in std::string order) and its first two columns.
-    std::size_t dup_first = 0, dup_second = 0;
-    if (repeated_name(dup_first, dup_second))
-      throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
-                              lineno_, shown(names_[dup_second]), dup_first + 1, dup_second + 1));
+    check_repeated_names(lineno_);
     return false;
   }
 
-  // The line after the header (in fields_) is a units row ("s,kPa,N", "[s];[bar];[mm]") if it has
-  // the header's number of fields, at least one of them not empty, and none a number (a data
-  // row has only numbers and empty fields).
+  // A blank-separated header splits a name from its unit ("t [s] p [kPa]": 4 fields for 2
+  // columns): a field that is a bracketed unit alone is joined to the name before it (one without
+  // a unit of its own). Should the first data row have the unjoined number of fields, it is taken
+  // as written (split_names_, read_row).
+  void join_header_units() {
+    std::vector<std::string> joined;
+    for (const std::string& n : names_) {
+      const bool unit_alone = !n.empty() && (n.front() == '[' || n.front() == '(') && !trailing_unit("x " + n).empty();
+      if (unit_alone && !joined.empty() && !joined.back().empty() && trailing_unit(joined.back()).empty())
+        joined.back() += " " + n;
+      else
+        joined.push_back(n);
+    }
+    if (joined.size() == names_.size()) return;
+    split_names_ = std::move(names_);
+    names_ = std::move(joined);
+    resize_columns(names_.size());
+  }
+
+  void resize_columns(std::size_t n) {
+    nfields_ = n;
+    filled_.assign(nfields_, 0);
+    first_empty_line_.assign(nfields_, 0);
+    values_.assign(nfields_, 0.0);
+    present_.assign(nfields_, 0);
+  }
+
+  // A name given twice would select the first column silently (empty names may repeat). The
+  // error names the smallest repeated name (in std::string order) and its first two columns.
+  void check_repeated_names(std::size_t header_line) const {
+    std::size_t dup_first = 0, dup_second = 0;
+    if (repeated_name(dup_first, dup_second))
+      throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
+                              header_line, shown(names_[dup_second]), dup_first + 1, dup_second + 1));
+  }
+
+  // The line after the header (in fields_) is a units row ("s,kPa,N", "[s];[bar];[mm]", "s,kPa,-")
+  // if it has the header's number of fields, each of them a unit, a placeholder for a column
+  // without one ("-", "NA", or empty) and none a number, at least one a unit, and it does not
+  // repeat the header (a data row has only numbers and empty fields). Where a row with a unit in
+  // it is not taken, units_refusal_ says why, for the data rows' error on that line.
   bool units_line() {
-    if (fields_.size() != nfields_) return false;
-    bool any = false, repeats_header = true;
+    units_refusal_.clear();
+    std::size_t unit_fields = 0, numbers = 0, number_field = 0, other_field = 0;
+    bool repeats_header = fields_.size() == nfields_;
     for (std::size_t c = 0; c < fields_.size(); ++c) {
       const std::string_view f = unquote(fields_[c]);
       double v = 0.0;
-      if (parse_field(fields_[c], v) != Parse::malformed && !f.empty()) return false;
-      if (!f.empty() && !looks_like_unit(f)) return false;  // "-", "NA": a placeholder, left to the data rows
-      any = any || !f.empty();
+      if (f.empty() || is_placeholder(f)) {
+      } else if (parse_field(fields_[c], v) != Parse::malformed) {
+        if (number_field == 0) number_field = c + 1;
+        ++numbers;
+      } else if (looks_like_unit(f)) {
+        ++unit_fields;
+      } else if (other_field == 0) {
+        other_field = c + 1;
+      }
       repeats_header = repeats_header && f == names_[c];
     }
-    if (!any || repeats_header) return false;
+    // data (a malformed data row, mostly numbers, gets no word on units), placeholders only, the header again
+    if (unit_fields == 0 || unit_fields <= numbers || repeats_header) return false;
+    if (fields_.size() != nfields_) {
+      units_refusal_ = fmt::format("; line {} is not read as a units row: it has {} fields, the header {}",
+                                   lineno_, fields_.size(), nfields_);
+      return false;
+    }
+    if (number_field != 0 || other_field != 0) {
+      const std::size_t c = number_field != 0 ? number_field : other_field;
+      units_refusal_ = fmt::format(
+          "; line {} is not read as a units row: its field {} \"{}\" is {} (write \"-\" for a column without a unit)",
+          lineno_, c, shown(unquote(fields_[c - 1])), number_field != 0 ? "a number" : "no unit");
+      return false;
+    }
     units_.clear();
-    for (const std::string_view f : fields_) units_.emplace_back(unquote(f));
+    for (const std::string_view f : fields_) {
+      const std::string_view u = unquote(f);
+      units_.emplace_back(is_placeholder(u) ? std::string_view{} : u);
+    }
     return true;
+  }
+
+  // A units row's field for a column without a unit.
+  static bool is_placeholder(std::string_view f) {
+    for (const std::string_view p : {"-", "--", "NA", "N/A", "n/a", "na", "null", "NULL", "none", "None"})
+      if (f == p) return true;
+    return false;
   }
 
   // A units row's field: a letter, '%' or a non-ASCII byte (µ, °) in it, and not a placeholder.
   static bool looks_like_unit(std::string_view f) {
-    for (const std::string_view p : {"NA", "N/A", "n/a", "na", "null", "NULL", "none", "None"})
-      if (f == p) return false;
+    if (is_placeholder(f)) return false;
     return std::any_of(f.begin(), f.end(), [](char ch) {
       const auto u = static_cast<unsigned char>(ch);
       return std::isalpha(u) || ch == '%' || u >= 0x80;
@@ -496,6 +571,8 @@ class TextParser {
   bool first_ = true, decimal_comma_ = false, units_pending_ = false;
   std::size_t nfields_ = 0, first_line_ = 0, rows_ = 0, lineno_ = 0;
   std::vector<std::string> names_, units_;  // units_: a units row's fields, else empty
+  std::vector<std::string> split_names_;  // a blank-separated header as split, where its units were joined
+  std::string units_refusal_;  // why the line after the header, with a unit in it, is no units row
   std::vector<std::string_view> fields_;
   std::vector<std::size_t> filled_, first_empty_line_;  // non-empty fields per column; first empty one's line
   std::vector<double> values_;

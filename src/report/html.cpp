@@ -822,8 +822,9 @@ namespace {
 // ---- the data a fit or evaluation document names ---------------------------------
 
 // data_override (hysteron report --data/--input/--output/--time-column/--time-unit/--no-time):
-// each given field replaces the document's own, the others are kept (FitDataSource).
-void apply_data_override(io::DataDescription& d, const FitDataSource& o) {
+// each given field replaces the document's own, the others are kept (FitDataSource). A --time-unit
+// where no time column is left would be ignored: an error naming the document.
+void apply_data_override(io::DataDescription& d, const FitDataSource& o, const std::string& doc_path) {
   if (!o.input_file.empty()) {
     d.input_file = o.input_file;
     d.output_file = o.output_file.empty() ? o.input_file : o.output_file;
@@ -839,6 +840,11 @@ void apply_data_override(io::DataDescription& d, const FitDataSource& o) {
   } else if (!o.time_unit.empty()) {
     d.time_unit = o.time_unit;  // the document's column, in another unit than it records (or s)
   }
+  if (!o.time_unit.empty() && d.time_column.empty())
+    throw Error(fmt::format("{}: data: --time-unit {} but {}; give the time column with --time-column NAME, or drop "
+                            "--time-unit",
+                            doc_path, o.time_unit,
+                            o.no_time ? "--no-time draws against the sample index" : "the document names no time column"));
 }
 
 // A data file a document names: a relative path beside the document first, then from the
@@ -995,7 +1001,7 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
   LoadedFit out;
   out.fit = doc.fit;
   io::DataDescription& d = doc.data;
-  apply_data_override(d, data_override);
+  apply_data_override(d, data_override, path);
   if (!d.input_file.empty() && !j.contains("data") && j.contains("train") && j["train"].contains("range"))
     io::from_json(j["train"]["range"], d.train, path + ": train.range");
   const std::string dw = path + ": data";
@@ -1039,7 +1045,7 @@ LoadedEvaluation read_evaluation_document(const json& j, const std::string& path
   LoadedEvaluation out;
   out.document = io::from_json<io::EvaluationDocument>(j, path);
   io::DataDescription& d = out.document.data;
-  apply_data_override(d, data_override);
+  apply_data_override(d, data_override, path);
   out.data = load_document_record(path, d, !data_override.time_unit.empty());
   // The data must be the record evaluated (as for a fit: -d by hand, or a file changed since):
   // the model scored on it again gives the document's metrics. (from_json refuses a missing or
@@ -1097,6 +1103,13 @@ LoadedEvaluation read_evaluation_json(const std::string& path, const FitDataSour
 void write_report_from(const std::string& input, const std::string& html_path, const std::string& command_line,
                        const FitDataSource& data_override) {
   if (fs::is_directory(input)) {
+    const FitDataSource& o = data_override;
+    if (!o.input_file.empty() || !o.input_column.empty() || !o.output_column.empty() || !o.time_column.empty() ||
+        !o.time_unit.empty() || o.no_time)
+      throw Error(fmt::format("{}: an experiment directory: --data, --input, --output, --time-column, --time-unit and "
+                              "--no-time apply to fit and evaluation documents only (the experiment's records are "
+                              "its own)",
+                              input));
     write_experiment_report(read_experiment_dir(input), html_path, command_line);
   } else if (fs::is_regular_file(input)) {
     const json j = parse_json_file(input);

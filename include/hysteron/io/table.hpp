@@ -6,9 +6,11 @@
 //    is not a number ("nan"/"inf" count as numbers, and are then refused);
 //  - one separator per file, detected from the first non-empty line: tab if it
 //    has one, else ';', else ',', else runs of blanks;
-//  - a units row may follow the header: a line with the header's number of fields, none of them a
-//    number and not all empty ("s,kPa,N", "[s];[bar];[mm]"); it gives the columns' units
-//    (column_unit), as does a header name ending in "[unit]" or "(unit)";
+//  - a units row may follow the header: a line with the header's number of fields, each a unit or
+//    a placeholder for a column without one ("-", "NA", empty), none a number, at least one a unit,
+//    and not the header repeated ("s,kPa,N", "[s];[bar];[mm]", "s,-,N"); it gives the columns'
+//    units (column_unit), as does a header name ending in "[unit]" or "(unit)". A line after the
+//    header with more units than numbers that is no units row is an error that says why;
 //  - a UTF-8 BOM, blank lines and lines starting with '#' are ignored; lines end with
 //    LF, CRLF or a lone CR; fields are trimmed of blanks and of one pair of double quotes;
 //  - a column that is empty in every row (e.g. the leading "," of every line)

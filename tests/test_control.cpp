@@ -11,9 +11,14 @@
 #include <random>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "alloc_counter.hpp"
+#include "hysteron/compensation.hpp"
 #include "hysteron/control.hpp"
 #include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/models.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/signals.hpp"
 
@@ -599,4 +604,74 @@ TEST(Control, PidTracksTheGpiSinusoidOnTheRig) {
   RecordProperty("max_error_mm", std::to_string(max_err * 1e3));
   RecordProperty("rms_error_mm", std::to_string(rms * 1e3));
   std::printf("PID-only tracking of Eq. 18 (5..20 s): max %.3f mm, rms %.3f mm\n", max_err * 1e3, rms * 1e3);
+}
+
+// A model whose output decreases with the pressure (a displacement sensor that reads the muscle's
+// length instead of its contraction, a force read with the other sign) is one the controllers
+// must feed back with the other sign: their PID gains are magnitudes. Each controller on the
+// negated model, tracking the negated reference on the negated plant, commands exactly what it
+// commands on the original (the PID sees sign * (r, y); the inverse of -y on the negated model is
+// the inverse of y on the original, bit for bit). Without the sign, the loop on the negated model
+// is positive feedback and runs to a pressure limit.
+TEST(Compensation, ADecreasingModelIsFedBackWithItsSign) {
+  const auto gpi = [](double gain, double offset) {
+    return io::model_from_json(
+        io::parse_json(fmt::format(R"({{"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05],
+      "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05, "input_origin": 0.05, "input_scale": 0.5,
+      "output_offset": {}, "output_gain": {}, "input_limits": [0, 0.6]}})",
+                                   offset, gain),
+                       "gpi"),
+        "gpi");
+  };
+  const ModelParams up = gpi(30.0, 1.0), down = gpi(-30.0, -1.0);  // down: y -> -y exactly
+  ASSERT_TRUE(units_map(up).increasing());
+  ASSERT_FALSE(units_map(down).increasing());
+  const double ts = 1e-3;
+  FeedforwardParams ff;
+  ff.sample_time = ts;
+  ff.lag_time_constant = 0.02;
+  const PidParams pid{.kp = 8.0, .ki = 40.0, .kd = 0.0, .sample_time = ts, .out_min = 0.0, .out_max = 0.6};
+  OpenLoopParams ol;
+  ol.feedforward = ff;
+  ol.pressure_gain = 0.5;
+  ol.position = PidParams{.kp = 2.0, .ki = 20.0, .kd = 0.0, .sample_time = ts, .out_min = -0.6, .out_max = 0.6};
+  CascadeParams cp;
+  cp.feedforward = ff;
+  cp.position = pid;
+  cp.pressure = PidParams{.kp = 4.0, .ki = 30.0, .kd = 0.0, .sample_time = ts, .out_min = -1.0, .out_max = 1.0};
+  // the plant: the model itself behind a lag on the pressure, a bias the feedback must remove (in
+  // output units of the model, mm; the controllers take metres: model_scale 1000)
+  struct Run {
+    std::vector<double> command;
+    double rms_mm = 0.0;
+  };
+  const auto run = [&](const ModelParams& model, double sign, int kind) {
+    FeedforwardPidController a(model, ff, pid);
+    OpenLoopController b(model, ol);
+    CascadePwmController c(model, cp);
+    Model plant(model);
+    FirstOrder lag(0.03, ts);
+    double pressure = 0.0, y_mm = plant.step(0.0) + sign * 2.0, sq = 0.0;
+    Run out;
+    for (int k = 0; k < 4000; ++k) {
+      const double t = k * ts, r_mm = sign * (30.0 + 8.0 * std::sin(2.0 * std::numbers::pi * t));
+      double u = 0.0;
+      if (kind == 0) u = a.step(r_mm * 1e-3, r_mm * 1e-3, y_mm * 1e-3);
+      if (kind == 1) u = b.step(r_mm * 1e-3, r_mm * 1e-3, y_mm * 1e-3, pressure);
+      if (kind == 2) u = std::clamp(pressure + 0.05 * c.step(r_mm * 1e-3, r_mm * 1e-3, y_mm * 1e-3, pressure), 0.0, 0.6);
+      out.command.push_back(u);
+      pressure = kind == 2 ? u : lag.step(u);
+      y_mm = plant.step(pressure) + sign * 2.0;
+      if (k >= 2000) sq += (r_mm - y_mm) * (r_mm - y_mm);
+    }
+    out.rms_mm = std::sqrt(sq / 2000.0);
+    return out;
+  };
+  for (int kind = 0; kind < 3; ++kind) {
+    SCOPED_TRACE(kind);
+    const Run a = run(up, 1.0, kind), b = run(down, -1.0, kind);
+    EXPECT_LT(a.rms_mm, 1.0);  // the loop tracks (the 2 mm bias removed)
+    EXPECT_EQ(a.command, b.command);
+    EXPECT_EQ(a.rms_mm, b.rms_mm);
+  }
 }

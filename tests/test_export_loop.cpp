@@ -40,6 +40,11 @@ ModelParams gpi_units_model() {  // a units map: x_m = (x - 0.05) / 0.5, y = 1 +
       "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05, "input_origin": 0.05, "input_scale": 0.5,
       "output_offset": 1.0, "output_gain": 30.0, "input_limits": [0, 0.6]})", "gpi"), "gpi");
 }
+ModelParams gpi_decreasing_model() {  // y = 60 - 30 v: decreasing (a sensor reading length, not contraction)
+  return io::model_from_json(io::parse_json(R"({"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05],
+      "q": 0.5, "n": 10, "rho": 0.3, "tau": 1.5, "alpha": 0.05, "input_origin": 0.05, "input_scale": 0.5,
+      "output_offset": 60.0, "output_gain": -30.0, "input_limits": [0, 0.6]})", "gpi"), "gpi");
+}
 ModelParams asym_model() {
   return io::model_from_json(io::parse_json(R"({"model": "mpi-asym", "q": 30, "r": [0.02, 0.05, 0.1],
       "p": [10, 8, 5], "ascending": {"envelope": "tanh", "c": [1, 1.3, 0.05, 0.01]},
@@ -58,8 +63,11 @@ PidParams pid(double kp, double ki, double kd, double tf, AntiWindup aw) {
   return p;
 }
 
-enum class M { pi, asym, gpi_units };
-ModelParams model_of(M m) { return m == M::pi ? pi_model() : m == M::asym ? asym_model() : gpi_units_model(); }
+enum class M { pi, asym, gpi_units, gpi_decreasing };
+ModelParams model_of(M m) {
+  return m == M::pi ? pi_model() : m == M::asym ? asym_model() : m == M::gpi_units ? gpi_units_model()
+                                                                                   : gpi_decreasing_model();
+}
 
 struct Case {
   std::string name;
@@ -134,6 +142,24 @@ std::vector<Case> cases() {
     d.pressure_pid = pp;
     d.pwm = PwmParams{1.0, 0.0, 0.0, 1.0, 0.0};
     v.push_back({"cascade_continuous_pwm", d, M::pi, true});
+  }
+  {
+    // a decreasing model: each position PID fed sign * (r, y) (feedback_sign -1)
+    LoopDesign d;
+    d.kind = LoopDesign::Kind::feedforward_pid;
+    d.pid = pid(9.8, 82, 0.29, 0.008, AntiWindup::conditional);
+    d.feedforward_lead = 40;
+    v.push_back({"ff_pid_decreasing_model", d, M::gpi_decreasing, false});
+    d.kind = LoopDesign::Kind::open_loop;
+    d.pressure_gain = 0.5;
+    v.push_back({"open_loop_decreasing_model", d, M::gpi_decreasing, true});
+    d.kind = LoopDesign::Kind::cascade_pwm;
+    PidParams pp = pid(12, 60, 0.0, 0.0, AntiWindup::conditional);
+    pp.out_min = -1;
+    pp.out_max = 1;
+    d.pressure_pid = pp;
+    d.pwm = PwmParams{1.0, 0.0, 0.0, 1.0, 0.0};
+    v.push_back({"cascade_decreasing_model", d, M::gpi_decreasing, false});
   }
   return v;
 }

@@ -50,17 +50,24 @@ class InverseFeedforward {
   // The parameters with the resolved pressure limits (never infinite).
   const FeedforwardParams& params() const noexcept { return p_; }
   const Limits& pressure_limits() const noexcept { return p_.pressure_limits; }
+  // +1 where the model's output increases with its input, -1 where it decreases (UnitsMap::
+  // increasing(): a displacement sensor that reads length instead of contraction, a force read with
+  // the other sign). The controllers feed their position PID sign * (r, y): PID gains are magnitudes,
+  // and feedback on a decreasing model is negative feedback too.
+  double feedback_sign() const noexcept { return sign_; }
 
  private:
   FeedforwardParams p_;
   Inverse inverse_;
+  double sign_ = 1.0;
   double prev_ = 0.0;
   bool started_ = false;
 };
 
 // GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)), with the PID's
 // anti-windup aware of the total command (the feedforward enters the PID as
-// its feedforward term, so the clamp and the integrator agree).
+// its feedforward term, so the clamp and the integrator agree). On a decreasing model the PID
+// acts on y - y_d (InverseFeedforward::feedback_sign), as do the other controllers' position PIDs.
 class FeedforwardPidController {
  public:
   // Throws hysteron::Error if pid.sample_time is not ff.sample_time (one sample time for the loop)

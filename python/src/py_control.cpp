@@ -213,6 +213,9 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
           "pressure_limits", [](const InverseFeedforward& c) { return limits_pair(c.pressure_limits()); },
           "The (lo, hi) [MPa] the commands are clamped to: the given ones, or the model's.")
       .def("reset", &InverseFeedforward::reset, "Back to the virgin state of the inverse (and no lag history).")
+      .def_property_readonly("feedback_sign", &InverseFeedforward::feedback_sign,
+                             "+1 where the model's output increases with its input, -1 where it decreases: the "
+                             "controllers' position PIDs act on feedback_sign * (r - y) (PID gains are magnitudes).")
       .def_property_readonly("saturated", &InverseFeedforward::saturated,
                              "True if the last command was clamped to pressure_limits.")
       .def("__repr__", [](const InverseFeedforward& f) {

@@ -453,3 +453,35 @@ def test_experiment_registry():
         assert "learning" in e["variants"] and "compensated" in e["variants"]
     with pytest.raises(hysteron.Error, match="learning_periods"):
         hysteron.run_experiment("gpi-pid", learning_periods=-1)
+
+
+def test_a_decreasing_model_is_fed_back_with_its_sign():
+    # a record of the muscle's length instead of its contraction gives a decreasing model; the
+    # controllers' PIDs take gains as magnitudes and feed back y - r there (positive feedback before)
+    base = {"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10, "rho": 0.3,
+            "tau": 1.5, "alpha": 0.05, "input_origin": 0.05, "input_scale": 0.5, "output_offset": 1.0,
+            "output_gain": 30.0, "input_limits": [0, 0.6]}
+    down = dict(base, output_offset=-1.0, output_gain=-30.0)  # y -> -y
+    assert hysteron.InverseFeedforward(base).feedback_sign == 1.0
+    assert hysteron.InverseFeedforward(down).feedback_sign == -1.0
+
+    def run(model, sign):
+        pid = hysteron.Pid(kp=8.0, ki=40.0, sample_time=1e-3, out_min=0.0, out_max=0.6)
+        c = hysteron.FeedforwardPidController(model, pid=pid, lag_time_constant=0.02)
+        plant = hysteron.Model(model)
+        a, p, y = np.exp(-1e-3 / 0.03), 0.0, plant.step(0.0) + sign * 2.0
+        commands, errors = [], []
+        for k in range(3000):
+            r = sign * (30.0 + 8.0 * np.sin(2 * np.pi * k * 1e-3))
+            u = c.step(r * 1e-3, r * 1e-3, y * 1e-3)
+            p = a * p + (1 - a) * u
+            y = plant.step(p) + sign * 2.0
+            commands.append(u)
+            errors.append(r - y)
+        return np.array(commands), float(np.sqrt(np.mean(np.square(errors[1500:]))))
+
+    up_u, up_rms = run(base, 1.0)
+    down_u, down_rms = run(down, -1.0)
+    assert up_rms < 1.0
+    np.testing.assert_array_equal(up_u, down_u)
+    assert down_rms == up_rms

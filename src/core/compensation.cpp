@@ -72,7 +72,9 @@ void check_sample_time(const PidParams& pid, const FeedforwardParams& ff, const 
 }  // namespace
 
 InverseFeedforward::InverseFeedforward(const ModelParams& model, const FeedforwardParams& params)
-    : p_(resolved(model, params)), inverse_(model, inverse_options(p_)) {}
+    : p_(resolved(model, params)),
+      inverse_(model, inverse_options(p_)),
+      sign_(units_map(model).increasing() ? 1.0 : -1.0) {}
 
 void InverseFeedforward::reset() noexcept {
   inverse_.reset();
@@ -106,8 +108,8 @@ void FeedforwardPidController::reset() noexcept {
 }
 
 double FeedforwardPidController::step(double reference_m, double preview_m, double measured_m) noexcept {
-  const double u_ff = ff_.step(preview_m);
-  const double u = pid_.step(reference_m, measured_m, u_ff);
+  const double u_ff = ff_.step(preview_m), s = ff_.feedback_sign();
+  const double u = pid_.step(s * reference_m, s * measured_m, u_ff);
   const Limits& lim = ff_.pressure_limits();
   return std::clamp(std::isfinite(u) ? u : u_ff, lim.lo, lim.hi);
 }
@@ -136,7 +138,8 @@ double OpenLoopController::step(double reference_m, double preview_m, double mea
                                 double pressure_mpa) noexcept {
   const Limits& lim = p_.feedforward.pressure_limits;
   double p_d = ff_.step(preview_m);
-  if (use_position_) p_d = std::clamp(p_d + position_.step(reference_m, measured_m), lim.lo, lim.hi);
+  const double s = ff_.feedback_sign();
+  if (use_position_) p_d = std::clamp(p_d + position_.step(s * reference_m, s * measured_m), lim.lo, lim.hi);
   return std::clamp(pressure_loop_command(p_d, pressure_mpa, p_.pressure_gain), lim.lo, lim.hi);
 }
 
@@ -170,8 +173,8 @@ void CascadePwmController::reset() noexcept {
 double CascadePwmController::step(double reference_m, double preview_m, double measured_m,
                                   double pressure_mpa) noexcept {
   const Limits& lim = p_.feedforward.pressure_limits;
-  const double u_ff = ff_.step(preview_m);
-  p_d_ = std::clamp(position_.step(reference_m, measured_m, u_ff), lim.lo, lim.hi);
+  const double u_ff = ff_.step(preview_m), s = ff_.feedback_sign();
+  p_d_ = std::clamp(position_.step(s * reference_m, s * measured_m, u_ff), lim.lo, lim.hi);
   const double u = pressure_.step(p_d_, pressure_mpa);
   return std::clamp(pwm_.step(u), -1.0, 1.0);
 }

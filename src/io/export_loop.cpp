@@ -345,6 +345,10 @@ void $P_loop_preview(const double *reference, double *preview, size_t n);
   df += fmt::format("static const double $P_pressure_lo = {}, $P_pressure_hi = {};  /* pressure limits [MPa] */\n",
                     num(ff.pressure_limits.lo), num(ff.pressure_limits.hi));
   df += fmt::format("static const size_t $P_lead = {};  /* the feedforward's lead [samples] */\n", lead);
+  const double sign = std::visit([](const auto& c) { return c.feedforward().feedback_sign(); }, ctl);
+  df += fmt::format(
+      "static const double $P_feedback_sign = {};  /* -1: the model decreases, the position PID acts on y - r */\n",
+      num(sign));
   if (d.shaper) {
     df += fmt::format("static const size_t $P_advance = {}, $P_delay = {};  /* shaper [samples] */\n", advance, delay);
     df += fmt::format("static const double $P_a1 = {}, $P_a2 = {};  /* shaper weights */\n", num(d.shaper->a1),
@@ -426,7 +430,8 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
   switch (d.kind) {
     case LoopDesign::Kind::feedforward_pid:
       df += R"(  const double u_ff = $P_feedforward(c, preview_m);
-  const double u = $P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, u_ff);
+  const double u = $P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m,
+                               $P_feedback_sign * measured_m, u_ff);
   (void)pressure_mpa;
   if (duty) *duty = 0.0;
   return $P_clamp($P_finite(u) ? u : u_ff, $P_pressure_lo, $P_pressure_hi);
@@ -436,8 +441,9 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
     case LoopDesign::Kind::open_loop:
       df += R"(  double p_d = $P_feedforward(c, preview_m), cmd;
   if ($P_use_position)
-    p_d = $P_clamp(p_d + $P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, 0.0), $P_pressure_lo,
-                   $P_pressure_hi);
+    p_d = $P_clamp(p_d + $P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m,
+                                     $P_feedback_sign * measured_m, 0.0),
+                   $P_pressure_lo, $P_pressure_hi);
   /* the pressure loop (pressure_loop_command): without a finite measurement, p_d itself */
   cmd = $P_finite(pressure_mpa) ? p_d + $P_pressure_gain * (p_d - pressure_mpa) : p_d;
   if (duty) *duty = 0.0;
@@ -448,7 +454,8 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
     case LoopDesign::Kind::cascade_pwm:
       df += R"(  const double u_ff = $P_feedforward(c, preview_m);
   double u, d;
-  c->desired_pressure = $P_clamp($P_pid_step(&c->position, &$P_position_gains, reference_m, measured_m, u_ff),
+  c->desired_pressure = $P_clamp($P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m,
+                                            $P_feedback_sign * measured_m, u_ff),
                                  $P_pressure_lo, $P_pressure_hi);
   u = $P_pid_step(&c->pressure, &$P_pressure_gains, c->desired_pressure, pressure_mpa, 0.0);
   d = $P_clamp($P_pwm_step(c, u), -1.0, 1.0);

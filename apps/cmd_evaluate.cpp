@@ -47,8 +47,9 @@ int run_evaluate(const EvaluateOptions& c) {
   if (c.json && report_stdout)
     throw Error(fmt::format("--report {} and --json both write to standard output: choose one", c.report));
   io::check_output_files({{"--report", c.report}}, {{"--model", c.model}, {"--data", c.sel.file}});
-  ModelUnits units;
-  const ModelParams model = read_model_source(c.model, &units);
+  const io::ModelDocument model_doc = read_model_source(c.model);
+  const ModelParams& model = model_doc.params;
+  const ModelUnits units = model_units(model_doc);
   const DataSelection& sel = c.sel;
   const DataColumns rec = read_data_columns(c.sel.file, sel);
   check_units_agree(units, fmt::format("the model {}", c.model == "-" ? "<stdin>" : c.model), rec, sel, c.sel.file);

@@ -130,8 +130,9 @@ void warn_assumed_dt(const ModelParams& params, const std::string& input, const 
 
 int run_simulate(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
-  ModelUnits units;
-  const ModelParams params = read_model_source(o.model, &units);
+  const io::ModelDocument doc = read_model_source(o.model);
+  const ModelParams& params = doc.params;
+  const ModelUnits units = model_units(doc);
   const io::ReadOptions ro = input_options(o.column, "input");
   const auto unit_check = [&](const io::NamedColumn& c) { check_column_unit(c, o.input, ro, units.input, o.model, "input"); };
   Model model(params);
@@ -184,8 +185,9 @@ int run_simulate(const Options& o) {
 
 int run_invert(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
-  ModelUnits units;
-  const ModelParams params = read_model_source(o.model, &units);
+  const io::ModelDocument doc = read_model_source(o.model);
+  const ModelParams& params = doc.params;
+  const ModelUnits units = model_units(doc);
   const io::ReadOptions ro = input_options(o.column, "output");
   const auto unit_check = [&](const io::NamedColumn& c) {
     check_column_unit(c, o.input, ro, units.output, o.model, "output");

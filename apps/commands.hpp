@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "hysteron/identify.hpp"
+#include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
@@ -55,13 +56,15 @@ const std::string& command_line();                        // the recorded comman
 // 3 poor_fit (model not written unless --force); 4 internal error.
 inline constexpr int exit_ok = 0, exit_error = 1, exit_not_converged = 2, exit_poor_fit = 3, exit_internal = 4;
 
-// A model file, or the model JSON on stdin for "-". Throws hysteron::Error.
+// A model file with its free-form keys (io::read_model_document), or the model JSON on stdin
+// for "-". Throws hysteron::Error.
+io::ModelDocument read_model_source(const std::string& path);
 // The units a model file records, its "units": {"input": ..., "output": ...} (fit writes them where
 // the record names them); "" where it records none.
 struct ModelUnits {
   std::string input, output;
 };
-ModelParams read_model_source(const std::string& path, ModelUnits* units = nullptr);
+ModelUnits model_units(const io::ModelDocument& doc);
 // "A:B" (sample indices, half-open; either side may be empty) or "As:Bs" (seconds, needs
 // `time`); both sides in the same unit. Throws hysteron::Error naming `opt`.
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n);

@@ -41,26 +41,11 @@ std::string trim(std::string_view s) {
 
 }  // namespace
 
-ModelParams read_model_source(const std::string& path, ModelUnits* units) {
-  std::string text, where = path;
-  if (path != "-") {
-    text = io::read_text_file(path, "model file", io::max_model_file_bytes);
-  } else {
-    text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
-    if (trim(text).empty()) throw Error("--model -: standard input is empty (expected a model file's JSON)");
-    where = "<stdin>";
-  }
-  const nlohmann::json j = io::parse_json(text, where);
-  ModelParams params = io::model_from_json(j, where);  // validates "units" too: an object of strings
-  if (units) {
-    *units = {};
-    if (const auto u = j.find("units"); u != j.end()) {
-      if (const auto in = u->find("input"); in != u->end()) units->input = in->get<std::string>();
-      if (const auto out = u->find("output"); out != u->end()) units->output = out->get<std::string>();
-    }
-  }
-  return params;
+io::ModelDocument read_model_source(const std::string& path) {
+  return io::read_model_document(path);  // "-": standard input, "<stdin>" in its errors
 }
+
+ModelUnits model_units(const io::ModelDocument& doc) { return {doc.unit("input"), doc.unit("output")}; }
 
 namespace {
 // A record's column and a model (or the training record) naming two different units of one kind.

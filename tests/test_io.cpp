@@ -8,6 +8,7 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -181,6 +182,105 @@ TEST(ModelFile, WriteAndReadFileRoundTripKeepsUnitsAndNote) {
     EXPECT_EQ(extra.at("note"), "fitted");
   }
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"m.json"});  // no temporary files left
+}
+
+// io::read_model_document: one reader of a model file that returns the parameters with the
+// free-form keys ("units", "note", "metadata"), and write_model_file(path, doc) the writer.
+TEST(ModelDocument, ReadReturnsParamsAndFreeFormKeys) {
+  TempDir dir;
+  const std::string text = R"({"schema": 1, "model": "pi", "r": [0, 0.1], "p": [1, 0.5],
+    "units": {"input": "kPa", "output": "N"}, "note": "bench 3",
+    "metadata": {"rig": {"id": 7, "tags": ["a", null]}}})";
+  const std::string path = dir.write("m.json", text);
+  const io::ModelDocument doc = io::read_model_document(path);
+  const json j = json::parse(text);
+  expect_same(io::model_from_json(j, "mem"), doc.params);
+  const json expected = {{"units", j.at("units")}, {"note", j.at("note")}, {"metadata", j.at("metadata")}};
+  EXPECT_EQ(doc.extra, expected);
+  EXPECT_EQ(doc.unit("input"), "kPa");
+  EXPECT_EQ(doc.unit("output"), "N");
+  EXPECT_EQ(doc.unit("time"), "");
+  // a file without them: an empty object, no units
+  const io::ModelDocument bare = io::read_model_document(dir.write("b.json", R"({"model":"pi","r":[0],"p":[1]})"));
+  EXPECT_TRUE(bare.extra.is_object());
+  EXPECT_TRUE(bare.extra.empty());
+  EXPECT_EQ(bare.unit("input"), "");
+  // read_model_file is the same reader, parameters only
+  expect_same(doc.params, io::read_model_file(path));
+}
+
+TEST(ModelDocument, WriteThenReadKeepsEveryFreeFormKeyForEveryKind) {
+  TempDir dir;
+  const json extra = {{"units", {{"input", "bar"}, {"output", "mm"}, {"time", "s"}}},
+                      {"note", "fitted on r.csv"},
+                      {"metadata", {{"score", 0.25}, {"list", {1, 2, 3}}}}};
+  for (const auto& params : all_model_kinds()) {
+    SCOPED_TRACE(std::string(hysteron::model_name(params)));
+    const std::string path = dir.file("m.json");
+    io::write_model_file(path, io::ModelDocument{params, extra});
+    const io::ModelDocument back = io::read_model_document(path);
+    expect_same(params, back.params);
+    EXPECT_EQ(back.extra, extra);
+    // and the JSON of a document is its parameters' JSON plus the keys
+    json want = io::model_to_json(params);
+    for (const auto& [k, v] : extra.items()) want[k] = v;
+    EXPECT_EQ(io::model_to_json(io::ModelDocument{params, extra}), want);
+  }
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"m.json"});
+}
+
+TEST(ModelDocument, DashReadsStandardInput) {
+  // fd 0 replaced by a pipe holding `text` for one read_model_document("-")
+  const auto read_stdin = [](const std::string& text) {
+    int fds[2];
+    EXPECT_EQ(::pipe(fds), 0);
+    EXPECT_EQ(::write(fds[1], text.data(), text.size()), static_cast<ssize_t>(text.size()));
+    ::close(fds[1]);
+    const int saved = ::dup(0);
+    ::dup2(fds[0], 0);
+    ::close(fds[0]);
+    std::clearerr(stdin);
+    struct Restore {
+      int fd;
+      ~Restore() {
+        ::dup2(fd, 0);
+        ::close(fd);
+        std::clearerr(stdin);
+      }
+    } restore{saved};
+    return io::read_model_document("-");
+  };
+  const io::ModelDocument doc =
+      read_stdin(R"({"model": "pi", "r": [0, 0.2], "p": [1, 0.25], "units": {"input": "kPa"}})");
+  EXPECT_EQ(std::get<hysteron::PiParams>(doc.params).p, (std::vector<double>{1, 0.25}));
+  EXPECT_EQ(doc.unit("input"), "kPa");
+  EXPECT_EQ(doc.unit("output"), "");
+  expect_error([&] { read_stdin(" \n"); }, {"<stdin>", "standard input is empty"});
+  expect_error([&] { read_stdin(R"({"model": "pi", "r": [0], "p": [1], "units": "kPa"})"); },
+               {"<stdin>", "\"units\"", "expected an object"});
+}
+
+TEST(ModelDocument, BadFreeFormKeysAreRefusedReadingAndWriting) {
+  const auto doc_error = [](const std::string& extra_keys, std::initializer_list<std::string> parts) {
+    const std::string text = R"({"model": "pi", "r": [0], "p": [1], )" + extra_keys + "}";
+    expect_error([&] { io::model_document_from_json(json::parse(text), "m.json"); }, parts);
+  };
+  doc_error(R"("units": "kPa")", {"m.json", "\"units\"", "expected an object"});
+  doc_error(R"("units": {"input": 100})", {"m.json", "\"units.input\"", "expected a string, got number"});
+  doc_error(R"("note": ["a"])", {"m.json", "\"note\"", "expected a string, got array"});
+  // the writer checks the values too: nothing is written
+  TempDir dir;
+  const std::string path = dir.write("m.json", "old");
+  hysteron::PiParams good;
+  good.r = {0.1};
+  good.p = {1.0};
+  expect_error([&] { io::write_model_file(path, good, {{"units", {{"input", 100}}}}); },
+               {path, "\"units.input\"", "expected a string"});
+  expect_error([&] { io::write_model_file(path, good, {{"units", "kPa"}}); }, {path, "\"units\""});
+  expect_error([&] { io::write_model_file(path, good, {{"note", 3}}); }, {path, "\"note\""});
+  expect_error([&] { io::write_model_file(path, io::ModelDocument{good, {{"fit", 1}}}); }, {path, "\"fit\""});
+  EXPECT_EQ(slurp(path), "old");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"m.json"});
 }
 
 TEST(ModelFile, ExampleFromDocsReads) {

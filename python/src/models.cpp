@@ -55,14 +55,16 @@ void bind_models(py::module_& m) {
       "Every error of hysteron (bad input, bad parameters, unreadable or unwritable files), with the C++ message "
       "naming what and where. A subclass of ValueError.";
 
-  // pickle: the model file's JSON (io::model_to_json, io::model_from_json) and Model::snapshot()
+  // pickle: the model file's JSON (io::model_to_json, io::model_document_from_json; a Model's with
+  // its free-form keys) and Model::snapshot()
   const auto model_json = [](const ModelParams& p) { return io::model_to_json(p).dump(); };
-  const auto model_from = [](const py::handle& text) {
-    return io::model_from_json(io::parse_json(cast_arg<std::string>(text, "pickled model", "a str"), "pickled model"),
-                               "pickled model");
+  const auto document_from = [](const py::handle& text) {
+    return io::model_document_from_json(
+        io::parse_json(cast_arg<std::string>(text, "pickled model", "a str"), "pickled model"), "pickled model");
   };
+  const auto model_from = [=](const py::handle& text) { return document_from(text).params; };
 
-  auto model_class = def_copy(py::class_<Model>(m, "Model", R"doc(
+  auto model_class = def_copy(py::class_<PyModel>(m, "Model", R"doc(
 A hysteresis model (pi, gpi, mpi-deadzone, mpi-asym, preisach, kp, bouc-wen, maxwell-slip,
 rate-pi) run sample by sample.
 
@@ -70,45 +72,60 @@ Model(spec) takes a dict with the model-file keys, e.g.
 ``{"model": "gpi", "n": 10, "c": [c0, c1, c2, c3], "q": q, "rho": rho, "tau": tau, "alpha": alpha}``,
 the path of a model JSON file (a str or an os.PathLike such as pathlib.Path), or a
 hysteron.Model (a copy of its parameters, in the virgin state). Starts in the virgin state
-y_i0 = 0. copy.copy, copy.deepcopy and pickle keep the state too (bit for bit: the parameters
-through the model file's JSON, the state, last output and fault count as numbers).)doc"));
-  def_pickle(model_class, "Model", [=](const Model& s) { return model_json(s.params()); },
-             [=](const py::handle& spec) { return Model(model_from(spec)); });
+y_i0 = 0. The free-form keys of the spec ("units", "note", "metadata"; checked as a model file's:
+"units" an object of strings such as {"input": "kPa", "output": "N"}, "note" a string) are kept
+with the model: units shows them, and save(), to_dict(), Model(m), copy and pickle write them
+back, so that the CLI still checks a record's units against a model saved here. copy.copy,
+copy.deepcopy and pickle keep the state too (bit for bit: the parameters through the model
+file's JSON, the state, last output and fault count as numbers).)doc"));
+  def_pickle(model_class, "Model",
+             [](const PyModel& s) { return io::model_to_json(s.document()).dump(); },
+             [=](const py::handle& spec) { return PyModel(document_from(spec)); });
   model_class
-      .def(py::init([](const py::object& spec) { return Model(model_spec(spec, "Model: spec")); }), py::arg("spec"))
-      .def_property_readonly("name", [](const Model& s) { return std::string(s.name()); },
+      .def(py::init([](const py::object& spec) { return PyModel(model_document(spec, "Model: spec")); }), py::arg("spec"))
+      .def_property_readonly("name", [](const PyModel& s) { return std::string(s.name()); },
                              "The model kind: 'pi', 'gpi', 'mpi-deadzone', 'mpi-asym', 'preisach', 'kp', 'bouc-wen', "
                              "'maxwell-slip' or 'rate-pi'.")
-      .def_property_readonly("num_operators", &Model::num_operators, "Number of play operators.")
-      .def("step", &Model::step, py::arg("x"),
+      .def_property_readonly("num_operators", [](const PyModel& s) { return s.num_operators(); }, "Number of play operators.")
+      .def("step", [](PyModel& s, double x) { return s.step(x); }, py::arg("x"),
            "One sample: the output for input x (updates the state). A NaN or infinite x (or one so large the "
            "output could overflow) leaves the state unchanged, returns the previous output and is counted in "
            "faults; simulate() raises hysteron.Error on such an input instead.")
-      .def_property_readonly("faults", &Model::faults,
+      .def_property_readonly("faults", [](const PyModel& s) { return s.faults(); },
                              "Number of inputs step() ignored (NaN, infinite or beyond the model's input bound) "
                              "since the last reset (reset() and reset_relaxed() set it to 0).")
       .def(
           "simulate",
-          [](Model& s, const ArrayArg& x) { return to_numpy(s.simulate(as_span(x, "Model.simulate: x"))); },
+          [](PyModel& s, const ArrayArg& x) { return to_numpy(s.simulate(as_span(x, "Model.simulate: x"))); },
           py::arg("x"), "Outputs for an input array, continuing from the current state.")
-      .def("reset", py::overload_cast<>(&Model::reset), "Back to the virgin state.")
+      .def("reset", [](PyModel& s) { s.reset(); }, "Back to the virgin state.")
       .def(
-          "reset_relaxed", [](Model& self, double x0) { self.reset_relaxed(finite_arg(x0, "Model.reset_relaxed: x0")); },
+          "reset_relaxed", [](PyModel& self, double x0) { self.reset_relaxed(finite_arg(x0, "Model.reset_relaxed: x0")); },
           py::arg("x0"), "Start at rest at input x0 (finite).")
-      .def_property_readonly("state", [](const Model& s) { return to_numpy(s.state().y); },
+      .def_property_readonly("state", [](const PyModel& s) { return to_numpy(s.state().y); },
                              "Operator outputs y_i.")
-      .def("to_dict", [](const Model& s) { return from_json(io::model_to_json(s.params())); },
-           "The model's parameters as a dict with the model-file keys (docs/model-files.md); "
-           "Model(m.to_dict()) is the same model.")
+      .def_property_readonly(
+          "units",
+          [](const PyModel& s) -> py::object {
+            const auto u = s.extra.find("units");
+            return u == s.extra.end() ? py::object(py::none()) : from_json(*u);
+          },
+          "The units the model file records, its \"units\" (a new dict, e.g. {'input': 'kPa', 'output': 'N'}; "
+          "hysteron fit and hysteron.fit(units=...) write them), or None. The CLI's evaluate, simulate and "
+          "invert refuse a record whose columns name other units.")
+      .def("to_dict", [](const PyModel& s) { return from_json(io::model_to_json(s.document())); },
+           "The model's parameters as a dict with the model-file keys (docs/model-files.md), and its free-form "
+           "keys (\"units\", \"note\", \"metadata\") where it has them; Model(m.to_dict()) is the same model.")
       .def(
           "save",
-          [](const Model& s, const PathArg& path) {
-            io::write_model_file(path_arg(path, "Model.save: path"), s.params());
+          [](const PyModel& s, const PathArg& path) {
+            io::write_model_file(path_arg(path, "Model.save: path"), s.document());
           },
            py::arg("path"),
-           "Write the model file (JSON) to path (a str or an os.PathLike), atomically: on an error the old "
-           "file is left as it was.")
-      .def("__repr__", [](const Model& s) {
+           "Write the model file (JSON) to path (a str or an os.PathLike), with the free-form keys (\"units\", "
+           "\"note\", \"metadata\") the model was built with, atomically: on an error the old file is left as "
+           "it was.")
+      .def("__repr__", [](const PyModel& s) {
         if (!has_pi_structure(s.params()))
           return fmt::format("<hysteron.Model {} with {} state entries>", s.name(), s.state().y.size());
         return fmt::format("<hysteron.Model {} with {} operators>", s.name(), s.num_operators());
@@ -160,7 +177,7 @@ for bit).)doc"));
       .def("reset", py::overload_cast<>(&Inverse::reset), "Back to the virgin state.")
       .def(
           "start_from",
-          [](Inverse& s, const Model& model) { s.reset(model.state()); }, py::arg("model"),
+          [](Inverse& s, const PyModel& model) { s.reset(model.state()); }, py::arg("model"),
           "Start consistently from a forward model's current state.")
       .def_property_readonly("saturated", &Inverse::saturated, "True if the last step hit an input limit.")
       .def_property_readonly("limits", [](const Inverse& s) { return std::make_pair(s.limits().lo, s.limits().hi); },

@@ -96,12 +96,17 @@ double finite_arg(double v, const char* what) {
   return v;
 }
 
-ModelParams model_spec(const py::handle& spec, std::string_view what) {
-  if (is_path(spec)) return io::read_model_file(path_arg(spec, what));
-  if (py::isinstance<Model>(spec)) return spec.cast<const Model&>().params();
+io::ModelDocument model_document(const py::handle& spec, std::string_view what) {
+  if (is_path(spec)) return io::read_model_document(path_arg(spec, what));
+  if (py::isinstance<PyModel>(spec)) return spec.cast<const PyModel&>().document();
   if (!py::isinstance<py::dict>(spec))
     throw_arg_type(spec, what, "a model dict (the model-file keys), a model file path or a hysteron.Model");
-  return io::model_from_json(to_json(spec, what), std::string(what));
+  return io::model_document_from_json(to_json(spec, what), std::string(what));
+}
+
+ModelParams model_spec(const py::handle& spec, std::string_view what) {
+  if (py::isinstance<PyModel>(spec)) return spec.cast<const PyModel&>().params();
+  return model_document(spec, what).params;
 }
 
 std::uint64_t uint_arg(const py::handle& obj, std::string_view what, std::uint64_t min, std::uint64_t max) {

@@ -2,12 +2,24 @@
 // Helpers shared by the bindings in more.cpp and py_*.cpp.
 #include "bindings.hpp"
 #include "hysteron/identify.hpp"
+#include "hysteron/io/model_file.hpp"
 #include "hysteron/models.hpp"
 
 namespace hysteron::python {
 
+// hysteron.Model: the C++ Model and the free-form keys ("units", "note", "metadata") of the
+// spec it was built from, which Model.save, to_dict, pickle and copy write back. They live here,
+// beside the model: hysteron::Model (the real-time core) never sees them.
+struct PyModel : Model {
+  explicit PyModel(io::ModelDocument doc) : Model(std::move(doc.params)), extra(std::move(doc.extra)) {}
+  io::ModelDocument document() const { return {params(), extra}; }
+  nlohmann::json extra = nlohmann::json::object();  // checked as io::check_model_extra checks it
+};
+
 // A model from a dict (model-file keys), a model file path (str or os.PathLike) or a
 // hysteron.Model; `what` names the argument in errors ("InverseFeedforward: model").
+// model_document: with the free-form keys (a dict's or a file's, a hysteron.Model's own).
+io::ModelDocument model_document(const py::handle& spec, std::string_view what);
 ModelParams model_spec(const py::handle& spec, std::string_view what);
 InitialState initial_state_from(const std::string& name);
 // A (lo, hi) pair of numbers: TypeError naming WHAT otherwise.

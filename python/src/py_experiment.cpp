@@ -114,7 +114,10 @@ inverse is fixed. hysteron.Error names a missing or invalid key. docs/deploy.md.
         o.source_name = source_name;
         if (limits) o.inverse_limits = Limits{limits->first, limits->second};
         if (!controller.is_none()) o.loop = io::from_json<LoopDesign>(to_json(controller), "controller");
-        const io::GeneratedC g = io::generate_c(model_spec(model, "export_c: model"), o);
+        const io::ModelDocument doc = model_document(model, "export_c: model");
+        o.input_unit = doc.unit("input");  // the model's units, stated in the comments as hysteron export does
+        o.output_unit = doc.unit("output");
+        const io::GeneratedC g = io::generate_c(doc.params, o);
         py::dict out;
         out["source"] = g.source;
         out["header"] = g.header;
@@ -125,7 +128,8 @@ inverse is fixed. hysteron.Error names a missing or invalid key. docs/deploy.md.
       R"doc(hysteron export as a function (docs/export.md): the model and its exact inverse as one
 self-contained C99 file, {"source": the .c text, "header": the .h text or "" without header_name}.
 prefix names every C symbol; header_name (e.g. "compensator.h") moves the declarations to a
-header the source #includes; limits=(lo, hi) the inverse's input limits. controller (a run's
+header the source #includes; limits=(lo, hi) the inverse's input limits. The model's "units"
+(a model file's, a dict's or a Model's) are stated in the comments. controller (a run's
 "controller" dict, e.g. loop_of_run(result, "compensated.sine")) adds the run's loop around the
 inverse: PREFIX_loop_reset / _loop_step / _loop_preview, which step exactly as controller_from(
 controller, model); a learning run's controller also adds its iterative learning,

@@ -3,6 +3,7 @@
 
 #include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 #include "more.hpp"
 
@@ -27,6 +28,43 @@ IndexRange range_from(const py::object& r, const char* what) {
   return {index(t.first, "begin", 0), index(t.second, "end", IndexRange::npos)};
 }
 
+// fit's units= (None or {"input": str, "output": str}; "" = not given) with the units of
+// input_axis / output_axis: one unit per signal, the one given, else the axis's; two that name
+// different units are refused, as the CLI refuses a --input-label against the column's unit.
+nlohmann::json fit_units(const py::object& units, const std::pair<std::string, std::string>& input_axis,
+                         const std::pair<std::string, std::string>& output_axis) {
+  const auto trimmed = [](std::string s) {
+    const auto b = s.find_first_not_of(" \t\r\n"), e = s.find_last_not_of(" \t\r\n");
+    return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+  };
+  std::string given[2];
+  if (!units.is_none()) {
+    const auto d = cast_arg<py::dict>(units, "fit: units", "a dict {'input': str, 'output': str} or None");
+    check_dict_keys(d, {"input", "output"}, "fit: units");
+    const char* names[2] = {"input", "output"};
+    for (int i = 0; i < 2; ++i) {
+      if (!d.contains(names[i])) continue;
+      const py::object v = d[names[i]];
+      const std::string what = fmt::format("fit: units['{}']", names[i]);
+      if (!py::isinstance<py::str>(v)) throw_arg_type(v, what, "a str naming the unit, such as 'kPa'");
+      given[i] = trimmed(v.cast<std::string>());
+    }
+  }
+  const std::string axis[2] = {trimmed(input_axis.second), trimmed(output_axis.second)};
+  nlohmann::json out = nlohmann::json::object();
+  const char* names[2] = {"input", "output"};
+  for (int i = 0; i < 2; ++i) {
+    const std::string ca = io::canonical_unit(given[i]), cb = io::canonical_unit(axis[i]);
+    if (!given[i].empty() && !axis[i].empty() && given[i] != axis[i] && (ca.empty() || cb.empty() || ca != cb))
+      throw Error(fmt::format("fit: units['{0}'] is '{1}' but {0}_axis gives the unit '{2}': give both the same unit "
+                              "(or one of them)",
+                              names[i], given[i], axis[i]));
+    const std::string& u = given[i].empty() ? axis[i] : given[i];
+    if (!u.empty()) out[names[i]] = u;
+  }
+  return out;
+}
+
 }  // namespace
 
 void bind_identify(py::module_& m) {
@@ -37,7 +75,11 @@ void bind_identify(py::module_& m) {
          const IntArg& num_starts, const IntArg& seed, const IntArg& max_iterations, bool fix_scale, bool free_weights,
          bool compute_covariance, const PathArg& report_arg, std::pair<std::string, std::string> input_axis,
          std::pair<std::string, std::string> output_axis, const IntArg& num_threads, const IntArg& stall_iterations,
-         double stall_tolerance, double min_slope, double sample_time, const IntArg& censor_passes, bool mirror) {
+         double stall_tolerance, double min_slope, double sample_time, const IntArg& censor_passes, bool mirror,
+         const py::object& units_arg) {
+        const nlohmann::json units = fit_units(units_arg, input_axis, output_axis);  // before the fit, not after it
+        if (input_axis.second.empty() && units.contains("input")) input_axis.second = units["input"].get<std::string>();  // the report's
+        if (output_axis.second.empty() && units.contains("output")) output_axis.second = units["output"].get<std::string>();
         const std::string report = path_arg(report_arg, "fit: report");
         io::check_output_file({"fit: report", report});  // before the fit, not after it
         FitOptions o;
@@ -79,7 +121,18 @@ void bind_identify(py::module_& m) {
           report::write_fit_report(r, data, report, fmt::format("hysteron.fit(x, y, model='{}', num_operators={})",
                                                                 model, o.num_operators));
         }
-        return fit_dict(r);
+        py::dict d = fit_dict(r);
+        if (!units.empty()) {  // in every model dict: Model(d["model"]).save(path) writes them
+          const py::object u = from_json(units);
+          const auto put = [&](py::handle dict) {
+            if (py::isinstance<py::dict>(dict)) dict.cast<py::dict>()["units"] = u.attr("copy")();
+          };
+          if (d.contains("model")) put(d["model"]);
+          if (d.contains("candidates"))
+            for (py::handle c : d["candidates"])
+              if (py::isinstance<py::dict>(c) && c.cast<py::dict>().contains("model")) put(c.cast<py::dict>()["model"]);
+        }
+        return d;
       },
       py::arg("x"), py::arg("y"), py::arg("model") = "gpi", py::arg("num_operators") = 10,
       py::arg("num_dead_zones") = 4, py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
@@ -90,6 +143,7 @@ void bind_identify(py::module_& m) {
       py::arg("stall_iterations") = 25, py::arg("stall_tolerance") = 1e-5,
       py::arg("min_slope") = FitOptions{}.min_slope, py::arg("sample_time") = 0.0,
       py::arg("censor_passes") = FitOptions{}.censor_passes, py::arg("mirror") = FitOptions{}.mpi_asym_mirror,
+      py::arg("units") = py::none(),
       R"doc(Identify a hysteresis model by Levenberg-Marquardt (Eq. 12 of the GPI paper).
 
 x, y: input and measured output (1-D arrays of equal length).
@@ -114,6 +168,13 @@ LM also ends as converged when the cost falls by at most stall_tolerance (relati
 over the last stall_iterations iterations (0 disables it).
 report: if given, path of a self-contained HTML report (plots, parameters,
 errors), with input_axis/output_axis = (label, unit) for its plots.
+units: the units of x and y, {"input": "kPa", "output": "N"} (either key may be left out; "" is
+none), or None: written as "units" into the returned model dicts (and so by Model(...).save into
+the model file, as `hysteron fit` writes a record's units), where the CLI's evaluate, simulate and
+invert refuse a record whose columns name other units. A unit given in input_axis / output_axis
+counts too (as the CLI's --input-label); units and an axis naming two different units raise
+hysteron.Error. A key other than "input" and "output" raises hysteron.Error, a value that is not a
+str TypeError, before the fit.
 
 Never raises on bad data: returns a dict (the JSON of `hysteron fit --json`, NaN as
 None) with "status" (one of hysteron.fit_statuses: "converged", "no_convergence",

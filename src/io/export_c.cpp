@@ -402,6 +402,10 @@ struct Gen {
                      header ? "C99 declarations" : "C99 source", version);
     t += fmt::format(" * Model kind: {}{}.\n", model_name(params),
                      o.source_name.empty() ? std::string() : fmt::format(", from the model file \"{}\"", comment_safe(o.source_name)));
+    if (!o.input_unit.empty() || !o.output_unit.empty())
+      t += fmt::format(" * Units (the model file's \"units\"): input {}, output {}.\n",
+                       o.input_unit.empty() ? std::string("not given") : comment_safe(o.input_unit),
+                       o.output_unit.empty() ? std::string("not given") : comment_safe(o.output_unit));
     if (loop)
       t += fmt::format(" * With the compensating loop around its inverse{}.\n",
                        o.loop_source.empty() ? std::string() : fmt::format(", from {}", comment_safe(o.loop_source)));

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -525,21 +526,48 @@ ModelParams model_from_json(const nlohmann::json& j, std::string_view where) {
     top.fail("model", fmt::format("expected one of \"pi\", \"gpi\", \"mpi-deadzone\", \"mpi-asym\", \"preisach\", "
                                   "\"kp\", \"bouc-wen\", \"maxwell-slip\", \"rate-pi\", got \"{}\"", model));
   }
-  if (j.contains("units")) {
-    const json& u = j["units"];
-    if (!u.is_object()) top.fail("units", fmt::format("expected an object {{\"input\": \"...\", \"output\": \"...\"}}, got {}", type_name(u)));
-    for (auto it = u.begin(); it != u.end(); ++it)
-      if (!it.value().is_string())
-        top.fail(fmt::format("units.{}", it.key()), fmt::format("expected a string, got {}", type_name(it.value())));
-  }
-  if (j.contains("note") && !j["note"].is_string())
-    top.fail("note", fmt::format("expected a string, got {}", type_name(j["note"])));
+  check_model_extra(model_extra(j), where);
   try {
     Model check(params);  // the model's own validation (names the key)
   } catch (const Error& e) {
     throw Error(fmt::format("{}: {}", where, e.what()));
   }
   return params;
+}
+
+void check_model_extra(const nlohmann::json& extra, std::string_view where) {
+  if (extra.is_null()) return;
+  if (!extra.is_object())
+    throw Error(fmt::format("{}: the free-form model-file keys must be a JSON object ({}), got {}", where,
+                            join(kFreeKeys), type_name(extra)));
+  Reader top(extra, std::string(where));
+  for (auto it = extra.begin(); it != extra.end(); ++it)
+    if (std::find(kFreeKeys.begin(), kFreeKeys.end(), it.key()) == kFreeKeys.end())
+      top.fail(it.key(), fmt::format("not a free-form key of a model file; allowed: {}", join(kFreeKeys)));
+  if (extra.contains("units")) {
+    const json& u = extra["units"];
+    if (!u.is_object()) top.fail("units", fmt::format("expected an object {{\"input\": \"...\", \"output\": \"...\"}}, got {}", type_name(u)));
+    for (auto it = u.begin(); it != u.end(); ++it)
+      if (!it.value().is_string())
+        top.fail(fmt::format("units.{}", it.key()), fmt::format("expected a string, got {}", type_name(it.value())));
+  }
+  if (extra.contains("note") && !extra["note"].is_string())
+    top.fail("note", fmt::format("expected a string, got {}", type_name(extra["note"])));
+}
+
+std::string ModelDocument::unit(std::string_view which) const {
+  if (!extra.is_object()) return {};
+  const auto u = extra.find("units");
+  if (u == extra.end() || !u->is_object()) return {};
+  const auto it = u->find(which);
+  return it != u->end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
+ModelDocument model_document_from_json(const nlohmann::json& j, std::string_view where) {
+  ModelDocument doc;
+  doc.params = model_from_json(j, where);
+  doc.extra = model_extra(j);
+  return doc;
 }
 
 nlohmann::json model_extra(const nlohmann::json& j) {
@@ -559,9 +587,36 @@ nlohmann::json model_to_json(const ModelParams& params) {
   return j;
 }
 
-ModelParams read_model_file(const std::string& path) {
-  const json j = parse_json(read_text_file(path, "model file", max_model_file_bytes), path);
-  return model_from_json(j, path);
+nlohmann::json model_to_json(const ModelDocument& doc) {
+  check_model_extra(doc.extra, "model document");
+  json j = model_to_json(doc.params);
+  if (doc.extra.is_object())
+    for (auto it = doc.extra.begin(); it != doc.extra.end(); ++it) j[it.key()] = it.value();
+  return j;
+}
+
+ModelDocument read_model_document(const std::string& path) {
+  if (path != "-") return model_document_from_json(parse_json(read_text_file(path, "model file", max_model_file_bytes), path), path);
+  // standard input: at most max_model_file_bytes, as a file
+  std::string text;
+  char buf[1 << 16];
+  std::size_t got = 0;
+  while ((got = std::fread(buf, 1, sizeof buf, stdin)) > 0) {
+    text.append(buf, got);
+    if (text.size() > max_model_file_bytes)
+      throw Error(fmt::format("<stdin>: the model file is more than the {} bytes any valid one needs",
+                              max_model_file_bytes));
+  }
+  if (std::ferror(stdin)) throw Error(fmt::format("<stdin>: read error: {}", std::strerror(errno)));
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw Error("<stdin>: standard input is empty (expected a model file's JSON)");
+  return model_document_from_json(parse_json(text, "<stdin>"), "<stdin>");
+}
+
+ModelParams read_model_file(const std::string& path) { return read_model_document(path).params; }
+
+void write_model_file(const std::string& path, const ModelDocument& doc) {
+  write_model_file(path, doc.params, doc.extra);
 }
 
 void write_model_file(const std::string& path, const ModelParams& params, const nlohmann::json& extra) {
@@ -573,18 +628,10 @@ void write_model_file(const std::string& path, const ModelParams& params, const 
   } catch (const Error& e) {
     throw Error(fmt::format("{}: refusing to write an invalid model: {}", path, e.what()));
   }
+  check_model_extra(extra, path);
   json j = model_to_json(params);
-  if (!extra.is_null()) {
-    if (!extra.is_object()) throw Error(fmt::format("{}: extra model-file keys must be a JSON object", path));
-    for (auto it = extra.begin(); it != extra.end(); ++it) {
-      bool ok = false;
-      for (std::string_view k : kFreeKeys) ok = ok || it.key() == k;
-      if (!ok)
-        throw Error(fmt::format("{}: extra key \"{}\" is not allowed in a model file; allowed: {}", path, it.key(),
-                                join(kFreeKeys)));
-      j[it.key()] = it.value();
-    }
-  }
+  if (extra.is_object())
+    for (auto it = extra.begin(); it != extra.end(); ++it) j[it.key()] = it.value();
   const std::string text = j.dump(2) + "\n";
   write_text_file(path, text);
 }

@@ -136,5 +136,19 @@ for m in model best_model; do
     "$T/ex/$m.json" || fail "experiment's $m.json: units"
 done
 
+# the model on stdin (--model -) goes through the same reader as a file: its units are checked
+"$BIN" evaluate --model - --data "$T/bar.csv" --input p --output F < "$T/m.json" > /dev/null 2> "$T/err.txt"
+[ $? -eq 1 ] || fail "evaluate --model - (a model in kPa) of a record in bar: not exit 1"
+grep -q "bar.csv: the input column p is in bar, but the model <stdin>'s input is in kPa" "$T/err.txt" \
+  || fail "evaluate --model - bar: $(cat "$T/err.txt")"
+# export: the C file and its header state the model's units (and nothing for a model without)
+"$BIN" export --model "$T/m.json" --out "$T/comp.c" --header "$T/comp.h" > /dev/null 2> "$T/err.txt" \
+  || fail "export: exit $?: $(cat "$T/err.txt")"
+for f in comp.c comp.h; do
+  grep -q 'Units (the model file.s "units"): input kPa, output N\.' "$T/$f" || fail "export: $f does not state the units"
+done
+"$BIN" export --model "$T/plain.json" --out "$T/plain.c" > /dev/null 2>&1 || fail "export plain.json: exit $?"
+grep -q "Units (the model" "$T/plain.c" && fail "export of a model without units states some"
+
 [ $fails -eq 0 ] && echo "record_units: all passed"
 exit $fails

@@ -26,6 +26,9 @@ struct ExportOptions {
   std::string prefix = "compensator";
   // Where the model came from (a file name), written in the comments; empty: not said.
   std::string source_name;
+  // The units the model file records (its "units": io::ModelDocument::unit), written in the
+  // comments of the .c and the .h file; empty: not said.
+  std::string input_unit, output_unit;
   // When non-empty, the declarations go to a separate header (GeneratedC::header)
   // that the source #includes by this name (e.g. "compensator.h"). Empty: one .c
   // file with the declarations at its top, which also works when #included.

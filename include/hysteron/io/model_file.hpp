@@ -46,28 +46,55 @@ std::string read_text_file(const std::string& path, std::string_view what,
 // Current (and only) schema version written to and accepted in "schema".
 inline constexpr int model_schema_version = 1;
 
-// Reads and validates a model file. Throws hysteron::Error naming `path`,
-// the line/column of a JSON syntax error, or the offending key.
+// A model file as a whole: the model's parameters and the free-form keys beside them
+// ("units", "note", "metadata"; not part of the model: hysteron::Model never sees them).
+// read_model_document / write_model_file(path, doc) are the one reader and writer of a
+// model file: a read-modify-write through them keeps the free-form keys.
+struct ModelDocument {
+  ModelParams params;
+  // The free-form keys as the file has them: an object, empty if none (checked as
+  // check_model_extra does).
+  nlohmann::json extra = nlohmann::json::object();
+  // The unit the document's "units" names for `which` ("input" or "output"); "" if none.
+  std::string unit(std::string_view which) const;
+};
+
+// Reads and validates a model file with its free-form keys; path "-" reads standard input
+// (named "<stdin>" in errors; empty input is an error). Throws hysteron::Error naming
+// `path`, the line/column of a JSON syntax error, or the offending key.
+ModelDocument read_model_document(const std::string& path);
+// read_model_document(path).params: the parameters only.
 ModelParams read_model_file(const std::string& path);
 
 // Parses and validates a model from JSON; `where` (e.g. the file name) starts
 // every error message. Free-form keys "units", "note" and "metadata" are
-// accepted and ignored here (see model_extra()).
+// checked (check_model_extra) and not part of the result (see model_document_from_json).
 ModelParams model_from_json(const nlohmann::json& j, std::string_view where);
+// The same with the free-form keys (model_extra(j)).
+ModelDocument model_document_from_json(const nlohmann::json& j, std::string_view where);
 
 // The free-form keys ("units", "note", "metadata") of a model JSON object, as an
 // object (empty if none). Lets a caller keep them on a read-modify-write.
 nlohmann::json model_extra(const nlohmann::json& j);
 
+// Throws hysteron::Error "WHERE: key \"K\": ..." unless `extra` is null or an object whose keys
+// are among "units" (an object of strings, e.g. {"input": "kPa", "output": "N"}), "note"
+// (a string) and "metadata" (any JSON value).
+void check_model_extra(const nlohmann::json& extra, std::string_view where);
+
 // Model as JSON (with "schema"). model_from_json(model_to_json(p)) reproduces p
 // exactly: doubles are written with 17 significant digits. A gpi with free
 // weights (non-empty r) is written as r/p, without n/rho/tau/alpha.
 nlohmann::json model_to_json(const ModelParams& params);
+// model_to_json(doc.params) with doc.extra's keys (checked as check_model_extra does).
+nlohmann::json model_to_json(const ModelDocument& doc);
 
-// Writes model_to_json(params) merged with `extra` (an object whose keys may only
-// be "units", "note", "metadata") to `path`, atomically: a temporary file in the
-// same directory is renamed over `path`; on failure `path` is left untouched.
-// The parameters are validated first. Path "-" writes to stdout.
+// Writes model_to_json(params) merged with `extra` (null or an object whose keys may only
+// be "units", "note", "metadata", checked as check_model_extra does) to `path`, atomically:
+// a temporary file in the same directory is renamed over `path`; on failure `path` is left
+// untouched. The parameters are validated first. Path "-" writes to stdout.
 void write_model_file(const std::string& path, const ModelParams& params, const nlohmann::json& extra = {});
+// write_model_file(path, doc.params, doc.extra).
+void write_model_file(const std::string& path, const ModelDocument& doc);
 
 }  // namespace hysteron::io

@@ -12,6 +12,8 @@
 #include "hysteron/compensation.hpp"
 #include "hysteron/control.hpp"
 #include "hysteron/error.hpp"
+#include "hysteron/io/model_file.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/learning.hpp"
 #include "more.hpp"
 
@@ -82,6 +84,38 @@ FeedforwardParams ff_params(const Limits& limits, double model_scale, double lag
 }
 
 constexpr double inf = std::numeric_limits<double>::infinity();
+
+// The controllers' model_scale [model output units per m]: the one given, else the one the model's
+// "units" imply (its output in mm: 1000, in m: 1, in um: 1e6), else 1000 (mm). One given that
+// contradicts the model's length unit is refused (a model in m under the default 1000 asked the
+// inverse for outputs 1000x too large, silently). A model whose input names a pressure unit other
+// than MPa is warned of: the controllers' pressures (limits, PID output, commands) are then in it.
+double model_scale_of(const io::ModelDocument& doc, const py::object& given, std::string_view what) {
+  const std::string out = io::canonical_unit(doc.unit("output"));
+  std::optional<double> per_metre;
+  for (const auto& [unit, factor] : {std::pair{"m", 1.0}, {"cm", 100.0}, {"mm", 1000.0}, {"um", 1e6}, {"nm", 1e9},
+                                     {"in", 1.0 / 0.0254}})
+    if (out == unit) per_metre = factor;
+  const std::string in = io::canonical_unit(doc.unit("input"));
+  const bool other_pressure =
+      in == "Pa" || in == "hPa" || in == "kPa" || in == "bar" || in == "mbar" || in == "psi" || in == "atm";
+  if (other_pressure)
+    if (PyErr_WarnEx(PyExc_UserWarning,
+                     fmt::format("{}: the model's input is in {}, not MPa: the controller's pressures (limits, PID "
+                                 "output, commands) are then in {} too, and PID gains meant per MPa are off by the "
+                                 "ratio of the units",
+                                 what, in, in)
+                         .c_str(),
+                     1) != 0)
+      throw py::error_already_set();
+  if (given.is_none()) return per_metre.value_or(1000.0);
+  const double scale = cast_arg<double>(given, fmt::format("{}: model_scale", what), "a number or None");
+  if (per_metre && std::abs(scale - *per_metre) > 1e-9 * *per_metre)
+    throw Error(fmt::format("{}: model_scale = {} model output units per metre, but the model's output is in {} ({} "
+                            "per metre): leave model_scale to the model (None) or give {}",
+                            what, scale, doc.unit("output"), *per_metre, *per_metre));
+  return scale;
+}
 
 // A controller's pid= (or pressure_pid=): a hysteron.Pid; `what` names the argument in errors.
 // (A Pid at another sample time than the controller's is refused by the C++ constructors.)
@@ -201,12 +235,15 @@ for a model fitted in mm); optional compensation of a first-order lag.
 pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the model's
 input_limits (a fitted model's training input range); a model without them (a hand-written
 model file) raises hysteron.Error: give your actuator's.)doc"))
-      .def(py::init([](const py::object& model, const py::object& limits, double scale, double lag, double ts) {
-             const ModelParams mp = model_spec(model, "InverseFeedforward: model");
+      .def(py::init([](const py::object& model, const py::object& limits, const py::object& scale_obj, double lag,
+                       double ts) {
+             const io::ModelDocument doc = model_document(model, "InverseFeedforward: model");
+             const ModelParams& mp = doc.params;
+             const double scale = model_scale_of(doc, scale_obj, "InverseFeedforward");
              const Limits given = limits_arg(limits, "InverseFeedforward");
              return InverseFeedforward(mp, ff_params(resolved_limits(mp, given, "InverseFeedforward"), scale, lag, ts));
            }),
-           py::arg("model"), py::arg("pressure_limits") = py::none(), py::arg("model_scale") = 1000.0,
+           py::arg("model"), py::arg("pressure_limits") = py::none(), py::arg("model_scale") = py::none(),
            py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &InverseFeedforward::step, py::arg("desired_m"), "Pressure [MPa] for the desired contraction [m].")
       .def_property_readonly(
@@ -233,9 +270,11 @@ are used; default: Pid.gpi_paper(), output limits +-pressure_limits[1]).
 pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the model's
 input_limits (a fitted model's training input range); a model without them (a hand-written
 model file) raises hysteron.Error: give your actuator's.)doc"))
-      .def(py::init([](const py::object& model, const py::object& pid, const py::object& limits_obj, double scale,
-                       double lag, double ts) {
-             const ModelParams mp = model_spec(model, "FeedforwardPidController: model");
+      .def(py::init([](const py::object& model, const py::object& pid, const py::object& limits_obj,
+                       const py::object& scale_obj, double lag, double ts) {
+             const io::ModelDocument doc = model_document(model, "FeedforwardPidController: model");
+             const ModelParams& mp = doc.params;
+             const double scale = model_scale_of(doc, scale_obj, "FeedforwardPidController");
              const Limits given = limits_arg(limits_obj, "FeedforwardPidController");
              std::optional<PidParams> pp;
              if (!pid.is_none()) pp = pid_arg(pid, "FeedforwardPidController: pid");
@@ -244,7 +283,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
              return FeedforwardPidController(mp, ff_params(limits, scale, lag, ts), *pp);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_limits") = py::none(),
-           py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
+           py::arg("model_scale") = py::none(), py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &FeedforwardPidController::step, py::arg("reference_m"), py::arg("preview_m"),
            py::arg("measured_m"), "One control sample; returns the pressure command [MPa].")
       .def_property_readonly(
@@ -265,8 +304,10 @@ pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the
 input_limits (a fitted model's training input range); a model without them (a hand-written
 model file) raises hysteron.Error: give your actuator's.)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, double pressure_gain,
-                       const py::object& limits, double scale, double lag, double ts) {
-             const ModelParams mp = model_spec(model, "OpenLoopController: model");
+                       const py::object& limits, const py::object& scale_obj, double lag, double ts) {
+             const io::ModelDocument doc = model_document(model, "OpenLoopController: model");
+             const ModelParams& mp = doc.params;
+             const double scale = model_scale_of(doc, scale_obj, "OpenLoopController");
              const Limits given = limits_arg(limits, "OpenLoopController");
              OpenLoopParams p;
              p.position.sample_time = ts;  // (unused without gains)
@@ -276,7 +317,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
              return OpenLoopController(mp, p);
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_gain") = 0.5,
-           py::arg("pressure_limits") = py::none(), py::arg("model_scale") = 1000.0,
+           py::arg("pressure_limits") = py::none(), py::arg("model_scale") = py::none(),
            py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &OpenLoopController::step, py::arg("reference_m"), py::arg("preview_m"), py::arg("measured_m"),
            py::arg("pressure_mpa"),
@@ -300,8 +341,11 @@ pressure_limits: (lo, hi) [MPa]; None (the default), or an infinite side, is the
 input_limits (a fitted model's training input range); a model without them (a hand-written
 model file) raises hysteron.Error: give your actuator's.)doc"))
       .def(py::init([](const py::object& model, const py::object& pid, const py::object& pressure_pid,
-                       const py::object& pwm, const py::object& limits_obj, double scale, double lag, double ts) {
-             const ModelParams mp = model_spec(model, "CascadePwmController: model");
+                       const py::object& pwm, const py::object& limits_obj, const py::object& scale_obj, double lag,
+                       double ts) {
+             const io::ModelDocument doc = model_document(model, "CascadePwmController: model");
+             const ModelParams& mp = doc.params;
+             const double scale = model_scale_of(doc, scale_obj, "CascadePwmController");
              const Limits given = limits_arg(limits_obj, "CascadePwmController");
              CascadeParams p;
              if (!pid.is_none()) p.position = pid_arg(pid, "CascadePwmController: pid");
@@ -335,7 +379,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
            }),
            py::arg("model"), py::arg("pid") = py::none(), py::arg("pressure_pid") = py::none(),
            py::arg("pwm") = py::none(), py::arg("pressure_limits") = py::none(),
-           py::arg("model_scale") = 1000.0, py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
+           py::arg("model_scale") = py::none(), py::arg("lag_time_constant") = 0.0, py::arg("sample_time") = 1e-3)
       .def("step", &CascadePwmController::step, py::arg("reference_m"), py::arg("preview_m"), py::arg("measured_m"),
            py::arg("pressure_mpa"), "One control sample; returns the PWM duty in [-1, 1].")
       .def_property_readonly("desired_pressure", &CascadePwmController::desired_pressure,

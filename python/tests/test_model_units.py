@@ -166,3 +166,27 @@ def test_cli_refuses_a_record_in_other_units_than_a_python_saved_model(tmp_path)
         refused = evaluate(model, bar)
         assert refused.returncode == 1, (model, refused.stdout)
         assert f"the input column pressure is in bar, but the model {model}'s input is in kPa" in refused.stderr
+
+
+def test_the_controllers_take_model_scale_from_the_models_units():
+    # a model fitted with its output in m under the controllers' default model_scale 1000 asked the
+    # inverse for outputs 1000x too large (saturated at the top pressure, silently)
+    base = {"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10, "rho": 0.3,
+            "tau": 1.5, "alpha": 0.05, "input_limits": [0, 0.6]}
+    in_mm = dict(base, output_gain=30.0, units={"input": "MPa", "output": "mm"})
+    in_m = dict(base, output_gain=0.030, units={"input": "MPa", "output": "m"})
+    mm = hysteron.InverseFeedforward(in_mm)
+    m = hysteron.InverseFeedforward(in_m)
+    plain = hysteron.InverseFeedforward(dict(base, output_gain=0.030), model_scale=1.0)
+    for desired in (0.010, 0.020, 0.030, 0.025):
+        a, b, c = mm.step(desired), m.step(desired), plain.step(desired)
+        assert 0.0 < b < 0.6
+        assert b == c
+        assert abs(a - b) < 1e-9
+    assert hysteron.InverseFeedforward(dict(base, output_gain=0.030, units={"output": "um"})).step(1e-6) >= 0.0
+    with pytest.raises(hysteron.Error, match=r"model_scale = 1000 .* the model's output is in m \(1 per metre\)"):
+        hysteron.FeedforwardPidController(in_m, model_scale=1000.0)
+    for make in (hysteron.FeedforwardPidController, hysteron.OpenLoopController, hysteron.CascadePwmController):
+        make(in_m)  # model_scale from the units
+        with pytest.warns(UserWarning, match="the model's input is in kPa, not MPa"):
+            make(dict(in_mm, units={"input": "kPa", "output": "mm"}, input_limits=[0, 600]))

@@ -456,3 +456,54 @@ TEST(PressureLimits, CApiFirstSampleFaultHoldsACommandWithinTheLimits) {
   hysteron_cascade_free(cs);
   hysteron_params_free(model);
 }
+
+// A model file whose output is in m (its "units") under the controllers' default model_scale of
+// 1000 (mm) asked the inverse for outputs 1000x too large: every command at the top limit,
+// silently. The C ABI's controllers refuse a model_scale that contradicts the model's length unit
+// and take the one it implies; a model without units is as before.
+TEST(PressureLimits, CApiModelScaleAgreesWithTheModelsLengthUnit) {
+  const std::string body = R"("model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10,
+      "rho": 0.3, "tau": 1.5, "alpha": 0.05, "input_limits": [0, 0.6])";
+  hysteron_params *in_m = nullptr, *plain = nullptr;
+  ASSERT_EQ(hysteron_params_from_json(("{" + body + R"(, "output_gain": 0.03, "units": {"input": "MPa", "output": "m"}})")
+                                          .c_str(),
+                                      &in_m),
+            HYSTERON_OK)
+      << hysteron_last_error();
+  ASSERT_EQ(hysteron_params_from_json(("{" + body + R"(, "output_gain": 0.03})").c_str(), &plain), HYSTERON_OK);
+  hysteron_ff_pid_params f;
+  ASSERT_EQ(hysteron_ff_pid_default_params(&f), HYSTERON_OK);
+  ASSERT_EQ(f.model_scale, 1000.0);
+  hysteron_ff_pid* fp = nullptr;
+  EXPECT_EQ(hysteron_ff_pid_create(in_m, &f, &fp), HYSTERON_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(fp, nullptr);
+  EXPECT_NE(std::string(hysteron_last_error()).find("model_scale = 1000"), std::string::npos) << hysteron_last_error();
+  EXPECT_NE(std::string(hysteron_last_error()).find("output is in m (1 per metre)"), std::string::npos);
+  hysteron_open_loop_params o;
+  ASSERT_EQ(hysteron_open_loop_default_params(&o), HYSTERON_OK);
+  hysteron_open_loop* ol = nullptr;
+  EXPECT_EQ(hysteron_open_loop_create(in_m, &o, &ol), HYSTERON_ERROR_INVALID_ARGUMENT);
+  hysteron_cascade_params c;
+  ASSERT_EQ(hysteron_cascade_default_params(&c), HYSTERON_OK);
+  hysteron_cascade* cs = nullptr;
+  EXPECT_EQ(hysteron_cascade_create(in_m, &c, &cs), HYSTERON_ERROR_INVALID_ARGUMENT);
+  // with model_scale 1, the model in m commands what the same model without units does
+  f.model_scale = 1.0;
+  f.kp = 0.0;
+  f.ki = 0.0;
+  hysteron_ff_pid *a = nullptr, *b = nullptr;
+  ASSERT_EQ(hysteron_ff_pid_create(in_m, &f, &a), HYSTERON_OK) << hysteron_last_error();
+  ASSERT_EQ(hysteron_ff_pid_create(plain, &f, &b), HYSTERON_OK) << hysteron_last_error();
+  for (const double r : {0.010, 0.020, 0.030}) {
+    double ua = -1, ub = -2;
+    ASSERT_EQ(hysteron_ff_pid_step(a, r, r, r, &ua), HYSTERON_OK);
+    ASSERT_EQ(hysteron_ff_pid_step(b, r, r, r, &ub), HYSTERON_OK);
+    EXPECT_EQ(ua, ub);
+    EXPECT_GT(ua, 0.0);
+    EXPECT_LT(ua, 0.6);
+  }
+  hysteron_ff_pid_free(a);
+  hysteron_ff_pid_free(b);
+  hysteron_params_free(in_m);
+  hysteron_params_free(plain);
+}

@@ -213,7 +213,10 @@ typedef struct hysteron_ff_pid_params {
    * without finite ones there: *_create is HYSTERON_ERROR_INVALID_ARGUMENT (set your actuator's). */
   double pressure_min;
   double pressure_max;
-  double model_scale;       /* model output units per metre (default 1000: model in mm) */
+  double model_scale;       /* model output units per metre (default 1000: model in mm); where the
+                               model file's "units" give its output a length unit (m, mm, um, ...),
+                               one that contradicts it is HYSTERON_ERROR_INVALID_ARGUMENT (a model
+                               in m needs 1) */
   double lag_time_constant; /* tau [s] >= 0 of the actuator lag to compensate (default 0) */
   double kp;                /* K_p [MPa/m] (default 0) */
   double ki;                /* K_i [MPa/(m s)] (default 0) */

@@ -91,15 +91,9 @@ constexpr double inf = std::numeric_limits<double>::infinity();
 // inverse for outputs 1000x too large, silently). A model whose input names a pressure unit other
 // than MPa is warned of: the controllers' pressures (limits, PID output, commands) are then in it.
 double model_scale_of(const io::ModelDocument& doc, const py::object& given, std::string_view what) {
-  const std::string out = io::canonical_unit(doc.unit("output"));
-  std::optional<double> per_metre;
-  for (const auto& [unit, factor] : {std::pair{"m", 1.0}, {"cm", 100.0}, {"mm", 1000.0}, {"um", 1e6}, {"nm", 1e9},
-                                     {"in", 1.0 / 0.0254}})
-    if (out == unit) per_metre = factor;
+  const double per_metre = io::length_units_per_metre(doc.unit("output"));
   const std::string in = io::canonical_unit(doc.unit("input"));
-  const bool other_pressure =
-      in == "Pa" || in == "hPa" || in == "kPa" || in == "bar" || in == "mbar" || in == "psi" || in == "atm";
-  if (other_pressure)
+  if (io::pressure_unit_other_than_mpa(in))
     if (PyErr_WarnEx(PyExc_UserWarning,
                      fmt::format("{}: the model's input is in {}, not MPa: the controller's pressures (limits, PID "
                                  "output, commands) are then in {} too, and PID gains meant per MPa are off by the "
@@ -108,12 +102,12 @@ double model_scale_of(const io::ModelDocument& doc, const py::object& given, std
                          .c_str(),
                      1) != 0)
       throw py::error_already_set();
-  if (given.is_none()) return per_metre.value_or(1000.0);
+  if (given.is_none()) return per_metre > 0 ? per_metre : 1000.0;
   const double scale = cast_arg<double>(given, fmt::format("{}: model_scale", what), "a number or None");
-  if (per_metre && std::abs(scale - *per_metre) > 1e-9 * *per_metre)
+  if (per_metre > 0 && std::abs(scale - per_metre) > 1e-9 * per_metre)
     throw Error(fmt::format("{}: model_scale = {} model output units per metre, but the model's output is in {} ({} "
                             "per metre): leave model_scale to the model (None) or give {}",
-                            what, scale, doc.unit("output"), *per_metre, *per_metre));
+                            what, scale, doc.unit("output"), per_metre, per_metre));
   return scale;
 }
 

@@ -29,6 +29,7 @@
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/table.hpp"
 #include "hysteron/learning.hpp"
 #include "hysteron/loop_design.hpp"
 #include "hysteron/models.hpp"
@@ -39,6 +40,7 @@ struct hysteron_params {
   hysteron::ModelParams params;
   std::string kind;  // "gpi", ... (NUL-terminated for hysteron_params_kind)
   std::size_t num_operators = 0;  // the length of a state vector (Model::state().y), every kind
+  std::string output_unit;  // the model file's "units" output ("" if none): checked against model_scale
 };
 
 struct hysteron_model {
@@ -172,8 +174,8 @@ void require_state_size(std::size_t n, std::size_t expected) {
          expected);
 }
 
-hysteron_params* make_params(hysteron::ModelParams p) {
-  auto* h = new hysteron_params{std::move(p), {}, 0};
+hysteron_params* make_params(hysteron::io::ModelDocument doc) {
+  auto* h = new hysteron_params{std::move(doc.params), {}, 0, doc.unit("output")};
   h->kind = std::string(hysteron::model_name(h->params));
   try {
     // the state's length: the play operators of the PI family, the kernel's entries of the other
@@ -197,15 +199,16 @@ std::string read_file(const char* path, const char* what,
   }
 }
 
-// io::parse_json (strict: also a repeated key or a NUL byte is a parse error), then the model.
-hysteron::ModelParams parse_model(const std::string& text, const std::string& where) {
+// io::parse_json (strict: also a repeated key or a NUL byte is a parse error), then the model
+// with its free-form keys (the units).
+hysteron::io::ModelDocument parse_model(const std::string& text, const std::string& where) {
   nlohmann::json j;
   try {
     j = hysteron::io::parse_json(text, where);
   } catch (const hysteron::Error& e) {
     fail(HYSTERON_ERROR_PARSE, "%s", e.what());
   }
-  return hysteron::io::model_from_json(j, where);
+  return hysteron::io::model_document_from_json(j, where);
 }
 
 void copy_state(const hysteron::ModelState& s, double* y, std::size_t n, double* u) {
@@ -585,6 +588,14 @@ void check_controller(const hysteron::FeedforwardParams& ff, const hysteron::Pid
 // (hysteron::resolve_pressure_limits). A side the model cannot give, or a resolved lo >= hi, is the
 // caller's argument: INVALID_ARGUMENT naming `prefix`pressure_min / pressure_max.
 void resolve_limits(const hysteron_params& model, hysteron::FeedforwardParams& ff, const char* prefix) {
+  // a model_scale that contradicts the model file's output unit (a model in m under the default
+  // 1000 asks the inverse for outputs 1000x too large and saturates)
+  if (const double per_metre = hysteron::io::length_units_per_metre(model.output_unit);
+      per_metre > 0 && std::abs(ff.model_scale - per_metre) > 1e-9 * per_metre)
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
+         "%smodel_scale = %g model output units per metre, but the model's output is in %s (%g per metre): set "
+         "%smodel_scale = %g",
+         prefix, ff.model_scale, model.output_unit.c_str(), per_metre, prefix, per_metre);
   const hysteron::Limits given = ff.pressure_limits;
   try {
     ff.pressure_limits = hysteron::resolve_pressure_limits(model.params, given);

@@ -806,6 +806,21 @@ std::string canonical_unit(std::string_view unit) {
   return std::string();
 }
 
+double length_units_per_metre(std::string_view unit) {
+  const std::string u = canonical_unit(unit);
+  for (const auto& [symbol, count] : {std::pair<std::string_view, double>{"m", 1.0}, {"cm", 100.0}, {"mm", 1000.0},
+                                      {"um", 1e6}, {"nm", 1e9}, {"in", 1.0 / 0.0254}})
+    if (u == symbol) return count;
+  return 0.0;
+}
+
+bool pressure_unit_other_than_mpa(std::string_view unit) {
+  const std::string u = canonical_unit(unit);
+  for (const std::string_view p : {"Pa", "hPa", "kPa", "bar", "mbar", "psi", "atm"})
+    if (u == p) return true;
+  return false;
+}
+
 std::string column_unit(const Table& t, std::size_t i) {
   if (i < t.units.size() && !trim(t.units[i]).empty()) return strip_unit_brackets(t.units[i]);
   if (i >= t.names.size()) return std::string();

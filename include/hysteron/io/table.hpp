@@ -99,6 +99,12 @@ std::string without_unit(std::string_view text);
 // "Pressure [kPa]"; "um" for "µm"), "" for any other text (free text is not compared). Prefixes
 // keep their case: "mPa" is not "MPa".
 std::string canonical_unit(std::string_view unit);
+// A length unit's count per metre (canonical_unit "m" 1, "cm" 100, "mm" 1000, "um" 1e6, "nm" 1e9,
+// "in" 1 / 0.0254): a controller's model_scale for a model whose output is in it; 0 for any other
+// text. And whether canonical_unit names a pressure unit other than MPa (Pa, hPa, kPa, bar, mbar,
+// psi, atm): the controllers' pressures are in MPa.
+double length_units_per_metre(std::string_view unit);
+bool pressure_unit_other_than_mpa(std::string_view unit);
 // Column i's unit: its units-row field, else trailing_unit of its header name; brackets are
 // stripped ("[kPa]" -> "kPa"). "" if it has none.
 std::string column_unit(const Table& t, std::size_t i);

@@ -13,7 +13,7 @@
 #include "hysteron/control.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
-#include "hysteron/io/table.hpp"
+#include "hysteron/io/units.hpp"
 #include "hysteron/learning.hpp"
 #include "more.hpp"
 

@@ -29,7 +29,7 @@
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/model_file.hpp"
-#include "hysteron/io/table.hpp"
+#include "hysteron/io/units.hpp"
 #include "hysteron/learning.hpp"
 #include "hysteron/loop_design.hpp"
 #include "hysteron/models.hpp"

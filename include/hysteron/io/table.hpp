@@ -45,6 +45,7 @@
 #include <vector>
 
 #include "hysteron/io/files.hpp"  // write_file_atomically, write_text_file, check_outputs_distinct
+#include "hysteron/io/units.hpp"  // canonical_unit, trailing_unit, ... (units as text)
 
 namespace hysteron::io {
 
@@ -87,24 +88,6 @@ struct Table {
   const std::vector<double>& column(std::string_view spec) const;
 };
 
-// "[kPa]" / "(kPa)" -> "kPa" (one pair of brackets, and blanks, stripped).
-std::string strip_unit_brackets(std::string_view unit);
-// The unit a header name or axis label ends in, " [unit]" or " (unit)" after a blank: "Pressure
-// [kPa]" -> "kPa"; "" for none ("x[0]", "sin(t)": no blank before the bracket; "p [3]": digits).
-std::string trailing_unit(std::string_view text);
-// The text without that unit ("Pressure [kPa]" -> "Pressure").
-std::string without_unit(std::string_view text);
-// A unit as compared (evaluate, simulate, invert against a model's "units"): the symbol of a unit
-// of pressure, length, force, voltage, current or time ("kPa" for "kPa", "KPa", "[kPa]",
-// "Pressure [kPa]"; "um" for "µm"), "" for any other text (free text is not compared). Prefixes
-// keep their case: "mPa" is not "MPa".
-std::string canonical_unit(std::string_view unit);
-// A length unit's count per metre (canonical_unit "m" 1, "cm" 100, "mm" 1000, "um" 1e6, "nm" 1e9,
-// "in" 1 / 0.0254): a controller's model_scale for a model whose output is in it; 0 for any other
-// text. And whether canonical_unit names a pressure unit other than MPa (Pa, hPa, kPa, bar, mbar,
-// psi, atm): the controllers' pressures are in MPa.
-double length_units_per_metre(std::string_view unit);
-bool pressure_unit_other_than_mpa(std::string_view unit);
 // Column i's unit: its units-row field, else trailing_unit of its header name; brackets are
 // stripped ("[kPa]" -> "kPa"). "" if it has none.
 std::string column_unit(const Table& t, std::size_t i);

@@ -1,0 +1,29 @@
+#pragma once
+// Units as text: the unit of a header name or label ("pressure [kPa]"), a unit as compared
+// ("KPa" is "kPa"), and what the controllers need of one. No file access: the C ABI uses these
+// without the table readers (and their matio).
+#include <string>
+#include <string_view>
+
+namespace hysteron::io {
+
+// "[kPa]" / "(kPa)" -> "kPa" (one pair of brackets, and blanks, stripped).
+std::string strip_unit_brackets(std::string_view unit);
+// The unit a header name or axis label ends in, " [unit]" or " (unit)" after a blank: "Pressure
+// [kPa]" -> "kPa"; "" for none ("x[0]", "sin(t)": no blank before the bracket; "p [3]": digits).
+std::string trailing_unit(std::string_view text);
+// The text without that unit ("Pressure [kPa]" -> "Pressure").
+std::string without_unit(std::string_view text);
+// A unit as compared (evaluate, simulate, invert against a model's "units"): the symbol of a unit
+// of pressure, length, force, voltage, current or time ("kPa" for "kPa", "KPa", "[kPa]",
+// "Pressure [kPa]"; "um" for "µm"), "" for any other text (free text is not compared). Prefixes
+// keep their case: "mPa" is not "MPa".
+std::string canonical_unit(std::string_view unit);
+// A length unit's count per metre (canonical_unit "m" 1, "cm" 100, "mm" 1000, "um" 1e6, "nm" 1e9,
+// "in" 1 / 0.0254): a controller's model_scale for a model whose output is in it; 0 for any other
+// text. And whether canonical_unit names a pressure unit other than MPa (Pa, hPa, kPa, bar, mbar,
+// psi, atm): the controllers' pressures are in MPa.
+double length_units_per_metre(std::string_view unit);
+bool pressure_unit_other_than_mpa(std::string_view unit);
+
+}  // namespace hysteron::io

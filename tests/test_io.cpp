@@ -964,6 +964,12 @@ TEST(Table, UnitsRowAndUnitsInTheHeader) {
   std::vector<double> streamed;
   io::for_each_value(blanks, spec("p"), [&](double v) { streamed.push_back(v); });
   EXPECT_EQ(streamed, (std::vector<double>{1, 3}));
+  // ... or the units row has (the header as written, its units row below it)
+  const io::Table units_as_written = io::read_table(dir.write("uw.txt", "t [s] p [kPa]\nx s y kPa\n0 1 2 3\n"));
+  ASSERT_EQ(units_as_written.columns.size(), 4u);
+  EXPECT_EQ(units_as_written.names[1], "[s]");
+  EXPECT_EQ(io::column_unit(units_as_written, 3), "kPa");
+  EXPECT_EQ(units_as_written.columns[3], (std::vector<double>{3}));
   const io::Table as_written = io::read_table(dir.write("written.txt", "a (b) c\n1 2 3\n"));
   ASSERT_EQ(as_written.columns.size(), 3u);
   EXPECT_EQ(as_written.names[1], "(b)");

@@ -37,8 +37,8 @@
  * (e.g. MPa of pressure, V of a piezo amplifier) to the output y in its output
  * units (e.g. mm of contraction); see docs/model-files.md. The controller
  * (hysteron_ff_pid_*) works in metres and MPa, like the C++ FeedforwardPidController.
- * PID gains are magnitudes: on a model whose output decreases with its input (a negative
- * output_gain, e.g. a sensor that reads the muscle's length, not its contraction) every
+ * PID gains are magnitudes: on a model whose output decreases with its input (output_gain and
+ * input_scale of opposite signs, e.g. a sensor that reads the muscle's length, not its contraction) every
  * controller's position PID acts on y - r instead of r - y, so the feedback stays negative.
  */
 #ifndef HYSTERON_H

@@ -104,10 +104,8 @@ double model_scale_of(const io::ModelDocument& doc, const py::object& given, std
       throw py::error_already_set();
   if (given.is_none()) return per_metre > 0 ? per_metre : 1000.0;
   const double scale = cast_arg<double>(given, fmt::format("{}: model_scale", what), "a number or None");
-  if (per_metre > 0 && std::abs(scale - per_metre) > 1e-9 * per_metre)
-    throw Error(fmt::format("{}: model_scale = {} model output units per metre, but the model's output is in {} ({} "
-                            "per metre): leave model_scale to the model (None) or give {}",
-                            what, scale, doc.unit("output"), per_metre, per_metre));
+  if (const std::string why = io::model_scale_mismatch(scale, doc.unit("output")); !why.empty())
+    throw Error(fmt::format("{}: {}: leave model_scale to the model (None) or give {:.10g}", what, why, per_metre));
   return scale;
 }
 

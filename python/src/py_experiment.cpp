@@ -19,6 +19,7 @@
 #include "hysteron/io/files.hpp"
 #include "hysteron/io/export_c.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/io/units.hpp"
 #include "more.hpp"
 
 namespace hysteron::python {
@@ -93,7 +94,13 @@ void bind_experiment(py::module_& m) {
       "controller_from",
       [](const py::object& controller, const py::object& model) {
         const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
-        Controller c = make_controller(d, model_spec(model, "controller_from: model"));
+        const io::ModelDocument doc = model_document(model, "controller_from: model");
+        if (const std::string why = io::model_scale_mismatch(d.feedforward.model_scale, doc.unit("output"));
+            !why.empty())
+          throw Error(fmt::format("controller_from: {}: the controller was designed for a model in another length "
+                                  "unit",
+                                  why));
+        Controller c = make_controller(d, doc.params);
         return std::visit([](auto& loop) { return py::cast(std::move(loop)); }, c);
       },
       py::arg("controller"), py::arg("model"),

@@ -5,6 +5,7 @@ record's units still protects a model that went through Python."""
 import copy
 import json
 import os
+import pathlib
 import pickle
 import subprocess
 
@@ -184,9 +185,29 @@ def test_the_controllers_take_model_scale_from_the_models_units():
         assert b == c
         assert abs(a - b) < 1e-9
     assert hysteron.InverseFeedforward(dict(base, output_gain=0.030, units={"output": "um"})).step(1e-6) >= 0.0
+    hysteron.InverseFeedforward(dict(base, units={"output": "in"}), model_scale=39.37)  # 1 / 0.0254, rounded
     with pytest.raises(hysteron.Error, match=r"model_scale = 1000 .* the model's output is in m \(1 per metre\)"):
         hysteron.FeedforwardPidController(in_m, model_scale=1000.0)
     for make in (hysteron.FeedforwardPidController, hysteron.OpenLoopController, hysteron.CascadePwmController):
         make(in_m)  # model_scale from the units
         with pytest.warns(UserWarning, match="the model's input is in kPa, not MPa"):
             make(dict(in_mm, units={"input": "kPa", "output": "mm"}, input_limits=[0, 600]))
+
+
+def test_a_loop_from_a_result_is_refused_on_a_model_in_another_length_unit():
+    # result.json's loops carry model_scale 1000 (the experiments' models are in mm): on a model in
+    # m, controller_from and export_c (as hysteron export --loop) built a loop that asked the
+    # inverse for outputs 1000x too large
+    result = pathlib.Path(__file__).resolve().parents[2] / "tests" / "c_api" / "result.json"
+    ctl = hysteron.loop_of_run(str(result), "compensated.sine")
+    pi = {"model": "pi", "q": 0.03, "r": [0.02, 0.05, 0.1, 0.15], "p": [0.012, 0.009, 0.006, 0.003],
+          "input_limits": [0, 0.6]}
+    in_m = dict(pi, units={"input": "MPa", "output": "m"})
+    with pytest.raises(hysteron.Error, match=r"controller_from: model_scale = 1000 .*output is in m"):
+        hysteron.controller_from(ctl, in_m)
+    with pytest.raises(hysteron.Error, match=r"model_scale = 1000 .*output is in m"):
+        hysteron.export_c(in_m, controller=ctl)
+    in_mm = dict(pi, q=30, p=[12, 9, 6, 3], units={"input": "MPa", "output": "mm"})
+    hysteron.controller_from(ctl, in_mm)
+    hysteron.export_c(in_mm, controller=ctl)
+    hysteron.controller_from(ctl, dict(pi, q=30, p=[12, 9, 6, 3]))  # no units: as before

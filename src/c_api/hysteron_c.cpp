@@ -590,12 +590,9 @@ void check_controller(const hysteron::FeedforwardParams& ff, const hysteron::Pid
 void resolve_limits(const hysteron_params& model, hysteron::FeedforwardParams& ff, const char* prefix) {
   // a model_scale that contradicts the model file's output unit (a model in m under the default
   // 1000 asks the inverse for outputs 1000x too large and saturates)
-  if (const double per_metre = hysteron::io::length_units_per_metre(model.output_unit);
-      per_metre > 0 && std::abs(ff.model_scale - per_metre) > 1e-9 * per_metre)
-    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
-         "%smodel_scale = %g model output units per metre, but the model's output is in %s (%g per metre): set "
-         "%smodel_scale = %g",
-         prefix, ff.model_scale, model.output_unit.c_str(), per_metre, prefix, per_metre);
+  if (const std::string why = hysteron::io::model_scale_mismatch(ff.model_scale, model.output_unit); !why.empty())
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT, "%s%s: set %smodel_scale = %.10g", prefix, why.c_str(), prefix,
+         hysteron::io::length_units_per_metre(model.output_unit));
   const hysteron::Limits given = ff.pressure_limits;
   try {
     ff.pressure_limits = hysteron::resolve_pressure_limits(model.params, given);

@@ -3,6 +3,7 @@
 // transcribed into C99 operation by operation, with the model's constants baked in.
 // Keep the two in step: tests/test_export.cpp compares them over 10^5 samples per kind.
 #include "hysteron/io/export_c.hpp"
+#include "hysteron/io/units.hpp"
 
 #include <fmt/format.h>
 
@@ -1082,6 +1083,10 @@ GeneratedC generate_c(const ModelParams& params, const ExportOptions& options) {
       throw Error(fmt::format("the loop{}: {}",
                               options.loop_source.empty() ? std::string() : " of " + options.loop_source, e.what()));
     }
+    if (const std::string why = model_scale_mismatch(options.loop->feedforward.model_scale, options.output_unit);
+        !why.empty())
+      throw Error(fmt::format("the loop{}: {}: this loop was designed for a model in another length unit",
+                              options.loop_source.empty() ? std::string() : " of " + options.loop_source, why));
     // the loop's inverse saturates at its pressure limits (InverseFeedforward), resolved on the model
     const Limits& pl = loop->pressure_limits;
     const bool unset = std::isinf(inverse_limits.lo) && std::isinf(inverse_limits.hi);

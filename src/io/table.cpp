@@ -312,19 +312,19 @@ class TextParser {
     }
     if (first_) return first_line(line);
     split(line, sep_, fields_);
+    // the first line after a header whose units were joined (a units row or a data row) with a
+    // field for each part as written: the header as written
+    if (!split_names_.empty() && fields_.size() != nfields_ && fields_.size() == split_names_.size()) {
+      names_ = std::move(split_names_);
+      resize_columns(names_.size());
+      check_repeated_names(first_line_);
+    }
+    split_names_.clear();
     if (units_pending_) {
       units_pending_ = false;
       if (units_line()) return false;
     } else {
       units_refusal_.clear();  // said of the line after the header only
-    }
-    if (!split_names_.empty()) {  // the first data row after a header whose units were joined
-      if (fields_.size() != nfields_ && fields_.size() == split_names_.size()) {
-        names_ = std::move(split_names_);
-        resize_columns(names_.size());
-        check_repeated_names(first_line_);
-      }
-      split_names_.clear();
     }
     if (fields_.size() != nfields_) {
       if (fields_.size() > max_text_columns) too_many_columns();

@@ -1,7 +1,10 @@
 // Units as text (units.hpp).
 #include "hysteron/io/units.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace hysteron::io {
@@ -81,6 +84,14 @@ bool pressure_unit_other_than_mpa(std::string_view unit) {
   for (const std::string_view p : {"Pa", "hPa", "kPa", "bar", "mbar", "psi", "atm"})
     if (u == p) return true;
   return false;
+}
+
+std::string model_scale_mismatch(double model_scale, std::string_view output_unit) {
+  const double per_metre = length_units_per_metre(output_unit);
+  if (per_metre <= 0 || std::abs(model_scale - per_metre) <= 1e-4 * per_metre) return std::string();
+  return fmt::format("model_scale = {} model output units per metre, but the model's output is in {} ({:.10g} per "
+                     "metre)",
+                     model_scale, output_unit, per_metre);
 }
 
 }  // namespace hysteron::io

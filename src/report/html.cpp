@@ -841,10 +841,10 @@ void apply_data_override(io::DataDescription& d, const FitDataSource& o, const s
     d.time_unit = o.time_unit;  // the document's column, in another unit than it records (or s)
   }
   if (!o.time_unit.empty() && d.time_column.empty())
-    throw Error(fmt::format("{}: data: --time-unit {} but {}; give the time column with --time-column NAME, or drop "
-                            "--time-unit",
-                            doc_path, o.time_unit,
-                            o.no_time ? "--no-time draws against the sample index" : "the document names no time column"));
+    throw Error(fmt::format("{}: data: --time-unit {} but {}", doc_path, o.time_unit,
+                            o.no_time ? "--no-time draws against the sample index: drop one of them"
+                                      : "the document names no time column: give the time column with --time-column "
+                                        "NAME, or drop --time-unit"));
 }
 
 // A data file a document names: a relative path beside the document first, then from the

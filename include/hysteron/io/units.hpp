@@ -25,5 +25,11 @@ std::string canonical_unit(std::string_view unit);
 // psi, atm): the controllers' pressures are in MPa.
 double length_units_per_metre(std::string_view unit);
 bool pressure_unit_other_than_mpa(std::string_view unit);
+// Why a controller's model_scale [model output units per m] contradicts a model whose output is
+// in `output_unit` (a length unit whose count per metre differs from it by more than 1e-4
+// relative: a model in m under the default 1000 asks its inverse for outputs 1000x too large);
+// "" where it agrees or the unit is no length (or none). The controllers' constructors in
+// Python, the C ABI's *_create, controller_from and export --loop refuse with it.
+std::string model_scale_mismatch(double model_scale, std::string_view output_unit);
 
 }  // namespace hysteron::io

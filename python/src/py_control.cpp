@@ -102,6 +102,16 @@ double model_scale_of(const io::ModelDocument& doc, const py::object& given, std
                          .c_str(),
                      1) != 0)
       throw py::error_already_set();
+  if (const std::string out = io::canonical_unit(doc.unit("output"));
+      given.is_none() && per_metre == 0 && !out.empty() && out != "%")
+    if (PyErr_WarnEx(PyExc_UserWarning,
+                     fmt::format("{}: the model's output is in {}, not a length: the controller takes its references "
+                                 "and measurements as model outputs / model_scale, 1000 by default (mm per m); give "
+                                 "model_scale=1 to give them in {}",
+                                 what, out, out)
+                         .c_str(),
+                     1) != 0)
+      throw py::error_already_set();
   if (given.is_none()) return per_metre > 0 ? per_metre : 1000.0;
   const double scale = cast_arg<double>(given, fmt::format("{}: model_scale", what), "a number or None");
   if (const std::string why = io::model_scale_mismatch(scale, doc.unit("output")); !why.empty())

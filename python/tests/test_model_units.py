@@ -186,6 +186,14 @@ def test_the_controllers_take_model_scale_from_the_models_units():
         assert abs(a - b) < 1e-9
     assert hysteron.InverseFeedforward(dict(base, output_gain=0.030, units={"output": "um"})).step(1e-6) >= 0.0
     hysteron.InverseFeedforward(dict(base, units={"output": "in"}), model_scale=39.37)  # 1 / 0.0254, rounded
+    # an output that is no length (a force record's N): the default 1000 is said, model_scale=1 is silent
+    with pytest.warns(UserWarning, match="the model's output is in N, not a length"):
+        hysteron.InverseFeedforward(dict(base, units={"output": "N"}))
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hysteron.InverseFeedforward(dict(base, units={"output": "N"}), model_scale=1.0)
+        hysteron.InverseFeedforward(in_mm)
     with pytest.raises(hysteron.Error, match=r"model_scale = 1000 .* the model's output is in m \(1 per metre\)"):
         hysteron.FeedforwardPidController(in_m, model_scale=1000.0)
     for make in (hysteron.FeedforwardPidController, hysteron.OpenLoopController, hysteron.CascadePwmController):

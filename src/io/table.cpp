@@ -423,8 +423,8 @@ class TextParser {
 
   // A blank-separated header splits a name from its unit ("t [s] p [kPa]": 4 fields for 2
   // columns): a field that is a bracketed unit alone is joined to the name before it (one without
-  // a unit of its own). Should the first data row have the unjoined number of fields, it is taken
-  // as written (split_names_, read_row).
+  // a unit of its own). Should the next line (a units row or the first data row) have the
+  // unjoined number of fields, the header is taken as written (split_names_).
   void join_header_units() {
     std::vector<std::string> joined;
     for (const std::string& n : names_) {

@@ -47,7 +47,7 @@ int run_evaluate(const EvaluateOptions& c) {
   if (c.json && report_stdout)
     throw Error(fmt::format("--report {} and --json both write to standard output: choose one", c.report));
   io::check_output_files({{"--report", c.report}}, {{"--model", c.model}, {"--data", c.sel.file}});
-  const io::ModelDocument model_doc = read_model_source(c.model);
+  const io::ModelDocument model_doc = io::read_model_document(c.model);
   const ModelParams& model = model_doc.params;
   const ModelUnits units = model_units(model_doc);
   const DataSelection& sel = c.sel;

@@ -76,7 +76,7 @@ int run_export(const Options& o) {
   if (!o.header.empty() && o.header == o.out) throw Error(fmt::format("--header and --out name the same file \"{}\"", o.out));
   if (!o.run.empty() && o.loop.empty()) throw Error("--run names a run of the --loop file: give --loop too");
   io::check_output_files({{"--out", o.out}, {"--header", o.header}}, {{"--model", o.model}, {"--loop", o.loop}});
-  const io::ModelDocument doc = read_model_source(o.model);
+  const io::ModelDocument doc = io::read_model_document(o.model);
   const ModelParams& params = doc.params;
   io::ExportOptions e;
   e.input_unit = doc.unit("input");  // the units the C file's comments state

@@ -130,7 +130,7 @@ void warn_assumed_dt(const ModelParams& params, const std::string& input, const 
 
 int run_simulate(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
-  const io::ModelDocument doc = read_model_source(o.model);
+  const io::ModelDocument doc = io::read_model_document(o.model);
   const ModelParams& params = doc.params;
   const ModelUnits units = model_units(doc);
   const io::ReadOptions ro = input_options(o.column, "input");
@@ -185,7 +185,7 @@ int run_simulate(const Options& o) {
 
 int run_invert(const Options& o) {
   io::check_output_files({{"--output", o.output}}, {{"--model", o.model}, {"--input", o.input}});
-  const io::ModelDocument doc = read_model_source(o.model);
+  const io::ModelDocument doc = io::read_model_document(o.model);
   const ModelParams& params = doc.params;
   const ModelUnits units = model_units(doc);
   const io::ReadOptions ro = input_options(o.column, "output");

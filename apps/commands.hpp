@@ -56,9 +56,6 @@ const std::string& command_line();                        // the recorded comman
 // 3 poor_fit (model not written unless --force); 4 internal error.
 inline constexpr int exit_ok = 0, exit_error = 1, exit_not_converged = 2, exit_poor_fit = 3, exit_internal = 4;
 
-// A model file with its free-form keys (io::read_model_document), or the model JSON on stdin
-// for "-". Throws hysteron::Error.
-io::ModelDocument read_model_source(const std::string& path);
 // The units a model file records, its "units": {"input": ..., "output": ...} (fit writes them where
 // the record names them); "" where it records none.
 struct ModelUnits {

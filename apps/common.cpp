@@ -41,10 +41,6 @@ std::string trim(std::string_view s) {
 
 }  // namespace
 
-io::ModelDocument read_model_source(const std::string& path) {
-  return io::read_model_document(path);  // "-": standard input, "<stdin>" in its errors
-}
-
 ModelUnits model_units(const io::ModelDocument& doc) { return {doc.unit("input"), doc.unit("output")}; }
 
 namespace {

@@ -91,27 +91,20 @@ constexpr double inf = std::numeric_limits<double>::infinity();
 // inverse for outputs 1000x too large, silently). A model whose input names a pressure unit other
 // than MPa is warned of: the controllers' pressures (limits, PID output, commands) are then in it.
 double model_scale_of(const io::ModelDocument& doc, const py::object& given, std::string_view what) {
+  const auto warn = [](const std::string& message) {
+    if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+  };
   const double per_metre = io::length_units_per_metre(doc.unit("output"));
-  const std::string in = io::canonical_unit(doc.unit("input"));
-  if (io::pressure_unit_other_than_mpa(in))
-    if (PyErr_WarnEx(PyExc_UserWarning,
-                     fmt::format("{}: the model's input is in {}, not MPa: the controller's pressures (limits, PID "
-                                 "output, commands) are then in {} too, and PID gains meant per MPa are off by the "
-                                 "ratio of the units",
-                                 what, in, in)
-                         .c_str(),
-                     1) != 0)
-      throw py::error_already_set();
+  if (const std::string in = io::canonical_unit(doc.unit("input")); io::pressure_unit_other_than_mpa(in))
+    warn(fmt::format("{}: the model's input is in {}, not MPa: the controller's pressures (limits, PID output, "
+                     "commands) are then in {} too, and PID gains meant per MPa are off by the ratio of the units",
+                     what, in, in));
   if (const std::string out = io::canonical_unit(doc.unit("output"));
       given.is_none() && per_metre == 0 && !out.empty() && out != "%")
-    if (PyErr_WarnEx(PyExc_UserWarning,
-                     fmt::format("{}: the model's output is in {}, not a length: the controller takes its references "
-                                 "and measurements as model outputs / model_scale, 1000 by default (mm per m); give "
-                                 "model_scale=1 to give them in {}",
-                                 what, out, out)
-                         .c_str(),
-                     1) != 0)
-      throw py::error_already_set();
+    warn(fmt::format("{}: the model's output is in {}, not a length: the controller takes its references and "
+                     "measurements as model outputs / model_scale, 1000 by default (mm per m); give model_scale=1 to "
+                     "give them in {}",
+                     what, out, out));
   if (given.is_none()) return per_metre > 0 ? per_metre : 1000.0;
   const double scale = cast_arg<double>(given, fmt::format("{}: model_scale", what), "a number or None");
   if (const std::string why = io::model_scale_mismatch(scale, doc.unit("output")); !why.empty())

@@ -9,6 +9,10 @@
 
 namespace hysteron::io::detail {
 
+// units.cpp (so that the unit helpers need no table reader)
+// The text without leading blanks and tabs and trailing blanks, tabs and CRs.
+std::string_view trim(std::string_view s);
+
 // table.cpp
 bool is_mat_path(std::string_view path);  // extension .mat, any case
 // Printable, bounded form of a field or name for messages (at most 40 characters, control bytes

@@ -65,12 +65,7 @@ namespace {
 namespace fs = std::filesystem;
 using detail::is_mat_path;
 using detail::shown;
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
+using detail::trim;
 
 std::string_view unquote(std::string_view s) {
   s = trim(s);

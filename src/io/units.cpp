@@ -1,6 +1,8 @@
 // Units as text (units.hpp).
 #include "hysteron/io/units.hpp"
 
+#include "mat.hpp"  // detail::trim
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -9,15 +11,17 @@
 
 namespace hysteron::io {
 
-namespace {
+namespace detail {
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
   while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
   return s;
 }
-}  // namespace
+}  // namespace detail
 
 namespace {
+using detail::trim;
+
 // "name [unit]" / "name (unit)": the position of the bracket that opens a trailing unit, else npos.
 // The bracket follows a blank ("x[0]", "sin(t)" have none) and holds more than digits ("p [3]").
 std::size_t unit_bracket(std::string_view name) {
@@ -34,6 +38,8 @@ std::size_t unit_bracket(std::string_view name) {
   return open;
 }
 }  // namespace
+
+using detail::trim;
 
 std::string strip_unit_brackets(std::string_view u) {
   u = trim(u);

@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,12 +70,23 @@ struct Worst {
   std::size_t n = 0;
 };
 
+// A sample k whose argument `which` (0 reference, 1 preview, 2 measured, 3 pressure) is `value`.
+struct Fault {
+  std::size_t k;
+  int which;
+  double value;
+};
+
 // The loop rebuilt through the C ABI as docs/deploy.md tells a C user to: the run's loop read
 // from result.json (hysteron_loop_params_from_file, "VARIANT.REFERENCE"), the object its kind
 // names created on the run's model file, and the preview from hysteron_loop_preview; fed the
 // run's recorded inputs. The position PID's limit-cycle guard is read and set too
 // (hysteron_loop_guard_from_file, hysteron_*_set_guard) unless with_guard is false.
-Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r, bool with_guard = true) {
+// With `faults`, those samples' arguments are replaced, the step must return
+// HYSTERON_ERROR_INVALID_ARGUMENT there (HYSTERON_OK elsewhere), and the differences are to
+// the same loop in C++ (make_controller, step) fed the same arguments, not to the run.
+Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r, bool with_guard = true,
+               const std::vector<Fault>& faults = {}) {
   Worst w;
   hysteron_loop_params c;
   const std::string run = r.variant + "." + r.reference;
@@ -118,15 +131,30 @@ Worst replay_c(const std::filesystem::path& dir, const TrackingRun& r, bool with
   std::vector<double> preview(ref.size());
   EXPECT_EQ(hysteron_loop_preview(&c, ref.data(), ref.size(), preview.data(), preview.size()), HYSTERON_OK)
       << hysteron_last_error();
+  std::optional<Controller> cpp;
+  if (!faults.empty()) cpp.emplace(make_controller(r.controller, io::read_model_file((dir / model_file(r)).string())));
   for (std::size_t k = 0; k < r.t.size(); ++k, ++w.n) {
-    const double meas = r.measured_mm[k] * 1e-3, p = r.pressure_measured_mpa[k];
+    double a[4] = {ref[k], preview[k], r.measured_mm[k] * 1e-3, r.pressure_measured_mpa[k]};
+    bool faulty = false;
+    for (const Fault& f : faults)
+      if (f.k == k) {
+        a[f.which] = f.value;
+        faulty = faulty || f.which != 3 || ff == nullptr;  // hysteron_ff_pid_step takes no pressure
+      }
     double u = -1.0, duty = 0.0;
-    EXPECT_EQ(ff    ? hysteron_ff_pid_step(ff, ref[k], preview[k], meas, &u)
-              : ol ? hysteron_open_loop_step(ol, ref[k], preview[k], meas, p, &u)
-                   : hysteron_cascade_step(cas, ref[k], preview[k], meas, p, &duty, &u),
-              HYSTERON_OK);
-    w.command = std::max(w.command, std::abs(u - r.pressure_command_mpa[k]));  // with the valves: p_d
-    w.duty = std::max(w.duty, std::abs(duty - r.duty[k]));
+    EXPECT_EQ(ff    ? hysteron_ff_pid_step(ff, a[0], a[1], a[2], &u)
+              : ol ? hysteron_open_loop_step(ol, a[0], a[1], a[2], a[3], &u)
+                   : hysteron_cascade_step(cas, a[0], a[1], a[2], a[3], &duty, &u),
+              faulty ? HYSTERON_ERROR_INVALID_ARGUMENT : HYSTERON_OK)
+        << run << " sample " << k;
+    double want_u = r.pressure_command_mpa[k], want_duty = r.duty[k];  // with the valves: p_d
+    if (cpp) {
+      const LoopOutput o = step(*cpp, a[0], a[1], a[2], a[3]);
+      want_u = o.command_mpa;
+      want_duty = o.duty;
+    }
+    w.command = std::max(w.command, std::abs(u - want_u));
+    w.duty = std::max(w.duty, std::abs(duty - want_duty));
   }
   double scale = 0.0;
   std::size_t cuts = 0;
@@ -287,6 +315,18 @@ void check_replay(const ExperimentOptions& o, LoopDesign::Kind expected, bool ex
       std::printf("  %s %s.%s: %zu samples; largest difference from the run: C ABI %.3g MPa / %.3g duty, generated C "
                   "%.3g MPa / %.3g duty\n",
                   name.c_str(), run.variant.c_str(), run.reference.c_str(), g.n, w.command, w.duty, g.command, g.duty);
+    }
+    {
+      // A non-finite argument of each kind, once: the C ABI reports it and still commands what the
+      // library's step (and so Python's and the generated C's) commands, then and on every later
+      // sample (docs/deploy.md).
+      const std::size_t n = run.t.size();
+      const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+      const std::vector<Fault> faults = {{n / 5, 0, nan}, {2 * n / 5, 1, nan}, {3 * n / 5, 2, -inf}, {4 * n / 5, 3, nan}};
+      const Worst f = replay_c(dir, run, true, faults);
+      EXPECT_EQ(f.n, n);
+      EXPECT_EQ(f.command, 0.0) << name << " " << run.variant << " " << run.reference << ": faults, MPa";
+      EXPECT_EQ(f.duty, 0.0) << name << " " << run.variant << " " << run.reference << ": faults, duty";
     }
     if (run.controller.guard_cuts > 0) {
       ++guard_cut;

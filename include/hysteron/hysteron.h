@@ -22,7 +22,9 @@
  *   so one hysteron_params may be shared by any number of threads at once, e.g. each
  *   creating its own model or inverse from it, as long as none frees it meanwhile.
  * - Out-pointers are written only on success, except that the per-sample step
- *   functions also write the held (previous) value when an input is not finite.
+ *   functions also write an output when an input is not finite: the held (previous) value
+ *   for a model or an inverse, the command the loop computes without that input for a
+ *   controller (as the library's controllers and the generated C; see hysteron_ff_pid_step).
  * - The per-sample functions (hysteron_model_step, hysteron_inverse_step,
  *   hysteron_ff_pid_step, hysteron_open_loop_step, hysteron_cascade_step,
  *   hysteron_ilc_correction, hysteron_ilc_step) never allocate
@@ -243,8 +245,13 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller
 /* One sample. reference_m: y_d(t) [m]; preview_m: the reference fed to the inverse [m]
  * (y_d(t + lead) for a known reference, else reference_m); measured_m: sensor [m].
  * *pressure_mpa: the command [MPa]. A non-finite argument returns
- * HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the previous
- * command. Finite arguments whose error or PID terms overflow (reference_m = 1e308,
+ * HYSTERON_ERROR_INVALID_ARGUMENT and the loop steps without it, as the C++ controller, Python
+ * and the generated C do (so they agree on every later sample): a non-finite reference_m or
+ * measured_m holds the position PID's state and output (the previous command); a non-finite
+ * preview_m holds the inverse's state and output, and the PID steps on; in
+ * hysteron_open_loop_step a non-finite pressure_mpa skips the pressure loop for that sample (p_d
+ * is commanded), in hysteron_cascade_step it holds the pressure PID's state and output. The
+ * command is always finite and within the limits. Finite arguments whose error or PID terms overflow (reference_m = 1e308,
  * measured_m = -1e308) return HYSTERON_ERROR_INVALID_ARGUMENT too: the PID's state is
  * unchanged and its previous output held (never a NaN into the integrator). The same holds
  * for hysteron_open_loop_step and hysteron_cascade_step. Real-time safe. */
@@ -278,8 +285,8 @@ HYSTERON_C_API hysteron_status hysteron_open_loop_free(hysteron_open_loop* contr
 HYSTERON_C_API hysteron_status hysteron_open_loop_reset(hysteron_open_loop* controller);
 /* One sample: reference_m, preview_m, measured_m as in hysteron_ff_pid_step; pressure_mpa the
  * measured gauge pressure [MPa]; *command_mpa the regulator's command [MPa]. A non-finite
- * argument returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the
- * previous command. Real-time safe. */
+ * argument returns HYSTERON_ERROR_INVALID_ARGUMENT and the loop steps without it (see
+ * hysteron_ff_pid_step). Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_open_loop_step(hysteron_open_loop* controller, double reference_m,
                                                       double preview_m, double measured_m, double pressure_mpa,
                                                       double* command_mpa);
@@ -326,8 +333,8 @@ HYSTERON_C_API hysteron_status hysteron_cascade_free(hysteron_cascade* controlle
 HYSTERON_C_API hysteron_status hysteron_cascade_reset(hysteron_cascade* controller);
 /* One sample (arguments as hysteron_open_loop_step): *duty the PWM duty in [-1, 1] for the next
  * valve period; *desired_pressure_mpa (may be NULL) the outer loop's p_d. A non-finite argument
- * returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and writes the previous
- * outputs. Real-time safe. */
+ * returns HYSTERON_ERROR_INVALID_ARGUMENT and the loop steps without it (see
+ * hysteron_ff_pid_step). Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_cascade_step(hysteron_cascade* controller, double reference_m,
                                                     double preview_m, double measured_m, double pressure_mpa,
                                                     double* duty, double* desired_pressure_mpa);

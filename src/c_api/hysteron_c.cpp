@@ -55,25 +55,15 @@ struct hysteron_inverse {
 
 struct hysteron_ff_pid {
   hysteron::FeedforwardPidController controller;
-  double last = 0.0;  // the last command (held on a non-finite argument)
 };
 
 struct hysteron_open_loop {
   hysteron::OpenLoopController controller;
-  double last = 0.0;  // the last command (held on a non-finite argument)
 };
 
 struct hysteron_cascade {
   hysteron::CascadePwmController controller;
-  double last_duty = 0.0, last_desired = 0.0;  // held on a non-finite argument
 };
-
-namespace {
-// The command held on a non-finite argument before any step (at create and after reset): 0 within the
-// controller's pressure limits, which the model's input_limits may put above 0 (the library then holds
-// its clamped 0 too; a command outside the limits must never leave the controller).
-double start_command(const hysteron::Limits& lim) { return std::clamp(0.0, lim.lo, lim.hi); }
-}  // namespace
 
 struct hysteron_ilc {
   hysteron::IterativeLearning ilc;
@@ -603,22 +593,23 @@ void resolve_limits(const hysteron_params& model, hysteron::FeedforwardParams& f
 }
 
 // "arguments ... not all finite" for the controllers' step functions (no allocation).
-bool finite_step_args(const char* fn, double reference_m, double preview_m, double measured_m, const double* pressure,
-                      const char* held) noexcept {
+bool finite_step_args(const char* fn, double reference_m, double preview_m, double measured_m,
+                      const double* pressure) noexcept {
   if (std::isfinite(reference_m) && std::isfinite(preview_m) && std::isfinite(measured_m) &&
       (pressure == nullptr || std::isfinite(*pressure)))
     return true;
-  char text[260];
+  // The loop still steps, as the library's step and the generated C do: each part ignores the
+  // value it cannot use (docs/deploy.md, "A non-finite argument").
+  constexpr const char* what =
+      "not all finite (the loop stepped without them: a non-finite reference or measurement holds the position "
+      "PID's state and output, a non-finite preview the inverse's, a non-finite pressure the pressure loop's)";
+  char text[400];
   if (pressure)
-    std::snprintf(text, sizeof text,
-                  "arguments reference_m = %g, preview_m = %g, measured_m = %g, pressure_mpa = %g: not all finite "
-                  "(state unchanged, previous %s held)",
-                  reference_m, preview_m, measured_m, *pressure, held);
+    std::snprintf(text, sizeof text, "arguments reference_m = %g, preview_m = %g, measured_m = %g, pressure_mpa = %g: %s",
+                  reference_m, preview_m, measured_m, *pressure, what);
   else
-    std::snprintf(text, sizeof text,
-                  "arguments reference_m = %g, preview_m = %g, measured_m = %g: not all finite (state unchanged, "
-                  "previous %s held)",
-                  reference_m, preview_m, measured_m, held);
+    std::snprintf(text, sizeof text, "arguments reference_m = %g, preview_m = %g, measured_m = %g: %s", reference_m,
+                  preview_m, measured_m, what);
   set_message(fn, text);
   return false;
 }
@@ -859,8 +850,7 @@ hysteron_status hysteron_ff_pid_create(const hysteron_params* params, const hyst
     pid.out_min = ff.pressure_limits.lo;  // the controller clamps to the pressure limits anyway
     pid.out_max = ff.pressure_limits.hi;
     hysteron::FeedforwardPidController c(params->params, ff, pid);
-    const double start = start_command(c.pressure_limits());
-    *out = new hysteron_ff_pid{std::move(c), start};
+    *out = new hysteron_ff_pid{std::move(c)};
   });
 }
 
@@ -873,7 +863,6 @@ hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller) {
   return guard("hysteron_ff_pid_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(controller);
     controller->controller.reset();
-    controller->last = start_command(controller->controller.pressure_limits());
   });
 }
 
@@ -884,13 +873,10 @@ hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double referen
                 controller == nullptr ? "argument controller is NULL" : "argument pressure_mpa is NULL");
     return HYSTERON_ERROR_NULL_POINTER;
   }
-  if (!finite_step_args("hysteron_ff_pid_step", reference_m, preview_m, measured_m, nullptr, "command")) {
-    *pressure_mpa = controller->last;
-    return HYSTERON_ERROR_INVALID_ARGUMENT;
-  }
+  const bool finite = finite_step_args("hysteron_ff_pid_step", reference_m, preview_m, measured_m, nullptr);
   const std::size_t faults = controller->controller.pid().faults();
-  controller->last = controller->controller.step(reference_m, preview_m, measured_m);
-  *pressure_mpa = controller->last;
+  *pressure_mpa = controller->controller.step(reference_m, preview_m, measured_m);
+  if (!finite) return HYSTERON_ERROR_INVALID_ARGUMENT;
   return pid_overflow("hysteron_ff_pid_step", faults, controller->controller.pid().faults(), reference_m, measured_m);
 }
 
@@ -920,8 +906,7 @@ hysteron_status hysteron_open_loop_create(const hysteron_params* params, const h
     p.position.out_min = -span;  // the controller's limits of the correction
     p.position.out_max = span;
     hysteron::OpenLoopController c(params->params, p);
-    const double start = start_command(c.pressure_limits());
-    *out = new hysteron_open_loop{std::move(c), start};
+    *out = new hysteron_open_loop{std::move(c)};
   });
 }
 
@@ -934,7 +919,6 @@ hysteron_status hysteron_open_loop_reset(hysteron_open_loop* controller) {
   return guard("hysteron_open_loop_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(controller);
     controller->controller.reset();
-    controller->last = start_command(controller->controller.pressure_limits());
   });
 }
 
@@ -945,13 +929,10 @@ hysteron_status hysteron_open_loop_step(hysteron_open_loop* controller, double r
                 controller == nullptr ? "argument controller is NULL" : "argument command_mpa is NULL");
     return HYSTERON_ERROR_NULL_POINTER;
   }
-  if (!finite_step_args("hysteron_open_loop_step", reference_m, preview_m, measured_m, &pressure_mpa, "command")) {
-    *command_mpa = controller->last;
-    return HYSTERON_ERROR_INVALID_ARGUMENT;
-  }
+  const bool finite = finite_step_args("hysteron_open_loop_step", reference_m, preview_m, measured_m, &pressure_mpa);
   const std::size_t faults = controller->controller.position().faults();
-  controller->last = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
-  *command_mpa = controller->last;
+  *command_mpa = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
+  if (!finite) return HYSTERON_ERROR_INVALID_ARGUMENT;
   return pid_overflow("hysteron_open_loop_step", faults, controller->controller.position().faults(), reference_m,
                       measured_m);
 }
@@ -996,8 +977,7 @@ hysteron_status hysteron_cascade_create(const hysteron_params* params, const hys
     p.position.out_min = p.feedforward.pressure_limits.lo;  // the controller clamps p_d to them
     p.position.out_max = p.feedforward.pressure_limits.hi;
     hysteron::CascadePwmController c(params->params, p);
-    const double start = start_command(c.pressure_limits());
-    *out = new hysteron_cascade{std::move(c), 0.0, start};
+    *out = new hysteron_cascade{std::move(c)};
   });
 }
 
@@ -1010,8 +990,6 @@ hysteron_status hysteron_cascade_reset(hysteron_cascade* controller) {
   return guard("hysteron_cascade_reset", HYSTERON_ERROR_INTERNAL, [&] {
     HYSTERON_REQUIRE(controller);
     controller->controller.reset();
-    controller->last_duty = 0.0;
-    controller->last_desired = start_command(controller->controller.pressure_limits());
   });
 }
 
@@ -1022,17 +1000,12 @@ hysteron_status hysteron_cascade_step(hysteron_cascade* controller, double refer
     set_message("hysteron_cascade_step", controller == nullptr ? "argument controller is NULL" : "argument duty is NULL");
     return HYSTERON_ERROR_NULL_POINTER;
   }
-  if (!finite_step_args("hysteron_cascade_step", reference_m, preview_m, measured_m, &pressure_mpa, "outputs")) {
-    *duty = controller->last_duty;
-    if (desired_pressure_mpa) *desired_pressure_mpa = controller->last_desired;
-    return HYSTERON_ERROR_INVALID_ARGUMENT;
-  }
+  const bool finite = finite_step_args("hysteron_cascade_step", reference_m, preview_m, measured_m, &pressure_mpa);
   const hysteron::CascadePwmController& c = controller->controller;
   const std::size_t faults = c.position().faults() + c.pressure().faults();
-  controller->last_duty = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
-  controller->last_desired = controller->controller.desired_pressure();
-  *duty = controller->last_duty;
-  if (desired_pressure_mpa) *desired_pressure_mpa = controller->last_desired;
+  *duty = controller->controller.step(reference_m, preview_m, measured_m, pressure_mpa);
+  if (desired_pressure_mpa) *desired_pressure_mpa = controller->controller.desired_pressure();
+  if (!finite) return HYSTERON_ERROR_INVALID_ARGUMENT;
   return pid_overflow("hysteron_cascade_step", faults, c.position().faults() + c.pressure().faults(), reference_m,
                       measured_m);
 }

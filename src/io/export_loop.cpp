@@ -310,9 +310,11 @@ void $P_loop_reset($P_loop *c);
  * preview_m, the feedforward's reference (preview[k] of $P_loop_preview); measured_m, the
  * contraction [m]; pressure_mpa, the measured gauge pressure [MPa]{}. Returns the pressure
  * command [MPa]{}, always finite and inside the pressure limits; writes the valves' PWM duty
- * in [-1, 1] to *duty if duty is not NULL ({}). Non-finite inputs, and errors whose PID terms
- * overflow (|r - y| near 1e308), are counted in the PIDs' and the inverse's faults (the C ABI
- * returns HYSTERON_INVALID_ARGUMENT there); the last finite command is held. */
+ * in [-1, 1] to *duty if duty is not NULL ({}). A non-finite input is stepped without: a
+ * reference or measurement holds the position PID's state and output, a preview the inverse's,
+ * a pressure the pressure loop's; these, and errors whose PID terms overflow (|r - y| near
+ * 1e308), are counted in the PIDs' and the inverse's faults (the C ABI returns
+ * HYSTERON_ERROR_INVALID_ARGUMENT there, with the same command). */
 double $P_loop_step($P_loop *c, double reference_m, double preview_m, double measured_m, double pressure_mpa,
                     double *duty);
 /* The feedforward's reference for a recorded or planned reference (feedforward_preview):

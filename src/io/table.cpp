@@ -769,6 +769,7 @@ NamedColumn read_named_column(const std::string& path, const ReadOptions& option
   check_column_has_data(t, i);
   c.name = column_quantity(t, i);
   c.unit = column_unit(t, i);
+  c.index = i;
   c.values = std::move(t.columns[i]);
   return c;
 }
@@ -783,7 +784,7 @@ void for_each_value(const std::string& path, const ReadOptions& options, const s
                     const std::function<void(const NamedColumn&)>& on_column) {
   if (is_mat_path(path)) {
     NamedColumn c = read_named_column(path, options);
-    if (on_column) on_column({{}, c.name, c.unit});
+    if (on_column) on_column({{}, c.name, c.unit, NamedColumn::npos});
     for (const double v : c.values) on_value(v);
     return;
   }
@@ -802,7 +803,7 @@ void for_each_value(const std::string& path, const ReadOptions& options, const s
     check_column_has_data(probe, i);
     if (on_column) {
       probe.units = parser.units();
-      on_column({{}, column_quantity(probe, i), column_unit(probe, i)});
+      on_column({{}, column_quantity(probe, i), column_unit(probe, i), i});
     }
     return i;
   };

@@ -69,5 +69,41 @@ done
 rc=$?
 grep -q "sign flipped" "$T/w2.txt" && fail "--validate on a random walk: sign claimed: $(grep warning "$T/w2.txt")"
 
+# ---- one column as input and output, or as the time column: refused ----
+expect_refused() {  # what, expected words, command...
+  local what=$1 words=$2
+  shift 2
+  "$@" > "$T/err.txt" 2>&1
+  local rc=$?
+  [ $rc -eq 1 ] || { fail "$what: exit $rc, expected 1: $(cat "$T/err.txt")"; return; }
+  grep -q -- "$words" "$T/err.txt" || fail "$what: $(cat "$T/err.txt")"
+}
+expect_refused "fit -i input -y input" "the input (input) and the output (input) are the same column (column 1 \"input\")" \
+  "$BIN" fit --model pi --data "$T/data.csv" --input input --output input --out "$T/same.json"
+expect_refused "fit -i input -y 1" "the input (input) and the output (1) are the same column" \
+  "$BIN" fit --model pi --data "$T/data.csv" --input input --output 1 --out "$T/same.json"
+[ -e "$T/same.json" ] && fail "fit with one column as both: a model written"
+expect_refused "fit --time-column output" "the time column (2) is the output column (output) (column 2 \"output\")" \
+  "$BIN" fit --model pi --data "$T/data.csv" --input input --output output --time-column 2 --out "$T/same.json"
+expect_refused "evaluate -i 2 -y output" "are the same column" \
+  "$BIN" evaluate --model "$T/ok.json" --data "$T/data.csv" --input 2 --output output
+expect_refused "evaluate --time-column input" "the time column (input) is the input column" \
+  "$BIN" evaluate --model "$T/ok.json" --data "$T/data.csv" --input input --output output --time-column input
+
+# ---- report --data: the document's time column on another file ----
+"$BIN" fit --model gpi --data "$T/data.csv" --input input --output output --train 0:1800 --threads 1 \
+  --time-column 0 --out "$T/mt.json" --report "$T/ft.json" > /dev/null 2>&1 || fail "fit with a time column"
+"$BIN" report "$T/ft.json" --data "$T/data.csv" --input input --output output --out "$T/r_ok.html" \
+  > "$T/err.txt" 2>&1 || fail "report --data on the fit's own file: $(cat "$T/err.txt")"
+# column 0 of swapped.csv is its output: refused (it was drawn as the time axis, exit 0)
+expect_refused "report --data swapped.csv" "data: the time column 0 (the document's, read from the file --data gives) is the output column of $T/swapped.csv" \
+  "$BIN" report "$T/ft.json" --data "$T/swapped.csv" --input input --output output --out "$T/r1.html"
+expect_refused "report --data back.csv" "the time column 0 (the document's, read from the file --data gives) goes backwards in $T/back.csv at sample 1" \
+  "$BIN" report "$T/ft.json" --data "$T/back.csv" --input input --output output --out "$T/r2.html"
+"$BIN" report "$T/ft.json" --data "$T/swapped.csv" --input input --output output --time-column t \
+  --out "$T/r3.html" > "$T/err.txt" 2>&1 || fail "report --data swapped.csv --time-column t: $(cat "$T/err.txt")"
+expect_refused "report -i input -y input" "the input (input) and the output (input) are the same column" \
+  "$BIN" report "$T/ft.json" --data "$T/data.csv" --input input --output input --no-time --out "$T/r4.html"
+
 if [ $fails -ne 0 ]; then echo "record_columns: $fails failures"; exit 1; fi
 echo "record_columns: ok"

@@ -105,5 +105,11 @@ expect_refused "report --data back.csv" "the time column 0 (the document's, read
 expect_refused "report -i input -y input" "the input (input) and the output (input) are the same column" \
   "$BIN" report "$T/ft.json" --data "$T/data.csv" --input input --output input --no-time --out "$T/r4.html"
 
+# ---- repeated header names: refused only where selected, columns counted from 0 ----
+"$BIN" fit --model pi --data "$T/dup.csv" --input input --output output --train 0:1800 --threads 1 \
+  --out "$T/dup.json" > "$T/err.txt" 2>&1 || fail "a file with two unused \"spare\" columns: $(cat "$T/err.txt")"
+expect_refused "fit -y spare" "column name \"spare\" appears twice (columns 3 and 4, counted from 0)" \
+  "$BIN" fit --model pi --data "$T/dup.csv" --input input --output spare --out "$T/dup2.json"
+
 if [ $fails -ne 0 ]; then echo "record_columns: $fails failures"; exit 1; fi
 echo "record_columns: ok"

@@ -328,10 +328,14 @@ int run_fit(const FitCliOptions& c) {
   if (fitted) {
     text += fmt::format("reference PI: rms {:.6g}  ({:.4g}% of span) on the training range; the fit's rms {:.6g}\n",
                         rep.reference.rms, rep.reference.rms_percent_span, rep.train.rms);
-    text += fmt::format("inverse: max slope {:.6g} {} per {}; max jump per sample {:.6g} (measured input: max step "
-                        "{:.6g}){}\n",
-                        rep.inverse.max_slope, xu, yu, rep.inverse.max_jump, rep.inverse.max_input_step,
-                        rep.inverse.increasing ? "" : "; the model is decreasing");
+    if (std::isfinite(rep.inverse.max_slope))
+      text += fmt::format("inverse: max slope {:.6g} {} per {}; max jump per sample {:.6g} (measured input: max step "
+                          "{:.6g}){}\n",
+                          rep.inverse.max_slope, xu, yu, rep.inverse.max_jump, rep.inverse.max_input_step,
+                          rep.inverse.increasing ? "" : "; the model is decreasing");
+    else  // no inverse: no slope or jump of it to give (they were printed as inf)
+      text += fmt::format("inverse: none ({}){}\n", rep.inverse.no_inverse,
+                          rep.inverse.increasing ? "" : "; the model is decreasing");
   }
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {

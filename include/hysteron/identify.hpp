@@ -363,6 +363,9 @@ struct InverseCheck {
   double max_jump = 0.0;
   double max_input_step = 0.0;
   bool increasing = true;  // false: the model decreases (output_gain / input_scale < 0)
+  // Why the model has no inverse where max_slope is inf (its least slope is 0, or the Inverse
+  // refuses it: the reason it gives); empty where it has one.
+  std::string no_inverse;
 };
 
 struct FitReport {

@@ -111,5 +111,22 @@ expect_refused "report -i input -y input" "the input (input) and the output (inp
 expect_refused "fit -y spare" "column name \"spare\" appears twice (columns 3 and 4, counted from 0)" \
   "$BIN" fit --model pi --data "$T/dup.csv" --input input --output spare --out "$T/dup2.json"
 
+# ---- a model without an inverse: said so, not "max slope inf" / "capped near inf" ----
+# (a gpi fitted to noise on a triangle: its least slope over its input limits is 0)
+$PY - "$T/noise.csv" <<'PYEOF'
+import random, sys
+r = random.Random(8)
+with open(sys.argv[1], "w") as f:
+    f.write("p,f\n")
+    for k in range(6000):
+        f.write(f"{abs((k % 1000) / 500.0 - 1)!r},{r.gauss(0.0, 1.0)!r}\n")
+PYEOF
+"$BIN" fit --model gpi --data "$T/noise.csv" --input p --output f --threads 1 --out "$T/noise.json" > "$T/noise.txt" 2>&1
+grep -qi "inf input units\|near inf\|slope inf" "$T/noise.txt" && fail "no inverse: inf printed: $(grep -i inf "$T/noise.txt")"
+grep -q "^inverse: none (its least slope over its input limits is 0: its output is flat there" "$T/noise.txt" \
+  || fail "no inverse: $(grep inverse "$T/noise.txt")"
+grep -q "^warning: the minimum-slope bound is active .* but the model has no inverse (its least slope" "$T/noise.txt" \
+  || fail "no inverse: the bound's warning: $(grep warning "$T/noise.txt")"
+
 if [ $fails -ne 0 ]; then echo "record_columns: $fails failures"; exit 1; fi
 echo "record_columns: ok"

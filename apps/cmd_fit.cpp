@@ -229,6 +229,8 @@ int run_fit(const FitCliOptions& c) {
   doc.data = describe_data(sel, rec, o.initial_state, train);
   doc.data.censored = censor;
   const bool fitted = has_model(rep.status);
+  // validation sets the model predicts worse than their mean (R^2 <= 0): the fit exits exit_poor_fit
+  std::vector<std::string> useless;
   if (fitted)
     for (const auto& v : sets)
       if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored)) {
@@ -236,10 +238,15 @@ int run_fit(const FitCliOptions& c) {
         const OutputMap map = output_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor);
         doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
         const std::string what = v.file.empty() ? "validation range" : v.file;
+        if (m->r2 <= 0.0)
+          useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, {:.4g} % of span)",
+                                        v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
+                                        m->rms_percent_span));
         // a validation record beyond the training range scores the model's extrapolation; one whose output
-        // differs by a sign, a unit or a zero scores that; another file sampled otherwise runs rate-pi's
-        // rates wrong (as evaluate says)
-        std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what)};
+        // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
+        // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
+        // evaluate says)
+        std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what, rep.train.r2)};
         if (!v.file.empty()) {
           auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                        v.file, c.sel.time_column);
@@ -251,6 +258,22 @@ int run_fit(const FitCliOptions& c) {
             doc.fit.warnings.push_back(std::move(w));
           }
       }
+  // A converged fit whose validation is useless (R^2 <= 0: worse than the validation output's mean)
+  // must not exit as a success: exit_poor_fit, as poor_fit, naming the sets; the status stays
+  // converged and the model is written as for any converged fit (its training fit is good).
+  if (!useless.empty()) {
+    std::string sets_named;
+    for (const auto& u : useless) sets_named += (sets_named.empty() ? "" : " and ") + u;
+    std::string w = fmt::format("the validation is useless: the model predicts {} worse than its mean (R^2 <= 0; "
+                                "training R^2 {:.4g}){}",
+                                sets_named, rep.train.r2,
+                                rep.status == FitStatus::converged
+                                    ? fmt::format(": the fit exits {} (the model is written: its training fit converged)",
+                                                  exit_poor_fit)
+                                    : std::string());
+    rep.warnings.push_back(w);
+    doc.fit.warnings.push_back(std::move(w));
+  }
   if (!sets.empty())
     for (const auto& cand : rep.candidates) {
       std::vector<FitMetrics> row;
@@ -289,9 +312,10 @@ int run_fit(const FitCliOptions& c) {
     }
   }
 
-  const int code = rep.status == FitStatus::converged  ? exit_ok
-                   : rep.status == FitStatus::poor_fit ? exit_poor_fit
-                                                       : exit_not_converged;
+  int code = rep.status == FitStatus::converged  ? exit_ok
+             : rep.status == FitStatus::poor_fit ? exit_poor_fit
+                                                 : exit_not_converged;
+  if (!useless.empty() && code == exit_ok) code = exit_poor_fit;
   if (c.json) {
     fmt::print("{}\n", io::to_json(doc).dump(2));
     return code;
@@ -304,10 +328,14 @@ int run_fit(const FitCliOptions& c) {
   if (fitted) {
     text += fmt::format("reference PI: rms {:.6g}  ({:.4g}% of span) on the training range; the fit's rms {:.6g}\n",
                         rep.reference.rms, rep.reference.rms_percent_span, rep.train.rms);
-    text += fmt::format("inverse: max slope {:.6g} {} per {}; max jump per sample {:.6g} (measured input: max step "
-                        "{:.6g}){}\n",
-                        rep.inverse.max_slope, xu, yu, rep.inverse.max_jump, rep.inverse.max_input_step,
-                        rep.inverse.increasing ? "" : "; the model is decreasing");
+    if (std::isfinite(rep.inverse.max_slope))
+      text += fmt::format("inverse: max slope {:.6g} {} per {}; max jump per sample {:.6g} (measured input: max step "
+                          "{:.6g}){}\n",
+                          rep.inverse.max_slope, xu, yu, rep.inverse.max_jump, rep.inverse.max_input_step,
+                          rep.inverse.increasing ? "" : "; the model is decreasing");
+    else  // no inverse: no slope or jump of it to give (they were printed as inf)
+      text += fmt::format("inverse: none ({}){}\n", rep.inverse.no_inverse,
+                          rep.inverse.increasing ? "" : "; the model is decreasing");
   }
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {

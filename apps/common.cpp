@@ -9,6 +9,7 @@
 #include <iostream>
 #include <iterator>
 #include <string>
+#include <tuple>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -225,6 +226,12 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
 }
 
 namespace {
+// " (column 3 \"voltage\")": a column as read_named_column found it, for a message
+std::string column_named(const io::NamedColumn& c) {
+  if (c.index == io::NamedColumn::npos) return std::string();
+  return c.name.empty() ? fmt::format(" (column {})", c.index) : fmt::format(" (column {} \"{}\")", c.index, c.name);
+}
+
 io::ReadOptions column_options(const std::string& spec) {
   io::ReadOptions o;
   o.column_spec = spec;
@@ -234,9 +241,17 @@ io::ReadOptions column_options(const std::string& spec) {
 
 DataColumns read_data_columns(const std::string& file, const DataSelection& sel) {
   DataColumns d;
+  io::NamedColumn in_id, out_id;  // the columns read (without their values), for the time column's check
   {
     io::NamedColumn in = io::read_named_column(file, column_options(sel.input));
     io::NamedColumn out = io::read_named_column(file, column_options(sel.output));
+    // one column read as both: a "fit" of the identity (converged at 1e-12 % of span, exit 0)
+    if (io::NamedColumn::same(in, out))
+      throw Error(fmt::format("{}: the input ({}) and the output ({}) are the same column{}: give two different "
+                              "columns",
+                              file, sel.input, sel.output, column_named(in)));
+    in_id = {{}, in.name, in.unit, in.index};
+    out_id = {{}, out.name, out.unit, out.index};
     d.x = std::move(in.values);
     d.y = std::move(out.values);
     d.input_name = std::move(in.name);
@@ -258,6 +273,11 @@ DataColumns read_data_columns(const std::string& file, const DataSelection& sel)
   label_agrees("output", sel.output, d.output_unit, sel.output_label);
   if (!sel.time_column.empty()) {
     io::NamedColumn t = io::read_named_column(file, column_options(sel.time_column));
+    for (const auto& [what, spec, id] : {std::tuple{"input", &sel.input, &in_id}, std::tuple{"output", &sel.output, &out_id}})
+      if (io::NamedColumn::same(t, *id))
+        throw Error(fmt::format("{}: the time column ({}) is the {} column ({}){}: give the time stamps' own column "
+                                "(or none)",
+                                file, sel.time_column, what, *spec, column_named(t)));
     d.t = std::move(t.values);
     if (d.t->size() != d.x.size())
       throw Error(fmt::format("{}: time column has {} values, input column {}", file, d.t->size(), d.x.size()));

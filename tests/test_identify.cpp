@@ -677,6 +677,48 @@ TEST(IdentifyInput, InputCoverageCountsSamplesBeyondTheFittedRange) {
   EXPECT_EQ(input_coverage(open, x).outside, 0u);
 }
 
+// The sign / scale / zero diagnosis only where the map makes the model describe the record: its
+// R^2 at least kMinFitR2 and, given the training R^2, 1 - r2_mapped <= sqrt(1 - train R^2).
+// Otherwise the warning says plainly that the model describes the record far worse than its
+// training record, with the numbers. (Audit of 2026-12-01: a time column taken for the output
+// scored R^2 -639 and was asked "is its sign flipped" at a mapped R^2 of 0.239; two independent
+// random walks, R^2 -16 mapped 0.148, alike.) The maps below are those the audit measured.
+TEST(IdentifyInput, OutputMapClaimsASignOrZeroOnlyWhereTheMapFits) {
+  const auto map = [](double gain, double r2, double r2_mapped, double rms, double rms_mapped, double span) {
+    OutputMap m;
+    m.gain = gain, m.offset = 1.0, m.r2 = r2, m.r2_mapped = r2_mapped, m.rms = rms, m.rms_mapped = rms_mapped;
+    m.span = span;
+    return m;
+  };
+  const OutputMap time_column = map(-0.02902, -639.02, 0.2388, 208.46, 7.189, 28.252);
+  const OutputMap walks = map(-0.3548, -16.107, 0.1475, 69.45, 15.50, 83.33);
+  const OutputMap negated = map(-0.989, -8.437, 0.992, 425.9, 12.35, 379.8);  // Festo test9, force negated
+  for (const OutputMap& m : {time_column, walks}) {
+    for (double train : {0.99955, 0.894, std::nan("")}) {
+      const std::string w = output_map_warning(m, "v.csv", train);
+      EXPECT_FALSE(output_map_explains(m, train));
+      EXPECT_EQ(w.find("sign flipped"), std::string::npos) << w;
+      EXPECT_EQ(w.rfind("v.csv: the model's prediction scores R^2 ", 0), 0u) << w;
+      EXPECT_NE(w.find("worse than the record's mean"), std::string::npos) << w;
+      EXPECT_NE(w.find("far worse than the one it was fitted on"), std::string::npos) << w;
+      EXPECT_EQ(w.find("in training") != std::string::npos, std::isfinite(train)) << w;
+    }
+  }
+  EXPECT_NE(output_map_warning(time_column, "v.csv", 0.99955).find("R^2 -639"), std::string::npos);
+  EXPECT_NE(output_map_warning(time_column, "v.csv", 0.99955).find("(the best map gain x prediction + offset leaves "
+                                                                    "R^2 0.239)"),
+            std::string::npos)
+      << output_map_warning(time_column, "v.csv", 0.99955);
+  // a sign the map does explain: named, against a training fit of R^2 0.99955 (up to 0.021 unexplained) or none
+  for (double train : {0.99955, std::nan("")}) {
+    EXPECT_TRUE(output_map_explains(negated, train));
+    EXPECT_NE(output_map_warning(negated, "v.csv", train).find("is its sign flipped"), std::string::npos);
+  }
+  // ... but not against a training fit 100 times closer (R^2 0.99999: 1 - 0.992 > sqrt(1e-5))
+  EXPECT_FALSE(output_map_explains(negated, 0.99999));
+  EXPECT_NE(output_map_warning(negated, "v.csv", 0.99999).find("far worse"), std::string::npos);
+}
+
 // A record whose output differs from the model's by a sign, a unit or a zero (audit of 2026-11-30:
 // a Festo model scored on test9 with its force negated gave R^2 -8.4 with nothing saying why):
 // output_map gives the least-squares y ~ gain * prediction + offset, and the warning names a

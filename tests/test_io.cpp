@@ -559,11 +559,18 @@ TEST(Csv, ColumnSelectionErrorsAndRaggedRows) {
   expect_error([&] { io::read_column(dir.file("nope.csv"), "a"); }, {"nope.csv", "cannot open"});
 }
 
-// Issue 13: a header naming two columns alike selected the first one silently.
+// Issue 13: a header naming two columns alike selected the first one silently. Such a name is
+// refused where it selects a column (columns counted from 0, as everywhere else); a file whose
+// repeated names are not used reads (an audit of 2026-12-01: two "spare" columns refused the file).
 TEST(Csv, DuplicateHeaderNamesRefused) {
   TempDir dir;
   const auto path = dir.write("d.csv", "# comment\nt,x,y,x\n0,1,2,3\n");
-  expect_error([&] { io::read_column(path, "y"); }, {path + ":2", "column name \"x\" appears twice", "columns 2 and 4"});
+  expect_error([&] { io::read_column(path, "x"); }, {path, "column name \"x\" appears twice", "columns 1 and 3"});
+  EXPECT_EQ(io::read_column(path, "y"), std::vector<double>{2.0});
+  EXPECT_EQ(io::read_column(path, "3"), std::vector<double>{3.0});  // by its index
+  const auto spare = dir.write("s.csv", "t,p,force,spare,spare\n0,1,2,0,0\n1,2,3,0,0\n");
+  EXPECT_EQ(io::read_column(spare, "force"), (std::vector<double>{2.0, 3.0}));
+  expect_error([&] { io::read_column(spare, "spare"); }, {"column name \"spare\" appears twice", "columns 3 and 4"});
   // Empty names (a leading index column without a header) may repeat.
   const auto ok = dir.write("e.csv", ",,x\n1,2,3\n");
   EXPECT_EQ(io::read_column(ok, "x"), std::vector<double>{3.0});

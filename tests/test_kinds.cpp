@@ -111,6 +111,80 @@ TEST(Kinds, PreisachMatchesRelaysSimulatedOneByOne) {
   }
 }
 
+// The relaxed state at x0 is what an oscillation around x0 whose amplitude decays slowly from
+// beyond the grid to 0 leaves (kernels.hpp). kp's ramp (i, j) was centred half a grid cell low
+// ((t_i + t_j) / 2 instead of (alpha_i + beta_j) / 2 = (t_i + t_j + h) / 2): its relaxed (and
+// virgin) state disagreed with the oscillation's by up to 1/2 per ramp near x0.
+TEST(Kinds, RelaxedStateIsWhatADecayingOscillationLeaves) {
+  std::mt19937_64 rng(21);
+  // a grid [-1.03, 0.97] of h = 0.2: no x0 below on a relay's (alpha + beta) / 2 (a tie the
+  // oscillation's last sample decides)
+  const PreisachParams pre = random_grid<PreisachParams>(rng, 10, -1.03, 0.97);
+  const KpParams kp = random_grid<KpParams>(rng, 10, -1.03, 0.97);
+  const auto walk = random_walk(rng, 2000, -1.3, 1.3);
+  for (const ModelParams& mp : {ModelParams(pre), ModelParams(kp)}) {
+    const PreisachGrid& g = std::holds_alternative<KpParams>(mp) ? static_cast<const PreisachGrid&>(kp) : pre;
+    double sum_w = 0.0;
+    for (double w : g.w) sum_w += w;
+    for (double x0 : {0.137, -0.468, 0.0}) {  // 0: the virgin state (relaxed at the origin) too
+      Model osc(mp);
+      const int n = 40000;
+      const double a0 = 2.4;  // beyond the grid on both sides of x0
+      for (int k = 0; k <= n; ++k) osc.step(x0 + (k % 2 ? -1.0 : 1.0) * a0 * (n - k) / n);
+      Model relaxed(mp), virgin(mp);
+      ASSERT_TRUE(relaxed.reset_relaxed(x0));
+      // kp: the ramps meet within an amplitude step (a0 / n) of their crossing, slope 1/h = 5
+      const double tol = 4.0 * a0 / n * 5.0 * sum_w + 1e-12;
+      double dev = 0.0, dev_virgin = 0.0;
+      for (double x : walk) {
+        const double yo = osc.step(x), yr = relaxed.step(x), yv = virgin.step(x);
+        dev = std::max(dev, std::abs(yr - yo));
+        if (x0 == 0.0) dev_virgin = std::max(dev_virgin, std::abs(yv - yo));
+      }
+      EXPECT_LE(dev, tol) << model_name(mp) << " relaxed at " << x0;
+      EXPECT_LE(dev_virgin, tol) << model_name(mp) << " virgin";
+    }
+  }
+}
+
+// kp (and preisach) mirrored: ramp (i, j) on [lo, hi] is ramp (L-1-j, L-1-i) on [-hi, -lo] with its output
+// 1 - R, so y'(-x) = -y(x) + sum w, from the virgin state and from any relaxed one. The relaxed
+// state half a cell low broke this wherever x0 lay inside the grid (a kp fit of the piezo record
+// from row 17000 trained at 0.340 % of span, 0.267 % with its input negated).
+template <class G>
+void expect_relaxed_states_mirror(unsigned seed) {
+  std::mt19937_64 rng(seed);
+  const G g = random_grid<G>(rng, 9, -1.2, 0.8);
+  G m = g;
+  m.lo = -g.hi;
+  m.hi = -g.lo;
+  m.input_limits = {-g.input_limits.hi, -g.input_limits.lo};
+  const int n = g.levels;
+  double sum_w = 0.0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) {
+      const int im = n - 1 - j, jm = n - 1 - i;
+      m.w[static_cast<std::size_t>(im * (im + 1) / 2 + jm)] = g.w[static_cast<std::size_t>(i * (i + 1) / 2 + j)];
+      sum_w += g.w[static_cast<std::size_t>(i * (i + 1) / 2 + j)];
+    }
+  const auto walk = random_walk(rng, 3000, -1.5, 1.1);
+  for (double x0 : {0.0, 0.31, -0.77, -1.1, 0.7}) {
+    Model a(g), b(m);
+    if (x0 != 0.0) {  // 0: both virgin
+      ASSERT_TRUE(a.reset_relaxed(x0));
+      ASSERT_TRUE(b.reset_relaxed(-x0));
+    }
+    double dev = 0.0;
+    for (double x : walk) dev = std::max(dev, std::abs(b.step(-x) - (sum_w - a.step(x))));
+    EXPECT_LE(dev, 1e-12) << model_name(g) << " relaxed at " << x0;
+  }
+}
+
+TEST(Kinds, GridRelaxedAndVirginStatesMirrorWithTheInput) {
+  expect_relaxed_states_mirror<KpParams>(22);
+  expect_relaxed_states_mirror<PreisachParams>(23);  // (its relays' thresholds: no x0 below on a tie)
+}
+
 // Elasto-slide elements simulated as springs and sliders.
 TEST(Kinds, MaxwellSlipMatchesElastoSlideElements) {
   std::mt19937_64 rng(3);

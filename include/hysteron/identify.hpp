@@ -163,12 +163,20 @@ struct OutputMap {
 // censors (censor_clipped) are left out of the map and of its prediction's R^2 and RMS.
 OutputMap output_map(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                      IndexRange range = {}, InitialState initial = InitialState::virgin, bool censor = false);
-// The warning ("" if none; `what` names the record) where the map explains what the prediction does
-// not: the prediction's R^2 is below kMinFitR2 and the map's at least kMinFitR2 (a sign, a unit), or
-// the map at least halves an RMS error above 1 % of the output's span (a zero: on the Festo
-// records, fitted on test8, the map leaves 0.88-0.92 of the RMS; with 40 N added to test9's force,
-// 0.26).
-std::string output_map_warning(const OutputMap& m, std::string_view what);
+// Whether the map explains the record: its R^2 is at least kMinFitR2 and, where the model's
+// training R^2 is known (train_r2 finite), the variance it leaves unexplained, 1 - r2_mapped, is
+// at most sqrt(1 - train_r2): nearer the training fit's than a constant's (1) on a log scale
+// (Festo gpi trained at R^2 0.99955: up to 0.021; test9 with its force negated leaves 0.008).
+bool output_map_explains(const OutputMap& m, double train_r2 = std::numeric_limits<double>::quiet_NaN());
+// The warning ("" if none; `what` names the record) where the prediction scores poorly (R^2 below
+// kMinFitR2) or the map at least halves an RMS error above 1 % of the output's span (a zero: on the
+// Festo records, fitted on test8, the map leaves 0.88-0.92 of the RMS; with 40 N added to test9's
+// force, 0.26). Where the map explains the record (output_map_explains) it names a flipped sign, a
+// scale or a zero; otherwise it says plainly that the model does not describe the record, with its
+// R^2 and RMS (and the training R^2, where given). (Before 2026-12-01 the halved RMS alone claimed
+// a flipped sign: the time column taken for the output gave R^2 -639, mapped 0.239.)
+std::string output_map_warning(const OutputMap& m, std::string_view what,
+                               double train_r2 = std::numeric_limits<double>::quiet_NaN());
 
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0
@@ -355,6 +363,9 @@ struct InverseCheck {
   double max_jump = 0.0;
   double max_input_step = 0.0;
   bool increasing = true;  // false: the model decreases (output_gain / input_scale < 0)
+  // Why the model has no inverse where max_slope is inf (its least slope is 0, or the Inverse
+  // refuses it: the reason it gives); empty where it has one.
+  std::string no_inverse;
 };
 
 struct FitReport {

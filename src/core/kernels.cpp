@@ -157,12 +157,19 @@ class KpKernel final : public Kernel {
   }
   std::unique_ptr<Kernel> clone() const override { return std::make_unique<KpKernel>(*this); }
   void reset() noexcept override { reset_relaxed(0.0); }
+  // A decaying oscillation x +- A around x: the ramp (i, j) is pushed up to s_i(x + A) at each
+  // peak and down to s_j(x - A) at each trough, until the two meet, at A = (t_i - t_j) / 2
+  // where unsaturated: it is left at s((x - (t_i + t_j) / 2) / h), 1/2 at (alpha_i + beta_j) / 2
+  // = (t_i + t_j + h) / 2 as the relay's switch (PreisachKernel::reset_relaxed), and mirrored
+  // with the input (x -> -x, R -> 1 - R maps ramp (i, j) to ramp (L-1-j, L-1-i)). It lies in
+  // [s_i(x), s_j(x)] by construction. (It was centred at (t_i + t_j) / 2, half a cell low: a
+  // kp fit was not equivariant to the input's sign on a record starting inside the grid.)
   void reset_relaxed(double x) noexcept override {
     const double* t = g_.t.data();
     for (int i = 0; i < g_.n; ++i)
       for (int j = 0; j <= i; ++j) {
         const double lo = unit_ramp((x - t[i]) / g_.h), hi = unit_ramp((x - t[j]) / g_.h);
-        const double mid = unit_ramp((x - 0.5 * (t[i] + t[j])) / g_.h + 0.5);
+        const double mid = unit_ramp((x - 0.5 * (t[i] + t[j])) / g_.h);
         y_[Grid::row(i) + static_cast<std::size_t>(j)] = std::clamp(mid, lo, hi);
       }
   }

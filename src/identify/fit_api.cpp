@@ -84,6 +84,9 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
                                                 : detail::make_kernel(model)->min_slope();
   const double slope = mslope * std::abs(um.output_gain / um.input_scale);
   c.max_slope = slope > 0 ? 1.0 / slope : std::numeric_limits<double>::infinity();
+  if (!(slope > 0))
+    c.no_inverse = fmt::format("its least slope over its input limits is {:.4g}: its output is flat there, and no "
+                               "input can be read back from it", slope);
   for (std::size_t k = tr.begin + 1; k < tr.end; ++k) c.max_input_step = std::max(c.max_input_step, std::abs(x[k] - x[k - 1]));
   try {
     Inverse inv(model);
@@ -93,9 +96,10 @@ InverseCheck check_inverse(const ModelParams& model, std::span<const double> x, 
       if (k > tr.begin) c.max_jump = std::max(c.max_jump, std::abs(xk - prev));
       prev = xk;
     }
-  } catch (const Error&) {
+  } catch (const Error& e) {
     c.max_jump = std::numeric_limits<double>::infinity();
     c.max_slope = std::numeric_limits<double>::infinity();
+    if (c.no_inverse.empty()) c.no_inverse = e.what();
   }
   return c;
 }
@@ -603,12 +607,24 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
                                       : std::abs(e.value(xh) - e.value(xl));
     const double smin = min_cumulative_slope(s);
     const double bound = o.min_slope * sy / (std::abs(u.output_gain) * uspan);
-    if (uspan > 0 && smin <= bound * (1 + 1e-6))
-      rep.warnings.push_back(fmt::format(
-          "the minimum-slope bound is active (min_slope = {}): the fit wanted a flatter branch after a reversal; the "
-          "inverse slope is capped near {:.4g} input units per output unit",
-          o.min_slope, rep.inverse.max_slope));
+    if (uspan > 0 && smin <= bound * (1 + 1e-6)) {
+      // the cap holds only where the model has an inverse (a finite max_slope): otherwise say why it has none
+      if (std::isfinite(rep.inverse.max_slope))
+        rep.warnings.push_back(fmt::format(
+            "the minimum-slope bound is active (min_slope = {}): the fit wanted a flatter branch after a reversal; "
+            "the inverse slope is capped near {:.4g} input units per output unit",
+            o.min_slope, rep.inverse.max_slope));
+      else
+        rep.warnings.push_back(fmt::format(
+            "the minimum-slope bound is active (min_slope = {}): the fit wanted a flatter branch after a reversal; "
+            "the bound caps the operators' slope, but the model has no inverse ({})",
+            o.min_slope, rep.inverse.no_inverse));
+    }
   }
+  if (!std::isfinite(rep.inverse.max_slope) &&
+      std::none_of(rep.warnings.begin(), rep.warnings.end(),
+                   [](const std::string& w) { return w.find("the model has no inverse") != std::string::npos; }))
+    rep.warnings.push_back(fmt::format("the model has no inverse: {}", rep.inverse.no_inverse));
   for (const auto& p : rep.parameters)
     if (p.at_bound) rep.warnings.push_back(fmt::format("parameter {} ended on its lower bound", p.name));
   if (rep.inverse.max_input_step > 0 && rep.inverse.max_jump > 10 * rep.inverse.max_input_step)

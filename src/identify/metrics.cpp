@@ -276,20 +276,39 @@ OutputMap output_map(const ModelParams& params, std::span<const double> x, std::
   return m;
 }
 
-std::string output_map_warning(const OutputMap& m, std::string_view what) {
-  const bool poor_made_good = m.r2 < kMinFitR2 && m.r2_mapped >= kMinFitR2;
+bool output_map_explains(const OutputMap& m, double train_r2) {
+  if (!(m.r2_mapped >= kMinFitR2)) return false;
+  if (!std::isfinite(train_r2)) return true;
+  return 1.0 - m.r2_mapped <= std::sqrt(std::max(0.0, 1.0 - train_r2));
+}
+
+std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2) {
+  const bool poor = m.r2 < kMinFitR2;
   const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
-  if (!poor_made_good && !halved) return {};
-  const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS error "
-                                      "{:.4g}, R^2 {:.3f}, against {:.4g} and {:.4g} for the prediction as it is)",
-                                      m.gain, m.offset, m.rms_mapped, m.r2_mapped, m.rms, m.r2);
-  if (m.gain < 0.0)
-    return fmt::format("{}: {}: the output runs against the model's; is its sign flipped (a sensor mounted the other "
-                       "way, or the other signal's convention) relative to the record the model was fitted on?",
+  if (!poor && !halved) return {};
+  if (output_map_explains(m, train_r2)) {
+    const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS "
+                                        "error {:.4g}, R^2 {:.3f}, against {:.4g} and {:.4g} for the prediction as it "
+                                        "is)",
+                                        m.gain, m.offset, m.rms_mapped, m.r2_mapped, m.rms, m.r2);
+    if (m.gain < 0.0)
+      return fmt::format("{}: {}: the output runs against the model's; is its sign flipped (a sensor mounted the other "
+                         "way, or the other signal's convention) relative to the record the model was fitted on?",
+                         what, fit);
+    return fmt::format("{}: {}: it differs from the record the model was fitted on by a scale (another unit, a gain) "
+                       "or a zero (a sensor offset) more than by its hysteresis, or the actuator changed",
                        what, fit);
-  return fmt::format("{}: {}: it differs from the record the model was fitted on by a scale (another unit, a gain) or a "
-                     "zero (a sensor offset) more than by its hysteresis, or the actuator changed",
-                     what, fit);
+  }
+  // no sign, scale or zero explains it: say so plainly, with the numbers
+  const std::string train = std::isfinite(train_r2) ? fmt::format(" against R^2 {:.4g} in training", train_r2)
+                                                    : std::string();
+  const double pct = m.span > 0.0 ? 100.0 * m.rms / m.span : std::nan("");
+  return fmt::format("{}: the model's prediction scores R^2 {:.4g} (RMS error {:.4g}, {:.3g} % of the output's span){}{}: "
+                     "the model describes this record far worse than the one it was fitted on (another actuator or "
+                     "condition, or other signals in these columns?), and no sign, scale or zero explains it (the best map gain x prediction + "
+                     "offset leaves R^2 {:.3f})",
+                     what, m.r2, m.rms, pct, train,
+                     m.r2 <= 0.0 ? ", worse than the record's mean" : "", m.r2_mapped);
 }
 
 }  // namespace hysteron

@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <cctype>
 #include <atomic>
-#include <bit>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -312,7 +311,6 @@ class TextParser {
     if (!split_names_.empty() && fields_.size() != nfields_ && fields_.size() == split_names_.size()) {
       names_ = std::move(split_names_);
       resize_columns(names_.size());
-      check_repeated_names(first_line_);
     }
     split_names_.clear();
     if (units_pending_) {
@@ -412,7 +410,6 @@ class TextParser {
     for (auto f : fields_) names_.emplace_back(unquote(f));
     if (sep_ == ' ') join_header_units();
     units_pending_ = true;
-    check_repeated_names(lineno_);
     return false;
   }
 
@@ -441,15 +438,6 @@ class TextParser {
     first_empty_line_.assign(nfields_, 0);
     values_.assign(nfields_, 0.0);
     present_.assign(nfields_, 0);
-  }
-
-  // A name given twice would select the first column silently (empty names may repeat). The
-  // error names the smallest repeated name (in std::string order) and its first two columns.
-  void check_repeated_names(std::size_t header_line) const {
-    std::size_t dup_first = 0, dup_second = 0;
-    if (repeated_name(dup_first, dup_second))
-      throw Error(fmt::format("{}:{}: column name \"{}\" appears twice (columns {} and {}); rename one", path_,
-                              header_line, shown(names_[dup_second]), dup_first + 1, dup_second + 1));
   }
 
   // The line after the header (in fields_) is a units row ("s,kPa,N", "[s];[bar];[mm]", "s,kPa,-")
@@ -511,30 +499,6 @@ class TextParser {
       const auto u = static_cast<unsigned char>(ch);
       return std::isalpha(u) || ch == '%' || u >= 0x80;
     });
-  }
-
-  // Finds the smallest non-empty name that appears more than once and the 0-based columns of its
-  // first two occurrences. One pass over an open-addressing hash table of column indices (a
-  // header of up to max_text_columns names, checked once per file: no sort, one allocation).
-  bool repeated_name(std::size_t& first, std::size_t& second) const {
-    constexpr std::size_t none = static_cast<std::size_t>(-1);
-    const std::size_t size = std::bit_ceil(2 * names_.size() + 2), mask = size - 1;
-    std::vector<std::size_t> slot(size, none);  // index of the first column with a name
-    bool found = false;
-    for (std::size_t i = 0; i < names_.size(); ++i) {
-      const std::string& name = names_[i];
-      if (name.empty()) continue;
-      std::size_t h = std::hash<std::string_view>{}(name) & mask;
-      while (slot[h] != none && names_[slot[h]] != name) h = (h + 1) & mask;
-      if (slot[h] == none) {
-        slot[h] = i;
-      } else if (!found || name < names_[second]) {  // a second occurrence (a third is never smaller)
-        first = slot[h];
-        second = i;
-        found = true;
-      }
-    }
-    return found;
   }
 
   // A number with a decimal comma ("13,123"): parse_number of the field with ',' read as '.'.
@@ -600,14 +564,30 @@ Table read_text_table(const std::string& path, const ReadOptions& opt) {
   return read_text_lines(lines, path, opt);
 }
 
+// The column named `name` exactly (names.size() if none). A header may repeat a name (two
+// "spare" columns, an export's duplicated labels): that is refused only where the name is
+// selected, as it cannot tell which one is meant; the error counts columns from 0, as every other.
+std::size_t find_named_column(const Table& t, std::string_view name) {
+  const std::size_t n = t.names.size();
+  for (std::size_t i = 0; i < n; ++i)
+    if (t.names[i] == name) {
+      for (std::size_t k = i + 1; k < n; ++k)
+        if (t.names[k] == name)
+          throw Error(fmt::format("{}: column name \"{}\" appears twice (columns {} and {}, counted from 0): choose "
+                                  "one by its 0-based index, or rename one",
+                                  t.source, shown(name), i, k));
+      return i;
+    }
+  return n;
+}
+
 // The column ReadOptions selects in `t` (preferred_column included).
 std::size_t select_column(const Table& t, const ReadOptions& opt) {
   if (opt.column_spec.empty() && !opt.preferred_column.empty()) {
     std::size_t nonempty = 0;
     for (const auto& c : t.columns) nonempty += c.empty() ? 0 : 1;
     if (nonempty != 1) {
-      for (std::size_t i = 0; i < t.names.size(); ++i)
-        if (t.names[i] == opt.preferred_column) return i;
+      if (const std::size_t i = find_named_column(t, opt.preferred_column); i < t.names.size()) return i;
       // or the one column so named with a unit ("output [mm]")
       std::size_t found = t.names.size(), count = 0;
       for (std::size_t i = 0; i < t.names.size(); ++i)
@@ -694,8 +674,7 @@ std::size_t Table::column_index(std::string_view spec) const {
                               count, describe()));
     return found;
   }
-  for (std::size_t i = 0; i < names.size(); ++i)
-    if (names[i] == spec) return i;
+  if (const std::size_t i = find_named_column(*this, spec); i < names.size()) return i;
   std::size_t idx = 0;
   const auto res = std::from_chars(spec.data(), spec.data() + spec.size(), idx);
   if (res.ec == std::errc() && res.ptr == spec.data() + spec.size()) {
@@ -769,6 +748,7 @@ NamedColumn read_named_column(const std::string& path, const ReadOptions& option
   check_column_has_data(t, i);
   c.name = column_quantity(t, i);
   c.unit = column_unit(t, i);
+  c.index = i;
   c.values = std::move(t.columns[i]);
   return c;
 }
@@ -783,7 +763,7 @@ void for_each_value(const std::string& path, const ReadOptions& options, const s
                     const std::function<void(const NamedColumn&)>& on_column) {
   if (is_mat_path(path)) {
     NamedColumn c = read_named_column(path, options);
-    if (on_column) on_column({{}, c.name, c.unit});
+    if (on_column) on_column({{}, c.name, c.unit, NamedColumn::npos});
     for (const double v : c.values) on_value(v);
     return;
   }
@@ -802,7 +782,7 @@ void for_each_value(const std::string& path, const ReadOptions& options, const s
     check_column_has_data(probe, i);
     if (on_column) {
       probe.units = parser.units();
-      on_column({{}, column_quantity(probe, i), column_unit(probe, i)});
+      on_column({{}, column_quantity(probe, i), column_unit(probe, i), i});
     }
     return i;
   };

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <span>
 #include <utility>
 
 #include "hysteron/error.hpp"
@@ -881,21 +882,33 @@ io::NamedColumn read_named_document_column(const std::string& doc_path, const st
   }
 }
 
-std::vector<double> read_document_column(const std::string& doc_path, const std::string& file,
-                                         const std::string& column, std::string_view what) {
-  return read_named_document_column(doc_path, file, column, what).values;
-}
-
 // The time column of `file` in seconds: the column in its unit (data.time_unit; "s" in documents
 // without it; empty, a --time-column without --time-unit: the unit the file gives the column
 // ("t [ms]", a units row), else s; `unit` receives it) times its seconds; n values (the input's).
+// `data`: the record's input and output columns where they were read from `file` (the time column
+// must be neither). `reused`: the document's time column read from another file (--data without
+// --time-column), whose stamps must then not go backwards: a column of another meaning is refused
+// rather than drawn as time.
 std::vector<double> read_time_seconds(const std::string& doc_path, const io::DataDescription& d,
                                       const std::string& file, std::size_t n, bool unit_given,
-                                      std::string* unit = nullptr) {
+                                      std::string* unit = nullptr,
+                                      std::span<const std::pair<std::string_view, const io::NamedColumn*>> data = {},
+                                      bool reused = false) {
   const std::string_view remedy =
       "; give the file's time column (hysteron report --time-column NAME [--time-unit s|ms|us]) or draw against the "
       "sample index (--no-time)";
   io::NamedColumn c = read_named_document_column(doc_path, file, d.time_column, "time", remedy);
+  const std::string whose = reused ? " (the document's, read from the file --data gives)" : "";
+  for (const auto& [what, col] : data)
+    if (col && io::NamedColumn::same(c, *col))
+      throw Error(fmt::format("{}: data: the time column {}{} is the {} column of {}{}", doc_path, d.time_column, whose,
+                              what, file, remedy));
+  if (reused)
+    for (std::size_t k = 1; k < c.values.size(); ++k)
+      if (!(c.values[k] >= c.values[k - 1]))  // NaN too
+        throw Error(fmt::format("{}: data: the time column {}{} goes backwards in {} at sample {} ({} after {}): it "
+                                "is no time column there{}",
+                                doc_path, d.time_column, whose, file, k, c.values[k], c.values[k - 1], remedy));
   // as fit and evaluate read it: the unit the file gives the column (io::time_unit_named) wherever it
   // gives one (each --validate-data file in its own), else the document's, else s; a --time-unit
   // given here that disagrees with the file is refused, as fit's and evaluate's is
@@ -938,7 +951,12 @@ namespace {
 
 // The record a document's "data" object names (input, output, time in s), its axes, initial state,
 // range (data.train) and censoring, read again. Throws naming the document and the file.
-FitData load_document_record(const std::string& doc_path, const io::DataDescription& d, bool time_unit_given) {
+// --data without --time-column (or --no-time): the document's time column is read from the file given.
+bool time_reused(const FitDataSource& o) { return !o.input_file.empty() && o.time_column.empty() && !o.no_time; }
+
+// time_reused: the document's time column is read from a file given by --data (read_time_seconds).
+FitData load_document_record(const std::string& doc_path, const io::DataDescription& d, bool time_unit_given,
+                             bool time_reused) {
   if (d.input_file.empty())
     throw Error(fmt::format("{}: the report does not name its data: pass them (hysteron report {} --data FILE "
                             "--input COLUMN --output COLUMN)", doc_path, doc_path));
@@ -946,14 +964,23 @@ FitData load_document_record(const std::string& doc_path, const io::DataDescript
   const std::string xf = resolve_data_file(doc_path, d.input_file);
   const std::string yf = resolve_data_file(doc_path, d.output_file.empty() ? d.input_file : d.output_file);
   FitData out;
-  out.x = read_document_column(doc_path, xf, d.input_column, "input");
-  out.y = read_document_column(doc_path, yf, d.output_column, "output");
+  io::NamedColumn in = read_named_document_column(doc_path, xf, d.input_column, "input");
+  io::NamedColumn outc = read_named_document_column(doc_path, yf, d.output_column, "output");
+  if (xf == yf && io::NamedColumn::same(in, outc))
+    throw Error(fmt::format("{}: the input ({}) and the output ({}) are the same column of {}: give two different "
+                            "columns (--input, --output)",
+                            dw, d.input_column, d.output_column, xf));
+  out.x = std::move(in.values);
+  out.y = std::move(outc.values);
   if (out.x.size() != out.y.size())
     throw Error(fmt::format("{}: input and output have different lengths ({} in {}, {} in {})", dw, out.x.size(), xf,
                             out.y.size(), yf));
   io::DataDescription as_read = d;  // the time column's unit as read (--time-column without --time-unit)
-  if (!d.time_column.empty())
-    out.t = read_time_seconds(doc_path, d, xf, out.x.size(), time_unit_given, &as_read.time_unit);
+  if (!d.time_column.empty()) {
+    const std::pair<std::string_view, const io::NamedColumn*> cols[] = {{"input", &in},
+                                                                       {"output", xf == yf ? &outc : nullptr}};
+    out.t = read_time_seconds(doc_path, d, xf, out.x.size(), time_unit_given, &as_read.time_unit, cols, time_reused);
+  }
   out.files = {xf, yf};
   out.source = data_source_line(as_read);
   out.input = {d.input_label, d.input_unit};
@@ -1005,7 +1032,7 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
   if (!d.input_file.empty() && !j.contains("data") && j.contains("train") && j["train"].contains("range"))
     io::from_json(j["train"]["range"], d.train, path + ": train.range");
   const std::string dw = path + ": data";
-  out.data = load_document_record(path, d, !data_override.time_unit.empty());
+  out.data = load_document_record(path, d, !data_override.time_unit.empty(), time_reused(data_override));
   // The data must be the record the fit used (-d names a file and columns by hand): another
   // record, or swapped columns, gave a report of the fit against data it never saw, silently.
   if (const FitMetrics& t = out.fit.train; t.n > 0) {
@@ -1032,9 +1059,14 @@ LoadedFit read_fit_document(const json& j, const std::string& path, const FitDat
     if (!e.file.empty()) {
       const std::string vf = resolve_data_file(path, e.file);
       out.data.files.push_back(vf);
-      v.x = read_document_column(path, vf, d.input_column, "validation input");
-      v.y = read_document_column(path, vf, d.output_column, "validation output");
-      if (!d.time_column.empty()) v.t = read_time_seconds(path, d, vf, v.x.size(), !data_override.time_unit.empty());
+      io::NamedColumn vin = read_named_document_column(path, vf, d.input_column, "validation input");
+      io::NamedColumn vout = read_named_document_column(path, vf, d.output_column, "validation output");
+      v.x = std::move(vin.values);
+      v.y = std::move(vout.values);
+      if (!d.time_column.empty()) {
+        const std::pair<std::string_view, const io::NamedColumn*> cols[] = {{"input", &vin}, {"output", &vout}};
+        v.t = read_time_seconds(path, d, vf, v.x.size(), !data_override.time_unit.empty(), nullptr, cols);
+      }
     }
     out.data.validation.push_back(std::move(v));
   }
@@ -1046,7 +1078,7 @@ LoadedEvaluation read_evaluation_document(const json& j, const std::string& path
   out.document = io::from_json<io::EvaluationDocument>(j, path);
   io::DataDescription& d = out.document.data;
   apply_data_override(d, data_override, path);
-  out.data = load_document_record(path, d, !data_override.time_unit.empty());
+  out.data = load_document_record(path, d, !data_override.time_unit.empty(), time_reused(data_override));
   // The data must be the record evaluated (as for a fit: -d by hand, or a file changed since):
   // the model scored on it again gives the document's metrics. (from_json refuses a missing or
   // empty metrics.range; an end of null is the record's end.)

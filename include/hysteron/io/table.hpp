@@ -112,6 +112,13 @@ std::vector<double> read_column(const std::string& path, const std::string& colu
 struct NamedColumn {
   std::vector<double> values;
   std::string name, unit;
+  // the column's 0-based index in a text file; npos for a .mat variable (name is its selector)
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  std::size_t index = npos;
+  // Whether a and b are one column of one file (read from it by read_named_column).
+  static bool same(const NamedColumn& a, const NamedColumn& b) {
+    return a.index != npos ? a.index == b.index : b.index == npos && a.name == b.name;
+  }
 };
 NamedColumn read_named_column(const std::string& path, const ReadOptions& options);
 

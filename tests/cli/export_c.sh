@@ -270,6 +270,13 @@ expect_fail "--loop: several references, none named" 1 'one run per reference (s
   "$BIN" export --model "$DZ" --loop "$RES" --run compensated --out "$T/out/new.c"
 expect_fail "--loop: --limits other than the loop's" 1 "differ from the loop's pressure limits" -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run compensated.sine --limits=0,0.5 --out "$T/out/new.c"
+# a model whose input is in kPa under the loop's pressures in MPa (audit2: its inverse saturated): refused
+$PY -c 'import json, sys; d = json.load(open(sys.argv[1])); d["units"] = {"input": "kPa", "output": "mm"}; json.dump(d, open(sys.argv[2], "w"))' \
+  "$DZ" "$T/dz_kpa.json"
+expect_fail "--loop: a model in kPa" 1 \
+  "dz_kpa.json: cannot export: the loop of \"result.json\", run \"compensated.sine\": the model's input is in kPa, not MPa" -- \
+  "$BIN" export --model "$T/dz_kpa.json" --loop "$RES" --run compensated.sine --out "$T/out/new.c"
+grep -qF "refit the model with its pressure in MPa (1 kPa = 0.001 MPa" "$T/stderr" || fail "--loop: a model in kPa: not what to do"
 expect_fail "--loop: missing file" 1 'nope.json: cannot open result file' -- \
   "$BIN" export --model "$DZ" --loop "$T/nope.json" --run compensated.sine --out "$T/out/new.c"
 expect_fail "--loop over the --out file" 1 'out/keep.c' -- \

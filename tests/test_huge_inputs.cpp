@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <string>
@@ -325,4 +326,54 @@ TEST(HugeInputs, CApiStateOfEveryKindRoundTrips) {
     ASSERT_EQ(hysteron_inverse_get_state(a.inv, back.data(), n, &u_back), HYSTERON_OK) << hysteron_last_error();
     for (std::size_t i = 0; i < n; ++i) EXPECT_NEAR(back[i], y[i], 1e-12 * (1.0 + std::abs(y[i]))) << "entry " << i;  // through the inverse's coordinates
   }
+}
+
+// The batches with arrays that partly overlap (audit2 F5): y = x + 1 stepped sample k from an x[k]
+// already overwritten by y[k - 1], and returned wrong outputs with HYSTERON_OK. Now refused with
+// nothing written; in place (y == x) and apart are the single steps' outputs, both directions.
+TEST(HugeInputs, CApiBatchesRefusePartlyOverlappingArrays) {
+  const Kind& k = kKinds[0];
+  const std::vector<double> x = {0.1, 0.2, 0.3, 0.2, 0.1, 0.4, 0.5, 0.0};
+  const std::size_t n = 7;
+  Handles h(k.json);
+  std::vector<double> expected(n), inverted(n);
+  ASSERT_EQ(hysteron_model_simulate(h.m, x.data(), n, expected.data(), n), HYSTERON_OK);
+  ASSERT_EQ(hysteron_inverse_invert(h.inv, expected.data(), n, inverted.data(), n, nullptr), HYSTERON_OK);
+  for (const std::ptrdiff_t shift : {1, -1, 3, -6}) {
+    std::vector<double> buf(n + 16, -7.0);
+    const std::size_t at = 7;  // x at buf[7..14), the output at buf[7 + shift ..)
+    std::copy(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n), buf.begin() + static_cast<std::ptrdiff_t>(at));
+    const std::vector<double> before = buf;
+    ASSERT_EQ(hysteron_model_reset(h.m), HYSTERON_OK);
+    EXPECT_EQ(hysteron_model_simulate(h.m, buf.data() + at, n, buf.data() + at + shift, n),
+              HYSTERON_ERROR_INVALID_ARGUMENT)
+        << "shift " << shift;
+    EXPECT_NE(std::string(hysteron_last_error()).find("hysteron_model_simulate: y overlaps x"), std::string::npos)
+        << hysteron_last_error();
+    EXPECT_EQ(buf, before) << "shift " << shift << ": written";
+    std::copy(expected.begin(), expected.end(), buf.begin() + static_cast<std::ptrdiff_t>(at));
+    const std::vector<double> before_inv = buf;
+    ASSERT_EQ(hysteron_inverse_reset(h.inv), HYSTERON_OK);
+    EXPECT_EQ(hysteron_inverse_invert(h.inv, buf.data() + at, n, buf.data() + at + shift, n, nullptr),
+              HYSTERON_ERROR_INVALID_ARGUMENT)
+        << "shift " << shift;
+    EXPECT_NE(std::string(hysteron_last_error()).find("hysteron_inverse_invert: x overlaps y"), std::string::npos)
+        << hysteron_last_error();
+    EXPECT_EQ(buf, before_inv) << "shift " << shift << ": written";
+  }
+  // in place: the outputs of separate arrays
+  std::vector<double> in_place(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n));
+  ASSERT_EQ(hysteron_model_reset(h.m), HYSTERON_OK);
+  ASSERT_EQ(hysteron_model_simulate(h.m, in_place.data(), n, in_place.data(), n), HYSTERON_OK) << hysteron_last_error();
+  EXPECT_EQ(in_place, expected);
+  ASSERT_EQ(hysteron_inverse_reset(h.inv), HYSTERON_OK);
+  ASSERT_EQ(hysteron_inverse_invert(h.inv, in_place.data(), n, in_place.data(), n, nullptr), HYSTERON_OK)
+      << hysteron_last_error();
+  EXPECT_EQ(in_place, inverted);
+  // adjacent (y right after x): apart
+  std::vector<double> both(2 * n);
+  std::copy(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n), both.begin());
+  ASSERT_EQ(hysteron_model_reset(h.m), HYSTERON_OK);
+  ASSERT_EQ(hysteron_model_simulate(h.m, both.data(), n, both.data() + n, n), HYSTERON_OK) << hysteron_last_error();
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), both.begin() + static_cast<std::ptrdiff_t>(n)));
 }

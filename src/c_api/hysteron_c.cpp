@@ -176,6 +176,18 @@ void require_state_size(std::size_t n, std::size_t expected) {
          expected);
 }
 
+// Batches step sample k from in[k] before writing out[k]: out == in (in place) is safe, any other
+// overlap would read samples already overwritten (or, written ahead, step on outputs).
+void require_same_or_apart(const double* in, const double* out, std::size_t n, const char* in_name,
+                           const char* out_name) {
+  const auto at = [](const double* p) { return reinterpret_cast<std::uintptr_t>(p); };
+  if (n > 0 && in != out && at(out) < at(in + n) && at(in) < at(out + n))
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
+         "%s overlaps %s without being the same array (%s may be %s itself, in place, or apart from it; nothing was "
+         "changed)",
+         out_name, in_name, out_name, in_name);
+}
+
 hysteron_params* make_params(hysteron::io::ModelDocument doc, const std::string& source) {
   auto* h = new hysteron_params{std::move(doc.params), {}, 0, doc.unit("output"), doc.unit("input"), source};
   h->kind = std::string(hysteron::model_name(h->params));
@@ -384,6 +396,7 @@ hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, 
     if (n_x == 0) return;
     HYSTERON_REQUIRE(x);
     HYSTERON_REQUIRE(y);
+    require_same_or_apart(x, y, n_x, "x", "y");
     require_finite_array(x, n_x, "x");
     for (std::size_t k = 0; k < n_x; ++k)
       if (!model->model.accepts(x[k]))
@@ -497,6 +510,7 @@ hysteron_status hysteron_inverse_invert(hysteron_inverse* inverse, const double*
     if (n_y > 0) {
       HYSTERON_REQUIRE(y);
       HYSTERON_REQUIRE(x);
+      require_same_or_apart(y, x, n_y, "y", "x");
       require_finite_array(y, n_y, "y");
       for (std::size_t k = 0; k < n_y; ++k) {
         x[k] = inverse->inverse.step(y[k]);

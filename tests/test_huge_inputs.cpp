@@ -377,3 +377,44 @@ TEST(HugeInputs, CApiBatchesRefusePartlyOverlappingArrays) {
   ASSERT_EQ(hysteron_model_simulate(h.m, both.data(), n, both.data() + n, n), HYSTERON_OK) << hysteron_last_error();
   EXPECT_TRUE(std::equal(expected.begin(), expected.end(), both.begin() + static_cast<std::ptrdiff_t>(n)));
 }
+
+// Units maps whose values are finite but extreme (audit2): output_gain 1e-320 (subnormal, its
+// reciprocal inf) or output_offset 1e308 (no input the model accepts) loaded and broke every step.
+// Refused at load, by the model's validation (so the C ABI, the CLI, Python and fit alike), naming
+// the key; the extremes a fit of records scaled to 1e-300 or 1e300 writes are accepted.
+TEST(HugeInputs, ExtremeUnitsMapsAreRefusedAtLoad) {
+  const std::string body = R"("model": "gpi", "n": 10, "c": [1, 2, 0, 0], "alpha": 1, "q": 0.1, "rho": 1, "tau": 1,
+      "envelope": "tanh")";
+  const auto model_json = [&](const std::string& extra) {  // input_limits [0, 0.6] unless extra gives them
+    return "{" + body + ", " + extra + (std::string(extra).find("input_limits") != std::string::npos ? "" : R"(, "input_limits": [0, 0.6])") + "}";
+  };
+  for (const auto& [extra, key] :
+       {std::pair{R"("output_gain": 1e-320)", "output_gain = 1e-320"}, std::pair{R"("output_gain": -1e308)", "output_gain = -1e+308"},
+        std::pair{R"("input_scale": 4e-310)", "input_scale = 4e-310"}, std::pair{R"("input_scale": 1e308)", "input_scale = 1e+308"},
+        std::pair{R"("output_offset": 1e308)", "output_offset = 1e+308"},
+        std::pair{R"("output_offset": -1e308, "output_gain": 1e308)", "output_gain = 1e+308"},
+        std::pair{R"("input_origin": 1e308)", "input_origin = 1e+308"},
+        std::pair{R"("input_origin": 1e306)", "input_limits [0, 0.6] map to"},
+        std::pair{R"("input_scale": 1e-300, "input_limits": [-1e10, 1e10])", "input_limits [-1e+10, 1e+10] map to"}}) {
+    const std::string json = model_json(extra);
+    hysteron_params* p = nullptr;
+    EXPECT_EQ(hysteron_params_from_json(json.c_str(), &p), HYSTERON_ERROR_MODEL) << extra;
+    EXPECT_EQ(p, nullptr);
+    const std::string said = hysteron_last_error();
+    EXPECT_NE(said.find(std::string("gpi: ") + key), std::string::npos) << extra << ": " << said;
+    try {
+      (void)hysteron::io::model_from_json(nlohmann::json::parse(json), "m.json");
+      ADD_FAILURE() << extra << ": accepted by io::model_from_json";
+    } catch (const hysteron::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+  // large and small but sound maps (a fit of records scaled by 1e300 or 1e-300 writes such)
+  for (const char* extra : {R"("output_gain": 1e300, "input_scale": 1e300)", R"("output_gain": 1e-300, "input_scale": 1e-300)",
+                            R"("output_offset": 1e300, "output_gain": 1e299)", R"("input_origin": 1e-300)"}) {
+    const std::string json = model_json(extra);
+    hysteron_params* p = nullptr;
+    EXPECT_EQ(hysteron_params_from_json(json.c_str(), &p), HYSTERON_OK) << extra << ": " << hysteron_last_error();
+    hysteron_params_free(p);
+  }
+}

@@ -88,7 +88,7 @@ int run_export(const Options& o) {
   if (!o.header.empty()) e.header_name = std::filesystem::path(o.header).filename().string();
   if (!o.limits.empty()) {
     e.inverse_limits = parse_limits(o.limits);
-    warn_limits_beyond_model(params, e.inverse_limits, "export");
+    warn_limits_beyond_model(params, e.inverse_limits, "export", e.input_unit);
   }
   if (!o.loop.empty()) {
     e.loop = io::read_loop_design(o.loop, o.run);  // an adaptive run's loop is refused by generate_c

@@ -195,7 +195,7 @@ int run_invert(const Options& o) {
   InverseOptions opt;
   if (!o.limits.empty()) {
     opt.input_limits = parse_limits(o.limits);
-    warn_limits_beyond_model(params, opt.input_limits, "invert");
+    warn_limits_beyond_model(params, opt.input_limits, "invert", doc.unit("input"));
   }
   Inverse inv(params, opt);
   Model forward(params);  // the model driven by the inverse's inputs: what they produce

@@ -45,8 +45,12 @@ void add_control_period_option(CLI::App* cmd, double& period);
 Limits parse_limits(const std::string& text);
 // The warning (on stderr, prefixed by `command`) where --limits reach beyond the model's
 // input_limits (its training range) by more than kInputCoverageTolerance of their span: the
-// inverse then commands inputs the model was never fitted on.
-void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, std::string_view command);
+// inverse then commands inputs the model was never fitted on; a louder one where less than
+// half of --limits lies within them (--limits in another unit?). --limits that do not overlap
+// the model's input_limits at all (e.g. 0,0.6 on a model in kPa fitted on 8..626) throw
+// hysteron::Error. `input_unit`: the model file's, named in both ("" if none).
+void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, std::string_view command,
+                              std::string_view input_unit);
 const std::string& command_line();                        // the recorded command line
 
 // ---- shared by the subcommands (common.cpp) --------------------------------------

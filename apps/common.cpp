@@ -99,12 +99,31 @@ Limits parse_limits(const std::string& text) {
   return l;
 }
 
-void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, std::string_view command) {
+void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, std::string_view command,
+                              std::string_view input_unit) {
   const Limits& m = input_limits(params);
   if (!m.bounded()) return;
+  const std::string in = input_unit.empty() ? std::string() : fmt::format(" (the model's input is in {})", input_unit);
+  // the part of --limits inside the model's range: none (limits in another unit, e.g. 0,0.6 MPa on a
+  // model in kPa fitted on 8..626) is refused, the inverse could only command inputs the model never saw
+  const double lo = std::max(limits.lo, m.lo), hi = std::min(limits.hi, m.hi);
+  if (!(lo < hi))
+    throw Error(fmt::format("--limits [{:.6g}, {:.6g}] lie outside the model's input_limits [{:.6g}, {:.6g}]{} (fit() "
+                            "sets them to its training range): the inverse could only command inputs the model was "
+                            "never fitted on; give --limits in the model's input unit, overlapping its input_limits, "
+                            "or leave them out (the model's)",
+                            limits.lo, limits.hi, m.lo, m.hi, in));
   const double tol = kInputCoverageTolerance * (m.hi - m.lo);
   const double below = m.lo - limits.lo, above = limits.hi - m.hi;
   if (!(below > tol) && !(above > tol)) return;
+  if (hi - lo < 0.5 * (limits.hi - limits.lo)) {
+    fmt::print(stderr,
+               "{}: warning: most of --limits [{:.6g}, {:.6g}] lie outside the model's input_limits [{:.6g}, {:.6g}]{} "
+               "(fit() sets them to its training range): only [{:.6g}, {:.6g}] is within them, and the inverse may "
+               "command inputs beyond, where the model extrapolates; are --limits in the model's input unit?\n",
+               command, limits.lo, limits.hi, m.lo, m.hi, in, lo, hi);
+    return;
+  }
   fmt::print(stderr,
              "{}: warning: --limits [{:.6g}, {:.6g}] reach beyond the model's input_limits [{:.6g}, {:.6g}] (fit() sets "
              "them to its training range) by up to {:.6g}: the inverse may command inputs there, where the model "

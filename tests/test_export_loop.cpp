@@ -484,6 +484,45 @@ TEST(ExportLoopCheck, GuardNearDblMinKeepsSteppingAsTheLibrarysLoop) {
   }
 }
 
+// The open loop without a pressure loop (pressure_gain 0) and absurd pressure limits: p_d at the
+// upper limit 1e300 and a finite pressure reading of -DBL_MAX made p_d - p overflow, and 0 * inf
+// commanded NaN (audit2 F2), in the library and the generated C alike. Now p_d itself, finite,
+// in both, bit for bit; with k_p > 0 the overflowing term takes the command to a limit.
+TEST(ExportLoopCheck, ZeroPressureGainNeverCommandsNaN) {
+  const double big = std::numeric_limits<double>::max();
+  const std::vector<double> reference = {1e3, 1e3, 1e3, 0.01, -1e3, 0.02},
+                            measured = {0.0, 0.0, 0.0, 0.0, 0.0, 0.01},
+                            pressure = {-big, big, 0.2, -big, big, 0.3};
+  for (const double k_p : {0.0, 0.5}) {
+    LoopDesign d;
+    d.kind = LoopDesign::Kind::open_loop;
+    d.pressure_gain = k_p;
+    d.feedforward.pressure_limits = {-1e300, 1e300};
+    const ModelParams model = gpi_units_model();  // saturating: 1 km of reference is beyond reach
+    Controller ctl = make_controller(d, model);
+    std::vector<double> lib;
+    for (std::size_t k = 0; k < reference.size(); ++k) {
+      lib.push_back(step(ctl, reference[k], reference[k], measured[k], pressure[k]).command_mpa);
+      EXPECT_TRUE(std::isfinite(lib.back())) << "k_p " << k_p << ", sample " << k << ": " << lib.back();
+    }
+    if (k_p == 0.0) {
+      EXPECT_EQ(lib[0], 1e300);  // p_d: the upper limit
+      EXPECT_EQ(lib[1], 1e300);
+    } else {
+      EXPECT_EQ(lib[0], 1e300);   // p_d + 0.5 (p_d + DBL_MAX): +inf, clamped
+      EXPECT_EQ(lib[1], -1e300);  // p_d + 0.5 (p_d - DBL_MAX)
+    }
+    if (!test::have_gcc()) continue;
+    test::TempDir dir;
+    const test::LoopRun got =
+        test::run_generated_loop(d, model, dir.file("."), true, reference, reference, measured, pressure);
+    ASSERT_EQ(got.error, "");
+    ASSERT_EQ(got.command.size(), lib.size());
+    for (std::size_t k = 0; k < lib.size(); ++k)
+      EXPECT_EQ(got.command[k], lib[k]) << "k_p " << k_p << ", sample " << k << ": the generated C's command";
+  }
+}
+
 // The comparison can fail: the C file of a loop whose K_p, pressure PID K_i or shaper weight
 // is 1e-9 off (relative), compared with the library's loop, differs.
 TEST(ExportLoopCheck, PerturbedNumberIsDetected) {

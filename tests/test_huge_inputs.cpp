@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <string>
@@ -324,5 +325,96 @@ TEST(HugeInputs, CApiStateOfEveryKindRoundTrips) {
     double u_back = 0;
     ASSERT_EQ(hysteron_inverse_get_state(a.inv, back.data(), n, &u_back), HYSTERON_OK) << hysteron_last_error();
     for (std::size_t i = 0; i < n; ++i) EXPECT_NEAR(back[i], y[i], 1e-12 * (1.0 + std::abs(y[i]))) << "entry " << i;  // through the inverse's coordinates
+  }
+}
+
+// The batches with arrays that partly overlap (audit2 F5): y = x + 1 stepped sample k from an x[k]
+// already overwritten by y[k - 1], and returned wrong outputs with HYSTERON_OK. Now refused with
+// nothing written; in place (y == x) and apart are the single steps' outputs, both directions.
+TEST(HugeInputs, CApiBatchesRefusePartlyOverlappingArrays) {
+  const Kind& k = kKinds[0];
+  const std::vector<double> x = {0.1, 0.2, 0.3, 0.2, 0.1, 0.4, 0.5, 0.0};
+  const std::size_t n = 7;
+  Handles h(k.json);
+  std::vector<double> expected(n), inverted(n);
+  ASSERT_EQ(hysteron_model_simulate(h.m, x.data(), n, expected.data(), n), HYSTERON_OK);
+  ASSERT_EQ(hysteron_inverse_invert(h.inv, expected.data(), n, inverted.data(), n, nullptr), HYSTERON_OK);
+  for (const std::ptrdiff_t shift : {1, -1, 3, -6}) {
+    std::vector<double> buf(n + 16, -7.0);
+    const std::size_t at = 7;  // x at buf[7..14), the output at buf[7 + shift ..)
+    std::copy(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n), buf.begin() + static_cast<std::ptrdiff_t>(at));
+    const std::vector<double> before = buf;
+    ASSERT_EQ(hysteron_model_reset(h.m), HYSTERON_OK);
+    EXPECT_EQ(hysteron_model_simulate(h.m, buf.data() + at, n, buf.data() + at + shift, n),
+              HYSTERON_ERROR_INVALID_ARGUMENT)
+        << "shift " << shift;
+    EXPECT_NE(std::string(hysteron_last_error()).find("hysteron_model_simulate: y overlaps x"), std::string::npos)
+        << hysteron_last_error();
+    EXPECT_EQ(buf, before) << "shift " << shift << ": written";
+    std::copy(expected.begin(), expected.end(), buf.begin() + static_cast<std::ptrdiff_t>(at));
+    const std::vector<double> before_inv = buf;
+    ASSERT_EQ(hysteron_inverse_reset(h.inv), HYSTERON_OK);
+    EXPECT_EQ(hysteron_inverse_invert(h.inv, buf.data() + at, n, buf.data() + at + shift, n, nullptr),
+              HYSTERON_ERROR_INVALID_ARGUMENT)
+        << "shift " << shift;
+    EXPECT_NE(std::string(hysteron_last_error()).find("hysteron_inverse_invert: x overlaps y"), std::string::npos)
+        << hysteron_last_error();
+    EXPECT_EQ(buf, before_inv) << "shift " << shift << ": written";
+  }
+  // in place: the outputs of separate arrays
+  std::vector<double> in_place(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n));
+  ASSERT_EQ(hysteron_model_reset(h.m), HYSTERON_OK);
+  ASSERT_EQ(hysteron_model_simulate(h.m, in_place.data(), n, in_place.data(), n), HYSTERON_OK) << hysteron_last_error();
+  EXPECT_EQ(in_place, expected);
+  ASSERT_EQ(hysteron_inverse_reset(h.inv), HYSTERON_OK);
+  ASSERT_EQ(hysteron_inverse_invert(h.inv, in_place.data(), n, in_place.data(), n, nullptr), HYSTERON_OK)
+      << hysteron_last_error();
+  EXPECT_EQ(in_place, inverted);
+  // adjacent (y right after x): apart
+  std::vector<double> both(2 * n);
+  std::copy(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n), both.begin());
+  ASSERT_EQ(hysteron_model_reset(h.m), HYSTERON_OK);
+  ASSERT_EQ(hysteron_model_simulate(h.m, both.data(), n, both.data() + n, n), HYSTERON_OK) << hysteron_last_error();
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), both.begin() + static_cast<std::ptrdiff_t>(n)));
+}
+
+// Units maps whose values are finite but extreme (audit2): output_gain 1e-320 (subnormal, its
+// reciprocal inf) or output_offset 1e308 (no input the model accepts) loaded and broke every step.
+// Refused at load, by the model's validation (so the C ABI, the CLI, Python and fit alike), naming
+// the key; the extremes a fit of records scaled to 1e-300 or 1e300 writes are accepted.
+TEST(HugeInputs, ExtremeUnitsMapsAreRefusedAtLoad) {
+  const std::string body = R"("model": "gpi", "n": 10, "c": [1, 2, 0, 0], "alpha": 1, "q": 0.1, "rho": 1, "tau": 1,
+      "envelope": "tanh")";
+  const auto model_json = [&](const std::string& extra) {  // input_limits [0, 0.6] unless extra gives them
+    return "{" + body + ", " + extra + (std::string(extra).find("input_limits") != std::string::npos ? "" : R"(, "input_limits": [0, 0.6])") + "}";
+  };
+  for (const auto& [extra, key] :
+       {std::pair{R"("output_gain": 1e-320)", "output_gain = 1e-320"}, std::pair{R"("output_gain": -1e308)", "output_gain = -1e+308"},
+        std::pair{R"("input_scale": 4e-310)", "input_scale = 4e-310"}, std::pair{R"("input_scale": 1e308)", "input_scale = 1e+308"},
+        std::pair{R"("output_offset": 1e308)", "output_offset = 1e+308"},
+        std::pair{R"("output_offset": -1e308, "output_gain": 1e308)", "output_gain = 1e+308"},
+        std::pair{R"("input_origin": 1e308)", "input_origin = 1e+308"},
+        std::pair{R"("input_origin": 1e306)", "input_limits [0, 0.6] map to"},
+        std::pair{R"("input_scale": 1e-300, "input_limits": [-1e10, 1e10])", "input_limits [-1e+10, 1e+10] map to"}}) {
+    const std::string json = model_json(extra);
+    hysteron_params* p = nullptr;
+    EXPECT_EQ(hysteron_params_from_json(json.c_str(), &p), HYSTERON_ERROR_MODEL) << extra;
+    EXPECT_EQ(p, nullptr);
+    const std::string said = hysteron_last_error();
+    EXPECT_NE(said.find(std::string("gpi: ") + key), std::string::npos) << extra << ": " << said;
+    try {
+      (void)hysteron::io::model_from_json(nlohmann::json::parse(json), "m.json");
+      ADD_FAILURE() << extra << ": accepted by io::model_from_json";
+    } catch (const hysteron::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+  // large and small but sound maps (a fit of records scaled by 1e300 or 1e-300 writes such)
+  for (const char* extra : {R"("output_gain": 1e300, "input_scale": 1e300)", R"("output_gain": 1e-300, "input_scale": 1e-300)",
+                            R"("output_offset": 1e300, "output_gain": 1e299)", R"("input_origin": 1e-300)"}) {
+    const std::string json = model_json(extra);
+    hysteron_params* p = nullptr;
+    EXPECT_EQ(hysteron_params_from_json(json.c_str(), &p), HYSTERON_OK) << extra << ": " << hysteron_last_error();
+    hysteron_params_free(p);
   }
 }

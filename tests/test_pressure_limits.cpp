@@ -510,3 +510,83 @@ TEST(PressureLimits, CApiModelScaleAgreesWithTheModelsLengthUnit) {
   hysteron_params_free(in_m);
   hysteron_params_free(plain);
 }
+
+// A model file whose input is in kPa (bar, Pa, psi, ...) under the loops' pressures in MPa: the
+// inverse saturated at the limits given in MPa (0.6 kPa), silently, through every loop of the C
+// ABI, a loop from a result.json and the generated C (hysteron export --loop). Each now refuses
+// it naming the unit and the file and saying to refit in MPa; a model in MPa, without units, or
+// with an input unit that is no pressure is as before.
+TEST(PressureLimits, ModelInputInAnotherPressureUnitIsRefusedByTheLoops) {
+  const std::string body = R"("model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10,
+      "rho": 0.3, "tau": 1.5, "alpha": 0.05, "output_gain": 30)";
+  const auto with_units = [&](const std::string& units, const std::string& limits) {
+    return "{" + body + ", \"input_limits\": " + limits + (units.empty() ? "" : ", \"units\": " + units) + "}";
+  };
+  test::TempDir dir;
+  const std::string kpa_path = dir.write("model_kpa.json", with_units(R"({"input": "kPa", "output": "mm"})", "[0, 600]"));
+  hysteron_params* kpa = nullptr;
+  ASSERT_EQ(hysteron_params_from_file(kpa_path.c_str(), &kpa), HYSTERON_OK) << hysteron_last_error();
+  hysteron_ff_pid_params f;
+  ASSERT_EQ(hysteron_ff_pid_default_params(&f), HYSTERON_OK);
+  hysteron_ff_pid* fp = nullptr;
+  EXPECT_EQ(hysteron_ff_pid_create(kpa, &f, &fp), HYSTERON_ERROR_MODEL);
+  EXPECT_EQ(fp, nullptr);
+  const std::string said = hysteron_last_error();
+  for (const char* part : {"hysteron_ff_pid_create: ", "model_kpa.json", "the model's input is in kPa, not MPa",
+                           "refit the model with its pressure in MPa", "1 kPa = 0.001 MPa"})
+    EXPECT_NE(said.find(part), std::string::npos) << part << " in: " << said;
+  hysteron_open_loop_params o;
+  ASSERT_EQ(hysteron_open_loop_default_params(&o), HYSTERON_OK);
+  hysteron_open_loop* ol = nullptr;
+  EXPECT_EQ(hysteron_open_loop_create(kpa, &o, &ol), HYSTERON_ERROR_MODEL);
+  hysteron_cascade_params c;
+  ASSERT_EQ(hysteron_cascade_default_params(&c), HYSTERON_OK);
+  hysteron_cascade* cs = nullptr;
+  EXPECT_EQ(hysteron_cascade_create(kpa, &c, &cs), HYSTERON_ERROR_MODEL);
+  // the loop of a result.json on it (the fixture's runs are in MPa and mm)
+  const std::string result = std::string(HYSTERON_SOURCE_DIR) + "/tests/c_api/result.json";
+  hysteron_loop_params lp;
+  ASSERT_EQ(hysteron_loop_params_from_file(result.c_str(), "compensated.sine", &lp), HYSTERON_OK)
+      << hysteron_last_error();
+  EXPECT_EQ(hysteron_ff_pid_create(kpa, &lp.ff_pid, &fp), HYSTERON_ERROR_MODEL);
+  EXPECT_NE(std::string(hysteron_last_error()).find("is in kPa"), std::string::npos) << hysteron_last_error();
+  // the other pressure units, by hysteron_params_from_json ("model JSON" named)
+  for (const char* unit : {"bar", "Pa", "psi", "[KPa]"}) {
+    hysteron_params* m = nullptr;
+    ASSERT_EQ(hysteron_params_from_json(with_units(fmt::format(R"({{"input": "{}"}})", unit), "[0, 6]").c_str(), &m),
+              HYSTERON_OK)
+        << hysteron_last_error();
+    EXPECT_EQ(hysteron_ff_pid_create(m, &f, &fp), HYSTERON_ERROR_MODEL) << unit;
+    EXPECT_NE(std::string(hysteron_last_error()).find("model JSON: the model's input is in"), std::string::npos)
+        << hysteron_last_error();
+    hysteron_params_free(m);
+  }
+  // MPa, no units, an input that is no pressure: as before
+  for (const std::string& units : {std::string(R"({"input": "MPa", "output": "mm"})"), std::string(),
+                                  std::string(R"({"input": "V"})"), std::string(R"({"input": "pressure"})")}) {
+    hysteron_params* m = nullptr;
+    ASSERT_EQ(hysteron_params_from_json(with_units(units, "[0, 0.6]").c_str(), &m), HYSTERON_OK);
+    ASSERT_EQ(hysteron_ff_pid_create(m, &f, &fp), HYSTERON_OK) << units << ": " << hysteron_last_error();
+    hysteron_ff_pid_free(fp);
+    fp = nullptr;
+    hysteron_params_free(m);
+  }
+  hysteron_params_free(kpa);
+  // the generated C (hysteron export --loop, Python's export_c(controller=)) refuses it alike
+  const ModelParams model = io::read_model_document(kpa_path).params;
+  io::ExportOptions e;
+  e.loop = io::read_loop_design(result, "compensated.sine");
+  e.loop_source = "\"result.json\"";
+  e.input_unit = "kPa";
+  e.output_unit = "mm";
+  const std::string refused = test::error_of([&] { (void)io::generate_c(model, e); });
+  EXPECT_TRUE(test::has(refused, "the loop of \"result.json\": the model's input is in kPa, not MPa")) << refused;
+  EXPECT_TRUE(test::has(refused, "refit the model with its pressure in MPa")) << refused;
+  e.input_unit = "MPa";
+  EXPECT_NO_THROW((void)io::generate_c(model, e));
+  e.input_unit.clear();
+  EXPECT_NO_THROW((void)io::generate_c(model, e));
+  e.loop.reset();
+  e.input_unit = "kPa";  // the model alone, in its own units: as before
+  EXPECT_NO_THROW((void)io::generate_c(model, e));
+}

@@ -3,16 +3,20 @@
 // field with what was written.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <limits>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "hysteron/error.hpp"
 #include "hysteron/experiment.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/results.hpp"
+#include "test_util.hpp"
 
 using namespace hysteron;
 
@@ -678,6 +682,34 @@ TEST(Results, LoopDesignRoundTripAndErrors) {
     FAIL() << "a shaper without its delay accepted";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "controller.shaper: missing key \"delay_samples\"");
+  }
+}
+
+// The zero-vibration shaper's weights (audit2 F4): a1 > 0, a2 >= 0, a1 + a2 = 1 within 1e-9. Weights that
+// do not sum to 1 scaled the feedforward's preview, a negative one flipped an impulse, and every reader of a
+// "controller" (C ABI, export --loop, controller_from) took them without a word.
+TEST(Results, LoopDesignShaperWeightsAreChecked) {
+  LoopDesign d;
+  d.pid = PidParams{};
+  d.shaper = LoopDesign::Shaper{0.955, 0.045, 172, 8};
+  const nlohmann::json j = io::to_json(d);
+  EXPECT_EQ(io::from_json<LoopDesign>(j, "controller").shaper->a2, 0.045);
+  for (const auto& [a1, a2] : {std::pair{0.9, 0.2}, std::pair{1.2, -0.2}, std::pair{-0.5, 1.5}, std::pair{0.5, 0.4},
+                               std::pair{0.0, 1.0}, std::pair{0.955, 0.045 + 1e-8}}) {
+    nlohmann::json bad = j;
+    bad["shaper"]["a1"] = a1;
+    bad["shaper"]["a2"] = a2;
+    const std::string said = test::error_of([&] { (void)io::from_json<LoopDesign>(bad, "result.json.compensated.controller"); });
+    EXPECT_TRUE(test::has(said, fmt::format("result.json.compensated.controller.shaper: a1 = {}, a2 = {}", a1, a2)))
+        << said;
+    EXPECT_TRUE(test::has(said, "a1 > 0 and a2 >= 0 with a1 + a2 = 1")) << said;
+  }
+  // a2 = 0 (one impulse: the reference advanced) and a sum within rounding are accepted
+  for (const auto& [a1, a2] : {std::pair{1.0, 0.0}, std::pair{0.955, 0.045 + 1e-12}}) {
+    nlohmann::json ok = j;
+    ok["shaper"]["a1"] = a1;
+    ok["shaper"]["a2"] = a2;
+    EXPECT_NO_THROW((void)io::from_json<LoopDesign>(ok, "controller")) << a1 << " " << a2;
   }
 }
 

@@ -100,9 +100,12 @@ struct OpenLoopParams {
 };
 
 // The proportional pressure loop of OpenLoopController: p_d + k_p (p_d - p_meas) [MPa], or p_d
-// where the measured pressure is not finite (not clamped).
+// where the measured pressure is not finite or k_p = 0 (not clamped). Never NaN for a finite
+// p_d: a difference that overflows (p_d = 1e300, p_meas = -DBL_MAX) gives +-inf with k_p > 0,
+// which the caller's clamp takes to a limit, and with k_p = 0 no term (0 * inf would be NaN).
+// The generated C's loop (io::export_loop) computes the same, operation for operation.
 inline double pressure_loop_command(double p_d, double pressure_mpa, double k_p) noexcept {
-  return std::isfinite(pressure_mpa) ? p_d + k_p * (p_d - pressure_mpa) : p_d;
+  return std::isfinite(pressure_mpa) && k_p != 0.0 ? p_d + k_p * (p_d - pressure_mpa) : p_d;
 }
 
 class OpenLoopController {

@@ -142,9 +142,11 @@ HYSTERON_C_API hysteron_status hysteron_model_get_state(const hysteron_model* mo
  * physical input), returns HYSTERON_ERROR_INVALID_ARGUMENT, leaves the state unchanged and
  * writes the previous output to *y: never an inf or NaN output. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_model_step(hysteron_model* model, double x, double* y);
-/* Batch: y[k] = step(x[k]) for k < n_x; n_y must equal n_x (y may be x). Every x[k] is
- * checked first: on one that step would refuse nothing is stepped and the index is in the
- * message. */
+/* Batch: y[k] = step(x[k]) for k < n_x; n_y must equal n_x. y may be x itself (in place:
+ * x[k] is read before y[k] is written) or apart from it; a y that partly overlaps x (y = x + 1)
+ * is HYSTERON_ERROR_INVALID_ARGUMENT (since 2026-12-01; before, wrong outputs with
+ * HYSTERON_OK). Every x[k] is checked first: on one that step would refuse nothing is stepped
+ * and the index is in the message. */
 HYSTERON_C_API hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, size_t n_x, double* y,
                                                       size_t n_y);
 
@@ -190,8 +192,10 @@ HYSTERON_C_API hysteron_status hysteron_inverse_get_state(const hysteron_inverse
  * input to *x. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_inverse_step(hysteron_inverse* inverse, double y_desired, double* x,
                                                     int* saturated);
-/* Batch: x[k] = step(y[k]) for k < n_y; n_x must equal n_y (x may be y). *n_saturated (may
- * be NULL) = number of clamped samples. Every y[k] is checked first (nothing stepped on error). */
+/* Batch: x[k] = step(y[k]) for k < n_y; n_x must equal n_y. x may be y itself (in place) or
+ * apart from it; an x that partly overlaps y is HYSTERON_ERROR_INVALID_ARGUMENT (as
+ * hysteron_model_simulate). *n_saturated (may be NULL) = number of clamped samples. Every y[k]
+ * is checked first (nothing stepped on error). */
 HYSTERON_C_API hysteron_status hysteron_inverse_invert(hysteron_inverse* inverse, const double* y, size_t n_y,
                                                       double* x, size_t n_x, size_t* n_saturated);
 
@@ -235,7 +239,12 @@ typedef struct hysteron_ff_pid hysteron_ff_pid;
 HYSTERON_C_API hysteron_status hysteron_ff_pid_default_params(hysteron_ff_pid_params* params);
 /* A controller for the model `params` (copied: params may be freed afterwards). Invalid
  * controller parameters are HYSTERON_ERROR_INVALID_ARGUMENT (the field is named), and so are
- * unset pressure limits that the model's input_limits cannot give. */
+ * unset pressure limits that the model's input_limits cannot give. A model file whose "units"
+ * give its input a pressure unit other than MPa ("kPa", "bar", "Pa", "psi", ...) is
+ * HYSTERON_ERROR_MODEL naming the file and the unit (since 2026-12-01; the controller's
+ * pressures are in MPa and its inverse would saturate): refit the model with its pressure in
+ * MPa. A model without an input unit (hand-written) or with one that is no pressure is taken
+ * as in MPa. The same holds for hysteron_open_loop_create and hysteron_cascade_create. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_create(const hysteron_params* params,
                                                      const hysteron_ff_pid_params* controller,
                                                      hysteron_ff_pid** out);
@@ -262,7 +271,8 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller,
 /* p_d = FF(preview) (+ PID(reference - measured) if any of kp, ki, kd is nonzero, the sum
  * clamped to the pressure limits), then the proportional pressure loop
  *   pressure_cmd = clamp(p_d + pressure_gain (p_d - pressure), pressure_min, pressure_max)
- * around a proportional regulator. The C++ OpenLoopController; `hysteron experiment
+ * around a proportional regulator (p_d itself where pressure_gain = 0: never NaN, also where
+ * p_d - pressure overflows). The C++ OpenLoopController; `hysteron experiment
  * mpi-openloop`'s loops (result.json "controller", "loop": "open_loop"; docs/deploy.md). */
 typedef struct hysteron_open_loop_params {
   /* The feedforward (sample_time, pressure limits, model_scale, lag_time_constant) and the

@@ -10,6 +10,7 @@
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/names.hpp"
 #include "hysteron/io/results.hpp"
+#include "hysteron/io/units.hpp"
 
 namespace hysteron::python {
 
@@ -102,6 +103,12 @@ io::ModelDocument model_document(const py::handle& spec, std::string_view what) 
   if (!py::isinstance<py::dict>(spec))
     throw_arg_type(spec, what, "a model dict (the model-file keys), a model file path or a hysteron.Model");
   return io::model_document_from_json(to_json(spec, what), std::string(what));
+}
+
+std::string input_unit_refusal(const py::handle& spec, const io::ModelDocument& doc) {
+  const std::string why = io::input_unit_mismatch(doc.unit("input"));
+  if (why.empty()) return why;
+  return is_path(spec) ? fmt::format("model {}: {}", path_arg(spec, "model"), why) : fmt::format("model: {}", why);
 }
 
 ModelParams model_spec(const py::handle& spec, std::string_view what) {

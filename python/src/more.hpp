@@ -20,6 +20,9 @@ struct PyModel : Model {
 // hysteron.Model; `what` names the argument in errors ("InverseFeedforward: model").
 // model_document: with the free-form keys (a dict's or a file's, a hysteron.Model's own).
 io::ModelDocument model_document(const py::handle& spec, std::string_view what);
+// Why a controller (pressures in MPa) cannot run on `spec`'s document `doc` (io::input_unit_mismatch),
+// naming the model file where spec is a path; "" where it can.
+std::string input_unit_refusal(const py::handle& spec, const io::ModelDocument& doc);
 ModelParams model_spec(const py::handle& spec, std::string_view what);
 InitialState initial_state_from(const std::string& name);
 // A (lo, hi) pair of numbers: TypeError naming WHAT otherwise.

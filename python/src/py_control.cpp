@@ -89,22 +89,21 @@ constexpr double inf = std::numeric_limits<double>::infinity();
 // "units" imply (its output in mm: 1000, in m: 1, in um: 1e6), else 1000 (mm). One given that
 // contradicts the model's length unit is refused (a model in m under the default 1000 asked the
 // inverse for outputs 1000x too large, silently). A model whose input names a pressure unit other
-// than MPa is warned of: the controllers' pressures (limits, PID output, commands) are then in it.
-double model_scale_of(const io::ModelDocument& doc, const py::object& given, std::string_view what) {
-  const auto warn = [](const std::string& message) {
-    if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
-  };
+// than MPa is refused (io::input_unit_mismatch; since 2026-12-01, a warning before): the
+// controllers' pressures (limits, PID gains, commands) are in MPa.
+double model_scale_of(const py::object& model, const io::ModelDocument& doc, const py::object& given,
+                      std::string_view what) {
+  if (const std::string why = input_unit_refusal(model, doc); !why.empty()) throw Error(fmt::format("{}: {}", what, why));
   const double per_metre = io::length_units_per_metre(doc.unit("output"));
-  if (const std::string in = io::canonical_unit(doc.unit("input")); io::pressure_unit_other_than_mpa(in))
-    warn(fmt::format("{}: the model's input is in {}, not MPa: the controller's pressures (limits, PID output, "
-                     "commands) are then in {} too, and PID gains meant per MPa are off by the ratio of the units",
-                     what, in, in));
   if (const std::string out = io::canonical_unit(doc.unit("output"));
-      given.is_none() && per_metre == 0 && !out.empty() && out != "%")
-    warn(fmt::format("{}: the model's output is in {}, not a length: the controller takes its references and "
-                     "measurements as model outputs / model_scale, 1000 by default (mm per m); give model_scale=1 to "
-                     "give them in {}",
-                     what, out, out));
+      given.is_none() && per_metre == 0 && !out.empty() && out != "%") {
+    const std::string message =
+        fmt::format("{}: the model's output is in {}, not a length: the controller takes its references and "
+                    "measurements as model outputs / model_scale, 1000 by default (mm per m); give model_scale=1 to "
+                    "give them in {}",
+                    what, out, out);
+    if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+  }
   if (given.is_none()) return per_metre > 0 ? per_metre : 1000.0;
   const double scale = cast_arg<double>(given, fmt::format("{}: model_scale", what), "a number or None");
   if (const std::string why = io::model_scale_mismatch(scale, doc.unit("output")); !why.empty())
@@ -234,7 +233,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
                        double ts) {
              const io::ModelDocument doc = model_document(model, "InverseFeedforward: model");
              const ModelParams& mp = doc.params;
-             const double scale = model_scale_of(doc, scale_obj, "InverseFeedforward");
+             const double scale = model_scale_of(model, doc, scale_obj, "InverseFeedforward");
              const Limits given = limits_arg(limits, "InverseFeedforward");
              return InverseFeedforward(mp, ff_params(resolved_limits(mp, given, "InverseFeedforward"), scale, lag, ts));
            }),
@@ -269,7 +268,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
                        const py::object& scale_obj, double lag, double ts) {
              const io::ModelDocument doc = model_document(model, "FeedforwardPidController: model");
              const ModelParams& mp = doc.params;
-             const double scale = model_scale_of(doc, scale_obj, "FeedforwardPidController");
+             const double scale = model_scale_of(model, doc, scale_obj, "FeedforwardPidController");
              const Limits given = limits_arg(limits_obj, "FeedforwardPidController");
              std::optional<PidParams> pp;
              if (!pid.is_none()) pp = pid_arg(pid, "FeedforwardPidController: pid");
@@ -302,7 +301,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
                        const py::object& limits, const py::object& scale_obj, double lag, double ts) {
              const io::ModelDocument doc = model_document(model, "OpenLoopController: model");
              const ModelParams& mp = doc.params;
-             const double scale = model_scale_of(doc, scale_obj, "OpenLoopController");
+             const double scale = model_scale_of(model, doc, scale_obj, "OpenLoopController");
              const Limits given = limits_arg(limits, "OpenLoopController");
              OpenLoopParams p;
              p.position.sample_time = ts;  // (unused without gains)
@@ -340,7 +339,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
                        double ts) {
              const io::ModelDocument doc = model_document(model, "CascadePwmController: model");
              const ModelParams& mp = doc.params;
-             const double scale = model_scale_of(doc, scale_obj, "CascadePwmController");
+             const double scale = model_scale_of(model, doc, scale_obj, "CascadePwmController");
              const Limits given = limits_arg(limits_obj, "CascadePwmController");
              CascadeParams p;
              if (!pid.is_none()) p.position = pid_arg(pid, "CascadePwmController: pid");

@@ -95,6 +95,8 @@ void bind_experiment(py::module_& m) {
       [](const py::object& controller, const py::object& model) {
         const LoopDesign d = io::from_json<LoopDesign>(to_json(controller), "controller");
         const io::ModelDocument doc = model_document(model, "controller_from: model");
+        if (const std::string why = input_unit_refusal(model, doc); !why.empty())
+          throw Error(fmt::format("controller_from: {}", why));
         if (const std::string why = io::model_scale_mismatch(d.feedforward.model_scale, doc.unit("output"));
             !why.empty())
           throw Error(fmt::format("controller_from: {}: the controller was designed for a model in another length "

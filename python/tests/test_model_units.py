@@ -198,8 +198,35 @@ def test_the_controllers_take_model_scale_from_the_models_units():
         hysteron.FeedforwardPidController(in_m, model_scale=1000.0)
     for make in (hysteron.FeedforwardPidController, hysteron.OpenLoopController, hysteron.CascadePwmController):
         make(in_m)  # model_scale from the units
-        with pytest.warns(UserWarning, match="the model's input is in kPa, not MPa"):
-            make(dict(in_mm, units={"input": "kPa", "output": "mm"}, input_limits=[0, 600]))
+
+
+def test_the_controllers_refuse_a_model_whose_input_is_in_another_pressure_unit(tmp_path):
+    # the controllers' pressures (limits, PID gains, commands) are in MPa: on a model in kPa the inverse
+    # saturated (a warning only, before 2026-12-01); refused as the C ABI and export --loop refuse it
+    base = {"model": "gpi", "envelope": "tanh", "c": [1.2, 0.8, 0.1, 0.05], "q": 0.5, "n": 10, "rho": 0.3,
+            "tau": 1.5, "alpha": 0.05, "output_gain": 30.0}
+    in_kpa = dict(base, units={"input": "kPa", "output": "mm"}, input_limits=[0, 600])
+    path = tmp_path / "model_kpa.json"
+    path.write_text(json.dumps(in_kpa))
+    for make in (hysteron.InverseFeedforward, hysteron.FeedforwardPidController, hysteron.OpenLoopController,
+                 hysteron.CascadePwmController):
+        name = make.__name__
+        with pytest.raises(hysteron.Error, match=rf"{name}: model: the model's input is in kPa, not MPa.*refit the "
+                                                 r"model with its pressure in MPa \(1 kPa = 0.001 MPa"):
+            make(in_kpa)
+        with pytest.raises(hysteron.Error, match=rf"{name}: model .*model_kpa.json: the model's input is in kPa"):
+            make(str(path))
+        with pytest.raises(hysteron.Error, match=r"the model's input is in bar, not MPa"):
+            make(dict(base, units={"input": "bar"}, input_limits=[0, 6]))
+        make(dict(base, units={"input": "MPa", "output": "mm"}, input_limits=[0, 0.6]))
+        make(dict(base, input_limits=[0, 0.6]))  # no units: as before
+    result = pathlib.Path(__file__).resolve().parents[2] / "tests" / "c_api" / "result.json"
+    ctl = hysteron.loop_of_run(str(result), "compensated.sine")
+    with pytest.raises(hysteron.Error, match=r"controller_from: model .*model_kpa.json: the model's input is in kPa"):
+        hysteron.controller_from(ctl, str(path))
+    with pytest.raises(hysteron.Error, match=r"the model's input is in kPa, not MPa"):
+        hysteron.export_c(in_kpa, controller=ctl)
+    hysteron.export_c(in_kpa)  # the model alone, in its own units
 
 
 def test_a_loop_from_a_result_is_refused_on_a_model_in_another_length_unit():

@@ -41,6 +41,8 @@ struct hysteron_params {
   std::string kind;  // "gpi", ... (NUL-terminated for hysteron_params_kind)
   std::size_t num_operators = 0;  // the length of a state vector (Model::state().y), every kind
   std::string output_unit;  // the model file's "units" output ("" if none): checked against model_scale
+  std::string input_unit;   // its "units" input ("" if none): a pressure unit other than MPa is refused by the loops
+  std::string source;       // the model file's path, or "model JSON": named in the loops' errors
 };
 
 struct hysteron_model {
@@ -164,8 +166,20 @@ void require_state_size(std::size_t n, std::size_t expected) {
          expected);
 }
 
-hysteron_params* make_params(hysteron::io::ModelDocument doc) {
-  auto* h = new hysteron_params{std::move(doc.params), {}, 0, doc.unit("output")};
+// Batches step sample k from in[k] before writing out[k]: out == in (in place) is safe, any other
+// overlap would read samples already overwritten (or, written ahead, step on outputs).
+void require_same_or_apart(const double* in, const double* out, std::size_t n, const char* in_name,
+                           const char* out_name) {
+  const auto at = [](const double* p) { return reinterpret_cast<std::uintptr_t>(p); };
+  if (n > 0 && in != out && at(out) < at(in + n) && at(in) < at(out + n))
+    fail(HYSTERON_ERROR_INVALID_ARGUMENT,
+         "%s overlaps %s without being the same array (%s may be %s itself, in place, or apart from it; nothing was "
+         "changed)",
+         out_name, in_name, out_name, in_name);
+}
+
+hysteron_params* make_params(hysteron::io::ModelDocument doc, const std::string& source) {
+  auto* h = new hysteron_params{std::move(doc.params), {}, 0, doc.unit("output"), doc.unit("input"), source};
   h->kind = std::string(hysteron::model_name(h->params));
   try {
     // the state's length: the play operators of the PI family, the kernel's entries of the other
@@ -253,7 +267,7 @@ hysteron_status hysteron_params_from_json(const char* json, hysteron_params** ou
   return guard("hysteron_params_from_json", HYSTERON_ERROR_MODEL, [&] {
     HYSTERON_REQUIRE(json);
     HYSTERON_REQUIRE(out);
-    *out = make_params(parse_model(json, "model JSON"));
+    *out = make_params(parse_model(json, "model JSON"), "model JSON");
   });
 }
 
@@ -261,7 +275,7 @@ hysteron_status hysteron_params_from_file(const char* path, hysteron_params** ou
   return guard("hysteron_params_from_file", HYSTERON_ERROR_MODEL, [&] {
     HYSTERON_REQUIRE(path);
     HYSTERON_REQUIRE(out);
-    *out = make_params(parse_model(read_file(path, "model file"), path));
+    *out = make_params(parse_model(read_file(path, "model file"), path), path);
   });
 }
 
@@ -372,6 +386,7 @@ hysteron_status hysteron_model_simulate(hysteron_model* model, const double* x, 
     if (n_x == 0) return;
     HYSTERON_REQUIRE(x);
     HYSTERON_REQUIRE(y);
+    require_same_or_apart(x, y, n_x, "x", "y");
     require_finite_array(x, n_x, "x");
     for (std::size_t k = 0; k < n_x; ++k)
       if (!model->model.accepts(x[k]))
@@ -485,6 +500,7 @@ hysteron_status hysteron_inverse_invert(hysteron_inverse* inverse, const double*
     if (n_y > 0) {
       HYSTERON_REQUIRE(y);
       HYSTERON_REQUIRE(x);
+      require_same_or_apart(y, x, n_y, "y", "x");
       require_finite_array(y, n_y, "y");
       for (std::size_t k = 0; k < n_y; ++k) {
         x[k] = inverse->inverse.step(y[k]);
@@ -578,6 +594,10 @@ void check_controller(const hysteron::FeedforwardParams& ff, const hysteron::Pid
 // (hysteron::resolve_pressure_limits). A side the model cannot give, or a resolved lo >= hi, is the
 // caller's argument: INVALID_ARGUMENT naming `prefix`pressure_min / pressure_max.
 void resolve_limits(const hysteron_params& model, hysteron::FeedforwardParams& ff, const char* prefix) {
+  // a model whose input is in kPa, bar, ... under the loop's pressures in MPa (its inverse saturates):
+  // the model's to change, not an argument (MODEL)
+  if (const std::string why = hysteron::io::input_unit_mismatch(model.input_unit); !why.empty())
+    fail(HYSTERON_ERROR_MODEL, "%s: %s", model.source.c_str(), why.c_str());
   // a model_scale that contradicts the model file's output unit (a model in m under the default
   // 1000 asks the inverse for outputs 1000x too large and saturates)
   if (const std::string why = hysteron::io::model_scale_mismatch(ff.model_scale, model.output_unit); !why.empty())

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <type_traits>
+#include <utility>
 
 #include "hysteron/error.hpp"
 #include "kernels.hpp"
@@ -59,7 +61,13 @@ void add_operators(Structure<double>& s, const std::vector<double>& r, const std
   }
 }
 
-void check_units(const UnitsMap& u, std::string_view model) {
+// The units map of `model` whose raw input_limits are `lim`: finite; the scale and gain that
+// the map divides by normal with normal reciprocals; the offset and origin within DBL_MAX / 32
+// (the outputs are kept within DBL_MAX / 16: an offset beyond leaves the model no input it
+// accepts); and finite input_limits mapped to a finite range of model coordinates that is not
+// one point (an origin of 1e308 maps [0, 0.6] onto one double). Since 2026-12-01; before, such a
+// map loaded and broke every step.
+void check_units(const UnitsMap& u, const Limits& lim, std::string_view model) {
   require_finite(u.input_origin, model, "input_origin");
   require_finite(u.output_offset, model, "output_offset");
   require_finite(u.input_scale, model, "input_scale");
@@ -67,6 +75,29 @@ void check_units(const UnitsMap& u, std::string_view model) {
   if (u.input_scale == 0.0)
     throw Error(detail::format("{}: input_scale must be != 0 (< 0 mirrors the input), got 0", model));
   if (u.output_gain == 0.0) throw Error(detail::format("{}: output_gain must be != 0 (the output would be constant)", model));
+  constexpr double tiny = std::numeric_limits<double>::min();  // DBL_MIN
+  constexpr double huge = 1.0 / tiny;                          // its reciprocal, 4.49e307
+  constexpr double far = std::numeric_limits<double>::max() / 32;
+  for (const auto& [key, v] : {std::pair<const char*, double>{"input_scale", u.input_scale}, {"output_gain", u.output_gain}})
+    if (!(std::abs(v) >= tiny && std::abs(v) <= huge))
+      throw Error(detail::format("{}: {} = {}: |{}| must be within [{}, {}] (DBL_MIN and 1 / DBL_MIN: the units map "
+                                 "divides by it, and it and its reciprocal must be normal numbers)",
+                                 model, key, v, key, tiny, huge));
+  for (const auto& [key, v] :
+       {std::pair<const char*, double>{"input_origin", u.input_origin}, {"output_offset", u.output_offset}})
+    if (!(std::abs(v) <= far))
+      throw Error(detail::format("{}: {} = {}: |{}| must be at most DBL_MAX / 32 = {} (the model's outputs, "
+                                 "output_offset + output_gain M((x - input_origin) / input_scale), must stay finite)",
+                                 model, key, v, key, far));
+  const double a = u.to_model(lim.lo), b = u.to_model(lim.hi);  // of a finite side (an infinite one stays so)
+  if ((std::isfinite(lim.lo) && !std::isfinite(a)) || (std::isfinite(lim.hi) && !std::isfinite(b)) ||
+      (std::isfinite(lim.lo) && std::isfinite(lim.hi) && !(a != b))) {
+    const Limits m = u.to_model(lim);
+    throw Error(detail::format("{}: input_limits [{}, {}] map to [{}, {}] in model coordinates ((x - input_origin) / "
+                               "input_scale, input_origin = {}, input_scale = {}): not a finite range of more than "
+                               "one point; input_origin and input_scale must be of the limits' magnitude",
+                               model, lim.lo, lim.hi, m.lo, m.hi, u.input_origin, u.input_scale));
+  }
 }
 
 void set_envelope(std::array<double, 4>& c, EnvelopeKind& kind, const Envelope& e) {
@@ -305,7 +336,7 @@ Structure<double> canonical_structure(const ModelParams& params) {
               "the fixed play structure of the Prandtl-Ishlinskii family it needs does not hold"
             : "not a model of the Prandtl-Ishlinskii family (it has no play structure)"));
   Structure<double> s = std::visit(CanonicalVisitor{}, params);
-  check_units(units_map(params), model_name(params));
+  check_units(units_map(params), input_limits(params), model_name(params));
   s.units = units_map(params);
   s.inv_input_scale = 1.0 / s.units.input_scale;
   s.inv_output_gain = 1.0 / s.units.output_gain;
@@ -326,7 +357,7 @@ KernelCopy::~KernelCopy() = default;
 
 Structure<double> detail::structure_of(const ModelParams& params) {
   if (has_pi_structure(params)) return canonical_structure(params);
-  check_units(units_map(params), model_name(params));
+  check_units(units_map(params), input_limits(params), model_name(params));
   Structure<double> s;
   s.units = units_map(params);
   s.inv_input_scale = 1.0 / s.units.input_scale;

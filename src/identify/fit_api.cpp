@@ -14,6 +14,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 
 #include "../core/kernels.hpp"
 #include "detail.hpp"
@@ -585,10 +586,15 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
   try {
     // Fitted on the normalised record (no underflow at 1e-300 scales), then mapped
     // to raw units like the model: y = y[0] + sign sy (off + g core((x_m - o) / s)).
-    ModelParams ref = reference_pi(xn, yn, tr, 10);
-    UnitsMap& ru = units_map(ref);
-    ru = UnitsMap{x[0] + sx * ru.input_origin, sx * ru.input_scale, y[0] + sign * sy * ru.output_offset,
-                  sign * sy * ru.output_gain};
+    // Its input_limits (the normalised training range) are mapped to raw units too: left normalised
+    // beside a raw map, a record at 1e150 put them onto one point of model coordinates, which the
+    // model's validation refuses since 2026-12-01.
+    PiParams pi = reference_pi(xn, yn, tr, 10);
+    const UnitsMap nu = pi.units;
+    pi.units = UnitsMap{x[0] + sx * nu.input_origin, sx * nu.input_scale, y[0] + sign * sy * nu.output_offset,
+                        sign * sy * nu.output_gain};
+    pi.input_limits = Limits{x[0] + sx * pi.input_limits.lo, x[0] + sx * pi.input_limits.hi};
+    ModelParams ref = std::move(pi);
     rep.reference = evaluate(ref, x, y, tr, InitialState::virgin);
     reference_model = ref;
   } catch (const Error& e) {

@@ -1083,6 +1083,9 @@ GeneratedC generate_c(const ModelParams& params, const ExportOptions& options) {
       throw Error(fmt::format("the loop{}: {}",
                               options.loop_source.empty() ? std::string() : " of " + options.loop_source, e.what()));
     }
+    if (const std::string why = input_unit_mismatch(options.input_unit); !why.empty())
+      throw Error(fmt::format("the loop{}: {}", options.loop_source.empty() ? std::string() : " of " + options.loop_source,
+                              why));
     if (const std::string why = model_scale_mismatch(options.loop->feedforward.model_scale, options.output_unit);
         !why.empty())
       throw Error(fmt::format("the loop{}: {}: this loop was designed for a model in another length unit",

@@ -446,8 +446,9 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
     p_d = $P_clamp(p_d + $P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m,
                                      $P_feedback_sign * measured_m, 0.0),
                    $P_pressure_lo, $P_pressure_hi);
-  /* the pressure loop (pressure_loop_command): without a finite measurement, p_d itself */
-  cmd = $P_finite(pressure_mpa) ? p_d + $P_pressure_gain * (p_d - pressure_mpa) : p_d;
+  /* the pressure loop (pressure_loop_command): without a finite measurement or a gain, p_d itself
+     (0 * an overflowing difference would be NaN) */
+  cmd = $P_finite(pressure_mpa) && $P_pressure_gain != 0.0 ? p_d + $P_pressure_gain * (p_d - pressure_mpa) : p_d;
   if (duty) *duty = 0.0;
   return $P_clamp(cmd, $P_pressure_lo, $P_pressure_hi);
 }

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <limits>
 #include <string>
 #include <utility>
@@ -204,6 +205,13 @@ void from_json(const json& j, LoopDesign& d, std::string_view where) {
     z.a2 = get_double(s, "a2", w);
     z.delay = get_size(s, "delay_samples", w);
     z.advance = get_size(s, "advance_samples", w);
+    // a zero-vibration shaper's two impulses (docs/control.md section 2): a1 = 1 / (1 + K) > 0,
+    // a2 = K / (1 + K) >= 0 (0: no second impulse), a1 + a2 = 1 (the preview keeps the reference's
+    // level); anything else scales or flips the feedforward's preview
+    if (!(z.a1 > 0.0) || !(z.a2 >= 0.0) || !(std::abs(z.a1 + z.a2 - 1.0) <= 1e-9))
+      throw Error(fmt::format("{}: a1 = {}, a2 = {}: a zero-vibration shaper's weights must be a1 > 0 and a2 >= 0 "
+                              "with a1 + a2 = 1 (within 1e-9; here {})",
+                              w, z.a1, z.a2, z.a1 + z.a2));
     d.shaper = z;
   }
   if (j.contains("learning")) {

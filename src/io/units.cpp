@@ -92,6 +92,26 @@ bool pressure_unit_other_than_mpa(std::string_view unit) {
   return false;
 }
 
+double mpa_per_pressure_unit(std::string_view unit) {
+  const std::string u = canonical_unit(unit);
+  for (const auto& [symbol, mpa] : {std::pair<std::string_view, double>{"Pa", 1e-6}, {"hPa", 1e-4}, {"kPa", 1e-3},
+                                    {"MPa", 1.0}, {"bar", 0.1}, {"mbar", 1e-4}, {"psi", 0.006894757293168361},
+                                    {"atm", 0.101325}})
+    if (u == symbol) return mpa;
+  return 0.0;
+}
+
+std::string input_unit_mismatch(std::string_view input_unit) {
+  const std::string in = canonical_unit(input_unit);
+  if (!pressure_unit_other_than_mpa(in)) return std::string();
+  const double mpa = mpa_per_pressure_unit(in);
+  return fmt::format("the model's input is in {}, not MPa, but the controller's pressures (its limits, PID gains and "
+                     "output, commands) are in MPa: the model would take them as {}, {:.4g}x off, and its inverse "
+                     "saturate; refit the model with its pressure in MPa (1 {} = {:.10g} MPa: the record's pressure "
+                     "column times {:.10g})",
+                     in, in, 1.0 / mpa, in, mpa, mpa);
+}
+
 std::string model_scale_mismatch(double model_scale, std::string_view output_unit) {
   const double per_metre = length_units_per_metre(output_unit);
   if (per_metre <= 0 || std::abs(model_scale - per_metre) <= 1e-4 * per_metre) return std::string();

@@ -153,6 +153,26 @@ expect_fail "prefix ending in _" 1 '--prefix: "pam_" is not usable' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --prefix pam_
 expect_fail "bad limits" 1 '--limits: LO = 2 must be < HI = 1' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --limits 2,1
+# --limits outside the model's input_limits (audit2: 0,0.6 meant as MPa on a model in kPa fitted on 8..624):
+# refused, naming both ranges and the model's input unit; mostly outside: a warning that asks for the unit
+cat > "$T/kpa.json" <<'JSON'
+{"model": "pi", "q": 0.09, "r": [28.8, 57.6], "p": [0.72, -0.04], "input_origin": 8.18, "input_limits": [8.18, 624.3],
+ "units": {"input": "kPa", "output": "N"}}
+JSON
+expect_fail "--limits outside the model's input_limits" 1 \
+  "--limits [0, 0.6] lie outside the model's input_limits [8.18, 624.3] (the model's input is in kPa)" -- \
+  "$BIN" export --model "$T/kpa.json" --out "$T/out/new.c" --limits=0,0.6
+"$BIN" export --model "$T/kpa.json" --out "$T/kpa_20.c" --limits=-10,20 2> "$T/stderr" || fail "--limits -10,20: refused"
+grep -qF "export: warning: most of --limits [-10, 20] lie outside the model's input_limits [8.18, 624.3] (the model's input is in kPa)" "$T/stderr" \
+  || { fail "--limits -10,20: no warning that most of them lie outside"; cat "$T/stderr"; }
+"$BIN" export --model "$T/kpa.json" --out "$T/kpa_700.c" --limits=0,700 2> "$T/stderr" || fail "--limits 0,700: refused"
+grep -qF "export: warning: --limits [0, 700] reach beyond the model's input_limits [8.18, 624.3]" "$T/stderr" \
+  || { fail "--limits 0,700: not the warning of limits reaching beyond"; cat "$T/stderr"; }
+"$BIN" export --model "$T/kpa.json" --out "$T/kpa_in.c" --limits=10,600 2> "$T/stderr" || fail "--limits 10,600: refused"
+if grep -q warning "$T/stderr"; then fail "--limits 10,600 (within): a warning"; cat "$T/stderr"; fi
+printf 'y\n1\n2\n' > "$T/kpa_y.csv"
+expect_fail "invert --limits outside the model's input_limits" 1 "--limits [0, 0.6] lie outside the model's input_limits" -- \
+  "$BIN" invert --model "$T/kpa.json" --input "$T/kpa_y.csv" --output "$T/kpa_x.csv" --limits=0,0.6
 expect_fail "missing model file" 1 'nope.json: cannot open' -- "$BIN" export --model "$T/nope.json" --out "$T/out/new.c"
 expect_fail "header and out the same" 1 'name the same file' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/keep.c" --header "$T/out/keep.c"
@@ -270,6 +290,13 @@ expect_fail "--loop: several references, none named" 1 'one run per reference (s
   "$BIN" export --model "$DZ" --loop "$RES" --run compensated --out "$T/out/new.c"
 expect_fail "--loop: --limits other than the loop's" 1 "differ from the loop's pressure limits" -- \
   "$BIN" export --model "$DZ" --loop "$RES" --run compensated.sine --limits=0,0.5 --out "$T/out/new.c"
+# a model whose input is in kPa under the loop's pressures in MPa (audit2: its inverse saturated): refused
+$PY -c 'import json, sys; d = json.load(open(sys.argv[1])); d["units"] = {"input": "kPa", "output": "mm"}; json.dump(d, open(sys.argv[2], "w"))' \
+  "$DZ" "$T/dz_kpa.json"
+expect_fail "--loop: a model in kPa" 1 \
+  "dz_kpa.json: cannot export: the loop of \"result.json\", run \"compensated.sine\": the model's input is in kPa, not MPa" -- \
+  "$BIN" export --model "$T/dz_kpa.json" --loop "$RES" --run compensated.sine --out "$T/out/new.c"
+grep -qF "refit the model with its pressure in MPa (1 kPa = 0.001 MPa" "$T/stderr" || fail "--loop: a model in kPa: not what to do"
 expect_fail "--loop: missing file" 1 'nope.json: cannot open result file' -- \
   "$BIN" export --model "$DZ" --loop "$T/nope.json" --run compensated.sine --out "$T/out/new.c"
 expect_fail "--loop over the --out file" 1 'out/keep.c' -- \

@@ -27,7 +27,9 @@ struct ExportOptions {
   // Where the model came from (a file name), written in the comments; empty: not said.
   std::string source_name;
   // The units the model file records (its "units": io::ModelDocument::unit), written in the
-  // comments of the .c and the .h file; empty: not said.
+  // comments of the .c and the .h file; empty: not said. With a loop, an input in a pressure
+  // unit other than MPa (io::input_unit_mismatch) and an output length unit that contradicts the
+  // loop's model_scale (io::model_scale_mismatch) are refused.
   std::string input_unit, output_unit;
   // When non-empty, the declarations go to a separate header (GeneratedC::header)
   // that the source #includes by this name (e.g. "compensator.h"). Empty: one .c

@@ -25,6 +25,15 @@ std::string canonical_unit(std::string_view unit);
 // psi, atm): the controllers' pressures are in MPa.
 double length_units_per_metre(std::string_view unit);
 bool pressure_unit_other_than_mpa(std::string_view unit);
+// A pressure unit's MPa (canonical_unit "Pa" 1e-6, "hPa" 1e-4, "kPa" 1e-3, "MPa" 1, "bar" 0.1,
+// "mbar" 1e-4, "psi" 0.00689..., "atm" 0.101325); 0 for any other text.
+double mpa_per_pressure_unit(std::string_view unit);
+// Why a controller (its pressure limits, PID gains and commands in MPa) cannot run on a model
+// whose input is in `input_unit`: a known pressure unit other than MPa (kPa, bar, Pa, psi, ...;
+// the message names it and says to refit the model with its pressure in MPa); "" for MPa, no
+// unit, or a unit that is no pressure (a hand-written model has none). The controllers'
+// constructors in Python, the C ABI's *_create, controller_from and export --loop refuse with it.
+std::string input_unit_mismatch(std::string_view input_unit);
 // Why a controller's model_scale [model output units per m] contradicts a model whose output is
 // in `output_unit` (a length unit whose count per metre differs from it by more than 1e-4
 // relative: a model in m under the default 1000 asks its inverse for outputs 1000x too large);

@@ -312,9 +312,11 @@ and envelopes and gives the initial weights.)doc"))
       .def_property_readonly("lam", &Rls::lambda, "Forgetting factor.")
       .def(
           "params", [](const Rls& r) { return from_json(io::model_to_json(r.params())); },
-          "The model with the current weights, as a model dict.")
+          "The model with the current weights, as a model dict. RLS does not constrain the weights: "
+          "hysteron.Error naming the parameter where they make no valid model of the kind (e.g. gpi q <= 0); "
+          "theta still gives them.")
       .def("__repr__", [](const Rls& r) {
-        return fmt::format("Rls(model='{}', weights={}, lam={})", model_name(r.params()), r.theta().size(), r.lambda());
+        return fmt::format("Rls(model='{}', weights={}, lam={})", model_name(r.model()), r.theta().size(), r.lambda());
       });
 
   m.def(
@@ -326,7 +328,10 @@ and envelopes and gives the initial weights.)doc"))
                     int_arg(passes, "rls_fit: passes"), initial_state_from(initial_state))));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("lam") = 1.0, py::arg("passes") = 1,
-      py::arg("initial_state") = "virgin", "Run Rls over the record `passes` times; returns the model dict.");
+      py::arg("initial_state") = "virgin",
+      "Run Rls over the record `passes` times; returns the model dict. RLS does not constrain the weights: "
+      "hysteron.Error naming the parameter where the estimate makes no valid model of the kind (e.g. gpi q <= 0); "
+      "fit_weights gives bounded ones.");
 
   m.def(
       "fit_weights",
@@ -339,7 +344,9 @@ and envelopes and gives the initial weights.)doc"))
                                                        as_span(x, "fit_weights: x"), as_span(y, "fit_weights: y"), o)));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
-      "Constrained linear least squares for the weights of a model with fixed thresholds/envelopes.");
+      "Constrained linear least squares for the weights of a model with fixed thresholds/envelopes, bounded so "
+      "that the model stays invertible: every cumulative slope q + p_1 + ... + p_i > 0 (pi, gpi, mpi-deadzone), "
+      "q > 0 and every p_i >= 0 (mpi-asym).");
 }
 
 }  // namespace hysteron::python

@@ -1,0 +1,55 @@
+"""Fixes from the third Python audit (session 24): each test fails without its fix."""
+import json
+
+import numpy as np
+import pytest
+
+import hysteron
+
+GPI = {"model": "gpi", "n": 10, "c": [1.0, 2.0, -0.6, 0.6], "q": 0.8, "rho": 0.4, "tau": 5.0, "alpha": 0.03}
+
+
+def decaying_sine(n=800):
+    t = np.linspace(0, 4 * np.pi, n)
+    return 0.3 + 0.3 * np.sin(t) * np.exp(-t / 20)
+
+
+def test_rls_estimate_that_makes_no_valid_model_raises_naming_the_parameter():
+    # The record's part along the envelope is negative: the RLS estimate of q is -0.8, which
+    # a gpi refuses (q > 0, Eq. 6). rls_fit returned it as a model dict that Model() refused.
+    x = decaying_sine()
+    c = GPI["c"]
+    y = hysteron.Model(GPI).simulate(x) - 1.6 * (c[0] * np.tanh(c[1] * x + c[2]) + c[3])
+    with pytest.raises(hysteron.Error, match=r"rls: .*gpi: q must be > 0"):
+        hysteron.rls_fit(GPI, x, y, 1.0, 2, "virgin")
+    rls = hysteron.Rls(GPI)
+    for a, b in zip(x, y):
+        rls.step(a, b)
+    assert rls.theta[0] < 0  # the weights are still there to read
+    assert "Rls(model='gpi'" in repr(rls)
+    with pytest.raises(hysteron.Error, match=r"q must be > 0"):
+        rls.params()
+    # a valid estimate is returned as before
+    assert hysteron.rls_fit(GPI, x, hysteron.Model(GPI).simulate(x))["q"] == pytest.approx(0.8, rel=1e-6)
+
+
+MPI_ASYM = {"model": "mpi-asym", "ascending": {"envelope": "tanh", "c": [1.0, 2.0, -0.6, 0.6]},
+            "descending": {"envelope": "tanh", "c": [1.1, 2.0, -0.7, 0.55]}, "q": 0.5,
+            "r": [0.03 * i for i in range(1, 9)], "p": [0.3, 0.2, 0.15, 0.1, 0.08, 0.06, 0.04, 0.02],
+            "input_limits": [0.0, 0.6]}
+
+
+def test_fit_weights_keeps_mpi_asym_invertible():
+    # A record whose least-squares weights have p_3 = -0.1 (cumulative slopes all positive):
+    # the bound on the cumulative slopes let it through and Inverse() refused the model.
+    x = decaying_sine()
+    truth = dict(MPI_ASYM, p=[0.3, 0.2, -0.1, 0.1, 0.08, 0.06, 0.04, 0.02])
+    y = hysteron.Model(truth).simulate(x)
+    fw = hysteron.fit_weights(MPI_ASYM, x, y, "virgin", None)
+    assert fw["q"] > 0 and min(fw["p"]) >= 0
+    inv = hysteron.Inverse(fw)
+    yp = hysteron.Model(fw).simulate(x)
+    assert np.max(np.abs(hysteron.Model(fw).simulate(inv.simulate(yp)) - yp)) < 1e-6
+    # weights the bounds do not touch are recovered as before
+    fit = hysteron.fit_weights(MPI_ASYM, x, hysteron.Model(MPI_ASYM).simulate(x), "virgin", None)
+    assert np.allclose(fit["p"], MPI_ASYM["p"], atol=1e-6) and fit["q"] == pytest.approx(0.5, abs=1e-6)

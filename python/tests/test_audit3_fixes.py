@@ -53,3 +53,16 @@ def test_fit_weights_keeps_mpi_asym_invertible():
     # weights the bounds do not touch are recovered as before
     fit = hysteron.fit_weights(MPI_ASYM, x, hysteron.Model(MPI_ASYM).simulate(x), "virgin", None)
     assert np.allclose(fit["p"], MPI_ASYM["p"], atol=1e-6) and fit["q"] == pytest.approx(0.5, abs=1e-6)
+
+
+def test_run_experiment_returns_the_baseline_model_that_replays_the_baseline_run(tmp_path):
+    res = hysteron.run_experiment("gpi-pid", learning_periods=0, adaptive=False, model="gpi",
+                                  out=str(tmp_path / "out"))
+    with open(tmp_path / "out" / "result.json") as f:
+        assert res["baseline_model"] == json.load(f)["baseline_model"]
+    run = [r for r in res["runs"] if r["variant"] == "baseline"][0]
+    loop = hysteron.controller_from(run["controller"], res["baseline_model"])
+    ref = run["reference_mm"] * 1e-3
+    pre = hysteron.feedforward_preview(run["controller"], ref)
+    u = np.array([loop.step(ref[k], pre[k], run["measured_mm"][k] * 1e-3) for k in range(len(ref))])
+    assert np.max(np.abs(u - run["pressure_command_mpa"])) < 1e-9

@@ -242,6 +242,21 @@ usable by hysteron.Model (it may not be invertible).)doc");
         om["rms_mapped"] = map.rms_mapped;
         om["span"] = map.span;
         d["output_map"] = om;
+        // The CLI's evaluate censors by default (--uncensored), this one does not: where the output clips,
+        // say how many samples the CLI would not count as errors (a clipped Festo record: RMS 30.8 here, 3.34 there).
+        std::string clip_warning;
+        if (!censored) {
+          std::size_t would = 0;
+          (void)evaluate_scored(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state),
+                                true, &would);
+          if (would > 0)
+            clip_warning = fmt::format(
+                "evaluate: the output clips: {} samples at its limit where the model predicts beyond it are scored as "
+                "errors here (censored=False, the default); hysteron evaluate and fit score them as censored, no "
+                "error: pass censored=True to score as they do",
+                would);
+        }
+        d["clipping_warning"] = clip_warning;
         d["output_map_warning"] = output_map_warning(map, "evaluate");
         return d;
       },
@@ -254,7 +269,9 @@ error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
 censored: where y clips (a sensor's limit, detected from the record), a sample at the limit
 where the model predicts beyond it is no error, as fit() treats such a record and as
 `hysteron fit` / `hysteron evaluate` score it; the dict then also has censored_samples, their
-number in the range. Default False: scored as recorded.
+number in the range. Default False: scored as recorded (the CLI's --uncensored), and where y
+clips clipping_warning says how many samples the CLI's default would not count as errors
+("" otherwise, and always "" with censored=True).
 
 output_map: {gain, offset, r2, r2_mapped, rms, rms_mapped, span}, y ~ gain * prediction +
 offset by least squares on the range; output_map_warning: non-empty where the prediction's R^2

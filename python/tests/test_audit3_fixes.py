@@ -66,3 +66,17 @@ def test_run_experiment_returns_the_baseline_model_that_replays_the_baseline_run
     pre = hysteron.feedforward_preview(run["controller"], ref)
     u = np.array([loop.step(ref[k], pre[k], run["measured_mm"][k] * 1e-3) for k in range(len(ref))])
     assert np.max(np.abs(u - run["pressure_command_mpa"])) < 1e-9
+
+
+def test_evaluate_says_where_the_output_clips_and_the_cli_would_censor():
+    x = decaying_sine()
+    y = hysteron.Model(GPI).simulate(x)
+    limit = np.percentile(y, 85)
+    yc = np.minimum(y, limit)
+    e = hysteron.evaluate(GPI, x, yc)
+    n = hysteron.evaluate(GPI, x, yc, censored=True)["censored_samples"]
+    assert n > 50
+    assert "%d samples" % n in e["clipping_warning"] and "censored=True" in e["clipping_warning"]
+    assert e["rms"] > 0 and "censored_samples" not in e  # scored as recorded, as documented
+    assert hysteron.evaluate(GPI, x, y)["clipping_warning"] == ""
+    assert hysteron.evaluate(GPI, x, yc, censored=True)["clipping_warning"] == ""

@@ -1,6 +1,9 @@
 // Bindings of identification: fit, evaluate, simulate_record, metrics, RLS.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
+
 #include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/table.hpp"
@@ -82,6 +85,14 @@ void bind_identify(py::module_& m) {
         if (output_axis.second.empty() && units.contains("output")) output_axis.second = units["output"].get<std::string>();
         const std::string report = path_arg(report_arg, "fit: report");
         io::check_output_file({"fit: report", report});  // before the fit, not after it
+        if (!report.empty()) {  // the CLI's --report writes JSON unless the name ends .html / .htm: no HTML in a .json
+          std::string lower = report;
+          std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return std::tolower(ch); });
+          if (!lower.ends_with(".html") && !lower.ends_with(".htm"))
+            throw Error(fmt::format("fit: report: '{}' does not end in .html or .htm: fit(report=) writes the HTML "
+                                    "report (the JSON is the dict fit() returns: json.dump it)",
+                                    report));
+        }
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = int_arg(num_operators, "fit: num_operators");
@@ -167,7 +178,9 @@ LM iterations per start (as the C++ default, 200). stall_iterations, stall_toler
 LM also ends as converged when the cost falls by at most stall_tolerance (relative)
 over the last stall_iterations iterations (0 disables it).
 report: if given, path of a self-contained HTML report (plots, parameters,
-errors), with input_axis/output_axis = (label, unit) for its plots.
+errors), with input_axis/output_axis = (label, unit) for its plots; its name must end in
+.html or .htm (hysteron.Error before the fit otherwise: the CLI's --report writes JSON for
+other names, and the JSON here is the returned dict).
 units: the units of x and y, {"input": "kPa", "output": "N"} (either key may be left out; "" is
 none), or None: written as "units" into the returned model dicts (and so by Model(...).save into
 the model file, as `hysteron fit` writes a record's units), where the CLI's evaluate, simulate and

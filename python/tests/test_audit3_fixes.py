@@ -80,3 +80,21 @@ def test_evaluate_says_where_the_output_clips_and_the_cli_would_censor():
     assert e["rms"] > 0 and "censored_samples" not in e  # scored as recorded, as documented
     assert hysteron.evaluate(GPI, x, y)["clipping_warning"] == ""
     assert hysteron.evaluate(GPI, x, yc, censored=True)["clipping_warning"] == ""
+
+
+def test_fit_report_refuses_a_name_that_is_no_html_before_the_fit(tmp_path):
+    # fit(report="fit.json") wrote HTML into a .json (the CLI's --report writes JSON there)
+    x = decaying_sine()
+    y = hysteron.Model(GPI).simulate(x)
+    path = tmp_path / "fit.json"
+    with pytest.raises(hysteron.Error, match=r"fit: report: .*fit\.json.* \.html or \.htm"):
+        hysteron.fit(x, y, model="pi", num_starts=1, report=str(path))
+    assert not path.exists()
+    html = tmp_path / "fit.HTM"
+    hysteron.fit(x, y, model="pi", num_starts=1, report=str(html))
+    assert html.read_text().lstrip().lower().startswith("<!doctype html")
+
+
+def test_invalid_input_has_no_metrics():
+    r = hysteron.fit([1.0, np.nan], [1.0, 2.0])
+    assert r["status"] == "invalid_input" and r["train"] is None and r["reference"] is None

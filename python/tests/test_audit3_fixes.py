@@ -95,6 +95,14 @@ def test_fit_report_refuses_a_name_that_is_no_html_before_the_fit(tmp_path):
     assert html.read_text().lstrip().lower().startswith("<!doctype html")
 
 
+def test_unknown_pwm_and_guard_keys_raise_hysteron_error_with_the_closest_name():
+    model = dict(GPI, input_limits=[0.0, 0.6])
+    with pytest.raises(hysteron.Error, match=r"CascadePwmController: pwm: unknown key 'gian', did you mean 'gain'\?"):
+        hysteron.CascadePwmController(model, pwm={"gian": 1.0})
+    with pytest.raises(hysteron.Error, match=r"Pid: guard: unknown key 'perod', did you mean 'period'\?"):
+        hysteron.Pid(kp=1.0, guard={"perod": 1.0})
+
+
 def test_invalid_input_has_no_metrics():
     r = hysteron.fit([1.0, np.nan], [1.0, 2.0])
     assert r["status"] == "invalid_input" and r["train"] is None and r["reference"] is None

@@ -106,3 +106,23 @@ def test_unknown_pwm_and_guard_keys_raise_hysteron_error_with_the_closest_name()
 def test_invalid_input_has_no_metrics():
     r = hysteron.fit([1.0, np.nan], [1.0, 2.0])
     assert r["status"] == "invalid_input" and r["train"] is None and r["reference"] is None
+
+
+@pytest.mark.parametrize("kind", ["preisach", "kp"])
+def test_fit_of_a_huge_input_returns_a_status_not_an_exception(kind):
+    # preisach and kp fitted on an input of 1e200 refused it in their own simulation: fit raised
+    x = decaying_sine()
+    y = hysteron.Model(GPI).simulate(x)
+    r = hysteron.fit(x * 1e200, y, model=kind, num_threads=1)
+    assert r["status"] == "invalid_input" and not r["ok"]
+    assert kind in r["message"] and "input bound" in r["message"] and "rescale" in r["message"]
+    assert r["train"] is None and r["reference"] is None  # nothing fitted: no metrics, not zeros
+
+
+def test_auto_goes_on_when_one_candidate_cannot_run_on_the_record():
+    x = decaying_sine()
+    y = hysteron.Model(GPI).simulate(x)
+    r = hysteron.fit(x * 1e200, y, model="auto", num_threads=1)
+    by_kind = {c["kind"]: c for c in r["candidates"]}
+    assert by_kind["preisach"]["status"] == "invalid_input" and "input bound" in by_kind["preisach"]["message"]
+    assert r["model_kind"] not in ("preisach", "kp") and r["status"] in ("converged", "poor_fit", "no_convergence")

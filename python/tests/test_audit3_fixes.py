@@ -126,3 +126,11 @@ def test_auto_goes_on_when_one_candidate_cannot_run_on_the_record():
     by_kind = {c["kind"]: c for c in r["candidates"]}
     assert by_kind["preisach"]["status"] == "invalid_input" and "input bound" in by_kind["preisach"]["message"]
     assert r["model_kind"] not in ("preisach", "kp") and r["status"] in ("converged", "poor_fit", "no_convergence")
+
+
+def test_signals_refuse_a_sample_count_they_cannot_hold_with_a_clear_error():
+    with pytest.raises(hysteron.Error, match=r"gpi_identification_pressure: 30 s at dt = 1e-09 s is 3e\+10 samples"):
+        hysteron.gpi_identification_pressure(1e-9)
+    with pytest.raises(hysteron.Error, match=r"gpi_sinusoid_reference: .*larger dt or a shorter duration"):
+        hysteron.gpi_sinusoid_reference(1e-3, 1e12)
+    assert len(hysteron.gpi_identification_pressure(1e-3)) == 30000

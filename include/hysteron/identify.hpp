@@ -440,7 +440,8 @@ struct WeightFitOptions {
   InitialState initial_state = InitialState::virgin;
   IndexRange train{};
   // q and every partial sum q + p_1 + ... + p_i are kept >= margin * scale,
-  // where scale = span(y) / span(u) (keeps the model invertible). For
+  // where scale = span(y) / span(u) (keeps the model invertible). mpi-asym:
+  // q >= margin * scale and every p_i >= 0 (what its inverse needs). For
   // mpi-deadzone also the cumulative dead-zone slopes on each side.
   double margin = 1e-6;
   // Also fit a free output offset (returned in the model's units map, output_offset);
@@ -450,7 +451,8 @@ struct WeightFitOptions {
 
 // Weights of a model whose thresholds and envelopes are fixed, by bounded
 // least squares (active-set NNLS on the cumulative slopes s_i = q + p_1 + ... + p_i,
-// which turns the invertibility constraints into simple bounds).
+// which turns the invertibility constraints into simple bounds; mpi-asym, whose
+// inverse needs every p_i >= 0: on q and the weights themselves).
 //   pi, mpi-asym, gpi with free weights (r non-empty): q and p from the output
 //     error directly (the output is linear in them).
 //   gpi in Eq. 7-8 form: converted to free weights on r_i = alpha i first.
@@ -487,8 +489,11 @@ class Rls {
   const Eigen::VectorXd& theta() const noexcept { return theta_; }
   const Eigen::MatrixXd& covariance() const noexcept { return P_; }
   double lambda() const noexcept { return lambda_; }
-  // The model with the current weights (allocates).
+  // The model with the current weights (allocates). RLS does not constrain the weights:
+  // throws hysteron::Error (naming the parameter) where they make no valid model of the kind
+  // (e.g. gpi q <= 0); theta() still gives them.
   ModelParams params() const;
+  const ModelParams& model() const noexcept { return model_; }  // the template given
 
  private:
   double step_model(double x, double y) noexcept;  // in model coordinates
@@ -503,7 +508,8 @@ class Rls {
 };
 
 // Batch helper: runs Rls over the record `passes` times (1..10000; the operator
-// state restarts at each pass) and returns the model with the final weights.
+// state restarts at each pass) and returns the model with the final weights
+// (Rls::params(): throws hysteron::Error where they make no valid model).
 ModelParams rls_fit(const ModelParams& model, std::span<const double> x, std::span<const double> y,
                     double lambda = 1.0, int passes = 1, InitialState initial = InitialState::virgin);
 

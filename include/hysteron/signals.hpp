@@ -24,7 +24,8 @@ struct WaveSegment {
 };
 
 // Concatenation of segments (each starting at its minimum). Throws
-// hysteron::Error on dt <= 0, period <= 0, periods < 1 or non-finite values.
+// hysteron::Error on dt <= 0, period <= 0, periods < 1 or non-finite values, and (as
+// every signal here) where duration / dt exceeds 1e8 samples.
 std::vector<double> wave_sequence(const std::vector<WaveSegment>& segments, double dt);
 // Value of the same sequence at time t (0 after the end).
 double wave_sequence_at(const std::vector<WaveSegment>& segments, double t) noexcept;

@@ -149,6 +149,10 @@ py::dict metrics_dict(const FitMetrics& m) { return from_json(io::to_json(m)); }
 
 py::dict fit_dict(const FitReport& r) {
   py::dict d = from_json(io::to_json(r));
+  if (r.status == FitStatus::invalid_input) {  // nothing was fitted or scored: no metrics, not zeros (a perfect fit)
+    d["train"] = py::none();
+    d["reference"] = py::none();
+  }
   d["ok"] = r.ok();
   d["report"] = r.full_report();
   return d;

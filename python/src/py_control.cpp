@@ -60,6 +60,7 @@ PidGuard guard_from(const py::object& o) {
   PidGuard g;
   if (o.is_none()) return g;
   if (!py::isinstance<py::dict>(o)) throw Error("Pid: guard must be a dict or None");
+  check_dict_keys(o.cast<py::dict>(), {"period", "amplitude", "count", "memory", "factor", "min_scale"}, "Pid: guard");
   for (const auto& [key, value] : o.cast<py::dict>()) {
     const std::string k = py::str(key);
     const double v = cast_arg<double>(value, fmt::format("Pid: guard[\"{}\"]", k), "a number");
@@ -352,6 +353,8 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
              if (!pwm.is_none()) {
                const auto d = cast_arg<py::dict>(pwm, "CascadePwmController: pwm",
                                                  "a dict of gain, deadband, min_duty, max_duty, resolution, or None");
+               check_dict_keys(d, {"gain", "deadband", "min_duty", "max_duty", "resolution"},
+                               "CascadePwmController: pwm");
                for (const auto& [k, v] : d) {
                  const std::string key = py::str(k);
                  const double x = cast_arg<double>(v, fmt::format("CascadePwmController: pwm[\"{}\"]", key), "a number");

@@ -237,6 +237,8 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
                                           fmt::format("hysteron.run_experiment('{}', seed={})", name, seed));
         py::dict d;
         d["summary"] = from_json(io::to_json(r));
+        // the straight line the baseline loop inverts (result.json's "baseline_model"; None where none)
+        d["baseline_model"] = d["summary"]["baseline_model"];
         d["table"] = r.table();
         py::dict id = id_run_dict(r.identification);
         id["train_end"] = r.id_train_end;

@@ -1,6 +1,9 @@
 // Bindings of identification: fit, evaluate, simulate_record, metrics, RLS.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
+
 #include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/table.hpp"
@@ -82,6 +85,14 @@ void bind_identify(py::module_& m) {
         if (output_axis.second.empty() && units.contains("output")) output_axis.second = units["output"].get<std::string>();
         const std::string report = path_arg(report_arg, "fit: report");
         io::check_output_file({"fit: report", report});  // before the fit, not after it
+        if (!report.empty()) {  // the CLI's --report writes JSON unless the name ends .html / .htm: no HTML in a .json
+          std::string lower = report;
+          std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return std::tolower(ch); });
+          if (!lower.ends_with(".html") && !lower.ends_with(".htm"))
+            throw Error(fmt::format("fit: report: '{}' does not end in .html or .htm: fit(report=) writes the HTML "
+                                    "report (the JSON is the dict fit() returns: json.dump it)",
+                                    report));
+        }
         FitOptions o;
         o.model = fit_model_from_name(model);
         o.num_operators = int_arg(num_operators, "fit: num_operators");
@@ -167,7 +178,9 @@ LM iterations per start (as the C++ default, 200). stall_iterations, stall_toler
 LM also ends as converged when the cost falls by at most stall_tolerance (relative)
 over the last stall_iterations iterations (0 disables it).
 report: if given, path of a self-contained HTML report (plots, parameters,
-errors), with input_axis/output_axis = (label, unit) for its plots.
+errors), with input_axis/output_axis = (label, unit) for its plots; its name must end in
+.html or .htm (hysteron.Error before the fit otherwise: the CLI's --report writes JSON for
+other names, and the JSON here is the returned dict).
 units: the units of x and y, {"input": "kPa", "output": "N"} (either key may be left out; "" is
 none), or None: written as "units" into the returned model dicts (and so by Model(...).save into
 the model file, as `hysteron fit` writes a record's units), where the CLI's evaluate, simulate and
@@ -242,6 +255,21 @@ usable by hysteron.Model (it may not be invertible).)doc");
         om["rms_mapped"] = map.rms_mapped;
         om["span"] = map.span;
         d["output_map"] = om;
+        // The CLI's evaluate censors by default (--uncensored), this one does not: where the output clips,
+        // say how many samples the CLI would not count as errors (a clipped Festo record: RMS 30.8 here, 3.34 there).
+        std::string clip_warning;
+        if (!censored) {
+          std::size_t would = 0;
+          (void)evaluate_scored(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state),
+                                true, &would);
+          if (would > 0)
+            clip_warning = fmt::format(
+                "evaluate: the output clips: {} samples at its limit where the model predicts beyond it are scored as "
+                "errors here (censored=False, the default); hysteron evaluate and fit score them as censored, no "
+                "error: pass censored=True to score as they do",
+                would);
+        }
+        d["clipping_warning"] = clip_warning;
         d["output_map_warning"] = output_map_warning(map, "evaluate");
         return d;
       },
@@ -254,7 +282,9 @@ error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
 censored: where y clips (a sensor's limit, detected from the record), a sample at the limit
 where the model predicts beyond it is no error, as fit() treats such a record and as
 `hysteron fit` / `hysteron evaluate` score it; the dict then also has censored_samples, their
-number in the range. Default False: scored as recorded.
+number in the range. Default False: scored as recorded (the CLI's --uncensored), and where y
+clips clipping_warning says how many samples the CLI's default would not count as errors
+("" otherwise, and always "" with censored=True).
 
 output_map: {gain, offset, r2, r2_mapped, rms, rms_mapped, span}, y ~ gain * prediction +
 offset by least squares on the range; output_map_warning: non-empty where the prediction's R^2
@@ -312,9 +342,11 @@ and envelopes and gives the initial weights.)doc"))
       .def_property_readonly("lam", &Rls::lambda, "Forgetting factor.")
       .def(
           "params", [](const Rls& r) { return from_json(io::model_to_json(r.params())); },
-          "The model with the current weights, as a model dict.")
+          "The model with the current weights, as a model dict. RLS does not constrain the weights: "
+          "hysteron.Error naming the parameter where they make no valid model of the kind (e.g. gpi q <= 0); "
+          "theta still gives them.")
       .def("__repr__", [](const Rls& r) {
-        return fmt::format("Rls(model='{}', weights={}, lam={})", model_name(r.params()), r.theta().size(), r.lambda());
+        return fmt::format("Rls(model='{}', weights={}, lam={})", model_name(r.model()), r.theta().size(), r.lambda());
       });
 
   m.def(
@@ -326,7 +358,10 @@ and envelopes and gives the initial weights.)doc"))
                     int_arg(passes, "rls_fit: passes"), initial_state_from(initial_state))));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("lam") = 1.0, py::arg("passes") = 1,
-      py::arg("initial_state") = "virgin", "Run Rls over the record `passes` times; returns the model dict.");
+      py::arg("initial_state") = "virgin",
+      "Run Rls over the record `passes` times; returns the model dict. RLS does not constrain the weights: "
+      "hysteron.Error naming the parameter where the estimate makes no valid model of the kind (e.g. gpi q <= 0); "
+      "fit_weights gives bounded ones.");
 
   m.def(
       "fit_weights",
@@ -339,7 +374,9 @@ and envelopes and gives the initial weights.)doc"))
                                                        as_span(x, "fit_weights: x"), as_span(y, "fit_weights: y"), o)));
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("initial_state") = "virgin", py::arg("train") = py::none(),
-      "Constrained linear least squares for the weights of a model with fixed thresholds/envelopes.");
+      "Constrained linear least squares for the weights of a model with fixed thresholds/envelopes, bounded so "
+      "that the model stays invertible: every cumulative slope q + p_1 + ... + p_i > 0 (pi, gpi, mpi-deadzone), "
+      "q > 0 and every p_i >= 0 (mpi-asym).");
 }
 
 }  // namespace hysteron::python

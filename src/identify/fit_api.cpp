@@ -739,8 +739,8 @@ void mirror_report(FitReport& rep) {
 // fit_oriented, and for mpi-asym (FitOptions::mpi_asym_mirror) also on the mirrored input:
 // the orientation with the lower training cost is kept (ties: the plain one), so that the fit
 // of a record with its input negated is the mirror image of this one.
-FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
-                  Clock::time_point t0) {
+FitReport fit_orientations(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
+                           Clock::time_point t0) {
   if (o.model != FitModel::mpi_asym || !o.mpi_asym_mirror) return fit_oriented(x, y, o, tr, t0);
   std::vector<double> xm(x.size());
   for (std::size_t k = 0; k < x.size(); ++k) xm[k] = -x[k];
@@ -781,6 +781,21 @@ FitReport fit_one(std::span<const double> x, std::span<const double> y, const Fi
   return std::move(rep);
 }
 
+// fit_orientations, with a model that cannot run on the record said as a status, not thrown:
+// fit() never throws on bad data, and in auto one candidate's throw ended the whole fit (the
+// preisach and kp models fitted on an input of 1e200 refused that input: beyond their input bound).
+FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
+                  Clock::time_point t0) {
+  try {
+    return fit_orientations(x, y, o, tr, t0);
+  } catch (const Error& e) {
+    return invalid(fmt::format("fit: {}: the fitted model cannot run on the record ({}); rescale the input or the "
+                               "output (e.g. to a span near 1)",
+                               fit_model_name(o.model), e.what()),
+                   o.model, t0);
+  }
+}
+
 FitReport fit_auto(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
                    Clock::time_point t0) {
   // Two folds, so that a hold-out that happens to be quiet (a record that ends holding
@@ -809,11 +824,15 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
     oc.num_threads = 1;
     oc.progress = nullptr;
     runs[j] = fit_one(x, y, oc, fit_range[fold], Clock::now());
-    if (has_model(runs[j].status)) {
-      held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
-      if (o.huber_delta > 0)
-        held_huber[j] = huber_rms(runs[j].model, x, y, hold_range[fold], o.initial_state, o.huber_delta);
-    }
+    if (has_model(runs[j].status)) try {
+        held[j] = evaluate(runs[j].model, x, y, hold_range[fold], o.initial_state);
+        if (o.huber_delta > 0)
+          held_huber[j] = huber_rms(runs[j].model, x, y, hold_range[fold], o.initial_state, o.huber_delta);
+      } catch (const Error& e) {  // a model that cannot run on the hold-out: this candidate fails, the others go on
+        runs[j] = invalid(fmt::format("fit: {}: the fitted model cannot run on the hold-out ({})",
+                                      fit_model_name(oc.model), e.what()),
+                          oc.model, t0);
+      }
   });
   const auto yt = y.subspan(tr.begin, m);
   const auto [ylo, yhi] = std::minmax_element(yt.begin(), yt.end());

@@ -408,7 +408,12 @@ void streamed_slope_ls(const Structure<double>& s, std::span<const double> x, st
   const auto b_of = [&](Eigen::Index k0, Eigen::Index rows) {
     return Eigen::Map<const Eigen::VectorXd>(y.data() + r.begin + static_cast<std::size_t>(k0), rows);
   };
-  auto to_slopes = [](Eigen::Ref<Eigen::MatrixXd> P) {  // slope columns in place (ascending: col i + 1 still phi's)
+  // mpi-asym is invertible with q > 0 and every p_i >= 0 (its numerical inverse refuses a
+  // negative weight: the output folds back), not with positive cumulative slopes: its
+  // columns stay the regressors and the bounds are on q and the weights themselves.
+  const bool weights = s.asymmetric;
+  auto to_slopes = [weights](Eigen::Ref<Eigen::MatrixXd> P) {  // slope columns in place (ascending: col i + 1 still phi's)
+    if (weights) return;
     for (Eigen::Index i = 0; i + 1 < P.cols(); ++i) P.col(i) -= P.col(i + 1);
   };
   Eigen::RowVectorXd asum = Eigen::RowVectorXd::Zero(nc), asq = Eigen::RowVectorXd::Zero(nc);
@@ -423,7 +428,8 @@ void streamed_slope_ls(const Structure<double>& s, std::span<const double> x, st
   });
   const double uspan = std::max(umax - umin, 1e-300);
   const double scale = detail::span_of(y.subspan(r.begin, r.end - r.begin)) / uspan;
-  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(nc, options.margin * scale);
+  Eigen::VectorXd lo = Eigen::VectorXd::Constant(nc, options.margin * scale);
+  if (weights) lo.tail(nc - 1).setZero();  // mpi-asym: q >= margin * scale, p_i >= 0
   const bool centre = options.free_offset;
   const Eigen::RowVectorXd amean = centre ? Eigen::RowVectorXd(asum / m) : Eigen::RowVectorXd::Zero(nc);
   const double bmean = centre ? bsum / m : 0.0;
@@ -445,6 +451,11 @@ void streamed_slope_ls(const Structure<double>& s, std::span<const double> x, st
   G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
   const Eigen::VectorXd t = lo + detail::nnls_normal(G, h);
   offset = centre ? bmean - amean.dot(t) : 0.0;
+  if (weights) {
+    q = t(0);
+    p.assign(t.data() + 1, t.data() + nc);
+    return;
+  }
   slopes_to_weights(t, asq.cwiseSqrt().transpose(), q, p);
 }
 
@@ -544,7 +555,18 @@ double Rls::step_model(double x, double y) noexcept {
 ModelParams Rls::params() const {
   std::vector<double> p(static_cast<std::size_t>(theta_.size() - 1));
   for (std::size_t i = 0; i < p.size(); ++i) p[i] = theta_(static_cast<Eigen::Index>(i + 1));
-  return detail::with_weights(model_, s_, theta_(0), p);
+  ModelParams out = detail::with_weights(model_, s_, theta_(0), p);
+  // RLS does not constrain its estimate (the adaptive inverse projects its own): an estimate
+  // the kind refuses (gpi q <= 0 on the Festo record, issue: rls_fit returned q = -0.797 that
+  // Model() then refused) is said here, not handed on.
+  try {
+    validate_model(out);
+  } catch (const Error& e) {
+    throw Error(fmt::format("rls: the estimated weights make no valid {} model ({}); RLS does not constrain "
+                            "them: use fit_weights (bounded) or fit, or a record that excites every operator",
+                            model_name(model_), e.what()));
+  }
+  return out;
 }
 
 ModelParams rls_fit(const ModelParams& model, std::span<const double> x, std::span<const double> y, double lambda,

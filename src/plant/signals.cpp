@@ -23,8 +23,22 @@ void check_dt(double dt, const char* where) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw Error(fmt::format("{}: dt = {} must be > 0", where, dt));
 }
 
+// The number of samples of `duration` s at dt, refused above 1e8 (0.8 GB): a dt of 1e-9 s asked
+// for 3e10 samples and ended in std::bad_alloc (Python: MemoryError) instead of saying why.
+constexpr double kMaxSignalSamples = 1e8;
+std::size_t sample_count(double duration, double dt, const char* where) {
+  const double n = std::round(duration / dt);
+  if (!(n <= kMaxSignalSamples))
+    throw Error(fmt::format("{}: {:g} s at dt = {:g} s is {:.3g} samples, more than {:.0e}: choose a larger dt or a "
+                            "shorter duration",
+                            where, duration, dt, n, kMaxSignalSamples));
+  return static_cast<std::size_t>(n);
+}
+
 std::vector<double> triangles(std::initializer_list<double> amplitudes, double period, int periods,
-                              Waveform w, double dt) {
+                              Waveform w, double dt, const char* where) {
+  check_dt(dt, where);
+  (void)sample_count(period * periods * static_cast<double>(amplitudes.size()), dt, where);
   std::vector<WaveSegment> segs;
   for (double a : amplitudes) segs.push_back({w, a, period, periods, 0.0});
   return wave_sequence(segs, dt);
@@ -45,7 +59,7 @@ std::vector<double> wave_sequence(const std::vector<WaveSegment>& segments, doub
       throw Error(fmt::format("wave_sequence: segment {}: amplitude and offset must be finite", i));
     duration += s.period * s.periods;
   }
-  const auto n = static_cast<std::size_t>(std::llround(duration / dt));
+  const std::size_t n = sample_count(duration, dt, "wave_sequence");
   std::vector<double> out(n);
   for (std::size_t k = 0; k < n; ++k) out[k] = wave_sequence_at(segments, static_cast<double>(k) * dt);
   return out;
@@ -62,11 +76,11 @@ double wave_sequence_at(const std::vector<WaveSegment>& segments, double t) noex
 }
 
 std::vector<double> gpi_identification_pressure(double dt) {
-  return triangles({0.6, 0.5, 0.4, 0.3, 0.2, 0.1}, 5.0, 1, Waveform::triangle, dt);
+  return triangles({0.6, 0.5, 0.4, 0.3, 0.2, 0.1}, 5.0, 1, Waveform::triangle, dt, "gpi_identification_pressure");
 }
 
 std::vector<double> mpi_identification_pressure(double dt) {
-  return triangles({0.5, 0.45, 0.4, 0.35, 0.3}, 5.0, 1, Waveform::triangle, dt);
+  return triangles({0.5, 0.45, 0.4, 0.35, 0.3}, 5.0, 1, Waveform::triangle, dt, "mpi_identification_pressure");
 }
 
 double gpi_sinusoid_length(double t, const SinusoidParams& p) noexcept {
@@ -82,18 +96,18 @@ std::vector<double> gpi_sinusoid_reference(double dt, double duration, double re
   check_dt(dt, "gpi_sinusoid_reference");
   if (!(duration >= 0.0) || !std::isfinite(duration))
     throw Error(fmt::format("gpi_sinusoid_reference: duration = {} must be >= 0", duration));
-  const auto n = static_cast<std::size_t>(std::llround(duration / dt));
+  const std::size_t n = sample_count(duration, dt, "gpi_sinusoid_reference");
   std::vector<double> out(n);
   for (std::size_t k = 0; k < n; ++k) out[k] = gpi_sinusoid_contraction(static_cast<double>(k) * dt, rest_length, p);
   return out;
 }
 
 std::vector<double> mpi_triangle_contraction(double dt, int periods_each) {
-  return triangles({0.040, 0.035, 0.030}, 5.0, periods_each, Waveform::triangle, dt);
+  return triangles({0.040, 0.035, 0.030}, 5.0, periods_each, Waveform::triangle, dt, "mpi_triangle_contraction");
 }
 
 std::vector<double> mpi_sine_contraction(double dt, int periods_each) {
-  return triangles({0.040, 0.035, 0.030}, 5.0, periods_each, Waveform::sine, dt);
+  return triangles({0.040, 0.035, 0.030}, 5.0, periods_each, Waveform::sine, dt, "mpi_sine_contraction");
 }
 
 }  // namespace hysteron

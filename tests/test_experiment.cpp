@@ -776,6 +776,25 @@ TEST(Experiment, ClippedDisplacementSensorIsDetectedAndKeptOutOfTheReach) {
   }
 }
 
+// A displacement sensor with 1 um of noise (below its 2.3 um step), zeroed at the muscle's rest:
+// most rest samples read exactly 0, the record is taken as clipped there, and the bottom kept 3
+// noise widths (0.004 mm) above it: "reference triangle mapped onto the rig's reach: 0.0..40.0 mm
+// instead of the published 0.0..40.0 mm (scale 1.000)", scaled. A change the record does not
+// resolve (3 noise widths of the 11-sample mean, at least the sensor's step) maps nothing; the
+// 3 mm offset above still maps (ClippedDisplacementSensorIsDetectedAndKeptOutOfTheReach).
+TEST(Experiment, AMappingTheRecordDoesNotResolveIsNotMade) {
+  ExperimentOptions o = test::quick_experiment("mpi-openloop");
+  o.rig.sensors.displacement_noise = 1e-6;
+  const ExperimentResult r = run_experiment(o);
+  ASSERT_EQ(r.reference_ranges.size(), 2u);
+  for (const ReferenceRange& rr : r.reference_ranges) {
+    EXPECT_FALSE(rr.scaled) << rr.reference;
+    EXPECT_TRUE(rr.reachable) << rr.reference;
+    EXPECT_EQ(rr.min_mm, rr.paper_min_mm) << rr.reference;
+  }
+  EXPECT_FALSE(test::said(r, "mapped onto")) << fmt::format("{}", fmt::join(r.messages, "\n"));
+}
+
 // ---- the actuator's limit is the rig's (muscle.max_pressure, regulator.max_command) --------
 
 namespace {

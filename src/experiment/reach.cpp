@@ -258,7 +258,8 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
   double bottom = res.reach_min_mm - 1e-3 * (res.reach_max_mm - res.reach_min_mm);
   // A displacement sensor that clips (detect_clipping; docs/control.md section 5): the rig
   // cannot be seen beyond its limit, so the reach keeps 3 noise widths from it.
-  if (const Clipping clip = detect_clipping(id.contraction_mm); clip.any()) {
+  const Clipping clip = detect_clipping(id.contraction_mm);
+  if (clip.any()) {
     const double band = 3.0 * clip.sigma;
     if (clip.low && clip.lo + band > floor_mm) floor_mm = bottom = clip.lo + band;
     if (clip.high) top = std::min(top, clip.hi - band);
@@ -267,13 +268,23 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
   const bool known_top = std::isfinite(top);  // else the identification never reached p_limit
   res.reach_top_mm = known_top ? top : std::numeric_limits<double>::quiet_NaN();
   res.reach_top_pressure_mpa = p_limit;
+  // What the record resolves of the reach's ends, read off the 11-sample mean: 3 noise widths of
+  // that mean (the record's noise / sqrt of its window), and no finer than the sensor's step (the
+  // least change between two readings); a reference that leaves the reach by less is kept (a
+  // 1 um sensor clipped at the muscle's rest moved the bottom 0.004 mm: "mapped ... 0.0..40.0 mm
+  // instead of the published 0.0..40.0 mm (scale 1.000)")
+  double step_mm = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 1; k < id.contraction_mm.size(); ++k)
+    if (const double d = std::abs(id.contraction_mm[k] - id.contraction_mm[k - 1]); d > 0.0) step_mm = std::min(step_mm, d);
+  if (!std::isfinite(step_mm)) step_mm = 0.0;
+  const double resolved_mm = 3.0 * std::max(step_mm, clip.sigma / std::sqrt(static_cast<double>(sm.window)));
   for (Reference& ref : refs) {
     const auto [lo_it, hi_it] = std::minmax_element(ref.ref_m.begin(), ref.ref_m.end());
     ReferenceRange rr;
     rr.reference = ref.name;
     rr.paper_min_mm = rr.min_mm = *lo_it * 1e3;
     rr.paper_max_mm = rr.max_mm = *hi_it * 1e3;
-    const bool above = known_top && rr.paper_max_mm > top, below = rr.paper_min_mm < bottom;
+    const bool above = known_top && rr.paper_max_mm > top + resolved_mm, below = rr.paper_min_mm < bottom - resolved_mm;
     if (above || below) {
       const std::string why = fmt::format(
           "the rig's reach in its identification run is {:.1f} mm at rest to {} on its ascent at {:.2f} MPa "

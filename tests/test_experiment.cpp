@@ -315,6 +315,42 @@ TEST(Experiment, AStrokeEndBelowTheReferencesIsKeptOutOfTheReach) {
   }
 }
 
+// A displacement sensor with 2 mm of noise and no stop (the stroke ends at 125 mm): the stop's
+// band was 3 noise widths of the raw reading but compared with the 11-sample mean, whose noise is
+// sqrt(11) = 3.3x smaller, and near 0.6 MPa, where the slope is small, it spanned about 48 kPa:
+// "the contraction stops growing at 101.2 mm ... the muscle's stroke end or a hard stop", and the
+// sine was mapped to 5..90.3 mm (x0.948; nominal top 96.5 mm). Neither now: no stop is said, and
+// the reach's top is the nominal rig's within 3 noise widths of the mean.
+TEST(Experiment, ANoisyDisplacementSensorIsNoStrokeEnd) {
+  const ExperimentResult nominal = run_experiment(test::quick_experiment("gpi-pid"));
+  ASSERT_TRUE(std::isfinite(nominal.reach_top_mm));
+  const double noise_mm = 2.0, sigma_mean = noise_mm / std::sqrt(11.0);
+  for (std::uint64_t seed : {1u, 2u}) {
+    SCOPED_TRACE(seed);
+    ExperimentOptions o = test::quick_experiment("gpi-pid");
+    o.rig.sensors.displacement_noise = noise_mm * 1e-3;
+    o.seed = seed;
+    const ExperimentResult r = run_experiment(o);
+    EXPECT_FALSE(test::said(r, "stops growing")) << fmt::format("{}", fmt::join(r.messages, "\n"));
+    EXPECT_GT(r.reach_top_mm, nominal.reach_top_mm - 3.0 * sigma_mean);
+    ASSERT_EQ(r.reference_ranges.size(), 1u);
+    EXPECT_GT(r.reference_ranges[0].max_mm, std::min(95.0, nominal.reach_top_mm) - 3.0 * sigma_mean);
+  }
+}
+
+// A pressure sensor with 20 kPa of noise: the reach's top was the least contraction at the first
+// raw pressure sample at or above 0.57 MPa, which a noise peak reaches early (90.8 mm against the
+// nominal 96.5); it is now taken on the pressure's 11-sample mean, as the contraction's.
+TEST(Experiment, PressureNoiseDoesNotShrinkTheReach) {
+  const ExperimentResult nominal = run_experiment(test::quick_experiment("gpi-pid"));
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.rig.sensors.pressure_noise = 20e3;  // [Pa]
+  const ExperimentResult r = run_experiment(o);
+  EXPECT_GT(r.reach_top_mm, nominal.reach_top_mm - 1.0);
+  ASSERT_EQ(r.reference_ranges.size(), 1u);
+  EXPECT_FALSE(r.reference_ranges[0].scaled);
+}
+
 // A light load (20 N, gravity 1 m/s^2) on 400 N s/m falls at about 50 mm/s with the muscle vented:
 // gpi-pid's sine (5..95 mm, 0.2 Hz: up to pi 0.2 90 = 56.5 mm/s) descends faster, and the
 // result says so with the numbers; a return spring's preload lets it fall fast enough (no
@@ -738,6 +774,25 @@ TEST(Experiment, ClippedDisplacementSensorIsDetectedAndKeptOutOfTheReach) {
     };
     EXPECT_LT(true_rms(r, -3.0), 2.5 * true_rms(n, 0.0)) << ref;
   }
+}
+
+// A displacement sensor with 1 um of noise (below its 2.3 um step), zeroed at the muscle's rest:
+// most rest samples read exactly 0, the record is taken as clipped there, and the bottom kept 3
+// noise widths (0.004 mm) above it: "reference triangle mapped onto the rig's reach: 0.0..40.0 mm
+// instead of the published 0.0..40.0 mm (scale 1.000)", scaled. A change the record does not
+// resolve (3 noise widths of the 11-sample mean, at least the sensor's step) maps nothing; the
+// 3 mm offset above still maps (ClippedDisplacementSensorIsDetectedAndKeptOutOfTheReach).
+TEST(Experiment, AMappingTheRecordDoesNotResolveIsNotMade) {
+  ExperimentOptions o = test::quick_experiment("mpi-openloop");
+  o.rig.sensors.displacement_noise = 1e-6;
+  const ExperimentResult r = run_experiment(o);
+  ASSERT_EQ(r.reference_ranges.size(), 2u);
+  for (const ReferenceRange& rr : r.reference_ranges) {
+    EXPECT_FALSE(rr.scaled) << rr.reference;
+    EXPECT_TRUE(rr.reachable) << rr.reference;
+    EXPECT_EQ(rr.min_mm, rr.paper_min_mm) << rr.reference;
+  }
+  EXPECT_FALSE(test::said(r, "mapped onto")) << fmt::format("{}", fmt::join(r.messages, "\n"));
 }
 
 // ---- the actuator's limit is the rig's (muscle.max_pressure, regulator.max_command) --------

@@ -572,6 +572,25 @@ TEST(PamRigParams, JsonRoundTripAndErrors) {
             std::string::npos);
   EXPECT_NO_THROW(rig_params_from_json(
       nlohmann::json::parse(R"({"air": {"supply_pressure": 1.7e6, "atmospheric_pressure": 7e4}})"), "x"));
+  // values the experiments aborted on or that contradict docs/plant.md (2026-12-01): a minimum
+  // pulse of the PWM period or more (every pulse dropped), a regulator range of 1e12 Pa, air at
+  // 1 K, a divergence check disabled by its tolerance; each names its key and range
+  EXPECT_NE(msg(R"({"valves": {"min_pulse": 0.006}})").find("rig.json.valves.min_pulse = 0.006: must be < the PWM "
+                                                           "period 0.005 s"),
+            std::string::npos) << msg(R"({"valves": {"min_pulse": 0.006}})");
+  EXPECT_NE(msg(R"({"regulator": {"max_command": 1e12}})").find("rig.json.regulator.max_command = 1000000000000: "
+                                                               "must be <= 5e6 Pa"),
+            std::string::npos) << msg(R"({"regulator": {"max_command": 1e12}})");
+  EXPECT_NE(msg(R"({"air": {"temperature": 1}})").find("rig.json.air.temperature = 1: must be within 150 .. 600 K"),
+            std::string::npos);
+  EXPECT_NE(msg(R"({"simulation": {"pressure_tolerance": 1e9}})").find("simulation.pressure_tolerance = 1000000000: "
+                                                                      "must be <= 1"),
+            std::string::npos);
+  EXPECT_NE(msg(R"({"simulation": {"position_tolerance": 1e9}})").find("simulation.position_tolerance"),
+            std::string::npos);
+  EXPECT_NO_THROW(rig_params_from_json(nlohmann::json::parse(R"({"valves": {"min_pulse": 0.004}, "regulator": )"
+                                                             R"({"max_command": 1.2e6}, "air": {"temperature": 330}})"),
+                                       "x"));
   EXPECT_NE(msg(R"([1, 2])").find("expected a JSON object"), std::string::npos);
   // A muscle whose stroke (0.25 x 0.7 m) exceeds the displacement sensor's range (0.15 m): the
   // message names the key to change and why; a longer sensor makes the same rig valid.

@@ -595,6 +595,37 @@ ExperimentResult small_experiment(std::initializer_list<const char*> variants = 
 }
 }  // namespace
 
+// `hysteron report DIR` re-rendering an experiment directory: the fitted model's parameter table
+// with its standard errors (before, read_experiment_dir read the model alone, and the re-rendered
+// page had no table: result.json did not hold the parameters' errors).
+TEST(Report, ExperimentDirectoryKeepsTheParametersStandardErrors) {
+  Tmp tmp;
+  ExperimentResult r = small_experiment();
+  r.fit.parameters = {{"r1", 0.125, 0.0031, false, false}, {"w1", 2.5, 0.0, true, false},
+                      {"w2", 0.0, 0.0, false, true}, {"c0", -1.75, std::numeric_limits<double>::quiet_NaN()}};
+  r.fit.covariance_note = "the Jacobian is rank deficient (test)";
+  const std::string dir = tmp / "exp";
+  r.write(dir);
+  const ExperimentResult back = read_experiment_dir(dir);
+  ASSERT_EQ(back.fit.parameters.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(back.fit.parameters[i].name, r.fit.parameters[i].name);
+    EXPECT_EQ(back.fit.parameters[i].value, r.fit.parameters[i].value);
+    EXPECT_EQ(back.fit.parameters[i].held, r.fit.parameters[i].held);
+    EXPECT_EQ(back.fit.parameters[i].at_bound, r.fit.parameters[i].at_bound);
+  }
+  EXPECT_EQ(back.fit.parameters[0].std_error, 0.0031);
+  EXPECT_TRUE(std::isnan(back.fit.parameters[3].std_error));
+  EXPECT_EQ(back.fit.covariance_note, r.fit.covariance_note);
+  write_report_from(dir, tmp / "exp.html", "hysteron report exp --out exp.html");
+  const std::string html = slurp(tmp / "exp.html");
+  EXPECT_NE(html.find("std. error"), std::string::npos);
+  EXPECT_NE(html.find(">r1</td>"), std::string::npos);
+  EXPECT_NE(html.find("the Jacobian is rank deficient (test)"), std::string::npos);
+  write_experiment_report(r, tmp / "direct.html", "experiment");
+  EXPECT_EQ(count(slurp(tmp / "direct.html"), "std. error"), count(html, "std. error"));
+}
+
 TEST(Report, ExperimentDirectoryRoundTripAndHtml) {
   Tmp tmp;
   ExperimentResult r = small_experiment();

@@ -461,6 +461,87 @@ TEST(SweepRun, ListsTheLearningRunsNotBelowTheirCompensatedLoop) {
   EXPECT_TRUE(below.to_json().at("learning_not_below_compensated").empty());
 }
 
+// fake_learning with a baseline of 0.25 mm: the learning run is not below it from 30 kg on (0.267 mm
+// at 40 kg), the compensated one never (0.2 mm). Before, a sweep's run records had no status and
+// its target misses checked the compensated run alone: a learning or adaptive run at or above the
+// baseline, where `hysteron experiment` exits 3, was listed nowhere.
+ExperimentResult fake_learning_with_baseline(const ExperimentOptions& o) {
+  ExperimentResult r = fake_learning(o);
+  TrackingRun b;
+  b.reference = "sine";
+  b.variant = "baseline";
+  b.errors.rms_error_mm = 0.25;
+  b.errors.max_error_mm = 0.75;
+  r.runs.push_back(std::move(b));
+  return r;
+}
+
+TEST(SweepRun, CarriesTheExperimentsNotBelowBaselineIntoEveryRecord) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.variants = parse_vary("load.mass=10,40");
+  o.runner = fake_learning_with_baseline;
+  o.jobs = 1;
+  const SweepResult r = run_sweep(o);
+  ASSERT_EQ(r.variants.size(), 3u);
+  const SweepRunErrors* heavy = r.find(0, 2, "sine", "learning");
+  const SweepRunErrors* light = r.find(0, 1, "sine", "learning");
+  ASSERT_NE(heavy, nullptr);
+  ASSERT_NE(light, nullptr);
+  EXPECT_TRUE(heavy->not_below_baseline);
+  EXPECT_FALSE(light->not_below_baseline);
+  EXPECT_FALSE(r.find(0, 2, "sine", "compensated")->not_below_baseline);
+  EXPECT_EQ(r.run(0, 2).not_below_baseline, std::vector<std::string>{"learning (sine)"});
+  const auto listed = r.not_below_baseline();
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_TRUE(contains(listed[0], "gpi-pid load.mass=40 sine learning: RMS 0.267 mm, not below the baseline's "
+                                  "0.250 mm (1.07x)")) << listed[0];
+  // the CSV's last column: 1 | 0 for hysteron's loops, empty for the baseline
+  const std::string csv = r.csv();
+  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",control_period_s,not_below_baseline")) << csv;
+  std::size_t ones = 0, zeros = 0, empty = 0;
+  for (std::size_t s = csv.find('\n') + 1, e; s < csv.size(); s = e + 1) {
+    e = csv.find('\n', s);
+    const auto f = csv_fields(csv.substr(s, e - s));
+    ASSERT_EQ(f.size(), 22u);
+    const std::string& last = f.back();
+    if (last == "1") {
+      ++ones;
+      EXPECT_EQ(f[2], "load.mass=40");
+      EXPECT_EQ(f[4], "learning");
+    } else if (last == "0") {
+      ++zeros;
+    } else {
+      ++empty;
+      EXPECT_EQ(f[4], "baseline");
+    }
+  }
+  EXPECT_EQ(ones, 1u);
+  EXPECT_EQ(zeros, 5u);
+  EXPECT_EQ(empty, 3u);
+  // the JSON: each run's status as the experiment's result.json, each tracking run's flag, the list
+  const auto j = r.to_json();
+  EXPECT_EQ(j.at("runs").at(2).at("status").get<std::string>(), "not_below_baseline");
+  EXPECT_EQ(j.at("runs").at(2).at("not_below_baseline").at(0).get<std::string>(), "learning (sine)");
+  EXPECT_EQ(j.at("runs").at(1).at("status").get<std::string>(), "ok");
+  EXPECT_TRUE(j.at("runs").at(2).at("tracking").at(1).at("not_below_baseline").get<bool>());
+  EXPECT_FALSE(j.at("runs").at(2).at("tracking").at(2).contains("not_below_baseline"));  // the baseline
+  ASSERT_EQ(j.at("not_below_baseline").size(), 1u);
+  EXPECT_EQ(j.at("not_below_baseline").at(0).get<std::string>(), listed[0]);
+  // the text and the page
+  EXPECT_TRUE(contains(r.text(), "Runs of hysteron's loops not below their baseline (1;")) << r.text();
+  EXPECT_TRUE(contains(r.text(), listed[0]));
+  const std::string html = report::sweep_report_html(r, "hysteron sweep gpi-pid --vary load.mass=10,40");
+  EXPECT_TRUE(contains(html, "1 run(s) of hysteron's loops not below their baseline"));
+  EXPECT_TRUE(contains(html, "gpi-pid load.mass=40 sine learning: RMS 0.267 mm, not below the baseline"));
+  // a sweep where every loop is below lists none
+  o.variants = parse_vary("load.mass=10,25");
+  const SweepResult below = run_sweep(o);
+  EXPECT_TRUE(below.not_below_baseline().empty());
+  EXPECT_FALSE(contains(below.text(), "not below their baseline"));
+  EXPECT_EQ(below.to_json().at("runs").at(0).at("status").get<std::string>(), "ok");
+}
+
 // compensated runs whose guard cut the gains above 30 kg (twice, to x0.40), none below
 ExperimentResult fake_guard(const ExperimentOptions& o) {
   ExperimentResult r = fake_learning(o);
@@ -487,7 +568,8 @@ TEST(SweepRun, ListsTheRunsWhoseLimitCycleGuardActed) {
   EXPECT_EQ(j.at("guard_acted").at(0).get<std::string>(), cut[0]);
   EXPECT_EQ(j.at("runs").at(2).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 2u);
   EXPECT_EQ(j.at("runs").at(1).at("tracking").at(0).at("guard_cuts").get<std::size_t>(), 0u);
-  // the CSV's guard columns (before the limit and the control period, the last): the cut run's, and an untouched run's
+  // the CSV's guard columns (before the limit, the control period and not_below_baseline, the last): the cut
+  // run's, and an untouched run's
   const std::string csv = r.csv();
   EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",wall_time_s,guard_cuts,guard_final_scale,command_limit_mpa"))
       << csv;
@@ -496,10 +578,10 @@ TEST(SweepRun, ListsTheRunsWhoseLimitCycleGuardActed) {
     const std::string row = csv.substr(a, csv.find('\n', a) - a);
     ++rows;
     if (contains(row, "load.mass=40,sine,compensated,")) {
-      EXPECT_TRUE(row.ends_with(",2,0.39689999999999998,0.59999999999999998,0.001")) << row;
+      EXPECT_TRUE(row.ends_with(",2,0.39689999999999998,0.59999999999999998,0.001,0")) << row;
       ++cut_rows;
     } else {
-      EXPECT_TRUE(row.ends_with(",0,1,0.59999999999999998,0.001")) << row;
+      EXPECT_TRUE(row.ends_with(",0,1,0.59999999999999998,0.001,0")) << row;
     }
   }
   EXPECT_EQ(cut_rows, 1u);
@@ -894,8 +976,9 @@ void check_CsvHasOneRowPerTrackingRunAndFailure(const SweepResult* serial_, cons
     lines.push_back(csv.substr(s, e - s));
   }
   const auto header = csv_fields(lines.at(0));
-  ASSERT_EQ(header.size(), 21u);
+  ASSERT_EQ(header.size(), 22u);
   EXPECT_EQ(header[0], "experiment");
+  EXPECT_EQ(header[21], "not_below_baseline");
   EXPECT_EQ(header[17], "guard_cuts");
   EXPECT_EQ(header[18], "guard_final_scale");
   EXPECT_EQ(header[19], "command_limit_mpa");
@@ -1001,11 +1084,11 @@ TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
       EXPECT_FALSE(contains(m, "mpi-pwm regulator.max_command")) << m;
     }
   EXPECT_EQ(over, 3u * 10u);  // 3 runs x 10 tracking runs, each up to 0.1 MPa
-  // the CSV's last columns: the limit, the control period
+  // the CSV's last columns: the limit, the control period (then not_below_baseline)
   const std::string csv = r.csv();
-  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa,control_period_s"));
-  EXPECT_TRUE(contains(csv, ",0.050000000000000003,0.00050000000000000001\n"));
-  EXPECT_FALSE(contains(csv, ",0.001\n"));
+  EXPECT_TRUE(contains(csv.substr(0, csv.find('\n')), ",command_limit_mpa,control_period_s,not_below_baseline"));
+  EXPECT_TRUE(contains(csv, ",0.050000000000000003,0.00050000000000000001,"));
+  EXPECT_FALSE(contains(csv, ",0.001,"));
   EXPECT_TRUE(contains(r.text(), ", control period 0.5 ms,")) << r.text();
   EXPECT_TRUE(contains(report::sweep_report_html(r, "cmd"), "at a control period of 0.5 ms"));
   EXPECT_EQ(r.to_json()["runs"][1]["command_limit_mpa"].get<double>(), 0.05);

@@ -151,6 +151,10 @@ struct SweepRunErrors {
   // docs/control.md, section 2): 0 and 1 where it never acted or the loop has none.
   std::size_t guard_cuts = 0;
   double guard_final_scale = 1.0;
+  // One of hysteron's loops (compensated, learning, adaptive) whose RMS error is not below the
+  // baseline's on the same rig and reference: listed by the experiment's
+  // ExperimentResult::not_below_baseline() (where `hysteron experiment` exits 3).
+  bool not_below_baseline = false;
 };
 
 // One (experiment, variant) run.
@@ -165,6 +169,9 @@ struct SweepRun {
   // and ExperimentResult::model_reason.
   std::string model;
   std::string model_reason;
+  // ExperimentResult::not_below_baseline() of the run ("variant (reference)"; empty if it failed):
+  // the runs whose experiment would exit 3 (SweepRunErrors::not_below_baseline for each).
+  std::vector<std::string> not_below_baseline;
   // The actuator's limit of the run [MPa] (ExperimentResult::pressure_limit_mpa: the rig's
   // muscle.max_pressure, and regulator.max_command for a regulator experiment): no pressure
   // command may leave 0..command_limit_mpa. NaN for an unknown experiment.
@@ -201,7 +208,9 @@ struct SweepResult {
   // reference_scale, status (ok | failed), error, wall_time_s, guard_cuts, guard_final_scale
   // (what the position PID's limit-cycle guard did; 0 and 1 where it has none),
   // command_limit_mpa (SweepRun::command_limit_mpa), control_period_s (every run's controller
-  // period, SweepOptions::control_period). Numbers with %.17g (exact), NaN as "".
+  // period, SweepOptions::control_period), not_below_baseline (1 | 0 for hysteron's loops,
+  // SweepRunErrors::not_below_baseline; empty for the other kinds and a failed run). Numbers
+  // with %.17g (exact), NaN as "".
   std::string csv() const;
   // A human-readable table (RMS per kind), failures and target misses.
   std::string text() const;
@@ -218,6 +227,11 @@ struct SweepResult {
   // themselves there (docs/control.md, section 3; where it is above, the experiment's own note
   // says why). One line each, with both errors.
   std::vector<std::string> learning_not_below_compensated() const;
+  // Every run of hysteron's loops (compensated, learning, adaptive) not below the baseline's RMS
+  // error on the same rig and reference (SweepRunErrors::not_below_baseline: what makes
+  // `hysteron experiment` exit 3 on that rig), one line each with both errors. The compensated
+  // ones are also target misses; the sweep's exit status does not change (docs/plant.md).
+  std::vector<std::string> not_below_baseline() const;
   // The runs whose position PID's limit-cycle guard cut its gains (they rang near the relay's
   // period; docs/control.md, section 2): how often and to which scale. One line each.
   std::vector<std::string> guard_acted() const;

@@ -475,9 +475,11 @@ std::size_t smoothing_half_width(double tc);
 // model's identification range are read from.
 struct SmoothedRun {
   std::vector<double> x_mm, p;
+  std::size_t window = 1;  // the samples each mean is over, 2 h + 1 (a sensor's white noise / sqrt(window) in it)
   SmoothedRun(const IdentificationRun& id, double tc)
       : x_mm(smoothed(id.contraction_mm, smoothing_half_width(tc))),
-        p(smoothed(id.pressure_mpa, smoothing_half_width(tc))) {}
+        p(smoothed(id.pressure_mpa, smoothing_half_width(tc))),
+        window(2 * smoothing_half_width(tc) + 1) {}
 };
 
 // The top pressure the loops can use and why (usable_top, reach.cpp).

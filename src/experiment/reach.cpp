@@ -182,8 +182,8 @@ namespace {
 // stroke end, a hard stop, or a load come to rest on a support. Over the samples of the
 // identification run whose command rises, p_mpa is the least (11-sample mean) pressure at which
 // the (11-sample mean) contraction lies within a band of its largest, x_mm: 3 noise widths of
-// the displacement record (detect_clipping's sigma) or 0.1 % of the reached span, whichever is
-// larger. A stop where that pressure lies below the headroom line, (1 - kPressureHeadroom) of
+// that mean (detect_clipping's sigma of the displacement record / sqrt of the mean's window) or
+// 0.1 % of the reached span, whichever is larger. A stop where that pressure lies below the headroom line, (1 - kPressureHeadroom) of
 // the usable top: the contraction stayed put while the pressure rose by more than the headroom
 // (without a stop the largest contraction is reached at the top pressure, and within the band
 // only just below it). The reach then ends where the ascent reached (1 - kPressureHeadroom) of
@@ -202,7 +202,11 @@ StrokeEnd stroke_end(const IdentificationRun& id, const SmoothedRun& sm, double 
   if (n < 100) return s;
   const auto [lo_it, hi_it] = std::minmax_element(sm.x_mm.begin(), sm.x_mm.begin() + static_cast<std::ptrdiff_t>(n));
   s.x_mm = *hi_it;
-  const double band = std::max(3.0 * detect_clipping(id.contraction_mm).sigma, 1e-3 * (*hi_it - *lo_it));
+  // 3 noise widths of the 11-sample mean the band is compared with: the record's noise (from its
+  // second differences) / sqrt(window); 3 widths of the raw reading were 3.3x too wide, and with 2 mm
+  // of sensor noise the band reached 48 kPa below the top, where the slope is small: a false stop
+  const double sigma_mean = detect_clipping(id.contraction_mm).sigma / std::sqrt(static_cast<double>(sm.window));
+  const double band = std::max(3.0 * sigma_mean, 1e-3 * (*hi_it - *lo_it));
   double p_at = std::numeric_limits<double>::infinity();
   for (std::size_t k = 1; k < n; ++k)
     if (c[k] > c[k - 1] && sm.x_mm[k] >= s.x_mm - band) p_at = std::min(p_at, sm.p[k]);
@@ -215,8 +219,10 @@ StrokeEnd stroke_end(const IdentificationRun& id, const SmoothedRun& sm, double 
 
 // ExperimentOptions::fit_references. The reach measured on the identification run: from the
 // contraction at rest (the least, vented) to the contraction on the ascent when the
-// measured pressure first reached (1 - kPressureHeadroom) of the actuator's top pressure
-// (the least contraction at or above that pressure). The top pressure p_top is usable_top's
+// measured pressure (its 11-sample mean, as the contraction's: a raw reading's noise peak
+// reached the line early, 90.8 mm instead of 96.5 with 20 kPa of sensor noise) first reached
+// (1 - kPressureHeadroom) of the actuator's top pressure (the least contraction at or above
+// that pressure). The top pressure p_top is usable_top's
 // (p_max, the run's limit, or the most the measured pressure reached where the supply, the regulator
 // or the valves cap the actuator, or the pressure sensor's range ends; its note says which). A
 // reference that leaves the reach is mapped affinely onto its intersection with it (only
@@ -245,14 +251,15 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
   for (std::size_t k = 0; k < x.size(); ++k) {
     res.reach_min_mm = std::min(res.reach_min_mm, x[k]);
     res.reach_max_mm = std::max(res.reach_max_mm, x[k]);
-    if (id.pressure_mpa[k] >= p_limit) top = std::min(top, x[k]);
+    if (k < sm.p.size() && sm.p[k] >= p_limit) top = std::min(top, x[k]);  // the mean: a noise peak is no top
   }
   // the rest position, with the sensor's resolution as tolerance: 0.1 % of the reached span
   double floor_mm = res.reach_min_mm;  // where a reference below the reach is mapped to
   double bottom = res.reach_min_mm - 1e-3 * (res.reach_max_mm - res.reach_min_mm);
   // A displacement sensor that clips (detect_clipping; docs/control.md section 5): the rig
   // cannot be seen beyond its limit, so the reach keeps 3 noise widths from it.
-  if (const Clipping clip = detect_clipping(id.contraction_mm); clip.any()) {
+  const Clipping clip = detect_clipping(id.contraction_mm);
+  if (clip.any()) {
     const double band = 3.0 * clip.sigma;
     if (clip.low && clip.lo + band > floor_mm) floor_mm = bottom = clip.lo + band;
     if (clip.high) top = std::min(top, clip.hi - band);
@@ -261,13 +268,23 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
   const bool known_top = std::isfinite(top);  // else the identification never reached p_limit
   res.reach_top_mm = known_top ? top : std::numeric_limits<double>::quiet_NaN();
   res.reach_top_pressure_mpa = p_limit;
+  // What the record resolves of the reach's ends, read off the 11-sample mean: 3 noise widths of
+  // that mean (the record's noise / sqrt of its window), and no finer than the sensor's step (the
+  // least change between two readings); a reference that leaves the reach by less is kept (a
+  // 1 um sensor clipped at the muscle's rest moved the bottom 0.004 mm: "mapped ... 0.0..40.0 mm
+  // instead of the published 0.0..40.0 mm (scale 1.000)")
+  double step_mm = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 1; k < id.contraction_mm.size(); ++k)
+    if (const double d = std::abs(id.contraction_mm[k] - id.contraction_mm[k - 1]); d > 0.0) step_mm = std::min(step_mm, d);
+  if (!std::isfinite(step_mm)) step_mm = 0.0;
+  const double resolved_mm = 3.0 * std::max(step_mm, clip.sigma / std::sqrt(static_cast<double>(sm.window)));
   for (Reference& ref : refs) {
     const auto [lo_it, hi_it] = std::minmax_element(ref.ref_m.begin(), ref.ref_m.end());
     ReferenceRange rr;
     rr.reference = ref.name;
     rr.paper_min_mm = rr.min_mm = *lo_it * 1e3;
     rr.paper_max_mm = rr.max_mm = *hi_it * 1e3;
-    const bool above = known_top && rr.paper_max_mm > top, below = rr.paper_min_mm < bottom;
+    const bool above = known_top && rr.paper_max_mm > top + resolved_mm, below = rr.paper_min_mm < bottom - resolved_mm;
     if (above || below) {
       const std::string why = fmt::format(
           "the rig's reach in its identification run is {:.1f} mm at rest to {} on its ascent at {:.2f} MPa "

@@ -30,6 +30,10 @@ namespace {
 
 // The variant kinds that use the gain trial's choice (ExperimentResult::gain_trials).
 bool uses_gain_trial(std::string_view kind) { return kind == "compensated" || kind == "adaptive"; }
+// hysteron's own loops, which ExperimentResult::not_below_baseline() holds against the baseline
+bool is_hysterons_loop(std::string_view kind) {
+  return kind == "compensated" || kind == "learning" || kind == "adaptive";
+}
 
 using nlohmann::json;
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
@@ -544,6 +548,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         const experiment::Spec* spec = experiment::find_spec(run.experiment);
         run.command_limit_mpa = spec ? experiment::run_pressure_limit(eo, spec->valves) : nan;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
+        run.not_below_baseline = er.not_below_baseline();
         for (const auto& tr : er.runs) {
           SweepRunErrors e;
           e.reference = tr.reference;
@@ -552,6 +557,9 @@ SweepResult run_sweep(const SweepOptions& options) {
           e.saturated = tr.saturated;
           e.guard_cuts = tr.controller.guard_cuts;
           e.guard_final_scale = tr.controller.guard_final_scale;
+          const std::string as_listed = fmt::format("{} ({})", tr.variant, tr.reference);  // as not_below_baseline()
+          e.not_below_baseline = std::find(run.not_below_baseline.begin(), run.not_below_baseline.end(), as_listed) !=
+                                 run.not_below_baseline.end();
           for (const auto& rr : er.reference_ranges)
             if (rr.reference == tr.reference) {
               const double span = rr.paper_max_mm - rr.paper_min_mm;
@@ -577,10 +585,12 @@ SweepResult run_sweep(const SweepOptions& options) {
         run.ok = false;
         run.runs.clear();
         run.model.clear();
+        run.not_below_baseline.clear();
         run.error = e.what();
       } catch (...) {
         run.ok = false;
         run.runs.clear();
+        run.not_below_baseline.clear();
         run.error = "unknown exception";
       }
       run.wall_time_s = std::chrono::duration<double>(clock::now() - t0).count();
@@ -634,7 +644,7 @@ std::string SweepResult::csv() const {
   std::string out =
       "experiment,variant,overrides,reference,kind,max_mm,mae_mm,rms_mm,rms_vs_nominal,rms_vs_baseline,"
       "min_command_mpa,max_command_mpa,saturated,reference_scale,status,error,wall_time_s,guard_cuts,"
-      "guard_final_scale,command_limit_mpa,control_period_s\n";
+      "guard_final_scale,command_limit_mpa,control_period_s,not_below_baseline\n";
   for (std::size_t e = 0; e < experiments.size(); ++e)
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const SweepRun& run = this->run(e, v);
@@ -643,14 +653,14 @@ std::string SweepResult::csv() const {
       const std::string head = fmt::format("{},{},{},", csv_field(experiments[e]), csv_field(variants[v].variant.name),
                                            csv_field(overrides));
       if (!run.ok) {
-        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,,{},{}\n", csv_field(run.error), csv_number(run.wall_time_s),
+        out += head + fmt::format(",,,,,,,,,,,failed,{},{},,,{},{},\n", csv_field(run.error), csv_number(run.wall_time_s),
                                   csv_number(run.command_limit_mpa), csv_number(control_period));
         continue;
       }
       for (const auto& x : run.runs) {
         const SweepRunErrors* nom = find(e, 0, x.reference, x.kind);
         const SweepRunErrors* base = find(e, v, x.reference, "baseline");
-        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{},{},{}\n", csv_field(x.reference),
+        out += head + fmt::format("{},{},{},{},{},{},{},{},{},{},{},ok,,{},{},{},{},{},{}\n", csv_field(x.reference),
                                   csv_field(x.kind), csv_number(x.errors.max_error_mm), csv_number(x.errors.mae_mm),
                                   csv_number(x.errors.rms_error_mm),
                                   csv_number(nom ? ratio(x.errors.rms_error_mm, nom->errors.rms_error_mm) : nan),
@@ -658,7 +668,8 @@ std::string SweepResult::csv() const {
                                   csv_number(x.min_command_mpa), csv_number(x.max_command_mpa), x.saturated,
                                   csv_number(x.reference_scale), csv_number(run.wall_time_s), x.guard_cuts,
                                   csv_number(x.guard_final_scale), csv_number(run.command_limit_mpa),
-                                  csv_number(control_period));
+                                  csv_number(control_period),
+                                  is_hysterons_loop(x.kind) ? (x.not_below_baseline ? "1" : "0") : "");
       }
     }
   return out;
@@ -723,6 +734,19 @@ std::vector<std::string> SweepResult::learning_not_below_compensated() const {
     out.push_back(fmt::format("{} {} {} learning: RMS {:.3f} mm, not below the compensated loop's {:.3f} mm ({:.2f}x)",
                               experiments[e], variants[v].variant.name, x.reference, x.errors.rms_error_mm,
                               c->errors.rms_error_mm, ratio(x.errors.rms_error_mm, c->errors.rms_error_mm)));
+  });
+  return out;
+}
+
+std::vector<std::string> SweepResult::not_below_baseline() const {
+  std::vector<std::string> out;
+  each_tracking_run(*this, [&](std::size_t e, std::size_t v, const SweepRunErrors& x) {
+    if (!x.not_below_baseline) return;
+    const SweepRunErrors* b = find(e, v, x.reference, "baseline");
+    const double base = b ? b->errors.rms_error_mm : nan;
+    out.push_back(fmt::format("{} {} {} {}: RMS {:.3f} mm, not below the baseline's {:.3f} mm ({:.2f}x)",
+                              experiments[e], variants[v].variant.name, x.reference, x.kind, x.errors.rms_error_mm,
+                              base, ratio(x.errors.rms_error_mm, base)));
   });
   return out;
 }
@@ -807,6 +831,12 @@ std::string SweepResult::text() const {
     out += fmt::format("\nLearning runs not below their compensated loop ({}):\n", above.size());
     for (const auto& m : above) out += "  " + m + "\n";
   }
+  if (const auto useless = not_below_baseline(); !useless.empty()) {
+    out += fmt::format("\nRuns of hysteron's loops not below their baseline ({}; `hysteron experiment` exits 3 on "
+                       "such a rig, the sweep does not):\n",
+                       useless.size());
+    for (const auto& m : useless) out += "  " + m + "\n";
+  }
   if (const auto cut = guard_acted(); !cut.empty()) {
     out += fmt::format("\nRuns whose limit-cycle guard cut the PID's gains ({}; they rang near the relay's period, "
                        "docs/control.md section 2):\n",
@@ -850,6 +880,9 @@ json SweepResult::to_json() const {
     o["ok"] = run.ok;
     if (!run.ok) o["error"] = run.error;
     if (run.ok) o["model"] = run.model, o["model_reason"] = run.model_reason;
+    // as the experiment's result.json: "ok", "not_below_baseline" (its runs listed), or "failed"
+    o["status"] = !run.ok ? "failed" : run.not_below_baseline.empty() ? "ok" : "not_below_baseline";
+    o["not_below_baseline"] = run.not_below_baseline;
     o["wall_time_s"] = run.wall_time_s;
     o["command_limit_mpa"] = number(run.command_limit_mpa);
     o["tracking"] = json::array();
@@ -873,12 +906,14 @@ json SweepResult::to_json() const {
       if (uses_gain_trial(x.kind)) t["gain_scale"] = x.gain_scale, t["shaped"] = x.shaped;
       t["guard_cuts"] = x.guard_cuts;
       t["guard_final_scale"] = x.guard_final_scale;
+      if (is_hysterons_loop(x.kind)) t["not_below_baseline"] = x.not_below_baseline;
       o["tracking"].push_back(std::move(t));
     }
     j["runs"].push_back(std::move(o));
   }
   j["target_misses"] = target_misses();
   j["learning_not_below_compensated"] = learning_not_below_compensated();
+  j["not_below_baseline"] = not_below_baseline();
   j["guard_acted"] = guard_acted();
   j["notes"] = notes;
   return j;

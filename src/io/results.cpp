@@ -521,7 +521,11 @@ json to_json(const ExperimentResult& r) {
                          {"train", to_json(r.fit.train)},
                          {"validate", to_json(r.validation)},
                          {"fit_time_s", number(r.fit.time_s)},
-                         {"parameters", model_or_null(r.fit.status, r.fit.model)}};
+                         {"parameters", model_or_null(r.fit.status, r.fit.model)},
+                         {"covariance_note", r.fit.covariance_note}};
+  // the fitted parameters with their standard errors (the report's table; `hysteron report DIR` reads them back)
+  j["identification"]["fitted_parameters"] = json::array();
+  for (const FitParameter& p : r.fit.parameters) j["identification"]["fitted_parameters"].push_back(to_json(p));
   j["best_model"] = {{"model", std::string(fit_model_name(r.best_fit.model_kind))},
                      {"status", std::string(fit_status_name(r.best_fit.status))},
                      {"validate_second_run", to_json(r.best_validation)},
@@ -615,6 +619,12 @@ void from_json(const json& j, ExperimentResult& r, std::string_view where) {
   r.fit.time_s = opt_double(id, "fit_time_s", idw, 0.0);
   r.id_train_end = id.contains("train_end") ? get_size(id, "train_end", idw) : 0;
   if (id.contains("parameters")) read_model(id, "parameters", idw, r.fit.model);
+  if (id.contains("fitted_parameters")) {  // absent in files before 2026-12-01
+    const json& ps = get_array(id, "fitted_parameters", idw);
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      r.fit.parameters.push_back(from_json<FitParameter>(ps[i], fmt::format("{}.fitted_parameters[{}]", idw, i)));
+  }
+  r.fit.covariance_note = opt_string(id, "covariance_note", idw);
   if (j.contains("best_model")) {
     const json& b = j["best_model"];
     const std::string bw = key_where(where, "best_model");

@@ -174,6 +174,32 @@ void validate(const PamRigParams& p, std::string_view where) {
     fail(where, "valves.on_delay", p.valves.on_delay, fmt::format("< the PWM period {} s", period));
   if (p.valves.off_delay >= period)
     fail(where, "valves.off_delay", p.valves.off_delay, fmt::format("< the PWM period {} s", period));
+  // P10 drops a pulse |d| T <= min_pulse, |d| <= 1: from the period on every pulse was dropped, the
+  // valves never opened, and mpi-pwm's relay test stopped the experiment
+  if (p.valves.min_pulse >= period)
+    fail(where, "valves.min_pulse", p.valves.min_pulse,
+         fmt::format("< the PWM period {} s (a pulse no longer than it is dropped: the valves would never open)",
+                     period));
+  // A regulator's command range (P9; proportional regulators span 0-2 .. 0-10 bar): 1e12 Pa was
+  // accepted; the bound is the supply's
+  if (p.regulator.max_command > 5e6)
+    fail(where, "regulator.max_command", p.regulator.max_command,
+         "<= 5e6 Pa (50 bar, the supply's bound; proportional regulators span 0-2 .. 0-10 bar)");
+  // Air as the ideal gas P8 and the chamber's equation treat it: it liquefies near 80 K, and a
+  // muscle's rubber is rated for about -10 .. +60 C (1 K was accepted and simulated)
+  if (p.air.temperature < 150.0 || p.air.temperature > 600.0)
+    fail(where, "air.temperature", p.air.temperature,
+         "within 150 .. 600 K (the air's temperature; 293.15 K is 20 C; air liquefies near 80 K)");
+  // The divergence check (docs/plant.md, Safety): a rig fed from the supply cannot reach twice its
+  // pressure, nor contract by more than the muscle's length; 1e9 disabled the check
+  if (p.simulation.pressure_tolerance > 1.0)
+    fail(where, "simulation.pressure_tolerance", p.simulation.pressure_tolerance,
+         "<= 1 (the pressure above the supply, relative, at which the rig is held diverged; 0.05 nominal)");
+  if (p.simulation.position_tolerance > p.muscle.rest_length)
+    fail(where, "simulation.position_tolerance", p.simulation.position_tolerance,
+         fmt::format("<= muscle.rest_length = {} m (the contraction outside the stroke at which the rig is held "
+                     "diverged; 1e-3 m nominal)",
+                     p.muscle.rest_length));
   if (p.simulation.dt > 0.5 * period)
     fail(where, "simulation.dt", p.simulation.dt, fmt::format("<= half the PWM period {} s", period));
   if (p.muscle.max_contraction * p.muscle.rest_length > p.sensors.displacement_range)

@@ -105,6 +105,13 @@ std::string sweep_report_html(const SweepResult& r, const std::string& command_l
     for (const auto& m : above) h += fmt::format("<li>{}</li>\n", html_escape(m));
     h += "</ul>\n";
   }
+  if (const auto useless = r.not_below_baseline(); !useless.empty()) {
+    h += fmt::format("<p class=\"warn\">{} run(s) of hysteron's loops not below their baseline (<code>hysteron "
+                     "experiment</code> exits 3 on such a rig; the sweep does not):</p>\n<ul>\n",
+                     useless.size());
+    for (const auto& m : useless) h += fmt::format("<li>{}</li>\n", html_escape(m));
+    h += "</ul>\n";
+  }
   if (const auto cut = r.guard_acted(); !cut.empty()) {
     h += fmt::format("<p>{} run(s) whose limit-cycle guard cut the PID's gains (they rang near the relay's period; "
                      "docs/control.md, section 2):</p>\n<ul>\n",

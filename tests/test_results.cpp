@@ -67,6 +67,7 @@ void expect_same(const InverseCheck& a, const InverseCheck& b) {
   expect_same(a.max_jump, b.max_jump, "max_jump");
   expect_same(a.max_input_step, b.max_input_step, "max_input_step");
   EXPECT_EQ(a.increasing, b.increasing);
+  EXPECT_EQ(a.no_inverse, b.no_inverse);
 }
 
 void expect_same(const FitCandidate& a, const FitCandidate& b) {
@@ -150,7 +151,7 @@ FitReport test_report() {
   r.covariance_note = "singular J^T J";
   r.train = metrics(0.031, 1200);
   r.reference = metrics(0.029, 1200);
-  r.inverse = {inf_v, 0.062, 0.004, false};
+  r.inverse = {inf_v, 0.062, 0.004, false, "its least slope over its input limits is 0"};
   r.warnings = {"q + p1 on its lower bound", "tau at bound"};
   FitCandidate c1;
   c1.kind = FitModel::gpi;
@@ -182,9 +183,9 @@ TEST(Results, MetricsParameterInverseRoundTrip) {
   expect_same(round_trip(with_nan), with_nan);
   const FitParameter p{"asc.c0", -1.5e-300, nan_v, false, true};
   expect_same(round_trip(p), p);
-  const InverseCheck finite{12.5, 0.03, 0.004, true};
+  const InverseCheck finite{12.5, 0.03, 0.004, true, {}};
   expect_same(round_trip(finite), finite);
-  const InverseCheck not_invertible{inf_v, 1.0, 0.004, false};
+  const InverseCheck not_invertible{inf_v, 1.0, 0.004, false, "Inverse refuses it"};
   expect_same(round_trip(not_invertible), not_invertible);  // null max_slope reads back as +inf
   // the JSON is plain: NaN and infinity are written as null
   EXPECT_TRUE(io::to_json(p)["std_error"].is_null());

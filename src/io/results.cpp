@@ -101,8 +101,10 @@ void from_json(const json& j, FitParameter& p, std::string_view where) {
 // ---- InverseCheck ----------------------------------------------------------------
 
 json to_json(const InverseCheck& c) {
-  return {{"max_slope", number(c.max_slope)}, {"max_jump", number(c.max_jump)},
-          {"max_input_step", number(c.max_input_step)}, {"increasing", c.increasing}};
+  json j = {{"max_slope", number(c.max_slope)}, {"max_jump", number(c.max_jump)},
+            {"max_input_step", number(c.max_input_step)}, {"increasing", c.increasing}};
+  if (!c.no_inverse.empty()) j["no_inverse"] = c.no_inverse;  // why max_slope is null
+  return j;
 }
 
 void from_json(const json& j, InverseCheck& c, std::string_view where) {
@@ -110,6 +112,7 @@ void from_json(const json& j, InverseCheck& c, std::string_view where) {
   c.max_jump = get_double(j, "max_jump", where);
   c.max_input_step = get_double(j, "max_input_step", where);
   c.increasing = get_bool(j, "increasing", where);
+  c.no_inverse = opt_string(j, "no_inverse", where);
 }
 
 // ---- FitCandidate ----------------------------------------------------------------

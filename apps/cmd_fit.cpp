@@ -229,7 +229,8 @@ int run_fit(const FitCliOptions& c) {
   doc.data = describe_data(sel, rec, o.initial_state, train);
   doc.data.censored = censor;
   const bool fitted = has_model(rep.status);
-  // validation sets the model predicts worse than their mean (R^2 <= 0): the fit exits exit_poor_fit
+  // validation sets the model does not describe (validation_useless: worse than their mean, R^2 <= 0,
+  // and more than twice the training RMS error): the fit exits exit_poor_fit
   std::vector<std::string> useless;
   if (fitted)
     for (const auto& v : sets)
@@ -238,15 +239,15 @@ int run_fit(const FitCliOptions& c) {
         const OutputMap map = output_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor);
         doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
         const std::string what = v.file.empty() ? "validation range" : v.file;
-        if (m->r2 <= 0.0)
-          useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, {:.4g} % of span)",
+        if (validation_useless(*m, rep.train))
+          useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span)",
                                         v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
-                                        m->rms_percent_span));
+                                        m->rms, m->rms_percent_span));
         // a validation record beyond the training range scores the model's extrapolation; one whose output
         // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
         // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
         // evaluate says)
-        std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what, rep.train.r2)};
+        std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what, rep.train.r2, rep.train.rms)};
         if (!v.file.empty()) {
           auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                        v.file, c.sel.time_column);
@@ -264,9 +265,9 @@ int run_fit(const FitCliOptions& c) {
   if (!useless.empty()) {
     std::string sets_named;
     for (const auto& u : useless) sets_named += (sets_named.empty() ? "" : " and ") + u;
-    std::string w = fmt::format("the validation is useless: the model predicts {} worse than its mean (R^2 <= 0; "
-                                "training R^2 {:.4g}){}",
-                                sets_named, rep.train.r2,
+    std::string w = fmt::format("the validation is useless: the model predicts {} worse than its mean (R^2 <= 0) "
+                                "and with more than {:g} times its training RMS error ({:.4g}; training R^2 {:.4g}){}",
+                                sets_named, kValidationRmsFactor, rep.train.rms, rep.train.r2,
                                 rep.status == FitStatus::converged
                                     ? fmt::format(": the fit exits {} (the model is written: its training fit converged)",
                                                   exit_poor_fit)

@@ -2,7 +2,8 @@
 //
 // Exit codes (README, "Command line"): 0 success; 1 error: bad input, bad usage (CLI11's
 // parse errors, which CLI11 itself would report as 105-109, are mapped to 1), unreadable
-// or unwritable files; fit: 2 no_convergence or failed, 3 poor_fit; 4 internal error.
+// or unwritable files; fit: 2 no_convergence or failed, 3 poor_fit or a useless validation
+// (validation_useless); experiment, demo: 3 a loop not below the baseline; 4 internal error.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <glog/logging.h>

@@ -175,8 +175,20 @@ bool output_map_explains(const OutputMap& m, double train_r2 = std::numeric_limi
 // scale or a zero; otherwise it says plainly that the model does not describe the record, with its
 // R^2 and RMS (and the training R^2, where given). (Before 2026-12-01 the halved RMS alone claimed
 // a flipped sign: the time column taken for the output gave R^2 -639, mapped 0.239.)
+// The plain warning needs an error that is large as far as known: more than kValidationRmsFactor
+// times train_rms (the training RMS error, where given: a quiet stretch of a record, a held-out end
+// where the output barely moves, has a small span and so a poor R^2 where the model describes it as
+// well as its training record: Festo test8, --validate 12000:15000, RMS 0.93 N against 3.70 N in
+// training, R^2 -0.08), or, without it (evaluate: a model file has no training error), a map that
+// at least halves the RMS error.
 std::string output_map_warning(const OutputMap& m, std::string_view what,
-                               double train_r2 = std::numeric_limits<double>::quiet_NaN());
+                               double train_r2 = std::numeric_limits<double>::quiet_NaN(),
+                               double train_rms = std::numeric_limits<double>::quiet_NaN());
+// A validation the model does not describe (fit exits 3 on it): worse than the validation output's
+// mean (R^2 <= 0) and an RMS error more than kValidationRmsFactor times the training one. R^2 alone
+// is relative to the validation's own variance: a good model on a quiet stretch scores R^2 < 0.
+inline constexpr double kValidationRmsFactor = 2.0;
+bool validation_useless(const FitMetrics& validation, const FitMetrics& train) noexcept;
 
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0

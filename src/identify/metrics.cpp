@@ -282,7 +282,11 @@ bool output_map_explains(const OutputMap& m, double train_r2) {
   return 1.0 - m.r2_mapped <= std::sqrt(std::max(0.0, 1.0 - train_r2));
 }
 
-std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2) {
+bool validation_useless(const FitMetrics& validation, const FitMetrics& train) noexcept {
+  return validation.r2 <= 0.0 && validation.rms > kValidationRmsFactor * train.rms;
+}
+
+std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2, double train_rms) {
   const bool poor = m.r2 < kMinFitR2;
   const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
   if (!poor && !halved) return {};
@@ -299,7 +303,11 @@ std::string output_map_warning(const OutputMap& m, std::string_view what, double
                        "or a zero (a sensor offset) more than by its hysteresis, or the actuator changed",
                        what, fit);
   }
-  // no sign, scale or zero explains it: say so plainly, with the numbers
+  // no sign, scale or zero explains it: say so plainly, with the numbers, where the error is large
+  // as far as known: more than kValidationRmsFactor times the training RMS error (a quiet stretch
+  // has a poor R^2 on its small span where the model describes it as well as its training record),
+  // or, without a training error (evaluate), where the map at least halves it
+  if (std::isfinite(train_rms) ? !(m.rms > kValidationRmsFactor * train_rms) : !halved) return {};
   const std::string train = std::isfinite(train_r2) ? fmt::format(" against R^2 {:.4g} in training", train_r2)
                                                     : std::string();
   const double pct = m.span > 0.0 ? 100.0 * m.rms / m.span : std::nan("");

@@ -63,6 +63,31 @@ for v in timeout walk; do
   $PY -c 'import json, sys; d = json.load(open(sys.argv[1])); assert any("validation is useless" in w for w in d["warnings"]), d["warnings"]' \
     "$T/r_$v.json" || fail "$v: the report's warnings"
 done
+# a held-out end where the output barely moves (the input held, the output noise alone): its R^2 is
+# <= 0 on that small span whatever the model (a constant prediction), but its RMS error is the
+# training's: described as well as the training record, exit 0 and no warning (review of 2026-12-01:
+# Festo test8 --train 0:12000 --validate 12000:15000, RMS 0.93 N against 3.70 N in training,
+# R^2 -0.08, exited 3 as useless)
+$PY - "$T/data.csv" "$T/quiet.csv" <<'PYEOF'
+import random, sys
+rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n")[1:] if r]
+ys = [float(r[2]) for r in rows]
+sd = 0.005 * (max(ys) - min(ys))
+rng = random.Random(7)
+with open(sys.argv[2], "w") as f:
+    f.write("t,input,output\n")
+    for i, (t, x, y) in enumerate(rows):
+        f.write(f"{t},{x},{float(y) + rng.gauss(0.0, sd)!r}\n")
+    t0, x, y = float(rows[-1][0]), rows[-1][1], float(rows[-1][2])
+    for i in range(1, 301):
+        f.write(f"{t0 + 0.01 * i!r},{x},{y + rng.gauss(0.0, sd)!r}\n")
+PYEOF
+"$BIN" fit --model gpi --data "$T/quiet.csv" --input input --output output --train 0:2700 --validate 2700:3000 \
+  --threads 1 --out "$T/quiet.json" > "$T/quiet.txt" 2>&1
+rc=$?
+[ $rc -eq 0 ] || fail "a quiet held-out end: exit $rc (expected 0): $(cat "$T/quiet.txt")"
+grep -q "validation is useless\|far worse" "$T/quiet.txt" && fail "a quiet held-out end warned: $(grep warning "$T/quiet.txt")"
+grep -q "^validate: .* r2 -" "$T/quiet.txt" || fail "the quiet end's R^2 is not negative (the case is not tested): $(grep validate "$T/quiet.txt")"
 # a range of the fit's own record that the model does not describe: the same (--validate)
 "$BIN" fit --model gpi --data "$T/walk.csv" --input input --output output --train 0:1800 --validate 1800:2700 \
   --threads 1 --out "$T/w2.json" --force > "$T/w2.txt" 2>&1

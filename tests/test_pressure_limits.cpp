@@ -590,3 +590,36 @@ TEST(PressureLimits, ModelInputInAnotherPressureUnitIsRefusedByTheLoops) {
   e.input_unit = "kPa";  // the model alone, in its own units: as before
   EXPECT_NO_THROW((void)io::generate_c(model, e));
 }
+
+// Inverse limits that share nothing with the model's input_limits (limits in MPa on a model in kPa)
+// are refused by the library's Inverse, so by Python's Inverse and export_c, the generated C and the
+// C ABI's hysteron_inverse_create alike; before 2026-12-01 only the CLI's --limits refused them.
+// Limits that overlap them, or reach beyond them, are taken (the CLI warns on the latter).
+TEST(PressureLimits, InverseLimitsOutsideTheModelsInputLimitsAreRefused) {
+  const ModelParams kpa = test::rig_like_gpi({8.0, 626.0});
+  InverseOptions o;
+  o.input_limits = {0.0, 0.6};
+  try {
+    Inverse inv(kpa, o);
+    ADD_FAILURE() << "limits [0, 0.6] on a model fitted on [8, 626] were taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("lie outside the model's input_limits [8, 626]"), std::string::npos)
+        << e.what();
+  }
+  o.input_limits = {0.0, 10.0};  // overlapping: taken
+  EXPECT_NO_THROW(Inverse(kpa, o));
+  o.input_limits = {0.0, 700.0};  // beyond on both sides: taken
+  EXPECT_NO_THROW(Inverse(kpa, o));
+  io::ExportOptions e;
+  e.inverse_limits = Limits{0.0, 0.6};
+  EXPECT_THROW(io::generate_c(kpa, e), Error);
+  hysteron_params* p = c_model({8.0, 626.0});
+  hysteron_inverse* ci = nullptr;
+  EXPECT_EQ(hysteron_inverse_create(p, 0.0, 0.6, &ci), HYSTERON_ERROR_MODEL);
+  EXPECT_NE(std::string(hysteron_last_error()).find("outside the model's input_limits"), std::string::npos)
+      << hysteron_last_error();
+  EXPECT_EQ(ci, nullptr);
+  EXPECT_EQ(hysteron_inverse_create(p, 0.0, 10.0, &ci), HYSTERON_OK) << hysteron_last_error();
+  hysteron_inverse_free(ci);
+  hysteron_params_free(p);
+}

@@ -157,7 +157,8 @@ typedef struct hysteron_inverse hysteron_inverse;
  * -HUGE_VAL / +HUGE_VAL (C99 <math.h>, or -INFINITY / INFINITY) take the model file's
  * input_limits, and for a saturating envelope with no limit at all the envelope's own
  * range (see docs/models.md). NaN, or lo >= hi, is HYSTERON_ERROR_INVALID_ARGUMENT; a
- * model that cannot be inverted (e.g. mpi-asym without finite limits) is
+ * model that cannot be inverted (e.g. mpi-asym without finite limits), or limits that share
+ * nothing with the model's finite input_limits (e.g. MPa on a model in kPa), is
  * HYSTERON_ERROR_MODEL. */
 HYSTERON_C_API hysteron_status hysteron_inverse_create(const hysteron_params* params, double lo, double hi,
                                                       hysteron_inverse** out);

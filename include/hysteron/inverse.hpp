@@ -34,6 +34,8 @@ struct InverseOptions {
   // Input limits to saturate at. Unset (infinite) fields fall back to the model's
   // input_limits; for a saturating envelope (tanh, atan) with no limit at all, the
   // inverse stops where the envelope reaches 1e-9 of its range from its asymptote.
+  // Limits that share nothing with the model's finite input_limits (its training range)
+  // are refused (hysteron::Error): the inverse could only command inputs never fitted.
   Limits input_limits;
 };
 

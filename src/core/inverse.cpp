@@ -55,6 +55,15 @@ Inverse::Inverse(ModelParams params, InverseOptions options)
   lim_.hi = std::isinf(options.input_limits.hi) ? ml.hi : options.input_limits.hi;
   if (std::isnan(lim_.lo) || std::isnan(lim_.hi) || !(lim_.lo < lim_.hi))
     throw Error(detail::format("{}: inverse input limits must satisfy lo < hi, got [{}, {}]", name, lim_.lo, lim_.hi));
+  // Limits that share no part with the model's input_limits (its training range, as fit sets them):
+  // the inverse could only command inputs the model never saw, e.g. limits in MPa on a model in kPa
+  // (0..0.6 against 8..626); the CLI's --limits said so, Python's Inverse and export_c and the C
+  // ABI's hysteron_inverse_create took them silently (review of 2026-12-01)
+  if (ml.bounded() && !(std::max(lim_.lo, ml.lo) < std::min(lim_.hi, ml.hi)))
+    throw Error(detail::format("{}: inverse input limits [{}, {}] lie outside the model's input_limits [{}, {}] (its "
+                               "training range): the inverse could only command inputs the model was never fitted "
+                               "on; give them in the model's input unit, overlapping its input_limits",
+                               name, lim_.lo, lim_.hi, ml.lo, ml.hi));
   // From here on lim_ is in model coordinates (a mirrored input, input_scale < 0, swaps lo and hi).
   const UnitsMap& um = s_.units;
   const Limits raw = lim_;

@@ -551,7 +551,7 @@ TEST(PressureLimits, ModelInputInAnotherPressureUnitIsRefusedByTheLoops) {
   EXPECT_EQ(hysteron_ff_pid_create(kpa, &lp.ff_pid, &fp), HYSTERON_ERROR_MODEL);
   EXPECT_NE(std::string(hysteron_last_error()).find("is in kPa"), std::string::npos) << hysteron_last_error();
   // the other pressure units, by hysteron_params_from_json ("model JSON" named)
-  for (const char* unit : {"bar", "Pa", "psi", "[KPa]"}) {
+  for (const char* unit : {"bar", "Pa", "psi", "[KPa]", "barg", "psig"}) {  // gauge spellings too
     hysteron_params* m = nullptr;
     ASSERT_EQ(hysteron_params_from_json(with_units(fmt::format(R"({{"input": "{}"}})", unit), "[0, 6]").c_str(), &m),
               HYSTERON_OK)
@@ -562,7 +562,7 @@ TEST(PressureLimits, ModelInputInAnotherPressureUnitIsRefusedByTheLoops) {
     hysteron_params_free(m);
   }
   // MPa, no units, an input that is no pressure: as before
-  for (const std::string& units : {std::string(R"({"input": "MPa", "output": "mm"})"), std::string(),
+  for (const std::string& units : {std::string(R"({"input": "MPa", "output": "mm"})"), std::string(R"({"input": "MPag"})"), std::string(),
                                   std::string(R"({"input": "V"})"), std::string(R"({"input": "pressure"})")}) {
     hysteron_params* m = nullptr;
     ASSERT_EQ(hysteron_params_from_json(with_units(units, "[0, 0.6]").c_str(), &m), HYSTERON_OK);

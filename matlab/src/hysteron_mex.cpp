@@ -53,6 +53,7 @@
 #include "hysteron/identify.hpp"
 #include "hysteron/inverse.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/units.hpp"
 #include "hysteron/io/loop_design.hpp"
 #include "hysteron/io/results.hpp"
 #include "hysteron/loop_design.hpp"
@@ -536,6 +537,19 @@ void cmd_loop(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   } else if (d.kind != LoopDesign::Kind::feedforward_pid) {
     throw MexError(id_bad_argument, "pressure_mpa: this loop has a pressure loop: give the measured pressure [MPa]");
   }
+  // a model in another pressure unit than MPa, or a length unit the loop's model_scale contradicts, is
+  // refused as by the C ABI, Python's controller_from and hysteron export --loop (io/units.hpp)
+  const auto unit = [&](const char* which) {
+    const auto u = spec.extra.find("units");
+    if (u == spec.extra.end() || !u->is_object()) return std::string();
+    const auto v = u->find(which);
+    return v != u->end() && v->is_string() ? v->get<std::string>() : std::string();
+  };
+  if (const std::string why = io::input_unit_mismatch(unit("input")); !why.empty())
+    throw MexError(id_bad_model, fmt::format("model: {}", why));
+  if (const std::string why = io::model_scale_mismatch(d.feedforward.model_scale, unit("output")); !why.empty())
+    throw MexError(id_bad_model,
+                   fmt::format("model: {}: the loop was designed for a model in another length unit", why));
   Controller c = make_controller(d, spec.params);
   const std::vector<double> preview = feedforward_preview(d, ref);
   std::vector<double> command(ref.size()), duty(ref.size(), 0.0);

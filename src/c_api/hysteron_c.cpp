@@ -620,9 +620,12 @@ bool finite_step_args(const char* fn, double reference_m, double preview_m, doub
     return true;
   // The loop still steps, as the library's step and the generated C do: each part ignores the
   // value it cannot use (docs/deploy.md, "A non-finite argument").
-  constexpr const char* what =
-      "not all finite (the loop stepped without them: a non-finite reference or measurement holds the position "
-      "PID's state and output, a non-finite preview the inverse's, a non-finite pressure the pressure loop's)";
+  const char* what =
+      pressure ? "not all finite (the loop stepped without them: a non-finite reference or measurement holds the "
+                 "position PID's state and output, a non-finite preview the inverse's, a non-finite pressure the "
+                 "pressure loop's)"
+               : "not all finite (the loop stepped without them: a non-finite reference or measurement holds the "
+                 "position PID's state and output, a non-finite preview the inverse's)";
   char text[400];
   if (pressure)
     std::snprintf(text, sizeof text, "arguments reference_m = %g, preview_m = %g, measured_m = %g, pressure_mpa = %g: %s",

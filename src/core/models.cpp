@@ -95,7 +95,8 @@ void check_units(const UnitsMap& u, const Limits& lim, std::string_view model) {
     const Limits m = u.to_model(lim);
     throw Error(detail::format("{}: input_limits [{}, {}] map to [{}, {}] in model coordinates ((x - input_origin) / "
                                "input_scale, input_origin = {}, input_scale = {}): not a finite range of more than "
-                               "one point; input_origin and input_scale must be of the limits' magnitude",
+                               "one point; input_origin and input_scale must be of the limits' magnitude (an "
+                               "unbounded side is null in a model file, not +-1e308)",
                                model, lim.lo, lim.hi, m.lo, m.hi, u.input_origin, u.input_scale));
   }
 }

@@ -71,7 +71,9 @@ std::string canonical_unit(std::string_view unit) {
       {"cm", "cm"},     {"mm", "mm"},     {"um", "um"},     {"\xC2\xB5m", "um"}, {"\xCE\xBCm", "um"},
       {"nm", "nm"},     {"in", "in"},     {"N", "N"},       {"kN", "kN"},     {"mN", "mN"},    {"lbf", "lbf"},
       {"V", "V"},       {"mV", "mV"},     {"kV", "kV"},     {"A", "A"},       {"mA", "mA"},    {"s", "s"},
-      {"ms", "ms"},     {"us", "us"},     {"\xC2\xB5s", "us"}, {"\xCE\xBCs", "us"}, {"%", "%"}};
+      {"ms", "ms"},     {"us", "us"},     {"\xC2\xB5s", "us"}, {"\xCE\xBCs", "us"}, {"%", "%"},
+      // gauge pressure, as hysteron's pressures are (a model in barg is one in bar to every check)
+      {"barg", "bar"},  {"psig", "psi"},  {"kPag", "kPa"},  {"MPag", "MPa"}};
   for (const auto& [spelling, symbol] : table)
     if (u == spelling) return std::string(symbol);
   return std::string();

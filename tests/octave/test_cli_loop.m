@@ -65,6 +65,11 @@ function test_cli_loop(cli)
                                'hysteron:nonFinite', 'reference_m');
   fails = fails + expect_error(@() hysteron_loop(fullfile(dir, 'none.json'), 'compensated.sine', bm, 0, 0, 0), ...
                                'hysteron:badArgument', 'cannot open result file');
+  % a model whose input is in kPa: refused as by the C ABI and controller_from (the loop is in MPa)
+  txt = fileread(bm);
+  kpa = strrep(txt, '"input": "MPa"', '"input": "kPa"');
+  fails = fails + expect_error(@() hysteron_loop(rj, 'compensated.sine', kpa, [0; 0], [0; 0], [0; 0]), ...
+                               'hysteron:badModel', 'the model''s input is in kPa, not MPa');
   if fails > 0
     fprintf('%d failure(s)\n', fails);
     exit(1);

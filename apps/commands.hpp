@@ -16,6 +16,7 @@
 
 #include "hysteron/identify.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/files.hpp"
 #include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
@@ -72,7 +73,7 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
 // "Pressure [kPa]" -> {"Pressure", "kPa"}; "" -> {fallback, ""}.
 report::Axis parse_axis(const std::string& text, const std::string& fallback);
 // Reports: a path ending in .html or .htm (any case) is HTML, anything else JSON.
-bool is_html_path(const std::string& path);
+using io::is_html_path;
 // An output path that names standard output: "-", or an existing file that is the one stdout is
 // open on (the same st_dev and st_ino: /dev/stdout, /dev/fd/1, or the file or pipe stdout is
 // redirected to). A command that prints on stdout treats such an output as it treats "-", so

@@ -217,12 +217,6 @@ bool names_stdout(const std::string& path) {
   return !(S_ISCHR(named.st_mode) && ::stat("/dev/null", &null) == 0 && null.st_rdev == named.st_rdev);
 }
 
-bool is_html_path(const std::string& path) {
-  std::string lower = path;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  return lower.ends_with(".html") || lower.ends_with(".htm");
-}
-
 void add_data_options(CLI::App* sub, DataSelection& sel) {
   sub->add_option("--data,-d", sel.file, "data file (.csv or .mat)")->required();
   sub->add_option("--input,-i", sel.input,

@@ -253,6 +253,10 @@ struct GainTrial {
   bool operator==(const GainTrial&) const = default;
 };
 
+// Whether a run's variant is one of hysteron's own loops (compensated, learning, adaptive): those
+// ExperimentResult::not_below_baseline() holds against the baseline (a sweep's records mark them).
+bool is_hysterons_loop(std::string_view variant) noexcept;
+
 struct ExperimentResult {
   std::string name;
   std::string title;

@@ -86,9 +86,7 @@ void bind_identify(py::module_& m) {
         const std::string report = path_arg(report_arg, "fit: report");
         io::check_output_file({"fit: report", report});  // before the fit, not after it
         if (!report.empty()) {  // the CLI's --report writes JSON unless the name ends .html / .htm: no HTML in a .json
-          std::string lower = report;
-          std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return std::tolower(ch); });
-          if (!lower.ends_with(".html") && !lower.ends_with(".htm"))
+          if (!io::is_html_path(report))
             throw Error(fmt::format("fit: report: '{}' does not end in .html or .htm: fit(report=) writes the HTML "
                                     "report (the JSON is the dict fit() returns: json.dump it)",
                                     report));

@@ -179,10 +179,14 @@ std::string ExperimentResult::table() const {
   return s;
 }
 
+bool is_hysterons_loop(std::string_view variant) noexcept {
+  return variant == "compensated" || variant == "learning" || variant == "adaptive";
+}
+
 std::vector<std::string> ExperimentResult::not_below_baseline() const {
   std::vector<std::string> out;
   for (const TrackingRun& run : runs) {
-    if (run.variant != "compensated" && run.variant != "learning" && run.variant != "adaptive") continue;
+    if (!is_hysterons_loop(run.variant)) continue;
     for (const TrackingRun& base : runs)
       if (base.variant == "baseline" && base.reference == run.reference &&
           !(run.errors.rms_error_mm < base.errors.rms_error_mm))

@@ -30,10 +30,6 @@ namespace {
 
 // The variant kinds that use the gain trial's choice (ExperimentResult::gain_trials).
 bool uses_gain_trial(std::string_view kind) { return kind == "compensated" || kind == "adaptive"; }
-// hysteron's own loops, which ExperimentResult::not_below_baseline() holds against the baseline
-bool is_hysterons_loop(std::string_view kind) {
-  return kind == "compensated" || kind == "learning" || kind == "adaptive";
-}
 
 using nlohmann::json;
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();

@@ -4,6 +4,8 @@
 // needs these without the data-table code.
 #include "hysteron/io/files.hpp"
 
+#include <cctype>
+#include <algorithm>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -392,6 +394,12 @@ void check_output_directory(const NamedPath& output) {
 void check_output_files(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
   check_outputs_distinct(outputs, inputs);
   for (const auto& o : outputs) check_output_file(o);
+}
+
+bool is_html_path(std::string_view path) {
+  std::string lower(path);
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return lower.ends_with(".html") || lower.ends_with(".htm");
 }
 
 }  // namespace hysteron::io

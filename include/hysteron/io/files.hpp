@@ -72,6 +72,9 @@ void check_outputs_distinct(const std::vector<NamedPath>& outputs, const std::ve
 // there, because it is a directory or its directory does not exist or is not writable.
 // Writes nothing. Empty paths and "-" pass.
 void check_output_file(const NamedPath& output);
+// Whether a report path names an HTML page (ends in .html or .htm, any case): the CLI's --report
+// and Python's fit(report=) write HTML there and JSON elsewhere (Python refuses the rest).
+bool is_html_path(std::string_view path);
 // The same for an output directory its writer creates (ExperimentResult::write, with its
 // parents): the directory, or its nearest existing ancestor, must be a writable directory.
 void check_output_directory(const NamedPath& output);

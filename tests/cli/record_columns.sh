@@ -123,6 +123,12 @@ expect_refused "evaluate --time-column input" "the time column (input) is the in
 # column 0 of swapped.csv is its output: refused (it was drawn as the time axis, exit 0)
 expect_refused "report --data swapped.csv" "data: the time column 0 (the document's, read from the file --data gives) is the output column of $T/swapped.csv" \
   "$BIN" report "$T/ft.json" --data "$T/swapped.csv" --input input --output output --out "$T/r1.html"
+# fit on a time column that goes backwards: the fit (gpi, which does not run on the time) goes on and
+# says so, naming the row, since report --data refuses such a column (review of 2026-12-01)
+"$BIN" fit --model gpi --data "$T/back.csv" --input input --output output --time-column s --threads 1 \
+  --out "$T/fb.json" > "$T/fb.txt" 2>&1 || fail "fit on a backwards time column: exit $?: $(cat "$T/fb.txt")"
+grep -q "^warning: $T/back.csv: the time column s goes backwards at sample 1 .*hysteron report's time axis" "$T/fb.txt" \
+  || fail "fit on a backwards time column said nothing: $(grep warning "$T/fb.txt")"
 expect_refused "report --data back.csv" "the time column 0 (the document's, read from the file --data gives) goes backwards in $T/back.csv at sample 1" \
   "$BIN" report "$T/ft.json" --data "$T/back.csv" --input input --output output --out "$T/r2.html"
 "$BIN" report "$T/ft.json" --data "$T/swapped.csv" --input input --output output --time-column t \

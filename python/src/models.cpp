@@ -1,6 +1,8 @@
 // Bindings of the core models and inverses.
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "bindings.hpp"
 #include "more.hpp"
 #include "hysteron/error.hpp"
@@ -12,6 +14,35 @@ namespace hysteron::python {
 
 // A Python dict/list (numpy scalars and arrays included, via their tolist())
 // as JSON. NaN, infinities and objects JSON cannot hold are hysteron.Error.
+namespace {
+// The path of the first NaN or infinite float in a dict / list / tuple / array tree ("" if none):
+// the key a JSON conversion refused (e.g. input_limits[0] = -inf, where None is an unbounded side).
+std::string non_finite_path(const py::handle& o, const std::string& at, int depth = 0) {
+  if (depth > 64) return {};
+  if (py::isinstance<py::dict>(o)) {
+    for (const auto& [k, v] : py::reinterpret_borrow<py::dict>(o)) {
+      const std::string key = py::str(k).cast<std::string>();
+      if (std::string p = non_finite_path(v, at.empty() ? key : at + "." + key, depth + 1); !p.empty()) return p;
+    }
+    return {};
+  }
+  if (py::isinstance<py::str>(o) || py::isinstance<py::bytes>(o)) return {};
+  if (py::isinstance<py::list>(o) || py::isinstance<py::tuple>(o) || py::hasattr(o, "tolist")) {
+    const py::object items = py::hasattr(o, "tolist") ? o.attr("tolist")() : py::reinterpret_borrow<py::object>(o);
+    if (!py::isinstance<py::list>(items) && !py::isinstance<py::tuple>(items)) return non_finite_path(items, at, depth + 1);
+    std::size_t i = 0;
+    for (const auto& v : items) {
+      if (std::string p = non_finite_path(v, fmt::format("{}[{}]", at, i), depth + 1); !p.empty()) return p;
+      ++i;
+    }
+    return {};
+  }
+  if (py::isinstance<py::float_>(o) && !std::isfinite(o.cast<double>()))
+    return fmt::format("{} = {}", at.empty() ? "the value" : at, py::str(o).cast<std::string>());
+  return {};
+}
+}  // namespace
+
 nlohmann::json to_json(const py::handle& obj, std::string_view what) {
   using namespace pybind11::literals;
   const auto dumps = py::module_::import("json").attr("dumps");
@@ -26,8 +57,12 @@ nlohmann::json to_json(const py::handle& obj, std::string_view what) {
   } catch (py::error_already_set& e) {
     // the exception's own message, not e.what() (which carries a Python traceback)
     const std::string message = py::str(e.value()).cast<std::string>();
-    if (message.find("Out of range float") != std::string::npos)
-      throw Error(fmt::format("{}: a value is NaN or infinite (JSON and model files hold finite numbers only)", what));
+    if (message.find("Out of range float") != std::string::npos) {
+      const std::string at = non_finite_path(obj, "");
+      throw Error(fmt::format("{}: {} is NaN or infinite (JSON and model files hold finite numbers only; an unbounded "
+                              "side of input_limits is None)",
+                              what, at.empty() ? std::string("a value") : at));
+    }
     throw Error(fmt::format("{}: cannot convert to JSON: {}", what, message));
   }
   return io::parse_json(text, std::string(what));

@@ -134,3 +134,13 @@ def test_signals_refuse_a_sample_count_they_cannot_hold_with_a_clear_error():
     with pytest.raises(hysteron.Error, match=r"gpi_sinusoid_reference: .*larger dt or a shorter duration"):
         hysteron.gpi_sinusoid_reference(1e-3, 1e12)
     assert len(hysteron.gpi_identification_pressure(1e-3)) == 30000
+
+
+def test_a_non_finite_value_in_a_model_dict_is_named_by_its_key():
+    """A model dict with an infinite input limit (or a NaN weight) names the key and says None is
+    an unbounded side; before 2026-12-01 it said only 'a value is NaN or infinite'."""
+    import numpy as np
+    with pytest.raises(hysteron.Error, match=r"input_limits\[0\] = -inf is NaN or infinite.*None"):
+        hysteron.Model({"model": "pi", "r": [0, 0.1], "p": [1, 0.5], "input_limits": [-np.inf, 600]})
+    with pytest.raises(hysteron.Error, match=r"p\[1\] = nan"):
+        hysteron.Model({"model": "pi", "r": [0, 0.1], "p": np.array([1, np.nan])})

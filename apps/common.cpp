@@ -104,15 +104,10 @@ void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, s
   const Limits& m = input_limits(params);
   if (!m.bounded()) return;
   const std::string in = input_unit.empty() ? std::string() : fmt::format(" (the model's input is in {})", input_unit);
-  // the part of --limits inside the model's range: none (limits in another unit, e.g. 0,0.6 MPa on a
-  // model in kPa fitted on 8..626) is refused, the inverse could only command inputs the model never saw
+  // the part of --limits inside the model's range; none (limits in another unit, e.g. 0,0.6 MPa on a
+  // model in kPa fitted on 8..626) is refused by the library's Inverse itself (InverseOptions)
   const double lo = std::max(limits.lo, m.lo), hi = std::min(limits.hi, m.hi);
-  if (!(lo < hi))
-    throw Error(fmt::format("--limits [{:.6g}, {:.6g}] lie outside the model's input_limits [{:.6g}, {:.6g}]{} (fit() "
-                            "sets them to its training range): the inverse could only command inputs the model was "
-                            "never fitted on; give --limits in the model's input unit, overlapping its input_limits, "
-                            "or leave them out (the model's)",
-                            limits.lo, limits.hi, m.lo, m.hi, in));
+  if (!(lo < hi)) return;
   const double tol = kInputCoverageTolerance * (m.hi - m.lo);
   const double below = m.lo - limits.lo, above = limits.hi - m.hi;
   if (!(below > tol) && !(above > tol)) return;

@@ -154,13 +154,13 @@ expect_fail "prefix ending in _" 1 '--prefix: "pam_" is not usable' -- \
 expect_fail "bad limits" 1 '--limits: LO = 2 must be < HI = 1' -- \
   "$BIN" export --model "$T/gpi.json" --out "$T/out/new.c" --limits 2,1
 # --limits outside the model's input_limits (audit2: 0,0.6 meant as MPa on a model in kPa fitted on 8..624):
-# refused, naming both ranges and the model's input unit; mostly outside: a warning that asks for the unit
+# refused by the library's Inverse, naming both ranges; mostly outside: a warning that asks for the unit
 cat > "$T/kpa.json" <<'JSON'
 {"model": "pi", "q": 0.09, "r": [28.8, 57.6], "p": [0.72, -0.04], "input_origin": 8.18, "input_limits": [8.18, 624.3],
  "units": {"input": "kPa", "output": "N"}}
 JSON
 expect_fail "--limits outside the model's input_limits" 1 \
-  "--limits [0, 0.6] lie outside the model's input_limits [8.18, 624.3] (the model's input is in kPa)" -- \
+  "inverse input limits [0, 0.6] lie outside the model's input_limits [8.18, 624.3]" -- \
   "$BIN" export --model "$T/kpa.json" --out "$T/out/new.c" --limits=0,0.6
 "$BIN" export --model "$T/kpa.json" --out "$T/kpa_20.c" --limits=-10,20 2> "$T/stderr" || fail "--limits -10,20: refused"
 grep -qF "export: warning: most of --limits [-10, 20] lie outside the model's input_limits [8.18, 624.3] (the model's input is in kPa)" "$T/stderr" \
@@ -171,7 +171,7 @@ grep -qF "export: warning: --limits [0, 700] reach beyond the model's input_limi
 "$BIN" export --model "$T/kpa.json" --out "$T/kpa_in.c" --limits=10,600 2> "$T/stderr" || fail "--limits 10,600: refused"
 if grep -q warning "$T/stderr"; then fail "--limits 10,600 (within): a warning"; cat "$T/stderr"; fi
 printf 'y\n1\n2\n' > "$T/kpa_y.csv"
-expect_fail "invert --limits outside the model's input_limits" 1 "--limits [0, 0.6] lie outside the model's input_limits" -- \
+expect_fail "invert --limits outside the model's input_limits" 1 "inverse input limits [0, 0.6] lie outside the model's input_limits" -- \
   "$BIN" invert --model "$T/kpa.json" --input "$T/kpa_y.csv" --output "$T/kpa_x.csv" --limits=0,0.6
 expect_fail "missing model file" 1 'nope.json: cannot open' -- "$BIN" export --model "$T/nope.json" --out "$T/out/new.c"
 expect_fail "header and out the same" 1 'name the same file' -- \

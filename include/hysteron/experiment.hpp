@@ -337,6 +337,9 @@ struct ExperimentResult {
   // experiment` and `demo` exit 3 where this is not empty (README, Exit codes), and to_json()
   // gives it with a status. Derived from runs (not stored).
   std::vector<std::string> not_below_baseline() const;
+  // Whether `run` is one of them (a run of hysteron's loops whose RMS error is not below the
+  // baseline's on its reference): the rule not_below_baseline() lists by.
+  bool not_below_baseline(const TrackingRun& run) const;
 };
 
 // Throws hysteron::Error on invalid options or a diverging rig.

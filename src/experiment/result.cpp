@@ -183,15 +183,19 @@ bool is_hysterons_loop(std::string_view variant) noexcept {
   return variant == "compensated" || variant == "learning" || variant == "adaptive";
 }
 
+bool ExperimentResult::not_below_baseline(const TrackingRun& run) const {
+  if (!is_hysterons_loop(run.variant)) return false;
+  for (const TrackingRun& base : runs)
+    if (base.variant == "baseline" && base.reference == run.reference &&
+        !(run.errors.rms_error_mm < base.errors.rms_error_mm))
+      return true;
+  return false;
+}
+
 std::vector<std::string> ExperimentResult::not_below_baseline() const {
   std::vector<std::string> out;
-  for (const TrackingRun& run : runs) {
-    if (!is_hysterons_loop(run.variant)) continue;
-    for (const TrackingRun& base : runs)
-      if (base.variant == "baseline" && base.reference == run.reference &&
-          !(run.errors.rms_error_mm < base.errors.rms_error_mm))
-        out.push_back(fmt::format("{} ({})", run.variant, run.reference));
-  }
+  for (const TrackingRun& run : runs)
+    if (not_below_baseline(run)) out.push_back(fmt::format("{} ({})", run.variant, run.reference));
   return out;
 }
 

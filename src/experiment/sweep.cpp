@@ -553,9 +553,7 @@ SweepResult run_sweep(const SweepOptions& options) {
           e.saturated = tr.saturated;
           e.guard_cuts = tr.controller.guard_cuts;
           e.guard_final_scale = tr.controller.guard_final_scale;
-          const std::string as_listed = fmt::format("{} ({})", tr.variant, tr.reference);  // as not_below_baseline()
-          e.not_below_baseline = std::find(run.not_below_baseline.begin(), run.not_below_baseline.end(), as_listed) !=
-                                 run.not_below_baseline.end();
+          e.not_below_baseline = er.not_below_baseline(tr);
           for (const auto& rr : er.reference_ranges)
             if (rr.reference == tr.reference) {
               const double span = rr.paper_max_mm - rr.paper_min_mm;

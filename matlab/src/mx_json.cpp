@@ -81,14 +81,25 @@ nlohmann::json number_json(double v, const std::string& path, bool inf_as_null, 
   return v;
 }
 
+// The elements of a numeric or logical array given by the user: every read of the user's numbers
+// (data, model fields, options) passes here. A sparse array's data holds only its non-zeros, not
+// the matrix (read as full it gives wrong numbers or reads beyond them): refused.
+const void* user_data(const mxArray* a, const std::string& what) {
+  if (mxIsSparse(a))
+    throw MexError(id_bad_argument,
+                   fmt::format("{}: a sparse {}x{} array; sparse arrays are not supported: use full(x)", what,
+                               mxGetM(a), mxGetN(a)));
+  return mxGetData(a);
+}
+
 template <class T>
 nlohmann::json integer_json(const void* data, std::size_t k) {
   return static_cast<const T*>(data)[k];
 }
 
-nlohmann::json numeric_element(const mxArray* a, std::size_t k, const std::string& path, bool inf_as_null,
-                               bool nan_as_null) {
-  const void* d = mxGetData(a);
+// Element k of a numeric array whose data `d` is (user_data).
+nlohmann::json numeric_element(const mxArray* a, const void* d, std::size_t k, const std::string& path,
+                               bool inf_as_null, bool nan_as_null) {
   switch (mxGetClassID(a)) {
     case mxDOUBLE_CLASS: return number_json(static_cast<const double*>(d)[k], path, inf_as_null, nan_as_null);
     case mxSINGLE_CLASS: return number_json(static_cast<const float*>(d)[k], path, inf_as_null, nan_as_null);
@@ -201,8 +212,9 @@ nlohmann::json to_json(const mxArray* a, const std::string& path, const ToJsonOp
         const std::string fp = p + "." + name;
         if (inf_null && v && (mxIsDouble(v) || mxIsSingle(v)) && !mxIsComplex(v)) {
           // numbers of this field: -Inf/Inf -> null (e.g. an unbounded input limit)
+          const void* d = user_data(v, fp);
           o[name] = array_json(v, fp, [&](std::size_t i, const std::string& ep) {
-            return numeric_element(v, i, ep, true, false);
+            return numeric_element(v, d, i, ep, true, false);
           });
           if (mxGetNumberOfElements(v) == 0) o[name] = nlohmann::json::array();
         } else {
@@ -234,15 +246,16 @@ nlohmann::json to_json(const mxArray* a, const std::string& path, const ToJsonOp
     return out;
   }
   if (mxIsLogical(a)) {
+    const auto* d = static_cast<const mxLogical*>(user_data(a, path));
     if (count == 0) return nlohmann::json::array();
-    const mxLogical* d = mxGetLogicals(a);
     return array_json(a, path, [&](std::size_t k, const std::string&) { return nlohmann::json(d[k] != 0); });
   }
   if (mxIsNumeric(a)) {
     if (mxIsComplex(a)) throw MexError(id_bad_argument, fmt::format("{}: complex numbers are not supported", path));
+    const void* d = user_data(a, path);
     if (count == 0) return nlohmann::json::array();
     return array_json(a, path, [&](std::size_t k, const std::string& ep) {
-      return numeric_element(a, k, ep, options.all_null, options.all_null);
+      return numeric_element(a, d, k, ep, options.all_null, options.all_null);
     });
   }
   throw MexError(id_bad_argument, fmt::format("{}: values of class {} are not supported", path, class_name(a)));
@@ -267,14 +280,16 @@ double get_scalar(const mxArray* a, const std::string& what) {
     throw MexError(id_bad_argument,
                    fmt::format("{}: expected a real number (scalar), got {}", what,
                                a ? fmt::format("a {}x{} {}", mxGetM(a), mxGetN(a), class_name(a)) : "nothing"));
-  if (mxIsLogical(a)) return *mxGetLogicals(a) ? 1.0 : 0.0;
-  const double v = mxGetScalar(a);
+  const void* d = user_data(a, what);
+  if (mxIsLogical(a)) return *static_cast<const mxLogical*>(d) ? 1.0 : 0.0;
+  const double v = mxGetScalar(a);  // (of any numeric class; a full array: user_data)
   if (!std::isfinite(v)) throw MexError(id_non_finite, fmt::format("{} must be finite, got {}", what, v));
   return v;
 }
 
 bool get_bool(const mxArray* a, const std::string& what) {
-  if (a != nullptr && mxIsLogical(a) && mxGetNumberOfElements(a) == 1) return *mxGetLogicals(a) != 0;
+  if (a != nullptr && mxIsLogical(a) && mxGetNumberOfElements(a) == 1)
+    return *static_cast<const mxLogical*>(user_data(a, what)) != 0;
   const double v = get_scalar(a, what);
   if (v != 0.0 && v != 1.0) throw MexError(id_bad_argument, fmt::format("{}: expected true or false, got {}", what, v));
   return v != 0.0;
@@ -295,7 +310,7 @@ std::vector<double> get_vector(const mxArray* a, const std::string& what) {
                                a ? fmt::format("a {}x{} {}{}", mxGetM(a), mxGetN(a), mxIsComplex(a) ? "complex " : "",
                                                class_name(a))
                                  : "nothing"));
-  const double* d = static_cast<const double*>(mxGetData(a));
+  const double* d = static_cast<const double*>(user_data(a, what));
   return std::vector<double>(d, d + mxGetNumberOfElements(a));
 }
 

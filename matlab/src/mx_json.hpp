@@ -16,6 +16,8 @@
 //   NaN and +-Inf are an error naming the field, except for the fields listed in
 //   ToJsonOptions::infinite_as_null (-Inf/Inf -> null) and the subtrees listed in
 //   ToJsonOptions::null_subtrees (free-form data such as a model's "metadata": NaN -> null).
+// Sparse arrays are refused wherever a number is read (data, model fields, options): a
+// MexError(id_bad_argument) naming the argument, "use full(x)".
 // Every error is a MexError whose message names the argument and the field path
 // (e.g. "model.c(2)").
 #include <mex.h>

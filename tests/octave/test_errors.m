@@ -14,6 +14,7 @@ function test_errors()
   neg_alpha = gpi; neg_alpha.alpha = -1;
   unknown_kind = gpi; unknown_kind.model = 'foo';
   unknown_key = gpi; unknown_key.gain = 2;
+  sparse_c = gpi; sparse_c.c = sparse([60 4 0 30]);  % a sparse array's data is its non-zeros only
   % mpi-asym with unbounded envelopes: its numerical inverse needs input limits
   asym = struct('model', 'mpi-asym', 'r', 0.1, 'p', 0.2, 'ascending', struct('envelope', 'affine', 'c', [1 0]), ...
                 'descending', struct('envelope', 'affine', 'c', [0.8 0]));
@@ -56,6 +57,18 @@ function test_errors()
     'negative rig mass',      @() hysteron_rig_params(struct('load', struct('mass', -1))), 'hysteron:error', 'mass'
     'NaN rig pressure',       @() hysteron_rig([0 NaN]),                    'hysteron:nonFinite', 'pressure_mpa(2)'
     'missing rig file',       @() hysteron_rig(0, 'params', fullfile(dir, 'rig.json')), 'hysteron:error', 'rig.json'
+    'sparse input',           @() hysteron_simulate(gpi, sparse(x)),       'hysteron:badArgument', 'x: a sparse 1x200 array'
+    'sparse zeros (5e6)',     @() hysteron_simulate(gpi, sparse(1, 5e6)),  'hysteron:badArgument', 'use full(x)'
+    'sparse invert input',    @() hysteron_invert(gpi, sparse(y)),         'hysteron:badArgument', 'use full(x)'
+    'sparse fit data',        @() hysteron_fit(x, sparse(y)),              'hysteron:badArgument', 'y: a sparse'
+    'sparse evaluate data',   @() hysteron_evaluate(gpi, sparse(x), y),    'hysteron:badArgument', 'x: a sparse'
+    'sparse model field',     @() hysteron_simulate(sparse_c, x),          'hysteron:badArgument', 'model.c: a sparse'
+    'sparse limits',          @() hysteron_invert(gpi, y, 'limits', sparse([0 0.6])), 'hysteron:badArgument', 'limits'': a sparse'
+    'sparse range',           @() hysteron_evaluate(gpi, x, y, 'range', sparse([1 10])), 'hysteron:badArgument', 'range'': a sparse'
+    'sparse scalar option',   @() hysteron_fit(x, y, 'num_operators', sparse(5)), 'hysteron:badArgument', 'num_operators'': a sparse'
+    'sparse logical option',  @() hysteron_simulate(gpi, x, 'relaxed', sparse(true)), 'hysteron:badArgument', 'relaxed'': a sparse'
+    'sparse rig pressure',    @() hysteron_rig(sparse([0 0 0.3])),         'hysteron:badArgument', 'pressure_mpa: a sparse'
+    'sparse rig parameter',   @() hysteron_rig_params(struct('load', struct('mass', sparse(10)))), 'hysteron:badArgument', 'mass: a sparse'
     'unknown command',        @() hysteron_mex('nope'),                     'hysteron:badArgument', 'nope'
     'no command',             @() hysteron_mex(),                           'hysteron:badArgument', 'command'
     'too many arguments',     @() hysteron_mex('simulate', gpi, x, struct(), 4), 'hysteron:badArgument', 'arguments'

@@ -12,9 +12,29 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %   The same as `hysteron evaluate` on the command line, which scores censored by
 %   default (--uncensored: as recorded); here, as in Python, only when asked.
 %
+%   M also has, as Python's evaluate:
+%     outside_input_limits   samples of the range whose input lies outside the model's
+%                            input_limits by more than 2 % of their span (the model
+%                            extrapolates there)
+%     output_map             Y ~ gain * prediction + offset on the range: gain, offset,
+%                            r2, r2_mapped, rms, rms_mapped, span (NaN where undefined)
+%     clipping_warning       where Y clips and 'censored' is false: how many samples
+%                            `hysteron evaluate` would not count as errors ('' otherwise)
+%     output_map_warning     where the prediction scores poorly or the map explains the
+%                            errors (a flipped sign, a unit, a zero) ('' otherwise)
+%     input_coverage_warning where more than 1 % of the samples are outside the input
+%                            limits ('' otherwise)
+%   Each non-empty warning is also issued as a warning with identifier
+%   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).
+%
 %   See also HYSTERON_FIT, HYSTERON_SIMULATE.
   if nargin < 3
     error('hysteron:badArgument', 'usage: metrics = hysteron_evaluate(model, x, y, ''range'', [first last])');
   end
   metrics = hysteron_mex('evaluate', model, x, y, hysteron_options('hysteron_evaluate', varargin{:}));
+  for f = {'clipping_warning', 'output_map_warning', 'input_coverage_warning'}
+    if ~isempty(metrics.(f{1}))
+      warning('hysteron:evaluate', '%s', metrics.(f{1}));
+    end
+  end
 end

@@ -16,6 +16,7 @@
 //   simulate    spec, x, opts        -> y                     opts: relaxed
 //   invert      spec, y, opts        -> [x, saturated]        opts: limits
 //   evaluate    spec, x, y, opts     -> metrics struct        opts: range, initial_state, censored
+//                                       (+ outside_input_limits, output_map and three warnings)
 //   fit         x, y, opts           -> [model, report]       opts: see fit_options(), and report
 //                                                              (HTML file), input_axis, output_axis
 //   rig         pressure_mpa, opts   -> struct of columns     opts: params, seed, control_period
@@ -328,9 +329,32 @@ void cmd_evaluate(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   // censored: where y clips (detect_clipping), a sample at the limit that the model puts beyond
   // it is scored as met, as `hysteron evaluate` does by default and Python's evaluate(censored=True)
   const bool censored = opt.get("censored") && get_bool(opt.get("censored"), opt.where("censored"));
-  std::size_t count = 0;
-  nlohmann::json m = io::to_json(evaluate_scored(spec.params, x, y, range, init, censored, &count));
-  if (censored) m["censored_samples"] = count;  // (only when asked, as Python's)
+  // the metrics and what Python's evaluate adds (io::Evaluation, as `hysteron evaluate --json`):
+  // outside_input_limits, output_map, and the warnings hysteron_evaluate.m raises
+  io::Evaluation e;
+  e.metrics = evaluate_scored(spec.params, x, y, range, init, censored, &e.censored);
+  e.censored_recorded = censored;  // censored_samples only when asked, as Python's
+  const InputCoverage coverage = input_coverage(spec.params, x, range);
+  e.outside_input_limits = coverage.outside;
+  e.output_map = output_map(spec.params, x, y, range, init, censored);
+  nlohmann::json m = io::to_json(e);
+  m.erase("file");
+  m.erase("range");
+  // hysteron evaluate scores censored by default, this does not: where the output clips, say how
+  // many samples it would not count as errors (Python's clipping_warning)
+  std::string clipping;
+  if (!censored) {
+    std::size_t would = 0;
+    (void)evaluate_scored(spec.params, x, y, range, init, true, &would);
+    if (would > 0)
+      clipping = fmt::format("hysteron_evaluate: the output clips: {} samples at its limit where the model predicts "
+                             "beyond it are scored as errors here ('censored', false, the default); hysteron evaluate "
+                             "and fit score them as censored, no error: pass 'censored', true to score as they do",
+                             would);
+  }
+  m["clipping_warning"] = clipping;
+  m["output_map_warning"] = output_map_warning(e.output_map, "hysteron_evaluate");
+  m["input_coverage_warning"] = input_coverage_warning(coverage, "hysteron_evaluate");
   plhs[0] = to_mx(m);
 }
 

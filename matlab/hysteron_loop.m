@@ -11,14 +11,20 @@ function out = hysteron_loop(result, run, model, reference_m, measured_m, pressu
 %     command_mpa   the pressure command [MPa] (the cascade: its desired pressure p_d)
 %     duty          the cascade's PWM duty in [-1, 1] (0 for the others)
 %     preview_m     the reference the feedforward was fed (the run's shaper and lead)
-%   shaped like REFERENCE_M. The learning is not part of it.
+%   shaped like REFERENCE_M.
+%   Runs whose loop this does not replay are refused (hysteron:error): a learning run
+%   (its iterative learning adds a correction learnt period by period: replay it with the
+%   C ABI's hysteron_loop_params_from_file + hysteron_ilc_*, or generate it with
+%   `hysteron export --loop result.json --run learning.REFERENCE`) and an adaptive run
+%   (its inverse is re-identified online).
 %
 %   RESULT is a result.json file name (`hysteron experiment NAME --out DIR`), or JSON
 %   text of a result.json or of one "controller". RUN is 'VARIANT' for an experiment with
 %   one reference ('compensated'), 'VARIANT.REFERENCE' for one with several
-%   ('compensated.triangle'), '' for a controller's text. MODEL is the model the run
-%   inverts: DIR/best_model.json for the compensated and learning loops, DIR/model.json
-%   for the faithful one (a model struct, JSON text or file name).
+%   ('compensated.triangle'), '' for a controller's text: the faithful and compensated
+%   runs (not the learning or adaptive ones, above). MODEL is the model the run
+%   inverts: DIR/best_model.json for the compensated loop, DIR/model.json for the
+%   faithful one (a model struct, JSON text or file name).
 %   Fed a run's own tracking CSV, it commands what the run commanded: a check of the
 %   loop before it drives a muscle. The same as the C ABI's hysteron_loop_params_from_file
 %   + hysteron_*_create + hysteron_*_step, and Python's hysteron.controller_from.
@@ -33,7 +39,8 @@ function out = hysteron_loop(result, run, model, reference_m, measured_m, pressu
 %     max(abs(o.command_mpa - c(:,5)))      % ~1e-15
 %
 %   Errors: hysteron:badArgument (no such run: the message names the runs there are; a
-%   missing key; sizes), hysteron:nonFinite, hysteron:badModel, hysteron:modelFile.
+%   missing key; sizes), hysteron:error (a learning or adaptive run, see above),
+%   hysteron:nonFinite, hysteron:badModel, hysteron:modelFile.
 %   See also HYSTERON_INVERT, HYSTERON_RIG.
   if nargin < 5
     error('hysteron:badArgument', ...

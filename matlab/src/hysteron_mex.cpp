@@ -543,7 +543,20 @@ LoopDesign loop_source(const std::string& source, const std::string& run) {
 
 void cmd_loop(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   require_args(nrhs, 6, 7, "result, run, model, reference_m, measured_m, pressure_mpa");
-  const LoopDesign d = loop_source(get_string(prhs[1], "result"), get_string(prhs[2], "run"));
+  const std::string run = get_string(prhs[2], "run");
+  const LoopDesign d = loop_source(get_string(prhs[1], "result"), run);
+  // a learning run commanded its loop plus the correction its iterative learning learnt period by
+  // period: the loop alone does not command what the run commanded (as an adaptive run's, refused
+  // by make_controller)
+  if (d.learning)
+    throw Error(fmt::format("controller{}: its loop has an iterative learning (\"learning\"; a learning run), which "
+                            "hysteron_loop does not replay: its commands would not be the run's. Replay the loop "
+                            "with its learning through the C ABI (hysteron_loop_params_from_file: has_learning, "
+                            "then hysteron_ilc_create / hysteron_ilc_correction / hysteron_ilc_step) or "
+                            "`hysteron export --loop RESULT.json --run {}` (a C99 file), or use the compensated "
+                            "run's loop (the same loop without the learning)",
+                            run.empty() ? "" : fmt::format(" of run \"{}\"", run),
+                            run.empty() ? "learning.REFERENCE" : run));
   const ModelSpec spec = model_spec(prhs[3], "model");
   const std::vector<double> ref = get_vector(prhs[4], "reference_m");
   const std::vector<double> meas = get_vector(prhs[5], "measured_m");

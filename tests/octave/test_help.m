@@ -9,7 +9,7 @@ function test_help()
     'hysteron_evaluate',   {'Error metrics', 'range'}
     'hysteron_load_model', {'model file', 'input_limits'}
     'hysteron_save_model', {'atomically'}
-    'hysteron_model',      {'Validate a model'}
+    'hysteron_model',      {'Validate a model', 'only', 'differs from the identity'}
     'hysteron_model_json', {'JSON text'}
     'hysteron_rig',        {'simulated pneumatic-muscle rig', 'contraction_measured_mm', 'seed'}
     'hysteron_rig_params', {'parameter struct'}
@@ -21,6 +21,11 @@ function test_help()
                             expect{i, 1}, expect{i, 2}{k}, text);
     end
   end
+  % what hysteron_model's help says it returns: the library's keys, defaults filled in, no
+  % unbounded input_limits, no identity units map
+  s = hysteron_model('{"model": "pi", "r": [0, 0.1], "p": [0.3, 0.2]}');
+  fails = fails + check(isequal(sort(fieldnames(s)), sort({'model'; 'p'; 'q'; 'r'; 'schema'})) && s.q == 0, ...
+                        'hysteron_model of a pi: fields %s', strjoin(fieldnames(s)', ', '));
   fails = fails + check(strcmp(hysteron(), hysteron_mex('version')), 'hysteron() returns the version');
   fails = fails + check(~isempty(regexp(hysteron_mex('version'), '^\d+\.\d+\.\d+$', 'once')), 'version');
   if fails > 0

@@ -11,18 +11,22 @@ function v = hysteron()
 % Model files and structs
 %   hysteron_load_model  - Read a model file (JSON) into a struct.
 %   hysteron_save_model  - Write a model struct to a model file (JSON).
-%   hysteron_model       - Validate a model (struct, JSON text or file) -> complete struct.
+%   hysteron_model       - Validate a model (struct, JSON text or file) -> model struct.
 %   hysteron_model_json  - A model as JSON text.
 %
-% Simulated rig
+% Simulated rig and loops
 %   hysteron_rig         - Run the simulated pneumatic-muscle rig on a pressure command.
 %   hysteron_rig_params  - The rig's complete parameter struct.
+%   hysteron_loop        - Replay a loop of `hysteron experiment` (result.json) over
+%                          recorded signals: the pressure commands it gives.
 %
 % Gateway
 %   hysteron_mex         - The MEX file behind these functions (hysteron_mex('version')).
 %
 % A model argument is a model struct, the JSON text of a model file or a model file
-% name; errors have identifiers hysteron:* (see docs/matlab.md).
+% name, of any kind the library reads: pi, gpi, mpi-deadzone, mpi-asym, preisach, kp,
+% bouc-wen, maxwell-slip, rate-pi (docs/model-files.md); errors have identifiers
+% hysteron:* (see docs/matlab.md).
   if nargout > 0
     v = hysteron_mex('version');
   else

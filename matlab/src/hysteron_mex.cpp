@@ -152,6 +152,20 @@ ModelSpec load_model_file(const std::string& path) {
   return spec;
 }
 
+// A struct's input_limits [lo hi]: -Inf / Inf are its unbounded sides (null in the file). Inf as lo,
+// -Inf as hi or lo above hi would read as unbounded sides: refused. (Other values: to_json and the
+// model reader check them.)
+void check_struct_limits(const mxArray* a, const std::string& what) {
+  const mxArray* l = mxGetField(a, 0, "input_limits");
+  if (l == nullptr || !mxIsDouble(l) || mxIsComplex(l) || mxGetNumberOfElements(l) != 2) return;
+  const std::vector<double> v = get_vector(l, what + ".input_limits");
+  const auto text = [](double x) { return std::isinf(x) ? std::string(x > 0 ? "Inf" : "-Inf") : fmt::format("{}", x); };
+  if (v[0] == HUGE_VAL || v[1] == -HUGE_VAL || v[0] > v[1])
+    throw MexError(id_bad_model, fmt::format("{}.input_limits: [{} {}]: expected [lo hi] with lo <= hi (-Inf / Inf: an "
+                                             "unbounded side)",
+                                             what, text(v[0]), text(v[1])));
+}
+
 // spec: a model struct, the JSON text of a model file, or the path of a model file.
 ModelSpec model_spec(const mxArray* a, const std::string& what) {
   if (a != nullptr && mxIsChar(a)) {
@@ -171,8 +185,9 @@ ModelSpec model_spec(const mxArray* a, const std::string& what) {
   }
   if (a != nullptr && mxIsStruct(a)) {
     if (mxGetNumberOfElements(a) != 1)
-      throw MexError(id_bad_model, fmt::format("{}: expected one model (a 1x1 struct), got a {}x{} struct array", what,
-                                               mxGetM(a), mxGetN(a)));
+      throw MexError(id_bad_model, fmt::format("{}: expected one model (a 1x1 struct), got a {} struct array", what,
+                                               dims(a)));
+    check_struct_limits(a, what);
     ToJsonOptions o;
     o.infinite_as_null = {"input_limits"};
     o.null_subtrees = {"metadata"};

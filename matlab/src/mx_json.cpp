@@ -69,6 +69,10 @@ std::string class_name(const mxArray* a) { return mxGetClassName(a); }
 
 nlohmann::json number_json(double v, const std::string& path, bool inf_as_null, bool nan_as_null) {
   if (std::isnan(v) && nan_as_null) return nullptr;
+  if (std::isnan(v) && inf_as_null)  // (a jsondecode'd null is NaN)
+    throw MexError(id_non_finite, fmt::format("{} is NaN: use -Inf or Inf for an unbounded side (jsondecode reads "
+                                              "JSON's null as NaN)",
+                                              path));
   if (std::isnan(v)) throw MexError(id_non_finite, fmt::format("{} is NaN (numbers must be finite)", path));
   if (std::isinf(v)) {
     if (inf_as_null) return nullptr;
@@ -87,8 +91,8 @@ nlohmann::json number_json(double v, const std::string& path, bool inf_as_null, 
 const void* user_data(const mxArray* a, const std::string& what) {
   if (mxIsSparse(a))
     throw MexError(id_bad_argument,
-                   fmt::format("{}: a sparse {}x{} array; sparse arrays are not supported: use full(x)", what,
-                               mxGetM(a), mxGetN(a)));
+                   fmt::format("{}: a sparse {} array; sparse arrays are not supported: use full(x)", what,
+                               dims(a)));
   return mxGetData(a);
 }
 
@@ -143,6 +147,14 @@ nlohmann::json array_json(const mxArray* a, const std::string& path, Element ele
 }
 
 }  // namespace
+
+std::string dims(const mxArray* a) {
+  const mwSize nd = mxGetNumberOfDimensions(a);
+  const mwSize* d = mxGetDimensions(a);
+  std::string out;
+  for (mwSize k = 0; k < nd; ++k) out += fmt::format("{}{}", k ? "x" : "", d[k]);
+  return out;
+}
 
 std::string valid_field_name(const std::string& key) {
   std::string name;
@@ -237,8 +249,8 @@ nlohmann::json to_json(const mxArray* a, const std::string& path, const ToJsonOp
   if (mxIsChar(a)) {
     if (count == 0) return "";
     if (mxGetM(a) != 1 || mxGetNumberOfDimensions(a) > 2)
-      throw MexError(id_bad_argument, fmt::format("{}: expected a text row (char), got a {}x{} char array", path,
-                                                  mxGetM(a), mxGetN(a)));
+      throw MexError(id_bad_argument, fmt::format("{}: expected a text row (char), got a {} char array", path,
+                                                  dims(a)));
     char* s = mxArrayToString(a);
     if (s == nullptr) throw MexError(id_bad_argument, fmt::format("{}: cannot convert the text", path));
     std::string out(s);
@@ -279,7 +291,7 @@ double get_scalar(const mxArray* a, const std::string& what) {
   if (a == nullptr || !(mxIsNumeric(a) || mxIsLogical(a)) || mxIsComplex(a) || mxGetNumberOfElements(a) != 1)
     throw MexError(id_bad_argument,
                    fmt::format("{}: expected a real number (scalar), got {}", what,
-                               a ? fmt::format("a {}x{} {}", mxGetM(a), mxGetN(a), class_name(a)) : "nothing"));
+                               a ? fmt::format("a {} {}", dims(a), class_name(a)) : "nothing"));
   const void* d = user_data(a, what);
   if (mxIsLogical(a)) return *static_cast<const mxLogical*>(d) ? 1.0 : 0.0;
   const double v = mxGetScalar(a);  // (of any numeric class; a full array: user_data)
@@ -307,7 +319,7 @@ std::vector<double> get_vector(const mxArray* a, const std::string& what) {
       (mxGetM(a) > 1 && mxGetN(a) > 1))
     throw MexError(id_bad_argument,
                    fmt::format("{}: expected a real double vector, got {}", what,
-                               a ? fmt::format("a {}x{} {}{}", mxGetM(a), mxGetN(a), mxIsComplex(a) ? "complex " : "",
+                               a ? fmt::format("a {} {}{}", dims(a), mxIsComplex(a) ? "complex " : "",
                                                class_name(a))
                                  : "nothing"));
   const double* d = static_cast<const double*>(user_data(a, what));

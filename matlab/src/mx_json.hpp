@@ -60,6 +60,9 @@ struct ToJsonOptions {
 mxArray* to_mx(const nlohmann::json& j);
 nlohmann::json to_json(const mxArray* a, const std::string& path, const ToJsonOptions& options = {});
 
+// The array's size as MATLAB prints it: "3x4", "1x1x200" (every dimension, not mxGetN's product).
+std::string dims(const mxArray* a);
+
 // A MATLAB name for a JSON key (see above).
 std::string valid_field_name(const std::string& key);
 

@@ -14,6 +14,9 @@ function test_errors()
   neg_alpha = gpi; neg_alpha.alpha = -1;
   unknown_kind = gpi; unknown_kind.model = 'foo';
   unknown_key = gpi; unknown_key.gain = 2;
+  swapped_limits = gpi; swapped_limits.input_limits = [Inf -Inf];  % not unbounded: lo > hi
+  inf_lo = gpi; inf_lo.input_limits = [Inf 0.6];
+  nan_limit = gpi; nan_limit.input_limits = [NaN 0.6];  % jsondecode('[null, 0.6]')
   sparse_c = gpi; sparse_c.c = sparse([60 4 0 30]);  % a sparse array's data is its non-zeros only
   % mpi-asym with unbounded envelopes: its numerical inverse needs input limits
   asym = struct('model', 'mpi-asym', 'r', 0.1, 'p', 0.2, 'ascending', struct('envelope', 'affine', 'c', [1 0]), ...
@@ -69,6 +72,10 @@ function test_errors()
     'sparse logical option',  @() hysteron_simulate(gpi, x, 'relaxed', sparse(true)), 'hysteron:badArgument', 'relaxed'': a sparse'
     'sparse rig pressure',    @() hysteron_rig(sparse([0 0 0.3])),         'hysteron:badArgument', 'pressure_mpa: a sparse'
     'sparse rig parameter',   @() hysteron_rig_params(struct('load', struct('mass', sparse(10)))), 'hysteron:badArgument', 'mass: a sparse'
+    '3-D input',              @() hysteron_simulate(gpi, ones(1, 1, 200)), 'hysteron:badArgument', 'a 1x1x200 double'
+    'limits [Inf -Inf]',      @() hysteron_simulate(swapped_limits, x),    'hysteron:badModel', 'input_limits: [Inf -Inf]'
+    'limits [Inf 0.6]',       @() hysteron_model(inf_lo),                  'hysteron:badModel', 'lo <= hi'
+    'jsondecode null limit',  @() hysteron_simulate(nan_limit, x),         'hysteron:nonFinite', 'input_limits(1) is NaN: use -Inf or Inf'
     'unknown command',        @() hysteron_mex('nope'),                     'hysteron:badArgument', 'nope'
     'no command',             @() hysteron_mex(),                           'hysteron:badArgument', 'command'
     'too many arguments',     @() hysteron_mex('simulate', gpi, x, struct(), 4), 'hysteron:badArgument', 'arguments'

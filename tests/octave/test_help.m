@@ -2,17 +2,18 @@ function test_help()
 %TEST_HELP `help hysteron_xxx` prints each wrapper's help text (usage and options).
   fails = 0;
   expect = {
-    'hysteron',            {'hysteron_fit', 'hysteron_invert', 'hysteron_rig', 'hysteron:*'}
+    'hysteron',            {'hysteron_fit', 'hysteron_invert', 'hysteron_rig', 'hysteron_loop', 'rate-pi', 'hysteron:*'}
     'hysteron_fit',        {'Identify a hysteresis model', 'num_operators', 'hysteron:fitInvalidInput'}
     'hysteron_simulate',   {'forwards', 'relaxed'}
     'hysteron_invert',     {'Exact inverse', 'limits', 'SATURATED'}
     'hysteron_evaluate',   {'Error metrics', 'range'}
-    'hysteron_load_model', {'model file', 'input_limits'}
+    'hysteron_load_model', {'model file', 'input_limits', 'preisach', 'kp', 'bouc-wen', 'maxwell-slip', 'rate-pi'}
     'hysteron_save_model', {'atomically'}
     'hysteron_model',      {'Validate a model', 'only', 'differs from the identity'}
     'hysteron_model_json', {'JSON text'}
     'hysteron_rig',        {'simulated pneumatic-muscle rig', 'contraction_measured_mm', 'seed'}
     'hysteron_rig_params', {'parameter struct'}
+    'hysteron_loop',       {'Replay a loop', 'learning run', 'hysteron:error'}
   };
   for i = 1:size(expect, 1)
     text = evalc(['help ' expect{i, 1}]);

@@ -115,10 +115,14 @@ struct ModelSpec {
   nlohmann::json extra;  // "units", "note", "metadata"
 };
 
-// Keys of a model file whose value is an array (a MATLAB scalar is one element).
+// Keys of a model file whose value is an array (a MATLAB scalar is one element): every kind's
+// (docs/model-files.md), but rate-pi's c is a number.
 void wrap_array_keys(nlohmann::json& j) {
   if (!j.is_object()) return;
-  for (const char* key : {"c", "r", "p", "z", "g", "input_limits"}) {
+  const auto kind = j.find("model");
+  const bool rate_pi = kind != j.end() && kind->is_string() && *kind == "rate-pi";
+  for (const char* key : {"c", "r", "p", "z", "g", "w", "k", "delta", "input_limits"}) {
+    if (rate_pi && std::string_view(key) == "c") continue;
     auto it = j.find(key);
     if (it != j.end() && (it->is_number() || it->is_null())) *it = nlohmann::json::array({*it});
   }

@@ -105,6 +105,26 @@ function test_roundtrip()
                         'the HTML report of hysteron_fit');
   fails = fails + check(strcmp(mfit.model, 'pi') && rfit.train.r2 > 0.9, 'pi fit of the gpi output: r2 %g', rfit.train.r2);
 
+  % the other kinds the model reader has, as JSON text and as the struct hysteron_model returns
+  % (one-element arrays come back as scalars, and rate-pi's c is a number, not an array)
+  texts = {
+    '{"model": "preisach", "q": 0.5, "lo": 0, "hi": 0.6, "levels": 1, "w": [2]}'
+    '{"model": "kp", "q": 0.5, "lo": 0, "hi": 0.6, "levels": 2, "w": [1, 2, 3]}'
+    '{"model": "bouc-wen", "kx": 1, "kw": 0.5, "rho": 10, "sigma": 0.5, "n": 1}'
+    '{"model": "maxwell-slip", "k0": 1, "k": [2], "delta": [0.1]}'
+    '{"model": "rate-pi", "q": 0.1, "r": [0, 0.1], "p": [0.3, 0.2], "c": 0.1, "tau": 0.05, "dt": 0.001}'
+  };
+  for i = 1:numel(texts)
+    try
+      s = hysteron_model(texts{i});
+      y = hysteron_simulate(texts{i}, x);
+      fails = fails + check(isequal(hysteron_simulate(s, x), y) && isequal(hysteron_model(s), s), ...
+                            '%s: the struct gives another model', s.model);
+    catch err
+      fails = fails + check(false, '%s: %s', texts{i}, err.message);
+    end
+  end
+
   if fails > 0
     error('test_roundtrip: %d check(s) failed', fails);
   end

@@ -21,10 +21,11 @@ function out = hysteron_loop(result, run, model, reference_m, measured_m, pressu
 %   RESULT is a result.json file name (`hysteron experiment NAME --out DIR`), or JSON
 %   text of a result.json or of one "controller". RUN is 'VARIANT' for an experiment with
 %   one reference ('compensated'), 'VARIANT.REFERENCE' for one with several
-%   ('compensated.triangle'), '' for a controller's text: the faithful and compensated
-%   runs (not the learning or adaptive ones, above). MODEL is the model the run
+%   ('compensated.triangle'), '' for a controller's text: the faithful, compensated and
+%   baseline runs (not the learning or adaptive ones, above). MODEL is the model the run
 %   inverts: DIR/best_model.json for the compensated loop, DIR/model.json for the
-%   faithful one (a model struct, JSON text or file name).
+%   faithful one, result.json's baseline_model for the baseline (a model struct, JSON
+%   text or file name; jsondecode(fileread(RESULT)).baseline_model).
 %   Fed a run's own tracking CSV, it commands what the run commanded: a check of the
 %   loop before it drives a muscle. The same as the C ABI's hysteron_loop_params_from_file
 %   + hysteron_*_create + hysteron_*_step, and Python's hysteron.controller_from.

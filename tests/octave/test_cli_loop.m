@@ -44,8 +44,8 @@ function test_cli_loop(cli)
                         col('measured_mm') * 1e-3, col('pressure_measured_mpa'));
       dc = max(abs(o.command_mpa - col('pressure_command_mpa')));
       dd = max(abs(o.duty - col('pwm_duty')));
-      fails = fails + check(dc < 1e-9 && dd < 1e-9, '%s %s: command differs by %g MPa, duty by %g', runs{e, 1}, run, dc, dd);
-      fails = fails + check(numel(o.command_mpa) == size(c, 1) && numel(o.preview_m) == size(c, 1), '%s: sizes', run);
+      fails = fails + check_that(dc < 1e-9 && dd < 1e-9, '%s %s: command differs by %g MPa, duty by %g', runs{e, 1}, run, dc, dd);
+      fails = fails + check_that(numel(o.command_mpa) == size(c, 1) && numel(o.preview_m) == size(c, 1), '%s: sizes', run);
       printf('ok   %s %s (%s): %d samples, largest difference %.3g MPa, %.3g in the duty\n', runs{e, 1}, run, ...
              o.loop, size(c, 1), dc, dd);
     end
@@ -75,28 +75,4 @@ function test_cli_loop(cli)
     exit(1);
   end
   printf('all checks passed\n');
-end
-
-function f = check(ok, varargin)
-  f = 0;
-  if ~ok
-    fprintf(['FAIL: ' varargin{1} '\n'], varargin{2:end});
-    f = 1;
-  end
-end
-
-function f = expect_error(fn, id, needle)
-  f = 0;
-  try
-    fn();
-    fprintf('FAIL: no error (expected %s: %s)\n', id, needle);
-    f = 1;
-  catch err
-    if ~strcmp(err.identifier, id) || isempty(strfind(err.message, needle))
-      fprintf('FAIL: got %s: %s (expected %s: %s)\n', err.identifier, err.message, id, needle);
-      f = 1;
-    else
-      printf('ok   %s: %s\n', err.identifier, err.message);
-    end
-  end
 end

@@ -14,34 +14,34 @@ function test_evaluate()
   names = {'rms', 'n', 'outside_input_limits', 'output_map', 'clipping_warning', 'output_map_warning', ...
            'input_coverage_warning'};
   for k = 1:numel(names)
-    fails = fails + check(isfield(m, names{k}), 'field %s missing', names{k});
+    fails = fails + check_that(isfield(m, names{k}), 'field %s missing', names{k});
   end
-  fails = fails + check(isempty(w), 'a clean record warns: %s', w);
-  fails = fails + check(m.outside_input_limits == 0 && isempty(m.input_coverage_warning), 'clean: coverage');
-  fails = fails + check(abs(m.output_map.gain - 1) < 0.01 && isempty(m.output_map_warning), 'clean: gain %g', ...
+  fails = fails + check_that(isempty(w), 'a clean record warns: %s', w);
+  fails = fails + check_that(m.outside_input_limits == 0 && isempty(m.input_coverage_warning), 'clean: coverage');
+  fails = fails + check_that(abs(m.output_map.gain - 1) < 0.01 && isempty(m.output_map_warning), 'clean: gain %g', ...
                         m.output_map.gain);
-  fails = fails + check(isempty(m.clipping_warning), 'clean: clipping_warning %s', m.clipping_warning);
+  fails = fails + check_that(isempty(m.clipping_warning), 'clean: clipping_warning %s', m.clipping_warning);
   % the output's sign flipped: the map explains it, and says so
   [m, w, id] = evaluate_warned(gpi, x, -noisy);
-  fails = fails + check(m.output_map.gain < 0 && ~isempty(strfind(m.output_map_warning, 'sign')), ...
+  fails = fails + check_that(m.output_map.gain < 0 && ~isempty(strfind(m.output_map_warning, 'sign')), ...
                         'flipped: gain %g, warning "%s"', m.output_map.gain, m.output_map_warning);
-  fails = fails + check(strcmp(id, 'hysteron:evaluate') && strcmp(w, m.output_map_warning), ...
+  fails = fails + check_that(strcmp(id, 'hysteron:evaluate') && strcmp(w, m.output_map_warning), ...
                         'flipped: warning %s "%s"', id, w);
   % the input beyond the model's limits [0 0.6] for half of the record
   [m, w, id] = evaluate_warned(gpi, 2 * x, hysteron_simulate(gpi, 2 * x));
-  fails = fails + check(m.outside_input_limits > 500 && ~isempty(m.input_coverage_warning), ...
+  fails = fails + check_that(m.outside_input_limits > 500 && ~isempty(m.input_coverage_warning), ...
                         'outside: %d samples, warning "%s"', m.outside_input_limits, m.input_coverage_warning);
-  fails = fails + check(strcmp(id, 'hysteron:evaluate') && ~isempty(strfind(w, 'input_limits')), ...
+  fails = fails + check_that(strcmp(id, 'hysteron:evaluate') && ~isempty(strfind(w, 'input_limits')), ...
                         'outside: warning %s "%s"', id, w);
   % the output clips at a sensor's limit (below the least output): scored as recorded, a warning
   lo = min(y) + 0.25 * (max(y) - min(y));
   clipped = max(noisy, lo);
   [m, w, id] = evaluate_warned(gpi, x, clipped);
-  fails = fails + check(~isempty(strfind(m.clipping_warning, 'clips')), 'clipped: clipping_warning "%s"', ...
+  fails = fails + check_that(~isempty(strfind(m.clipping_warning, 'clips')), 'clipped: clipping_warning "%s"', ...
                         m.clipping_warning);
-  fails = fails + check(strcmp(id, 'hysteron:evaluate') && ~isempty(w), 'clipped: warning %s "%s"', id, w);
+  fails = fails + check_that(strcmp(id, 'hysteron:evaluate') && ~isempty(w), 'clipped: warning %s "%s"', id, w);
   [m, w] = evaluate_warned(gpi, x, clipped, 'censored', true);
-  fails = fails + check(isempty(m.clipping_warning) && m.censored_samples > 0, ...
+  fails = fails + check_that(isempty(m.clipping_warning) && m.censored_samples > 0, ...
                         'clipped, censored: %d censored, warning "%s"', m.censored_samples, m.clipping_warning);
   if fails > 0
     error('test_evaluate: %d check(s) failed', fails);
@@ -54,11 +54,4 @@ function [m, w, id] = evaluate_warned(varargin)
   lastwarn('', '');
   m = hysteron_evaluate(varargin{:});
   [w, id] = lastwarn();
-end
-
-function failed = check(ok, varargin)
-  failed = ~ok;
-  if failed
-    fprintf('FAIL: %s\n', sprintf(varargin{:}));
-  end
 end

@@ -8,7 +8,7 @@ function test_loop_runs(dir)
   model = fullfile(dir, 'dz.json');
   r = 0.01 * ones(10, 1);
   o = hysteron_loop(rj, 'compensated.triangle', model, r, r, 0.3 * ones(10, 1));
-  fails = fails + check(strcmp(o.loop, 'cascade_pwm') && numel(o.command_mpa) == 10, 'compensated.triangle: %s', o.loop);
+  fails = fails + check_that(strcmp(o.loop, 'cascade_pwm') && numel(o.command_mpa) == 10, 'compensated.triangle: %s', o.loop);
   fails = fails + expect_error(@() hysteron_loop(rj, 'learning.triangle', model, r, r, r), 'hysteron:error', ...
                                {'learning.triangle', 'iterative learning', 'does not replay', 'hysteron_ilc', ...
                                 'hysteron export --loop'});
@@ -18,28 +18,4 @@ function test_loop_runs(dir)
     error('test_loop_runs: %d check(s) failed', fails);
   end
   fprintf('test_loop_runs: learning and adaptive runs refused\n');
-end
-
-function f = expect_error(fn, id, needles)
-  f = 0;
-  try
-    fn();
-    fprintf('FAIL: no error (expected %s: %s)\n', id, strjoin(needles, ', '));
-    f = 1;
-  catch err
-    missing = needles(cellfun(@(n) isempty(strfind(err.message, n)), needles));
-    if ~strcmp(err.identifier, id) || ~isempty(missing)
-      fprintf('FAIL: got %s: %s (expected %s, mentioning %s)\n', err.identifier, err.message, id, strjoin(missing, ', '));
-      f = 1;
-    else
-      printf('ok   %s: %s\n', err.identifier, err.message);
-    end
-  end
-end
-
-function failed = check(ok, varargin)
-  failed = ~ok;
-  if failed
-    fprintf('FAIL: %s\n', sprintf(varargin{:}));
-  end
 end

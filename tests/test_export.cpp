@@ -571,6 +571,40 @@ TEST(ExportCheck, CompilesWithOtherFlags) {
   }
 }
 
+// -ffast-math regroups floating-point operations: the tanh kernel's round-to-integer trick
+// (y/ln2 + 1.5 2^52) - 1.5 2^52 was folded to y/ln2 and a tanh model was off by up to 10 mm
+// (gpi-pid's fitted model). Not bit-identical under it, but within 1e-12 of the library, every kind.
+TEST(ExportCheck, FastMathStaysWithin1e12OfTheLibrary) {
+  if (!have_gcc()) GTEST_SKIP() << "gcc not found";
+  for (const Case& c : cases()) {
+    TempDir dir("fast_math_" + c.name);
+    write(dir.path / "model.c", generate(c, true).source);
+    ASSERT_EQ(compile(dir.path, true, kFlags + " -ffast-math"), "") << c.name;
+    const Script run = make_run(c, 20000, 99u);
+    const Compared r = compare(run, run_driver(dir.path, run.script));
+    EXPECT_LE(r.forward_err, 1e-12) << c.name;
+    EXPECT_LE(r.inverse_err, 1e-12) << c.name;
+    std::printf("  %s with -ffast-math: max relative error %.3g / %.3g; bit-identical %zu / %zu of %zu / %zu; "
+                "%zu other mismatches%s%s\n",
+                c.name.c_str(), r.forward_err, r.inverse_err, r.forward_exact, r.inverse_exact, r.forward, r.inverse,
+                r.mismatches, r.mismatches ? ", first: " : "", r.first_mismatch.c_str());
+  }
+}
+
+// -fsingle-precision-constant makes every floating constant a float (0.6 -> 0.60000002384185791,
+// 1e300 -> inf) and defines no macro: the generated file's check stops the compilation.
+TEST(ExportCheck, SinglePrecisionConstantsStopTheCompilation) {
+  if (!have_gcc()) GTEST_SKIP() << "gcc not found";
+  for (const Case& c : cases()) {
+    if (c.name != "pi" && c.name != "gpi_tanh") continue;
+    TempDir dir("single_constants_" + c.name);
+    write(dir.path / "model.c", generate(c, true).source);
+    ASSERT_EQ(compile(dir.path, true), "") << c.name;
+    const std::string err = compile(dir.path, true, kFlags + " -fsingle-precision-constant");
+    EXPECT_NE(err.find("hm_floating_constants_are_double"), std::string::npos) << c.name << ": " << err;
+  }
+}
+
 TEST(ExportCheck, BadOptionsAndModelsAreRefused) {
   const ModelParams pi = io::model_from_json(io::parse_json(R"({"model": "pi", "q": 0.4, "r": [0.1], "p": [0.3]})", "pi"), "pi");
   io::ExportOptions o;

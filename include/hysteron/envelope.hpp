@@ -43,9 +43,12 @@ inline double tanh_fast(double z) noexcept {
   constexpr double kShift = 0x1.8p52;  // adding it rounds to an integer
   constexpr double kInvLn2 = 0x1.71547652b82fep0;
   constexpr double kLn2Hi = 0x1.62e42fee00000p-1, kLn2Lo = 0x1.a39ef35793c76p-33;
-  double kd = y * kInvLn2 + kShift;
-  const std::uint64_t ki = std::bit_cast<std::uint64_t>(kd);
-  kd -= kShift;
+  // k = round(y / ln2) read from the bits of the shifted sum, not as (sum - kShift): under
+  // -ffast-math (-fassociative-math) compilers fold (y/ln2 + kShift) - kShift to y/ln2, and
+  // r and 2^k stop matching (tanh off by up to 0.17). The same k, exact, under any flags
+  // (tests/fast_math/test_fast_math.cpp).
+  const std::uint64_t ki = std::bit_cast<std::uint64_t>(y * kInvLn2 + kShift) - std::bit_cast<std::uint64_t>(kShift);
+  const double kd = static_cast<double>(static_cast<std::int64_t>(ki));
   const double r = (y - kd * kLn2Hi) - kd * kLn2Lo;  // k ln2_hi is exact
   const double r2 = r * r, r4 = r2 * r2, r8 = r4 * r4;
   // P(r) = (expm1(r) - r) / r^2, Estrin's scheme
@@ -56,7 +59,11 @@ inline double tanh_fast(double z) noexcept {
   const double q4 = 0x1.27e4d3f1bb8b0p-22 + r * 0x1.af4e5f2efa609p-26;
   const double P = (q0 + r2 * q1) + r4 * (q2 + r2 * q3) + r8 * (q4 + r2 * 0x1.1f7f70ba58a50p-29);
   const double s = std::bit_cast<double>((ki + 1023) << 52);  // 2^k, k = 0..58
-  const double e = s * (r + r2 * P) + (s - 1.0);              // expm1(2|z|)
+  // s - 1 (rounded as the subtraction would be) from the integer 2^k - 1: written s - 1.0, it is
+  // reassociated under -ffast-math into (s (r + r2 P) + s) - 1, and tanh of |z| < 1e-3 loses its
+  // relative precision (tanh(1e-17) = 0).
+  const double sm1 = static_cast<double>(static_cast<std::int64_t>((std::uint64_t{1} << (ki & 63)) - 1));
+  const double e = s * (r + r2 * P) + sm1;  // expm1(2|z|)
   return std::copysign(e / (e + 2.0), z);
 }
 

@@ -196,6 +196,54 @@ def test_generated_c_refuses_nan_under_fast_math(tmp_path):
         assert c.fm_learning_correction(learning, 0) == 0.0, flags
 
 
+TANH_MODELS = {  # tanh envelopes (the branch-free tanh and atanh kernels), gpi-pid's scale (MPa -> mm)
+    "gpi": {"model": "gpi", "envelope": "tanh", "c": [26.5, 5.4, -1.67, 21.4], "q": 0.8, "n": 10, "rho": 0.4,
+            "tau": 0.1, "alpha": 2.0, "input_limits": [0.0, 0.6]},
+    "mpi_asym": {"model": "mpi-asym", "ascending": {"envelope": "tanh", "c": [26.5, 5.4, -1.67, 21.4]},
+                 "descending": {"envelope": "tanh", "c": [21.0, 7.7, -1.84, 15.2]}, "q": 0.02,
+                 "r": [0.3 * i for i in range(1, 9)], "p": [1.1, 0.45, 0.25, 0.1, 0.05, 0.03, 0.02, 0.3],
+                 "input_limits": [0.0, 0.6]}}
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
+@pytest.mark.parametrize("name", sorted(TANH_MODELS))
+def test_generated_c_under_fast_math_matches_the_library(tmp_path, name):
+    # -ffast-math (-fassociative-math) used to fold the tanh kernel's (y/ln2 + 1.5 2^52) - 1.5 2^52
+    # to y/ln2: the model was off by up to 10 mm and its inverse by 0.09 MPa, commands within limits.
+    # Now k is read from the bits; the results stay within 1e-12 (relative to the output range) of
+    # the library's, and bit-identical without the flags (docs/export.md, "Limits").
+    spec = TANH_MODELS[name]
+    source = hysteron.export_c(spec, prefix="tm")["source"]
+    n = 4000
+    k = np.arange(n)
+    rng = np.random.default_rng(3)
+    x = np.clip(0.3 + 0.3 * np.exp(-k / 2000) * np.sin(2 * np.pi * k / 400) + 0.01 * rng.standard_normal(n), 0, 0.6)
+    lib_model = hysteron.Model(spec)
+    y_lib = np.array([lib_model.step(v) for v in x])
+    y_span = y_lib.max() - y_lib.min()
+    yd = np.concatenate([y_lib[::-1], [y_lib.max() + 5.0, y_lib.min() - 5.0]])  # and two beyond reach
+    lib_inverse = hysteron.Inverse(spec)
+    x_lib = np.array([lib_inverse.step(v) for v in yd])
+    for flags in (["-O2"], ["-O2", "-ffast-math"], ["-O3", "-fassociative-math", "-fno-signed-zeros",
+                                                     "-fno-trapping-math"]):
+        c = compile_generated(tmp_path, source, "tm" + "".join(flags).replace("-", "_"), flags)
+        for f in ("tm_model_step", "tm_inverse_step"):
+            getattr(c, f).restype = ctypes.c_double
+            getattr(c, f).argtypes = [ctypes.c_void_p, ctypes.c_double]
+        model, inverse = ctypes.create_string_buffer(1 << 16), ctypes.create_string_buffer(1 << 16)
+        c.tm_model_reset(model)
+        c.tm_inverse_reset(inverse)
+        y_c = np.array([c.tm_model_step(model, v) for v in x])
+        x_c = np.array([c.tm_inverse_step(inverse, v) for v in yd])
+        if flags == ["-O2"]:
+            assert np.array_equal(y_c, y_lib) and np.array_equal(x_c, x_lib), name
+            continue
+        y_err = np.max(np.abs(y_c - y_lib)) / y_span
+        x_err = np.max(np.abs(x_c - x_lib)) / 0.6
+        assert y_err <= 1e-12 and x_err <= 1e-12, (name, flags, y_err, x_err)
+        assert x_c[-2] == 0.6 and x_c[-1] == 0.0, (name, flags)  # beyond reach: the limits
+
+
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found: generated C not compiled")
 def test_learning_with_huge_errors_keeps_its_corrections_finite(tmp_path):
     # errors of 1.2e308 are finite, but L e overflows with L = 1.9 (and alternating signs give

@@ -178,21 +178,30 @@ std::string inverse_body(const FastEnvelope& e) {
   return "  return u;\n";
 }
 
+// The arithmetic is the library's in IEEE binary64: a 32-bit double, or floating constants made
+// float by -fsingle-precision-constant (no macro tells), would give wrong limits (0.6 becomes
+// 0.60000002384185791 > 0.6) and overflow guards of inf. Both stop the compilation instead.
+constexpr std::string_view kTargetCheck = R"(
+/* The constants and kernels below are IEEE 754 binary64 doubles (docs/export.md, "Limits"). A
+ * target whose double is narrower (e.g. avr-gcc's 32-bit default) stops here; so does a build
+ * with -fsingle-precision-constant, which makes every floating constant a float (the limit 0.6
+ * would be 0.60000002384185791 and the overflow guards 1e300 inf): the array size below is
+ * negative when a constant like 0.5 is not a double. */
+#if DBL_MANT_DIG != 53 || DBL_MAX_EXP != 1024
+#error "this generated C needs IEEE 754 binary64 double, DBL_MANT_DIG == 53"
+#endif
+typedef char $P_floating_constants_are_double[(sizeof(0.5) == sizeof(double)) ? 1 : -1];
+)";
+
 // Finiteness from the IEEE 754 bit pattern: isfinite()/isnan() are folded to constants under
 // -ffast-math (-ffinite-math-only), and a target's build may use such flags.
 constexpr std::string_view kFinite = R"(
 /* x is finite (not NaN, not +-inf): its exponent bits are not all ones. Read from the bit
  * pattern, not with isfinite()/isnan(), which compilers fold to constants under -ffast-math
  * (-ffinite-math-only): the checks on the inputs hold whatever flags the target uses. */
-#if DBL_MANT_DIG == 24 /* a 32-bit double (e.g. avr-gcc's default) */
-typedef uint32_t $P_bits;
-#define $U_EXPONENT_BITS UINT32_C(0x7f800000)
-#define $U_MAGNITUDE_BITS UINT32_C(0x7fffffff)
-#else
-typedef uint64_t $P_bits;
+typedef uint64_t $P_bits; /* double is IEEE 754 binary64 (checked after the #includes) */
 #define $U_EXPONENT_BITS UINT64_C(0x7ff0000000000000)
 #define $U_MAGNITUDE_BITS UINT64_C(0x7fffffffffffffff)
-#endif
 
 static int $P_finite(double x)
 {
@@ -218,12 +227,14 @@ static double $P_tanh(double z)
 {
   union { double d; uint64_t u; } kb, sb;
   double a = fabs(z);
-  double y, kd, r, r2, r4, r8, q0, q1, q2, q3, q4, P, s, e;
+  double y, kd, r, r2, r4, r8, q0, q1, q2, q3, q4, P, s, sm1, e;
   a = a > 20.0 ? 20.0 : a; /* tanh = 1 to double precision beyond 19.1 */
   y = a + a;
-  kd = y * 0x1.71547652b82fep0 + 0x1.8p52; /* adding 1.5 2^52 rounds to an integer */
-  kb.d = kd;
-  kd -= 0x1.8p52;
+  kb.d = y * 0x1.71547652b82fep0 + 0x1.8p52; /* adding 1.5 2^52 rounds to an integer */
+  /* k read from the bits of the sum, not as (sum - 1.5 2^52), which -ffast-math
+   * (-fassociative-math) folds to y / ln2: the same k, exact, under any flags */
+  kb.u -= UINT64_C(0x4338000000000000);
+  kd = (double)(int64_t)kb.u;
   r = (y - kd * 0x1.62e42fee00000p-1) - kd * 0x1.a39ef35793c76p-33;
   r2 = r * r;
   r4 = r2 * r2;
@@ -236,7 +247,10 @@ static double $P_tanh(double z)
   P = (q0 + r2 * q1) + r4 * (q2 + r2 * q3) + r8 * (q4 + r2 * 0x1.1f7f70ba58a50p-29);
   sb.u = (kb.u + 1023u) << 52; /* 2^k, k = 0..58 */
   s = sb.d;
-  e = s * (r + r2 * P) + (s - 1.0); /* expm1(2|z|) */
+  /* s - 1 from the integer 2^k - 1, rounded as the subtraction: written s - 1.0, -ffast-math
+   * reassociates e into (s (r + r2 P) + s) - 1 and tanh(1e-17) becomes 0 */
+  sm1 = (double)(int64_t)((UINT64_C(1) << (kb.u & 63u)) - 1u);
+  e = s * (r + r2 * P) + sm1; /* expm1(2|z|) */
   return copysign(e / (e + 2.0), z);
 }
 )";
@@ -1018,6 +1032,7 @@ double $P_inverse_step($P_inverse *inv, double y_desired)
     if (loop) src += loop->comment;
     src += api_comment();
     src += "\n#ifndef $U_C_INCLUDED\n#define $U_C_INCLUDED\n\n#include <float.h>\n#include <math.h>\n#include <stdint.h>\n#include <string.h>\n";
+    src += kTargetCheck;
     if (o.header_name.empty()) {
       src += declarations();
       if (loop) src += loop->declarations;

@@ -403,21 +403,23 @@ void add_fit(CLI::App& app, Action& action) {
   CLI::App* sub = app.add_subcommand("fit", "identify a hysteresis model from measured input/output data");
   const std::vector<std::string> names = model_names();
   sub->add_option("--model,-m", c->model,
-                  fmt::format("{} (auto: fit every kind, choose by hold-out RMS; default gpi)", join(names, " | ")))
-      ->check(CLI::IsMember(names));
+                  fmt::format("{} (auto: fit every kind, choose by the hold-out score; default gpi)", join(names, " | ")))
+      ->check(one_of(names));
   add_data_options(sub, c->sel);
-  sub->add_option("--n", c->n, "number of operators (default 10)");
-  sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones (default 4)");
+  sub->add_option("--n", c->n, "number of operators, an integer in 1..200 (default 10)");
+  sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones, an integer in 0..50 (default 4)");
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");
-  sub->add_option("--validate", c->validate, "validation range C:D (of each --validate-data file if given)");
+  sub->add_option("--validate", c->validate,
+                  "validation range C:D (sample indices, half-open) or Cs:Ds (seconds), of each --validate-data file "
+                  "if given (default: the whole file; without --validate-data, the samples after --train, if any)");
   sub->add_option("--validate-data", c->validate_data, "other records (same columns) to validate on (repeatable)");
   sub->add_option("--out,-o", c->out, "model file to write (JSON); - prints the model JSON on stdout")->required();
   sub->add_option("--report", c->report, "also write the report: HTML if the name ends in .html/.htm, else JSON");
   sub->add_flag("--json", c->json, "print the report as one JSON document");
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
-  sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)")
+  sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses, an integer in 0..4294967295 (default 0: none)")
       ->check(non_negative_integer(std::numeric_limits<unsigned>::max()));
-  sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
+  sub->add_option("--starts", c->starts, "number of initial guesses refined by LM, an integer in 1..54 (default 2)");
   sub->add_option("--threads", c->threads,
                   "threads refining the starts concurrently (default 0: one per hardware thread, fewer on a long "
                   "record so that the concurrent starts hold at most about 512 MB; 1: sequential; the result does "

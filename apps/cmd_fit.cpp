@@ -352,23 +352,35 @@ int run_fit(const FitCliOptions& c) {
   }
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {
-    text += "candidates (chosen by the hold-out score: over the first and the last part of the training range, the "
-            "geometric mean of the RMS over the best kind's; within 2 % of the least score, the fewest parameters):\n";
-    std::string head = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", "kind", "status", "params", "train RMS",
-                                   "hold-out RMS", "score");
-    for (const auto& v : sets) head += fmt::format(" {:>14}", v.file.empty() ? std::string("validate RMS") : "validate RMS");
+    // a row's status, params, train and validate RMS are its fold-0 fit's (on the training range without its last
+    // part), not the chosen kind's refit on the whole range: the table says so, and where the refit's figures are
+    const IndexRange f0 = rep.candidates.front().fit_range, tr = train.resolved(x.size());
+    const bool chosen = std::any_of(rep.candidates.begin(), rep.candidates.end(), [](const auto& k) { return k.chosen; });
+    text += fmt::format(
+        "candidates (chosen by the hold-out score: over the first and the last {:.0f} % of the training range, the "
+        "geometric mean of the RMS over the best kind's; within 2 % of the least score, the fewest parameters).\n"
+        "  Each row is the kind's fold-0 fit, trained on samples {}..{} (the training range without its last part): "
+        "its \"(fold 0)\" columns are that fit's{}.\n",
+        100 * o.holdout_fraction, f0.begin, f0.end,
+        chosen ? fmt::format(", not the chosen kind's refit on the whole training range (samples {}..{}), whose "
+                             "figures are the train line above and the validate lines below",
+                             tr.begin, tr.end)
+               : std::string());
+    std::string head = fmt::format("  {:<13} {:<15} {:>6} {:>18} {:>12} {:>9}", "kind", "status (fold 0)", "params",
+                                   "train RMS (fold 0)", "hold-out RMS", "score");
+    for (std::size_t k = 0; k < sets.size(); ++k) head += fmt::format(" {:>21}", "validate RMS (fold 0)");
     text += head + fmt::format(" {:>9}\n", "time [s]");
     for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
       const auto& cand = rep.candidates[i];
       const auto cell = [](double v, const char* f) { return std::isfinite(v) ? fmt::format(fmt::runtime(f), v) : "-"; };
-      std::string line = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", fit_model_name(cand.kind),
+      std::string line = fmt::format("  {:<13} {:<15} {:>6} {:>18} {:>12} {:>9}", fit_model_name(cand.kind),
                                      fit_status_name(cand.status),
                                      cand.num_parameters ? std::to_string(cand.num_parameters) : "-",
                                      cell(cand.train.rms, "{:.6g}"),
                                      cell(cand.holdout.rms, "{:.6g}"), cell(cand.holdout_score, "{:.4g}"));
       for (std::size_t k = 0; k < sets.size(); ++k) {
         const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();
-        line += fmt::format(" {:>14}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");
+        line += fmt::format(" {:>21}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");
       }
       text += line + fmt::format(" {:>9.3f}{}\n", cand.time_s, cand.chosen ? "  <- chosen" : "");
     }

@@ -351,7 +351,11 @@ struct FitCandidate {
   FitModel kind = FitModel::gpi;
   FitStatus status = FitStatus::not_run;
   std::string message;
-  FitMetrics train;    // fold 0: on the training range without its last part
+  // The samples fold 0's fit was trained on: the training range without its last
+  // holdout_fraction. status, message, train, num_parameters and model are that fit's, not
+  // the chosen kind's refit on the whole training range (FitReport's own fields are).
+  IndexRange fit_range;
+  FitMetrics train;    // fold 0: on fit_range (the training range without its last part)
   FitMetrics holdout;  // pooled over both folds' hold-outs (r2 not computed: NaN)
   // What auto chooses by (least wins): the geometric mean over the two folds of this kind's
   // hold-out RMS divided by the best kind's on that fold (1: best on both). Each fold

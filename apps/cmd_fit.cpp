@@ -418,8 +418,11 @@ void add_fit(CLI::App& app, Action& action) {
                   fmt::format("{} (auto: fit every kind, choose by the hold-out score; default gpi)", join(names, " | ")))
       ->check(one_of(names));
   add_data_options(sub, c->sel);
-  sub->add_option("--n", c->n, "number of operators, an integer in 1..200 (default 10)");
-  sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones, an integer in 0..50 (default 4)");
+  // the ranges FitOptions::is_valid checks, said before the fit (10.5: CLI11's "Could not convert" otherwise)
+  sub->add_option("--n", c->n, "number of operators, an integer in 1..200 (default 10)")
+      ->check(non_negative_integer(200, 1));
+  sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones, an integer in 0..50 (default 4)")
+      ->check(non_negative_integer(50));
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");
   sub->add_option("--validate", c->validate,
                   "validation range C:D (sample indices, half-open) or Cs:Ds (seconds), of each --validate-data file "
@@ -431,7 +434,8 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
   sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses, an integer in 0..4294967295 (default 0: none)")
       ->check(non_negative_integer(std::numeric_limits<unsigned>::max()));
-  sub->add_option("--starts", c->starts, "number of initial guesses refined by LM, an integer in 1..54 (default 2)");
+  sub->add_option("--starts", c->starts, "number of initial guesses refined by LM, an integer in 1..54 (default 2)")
+      ->check(non_negative_integer(54, 1));
   sub->add_option("--threads", c->threads,
                   "threads refining the starts concurrently (default 0: one per hardware thread, fewer on a long "
                   "record so that the concurrent starts hold at most about 512 MB; 1: sequential; the result does "

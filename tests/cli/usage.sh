@@ -48,6 +48,9 @@ if grep -qF -- "-j,--jobs UINT " "$T/sweep_help" && grep -qF "an integer in 1..1
 else
   echo "FAIL: --jobs help: $(grep -F -- --jobs "$T/sweep_help")"; fails=$((fails + 1))
 fi
+expect "fit --n 10.5: the range" 1 "--n: 10.5 is not an integer in 1..200" -- "$BIN" fit --n 10.5
+expect "fit --starts 0: the range" 1 "--starts: 0 is not an integer in 1..54" -- "$BIN" fit --starts 0
+expect "fit --dead-zones 51: the range" 1 "--dead-zones: 51 is not an integer in 0..50" -- "$BIN" fit --dead-zones 51
 expect "jobs 0: the range" 1 "--jobs: 0 is not an integer in 1..1024" -- "$BIN" sweep gpi-pid --vary load.mass=35 --jobs 0
 expect "jobs 1025: the range" 1 "--jobs: 1025 is not an integer in 1..1024" -- \
   "$BIN" sweep gpi-pid --vary load.mass=35 --jobs 1025

@@ -53,7 +53,7 @@ std::string model_help() {
 
 void add_model_options(CLI::App* cmd, ExperimentArgs& args) {
   add_control_period_option(cmd, args.control_period);
-  cmd->add_option("--model", args.model, model_help())->check(CLI::IsMember(model_choices()))->default_val("auto");
+  cmd->add_option("--model", args.model, model_help())->check(one_of(model_choices()))->default_val("auto");
   cmd->add_flag("--paper-references", args.paper_references,
                 "Track the papers' references as published even where they leave the contraction range this "
                 "rig reached in its identification run (default: such a reference is mapped into the rig's reach, "
@@ -121,7 +121,7 @@ void add_experiment(CLI::App& app, Action& action) {
   for (const auto& e : experiments()) names_help += fmt::format("\n  {:<14}{}", e.name, e.title);
   cmd->add_option("name", args->name, "The experiment:" + names_help)
       ->required()
-      ->check(CLI::IsMember(experiment_names()));
+      ->check(one_of(experiment_names()));
   cmd->add_option("--learning-periods", args->learning_periods,
                   "Periods of the learning variant (0: no learning runs; default 10)")
       ->check(CLI::Range(0, 1000));

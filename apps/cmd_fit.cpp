@@ -352,23 +352,35 @@ int run_fit(const FitCliOptions& c) {
   }
   for (const auto& w : rep.warnings) text += fmt::format("warning: {}\n", w);
   if (!rep.candidates.empty()) {
-    text += "candidates (chosen by the hold-out score: over the first and the last part of the training range, the "
-            "geometric mean of the RMS over the best kind's; within 2 % of the least score, the fewest parameters):\n";
-    std::string head = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", "kind", "status", "params", "train RMS",
-                                   "hold-out RMS", "score");
-    for (const auto& v : sets) head += fmt::format(" {:>14}", v.file.empty() ? std::string("validate RMS") : "validate RMS");
+    // a row's status, params, train and validate RMS are its fold-0 fit's (on the training range without its last
+    // part), not the chosen kind's refit on the whole range: the table says so, and where the refit's figures are
+    const IndexRange f0 = rep.candidates.front().fit_range, tr = train.resolved(x.size());
+    const bool chosen = std::any_of(rep.candidates.begin(), rep.candidates.end(), [](const auto& k) { return k.chosen; });
+    text += fmt::format(
+        "candidates (chosen by the hold-out score: over the first and the last {:.0f} % of the training range, the "
+        "geometric mean of the RMS over the best kind's; within 2 % of the least score, the fewest parameters).\n"
+        "  Each row is the kind's fold-0 fit, trained on samples {}..{} (the training range without its last part): "
+        "its \"(fold 0)\" columns are that fit's{}.\n",
+        100 * o.holdout_fraction, f0.begin, f0.end,
+        chosen ? fmt::format(", not the chosen kind's refit on the whole training range (samples {}..{}), whose "
+                             "figures are the train line above and the validate lines below",
+                             tr.begin, tr.end)
+               : std::string());
+    std::string head = fmt::format("  {:<13} {:<15} {:>6} {:>18} {:>12} {:>9}", "kind", "status (fold 0)", "params",
+                                   "train RMS (fold 0)", "hold-out RMS", "score");
+    for (std::size_t k = 0; k < sets.size(); ++k) head += fmt::format(" {:>21}", "validate RMS (fold 0)");
     text += head + fmt::format(" {:>9}\n", "time [s]");
     for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
       const auto& cand = rep.candidates[i];
       const auto cell = [](double v, const char* f) { return std::isfinite(v) ? fmt::format(fmt::runtime(f), v) : "-"; };
-      std::string line = fmt::format("  {:<13} {:<15} {:>6} {:>12} {:>12} {:>9}", fit_model_name(cand.kind),
+      std::string line = fmt::format("  {:<13} {:<15} {:>6} {:>18} {:>12} {:>9}", fit_model_name(cand.kind),
                                      fit_status_name(cand.status),
                                      cand.num_parameters ? std::to_string(cand.num_parameters) : "-",
                                      cell(cand.train.rms, "{:.6g}"),
                                      cell(cand.holdout.rms, "{:.6g}"), cell(cand.holdout_score, "{:.4g}"));
       for (std::size_t k = 0; k < sets.size(); ++k) {
         const bool ok = i < doc.candidate_validation.size() && k < doc.candidate_validation[i].size();
-        line += fmt::format(" {:>14}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");
+        line += fmt::format(" {:>21}", ok ? rms_cell(doc.candidate_validation[i][k]) : "-");
       }
       text += line + fmt::format(" {:>9.3f}{}\n", cand.time_s, cand.chosen ? "  <- chosen" : "");
     }
@@ -403,21 +415,27 @@ void add_fit(CLI::App& app, Action& action) {
   CLI::App* sub = app.add_subcommand("fit", "identify a hysteresis model from measured input/output data");
   const std::vector<std::string> names = model_names();
   sub->add_option("--model,-m", c->model,
-                  fmt::format("{} (auto: fit every kind, choose by hold-out RMS; default gpi)", join(names, " | ")))
-      ->check(CLI::IsMember(names));
+                  fmt::format("{} (auto: fit every kind, choose by the hold-out score; default gpi)", join(names, " | ")))
+      ->check(one_of(names));
   add_data_options(sub, c->sel);
-  sub->add_option("--n", c->n, "number of operators (default 10)");
-  sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones (default 4)");
+  // the ranges FitOptions::is_valid checks, said before the fit (10.5: CLI11's "Could not convert" otherwise)
+  sub->add_option("--n", c->n, "number of operators, an integer in 1..200 (default 10)")
+      ->check(non_negative_integer(200, 1));
+  sub->add_option("--dead-zones", c->dead_zones, "mpi-deadzone: number of dead zones, an integer in 0..50 (default 4)")
+      ->check(non_negative_integer(50));
   sub->add_option("--train", c->train, "training range A:B (sample indices, half-open) or As:Bs (seconds)");
-  sub->add_option("--validate", c->validate, "validation range C:D (of each --validate-data file if given)");
+  sub->add_option("--validate", c->validate,
+                  "validation range C:D (sample indices, half-open) or Cs:Ds (seconds), of each --validate-data file "
+                  "if given (default: the whole file; without --validate-data, the samples after --train, if any)");
   sub->add_option("--validate-data", c->validate_data, "other records (same columns) to validate on (repeatable)");
   sub->add_option("--out,-o", c->out, "model file to write (JSON); - prints the model JSON on stdout")->required();
   sub->add_option("--report", c->report, "also write the report: HTML if the name ends in .html/.htm, else JSON");
   sub->add_flag("--json", c->json, "print the report as one JSON document");
   sub->add_option("--huber", c->huber, "Huber loss threshold in output units (default: least squares)");
-  sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses (0: none)")
+  sub->add_option("--seed", c->seed, "seed of the jitter of the initial guesses, an integer in 0..4294967295 (default 0: none)")
       ->check(non_negative_integer(std::numeric_limits<unsigned>::max()));
-  sub->add_option("--starts", c->starts, "number of initial guesses refined by LM (default 2)");
+  sub->add_option("--starts", c->starts, "number of initial guesses refined by LM, an integer in 1..54 (default 2)")
+      ->check(non_negative_integer(54, 1));
   sub->add_option("--threads", c->threads,
                   "threads refining the starts concurrently (default 0: one per hardware thread, fewer on a long "
                   "record so that the concurrent starts hold at most about 512 MB; 1: sequential; the result does "

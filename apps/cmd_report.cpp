@@ -39,7 +39,7 @@ void add_report(CLI::App& app, Action& action) {
   cmd->add_option("--time-unit", args->data.time_unit,
                   "Fit and evaluation documents: unit of the time column, s, ms or us (default: the document's for its "
                   "own column; for --time-column the unit the file gives it, else s)")
-      ->check(CLI::IsMember({"s", "ms", "us"}));
+      ->check(one_of({"s", "ms", "us"}));
   cmd->add_flag("--no-time", args->data.no_time,
                 "Fit and evaluation documents: draw against the sample index, not the document's time column")
       ->excludes(time_column);

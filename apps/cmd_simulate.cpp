@@ -294,7 +294,9 @@ void add_simulate_invert(CLI::App& app, Action& action) {
 
   CLI::App* invs = app.add_subcommand("invert", "run the exact inverse: desired output -> input (columns output,input)");
   add_common(invs, *opts, "desired outputs (CSV or .mat); default column: the only one, or \"output\"");
-  invs->add_option("--limits", opts->limits, "input limits LO,HI to saturate at (write --limits=LO,HI if LO < 0)");
+  invs->add_option("--limits", opts->limits,
+                   "input limits LO,HI to saturate at (default: the model's input_limits, a fitted model's training input "
+                   "range; write --limits=LO,HI if LO < 0)");
   invs->callback([opts, &action] { action = [opts] { return run_invert(*opts); }; });
 }
 

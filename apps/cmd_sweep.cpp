@@ -208,7 +208,7 @@ void add_sweep(CLI::App& app, Action& action) {
                     fmt::format("Kind of hysteron's model in every run: auto (default: each run fits every kind and "
                                 "chooses on its own rig, about 2.5 s more per run) or one of {} (pinned)",
                                 kinds))
-        ->check(CLI::IsMember(choices))
+        ->check(one_of(choices))
         ->default_val("auto");
   }
   cmd->add_flag("--paper-references", args->paper_references,
@@ -218,9 +218,8 @@ void add_sweep(CLI::App& app, Action& action) {
                 "Identify and tune every run on the base rig and track on the variant's: a rig that changed after "
                 "its identification (another load, a wider band), the loops not re-tuned (docs/plant.md); default: "
                 "each variant identified and tuned on its own rig");
-  cmd->add_option("--jobs,-j", args->jobs, "Runs at once, 1..1024 (default: the number of cores)")
-      ->check(non_negative_integer(1024))
-      ->check(CLI::Range(1u, 1024u));
+  cmd->add_option("--jobs,-j", args->jobs, "Runs at once, an integer in 1..1024 (default: the number of cores)")
+      ->check(non_negative_integer(1024, 1));
   cmd->add_option("--out", args->out, "The table (CSV): one row per experiment, variant, reference and kind");
   cmd->add_option("--report", args->report, "HTML page: every error, target misses, RMS against each parameter");
   cmd->add_flag("--json", args->json, "Print one JSON document instead of the text table");

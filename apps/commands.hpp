@@ -38,7 +38,13 @@ void set_command_line(int argc, char** argv);             // recorded in reports
 // CLI11 validator: a decimal integer >= 0 ("-1" would wrap to 2^64 - 1 in an unsigned).
 // A decimal integer in 0..max (the option's type's largest value: 2^32 - 1 for an unsigned seed), else the
 // message "TEXT is not an integer in 0..MAX".
-CLI::Validator non_negative_integer(std::uint64_t max = std::numeric_limits<std::uint64_t>::max());
+// A range with a lower bound other than 0 (--jobs 1..1024): "TEXT is not an integer in MIN..MAX". No description
+// in --help (only the option's type, UINT): the option's own text gives the range.
+CLI::Validator non_negative_integer(std::uint64_t max = std::numeric_limits<std::uint64_t>::max(),
+                                    std::uint64_t min = 0);
+// CLI11 validator: one of `names`, else "TEXT not in {A,B,...} (did you mean X?)" with io::closest_name's
+// suggestion, as for a mistyped command or option (--model gpii, experiment gpi-pd); --help shows {A,B,...}.
+CLI::Validator one_of(std::vector<std::string> names);
 // --control-period S (experiment, demo, sweep): the loop's sample time [s] into `period`
 // (ExperimentOptions::control_period, which checks it before anything runs or is written).
 void add_control_period_option(CLI::App* cmd, double& period);

@@ -19,6 +19,7 @@
 #include "commands.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/names.hpp"
 #include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
 
@@ -126,17 +127,30 @@ void warn_limits_beyond_model(const ModelParams& params, const Limits& limits, s
              command, limits.lo, limits.hi, m.lo, m.hi, std::max(below, above));
 }
 
-CLI::Validator non_negative_integer(std::uint64_t max) {
+CLI::Validator non_negative_integer(std::uint64_t max, std::uint64_t min) {
   return CLI::Validator(
-      [max](std::string& text) -> std::string {
+      [max, min](std::string& text) -> std::string {
         std::uint64_t v = 0;
         const bool digits = !text.empty() &&
                             std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
         const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-        const bool ok = digits && ec == std::errc() && end == text.data() + text.size() && v <= max;
-        return ok ? std::string() : fmt::format("{} is not an integer in 0..{}", text, max);
+        const bool ok = digits && ec == std::errc() && end == text.data() + text.size() && v >= min && v <= max;
+        return ok ? std::string() : fmt::format("{} is not an integer in {}..{}", text, min, max);
       },
-      "INT>=0");
+      "");
+}
+
+CLI::Validator one_of(std::vector<std::string> names) {
+  std::string set;
+  for (const auto& n : names) set += (set.empty() ? "" : ",") + n;
+  set = "{" + set + "}";
+  return CLI::Validator(
+      [names = std::move(names), set](std::string& text) -> std::string {
+        if (std::find(names.begin(), names.end(), text) != names.end()) return std::string();
+        const std::string_view hint = io::closest_name(text, names);
+        return fmt::format("{} not in {}{}", text, set, hint.empty() ? "" : fmt::format(" (did you mean {}?)", hint));
+      },
+      set);
 }
 
 void add_control_period_option(CLI::App* cmd, double& period) {
@@ -227,7 +241,7 @@ void add_data_options(CLI::App* sub, DataSelection& sel) {
   sub->add_option("--time-unit", sel.time_unit,
                   "unit of the time column: s, ms or us (default: the unit its header or units row gives, as in "
                   "\"t [ms]\", else s); read as seconds")
-      ->check(CLI::IsMember({"s", "ms", "us"}))
+      ->check(one_of({"s", "ms", "us"}))
       ->needs(time);
   sub->add_option("--input-label", sel.input_label, "input axis label with unit, e.g. \"Pressure [kPa]\"");
   sub->add_option("--output-label", sel.output_label, "output axis label with unit, e.g. \"Force [N]\"");

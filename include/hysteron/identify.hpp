@@ -261,9 +261,11 @@ struct FitOptions {
   // gpi only: the 8 parameters of Eq. 13 have an exact scale symmetry
   //   (c0, c3, alpha, q, rho, tau) -> (k c0, k c3, k alpha, q/k, rho/k, tau/k)
   // that leaves the output unchanged, so the Jacobian is rank 7. With true
-  // (default) c0 is held at its data-derived initial value (std error 0) and
-  // the other 7 are estimated; with false all 8 are free (LM still converges
-  // thanks to its damping, but the covariance is singular).
+  // (default) the gauge S = c0 c1 xs (xs: half the training input's span) is held
+  // at its data-derived initial value and the other 7 directions are estimated (c0
+  // itself is, with the standard error of that gauge; docs/identification.md, "GPI
+  // chart"); with false all 8 are free (LM still converges thanks to its damping,
+  // but the covariance is singular).
   bool gpi_fix_scale = true;
   // gpi only: fit the free-weight variant instead of Eq. 8's law: the tanh envelope
   // (c0..c3), q and n free weights p_i on thresholds r_i = alpha i (alpha from the
@@ -351,7 +353,11 @@ struct FitCandidate {
   FitModel kind = FitModel::gpi;
   FitStatus status = FitStatus::not_run;
   std::string message;
-  FitMetrics train;    // fold 0: on the training range without its last part
+  // The samples fold 0's fit was trained on: the training range without its last
+  // holdout_fraction. status, message, train, num_parameters and model are that fit's, not
+  // the chosen kind's refit on the whole training range (FitReport's own fields are).
+  IndexRange fit_range;
+  FitMetrics train;    // fold 0: on fit_range (the training range without its last part)
   FitMetrics holdout;  // pooled over both folds' hold-outs (r2 not computed: NaN)
   // What auto chooses by (least wins): the geometric mean over the two folds of this kind's
   // hold-out RMS divided by the best kind's on that fold (1: best on both). Each fold

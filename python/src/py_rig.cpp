@@ -57,6 +57,20 @@ std::vector<WaveSegment> segments_from(const py::list& segs) {
   return out;
 }
 
+// step and run_pressure take MPa (gauge); the C++ clamps a command to the regulator's range (regulator.max_command,
+// 0..1 MPa by default) and the supply bounds the pressure, so a command in pascals (300000.0 for 0.3 MPa) ran
+// silently at the supply's limit. The mirror of reset_at_pressure's guard (which takes Pa and refuses 0 < p < 10,
+// MPa given as Pa): a command of 10 or more, 10 MPa, is Pa given as MPa (regulator.max_command is at most 5 MPa).
+void check_command_mpa(const PamRig& r, double p, const std::string& what) {
+  if (!(p >= 10)) return;
+  const PamRigParams& q = r.params();
+  throw Error(fmt::format("{} = {}: the unit is MPa (gauge), not Pa (for {} Pa give {:g}); the regulator's commands "
+                          "are 0 .. {:g} MPa (regulator.max_command) and the pressure stays below the supply's {:g} MPa "
+                          "gauge (air.supply_pressure minus air.atmospheric_pressure)",
+                          what, p, p, p * 1e-6, q.regulator.max_command * 1e-6,
+                          (q.air.supply_pressure - q.air.atmospheric_pressure) * 1e-6));
+}
+
 }  // namespace
 
 void bind_rig(py::module_& m) {
@@ -123,6 +137,7 @@ for a given seed.)doc"))
       .def(
           "step",
           [](PamRig& r, double pressure_command, double pwm_duty, const std::string& mode) {
+            check_command_mpa(r, pressure_command, "PamRig.step: pressure_command");
             RigInputs in;
             in.pressure_command = pressure_command;
             in.pwm_duty = pwm_duty;
@@ -132,13 +147,16 @@ for a given seed.)doc"))
             return outputs_dict(r.step(in));
           },
           py::arg("pressure_command") = 0.0, py::arg("pwm_duty") = 0.0, py::arg("mode") = "regulator",
-          "One rig step of dt: pressure_command [MPa gauge] (regulator) or pwm_duty in [-1, 1] "
-          "(switching_valves). Returns the outputs (SI units: m, Pa gauge).")
+          "One rig step of dt: pressure_command [MPa gauge, unlike reset_at_pressure's Pa] (regulator; clamped to "
+          "0 .. regulator.max_command, the pressure bounded by the supply; hysteron.Error for 10 or more, Pa given as "
+          "MPa) or pwm_duty in [-1, 1] (switching_valves). Returns the outputs (SI units: m, Pa gauge).")
       .def(
           "run_pressure",
           [](PamRig& r, const ArrayArg& profile, double control_period) {
             const auto checked = as_finite_span(profile, "run_pressure: profile");
             const std::vector<double> p(checked.begin(), checked.end());  // a copy: the run is without the GIL
+            for (std::size_t i = 0; i < p.size(); ++i)
+              check_command_mpa(r, p[i], fmt::format("PamRig.run_pressure: profile[{}]", i));
             // A period that is not a whole number of rig steps was rounded silently.
             const auto every = control_steps(control_period, r.dt(), "run_pressure");
             std::vector<double> t, cmd, pr, x, xm;
@@ -176,7 +194,9 @@ for a given seed.)doc"))
             return d;
           },
           py::arg("profile"), py::arg("control_period") = 1e-3,
-          R"doc(Drive the regulator with a pressure profile [MPa], one value per control_period [s].
+          R"doc(Drive the regulator with a pressure profile [MPa gauge], one value per control_period [s]
+(clamped to 0 .. regulator.max_command, the pressure bounded by the supply; hysteron.Error for a value of 10 or
+more: Pa given as MPa).
 Returns numpy arrays logged at the end of each period: t [s], pressure_command_mpa,
 pressure_mpa (measured), contraction_mm (true), contraction_measured_mm.
 Raises hysteron.Error if the simulation diverges.)doc")

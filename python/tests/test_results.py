@@ -71,6 +71,8 @@ def test_fit_auto_lists_every_candidate():
     for c in r["candidates"]:
         assert set(c["train"]) == METRIC_KEYS and set(c["holdout"]) == METRIC_KEYS
         assert c["time_s"] >= 0 and c["status"] in hysteron.fit_statuses
+        # a candidate is its fold-0 fit: on the training range without its last 20 %
+        assert c["fit_range"] == [0, 960], c["fit_range"]
     # the chosen kind has the lowest hold-out score among the candidates that have one; the
     # score is >= 1 (1: the best kind on both folds)
     scored = [c for c in r["candidates"] if c["holdout_score"] is not None and c["model"] is not None]

@@ -390,9 +390,8 @@ SweepResult run_sweep(const SweepOptions& options) {
     if (std::find(known.begin(), known.end(), name) == known.end()) {
       std::string list;
       for (const auto& k : known) { list += (list.empty() ? "" : ", "); list += k; }
-      std::string hint;
-      for (const auto& k : known)
-        if (io::edit_distance(name, k) <= std::max<std::size_t>(2, name.size() / 3)) hint = fmt::format(" (did you mean {}?)", k);
+      const std::string_view close = io::closest_name(name, known);
+      const std::string hint = close.empty() ? std::string() : fmt::format(" (did you mean {}?)", close);
       throw Error(fmt::format("sweep: unknown experiment '{}'{}; experiments: {}", name, hint, list));
     }
     if (std::find(r.experiments.begin(), r.experiments.end(), name) != r.experiments.end())

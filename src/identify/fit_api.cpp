@@ -841,6 +841,7 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
     FitCandidate& c = cands[k];
     const FitReport& r = runs[2 * k];
     c.kind = kAutoKinds[k];
+    c.fit_range = fit_range[0];
     c.status = r.status;
     c.message = r.message;
     c.time_s = r.time_s + runs[2 * k + 1].time_s;

@@ -119,6 +119,8 @@ void from_json(const json& j, InverseCheck& c, std::string_view where) {
 
 json to_json(const FitCandidate& c) {
   return {{"kind", std::string(fit_model_name(c.kind))},
+          // the samples of fold 0's fit, whose status, message, train, model and parameters these are
+          {"fit_range", to_json(c.fit_range)},
           {"status", std::string(fit_status_name(c.status))},
           {"message", c.message},
           {"train", to_json(c.train)},
@@ -134,6 +136,8 @@ void from_json(const json& j, FitCandidate& c, std::string_view where) {
   c.kind = model_kind_from(j, "kind", where);
   c.status = fit_status_from_name(get_string(j, "status", where), key_where(where, "status"));
   c.message = opt_string(j, "message", where);
+  c.fit_range = {};
+  if (j.contains("fit_range")) from_json(j["fit_range"], c.fit_range, key_where(where, "fit_range"));  // absent before it
   from_json(need(j, "train", where), c.train, key_where(where, "train"));
   from_json(need(j, "holdout", where), c.holdout, key_where(where, "holdout"));
   c.holdout_score = opt_double(j, "holdout_score", where, nan);  // absent in files before it

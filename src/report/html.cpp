@@ -621,9 +621,22 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
 
   if (!fit.candidates.empty()) {
     page.raw("<h3>Candidates (--model auto)</h3>\n");
-    std::vector<std::string> header = {"kind", "status", "parameters", "train RMS" + yu, "hold-out RMS" + yu,
-                                       "hold-out RMS [% of span]", "hold-out score"};
-    for (const auto& v : vals) header.push_back(fmt::format("validation RMS{} ({})", yu, validation_name(*v.v)));
+    // a row's status, parameters, train and validation RMS are its fold-0 fit's, not the chosen kind's refit
+    const IndexRange f0 = fit.candidates.front().fit_range, whole = data.train.resolved(n);
+    const bool chosen = std::any_of(fit.candidates.begin(), fit.candidates.end(), [](const auto& c) { return c.chosen; });
+    page.para(fmt::format("Each row is the kind's fold-0 fit, trained on {}the training range without its last part"
+                          "{}: its \"(fold 0)\" columns are that fit's{}.",
+                          f0.end == IndexRange::npos ? "" : fmt::format("samples {}..{} (", f0.begin, f0.end),
+                          f0.end == IndexRange::npos ? "" : ")",
+                          chosen ? fmt::format(", not the chosen kind's refit on the whole training range (samples "
+                                               "{}..{}), whose figures are those of the result above and of the "
+                                               "errors below",
+                                               whole.begin, whole.end)
+                                 : std::string()));
+    std::vector<std::string> header = {"kind", "status (fold 0)", "parameters", "train RMS (fold 0)" + yu,
+                                       "hold-out RMS" + yu, "hold-out RMS [% of span]", "hold-out score"};
+    for (const auto& v : vals)
+      header.push_back(fmt::format("validation RMS (fold 0){} ({})", yu, validation_name(*v.v)));
     header.insert(header.end(), {"time [s]", "chosen"});
     std::vector<std::vector<std::string>> rows;
     std::vector<std::string> classes;
@@ -644,9 +657,10 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
       classes.emplace_back(c.chosen ? "chosen" : "");
     }
     page.table(header, rows, classes);
-    page.para("The kind with the lowest hold-out RMS (pooled over the first and the last part of the training range, each "
-              "predicted by a fit on the rest) is chosen and refitted "
-              "on the whole training range; validation data never enter the choice.");
+    page.para("The kind with the lowest hold-out score (over the first and the last part of the training range, each "
+              "predicted by a fit on the rest: the geometric mean of its RMS over the best kind's; within 2 % of the "
+              "least score, the one with the fewest parameters) is chosen and refitted on the whole training range; "
+              "the hold-out RMS is pooled over both parts; validation data never enter the choice.");
   }
 
   parameter_table(page, fit);

@@ -115,7 +115,21 @@ for c in r["candidates"]:
     assert c["kind"] in text
 assert "candidates" in text and "<- chosen" in text
 assert rc == {"converged": 0, "no_convergence": 2, "failed": 2, "poor_fit": 3}[r["status"]], (rc, r["status"])
+# a row's status, train and validate RMS are its fold-0 fit's (the first 80 % of 0:1200), not the chosen kind's
+# refit on the whole range: the JSON gives each candidate's fit_range, the text labels the columns and says so
+for c in r["candidates"]:
+    assert c["fit_range"] == [0, 960], (c["kind"], c.get("fit_range"))
+for s in ("trained on samples 0..960", "refit on the whole training range (samples 0..1200)",
+          "status (fold 0)", "train RMS (fold 0)", "validate RMS (fold 0)"):
+    assert s in text, s
 PYEOF
+# the HTML report of that document (hysteron report reads fit_range back) labels them alike
+"$BIN" report "$T/auto_report.json" --out "$T/auto_report.html" > /dev/null 2> "$T/auto_html.err" ||
+  fail "report of the auto document: $(cat "$T/auto_html.err")"
+for s in "trained on samples 0..960" "status (fold 0)" "train RMS (fold 0)" "validation RMS (fold 0)" \
+  "refit on the whole training range (samples 0..1200)"; do
+  grep -qF "$s" "$T/auto_report.html" || fail "auto HTML report lacks '$s'"
+done
 
 # 5. exit codes: no convergence (2, model not written; --force writes it), errors and usage (1)
 "$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --max-iterations 1 --starts 1 --threads 1 \

@@ -29,6 +29,31 @@ expect "mistyped option suggested" 1 "did you mean --model?" -- "$BIN" simulate 
 expect "mistyped option with =value" 1 "did you mean --output?" -- "$BIN" fit --outptu=x.csv
 expect "mistyped command suggested" 1 'unknown command "fitt" (did you mean fit?)' -- "$BIN" fitt
 expect "unrelated command lists the commands" 1 "commands: simulate, invert, fit" -- "$BIN" frobnicate
+# a mistyped value of a fixed set: the closest name, as for a command or an option (sweep's experiment had it)
+expect "mistyped experiment suggested" 1 "gpi-pd not in {gpi-pid,mpi-openloop,mpi-pwm} (did you mean gpi-pid?)" -- \
+  "$BIN" experiment gpi-pd
+expect "mistyped sweep experiment suggested" 1 "unknown experiment 'gpi-pd' (did you mean gpi-pid?)" -- \
+  "$BIN" sweep gpi-pd --vary load.mass=35
+expect "mistyped fit kind suggested" 1 "--model: gpii not in {auto,pi,gpi," -- "$BIN" fit --model gpii -d x.csv -i 0 -y 1 -o m.json
+expect "mistyped fit kind: the closest" 1 "(did you mean gpi?)" -- "$BIN" fit --model gpii -d x.csv -i 0 -y 1 -o m.json
+expect "mistyped experiment kind suggested" 1 "(did you mean mpi-asym?)" -- "$BIN" experiment gpi-pid --model mpi-asim
+expect "mistyped sweep kind suggested" 1 "(did you mean maxwell-slip?)" -- "$BIN" sweep gpi-pid --model maxwel-slip
+expect "unrelated kind: no suggestion, the set" 1 "--model: spline not in {auto," -- "$BIN" fit --model spline
+if grep -qF "did you mean" "$T/stderr"; then echo "FAIL: spline: a suggestion: $(cat "$T/stderr")"; fails=$((fails + 1)); fi
+# --jobs: its range in words, not CLI11's validator names (UINT:INT>=0:UINT in [1 - 1024])
+"$BIN" sweep --help > "$T/sweep_help" 2>&1
+if grep -qF -- "-j,--jobs UINT " "$T/sweep_help" && grep -qF "an integer in 1..1024" "$T/sweep_help" &&
+  ! grep -qE "INT>=0|\[1 - 1024\]" "$T/sweep_help"; then
+  echo "ok: --jobs help"
+else
+  echo "FAIL: --jobs help: $(grep -F -- --jobs "$T/sweep_help")"; fails=$((fails + 1))
+fi
+expect "fit --n 10.5: the range" 1 "--n: 10.5 is not an integer in 1..200" -- "$BIN" fit --n 10.5
+expect "fit --starts 0: the range" 1 "--starts: 0 is not an integer in 1..54" -- "$BIN" fit --starts 0
+expect "fit --dead-zones 51: the range" 1 "--dead-zones: 51 is not an integer in 0..50" -- "$BIN" fit --dead-zones 51
+expect "jobs 0: the range" 1 "--jobs: 0 is not an integer in 1..1024" -- "$BIN" sweep gpi-pid --vary load.mass=35 --jobs 0
+expect "jobs 1025: the range" 1 "--jobs: 1025 is not an integer in 1..1024" -- \
+  "$BIN" sweep gpi-pid --vary load.mass=35 --jobs 1025
 expect "negative seed refused" 1 "--seed: -1 is not an integer" -- "$BIN" experiment gpi-pid --seed -1
 expect "fractional seed refused" 1 "--seed: 1.5 is not an integer" -- "$BIN" fit --seed=1.5
 # the bound said is the option's own: fit's seed is 32-bit, the rig's noise seed 64-bit

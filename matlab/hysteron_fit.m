@@ -4,8 +4,9 @@ function [model, report] = hysteron_fit(x, y, varargin)
 %   input X and the measured output Y (real, finite vectors of equal length) by
 %   Levenberg-Marquardt (GPI paper, Eq. 12), as `hysteron fit` on the command line.
 %   [MODEL, REPORT] = HYSTERON_FIT(X, Y, 'name', value, ...) sets options:
-%     model               'gpi' (default), 'pi', 'mpi-deadzone', 'mpi-asym' or 'auto'
-%                         (every kind fitted, the best on a hold-out chosen)
+%     model               'gpi' (default), 'pi', 'mpi-deadzone', 'mpi-asym', 'preisach',
+%                         'kp', 'bouc-wen', 'maxwell-slip', 'rate-pi' (needs sample_time)
+%                         or 'auto' (every kind fitted, the best on a hold-out chosen)
 %     num_operators       n (default 10)
 %     num_dead_zones      mpi-deadzone: dead zones (default 4)
 %     initial_state       'virgin' (default) or 'relaxed'
@@ -17,6 +18,8 @@ function [model, report] = hysteron_fit(x, y, varargin)
 %     seed                seed of the start jitter (default 0)
 %     max_iterations      LM iterations per start (default 200)
 %     min_slope           minimum slope relative to span(y)/span(x) (default 0.02)
+%     sample_time         the record's sample time in s (rate-pi's dt; its rates are
+%                         per second); required for 'rate-pi', checked by no other kind
 %     censor_passes       an output that clips (a sensor's limit) is fitted as censored
 %                         data over this many refits (default 2; 0: as recorded)
 %     fix_scale, free_weights, compute_covariance, stall_iterations,

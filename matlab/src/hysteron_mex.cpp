@@ -381,7 +381,8 @@ const std::vector<std::string> fit_option_names = {
     "model",        "num_operators",    "num_dead_zones", "initial_state",      "train",
     "huber_delta",  "num_starts",       "num_threads",    "seed",               "max_iterations",
     "fix_scale",    "free_weights",     "compute_covariance", "min_slope",      "stall_iterations",
-    "stall_tolerance", "holdout_fraction", "poor_fit_ratio", "censor_passes", "report", "input_axis", "output_axis"};
+    "stall_tolerance", "holdout_fraction", "poor_fit_ratio", "censor_passes", "sample_time", "report", "input_axis",
+    "output_axis"};
 
 FitOptions fit_options(const Options& opt) {
   FitOptions o;
@@ -431,6 +432,7 @@ FitOptions fit_options(const Options& opt) {
   number("holdout_fraction", o.holdout_fraction);
   integer("censor_passes", o.censor_passes);
   number("poor_fit_ratio", o.poor_fit_ratio);
+  number("sample_time", o.sample_time);  // s; rate-pi's dt (its rates are per second)
   return o;
 }
 

@@ -37,6 +37,8 @@ function test_errors()
     'train beyond the data',  @() hysteron_fit(x, y, 'train', [1 1e6]),     'hysteron:fitInvalidInput', ''
     'constant fit input',     @() hysteron_fit(ones(1, 500), 1:500),        'hysteron:fitInvalidInput', ''
     'unequal fit lengths',    @() hysteron_fit(x, y(1:end - 1)),            'hysteron:badArgument', 'same length'
+    'rate-pi without dt',     @() hysteron_fit(x, y, 'model', 'rate-pi'),   'hysteron:fitInvalidInput', 'sample'
+    'negative sample_time',   @() hysteron_fit(x, y, 'model', 'rate-pi', 'sample_time', -1), 'hysteron:fitInvalidInput', 'sample_time'
     'missing model file',     @() hysteron_load_model(missing),             'hysteron:modelFile', 'no_such_model.json'
     'missing file, simulate', @() hysteron_simulate(missing, x),            'hysteron:modelFile', 'no_such_model.json'
     'broken model file',      @() hysteron_load_model(broken),              'hysteron:modelFile', 'broken.json'
@@ -96,6 +98,10 @@ function test_errors()
   end
   % the gateway still works after all of these
   fails = fails + check(isequal(hysteron_simulate(gpi, x), y), 'simulate after the errors differs');
+  % rate-pi is fitted where the record's sample time is given (its rates are per second)
+  [rp, rr] = hysteron_fit(x, y, 'model', 'rate-pi', 'sample_time', 1e-3);
+  fails = fails + check(strcmp(rp.model, 'rate-pi') && rp.dt == 1e-3 && ~strcmp(rr.status, 'invalid_input'), ...
+                        'rate-pi with sample_time: model %s, status %s', rp.model, rr.status);
   if fails > 0
     error('test_errors: %d check(s) failed', fails);
   end

@@ -364,6 +364,7 @@ void ExperimentOptions::validate() const {
     check_return_force(*tracking_rig, "tracking rig");
     check_control_period(control_period, tracking_rig->simulation.dt, "experiment", "tracking rig");
   }
+  check_user_references(references, control_period);
   if (!find_spec(name)) {
     std::string list;
     for (const auto& n : experiment_names()) list += (list.empty() ? "" : ", ") + n;
@@ -382,6 +383,10 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.seed = o.seed;
   res.control_period_s = tc;
   res.published = spec.published;
+  if (!o.references.empty()) {  // no paper tracked them: no figures (NaN, printed "-")
+    res.published = {"none: the user's references (--reference), which no paper tracked", {}};
+    for (const UserReference& u : o.references) res.published.errors.push_back({u.name});
+  }
   // the actuator's limit: no run commands more (the rig's rating and the regulator's range)
   const double p_max = run_pressure_limit(o, spec.valves);
   res.pressure_limit_mpa = p_max;
@@ -433,7 +438,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // Where the paper's input stops short of the actuator's top and its run never reached the
   // references' top, the reach and hysteron's model come from a run of that input extended to
   // the top (extended_input_top); the paper's model stays fitted on the paper's run.
-  std::vector<Reference> refs = spec.references(tc);
+  std::vector<Reference> refs = o.references.empty() ? spec.references(tc) : user_references(o.references, tc);
   std::optional<IdentificationRun> extended_run, extended_runf;
   {
     const SmoothedRun sm(id, tc);
@@ -621,6 +626,11 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       res.runs.push_back(std::move(run));
       if (loop.note)
         if (std::string note = loop.note(); !note.empty()) res.messages.push_back(std::move(note));
+      if (v.name == spec.learning_on && o.learning_periods > 0 && ref.period == 0)
+        res.messages.push_back(fmt::format("learning ({}) not run: the reference is not periodic, and the learning "
+                                           "variant repeats one period (a file reference is periodic where it says "
+                                           "so: file:PATH,periodic)",
+                                           ref.name));
       if (v.name == spec.learning_on && o.learning_periods > 0 && ref.period > 0) {
         Context lc = rc;
         lc.learning = true;

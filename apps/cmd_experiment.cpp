@@ -56,9 +56,9 @@ void add_model_options(CLI::App* cmd, ExperimentArgs& args) {
   add_control_period_option(cmd, args.control_period);
   cmd->add_option("--model", args.model, model_help())->check(CLI::IsMember(model_choices()))->default_val("auto");
   cmd->add_flag("--paper-references", args.paper_references,
-                "Track the papers' references as published even where they leave the contraction range this "
-                "rig reached in its identification run (default: such a reference is mapped into the rig's reach, "
-                "with a note; docs/control.md, section 5)");
+                "Track the papers' references as published (or --reference's as given) even where they leave the "
+                "contraction range this rig reached in its identification run (default: such a reference is mapped "
+                "into the rig's reach, with a note; docs/control.md, section 5)");
 }
 
 ExperimentOptions options_from(const ExperimentArgs& a) {

@@ -22,6 +22,7 @@
 #include "hysteron/experiment.hpp"
 #include "hysteron/report.hpp"
 #include "temp_dir.hpp"
+#include "../src/experiment/detail.hpp"  // user_references
 #include "test_util.hpp"
 #include "hysteron/plant.hpp"
 
@@ -1058,4 +1059,61 @@ TEST(Experiment, UserReferenceSpecsAreCheckedNamingTheKey) {
               std::string::npos)
         << e.what();
   }
+}
+
+// A user reference beyond the rig's reach goes through the reach mapping as a paper's does:
+// mapped with a note that calls it given (not published), or tracked as given with the note
+// that it is out of reach (fit_references = false, --paper-references).
+TEST(Experiment, AUserReferenceOutOfReachIsMappedOrKeptAsGiven) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.references = parse_references({"triangle:amplitude=30,offset=110,frequency=0.5,periods=1,name=high"});
+  const ExperimentResult mapped = run_experiment(o);
+  ASSERT_EQ(mapped.reference_ranges.size(), 1u);
+  EXPECT_TRUE(mapped.reference_ranges[0].scaled);
+  EXPECT_NEAR(mapped.reference_ranges[0].paper_max_mm, 140.0, 1e-6);
+  EXPECT_LT(mapped.reference_ranges[0].max_mm, 100.0);
+  bool said = false;
+  for (const auto& m : mapped.messages)
+    said = said || (m.find("reference high mapped onto the rig's reach") == 0 && m.find("instead of the given") !=
+                                                                                  std::string::npos);
+  EXPECT_TRUE(said) << fmt::format("{}", fmt::join(mapped.messages, "\n"));
+  o.fit_references = false;
+  const ExperimentResult kept = run_experiment(o);
+  ASSERT_EQ(kept.reference_ranges.size(), 1u);
+  EXPECT_FALSE(kept.reference_ranges[0].scaled);
+  EXPECT_FALSE(kept.reference_ranges[0].reachable);
+  EXPECT_NEAR(kept.reference_ranges[0].max_mm, 140.0, 1e-6);
+  for (const TrackingRun& run : kept.runs)
+    for (double p : run.pressure_command_mpa) ASSERT_TRUE(p >= 0.0 && p <= kept.pressure_limit_mpa) << run.variant;
+}
+
+// The samples a user reference is tracked on: the papers' sine (O - A cos, from its bottom), a
+// periodic record (one period, its last sample closing it) repeated, its units from its header.
+TEST(Experiment, UserReferencesAreSampledAtTheControlPeriod) {
+  const auto sine = experiment::user_references(
+      parse_references({"sine:amplitude=15,offset=50,frequency=0.5,periods=2"}), 1e-3);
+  ASSERT_EQ(sine.size(), 1u);
+  EXPECT_EQ(sine[0].ref_m.size(), 4000u);
+  EXPECT_EQ(sine[0].period, 2000u);
+  EXPECT_NEAR(sine[0].ref_m[0], 0.035, 1e-12);
+  EXPECT_NEAR(sine[0].ref_m[1000], 0.065, 1e-12);
+  EXPECT_NEAR(sine[0].ref_m[500], 0.050, 1e-12);
+  test::TempDir dir;
+  // one period of a triangle, 2 s, in ms and m: 0.03 .. 0.06 m
+  std::string csv = "time [ms],x [m]\n";
+  for (int k = 0; k <= 200; ++k) csv += fmt::format("{},{}\n", 10 * k, 0.03 + 0.03 * (1.0 - std::abs(1.0 - k / 100.0)));
+  const std::string path = dir.write("tri.csv", csv);
+  const auto file = parse_references({"file:" + path + ",periodic,periods=3"});
+  EXPECT_EQ(file[0].name, "file");
+  EXPECT_NEAR(file[0].t_s.back(), 2.0, 1e-12);
+  EXPECT_NEAR(file[0].x_mm[100], 60.0, 1e-9);
+  const auto tri = experiment::user_references(file, 1e-3);
+  EXPECT_EQ(tri[0].period, 2000u);
+  EXPECT_EQ(tri[0].ref_m.size(), 6000u);
+  EXPECT_NEAR(tri[0].ref_m[1000], 0.060, 1e-12);
+  EXPECT_NEAR(tri[0].ref_m[2000 + 500], 0.045, 1e-12);
+  // a periodic record that does not close is refused
+  const std::string unclosed = dir.write("open.csv", "t,x\n0,30\n1,60\n2,45\n");
+  EXPECT_THROW((void)parse_references({"file:" + unclosed + ",periodic"}), Error);
+  EXPECT_NO_THROW((void)parse_references({"file:" + unclosed}));
 }

@@ -66,4 +66,18 @@ assert [x["reference"] for x in r["references"]] == ["mine"], r["references"]
 assert r["published"]["mine"] == {}, r["published"]
 assert r["compensated"]["rms_error_mm"] < r["baseline"]["rms_error_mm"], (r["compensated"], r["baseline"])
 PYEOF
+
+# sweep takes the same --reference: checked before any run, then every run tracks it
+"$BIN" sweep gpi-pid --vary load.mass=20 --reference sine:amplitude=20,offset=50,frequency=0,periods=2 \
+  --out "$T/s.csv" > "$T/out.txt" 2> "$T/err.txt"
+rc=$?
+[ $rc -eq 1 ] || fail "sweep bad spec: exit $rc"
+grep -qF "frequency = 0 Hz must be > 0" "$T/err.txt" || fail "sweep bad spec: $(cat "$T/err.txt")"
+[ ! -e "$T/s.csv" ] || fail "sweep bad spec wrote its table"
+"$BIN" sweep gpi-pid --vary load.mass=20 --learning-periods 0 --model gpi --jobs 1 \
+  --reference triangle:amplitude=20,offset=50,frequency=0.5,periods=2,name=mine --out "$T/s.csv" > "$T/out.txt" 2>&1
+rc=$?
+[ $rc -eq 0 ] || fail "sweep: exit $rc: $(tail -3 "$T/out.txt")"
+grep -q ",mine," "$T/s.csv" || fail "sweep: no run of the reference mine: $(head -3 "$T/s.csv")"
+grep -q ",sine," "$T/s.csv" && fail "sweep: the paper's sine was tracked too"
 exit $fails

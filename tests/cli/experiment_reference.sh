@@ -6,47 +6,42 @@
 # table, the CSV files and result.json, and no published figures.
 # Usage: bash experiment_reference.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail, expect_error
 
-# expect_error "what" "part of the message" command...: exit 1, the message on stderr, $T/o not created
-expect_error() {
-  local what=$1 part=$2
-  shift 2
-  "$@" > "$T/out.txt" 2> "$T/err.txt"
-  local rc=$?
-  [ $rc -eq 1 ] || fail "$what: exit $rc, expected 1 ($(cat "$T/err.txt"))"
-  grep -qF -- "$part" "$T/err.txt" || fail "$what: stderr lacks '$part': $(cat "$T/err.txt")"
-  grep -qF -- "identification" "$T/out.txt" && fail "$what: something ran: $(head -3 "$T/out.txt")"
-  [ ! -e "$T/o" ] || fail "$what: $T/o was written"
+# refused "what" "part of the message" command...: expect_error, and nothing ran, $T/o not created
+refused() {
+  expect_error "$@"
+  grep -qF -- "identification" "$T/out.txt" && fail "$1: something ran: $(head -3 "$T/out.txt")"
+  [ ! -e "$T/o" ] || fail "$1: $T/o was written"
 }
 
 run=("$BIN" experiment gpi-pid --out "$T/o")
-expect_error "bad key" "--reference 'sine:amplitude=20,offset=50,frequency=0.5,periods=2,phase=1': unknown key \"phase\"" \
+refused "bad key" "--reference 'sine:amplitude=20,offset=50,frequency=0.5,periods=2,phase=1': unknown key \"phase\"" \
   "${run[@]}" --reference sine:amplitude=20,offset=50,frequency=0.5,periods=2,phase=1
-expect_error "missing key" "missing key \"periods\"" "${run[@]}" --reference sine:amplitude=20,offset=50,frequency=0.5
-expect_error "bad value" "frequency = \"fast\" is not a finite number" \
+refused "missing key" "missing key \"periods\"" "${run[@]}" --reference sine:amplitude=20,offset=50,frequency=0.5
+refused "bad value" "frequency = \"fast\" is not a finite number" \
   "${run[@]}" --reference triangle:amplitude=20,offset=50,frequency=fast,periods=2
-expect_error "inf" "offset = \"inf\" is not a finite number" \
+refused "inf" "offset = \"inf\" is not a finite number" \
   "${run[@]}" --reference sine:amplitude=20,offset=inf,frequency=0.5,periods=2
-expect_error "frequency 0" "frequency = 0 Hz must be > 0" "${run[@]}" --reference sine:amplitude=20,offset=50,frequency=0,periods=2
-expect_error "negative amplitude" "amplitude = -5 mm must be >= 0" \
+refused "frequency 0" "frequency = 0 Hz must be > 0" "${run[@]}" --reference sine:amplitude=20,offset=50,frequency=0,periods=2
+refused "negative amplitude" "amplitude = -5 mm must be >= 0" \
   "${run[@]}" --reference sine:amplitude=-5,offset=50,frequency=0.5,periods=2
-expect_error "periods 0" "periods = 0 must be a whole number" "${run[@]}" --reference sine:amplitude=5,offset=50,frequency=0.5,periods=0
-expect_error "periods 1.5" "periods = 1.5 must be a whole number" \
+refused "periods 0" "periods = 0 must be a whole number" "${run[@]}" --reference sine:amplitude=5,offset=50,frequency=0.5,periods=0
+refused "periods 1.5" "periods = 1.5 must be a whole number" \
   "${run[@]}" --reference sine:amplitude=5,offset=50,frequency=0.5,periods=1.5
-expect_error "unknown kind" "expected sine:KEY=VALUE" "${run[@]}" --reference square:amplitude=5
-expect_error "missing file" "$T/none.csv" "${run[@]}" --reference "file:$T/none.csv"
-expect_error "file key" "unknown key \"column\"" "${run[@]}" --reference "file:$T/none.csv,column=2"
-expect_error "duplicate name" "its name \"a\" is that of" "${run[@]}" \
+refused "unknown kind" "expected sine:KEY=VALUE" "${run[@]}" --reference square:amplitude=5
+refused "missing file" "$T/none.csv" "${run[@]}" --reference "file:$T/none.csv"
+refused "file key" "unknown key \"column\"" "${run[@]}" --reference "file:$T/none.csv,column=2"
+refused "duplicate name" "its name \"a\" is that of" "${run[@]}" \
   --reference sine:amplitude=5,offset=50,frequency=0.5,periods=1,name=a \
   --reference triangle:amplitude=5,offset=50,frequency=0.5,periods=1,name=a
-expect_error "too fast" "frequency = 30 Hz needs more than the control period resolves" \
+refused "too fast" "frequency = 30 Hz needs more than the control period resolves" \
   "${run[@]}" --reference sine:amplitude=5,offset=50,frequency=30,periods=1
 # a record that is not increasing, and one finer than the control period
 printf 't,x\n0,30\n0.5,40\n0.4,50\n' > "$T/back.csv"
-expect_error "time backwards" "does not increase at sample 2" "${run[@]}" --reference "file:$T/back.csv"
+refused "time backwards" "does not increase at sample 2" "${run[@]}" --reference "file:$T/back.csv"
 { echo "t,x"; for k in $(seq 0 100); do echo "$(echo "$k * 0.001" | bc -l),$((30 + (k % 2) * 10))"; done; } > "$T/fine.csv"
-expect_error "finer than the period" "needs more than the control period resolves" \
+refused "finer than the period" "needs more than the control period resolves" \
   "${run[@]}" --control-period 0.01 --reference "file:$T/fine.csv"
 
 # a user sine runs under its name; no figures of a paper beside it

@@ -32,6 +32,7 @@ struct ExperimentArgs {
   std::string out;
   std::string model = "auto";
   bool paper_references = false;
+  std::vector<std::string> references;  // --reference SPEC (experiment only)
 };
 
 // "auto" and every kind fit() identifies (the registry, identify.hpp).
@@ -55,9 +56,9 @@ void add_model_options(CLI::App* cmd, ExperimentArgs& args) {
   add_control_period_option(cmd, args.control_period);
   cmd->add_option("--model", args.model, model_help())->check(one_of(model_choices()))->default_val("auto");
   cmd->add_flag("--paper-references", args.paper_references,
-                "Track the papers' references as published even where they leave the contraction range this "
-                "rig reached in its identification run (default: such a reference is mapped into the rig's reach, "
-                "with a note; docs/control.md, section 5)");
+                "Track the papers' references as published (or --reference's as given) even where they leave the "
+                "contraction range this rig reached in its identification run (default: such a reference is mapped "
+                "into the rig's reach, with a note; docs/control.md, section 5)");
 }
 
 ExperimentOptions options_from(const ExperimentArgs& a) {
@@ -71,6 +72,7 @@ ExperimentOptions options_from(const ExperimentArgs& a) {
   o.adaptive = !a.no_adaptive;
   o.model = fit_model_from_name(a.model);
   o.fit_references = !a.paper_references;
+  o.references = parse_references(a.references, "--reference");
   return o;
 }
 
@@ -129,6 +131,15 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->add_option("--tracking-plant", args->tracking_plant,
                   "Rig parameters of the tracking runs (JSON), if the rig changed after its identification on "
                   "--plant (default: the same rig)");
+  cmd->add_option("--reference", args->references,
+                  "A reference of your own, tracked instead of the paper's (repeatable; default: the paper's): "
+                  "sine:amplitude=MM,offset=MM,frequency=HZ,periods=N (offset - amplitude cos(2 pi f t), the "
+                  "papers' sine), triangle:amplitude=MM,offset=MM,frequency=HZ,periods=N (offset -+ amplitude), or "
+                  "file:PATH[,time=COL][,contraction=COL][,periodic][,periods=N] (a record, time in s, contraction "
+                  "in mm; columns 0 and 1 by default; interpolated at the control period; periodic: the record is one "
+                  "period). Each takes name=NAME (default: its kind, or refN). docs/control.md, section 8")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_flag("--no-adaptive", args->no_adaptive, "Do not run the adaptive variant");
   add_model_options(cmd, *args);
   cmd->add_option("--seed", args->seed, "Seed of the rig's noise (default 1)")
@@ -137,6 +148,7 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->add_option("--out", args->out, "Directory for the time series (CSV), models and result.json");
   cmd->callback([args, &action] {
     action = [args] {
+      (void)parse_references(args->references, "--reference");  // a bad spec: nothing checked, read or run before
       check_plant_not_output(args->plant, args->out);
       check_plant_not_output(args->tracking_plant, args->out);
       io::check_output_directory({"--out", args->out});  // before the run, not after it

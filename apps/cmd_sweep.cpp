@@ -34,6 +34,7 @@ struct SweepArgs {
   double control_period = ExperimentOptions{}.control_period;  // [s]
   std::string model = "auto";
   bool paper_references = false;
+  std::vector<std::string> references;  // --reference SPEC
   bool identify_on_base = false;
   unsigned jobs = 0;
   std::string out;
@@ -129,6 +130,7 @@ int run_sweep_command(const SweepArgs& a) {
   o.control_period = a.control_period;
   o.model = fit_model_from_name(a.model);
   o.fit_references = !a.paper_references;
+  o.references = parse_references(a.references, "--reference");
   o.identify_on_base = a.identify_on_base;
   o.jobs = a.jobs;
   o.experiments = sweep_experiments(a.experiments);
@@ -214,6 +216,11 @@ void add_sweep(CLI::App& app, Action& action) {
   cmd->add_flag("--paper-references", args->paper_references,
                 "Every run tracks the papers' references as published, even beyond its rig's reach (then a "
                 "target miss); default: mapped into each rig's reach, shown as 'ref xS' (docs/control.md, section 5)");
+  cmd->add_option("--reference", args->references,
+                  "A reference of your own, tracked in every run instead of the experiments' (repeatable; as "
+                  "experiment --reference: sine:..., triangle:..., file:PATH...; docs/control.md, section 8)")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_flag("--identify-on-base", args->identify_on_base,
                 "Identify and tune every run on the base rig and track on the variant's: a rig that changed after "
                 "its identification (another load, a wider band), the loops not re-tuned (docs/plant.md); default: "

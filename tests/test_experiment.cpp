@@ -22,6 +22,7 @@
 #include "hysteron/experiment.hpp"
 #include "hysteron/report.hpp"
 #include "temp_dir.hpp"
+#include "../src/experiment/detail.hpp"  // user_references
 #include "test_util.hpp"
 #include "hysteron/plant.hpp"
 
@@ -944,4 +945,180 @@ TEST(Experiment, ImpossibleMuscleRatingIsRefusedNamingTheKey) {
   p.muscle.max_pressure = 8e5;
   EXPECT_EQ(rig_params_from_json(rig_params_to_json(p), "rig").muscle.max_pressure, 8e5);
   EXPECT_EQ(rig_params_to_json(PamRigParams{})["muscle"]["max_pressure"].get<double>(), 600e3);
+}
+
+// The user's own reference (--reference): a sine at another frequency and amplitude than the
+// paper's, through every mechanism of the paper's (reach, gain trial, learning), named by its kind.
+TEST(Experiment, AUserSineIsTrackedInsteadOfThePapers) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid", 2);
+  o.references = parse_references({"sine:amplitude=15,offset=50,frequency=0.5,periods=2"});
+  const ExperimentResult r = run_experiment(o);
+  ASSERT_EQ(r.reference_ranges.size(), 1u);
+  EXPECT_EQ(r.reference_ranges[0].reference, "sine");
+  EXPECT_NEAR(r.reference_ranges[0].min_mm, 35.0, 1e-6);
+  EXPECT_NEAR(r.reference_ranges[0].max_mm, 65.0, 1e-6);
+  const TrackingRun* comp = nullptr;
+  const TrackingRun* base = nullptr;
+  const TrackingRun* learning = nullptr;
+  for (const TrackingRun& run : r.runs) {
+    EXPECT_EQ(run.reference, "sine");
+    EXPECT_TRUE(std::isfinite(run.errors.rms_error_mm) && std::isfinite(run.errors.max_error_mm)) << run.variant;
+    for (double p : run.pressure_command_mpa) {
+      ASSERT_GE(p, 0.0) << run.variant;
+      ASSERT_LE(p, r.pressure_limit_mpa) << run.variant;
+    }
+    if (run.variant == "compensated") comp = &run;
+    if (run.variant == "baseline") base = &run;
+    if (run.variant == "learning") learning = &run;
+  }
+  ASSERT_TRUE(comp && base && learning);
+  EXPECT_LT(comp->errors.rms_error_mm, base->errors.rms_error_mm);
+  // the tracked reference is the user's: 2 periods of 2 s after the 1.5 s pre-roll, 35..65 mm
+  EXPECT_NEAR(comp->t.size() * r.control_period_s, 1.5 + 4.0, 1e-6);
+  EXPECT_NEAR(*std::max_element(comp->reference_mm.begin(), comp->reference_mm.end()), 65.0, 1e-6);
+  EXPECT_EQ(learning->periods.size(), 2u);
+  // the learning run starts after the same pre-roll (the sine starts at 35 mm, not at rest): its
+  // first period, before anything is learnt, is near the compensated loop's (its PID is the
+  // learning rule's, lower), not the fill from rest (6.7 mm RMS at 0.5 Hz from 30 mm)
+  EXPECT_NEAR(learning->t.size() * r.control_period_s, 1.5 + 4.0, 1e-6);
+  EXPECT_LT(learning->periods[0].rms_error_mm, 3.0 * comp->errors.rms_error_mm);
+  EXPECT_LT(learning->errors.rms_error_mm, base->errors.rms_error_mm);
+  ASSERT_EQ(r.gain_trials.size(), 1u);
+  EXPECT_EQ(r.gain_trials[0].reference, "sine");
+  // no paper tracked it: no published figures
+  ASSERT_EQ(r.published.errors.size(), 1u);
+  EXPECT_EQ(r.published.errors[0].reference, "sine");
+  EXPECT_TRUE(std::isnan(r.published.errors[0].rms_error_mm));
+  EXPECT_NE(r.table().find(fmt::format("  {:<10} {:<12} {:>9} {:>9} {:>9}\n", "sine", "published", "-", "-", "-")),
+            std::string::npos)
+      << r.table();
+}
+
+// A record as the reference (file:PATH): not periodic, so no learning run, and the result says why.
+TEST(Experiment, ANonPeriodicFileReferenceRunsWithoutLearning) {
+  test::TempDir dir;
+  std::string csv = "t [s],x [mm]\n";
+  for (int k = 0; k <= 300; ++k) {  // 3 s at 10 ms: a ramp from 30 to 60 mm and a hold
+    const double t = 0.01 * k;
+    csv += fmt::format("{},{}\n", t, t < 2.0 ? 30.0 + 15.0 * t : 60.0);
+  }
+  const std::string path = dir.write("ref.csv", csv);
+  ExperimentOptions o = test::quick_experiment("gpi-pid", 2);
+  o.references = parse_references({"file:" + path + ",name=ramp"});
+  const ExperimentResult r = run_experiment(o);
+  bool said = false;
+  for (const auto& m : r.messages) said = said || m.find("learning (ramp) not run: the reference is not periodic") == 0;
+  EXPECT_TRUE(said) << fmt::format("{}", fmt::join(r.messages, "\n"));
+  ASSERT_FALSE(r.runs.empty());
+  for (const TrackingRun& run : r.runs) {
+    EXPECT_EQ(run.reference, "ramp");
+    EXPECT_NE(run.variant, "learning");
+    EXPECT_TRUE(std::isfinite(run.errors.rms_error_mm));
+  }
+  // interpolated at 1 ms, after the pre-roll: 1.5 s + 3.001 s
+  EXPECT_EQ(r.runs[0].t.size(), 1500u + 3001u);
+  EXPECT_NEAR(r.runs[0].reference_mm[1500 + 1000], 45.0, 1e-9);
+}
+
+TEST(Experiment, UserReferenceSpecsAreCheckedNamingTheKey) {
+  const auto message = [](const std::vector<std::string>& specs) {
+    try {
+      (void)parse_references(specs);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({"sine:amplitude=10,offset=50,frequency=1,periods=2,phase=3"}).find("unknown key \"phase\""),
+            std::string::npos);
+  EXPECT_NE(message({"sine:amplitude=10,offset=50,periods=2"}).find("missing key \"frequency\""), std::string::npos);
+  EXPECT_NE(message({"sine:amplitude=10,offset=50,frequency=0,periods=2"}).find("frequency = 0 Hz must be > 0"),
+            std::string::npos);
+  EXPECT_NE(message({"sine:amplitude=-1,offset=50,frequency=1,periods=2"}).find("amplitude = -1 mm must be >= 0"),
+            std::string::npos);
+  EXPECT_NE(message({"triangle:amplitude=nan,offset=50,frequency=1,periods=2"}).find("amplitude = \"nan\" is not a "
+                                                                                      "finite number"),
+            std::string::npos);
+  EXPECT_NE(message({"triangle:amplitude=1,offset=50,frequency=1,periods=0"}).find("periods = 0"), std::string::npos);
+  EXPECT_NE(message({"sine:amplitude=1,offset=50,frequency=1,periods=1,"}).find("empty KEY=VALUE"), std::string::npos);
+  EXPECT_NE(message({"square:amplitude=1"}).find("--reference 'square:amplitude=1': expected sine:"), std::string::npos);
+  EXPECT_NE(message({"file:/nonexistent/ref.csv"}).find("/nonexistent/ref.csv"), std::string::npos);
+  const std::string twice = message({"sine:amplitude=1,offset=50,frequency=1,periods=1,name=a",
+                                     "triangle:amplitude=1,offset=50,frequency=1,periods=1,name=a"});
+  EXPECT_NE(twice.find("its name \"a\" is that of"), std::string::npos) << twice;
+  // two of a kind are ref1, ref2
+  const auto two = parse_references({"sine:amplitude=1,offset=50,frequency=1,periods=1",
+                                     "sine:amplitude=2,offset=50,frequency=0.5,periods=1",
+                                     "triangle:amplitude=2,offset=50,frequency=0.5,periods=1"});
+  EXPECT_EQ(two[0].name, "ref1");
+  EXPECT_EQ(two[1].name, "ref2");
+  EXPECT_EQ(two[2].name, "triangle");
+  // finer than the control period resolves: refused before anything runs
+  ExperimentOptions o;
+  o.references = parse_references({"sine:amplitude=10,offset=50,frequency=30,periods=2"});
+  try {
+    o.validate();
+    ADD_FAILURE() << "a 30 Hz sine at 1 ms was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("frequency = 30 Hz needs more than the control period resolves"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// A user reference beyond the rig's reach goes through the reach mapping as a paper's does:
+// mapped with a note that calls it given (not published), or tracked as given with the note
+// that it is out of reach (fit_references = false, --paper-references).
+TEST(Experiment, AUserReferenceOutOfReachIsMappedOrKeptAsGiven) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.references = parse_references({"triangle:amplitude=30,offset=110,frequency=0.5,periods=1,name=high"});
+  const ExperimentResult mapped = run_experiment(o);
+  ASSERT_EQ(mapped.reference_ranges.size(), 1u);
+  EXPECT_TRUE(mapped.reference_ranges[0].scaled);
+  EXPECT_NEAR(mapped.reference_ranges[0].paper_max_mm, 140.0, 1e-6);
+  EXPECT_LT(mapped.reference_ranges[0].max_mm, 100.0);
+  bool said = false;
+  for (const auto& m : mapped.messages)
+    said = said || (m.find("reference high mapped onto the rig's reach") == 0 && m.find("instead of the given") !=
+                                                                                  std::string::npos);
+  EXPECT_TRUE(said) << fmt::format("{}", fmt::join(mapped.messages, "\n"));
+  o.fit_references = false;
+  const ExperimentResult kept = run_experiment(o);
+  ASSERT_EQ(kept.reference_ranges.size(), 1u);
+  EXPECT_FALSE(kept.reference_ranges[0].scaled);
+  EXPECT_FALSE(kept.reference_ranges[0].reachable);
+  EXPECT_NEAR(kept.reference_ranges[0].max_mm, 140.0, 1e-6);
+  for (const TrackingRun& run : kept.runs)
+    for (double p : run.pressure_command_mpa) ASSERT_TRUE(p >= 0.0 && p <= kept.pressure_limit_mpa) << run.variant;
+}
+
+// The samples a user reference is tracked on: the papers' sine (O - A cos, from its bottom), a
+// periodic record (one period, its last sample closing it) repeated, its units from its header.
+TEST(Experiment, UserReferencesAreSampledAtTheControlPeriod) {
+  const auto sine = experiment::user_references(
+      parse_references({"sine:amplitude=15,offset=50,frequency=0.5,periods=2"}), 1e-3);
+  ASSERT_EQ(sine.size(), 1u);
+  EXPECT_EQ(sine[0].ref_m.size(), 4000u);
+  EXPECT_EQ(sine[0].period, 2000u);
+  EXPECT_NEAR(sine[0].ref_m[0], 0.035, 1e-12);
+  EXPECT_NEAR(sine[0].ref_m[1000], 0.065, 1e-12);
+  EXPECT_NEAR(sine[0].ref_m[500], 0.050, 1e-12);
+  test::TempDir dir;
+  // one period of a triangle, 2 s, in ms and m: 0.03 .. 0.06 m
+  std::string csv = "time [ms],x [m]\n";
+  for (int k = 0; k <= 200; ++k) csv += fmt::format("{},{}\n", 10 * k, 0.03 + 0.03 * (1.0 - std::abs(1.0 - k / 100.0)));
+  const std::string path = dir.write("tri.csv", csv);
+  const auto file = parse_references({"file:" + path + ",periodic,periods=3"});
+  EXPECT_EQ(file[0].name, "file");
+  EXPECT_NEAR(file[0].t_s.back(), 2.0, 1e-12);
+  EXPECT_NEAR(file[0].x_mm[100], 60.0, 1e-9);
+  const auto tri = experiment::user_references(file, 1e-3);
+  EXPECT_EQ(tri[0].period, 2000u);
+  EXPECT_EQ(tri[0].ref_m.size(), 6000u);
+  EXPECT_NEAR(tri[0].ref_m[1000], 0.060, 1e-12);
+  EXPECT_NEAR(tri[0].ref_m[2000 + 500], 0.045, 1e-12);
+  // a periodic record that does not close is refused
+  const std::string unclosed = dir.write("open.csv", "t,x\n0,30\n1,60\n2,45\n");
+  EXPECT_THROW((void)parse_references({"file:" + unclosed + ",periodic"}), Error);
+  EXPECT_NO_THROW((void)parse_references({"file:" + unclosed}));
 }

@@ -70,6 +70,47 @@ inline constexpr double kMaxControlPeriod = 0.01;
 // check for the experiment's rig and tracking rig and a sweep's base and variant rigs.
 void check_control_period(double control_period, double dt, std::string_view where, std::string_view rig);
 
+// A reference of the user's own (ExperimentOptions::references; `hysteron experiment --reference
+// SPEC`, Python run_experiment(references=[SPEC, ...]); docs/control.md, section 8).
+// SPEC (contractions in mm, from the muscle at rest):
+//   sine:amplitude=A,offset=O,frequency=F,periods=N      x(t) = O - A cos(2 pi F t): the papers'
+//       sine (Eq. 18 as a contraction, gpi_sinusoid_reference), centre O, from its bottom O - A;
+//   triangle:amplitude=A,offset=O,frequency=F,periods=N  from O - A up to O + A and back, N times;
+//   file:PATH[,time=COL][,contraction=COL][,periodic][,periods=N]  a record (CSV or .mat, read
+//       as fit reads one): the time column (default column 0) in s (or the unit its header
+//       names: "t [ms]"), strictly increasing, and the contraction column (default column 1) in
+//       mm (or the length unit its header names), each a header name or a 0-based index;
+//       linearly interpolated at the control period from its first time stamp (shifted to 0).
+//       Not periodic (no learning run) unless `periodic`: the record is then one period, its
+//       last sample closing it (equal to its first within 1 % of its span), tracked N times.
+// Every kind takes `name=NAME` (letters, digits, '-', '_'): the name in the CSV files, the
+// table and result.json; default the kind, or refN (N its place among the references) where
+// two share a kind. Each is preceded by the pre-roll of the papers' references (kPreRollS).
+struct UserReference {
+  enum class Kind { sine, triangle, file };
+  Kind kind = Kind::sine;
+  std::string name;    // unique among the references
+  std::string origin;  // where it was given, for errors: "--reference 'sine:...'"
+  double amplitude_mm = 0.0, offset_mm = 0.0, frequency_hz = 0.0;  // sine, triangle
+  int periods = 1;     // sine, triangle; a periodic file
+  std::string path;    // file: the record, its samples below (time from 0 [s], contraction [mm])
+  std::vector<double> t_s, x_mm;
+  bool periodic = true;  // a file: only with `periodic`
+};
+// Parses the SPECs in order (default names as above); `option` names them in errors
+// ("--reference"; Python "references"). Reads a file reference's record. Throws hysteron::Error
+// naming the option, the spec and the key at fault (an unknown or missing key, a value that is
+// not a finite number, frequency <= 0, periods < 1, amplitude < 0, a duplicate name).
+std::vector<UserReference> parse_references(const std::vector<std::string>& specs,
+                                            std::string_view option = "--reference");
+// [samples] The fewest control periods a user reference's period may span (a sine or triangle),
+// and the most a file reference's record may deviate from its resampling at the control period
+// [fraction of its span]: a trajectory finer than the loop's period is refused, not smoothed.
+inline constexpr double kMinReferencePeriodSamples = 50.0;
+inline constexpr double kReferenceResolution = 0.01;
+// [s] The longest user reference (the runs log every control period).
+inline constexpr double kMaxReferenceSeconds = 3600.0;
+
 struct ExperimentOptions {
   std::string name = "gpi-pid";  // one of experiment_names()
   PamRigParams rig{};            // the simulated rig (defaults: nominal, with sensor noise)
@@ -109,13 +150,18 @@ struct ExperimentOptions {
   // and the other kinds are fitted for comparison (ExperimentResult::candidates). false: they
   // are not fitted (listed as such); the choice is the same. hysteron sweep sets it.
   bool fit_ineligible_candidates = true;
+  // The references tracked instead of the experiment's own (the paper's) where not empty
+  // (UserReference, parse_references). Every mechanism applies as to a paper's: the reach
+  // mapping (fit_references), the model's identification range, the gain trial, learning
+  // (periodic references only: a note for the others); no published figures (NaN).
+  std::vector<UserReference> references;
   void validate() const;         // throws hysteron::Error
 };
 
 // A reference as the paper defines it and as it was tracked on this rig [mm].
 struct ReferenceRange {
   std::string reference;
-  double paper_min_mm = 0.0, paper_max_mm = 0.0;  // as published
+  double paper_min_mm = 0.0, paper_max_mm = 0.0;  // as published (a user reference: as given)
   double min_mm = 0.0, max_mm = 0.0;              // as tracked (the paper's unless scaled)
   bool scaled = false;        // mapped into the rig's reach (ExperimentOptions::fit_references)
   bool reachable = true;      // the tracked reference lies within the reach (with its margin)

@@ -114,6 +114,9 @@ struct SweepOptions {
   // its own rig; fits 9 kinds per run) or one kind pinned for every run.
   FitModel model = ExperimentOptions{}.model;
   bool fit_references = ExperimentOptions{}.fit_references;  // of every run
+  // ExperimentOptions::references of every run (parse_references; empty: each experiment's own),
+  // checked against control_period before anything runs
+  std::vector<UserReference> references;
   // Every run identified and tuned on the base rig, its tracking runs on the variant's rig
   // (ExperimentOptions::tracking_rig): a rig that changed after its identification (another
   // load, a wider band, a slower regulator), the loops not re-tuned. false: each variant is

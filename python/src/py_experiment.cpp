@@ -203,7 +203,25 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       "run_experiment",
       [](const std::string& name, const IntArg& seed_arg, const py::object& plant, const PathArg& out_arg,
          const PathArg& report_arg, const IntArg& learning_periods, bool adaptive, const py::object& tracking_plant,
-         const std::string& model, bool paper_references, double control_period) {
+         const std::string& model, bool paper_references, double control_period, const py::object& references) {
+        // the user's references first: a bad spec is an error before anything is checked, read or run
+        std::vector<std::string> specs;
+        if (py::isinstance<py::str>(references)) {
+          specs.push_back(references.cast<std::string>());
+        } else if (!references.is_none()) {
+          if (!py::isinstance<py::sequence>(references))
+            throw Error(fmt::format("run_experiment: references must be a list of SPEC strings or None, not {}",
+                                    py::str(py::type::of(references).attr("__name__")).cast<std::string>()));
+          std::size_t i = 0;
+          for (const py::handle h : references) {
+            if (!py::isinstance<py::str>(h))
+              throw Error(fmt::format("run_experiment: references[{}] must be a SPEC string, not {}", i,
+                                      py::str(py::type::of(h).attr("__name__")).cast<std::string>()));
+            specs.push_back(h.cast<std::string>());
+            ++i;
+          }
+        }
+        std::vector<UserReference> user = parse_references(specs, "references");
         // where the outputs go, before the run (minutes): a report whose directory is `out` is
         // written after `out` was created
         const std::string out = path_arg(out_arg, "run_experiment: out");
@@ -224,6 +242,7 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         o.learning_periods = int_arg(learning_periods, "run_experiment: learning_periods");
         o.adaptive = adaptive;
         o.control_period = control_period;  // checked by run_experiment before anything is run or written
+        o.references = std::move(user);
         if (!plant.is_none()) o.rig = rig_from(plant, "plant");
         if (!tracking_plant.is_none()) o.tracking_rig = rig_from(tracking_plant, "tracking_plant");
         ExperimentResult r;
@@ -302,7 +321,7 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
       py::arg("name"), py::arg("seed") = 1, py::arg("plant") = py::none(), py::arg("out") = "",
       py::arg("report") = "", py::arg("learning_periods") = 10, py::arg("adaptive") = true,
       py::arg("tracking_plant") = py::none(), py::arg("model") = "auto", py::arg("paper_references") = false,
-      py::arg("control_period") = ExperimentOptions{}.control_period,
+      py::arg("control_period") = ExperimentOptions{}.control_period, py::arg("references") = py::none(),
       R"doc(Run one of the registered experiments (experiment_names(): "gpi-pid", "mpi-openloop",
 "mpi-pwm") on the simulated rig. plant: rig parameter dict or JSON path (None: defaults).
 model: kind of hysteron's model, the one the compensated, learning and adaptive variants
@@ -318,6 +337,12 @@ identification (None: the identified rig).
 paper_references: track the papers' references as published even above the contraction the
 rig reached in its identification run (default False: such a reference is scaled into the
 reach, said in "messages"; the ranges are in summary["references"] and summary["reach"]).
+references: None (the paper's references) or a list of SPEC strings tracked instead, as the
+CLI's --reference: "sine:amplitude=MM,offset=MM,frequency=HZ,periods=N",
+"triangle:amplitude=MM,offset=MM,frequency=HZ,periods=N" or
+"file:PATH[,time=COL][,contraction=COL][,periodic][,periods=N]", each with an optional
+name=NAME (docs/control.md, section 8); a bad spec is hysteron.Error naming
+references, the spec and the key, before anything runs.
 out: directory for the CSV/JSON outputs (as `hysteron experiment --out`);
 report: path of an HTML report. Returns a dict: "summary" (the CLI's --json
 object), "table" (text), "identification" (numpy series + train_end), "fit",

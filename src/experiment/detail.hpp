@@ -56,7 +56,16 @@ struct Reference {
   std::size_t score_from = 0;    // first scored sample
   std::size_t period = 0;        // samples per period (0: not periodic)
   std::size_t periodic_from = 0; // first sample of the periodic part (after a pre-roll)
+  bool user = false;             // the user's (ExperimentOptions::references), not the paper's
 };
+
+// ---- the user's references (user_reference.cpp) ----
+// ExperimentOptions::references at the control period tc (score_from 0: add_pre_roll's hold).
+std::vector<Reference> user_references(const std::vector<UserReference>& refs, double tc);
+// Throws hysteron::Error where a user reference needs more than the control period tc
+// resolves (kMinReferencePeriodSamples, kReferenceResolution), is longer than
+// kMaxReferenceSeconds, or two share a name (ExperimentOptions::validate).
+void check_user_references(const std::vector<UserReference>& refs, double tc);
 
 // Seconds a reference without a warm-up is held at its first value before it starts
 // (unscored), the loop running: the rig starts vented (add_pre_roll, docs/control.md

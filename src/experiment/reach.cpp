@@ -301,9 +301,10 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
         rr.max_mm = new_hi;
         rr.scaled = true;
         res.messages.push_back(fmt::format("reference {} mapped onto the rig's reach: {:.1f}..{:.1f} mm instead of the "
-                                           "published {:.1f}..{:.1f} mm (scale {:.3f}): {}; errors are against the "
-                                           "mapped reference (--paper-references keeps the published one)",
-                                           ref.name, rr.min_mm, rr.max_mm, rr.paper_min_mm, rr.paper_max_mm, s, why));
+                                           "{} {:.1f}..{:.1f} mm (scale {:.3f}): {}; errors are against the "
+                                           "mapped reference (--paper-references keeps the {} one)",
+                                           ref.name, rr.min_mm, rr.max_mm, ref.user ? "given" : "published",
+                                           rr.paper_min_mm, rr.paper_max_mm, s, why, ref.user ? "given" : "published"));
       } else {
         rr.reachable = false;
         res.messages.push_back(fmt::format("reference {} ({:.1f}..{:.1f} mm) is out of this rig's reach: {}; the "

@@ -415,6 +415,11 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
   // the period as run_experiment checks it (ExperimentOptions::validate)
   check_control_period(options.control_period, options.base.simulation.dt, "sweep", "base rig");
+  try {
+    experiment::check_user_references(options.references, options.control_period);
+  } catch (const Error& e) {
+    throw Error(fmt::format("sweep: {}", e.what()));
+  }
 
   // the variants' rigs, all checked before anything runs
   const json base_json = rig_params_to_json(options.base);
@@ -538,6 +543,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.control_period = options.control_period;
         eo.model = options.model;
         eo.fit_references = options.fit_references;
+        eo.references = options.references;
         eo.complete_gain_trials = false;       // the sweep reports the trial's choice, not its curve
         eo.fit_ineligible_candidates = false;  // ... and the model auto chose, not the others
         const experiment::Spec* spec = experiment::find_spec(run.experiment);

@@ -7,17 +7,7 @@
 # variant is the nominal rig exits 0. Learning runs are switched off (--learning-periods 0) for speed.
 # Usage: bash sweep.sh <hysteron-binary> <source-dir>
 set -uo pipefail
-source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
-
-# expect_error "what" "part of the message" command...: exit 1, the message on stderr
-expect_error() {
-  local what=$1 part=$2
-  shift 2
-  "$@" > "$T/out.txt" 2> "$T/err.txt"
-  local rc=$?
-  [ $rc -eq 1 ] || fail "$what: exit $rc, expected 1 ($(cat "$T/err.txt"))"
-  grep -qF -- "$part" "$T/err.txt" || fail "$what: stderr lacks '$part': $(cat "$T/err.txt")"
-}
+source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail, expect_error
 
 expect_error "typo in a path" "unknown rig parameter 'load.mas' (did you mean load.mass?)" \
   "$BIN" sweep gpi-pid --vary load.mas=10,35 --out "$T/bad.csv"

@@ -294,6 +294,7 @@ json to_json(const Evaluation& e) {
   json j = to_json(e.metrics);
   j["file"] = e.file;
   j["range"] = to_json(e.range);
+  if (!e.error.empty()) j["error"] = e.error;
   if (e.censored_recorded) j["censored_samples"] = e.censored;
   if (e.outside_input_limits_recorded) j["outside_input_limits"] = e.outside_input_limits;
   j["output_map"] = {{"gain", number(e.output_map.gain)},
@@ -311,6 +312,7 @@ void from_json(const json& j, Evaluation& e, std::string_view where) {
   e.file = opt_string(j, "file", where);
   e.range = {};
   if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
+  e.error = opt_string(j, "error", where);
   // absent in documents before they were recorded: unknown (not 0)
   e.censored_recorded = j.contains("censored_samples");
   e.censored = e.censored_recorded ? get_size(j, "censored_samples", where) : 0;
@@ -338,7 +340,10 @@ json to_json(const FitDocument& d) {
     j["candidates"][i]["validate"] = v;
   }
   j["data"] = to_json(d.data);
-  j["validate"] = d.validation.empty() ? json(nullptr) : to_json(d.validation.front().metrics);
+  // the first set, as every --validate-data file is listed in validate_files (one the model could not be
+  // run on too, with its "error"): null where that set was not scored
+  j["validate"] = d.validation.empty() || !d.validation.front().error.empty() ? json(nullptr)
+                                                                               : to_json(d.validation.front().metrics);
   json files = json::array();
   for (const auto& e : d.validation) files.push_back(to_json(e));
   j["validate_files"] = files;

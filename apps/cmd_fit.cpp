@@ -279,7 +279,8 @@ int run_fit(const FitCliOptions& c) {
       // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
       // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
       // evaluate says)
-      std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what, rep.train.r2, rep.train.rms)};
+      std::vector<std::string> ws = {input_coverage_warning(cov, what),
+                                     output_map_warning(map, what, rep.train.r2, rep.train.rms, cov.span_share)};
       if (!v.file.empty()) {
         auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                      v.file, c.sel.time_column);
@@ -337,6 +338,8 @@ int run_fit(const FitCliOptions& c) {
     // the units the record's columns or --input-label / --output-label name: evaluate checks a record against them
     if (!doc.data.input_unit.empty()) extra["units"]["input"] = doc.data.input_unit;
     if (!doc.data.output_unit.empty()) extra["units"]["output"] = doc.data.output_unit;
+    // the training error in the output's units: evaluate compares a record's with it
+    if (nlohmann::json t = io::training_json(rep.train); !t.is_null()) extra["training"] = std::move(t);
     io::write_model_file(c.out, rep.model, extra);
   }
   doc.model_written = write;

@@ -5,7 +5,7 @@ function model = hysteron_load_model(file)
 %   model ('pi', 'gpi', 'mpi-deadzone', 'mpi-asym'), the parameters (q, r, p, c,
 %   n, rho, tau, alpha, g0, z, g, ascending, descending), input_limits ([lo hi],
 %   -Inf/Inf where unbounded), the units map (input_origin, input_scale,
-%   output_offset, output_gain) and the free-form keys units, note and metadata
+%   output_offset, output_gain) and the free-form keys units, note, metadata and training
 %   when the file has them. The numbers are the file's doubles exactly.
 %
 %   A missing or invalid file raises hysteron:modelFile with a message naming the

@@ -207,11 +207,15 @@ InputCoverage input_coverage(const ModelParams& params, std::span<const double> 
   c.n = r.end - r.begin;
   if (!c.limits.bounded()) return c;
   const double tol = kInputCoverageTolerance * (c.limits.hi - c.limits.lo);
+  double least = std::numeric_limits<double>::infinity(), largest = -least;
   for (std::size_t k = r.begin; k < r.end; ++k) {
     const double beyond = std::max(c.limits.lo - x[k], x[k] - c.limits.hi);
     if (beyond > tol) ++c.outside;
     c.max_beyond = std::max(c.max_beyond, beyond);
+    least = std::min(least, x[k]);
+    largest = std::max(largest, x[k]);
   }
+  if (c.n > 0 && c.limits.hi > c.limits.lo) c.span_share = (largest - least) / (c.limits.hi - c.limits.lo);
   return c;
 }
 
@@ -286,10 +290,24 @@ bool validation_useless(const FitMetrics& validation, const FitMetrics& train) n
   return validation.r2 <= 0.0 && validation.rms > kValidationRmsFactor * train.rms;
 }
 
-std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2, double train_rms) {
+std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2, double train_rms,
+                               double input_share) {
   const bool poor = m.r2 < kMinFitR2;
   const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
   if (!poor && !halved) return {};
+  // as well described as the training record: nothing to explain (a short or quiet stretch's R^2)
+  if (std::isfinite(train_rms) && !(m.rms > kValidationRmsFactor * train_rms)) return {};
+  // a stretch too narrow for R^2, % of span or a map to say much: no sign, scale or zero claimed
+  if (input_share < kNarrowInputShare)
+    return fmt::format("{}: the prediction scores R^2 {:.4g} (RMS error {:.4g}, {:.3g} % of the output's span) on a "
+                       "record whose input spans only {:.1f} % of the model's input range (input_limits): on so "
+                       "narrow a stretch R^2 and % of span say little about the model{}",
+                       what, m.r2, m.rms, m.span > 0.0 ? 100.0 * m.rms / m.span : std::nan(""), 100.0 * input_share,
+                       std::isfinite(train_rms)
+                           ? fmt::format("; its RMS error is {:.3g} times the training one ({:.4g})", m.rms / train_rms,
+                                         train_rms)
+                           : std::string(" (no training error to compare the RMS error with: the model file has no "
+                                         "\"training\", which hysteron fit writes)"));
   if (output_map_explains(m, train_r2)) {
     const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS "
                                         "error {:.4g}, R^2 {:.3f}, against {:.4g} and {:.4g} for the prediction as it "
@@ -307,7 +325,7 @@ std::string output_map_warning(const OutputMap& m, std::string_view what, double
   // as far as known: more than kValidationRmsFactor times the training RMS error (a quiet stretch
   // has a poor R^2 on its small span where the model describes it as well as its training record),
   // or, without a training error (evaluate), where the map at least halves it
-  if (std::isfinite(train_rms) ? !(m.rms > kValidationRmsFactor * train_rms) : !halved) return {};
+  if (!std::isfinite(train_rms) && !halved) return {};  // (with train_rms: beyond kValidationRmsFactor x it, above)
   const std::string train = std::isfinite(train_r2) ? fmt::format(" against R^2 {:.4g} in training", train_r2)
                                                     : std::string();
   const double pct = m.span > 0.0 ? 100.0 * m.rms / m.span : std::nan("");

@@ -22,6 +22,12 @@ using namespace json_read;
 
 // A model (null when there is none).
 json model_or_null(FitStatus s, const ModelParams& m) { return has_model(s) ? model_to_json(m) : json(nullptr); }
+// A fitted model with its training error (the model file's "training"), as hysteron fit writes its file.
+json model_or_null(FitStatus s, const ModelParams& m, const FitMetrics& train) {
+  json j = model_or_null(s, m);
+  if (json t = training_json(train); j.is_object() && !t.is_null()) j["training"] = std::move(t);
+  return j;
+}
 // A model that may not have been set (e.g. an experiment's baseline): null unless valid.
 json valid_model_or_null(const ModelParams& m) {
   try {
@@ -68,6 +74,11 @@ InitialState initial_state_from_name(std::string_view name, std::string_view whe
 }
 
 // ---- FitMetrics ------------------------------------------------------------------
+
+json training_json(const FitMetrics& train) {
+  if (!(std::isfinite(train.rms) && train.rms >= 0.0 && std::isfinite(train.r2) && train.r2 <= 1.0)) return nullptr;
+  return training_to_json({train.rms, train.r2, train.n});
+}
 
 json to_json(const FitMetrics& m) {
   return {{"rms", number(m.rms)}, {"max", number(m.max)}, {"mae", number(m.mae)},
@@ -127,7 +138,7 @@ json to_json(const FitCandidate& c) {
           {"num_parameters", c.num_parameters},
           {"time_s", number(c.time_s)},
           {"chosen", c.chosen},
-          {"model", model_or_null(c.status, c.model)}};
+          {"model", model_or_null(c.status, c.model, c.train)}};
 }
 
 void from_json(const json& j, FitCandidate& c, std::string_view where) {
@@ -160,7 +171,7 @@ json to_json(const FitReport& r) {
           {"total_iterations", r.total_iterations},
           {"num_starts", r.num_starts},
           {"time_s", number(r.time_s)},
-          {"model", model_or_null(r.status, r.model)},
+          {"model", model_or_null(r.status, r.model, r.train)},
           {"parameters", params},
           {"covariance_note", r.covariance_note},
           {"train", to_json(r.train)},

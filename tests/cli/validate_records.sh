@@ -2,6 +2,9 @@
 # A model checked on records other than its training one (fit --validate-data, evaluate): a
 # validation record the model cannot be run on (an input beyond its bound) is never left out: it
 # is listed with its error and counts as a useless validation (exit 3, the model still written).
+# fit records the training error in the model file ("training"), and evaluate judges a record by it
+# as fit judges a validation record: exit 3 on a record the model does not describe, nothing blamed
+# on a unit or a zero on a short stretch (with or without "training").
 # Usage: bash validate_records.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
@@ -71,5 +74,69 @@ PYEOF
 # a validation that can be run is scored as before: exit 0
 "$BIN" fit --model pi --data "$T/a.csv" --input p --output y --threads 1 --validate-data "$T/b.csv" \
   --out "$T/m3.json" > "$T/f3.txt" 2>&1 || fail "fit with a good validation record: exit $?: $(cat "$T/f3.txt")"
+
+# 2. the model file records the training error; evaluate judges a record against it
+$PY - "$T/m3.json" "$T/r3.json" <<'PYEOF' || fail "the model file's training"
+import json, sys
+m = json.load(open(sys.argv[1]))
+t = m["training"]
+assert set(t) == {"rms", "r2", "samples"} and t["samples"] == 1800 and 0 < t["rms"] and t["r2"] <= 1, t
+PYEOF
+"$BIN" fit --model pi --data "$T/a.csv" --input p --output y --threads 1 --out "$T/m3.json" --json > "$T/f3.json" \
+  || fail "fit --json"
+$PY - "$T/m3.json" "$T/f3.json" "$T/m3_old.json" <<'PYEOF' || fail "the fit document's model is not the model file's"
+import json, sys
+m, d = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+assert d["model"]["training"] == m["training"], (d["model"]["training"], m["training"])
+assert m["training"]["rms"] == d["train"]["rms"] and m["training"]["r2"] == d["train"]["r2"], d["train"]
+del m["training"]   # a model file written before "training": still read, judged as before
+json.dump(m, open(sys.argv[3], "w"))
+PYEOF
+# a short stretch near a turning point (30 samples, 11 % of the input range): R^2 < 0 there, but the
+# RMS error is within twice the training one: no warning, exit 0; without "training": no unit or zero
+# blamed (before: "differs ... by a scale (another unit, a gain) or a zero (a sensor offset)")
+for m in m3 m3_old; do
+  "$BIN" evaluate --model "$T/$m.json" --data "$T/b.csv" --input p --output y --range 400:430 > "$T/e_$m.txt" 2>&1
+  rc=$?
+  [ $rc -eq 0 ] || fail "evaluate $m on a short stretch: exit $rc: $(cat "$T/e_$m.txt")"
+  grep -q "scale (another unit\|sensor offset\|sign flipped" "$T/e_$m.txt" && fail "evaluate $m on a short stretch blames the record: $(cat "$T/e_$m.txt")"
+done
+grep -q "warning" "$T/e_m3.txt" && fail "evaluate with training on a short stretch warns: $(cat "$T/e_m3.txt")"
+grep -q "spans only 11.3 % of the model's input range" "$T/e_m3_old.txt" \
+  || fail "evaluate without training on a short stretch: $(cat "$T/e_m3_old.txt")"
+# a record the model does not describe (its output negated: a sensor mounted the other way): exit 3 with
+# "training", the metrics printed as always; exit 0 without it (nothing to compare with), as before
+$PY - "$T/b.csv" "$T/neg.csv" <<'PYEOF'
+import sys
+rows = [r for r in open(sys.argv[1]).read().split("\n") if r]
+with open(sys.argv[2], "w") as f:
+    f.write(rows[0] + "\n")
+    for r in rows[1:]:
+        p, y = r.split(",")
+        f.write(f"{p},{-float(y)!r}\n")
+PYEOF
+"$BIN" evaluate --model "$T/m3.json" --data "$T/neg.csv" --input p --output y > "$T/e4.txt" 2> "$T/e4.err"
+rc=$?
+[ $rc -eq 3 ] || fail "evaluate on a record the model does not describe: exit $rc (expected 3)"
+grep -q "^evaluate: rms" "$T/e4.txt" || fail "evaluate exit 3: no metrics printed"
+grep -q "the evaluation is useless: .*evaluate exits 3" "$T/e4.err" || fail "evaluate exit 3: $(cat "$T/e4.err")"
+grep -q "sign flipped" "$T/e4.err" || fail "evaluate: the negated output not named: $(cat "$T/e4.err")"
+"$BIN" evaluate --model "$T/m3.json" --data "$T/neg.csv" --input p --output y --json > "$T/e4.json" 2> /dev/null
+[ $? -eq 3 ] || fail "evaluate --json on a record the model does not describe: not exit 3"
+"$BIN" evaluate --model "$T/m3_old.json" --data "$T/neg.csv" --input p --output y > /dev/null 2>&1 \
+  || fail "evaluate of a model file without training: exit $?"
+# "training" is checked as strictly as the rest of the file
+for bad in '{"rms": -1, "r2": 0.9, "samples": 10}' '{"rms": 1, "r2": 0.9}' '{"rms": 1, "r2": 0.9, "samples": 10, "x": 1}' \
+  '{"rms": 1, "r2": 2, "samples": 10}' '{"rms": 1, "r2": 0.9, "samples": 1.5}' '"good"'; do
+  $PY - "$T/m3.json" "$T/bad.json" "$bad" <<'PYEOF'
+import json, sys
+m = json.load(open(sys.argv[1]))
+m["training"] = json.loads(sys.argv[3])
+json.dump(m, open(sys.argv[2], "w"))
+PYEOF
+  "$BIN" evaluate --model "$T/bad.json" --data "$T/b.csv" --input p --output y > /dev/null 2> "$T/err"
+  rc=$?
+  [ $rc -eq 1 ] && grep -q 'training' "$T/err" || fail "training $bad: exit $rc: $(cat "$T/err")"
+done
 
 exit $fails

@@ -109,6 +109,11 @@ struct EvaluationDocument {
   Evaluation result;
 };
 
+// The model file's "training" (TrainingMetrics: rms, r2, samples) of a fit's training metrics;
+// null where they are not finite (nothing to record). hysteron fit's model file, the fit documents'
+// "model" dicts (and so Python's fit) and the experiments' model files carry it.
+nlohmann::json training_json(const FitMetrics& train);
+
 // ---- to_json / from_json pairs ----------------------------------------------------
 
 nlohmann::json to_json(const FitMetrics& m);

@@ -95,8 +95,12 @@ int run_evaluate(const EvaluateOptions& c) {
   // for that, not for the model's hysteresis: say so where the affine map explains it
   const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
   doc.result.output_map = map;
-  if (std::string w = output_map_warning(map, c.sel.file, train.r2, train.rms, coverage.span_share); !w.empty())
+  // (an input in another zero or unit is named as such: input_map)
+  if (std::string w = output_map_warning(map, c.sel.file, train.r2, train.rms, coverage.span_share); !w.empty()) {
+    if (const InputMap im = input_map(model, rec.x, rec.y, range, initial, !c.uncensored, train.rms); im.found)
+      w = input_map_warning(im, c.sel.file);
     warnings.push_back(std::move(w));
+  }
   const bool useless = std::isfinite(train.rms) && validation_useless(m, train);
   if (useless)
     warnings.push_back(fmt::format(

@@ -279,8 +279,14 @@ int run_fit(const FitCliOptions& c) {
       // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
       // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
       // evaluate says)
-      std::vector<std::string> ws = {input_coverage_warning(cov, what),
-                                     output_map_warning(map, what, rep.train.r2, rep.train.rms, cov.span_share)};
+      // (an input in another zero or unit is named as such: input_map)
+      std::string out_w = output_map_warning(map, what, rep.train.r2, rep.train.rms, cov.span_share);
+      if (!out_w.empty())
+        if (const InputMap im = input_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor,
+                                          rep.train.rms);
+            im.found)
+          out_w = input_map_warning(im, what);
+      std::vector<std::string> ws = {input_coverage_warning(cov, what), std::move(out_w)};
       if (!v.file.empty()) {
         auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                      v.file, c.sel.time_column);

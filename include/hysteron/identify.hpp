@@ -198,6 +198,27 @@ std::string output_map_warning(const OutputMap& m, std::string_view what,
                                double train_r2 = std::numeric_limits<double>::quiet_NaN(),
                                double train_rms = std::numeric_limits<double>::quiet_NaN(),
                                double input_share = std::numeric_limits<double>::quiet_NaN());
+// Where a record's INPUT differs from the training one's by a zero (absolute against gauge
+// pressure: +0.101325 MPa) or a unit (kPa against MPa), the output map blames the output. The input
+// map tries maps of the record's input x -> scale * x + shift derived from the data: a shift that
+// makes the range's least (or largest) input agree with the model's input_limits, and a power-of-ten
+// scale that makes their spans agree; each is verified by simulating the model on the mapped record
+// (the whole record, from its start, scored on `range`). The best one is `found` where it brings the
+// RMS error within kValidationRmsFactor times train_rms (where given), or else at least halves it
+// with an R^2 of at least kMinFitR2. Nothing is found where the limits are unbounded.
+struct InputMap {
+  bool found = false;
+  double scale = 1.0, shift = 0.0;  // x -> scale * x + shift [input units]
+  double rms = std::numeric_limits<double>::quiet_NaN();        // of the prediction on the mapped input
+  double r2 = std::numeric_limits<double>::quiet_NaN();
+  double rms_as_is = std::numeric_limits<double>::quiet_NaN();  // on the input as recorded
+};
+InputMap input_map(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                   IndexRange range = {}, InitialState initial = InitialState::virgin, bool censor = false,
+                   double train_rms = std::numeric_limits<double>::quiet_NaN());
+// The warning naming the input map ("" where none is found); `what` names the record.
+std::string input_map_warning(const InputMap& m, std::string_view what);
+
 // A validation the model does not describe (fit exits 3 on it): worse than the validation output's
 // mean (R^2 <= 0) and an RMS error more than kValidationRmsFactor times the training one. R^2 alone
 // is relative to the validation's own variance: a good model on a quiet stretch scores R^2 < 0.

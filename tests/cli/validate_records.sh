@@ -4,7 +4,9 @@
 # is listed with its error and counts as a useless validation (exit 3, the model still written).
 # fit records the training error in the model file ("training"), and evaluate judges a record by it
 # as fit judges a validation record: exit 3 on a record the model does not describe, nothing blamed
-# on a unit or a zero on a short stretch (with or without "training").
+# on a unit or a zero on a short stretch (with or without "training"). A record whose input is in
+# another zero (absolute against gauge pressure) or unit (MPa against kPa) is said to be so, not
+# blamed on its output (the shared Festo records, transformed here; skipped where they are absent).
 # Usage: bash validate_records.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
@@ -138,5 +140,39 @@ PYEOF
   rc=$?
   [ $rc -eq 1 ] && grep -q 'training' "$T/err" || fail "training $bad: exit $rc: $(cat "$T/err")"
 done
+
+# 3. the input in another zero or unit: named (the Festo records: pressure [kPa] -> force [N])
+D="${HYSTERON_SHARED_DATA:-$2/../shared/data}/pam-force-pressure"
+if [ -f "$D/festo10mm_20cm_test8.csv" ] && [ -f "$D/festo10mm_20cm_test10.csv" ]; then
+  $PY - "$D/festo10mm_20cm_test10.csv" "$T" <<'PYEOF'
+import sys
+rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n") if r.strip()]
+for name, f in (("abs", lambda p, y: (p + 101.325, y)), ("mpa", lambda p, y: (p / 1000, y)),
+                ("yoff", lambda p, y: (p, y + 500.0))):
+    with open(f"{sys.argv[2]}/t10_{name}.csv", "w") as o:  # as the file: force, pressure (no header)
+        for r in rows:
+            p, y = f(float(r[1]), float(r[0]))
+            o.write(f"{y!r},{p!r}\n")
+PYEOF
+  "$BIN" fit --model kp --data "$D/festo10mm_20cm_test8.csv" --input 1 --output 0 --threads 1 --out "$T/kp.json" \
+    --validate-data "$T/t10_abs.csv" > "$T/f5.txt" 2>&1
+  grep -q "t10_abs.csv: the record's input matches the model's when shifted by -101.3 (another zero: absolute" \
+    "$T/f5.txt" || fail "fit --validate-data absolute pressure: $(grep warning "$T/f5.txt")"
+  for v in abs mpa yoff; do
+    "$BIN" evaluate --model "$T/kp.json" --data "$T/t10_$v.csv" --input 1 --output 0 > /dev/null 2> "$T/e_$v.txt"
+  done
+  grep -q "shifted by -101.3 (another zero: absolute against gauge pressure" "$T/e_abs.txt" \
+    || fail "evaluate absolute pressure: $(cat "$T/e_abs.txt")"
+  grep -q "scaled by 1000 (another unit" "$T/e_mpa.txt" || fail "evaluate MPa: $(cat "$T/e_mpa.txt")"
+  for v in abs mpa; do
+    grep -q "sensor offset\|a scale (another unit, a gain)\|another actuator" "$T/e_$v.txt" \
+      && fail "evaluate $v: the output blamed: $(cat "$T/e_$v.txt")"
+  done
+  grep -q "the record's output matches .* or a zero (a sensor offset)" "$T/e_yoff.txt" \
+    || fail "evaluate with the output offset: $(cat "$T/e_yoff.txt")"
+  grep -q "record's input matches" "$T/e_yoff.txt" && fail "evaluate with the output offset: the input blamed"
+else
+  echo "validate_records: ../shared/data absent: the Festo records' input maps not checked"
+fi
 
 exit $fails

@@ -11,29 +11,14 @@
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
 
-cat > "$T/gpi.json" <<'JSON'
-{"model": "gpi", "c": [60, 4, -0.5, 30], "q": 0.8, "n": 10, "rho": 0.4, "tau": 0.1, "alpha": 2}
-JSON
-# two records of the same actuator (different amplitudes)
-$PY - "$T" <<'PYEOF'
-import sys
-for name, amps in (("a", (0.6, 0.5, 0.4, 0.3, 0.2, 0.1)), ("b", (0.55, 0.35, 0.45, 0.15))):
-    with open(f"{sys.argv[1]}/{name}_x.csv", "w") as f:
-        f.write("p\n")
-        for a in amps:
-            for k in range(300):
-                f.write(f"{a * (1 - abs(2 * k / 300 - 1))!r}\n")
-PYEOF
-for r in a b; do
-  "$BIN" simulate --model "$T/gpi.json" --input "$T/${r}_x.csv" --output "$T/${r}_sim.csv" || fail "simulate $r"
-  sed '1s/.*/p,y/' "$T/${r}_sim.csv" > "$T/$r.csv"
-done
+# two records of the same actuator (different amplitudes): a.csv, b.csv (t_s, p, y)
+gpi_record_pair
 # b with one input sample far beyond any model's input bound
 $PY - "$T/b.csv" "$T/huge.csv" <<'PYEOF'
 import sys
 rows = open(sys.argv[1]).read().split("\n")
-p, y = rows[500].split(",")
-rows[500] = f"1e307,{y}"
+t, p, y = rows[500].split(",")
+rows[500] = f"{t},1e307,{y}"
 open(sys.argv[2], "w").write("\n".join(rows))
 PYEOF
 
@@ -114,8 +99,8 @@ rows = [r for r in open(sys.argv[1]).read().split("\n") if r]
 with open(sys.argv[2], "w") as f:
     f.write(rows[0] + "\n")
     for r in rows[1:]:
-        p, y = r.split(",")
-        f.write(f"{p},{-float(y)!r}\n")
+        t, p, y = r.split(",")
+        f.write(f"{t},{p},{-float(y)!r}\n")
 PYEOF
 "$BIN" evaluate --model "$T/m3.json" --data "$T/neg.csv" --input p --output y > "$T/e4.txt" 2> "$T/e4.err"
 rc=$?

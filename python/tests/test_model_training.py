@@ -52,3 +52,10 @@ def test_rate_pi_without_a_sample_time_names_the_argument():
     r = hysteron.fit(x, y, model="rate-pi", num_threads=1)
     assert r["status"] == "invalid_input", r["status"]
     assert "give sample_time" in r["message"] and "FitOptions::" not in r["message"], r["message"]
+
+
+def test_evaluate_does_not_blame_a_short_stretch_on_a_unit_or_a_zero():
+    x, y = record()
+    r = hysteron.fit(x, y, model="pi", num_threads=1)
+    w = hysteron.evaluate(r["model"], x, y, range=(140, 160))["output_map_warning"]
+    assert "sensor offset" not in w and "another unit" not in w, w

@@ -15,9 +15,13 @@
 // stdout, or one JSON document with --json; the report is HTML (metrics, loops,
 // residuals) if its name ends in .html/.htm, else the JSON document (`hysteron report` turns it
 // into the same page).
-// Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files).
+// Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files); 3 a useless evaluation:
+// where the model file records its training error ("training", as hysteron fit writes it), a record
+// the model predicts worse than its mean (R^2 <= 0) with more than kValidationRmsFactor times that
+// error (validation_useless, as fit --validate-data exits 3).
 #include <fmt/format.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -67,11 +71,6 @@ int run_evaluate(const EvaluateOptions& c) {
   warnings = rate_time_warnings(model, rec.t ? &*rec.t : nullptr, c.sample_time, c.sel.file, sel.time_column);
   const InputCoverage coverage = input_coverage(model, rec.x, range);
   if (std::string w = input_coverage_warning(coverage, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
-  // a record whose output differs from the training record's by a sign, a unit or a zero scores poorly
-  // for that, not for the model's hysteresis: say so where the affine map explains it
-  const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
-  if (std::string w = output_map_warning(map, c.sel.file); !w.empty()) warnings.push_back(std::move(w));
-  for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
 
   io::EvaluationDocument doc;
   doc.model_file = c.model == "-" ? std::string("<stdin>") : c.model;
@@ -82,7 +81,36 @@ int run_evaluate(const EvaluateOptions& c) {
   doc.result.range = range;
   doc.result.metrics = evaluate_scored(model, rec.x, rec.y, range, initial, doc.data.censored, &doc.result.censored);
   doc.result.outside_input_limits = coverage.outside;
+  const FitMetrics& m = doc.result.metrics;
+  // The training error the model file records ("training": hysteron fit writes it): judged as fit judges
+  // a --validate-data file; without it (older or hand-made files) there is nothing to compare with.
+  FitMetrics train;
+  train.rms = train.r2 = std::nan("");
+  if (const auto t = model_doc.training()) {
+    train.rms = t->rms;
+    train.r2 = t->r2;
+    train.n = t->samples;
+  }
+  // a record whose output differs from the training record's by a sign, a unit or a zero scores poorly
+  // for that, not for the model's hysteresis: say so where the affine map explains it
+  const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
   doc.result.output_map = map;
+  // (an input in another zero or unit is named as such: input_map)
+  if (std::string w = output_map_warning(map, c.sel.file, train.r2, train.rms, coverage.span_share); !w.empty()) {
+    if (const InputMap im = input_map(model, rec.x, rec.y, range, initial, !c.uncensored, train.rms); im.found)
+      w = input_map_warning(im, c.sel.file);
+    warnings.push_back(std::move(w));
+  }
+  const bool useless = std::isfinite(train.rms) && validation_useless(m, train);
+  if (useless)
+    warnings.push_back(fmt::format(
+        "the evaluation is useless: the model predicts {} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span) "
+        "worse than its mean (R^2 <= 0) and with more than {:g} times its training RMS error ({:.4g}; training R^2 "
+        "{:.4g}, the model file's \"training\"): evaluate exits {}",
+        c.sel.file, range.begin, range.end, m.r2, m.rms, m.rms_percent_span, kValidationRmsFactor, train.rms,
+        train.r2, exit_poor_fit));
+  for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
+  const int code = useless ? exit_poor_fit : exit_ok;
 
   if (!c.report.empty()) {
     if (is_html_path(c.report)) {
@@ -95,9 +123,8 @@ int run_evaluate(const EvaluateOptions& c) {
   }
   if (c.json) {
     fmt::print("{}\n", io::to_json(doc).dump(2));
-    return exit_ok;
+    return code;
   }
-  const FitMetrics& m = doc.result.metrics;
   const std::string yu = doc.data.output_unit.empty() ? "" : " " + doc.data.output_unit;
   std::string text = fmt::format("model {} ({}) on {}, samples {}..{} ({} start)\n", doc.model_file, model_name(model),
                                  c.sel.file, range.begin, range.end, c.relaxed ? "relaxed" : "virgin");
@@ -109,7 +136,7 @@ int run_evaluate(const EvaluateOptions& c) {
                         doc.result.censored);
   if (!c.report.empty() && !report_stdout) text += fmt::format("report written to {}\n", c.report);
   std::fputs(text.c_str(), report_stdout ? stderr : stdout);
-  return exit_ok;
+  return code;
 }
 
 }  // namespace
@@ -118,6 +145,10 @@ void add_evaluate(CLI::App& app, Action& action) {
   auto c = std::make_shared<EvaluateOptions>();
   CLI::App* sub = app.add_subcommand("evaluate", "score a saved model on measured input/output data (metrics, "
                                                  "loops and residuals in the report)");
+  sub->footer("Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files); 3 a useless evaluation: "
+              "the model file records its training error (\"training\", written by hysteron fit) and the model "
+              "predicts the record worse than its mean (R^2 <= 0) with more than twice that RMS error (as fit "
+              "--validate-data exits 3); the metrics are printed as always.");
   sub->add_option("--model,-m", c->model, "model file (JSON); - reads it from stdin")->required();
   add_data_options(sub, c->sel);
   sub->add_option("--range,--train", c->range,

@@ -227,11 +227,13 @@ int run_fit(const FitCliOptions& c) {
   // a validation set's record: its file's, or (a range of) the fit's
   const auto input_of = [&](const ValidationSet& v) { return std::span<const double>(v.file.empty() ? x : v.x); };
   const auto output_of = [&](const ValidationSet& v) { return std::span<const double>(v.file.empty() ? y : v.y); };
-  auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v,
-                         std::size_t* censored = nullptr) -> std::optional<FitMetrics> {
+  // nullopt where the model cannot be run on the set (an input beyond its bound): *error says why
+  auto evaluate_on = [&](const ModelParams& m, const ValidationSet& v, std::size_t* censored = nullptr,
+                         std::string* error = nullptr) -> std::optional<FitMetrics> {
     try {
       return evaluate_scored(m, input_of(v), output_of(v), v.range, o.initial_state, censor, censored);
-    } catch (const Error&) {
+    } catch (const Error& e) {
+      if (error) *error = e.what();
       return std::nullopt;
     }
   };
@@ -243,43 +245,76 @@ int run_fit(const FitCliOptions& c) {
   const bool fitted = has_model(rep.status);
   // validation sets the model does not describe (validation_useless: worse than their mean, R^2 <= 0,
   // and more than twice the training RMS error): the fit exits exit_poor_fit
-  std::vector<std::string> useless;
+  // Sets the model cannot be run on (an input sample beyond its bound) count as useless too: a
+  // validation asked for is never left out (listed with its error, exit_poor_fit).
+  std::vector<std::string> useless, unrun;
   if (fitted)
-    for (const auto& v : sets)
-      if (std::size_t censored = 0; const auto m = evaluate_on(rep.model, v, &censored)) {
-        const InputCoverage cov = input_coverage(rep.model, input_of(v), v.range);
-        const OutputMap map = output_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor);
-        doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
-        const std::string what = v.file.empty() ? "validation range" : v.file;
-        if (validation_useless(*m, rep.train))
-          useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span)",
-                                        v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
-                                        m->rms, m->rms_percent_span));
-        // a validation record beyond the training range scores the model's extrapolation; one whose output
-        // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
-        // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
-        // evaluate says)
-        std::vector<std::string> ws = {input_coverage_warning(cov, what), output_map_warning(map, what, rep.train.r2, rep.train.rms)};
-        if (!v.file.empty()) {
-          auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
-                                       v.file, c.sel.time_column);
-          ws.insert(ws.end(), rw.begin(), rw.end());
-        }
-        for (std::string& w : ws)
-          if (!w.empty()) {
-            rep.warnings.push_back(w);
-            doc.fit.warnings.push_back(std::move(w));
-          }
+    for (const auto& v : sets) {
+      std::size_t censored = 0;
+      std::string error;
+      const auto m = evaluate_on(rep.model, v, &censored, &error);
+      const InputCoverage cov = input_coverage(rep.model, input_of(v), v.range);
+      const std::string what = v.file.empty() ? "validation range" : v.file;
+      if (!m) {
+        io::Evaluation e{v.file, v.range, {}, 0, cov.outside, {}};
+        e.metrics.rms = e.metrics.max = e.metrics.mae = e.metrics.rms_percent_span = e.metrics.r2 = std::nan("");
+        e.error = error;
+        doc.validation.push_back(std::move(e));
+        unrun.push_back(fmt::format("{} (samples {}..{})", v.file.empty() ? c.sel.file : v.file, v.range.begin,
+                                    v.range.end));
+        std::string w = fmt::format("{}: the model cannot be run on this validation record ({}): it is not scored "
+                                    "and counts as a useless validation",
+                                    what, error);
+        rep.warnings.push_back(w);
+        doc.fit.warnings.push_back(std::move(w));
+        continue;
       }
+      const OutputMap map = output_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor);
+      doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
+      if (validation_useless(*m, rep.train))
+        useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span)",
+                                      v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
+                                      m->rms, m->rms_percent_span));
+      // a validation record beyond the training range scores the model's extrapolation; one whose output
+      // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
+      // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
+      // evaluate says)
+      // (an input in another zero or unit is named as such: input_map)
+      std::string out_w = output_map_warning(map, what, rep.train.r2, rep.train.rms, cov.span_share);
+      if (!out_w.empty())
+        if (const InputMap im = input_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor,
+                                          rep.train.rms);
+            im.found)
+          out_w = input_map_warning(im, what);
+      std::vector<std::string> ws = {input_coverage_warning(cov, what), std::move(out_w)};
+      if (!v.file.empty()) {
+        auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
+                                     v.file, c.sel.time_column);
+        ws.insert(ws.end(), rw.begin(), rw.end());
+      }
+      for (std::string& w : ws)
+        if (!w.empty()) {
+          rep.warnings.push_back(w);
+          doc.fit.warnings.push_back(std::move(w));
+        }
+    }
   // A converged fit whose validation is useless (R^2 <= 0: worse than the validation output's mean)
   // must not exit as a success: exit_poor_fit, as poor_fit, naming the sets; the status stays
   // converged and the model is written as for any converged fit (its training fit is good).
-  if (!useless.empty()) {
-    std::string sets_named;
-    for (const auto& u : useless) sets_named += (sets_named.empty() ? "" : " and ") + u;
-    std::string w = fmt::format("the validation is useless: the model predicts {} worse than its mean (R^2 <= 0) "
-                                "and with more than {:g} times its training RMS error ({:.4g}; training R^2 {:.4g}){}",
-                                sets_named, kValidationRmsFactor, rep.train.rms, rep.train.r2,
+  const auto named = [](const std::vector<std::string>& list) {
+    std::string out;
+    for (const auto& u : list) out += (out.empty() ? "" : " and ") + u;
+    return out;
+  };
+  if (!useless.empty() || !unrun.empty()) {
+    std::string because;
+    if (!useless.empty())
+      because = fmt::format("the model predicts {} worse than its mean (R^2 <= 0) and with more than {:g} times its "
+                        "training RMS error ({:.4g}; training R^2 {:.4g})",
+                        named(useless), kValidationRmsFactor, rep.train.rms, rep.train.r2);
+    if (!unrun.empty())
+      because += fmt::format("{}the model cannot be run on {}", because.empty() ? "" : "; ", named(unrun));
+    std::string w = fmt::format("the validation is useless: {}{}", because,
                                 rep.status == FitStatus::converged
                                     ? fmt::format(": the fit exits {} (the model is written: its training fit converged)",
                                                   exit_poor_fit)
@@ -309,6 +344,8 @@ int run_fit(const FitCliOptions& c) {
     // the units the record's columns or --input-label / --output-label name: evaluate checks a record against them
     if (!doc.data.input_unit.empty()) extra["units"]["input"] = doc.data.input_unit;
     if (!doc.data.output_unit.empty()) extra["units"]["output"] = doc.data.output_unit;
+    // the training error in the output's units: evaluate compares a record's with it
+    if (nlohmann::json t = io::training_json(rep.train); !t.is_null()) extra["training"] = std::move(t);
     io::write_model_file(c.out, rep.model, extra);
   }
   doc.model_written = write;
@@ -328,7 +365,7 @@ int run_fit(const FitCliOptions& c) {
   int code = rep.status == FitStatus::converged  ? exit_ok
              : rep.status == FitStatus::poor_fit ? exit_poor_fit
                                                  : exit_not_converged;
-  if (!useless.empty() && code == exit_ok) code = exit_poor_fit;
+  if ((!useless.empty() || !unrun.empty()) && code == exit_ok) code = exit_poor_fit;
   if (c.json) {
     fmt::print("{}\n", io::to_json(doc).dump(2));
     return code;
@@ -391,7 +428,7 @@ int run_fit(const FitCliOptions& c) {
     }
   }
   for (const auto& e : doc.validation)
-    text += metrics_text("validate:", e.metrics) +
+    text += (e.error.empty() ? metrics_text("validate:", e.metrics) : fmt::format("validate: not scored: {}", e.error)) +
             fmt::format("  [{}, samples {}..{}{}]\n", e.file.empty() ? c.sel.file : e.file, e.range.begin, e.range.end,
                         e.censored > 0 ? fmt::format("; the output clips: {} samples at its limit where the model "
                                                      "predicts beyond it scored as censored, no error "

@@ -3,7 +3,9 @@
 // Exit codes (README, "Command line"): 0 success; 1 error: bad input, bad usage (CLI11's
 // parse errors, which CLI11 itself would report as 105-109, are mapped to 1), unreadable
 // or unwritable files; fit: 2 no_convergence or failed, 3 poor_fit or a useless validation
-// (validation_useless); experiment, demo: 3 a loop not below the baseline; 4 internal error.
+// (validation_useless, or a validation record the model cannot be run on); evaluate: 3 a useless
+// evaluation (validation_useless against the model file's "training" error); experiment, demo: 3 a
+// loop not below the baseline; 4 internal error.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <glog/logging.h>

@@ -9,7 +9,8 @@ function model = hysteron_load_model(file)
 %   input_limits ([lo hi], -Inf/Inf where
 %   unbounded; absent where both sides are), the units map (input_origin,
 %   input_scale, output_offset, output_gain) where it is not the identity, and the
-%   free-form keys units, note and metadata when the file has them. The numbers
+%   free-form keys units, note and metadata, and training (the fit's rms, r2,
+%   samples), when the file has them. The numbers
 %   are the file's doubles exactly.
 %
 %   A missing or invalid file raises hysteron:modelFile with a message naming the

@@ -4,7 +4,7 @@ function hysteron_save_model(file, model)
 %   of a model or another model file's name) and writes it to FILE atomically (a
 %   temporary file renamed over FILE: a failure leaves FILE untouched). Numbers are
 %   written with 17 significant digits, so HYSTERON_LOAD_MODEL reads back the same
-%   doubles. The fields units, note and metadata are kept. The command line
+%   doubles. The fields units, note, metadata and training are kept. The command line
 %   (`hysteron simulate/invert/evaluate --model FILE`), the C++ library and the
 %   Python module read the file.
 %

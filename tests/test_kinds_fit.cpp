@@ -156,6 +156,10 @@ TEST(KindsFit, RatePiPredictsAnUnseenRateWherePiCannot) {
   const FitReport none = fit(train, y, options(FitModel::rate_pi, 8));
   EXPECT_EQ(none.status, FitStatus::invalid_input);
   EXPECT_NE(none.message.find("sample time"), std::string::npos) << none.message;
+  // named as every front end's user gives it: sample_time (Python's sample_time=, MATLAB's 'sample_time'),
+  // the CLI's options in parentheses; not a C++ member (before: "--sample-time (FitOptions::sample_time)")
+  EXPECT_NE(none.message.find("give sample_time"), std::string::npos) << none.message;
+  EXPECT_EQ(none.message.find("FitOptions::"), std::string::npos) << none.message;
 }
 
 // The linear kinds' least squares use a subset of the rows of a long record (one per block,

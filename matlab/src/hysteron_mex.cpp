@@ -11,7 +11,7 @@
 //   version                          -> char
 //   model       spec                 -> model struct (spec: struct, JSON text or file path)
 //   model_json  spec                 -> JSON text of the model file
-//   load        path                 -> model struct (with "units", "note", "metadata" if present)
+//   load        path                 -> model struct (with "units", "note", "metadata", "training" if present)
 //   save        path, spec           -> (writes the model file atomically)
 //   simulate    spec, x, opts        -> y                     opts: relaxed
 //   invert      spec, y, opts        -> [x, saturated]        opts: limits
@@ -112,7 +112,7 @@ void require_args(int nrhs, int min, int max, std::string_view usage) {
 
 struct ModelSpec {
   ModelParams params;
-  nlohmann::json extra;  // "units", "note", "metadata"
+  nlohmann::json extra;  // "units", "note", "metadata", "training"
 };
 
 // Keys of a model file whose value is an array (a MATLAB scalar is one element): every kind's
@@ -475,8 +475,10 @@ void cmd_fit(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
       if (c.is_object() && c.contains("model")) limits_to_infinite(c["model"]);
   rep["ok"] = r.ok();
   rep["report"] = r.full_report();
-  plhs[0] = has_model(r.status) ? model_struct({r.model, nlohmann::json::object()})
-                                : mxCreateDoubleMatrix(0, 0, mxREAL);
+  // the model with its training error ("training"), as hysteron fit's model file and the report's model
+  nlohmann::json extra = nlohmann::json::object();
+  if (nlohmann::json t = io::training_json(r.train); !t.is_null()) extra["training"] = std::move(t);
+  plhs[0] = has_model(r.status) ? model_struct({r.model, extra}) : mxCreateDoubleMatrix(0, 0, mxREAL);
   if (nlhs > 1) {
     plhs[1] = to_mx(rep);
     // a list of texts is a cell array, also when it is empty

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 
 #include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -242,7 +243,8 @@ usable by hysteron.Model (it may not be invertible).)doc");
         py::dict d = metrics_dict(evaluate_scored(spec, xs, ys, range_from(range, "evaluate: range"),
                                                   initial_state_from(initial_state), censored, &count));
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
-        d["outside_input_limits"] = input_coverage(spec, xs, range_from(range, "evaluate: range")).outside;
+        const InputCoverage coverage = input_coverage(spec, xs, range_from(range, "evaluate: range"));
+        d["outside_input_limits"] = coverage.outside;
         // y ~ gain * prediction + offset, and the warning where that map explains a poor score
         const OutputMap map =
             output_map(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state), censored);
@@ -270,7 +272,8 @@ usable by hysteron.Model (it may not be invertible).)doc");
                 would);
         }
         d["clipping_warning"] = clip_warning;
-        d["output_map_warning"] = output_map_warning(map, "evaluate");
+        // (a stretch whose input spans little of the model's input range is not blamed on a sign, unit or zero)
+        d["output_map_warning"] = output_map_warning(map, "evaluate", std::nan(""), std::nan(""), coverage.span_share);
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),

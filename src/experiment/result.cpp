@@ -57,8 +57,11 @@ std::vector<std::string> write_files(const ExperimentResult& r, const std::files
   }
   // the rig's signals: pressure [MPa] in, contraction [mm] out (`hysteron evaluate` checks a record against them)
   const nlohmann::json units{{"units", {{"input", "MPa"}, {"output", "mm"}}}};
-  io::write_model_file((d / "model.json").string(), r.fit.model, units);
+  nlohmann::json fitted = units;  // with the training error (evaluate compares a record's with it)
+  if (nlohmann::json t = io::training_json(r.fit.train); !t.is_null()) fitted["training"] = std::move(t);
+  io::write_model_file((d / "model.json").string(), r.fit.model, fitted);
   nlohmann::json best = units;
+  if (nlohmann::json t = io::training_json(r.best_fit.train); !t.is_null()) best["training"] = std::move(t);
   if (!r.model_reason.empty())
     best["note"] = fmt::format("hysteron experiment {}: the model of the compensated variants; {}", r.name,
                                r.model_reason);

@@ -379,8 +379,8 @@ class RatePiKind final : public Parametrization {
   }
   void fit(const Data& d, const Ranges&, const FitOptions& o, FitReport& rep) const override {
     if (!(o.sample_time > 0))
-      throw Error("rate-pi: the sample time is unknown (its rates are per second): give a time column or "
-                  "--sample-time (FitOptions::sample_time)");
+      throw Error("rate-pi: the sample time is unknown (its rates are per second): give sample_time, the seconds "
+                  "between samples (hysteron fit: a time column or --sample-time)");
     RatePiParams m;
     m.dt = o.sample_time;
     m.r = default_thresholds(train_x(d), o.num_operators);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "detail.hpp"
@@ -207,11 +208,15 @@ InputCoverage input_coverage(const ModelParams& params, std::span<const double> 
   c.n = r.end - r.begin;
   if (!c.limits.bounded()) return c;
   const double tol = kInputCoverageTolerance * (c.limits.hi - c.limits.lo);
+  double least = std::numeric_limits<double>::infinity(), largest = -least;
   for (std::size_t k = r.begin; k < r.end; ++k) {
     const double beyond = std::max(c.limits.lo - x[k], x[k] - c.limits.hi);
     if (beyond > tol) ++c.outside;
     c.max_beyond = std::max(c.max_beyond, beyond);
+    least = std::min(least, x[k]);
+    largest = std::max(largest, x[k]);
   }
+  if (c.n > 0 && c.limits.hi > c.limits.lo) c.span_share = (largest - least) / (c.limits.hi - c.limits.lo);
   return c;
 }
 
@@ -286,10 +291,24 @@ bool validation_useless(const FitMetrics& validation, const FitMetrics& train) n
   return validation.r2 <= 0.0 && validation.rms > kValidationRmsFactor * train.rms;
 }
 
-std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2, double train_rms) {
+std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2, double train_rms,
+                               double input_share) {
   const bool poor = m.r2 < kMinFitR2;
   const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
   if (!poor && !halved) return {};
+  // as well described as the training record: nothing to explain (a short or quiet stretch's R^2)
+  if (std::isfinite(train_rms) && !(m.rms > kValidationRmsFactor * train_rms)) return {};
+  // a stretch too narrow for R^2, % of span or a map to say much: no sign, scale or zero claimed
+  if (input_share < kNarrowInputShare)
+    return fmt::format("{}: the prediction scores R^2 {:.4g} (RMS error {:.4g}, {:.3g} % of the output's span) on a "
+                       "record whose input spans only {:.1f} % of the model's input range (input_limits): on so "
+                       "narrow a stretch R^2 and % of span say little about the model{}",
+                       what, m.r2, m.rms, m.span > 0.0 ? 100.0 * m.rms / m.span : std::nan(""), 100.0 * input_share,
+                       std::isfinite(train_rms)
+                           ? fmt::format("; its RMS error is {:.3g} times the training one ({:.4g})", m.rms / train_rms,
+                                         train_rms)
+                           : std::string(" (no training error to compare the RMS error with: the model file has no "
+                                         "\"training\", which hysteron fit writes)"));
   if (output_map_explains(m, train_r2)) {
     const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS "
                                         "error {:.4g}, R^2 {:.3f}, against {:.4g} and {:.4g} for the prediction as it "
@@ -307,7 +326,7 @@ std::string output_map_warning(const OutputMap& m, std::string_view what, double
   // as far as known: more than kValidationRmsFactor times the training RMS error (a quiet stretch
   // has a poor R^2 on its small span where the model describes it as well as its training record),
   // or, without a training error (evaluate), where the map at least halves it
-  if (std::isfinite(train_rms) ? !(m.rms > kValidationRmsFactor * train_rms) : !halved) return {};
+  if (!std::isfinite(train_rms) && !halved) return {};  // (with train_rms: beyond kValidationRmsFactor x it, above)
   const std::string train = std::isfinite(train_r2) ? fmt::format(" against R^2 {:.4g} in training", train_r2)
                                                     : std::string();
   const double pct = m.span > 0.0 ? 100.0 * m.rms / m.span : std::nan("");
@@ -317,6 +336,66 @@ std::string output_map_warning(const OutputMap& m, std::string_view what, double
                      "offset leaves R^2 {:.3f})",
                      what, m.r2, m.rms, pct, train,
                      m.r2 <= 0.0 ? ", worse than the record's mean" : "", m.r2_mapped);
+}
+
+InputMap input_map(const ModelParams& params, std::span<const double> x, std::span<const double> y, IndexRange range,
+                   InitialState initial, bool censor, double train_rms) {
+  detail::check_record(x, y, "input_map");
+  const IndexRange r = detail::check_range(range, x.size(), "input_map");
+  InputMap best;
+  const Limits lim = input_limits(params);
+  if (!lim.bounded() || !(lim.hi > lim.lo) || r.end - r.begin < 2) return best;
+  const auto score = [&](double scale, double shift) -> std::optional<FitMetrics> {
+    std::vector<double> xm(x.begin(), x.end());
+    for (double& v : xm) v = scale * v + shift;
+    try {
+      return evaluate_scored(params, xm, y, r, initial, censor);
+    } catch (const Error&) {  // an input beyond the model's bound: not this map
+      return std::nullopt;
+    }
+  };
+  const auto as_is = score(1.0, 0.0);
+  if (!as_is || !std::isfinite(as_is->rms)) return best;
+  best.rms_as_is = as_is->rms;
+  const auto [lo_it, hi_it] = std::minmax_element(x.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                                                  x.begin() + static_cast<std::ptrdiff_t>(r.end));
+  const double lo = *lo_it, hi = *hi_it, span = lim.hi - lim.lo;
+  std::vector<std::pair<double, double>> candidates;  // (scale, shift)
+  // a zero: the least or the largest input moved onto the limits' (more than the coverage tolerance)
+  for (const double shift : {lim.lo - lo, lim.hi - hi})
+    if (std::abs(shift) > kInputCoverageTolerance * span) candidates.push_back({1.0, shift});
+  // a unit: a power of ten between the spans (10^-9 .. 10^9, not 1)
+  if (hi > lo) {
+    const double k = std::round(std::log10(span / (hi - lo)));
+    if (k != 0.0 && std::abs(k) <= 9.0) candidates.push_back({std::pow(10.0, k), 0.0});
+  }
+  for (const auto& [scale, shift] : candidates) {
+    const auto m = score(scale, shift);
+    if (!m || !std::isfinite(m->rms) || (best.found && !(m->rms < best.rms))) continue;
+    const bool good = std::isfinite(train_rms) ? m->rms <= kValidationRmsFactor * train_rms
+                                               : m->rms <= 0.5 * as_is->rms && m->r2 >= kMinFitR2;
+    if (!good || !(m->rms < as_is->rms)) continue;
+    best.found = true;
+    best.scale = scale;
+    best.shift = shift;
+    best.rms = m->rms;
+    best.r2 = m->r2;
+  }
+  return best;
+}
+
+std::string input_map_warning(const InputMap& m, std::string_view what) {
+  if (!m.found) return {};
+  const std::string map =
+      m.scale != 1.0
+          ? fmt::format("scaled by {:g} (another unit: kPa against MPa is a factor 1000, Pa against kPa too?)", m.scale)
+          : fmt::format("shifted by {:+.4g} (another zero: absolute against gauge pressure, 0.101325 MPa or 101.3 "
+                        "kPa?)",
+                        m.shift);
+  return fmt::format("{}: the record's input matches the model's when {}: the model's RMS error on it is then {:.4g} "
+                     "(R^2 {:.4g}) against {:.4g} on the input as recorded; the input, not the output, differs from "
+                     "the record the model was fitted on: convert it before fitting or evaluating",
+                     what, map, m.rms, m.r2, m.rms_as_is);
 }
 
 }  // namespace hysteron

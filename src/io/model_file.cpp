@@ -27,7 +27,7 @@ namespace {
 
 using nlohmann::json;
 
-constexpr std::array<std::string_view, 3> kFreeKeys = {"units", "note", "metadata"};
+constexpr std::array<std::string_view, 4> kFreeKeys = {"units", "note", "metadata", "training"};
 
 std::string type_name(const json& v) {
   switch (v.type()) {
@@ -553,6 +553,40 @@ void check_model_extra(const nlohmann::json& extra, std::string_view where) {
   }
   if (extra.contains("note") && !extra["note"].is_string())
     top.fail("note", fmt::format("expected a string, got {}", type_name(extra["note"])));
+  if (extra.contains("training")) {
+    const json& t = extra["training"];
+    const char* expected = "expected an object {\"rms\": ..., \"r2\": ..., \"samples\": N} (the training fit's error)";
+    if (!t.is_object()) top.fail("training", fmt::format("{}, got {}", expected, type_name(t)));
+    for (auto it = t.begin(); it != t.end(); ++it)
+      if (it.key() != "rms" && it.key() != "r2" && it.key() != "samples")
+        top.fail(fmt::format("training.{}", it.key()), "not a key of \"training\"; allowed: rms, r2, samples");
+    for (const char* k : {"rms", "r2", "samples"}) {
+      const std::string key = fmt::format("training.{}", k);
+      if (!t.contains(k)) top.fail("training", fmt::format("{}: \"{}\" is missing", expected, k));
+      const json& v = t[k];
+      if (!v.is_number()) top.fail(key, fmt::format("expected a number, got {}", type_name(v)));
+      const double x = v.get<double>();
+      if (!std::isfinite(x)) top.fail(key, "expected a finite number");
+      if (std::string_view(k) == "rms" && !(x >= 0.0)) top.fail(key, fmt::format("expected >= 0, got {}", x));
+      if (std::string_view(k) == "r2" && !(x <= 1.0)) top.fail(key, fmt::format("expected <= 1, got {}", x));
+      // a whole number (MATLAB's structs hold it as a double)
+      if (std::string_view(k) == "samples" && !(x >= 0.0 && x == std::floor(x) && x < 9007199254740992.0))
+        top.fail(key, fmt::format("expected a whole number >= 0, got {}", v.dump()));
+    }
+  }
+}
+
+nlohmann::json training_to_json(const TrainingMetrics& t) {
+  return {{"rms", t.rms}, {"r2", t.r2}, {"samples", t.samples}};
+}
+
+std::optional<TrainingMetrics> ModelDocument::training() const {
+  if (!extra.is_object()) return std::nullopt;
+  const auto t = extra.find("training");
+  if (t == extra.end() || !t->is_object()) return std::nullopt;
+  check_model_extra(json{{"training", *t}}, "model document");
+  return TrainingMetrics{(*t)["rms"].get<double>(), (*t)["r2"].get<double>(),
+                         static_cast<std::size_t>((*t)["samples"].get<double>())};
 }
 
 std::string ModelDocument::unit(std::string_view which) const {

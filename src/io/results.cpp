@@ -22,6 +22,12 @@ using namespace json_read;
 
 // A model (null when there is none).
 json model_or_null(FitStatus s, const ModelParams& m) { return has_model(s) ? model_to_json(m) : json(nullptr); }
+// A fitted model with its training error (the model file's "training"), as hysteron fit writes its file.
+json model_or_null(FitStatus s, const ModelParams& m, const FitMetrics& train) {
+  json j = model_or_null(s, m);
+  if (json t = training_json(train); j.is_object() && !t.is_null()) j["training"] = std::move(t);
+  return j;
+}
 // A model that may not have been set (e.g. an experiment's baseline): null unless valid.
 json valid_model_or_null(const ModelParams& m) {
   try {
@@ -68,6 +74,11 @@ InitialState initial_state_from_name(std::string_view name, std::string_view whe
 }
 
 // ---- FitMetrics ------------------------------------------------------------------
+
+json training_json(const FitMetrics& train) {
+  if (!(std::isfinite(train.rms) && train.rms >= 0.0 && std::isfinite(train.r2) && train.r2 <= 1.0)) return nullptr;
+  return training_to_json({train.rms, train.r2, train.n});
+}
 
 json to_json(const FitMetrics& m) {
   return {{"rms", number(m.rms)}, {"max", number(m.max)}, {"mae", number(m.mae)},
@@ -129,7 +140,7 @@ json to_json(const FitCandidate& c) {
           {"num_parameters", c.num_parameters},
           {"time_s", number(c.time_s)},
           {"chosen", c.chosen},
-          {"model", model_or_null(c.status, c.model)}};
+          {"model", model_or_null(c.status, c.model, c.train)}};
 }
 
 void from_json(const json& j, FitCandidate& c, std::string_view where) {
@@ -164,7 +175,7 @@ json to_json(const FitReport& r) {
           {"total_iterations", r.total_iterations},
           {"num_starts", r.num_starts},
           {"time_s", number(r.time_s)},
-          {"model", model_or_null(r.status, r.model)},
+          {"model", model_or_null(r.status, r.model, r.train)},
           {"parameters", params},
           {"covariance_note", r.covariance_note},
           {"train", to_json(r.train)},
@@ -298,6 +309,7 @@ json to_json(const Evaluation& e) {
   json j = to_json(e.metrics);
   j["file"] = e.file;
   j["range"] = to_json(e.range);
+  if (!e.error.empty()) j["error"] = e.error;
   if (e.censored_recorded) j["censored_samples"] = e.censored;
   if (e.outside_input_limits_recorded) j["outside_input_limits"] = e.outside_input_limits;
   j["output_map"] = {{"gain", number(e.output_map.gain)},
@@ -315,6 +327,7 @@ void from_json(const json& j, Evaluation& e, std::string_view where) {
   e.file = opt_string(j, "file", where);
   e.range = {};
   if (j.contains("range")) from_json(j["range"], e.range, key_where(where, "range"));
+  e.error = opt_string(j, "error", where);
   // absent in documents before they were recorded: unknown (not 0)
   e.censored_recorded = j.contains("censored_samples");
   e.censored = e.censored_recorded ? get_size(j, "censored_samples", where) : 0;
@@ -342,7 +355,10 @@ json to_json(const FitDocument& d) {
     j["candidates"][i]["validate"] = v;
   }
   j["data"] = to_json(d.data);
-  j["validate"] = d.validation.empty() ? json(nullptr) : to_json(d.validation.front().metrics);
+  // the first set, as every --validate-data file is listed in validate_files (one the model could not be
+  // run on too, with its "error"): null where that set was not scored
+  j["validate"] = d.validation.empty() || !d.validation.front().error.empty() ? json(nullptr)
+                                                                               : to_json(d.validation.front().metrics);
   json files = json::array();
   for (const auto& e : d.validation) files.push_back(to_json(e));
   j["validate_files"] = files;

@@ -704,7 +704,9 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
                                                 yu),
                                     *m));
       else
-        page.para(fmt::format("The model cannot be evaluated on {}.", validation_name(*v.v)), "warn");
+        page.para(fmt::format("The model cannot be evaluated on {}: a useless validation (hysteron fit exits 3).",
+                              validation_name(*v.v)),
+                  "warn");
     }
   page.table(metric_header, rows);
   if (own_censored > 0)
@@ -824,7 +826,9 @@ json fit_report_to_json(const FitReport& fit, const FitData& data, const FitData
     if (fit.status != FitStatus::invalid_input) {
       try {
         e.metrics = score(data, fit.model, v.x.empty() ? data.x : v.x, v.x.empty() ? data.y : v.y, v.range, &e.censored);
-      } catch (const Error&) {
+      } catch (const Error& err) {  // listed unscored, with why (as hysteron fit does)
+        e.metrics.rms = e.metrics.max = e.metrics.mae = e.metrics.rms_percent_span = e.metrics.r2 = std::nan("");
+        e.error = err.what();
       }
     }
     d.validation.push_back(e);

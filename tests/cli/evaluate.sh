@@ -2,7 +2,8 @@
 # hysteron evaluate: fit a model, then score it on the same and on new data. Checks that
 # evaluate reproduces the fit's own validation numbers, that a model scores far worse on
 # a record of another actuator, --model - (stdin), --json (one document), the HTML/JSON
-# reports, and the exit codes (0 evaluated, 1 bad input or usage).
+# reports, and the exit codes (0 evaluated, 1 bad input or usage, 3 useless against the model
+# file's training error).
 # Usage: bash evaluate.sh <hysteron-binary> <source-dir>
 set -uo pipefail
 source "$(dirname "$0")/lib/common.sh"  # BIN, T, PY, fail
@@ -68,8 +69,10 @@ assert m["rms_percent_span"] < 0.5, m
 print("evaluate == fit validation: rms", m["rms"])
 PYEOF
 
-# 1b. the same record with its output negated, or offset: scored as it is (exit 0), and the warning says
-# the record's output matches the prediction by a sign / a zero; the record itself gets no such warning
+# 1b. the same record with its output negated, or offset: scored as it is, and the warning says the
+# record's output matches the prediction by a sign / a zero; the record itself gets no such warning.
+# Both score worse than their mean with more than twice the training RMS error that the model file
+# records ("training"): exit 3, as fit --validate-data (exit 0 before 2026-12-01)
 $PY - "$T/data.csv" "$T/neg.csv" "$T/off.csv" <<'PYEOF'
 import sys
 rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n")[1:] if r]
@@ -85,13 +88,16 @@ PYEOF
   || fail "evaluate own record: exit $?"
 grep -q "the record's output matches" "$T/err" && fail "own record: an output-map warning: $(cat "$T/err")"
 "$BIN" evaluate --model "$T/m.json" --data "$T/neg.csv" --input input --output output --json > "$T/ev_neg.json" \
-  2> "$T/err" || fail "evaluate negated: exit $?"
+  2> "$T/err"
+rc=$?
+[ $rc -eq 3 ] || fail "evaluate negated: exit $rc (expected 3)"
 grep -q "^warning: $T/neg.csv: the record's output matches -1 x the model's prediction.*is its sign flipped" "$T/err" \
   || fail "negated: no sign warning: $(cat "$T/err")"
 $PY -c 'import json, sys; m = json.load(open(sys.argv[1]))["metrics"]["output_map"]; assert abs(m["gain"] + 1) < 1e-3 and m["r2"] < 0 < 0.99 < m["r2_mapped"], m' \
   "$T/ev_neg.json" || fail "negated: output_map in --json"
-"$BIN" evaluate --model "$T/m.json" --data "$T/off.csv" --input input --output output > /dev/null 2> "$T/err" \
-  || fail "evaluate offset: exit $?"
+"$BIN" evaluate --model "$T/m.json" --data "$T/off.csv" --input input --output output > /dev/null 2> "$T/err"
+rc=$?
+[ $rc -eq 3 ] || fail "evaluate offset: exit $rc (expected 3)"
 grep -q "the record's output matches 1 x the model's prediction +.*or a zero (a sensor offset)" "$T/err" \
   || fail "offset: no zero warning: $(cat "$T/err")"
 # fit --validate-data says the same of a validation record, in its warnings; the validation as it
@@ -106,9 +112,11 @@ grep -q "^warning: $T/neg.csv: the record's output matches .*is its sign flipped
 $PY -c 'import json, sys; d = json.load(open(sys.argv[1])); assert any("sign flipped" in w for w in d["warnings"]), d["warnings"]' \
   "$T/fit2.json" || fail "fit --validate-data negated: the report's warnings"
 
-# 2. the same model on another actuator's record is much worse (the numbers are real)
+# 2. the same model on another actuator's record is much worse (the numbers are real): exit 3
 "$BIN" evaluate --model "$T/m.json" --data "$T/new.csv" --input input --output output --json > "$T/ev_new.json" \
-  || fail "evaluate on new data"
+  2> /dev/null
+rc=$?
+[ $rc -eq 3 ] || fail "evaluate on new data: exit $rc (expected 3: useless against the training error)"
 $PY - "$T/ev.json" "$T/ev_new.json" <<'PYEOF' || fail "a wrong model does not score worse"
 import json, sys
 good = json.load(open(sys.argv[1]))["metrics"]

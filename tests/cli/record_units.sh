@@ -56,8 +56,10 @@ rc=$?
 grep -q "bar.csv: the input column p is in bar, but the model .*m.json's input is in kPa" "$T/err.txt" \
   || fail "evaluate bar: $(cat "$T/err.txt")"
 [ -e "$T/ev.json" ] && fail "evaluate bar: a report written"
-"$BIN" evaluate --model "$T/plain.json" --data "$T/bar.csv" --input p --output F > /dev/null 2>&1 \
-  || fail "evaluate with a model without units: checked"
+# (evaluated, not refused; its values 100 times smaller score far worse than the training error: exit 3)
+"$BIN" evaluate --model "$T/plain.json" --data "$T/bar.csv" --input p --output F > /dev/null 2>&1
+rc=$?
+[ $rc -eq 3 ] || fail "evaluate with a model without units: exit $rc (expected 3: evaluated, useless)"
 
 # fit --validate-data in other units than the training record's: refused, nothing written
 "$BIN" fit --model pi --data "$T/kpa.csv" --input p --output F --validate-data "$T/bar.csv" --out "$T/v.json" \

@@ -12,6 +12,7 @@
 // starts with the file (or `where`) and names the key and what was expected.
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -46,8 +47,19 @@ std::string read_text_file(const std::string& path, std::string_view what,
 // Current (and only) schema version written to and accepted in "schema".
 inline constexpr int model_schema_version = 1;
 
+// The training fit's error a model file may record: "training": {"rms": 0.97, "r2": 0.9994,
+// "samples": 30000}, in the model's output units (the free-form key "training"; hysteron fit,
+// Python's fit and the fit documents' model dicts write it). hysteron evaluate compares a record's
+// error with it as fit --validate-data does (output_map_warning, validation_useless).
+struct TrainingMetrics {
+  double rms = 0.0;  // RMS error on the training range [output units], finite, >= 0
+  double r2 = 0.0;   // its R^2, finite, <= 1
+  std::size_t samples = 0;
+};
+nlohmann::json training_to_json(const TrainingMetrics& t);
+
 // A model file as a whole: the model's parameters and the free-form keys beside them
-// ("units", "note", "metadata"; not part of the model: hysteron::Model never sees them).
+// ("units", "note", "metadata", "training"; not part of the model: hysteron::Model never sees them).
 // read_model_document / write_model_file(path, doc) are the one reader and writer of a
 // model file: a read-modify-write through them keeps the free-form keys.
 struct ModelDocument {
@@ -57,6 +69,8 @@ struct ModelDocument {
   nlohmann::json extra = nlohmann::json::object();
   // The unit the document's "units" names for `which` ("input" or "output"); "" if none.
   std::string unit(std::string_view which) const;
+  // The training metrics the document's "training" records; nullopt if none.
+  std::optional<TrainingMetrics> training() const;
 };
 
 // Reads and validates a model file with its free-form keys; path "-" reads standard input
@@ -79,7 +93,8 @@ nlohmann::json model_extra(const nlohmann::json& j);
 
 // Throws hysteron::Error "WHERE: key \"K\": ..." unless `extra` is null or an object whose keys
 // are among "units" (an object of strings, e.g. {"input": "kPa", "output": "N"}), "note"
-// (a string) and "metadata" (any JSON value).
+// (a string), "metadata" (any JSON value) and "training" (an object with exactly "rms" (finite,
+// >= 0), "r2" (finite, <= 1) and "samples" (a whole number >= 0): TrainingMetrics).
 void check_model_extra(const nlohmann::json& extra, std::string_view where);
 
 // Model as JSON (with "schema"). model_from_json(model_to_json(p)) reproduces p

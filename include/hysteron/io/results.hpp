@@ -76,6 +76,10 @@ struct Evaluation {
   std::size_t censored = 0;  // clipped samples of the range scored as censored (evaluate_censored)
   std::size_t outside_input_limits = 0;  // samples of the range whose input is outside the model's (input_coverage)
   OutputMap output_map;  // the record's output against the prediction (output_map; NaN in files before it)
+  // Not scored: why the model could not be run on the record (hysteron::Error's text, e.g. an input
+  // sample beyond the model's input bound); its metrics are then NaN ("error" in the document, absent
+  // where scored). fit counts such a validation set as useless (exit 3), never leaves it out.
+  std::string error = {};
   // false where a document predates the count ("censored_samples" / "outside_input_limits" absent):
   // the count is unknown, not 0 (to_json then leaves the key out again)
   bool censored_recorded = true;
@@ -105,6 +109,11 @@ struct EvaluationDocument {
   Evaluation result;
 };
 
+// The model file's "training" (TrainingMetrics: rms, r2, samples) of a fit's training metrics;
+// null where they are not finite (nothing to record). hysteron fit's model file, the fit documents'
+// "model" dicts (and so Python's fit) and the experiments' model files carry it.
+nlohmann::json training_json(const FitMetrics& train);
+
 // ---- to_json / from_json pairs ----------------------------------------------------
 
 nlohmann::json to_json(const FitMetrics& m);
@@ -133,7 +142,8 @@ nlohmann::json to_json(const Evaluation& e);
 void from_json(const nlohmann::json& j, Evaluation& e, std::string_view where);
 
 // to_json(fit) plus "format", "schema", "data", "validate" (the first validation set's
-// metrics or null), "validate_files" (every set, with "file" and "range"),
+// metrics, or null where there is none or it was not scored: see its "error"), "validate_files"
+// (every set, with "file" and "range", "error" for one the model could not be run on),
 // "model_written", "model_file"; each candidate gets "validate": [metrics per set].
 // from_json also reads the older CLI report (no "format", "starts" for "num_starts").
 nlohmann::json to_json(const FitDocument& d);

@@ -84,20 +84,15 @@ std::string join_args(int argc, char** argv) {
 
 std::string g_command;  // the command line, shown in reports
 
-// The files an experiment writes into `dir` (those that exist), as outputs of --out: the rig
-// parameters (--plant) must not be one of them.
-void check_plant_not_output(const std::string& plant, const std::string& dir) {
-  if (plant.empty() || dir.empty()) return;
-  std::vector<io::NamedPath> outputs;
-  for (const char* f : {"identification.csv", "model_identification.csv", "model.json", "best_model.json", "result.json",
-                        "report.html"})
-    outputs.push_back({"--out", (std::filesystem::path(dir) / f).string()});
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string f = e.path().filename().string();
-    if (ExperimentResult::is_output_file(f)) outputs.push_back({"--out", e.path().string()});
-  }
-  for (const auto& o : outputs) io::check_outputs_distinct({o}, {{"--plant", plant}});
+// The run's input files (--plant, --tracking-plant, the --reference records) must not be files
+// it writes into `dir` or removes there as stale (ExperimentResult::check_inputs_not_outputs).
+void check_inputs_not_outputs(const ExperimentArgs& a, const std::string& dir) {
+  std::vector<std::pair<std::string, std::string>> inputs;
+  if (!a.plant.empty()) inputs.emplace_back("--plant", a.plant);
+  if (!a.tracking_plant.empty()) inputs.emplace_back("--tracking-plant", a.tracking_plant);
+  for (const UserReference& u : parse_references(a.references, "--reference"))
+    if (u.kind == UserReference::Kind::file) inputs.emplace_back("--reference", u.path);
+  ExperimentResult::check_inputs_not_outputs(dir, inputs);
 }
 
 // exit_poor_fit (3), with the runs named on stderr, where one of hysteron's loops ended at or above the
@@ -135,9 +130,11 @@ void add_experiment(CLI::App& app, Action& action) {
                   "A reference of your own, tracked instead of the paper's (repeatable; default: the paper's): "
                   "sine:amplitude=MM,offset=MM,frequency=HZ,periods=N (offset - amplitude cos(2 pi f t), the "
                   "papers' sine), triangle:amplitude=MM,offset=MM,frequency=HZ,periods=N (offset -+ amplitude), or "
-                  "file:PATH[,time=COL][,contraction=COL][,periodic][,periods=N] (a record, time in s, contraction "
-                  "in mm; columns 0 and 1 by default; interpolated at the control period; periodic: the record is one "
-                  "period). Each takes name=NAME (default: its kind, or refN). docs/control.md, section 8")
+                  "file:PATH[,time=COL][,contraction=COL][,time_unit=s|ms|us][,unit=mm|m|um][,periodic][,periods=N] "
+                  "(a record (PATH without commas), time and contraction in the units their header names or the keys "
+                  "give, else s and mm; columns 0 and 1 by default; interpolated at the control period; periodic: the "
+                  "record is one period). Each takes name=NAME (default: its kind, or refN). docs/control.md, "
+                  "section 8")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_flag("--no-adaptive", args->no_adaptive, "Do not run the adaptive variant");
@@ -148,9 +145,8 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->add_option("--out", args->out, "Directory for the time series (CSV), models and result.json");
   cmd->callback([args, &action] {
     action = [args] {
-      (void)parse_references(args->references, "--reference");  // a bad spec: nothing checked, read or run before
-      check_plant_not_output(args->plant, args->out);
-      check_plant_not_output(args->tracking_plant, args->out);
+      // a bad spec: nothing checked, read or run before; an input that is an output: nothing run
+      check_inputs_not_outputs(*args, args->out);
       io::check_output_directory({"--out", args->out});  // before the run, not after it
       const ExperimentResult r = run_experiment(options_from(*args));
       if (!args->out.empty()) {
@@ -178,7 +174,7 @@ void add_experiment(CLI::App& app, Action& action) {
       ->default_val("out/demo");
   demo->callback([dargs, &action] {
     action = [dargs] {
-      for (const auto& name : experiment_names()) check_plant_not_output(dargs->plant, dargs->out + "/" + name);
+      for (const auto& name : experiment_names()) check_inputs_not_outputs(*dargs, dargs->out + "/" + name);
       io::check_output_directory({"--out", dargs->out});
       for (const auto& name : experiment_names()) {  // every option checked before the first run writes
         ExperimentArgs a = *dargs;

@@ -116,6 +116,8 @@ int run_sweep_command(const SweepArgs& a) {
   if (!a.report.empty()) outputs.push_back({"--report", a.report});
   if (!a.grid.empty()) inputs.push_back({"--grid", a.grid});
   if (!a.plant.empty()) inputs.push_back({"--plant", a.plant});
+  for (const std::string& spec : a.references)  // the --reference records (only their paths: nothing read)
+    if (const auto path = reference_file_path(spec)) inputs.push_back({"--reference", *path});
   io::check_output_files(outputs, inputs);  // where the table and the page go, before the sweep's runs
   // an output naming stdout (-, /dev/stdout, the file stdout is redirected to) is handled as - is
   const bool out_stdout = names_stdout(a.out);

@@ -1020,6 +1020,83 @@ TEST(Experiment, ANonPeriodicFileReferenceRunsWithoutLearning) {
   EXPECT_NEAR(r.runs[0].reference_mm[1500 + 1000], 45.0, 1e-9);
 }
 
+// The limit-cycle guard restarts at the end of a pre-roll: a user sine from 50 mm fills the muscle
+// from rest during it, no ringing of the loop; the guard cut the gains then (to x0.63, "the gain
+// trial's gains are too high for this reference") and they stayed cut over the scored part.
+TEST(Experiment, TheGuardRestartsAfterAUserReferencesPreRoll) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid");
+  o.model = FitModel::gpi;
+  o.references = parse_references({"sine:amplitude=5,offset=55,frequency=0.2,periods=2"});
+  const ExperimentResult r = run_experiment(o);
+  bool compensated = false;
+  for (const TrackingRun& run : r.runs) {
+    if (run.variant != "compensated") continue;
+    compensated = true;
+    EXPECT_EQ(run.controller.guard_cuts, 0u);
+    EXPECT_EQ(run.controller.guard_final_scale, 1.0);
+    ASSERT_TRUE(run.controller.pid.has_value());
+    EXPECT_TRUE(run.controller.pid->guard.enabled());  // the guard is on, and restarted after the pre-roll
+  }
+  EXPECT_TRUE(compensated);
+  for (const auto& m : r.messages) EXPECT_EQ(m.find("limit-cycle guard cut"), std::string::npos) << m;
+}
+
+// A file reference's units: a header's unit that is no time (or no length) is refused; time_unit=
+// and unit= give them (checked against the header's); a column whose name suggests a unit but
+// gives none is refused; a time column's unit from nowhere is read as s with a note saying so.
+TEST(Experiment, FileReferenceUnitsAreGivenOrSaid) {
+  test::TempDir dir;
+  const auto message = [](const std::string& spec) {
+    try {
+      (void)parse_references({spec});
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const auto record = [&](const std::string& name, const std::string& header, double dt, double scale) {
+    std::string csv = header + "\n";
+    for (int k = 0; k <= 40; ++k) csv += fmt::format("{},{}\n", k * dt, scale * (40.0 + 10.0 * std::sin(0.2 * k)));
+    return dir.write(name, csv);
+  };
+  const std::string ms = record("ms.csv", "time_ms,x_mm", 10.0, 1.0);  // 0.4 s in ms, no unit in brackets
+  EXPECT_NE(message("file:" + ms).find("the time column time_ms of " + ms + " gives no unit but its name suggests ms"),
+            std::string::npos)
+      << message("file:" + ms);
+  const auto in_ms = parse_references({"file:" + ms + ",time_unit=ms"});
+  EXPECT_NEAR(in_ms[0].t_s.back(), 0.4, 1e-12);
+  EXPECT_TRUE(in_ms[0].note.empty()) << in_ms[0].note;
+  EXPECT_NE(message("file:" + ms + ",time_unit=min").find("time_unit = \"min\": expected s, ms or us"),
+            std::string::npos);
+  // a header's unit that is no time unit; one that disagrees with time_unit=
+  const std::string t_mm = record("t_mm.csv", "t [mm],x [mm]", 0.01, 1.0);
+  EXPECT_NE(message("file:" + t_mm).find("the time column 0 of " + t_mm + " is in \"mm\", not a time unit"),
+            std::string::npos)
+      << message("file:" + t_mm);
+  const std::string t_s = record("t_s.csv", "t [s],x [mm]", 0.01, 1.0);
+  EXPECT_NE(message("file:" + t_s + ",time_unit=ms").find("time_unit=ms but " + t_s + " gives the time column 0 the "
+                                                          "unit \"s\""),
+            std::string::npos)
+      << message("file:" + t_s + ",time_unit=ms");
+  EXPECT_TRUE(parse_references({"file:" + t_s + ",time_unit=s"})[0].note.empty());
+  // the contraction in metres: named so without a unit, refused; unit=m reads it
+  const std::string m = record("m.csv", "t,x_m", 0.01, 1e-3);
+  EXPECT_NE(message("file:" + m).find("the contraction column x_m of " + m + " gives no unit but its name suggests m"),
+            std::string::npos)
+      << message("file:" + m);
+  const auto in_m = parse_references({"file:" + m + ",unit=m"});
+  EXPECT_NEAR(in_m[0].x_mm[0], 40.0, 1e-9);
+  EXPECT_NE(message("file:" + t_s + ",unit=m").find("unit=m but " + t_s + " gives the contraction column 1 the unit"),
+            std::string::npos);
+  // a name saying s ("t_s", hysteron's own tracking CSVs) gives s: no note
+  EXPECT_TRUE(parse_references({"file:" + record("t_s_name.csv", "t_s,x", 0.01, 1.0)})[0].note.empty());
+  // no unit from anywhere, no name suggesting one: s, and a note with the duration and samples
+  const auto plain = parse_references({"file:" + m + ",unit=m,name=plain"});
+  EXPECT_EQ(plain[0].note, fmt::format("--reference 'file:{},unit=m,name=plain': 41 samples over 0.4 s: time read as s "
+                                       "(its header gives no unit; time_unit=ms if it is not)",
+                                       m));
+}
+
 TEST(Experiment, UserReferenceSpecsAreCheckedNamingTheKey) {
   const auto message = [](const std::vector<std::string>& specs) {
     try {
@@ -1043,6 +1120,17 @@ TEST(Experiment, UserReferenceSpecsAreCheckedNamingTheKey) {
   EXPECT_NE(message({"sine:amplitude=1,offset=50,frequency=1,periods=1,"}).find("empty KEY=VALUE"), std::string::npos);
   EXPECT_NE(message({"square:amplitude=1"}).find("--reference 'square:amplitude=1': expected sine:"), std::string::npos);
   EXPECT_NE(message({"file:/nonexistent/ref.csv"}).find("/nonexistent/ref.csv"), std::string::npos);
+  EXPECT_NE(message({"file:/data/my,step.csv"}).find("unknown key \"step.csv\" (a file reference takes "),
+            std::string::npos);
+  EXPECT_NE(message({"file:/data/my,step.csv"}).find("a PATH cannot contain a comma"), std::string::npos);
+  // names result.json puts beside the references' names are reserved (it would not read back)
+  for (const char* reserved : {"source", "max_error_mm", "mae_mm", "rms_error_mm"})
+    EXPECT_NE(message({fmt::format("sine:amplitude=1,offset=50,frequency=1,periods=1,name={}", reserved)})
+                  .find(fmt::format("name = \"{}\" is reserved: result.json keys the references by name beside source, "
+                                    "max_error_mm, mae_mm, rms_error_mm",
+                                    reserved)),
+              std::string::npos)
+        << reserved;
   const std::string twice = message({"sine:amplitude=1,offset=50,frequency=1,periods=1,name=a",
                                      "triangle:amplitude=1,offset=50,frequency=1,periods=1,name=a"});
   EXPECT_NE(twice.find("its name \"a\" is that of"), std::string::npos) << twice;
@@ -1053,6 +1141,23 @@ TEST(Experiment, UserReferenceSpecsAreCheckedNamingTheKey) {
   EXPECT_EQ(two[0].name, "ref1");
   EXPECT_EQ(two[1].name, "ref2");
   EXPECT_EQ(two[2].name, "triangle");
+  // a learning run longer than kMaxLearningSeconds: refused before anything runs
+  {
+    ExperimentOptions slow;
+    slow.learning_periods = 1000;
+    slow.references = parse_references({"sine:amplitude=10,offset=40,frequency=0.01,periods=1"});
+    try {
+      slow.validate();
+      ADD_FAILURE() << "a 100000 s learning run was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("its learning run of 1000 periods (--learning-periods) of 100 s would last "
+                                           "100000 s, more than the 3600 s"),
+                std::string::npos)
+          << e.what();
+    }
+    slow.learning_periods = 36;
+    EXPECT_NO_THROW(slow.validate());
+  }
   // finer than the control period resolves: refused before anything runs
   ExperimentOptions o;
   o.references = parse_references({"sine:amplitude=10,offset=50,frequency=30,periods=2"});

@@ -33,6 +33,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -96,6 +97,9 @@ struct UserReference {
   std::string path;    // file: the record, its samples below (time from 0 [s], contraction [mm])
   std::vector<double> t_s, x_mm;
   bool periodic = true;  // a file: only with `periodic`
+  // A file whose time column's unit nothing gave (no header unit, no time_unit=): its duration,
+  // samples and "time read as s" (run_experiment adds it to the result's notes); else empty.
+  std::string note;
 };
 // Parses the SPECs in order (default names as above); `option` names them in errors
 // ("--reference"; Python "references"). Reads a file reference's record. Throws hysteron::Error
@@ -103,6 +107,9 @@ struct UserReference {
 // not a finite number, frequency <= 0, periods < 1, amplitude < 0, a duplicate name).
 std::vector<UserReference> parse_references(const std::vector<std::string>& specs,
                                             std::string_view option = "--reference");
+// The PATH of a file:PATH[,...] SPEC (trimmed), as parse_references reads it, without reading it;
+// nullopt for a sine, a triangle or a spec parse_references refuses for its kind or an empty PATH.
+std::optional<std::string> reference_file_path(std::string_view spec);
 // [samples] The fewest control periods a user reference's period may span (a sine or triangle),
 // and the most a file reference's record may deviate from its resampling at the control period
 // [fraction of its span]: a trajectory finer than the loop's period is refused, not smoothed.
@@ -110,6 +117,9 @@ inline constexpr double kMinReferencePeriodSamples = 50.0;
 inline constexpr double kReferenceResolution = 0.01;
 // [s] The longest user reference (the runs log every control period).
 inline constexpr double kMaxReferenceSeconds = 3600.0;
+// [s] The longest learning run on a user reference: learning_periods x its period (the run logs
+// every control period; ExperimentOptions::validate refuses more).
+inline constexpr double kMaxLearningSeconds = 3600.0;
 
 struct ExperimentOptions {
   std::string name = "gpi-pid";  // one of experiment_names()
@@ -374,6 +384,15 @@ struct ExperimentResult {
   // directory: identification.csv, model_identification.csv, model.json, best_model.json,
   // result.json, report.html and tracking_*.csv.
   static bool is_output_file(const std::string& filename);
+  // The files of the run's inputs (its file references' records, ExperimentOptions::references):
+  // write() refuses (hysteron::Error, nothing written) where one of them lies in dir under an
+  // output file's name (is_output_file), which it would replace or remove as stale.
+  std::vector<std::string> input_files;
+  // Throws hysteron::Error naming both where one of `inputs` (option, path) is, through links,
+  // a file an experiment writing into `dir` would replace or remove: the output files there
+  // (is_output_file) and those it always writes. `hysteron experiment` checks its --plant,
+  // --tracking-plant and --reference files so before it runs.
+  static void check_inputs_not_outputs(const std::string& dir, const std::vector<std::pair<std::string, std::string>>& inputs);
   // Human-readable table beside the paper's figures.
   std::string table() const;
   // The runs of hysteron's own loops (compensated, learning, adaptive) whose RMS error is not

@@ -57,6 +57,7 @@ struct Reference {
   std::size_t period = 0;        // samples per period (0: not periodic)
   std::size_t periodic_from = 0; // first sample of the periodic part (after a pre-roll)
   bool user = false;             // the user's (ExperimentOptions::references), not the paper's
+  std::size_t pre_roll = 0;      // samples of add_pre_roll's hold before it (0: none)
 };
 
 // ---- the user's references (user_reference.cpp) ----
@@ -116,6 +117,10 @@ struct Loop {
   std::optional<LoopDesign::Adaptation> adaptation = {};  // the adaptive variant's RLS (adaptation_of)
   // After the run: the position PID's state (its limit-cycle guard's cuts and gain scale).
   std::function<PidState()> position_state = {};
+  // Restarts the position PID's limit-cycle guard (the gains as tuned, no half-cycles counted):
+  // called at the end of a reference's pre-roll (Reference::pre_roll), whose fill from rest is
+  // no ringing of the loop. Empty for a loop without a position PID.
+  std::function<void()> restart_guard = {};
 };
 
 struct Variant {

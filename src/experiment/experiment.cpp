@@ -70,6 +70,18 @@ LoopDesign loop_design(const Loop& loop, std::size_t lead, double tc, const ZvSh
   return d;
 }
 
+// `law` with the position PID's limit-cycle guard restarted (Loop::restart_guard) at sample k,
+// the end of a pre-roll (Reference::pre_roll): the muscle's fill from rest during it is no
+// ringing of the loop, and gains cut then would stay cut over the scored part. `law` itself
+// where k is 0 or the loop has no guard to restart.
+Law guard_from(Law law, const Loop& loop, std::size_t k) {
+  if (k == 0 || !loop.restart_guard || loop.position.guard.period <= 0.0) return law;
+  return [inner = std::move(law), restart = loop.restart_guard, k](const Sample& s) {
+    if (s.k == k) restart();
+    return inner(s);
+  };
+}
+
 // The learning variant on top of `base`: `periods` repetitions of the reference's
 // first period, the ILC designed on the identified closed loop and `which` of its neighbours,
 // among the Q-filters of `window`. A user's reference (Reference::user) is preceded by its
@@ -104,7 +116,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   auto applied = std::make_shared<std::vector<double>>();
   applied->reserve(r.size());
   const double p_max = ctx.pressure_max;
-  Law law = [ilc, inner = base.law, lead, applied, p_max, n0](const Sample& s) {
+  Law law = [ilc, inner = guard_from(base.law, base, ref.user ? n0 : 0), lead, applied, p_max, n0](const Sample& s) {
     if (s.k < n0) {  // the pre-roll: the loop alone
       applied->push_back(0.0);
       return inner(s);
@@ -374,6 +386,15 @@ void ExperimentOptions::validate() const {
     check_control_period(control_period, tracking_rig->simulation.dt, "experiment", "tracking rig");
   }
   check_user_references(references, control_period);
+  for (const UserReference& u : references) {  // the learning run: learning_periods of its period
+    const bool file = u.kind == UserReference::Kind::file;
+    const double period_s = !file ? 1.0 / u.frequency_hz : u.periodic ? u.t_s.back() : 0.0;
+    if (const double s = learning_periods * period_s; s > kMaxLearningSeconds)
+      throw Error(fmt::format("experiment: {}: its learning run of {} periods (--learning-periods) of {:g} s would "
+                              "last {:g} s, more than the {:g} s a learning run may (fewer --learning-periods, or "
+                              "--learning-periods 0: no learning run)",
+                              u.origin, learning_periods, period_s, s, kMaxLearningSeconds));
+  }
   if (!find_spec(name)) {
     std::string list;
     for (const auto& n : experiment_names()) list += (list.empty() ? "" : ", ") + n;
@@ -392,7 +413,13 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.seed = o.seed;
   res.control_period_s = tc;
   res.published = spec.published;
-  if (!o.references.empty()) {  // no paper tracked them: no figures (NaN, printed "-")
+  for (const UserReference& u : o.references) {
+    if (u.kind == UserReference::Kind::file) res.input_files.push_back(u.path);
+    if (!u.note.empty()) res.messages.push_back(u.note);
+  }
+  // no paper tracked them: no figures (NaN, printed "-"); the report (src/report/html.cpp) knows
+  // them by this source's start
+  if (!o.references.empty()) {
     res.published = {"none: the user's references (--reference), which no paper tracked", {}};
     for (const UserReference& u : o.references) res.published.errors.push_back({u.name});
   }
@@ -624,7 +651,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
         loop.description += fmt::format("; feedforward through a zero-vibration shaper at the identified mode {}",
                                         shaper_timing(zv, tc));
       }
-      TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false, loop.law, p_max);
+      TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false,
+                              guard_from(loop.law, loop, ref.pre_roll), p_max);
       run.variant = v.name;
       run.reference = ref.name;
       run.description = loop.description;

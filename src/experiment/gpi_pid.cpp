@@ -25,6 +25,7 @@ Loop ff_pid_loop(const ModelParams& model, double tc, double p_max, const PidPar
             std::move(description), pid};
   loop.feedforward = ff;
   loop.position_state = [c] { return c->pid().state(); };
+  loop.restart_guard = [c] { c->set_guard(c->pid().params().guard); };
   return loop;
 }
 
@@ -52,6 +53,7 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
   result.feedforward.pressure_limits = {0.0, p_max};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
   result.position_state = [fb] { return fb->state(); };
+  result.restart_guard = [fb] { fb->set_guard(fb->params().guard); };
   return result;
 }
 

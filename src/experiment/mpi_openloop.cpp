@@ -29,6 +29,7 @@ Loop open_loop(const ModelParams& model, const OpenLoopParams& p, std::string de
   Loop loop{std::move(law), std::move(description), p.position, {}, std::nullopt, p.pressure_gain,
             LoopDesign::Kind::open_loop, p.feedforward};
   loop.position_state = [c] { return c->position().state(); };
+  loop.restart_guard = [c] { c->set_guard(c->position().params().guard); };
   return loop;
 }
 
@@ -70,6 +71,7 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
               LoopDesign::Kind::open_loop, p.feedforward};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
   result.position_state = [position] { return position->state(); };
+  result.restart_guard = [position] { position->set_guard(position->params().guard); };
   return result;
 }
 

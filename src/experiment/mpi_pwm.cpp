@@ -27,6 +27,7 @@ Loop cascade(const ModelParams& model, const CascadeParams& p, std::string descr
   Loop loop{std::move(law), std::move(description), p.position, {}, p.pressure, 0.0,
             LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
   loop.position_state = [c] { return c->position().state(); };
+  loop.restart_guard = [c] { c->set_guard(c->position().params().guard); };
   return loop;
 }
 
@@ -76,6 +77,7 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
               LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
   result.position_state = [position] { return position->state(); };
+  result.restart_guard = [position] { position->set_guard(position->params().guard); };
   return result;
 }
 

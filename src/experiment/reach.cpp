@@ -335,7 +335,7 @@ void add_pre_roll(std::vector<Reference>& refs, double tc) {
   for (Reference& r : refs) {
     if (r.score_from > 0 || r.ref_m.empty()) continue;
     r.ref_m.insert(r.ref_m.begin(), n, r.ref_m.front());
-    r.score_from = r.periodic_from = n;
+    r.score_from = r.periodic_from = r.pre_roll = n;
   }
 }
 

@@ -26,6 +26,21 @@ bool ExperimentResult::is_output_file(const std::string& f) {
   return f.starts_with("tracking_") && f.ends_with(".csv");
 }
 
+void ExperimentResult::check_inputs_not_outputs(const std::string& dir,
+                                                const std::vector<std::pair<std::string, std::string>>& inputs) {
+  namespace fs = std::filesystem;
+  if (dir.empty() || inputs.empty()) return;
+  std::vector<io::NamedPath> outputs;
+  for (const char* f : {"identification.csv", "model_identification.csv", "model.json", "best_model.json", "result.json",
+                        "report.html"})
+    outputs.push_back({"--out", (fs::path(dir) / f).string()});
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (is_output_file(e.path().filename().string())) outputs.push_back({"--out", e.path().string()});
+  for (const auto& [option, path] : inputs)
+    for (const auto& o : outputs) io::check_outputs_distinct({o}, {{option, path}});
+}
+
 namespace {
 
 // Writes the run's files into `d`; returns their names.
@@ -75,6 +90,11 @@ std::vector<std::string> write_files(const ExperimentResult& r, const std::files
 void ExperimentResult::write(const std::string& dir) const {
   namespace fs = std::filesystem;
   const fs::path d(dir);
+  {
+    std::vector<std::pair<std::string, std::string>> inputs;
+    for (const std::string& f : input_files) inputs.emplace_back("--reference", f);
+    check_inputs_not_outputs(dir, inputs);  // nothing written where an input would be replaced or removed
+  }
   std::error_code ec;
   const bool existed = fs::is_directory(d, ec);
   fs::create_directories(d, ec);
@@ -96,6 +116,13 @@ void ExperimentResult::write(const std::string& dir) const {
     const std::string f = e.path().filename().string();
     if (is_output_file(f) && std::find(written.begin(), written.end(), f) == written.end()) stale.push_back(e.path());
   }
+  // never a file the run read (checked above; kept here too should it have appeared since)
+  std::erase_if(stale, [&](const fs::path& p) {
+    return std::any_of(input_files.begin(), input_files.end(), [&](const std::string& in) {
+      std::error_code e2;
+      return fs::equivalent(p, in, e2);
+    });
+  });
   for (const fs::path& p : stale) fs::remove(p, ec);
 }
 

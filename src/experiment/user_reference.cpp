@@ -49,15 +49,48 @@ std::optional<double> number(std::string_view text) {
   return v;
 }
 
+bool reserved_name(std::string_view n) {
+  return std::find(io::kKeysBesideReferenceNames.begin(), io::kKeysBesideReferenceNames.end(), n) !=
+         io::kKeysBesideReferenceNames.end();
+}
+
+std::string reserved_list() {
+  std::string s;
+  for (const std::string_view k : io::kKeysBesideReferenceNames) s += fmt::format("{}{}", s.empty() ? "" : ", ", k);
+  return s;
+}
+
 bool valid_name(std::string_view n) {
-  if (n.empty() || n.size() > 40) return false;
+  if (n.empty() || n.size() > 40 || reserved_name(n)) return false;
   return std::all_of(n.begin(), n.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
   });
 }
 
-// The record of a file reference: its time [s, from 0] and contraction [mm] columns.
-void read_record(UserReference& r, const std::string& time_col, const std::string& x_col) {
+// The unit a column's NAME suggests by one of its tokens (split at anything but letters and
+// digits, case ignored): "time_ms" "ms", "x_m" "m"; "" for none. `units` maps tokens to units.
+std::string unit_in_name(std::string_view name, std::initializer_list<std::pair<std::string_view, const char*>> units) {
+  std::string token;
+  std::string found;
+  const auto check = [&] {
+    for (const auto& [t, u] : units)
+      if (token == t && found.empty()) found = u;
+    token.clear();
+  };
+  for (const char c : name) {
+    if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9'))
+      token += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else
+      check();
+  }
+  check();
+  return found;
+}
+
+// The record of a file reference: its time [s, from 0] and contraction [mm] columns; time_unit
+// and unit: the spec's time_unit= (s, ms, us) and unit= (mm, m, um), "" where not given.
+void read_record(UserReference& r, const std::string& time_col, const std::string& x_col, const std::string& time_unit,
+                 const std::string& unit) {
   io::ReadOptions to, xo;
   to.column_spec = time_col;
   xo.column_spec = x_col;
@@ -76,15 +109,58 @@ void read_record(UserReference& r, const std::string& time_col, const std::strin
                             time_col, t.values.size(), x_col, x.values.size()));
   if (t.values.size() < 2)
     throw Error(fmt::format("{}: {} has {} sample(s): a reference needs at least 2", r.origin, r.path, t.values.size()));
-  const std::string tu = io::time_unit_named(t.unit, fmt::format("{}: the time column {}", r.origin, time_col));
-  const double to_s = tu.empty() ? 1.0 : io::time_unit_seconds(tu, r.origin);
+  // the time column's unit: its header's (checked against time_unit=), time_unit=, else s where
+  // its name suggests no other (a note says so)
+  std::string tu = io::time_unit_named(t.unit, fmt::format("{}: the time column {}", r.origin, time_col));
+  if (tu.empty() && !t.unit.empty())
+    throw Error(fmt::format("{}: the time column {} of {} is in \"{}\", not a time unit (s, ms or us)", r.origin,
+                            time_col, r.path, t.unit));
+  if (!time_unit.empty() && !tu.empty() && tu != time_unit)
+    throw Error(fmt::format("{}: time_unit={} but {} gives the time column {} the unit \"{}\": one of them is wrong "
+                            "(drop time_unit if the file is right)",
+                            r.origin, time_unit, r.path, time_col, t.unit));
+  bool time_unit_given = !tu.empty() || !time_unit.empty();
+  if (tu.empty()) tu = time_unit.empty() ? "s" : time_unit;
+  if (!time_unit_given) {
+    if (const std::string u = unit_in_name(t.name, {{"s", "s"},        {"sec", "s"},          {"secs", "s"},
+                                                    {"seconds", "s"},  {"ms", "ms"},          {"msec", "ms"},
+                                                    {"msecs", "ms"},   {"millis", "ms"},      {"millisec", "ms"},
+                                                    {"millisecond", "ms"}, {"milliseconds", "ms"}, {"us", "us"},
+                                                    {"usec", "us"},    {"usecs", "us"},       {"micros", "us"},
+                                                    {"microsec", "us"}, {"microsecond", "us"}, {"microseconds", "us"},
+                                                    {"ns", "ns"},      {"nanos", "ns"},       {"min", "min"},
+                                                    {"mins", "min"},   {"minutes", "min"},    {"hours", "h"},
+                                                    {"hrs", "h"}});
+        u == "s")
+      time_unit_given = true;  // "t_s": the name gives it
+    else if (!u.empty())
+      throw Error(fmt::format("{}: the time column {} of {} gives no unit but its name suggests {}: give time_unit=ms, "
+                              "us or s (or the unit in its header: \"{} [{}]\")",
+                              r.origin, t.name.empty() ? time_col : t.name, r.path, u, t.name, u));
+  }
+  const double to_s = io::time_unit_seconds(tu, r.origin);
+  // the contraction's: its header's (checked against unit=), unit=, else mm where its name
+  // suggests no other length
   double to_mm = 1.0;
+  if (!unit.empty()) to_mm = 1e3 / io::length_units_per_metre(unit);
   if (!x.unit.empty()) {
     const double per_m = io::length_units_per_metre(x.unit);
     if (!(per_m > 0.0))
       throw Error(fmt::format("{}: the contraction column {} of {} is in \"{}\", not a length (mm expected)", r.origin,
                               x_col, r.path, x.unit));
+    if (!unit.empty() && std::abs(1e3 / per_m - to_mm) > 1e-12 * to_mm)
+      throw Error(fmt::format("{}: unit={} but {} gives the contraction column {} the unit \"{}\": one of them is "
+                              "wrong (drop unit if the file is right)",
+                              r.origin, unit, r.path, x_col, x.unit));
     to_mm = 1e3 / per_m;
+  } else if (unit.empty()) {
+    if (const std::string u = unit_in_name(x.name, {{"m", "m"}, {"metre", "m"}, {"metres", "m"}, {"meter", "m"},
+                                                    {"meters", "m"}, {"cm", "cm"}, {"um", "um"}, {"micron", "um"},
+                                                    {"microns", "um"}, {"nm", "nm"}, {"in", "in"}, {"inch", "in"}});
+        !u.empty())
+      throw Error(fmt::format("{}: the contraction column {} of {} gives no unit but its name suggests {}: give "
+                              "unit=mm, m or um (or the unit in its header: \"{} [{}]\")",
+                              r.origin, x.name.empty() ? x_col : x.name, r.path, u, x.name, u));
   }
   r.t_s.resize(t.values.size());
   r.x_mm.resize(x.values.size());
@@ -96,6 +172,10 @@ void read_record(UserReference& r, const std::string& time_col, const std::strin
                               "a reference needs strictly increasing time stamps",
                               r.origin, time_col, r.path, k, k + 1, t.values[k], t.values[k - 1]));
   }
+  if (!time_unit_given)
+    r.note = fmt::format("{}: {} samples over {:g} s: time read as s (its header gives no unit; time_unit=ms if it is "
+                         "not)",
+                         r.origin, r.t_s.size(), r.t_s.back());
 }
 
 // The record resampled at tc by linear interpolation: samples k tc, k = 0 .. n - 1 [mm].
@@ -125,6 +205,15 @@ double seconds_of(const UserReference& r) {
 
 }  // namespace
 
+std::optional<std::string> reference_file_path(std::string_view spec) {
+  const std::size_t colon = spec.find(':');
+  if (colon == std::string_view::npos || trimmed(spec.substr(0, colon)) != "file") return std::nullopt;
+  const std::string_view rest = spec.substr(colon + 1);
+  const std::string path(trimmed(rest.substr(0, rest.find(','))));
+  if (path.empty()) return std::nullopt;
+  return path;
+}
+
 std::vector<UserReference> parse_references(const std::vector<std::string>& specs, std::string_view option) {
   std::vector<UserReference> out;
   std::vector<bool> named;
@@ -143,11 +232,12 @@ std::vector<UserReference> parse_references(const std::vector<std::string>& spec
     std::string_view rest = std::string_view(spec).substr(colon + 1);
     if (file) {
       const std::size_t comma = rest.find(',');
-      r.path = std::string(trimmed(rest.substr(0, comma)));
+      r.path = reference_file_path(spec).value_or("");
       if (r.path.empty()) throw fail("file: no PATH (file:PATH[,time=COL][,contraction=COL][,periodic][,periods=N])");
       rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
     }
-    const std::set<std::string> known = file ? std::set<std::string>{"time", "contraction", "periodic", "periods", "name"}
+    const std::set<std::string> known = file ? std::set<std::string>{"time", "contraction", "periodic", "periods", "name",
+                                                                     "time_unit", "unit"}
                                              : std::set<std::string>{"amplitude", "offset", "frequency", "periods", "name"};
     std::string known_list;
     for (const auto& k : known) known_list += (known_list.empty() ? "" : ", ") + k;
@@ -163,7 +253,12 @@ std::vector<UserReference> parse_references(const std::vector<std::string>& spec
       if (item.empty()) throw fail("an empty KEY=VALUE (two commas, or one at the end)");
       const std::size_t eq = item.find('=');
       const std::string key(trimmed(item.substr(0, eq)));
-      if (!known.count(key)) throw fail(fmt::format("unknown key \"{}\" (a {} reference takes {})", key, kind, known_list));
+      if (!known.count(key))
+        throw fail(fmt::format("unknown key \"{}\" (a {} reference takes {}){}", key, kind, known_list,
+                               file && eq == std::string_view::npos
+                                   ? "; if it is part of PATH: a PATH cannot contain a comma (the spec's separator), "
+                                     "rename the file or link it under a name without one"
+                                   : ""));
       if (kv.count(key)) throw fail(fmt::format("key \"{}\" given twice", key));
       if (key == "periodic") {
         if (eq != std::string_view::npos) throw fail("key \"periodic\" takes no value (file:PATH,periodic)");
@@ -202,7 +297,13 @@ std::vector<UserReference> parse_references(const std::vector<std::string>& spec
       r.periods = kv.count("periods") ? periods() : 1;
       const std::string tcol = kv.count("time") ? kv.at("time") : "0";
       const std::string xcol = kv.count("contraction") ? kv.at("contraction") : "1";
-      read_record(r, tcol, xcol);
+      for (const auto& [key, units] : {std::pair<const char*, std::set<std::string>>{"time_unit", {"s", "ms", "us"}},
+                                       {"unit", {"mm", "m", "um"}}})
+        if (kv.count(key) && !units.count(kv.at(key)))
+          throw fail(fmt::format("{} = \"{}\": expected {}", key, kv.at(key),
+                                 std::string(key) == "unit" ? "mm, m or um" : "s, ms or us"));
+      read_record(r, tcol, xcol, kv.count("time_unit") ? kv.at("time_unit") : "",
+                  kv.count("unit") ? kv.at("unit") : "");
       if (r.periodic) {
         const auto [lo, hi] = std::minmax_element(r.x_mm.begin(), r.x_mm.end());
         if (std::abs(r.x_mm.back() - r.x_mm.front()) > kReferenceResolution * (*hi - *lo))
@@ -213,6 +314,9 @@ std::vector<UserReference> parse_references(const std::vector<std::string>& spec
     }
     if (kv.count("name")) {
       r.name = kv.at("name");
+      if (reserved_name(r.name))
+        throw fail(fmt::format("name = \"{}\" is reserved: result.json keys the references by name beside {}",
+                               r.name, reserved_list()));
       if (!valid_name(r.name))
         throw fail(fmt::format("name = \"{}\": a name is 1 to 40 letters, digits, '-' or '_' (it names the tracking "
                                "CSV files)",
@@ -241,8 +345,9 @@ void check_user_references(const std::vector<UserReference>& refs, double tc) {
   for (std::size_t i = 0; i < refs.size(); ++i) {
     const UserReference& r = refs[i];
     if (!valid_name(r.name))
-      throw Error(fmt::format("experiment: {}: name \"{}\" must be 1 to 40 letters, digits, '-' or '_'", r.origin,
-                              r.name));
+      throw Error(fmt::format("experiment: {}: name \"{}\" must be 1 to 40 letters, digits, '-' or '_', and none of "
+                              "{} (result.json's keys beside the references' names)",
+                              r.origin, r.name, reserved_list()));
     for (std::size_t j = 0; j < i; ++j)
       if (refs[j].name == r.name)
         throw Error(fmt::format("experiment: {}: its name \"{}\" is that of {} too", r.origin, r.name, refs[j].origin));

@@ -370,10 +370,14 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
         if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
     }
     if (hi >= lo) dva.series.push_back({"ideal", {lo, hi}, {lo, hi}, "lines", "#222222", true});
-    page.figure(track, fmt::format("Desired and measured contraction, {} reference (paper Fig. 11).", ref));
-    page.figure(err, fmt::format("Tracking errors, {} reference (paper Fig. 12).", ref));
+    // the paper's figures beside a paper's reference; a user's (--reference: result.json's published
+    // source says so, experiment.cpp) was in no paper
+    const bool user = r.published.source.starts_with("none: the user's references");
+    const auto paper_fig = [user](int n) { return user ? std::string() : fmt::format(" (paper Fig. {})", n); };
+    page.figure(track, fmt::format("Desired and measured contraction, {} reference{}.", ref, paper_fig(11)));
+    page.figure(err, fmt::format("Tracking errors, {} reference{}.", ref, paper_fig(12)));
     page.figure(dva, fmt::format("Measured against desired contraction, {} reference: a straight line means the "
-                                 "hysteresis is compensated (paper Fig. 13).", ref));
+                                 "hysteresis is compensated{}.", ref, paper_fig(13)));
     for (const auto& run : r.runs) {
       if (run.reference != ref || run.periods.empty()) continue;
       PlotSpec per{{fmt::format("Learning: error of each period, {} reference", ref), {"Period", ""},

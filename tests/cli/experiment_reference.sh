@@ -53,6 +53,8 @@ for v in faithful compensated baseline; do
   [ -s "$T/ok/tracking_${v}_mine.csv" ] || fail "no tracking_${v}_mine.csv: $(ls "$T/ok")"
 done
 ls "$T/ok" | grep -q "tracking_.*_sine.csv" && fail "the paper's sine was tracked too: $(ls "$T/ok")"
+grep -q "paper Fig\. 1[123]" "$T/ok/report.html" && fail "report.html captions a user reference as the paper's figure"
+grep -q "Desired and measured contraction, mine reference\." "$T/ok/report.html" || fail "report.html: no tracking caption"
 grep -qE "^  mine +published +- +- +-$" "$T/ok.txt" || fail "no published row of dashes: $(cat "$T/ok.txt")"
 $PY - "$T/ok/result.json" <<'PYEOF' || fail "result.json"
 import json, math, sys
@@ -61,6 +63,25 @@ assert [x["reference"] for x in r["references"]] == ["mine"], r["references"]
 assert r["published"]["mine"] == {}, r["published"]
 assert r["compensated"]["rms_error_mm"] < r["baseline"]["rms_error_mm"], (r["compensated"], r["baseline"])
 PYEOF
+
+# a record in --out under an output file's name (the run would replace it, or remove it as stale):
+# refused before anything runs, also through a symbolic link, and the record is kept
+replay=(--learning-periods 0 --no-adaptive --model gpi --out "$T/ok")
+refused_kept() {
+  expect_error "$@"
+  grep -qF -- "identification" "$T/out.txt" && fail "$1: something ran"
+  [ -s "$T/ok/tracking_faithful_mine.csv" ] || fail "$1: the record was removed: $(ls "$T/ok")"
+}
+refused_kept "record in --out" "--reference $T/ok/tracking_faithful_mine.csv are the same file" \
+  "$BIN" experiment gpi-pid "${replay[@]}" \
+  --reference "file:$T/ok/tracking_faithful_mine.csv,time=t_s,contraction=measured_mm,name=replayed"
+ln -s "$T/ok/tracking_faithful_mine.csv" "$T/link.csv"
+refused_kept "record in --out, linked" "--reference $T/link.csv are the same file" \
+  "$BIN" experiment gpi-pid "${replay[@]}" --reference "file:$T/link.csv,time=t_s,contraction=measured_mm,name=replayed"
+refused_kept "sweep --out the record" "--reference $T/link.csv are the same file" \
+  "$BIN" sweep gpi-pid --vary load.mass=20 --reference "file:$T/link.csv,time=t_s,contraction=measured_mm" \
+  --out "$T/ok/tracking_faithful_mine.csv"
+head -c 10 "$T/ok/tracking_faithful_mine.csv" | grep -q "^t_s," || fail "sweep replaced the record"
 
 # sweep takes the same --reference: checked before any run, then every run tracks it
 "$BIN" sweep gpi-pid --vary load.mass=20 --reference sine:amplitude=20,offset=50,frequency=0,periods=2 \

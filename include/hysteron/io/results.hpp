@@ -17,6 +17,7 @@
 //
 // from_json(j, where) -> T is spelled io::from_json<T>(j, where).
 #include <cstddef>
+#include <array>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -59,6 +60,13 @@ struct DataDescription {
   // evaluate: not --uncensored); a report regenerated from the document scores it the same.
   bool censored = true;
 };
+
+// The keys result.json's writer (to_json(ExperimentResult)) puts beside reference names in the
+// objects keyed by them (the published figures' "source" and errors; a variant's errors, which
+// a single reference's object holds itself): no reference may take one as its name
+// (parse_references refuses it), or the file would not read back.
+inline constexpr std::array<std::string_view, 4> kKeysBesideReferenceNames = {"source", "max_error_mm", "mae_mm",
+                                                                             "rms_error_mm"};
 
 // Seconds in one unit of a time column: "s" 1, "ms" 1e-3, "us" 1e-6; throws hysteron::Error naming
 // `where` and the unit for any other.

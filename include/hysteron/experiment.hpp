@@ -270,11 +270,17 @@ struct PublishedErrors {
   bool operator==(const PublishedErrors&) const = default;
 };
 
+// The source of the published figures of a run on the user's references (--reference): none.
+inline constexpr std::string_view kUserReferencesSource =
+    "none: the user's references (--reference), which no paper tracked";
+
 // The paper's figures; errors empty where the paper gives none.
 struct PublishedFigures {
-  std::string source;  // e.g. "gpi-lm-feedforward-pid.txt, Table 5"
+  std::string source;  // e.g. "gpi-lm-feedforward-pid.txt, Table 5"; kUserReferencesSource
   std::vector<PublishedErrors> errors;
   bool empty() const noexcept { return errors.empty(); }
+  // The references were the user's (--reference), tracked in no paper (read back from result.json too).
+  bool of_user_references() const noexcept { return source == kUserReferencesSource; }
   // The figures for `reference` (or the single reference's), nullptr if none.
   const PublishedErrors* find(const std::string& reference) const noexcept;
 };

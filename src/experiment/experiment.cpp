@@ -420,7 +420,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // no paper tracked them: no figures (NaN, printed "-"); the report (src/report/html.cpp) knows
   // them by this source's start
   if (!o.references.empty()) {
-    res.published = {"none: the user's references (--reference), which no paper tracked", {}};
+    res.published = {std::string(kUserReferencesSource), {}};
     for (const UserReference& u : o.references) res.published.errors.push_back({u.name});
   }
   // the actuator's limit: no run commands more (the rig's rating and the regulator's range)

@@ -370,9 +370,8 @@ void write_experiment_report(const ExperimentResult& r, const std::string& html_
         if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
     }
     if (hi >= lo) dva.series.push_back({"ideal", {lo, hi}, {lo, hi}, "lines", "#222222", true});
-    // the paper's figures beside a paper's reference; a user's (--reference: result.json's published
-    // source says so, experiment.cpp) was in no paper
-    const bool user = r.published.source.starts_with("none: the user's references");
+    // the paper's figures beside a paper's reference; a user's (--reference) was in no paper
+    const bool user = r.published.of_user_references();
     const auto paper_fig = [user](int n) { return user ? std::string() : fmt::format(" (paper Fig. {})", n); };
     page.figure(track, fmt::format("Desired and measured contraction, {} reference{}.", ref, paper_fig(11)));
     page.figure(err, fmt::format("Tracking errors, {} reference{}.", ref, paper_fig(12)));

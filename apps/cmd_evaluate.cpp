@@ -18,7 +18,8 @@
 // Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files); 3 a useless evaluation:
 // where the model file records its training error ("training", as hysteron fit writes it), a record
 // the model predicts worse than its mean (R^2 <= 0) with more than kValidationRmsFactor times that
-// error (validation_useless, as fit --validate-data exits 3).
+// error (validation_useless, as fit --validate-data exits 3); never a record whose input spans less
+// than kNarrowInputShare of the model's input range (its R^2 says little).
 #include <fmt/format.h>
 
 #include <cmath>
@@ -101,7 +102,7 @@ int run_evaluate(const EvaluateOptions& c) {
       w = input_map_warning(im, c.sel.file);
     warnings.push_back(std::move(w));
   }
-  const bool useless = std::isfinite(train.rms) && validation_useless(m, train);
+  const bool useless = std::isfinite(train.rms) && validation_useless(m, train, coverage.span_share);
   if (useless)
     warnings.push_back(fmt::format(
         "the evaluation is useless: the model predicts {} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span) "
@@ -148,7 +149,8 @@ void add_evaluate(CLI::App& app, Action& action) {
   sub->footer("Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files); 3 a useless evaluation: "
               "the model file records its training error (\"training\", written by hysteron fit) and the model "
               "predicts the record worse than its mean (R^2 <= 0) with more than twice that RMS error (as fit "
-              "--validate-data exits 3); the metrics are printed as always.");
+              "--validate-data exits 3), unless the record's input spans less than half the model's input "
+              "range (its R^2 says little there: a warning says so); the metrics are printed as always.");
   sub->add_option("--model,-m", c->model, "model file (JSON); - reads it from stdin")->required();
   add_data_options(sub, c->sel);
   sub->add_option("--range,--train", c->range,

@@ -271,7 +271,7 @@ int run_fit(const FitCliOptions& c) {
       }
       const OutputMap map = output_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor);
       doc.validation.push_back({v.file, v.range, *m, censored, cov.outside, map});
-      if (validation_useless(*m, rep.train))
+      if (validation_useless(*m, rep.train, cov.span_share))
         useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span)",
                                       v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
                                       m->rms, m->rms_percent_span));

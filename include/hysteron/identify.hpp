@@ -200,6 +200,11 @@ bool output_map_explains(const OutputMap& m, double train_r2 = std::numeric_limi
 // 100 samples of a good record (1.5 % of the input range), RMS 0.56 mm against 0.97 mm in training,
 // R^2 -12, were said to differ by a unit or a sensor offset.
 inline constexpr double kNarrowInputShare = 0.5;
+// Whether output_map_warning names a flipped sign, a scale or a zero (rather than the plain or the
+// narrow-stretch warning, or none).
+bool output_map_names(const OutputMap& m, double train_r2 = std::numeric_limits<double>::quiet_NaN(),
+                      double train_rms = std::numeric_limits<double>::quiet_NaN(),
+                      double input_share = std::numeric_limits<double>::quiet_NaN());
 std::string output_map_warning(const OutputMap& m, std::string_view what,
                                double train_r2 = std::numeric_limits<double>::quiet_NaN(),
                                double train_rms = std::numeric_limits<double>::quiet_NaN(),
@@ -233,8 +238,11 @@ inline constexpr double kValidationRmsFactor = 2.0;
 // InputCoverage::span_share) is never useless: its R^2 says little (a review of 2026-12-01: 100-sample
 // windows of the model's own training record, Festo test8, were called useless); its warning
 // (output_map_warning) stays.
+// map_named: a sign, unit or zero explains the record (output_map_names, or an input_map found): the
+// narrow stretch is then judged as any other (a record in bar against a model in kPa spans 1 % of its
+// input range, and is useless).
 bool validation_useless(const FitMetrics& validation, const FitMetrics& train,
-                        double input_share = std::numeric_limits<double>::quiet_NaN()) noexcept;
+                        double input_share = std::numeric_limits<double>::quiet_NaN(), bool map_named = false) noexcept;
 
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0

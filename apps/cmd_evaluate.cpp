@@ -116,6 +116,8 @@ int run_evaluate(const EvaluateOptions& c) {
         c.sel.file, range.begin, range.end, m.r2, m.rms, m.rms_percent_span, kValidationRmsFactor, train.rms,
         train.r2, exit_poor_fit));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
+  doc.warnings = warnings;  // the --json / --report document records them and the verdict
+  doc.useless = useless;
   const int code = useless ? exit_poor_fit : exit_ok;
 
   if (!c.report.empty()) {

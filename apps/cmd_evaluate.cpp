@@ -18,7 +18,9 @@
 // Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files); 3 a useless evaluation:
 // where the model file records its training error ("training", as hysteron fit writes it), a record
 // the model predicts worse than its mean (R^2 <= 0) with more than kValidationRmsFactor times that
-// error (validation_useless, as fit --validate-data exits 3).
+// error (validation_useless, as fit --validate-data exits 3); never a record whose input spans less
+// than kNarrowInputShare of the model's input range (its R^2 says little) that no sign, unit or zero
+// explains (output_map_names, input_map).
 #include <fmt/format.h>
 
 #include <cmath>
@@ -96,12 +98,16 @@ int run_evaluate(const EvaluateOptions& c) {
   const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
   doc.result.output_map = map;
   // (an input in another zero or unit is named as such: input_map)
+  // (a narrow stretch is useless only where a sign, unit or zero explains it: map_named)
+  bool map_named = output_map_names(map, train.r2, train.rms, coverage.span_share);
   if (std::string w = output_map_warning(map, c.sel.file, train.r2, train.rms, coverage.span_share); !w.empty()) {
-    if (const InputMap im = input_map(model, rec.x, rec.y, range, initial, !c.uncensored, train.rms); im.found)
+    if (const InputMap im = input_map(model, rec.x, rec.y, range, initial, !c.uncensored, train.rms); im.found) {
       w = input_map_warning(im, c.sel.file);
+      map_named = true;
+    }
     warnings.push_back(std::move(w));
   }
-  const bool useless = std::isfinite(train.rms) && validation_useless(m, train);
+  const bool useless = std::isfinite(train.rms) && validation_useless(m, train, coverage.span_share, map_named);
   if (useless)
     warnings.push_back(fmt::format(
         "the evaluation is useless: the model predicts {} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span) "
@@ -110,6 +116,8 @@ int run_evaluate(const EvaluateOptions& c) {
         c.sel.file, range.begin, range.end, m.r2, m.rms, m.rms_percent_span, kValidationRmsFactor, train.rms,
         train.r2, exit_poor_fit));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
+  doc.warnings = warnings;  // the --json / --report document records them and the verdict
+  doc.useless = useless;
   const int code = useless ? exit_poor_fit : exit_ok;
 
   if (!c.report.empty()) {
@@ -148,7 +156,8 @@ void add_evaluate(CLI::App& app, Action& action) {
   sub->footer("Exit codes: 0 evaluated; 1 error (bad input or usage, unreadable files); 3 a useless evaluation: "
               "the model file records its training error (\"training\", written by hysteron fit) and the model "
               "predicts the record worse than its mean (R^2 <= 0) with more than twice that RMS error (as fit "
-              "--validate-data exits 3); the metrics are printed as always.");
+              "--validate-data exits 3), unless the record's input spans less than half the model's input "
+              "range and no sign, unit or zero explains it (its R^2 says little there: a warning says so); the metrics are printed as always.");
   sub->add_option("--model,-m", c->model, "model file (JSON); - reads it from stdin")->required();
   add_data_options(sub, c->sel);
   sub->add_option("--range,--train", c->range,

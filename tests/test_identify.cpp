@@ -719,6 +719,46 @@ TEST(IdentifyInput, OutputMapClaimsASignOrZeroOnlyWhereTheMapFits) {
   EXPECT_NE(output_map_warning(negated, "v.csv", 0.99999).find("far worse"), std::string::npos);
 }
 
+// On a stretch spanning less than kNarrowInputShare of the model's input range (review of 2026-12-01):
+// a flipped sign the map explains convincingly is still named (Festo test9 with its force negated, its
+// first 40 % of the input range: said only "R^2 ... say little" before), with or without the training
+// error; the maps of 100-sample windows of the training record itself (test8) name nothing; and such
+// a stretch is never useless (those windows exited 3).
+TEST(IdentifyInput, NarrowStretchNamesOnlyAConvincingMap) {
+  const auto map = [](double gain, double r2, double r2_mapped, double rms, double rms_mapped, double span) {
+    OutputMap m;
+    m.gain = gain, m.offset = 1.0, m.r2 = r2, m.r2_mapped = r2_mapped, m.rms = rms, m.rms_mapped = rms_mapped;
+    m.span = span;
+    return m;
+  };
+  const double train_r2 = 0.99955, train_rms = 3.3325, nan = std::nan("");
+  const OutputMap negated = map(-0.8797, -20.77, 0.9770, 114.93, 3.7348, 90.17);
+  for (double tr : {train_rms, nan}) {
+    const std::string w = output_map_warning(negated, "v.csv", std::isfinite(tr) ? train_r2 : nan, tr, 0.40);
+    EXPECT_NE(w.find("is its sign flipped"), std::string::npos) << w;
+  }
+  for (const OutputMap& m : {map(0.4066, -0.8208, 0.7203, 7.1849, 2.8161, 37.57),
+                             map(-4.5302, -0.5958, 0.5571, 7.1157, 3.7485, 30.74),
+                             map(-2.4287, -0.5996, 0.5813, 6.9038, 3.5323, 28.01)})
+    for (double tr : {train_rms, nan}) {
+      const std::string w = output_map_warning(m, "t8.csv", std::isfinite(tr) ? train_r2 : nan, tr, 0.05);
+      EXPECT_NE(w.find("say little about the model"), std::string::npos) << w;
+      EXPECT_EQ(w.find("sign flipped"), std::string::npos) << w;
+      EXPECT_EQ(w.find("sensor offset"), std::string::npos) << w;
+    }
+  FitMetrics train, bad;
+  train.rms = train_rms;
+  bad.r2 = -0.82;
+  bad.rms = 7.18;
+  EXPECT_TRUE(validation_useless(bad, train));
+  EXPECT_TRUE(validation_useless(bad, train, 0.5));
+  EXPECT_FALSE(validation_useless(bad, train, 0.05));
+  // ... unless a sign, unit or zero explains it (a record in bar against a model in kPa spans 1 %)
+  EXPECT_TRUE(validation_useless(bad, train, 0.05, true));
+  EXPECT_TRUE(output_map_names(negated, train_r2, train_rms, 0.40));
+  EXPECT_TRUE(output_map_names(negated, nan, nan, 0.40));
+}
+
 // A record whose output differs from the model's by a sign, a unit or a zero (audit of 2026-11-30:
 // a Festo model scored on test9 with its force negated gave R^2 -8.4 with nothing saying why):
 // output_map gives the least-squares y ~ gain * prediction + offset, and the warning names a

@@ -287,19 +287,47 @@ bool output_map_explains(const OutputMap& m, double train_r2) {
   return 1.0 - m.r2_mapped <= std::sqrt(std::max(0.0, 1.0 - train_r2));
 }
 
-bool validation_useless(const FitMetrics& validation, const FitMetrics& train) noexcept {
+bool validation_useless(const FitMetrics& validation, const FitMetrics& train, double input_share,
+                        bool map_named) noexcept {
+  // too narrow a stretch for R^2 to judge the model, unless a sign, unit or zero explains the record
+  if (input_share < kNarrowInputShare && !map_named) return false;
   return validation.r2 <= 0.0 && validation.rms > kValidationRmsFactor * train.rms;
+}
+
+namespace {
+// whether the map explains the record at all (a warning to give): a poor prediction, or one the map halves
+bool output_map_poor(const OutputMap& m, double train_rms) {
+  const bool poor = m.r2 < kMinFitR2;
+  const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
+  if (!poor && !halved) return false;
+  // as well described as the training record: nothing to explain (a short or quiet stretch's R^2)
+  return !(std::isfinite(train_rms) && !(m.rms > kValidationRmsFactor * train_rms));
+}
+}  // namespace
+
+bool output_map_names(const OutputMap& m, double train_r2, double train_rms, double input_share) {
+  if (!output_map_poor(m, train_rms)) return false;
+  // a stretch too narrow for R^2, % of span or a map to say much: a sign, scale or zero is claimed only
+  // where the map explains the record convincingly: it cuts the RMS error to at most 1 /
+  // kValidationRmsFactor^2 of the prediction's (a flipped sign's error is twice the signal; on a narrow
+  // stretch of a good record the map of two free numbers leaves 0.4-0.53 of it: Festo test8's own
+  // 100-sample windows, whose maps' gains reach -4.5 at R^2 0.56), and with a training error to a mapped
+  // RMS error within kValidationRmsFactor times it (a sign, scale or zero); without one only a flipped
+  // sign (gain < 0, mapped R^2 at least kMinFitR2), never a scale or a zero
+  if (input_share < kNarrowInputShare)
+    return std::isfinite(m.gain) && m.rms_mapped * kValidationRmsFactor * kValidationRmsFactor <= m.rms &&
+           (std::isfinite(train_rms) ? m.rms_mapped <= kValidationRmsFactor * train_rms
+                                     : m.gain < 0.0 && m.r2_mapped >= kMinFitR2);
+  return output_map_explains(m, train_r2);
 }
 
 std::string output_map_warning(const OutputMap& m, std::string_view what, double train_r2, double train_rms,
                                double input_share) {
-  const bool poor = m.r2 < kMinFitR2;
+  if (!output_map_poor(m, train_rms)) return {};
   const bool halved = m.rms_mapped <= 0.5 * m.rms && m.rms > 0.01 * m.span;
-  if (!poor && !halved) return {};
-  // as well described as the training record: nothing to explain (a short or quiet stretch's R^2)
-  if (std::isfinite(train_rms) && !(m.rms > kValidationRmsFactor * train_rms)) return {};
-  // a stretch too narrow for R^2, % of span or a map to say much: no sign, scale or zero claimed
-  if (input_share < kNarrowInputShare)
+  const bool narrow = input_share < kNarrowInputShare;
+  const bool named = output_map_names(m, train_r2, train_rms, input_share);
+  if (narrow && !named)
     return fmt::format("{}: the prediction scores R^2 {:.4g} (RMS error {:.4g}, {:.3g} % of the output's span) on a "
                        "record whose input spans only {:.1f} % of the model's input range (input_limits): on so "
                        "narrow a stretch R^2 and % of span say little about the model{}",
@@ -309,7 +337,7 @@ std::string output_map_warning(const OutputMap& m, std::string_view what, double
                                          train_rms)
                            : std::string(" (no training error to compare the RMS error with: the model file has no "
                                          "\"training\", which hysteron fit writes)"));
-  if (output_map_explains(m, train_r2)) {
+  if (named) {
     const std::string fit = fmt::format("the record's output matches {:.4g} x the model's prediction {:+.4g} (RMS "
                                         "error {:.4g}, R^2 {:.3f}, against {:.4g} and {:.4g} for the prediction as it "
                                         "is)",

@@ -414,6 +414,8 @@ json to_json(const EvaluationDocument& d) {
             {"model", model_to_json(d.model)},
             {"data", to_json(d.data)}};
   j["metrics"] = to_json(d.result);
+  j["warnings"] = d.warnings;
+  j["useless"] = d.useless;
   return j;
 }
 
@@ -430,6 +432,14 @@ void from_json(const json& j, EvaluationDocument& d, std::string_view where) {
   from_json(need(j, "data", where), d.data, key_where(where, "data"));
   const json& metrics = need(j, "metrics", where);
   from_json(metrics, d.result, key_where(where, "metrics"));
+  if (j.contains("warnings")) {
+    const json& w = get_array(j, "warnings", where);
+    for (std::size_t i = 0; i < w.size(); ++i) {
+      if (!w[i].is_string()) wrong_type(w[i], fmt::format("warnings[{}]", i), where, "a string");
+      d.warnings.push_back(w[i].get<std::string>());
+    }
+  }
+  d.useless = opt_bool(j, "useless", where, false);
   // the evaluated range: every evaluate writes it (the fit document's validations may lack one)
   if (!metrics.contains("range"))
     throw Error(fmt::format("{}: metrics.range is missing (the evaluated range [begin, end] the metrics are of)", where));

@@ -752,6 +752,15 @@ void write_evaluation_report(const io::EvaluationDocument& doc, const FitData& d
   const IndexRange range = data.train.resolved(n);
   const std::vector<double> y = try_simulate(page, model, std::span(data.x).first(n), data.initial_state, "the data");
   const std::string yu = data.output.unit.empty() ? "" : fmt::format(" [{}]", data.output.unit);
+  if (doc.useless)
+    page.para("The evaluation is useless: the model predicts the record worse than its mean (R² <= 0) with more "
+              "than twice its training RMS error (evaluate exits 3).",
+              "warn");
+  if (!doc.warnings.empty()) {
+    std::string list = "<ul class=\"warn\" id=\"warnings\">\n";
+    for (const auto& w : doc.warnings) list += fmt::format("<li>{}</li>\n", html_escape(w));
+    page.raw(list + "</ul>\n");
+  }
   page.heading("Errors");
   if (y.size() == n && range.end <= n && range.begin < range.end) {
     // a record whose output clips: scored as censored, as `hysteron evaluate` scores it

@@ -95,6 +95,17 @@ grep -q "^warning: $T/neg.csv: the record's output matches -1 x the model's pred
   || fail "negated: no sign warning: $(cat "$T/err")"
 $PY -c 'import json, sys; m = json.load(open(sys.argv[1]))["metrics"]["output_map"]; assert abs(m["gain"] + 1) < 1e-3 and m["r2"] < 0 < 0.99 < m["r2_mapped"], m' \
   "$T/ev_neg.json" || fail "negated: output_map in --json"
+# the document records the warnings and the verdict (useless: exit 3), and the HTML page shows them
+$PY -c 'import json, sys; d = json.load(open(sys.argv[1])); assert d["useless"] is True and any("sign flipped" in w for w in d["warnings"]), (d.get("useless"), d.get("warnings"))' \
+  "$T/ev_neg.json" || fail "negated: warnings / useless in --json"
+$PY -c 'import json, sys; d = json.load(open(sys.argv[1])); assert d["useless"] is False and d["warnings"] == [], d' \
+  "$T/ev.json" || fail "own record: warnings / useless in --json"
+"$BIN" evaluate --model "$T/m.json" --data "$T/neg.csv" --input input --output output --report "$T/ev_neg.html" \
+  > /dev/null 2>&1
+grep -q "is its sign flipped" "$T/ev_neg.html" && grep -q "The evaluation is useless" "$T/ev_neg.html" \
+  || fail "negated: the HTML report does not show the warnings"
+"$BIN" report "$T/ev_neg.json" --out "$T/ev_neg2.html" > /dev/null 2>&1
+grep -q "is its sign flipped" "$T/ev_neg2.html" || fail "report ev_neg.json: the page does not show the warnings"
 "$BIN" evaluate --model "$T/m.json" --data "$T/off.csv" --input input --output output > /dev/null 2> "$T/err"
 rc=$?
 [ $rc -eq 3 ] || fail "evaluate offset: exit $rc (expected 3)"

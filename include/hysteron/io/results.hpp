@@ -115,6 +115,10 @@ struct EvaluationDocument {
   ModelParams model;
   DataDescription data;  // data.train = the evaluated range
   Evaluation result;
+  // the warnings evaluate printed and its verdict (validation_useless: exit 3); a document from before
+  // 2026-12-01 records neither (read as none and false)
+  std::vector<std::string> warnings;
+  bool useless = false;
 };
 
 // The model file's "training" (TrainingMetrics: rms, r2, samples) of a fit's training metrics;

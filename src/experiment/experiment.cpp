@@ -418,7 +418,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
     if (!u.note.empty()) res.messages.push_back(u.note);
   }
   // no paper tracked them: no figures (NaN, printed "-"); the report (src/report/html.cpp) knows
-  // them by this source's start
+  // them by this source (PublishedFigures::of_user_references)
   if (!o.references.empty()) {
     res.published = {std::string(kUserReferencesSource), {}};
     for (const UserReference& u : o.references) res.published.errors.push_back({u.name});

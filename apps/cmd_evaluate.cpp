@@ -97,17 +97,12 @@ int run_evaluate(const EvaluateOptions& c) {
   // for that, not for the model's hysteresis: say so where the affine map explains it
   const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
   doc.result.output_map = map;
-  // (an input in another zero or unit is named as such: input_map)
-  // (a narrow stretch is useless only where a sign, unit or zero explains it: map_named)
-  bool map_named = output_map_names(map, train.r2, train.rms, coverage.span_share);
-  if (std::string w = output_map_warning(map, c.sel.file, train.r2, train.rms, coverage.span_share); !w.empty()) {
-    if (const InputMap im = input_map(model, rec.x, rec.y, range, initial, !c.uncensored, train.rms); im.found) {
-      w = input_map_warning(im, c.sel.file);
-      map_named = true;
-    }
-    warnings.push_back(std::move(w));
-  }
-  const bool useless = std::isfinite(train.rms) && validation_useless(m, train, coverage.span_share, map_named);
+  // (an input in another zero or unit is named as such; a narrow stretch is useless only where a sign,
+  // unit or zero explains it: diagnose_record, as fit's validation)
+  RecordDiagnosis dg = diagnose_record(model, rec.x, rec.y, range, initial, !c.uncensored, map, train,
+                                       coverage.span_share, c.sel.file);
+  if (!dg.warning.empty()) warnings.push_back(std::move(dg.warning));
+  const bool useless = std::isfinite(train.rms) && validation_useless(m, train, coverage.span_share, dg.map_named);
   if (useless)
     warnings.push_back(fmt::format(
         "the evaluation is useless: the model predicts {} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span) "

@@ -275,22 +275,15 @@ int run_fit(const FitCliOptions& c) {
       // differs by a sign, a unit or a zero scores that, one the model does not describe is said so
       // (against the training R^2); another file sampled otherwise runs rate-pi's rates wrong (as
       // evaluate says)
-      // (an input in another zero or unit is named as such: input_map)
-      std::string out_w = output_map_warning(map, what, rep.train.r2, rep.train.rms, cov.span_share);
-      // (a narrow stretch is useless only where a sign, unit or zero explains it: map_named)
-      bool map_named = output_map_names(map, rep.train.r2, rep.train.rms, cov.span_share);
-      if (!out_w.empty())
-        if (const InputMap im = input_map(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor,
-                                          rep.train.rms);
-            im.found) {
-          out_w = input_map_warning(im, what);
-          map_named = true;
-        }
-      if (validation_useless(*m, rep.train, cov.span_share, map_named))
+      // (an input in another zero or unit is named as such; a narrow stretch is useless only where a
+      // sign, unit or zero explains it: diagnose_record)
+      RecordDiagnosis dg = diagnose_record(rep.model, input_of(v), output_of(v), v.range, o.initial_state, censor, map,
+                                           rep.train, cov.span_share, what);
+      if (validation_useless(*m, rep.train, cov.span_share, dg.map_named))
         useless.push_back(fmt::format("{} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span)",
                                       v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
                                       m->rms, m->rms_percent_span));
-      std::vector<std::string> ws = {input_coverage_warning(cov, what), std::move(out_w)};
+      std::vector<std::string> ws = {input_coverage_warning(cov, what), std::move(dg.warning)};
       if (!v.file.empty()) {
         auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                      v.file, c.sel.time_column);

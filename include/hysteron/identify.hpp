@@ -230,6 +230,18 @@ InputMap input_map(const ModelParams& params, std::span<const double> x, std::sp
 // The warning naming the input map ("" where none is found); `what` names the record.
 std::string input_map_warning(const InputMap& m, std::string_view what);
 
+// What fit's validation and evaluate say about a record against the model's training error
+// (train: NaN where unknown): the output map's warning, or the input map's where one is found
+// instead (an input in another zero or unit), and whether a sign, unit or zero explains the
+// record (validation_useless's map_named). One diagnosis for both commands.
+struct RecordDiagnosis {
+  std::string warning;  // "" where nothing is to be said
+  bool map_named = false;
+};
+RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                                IndexRange range, InitialState initial, bool censor, const OutputMap& map,
+                                const FitMetrics& train, double input_share, std::string_view what);
+
 // A validation the model does not describe (fit exits 3 on it): worse than the validation output's
 // mean (R^2 <= 0) and an RMS error more than kValidationRmsFactor times the training one. R^2 alone
 // is relative to the validation's own variance: a good model on a quiet stretch scores R^2 < 0.

@@ -366,6 +366,20 @@ std::string output_map_warning(const OutputMap& m, std::string_view what, double
                      m.r2 <= 0.0 ? ", worse than the record's mean" : "", m.r2_mapped);
 }
 
+RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                                IndexRange range, InitialState initial, bool censor, const OutputMap& map,
+                                const FitMetrics& train, double input_share, std::string_view what) {
+  RecordDiagnosis d;
+  d.warning = output_map_warning(map, what, train.r2, train.rms, input_share);
+  d.map_named = output_map_names(map, train.r2, train.rms, input_share);
+  if (!d.warning.empty())
+    if (const InputMap im = input_map(params, x, y, range, initial, censor, train.rms); im.found) {
+      d.warning = input_map_warning(im, what);
+      d.map_named = true;
+    }
+  return d;
+}
+
 InputMap input_map(const ModelParams& params, std::span<const double> x, std::span<const double> y, IndexRange range,
                    InitialState initial, bool censor, double train_rms) {
   detail::check_record(x, y, "input_map");

@@ -18,4 +18,17 @@ cmake -S "$dir/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMA
 cmake --build "$tmp/build" > "$tmp/build.log" 2>&1 || { cat "$tmp/build.log"; exit 1; }
 "$tmp/build/consumer_shared" "$dir/gpi.json"
 "$tmp/build/consumer_static" "$dir/gpi.json"
+# a component that does not exist is named, with the list of those that do
+mkdir -p "$tmp/bogus"
+cat > "$tmp/bogus/CMakeLists.txt" <<'CM'
+cmake_minimum_required(VERSION 3.20)
+project(bogus LANGUAGES C)
+find_package(hysteron REQUIRED COMPONENTS c_static)
+CM
+if cmake -S "$tmp/bogus" -B "$tmp/bogus/b" -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/bogus.log" 2>&1; then
+  echo "install_c: find_package(hysteron COMPONENTS c_static) configured"; exit 1
+fi
+tr -s ' \n' ' ' < "$tmp/bogus.log" \
+  | grep -q "unknown component(s) c_static: hysteron's components are core io identify rig report c" \
+  || { echo "install_c: no message naming the unknown component:"; cat "$tmp/bogus.log"; exit 1; }
 echo "install_c: ok"

@@ -86,30 +86,19 @@ int run_evaluate(const EvaluateOptions& c) {
   const FitMetrics& m = doc.result.metrics;
   // The training error the model file records ("training": hysteron fit writes it): judged as fit judges
   // a --validate-data file; without it (older or hand-made files) there is nothing to compare with.
-  FitMetrics train;
-  train.rms = train.r2 = std::nan("");
-  if (const auto t = model_doc.training()) {
-    train.rms = t->rms;
-    train.r2 = t->r2;
-    train.n = t->samples;
-  }
+  const FitMetrics train = io::training_metrics(model_doc);
   // a record whose output differs from the training record's by a sign, a unit or a zero scores poorly
   // for that, not for the model's hysteresis: say so where the affine map explains it
   const OutputMap map = output_map(model, rec.x, rec.y, range, initial, !c.uncensored);
   doc.result.output_map = map;
   // (an input in another zero or unit is named as such; a narrow stretch is useless only where a sign,
-  // unit or zero explains it: diagnose_record, as fit's validation)
-  RecordDiagnosis dg = diagnose_record(model, rec.x, rec.y, range, initial, !c.uncensored, map, train,
-                                       coverage.span_share, c.sel.file);
-  if (!dg.warning.empty()) warnings.push_back(std::move(dg.warning));
-  const bool useless = std::isfinite(train.rms) && validation_useless(m, train, coverage.span_share, dg.map_named);
-  if (useless)
-    warnings.push_back(fmt::format(
-        "the evaluation is useless: the model predicts {} (samples {}..{}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span) "
-        "worse than its mean (R^2 <= 0) and with more than {:g} times its training RMS error ({:.4g}; training R^2 "
-        "{:.4g}, the model file's \"training\"): evaluate exits {}",
-        c.sel.file, range.begin, range.end, m.r2, m.rms, m.rms_percent_span, kValidationRmsFactor, train.rms,
-        train.r2, exit_poor_fit));
+  // unit or zero explains it: judge_evaluation, as Python's and MATLAB's evaluate)
+  EvaluationVerdict verdict =
+      judge_evaluation(model, rec.x, rec.y, range, initial, !c.uncensored, map, m, train, coverage.span_share,
+                       c.sel.file, fmt::format("samples {}..{}", range.begin, range.end));
+  if (!verdict.diagnosis.warning.empty()) warnings.push_back(std::move(verdict.diagnosis.warning));
+  const bool useless = verdict.useless;
+  if (useless) warnings.push_back(fmt::format("{}: evaluate exits {}", verdict.useless_warning, exit_poor_fit));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);
   doc.warnings = warnings;  // the --json / --report document records them and the verdict
   doc.useless = useless;

@@ -20,10 +20,26 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %                            r2, r2_mapped, rms, rms_mapped, span (NaN where undefined)
 %     clipping_warning       where Y clips and 'censored' is false: how many samples
 %                            `hysteron evaluate` would not count as errors ('' otherwise)
-%     output_map_warning     where the prediction scores poorly or the map explains the
-%                            errors (a flipped sign, a unit, a zero) ('' otherwise)
 %     input_coverage_warning where more than 1 % of the samples are outside the input
 %                            limits ('' otherwise)
+%   and the diagnosis and verdict of `hysteron evaluate` (the same C++), judged against
+%   the training error the model's "training" field records (hysteron_fit's model and
+%   a file hysteron fit wrote carry it):
+%     training               that field (rms, r2, samples), or [] where the model has none
+%     output_map_warning     where a sign, unit or zero of the output explains a poor
+%                            score, where the model describes the record far worse than
+%                            its training record, where the input spans too little of the
+%                            model's input range for R^2 to say much, or the input map's
+%                            warning where the INPUT is in another zero or unit
+%                            (absolute against gauge pressure, kPa against MPa) ('' otherwise)
+%     input_map              then: scale, shift (X -> scale * X + shift), rms, r2 and
+%                            rms_as_is (the RMS error on X as recorded); [] otherwise
+%     useless                true where the model records its training error and predicts
+%                            Y worse than its mean (R^2 <= 0) with more than twice that
+%                            RMS error, unless X spans less than half the model's input
+%                            range and no sign, unit or zero explains it (`hysteron
+%                            evaluate` exits 3 there)
+%     useless_warning        says so ('' otherwise)
 %   Each non-empty warning is also issued as a warning with identifier
 %   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).
 %
@@ -32,7 +48,7 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
     error('hysteron:badArgument', 'usage: metrics = hysteron_evaluate(model, x, y, ''range'', [first last])');
   end
   metrics = hysteron_mex('evaluate', model, x, y, hysteron_options('hysteron_evaluate', varargin{:}));
-  for f = {'clipping_warning', 'output_map_warning', 'input_coverage_warning'}
+  for f = {'clipping_warning', 'input_coverage_warning', 'output_map_warning', 'useless_warning'}
     if ~isempty(metrics.(f{1}))
       warning('hysteron:evaluate', '%s', metrics.(f{1}));
     end

@@ -759,6 +759,51 @@ TEST(IdentifyInput, NarrowStretchNamesOnlyAConvincingMap) {
   EXPECT_TRUE(output_map_names(negated, nan, nan, 0.40));
 }
 
+// judge_evaluation: what evaluate says (the CLI's, Python's and MATLAB's alike, 2026-12-01: the
+// bindings had ignored the training error and the input map). A record of the model's own actuator
+// with its input in another unit (x / 1000: MPa against kPa) names the input map and is useless
+// against the training error; without a training error nothing is useless; the training record
+// itself gets neither.
+TEST(IdentifyInput, JudgeEvaluationNamesTheInputMapAndTheVerdict) {
+  GpiParams g = true_gpi();
+  g.input_limits = {0.0, 6.0};
+  const ModelParams model = g;
+  const auto x = decaying_triangle({6, 5, 4, 3, 2, 1}, 200);
+  const auto y = with_noise(simulate_record(model, x), 0.01, 7);
+  FitMetrics train = evaluate_scored(model, x, y, {}, InitialState::virgin, false);
+  ASSERT_LT(train.rms, 0.02);
+  const auto judge = [&](const std::vector<double>& xr, const FitMetrics& tr) {
+    const FitMetrics m = evaluate_scored(model, xr, y, {}, InitialState::virgin, false);
+    const InputCoverage cov = input_coverage(model, xr, {});
+    return std::pair{m, judge_evaluation(model, xr, y, {}, InitialState::virgin, false,
+                                         output_map(model, xr, y, {}, InitialState::virgin, false), m, tr,
+                                         cov.span_share, "r.csv", "samples 0..2401")};
+  };
+  const auto [own_m, own] = judge(x, train);
+  EXPECT_TRUE(own.diagnosis.warning.empty()) << own.diagnosis.warning;
+  EXPECT_FALSE(own.useless);
+  EXPECT_TRUE(own.useless_warning.empty());
+  std::vector<double> mpa(x);
+  for (double& v : mpa) v /= 1000.0;
+  const auto [m, v] = judge(mpa, train);
+  ASSERT_TRUE(v.diagnosis.input_map.found) << v.diagnosis.warning;
+  EXPECT_EQ(v.diagnosis.input_map.scale, 1000.0);
+  EXPECT_LT(v.diagnosis.input_map.rms, 2.0 * train.rms);
+  EXPECT_NE(v.diagnosis.warning.find("scaled by 1000"), std::string::npos) << v.diagnosis.warning;
+  EXPECT_TRUE(v.diagnosis.map_named);
+  ASSERT_LE(m.r2, 0.0);  // the model's output barely moves over 0..0.006
+  EXPECT_TRUE(v.useless);
+  EXPECT_NE(v.useless_warning.find("the evaluation is useless: the model predicts r.csv (samples 0..2401: "),
+            std::string::npos)
+      << v.useless_warning;
+  // no training error (a hand-made model file): nothing to compare with, never useless
+  FitMetrics unknown;
+  unknown.rms = unknown.r2 = std::nan("");
+  const auto [m2, v2] = judge(mpa, unknown);
+  EXPECT_FALSE(v2.useless);
+  EXPECT_TRUE(v2.useless_warning.empty());
+}
+
 // A record whose output differs from the model's by a sign, a unit or a zero (audit of 2026-11-30:
 // a Festo model scored on test9 with its force negated gave R^2 -8.4 with nothing saying why):
 // output_map gives the least-squares y ~ gain * prediction + offset, and the warning names a

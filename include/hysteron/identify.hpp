@@ -237,6 +237,7 @@ std::string input_map_warning(const InputMap& m, std::string_view what);
 struct RecordDiagnosis {
   std::string warning;  // "" where nothing is to be said
   bool map_named = false;
+  InputMap input_map;   // found where the warning is the input map's
 };
 RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                                 IndexRange range, InitialState initial, bool censor, const OutputMap& map,
@@ -255,6 +256,22 @@ inline constexpr double kValidationRmsFactor = 2.0;
 // input range, and is useless).
 bool validation_useless(const FitMetrics& validation, const FitMetrics& train,
                         double input_share = std::numeric_limits<double>::quiet_NaN(), bool map_named = false) noexcept;
+
+// What evaluate says about a record (the CLI's hysteron evaluate, Python's hysteron.evaluate and
+// MATLAB's hysteron_evaluate alike): diagnose_record's warning and input map, and whether the
+// evaluation is useless (validation_useless; never without a training error, train.rms NaN: the
+// model file has no "training"), with its warning ("" unless useless). metrics: the record's on
+// `range` (evaluate_scored with the same censor); `what` names the record, `samples` the range as
+// the front end counts it ("samples 0..100"); the CLI adds its exit code to the useless warning.
+struct EvaluationVerdict {
+  RecordDiagnosis diagnosis;
+  bool useless = false;
+  std::string useless_warning;
+};
+EvaluationVerdict judge_evaluation(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                                   IndexRange range, InitialState initial, bool censor, const OutputMap& map,
+                                   const FitMetrics& metrics, const FitMetrics& train, double input_share,
+                                   std::string_view what, std::string_view samples);
 
 // A record that sits at its least (or largest) reading far more often than its noise
 // explains: a sensor's limit (a displacement sensor zeroed above the muscle's rest reads 0

@@ -372,8 +372,26 @@ void cmd_evaluate(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
                              would);
   }
   m["clipping_warning"] = clipping;
-  m["output_map_warning"] = output_map_warning(e.output_map, "hysteron_evaluate");
   m["input_coverage_warning"] = input_coverage_warning(coverage, "hysteron_evaluate");
+  // The diagnosis and verdict of hysteron evaluate (judge_evaluation) against the training error the
+  // model's "training" records (hysteron_fit's model and hysteron fit's file carry it): the output
+  // map's warning or the input map's (an input in another zero or unit), and useless
+  const FitMetrics train = io::training_metrics(io::ModelDocument{spec.params, spec.extra});
+  const IndexRange rr = range.resolved(x.size());
+  const EvaluationVerdict v = judge_evaluation(spec.params, x, y, range, init, censored, e.output_map, e.metrics, train,
+                                               coverage.span_share, "hysteron_evaluate",
+                                               fmt::format("samples {}..{}", rr.begin + 1, rr.end));  // 1-based
+  m["output_map_warning"] = v.diagnosis.warning;
+  const InputMap& im = v.diagnosis.input_map;
+  m["input_map"] = im.found ? nlohmann::json{{"scale", im.scale}, {"shift", im.shift}, {"rms", im.rms},
+                                             {"r2", im.r2}, {"rms_as_is", im.rms_as_is}}
+                            : nlohmann::json::array();  // [] where none
+  if (const auto t = spec.extra.find("training"); t != spec.extra.end())
+    m["training"] = *t;
+  else
+    m["training"] = nlohmann::json::array();
+  m["useless"] = v.useless;
+  m["useless_warning"] = v.useless_warning;
   plhs[0] = to_mx(m);
 }
 

@@ -7,6 +7,7 @@
 
 #include "hysteron/io/files.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 #include "more.hpp"
@@ -237,17 +238,21 @@ usable by hysteron.Model (it may not be invertible).)doc");
       "evaluate",
       [](const py::object& model, const ArrayArg& x, const ArrayArg& y, const py::object& range,
          const std::string& initial_state, bool censored) {
-        const ModelParams spec = model_spec(model, "evaluate: model");
+        // the model file's "training" (a dict, file or Model carries it): the error evaluate judges against
+        const io::ModelDocument doc = model_document(model, "evaluate: model");
+        const ModelParams& spec = doc.params;
+        const FitMetrics train = io::training_metrics(doc);
         std::size_t count = 0;
         const auto xs = as_span(x, "evaluate: x"), ys = as_span(y, "evaluate: y");
-        py::dict d = metrics_dict(evaluate_scored(spec, xs, ys, range_from(range, "evaluate: range"),
-                                                  initial_state_from(initial_state), censored, &count));
+        const IndexRange r = range_from(range, "evaluate: range");
+        const InitialState init = initial_state_from(initial_state);
+        const FitMetrics met = evaluate_scored(spec, xs, ys, r, init, censored, &count);
+        py::dict d = metrics_dict(met);
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
-        const InputCoverage coverage = input_coverage(spec, xs, range_from(range, "evaluate: range"));
+        const InputCoverage coverage = input_coverage(spec, xs, r);
         d["outside_input_limits"] = coverage.outside;
         // y ~ gain * prediction + offset, and the warning where that map explains a poor score
-        const OutputMap map =
-            output_map(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state), censored);
+        const OutputMap map = output_map(spec, xs, ys, r, init, censored);
         py::dict om;
         om["gain"] = map.gain;
         om["offset"] = map.offset;
@@ -262,8 +267,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         std::string clip_warning;
         if (!censored) {
           std::size_t would = 0;
-          (void)evaluate_scored(spec, xs, ys, range_from(range, "evaluate: range"), initial_state_from(initial_state),
-                                true, &would);
+          (void)evaluate_scored(spec, xs, ys, r, init, true, &would);
           if (would > 0)
             clip_warning = fmt::format(
                 "evaluate: the output clips: {} samples at its limit where the model predicts beyond it are scored as "
@@ -272,8 +276,42 @@ usable by hysteron.Model (it may not be invertible).)doc");
                 would);
         }
         d["clipping_warning"] = clip_warning;
-        // (a stretch whose input spans little of the model's input range is not blamed on a sign, unit or zero)
-        d["output_map_warning"] = output_map_warning(map, "evaluate", std::nan(""), std::nan(""), coverage.span_share);
+        d["input_coverage_warning"] = input_coverage_warning(coverage, "evaluate");
+        // The CLI's diagnosis and verdict (judge_evaluation): the output map's warning, or the input map's where
+        // the input is in another zero or unit, and useless against the model's training error
+        const IndexRange rr = r.resolved(xs.size());
+        const EvaluationVerdict v = judge_evaluation(spec, xs, ys, r, init, censored, map, met, train,
+                                                     coverage.span_share, "evaluate",
+                                                     fmt::format("samples {}..{}", rr.begin, rr.end));
+        d["output_map_warning"] = v.diagnosis.warning;
+        if (v.diagnosis.input_map.found) {
+          const InputMap& im = v.diagnosis.input_map;
+          py::dict imd;
+          imd["scale"] = im.scale;
+          imd["shift"] = im.shift;
+          imd["rms"] = im.rms;
+          imd["r2"] = im.r2;
+          imd["rms_as_is"] = im.rms_as_is;
+          d["input_map"] = imd;
+        } else {
+          d["input_map"] = py::none();
+        }
+        if (const auto t = doc.training()) {  // as the model file records it
+          py::dict td;
+          td["rms"] = t->rms;
+          td["r2"] = t->r2;
+          td["samples"] = t->samples;
+          d["training"] = td;
+        } else {
+          d["training"] = py::none();
+        }
+        d["useless"] = v.useless;
+        d["useless_warning"] = v.useless_warning;
+        py::list ws;  // the non-empty warnings, in the CLI's order (after this one's clipping_warning)
+        for (const std::string& w : {clip_warning, input_coverage_warning(coverage, "evaluate"), v.diagnosis.warning,
+                                     v.useless_warning})
+          if (!w.empty()) ws.append(w);
+        d["warnings"] = ws;
         return d;
       },
       py::arg("model"), py::arg("x"), py::arg("y"), py::arg("range") = py::none(),
@@ -290,15 +328,28 @@ clips clipping_warning says how many samples the CLI's default would not count a
 ("" otherwise, and always "" with censored=True).
 
 output_map: {gain, offset, r2, r2_mapped, rms, rms_mapped, span}, y ~ gain * prediction +
-offset by least squares on the range; output_map_warning: non-empty where the prediction's R^2
-is below 0.5 and the map's at least 0.5, or where the map at least halves an RMS error above
-1 % of the output's span (the record's sign, unit or zero differs from the training record's:
-a negative gain is a flipped sign).)
+offset by least squares on the range. output_map_warning, input_map, useless and
+useless_warning are the diagnosis and verdict of `hysteron evaluate` (the same C++,
+judge_evaluation; "evaluate" names the record), judged against the training error that the
+model file's "training" records (a dict from fit()'s "model", a file hysteron fit wrote or a
+Model made of either carries it; "training" here: {rms, r2, samples}, or None):
+output_map_warning: "" where nothing is to be said; else where a sign, unit or zero of the
+output explains a poor score (a negative gain is a flipped sign), where the model describes
+the record far worse than its training record, where the input spans too little of the model's
+input range for R^2 to say much, or, where the INPUT is in another zero or unit (absolute
+against gauge pressure, kPa against MPa), the input map's warning; input_map: then {scale,
+shift, rms, r2, rms_as_is} (the record's input x -> scale * x + shift brings the RMS error from
+rms_as_is to rms), else None. useless: True where the model file records its training error
+and the prediction is worse than the record's mean (R^2 <= 0) with more than twice that RMS
+error, unless the input spans less than half the model's input range and no sign, unit or zero
+explains it (`hysteron evaluate` exits 3 there); useless_warning says so ("" otherwise).
+warnings: the non-empty warnings, clipping_warning, input_coverage_warning,
+output_map_warning, useless_warning in that order (the CLI's, less clipping_warning).
 
 outside_input_limits: the samples of the range whose input lies outside the model's
 input_limits (fit() sets them to the training range's input) by more than 2 % of their span:
-the model extrapolates there (hysteron.input_coverage in C++; `hysteron evaluate` warns where
-they are more than 1 %).)doc");
+the model extrapolates there (hysteron.input_coverage in C++); input_coverage_warning: where
+they are more than 1 % (as `hysteron evaluate` warns; "" otherwise).)doc");
 
   m.def(
       "simulate_record",

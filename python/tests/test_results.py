@@ -42,8 +42,11 @@ def test_fit_report_fields():
     assert r["candidates"] == []  # only with model="auto"
     # metrics dicts come from the same writer as the fit's
     m = hysteron.evaluate(r["model"], x, y, range=(0, 1200))
-    assert set(m) == METRIC_KEYS | {"outside_input_limits", "output_map", "output_map_warning", "clipping_warning"}
+    assert set(m) == METRIC_KEYS | {"outside_input_limits", "output_map", "output_map_warning", "clipping_warning",
+                                    "input_coverage_warning", "input_map", "training", "useless", "useless_warning",
+                                    "warnings"}
     assert m["output_map_warning"] == ""  # the model on its own training record
+    assert m["useless"] is False and m["warnings"] == [] and m["input_map"] is None
     assert m["outside_input_limits"] == 0  # the training range itself
     # an input beyond the range the model was fitted on is counted (input_limits: that range)
     lo, hi = r["model"]["input_limits"]

@@ -373,11 +373,29 @@ RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const doubl
   d.warning = output_map_warning(map, what, train.r2, train.rms, input_share);
   d.map_named = output_map_names(map, train.r2, train.rms, input_share);
   if (!d.warning.empty())
-    if (const InputMap im = input_map(params, x, y, range, initial, censor, train.rms); im.found) {
+    if (InputMap im = input_map(params, x, y, range, initial, censor, train.rms); im.found) {
       d.warning = input_map_warning(im, what);
       d.map_named = true;
+      d.input_map = im;
     }
   return d;
+}
+
+EvaluationVerdict judge_evaluation(const ModelParams& params, std::span<const double> x, std::span<const double> y,
+                                   IndexRange range, InitialState initial, bool censor, const OutputMap& map,
+                                   const FitMetrics& metrics, const FitMetrics& train, double input_share,
+                                   std::string_view what, std::string_view samples) {
+  EvaluationVerdict v;
+  v.diagnosis = diagnose_record(params, x, y, range, initial, censor, map, train, input_share, what);
+  // without the model file's training error there is nothing to compare the record's with
+  v.useless = std::isfinite(train.rms) && validation_useless(metrics, train, input_share, v.diagnosis.map_named);
+  if (v.useless)
+    v.useless_warning = fmt::format(
+        "the evaluation is useless: the model predicts {} ({}: R^2 {:.4g}, RMS {:.4g}, {:.4g} % of span) worse than its "
+        "mean (R^2 <= 0) and with more than {:g} times its training RMS error ({:.4g}; training R^2 {:.4g}, the model "
+        "file's \"training\")",
+        what, samples, metrics.r2, metrics.rms, metrics.rms_percent_span, kValidationRmsFactor, train.rms, train.r2);
+  return v;
 }
 
 InputMap input_map(const ModelParams& params, std::span<const double> x, std::span<const double> y, IndexRange range,

@@ -80,6 +80,17 @@ json training_json(const FitMetrics& train) {
   return training_to_json({train.rms, train.r2, train.n});
 }
 
+FitMetrics training_metrics(const ModelDocument& doc) {
+  FitMetrics train;
+  train.rms = train.r2 = nan;
+  if (const auto t = doc.training()) {
+    train.rms = t->rms;
+    train.r2 = t->r2;
+    train.n = t->samples;
+  }
+  return train;
+}
+
 json to_json(const FitMetrics& m) {
   return {{"rms", number(m.rms)}, {"max", number(m.max)}, {"mae", number(m.mae)},
           {"rms_percent_span", number(m.rms_percent_span)}, {"r2", number(m.r2)}, {"n", m.n}};

@@ -125,6 +125,10 @@ struct EvaluationDocument {
 // null where they are not finite (nothing to record). hysteron fit's model file, the fit documents'
 // "model" dicts (and so Python's fit) and the experiments' model files carry it.
 nlohmann::json training_json(const FitMetrics& train);
+// The reverse: a model document's "training" as FitMetrics (rms, r2, n; the other fields 0), rms and
+// r2 NaN where the document records none (judge_evaluation: nothing to compare with). evaluate's
+// training error in the CLI, Python and MATLAB.
+FitMetrics training_metrics(const ModelDocument& doc);
 
 // ---- to_json / from_json pairs ----------------------------------------------------
 

@@ -281,6 +281,27 @@ TEST(Pid, OverflowingErrorIsAFaultWithTheGuard) {
   EXPECT_NO_THROW(copy.restore(pid.snapshot()));
 }
 
+// Review s26: at rest the guard's count (x exp(-T_s / (memory period)) per sample) and the filtered
+// derivative (x T_f / (T_f + T_s)) decayed into the subnormals (the count stuck at 6.2e-320 after
+// ~708 memory time constants), where Pid::step took 53 ns instead of 27. Below DBL_MIN they are 0.
+TEST(Pid, DecayingStatesAtRestAreNeverSubnormal) {
+  // T_f = T_s: the derivative halves per sample; memory x period = T_s: the count / e per sample
+  PidParams p{.kp = 1.0, .kd = 0.01, .sample_time = 1e-3, .derivative_filter = 1e-3, .out_min = -1.0, .out_max = 1.0};
+  p.guard = PidGuard{.period = 0.01, .amplitude = 0.002, .count = 100.0, .memory = 0.1};
+  Pid pid(p);
+  // a ring of 3-sample half-cycles of |e| = 0.01 (above the limit a T_u / pi) in y: counted, and a derivative
+  for (int k = 0; k < 30; ++k) pid.step(0.0, (k / 3) % 2 ? 0.01 : -0.01);
+  ASSERT_GT(pid.state().guard_count, 1e-3) << "no half-cycle counted: the test exercises nothing";
+  ASSERT_GT(std::abs(pid.state().derivative), 1e-3);
+  for (int k = 0; k < 3000; ++k) {  // at rest: e = 0 (3 s: the count e^-3000, the derivative 2^-3000)
+    pid.step(0.0, 0.0);
+    ASSERT_NE(std::fpclassify(pid.state().guard_count), FP_SUBNORMAL) << "sample " << k;
+    ASSERT_NE(std::fpclassify(pid.state().derivative), FP_SUBNORMAL) << "sample " << k;
+  }
+  EXPECT_EQ(pid.state().guard_count, 0.0);
+  EXPECT_EQ(pid.state().derivative, 0.0);
+}
+
 // Review s18: Pid::reset kept faults() while the generated C's pid_reset (and Model, Inverse,
 // IterativeLearning's resets) zero their counts. A reset is a fresh start: state, guard and counts.
 TEST(Pid, ResetRestartsTheFaultCountAndTheGuard) {

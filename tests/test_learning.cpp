@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -302,6 +303,69 @@ TEST(Learning, SupervisorHoldsTheBestCorrectionAfterEnoughCuts) {
     EXPECT_FALSE(ilc.held());
     EXPECT_EQ(ilc.correction(), 0.0);
   }
+}
+
+// Review s26: with hold_after_cuts = 0 ("never held" then) and tolerance 0 on a noisy loop, the
+// supervisor halved L at every rise the noise made, to exactly 0 through the subnormals (7412
+// cuts in 20,000 periods), and then smoothed the learnt correction away: a restored best was kept
+// whatever its re-measured error, and with L ~ 0 an update is c <- Q c. The true RMS error rose
+// to 0.0082 by period 2000 (0.0016 without supervision, 0.077 before learning), with nothing to
+// say so. L's floor now holds the best correction after kMaxLearningCuts halvings. The audit's
+// loop: y += a (r + c - y), a = 0.1, N = 500, L = 0.5, d = 10, h = 5, measurement noise 0.01.
+TEST(Learning, SupervisorHoldsAtTheGainFloorOnANoisyLoop) {
+  constexpr std::size_t kPeriods = 2000, kLast = 200;  // the RMS compared: mean over the last kLast periods
+  struct Run {
+    std::vector<double> rms;  // true error (r - y, without the noise) per period
+    double least_gain = 0.0;
+    std::size_t cuts = 0;
+    bool held = false;
+  };
+  const auto run = [](double tolerance) {
+    const LearningParams p{.period = 500, .gain = 0.5, .lead = 10, .half_width = 5, .rise_tolerance = tolerance};
+    IterativeLearning ilc(p);
+    std::uint64_t seed = 88172645463325252ULL;  // xorshift64, Box-Muller: the same noise for both runs
+    const auto u01 = [&seed] {
+      seed ^= seed << 13;
+      seed ^= seed >> 7;
+      seed ^= seed << 17;
+      return static_cast<double>(seed >> 11) * 0x1p-53;
+    };
+    Run out;
+    out.least_gain = ilc.gain();
+    double y = 0.0;
+    for (std::size_t j = 0; j < kPeriods; ++j) {
+      double s2 = 0.0;
+      for (std::size_t k = 0; k < p.period; ++k) {
+        const double r = std::sin(2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(p.period));
+        y += 0.1 * (r + ilc.correction() - y);
+        const double noise = 0.01 * std::sqrt(-2.0 * std::log(u01() + 1e-300)) * std::cos(2.0 * std::numbers::pi * u01());
+        s2 += (r - y) * (r - y);
+        ilc.step(r - (y + noise));
+      }
+      out.rms.push_back(std::sqrt(s2 / static_cast<double>(p.period)));
+      out.least_gain = std::min(out.least_gain, ilc.gain());
+    }
+    out.cuts = ilc.gain_cuts();
+    out.held = ilc.held();
+    return out;
+  };
+  const auto tail_mean = [](const std::vector<double>& v) {
+    double s = 0.0;
+    for (std::size_t j = v.size() - kLast; j < v.size(); ++j) s += v[j];
+    return s / static_cast<double>(kLast);
+  };
+  const Run free = run(std::numeric_limits<double>::infinity());
+  const Run supervised = run(0.0);
+  ASSERT_EQ(free.cuts, 0u);
+  // the unsupervised loop learns: its error far below the first period's
+  const double learnt = tail_mean(free.rms);
+  ASSERT_LT(learnt, 0.1 * free.rms[0]);
+  // the noise made rises: L halved down to its floor, then held there
+  EXPECT_EQ(supervised.cuts, kMaxLearningCuts);
+  EXPECT_TRUE(supervised.held);
+  EXPECT_GE(supervised.least_gain, 0.5 * std::ldexp(1.0, -static_cast<int>(kMaxLearningCuts)));
+  // the held correction keeps the error near the learnt level (it rose 5x without the floor)
+  EXPECT_LT(tail_mean(supervised.rms), 2.0 * learnt) << "unsupervised " << learnt;
 }
 
 // A warm start (reset(correction)): period 0 applies the given correction (clipped to

@@ -405,7 +405,9 @@ typedef struct hysteron_ilc_params {
   double rise_tolerance;  /* supervision: a period whose RMS error rises above the least
                              before it by more than this fraction restores the best
                              correction and halves L, >= 0 (default: infinity, none) */
-  size_t hold_after_cuts; /* after this many halvings the best correction is held (0: never) */
+  size_t hold_after_cuts; /* after this many halvings the best correction is held; at most 10
+                             (L's floor, kMaxLearningCuts): 0 or a larger count holds after 10.
+                             A held correction is never re-checked (until a reset) */
   double max_gain;        /* L doubles after every new best period up to this, until the first
                              halving (0: never; else in [gain, 2); needs rise_tolerance) */
 } hysteron_ilc_params;

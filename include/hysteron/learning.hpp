@@ -49,8 +49,10 @@ struct LearningParams {
   // (infinity: no supervision, L fixed).
   double rise_tolerance = std::numeric_limits<double>::infinity();
   // After this many halvings of L the supervisor holds the best correction: no more updates
-  // (0: never). Each update is c <- Q(c + L e), so with L near 0 an update only smooths the
-  // best correction by Q, and the period after it is worse again.
+  // (0: at L's floor, after kMaxLearningCuts halvings; a larger count holds there too). Each
+  // update is c <- Q(c + L e), so with L near 0 an update only smooths the best correction by Q,
+  // and the period after it is worse again. A held correction is applied unchanged from then on,
+  // whatever the errors of the periods after it: it is never re-checked (reset() starts again).
   std::size_t hold_after_cuts = 0;
   // Largest L of the supervisor's growth (0: L never grows; else in [gain, 2)). Until the first
   // halving, L is doubled (up to max_gain) after every period that is the new best: a design
@@ -66,6 +68,12 @@ struct LearningParams {
 
 inline constexpr std::size_t kMaxLearningHalfWidth = 10'000'000;  // h; its reach is 20,358 samples
 inline constexpr std::size_t kMaxLearningPeriod = 10'000'000;     // N [samples]
+// L's floor: after this many halvings (L = the L before the first one x 2^-10, about 1e-3 of it)
+// the supervisor holds the best correction whatever hold_after_cuts says. Below it an update is
+// c <- Q c in all but name: without the floor (hold_after_cuts = 0) L went on halving to 0 through
+// the subnormals on a noisy loop, and the best correction, re-measured after every rise and kept
+// whatever its error, was smoothed away period after period (docs/control.md, section 3, Hold).
+inline constexpr std::size_t kMaxLearningCuts = 10;
 
 // The taps of the binomial Q-filter of half-width h that the update sums, |m| <= reach: the
 // largest m with q_m >= 1e-18 q_0 (h itself up to h = 31; about 6.4 sqrt(h) for large h). The
@@ -115,7 +123,8 @@ class IterativeLearning {
   double gain() const noexcept { return gain_; }             // L in use (params().gain until halved)
   std::size_t gain_cuts() const noexcept { return cuts_; }   // times the supervisor reverted and halved L
   std::size_t gain_raises() const noexcept { return raises_; }  // times it doubled L (max_gain)
-  bool held() const noexcept { return held_; }               // the best correction is held (hold_after_cuts)
+  // the best correction is held (after hold_after_cuts halvings, or kMaxLearningCuts: L's floor)
+  bool held() const noexcept { return held_; }
   const LearningParams& params() const noexcept { return p_; }
   // The binomial Q-filter as built: the 2r + 1 taps q_m, m = -r..r, r = filter_reach() =
   // binomial_reach(h), that the per-sample update sums (their sum is 1; the others, below 1e-18

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "format.hpp"
+#include "flush.hpp"
 #include "validate.hpp"
 
 #include "hysteron/error.hpp"
@@ -215,7 +216,7 @@ double Pid::step(double r, double y, double ff) noexcept {
   }
   PidState s = s_;
   s.initialized = true;
-  s.derivative = derivative;
+  s.derivative = detail::flush_subnormal(derivative);  // no subnormal state at rest (flush.hpp)
   s.prev_d_error = d_err;
   s.integral = integral;
   s.saturated = u != v;
@@ -259,7 +260,7 @@ bool Pid::guard_step(PidState& s, double e) const noexcept {
     s.guard_iae = 0.0;
     s.guard_samples = 0;
   }
-  s.guard_count *= guard_decay_;
+  s.guard_count = detail::flush_subnormal(s.guard_count * guard_decay_);  // a count < 2.2e-308 is 0 (flush.hpp)
   if (!std::isfinite(s.guard_count)) return false;  // not with a validated count (below 2 count); kept as a check
   if (s.guard_count >= g.count) {
     s.guard_count = 0.0;

@@ -9,6 +9,7 @@
 
 #include "format.hpp"
 #include "hysteron/error.hpp"
+#include "flush.hpp"
 #include "validate.hpp"
 
 namespace hysteron::detail {
@@ -332,7 +333,8 @@ class RatePiKernel final : public Kernel {
       y_[i] = std::max(x - r, std::min(x + r, y_[i]));
       s += p_.p[i] * y_[i];
     }
-    rate_ += gain_ * (std::abs(x - x_) / p_.dt - rate_);
+    // a rate < 2.2e-308 is 0: f = 1 + c rate is 1 either way for c < 1e291 (flush.hpp)
+    rate_ = detail::flush_subnormal(rate_ + gain_ * (std::abs(x - x_) / p_.dt - rate_));
     x_ = x;
     return p_.q * x + s;
   }

@@ -265,7 +265,8 @@ void IterativeLearning::end_period() noexcept {
     skip_tail_ = true;
     gain_ *= 0.5;
     ++cuts_;
-    held_ = p_.hold_after_cuts > 0 && cuts_ >= p_.hold_after_cuts;
+    // held after hold_after_cuts halvings, and at L's floor whatever it says (0 included)
+    held_ = cuts_ >= kMaxLearningCuts || (p_.hold_after_cuts > 0 && cuts_ >= p_.hold_after_cuts);
   } else {
     std::swap(c_cur_, c_next_);
     tail_from_best_ = false;

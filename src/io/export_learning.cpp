@@ -176,7 +176,9 @@ static void $P_learning_end_period($P_learning *l)
     l->skip_tail = 1;
     l->gain *= 0.5;
     ++l->cuts;
-    l->held = $P_learning_hold_after_cuts > 0 && l->cuts >= $P_learning_hold_after_cuts;
+    /* held after hold_after_cuts halvings, and at L's floor (max_cuts) whatever it says */
+    l->held = l->cuts >= $P_learning_max_cuts ||
+              ($P_learning_hold_after_cuts > 0 && l->cuts >= $P_learning_hold_after_cuts);
   } else {
     $P_learning_swap(&l->cur, &l->next);
     l->tail_from_best = 0;
@@ -306,8 +308,9 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
                       " *     the best correction again and L / 2; L x 2 (up to {}) after a new best until then;\n"
                       " *     {}\n",
                       num(p.rise_tolerance), num(p.max_gain),
-                      p.hold_after_cuts > 0 ? fmt::format("the best correction held after {} halvings", p.hold_after_cuts)
-                                            : std::string("never held"));
+                      fmt::format("the best correction held after {} halvings{}",
+                                  p.hold_after_cuts > 0 ? std::min(p.hold_after_cuts, kMaxLearningCuts) : kMaxLearningCuts,
+                                  p.hold_after_cuts > 0 && p.hold_after_cuts < kMaxLearningCuts ? "" : " (L's floor)"));
   else
     cm += " *   no supervision: L fixed\n";
   cm += fmt::format(" *   state: {} doubles ({:.0f} bytes)\n", (nc + 2) * p.period, bytes);
@@ -334,7 +337,11 @@ void append_learning_c(const LoopDesign& d, LoopC& out) {
   df += fmt::format("static const int $P_learning_supervised = {};\n", supervised ? 1 : 0);
   df += fmt::format("static const double $P_learning_rise_tolerance = {};  /* {} */\n",
                     num(supervised ? p.rise_tolerance : 0.0), supervised ? "the supervisor's" : "unused");
-  df += fmt::format("static const unsigned long $P_learning_hold_after_cuts = {};  /* 0: never held */\n", hold);
+  df += fmt::format("static const unsigned long $P_learning_hold_after_cuts = {};  /* 0: held at L's floor only */\n",
+                    hold);
+  df += fmt::format("static const unsigned long $P_learning_max_cuts = {}u;  /* L's floor: held after this many "
+                    "halvings (kMaxLearningCuts) */\n",
+                    kMaxLearningCuts);
   df += fmt::format("static const size_t $P_learning_reach = {}u;  /* taps m = -reach..reach are summed */\n", reach);
   df += fmt::format("static const size_t $P_learning_delay = {}u;  /* D: the update runs D samples behind the errors "
                     "(learning_update_delay) */\n",

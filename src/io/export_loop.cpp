@@ -83,6 +83,7 @@ static int $P_pid_guard($P_pid_state *s, const $P_pid_gains *k, double e)
     s->guard_samples = 0;
   }
   s->guard_count *= k->guard_decay;
+  if (s->guard_count < 0x1p-1022) s->guard_count = 0.0;  /* below DBL_MIN: 0, no subnormal count */
   if (!$P_finite(s->guard_count)) return 0;
   if (s->guard_count >= k->guard_count) {
     double next = s->gain_scale * k->guard_factor;
@@ -134,7 +135,7 @@ static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, doub
   }
   n = *s;  /* the candidate state */
   n.initialized = 1;
-  n.derivative = derivative;
+  n.derivative = fabs(derivative) < 0x1p-1022 ? 0.0 : derivative;  /* no subnormal state at rest */
   n.prev_d_error = d_err;
   n.integral = integral;
   n.saturated = u != v;

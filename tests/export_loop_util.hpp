@@ -41,13 +41,15 @@ struct LoopRun {
 // Generates `d` on `model` (prefix lp; one .c, or .c + .h), compiles it with
 // gcc -std=c99 -pedantic -Wall -Wextra -Werror -O2 in `dir`, computes the preview of
 // `reference` and steps every sample with the given inputs; a reset before each sample listed
-// in `resets`. With d.learning, the steps are lp_loop_learning_step's, after a warm start from
+// in `resets`, and a restart of the position PID's limit-cycle guard (lp_loop_restart_guard) before each
+// sample listed in `guard_restarts` (after a reset there). With d.learning, the steps are lp_loop_learning_step's, after a warm start from
 // `warm_start` if it is not empty (a reset restarts the learning cold).
 inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model, const std::filesystem::path& dir,
                                   bool single, const std::vector<double>& reference, const std::vector<double>& preview,
                                   const std::vector<double>& measured, const std::vector<double>& pressure,
                                   const std::vector<std::size_t>& resets = {},
-                                  const std::vector<double>& warm_start = {}) {
+                                  const std::vector<double>& warm_start = {},
+                                  const std::vector<std::size_t>& guard_restarts = {}) {
   namespace fs = std::filesystem;
   LoopRun out;
   io::ExportOptions o;
@@ -85,11 +87,15 @@ inline LoopRun run_generated_loop(const LoopDesign& d, const ModelParams& model,
       s << '\n';
     }
     const char* op = d.learning ? "l " : "s ";
-    std::size_t next = 0;
+    std::size_t next = 0, next_restart = 0;
     for (std::size_t k = 0; k < reference.size(); ++k) {
       while (next < resets.size() && resets[next] <= k) {
         if (resets[next] == k) s << "r\n";
         ++next;
+      }
+      while (next_restart < guard_restarts.size() && guard_restarts[next_restart] <= k) {
+        if (guard_restarts[next_restart] == k) s << "g\n";
+        ++next_restart;
       }
       s << op << hexf(reference[k]) << ' ' << hexf(preview[k]) << ' ' << hexf(measured[k]) << ' '
         << hexf(pressure[k]) << '\n';

@@ -194,6 +194,31 @@ Worst replay_generated(const std::filesystem::path& dir, const TrackingRun& r) {
   return w;
 }
 
+// The loop as generated C fed the run's recorded inputs with `faults` (as replay_c's), against the same loop
+// in C++ (make_controller, step) fed the same: the largest differences, and the samples whose command or duty
+// differ at all.
+Worst replay_generated_faults(const std::filesystem::path& dir, const TrackingRun& r, const std::vector<Fault>& faults,
+                              std::size_t& differ) {
+  Worst w;
+  const LoopDesign d = io::read_loop_design((dir / "result.json").string(), r.variant + "." + r.reference);
+  const ModelParams model = io::read_model_file((dir / model_file(r)).string());
+  std::vector<double> a[4] = {metres(r.reference_mm), {}, metres(r.measured_mm), r.pressure_measured_mpa};
+  a[1] = feedforward_preview(d, a[0]);
+  for (const Fault& f : faults) a[f.which][f.k] = f.value;
+  test::TempDir tmp;
+  const test::LoopRun got = test::run_generated_loop(d, model, tmp.file("."), false, a[0], a[1], a[2], a[3]);
+  EXPECT_EQ(got.error, "") << r.variant << "." << r.reference;
+  Controller c = make_controller(d, model);
+  differ = 0;
+  for (std::size_t k = 0; k < got.command.size() && k < r.t.size(); ++k, ++w.n) {
+    const LoopOutput o = step(c, a[0][k], a[1][k], a[2][k], a[3][k]);
+    w.command = std::max(w.command, std::abs(got.command[k] - o.command_mpa));
+    w.duty = std::max(w.duty, std::abs(got.duty[k] - o.duty));
+    differ += got.command[k] != o.command_mpa || got.duty[k] != o.duty;
+  }
+  return w;
+}
+
 // A learning run's feedforward preview [m], as the run fed it: through the shaper (indices
 // clamped to the record: feedforward_preview) or, unshaped, the reference lead samples ahead,
 // wrapped around the record (the learning run's reference is periodic).
@@ -327,6 +352,20 @@ void check_replay(const ExperimentOptions& o, LoopDesign::Kind expected, bool ex
       EXPECT_EQ(f.n, n);
       EXPECT_EQ(f.command, 0.0) << name << " " << run.variant << " " << run.reference << ": faults, MPa";
       EXPECT_EQ(f.duty, 0.0) << name << " " << run.variant << " " << run.reference << ": faults, duty";
+      // a 200-sample dropout of the position sensor and of the pressure sensor too, in the generated C
+      std::vector<Fault> dropouts = faults;
+      for (std::size_t k = n / 10; k < n / 10 + 200; ++k) dropouts.push_back({k, 2, nan});
+      for (std::size_t k = n / 2; k < n / 2 + 200; ++k) dropouts.push_back({k, 3, nan});
+      if (test::have_gcc()) {
+        std::size_t differ = 0;
+        const Worst g = replay_generated_faults(dir, run, dropouts, differ);
+        EXPECT_EQ(g.n, n);
+        EXPECT_EQ(differ, 0u) << name << " " << run.variant << " " << run.reference << ": generated C with faults, "
+                              << g.command << " MPa, " << g.duty << " duty";
+      }
+      const Worst fd = replay_c(dir, run, true, dropouts);
+      EXPECT_EQ(fd.command, 0.0) << name << " " << run.variant << " " << run.reference << ": dropouts, MPa";
+      EXPECT_EQ(fd.duty, 0.0) << name << " " << run.variant << " " << run.reference << ": dropouts, duty";
     }
     if (run.controller.guard_cuts > 0) {
       ++guard_cut;

@@ -173,6 +173,7 @@ Case case_named(const std::string& name) {
 struct Inputs {
   std::vector<double> reference, measured, pressure;
   std::vector<std::size_t> resets;
+  std::vector<std::size_t> guard_restarts;  // restart_guard before these samples (after a reset there)
   std::size_t nonfinite = 0;
 };
 
@@ -220,6 +221,7 @@ struct Compared {
   std::string first_counts_difference;
   // resets where a count of the library's loop was > 0 just before (the resets the comparison exercises)
   std::size_t resets_with_faults = 0, resets_with_cuts = 0;
+  std::size_t restarts_with_cuts = 0;  // guard restarts where the library's position PID had cut its gains
 };
 
 // The position PID of whichever loop `c` holds.
@@ -264,7 +266,7 @@ Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, cons
   const ModelParams model = model_of(c.model);
   Controller ctl = make_controller(c.design, model);
   const Limits lim = pressure_limits(ctl);  // the design's, or where unset (most cases) the model's [0, 0.6]
-  std::size_t next = 0;
+  std::size_t next = 0, next_restart = 0;
   for (std::size_t k = 0; k < in.reference.size() && k < got.command.size(); ++k) {
     while (next < in.resets.size() && in.resets[next] <= k) {
       if (in.resets[next] == k) {
@@ -279,6 +281,13 @@ Compared compare(const Case& c, const Inputs& in, const test::LoopRun& got, cons
         reset(ctl);
       }
       ++next;
+    }
+    while (next_restart < in.guard_restarts.size() && in.guard_restarts[next_restart] <= k) {
+      if (in.guard_restarts[next_restart] == k) {
+        r.restarts_with_cuts += position_pid(ctl).state().guard_cuts > 0;
+        std::visit([](auto& l) { l.restart_guard(); }, ctl);
+      }
+      ++next_restart;
     }
     const LoopOutput o = step(ctl, in.reference[k], preview[k], in.measured[k], in.pressure[k]);
     if (k < got.counts.size()) {
@@ -316,7 +325,7 @@ TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
   const std::vector<double> preview = feedforward_preview(c.design, in.reference);
   const test::LoopRun got = test::run_generated_loop(c.design, model_of(c.model), dir.file("."),
                                                      c.single, in.reference, preview, in.measured, in.pressure,
-                                                     in.resets);
+                                                     in.resets, {}, in.guard_restarts);
   ASSERT_EQ(got.error, "");
   ASSERT_EQ(got.command.size(), in.reference.size());
   ASSERT_EQ(got.preview.size(), in.reference.size());
@@ -342,12 +351,32 @@ TEST_P(ExportLoop, StepsAsTheLibrarysLoop) {
   if (c.design.pid && c.design.pid->guard.enabled()) {
     EXPECT_GE(r.guard_cuts, 1u) << "the limit-cycle guard never cut the gains";
     EXPECT_GE(r.resets_with_cuts, 1u) << "no reset after a cut: the reset of the cut gains is not compared";
+    // the guard restarted (lp_loop_restart_guard, Pid::restart_guard) at three samples of a run without resets
+    Inputs again = in;
+    again.resets.clear();
+    again.guard_restarts = {in.reference.size() / 4, in.reference.size() / 2, (3 * in.reference.size()) / 4};
+    test::TempDir dir2;
+    const test::LoopRun got2 = test::run_generated_loop(c.design, model_of(c.model), dir2.file("."), c.single,
+                                                        again.reference, preview, again.measured, again.pressure, {},
+                                                        {}, again.guard_restarts);
+    ASSERT_EQ(got2.error, "");
+    const Compared r2 = compare(c, again, got2, preview);
+    EXPECT_LE(r2.worst_command, 1e-12) << "guard restarts: MPa";
+    EXPECT_LE(r2.worst_duty, 1e-12) << "guard restarts";
+#if defined(__x86_64__) && defined(__SSE2__)
+    EXPECT_EQ(r2.exact, r2.n) << "guard restarts: not bit-identical to the library's loop";
+#endif
+    EXPECT_EQ(r2.counts_differ, 0u) << "guard restarts: first: " << r2.first_counts_difference;
+    EXPECT_GE(r2.restarts_with_cuts, 1u) << "no guard restart after a cut: lp_loop_restart_guard is not compared";
+    std::printf("  %s: guard restarted %zu times after cuts, bit-identical %zu / %zu\n", c.name.c_str(),
+                r2.restarts_with_cuts, r2.exact, r2.n);
   }
   std::printf("  %s: %zu samples (%zu non-finite inputs, %zu at a pressure limit, %zu resets, %zu after faults, %zu "
-              "after cuts): largest difference %.3g MPa, %.3g duty, %.3g preview; bit-identical %zu / %zu; counts "
-              "differ after %zu steps\n",
+              "after cuts, %zu guard restarts after cuts): largest difference %.3g MPa, %.3g duty, %.3g preview; "
+              "bit-identical %zu / %zu; counts differ after %zu steps\n",
               c.name.c_str(), r.n, in.nonfinite, r.at_limits, in.resets.size(), r.resets_with_faults,
-              r.resets_with_cuts, r.worst_command, r.worst_duty, r.worst_preview, r.exact, r.n, r.counts_differ);
+              r.resets_with_cuts, r.restarts_with_cuts, r.worst_command, r.worst_duty, r.worst_preview, r.exact, r.n,
+              r.counts_differ);
 }
 
 INSTANTIATE_TEST_SUITE_P(Export, ExportLoop, ::testing::ValuesIn(cases()),
@@ -398,7 +427,8 @@ TEST(ExportLoopCheck, ExtremeFiniteInputsStepAsTheLibrarysLoop) {
     test::TempDir dir;
     const std::vector<double> preview = feedforward_preview(c.design, in.reference);
     const test::LoopRun got = test::run_generated_loop(c.design, model_of(c.model), dir.file("."), c.single,
-                                                       in.reference, preview, in.measured, in.pressure, in.resets);
+                                                       in.reference, preview, in.measured, in.pressure, in.resets, {},
+                                                       in.guard_restarts);
     ASSERT_EQ(got.error, "") << c.name;
     ASSERT_EQ(got.command.size(), in.reference.size()) << c.name;
     const Compared r = compare(c, in, got, preview);

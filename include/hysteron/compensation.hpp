@@ -6,6 +6,7 @@
 // for models fitted in mm). Every step() is allocation-free, noexcept and
 // deterministic; every pressure command is clamped to the pressure limits, which
 // default to the model's input_limits (resolve_pressure_limits).
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 
@@ -64,10 +65,28 @@ class InverseFeedforward {
   bool started_ = false;
 };
 
+// The command of a sample the position PID held (its step counted a fault: a non-finite reference
+// or measurement, or an overflow) in a loop whose feedforward enters the PID as its feedforward term
+// (FeedforwardPidController, CascadePwmController): this sample's feedforward u_ff plus the PID's
+// held correction, its held output minus the feedforward that output held (held_ff), clamped to the
+// PID's output limits [lo, hi] — the muscle keeps following the feedforward while the sensor is out,
+// as the open loop's does (2026-12-01; before, the whole command was held: 40 mm error after a 1 s
+// dropout of a 0.5 Hz sine). Exactly the held output where the feedforward is the one it held (a
+// non-finite preview too: the inverse holds), and where the sum is not finite (not for finite
+// inputs: both held values lie within [lo, hi]). After a reset held_ff is the PID's reset output
+// (no correction yet). The generated C's loop (io::export_loop) computes the same.
+inline double held_pid_command(double u_ff, double held_output, double held_ff, double lo, double hi) noexcept {
+  const double c = u_ff == held_ff ? held_output : u_ff + (held_output - held_ff);
+  return std::clamp(std::isfinite(c) ? c : held_output, lo, hi);
+}
+
 // GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)), with the PID's
 // anti-windup aware of the total command (the feedforward enters the PID as
 // its feedforward term, so the clamp and the integrator agree). On a decreasing model the PID
 // acts on y - y_d (InverseFeedforward::feedback_sign), as do the other controllers' position PIDs.
+// A sample the PID holds (a non-finite reference or measurement) commands held_pid_command: the
+// feedforward of this sample (of its preview: where that is not finite either, the inverse holds
+// too and the command is the previous one) plus the PID's held correction.
 class FeedforwardPidController {
  public:
   // Throws hysteron::Error if pid.sample_time is not ff.sample_time (one sample time for the loop)
@@ -84,10 +103,14 @@ class FeedforwardPidController {
   const Limits& pressure_limits() const noexcept { return ff_.pressure_limits(); }
   // Replaces the PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { pid_.set_guard(guard); }
+  // Restarts the PID's limit-cycle guard (Pid::restart_guard): real-time safe, for the end of the
+  // start-up transient.
+  void restart_guard() noexcept { pid_.restart_guard(); }
 
  private:
   InverseFeedforward ff_;
   Pid pid_;
+  double ff_held_;  // the feedforward in the PID's last output [MPa] (held_pid_command); reset: its output
 };
 
 // Asymmetric-MPI paper (Fig. 6): open-loop inverse compensation with a
@@ -125,6 +148,8 @@ class OpenLoopController {
   const InverseFeedforward& feedforward() const noexcept { return ff_; }
   // Replaces the position PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { position_.set_guard(guard); }
+  // Restarts the position PID's limit-cycle guard (Pid::restart_guard): real-time safe.
+  void restart_guard() noexcept { position_.restart_guard(); }
 
  private:
   OpenLoopParams p_;
@@ -136,6 +161,11 @@ class OpenLoopController {
 // Dead-zone MPI paper: cascade with fast switching valves. Outer loop: desired
 // pressure p_d = clamp(FF(y_d) + PID_x(y_d - y)); inner loop: a PI on the
 // pressure error plus a duty feedforward, modulated to a PWM duty in [-1, 1].
+// Faults: a non-finite pressure measurement commands duty 0 (both valves closed: the muscle's
+// pressure holds; a held duty kept filling it up to the supply) and holds the position PID (no
+// wind-up of p_d while the inner loop is blind), p_d = held_pid_command; the pressure PID counts the
+// sample (pressure().faults()). A non-finite reference or measurement holds the position PID, p_d =
+// held_pid_command (the feedforward goes on), and the inner loop tracks that p_d.
 struct CascadeParams {
   FeedforwardParams feedforward;
   PidParams position;        // outer loop, output in MPa
@@ -164,6 +194,8 @@ class CascadePwmController {
   const InverseFeedforward& feedforward() const noexcept { return ff_; }
   // Replaces the position PID's limit-cycle guard (Pid::set_guard; throws Error). A setup call.
   void set_guard(const PidGuard& guard) { position_.set_guard(guard); }
+  // Restarts the position PID's limit-cycle guard (Pid::restart_guard): real-time safe.
+  void restart_guard() noexcept { position_.restart_guard(); }
 
  private:
   CascadeParams p_;
@@ -172,6 +204,7 @@ class CascadePwmController {
   Pid pressure_;
   PwmModulator pwm_;
   double p_d_ = 0.0;
+  double ff_held_;  // the feedforward in the position PID's last output [MPa] (held_pid_command); reset: its output
 };
 
 }  // namespace hysteron

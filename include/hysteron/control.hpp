@@ -107,6 +107,11 @@ class Pid {
   // half-cycles counted. Throws hysteron::Error naming the field ("pid.guard.factor = 1: ...").
   // Not for the real-time loop's step: a setup call.
   void set_guard(const PidGuard& guard);
+  // Restarts the limit-cycle guard without changing it: the gains as tuned (gain_scale 1, guard_cuts 0), no
+  // half-cycles counted; the rest of the state (integral, output, faults) goes on. Real-time safe (noexcept,
+  // no allocation): call it once a start-up transient (the muscle filling from rest) has passed, which the
+  // guard may take for a ring and cut the gains on for good.
+  void restart_guard() noexcept;
   // One sample. A non-finite setpoint, measurement or feedforward, or a
   // non-finite intermediate (an overflow of large gains on a large error, or of
   // extreme finite inputs: the error r - y of r = 1e308, y = -1e308, the weighted

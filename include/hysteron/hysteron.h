@@ -257,14 +257,22 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_reset(hysteron_ff_pid* controller
  * *pressure_mpa: the command [MPa]. A non-finite argument returns
  * HYSTERON_ERROR_INVALID_ARGUMENT and the loop steps without it, as the C++ controller, Python
  * and the generated C do (so they agree on every later sample): a non-finite reference_m or
- * measured_m holds the position PID's state and output (the previous command); a non-finite
- * preview_m holds the inverse's state and output, and the PID steps on; in
+ * measured_m holds the position PID's state (no integration) and its correction, and the
+ * feedforward goes on: the command is the inverse's pressure for this sample's preview plus the
+ * PID's held correction (its previous output minus the feedforward in it), clamped to the
+ * limits, so a muscle whose position sensor drops out keeps following the reference open loop
+ * (before 2026-12-01 the previous command was held, the muscle stood still); with a non-finite
+ * preview_m as well the inverse holds too and the command is the previous one. A non-finite
+ * preview_m alone holds the inverse's state and output, and the PID steps on. In
  * hysteron_open_loop_step a non-finite pressure_mpa skips the pressure loop for that sample (p_d
- * is commanded), in hysteron_cascade_step it holds the pressure PID's state and output. The
- * command is always finite and within the limits. Finite arguments whose error or PID terms overflow (reference_m = 1e308,
- * measured_m = -1e308) return HYSTERON_ERROR_INVALID_ARGUMENT too: the PID's state is
- * unchanged and its previous output held (never a NaN into the integrator). The same holds
- * for hysteron_open_loop_step and hysteron_cascade_step. Real-time safe. */
+ * is commanded); in hysteron_cascade_step it commands duty 0 (both valves closed: the muscle's
+ * pressure holds; a held duty filled it up to the supply), holds the position PID (no wind-up
+ * of p_d while the pressure loop is blind; p_d is the feedforward plus its held correction) and
+ * holds the pressure PID's state. The command is always finite and within the limits. Finite
+ * arguments whose error or PID terms overflow (reference_m = 1e308, measured_m = -1e308) return
+ * HYSTERON_ERROR_INVALID_ARGUMENT too: the PID's state is unchanged and the command as for a
+ * non-finite measurement (never a NaN into the integrator). The same holds for
+ * hysteron_open_loop_step and hysteron_cascade_step. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_step(hysteron_ff_pid* controller, double reference_m, double preview_m,
                                                    double measured_m, double* pressure_mpa);
 
@@ -356,9 +364,13 @@ HYSTERON_C_API hysteron_status hysteron_cascade_step(hysteron_cascade* controlle
  * with a hysteresis of amplitude / 4) no longer than T_u whose integral of |e| dt exceeds
  * amplitude T_u / pi add 1 to a count that decays with time constant memory T_u; at `count`
  * the gains K_p, K_i, K_d are multiplied by `factor`, not below min_scale times the tuned
- * ones. The cut gains stay until the controller's reset. `hysteron experiment`'s tuned loops
- * (compensated, learning, adaptive) have one; hysteron_loop_guard_from_file reads it. Off by
- * default (period 0), and in the faithful and baseline loops. */
+ * ones. The cut gains stay until the controller's reset or hysteron_*_restart_guard.
+ * `hysteron experiment`'s tuned loops (compensated, learning, adaptive) have one;
+ * hysteron_loop_guard_from_file reads it. Off by default (period 0), and in the faithful and
+ * baseline loops. The start-up transient of a loop (the muscle filling from rest, a first
+ * large error) can look like a ring to the guard and cut the gains for good (+23 % RMS error on
+ * the rig after): call hysteron_*_restart_guard once it has passed (the experiments restart the
+ * guard after their pre-roll). */
 typedef struct hysteron_pid_guard {
   double period;    /* T_u [s]: 0 (off, the default) or >= 4 sample times */
   double amplitude; /* [m] > 0 where period > 0 (default 0) */
@@ -376,6 +388,13 @@ HYSTERON_C_API hysteron_status hysteron_ff_pid_set_guard(hysteron_ff_pid* contro
 HYSTERON_C_API hysteron_status hysteron_open_loop_set_guard(hysteron_open_loop* controller,
                                                            const hysteron_pid_guard* guard);
 HYSTERON_C_API hysteron_status hysteron_cascade_set_guard(hysteron_cascade* controller, const hysteron_pid_guard* guard);
+/* Restarts the position PID's guard without changing it: the gains as tuned (gain_scale 1, no
+ * cuts), no half-cycles counted; the rest of the loop's state goes on. Call it once the loop's
+ * start-up transient has passed (e.g. after the first period of the reference, or once |r - y|
+ * has settled). Real-time safe (no allocation, no lock): may be called between two steps. */
+HYSTERON_C_API hysteron_status hysteron_ff_pid_restart_guard(hysteron_ff_pid* controller);
+HYSTERON_C_API hysteron_status hysteron_open_loop_restart_guard(hysteron_open_loop* controller);
+HYSTERON_C_API hysteron_status hysteron_cascade_restart_guard(hysteron_cascade* controller);
 /* What the guard did: the factor on the position PID's gains now (1: as tuned) and how often
  * it cut them since the last reset. Either out-pointer may be NULL. Real-time safe. */
 HYSTERON_C_API hysteron_status hysteron_ff_pid_guard_state(const hysteron_ff_pid* controller, double* gain_scale,

@@ -146,6 +146,31 @@ std::size_t count_arg(const IntArg& v, const char* name, std::uint64_t min = 0) 
   return static_cast<std::size_t>(uint_arg(v, fmt::format("IterativeLearning: {}", name), min));
 }
 
+// The fault counts and the position PID's limit-cycle guard of a controller class (`position` its
+// position PID): faults, feedforward_faults, gain_scale, guard_cuts, restart_guard().
+template <class C, class Position>
+void def_loop_state(py::class_<C>& c, Position position) {
+  c.def_property_readonly(
+       "faults", [position](const C& l) { return (l.*position)().faults(); },
+       "Samples the position PID held since construction or the last reset (a non-finite reference or "
+       "measurement, or an overflow; the C++ pid().faults() / position().faults() and the generated C's "
+       "position.faults): the command was then the feedforward plus the PID's held correction.")
+      .def_property_readonly(
+          "feedforward_faults", [](const C& l) { return l.feedforward().faults(); },
+          "Non-finite previews the inverse feedforward ignored (holding its output) since the last reset.")
+      .def_property_readonly(
+          "gain_scale", [position](const C& l) { return (l.*position)().state().gain_scale; },
+          "The limit-cycle guard's factor on the position PID's gains now (1: as tuned; docs/control.md, "
+          "section 2).")
+      .def_property_readonly(
+          "guard_cuts", [position](const C& l) { return (l.*position)().state().guard_cuts; },
+          "How often the limit-cycle guard cut the position PID's gains since the last reset or restart_guard().")
+      .def("restart_guard", &C::restart_guard,
+           "Restarts the position PID's limit-cycle guard: the gains as tuned (gain_scale 1, guard_cuts 0), no "
+           "half-cycles counted, the rest of the state as it was. Real-time safe: call it once the loop's start-up "
+           "transient (the muscle filling from rest) has passed, which the guard can take for a ring.");
+}
+
 }  // namespace
 
 void bind_control(py::module_& m) {
@@ -211,6 +236,9 @@ state as numbers).)doc"));
           "(T_u [s]) with an integral of |e| dt above amplitude * period / pi count; at `count` (decaying with "
           "time constant memory * period) the gains are multiplied by factor, not below min_scale. period = 0: "
           "off. Restarts the guard; raises hysteron.Error on invalid numbers.")
+      .def("restart_guard", &Pid::restart_guard,
+           "Restarts the limit-cycle guard (the gains as tuned, no cuts, no half-cycles counted); the rest of "
+           "the state goes on. Real-time safe.")
       .def_property_readonly("gain_scale", [](const Pid& p) { return p.state().gain_scale; },
                              "The limit-cycle guard's factor on the gains now (1: as tuned).")
       .def_property_readonly("guard_cuts", [](const Pid& p) { return p.state().guard_cuts; },
@@ -258,7 +286,7 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
                            q.sample_time);
       });
 
-  def_copy(py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
+  auto ff_pid_class = def_copy(py::class_<FeedforwardPidController>(m, "FeedforwardPidController", R"doc(
 GPI paper Fig. 10: p_cmd = clamp(FF(y_d) + PID(y_d - y)) [MPa], the PID's
 anti-windup aware of the total command. pid: a hysteron.Pid (its parameters
 are used; default: Pid.gpi_paper(), output limits +-pressure_limits[1]).
@@ -288,8 +316,9 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
       .def("__repr__", [](const FeedforwardPidController&) {
         return std::string("FeedforwardPidController(inverse feedforward + PID, GPI paper Fig. 10)");
       });
+  def_loop_state(ff_pid_class, &FeedforwardPidController::pid);
 
-  def_copy(py::class_<OpenLoopController>(m, "OpenLoopController", R"doc(
+  auto open_loop_class = def_copy(py::class_<OpenLoopController>(m, "OpenLoopController", R"doc(
 Asymmetric-MPI paper, Fig. 6: open-loop inverse compensation with a proportional
 pressure loop, p_cmd = clamp(p_d + pressure_gain (p_d - p_measured)) [MPa], p_d =
 FF(preview) (+ PID(y_d - y), clamped, if pid is given: hysteron's compensated
@@ -324,8 +353,9 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
       .def("__repr__", [](const OpenLoopController&) {
         return std::string("OpenLoopController(inverse feedforward + pressure loop, asymmetric-MPI paper Fig. 6)");
       });
+  def_loop_state(open_loop_class, &OpenLoopController::position);
 
-  def_copy(py::class_<CascadePwmController>(m, "CascadePwmController", R"doc(
+  auto cascade_class = def_copy(py::class_<CascadePwmController>(m, "CascadePwmController", R"doc(
 Dead-zone MPI paper: cascade on fast switching valves. Outer loop p_d =
 clamp(FF(preview) + pid(y_d - y)) [MPa] (default pid: Pid.gpi_paper()); inner loop
 u = pressure_pid(p_d - p_measured) limited to [-1, 1] (default: the paper's P loop,
@@ -387,7 +417,13 @@ model file) raises hysteron.Error: give your actuator's.)doc"))
       .def("reset", &CascadePwmController::reset, "Back to the virgin state (inverse, both PIDs, the duty).")
       .def("__repr__", [](const CascadePwmController&) {
         return std::string("CascadePwmController(feedforward + PID position loop, PI pressure loop, PWM valves)");
-      });
+      })
+      .def_property_readonly(
+          "pressure_faults", [](const CascadePwmController& c) { return c.pressure().faults(); },
+          "Samples the pressure PID held since the last reset (a non-finite pressure measurement: the duty was "
+          "then 0, both valves closed, and the position PID held; the C++ pressure().faults(), the generated "
+          "C's pressure.faults).");
+  def_loop_state(cascade_class, &CascadePwmController::position);
 
   def_copy(py::class_<IterativeLearning>(m, "IterativeLearning", R"doc(
 Iterative learning control for a periodic reference of `period` samples (docs/control.md,

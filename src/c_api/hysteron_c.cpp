@@ -622,11 +622,12 @@ bool finite_step_args(const char* fn, double reference_m, double preview_m, doub
   // value it cannot use (docs/deploy.md, "A non-finite argument").
   const char* what =
       pressure ? "not all finite (the loop stepped without them: a non-finite reference or measurement holds the "
-                 "position PID's state and output, a non-finite preview the inverse's, a non-finite pressure the "
-                 "pressure loop's)"
+                 "position PID's state and correction, the feedforward going on, a non-finite preview the "
+                 "inverse's, a non-finite pressure the pressure loop's; the cascade's valves then closed)"
                : "not all finite (the loop stepped without them: a non-finite reference or measurement holds the "
-                 "position PID's state and output, a non-finite preview the inverse's)";
-  char text[400];
+                 "position PID's state and correction, the feedforward going on, a non-finite preview the "
+                 "inverse's)";
+  char text[512];
   if (pressure)
     std::snprintf(text, sizeof text, "arguments reference_m = %g, preview_m = %g, measured_m = %g, pressure_mpa = %g: %s",
                   reference_m, preview_m, measured_m, *pressure, what);
@@ -646,7 +647,7 @@ hysteron_status pid_overflow(const char* fn, std::size_t faults_before, std::siz
   char text[260];
   std::snprintf(text, sizeof text,
                 "reference_m = %g, measured_m = %g (or the pressures): the PID's error or terms overflow (its state "
-                "unchanged, its previous output held)", reference_m, measured_m);
+                "unchanged, its correction held)", reference_m, measured_m);
   set_message(fn, text);
   return HYSTERON_ERROR_INVALID_ARGUMENT;
 }
@@ -813,6 +814,14 @@ hysteron_status set_guard_of(const char* fn, Handle* h, const hysteron_pid_guard
     HYSTERON_REQUIRE(h);
     HYSTERON_REQUIRE(g);
     h->controller.set_guard(from_c_guard(*g));
+  });
+}
+
+template <class Handle>
+hysteron_status restart_guard_of(const char* fn, Handle* h) {
+  return guard(fn, HYSTERON_ERROR_INTERNAL, [&] {
+    HYSTERON_REQUIRE(h);
+    h->controller.restart_guard();
   });
 }
 
@@ -1052,6 +1061,18 @@ hysteron_status hysteron_open_loop_set_guard(hysteron_open_loop* controller, con
 
 hysteron_status hysteron_cascade_set_guard(hysteron_cascade* controller, const hysteron_pid_guard* guard) {
   return set_guard_of("hysteron_cascade_set_guard", controller, guard);
+}
+
+hysteron_status hysteron_ff_pid_restart_guard(hysteron_ff_pid* controller) {
+  return restart_guard_of("hysteron_ff_pid_restart_guard", controller);
+}
+
+hysteron_status hysteron_open_loop_restart_guard(hysteron_open_loop* controller) {
+  return restart_guard_of("hysteron_open_loop_restart_guard", controller);
+}
+
+hysteron_status hysteron_cascade_restart_guard(hysteron_cascade* controller) {
+  return restart_guard_of("hysteron_cascade_restart_guard", controller);
 }
 
 hysteron_status hysteron_ff_pid_guard_state(const hysteron_ff_pid* controller, double* gain_scale, size_t* cuts) {

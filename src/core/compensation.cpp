@@ -98,20 +98,29 @@ FeedforwardPidController::FeedforwardPidController(const ModelParams& model, con
         q.out_min = std::max(q.out_min, ff_.pressure_limits().lo);
         q.out_max = std::min(q.out_max, ff_.pressure_limits().hi);
         return q;
-      }()) {
+      }()),
+      ff_held_(pid_.output()) {
   check_sample_time(pid, ff, "feedforward-PID controller", "pid");
 }
 
 void FeedforwardPidController::reset() noexcept {
   ff_.reset();
   pid_.reset();
+  ff_held_ = pid_.output();  // no correction yet
 }
 
 double FeedforwardPidController::step(double reference_m, double preview_m, double measured_m) noexcept {
   const double u_ff = ff_.step(preview_m), s = ff_.feedback_sign();
+  const std::size_t faults = pid_.faults();
   const double u = pid_.step(s * reference_m, s * measured_m, u_ff);
   const Limits& lim = ff_.pressure_limits();
-  return std::clamp(std::isfinite(u) ? u : u_ff, lim.lo, lim.hi);
+  if (pid_.faults() == faults) {
+    ff_held_ = u_ff;
+    return std::clamp(std::isfinite(u) ? u : u_ff, lim.lo, lim.hi);
+  }
+  // held: the feedforward goes on with the PID's held correction
+  const PidParams& q = pid_.params();
+  return std::clamp(held_pid_command(u_ff, u, ff_held_, q.out_min, q.out_max), lim.lo, lim.hi);
 }
 
 OpenLoopController::OpenLoopController(const ModelParams& model, const OpenLoopParams& params)
@@ -156,7 +165,8 @@ CascadePwmController::CascadePwmController(const ModelParams& model, const Casca
         q.out_max = std::min(q.out_max, 1.0);
         return q;
       }()),
-      pwm_(params.pwm) {
+      pwm_(params.pwm),
+      ff_held_(position_.output()) {
   p_.feedforward = ff_.params();  // the resolved pressure limits
   check_sample_time(params.position, params.feedforward, "cascade PWM controller", "position");
   check_sample_time(params.pressure, params.feedforward, "cascade PWM controller", "pressure");
@@ -168,13 +178,29 @@ void CascadePwmController::reset() noexcept {
   pressure_.reset();
   pwm_.reset();
   p_d_ = 0.0;
+  ff_held_ = position_.output();  // no correction yet
 }
 
 double CascadePwmController::step(double reference_m, double preview_m, double measured_m,
                                   double pressure_mpa) noexcept {
   const Limits& lim = p_.feedforward.pressure_limits;
   const double u_ff = ff_.step(preview_m), s = ff_.feedback_sign();
-  p_d_ = std::clamp(position_.step(s * reference_m, s * measured_m, u_ff), lim.lo, lim.hi);
+  const PidParams& q = position_.params();
+  if (!std::isfinite(pressure_mpa)) {
+    // the inner loop is blind: the position PID held (its integral would wind p_d up), p_d the feedforward
+    // with its held correction; the pressure PID counts the fault; both valves closed, the pressure holds
+    p_d_ = std::clamp(held_pid_command(u_ff, position_.output(), ff_held_, q.out_min, q.out_max), lim.lo, lim.hi);
+    pressure_.step(p_d_, pressure_mpa);
+    return pwm_.step(0.0);
+  }
+  const std::size_t faults = position_.faults();
+  const double u_x = position_.step(s * reference_m, s * measured_m, u_ff);
+  if (position_.faults() == faults) {
+    ff_held_ = u_ff;
+    p_d_ = std::clamp(u_x, lim.lo, lim.hi);
+  } else {  // held: the feedforward goes on with the PID's held correction
+    p_d_ = std::clamp(held_pid_command(u_ff, u_x, ff_held_, q.out_min, q.out_max), lim.lo, lim.hi);
+  }
   const double u = pressure_.step(p_d_, pressure_mpa);
   return std::clamp(pwm_.step(u), -1.0, 1.0);
 }

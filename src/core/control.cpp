@@ -114,6 +114,10 @@ void Pid::set_guard(const PidGuard& g) {
   p_.guard = g;
   guard_decay_ = decay;
   guard_iae_limit_ = limit;
+  restart_guard();
+}
+
+void Pid::restart_guard() noexcept {
   // the guard restarts; the rest of the state goes on
   s_.gain_scale = 1.0;
   s_.guard_cuts = 0;

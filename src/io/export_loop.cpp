@@ -50,6 +50,19 @@ std::string pid_comment(const char* name, const Pid& pid) {
          : std::string());
 }
 
+// With a feedforward into the position PID (not the open loop's: unused there, which -Wall refuses).
+constexpr std::string_view kHeldCommand = R"(
+/* The command of a sample the position PID held (hysteron::held_pid_command): this sample's
+ * feedforward plus the PID's held correction (its held output minus the feedforward in it),
+ * clamped to the PID's output limits; the held output itself where the feedforward is the one
+ * it held, and where the sum is not finite. */
+static double $P_held_command(double u_ff, double held_output, double held_ff, const $P_pid_gains *k)
+{
+  const double c = u_ff == held_ff ? held_output : u_ff + (held_output - held_ff);
+  return $P_clamp($P_finite(c) ? c : held_output, k->out_min, k->out_max);
+}
+)";
+
 constexpr std::string_view kPidStep = R"(
 /* The limit-cycle guard (hysteron::Pid, PidGuard): half-cycles of e between its sign changes
  * (hysteresis amplitude / 4) no longer than T_u with an integral of |e| dt above a T_u / pi
@@ -148,6 +161,20 @@ static double $P_pid_step($P_pid_state *s, const $P_pid_gains *k, double r, doub
   return u;
 }
 
+/* Restarts the limit-cycle guard (hysteron::Pid::restart_guard): the gains as tuned, no half-cycles
+ * counted; the rest of the state goes on. */
+static void $P_pid_restart_guard($P_pid_state *s)
+{
+  s->gain_scale = 1.0;
+  s->guard_cuts = 0;
+  s->guard_sign = 0;
+  s->guard_iae = 0.0;
+  s->guard_samples = 0;
+  s->guard_count = 0.0;
+  s->guard_last = 0.0;
+  s->guard_last2 = 0.0;
+}
+
 static void $P_pid_reset($P_pid_state *s, const $P_pid_gains *k)
 {
   s->integral = k->reset_integral;
@@ -219,6 +246,7 @@ LoopC loop_c(const LoopDesign& d, const ModelParams& model) {
     case LoopDesign::Kind::feedforward_pid: {
       const auto& c = std::get<FeedforwardPidController>(ctl);
       cm += " *   feedforward_pid (FeedforwardPidController): p_cmd = clamp(PID(r, y, u_ff), limits)\n";
+      cm += " *     (a sample the PID holds: clamp(u_ff + its held correction), held_pid_command)\n";
       cm += pid_comment("position PID", c.pid());
       break;
     }
@@ -235,7 +263,8 @@ LoopC loop_c(const LoopDesign& d, const ModelParams& model) {
       const auto& c = std::get<CascadePwmController>(ctl);
       const PwmParams& w = c.params().pwm;
       cm += " *   cascade_pwm (CascadePwmController): p_d = clamp(PID(r, y, u_ff), limits),\n";
-      cm += " *     duty = PWM(pressure PID(p_d, p)), in [-1, 1] (> 0 inlet, < 0 exhaust)\n";
+      cm += " *     duty = PWM(pressure PID(p_d, p)), in [-1, 1] (> 0 inlet, < 0 exhaust);\n";
+      cm += " *     a non-finite p: duty 0 (valves closed), the position PID held\n";
       cm += pid_comment("position PID", c.position());
       cm += pid_comment("pressure PID", c.pressure());
       cm += fmt::format(" *   PWM: gain {}, deadband {}, duty in [{}, {}], resolution {}\n", num(w.gain), num(w.deadband),
@@ -299,6 +328,8 @@ typedef struct $P_loop {{
   double ff_prev;        /* last inverse output [MPa] (lag compensation) */
   int ff_started;
   $P_pid_state position; /* the position PID{} */
+  double ff_held;        /* the feedforward in the position PID's last output [MPa]: a sample it holds
+                            commands u_ff + (its output - ff_held) */
 {}}} $P_loop;
 
 #ifdef __cplusplus
@@ -307,15 +338,22 @@ extern "C" {{
 
 /* Initial state, as a new loop (the inverse virgin, the PIDs at their reset output). */
 void $P_loop_reset($P_loop *c);
+/* Restarts the position PID's limit-cycle guard (docs/control.md, section 2; off where the loop
+ * has none): the gains as tuned, no half-cycles counted, the rest of the state as it was. The
+ * guard cuts the gains of a loop that rings; the start-up transient (the muscle filling from
+ * rest) can look like a ring and cut them for good: call this once it has passed. Real-time safe. */
+void $P_loop_restart_guard($P_loop *c);
 /* One sample (step(Controller&, ...), loop_design.hpp): reference_m, the reference now [m];
  * preview_m, the feedforward's reference (preview[k] of $P_loop_preview); measured_m, the
  * contraction [m]; pressure_mpa, the measured gauge pressure [MPa]{}. Returns the pressure
  * command [MPa]{}, always finite and inside the pressure limits; writes the valves' PWM duty
  * in [-1, 1] to *duty if duty is not NULL ({}). A non-finite input is stepped without: a
- * reference or measurement holds the position PID's state and output, a preview the inverse's,
- * a pressure the pressure loop's; these, and errors whose PID terms overflow (|r - y| near
- * 1e308), are counted in the PIDs' and the inverse's faults (the C ABI returns
- * HYSTERON_ERROR_INVALID_ARGUMENT there, with the same command). */
+ * reference or measurement holds the position PID's state and correction while the feedforward
+ * goes on (the command: this sample's u_ff plus the PID's held output minus its ff_held), a
+ * preview holds the inverse's state and output, a pressure the pressure loop's (the cascade: duty
+ * 0, both valves closed, and the position PID held too); these, and errors whose PID terms
+ * overflow (|r - y| near 1e308), are counted in the PIDs' and the inverse's faults (the C ABI
+ * returns HYSTERON_ERROR_INVALID_ARGUMENT there, with the same command). */
 double $P_loop_step($P_loop *c, double reference_m, double preview_m, double measured_m, double pressure_mpa,
                     double *duty);
 /* The feedforward's reference for a recorded or planned reference (feedforward_preview):
@@ -389,6 +427,7 @@ static double $P_clamp(double v, double lo, double hi)
 }
 )";
   df += kPidStep;
+  if (d.kind != LoopDesign::Kind::open_loop) df += kHeldCommand;
   if (cascade)
     df += R"(
 /* PWM modulator (hysteron::PwmModulator::step): the duty for a command u. */
@@ -420,11 +459,18 @@ void $P_loop_reset($P_loop *c)
   c->ff_prev = 0.0;
   c->ff_started = 0;
   $P_pid_reset(&c->position, &$P_position_gains);
+  c->ff_held = $P_position_gains.reset_output;  /* no correction yet */
 )";
   if (cascade)
     df += "  $P_pid_reset(&c->pressure, &$P_pressure_gains);\n  c->desired_pressure = 0.0;\n  c->duty = 0.0;\n"
           "  c->pwm_faults = 0;\n";
   df += "}\n";
+  df += R"(
+void $P_loop_restart_guard($P_loop *c)
+{
+  $P_pid_restart_guard(&c->position);
+}
+)";
   df += R"(
 double $P_loop_step($P_loop *c, double reference_m, double preview_m, double measured_m, double pressure_mpa,
                     double *duty)
@@ -433,11 +479,17 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
   switch (d.kind) {
     case LoopDesign::Kind::feedforward_pid:
       df += R"(  const double u_ff = $P_feedforward(c, preview_m);
+  const unsigned long faults = c->position.faults;
   const double u = $P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m,
                                $P_feedback_sign * measured_m, u_ff);
   (void)pressure_mpa;
   if (duty) *duty = 0.0;
-  return $P_clamp($P_finite(u) ? u : u_ff, $P_pressure_lo, $P_pressure_hi);
+  if (c->position.faults == faults) {
+    c->ff_held = u_ff;
+    return $P_clamp($P_finite(u) ? u : u_ff, $P_pressure_lo, $P_pressure_hi);
+  }
+  /* held: the feedforward goes on with the PID's held correction */
+  return $P_clamp($P_held_command(u_ff, u, c->ff_held, &$P_position_gains), $P_pressure_lo, $P_pressure_hi);
 }
 )";
       break;
@@ -457,10 +509,28 @@ double $P_loop_step($P_loop *c, double reference_m, double preview_m, double mea
       break;
     case LoopDesign::Kind::cascade_pwm:
       df += R"(  const double u_ff = $P_feedforward(c, preview_m);
-  double u, d;
-  c->desired_pressure = $P_clamp($P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m,
-                                            $P_feedback_sign * measured_m, u_ff),
-                                 $P_pressure_lo, $P_pressure_hi);
+  unsigned long faults;
+  double u_x, u, d;
+  if (!$P_finite(pressure_mpa)) {
+    /* the pressure loop is blind: the position PID held (no wind-up of p_d), p_d the feedforward with its
+       held correction; the pressure PID counts the fault; both valves closed, the pressure holds */
+    c->desired_pressure = $P_clamp($P_held_command(u_ff, c->position.output, c->ff_held, &$P_position_gains),
+                                   $P_pressure_lo, $P_pressure_hi);
+    (void)$P_pid_step(&c->pressure, &$P_pressure_gains, c->desired_pressure, pressure_mpa, 0.0);
+    d = $P_pwm_step(c, 0.0);
+    if (duty) *duty = d;
+    return c->desired_pressure;
+  }
+  faults = c->position.faults;
+  u_x = $P_pid_step(&c->position, &$P_position_gains, $P_feedback_sign * reference_m, $P_feedback_sign * measured_m,
+                    u_ff);
+  if (c->position.faults == faults) {
+    c->ff_held = u_ff;
+    c->desired_pressure = $P_clamp(u_x, $P_pressure_lo, $P_pressure_hi);
+  } else {  /* held: the feedforward goes on with the PID's held correction */
+    c->desired_pressure = $P_clamp($P_held_command(u_ff, u_x, c->ff_held, &$P_position_gains), $P_pressure_lo,
+                                   $P_pressure_hi);
+  }
   u = $P_pid_step(&c->pressure, &$P_pressure_gains, c->desired_pressure, pressure_mpa, 0.0);
   d = $P_clamp($P_pwm_step(c, u), -1.0, 1.0);
   if (duty) *duty = d;

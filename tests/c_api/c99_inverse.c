@@ -556,9 +556,12 @@ static int selftest(const char* path) {
       CHECK(worst < 0.01 * span, "tracking error %.3g m", worst);
       {
         double q = -1.0;
-        expect_error("ff_pid_step NaN", hysteron_ff_pid_step(ctl, NAN, 0, 0, &q), HYSTERON_ERROR_INVALID_ARGUMENT,
+        /* a NaN reference (and preview: the inverse holds too) holds the PID's correction and the
+           feedforward: the previous command */
+        expect_error("ff_pid_step NaN", hysteron_ff_pid_step(ctl, NAN, NAN, 0, &q), HYSTERON_ERROR_INVALID_ARGUMENT,
                      "reference_m = nan");
-        CHECK(q == p, "a NaN reference holds the position PID's output, the previous command");
+        CHECK(q == p, "a NaN reference and preview hold the position PID's correction and the feedforward, the "
+              "previous command");
       }
       OK(hysteron_ff_pid_reset(ctl));
     }

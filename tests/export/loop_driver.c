@@ -4,6 +4,7 @@
  *   gcc -std=c99 ... -I DIR -DLP_SINGLE loop_driver.c -lm         (#includes DIR/loop.c)
  * Reads commands from stdin and prints one line per result (C99 hex floats, exact):
  *   r                       reset                                  (no output)
+ *   g                       lp_loop_restart_guard                  (no output)
  *   s REF PREV MEAS PRESS   one step of lp_loop_step               -> "S command duty" and the counts
  *                           after it: the position PID's faults, guard_cuts, gain_scale, the inverse's
  *                           faults; with -DLP_CASCADE (a cascade_pwm loop) also the pressure PID's
@@ -39,6 +40,9 @@ int main(void)
 #endif
   while (scanf("%7s", op) == 1) {
     switch (op[0]) {
+      case 'g':
+        lp_loop_restart_guard(&c);
+        break;
       case 'r':
         lp_loop_reset(&c);
 #ifdef LP_LEARNING

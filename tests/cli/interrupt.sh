@@ -37,3 +37,32 @@ diff -r "$T/dm_before" "$T/dm" > "$T/diff" || { head -5 "$T/diff"; fail "the int
 [ -z "$(find "$T/dm" -name '.*.tmp-*')" ] || fail "the interrupted demo left temporary files"
 echo "demo interrupted: the previous demo byte-identical"
 
+# ---- report: SIGINT while gnuplot runs leaves no temporary directory ------------------------
+mkdir "$T/tmpd"
+$PY - "$BIN" "$T/dm/gpi-pid" "$T/rp.html" "$T/tmpd" <<'PYEOF'
+import glob, os, signal, subprocess, sys, time
+binary, d, html, tmpd = sys.argv[1:5]
+env = dict(os.environ, TMPDIR=tmpd)
+for attempt in range(5):
+    p = subprocess.Popen([binary, "report", d, "-o", html], env=env, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL, start_new_session=True)
+    while p.poll() is None and not glob.glob(os.path.join(tmpd, "hysteron-plot-*", "plot.gp")):
+        time.sleep(0.001)
+    if p.poll() is not None:
+        print("report finished before a plot was seen; retrying")
+        continue
+    os.killpg(p.pid, signal.SIGINT)  # as Ctrl-C in a terminal: hysteron and gnuplot
+    rc = p.wait()
+    if rc != -signal.SIGINT:
+        sys.exit(f"report: exit status {rc}, expected death by SIGINT")
+    time.sleep(0.2)  # gnuplot, signalled too, has exited
+    left = os.listdir(tmpd)
+    if left:
+        sys.exit(f"report: temporary paths left in TMPDIR: {left}")
+    print("report: interrupted during a plot, no temporary directory left")
+    break
+else:
+    sys.exit("report: could not interrupt a plot in 5 attempts")
+PYEOF
+[ ! -e "$T/rp.html" ] || fail "the interrupted report wrote its page"
+

@@ -66,3 +66,28 @@ else:
 PYEOF
 [ ! -e "$T/rp.html" ] || fail "the interrupted report wrote its page"
 
+# ---- fit -o --report: the report failing leaves the old model and report ---------------------
+cat > "$T/gpi.json" <<'JSON'
+{"model": "gpi", "c": [60, 4, -0.5, 30], "q": 0.8, "n": 10, "rho": 0.4, "tau": 0.1, "alpha": 2}
+JSON
+$PY - "$T/x.csv" <<'PYEOF'
+import sys
+with open(sys.argv[1], "w") as f:
+    f.write("pressure\n")
+    for a in (0.6, 0.5, 0.4, 0.3, 0.2, 0.1):
+        for k in range(300):
+            f.write(f"{a * (1 - abs(2 * k / 300 - 1))!r}\n")
+PYEOF
+"$BIN" simulate --model "$T/gpi.json" --input "$T/x.csv" --output "$T/data.csv"
+"$BIN" fit --data "$T/data.csv" --input input --output output --train 0:600 --out "$T/m.json" --report "$T/r.html" > /dev/null
+cp "$T/m.json" "$T/m_before.json"
+cp "$T/r.html" "$T/r_before.html"
+rc=0
+HYSTERON_GNUPLOT=/bin/false "$BIN" fit --data "$T/data.csv" --input input --output output --train 0:1200 \
+  --out "$T/m.json" --report "$T/r.html" > /dev/null 2> "$T/err" || rc=$?
+[ "$rc" -ne 0 ] || fail "fit: a failing gnuplot did not fail the command"
+grep -q gnuplot "$T/err" || { cat "$T/err"; fail "fit: the error does not name gnuplot"; }
+cmp -s "$T/m.json" "$T/m_before.json" || fail "fit: the model was replaced though its report failed"
+cmp -s "$T/r.html" "$T/r_before.html" || fail "fit: the report was changed"
+[ -z "$(find "$T" -maxdepth 1 -name '.*.tmp-*')" ] || fail "fit: temporary files left"
+echo "fit with a failing report: the old model and report kept"

@@ -149,10 +149,11 @@ void add_experiment(CLI::App& app, Action& action) {
       check_inputs_not_outputs(*args, args->out);
       io::check_output_directory({"--out", args->out});  // before the run, not after it
       const ExperimentResult r = run_experiment(options_from(*args));
-      if (!args->out.empty()) {
-        r.write(args->out);
-        report::write_experiment_report(r, args->out + "/report.html", g_command);
-      }
+      if (!args->out.empty())  // the files and the report replaced together
+        ExperimentResult::write_all({&r}, {args->out}, [&](std::size_t, const std::string& dir) {
+          report::write_experiment_report(r, dir + "/report.html", g_command);
+          return std::vector<std::string>{"report.html"};
+        });
       if (args->json)
         fmt::print("{}\n", io::to_json(r).dump(2));
       else
@@ -181,18 +182,27 @@ void add_experiment(CLI::App& app, Action& action) {
         a.name = name;
         options_from(a).validate();
       }
+      // every experiment run before any directory is written, then all written together: an
+      // interrupted demo (Ctrl-C) leaves the previous one whole, never a mix of two runs
       int code = exit_ok;
+      std::vector<ExperimentResult> results;
+      std::vector<std::string> dirs;
       for (const auto& name : experiment_names()) {
         ExperimentArgs a = *dargs;
         a.name = name;
-        const ExperimentResult r = run_experiment(options_from(a));
-        const std::string dir = dargs->out + "/" + name;
-        r.write(dir);
-        report::write_experiment_report(r, dir + "/report.html", g_command);
-        fmt::print("{}  outputs: {}/   report: {}/report.html\n\n", r.table(), dir, dir);
+        results.push_back(run_experiment(options_from(a)));
+        dirs.push_back(dargs->out + "/" + name);
+        fmt::print("{}\n", results.back().table());  // progress: the outputs are written at the end
         std::fflush(stdout);
-        code = std::max(code, not_below_baseline_exit(r));
+        code = std::max(code, not_below_baseline_exit(results.back()));
       }
+      std::vector<const ExperimentResult*> all;
+      for (const auto& r : results) all.push_back(&r);
+      ExperimentResult::write_all(all, dirs, [&](std::size_t i, const std::string& dir) {
+        report::write_experiment_report(results[i], dir + "/report.html", g_command);
+        return std::vector<std::string>{"report.html"};
+      });
+      for (const auto& dir : dirs) fmt::print("outputs: {}/   report: {}/report.html\n", dir, dir);
       return code;
     };
   });

@@ -102,8 +102,10 @@ int run_export(const Options& o) {
   } catch (const Error& err) {
     throw Error(fmt::format("{}: cannot export: {}", o.model == "-" ? std::string("<stdin>") : o.model, err.what()));
   }
+  io::FileBatch batch;  // the header and the source replaced together
   if (!o.header.empty()) io::write_text_file(o.header, c.header);
   io::write_text_file(o.out, c.source);
+  batch.commit();
   if (o.out != "-")
     fmt::print(stderr, "export: {} model{} -> {}{} (prefix {})\n", model_name(params),
                e.loop ? fmt::format(" and the loop of {}", e.loop_source) : std::string(), o.out,

@@ -332,6 +332,9 @@ int run_fit(const FitCliOptions& c) {
     }
 
   const bool write = rep.status == FitStatus::converged || (fitted && c.force);
+  // the model and the report replaced together, once both are complete: a Ctrl-C or a gnuplot
+  // failure while the report is made leaves the old pair, never a new model beside an old report
+  io::FileBatch batch;
   if (write) {
     const std::string note = o.model == FitModel::automatic
                                  ? fmt::format("hysteron fit --model auto (chose {}) on {}",
@@ -358,6 +361,7 @@ int run_fit(const FitCliOptions& c) {
       io::write_text_file(c.report, io::to_json(doc).dump(2) + "\n");
     }
   }
+  batch.commit();
 
   int code = rep.status == FitStatus::converged  ? exit_ok
              : rep.status == FitStatus::poor_fit ? exit_poor_fit

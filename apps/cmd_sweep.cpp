@@ -166,8 +166,10 @@ int run_sweep_command(const SweepArgs& a) {
   // the page first (gnuplot may fail), then the files, each written atomically
   std::string html;
   if (!a.report.empty()) html = report::sweep_report_html(r, command_line());
+  io::FileBatch batch;  // the table and the page replaced together
   if (!a.out.empty()) io::write_text_file(a.out, r.csv());
   if (!a.report.empty()) io::write_text_file(a.report, html);
+  batch.commit();
   if (a.json)
     fmt::print("{}\n", r.to_json().dump(2));
   else if (!out_stdout)

@@ -5,7 +5,10 @@
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
+#include <csignal>
 #include <unistd.h>
+
+#include <fmt/format.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -21,6 +24,7 @@
 #include "test_util.hpp"
 #include "hysteron/plant.hpp"
 #include "hysteron/error.hpp"
+#include "hysteron/io/files.hpp"
 #include "hysteron/io/table.hpp"
 
 namespace fs = std::filesystem;
@@ -215,6 +219,78 @@ TEST(OutputFiles, RemoveTemporaryFilesRemovesLiveOnes) {
   });
   EXPECT_EQ(slurp(f), "done\n");
   EXPECT_NE(seen.find("/.out.csv.tmp-"), std::string::npos) << seen;
+}
+
+// A batch of more than 64 files (a user's many references): every temporary file is removed by
+// the handler's call, however many are waiting (the registry once had 64 fixed slots).
+TEST(OutputFiles, RemoveTemporaryFilesRemovesEveryFileOfALargeBatch) {
+  TempDir d;
+  constexpr int kFiles = 100;
+  std::size_t waiting = 0;
+  {
+    io::FileBatch batch;
+    for (int i = 0; i < kFiles - 1; ++i) io::write_text_file(d.file(fmt::format("f{}.csv", i)), "x\n");
+    io::write_file_atomically(d.file("last.csv"), [&](const std::string& tmp) {
+      put(tmp, "partial");
+      waiting = temp_files(d.path()).size();
+      io::remove_temporary_files();  // what the CLI's signal handler does
+      EXPECT_TRUE(temp_files(d.path()).empty()) << temp_files(d.path()).size() << " left";
+      put(tmp, "done\n");
+    });
+  }  // dropped without commit()
+  EXPECT_EQ(waiting, static_cast<std::size_t>(kFiles));
+  EXPECT_TRUE(temp_files(d.path()).empty());
+  EXPECT_TRUE(fs::is_empty(d.path()));
+}
+
+// The same through a real SIGINT in a child process whose handler is the CLI's (remove, re-raise):
+// it dies by the signal, and neither a temporary file nor a target is left.
+TEST(OutputFiles, SignalDuringALargeBatchLeavesNoTemporaryFile) {
+  TempDir d;
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    struct sigaction sa {};
+    sa.sa_handler = [](int sig) {
+      io::remove_temporary_files();
+      std::signal(sig, SIG_DFL);
+      std::raise(sig);
+    };
+    ::sigaction(SIGINT, &sa, nullptr);
+    io::FileBatch batch;
+    for (int i = 0; i < 100; ++i) io::write_text_file(d.file(fmt::format("f{}.csv", i)), "x\n");
+    std::raise(SIGINT);  // before commit()
+    batch.commit();
+    std::_Exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  EXPECT_TRUE(temp_files(d.path()).empty()) << temp_files(d.path()).size() << " left";
+  EXPECT_TRUE(fs::is_empty(d.path()));
+}
+
+// A TemporaryPath (the plots' gnuplot directory and its files): removed by the handler's call,
+// files before their directory; after its destruction no longer (its owner removes it).
+TEST(OutputFiles, TemporaryPathsAreRemovedFilesFirst) {
+  TempDir d;
+  const std::string dir = d.file("plotdir"), f1 = dir + "/plot.gp", f2 = dir + "/gnuplot.log";
+  fs::create_directory(dir);
+  {
+    io::TemporaryPath reg_dir(dir, true);
+    io::TemporaryPath reg1(f1), reg2(f2);
+    put(f1, "set term svg\n");
+    put(f2, "");
+    io::remove_temporary_files();
+    EXPECT_FALSE(fs::exists(f1));
+    EXPECT_FALSE(fs::exists(f2));
+    EXPECT_FALSE(fs::exists(dir));
+  }
+  fs::create_directory(dir);
+  put(f1, "kept\n");
+  { io::TemporaryPath gone(f1); }
+  io::remove_temporary_files();
+  EXPECT_EQ(slurp(f1), "kept\n");
 }
 
 TEST(OutputFiles, FullDeviceFailsDirectWrites) {

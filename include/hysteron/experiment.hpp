@@ -31,6 +31,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -386,6 +387,13 @@ struct ExperimentResult {
   // it did not run, report.html, which described it) are removed afterwards; other files in
   // dir are left alone.
   void write(const std::string& dir) const;
+  // Several runs written as write() writes one, results[i] into dirs[i], but in one io::FileBatch:
+  // every file of every run is complete before the first is replaced, so an error, or a signal
+  // (Ctrl-C) the CLI handles, before the end leaves every directory as it was (`hysteron demo`).
+  // also(i, dir), if given, writes further files of run i into its dir inside the batch and
+  // returns their names (report.html), which are then not removed as stale.
+  static void write_all(const std::vector<const ExperimentResult*>& results, const std::vector<std::string>& dirs,
+                        const std::function<std::vector<std::string>(std::size_t, const std::string&)>& also = {});
   // True for the names of the files write() and `hysteron experiment` put into an output
   // directory: identification.csv, model_identification.csv, model.json, best_model.json,
   // result.json, report.html and tracking_*.csv.

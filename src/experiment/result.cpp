@@ -87,43 +87,63 @@ std::vector<std::string> write_files(const ExperimentResult& r, const std::files
 
 }  // namespace
 
-void ExperimentResult::write(const std::string& dir) const {
+void ExperimentResult::write(const std::string& dir) const { write_all({this}, {dir}); }
+
+void ExperimentResult::write_all(const std::vector<const ExperimentResult*>& results,
+                                 const std::vector<std::string>& dirs,
+                                 const std::function<std::vector<std::string>(std::size_t, const std::string&)>& also) {
   namespace fs = std::filesystem;
-  const fs::path d(dir);
-  {
+  if (results.size() != dirs.size()) throw Error("experiment: write_all needs one directory per result");
+  for (std::size_t i = 0; i < results.size(); ++i) {
     std::vector<std::pair<std::string, std::string>> inputs;
-    for (const std::string& f : input_files) inputs.emplace_back("--reference", f);
-    check_inputs_not_outputs(dir, inputs);  // nothing written where an input would be replaced or removed
+    for (const std::string& f : results[i]->input_files) inputs.emplace_back("--reference", f);
+    check_inputs_not_outputs(dirs[i], inputs);  // nothing written where an input would be replaced or removed
   }
   std::error_code ec;
-  const bool existed = fs::is_directory(d, ec);
-  fs::create_directories(d, ec);
-  if (ec) throw Error(fmt::format("experiment: cannot create output directory {}: {}", dir, ec.message()));
-  const bool earlier_run = fs::exists(d / "result.json", ec);
-  std::vector<std::string> written;
+  std::vector<fs::path> created;  // the directories made here, parents first (removed again on an error)
+  std::vector<bool> earlier_run(dirs.size());
+  std::vector<std::vector<std::string>> written(dirs.size());
   try {
-    io::FileBatch batch;  // every file complete before any is replaced
-    written = write_files(*this, d);
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+      const fs::path d(dirs[i]);
+      std::vector<fs::path> missing;
+      for (fs::path p = d; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) missing.push_back(p);
+      fs::create_directories(d, ec);
+      if (ec) throw Error(fmt::format("experiment: cannot create output directory {}: {}", dirs[i], ec.message()));
+      created.insert(created.end(), missing.rbegin(), missing.rend());
+      earlier_run[i] = fs::exists(d / "result.json", ec);
+    }
+    io::FileBatch batch;  // every file of every run complete before any is replaced
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+      written[i] = write_files(*results[i], fs::path(dirs[i]));
+      if (also)
+        for (std::string& f : also(i, dirs[i])) written[i].push_back(std::move(f));
+    }
     batch.commit();
   } catch (...) {
-    if (!existed) fs::remove(d, ec);  // the directory it created, if still empty
+    for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ec);  // those still empty
     throw;
   }
-  if (!earlier_run) return;
-  // The earlier run's files this one does not have (a variant it did not run, its report).
-  std::vector<fs::path> stale;
-  for (const auto& e : fs::directory_iterator(d, ec)) {
-    const std::string f = e.path().filename().string();
-    if (is_output_file(f) && std::find(written.begin(), written.end(), f) == written.end()) stale.push_back(e.path());
-  }
-  // never a file the run read (checked above; kept here too should it have appeared since)
-  std::erase_if(stale, [&](const fs::path& p) {
-    return std::any_of(input_files.begin(), input_files.end(), [&](const std::string& in) {
-      std::error_code e2;
-      return fs::equivalent(p, in, e2);
+  for (std::size_t i = 0; i < dirs.size(); ++i) {
+    if (!earlier_run[i]) continue;
+    const fs::path d(dirs[i]);
+    // The earlier run's files this one does not have (a variant it did not run, its report).
+    std::vector<fs::path> stale;
+    for (const auto& e : fs::directory_iterator(d, ec)) {
+      const std::string f = e.path().filename().string();
+      if (is_output_file(f) && std::find(written[i].begin(), written[i].end(), f) == written[i].end())
+        stale.push_back(e.path());
+    }
+    // never a file the run read (checked above; kept here too should it have appeared since)
+    const auto& inputs = results[i]->input_files;
+    std::erase_if(stale, [&](const fs::path& p) {
+      return std::any_of(inputs.begin(), inputs.end(), [&](const std::string& in) {
+        std::error_code e2;
+        return fs::equivalent(p, in, e2);
+      });
     });
-  });
-  for (const fs::path& p : stale) fs::remove(p, ec);
+    for (const fs::path& p : stale) fs::remove(p, ec);
+  }
 }
 
 std::string ExperimentResult::table() const {

@@ -49,53 +49,70 @@ std::atomic<unsigned> temp_counter{0};
 
 namespace {
 
-// Temporary files being written, for remove_temporary_files() (called from signal handlers):
-// fixed storage, no allocation; a slot is claimed (1), filled, then published (2).
-constexpr std::size_t kTempSlots = 64, kTempPathMax = 4096;
-struct TempSlot {
-  std::atomic<int> state{0};
-  char path[kTempPathMax];
+// Temporary files and directories, for remove_temporary_files() (called from signal handlers):
+// a singly linked list of nodes that only grows (nodes are allocated here, never in the handler,
+// and reused once free), so a batch of any size is tracked. A node's path is a heap copy
+// published through an atomic pointer; unregistering takes the pointer back and frees it unless a
+// handler is walking the list (then it is left: the process is about to die). seq_cst throughout:
+// a handler that counted itself in before unregister_temp read the count may still read the path;
+// one that counted itself in after sees the pointer already taken.
+struct TempNode {
+  std::atomic<const char*> path{nullptr};
+  std::atomic<bool> claimed{true};
+  std::atomic<bool> directory{false};
+  TempNode* next = nullptr;  // set before the node is published, never changed
 };
-TempSlot g_temp_slots[kTempSlots];
-static_assert(std::atomic<int>::is_always_lock_free);
+std::atomic<TempNode*> g_temp_head{nullptr};
+std::atomic<int> g_temp_handlers{0};  // remove_temporary_files() calls in progress
+static_assert(std::atomic<const char*>::is_always_lock_free && std::atomic<TempNode*>::is_always_lock_free &&
+              std::atomic<bool>::is_always_lock_free && std::atomic<int>::is_always_lock_free);
 
-int register_temp(const std::string& p) {
-  if (p.size() >= kTempPathMax) return -1;
-  for (std::size_t i = 0; i < kTempSlots; ++i) {
-    int expected = 0;
-    if (g_temp_slots[i].state.compare_exchange_strong(expected, 1)) {
-      std::memcpy(g_temp_slots[i].path, p.c_str(), p.size() + 1);
-      g_temp_slots[i].state.store(2);
-      return static_cast<int>(i);
-    }
+TempNode* register_temp(const std::string& p, bool directory = false) {
+  char* copy = new char[p.size() + 1];
+  std::memcpy(copy, p.c_str(), p.size() + 1);
+  TempNode* node = nullptr;
+  for (TempNode* n = g_temp_head.load(); n != nullptr && node == nullptr; n = n->next) {
+    bool expected = false;
+    if (n->claimed.compare_exchange_strong(expected, true)) node = n;
   }
-  return -1;  // more than 64 writes at once: this one is only removed on errors, not on signals
+  if (node == nullptr) {
+    node = new TempNode;
+    TempNode* head = g_temp_head.load();
+    do node->next = head;
+    while (!g_temp_head.compare_exchange_weak(head, node));
+  }
+  node->directory.store(directory);
+  node->path.store(copy);
+  return node;
 }
 
-void unregister_temp(int slot) {
-  if (slot >= 0) g_temp_slots[slot].state.store(0);
+void unregister_temp(TempNode* node) {
+  if (node == nullptr) return;
+  const char* p = node->path.exchange(nullptr);
+  if (g_temp_handlers.load() == 0) delete[] p;
+  node->claimed.store(false);
 }
 
 // A live temporary file: removed (and unregistered) unless released after the rename.
 class TempFile {
  public:
-  explicit TempFile(std::string p) : path_(std::move(p)), slot_(register_temp(path_)) {}
+  explicit TempFile(std::string p) : path_(std::move(p)), node_(register_temp(path_)) {}
   ~TempFile() {
     if (!path_.empty()) ::unlink(path_.c_str());
-    unregister_temp(slot_);
+    unregister_temp(node_);
   }
   TempFile(const TempFile&) = delete;
   TempFile& operator=(const TempFile&) = delete;
   const std::string& path() const { return path_; }
   void release() {
-    unregister_temp(slot_);
-    slot_ = -1;
+    unregister_temp(node_);
+    node_ = nullptr;
     path_.clear();
   }
 
  private:
   std::string path_;
-  int slot_;
+  TempNode* node_;
 };
 
 // Follows symbolic links (a chain of at most 40) to the file they name; the last target may not exist.
@@ -213,9 +230,17 @@ void FileBatch::commit() {
 }
 
 void remove_temporary_files() noexcept {
-  for (auto& slot : g_temp_slots)
-    if (slot.state.load() == 2) ::unlink(slot.path);
+  g_temp_handlers.fetch_add(1);
+  for (const bool directories : {false, true})  // the files, then the directories they were in
+    for (TempNode* n = g_temp_head.load(); n != nullptr; n = n->next)
+      if (n->directory.load() == directories)
+        if (const char* p = n->path.load()) directories ? ::rmdir(p) : ::unlink(p);
+  g_temp_handlers.fetch_sub(1);
 }
+
+TemporaryPath::TemporaryPath(const std::string& path, bool directory) : node_(register_temp(path, directory)) {}
+
+TemporaryPath::~TemporaryPath() { unregister_temp(static_cast<TempNode*>(node_)); }
 
 void write_file_atomically(const std::string& path, const std::function<void(const std::string& temp_path)>& write) {
   if (path.empty()) throw Error("output path is empty");

@@ -1,5 +1,6 @@
 // Plots through gnuplot: a generated script with inline data, run as a child
-// process in a private temporary directory that is always removed.
+// process in a private temporary directory that is always removed (on SIGINT, SIGTERM and
+// SIGHUP too, by the CLI's handler).
 #include <fcntl.h>
 #include <spawn.h>
 #include <stdlib.h>
@@ -16,9 +17,12 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <memory>
 #include <sstream>
+#include <vector>
 
 #include "hysteron/error.hpp"
+#include "hysteron/io/files.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/report.hpp"
 
@@ -30,7 +34,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A private temporary directory, removed with everything in it on scope exit.
+// A private temporary directory, removed with everything in it on scope exit, and by the CLI's
+// signal handler (io::remove_temporary_files) with the files made through file().
 class TempDir {
  public:
   TempDir() {
@@ -38,17 +43,25 @@ class TempDir {
     if (::mkdtemp(tmpl.data()) == nullptr)
       throw Error(fmt::format("plot: cannot create a temporary directory: {}", std::strerror(errno)));
     path_ = tmpl;
+    registered_.push_back(std::make_unique<io::TemporaryPath>(path_.string(), true));
   }
   ~TempDir() {
     std::error_code ec;
     fs::remove_all(path_, ec);
-  }
+  }  // then registered_ is unregistered
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
   const fs::path& path() const { return path_; }
+  // The path of a file to be made in the directory, registered first.
+  fs::path file(const std::string& name) {
+    fs::path p = path_ / name;
+    registered_.push_back(std::make_unique<io::TemporaryPath>(p.string()));
+    return p;
+  }
 
  private:
   fs::path path_;
+  std::vector<std::unique_ptr<io::TemporaryPath>> registered_;
 };
 
 std::string read_file(const fs::path& p) {
@@ -215,9 +228,9 @@ std::string render(const PlotSpec& spec, std::string_view format) {
   if (format != "svg" && format != "png")
     throw Error(fmt::format("plot: unknown format '{}' (svg or png)", format));
   TempDir tmp;
-  const fs::path out = tmp.path() / fmt::format("plot.{}", format);
-  const fs::path gp = tmp.path() / "plot.gp";
-  const fs::path log = tmp.path() / "gnuplot.log";
+  const fs::path out = tmp.file(fmt::format("plot.{}", format));
+  const fs::path gp = tmp.file("plot.gp");
+  const fs::path log = tmp.file("gnuplot.log");
   {
     std::ofstream f(gp, std::ios::binary);
     f << script(spec, format, out.string());

@@ -51,11 +51,27 @@ class FileBatch {
 // write_file_atomically with a text body; path "-" writes to stdout.
 void write_text_file(const std::string& path, std::string_view text);
 
-// Removes the temporary files of the writes in progress (at most 64 at once are tracked).
-// Async-signal-safe (no allocation, unlink(2) only): meant for a program's signal handler,
-// which should then restore the default action and re-raise the signal. The library installs
-// no handler itself (a host program such as Python keeps its own).
+// Removes the temporary files of the writes in progress (every one, however many a FileBatch
+// holds) and the paths registered by live TemporaryPath objects: files first, then directories
+// (rmdir: those left empty). Async-signal-safe (no allocation, no lock; unlink(2) and rmdir(2)
+// only): meant for a program's signal handler, which should then restore the default action and
+// re-raise the signal. The library installs no handler itself (a host program such as Python
+// keeps its own).
 void remove_temporary_files() noexcept;
+
+// A temporary file or directory of the program's own (e.g. the plots' gnuplot directory), removed
+// by remove_temporary_files() while this object lives; the destructor only unregisters it (its
+// owner removes it). Register a directory before the files in it.
+class TemporaryPath {
+ public:
+  explicit TemporaryPath(const std::string& path, bool directory = false);
+  ~TemporaryPath();
+  TemporaryPath(const TemporaryPath&) = delete;
+  TemporaryPath& operator=(const TemporaryPath&) = delete;
+
+ private:
+  void* node_;
+};
 
 // A file named on the command line and the option that named it, e.g. {"--out", "m.json"}.
 struct NamedPath {

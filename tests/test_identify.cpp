@@ -2,6 +2,8 @@
 // invertibility of fitted models, RLS (batch equivalence, tracking, no
 // allocation), input validation, and fits of the measured records in ../shared/data.
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <fmt/format.h>
 
 #include <atomic>
@@ -607,6 +609,65 @@ TEST(IdentifyRls, TracksAChangeWithForgettingAndNeverAllocates) {
   for (std::size_t i = 0; i < b.p.size(); ++i) EXPECT_NEAR(rls.theta()(static_cast<Eigen::Index>(i + 1)), b.p[i], 1e-3);
   EXPECT_THROW(Rls(MpiDeadzoneParams{}, 0.99), Error);
   EXPECT_THROW(Rls(tmpl, 1.5), Error);
+}
+
+// The input held for hundreds of memory lengths (a rig at rest), then moving again: forgetting
+// grows P as lambda^-k in the directions a constant regressor does not excite; unbounded, the
+// standard update lost positive definiteness after 20-40 memory lengths and the estimate then
+// ran away (q = -9.3e7). With the covariance bounded by its prior the estimate after the hold
+// is as good as before it.
+TEST(IdentifyRls, AHeldInputNeitherWindsUpNorBreaksTheCovariance) {
+  PiParams nominal;
+  nominal.q = 0.5;
+  nominal.r = {0.05, 0.1, 0.2, 0.3, 0.4};
+  nominal.p = {0.3, 0.2, 0.15, 0.1, 0.05};
+  PiParams truth = nominal;
+  for (double& v : truth.p) v *= 1.3;
+  const double lambda = 0.9998, sigma = 0.005;
+  const int period = 20000;  // 2 s at 10 kHz
+  auto sine = [&](int k) { return 0.5 - 0.45 * std::cos(2 * M_PI * k / period); };
+  Model plant(truth);
+  Rls rls(nominal, lambda);
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> noise(0.0, sigma);
+  // The regressor from the play operators directly, and the forgetting-weighted information
+  // R1 = sum lambda^(N-k) phi phi^T and R2 = sum lambda^(2(N-k)) phi phi^T of the data.
+  std::vector<double> ops(5, 0.0);
+  Eigen::MatrixXd R1 = Eigen::MatrixXd::Zero(6, 6), R2 = R1;
+  Eigen::VectorXd phi(6);
+  auto feed = [&](double x) {
+    rls.step(x, plant.step(x) + noise(rng));
+    phi(0) = x;
+    for (int i = 0; i < 5; ++i)
+      phi(i + 1) = ops[static_cast<std::size_t>(i)] =
+          std::max(x - nominal.r[static_cast<std::size_t>(i)],
+                   std::min(x + nominal.r[static_cast<std::size_t>(i)], ops[static_cast<std::size_t>(i)]));
+    R1 = lambda * R1 + phi * phi.transpose();
+    R2 = lambda * lambda * R2 + phi * phi.transpose();
+  };
+  for (int k = 0; k < 3 * period; ++k) feed(sine(k));
+  for (int k = 0; k < 1'000'000; ++k) feed(0.5);  // 100 s, 200 memory lengths
+  auto positive_definite = [&] {
+    const Eigen::LLT<Eigen::MatrixXd> llt(rls.covariance());
+    return llt.info() == Eigen::Success && rls.covariance().allFinite();
+  };
+  EXPECT_TRUE(positive_definite()) << "after the hold";
+  EXPECT_LE(rls.covariance().trace(), 6 * 1e6 * (1 + 1e-12));  // the prior's trace: 6 weights, p0 = 1e6
+  R1.setZero();
+  R2.setZero();
+  for (int k = 0; k < 3 * period; ++k) feed(sine(k));  // 12 memory lengths: the hold is forgotten
+  EXPECT_TRUE(positive_definite()) << "after the second sine";
+  // Tolerance from the noise: the forgetting-weighted least-squares estimate has the covariance
+  // sigma^2 R1^-1 R2 R1^-1; 6 standard deviations.
+  const Eigen::MatrixXd R1inv = R1.inverse();
+  const Eigen::MatrixXd C = sigma * sigma * R1inv * R2 * R1inv;
+  for (Eigen::Index i = 0; i < 6; ++i) {
+    const double want = i == 0 ? truth.q : truth.p[static_cast<std::size_t>(i - 1)];
+    EXPECT_NEAR(rls.theta()(i), want, 6 * std::sqrt(C(i, i))) << "weight " << i;
+    EXPECT_LT(std::sqrt(C(i, i)), 0.05 * std::abs(want)) << "weight " << i << ": the test would be too weak";
+  }
+  EXPECT_EQ(rls.faults(), 0u);
+  EXPECT_GT(rls.bounded(), 0u);  // the bound acted (during the hold)
 }
 
 TEST(IdentifyInput, BadInputIsRejected) {

@@ -469,7 +469,9 @@ class AdaptiveInverse {
 
   // One measured pair (raw units): a-priori errors of both weight sets, the RLS update, the
   // projection, and (commit_every_update) commit(). Never allocates, never throws; a
-  // non-finite pair is ignored and counted in faults().
+  // non-finite pair is ignored and counted in faults(). The covariance is bounded by the
+  // prior's trace (directional forgetting at the bound, counters().bounded) and reset to the
+  // prior where it is no longer positive definite (counters().resets, also in faults()).
   void update(double x, double y) noexcept;
   // The guard, then the chosen weights (the projected estimate, or the fitted ones while the
   // estimate predicts worse) into the inverse, in place. Never allocates, never throws.
@@ -499,8 +501,11 @@ class AdaptiveInverse {
     std::size_t commits = 0;    // commit() calls
     std::size_t switches = 0;   // changes between adapted and fitted weights
     std::size_t rejected = 0;   // weights the inverse refused (0 unless the projection fails)
+    std::size_t bounded = 0;    // updates at the covariance bound (directional forgetting)
+    std::size_t resets = 0;     // covariance resets to the prior (no longer positive definite)
   };
   const Counters& counters() const noexcept { return n_; }
+  // Pairs not learned from (non-finite) plus covariance resets.
   std::size_t faults() const noexcept { return faults_; }
 
  private:
@@ -518,6 +523,7 @@ class AdaptiveInverse {
   // theta_: projected estimate (in use unless the guard says otherwise); theta_hat_: the
   // unconstrained RLS estimate; P_, R_ = P_^-1: m x m, row-major.
   std::vector<double> theta_, theta_hat_, theta_fixed_, clip_, w_, phi_, pphi_, P_, R_;
+  std::vector<double> P0_, R0_, Psave_, Rsave_;  // the prior's P_ and R_; scratch
   std::vector<double> zb_, zv_;              // dead-zone map: breakpoints and values there
   std::vector<double> xs_;                   // the last delay + 1 inputs (ring)
   std::size_t xi_ = 0, xn_ = 0;              // next slot, inputs held

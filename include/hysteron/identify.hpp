@@ -571,8 +571,15 @@ ModelParams fit_weights(const ModelParams& model, std::span<const double> x, std
 // output is linear in them (pi, mpi-asym, gpi with free weights; the regressor
 // is [u_m, y_1..y_n]; see models.hpp):
 //   e = y - theta^T phi,  K = P phi / (lambda + phi^T P phi),
-//   theta += K e,  P = (P - K phi^T P) / lambda.
-// All storage is allocated at construction; step() never allocates.
+//   theta += K e,  P = (P - K phi^T P) / lambda,
+// with the covariance bounded by its prior: where that step would leave trace(P) above
+// trace(P_0) = (n + 1) p0 (forgetting grows P as lambda^-k in directions the data do not
+// excite, e.g. while the input is held), the information is forgotten only along phi
+// (directional forgetting: eps = lambda - (1 - lambda) / (phi^T P phi),
+// P -= eps P phi phi^T P / (1 + eps phi^T P phi), K = P phi / (1 + phi^T P phi)).
+// A covariance that is no longer positive definite (phi^T P phi < 0, a diagonal entry
+// <= 0, non-finite) is reset to P_0 and counted (resets(), faults()).
+// docs/identification.md. All storage is allocated at construction; step() never allocates.
 class Rls {
  public:
   // `model` fixes thresholds/envelopes and gives the initial weights.
@@ -582,7 +589,7 @@ class Rls {
 
   // One sample: updates the operator state with x, then the weights with the
   // measured y. Returns the a-priori prediction theta^T phi. Non-finite x or y:
-  // no update, returns the last prediction. Never allocates.
+  // no update, returns the last prediction, counted in faults(). Never allocates.
   double step(double x, double y) noexcept;
   // Restart the operator state (virgin or relaxed at x0) keeping the weights.
   void reset_state(InitialState initial = InitialState::virgin, double x0 = 0.0) noexcept;
@@ -590,6 +597,12 @@ class Rls {
   const Eigen::VectorXd& theta() const noexcept { return theta_; }
   const Eigen::MatrixXd& covariance() const noexcept { return P_; }
   double lambda() const noexcept { return lambda_; }
+  // Samples not learned from: non-finite pairs, and covariance resets (resets()).
+  std::size_t faults() const noexcept { return faults_; }
+  // Covariance resets to P_0 (it was no longer positive definite); 0 unless rounding broke it.
+  std::size_t resets() const noexcept { return resets_; }
+  // Updates at the covariance bound (directional forgetting instead of the standard step).
+  std::size_t bounded() const noexcept { return bounded_; }
   // The model with the current weights (allocates). RLS does not constrain the weights:
   // throws hysteron::Error (naming the parameter) where they make no valid model of the kind
   // (e.g. gpi q <= 0); theta() still gives them.
@@ -602,10 +615,12 @@ class Rls {
   ModelParams model_;
   Structure<double> s_;
   std::vector<double> y_;
-  Eigen::VectorXd theta_, phi_, Pphi_, K_;
-  Eigen::MatrixXd P_;
+  Eigen::VectorXd theta_, phi_, Pphi_;
+  Eigen::MatrixXd P_, P0_, Psave_;  // covariance, its prior, scratch
   double lambda_;
+  double cap_ = 0.0;  // trace(P0_)
   double last_ = 0.0;
+  std::size_t faults_ = 0, resets_ = 0, bounded_ = 0;
 };
 
 // Batch helper: runs Rls over the record `passes` times (1..10000; the operator

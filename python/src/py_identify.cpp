@@ -394,6 +394,23 @@ and envelopes and gives the initial weights.)doc"))
           "theta", [](const Rls& r) { return to_numpy(std::vector<double>(r.theta().begin(), r.theta().end())); },
           "Current weights [q, p_1..p_n].")
       .def_property_readonly("lam", &Rls::lambda, "Forgetting factor.")
+      .def_property_readonly(
+          "covariance",
+          [](const Rls& r) {
+            const Eigen::MatrixXd& P = r.covariance();
+            py::array_t<double> out({P.rows(), P.cols()});
+            auto v = out.mutable_unchecked<2>();
+            for (Eigen::Index i = 0; i < P.rows(); ++i)
+              for (Eigen::Index j = 0; j < P.cols(); ++j) v(i, j) = P(i, j);
+            return out;
+          },
+          "Covariance P (a copy), bounded by its prior's trace (n + 1) p0.")
+      .def_property_readonly("faults", &Rls::faults,
+                             "Samples not learned from: non-finite pairs and covariance resets.")
+      .def_property_readonly("resets", &Rls::resets,
+                             "Covariance resets to the prior (it was no longer positive definite).")
+      .def_property_readonly("bounded", &Rls::bounded,
+                             "Updates at the covariance bound (directional forgetting instead of the standard step).")
       .def(
           "params", [](const Rls& r) { return from_json(io::model_to_json(r.params())); },
           "The model with the current weights, as a model dict. RLS does not constrain the weights: "

@@ -485,3 +485,22 @@ def test_a_decreasing_model_is_fed_back_with_its_sign():
     assert up_rms < 1.0
     np.testing.assert_array_equal(up_u, down_u)
     assert down_rms == up_rms
+
+
+def test_rls_survives_a_held_input():
+    """The input held for 200 memory lengths, then moving again: the covariance stays positive
+    definite and bounded by its prior's trace, and the estimate predicts to the noise level again
+    (unbounded, P became indefinite and the estimate ran away to q = -9.3e7)."""
+    nominal = {"model": "pi", "q": 0.5, "r": [0.0, 0.1, 0.2, 0.3, 0.4], "p": [0.3, 0.2, 0.15, 0.1, 0.05]}
+    true = dict(nominal, p=[1.3 * v for v in nominal["p"]])
+    lam, sigma, period = 0.999, 0.005, 20000
+    sine = 0.5 - 0.45 * np.cos(2 * np.pi * np.arange(2 * period) / period)
+    x = np.concatenate([sine, np.full(200_000, 0.5), sine])
+    y = hysteron.simulate_record(true, x) + sigma * np.random.default_rng(1).standard_normal(x.size)
+    rls = hysteron.Rls(nominal, lam=lam)
+    pred = np.array([rls.step(a, b) for a, b in zip(x, y)])
+    np.linalg.cholesky(rls.covariance)  # raises unless positive definite
+    assert np.trace(rls.covariance) <= 6 * 1e6 * (1 + 1e-12)
+    assert rls.faults == 0 and rls.resets == 0 and rls.bounded > 0
+    rms = np.sqrt(np.mean((pred[-period:] - y[-period:]) ** 2))
+    assert rms < 1.2 * sigma  # a-priori prediction error: the noise, and little more

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "../core/rls_update.hpp"
 #include "detail.hpp"
 #include "hysteron/error.hpp"
 
@@ -111,6 +112,10 @@ AdaptiveInverse::AdaptiveInverse(const ModelParams& model, std::span<const doubl
       R_[i * m + j] = R(a, b);
     }
   trace0_ = P0.trace();
+  P0_ = P_;
+  R0_ = R_;
+  Psave_ = P_;
+  Rsave_ = R_;
 
   // Margin: the fit's minimum-slope rule on the prior record, lowered to what the fitted
   // weights satisfy themselves (they must be feasible: the variant starts from them).
@@ -272,34 +277,22 @@ void AdaptiveInverse::update(double x, double y) noexcept {
   j_fixed_ = p_.lambda * j_fixed_ + ef * ef;
   // RLS with forgetting (the unconstrained estimate theta_hat_), with its information R = P^-1.
   const double e = t - vh;
-  double denom = p_.lambda;
-  for (std::size_t i = 0; i < m; ++i) {
-    double a = 0.0;
-    for (std::size_t j = 0; j < m; ++j) a += P_[i * m + j] * phi_[j];
-    pphi_[i] = a;
-    denom += phi_[i] * a;
+  const detail::RlsMatrices cov{P_.data(), R_.data(), P0_.data(), R0_.data(), Psave_.data(), Rsave_.data(),
+                                pphi_.data(), m, trace0_};
+  double gain = 0.0;
+  const auto outcome = std::isfinite(e) ? detail::rls_covariance_step(cov, phi_.data(), p_.lambda, gain)
+                                        : detail::RlsOutcome::skipped;
+  if (outcome == detail::RlsOutcome::bounded) ++n_.bounded;
+  if (outcome == detail::RlsOutcome::reset) {
+    ++n_.resets;
+    ++faults_;
   }
-  if (denom > 0 && std::isfinite(denom) && std::isfinite(e)) {
-    const double inv = 1.0 / denom;
-    for (std::size_t i = 0; i < m; ++i) theta_hat_[i] += pphi_[i] * inv * e;
-    double trace = 0.0;
-    for (std::size_t i = 0; i < m; ++i)
-      for (std::size_t j = i; j < m; ++j) {
-        const double v = (P_[i * m + j] - pphi_[i] * pphi_[j] * inv) / p_.lambda;
-        P_[i * m + j] = P_[j * m + i] = v;
-        const double r = p_.lambda * R_[i * m + j] + phi_[i] * phi_[j];
-        R_[i * m + j] = R_[j * m + i] = r;
-        if (i == j) trace += v;
-      }
-    if (trace > trace0_) {  // no wind-up: the covariance never exceeds the prior's trace
-      const double k = trace0_ / trace;
-      for (double& v : P_) v *= k;
-      for (double& v : R_) v /= k;
-    }
+  if (outcome == detail::RlsOutcome::skipped) {
+    ++faults_;
+  } else {
+    for (std::size_t i = 0; i < m; ++i) theta_hat_[i] += pphi_[i] * gain * e;
     project();
     ++n_.updates;
-  } else {
-    ++faults_;
   }
   if (p_.commit_every_update) commit();
   else if (!adapted_) ++n_.fallback;

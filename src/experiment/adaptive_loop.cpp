@@ -66,10 +66,18 @@ std::string adaptive_note(const AdaptiveInverse& a, const std::string& reference
                      "use on {} samples, {} switches (guard: the adapted weights are handed over only while their "
                      "forgetting-averaged a-priori prediction error is at most the fitted model's, so the model in use "
                      "never predicts worse than the fitted one; the tracking error is not guaranteed by it); at the end "
-                     "RMS prediction error {:.3f} mm adapted vs {:.3f} mm fitted{}",
+                     "RMS prediction error {:.3f} mm adapted vs {:.3f} mm fitted{}{}{}",
                      reference, n.updates, n.projected, n.commits, n.fallback, n.switches,
                      std::sqrt(ja * (1.0 - a.lambda())), std::sqrt(jf * (1.0 - a.lambda())),
-                     n.rejected ? fmt::format("; {} weight sets refused by the inverse", n.rejected) : std::string());
+                     n.rejected ? fmt::format("; {} weight sets refused by the inverse", n.rejected) : std::string(),
+                     n.bounded ? fmt::format("; the covariance at its bound (the prior's trace; forgotten only along the "
+                                             "regressor) on {} updates",
+                                             n.bounded)
+                               : std::string(),
+                     a.faults() ? fmt::format("; {} faults: {} measured pairs not finite (ignored), {} covariance resets "
+                                              "to the prior (it was no longer positive definite)",
+                                              a.faults(), a.faults() - n.resets, n.resets)
+                                : std::string());
 }
 
 }  // namespace hysteron::experiment

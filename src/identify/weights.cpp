@@ -9,6 +9,7 @@
 #include <limits>
 #include <numeric>
 
+#include "../core/rls_update.hpp"
 #include "detail.hpp"
 #include "hysteron/error.hpp"
 
@@ -510,8 +511,10 @@ Rls::Rls(const ModelParams& model, double lambda, double p0)
   for (std::size_t i = 0; i < n; ++i) theta_(static_cast<Eigen::Index>(i + 1)) = s_.p[i];
   phi_ = Eigen::VectorXd::Zero(m);
   Pphi_ = Eigen::VectorXd::Zero(m);
-  K_ = Eigen::VectorXd::Zero(m);
   P_ = Eigen::MatrixXd::Identity(m, m) * p0;
+  P0_ = P_;
+  Psave_ = P_;
+  cap_ = P0_.trace();
 }
 
 void Rls::reset_state(InitialState initial, double x0) noexcept {
@@ -522,7 +525,10 @@ void Rls::reset_state(InitialState initial, double x0) noexcept {
 }
 
 double Rls::step(double x, double y) noexcept {
-  if (!std::isfinite(x) || !std::isfinite(y)) return last_;
+  if (!std::isfinite(x) || !std::isfinite(y)) {
+    ++faults_;
+    return last_;
+  }
   const double pr = step_model(s_.to_model(x), s_.model_output(y));
   return last_ = s_.units.output(pr);
 }
@@ -539,16 +545,20 @@ double Rls::step_model(double x, double y) noexcept {
   }
   const double pred = theta_.dot(phi_);
   const double e = y - pred;
-  Pphi_.noalias() = P_ * phi_;
-  const double denom = lambda_ + phi_.dot(Pphi_);
-  if (!(denom > 0) || !std::isfinite(denom)) return pred;
-  K_ = Pphi_ / denom;
-  theta_ += K_ * e;
-  P_.noalias() -= K_ * Pphi_.transpose();
-  P_ /= lambda_;
-  const Eigen::Index m = P_.rows();
-  for (Eigen::Index i = 0; i < m; ++i)
-    for (Eigen::Index j = i + 1; j < m; ++j) P_(i, j) = P_(j, i) = 0.5 * (P_(i, j) + P_(j, i));
+  if (!std::isfinite(e)) {
+    ++faults_;
+    return pred;
+  }
+  const detail::RlsMatrices a{P_.data(), nullptr,       P0_.data(), nullptr, Psave_.data(), nullptr,
+                              Pphi_.data(), static_cast<std::size_t>(P_.rows()), cap_};
+  double gain = 0.0;
+  switch (detail::rls_covariance_step(a, phi_.data(), lambda_, gain)) {
+    case detail::RlsOutcome::standard: break;
+    case detail::RlsOutcome::bounded: ++bounded_; break;
+    case detail::RlsOutcome::reset: ++resets_; ++faults_; break;
+    case detail::RlsOutcome::skipped: ++faults_; break;
+  }
+  theta_ += Pphi_ * (gain * e);
   return pred;
 }
 

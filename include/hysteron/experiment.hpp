@@ -28,6 +28,7 @@
 //                paper's text is truncated before its results: no published figures.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <span>
@@ -165,6 +166,10 @@ struct ExperimentOptions {
   // mapping (fit_references), the model's identification range, the gain trial, learning
   // (periodic references only: a note for the others); no published figures (NaN).
   std::vector<UserReference> references;
+  // Optional: asked (thread-safe) between the runs on the rig, every few thousand samples of a
+  // run and inside the fits (FitOptions::stop_requested). Once it returns true the experiment is
+  // abandoned and run_experiment throws hysteron::Stopped: a stopped experiment has no result.
+  std::function<bool()> stop_requested;
   void validate() const;         // throws hysteron::Error
 };
 

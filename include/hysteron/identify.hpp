@@ -384,6 +384,10 @@ struct FitOptions {
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
   // With num_threads != 1 it is called from worker threads, one call at a time.
   std::function<void(int, int, double)> progress;
+  // Optional: asked (from worker threads, so it must be thread-safe) after each LM iteration and
+  // between the fits (starts, candidates, censored refits). Once it returns true the fit is
+  // abandoned and fit() throws hysteron::Stopped: a stopped fit has no report.
+  std::function<bool()> stop_requested;
 
   // False (with a reason in *error) if a field is out of range.
   bool is_valid(std::string* error) const;

@@ -28,11 +28,11 @@ def test_rls_fit_passes_range():
         hysteron.rls_fit(model, x, x, passes=10**9)
 
 
-def interrupted_after(call, settle, timeout, what):
-    """Runs `call` (Python source, after `import sys, numpy as np, hysteron`) in a child, sends it
-    SIGINT `settle` s after it started and requires KeyboardInterrupt within `timeout` s; returns
-    the seconds from the signal to the child's end."""
-    code = "import sys, numpy as np, hysteron\n" + textwrap.dedent(f"""
+def interrupted_after(call, settle, timeout, what, setup=""):
+    """Runs `call` (Python source, after `import sys, numpy as np, hysteron` and `setup`) in a child,
+    sends it SIGINT `settle` s after it started and requires KeyboardInterrupt within `timeout` s;
+    returns the seconds from the signal to the child's end."""
+    code = "import sys, numpy as np, hysteron\n" + setup + "\n" + textwrap.dedent(f"""
         print("started", flush=True)
         try:
             {call}
@@ -73,3 +73,50 @@ def test_ctrl_c_stops_a_long_sweep_and_writes_nothing(tmp_path):
     interrupted_after(f"hysteron.run_sweep('all', vary=['load.mass={masses}'], learning_periods=0, jobs=2, "
                       f"out={str(out)!r})", 1.0, 60, "run_sweep")
     assert not out.exists()
+
+
+# A record of the simulated rig (pressure in, contraction out; 750 samples): seconds of fitting
+# for auto (7.5 s on 2 loaded cores).
+RIG_RECORD = ("_r = hysteron.PamRig(seed=1).run_pressure(hysteron.gpi_identification_pressure(4e-2), "
+              "control_period=4e-2)\n"
+              "x, y = _r['pressure_mpa'], _r['contraction_mm']")
+
+
+def uninterrupted_seconds(call, setup=""):
+    scope = {"np": np, "hysteron": hysteron}
+    exec(setup, scope)
+    t0 = time.monotonic()
+    exec(call, scope)
+    return time.monotonic() - t0
+
+
+def check_stops_promptly(call, setup, what):
+    # the same call without a signal, then with SIGINT 0.5 s into it: it must end (KeyboardInterrupt)
+    # in less than half the uninterrupted time (before the fix: after all of it, the result dropped)
+    whole = uninterrupted_seconds(call, setup)
+    assert whole > 2.0, f"{what} took {whole:.2f} s: too short to tell a stop from the end"
+    settle = 0.5
+    elapsed = interrupted_after(call, settle, 10 * whole + 30, what, setup)
+    print(f"{what}: {whole:.2f} s uninterrupted, stopped {elapsed:.3f} s after SIGINT")
+    assert settle + elapsed < 0.5 * whole
+
+
+def test_ctrl_c_stops_an_auto_fit_promptly():
+    check_stops_promptly("hysteron.fit(x, y, model='auto', num_threads=1)", RIG_RECORD, "fit(model='auto')")
+
+
+def test_ctrl_c_stops_an_auto_fit_on_threads_promptly():
+    check_stops_promptly("hysteron.fit(x, y, model='auto')", RIG_RECORD, "fit(model='auto', num_threads=0)")
+
+
+def test_ctrl_c_stops_run_experiment_promptly(tmp_path):
+    out = tmp_path / "run"
+    check_stops_promptly(f"hysteron.run_experiment('mpi-openloop', learning_periods=10, out={str(out)!r})", "",
+                         "run_experiment('mpi-openloop')")
+    # the uninterrupted run wrote its directory; remove it, and the stopped one must write nothing
+    import shutil
+    shutil.rmtree(out)
+    interrupted_after(f"hysteron.run_experiment('mpi-openloop', learning_periods=10, out={str(out)!r})", 0.5, 60,
+                      "run_experiment")
+    assert not out.exists()
+

@@ -42,6 +42,8 @@ class Progress : public ceres::IterationCallback {
   Progress(const FitOptions& o, int start) : o_(o), start_(start) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     if (o_.progress) o_.progress(start_, s.iteration, s.cost);
+    // a stop ends LM here; solve_once then throws Stopped (no exception through Ceres)
+    if (o_.stop_requested && o_.stop_requested()) return ceres::SOLVER_ABORT;
     return ceres::SOLVER_CONTINUE;
   }
 
@@ -105,12 +107,14 @@ Solved solve_once(const LmProblem& lm, const Data& d, std::vector<double> theta,
   so.num_threads = 1;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
+  detail::check_stop(o);
   Progress cb(o, start);
-  if (o.progress) so.callbacks.push_back(&cb);
+  if (o.progress || o.stop_requested) so.callbacks.push_back(&cb);
   Stall stall(o.stall_iterations, o.stall_tolerance);
   if (o.stall_tolerance > 0) so.callbacks.push_back(&stall);
   ceres::Solver::Summary summary;
   ceres::Solve(so, problem.get(), &summary);
+  detail::check_stop(o);
   out.theta = theta;
   out.initial_cost = summary.initial_cost;
   out.final_cost = summary.final_cost;

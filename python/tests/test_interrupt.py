@@ -120,3 +120,28 @@ def test_ctrl_c_stops_run_experiment_promptly(tmp_path):
                       "run_experiment")
     assert not out.exists()
 
+
+def test_a_busy_rig_refuses_other_threads():
+    # while run_pressure runs (without the GIL) another thread's step, reset, copy or state raises
+    # hysteron.Error, and the run's result is the undisturbed one
+    import copy
+    import threading
+    profile = np.full(100000, 0.3)
+    rig = hysteron.PamRig(seed=1)
+    result = {}
+    th = threading.Thread(target=lambda: result.update(rig.run_pressure(profile)))
+    th.start()
+    while th.is_alive() and "running" not in repr(rig):
+        time.sleep(0)
+    assert th.is_alive(), "run_pressure ended before it was seen running: use a longer profile"
+    for call in (lambda: rig.step(0.5), rig.reset, lambda: rig.reset_at_pressure(1e5), lambda: copy.copy(rig),
+                 lambda: copy.deepcopy(rig), lambda: rig.state, lambda: rig.time, lambda: rig.ok,
+                 lambda: rig.run_pressure(np.full(3, 0.1))):
+        with pytest.raises(hysteron.Error, match="PamRig: run_pressure is running in another thread"):
+            call()
+    th.join()
+    ref = hysteron.PamRig(seed=1).run_pressure(profile)
+    assert np.array_equal(result["contraction_mm"], ref["contraction_mm"])
+    assert rig.time > 0 and "running" not in repr(rig)
+    rig.step(0.2)  # idle again
+    assert copy.copy(rig).time == rig.time

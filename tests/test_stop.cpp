@@ -1,10 +1,12 @@
 // Stopping a fit and an experiment (FitOptions / ExperimentOptions::stop_requested: the Python
-// module's Ctrl-C).
+// module's Ctrl-C), and the CPUs the default thread counts use (usable_cpus).
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <thread>
 #include <vector>
 
 #include "hysteron/error.hpp"
@@ -34,6 +36,28 @@ std::pair<std::vector<double>, std::vector<double>> gpi_record(int legs) {
 }
 
 }  // namespace
+
+TEST(UsableCpus, CountsTheAffinityMaskOfTheCallingThread) {
+  const unsigned all = usable_cpus();
+  EXPECT_GE(all, 1u);
+  cpu_set_t mask;
+  CPU_ZERO(&mask);
+  ASSERT_EQ(sched_getaffinity(0, sizeof mask, &mask), 0);
+  if (CPU_COUNT(&mask) < 2) GTEST_SKIP() << "one CPU allowed: nothing to restrict";
+  EXPECT_LE(all, static_cast<unsigned>(CPU_COUNT(&mask)));  // never more than the mask
+  int first = 0;
+  while (!CPU_ISSET(first, &mask)) ++first;
+  unsigned in_thread = 0;
+  std::thread t([&] {  // taskset -c FIRST: only the thread's mask changes
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(first, &one);
+    if (sched_setaffinity(0, sizeof one, &one) == 0) in_thread = usable_cpus();
+  });
+  t.join();
+  EXPECT_EQ(in_thread, 1u);  // hardware_concurrency() said CPU_COUNT of the machine here
+  EXPECT_EQ(usable_cpus(), all);
+}
 
 TEST(FitStop, AStopEndsTheFitWithStoppedAndNoReport) {
   const auto [x, y] = gpi_record(40);

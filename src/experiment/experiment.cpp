@@ -465,6 +465,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   fo.mpi_asym_mirror = false;
   fo.train = {0, train_end};
   fo.seed = static_cast<unsigned>(o.seed);
+  fo.num_threads = o.fit_threads;
   fo.stop_requested = o.stop_requested;  // and so every fit of the run (candidate_fit_options copies fo)
   res.fit = fit_checked(idf, fo, "paper's model", p_max);
   res.validation =

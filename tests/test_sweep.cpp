@@ -338,6 +338,26 @@ TEST(SweepRun, StopsStartingRunsWhenAStopIsRequested) {
   EXPECT_EQ(run_sweep(o).runs.size(), 22u);
 }
 
+TEST(SweepRun, EachRunFitsOnOneThread) {
+  // the runs are the sweep's threads: a run's fits on usable_cpus() threads more would multiply them
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.variants = parse_vary("load.mass=10,20");
+  o.jobs = 2;
+  std::atomic<int> runs{0}, one{0};
+  o.runner = [&](const ExperimentOptions& eo) {
+    ++runs;
+    if (eo.fit_threads == 1) ++one;
+    ExperimentOptions ok = eo;
+    ok.rig.load.damping = 1.0;
+    return fake_experiment(ok);
+  };
+  (void)run_sweep(o);
+  EXPECT_GE(runs.load(), 2);
+  EXPECT_EQ(one.load(), runs.load());
+  EXPECT_EQ(ExperimentOptions{}.fit_threads, 0);  // alone, a run's fits use every usable CPU
+}
+
 TEST(SweepRun, ThreadPoolResultsDoNotDependOnTheNumberOfThreads) {
   SweepOptions o;
   o.experiments = {"gpi-pid", "mpi-pwm"};

@@ -11,4 +11,12 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Thrown by fit() and run_experiment() when their stop_requested hook returned true (e.g. the
+// Python module's Ctrl-C): the work was abandoned and there is no result. Not an Error (the
+// input was fine), so the handlers that turn an Error into a status or a note let it through.
+class Stopped : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 }  // namespace hysteron

@@ -28,6 +28,7 @@
 //                paper's text is truncated before its results: no published figures.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <span>
@@ -166,6 +167,13 @@ struct ExperimentOptions {
   // mapping (fit_references), the model's identification range, the gain trial, learning
   // (periodic references only: a note for the others); no published figures (NaN).
   std::vector<UserReference> references;
+  // Threads of each fit (FitOptions::num_threads; 0: one per usable CPU). The result does not
+  // depend on it; hysteron sweep sets 1, its runs being its threads.
+  int fit_threads = 0;
+  // Optional: asked (thread-safe) between the runs on the rig, every few thousand samples of a
+  // run and inside the fits (FitOptions::stop_requested). Once it returns true the experiment is
+  // abandoned and run_experiment throws hysteron::Stopped: a stopped experiment has no result.
+  std::function<bool()> stop_requested;
   void validate() const;         // throws hysteron::Error
 };
 

@@ -310,6 +310,12 @@ std::vector<double> censor_clipped(std::span<const double> y, std::span<const do
 std::vector<double> simulate_record(const ModelParams& params, std::span<const double> x,
                                     InitialState initial = InitialState::virgin);
 
+// The CPUs this process may run on: those of its affinity mask (taskset, sched_setaffinity),
+// at most the cgroup v2 quota (/sys/fs/cgroup/cpu.max, rounded up), at least 1; where neither
+// can be read, std::thread::hardware_concurrency(). The default thread count of fit() and
+// run_sweep().
+unsigned usable_cpus() noexcept;
+
 // Options of fit(). Every field has a sensible default; is_valid() checks them.
 struct FitOptions {
   FitModel model = FitModel::gpi;
@@ -328,7 +334,7 @@ struct FitOptions {
   // (A larger grid of candidates is screened by cost first; this many are refined.)
   int num_starts = 2;
   // Threads that refine the starts concurrently (each start on one thread; the
-  // result does not depend on it). 0: one per hardware thread; 1: sequential.
+  // result does not depend on it). 0: one per usable CPU (usable_cpus()); 1: sequential.
   int num_threads = 0;
   // Seed of the jitter added to the candidate grid (reproducible).
   unsigned seed = 0;
@@ -401,6 +407,10 @@ struct FitOptions {
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
   // With num_threads != 1 it is called from worker threads, one call at a time.
   std::function<void(int, int, double)> progress;
+  // Optional: asked (from worker threads, so it must be thread-safe) after each LM iteration and
+  // between the fits (starts, candidates, censored refits). Once it returns true the fit is
+  // abandoned and fit() throws hysteron::Stopped: a stopped fit has no report.
+  std::function<bool()> stop_requested;
 
   // False (with a reason in *error) if a field is out of range.
   bool is_valid(std::string* error) const;

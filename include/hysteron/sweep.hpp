@@ -122,7 +122,7 @@ struct SweepOptions {
   // load, a wider band, a slower regulator), the loops not re-tuned. false: each variant is
   // identified and tuned on its own rig.
   bool identify_on_base = false;
-  unsigned jobs = 0;                      // threads; 0 = std::thread::hardware_concurrency()
+  unsigned jobs = 0;                      // threads; 0 = usable_cpus() (each run fits on one thread)
   std::function<void(const SweepProgress&)> progress;  // optional
   // Optional: asked (from the worker threads, so it must be thread-safe) before each run starts.
   // Once it returns true no further run starts; the runs under way end, and run_sweep throws

@@ -1,5 +1,11 @@
 #pragma once
 // Helpers shared by the bindings in more.cpp and py_*.cpp.
+#include <atomic>
+#include <chrono>
+#include <future>
+#include <optional>
+#include <utility>
+
 #include "bindings.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/io/model_file.hpp"
@@ -29,6 +35,40 @@ InitialState initial_state_from(const std::string& name);
 std::pair<double, double> pair_arg(const py::handle& obj, std::string_view what);
 py::dict metrics_dict(const FitMetrics& m);
 py::dict fit_dict(const FitReport& r);
+
+// work() without the GIL, on a thread of its own, while this (Python's) thread looks for signals
+// every 100 ms: on Ctrl-C `stop` is set (work's stop_requested hook reads it; work then ends
+// soon, throwing hysteron::Stopped), work's end is awaited and its result or exception dropped,
+// and the signal's exception (KeyboardInterrupt) is raised. Otherwise work's result is returned
+// or its exception rethrown. (Signals reach only Python's main thread: from another thread the
+// work runs to its end.)
+template <class Work>
+auto run_interruptible(std::atomic<bool>& stop, Work work) -> decltype(work()) {
+  std::optional<decltype(work())> r;
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    auto done = std::async(std::launch::async, std::move(work));
+    while (done.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+      py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() != 0) {  // the signal's exception is now set in this thread
+        interrupted = true;
+        stop.store(true);
+        break;
+      }
+    }
+    if (interrupted) {
+      try {
+        (void)done.get();  // a stopped fit or run throws Stopped; a result that came first is dropped
+      } catch (...) {
+      }
+    } else {
+      r.emplace(done.get());  // the work's own failure is rethrown here
+    }
+  }
+  if (interrupted) throw py::error_already_set();
+  return std::move(*r);
+}
 
 void bind_identify(py::module_& m);    // py_identify.cpp: fit, evaluate, Rls, ...
 void bind_rig(py::module_& m);         // py_rig.cpp: PamRig, signals

@@ -26,36 +26,13 @@ namespace hysteron::python {
 
 namespace {
 
-// run_sweep without the GIL, on a thread of its own, while this (Python's main) thread looks
-// for signals every 100 ms: Ctrl-C stops new runs from starting, waits for the runs under way
-// (seconds each without learning, tens of seconds with it) and raises KeyboardInterrupt.
+// run_sweep without the GIL while this thread looks for signals (run_interruptible): Ctrl-C
+// stops new runs from starting, waits for the runs under way (seconds each without learning,
+// tens of seconds with it) and raises KeyboardInterrupt.
 SweepResult run_sweep_interruptible(SweepOptions o) {
   std::atomic<bool> stop{false};
   o.stop_requested = [&stop] { return stop.load(); };
-  bool interrupted = false;
-  SweepResult r;
-  {
-    py::gil_scoped_release release;
-    auto done = std::async(std::launch::async, [&o] { return run_sweep(o); });
-    while (done.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
-      py::gil_scoped_acquire gil;
-      if (PyErr_CheckSignals() != 0) {  // the signal's exception is now set in this thread
-        interrupted = true;
-        stop.store(true);
-        break;
-      }
-    }
-    if (interrupted) {
-      try {
-        (void)done.get();  // the runs under way end; the sweep then throws "stopped"
-      } catch (...) {
-      }
-    } else {
-      r = done.get();  // a failure of the sweep itself is rethrown here
-    }
-  }
-  if (interrupted) throw py::error_already_set();
-  return r;
+  return run_interruptible(stop, [&o] { return run_sweep(o); });
 }
 
 
@@ -245,11 +222,10 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         o.references = std::move(user);
         if (!plant.is_none()) o.rig = rig_from(plant, "plant");
         if (!tracking_plant.is_none()) o.tracking_rig = rig_from(tracking_plant, "tracking_plant");
-        ExperimentResult r;
-        {
-          py::gil_scoped_release release;
-          r = run_experiment(o);
-        }
+        // Ctrl-C stops the run within a fraction of a second (ExperimentOptions::stop_requested)
+        std::atomic<bool> stop{false};
+        o.stop_requested = [&stop] { return stop.load(); };
+        ExperimentResult r = run_interruptible(stop, [&o] { return run_experiment(o); });
         if (!out.empty()) r.write(out);
         if (!report_path.empty())
           report::write_experiment_report(r, report_path,

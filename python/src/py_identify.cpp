@@ -115,11 +115,10 @@ void bind_identify(py::module_& m) {
         o.mpi_asym_mirror = mirror;
         // copies: another thread may change the caller's arrays while the fit runs without the GIL
         std::vector<double> xs = as_vector(x, "fit: x"), ys = as_vector(y, "fit: y");
-        FitReport r;
-        {
-          py::gil_scoped_release release;
-          r = fit(xs, ys, o);
-        }
+        // Ctrl-C stops the fit within a fraction of a second (FitOptions::stop_requested)
+        std::atomic<bool> stop{false};
+        o.stop_requested = [&stop] { return stop.load(); };
+        FitReport r = run_interruptible(stop, [&] { return fit(xs, ys, o); });
         if (!report.empty()) {
           report::FitData data;
           data.x = std::move(xs);

@@ -1,5 +1,7 @@
 // Bindings of the simulated muscle rig and the papers' signals.
 #include <cmath>
+#include <mutex>
+#include <unordered_set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -12,6 +14,35 @@
 namespace hysteron::python {
 
 namespace {
+
+// The rigs whose run_pressure is under way: it runs without the GIL, so another Python thread
+// may call the same rig meanwhile, and a step or reset there changed the run's result silently.
+// Their other methods raise hysteron.Error instead (idle() at their start).
+std::mutex busy_mutex;
+std::unordered_set<const PamRig*> busy_rigs;
+
+void idle(const PamRig& r) {
+  const std::lock_guard<std::mutex> lock(busy_mutex);
+  if (busy_rigs.count(&r) != 0) throw Error("PamRig: run_pressure is running in another thread");
+}
+
+// Marks `r` busy for its lifetime (run_pressure); hysteron.Error if it is already.
+class BusyRig {
+ public:
+  explicit BusyRig(const PamRig& r) : r_(r) {
+    const std::lock_guard<std::mutex> lock(busy_mutex);
+    if (!busy_rigs.insert(&r_).second) throw Error("PamRig: run_pressure is running in another thread");
+  }
+  ~BusyRig() {
+    const std::lock_guard<std::mutex> lock(busy_mutex);
+    busy_rigs.erase(&r_);
+  }
+  BusyRig(const BusyRig&) = delete;
+  BusyRig& operator=(const BusyRig&) = delete;
+
+ private:
+  const PamRig& r_;
+};
 
 PamRigParams rig_params_from(const py::object& params) {
   if (params.is_none()) return {};
@@ -97,7 +128,7 @@ void bind_rig(py::module_& m) {
       "refuse the rig ('' if they do not), and where the vented muscle stalls after a hold at the top of its reach "
       "('vented_stall_m', 'creep_return_speed_m_s', 'weak_return': the warning, '' if none; docs/plant.md).");
 
-  def_copy(py::class_<PamRig>(m, "PamRig", R"doc(
+  py::class_<PamRig>(m, "PamRig", R"doc(
 Simulated rig: a Festo DMSP-20-500 pneumatic muscle lifting a hanging mass (and an
 optional return spring: load.spring_rate, load.spring_preload), fed
 by a proportional pressure regulator or by PWM switching valves (docs/plant.md).
@@ -106,14 +137,36 @@ PamRig(params=None, seed=1): params is a dict with optional sections "muscle",
 "hysteresis", "air", "regulator", "valves", "load", "sensors", "simulation"
 (see hysteron.rig_params()), or the path of such a JSON file. SI units inside;
 run_pressure takes and returns MPa and mm. Runs are reproducible bit for bit
-for a given seed.)doc"))
+for a given seed. While run_pressure runs (without the GIL), the rig's other methods raise
+hysteron.Error from another thread.)doc")
+      .def(
+          "__copy__",
+          [](const PamRig& self) {
+            idle(self);
+            return PamRig(self);
+          },
+          "A copy in the same state.")
+      .def(
+          "__deepcopy__",
+          [](const PamRig& self, const py::handle&) {
+            idle(self);
+            return PamRig(self);
+          },
+          py::arg("memo"), "A copy in the same state.")
       .def(py::init([](const py::object& params, const IntArg& seed) {
              return PamRig(rig_params_from(params), uint_arg(seed, "PamRig: seed"));
            }),
            py::arg("params") = py::none(), py::arg("seed") = 1)
-      .def("reset", &PamRig::reset, "Vented muscle at rest, t = 0, RNG re-seeded.")
+      .def(
+          "reset",
+          [](PamRig& r) {
+            idle(r);
+            r.reset();
+          },
+          "Vented muscle at rest, t = 0, RNG re-seeded.")
       .def("reset_at_pressure",
            [](PamRig& r, double p) {
+             idle(r);
              finite_arg(p, "PamRig.reset_at_pressure: p_gauge");
              // the C++ clamps to what the supply can give; a value outside is a mistake (often MPa given as Pa)
              const AirParams& a = r.params().air;
@@ -137,6 +190,7 @@ for a given seed.)doc"))
       .def(
           "step",
           [](PamRig& r, double pressure_command, double pwm_duty, const std::string& mode) {
+            idle(r);
             check_command_mpa(r, pressure_command, "PamRig.step: pressure_command");
             RigInputs in;
             in.pressure_command = pressure_command;
@@ -161,6 +215,7 @@ for a given seed.)doc"))
             const auto every = control_steps(control_period, r.dt(), "run_pressure");
             std::vector<double> t, cmd, pr, x, xm;
             for (auto* v : {&t, &cmd, &pr, &x, &xm}) v->reserve(p.size());
+            const BusyRig busy(r);  // until the run's end: another thread's step or reset raises
             {
               py::gil_scoped_release release;
               RigInputs in;
@@ -200,15 +255,28 @@ more: Pa given as MPa).
 Returns numpy arrays logged at the end of each period: t [s], pressure_command_mpa,
 pressure_mpa (measured), contraction_mm (true), contraction_measured_mm.
 Raises hysteron.Error if the simulation diverges.)doc")
-      .def_property_readonly("time", &PamRig::time, "Simulated time [s].")
+      .def_property_readonly(
+          "time",
+          [](const PamRig& r) {
+            idle(r);
+            return r.time();
+          },
+          "Simulated time [s].")
       .def_property_readonly("dt", &PamRig::dt, "Rig step [s].")
       .def_property_readonly("seed", &PamRig::seed, "Seed of the sensor-noise generator.")
-      .def_property_readonly("ok", &PamRig::ok, "False once the simulation diverged.")
+      .def_property_readonly(
+          "ok",
+          [](const PamRig& r) {
+            idle(r);
+            return r.ok();
+          },
+          "False once the simulation diverged.")
       .def_property_readonly(
           "params", [](const PamRig& r) { return from_json(rig_params_to_json(r.params())); }, "Parameter dict.")
       .def_property_readonly(
           "state",
           [](const PamRig& r) {
+            idle(r);
             const RigState& s = r.state();
             py::dict d;
             d["pressure"] = s.pressure;
@@ -221,6 +289,10 @@ Raises hysteron.Error if the simulation diverges.)doc")
           },
           "The continuous state (SI units, pressure absolute).")
       .def("__repr__", [](const PamRig& r) {
+        {
+          const std::lock_guard<std::mutex> lock(busy_mutex);
+          if (busy_rigs.count(&r) != 0) return fmt::format("PamRig(seed={}, dt={}, running)", r.seed(), r.dt());
+        }
         return fmt::format("PamRig(seed={}, dt={}, time={}, ok={})", r.seed(), r.dt(), r.time(), r.ok() ? "True" : "False");
       });
 

@@ -240,6 +240,10 @@ std::string saturation_note(const TrackingRun& run, std::size_t from, std::size_
       rms_in, rms_out, why);
 }
 
+void check_stop(const ExperimentOptions& o) {
+  if (o.stop_requested && o.stop_requested()) throw Stopped("experiment stopped (stop requested)");
+}
+
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
                   std::size_t lead, bool periodic, const Law& law, double p_max) {
   PamRig rig(o.tracking_rig ? *o.tracking_rig : o.rig, seed);
@@ -251,6 +255,7 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
     v->reserve(n);
   std::size_t k = 0;
   rig.run(static_cast<double>(n) * o.control_period, o.control_period, [&](const RigOutputs& out) {
+    if (k % 4096 == 0) check_stop(o);  // a learning run lasts minutes of the rig's time
     const std::size_t i = std::min(k, n - 1);
     const std::size_t ahead = periodic ? (i + lead) % n : std::min(i + lead, n - 1);
     const Sample s{ref_m[i], ref_m[ahead], out.contraction_measured, out.pressure_measured * 1e-6, k};

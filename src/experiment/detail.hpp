@@ -235,6 +235,8 @@ std::string sensor_gap_note(const std::vector<std::string>& gaps, const PamRigPa
 // p_max [MPa] (the run's limit) counts as saturated.
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
                   std::size_t lead, bool periodic, const Law& law, double p_max);
+// Throws hysteron::Stopped where o.stop_requested says stop (ExperimentOptions::stop_requested).
+void check_stop(const ExperimentOptions& o);
 
 }  // namespace hysteron::experiment
 

@@ -448,7 +448,9 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   // 1. identification run and the paper's fit on the major loop (the papers' inputs scaled to a
   //    limit below their 0..0.6 MPa: paper_pressure_input)
   const std::vector<double> paper_input = paper_pressure_input(spec.id_pressure(tc), p_max);
+  check_stop(o);
   const IdentificationRun id = identification_run(o.rig, o.seed, paper_input, tc, make_actuator(), p_max);
+  check_stop(o);
   res.identification = id;
   res.id_train_end = static_cast<std::size_t>(std::lround(spec.train_seconds / tc));
   const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / (kFitRate * tc))));
@@ -463,6 +465,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   fo.mpi_asym_mirror = false;
   fo.train = {0, train_end};
   fo.seed = static_cast<unsigned>(o.seed);
+  fo.num_threads = o.fit_threads;
+  fo.stop_requested = o.stop_requested;  // and so every fit of the run (candidate_fit_options copies fo)
   res.fit = fit_checked(idf, fo, "paper's model", p_max);
   res.validation =
       evaluate_censored(res.fit.model, idf.pressure_mpa, idf.contraction_mm, {train_end, IndexRange::npos});
@@ -483,6 +487,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       const double input_max = *std::max_element(paper_input.begin(), paper_input.end());
       const double reached_mm = *std::max_element(sm.x_mm.begin(), sm.x_mm.end());
       extended_run = identification_run(o.rig, o.seed, scaled_to(paper_input, ext, true), tc, make_actuator(), p_max);
+      check_stop(o);
       extended_runf = decimate(*extended_run, every);
       res.messages.push_back(fmt::format(
           "the paper's identification input goes up to {:.3f} MPa, where this rig's contraction stayed at or below "
@@ -515,6 +520,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   if (rescaled) {
     res.messages.push_back(range.note());
     scaled_run = identification_run(o.rig, o.seed, scaled_to(id_input, range.p_id_mpa), tc, make_actuator(), p_max);
+    check_stop(o);
     scaled_runf = decimate(*scaled_run, every);
   }
   const IdentificationRun& ids = rescaled ? *scaled_run : id_run;
@@ -525,6 +531,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
                          scaled_to(paper_pressure_input(spec.id2_pressure(tc), p_max), range.p_id_mpa), tc,
                          make_actuator(), p_max),
       every);
+  check_stop(o);
   choose_model(o, spec, idsf, id2, fo, static_cast<double>(every) * tc, p_max, res);
   res.baseline_model = straight_line(id_run, p_max);
 
@@ -571,8 +578,10 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
   res.dynamics.relay_period_s = valves_relay.relay_period_s;
   res.dynamics.relay_level_mpa = valves_relay.relay_level_mpa;
   res.dynamics.relay_duty = valves_relay.relay_duty;
+  check_stop(o);
   position_relay_test(o.rig, o.seed + 32452843, tc, make_actuator, res.dynamics, p_max, top,
                       stroke_pressures(id_run, smooth));
+  check_stop(o);
   fit_load_mode(res.dynamics);
   if (const RigDynamics fitted = res.dynamics; fit_fopdt_to_relay_phase(res.dynamics))
     res.messages.push_back(fmt::format(

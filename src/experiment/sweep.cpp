@@ -486,7 +486,7 @@ SweepResult run_sweep(const SweepOptions& options) {
   }
   std::size_t total = 0;
   for (std::size_t k = 0; k < slots; ++k) total += same_as[k] == k;
-  unsigned jobs = options.jobs ? options.jobs : std::max(1u, std::thread::hardware_concurrency());
+  unsigned jobs = options.jobs ? options.jobs : usable_cpus();
   jobs = static_cast<unsigned>(std::min<std::size_t>(jobs, total));
   r.jobs = jobs;
   // Execution order (not the slots' order): experiments with more references first, so that
@@ -546,6 +546,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.references = options.references;
         eo.complete_gain_trials = false;       // the sweep reports the trial's choice, not its curve
         eo.fit_ineligible_candidates = false;  // ... and the model auto chose, not the others
+        eo.fit_threads = 1;  // the runs are the sweep's threads (the fits' results do not depend on it)
         const experiment::Spec* spec = experiment::find_spec(run.experiment);
         run.command_limit_mpa = spec ? experiment::run_pressure_limit(eo, spec->valves) : nan;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);

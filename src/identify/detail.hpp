@@ -73,10 +73,12 @@ struct Pinned {
 std::array<Pinned, 2> pinned_runs(std::span<const double> a, std::span<const double> b, IndexRange range);
 
 // Runs fn(k) for k = 0..count-1, spread over up to `threads` threads (0: one per
-// hardware thread; 1: in order on this thread). Each k must be independent, so the
+// usable CPU; 1: in order on this thread). Each k must be independent, so the
 // results do not depend on the thread count. The first exception (lowest k) is
 // rethrown once all have finished. (lm.cpp)
 void parallel_for(std::size_t count, int threads, const std::function<void(std::size_t)>& fn);
+// Throws hysteron::Stopped where o.stop_requested says stop (FitOptions::stop_requested).
+void check_stop(const FitOptions& o);
 
 // auto's choice among candidates by hold-out score (least wins; NaN: no score): of the scores
 // within `tie` of the least, the one with the fewest parameters (the first of equals).

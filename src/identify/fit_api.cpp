@@ -786,6 +786,7 @@ FitReport fit_orientations(std::span<const double> x, std::span<const double> y,
 // preisach and kp models fitted on an input of 1e200 refused that input: beyond their input bound).
 FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
                   Clock::time_point t0) {
+  detail::check_stop(o);  // Stopped is no Error: it passes the catch below
   try {
     return fit_orientations(x, y, o, tr, t0);
   } catch (const Error& e) {
@@ -976,6 +977,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     return options.model == FitModel::automatic ? fit_auto(x, yy, options, tr, t0) : fit_one(x, yy, options, tr, t0);
   };
   FitReport rep = run(y);
+  detail::check_stop(options);  // a fit that saw the stop after its LM has no report either
   Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
   // An output pinned at its least or largest value while the input moves on (pinned_runs), where detect_clipping
   // saw no limit (fewer than 50 samples at it or 100 in all, no noise to tell it by): a limit as well.
@@ -996,6 +998,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
         censored_output(y, simulate_record(rep.model, x, options.initial_state), clip, &n);
     if (n == 0) break;
     FitReport next = run(yc);
+    detail::check_stop(options);
     if (!has_model(next.status)) break;
     rep = std::move(next);
     censored = n;

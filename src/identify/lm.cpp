@@ -42,6 +42,8 @@ class Progress : public ceres::IterationCallback {
   Progress(const FitOptions& o, int start) : o_(o), start_(start) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     if (o_.progress) o_.progress(start_, s.iteration, s.cost);
+    // a stop ends LM here; solve_once then throws Stopped (no exception through Ceres)
+    if (o_.stop_requested && o_.stop_requested()) return ceres::SOLVER_ABORT;
     return ceres::SOLVER_CONTINUE;
   }
 
@@ -105,12 +107,14 @@ Solved solve_once(const LmProblem& lm, const Data& d, std::vector<double> theta,
   so.num_threads = 1;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
+  detail::check_stop(o);
   Progress cb(o, start);
-  if (o.progress) so.callbacks.push_back(&cb);
+  if (o.progress || o.stop_requested) so.callbacks.push_back(&cb);
   Stall stall(o.stall_iterations, o.stall_tolerance);
   if (o.stall_tolerance > 0) so.callbacks.push_back(&stall);
   ceres::Solver::Summary summary;
   ceres::Solve(so, problem.get(), &summary);
+  detail::check_stop(o);
   out.theta = theta;
   out.initial_cost = summary.initial_cost;
   out.final_cost = summary.final_cost;
@@ -385,7 +389,7 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
   if (threads == 0 && !starts.empty() && !small) {
     const double rows = static_cast<double>(d.train.end);
     const double per_start = kLmCopies * rows * static_cast<double>(starts.front().size() + 1) * sizeof(double);
-    const auto hw = static_cast<double>(std::max(1u, std::thread::hardware_concurrency()));
+    const auto hw = static_cast<double>(usable_cpus());
     threads = static_cast<int>(std::clamp(std::floor(kLmConcurrentBytes / per_start), 1.0, hw));
   }
   detail::parallel_for(starts.size(), threads, [&](std::size_t k) {
@@ -446,12 +450,12 @@ namespace hysteron::detail {
 bool set_lm_compression(bool on) { return fitting::compress_lm.exchange(on); }
 
 // Runs fn(k) for k = 0..count-1, the k spread over up to `threads` threads (0: one per
-// hardware thread; 1: in order on this thread). Each k is independent, so the
+// usable CPU; 1: in order on this thread). Each k is independent, so the
 // results do not depend on the thread count. The first exception (lowest k) thrown
 // by a task is rethrown once all have finished. If a thread cannot be created the
 // work runs on the threads that exist.
 void parallel_for(std::size_t count, int threads, const std::function<void(std::size_t)>& fn) {
-  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : std::max(1u, std::thread::hardware_concurrency());
+  std::size_t t = threads > 0 ? static_cast<std::size_t>(threads) : usable_cpus();
   t = std::min(t, count);
   if (t <= 1) {
     for (std::size_t k = 0; k < count; ++k) fn(k);

@@ -100,6 +100,8 @@ inline RlsOutcome rls_covariance_step(const RlsMatrices& a, const double* phi, d
   RlsOutcome out = RlsOutcome::standard;
   double denom = 0.0;
   gain = 0.0;
+  for (std::size_t i = 0; i < m; ++i)
+    if (!std::isfinite(phi[i])) return RlsOutcome::skipped;  // a non-finite regressor: P is not at fault
   if (!load(a, phi, lambda, denom)) {
     to_prior(a);
     if (!load(a, phi, lambda, denom)) return RlsOutcome::skipped;

@@ -233,8 +233,10 @@ void remove_temporary_files() noexcept {
   g_temp_handlers.fetch_add(1);
   for (const bool directories : {false, true})  // the files, then the directories they were in
     for (TempNode* n = g_temp_head.load(); n != nullptr; n = n->next)
-      if (n->directory.load() == directories)
-        if (const char* p = n->path.load()) directories ? ::rmdir(p) : ::unlink(p);
+      // path before directory: register_temp stores directory then path, so a path seen here comes
+      // with its own kind (a reused node is never skipped as the other kind)
+      if (const char* p = n->path.load(); p != nullptr && n->directory.load() == directories)
+        directories ? ::rmdir(p) : ::unlink(p);
   g_temp_handlers.fetch_sub(1);
 }
 

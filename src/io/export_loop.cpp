@@ -184,14 +184,7 @@ static void $P_pid_reset($P_pid_state *s, const $P_pid_gains *k)
   s->initialized = 0;
   s->saturated = 0;
   s->faults = 0;
-  s->gain_scale = 1.0;
-  s->guard_cuts = 0;
-  s->guard_sign = 0;
-  s->guard_iae = 0.0;
-  s->guard_samples = 0;
-  s->guard_count = 0.0;
-  s->guard_last = 0.0;
-  s->guard_last2 = 0.0;
+  $P_pid_restart_guard(s);
 }
 
 /* The inverse feedforward (hysteron::InverseFeedforward::step): the pressure [MPa] the model

@@ -531,7 +531,7 @@ class AdaptiveInverse {
   // theta_: projected estimate (in use unless the guard says otherwise); theta_hat_: the
   // unconstrained RLS estimate; P_, R_ = P_^-1: m x m, row-major.
   std::vector<double> theta_, theta_hat_, theta_fixed_, clip_, w_, phi_, pphi_, P_, R_;
-  std::vector<double> P0_, R0_, Psave_, Rsave_;  // the prior's P_ and R_; scratch
+  std::vector<double> P0_, R0_;  // the prior's P_ and R_
   std::vector<double> zb_, zv_;              // dead-zone map: breakpoints and values there
   std::vector<double> xs_;                   // the last delay + 1 inputs (ring)
   std::size_t xi_ = 0, xn_ = 0;              // next slot, inputs held

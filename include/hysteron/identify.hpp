@@ -626,7 +626,7 @@ class Rls {
   Structure<double> s_;
   std::vector<double> y_;
   Eigen::VectorXd theta_, phi_, Pphi_;
-  Eigen::MatrixXd P_, P0_, Psave_;  // covariance, its prior, scratch
+  Eigen::MatrixXd P_, P0_;  // covariance, its prior
   double lambda_;
   double cap_ = 0.0;  // trace(P0_)
   double last_ = 0.0;

@@ -14,8 +14,9 @@
 // uniform rescaling of P at the cap makes it: the condition number then grows with the hold
 // until rounding makes P indefinite). A P that is no longer positive definite (phi^T P phi < 0,
 // a diagonal entry <= 0, anything non-finite) is reset to the prior and reported.
-// Allocation-free, noexcept, deterministic. P, R, their priors and the scratch copies are
-// m x m symmetric (either storage order).
+// Allocation-free, noexcept, deterministic. P, R and their priors are m x m symmetric (either
+// storage order). Which step applies is known before P is written: the standard step's trace is
+// sum_i (P_ii - (P phi)_i^2 / denom) / lambda.
 #pragma once
 
 #include <cmath>
@@ -35,8 +36,6 @@ struct RlsMatrices {
   double* R;           // information P^-1 kept alongside, or nullptr
   const double* P0;    // priors
   const double* R0;    // (nullptr when R is)
-  double* P_save;      // scratch m x m (and R_save when R is kept)
-  double* R_save;
   double* pphi;        // out: P phi before the step (the gain's direction)
   std::size_t m;
   double cap;          // trace bound (the prior's trace)
@@ -109,26 +108,17 @@ inline RlsOutcome rls_covariance_step(const RlsMatrices& a, const double* phi, d
   }
   const double r = denom - lambda;  // phi^T P phi >= 0
   const double inv = 1.0 / denom;
-  for (std::size_t k = 0; k < m * m; ++k) a.P_save[k] = a.P[k];
-  if (a.R)
-    for (std::size_t k = 0; k < m * m; ++k) a.R_save[k] = a.R[k];
-  // Standard step.
-  double trace = 0.0;
-  for (std::size_t i = 0; i < m; ++i)
-    for (std::size_t j = i; j < m; ++j) {
-      const double v = (a.P[i * m + j] - a.pphi[i] * a.pphi[j] * inv) / lambda;
-      a.P[i * m + j] = a.P[j * m + i] = v;
-      if (a.R) a.R[i * m + j] = a.R[j * m + i] = lambda * a.R[i * m + j] + phi[i] * phi[j];
-      if (i == j) trace += v;
-    }
-  gain = inv;
-  if (trace > a.cap) {
-    // Directional forgetting from the saved P instead (phi = 0: nothing to learn or forget).
-    for (std::size_t k = 0; k < m * m; ++k) a.P[k] = a.P_save[k];
-    if (a.R)
-      for (std::size_t k = 0; k < m * m; ++k) a.R[k] = a.R_save[k];
+  double trace = 0.0;  // of the standard step's P
+  for (std::size_t i = 0; i < m; ++i) trace += (a.P[i * m + i] - a.pphi[i] * a.pphi[i] * inv) / lambda;
+  if (trace <= a.cap) {  // standard step
+    for (std::size_t i = 0; i < m; ++i)
+      for (std::size_t j = i; j < m; ++j) {
+        a.P[i * m + j] = a.P[j * m + i] = (a.P[i * m + j] - a.pphi[i] * a.pphi[j] * inv) / lambda;
+        if (a.R) a.R[i * m + j] = a.R[j * m + i] = lambda * a.R[i * m + j] + phi[i] * phi[j];
+      }
+    gain = inv;
+  } else {  // directional forgetting instead (phi = 0: nothing to learn or forget)
     if (out == RlsOutcome::standard) out = RlsOutcome::bounded;
-    gain = 0.0;
     if (r > 0) directional(a, phi, lambda, r, gain);
   }
   double tr = 0.0;

@@ -114,8 +114,6 @@ AdaptiveInverse::AdaptiveInverse(const ModelParams& model, std::span<const doubl
   trace0_ = P0.trace();
   P0_ = P_;
   R0_ = R_;
-  Psave_ = P_;
-  Rsave_ = R_;
 
   // Margin: the fit's minimum-slope rule on the prior record, lowered to what the fitted
   // weights satisfy themselves (they must be feasible: the variant starts from them).
@@ -277,8 +275,7 @@ void AdaptiveInverse::update(double x, double y) noexcept {
   j_fixed_ = p_.lambda * j_fixed_ + ef * ef;
   // RLS with forgetting (the unconstrained estimate theta_hat_), with its information R = P^-1.
   const double e = t - vh;
-  const detail::RlsMatrices cov{P_.data(), R_.data(), P0_.data(), R0_.data(), Psave_.data(), Rsave_.data(),
-                                pphi_.data(), m, trace0_};
+  const detail::RlsMatrices cov{P_.data(), R_.data(), P0_.data(), R0_.data(), pphi_.data(), m, trace0_};
   double gain = 0.0;
   const auto outcome = std::isfinite(e) ? detail::rls_covariance_step(cov, phi_.data(), p_.lambda, gain)
                                         : detail::RlsOutcome::skipped;

@@ -513,7 +513,6 @@ Rls::Rls(const ModelParams& model, double lambda, double p0)
   Pphi_ = Eigen::VectorXd::Zero(m);
   P_ = Eigen::MatrixXd::Identity(m, m) * p0;
   P0_ = P_;
-  Psave_ = P_;
   cap_ = P0_.trace();
 }
 
@@ -549,8 +548,8 @@ double Rls::step_model(double x, double y) noexcept {
     ++faults_;
     return pred;
   }
-  const detail::RlsMatrices a{P_.data(), nullptr,       P0_.data(), nullptr, Psave_.data(), nullptr,
-                              Pphi_.data(), static_cast<std::size_t>(P_.rows()), cap_};
+  const detail::RlsMatrices a{P_.data(), nullptr, P0_.data(), nullptr, Pphi_.data(),
+                              static_cast<std::size_t>(P_.rows()), cap_};
   double gain = 0.0;
   switch (detail::rls_covariance_step(a, phi_.data(), lambda_, gain)) {
     case detail::RlsOutcome::standard: break;

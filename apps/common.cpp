@@ -22,17 +22,16 @@
 #include "hysteron/io/names.hpp"
 #include "hysteron/io/results.hpp"
 #include "hysteron/io/table.hpp"
+#include "hysteron/io/numbers.hpp"
 
 namespace hysteron::cli {
 
 namespace {
 
 double parse_number(std::string_view s, std::string_view what) {
-  double v = 0.0;
-  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
-    throw Error(fmt::format("{}: \"{}\" is not a number", what, s));
-  return v;
+  const std::optional<double> v = io::finite_number(s);
+  if (!v) throw Error(fmt::format("{}: \"{}\" is not a number", what, s));
+  return *v;
 }
 
 std::string trim(std::string_view s) {
@@ -80,11 +79,10 @@ namespace {
 double parse_limit(std::string_view s, std::string_view what) {
   while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
   while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
-  double v = 0.0;
-  const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
+  const std::optional<double> v = io::finite_number(s);
+  if (!v)
     throw Error(fmt::format("--limits: {} \"{}\" is not a finite number (expected LO,HI, e.g. --limits=0,0.6)", what, s));
-  return v;
+  return *v;
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include "hysteron/io/table.hpp"
 #include "hysteron/io/names.hpp"
 #include "hysteron/version.hpp"
+#include "hysteron/io/numbers.hpp"
 
 namespace {
 // SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
@@ -47,10 +48,9 @@ std::string suggestion(std::string_view word, const std::vector<std::string>& ca
 }
 
 bool is_number(std::string_view s) {
-  const std::string t(s);
-  char* end = nullptr;
-  std::strtod(t.c_str(), &end);
-  return end != t.c_str() && *end == '\0';
+  double v = 0.0;
+  const auto p = hysteron::io::parse_number(s, v);
+  return p != hysteron::io::NumberParse::empty && p != hysteron::io::NumberParse::malformed;
 }
 
 // Unknown subcommands and options are reported before CLI11 parses, so that

@@ -22,6 +22,7 @@
 #include "test_util.hpp"
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
+#include "hysteron/io/numbers.hpp"
 #include "hysteron/io/table.hpp"
 #include "hysteron/models.hpp"
 
@@ -425,6 +426,34 @@ TEST(ModelFile, WriteRefusesInvalidModelAndBadExtraLeavingFileIntact) {
 }
 
 // ---- CSV reading --------------------------------------------------------------------
+
+// One number rule for files, overrides, references and options (io/numbers.hpp): a decimal
+// literal, the whole text, an optional '+'; C's strtod would take "0x10" (16), " 5" and "1e-999".
+TEST(Numbers, DecimalLiteralsOnlyTheWholeText) {
+  using io::NumberParse;
+  const auto parsed = [](std::string_view t) {
+    double v = -7.0;
+    const NumberParse p = io::parse_number(t, v);
+    return std::pair{p, v};
+  };
+  EXPECT_EQ(parsed("13.5"), std::pair(NumberParse::ok, 13.5));
+  EXPECT_EQ(parsed("+2e3"), std::pair(NumberParse::ok, 2000.0));
+  EXPECT_EQ(parsed("-0.25"), std::pair(NumberParse::ok, -0.25));
+  EXPECT_EQ(parsed(".5"), std::pair(NumberParse::ok, 0.5));
+  for (const char* bad : {"0x10", "0x1p3", " 5", "5 ", "5,0", "++5", "+-5", "1e", "e5", "5mm", "-"})
+    EXPECT_EQ(parsed(bad), std::pair(NumberParse::malformed, -7.0)) << bad;  // not written
+  EXPECT_EQ(parsed(""), std::pair(NumberParse::empty, -7.0));
+  for (const char* nf : {"nan", "NaN", "inf", "-Infinity", "+inf"})
+    EXPECT_EQ(parsed(nf).first, NumberParse::non_finite) << nf;
+  EXPECT_EQ(parsed("1e999").first, NumberParse::out_of_range);
+  EXPECT_EQ(parsed("-1e400").first, NumberParse::out_of_range);
+  // an underflow is a number: 0 or a subnormal, as the literal says
+  EXPECT_EQ(parsed("1e-999"), std::pair(NumberParse::ok, 0.0));
+  EXPECT_EQ(parsed("4.9406564584124654e-324"), std::pair(NumberParse::ok, std::numeric_limits<double>::denorm_min()));
+  EXPECT_EQ(io::finite_number("0.6"), 0.6);
+  EXPECT_FALSE(io::finite_number("0x1").has_value());
+  EXPECT_FALSE(io::finite_number("inf").has_value());
+}
 
 TEST(Csv, HeaderAndNoHeader) {
   TempDir dir;

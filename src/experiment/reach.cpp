@@ -278,6 +278,9 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
     if (const double d = std::abs(id.contraction_mm[k] - id.contraction_mm[k - 1]); d > 0.0) step_mm = std::min(step_mm, d);
   if (!std::isfinite(step_mm)) step_mm = 0.0;
   const double resolved_mm = 3.0 * std::max(step_mm, clip.sigma / std::sqrt(static_cast<double>(sm.window)));
+  // a given reference's ends in mm: "{:.1f}", or 4 digits with an exponent where a unit mistake
+  // made them huge (amplitude=1e300)
+  const auto mm = [](double v) { return std::abs(v) < 1e6 ? fmt::format("{:.1f}", v) : fmt::format("{:.4g}", v); };
   for (Reference& ref : refs) {
     const auto [lo_it, hi_it] = std::minmax_element(ref.ref_m.begin(), ref.ref_m.end());
     ReferenceRange rr;
@@ -301,15 +304,17 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
         rr.max_mm = new_hi;
         rr.scaled = true;
         res.messages.push_back(fmt::format("reference {} mapped onto the rig's reach: {:.1f}..{:.1f} mm instead of the "
-                                           "{} {:.1f}..{:.1f} mm (scale {:.3f}): {}; errors are against the "
+                                           "{} {}..{} mm (scale {}): {}; errors are against the "
                                            "mapped reference (--paper-references keeps the {} one)",
                                            ref.name, rr.min_mm, rr.max_mm, ref.user ? "given" : "published",
-                                           rr.paper_min_mm, rr.paper_max_mm, s, why, ref.user ? "given" : "published"));
+                                           mm(rr.paper_min_mm), mm(rr.paper_max_mm),
+                                           s >= 1e-3 ? fmt::format("{:.3f}", s) : fmt::format("{:.3g}", s), why,
+                                           ref.user ? "given" : "published"));
       } else {
         rr.reachable = false;
-        res.messages.push_back(fmt::format("reference {} ({:.1f}..{:.1f} mm) is out of this rig's reach: {}; the "
+        res.messages.push_back(fmt::format("reference {} ({}..{} mm) is out of this rig's reach: {}; the "
                                            "errors beyond it are the actuator's limit, not the controller's",
-                                           ref.name, rr.paper_min_mm, rr.paper_max_mm, why));
+                                           ref.name, mm(rr.paper_min_mm), mm(rr.paper_max_mm), why));
       }
     } else if (!known_top && rr.paper_max_mm > res.reach_max_mm) {
       res.messages.push_back(fmt::format("reference {}: its top, {:.1f} mm, lies above the {:.1f} mm the "

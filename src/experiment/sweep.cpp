@@ -23,6 +23,7 @@
 #include "hysteron/error.hpp"
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/names.hpp"
+#include "hysteron/io/numbers.hpp"
 
 namespace hysteron {
 
@@ -77,14 +78,9 @@ json* find_leaf(json& j, std::string_view path) {
   return node->is_object() ? nullptr : node;
 }
 
-// A finite number, the whole of `text`; "" on success, else the reason.
+// A finite number, the whole of `text` (io/numbers.hpp).
 bool parse_number(std::string_view text, double& value) {
-  const std::string t(text);
-  if (t.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  value = std::strtod(t.c_str(), &end);
-  return end == t.c_str() + t.size() && errno != ERANGE && std::isfinite(value);
+  return io::parse_number(text, value) == io::NumberParse::ok;
 }
 
 std::string number_text(double v) { return fmt::format("{}", v); }

@@ -19,6 +19,7 @@
 #include "hysteron/io/table.hpp"
 #include "hysteron/io/units.hpp"
 #include "hysteron/signals.hpp"
+#include "hysteron/io/numbers.hpp"
 
 namespace hysteron {
 
@@ -39,15 +40,8 @@ const char* kind_name(UserReference::Kind k) {
   return "?";
 }
 
-// A finite number, the whole text; nullopt otherwise.
-std::optional<double> number(std::string_view text) {
-  const std::string s(trimmed(text));
-  if (s.empty()) return std::nullopt;
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  if (end != s.c_str() + s.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
+// A finite number, the whole text but surrounding space (io/numbers.hpp); nullopt otherwise.
+std::optional<double> number(std::string_view text) { return io::finite_number(trimmed(text)); }
 
 bool reserved_name(std::string_view n) {
   return std::find(io::kKeysBesideReferenceNames.begin(), io::kKeysBesideReferenceNames.end(), n) !=

@@ -1,6 +1,7 @@
 // Data tables (table.hpp): text/CSV reading (in memory, streamed), the Table type, CSV writing.
 // The .mat side (checks, matio reading, writing) is in mat.cpp.
 #include "hysteron/io/table.hpp"
+#include "hysteron/io/numbers.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -100,33 +101,14 @@ void split(std::string_view line, char sep, std::vector<std::string_view>& out) 
   }
 }
 
-enum class Parse { ok, empty, malformed, non_finite, out_of_range };
+using Parse = NumberParse;
 
-Parse parse_number(std::string_view s, double& out) {
-  s = unquote(s);
-  if (s.empty()) return Parse::empty;
-  if (s.front() == '+') s.remove_prefix(1);
-  if (s.empty() || s.front() == '+') return Parse::malformed;
-  const auto res = std::from_chars(s.data(), s.data() + s.size(), out);
-  if (res.ptr != s.data() + s.size()) return Parse::malformed;
-  if (res.ec == std::errc::result_out_of_range) {
-    // from_chars also reports underflow (denormal/zero) as out of range; only overflow is an error
-    if (s.size() > 4096) return Parse::out_of_range;
-    char tmp[4100];
-    std::memcpy(tmp, s.data(), s.size());
-    tmp[s.size()] = '\0';
-    out = std::strtod(tmp, nullptr);
-    if (!std::isfinite(out)) return Parse::out_of_range;
-    return Parse::ok;
-  }
-  if (res.ec != std::errc()) return Parse::malformed;
-  if (!std::isfinite(out)) return Parse::non_finite;
-  return Parse::ok;
-}
+// A field's number (numbers.hpp), inside its quotes if it has them.
+Parse parse_unquoted(std::string_view s, double& out) { return io::parse_number(unquote(s), out); }
 
 bool looks_numeric(std::string_view s) {
   double d = 0.0;
-  const Parse p = parse_number(s, d);
+  const Parse p = parse_unquoted(s, d);
   return p != Parse::malformed;  // empty fields and nan/inf do not make a header
 }
 
@@ -501,18 +483,18 @@ class TextParser {
     });
   }
 
-  // A number with a decimal comma ("13,123"): parse_number of the field with ',' read as '.'.
+  // A number with a decimal comma ("13,123"): parse_unquoted of the field with ',' read as '.'.
   static Parse parse_comma(std::string_view f, double& v) {
     if (f.find(',') == std::string_view::npos || f.size() > 128) return Parse::malformed;
     char tmp[128];
     std::copy(f.begin(), f.end(), tmp);
     std::replace(tmp, tmp + f.size(), ',', '.');
-    return parse_number({tmp, f.size()}, v);
+    return parse_unquoted({tmp, f.size()}, v);
   }
   // A field of a data row: a decimal comma is read in a file not separated by ',' whose first
   // data row has one (European spreadsheets: "13,123;8,18"); the whole file is then read so.
   Parse parse_field(std::string_view f, double& v) {
-    const Parse p = parse_number(f, v);
+    const Parse p = parse_unquoted(f, v);
     if (p != Parse::malformed || sep_ == ',') return p;
     if (!decimal_comma_ && rows_ == 0 && parse_comma(f, v) != Parse::malformed) decimal_comma_ = true;
     return decimal_comma_ ? parse_comma(f, v) : p;

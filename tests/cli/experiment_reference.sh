@@ -23,6 +23,8 @@ refused "bad value" "frequency = \"fast\" is not a finite number" \
   "${run[@]}" --reference triangle:amplitude=20,offset=50,frequency=fast,periods=2
 refused "inf" "offset = \"inf\" is not a finite number" \
   "${run[@]}" --reference sine:amplitude=20,offset=inf,frequency=0.5,periods=2
+refused "hex" "amplitude = \"0x10\" is not a finite number" \
+  "${run[@]}" --reference sine:amplitude=0x10,offset=50,frequency=0.5,periods=2
 refused "frequency 0" "frequency = 0 Hz must be > 0" "${run[@]}" --reference sine:amplitude=20,offset=50,frequency=0,periods=2
 refused "negative amplitude" "amplitude = -5 mm must be >= 0" \
   "${run[@]}" --reference sine:amplitude=-5,offset=50,frequency=0.5,periods=2

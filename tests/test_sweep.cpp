@@ -338,6 +338,41 @@ TEST(SweepRun, StopsStartingRunsWhenAStopIsRequested) {
   EXPECT_EQ(run_sweep(o).runs.size(), 22u);
 }
 
+// The stop reaches into the runs under way (their ExperimentOptions::stop_requested): a run that
+// would go on until asked to stop is abandoned, and the sweep throws, whether the stop comes
+// while other runs are still to start or during the last one.
+TEST(SweepRun, AStopAbandonsTheRunsUnderWay) {
+  SweepOptions o;
+  o.experiments = {"gpi-pid"};
+  o.variants = parse_vary("load.mass=10,35,50");  // 4 runs with the base rig
+  for (const unsigned jobs : {1u, 2u})
+    for (const std::size_t stop_in_run : {1u, 4u}) {
+      o.jobs = jobs;
+      std::atomic<std::size_t> started{0}, abandoned{0};
+      std::atomic<bool> stop{false};
+      o.stop_requested = [&] { return stop.load(); };
+      o.runner = [&](const ExperimentOptions& eo) {
+        const std::size_t n = ++started;
+        if (n < stop_in_run) return fake_experiment(eo);
+        stop.store(true);  // Ctrl-C during this run: it would go on for ever unless told
+        for (long k = 0; k < 100000000L; ++k)
+          if (eo.stop_requested && eo.stop_requested()) {
+            ++abandoned;
+            throw Stopped("experiment stopped (stop requested)");
+          }
+        ADD_FAILURE() << "the run under way was never told to stop";
+        return fake_experiment(eo);
+      };
+      try {
+        (void)run_sweep(o);
+        ADD_FAILURE() << "a stopped sweep returned a result (jobs " << jobs << ", stop in run " << stop_in_run << ")";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("sweep stopped after"), std::string::npos) << e.what();
+      }
+      EXPECT_GE(abandoned.load(), 1u) << "jobs " << jobs << ", stop in run " << stop_in_run;
+    }
+}
+
 TEST(SweepRun, EachRunFitsOnOneThread) {
   // the runs are the sweep's threads: a run's fits on usable_cpus() threads more would multiply them
   SweepOptions o;

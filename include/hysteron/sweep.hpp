@@ -124,10 +124,11 @@ struct SweepOptions {
   bool identify_on_base = false;
   unsigned jobs = 0;                      // threads; 0 = usable_cpus() (each run fits on one thread)
   std::function<void(const SweepProgress&)> progress;  // optional
-  // Optional: asked (from the worker threads, so it must be thread-safe) before each run starts.
-  // Once it returns true no further run starts; the runs under way end, and run_sweep throws
-  // hysteron::Error ("sweep stopped after K of N runs"): a stopped sweep has no result (e.g. the
-  // Python module's Ctrl-C).
+  // Optional: asked (from the worker threads, so it must be thread-safe) before each run starts
+  // and inside the runs (as their ExperimentOptions::stop_requested). Once it returns true no
+  // further run starts, the runs under way are abandoned (hysteron::Stopped inside them), and
+  // run_sweep throws hysteron::Error ("sweep stopped after K of N runs"): a stopped sweep has no
+  // result (e.g. the Python module's Ctrl-C).
   std::function<bool()> stop_requested;
   // What runs one experiment: run_experiment when empty (a test may pass a cheaper one;
   // it is called from several threads at once).

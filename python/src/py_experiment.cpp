@@ -27,8 +27,8 @@ namespace hysteron::python {
 namespace {
 
 // run_sweep without the GIL while this thread looks for signals (run_interruptible): Ctrl-C
-// stops new runs from starting, waits for the runs under way (seconds each without learning,
-// tens of seconds with it) and raises KeyboardInterrupt.
+// stops new runs from starting, abandons the runs under way (SweepOptions::stop_requested reaches
+// into them) and raises KeyboardInterrupt.
 SweepResult run_sweep_interruptible(SweepOptions o) {
   std::atomic<bool> stop{false};
   o.stop_requested = [&stop] { return stop.load(); };

@@ -505,20 +505,22 @@ SweepResult run_sweep(const SweepOptions& options) {
   std::mutex progress_mutex;
   std::size_t done = 0;
   std::atomic<bool> stopped{false};
+  // asked before each run and, through ExperimentOptions::stop_requested, inside it: a stop ends
+  // the runs under way too (within a fraction of a second) instead of waiting for them
+  const auto stop_now = [&]() -> bool {
+    if (stopped.load()) return true;
+    if (!options.stop_requested) return false;
+    bool stop = true;  // a stop hook that throws asks for a stop (an exception must not end a worker thread)
+    try {
+      stop = options.stop_requested();
+    } catch (...) {
+    }
+    if (stop) stopped.store(true);
+    return stop;
+  };
   auto worker = [&] {
     for (;;) {
-      bool stop = stopped.load();
-      if (!stop && options.stop_requested) {
-        try {
-          stop = options.stop_requested();
-        } catch (...) {
-          stop = true;  // a stop hook that throws asks for a stop (an exception must not end a worker thread)
-        }
-      }
-      if (stop) {
-        stopped.store(true);
-        return;
-      }
+      if (stop_now()) return;
       const std::size_t i = next.fetch_add(1);
       if (i >= total) return;
       const std::size_t k = order[i];
@@ -543,6 +545,7 @@ SweepResult run_sweep(const SweepOptions& options) {
         eo.complete_gain_trials = false;       // the sweep reports the trial's choice, not its curve
         eo.fit_ineligible_candidates = false;  // ... and the model auto chose, not the others
         eo.fit_threads = 1;  // the runs are the sweep's threads (the fits' results do not depend on it)
+        if (options.stop_requested) eo.stop_requested = stop_now;
         const experiment::Spec* spec = experiment::find_spec(run.experiment);
         run.command_limit_mpa = spec ? experiment::run_pressure_limit(eo, spec->valves) : nan;
         const ExperimentResult er = options.runner ? options.runner(eo) : run_experiment(eo);
@@ -577,6 +580,9 @@ SweepResult run_sweep(const SweepOptions& options) {
         run.model = std::string(fit_model_name(er.best_fit.model_kind));
         run.model_reason = er.model_reason;
         run.ok = true;
+      } catch (const Stopped&) {
+        stopped.store(true);  // abandoned: no row, not counted as done, and the sweep has no result
+        return;
       } catch (const std::exception& e) {
         run.ok = false;
         run.runs.clear();

@@ -226,10 +226,22 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
         std::atomic<bool> stop{false};
         o.stop_requested = [&stop] { return stop.load(); };
         ExperimentResult r = run_interruptible(stop, [&o] { return run_experiment(o); });
-        if (!out.empty()) r.write(out);
-        if (!report_path.empty())
-          report::write_experiment_report(r, report_path,
-                                          fmt::format("hysteron.run_experiment('{}', seed={})", name, seed));
+        const std::string command = fmt::format("hysteron.run_experiment('{}', seed={})", name, seed);
+        if (!out.empty()) {  // the files and the report replaced together (as the CLI's --out)
+          ExperimentResult::write_all({&r}, {out}, [&](std::size_t, const std::string& out_dir) {
+            std::vector<std::string> in_dir;
+            if (report_path.empty()) return in_dir;
+            report::write_experiment_report(r, report_path, command);
+            // a report in the directory is one of this run's files, not an earlier run's to remove
+            std::error_code ec;
+            const std::filesystem::path rp = std::filesystem::weakly_canonical(report_path, ec);
+            if (!ec && rp.parent_path() == std::filesystem::weakly_canonical(out_dir, ec) && !ec)
+              in_dir.push_back(rp.filename().string());
+            return in_dir;
+          });
+        } else if (!report_path.empty()) {
+          report::write_experiment_report(r, report_path, command);
+        }
         py::dict d;
         d["summary"] = from_json(io::to_json(r));
         // the straight line the baseline loop inverts (result.json's "baseline_model"; None where none)
@@ -362,11 +374,13 @@ errors, the per-period errors of a learning run and numpy time series) and "publ
           throw Error(fmt::format("run_sweep: no variants: give vary=['PATH=V1,V2,...'], grid= or set='{}'",
                                   documented_set_name));
         const SweepResult r = run_sweep_interruptible(std::move(o));
-        // the page first (gnuplot may fail), then the table; each written atomically
+        // the page first (gnuplot may fail), then the table and the page replaced together (as the CLI)
         std::string html;
         if (!report_path.empty()) html = report::sweep_report_html(r, "hysteron.run_sweep(...)");
+        io::FileBatch batch;
         if (!out.empty()) io::write_text_file(out, r.csv());
         if (!report_path.empty()) io::write_text_file(report_path, html);
+        batch.commit();
         py::dict d = from_json(r.to_json());
         d["text"] = r.text();
         return d;

@@ -116,3 +116,33 @@ def test_long_runs_check_their_outputs_first(tmp_path):
         with pytest.raises(hysteron.Error, match="no-such-experiment"):
             hysteron.run_experiment("no-such-experiment", out=str(out), report=str(report))
     assert sorted(os.listdir(tmp_path)) == ["file"]
+
+
+def test_outputs_and_report_are_replaced_together(tmp_path):
+    # run_experiment(out=, report=) and run_sweep(out=, report=) replace their files together, as
+    # the CLI's --out/--report: a report that cannot be written (a file without any write bit is
+    # refused, even for root) leaves the earlier outputs as they were.
+    fast = dict(seed=1, learning_periods=0, adaptive=False, model="gpi")
+    out = tmp_path / "res"
+    out.mkdir()
+    (out / "result.json").write_text("earlier run")
+    locked = tmp_path / "locked.html"
+    locked.write_text("earlier page")
+    locked.chmod(0o444)
+    with pytest.raises(hysteron.Error, match="locked.html"):
+        hysteron.run_experiment("gpi-pid", out=str(out), report=str(locked), **fast)
+    assert (out / "result.json").read_text() == "earlier run"
+    assert sorted(os.listdir(out)) == ["result.json"]
+    table = tmp_path / "t.csv"
+    table.write_text("earlier table")
+    with pytest.raises(hysteron.Error, match="locked.html"):
+        hysteron.run_sweep("gpi-pid", vary=["load.mass=35"], learning_periods=0, model="gpi", jobs=1,
+                           out=str(table), report=str(locked))
+    assert table.read_text() == "earlier table"
+    assert locked.read_text() == "earlier page"
+    # a report inside out is one of the run's files: a second run keeps it (not removed as stale)
+    inside = out / "report.html"
+    for _ in range(2):
+        hysteron.run_experiment("gpi-pid", out=str(out), report=str(inside), **fast)
+        assert inside.exists() and "<html" in inside.read_text()[:2000].lower()
+    assert (out / "result.json").read_text() != "earlier run"

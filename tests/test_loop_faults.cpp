@@ -147,6 +147,54 @@ double worst_error(const TrackingRun& run, const ModelParams& model, Scenario sc
 
 }  // namespace
 
+// step_feedforward (the experiments' adaptive variants: the compensated controller around the adaptive
+// inverse's feedforward) is step() with the feedforward given: fed the same inverse's output, each
+// controller commands bit for bit what step() does, through position and pressure dropouts; fed
+// another feedforward, a held sample commands that feedforward plus the held correction (not the
+// whole held command), and a blind inner loop closes the cascade's valves.
+TEST(LoopFaults, StepFeedforwardIsStepAroundAGivenFeedforward) {
+  const GpiParams model = test::rig_like_gpi();
+  FeedforwardParams ff;
+  ff.sample_time = 1e-3;
+  ff.pressure_limits = {0.0, 0.6};
+  OpenLoopParams op;
+  op.feedforward = ff;
+  op.position = gpi_paper_pid(1e-3);
+  op.pressure_gain = 0.5;
+  CascadeParams cp = cascade_params();
+  cp.feedforward = ff;
+  FeedforwardPidController fa(model, ff, gpi_paper_pid(1e-3)), fb(model, ff, gpi_paper_pid(1e-3));
+  OpenLoopController oa(model, op), ob(model, op);
+  CascadePwmController ca(model, cp), cb(model, cp);
+  InverseFeedforward i1(model, ff), i2(model, ff), i3(model, ff);
+  for (int k = 0; k < 4000; ++k) {
+    const double r = 0.05 + 0.03 * std::sin(2 * M_PI * k / 2000.0);
+    const double y = (k >= 1000 && k < 1500) ? kNaN : r - 0.002 * std::cos(2 * M_PI * k / 700.0);
+    const double p = (k >= 2500 && k < 3000) ? kNaN : 0.25 + 0.05 * std::sin(2 * M_PI * k / 900.0);
+    ASSERT_EQ(fa.step(r, r, y), fb.step_feedforward(r, i1.step(r), y)) << "sample " << k;
+    ASSERT_EQ(oa.step(r, r, y, p), ob.step_feedforward(r, i2.step(r), y, p)) << "sample " << k;
+    ASSERT_EQ(ca.step(r, r, y, p), cb.step_feedforward(r, i3.step(r), y, p)) << "sample " << k;
+    ASSERT_EQ(ca.desired_pressure(), cb.desired_pressure()) << "sample " << k;
+  }
+  EXPECT_EQ(fb.pid().faults(), 500u);
+  EXPECT_EQ(cb.pressure().faults(), 500u);
+  // another feedforward: during a position dropout the command moves with it, by exactly its change
+  FeedforwardPidController g(model, ff, gpi_paper_pid(1e-3));
+  CascadePwmController h(model, cp);
+  double held = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    const double u_ff = 0.2 + 0.1 * k / 300.0;  // a ramp no inverse of this model gives
+    const bool blind = k >= 200;
+    const double u = g.step_feedforward(0.04, u_ff, blind ? kNaN : 0.039);
+    const double d = h.step_feedforward(0.04, u_ff, 0.039, blind ? kNaN : 0.3);
+    if (k == 199) held = u - u_ff;  // the correction at the dropout
+    if (blind) {
+      EXPECT_NEAR(u, u_ff + held, 1e-12) << "sample " << k;
+      EXPECT_EQ(d, 0.0) << "sample " << k << ": the valves stay closed while the pressure is unknown";
+    }
+  }
+}
+
 // A 1 s dropout of the position sensor in the feedforward+PID loop (gpi-pid's compensated loop) on the
 // simulated rig: the loop keeps feeding forward, its error stays far below that of the command frozen over the
 // dropout. The bound: the nominal run's error plus a quarter of what freezing the command adds to it.

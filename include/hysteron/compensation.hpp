@@ -95,6 +95,10 @@ class FeedforwardPidController {
   // reference_m: y_d(t); preview_m: the reference fed to the inverse (y_d(t + lead)
   // for a known reference, else reference_m); measured_m: sensor. Returns MPa.
   double step(double reference_m, double preview_m, double measured_m) noexcept;
+  // The same loop around a feedforward computed elsewhere (an inverse that adapts, a learned
+  // correction added to it): u_ff [MPa] in place of this controller's inverse, which is not
+  // stepped; the feedback sign, the limits and the hold are this controller's.
+  double step_feedforward(double reference_m, double u_ff, double measured_m) noexcept;
   void reset() noexcept;
   // The PID as built (its output limits narrowed to the pressure limits).
   const Pid& pid() const noexcept { return pid_; }
@@ -137,6 +141,9 @@ class OpenLoopController {
   // feedforward.sample_time, or the pressure limits cannot be resolved (resolve_pressure_limits).
   OpenLoopController(const ModelParams& model, const OpenLoopParams& params);
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
+  // The same loop around a feedforward computed elsewhere (FeedforwardPidController::
+  // step_feedforward): u_ff [MPa] in place of this controller's inverse, which is not stepped.
+  double step_feedforward(double reference_m, double u_ff, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;
   // The parameters with the resolved pressure limits.
   const OpenLoopParams& params() const noexcept { return p_; }
@@ -181,6 +188,9 @@ class CascadePwmController {
   CascadePwmController(const ModelParams& model, const CascadeParams& params);
   // Returns the PWM duty in [-1, 1]; desired_pressure() is the outer loop's output.
   double step(double reference_m, double preview_m, double measured_m, double pressure_mpa) noexcept;
+  // The same cascade around a feedforward computed elsewhere (FeedforwardPidController::
+  // step_feedforward): u_ff [MPa] in place of this controller's inverse, which is not stepped.
+  double step_feedforward(double reference_m, double u_ff, double measured_m, double pressure_mpa) noexcept;
   void reset() noexcept;  // every part, its fault counts and the guard's cuts included
   double desired_pressure() const noexcept { return p_d_; }
   // The parameters with the resolved pressure limits.

@@ -110,7 +110,11 @@ void FeedforwardPidController::reset() noexcept {
 }
 
 double FeedforwardPidController::step(double reference_m, double preview_m, double measured_m) noexcept {
-  const double u_ff = ff_.step(preview_m), s = ff_.feedback_sign();
+  return step_feedforward(reference_m, ff_.step(preview_m), measured_m);
+}
+
+double FeedforwardPidController::step_feedforward(double reference_m, double u_ff, double measured_m) noexcept {
+  const double s = ff_.feedback_sign();
   const std::size_t faults = pid_.faults();
   const double u = pid_.step(s * reference_m, s * measured_m, u_ff);
   const Limits& lim = ff_.pressure_limits();
@@ -145,8 +149,13 @@ void OpenLoopController::reset() noexcept {
 
 double OpenLoopController::step(double reference_m, double preview_m, double measured_m,
                                 double pressure_mpa) noexcept {
+  return step_feedforward(reference_m, ff_.step(preview_m), measured_m, pressure_mpa);
+}
+
+double OpenLoopController::step_feedforward(double reference_m, double u_ff, double measured_m,
+                                            double pressure_mpa) noexcept {
   const Limits& lim = p_.feedforward.pressure_limits;
-  double p_d = ff_.step(preview_m);
+  double p_d = u_ff;
   const double s = ff_.feedback_sign();
   if (use_position_) p_d = std::clamp(p_d + position_.step(s * reference_m, s * measured_m), lim.lo, lim.hi);
   return std::clamp(pressure_loop_command(p_d, pressure_mpa, p_.pressure_gain), lim.lo, lim.hi);
@@ -183,8 +192,13 @@ void CascadePwmController::reset() noexcept {
 
 double CascadePwmController::step(double reference_m, double preview_m, double measured_m,
                                   double pressure_mpa) noexcept {
+  return step_feedforward(reference_m, ff_.step(preview_m), measured_m, pressure_mpa);
+}
+
+double CascadePwmController::step_feedforward(double reference_m, double u_ff, double measured_m,
+                                              double pressure_mpa) noexcept {
   const Limits& lim = p_.feedforward.pressure_limits;
-  const double u_ff = ff_.step(preview_m), s = ff_.feedback_sign();
+  const double s = ff_.feedback_sign();
   const PidParams& q = position_.params();
   if (!std::isfinite(pressure_mpa)) {
     // the inner loop is blind: the position PID held (its integral would wind p_d up), p_d the feedforward

@@ -35,14 +35,13 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
   auto a = adaptive_inverse(c, frozen);
   const double p_max = c.pressure_max;
   auto ff = std::make_shared<AdaptiveFeedforward>(a, p_max);
-  PidParams q = pid;
-  q.out_min = std::max(q.out_min, 0.0);
-  q.out_max = std::min(q.out_max, p_max);
-  auto fb = std::make_shared<Pid>(q);
+  // the compensated loop's controller (its sign, limits and hold), fed the adaptive inverse's feedforward
+  FeedforwardParams ffp;
+  ffp.sample_time = c.tc;
+  ffp.pressure_limits = {0.0, p_max};
+  auto fb = std::make_shared<FeedforwardPidController>(c.result.best_fit.model, ffp, pid);
   Law law = [ff, fb, p_max](const Sample& s) {
-    const double u_ff = ff->step(s);
-    const double u = fb->step(s.reference_m, s.measured_m, u_ff);
-    return regulator(std::isfinite(u) ? u : u_ff, p_max);
+    return regulator(fb->step_feedforward(s.reference_m, ff->step(s), s.measured_m), p_max);
   };
   const std::string name = c.reference->name;
   Loop result{std::move(law),
@@ -52,8 +51,8 @@ Loop adaptive_ff_pid(const Context& c, bool frozen) {
               pid, [a, name] { return adaptive_note(*a, name); }};
   result.feedforward.pressure_limits = {0.0, p_max};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
-  result.position_state = [fb] { return fb->state(); };
-  result.restart_guard = [fb] { fb->set_guard(fb->params().guard); };
+  result.position_state = [fb] { return fb->pid().state(); };
+  result.restart_guard = [fb] { fb->set_guard(fb->pid().params().guard); };
   return result;
 }
 

@@ -50,16 +50,11 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
   auto a = adaptive_inverse(c, frozen);
   const double p_max = c.pressure_max;
   auto ff = std::make_shared<AdaptiveFeedforward>(a, p_max);
-  PidParams q = p.position;
-  q.out_min = std::max(q.out_min, -p_max);
-  q.out_max = std::min(q.out_max, p_max);
-  auto position = std::make_shared<Pid>(q);
-  const bool use_position = p.position.kp != 0.0 || p.position.ki != 0.0 || p.position.kd != 0.0;
+  // the compensated loop's controller (its sign, limits and pressure loop), fed the adaptive inverse's feedforward
+  auto ol = std::make_shared<OpenLoopController>(c.result.best_fit.model, p);
   const double kp = p.pressure_gain;
-  Law law = [ff, position, use_position, kp, p_max](const Sample& s) {
-    double p_d = ff->step(s);
-    if (use_position) p_d = std::clamp(p_d + position->step(s.reference_m, s.measured_m), 0.0, p_max);
-    return regulator(pressure_loop_command(p_d, s.pressure_mpa, kp), p_max);
+  Law law = [ff, ol, p_max](const Sample& s) {
+    return regulator(ol->step_feedforward(s.reference_m, ff->step(s), s.measured_m, s.pressure_mpa), p_max);
   };
   const std::string name = c.reference->name;
   Loop result{std::move(law),
@@ -70,8 +65,8 @@ Loop adaptive_open_loop(const Context& c, bool frozen) {
               p.position, [a, name] { return adaptive_note(*a, name); }, std::nullopt, kp,
               LoopDesign::Kind::open_loop, p.feedforward};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
-  result.position_state = [position] { return position->state(); };
-  result.restart_guard = [position] { position->set_guard(position->params().guard); };
+  result.position_state = [ol] { return ol->position().state(); };
+  result.restart_guard = [ol] { ol->set_guard(ol->position().params().guard); };
   return result;
 }
 

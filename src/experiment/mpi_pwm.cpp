@@ -51,20 +51,12 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
   auto a = adaptive_inverse(c, frozen);
   const double p_max = c.pressure_max;
   auto ff = std::make_shared<AdaptiveFeedforward>(a, p_max);
-  PidParams qx = p.position;
-  qx.out_min = std::max(qx.out_min, 0.0);
-  qx.out_max = std::min(qx.out_max, p_max);
-  PidParams qp = p.pressure;
-  qp.out_min = std::max(qp.out_min, -1.0);
-  qp.out_max = std::min(qp.out_max, 1.0);
-  auto position = std::make_shared<Pid>(qx);
-  auto pressure = std::make_shared<Pid>(qp);
-  auto pwm = std::make_shared<PwmModulator>(p.pwm);
-  Law law = [ff, position, pressure, pwm, p_max](const Sample& s) {
-    const double u_ff = ff->step(s);
-    const double p_d = std::clamp(position->step(s.reference_m, s.measured_m, u_ff), 0.0, p_max);
-    const double u = pressure->step(p_d, s.pressure_mpa);
-    return valves(std::clamp(pwm->step(u), -1.0, 1.0), p_d);
+  // the compensated cascade (its sign, limits and faults: duty 0 on a lost pressure reading), fed the
+  // adaptive inverse's feedforward
+  auto cc = std::make_shared<CascadePwmController>(c.result.best_fit.model, p);
+  Law law = [ff, cc](const Sample& s) {
+    const double d = cc->step_feedforward(s.reference_m, ff->step(s), s.measured_m, s.pressure_mpa);
+    return valves(d, cc->desired_pressure());
   };
   const std::string name = c.reference->name;
   Loop result{std::move(law),
@@ -76,8 +68,8 @@ Loop adaptive_cascade(const Context& c, bool frozen) {
               p.position, [a, name] { return adaptive_note(*a, name); }, p.pressure, 0.0,
               LoopDesign::Kind::cascade_pwm, p.feedforward, p.pwm};
   if (!frozen) result.adaptation = adaptation_of(*a);  // frozen: the fitted inverse, fixed
-  result.position_state = [position] { return position->state(); };
-  result.restart_guard = [position] { position->set_guard(position->params().guard); };
+  result.position_state = [cc] { return cc->position().state(); };
+  result.restart_guard = [cc] { cc->set_guard(cc->position().params().guard); };
   return result;
 }
 

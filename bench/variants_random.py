@@ -57,6 +57,12 @@ def draw(seed, n, ranges, most, digits, sensor, prefix):
         chosen = rng.sample(keys, rng.randint(3, most))
         s = {k: round(rng.uniform(*ranges[k]), digits) for k in chosen}
         if "valves.on_delay" in s:
+            # a valve opens within its PWM period (the rig refuses a delay of a period or more):
+            # a delay drawn at or beyond the period of the frequency drawn (or the default 200 Hz)
+            # is set to 0.8 periods (the draws that ran before are unchanged)
+            period = 1.0 / s.get("valves.pwm_frequency", 200.0)
+            if s["valves.on_delay"] >= period:
+                s["valves.on_delay"] = round(0.8 * period, digits)
             s["valves.off_delay"] = s["valves.on_delay"]
         if s.get("muscle.rest_length", 0.0) * 0.25 > 0.15:
             s["sensors.displacement_range"] = sensor

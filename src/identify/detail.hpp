@@ -4,6 +4,8 @@
 
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <random>
 #include <functional>
 #include <span>
 #include <string>
@@ -12,6 +14,19 @@
 #include "hysteron/identify.hpp"
 
 namespace hysteron::detail {
+
+// A uniform draw in [a, b) from two 32-bit words of `rng` (std::mt19937, whose sequence the
+// standard fixes), computed as libstdc++'s uniform_real_distribution<double> computes it
+// (generate_canonical<double, 53>: (w1 + 2^32 w2) / 2^64, below 1), written out so that a fit
+// with a seed (FitOptions::seed: the starts' jitter) gives the same model with any standard
+// library: libc++ and MSVC draw other values from the same engine.
+inline double uniform_draw(std::mt19937& rng, double a, double b) {
+  const double w1 = static_cast<double>(rng());
+  const double w2 = static_cast<double>(rng());
+  double u = (w1 + w2 * 4294967296.0) / 18446744073709551616.0;  // 2^32, 2^64
+  if (u >= 1.0) u = std::nextafter(1.0, 0.0);
+  return u * (b - a) + a;
+}
 
 // Throws hysteron::Error if x and y differ in length, are empty or hold a non-finite value.
 void check_record(std::span<const double> x, std::span<const double> y, std::string_view what);

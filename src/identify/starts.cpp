@@ -353,8 +353,7 @@ std::vector<std::vector<double>> gpi_starts(const Data& full, int n, const FitOp
   const Ranges rg = ranges_of(d);
   const auto envs = gpi_envelopes(d, rg);
   std::mt19937 rng(o.seed);
-  std::uniform_real_distribution<double> jit(-kAlphaJitter, kAlphaJitter);
-  auto j = [&](double v) { return o.seed == 0 ? v : v * (1.0 + jit(rng)); };
+  auto j = [&](double v) { return o.seed == 0 ? v : v * (1.0 + detail::uniform_draw(rng, -kAlphaJitter, kAlphaJitter)); };
   struct Cand {
     double sse;
     std::vector<double> th;

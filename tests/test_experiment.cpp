@@ -287,6 +287,38 @@ TEST(Experiment, ReferenceAboveTheRigsReachIsScaledOrReported) {
   EXPECT_TRUE(test::said(paper, "out of this rig's reach"));
 }
 
+// TrackingRun::saturated counts the scored samples only (those `errors` is over: after the warm-up
+// or pre-roll; a learning run's last period), as the saturation note does: recounted here from the
+// run's own series, its scored_from_s and the result's pressure limit. On the 35 kg rig with the
+// published reference the command sits at the limit near every top, in the scored samples and
+// before them.
+TEST(Experiment, SaturatedSamplesAreTheScoredOnes) {
+  ExperimentOptions o = test::quick_experiment("gpi-pid", 2);
+  o.rig.load.mass = 35.0;
+  o.fit_references = false;
+  const ExperimentResult r = run_experiment(o);
+  const double p_max = r.pressure_limit_mpa;
+  bool learning = false;
+  std::size_t whole_run_more = 0;
+  for (const TrackingRun& run : r.runs) {
+    const auto from = static_cast<std::size_t>(
+        std::lower_bound(run.t.begin(), run.t.end(), run.scored_from_s) - run.t.begin());
+    ASSERT_LT(from, run.t.size()) << run.variant;
+    const std::size_t to = run.t.size();  // a learning run's series end with its last period
+    learning = learning || !run.periods.empty();
+    std::size_t scored = 0, all = 0;
+    for (std::size_t k = 0; k < run.pressure_command_mpa.size(); ++k) {
+      const bool at_limit = run.pressure_command_mpa[k] <= 0.0 || run.pressure_command_mpa[k] >= p_max;
+      all += at_limit;
+      scored += at_limit && k >= from && k < to;
+    }
+    EXPECT_EQ(run.saturated, scored) << run.variant << " " << run.reference;
+    whole_run_more += all > scored;
+  }
+  EXPECT_TRUE(learning) << "no learning run: the test shows nothing of its periods";
+  EXPECT_GT(whole_run_more, 0u) << "no run saturates before its scored samples: the test shows nothing";
+}
+
 // A muscle whose stroke ends below the papers' references (15 % of 0.5 m: a hard stop at 75
 // mm, reached at about 0.42 MPa): the reach's top was taken at 0.57 MPa, i.e. on the stop, and
 // the references were mapped onto the stop, where the contraction no longer answers the

@@ -264,7 +264,10 @@ struct TrackingRun {
   std::vector<double> pressure_measured_mpa;
   TrackingErrors errors;  // reference vs measured contraction (the last period of a learning run)
   std::vector<TrackingErrors> periods;  // learning runs: the errors of each period, in order
-  std::size_t saturated = 0;  // control samples with the command at a pressure limit
+  // scored control samples (those `errors` is over) with the command at a pressure limit: 0 or the
+  // run's limit (before 2026-12-01, twenty-seventh session: every sample of the run, the pre-roll,
+  // warm-up and a learning run's earlier periods included)
+  std::size_t saturated = 0;
   // time [s] of the first scored sample: after a warm-up period or a pre-roll (the rig starts
   // vented, docs/control.md section 5); a learning run: the start of its last period
   double scored_from_s = 0.0;

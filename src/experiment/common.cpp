@@ -101,6 +101,13 @@ FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::stri
   return rep;
 }
 
+std::size_t saturated_samples(const TrackingRun& run, std::size_t from, std::size_t to, double p_max) {
+  std::size_t n = 0;
+  for (std::size_t k = from; k < std::min(to, run.pressure_command_mpa.size()); ++k)
+    if (run.pressure_command_mpa[k] <= 0.0 || run.pressure_command_mpa[k] >= p_max) ++n;
+  return n;
+}
+
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to) {
   TrackingErrors e;
   double s2 = 0, s1 = 0;
@@ -269,7 +276,6 @@ TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vec
     run.pressure_mpa.push_back(out.pressure * 1e-6);
     run.pressure_measured_mpa.push_back(s.pressure_mpa);
     run.duty.push_back(in.mode == Actuation::switching_valves ? in.pwm_duty : 0.0);
-    if (in.pressure_command <= 0.0 || in.pressure_command >= p_max) ++run.saturated;
     ++k;
     return in;
   });

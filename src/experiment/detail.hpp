@@ -200,6 +200,9 @@ ModelParams straight_line(const IdentificationRun& r, double p_max);
 FitReport fit_checked(const IdentificationRun& r, FitOptions fo, const std::string& what, double p_max,
                       FitStatus* status = nullptr);
 TrackingErrors errors_of(const TrackingRun& run, std::size_t from, std::size_t to);
+// The samples in [from, to) whose pressure command sat at 0 or at p_max [MPa], the run's limit
+// (TrackingRun::saturated: over the samples errors_of scores).
+std::size_t saturated_samples(const TrackingRun& run, std::size_t from, std::size_t to, double p_max);
 // The pressure at which a run's command sat at its limit p_max [MPa] long enough to level off,
 // where that is more than kCapMargin below it; nullopt otherwise.
 struct CappedTop {
@@ -231,8 +234,9 @@ std::string sensor_gap(const TrackingRun& run, std::size_t from, std::size_t to,
 std::string sensor_gap_note(const std::vector<std::string>& gaps, const PamRigParams& identified,
                             const PamRigParams& tracked);
 // Runs one tracking experiment: `reference` sampled at the control period, the
-// preview `lead` samples ahead (wrapping around for a periodic reference); a command at 0 or
-// p_max [MPa] (the run's limit) counts as saturated.
+// preview `lead` samples ahead (wrapping around for a periodic reference); p_max [MPa]: the
+// run's limit (its saturated samples are counted once the scored samples are known,
+// saturated_samples).
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
                   std::size_t lead, bool periodic, const Law& law, double p_max);
 // Throws hysteron::Stopped where o.stop_requested says stop (ExperimentOptions::stop_requested).

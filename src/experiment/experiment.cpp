@@ -142,6 +142,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
   run.errors = run.periods.back();
   const std::size_t last = n0 + static_cast<std::size_t>(o.learning_periods - 1) * ref.period;
   run.scored_from_s = last < run.t.size() ? run.t[last] : 0.0;
+  run.saturated = saturated_samples(run, last, last + ref.period, p_max);
   run.description = fmt::format("{}; + iterative learning over {} periods (L = {}, phase lead {} samples, "
                                 "binomial Q-filter half-width {}, contraction bound {:.3f} on the identified loop; L "
                                 "may grow to {}, the largest gain whose bound holds on the identified loop itself)",
@@ -668,6 +669,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
       run.controller = loop_design(loop, v.preview ? lead : 0, tc, v.preview ? &zv : nullptr);
       run.errors = errors_of(run, ref.score_from, run.t.size());
       run.scored_from_s = ref.score_from < run.t.size() ? run.t[ref.score_from] : 0.0;
+      run.saturated = saturated_samples(run, ref.score_from, run.t.size(), p_max);
       run_notes(run, ref.score_from);
       res.runs.push_back(std::move(run));
       if (loop.note)

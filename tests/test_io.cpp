@@ -1166,6 +1166,10 @@ TEST(Units, ConversionFactorsFromTheirDefinitions) {
   EXPECT_NE(io::input_unit_mismatch("psi").find("145x off"), std::string::npos)
       << io::input_unit_mismatch("psi");
   EXPECT_TRUE(io::input_unit_mismatch("MPa").empty());
+  // every other pressure unit is a mismatch; a unit that is no pressure is not this check's
+  for (const char* unit : {"Pa", "hPa", "kPa", "bar", "mbar", "psi", "atm", "barg", "kPa (gauge) [kPa]"})
+    EXPECT_FALSE(io::input_unit_mismatch(unit).empty()) << unit;
+  EXPECT_TRUE(io::input_unit_mismatch("mm").empty());
 }
 
 // A units map with input_scale 0 (it divides the input) or output_gain 0 (a constant output) is

@@ -112,3 +112,22 @@ TEST(Degenerate, TooShortARecordNamesTheOperatorCountThatFits) {
     EXPECT_NE(fit(r.x, r.y, o).message.find("too few"), std::string::npos) << "--n " << n + 1;
   }
 }
+
+// compute_metrics on a record small enough to compute by hand: errors {0, 0, 0, -2} on an
+// output {0, 1, 2, 3} (span 3, mean 1.5, SST 5): RMS 1, MAE 0.5, max 2, RMS 33.3 % of the span,
+// R^2 = 1 - 4 / 5 = 0.2. A constant output has no variance to explain: R^2 NaN (its sum of squares
+// about the mean is only rounding: 0.1 summed ten times is not 1).
+TEST(Degenerate, MetricsOfAHandComputedRecordAndAConstantOne) {
+  const FitMetrics m = compute_metrics(std::vector<double>{0, 1, 2, 3}, std::vector<double>{0, 1, 2, 5});
+  EXPECT_EQ(m.n, 4u);
+  EXPECT_DOUBLE_EQ(m.rms, 1.0);
+  EXPECT_DOUBLE_EQ(m.mae, 0.5);
+  EXPECT_DOUBLE_EQ(m.max, 2.0);
+  EXPECT_DOUBLE_EQ(m.rms_percent_span, 100.0 / 3.0);
+  EXPECT_NEAR(m.r2, 0.2, 1e-12);  // (the scaled sums round in the last bits)
+  const std::vector<double> flat(10, 0.1), off(10, 0.2);
+  const FitMetrics c = compute_metrics(flat, off);
+  EXPECT_TRUE(std::isnan(c.r2)) << c.r2;
+  EXPECT_TRUE(std::isnan(c.rms_percent_span)) << c.rms_percent_span;
+  EXPECT_DOUBLE_EQ(c.rms, 0.1);
+}

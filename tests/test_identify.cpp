@@ -1238,3 +1238,86 @@ TEST(Clipping, EvaluateCensoredScoresAClippedRecordAsTheFitDoes) {
   EXPECT_THROW(censor_clipped(y, std::vector<double>(n - 1, 0.0)), Error);
   EXPECT_THROW(censor_clipped(y, pred, {0, n + 1}), Error);
 }
+
+// Mutation testing of the verdicts (2026-12-01): each threshold below is the documented one
+// (identify.hpp), checked on both sides with inputs built by hand, not read back from the code.
+
+// input_coverage_warning: "more than 1 % of its samples outside" (identify.hpp).
+TEST(IdentifyVerdicts, CoverageWarningAboveOnePercentOutside) {
+  InputCoverage c;
+  c.limits = {0.0, 1.0};
+  c.n = 1000;
+  c.max_beyond = 0.5;
+  for (const auto& [outside, warns] : {std::pair<std::size_t, bool>{0, false}, {10, false}, {11, true}, {20, true},
+                                       {150, true}}) {
+    c.outside = outside;
+    EXPECT_EQ(!input_coverage_warning(c, "rec.csv").empty(), warns) << outside << " of 1000 outside";
+  }
+}
+
+// validation_useless: R^2 <= 0 AND an RMS error more than kValidationRmsFactor (2) times the
+// training one; each condition alone is not enough.
+TEST(IdentifyVerdicts, UselessNeedsRSquaredAtMostZeroAndMoreThanTwiceTheTrainingRms) {
+  FitMetrics train, v;
+  train.rms = 1.0;
+  train.r2 = 0.99;
+  const auto useless = [&](double r2, double rms) {
+    v.r2 = r2;
+    v.rms = rms;
+    return validation_useless(v, train);
+  };
+  EXPECT_TRUE(useless(0.0, 3.0));
+  EXPECT_TRUE(useless(-5.0, 2.01));
+  EXPECT_FALSE(useless(0.3, 3.0));   // explains 30 % of the variance: poor, not useless
+  EXPECT_FALSE(useless(0.01, 100.0));
+  EXPECT_FALSE(useless(-5.0, 2.0));  // exactly twice: not more than
+  EXPECT_FALSE(useless(-5.0, 1.5));
+}
+
+// output_map_warning with the training RMS given: a prediction of R^2 below kMinFitR2 (0.5) whose
+// RMS error is more than twice the training one gets the plain warning even where no map helps;
+// one within twice the training RMS gets none, whatever its R^2 (a quiet stretch).
+TEST(IdentifyVerdicts, OutputMapWarningBelowHalfRSquaredAndOnlyBeyondTwiceTheTrainingRms) {
+  OutputMap m;
+  m.gain = 0.8, m.offset = 0.1, m.span = 100.0;
+  m.r2 = 0.3, m.r2_mapped = 0.32;  // poor, and no map explains it
+  m.rms = 10.0, m.rms_mapped = 9.5;  // the map does not halve the error
+  const double train_r2 = 0.99, train_rms = 1.0;
+  const std::string w = output_map_warning(m, "v.csv", train_r2, train_rms);
+  EXPECT_EQ(w.rfind("v.csv: the model's prediction scores R^2 0.3 ", 0), 0u) << w;
+  EXPECT_FALSE(output_map_names(m, train_r2, train_rms));
+  // the same R^2 at 1.5x the training RMS error: the model describes the record as well as its own
+  m.rms = 1.5, m.rms_mapped = 1.45;
+  EXPECT_TRUE(output_map_warning(m, "v.csv", train_r2, train_rms).empty())
+      << output_map_warning(m, "v.csv", train_r2, train_rms);
+  m.r2 = -0.5, m.r2_mapped = 0.1;
+  EXPECT_TRUE(output_map_warning(m, "v.csv", train_r2, train_rms).empty())
+      << output_map_warning(m, "v.csv", train_r2, train_rms);
+}
+
+// detect_clipping: "Of the samples within 3 sigma of the least reading, the share exactly at it
+// ... Clipped above 3/4 with at least 50 samples at the limit" (identify.hpp). A noisy signal well
+// above 0 and a stretch of 100 samples near 0, 60 of them exactly at 0 (share 0.6): not clipped;
+// 90 of them (share 0.9): clipped.
+TEST(IdentifyVerdicts, ClippedOnlyAboveThreeQuartersOfTheSamplesNearTheLimit) {
+  for (const auto& [at, clipped] : {std::pair<std::size_t, bool>{60, false}, {90, true}}) {
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, 0.01);
+    std::vector<double> y;
+    for (int k = 0; k < 1000; ++k) y.push_back(0.5 + 0.4 * std::sin(2.0 * M_PI * k / 250.0) + noise(rng));
+    // the stretch at the bottom: `at` samples at 0, the others 0.005..0.0075 (within 3 noise widths of it)
+    for (std::size_t k = 0; k < 100; ++k) y.push_back(k % 10 < at / 10 ? 0.0 : 0.005 + 0.00025 * static_cast<double>(k % 10));
+    for (int k = 0; k < 1000; ++k) y.push_back(0.5 + 0.4 * std::sin(2.0 * M_PI * k / 250.0) + noise(rng));
+    const Clipping c = detect_clipping(y);
+    ASSERT_EQ(c.lo, 0.0);
+    ASSERT_GT(c.sigma, 0.005);  // the noise's 0.01, as estimated
+    ASSERT_LT(c.sigma, 0.02);
+    std::size_t near = 0, at_lo = 0;
+    for (double v : y) near += v <= 3.0 * c.sigma, at_lo += v == 0.0;
+    ASSERT_EQ(near, 100u);  // the sine's least value, 0.1 less its noise, lies beyond 3 sigma
+    ASSERT_EQ(at_lo, at);
+    EXPECT_EQ(c.low, clipped) << at << " of " << near << " at the least reading";
+    EXPECT_DOUBLE_EQ(c.low_share, static_cast<double>(at) / 100.0);
+    EXPECT_FALSE(c.high);
+  }
+}

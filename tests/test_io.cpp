@@ -24,6 +24,7 @@
 #include "hysteron/io/model_file.hpp"
 #include "hysteron/io/numbers.hpp"
 #include "hysteron/io/table.hpp"
+#include "hysteron/io/units.hpp"
 #include "hysteron/models.hpp"
 
 namespace fs = std::filesystem;
@@ -1155,4 +1156,59 @@ TEST(MatCorrupt, V4SizesAreCheckedAgainstTheFile) {
   const auto badname = dir.file("name4.mat");
   write_bytes(badname, name);
   expect_error([&] { io::read_column(badname, "input"); }, {badname, "variable #1"});
+}
+
+// Mutation testing (2026-12-01): the error of a column empty on some lines names the FIRST empty
+// line (not the last before a value), and a ragged row names the header's line as the reference
+// (a comment line before the header counts: the header is line 2).
+TEST(Csv, ErrorsNameTheFirstEmptyLineAndTheHeadersLine) {
+  TempDir dir;
+  const auto gaps = dir.write("gaps.csv", ",2\n,3\n,4\n5,6\n");
+  expect_error([&] { io::read_column(gaps, "1"); }, {gaps + ":1:1", "empty field"});
+  const auto ragged = dir.write("ragged.csv", "# a note\na,b\n1,2\n3\n");
+  expect_error([&] { io::read_column(ragged, "a"); }, {ragged + ":4:", "1 fields, expected 2 (as on line 2)"});
+}
+
+// The conversion factors of the units a model or record names, from their definitions (not read
+// back from the table): 1 psi = 0.45359237 kg x 9.80665 m/s^2 / (0.0254 m)^2, 1 bar = 1e5 Pa,
+// 1 mbar = 1 hPa = 100 Pa, 1 atm = 101325 Pa; 1 in = 0.0254 m. A model file in psi or inches must
+// be converted by the factor the message prints.
+TEST(Units, ConversionFactorsFromTheirDefinitions) {
+  const double psi_pa = 0.45359237 * 9.80665 / (0.0254 * 0.0254);
+  const std::pair<const char*, double> mpa[] = {{"Pa", 1e-6},        {"hPa", 100e-6}, {"kPa", 1e-3},
+                                                {"MPa", 1.0},        {"bar", 0.1},    {"mbar", 100e-6},
+                                                {"psi", psi_pa * 1e-6}, {"atm", 0.101325}, {"barg", 0.1},
+                                                {"Pressure [psi]", psi_pa * 1e-6}};
+  for (const auto& [unit, factor] : mpa) EXPECT_NEAR(io::mpa_per_pressure_unit(unit), factor, 1e-12 * factor) << unit;
+  EXPECT_EQ(io::mpa_per_pressure_unit("mm"), 0.0);
+  const std::pair<const char*, double> per_m[] = {{"m", 1.0},   {"cm", 100.0},        {"mm", 1000.0},
+                                                  {"um", 1e6},  {"\xC2\xB5m", 1e6}, {"nm", 1e9},
+                                                  {"in", 1.0 / 0.0254}};
+  for (const auto& [unit, count] : per_m) EXPECT_NEAR(io::length_units_per_metre(unit), count, 1e-12 * count) << unit;
+  EXPECT_EQ(io::length_units_per_metre("kPa"), 0.0);
+  // a model_scale within 1e-4 of the unit's count per metre is the unit's; 1 % off is a mismatch
+  EXPECT_TRUE(io::model_scale_mismatch(1000.0 * (1 + 5e-5), "mm").empty());
+  EXPECT_FALSE(io::model_scale_mismatch(1000.0 * 1.01, "mm").empty());
+  EXPECT_FALSE(io::model_scale_mismatch(1000.0, "um").empty());
+  // the controller's pressures are in MPa: a model in psi is 1 / (psi in MPa) = 145.04 x off
+  ASSERT_NEAR(1e6 / psi_pa, 145.04, 0.01);
+  EXPECT_NE(io::input_unit_mismatch("psi").find("145x off"), std::string::npos)
+      << io::input_unit_mismatch("psi");
+  EXPECT_TRUE(io::input_unit_mismatch("MPa").empty());
+  // every other pressure unit is a mismatch; a unit that is no pressure is not this check's
+  for (const char* unit : {"Pa", "hPa", "kPa", "bar", "mbar", "psi", "atm", "barg", "kPa (gauge) [kPa]"})
+    EXPECT_FALSE(io::input_unit_mismatch(unit).empty()) << unit;
+  EXPECT_TRUE(io::input_unit_mismatch("mm").empty());
+}
+
+// A units map with input_scale 0 (it divides the input) or output_gain 0 (a constant output) is
+// refused at load, naming the key (model_file.cpp's units_of, and the model's own validation
+// behind it: either alone refuses it).
+TEST(ModelFile, ZeroInputScaleOrOutputGainIsRefusedNamingTheKey) {
+  for (const char* key : {"input_scale", "output_gain"}) {
+    json j = json::parse(R"({"model": "pi", "q": 1, "r": [0, 0.5], "p": [1, 0.5]})");
+    EXPECT_NO_THROW(hysteron::io::model_from_json(j, "m.json"));
+    j[key] = 0.0;
+    expect_error([&] { hysteron::io::model_from_json(j, "m.json"); }, {"m.json", key});
+  }
 }

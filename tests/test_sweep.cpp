@@ -1148,3 +1148,48 @@ TEST(SweepRun, CommandsAreCheckedAgainstEachRigsLimit) {
   EXPECT_TRUE(contains(report::sweep_report_html(r, "cmd"), "at a control period of 0.5 ms"));
   EXPECT_EQ(r.to_json()["runs"][1]["command_limit_mpa"].get<double>(), 0.05);
 }
+
+// target_misses on a sweep built by hand (mutation testing, 2026-12-01): a variant's compensated
+// RMS error above rms_ratio_limit (1.5 by default) times the nominal rig's is a miss, at 1.4x none;
+// a compensated run whose RMS error equals its baseline's is not below it (as
+// ExperimentResult::not_below_baseline: equal is not below), one just below is fine; a pressure
+// command below 0 MPa by any amount is a miss.
+TEST(SweepResult, TargetMissesAtTheRatioLimitAndAtTheBaseline) {
+  const auto sweep = [](double variant_rms, double variant_baseline, double least_command = 0.0) {
+    SweepResult r;
+    r.experiments = {"gpi-pid"};
+    r.variants.resize(2);
+    r.variants[0].variant.name = "nominal";
+    r.variants[1].variant.name = "load.mass=35";
+    for (std::size_t v = 0; v < 2; ++v) {
+      SweepRun run;
+      run.experiment = "gpi-pid";
+      run.variant = v;
+      run.ok = true;
+      for (const auto& [kind, rms] : {std::pair<const char*, double>{"compensated", v ? variant_rms : 1.0},
+                                      {"baseline", v ? variant_baseline : 10.0}}) {
+        SweepRunErrors e;
+        e.reference = "sine";
+        e.kind = kind;
+        e.errors.rms_error_mm = rms;
+        e.min_command_mpa = v ? least_command : 0.0;
+        e.max_command_mpa = 0.5;  // within the 0.6 MPa limit
+        run.runs.push_back(e);
+      }
+      r.runs.push_back(run);
+    }
+    return r.target_misses();
+  };
+  EXPECT_TRUE(sweep(1.4, 10.0).empty());
+  const auto over = sweep(1.6, 10.0);
+  ASSERT_EQ(over.size(), 1u);
+  EXPECT_EQ(over[0], "gpi-pid load.mass=35 sine compensated: RMS 1.600 mm = 1.60x nominal 1.000 mm (target <= 1.5x)");
+  const auto equal = sweep(1.4, 1.4);
+  ASSERT_EQ(equal.size(), 1u);
+  EXPECT_EQ(equal[0], "gpi-pid load.mass=35 sine compensated: RMS 1.400 mm not below the baseline's 1.400 mm");
+  EXPECT_TRUE(sweep(1.4, 1.41).empty());
+  // a pressure command below 0 MPa, however little, leaves the actuator's range
+  const auto negative = sweep(1.4, 10.0, -0.005);
+  ASSERT_EQ(negative.size(), 2u);  // the compensated and the baseline run
+  EXPECT_EQ(negative[0], "gpi-pid load.mass=35 sine compensated: pressure command -0.0050..0.5000 MPa leaves 0..0.6 MPa");
+}

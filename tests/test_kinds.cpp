@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include "alloc_counter.hpp"
 #include "hysteron/error.hpp"
@@ -326,6 +327,35 @@ TEST(Kinds, InverseSaturatesAtTheLimits) {
 // A mirrored input (input_scale < 0): the kernels' numerical inverse brackets the input between the
 // raw limits, which swap in model coordinates; it inverts the model and saturates at the limit in the
 // output's direction.
+// A desired output inside a jump of a discontinuous kind: the inverse commands the side whose output is
+// the closer. One relay on [0, 2] (on at x >= 2, off from the start at x = 0), q = 1, w = 1:
+// f(x) = x below 2, 3 from 2 on. y = 2.2 is 0.2 from f(2-) = 2 and 0.8 from f(2) = 3: just below 2, the
+// relay off; y = 2.9 is closer to 3: x = 2, the relay on.
+TEST(Kinds, InverseInAJumpTakesTheCloserSide) {
+  PreisachParams g;
+  g.q = 1.0;
+  g.lo = 0.0;
+  g.hi = 2.0;
+  g.levels = 1;
+  g.w = {1.0};
+  for (const auto& [y, want_x_below_2, want_out] :
+       {std::tuple<double, bool, double>{2.2, true, 2.0}, {2.9, false, 3.0}}) {
+    Inverse inv(g, InverseOptions{{0.0, 3.0}});
+    Model fwd(g);
+    const double x = inv.step(y);
+    EXPECT_EQ(x < 2.0, want_x_below_2) << y << ": x = " << x;
+    EXPECT_NEAR(x, 2.0, 1e-12) << y;
+    EXPECT_NEAR(fwd.step(x), want_out, 1e-12) << y;
+    EXPECT_FALSE(inv.saturated());
+  }
+  // the output at the upper limit, f(3) = 3 + 1 = 4, is reached there, not saturated (as beyond it)
+  Inverse inv(g, InverseOptions{{0.0, 3.0}});
+  EXPECT_EQ(inv.step(4.0), 3.0);
+  EXPECT_FALSE(inv.saturated());
+  EXPECT_EQ(inv.step(4.5), 3.0);
+  EXPECT_TRUE(inv.saturated());
+}
+
 TEST(Kinds, MirroredInputInvertsAndSaturates) {
   std::mt19937_64 rng(7);
   for (ModelParams mp : random_models(rng)) {

@@ -761,6 +761,23 @@ TEST(Control, PidTracksTheGpiSinusoidOnTheRig) {
 // commands on the original (the PID sees sign * (r, y); the inverse of -y on the negated model is
 // the inverse of y on the original, bit for bit). Without the sign, the loop on the negated model
 // is positive feedback and runs to a pressure limit.
+// The open loop's position PID is limited to +- the pressure span ("as built", compensation.hpp):
+// limits [0, 0.6], span 0.6; a PID given no limits gets [-0.6, 0.6], and its conditional anti-windup stops
+// the integral there (K_i T_s e = -2.5 per sample on a reference far below the measurement).
+TEST(Compensation, OpenLoopPositionPidIsLimitedToThePressureSpan) {
+  OpenLoopParams p;
+  p.feedforward.pressure_limits = {0.0, 0.6};
+  p.feedforward.model_scale = 1.0;
+  p.feedforward.sample_time = 0.25;
+  p.pressure_gain = 0.0;
+  p.position = PidParams{.ki = 1.0, .sample_time = 0.25};
+  OpenLoopController c(PiParams{1.0, {}, {}, {}, {}}, p);
+  EXPECT_EQ(c.position().params().out_min, -0.6);
+  EXPECT_EQ(c.position().params().out_max, 0.6);
+  for (int k = 0; k < 10; ++k) c.step(-10.0, 0.3, 0.0, 0.3);
+  EXPECT_EQ(c.position().state().integral, -2.5);  // the first sample's, then held (v = -2.5 < -0.6)
+}
+
 // The lag compensation p + T_lag (p_k - p_{k-1}) / T_s, from the second sample after construction or
 // reset() on (the first has no previous pressure: no kick). A pure gain q = 1 (model_scale 1) inverts to
 // p = desired; T_lag / T_s = 2.

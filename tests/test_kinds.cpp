@@ -327,6 +327,36 @@ TEST(Kinds, InverseSaturatesAtTheLimits) {
 // A mirrored input (input_scale < 0): the kernels' numerical inverse brackets the input between the
 // raw limits, which swap in model coordinates; it inverts the model and saturates at the limit in the
 // output's direction.
+// Bouc-Wen's output slope is kx + kw dw/dx, and dw/dx reaches 0 where |w| = 1 on the loading branch: with
+// kx = 0 and kw > 0 the output stops rising there, not invertible, whatever kw (min slope kx + min(kw, 0) ...).
+TEST(Kinds, BoucWenWithoutALinearSlopeIsNotInvertible) {
+  const BoucWenParams bw{0.0, 1.0, 2.0, 0.5, 1.0, {-2.0, 2.0}, {}};
+  EXPECT_NO_THROW(Model{bw});
+  EXPECT_THROW(Inverse{bw}, Error);
+  const BoucWenParams ok{0.1, 1.0, 2.0, 0.5, 1.0, {-2.0, 2.0}, {}};
+  EXPECT_NO_THROW(Inverse{ok});
+}
+
+// reset() is the state of a new model and inverse, for every kind (Model::reset: virgin), after steps that
+// moved it: the same snapshot and the same outputs from there.
+TEST(Kinds, ResetIsTheStateOfANewModelAndInverse) {
+  std::mt19937_64 rng(77);
+  for (const ModelParams& p : random_models(rng)) {
+    Model used(p), fresh(p);
+    Inverse inv_used(p), inv_fresh(p);
+    for (double x : random_walk(rng, 300, -1.4, 1.4)) inv_used.step(used.step(x));
+    used.reset();
+    inv_used.reset();
+    EXPECT_EQ(used.snapshot(), fresh.snapshot()) << model_name(p);
+    EXPECT_EQ(inv_used.snapshot(), inv_fresh.snapshot()) << model_name(p);
+    for (double x : random_walk(rng, 50, -1.4, 1.4)) {
+      const double y = used.step(x);
+      ASSERT_EQ(y, fresh.step(x)) << model_name(p);
+      ASSERT_EQ(inv_used.step(y), inv_fresh.step(y)) << model_name(p);
+    }
+  }
+}
+
 // A desired output inside a jump of a discontinuous kind: the inverse commands the side whose output is
 // the closer. One relay on [0, 2] (on at x >= 2, off from the start at x = 0), q = 1, w = 1:
 // f(x) = x below 2, 3 from 2 on. y = 2.2 is 0.2 from f(2-) = 2 and 0.8 from f(2) = 3: just below 2, the

@@ -112,6 +112,36 @@ TEST(Kinds, PreisachMatchesRelaysSimulatedOneByOne) {
   }
 }
 
+// The same on inputs exactly at the thresholds (a grid of 8 levels on [-1, 1]: every threshold a multiple
+// of 0.25, exact): a relay is on from x >= alpha, off from x <= beta, the thresholds themselves included.
+TEST(Kinds, PreisachRelaysSwitchOnTheirThresholdsThemselves) {
+  std::mt19937_64 rng(5);
+  auto g = random_grid<PreisachParams>(rng, 8, -1.0, 1.0);
+  for (double& w : g.w) w = 0.125 + w;  // every relay counts
+  Model m(g);
+  const int n = g.levels;
+  std::vector<int> on(g.w.size());
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) {
+      const double a = -1.0 + (i + 1) * 0.25, b = -1.0 + j * 0.25;
+      on[static_cast<std::size_t>(i * (i + 1) / 2 + j)] = (a <= 0.0 || 0.5 * (a + b) <= 0.0) ? 1 : 0;
+    }
+  std::uniform_int_distribution<int> level(-5, 5);
+  for (int k = 0; k < 2000; ++k) {
+    const double xk = 0.25 * level(rng);
+    double y = g.q * xk;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double a = -1.0 + (i + 1) * 0.25, b = -1.0 + j * 0.25;
+        auto& s = on[static_cast<std::size_t>(i * (i + 1) / 2 + j)];
+        if (xk >= a) s = 1;
+        else if (xk <= b) s = 0;
+        y += g.w[static_cast<std::size_t>(i * (i + 1) / 2 + j)] * s;
+      }
+    ASSERT_NEAR(m.step(xk), y, 1e-12) << "sample " << k << ", x = " << xk;
+  }
+}
+
 // The relaxed state at x0 is what an oscillation around x0 whose amplitude decays slowly from
 // beyond the grid to 0 leaves (kernels.hpp). kp's ramp (i, j) was centred half a grid cell low
 // ((t_i + t_j) / 2 instead of (alpha_i + beta_j) / 2 = (t_i + t_j + h) / 2): its relaxed (and

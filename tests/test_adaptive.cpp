@@ -20,6 +20,8 @@
 #include "hysteron/loop_design.hpp"
 #include "hysteron/models.hpp"
 
+#include "../src/core/rls_update.hpp"
+
 using namespace hysteron;
 
 namespace {
@@ -418,5 +420,94 @@ TEST(Adaptive, BeatsTheFixedInverseOnARigWithAWiderHysteresisBand) {
     EXPECT_TRUE(noted);
     EXPECT_TRUE(changed);
     EXPECT_FALSE(above);  // it is below on this rig: no such note
+  }
+}
+
+// The shared covariance step (src/core/rls_update.hpp) against its documented formulas, on 2 x 2 matrices:
+// the standard step K = P phi / (lambda + r), P <- (P - P phi phi^T P / (lambda + r)) / lambda,
+// R <- lambda R + phi phi^T (r = phi^T P phi); directional forgetting where the standard step's trace
+// would exceed the cap, eps = lambda - (1 - lambda) / r, P <- P - eps P phi phi^T P / (1 + eps r),
+// R <- R + eps phi phi^T, gain 1 / (1 + r); R stays P^-1 either way. A P that is not positive definite
+// (phi^T P phi < 0, a diagonal entry <= 0) is reset to the prior.
+TEST(RlsUpdate, StepsFollowTheDocumentedFormulas) {
+  using detail::RlsOutcome;
+  const std::vector<double> P0 = {10.0, 0.0, 0.0, 10.0}, R0 = {0.1, 0.0, 0.0, 0.1};
+  const double phi[2] = {1.0, -1.0};
+  struct Run {
+    std::vector<double> P, R, pphi = {0.0, 0.0};
+    double gain = -1.0;
+    RlsOutcome out{};
+  };
+  auto run = [&](std::vector<double> P, std::vector<double> R, const double* ph, double lambda) {
+    Run x{std::move(P), std::move(R)};
+    const detail::RlsMatrices a{x.P.data(), x.R.data(), P0.data(), R0.data(), x.pphi.data(), 2, 20.0};
+    x.out = detail::rls_covariance_step(a, ph, lambda, x.gain);
+    return x;
+  };
+  // P R = I
+  auto expect_inverse = [](const Run& x, const char* what) {
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j) {
+        const double pr = x.P[2 * i] * x.R[j] + x.P[2 * i + 1] * x.R[2 + j];
+        EXPECT_NEAR(pr, i == j ? 1.0 : 0.0, 1e-12) << what << " (P R)[" << i << "][" << j << "]";
+      }
+  };
+  // from P0: P phi = (10, -10), r = 20
+  auto standard_from_prior = [&](const Run& x, double lambda, const char* what) {
+    const double denom = lambda + 20.0;
+    EXPECT_NEAR(x.gain, 1.0 / denom, 1e-15) << what;
+    const double pp[2] = {10.0, -10.0};
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j)
+        EXPECT_NEAR(x.P[2 * i + j], (P0[2 * i + j] - pp[i] * pp[j] / denom) / lambda, 1e-12) << what << i << j;
+  };
+  {  // standard: trace (20 - 200 / 20.99) / 0.99 = 10.6 <= 20
+    const Run x = run(P0, R0, phi, 0.99);
+    EXPECT_EQ(x.out, RlsOutcome::standard);
+    standard_from_prior(x, 0.99, "standard");
+    expect_inverse(x, "standard");
+  }
+  {  // lambda = 0.5: the standard trace (20 - 200 / 20.5) / 0.5 = 20.5 > 20: directional
+    const Run x = run(P0, R0, phi, 0.5);
+    EXPECT_EQ(x.out, RlsOutcome::bounded);
+    const double r = 20.0, eps = 0.5 - 0.5 / r;
+    EXPECT_NEAR(x.gain, 1.0 / (1.0 + r), 1e-15);
+    const double pp[2] = {10.0, -10.0};
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j)
+        EXPECT_NEAR(x.P[2 * i + j], P0[2 * i + j] - eps * pp[i] * pp[j] / (1.0 + eps * r), 1e-12) << i << j;
+    expect_inverse(x, "directional");
+  }
+  {  // a small regressor, r = 0.1 < (1 - lambda) / lambda: eps = 0.5 - 5 < 0 grows P along phi, to a trace
+     // 10 + 10 / 0.55 + 10 = 28.2 above the cap: scaled back to the cap (R by the inverse factor)
+    const double small[2] = {0.1, 0.0};
+    const Run x = run(P0, R0, small, 0.5);
+    EXPECT_EQ(x.out, RlsOutcome::bounded);
+    EXPECT_NEAR(x.P[0] + x.P[3], 20.0, 1e-12);
+    EXPECT_NEAR(x.P[0] / x.P[3], (10.0 + 4.5 / 0.55 * 1.0) / 10.0, 1e-12);
+    expect_inverse(x, "capped");
+  }
+  {  // indefinite: phi^T P phi = 1 - 4 + 1 = -2 < 0: the prior, then its standard step
+    const Run x = run({1.0, 2.0, 2.0, 1.0}, {-1.0 / 3, 2.0 / 3, 2.0 / 3, -1.0 / 3}, phi, 0.99);
+    EXPECT_EQ(x.out, RlsOutcome::reset);
+    standard_from_prior(x, 0.99, "reset");
+    expect_inverse(x, "reset");
+  }
+  {  // a negative diagonal after the step: the prior, no update
+    const double e2[2] = {0.0, 1.0};
+    const Run x = run({-1.0, 0.0, 0.0, 1.0}, {-1.0, 0.0, 0.0, 1.0}, e2, 0.99);
+    EXPECT_EQ(x.out, RlsOutcome::reset);
+    EXPECT_EQ(x.gain, 0.0);
+    EXPECT_EQ(x.P, P0);
+    EXPECT_EQ(x.R, R0);
+  }
+  {  // a non-finite regressor: nothing learned, P (not the prior) unchanged: P is not at fault
+    const double bad[2] = {1.0, NAN};
+    const std::vector<double> P = {5.0, 1.0, 1.0, 5.0}, R = {5.0 / 24, -1.0 / 24, -1.0 / 24, 5.0 / 24};
+    const Run x = run(P, R, bad, 0.99);
+    EXPECT_EQ(x.out, RlsOutcome::skipped);
+    EXPECT_EQ(x.gain, 0.0);
+    EXPECT_EQ(x.P, P);
+    EXPECT_EQ(x.R, R);
   }
 }

@@ -127,6 +127,68 @@ TEST(Pid, AntiWindup) {
   EXPECT_LT(sat_back, 5);
 }
 
+// Back-calculation, I += K_i T_s e + k_t (u - v) with k_t = min(1, T_s / T_t) (Astrom & Hagglund), by hand
+// on dyadic numbers (exact): constant r and y, so the derivative is 0 and v = K_p e + I.
+TEST(Pid, BackCalculationTrackingGain) {
+  // T_t = 0 selects sqrt(T_i T_d) with K_d > 0: T_i = K_p / K_i = 1 s, T_d = K_d / K_p = 0.25 s, T_t = 0.5 s,
+  // k_t = 0.125 / 0.5 = 0.25; e = 4: v = 4 + 0 saturates at u = 1, I = 0.125 x 4 + 0.25 (1 - 4) = -0.25
+  {
+    Pid pid(PidParams{.kp = 1.0, .ki = 1.0, .kd = 0.25, .sample_time = 0.125, .out_min = -1.0, .out_max = 1.0,
+                      .anti_windup = AntiWindup::back_calculation});
+    EXPECT_EQ(pid.step(4.0, 0.0), 1.0);
+    EXPECT_EQ(pid.state().integral, -0.25);
+  }
+  // A tracking time below T_s: k_t is capped at 1 (the integral is set so that v = u exactly; a larger gain
+  // overshoots it). K_i T_s = 5, K_p = 0, limits [-1, 1], e = 1: I = 5 after the first sample (v = 0), then
+  // v = 5, u = 1, I = 5 + 5 + 1 (1 - 5) = 6, and with e = 0 the output stays at the upper limit.
+  {
+    Pid pid(PidParams{.kp = 0.0, .ki = 10.0, .sample_time = 0.5, .out_min = -1.0, .out_max = 1.0,
+                      .anti_windup = AntiWindup::back_calculation, .tracking_time = 0.05});
+    EXPECT_EQ(pid.step(1.0, 0.0), 0.0);
+    EXPECT_EQ(pid.state().integral, 5.0);
+    EXPECT_EQ(pid.step(1.0, 0.0), 1.0);
+    EXPECT_EQ(pid.state().integral, 6.0);
+    EXPECT_EQ(pid.step(0.0, 0.0), 1.0);  // not driven to the opposite limit by the tracking
+  }
+}
+
+// The first sample after construction or reset has no previous measurement: the derivative starts at 0
+// (no kick), whatever y is; the second sample differentiates: -K_d (y_k - y_{k-1}) / T_s (c = 0).
+TEST(Pid, NoDerivativeKickOnTheFirstSample) {
+  Pid pid(PidParams{.kp = 0.0, .kd = 0.5, .sample_time = 0.25});
+  EXPECT_EQ(pid.step(0.0, 3.0), 0.0);
+  EXPECT_EQ(pid.step(0.0, 4.0), -2.0);  // -0.5 (4 - 3) / 0.25
+  pid.reset();
+  EXPECT_EQ(pid.step(0.0, -7.0), 0.0);
+}
+
+// Setpoint weighting of the proportional term, K_p (b r - y): b = 0.5 halves the setpoint's share, the
+// measurement's stays whole.
+TEST(Pid, ProportionalSetpointWeight) {
+  Pid pid(PidParams{.kp = 2.0, .sample_time = 0.5, .setpoint_weight_p = 0.5});
+  EXPECT_EQ(pid.step(1.0, 0.0), 1.0);    // 2 (0.5 - 0)
+  EXPECT_EQ(pid.step(1.0, 0.25), 0.5);   // 2 (0.5 - 0.25)
+  EXPECT_EQ(pid.step(0.0, 0.25), -0.5);  // 2 (0 - 0.25)
+}
+
+// reset(u0): the integral is clamp(u0) (a bumpless start) where there is an integral, and the output u0
+// within [out_min, out_max]; a P-only controller (K_i = 0) keeps no integral: no permanent offset u0.
+TEST(Pid, ResetStartsAtTheClampedOutput) {
+  Pid pi(PidParams{.kp = 2.0, .ki = 1.0, .sample_time = 0.5, .out_min = -1.0, .out_max = 1.0});
+  pi.reset(5.0);
+  EXPECT_EQ(pi.output(), 1.0);
+  EXPECT_EQ(pi.state().integral, 1.0);
+  pi.reset(-3.0);
+  EXPECT_EQ(pi.output(), -1.0);
+  EXPECT_EQ(pi.state().integral, -1.0);
+  EXPECT_EQ(pi.step(0.0, 0.0), -1.0);  // e = 0: v = I
+  Pid p(PidParams{.kp = 2.0, .ki = 0.0, .sample_time = 0.5, .out_min = -10.0, .out_max = 10.0});
+  p.reset(0.5);
+  EXPECT_EQ(p.output(), 0.5);
+  EXPECT_EQ(p.state().integral, 0.0);
+  EXPECT_EQ(p.step(1.0, 0.5), 1.0);  // K_p e = 2 x 0.5, no offset
+}
+
 TEST(Pid, OutputWithinLimitsAndFaultsHeld) {
   std::mt19937_64 rng(12345);
   std::uniform_real_distribution<double> big(-1e6, 1e6);
@@ -523,6 +585,71 @@ TEST(PidGuard, CutsAGrowingRingBeforeItReachesTheLimits) {
   EXPECT_LT(max_abs(held, 1000), 0.2 * max_abs(ring, 1000));  // counted by half-cycles: 0.96
 }
 
+// A cut multiplies K_p, K_i and K_d alike (docs/control.md): with the guard's scale at 0.5 (restored) a
+// P, an I and a D controller each command half of what the uncut one does on the same samples.
+TEST(PidGuard, TheScaleCutsEveryGain) {
+  const PidGuard g{.period = 1.0, .amplitude = 1.0};
+  for (const PidParams& base : {PidParams{.kp = 3.0, .sample_time = 0.25, .guard = g},
+                                PidParams{.ki = 4.0, .sample_time = 0.25, .guard = g},
+                                PidParams{.kd = 0.5, .sample_time = 0.25, .guard = g}}) {
+    Pid full(base), cut(base);
+    full.step(0.0, 1.0);
+    cut.step(0.0, 1.0);
+    std::vector<double> snap = cut.snapshot();
+    snap[6] = 0.5;  // gain_scale
+    cut.restore(snap);
+    const double i0 = full.state().integral;  // I: the integral of the uncut sample stays whole
+    for (double y : {3.0, -1.0, 0.5}) {
+      const double u_full = full.step(0.0, y) - i0;
+      const double u_cut = cut.step(0.0, y) - i0;
+      EXPECT_EQ(u_cut, 0.5 * u_full) << base.kp << " " << base.ki << " " << base.kd << " y " << y;
+    }
+  }
+}
+
+// Duties are multiples of the resolution but never above max_duty: 0.9 on a 0.25 grid rounds to 1.0, and
+// is held at 0.9.
+TEST(Pwm, ResolutionNeverExceedsMaxDuty) {
+  PwmModulator m(PwmParams{.gain = 1.0, .max_duty = 0.9, .resolution = 0.25});
+  EXPECT_EQ(m.step(10.0), 0.9);
+  EXPECT_EQ(m.step(-10.0), -0.9);
+  EXPECT_EQ(m.step(0.6), 0.5);  // 0.6 rounded to 0.25
+}
+
+namespace {
+// The guard's cuts after each sample of a square-wave error +-level (r = e, y = 0), `half` samples per
+// half-cycle, starting positive; T_u = 1 s, a = 1, T_s = 0.01 s (the limit a T_u / pi = 1 / pi).
+std::vector<std::size_t> guard_cuts_on_square_wave(double level, int half, int half_cycles) {
+  Pid pid(PidParams{.kp = 1.0, .sample_time = 0.01, .guard = PidGuard{.period = 1.0, .amplitude = 1.0}});
+  std::vector<std::size_t> cuts;
+  for (int k = 0; k < half * half_cycles; ++k) {
+    pid.step((k / half) % 2 == 0 ? level : -level, 0.0);
+    cuts.push_back(pid.state().guard_cuts);
+  }
+  return cuts;
+}
+}  // namespace
+
+// A half-cycle is |e| above a / 4: a ring at 0.4 a whose half-cycles of 0.9 T_u have integrals of
+// 0.36 a T_u > a T_u / pi is counted (and, sustained, cut); the same ring, counted, with each half-cycle
+// adding at least 1 (count 5, decay over 5 T_u: at most about 10 half-cycles of 0.9 T_u) cuts within 20.
+TEST(PidGuard, ARingAboveAQuarterOfTheAmplitudeIsCounted) {
+  const auto cuts = guard_cuts_on_square_wave(0.4, 90, 20);
+  EXPECT_GE(cuts.back(), 1u);
+}
+
+// A ring of constant amplitude is "growing" (each half-cycle's integral at least that of the one of its
+// sign before, three in a row counted): from the third counted half-cycle on it adds its severity, at most
+// `count`. At 2 a over 0.9 T_u the severity is 1.8 pi = 5.65 > count = 5: the sign changes 2 and 3 add 1
+// each (the first ends no counted half-cycle), change 4 adds 5 and cuts at once.
+TEST(PidGuard, AConstantRingCountsAsGrowing) {
+  const int half = 90;
+  const auto cuts = guard_cuts_on_square_wave(2.0, half, 6);
+  const std::size_t fourth = 3 * half;  // the sample of the 4th sign change
+  EXPECT_EQ(cuts[fourth - 1], 0u);
+  EXPECT_EQ(cuts[fourth], 1u);
+}
+
 TEST(PidGuard, LeavesAStableLoopAlone) {
   // The same loop at 0.4 K_u, tracking a sine of 20 T_u and then a square wave of amplitude 1
   // (half-periods of 10 T_u: each step rings a little and settles), with measurement noise
@@ -634,6 +761,59 @@ TEST(Control, PidTracksTheGpiSinusoidOnTheRig) {
 // commands on the original (the PID sees sign * (r, y); the inverse of -y on the negated model is
 // the inverse of y on the original, bit for bit). Without the sign, the loop on the negated model
 // is positive feedback and runs to a pressure limit.
+// The open loop's position PID is limited to +- the pressure span ("as built", compensation.hpp):
+// limits [0, 0.6], span 0.6; a PID given no limits gets [-0.6, 0.6], and its conditional anti-windup stops
+// the integral there (K_i T_s e = -2.5 per sample on a reference far below the measurement).
+TEST(Compensation, OpenLoopPositionPidIsLimitedToThePressureSpan) {
+  OpenLoopParams p;
+  p.feedforward.pressure_limits = {0.0, 0.6};
+  p.feedforward.model_scale = 1.0;
+  p.feedforward.sample_time = 0.25;
+  p.pressure_gain = 0.0;
+  p.position = PidParams{.ki = 1.0, .sample_time = 0.25};
+  OpenLoopController c(PiParams{1.0, {}, {}, {}, {}}, p);
+  EXPECT_EQ(c.position().params().out_min, -0.6);
+  EXPECT_EQ(c.position().params().out_max, 0.6);
+  for (int k = 0; k < 10; ++k) c.step(-10.0, 0.3, 0.0, 0.3);
+  EXPECT_EQ(c.position().state().integral, -2.5);  // the first sample's, then held (v = -2.5 < -0.6)
+}
+
+// The lag compensation p + T_lag (p_k - p_{k-1}) / T_s, from the second sample after construction or
+// reset() on (the first has no previous pressure: no kick). A pure gain q = 1 (model_scale 1) inverts to
+// p = desired; T_lag / T_s = 2.
+TEST(Compensation, LagCompensationStartsAtTheSecondSample) {
+  FeedforwardParams p;
+  p.pressure_limits = {0.0, 10.0};
+  p.model_scale = 1.0;
+  p.lag_time_constant = 0.5;
+  p.sample_time = 0.25;
+  InverseFeedforward ff(PiParams{1.0, {}, {}, {}, {}}, p);
+  EXPECT_EQ(ff.step(1.0), 1.0);
+  EXPECT_EQ(ff.step(2.0), 4.0);   // 2 + 2 (2 - 1)
+  EXPECT_EQ(ff.step(2.5), 3.5);   // 2.5 + 2 (0.5)
+  EXPECT_EQ(ff.step(2.0), 1.0);   // 2 + 2 (-0.5)
+  EXPECT_EQ(ff.step(9.0), 10.0);  // 9 + 14, at the limit
+  ff.reset();
+  EXPECT_EQ(ff.step(3.0), 3.0);
+  EXPECT_EQ(ff.step(3.0), 3.0);
+}
+
+// The feedforward-PID's anti-windup knows the total command: the PID is limited to the pressure limits
+// (the feedforward enters it as its feedforward term). An unreachable reference, K_i T_s e = 2.5 per sample:
+// the first sample integrates (v = 0 + 0.3 inside [0, 0.6]), then v = 2.8 is above 0.6 and the conditional
+// rule stops the integral at 2.5.
+TEST(Compensation, FeedforwardPidIntegralStopsAtThePressureLimits) {
+  FeedforwardParams ff;
+  ff.pressure_limits = {0.0, 0.6};
+  ff.model_scale = 1.0;
+  ff.sample_time = 0.25;
+  FeedforwardPidController c(PiParams{1.0, {}, {}, {}, {}}, ff, PidParams{.ki = 1.0, .sample_time = 0.25});
+  EXPECT_EQ(c.pid().params().out_max, 0.6);
+  EXPECT_EQ(c.pid().params().out_min, 0.0);
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(c.step(10.0, 0.3, 0.0), k == 0 ? 0.3 : 0.6);
+  EXPECT_EQ(c.pid().state().integral, 2.5);
+}
+
 TEST(Compensation, ADecreasingModelIsFedBackWithItsSign) {
   const auto gpi = [](double gain, double offset) {
     return io::model_from_json(

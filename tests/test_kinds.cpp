@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include "alloc_counter.hpp"
 #include "hysteron/error.hpp"
@@ -108,6 +109,36 @@ TEST(Kinds, PreisachMatchesRelaysSimulatedOneByOne) {
         y += g.w[static_cast<std::size_t>(i * (i + 1) / 2 + j)] * s;
       }
     ASSERT_NEAR(m.step(xk), y, 1e-12);
+  }
+}
+
+// The same on inputs exactly at the thresholds (a grid of 8 levels on [-1, 1]: every threshold a multiple
+// of 0.25, exact): a relay is on from x >= alpha, off from x <= beta, the thresholds themselves included.
+TEST(Kinds, PreisachRelaysSwitchOnTheirThresholdsThemselves) {
+  std::mt19937_64 rng(5);
+  auto g = random_grid<PreisachParams>(rng, 8, -1.0, 1.0);
+  for (double& w : g.w) w = 0.125 + w;  // every relay counts
+  Model m(g);
+  const int n = g.levels;
+  std::vector<int> on(g.w.size());
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) {
+      const double a = -1.0 + (i + 1) * 0.25, b = -1.0 + j * 0.25;
+      on[static_cast<std::size_t>(i * (i + 1) / 2 + j)] = (a <= 0.0 || 0.5 * (a + b) <= 0.0) ? 1 : 0;
+    }
+  std::uniform_int_distribution<int> level(-5, 5);
+  for (int k = 0; k < 2000; ++k) {
+    const double xk = 0.25 * level(rng);
+    double y = g.q * xk;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double a = -1.0 + (i + 1) * 0.25, b = -1.0 + j * 0.25;
+        auto& s = on[static_cast<std::size_t>(i * (i + 1) / 2 + j)];
+        if (xk >= a) s = 1;
+        else if (xk <= b) s = 0;
+        y += g.w[static_cast<std::size_t>(i * (i + 1) / 2 + j)] * s;
+      }
+    ASSERT_NEAR(m.step(xk), y, 1e-12) << "sample " << k << ", x = " << xk;
   }
 }
 
@@ -326,6 +357,65 @@ TEST(Kinds, InverseSaturatesAtTheLimits) {
 // A mirrored input (input_scale < 0): the kernels' numerical inverse brackets the input between the
 // raw limits, which swap in model coordinates; it inverts the model and saturates at the limit in the
 // output's direction.
+// Bouc-Wen's output slope is kx + kw dw/dx, and dw/dx reaches 0 where |w| = 1 on the loading branch: with
+// kx = 0 and kw > 0 the output stops rising there, not invertible, whatever kw (min slope kx + min(kw, 0) ...).
+TEST(Kinds, BoucWenWithoutALinearSlopeIsNotInvertible) {
+  const BoucWenParams bw{0.0, 1.0, 2.0, 0.5, 1.0, {-2.0, 2.0}, {}};
+  EXPECT_NO_THROW(Model{bw});
+  EXPECT_THROW(Inverse{bw}, Error);
+  const BoucWenParams ok{0.1, 1.0, 2.0, 0.5, 1.0, {-2.0, 2.0}, {}};
+  EXPECT_NO_THROW(Inverse{ok});
+}
+
+// reset() is the state of a new model and inverse, for every kind (Model::reset: virgin), after steps that
+// moved it: the same snapshot and the same outputs from there.
+TEST(Kinds, ResetIsTheStateOfANewModelAndInverse) {
+  std::mt19937_64 rng(77);
+  for (const ModelParams& p : random_models(rng)) {
+    Model used(p), fresh(p);
+    Inverse inv_used(p), inv_fresh(p);
+    for (double x : random_walk(rng, 300, -1.4, 1.4)) inv_used.step(used.step(x));
+    used.reset();
+    inv_used.reset();
+    EXPECT_EQ(used.snapshot(), fresh.snapshot()) << model_name(p);
+    EXPECT_EQ(inv_used.snapshot(), inv_fresh.snapshot()) << model_name(p);
+    for (double x : random_walk(rng, 50, -1.4, 1.4)) {
+      const double y = used.step(x);
+      ASSERT_EQ(y, fresh.step(x)) << model_name(p);
+      ASSERT_EQ(inv_used.step(y), inv_fresh.step(y)) << model_name(p);
+    }
+  }
+}
+
+// A desired output inside a jump of a discontinuous kind: the inverse commands the side whose output is
+// the closer. One relay on [0, 2] (on at x >= 2, off from the start at x = 0), q = 1, w = 1:
+// f(x) = x below 2, 3 from 2 on. y = 2.2 is 0.2 from f(2-) = 2 and 0.8 from f(2) = 3: just below 2, the
+// relay off; y = 2.9 is closer to 3: x = 2, the relay on.
+TEST(Kinds, InverseInAJumpTakesTheCloserSide) {
+  PreisachParams g;
+  g.q = 1.0;
+  g.lo = 0.0;
+  g.hi = 2.0;
+  g.levels = 1;
+  g.w = {1.0};
+  for (const auto& [y, want_x_below_2, want_out] :
+       {std::tuple<double, bool, double>{2.2, true, 2.0}, {2.9, false, 3.0}}) {
+    Inverse inv(g, InverseOptions{{0.0, 3.0}});
+    Model fwd(g);
+    const double x = inv.step(y);
+    EXPECT_EQ(x < 2.0, want_x_below_2) << y << ": x = " << x;
+    EXPECT_NEAR(x, 2.0, 1e-12) << y;
+    EXPECT_NEAR(fwd.step(x), want_out, 1e-12) << y;
+    EXPECT_FALSE(inv.saturated());
+  }
+  // the output at the upper limit, f(3) = 3 + 1 = 4, is reached there, not saturated (as beyond it)
+  Inverse inv(g, InverseOptions{{0.0, 3.0}});
+  EXPECT_EQ(inv.step(4.0), 3.0);
+  EXPECT_FALSE(inv.saturated());
+  EXPECT_EQ(inv.step(4.5), 3.0);
+  EXPECT_TRUE(inv.saturated());
+}
+
 TEST(Kinds, MirroredInputInvertsAndSaturates) {
   std::mt19937_64 rng(7);
   for (ModelParams mp : random_models(rng)) {

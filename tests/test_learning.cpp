@@ -22,6 +22,7 @@
 #include "temp_dir.hpp"
 #include "test_util.hpp"
 #include "hysteron/learning.hpp"
+#include "hysteron/loop_design.hpp"
 #include "hysteron/report.hpp"
 #include "hysteron/signals.hpp"
 #include "hysteron/sweep.hpp"
@@ -537,6 +538,45 @@ TEST(Learning, ProgressiveUpdateEqualsTheFormula) {
         ASSERT_NEAR(c_applied[(j + 1) * N + i], want, 1e-12) << "N " << N << " h " << h << " d " << d << " period "
                                                               << j + 1 << " i " << i;
       }
+  }
+}
+
+// feedforward_preview is docs' preview(k) = s(k + lead), s(k) = a1 r(k + advance) + a2 r(k + advance - delay),
+// evaluated directly where no index leaves the record (r(k) = k^2: every sample distinct).
+TEST(Learning, FeedforwardPreviewIsTheShapedReferenceAhead) {
+  LoopDesign d;
+  d.feedforward_lead = 3;
+  d.shaper = LoopDesign::Shaper{.a1 = 0.75, .a2 = 0.25, .delay = 5, .advance = 2};
+  std::vector<double> ref(40);
+  for (std::size_t k = 0; k < ref.size(); ++k) ref[k] = static_cast<double>(k * k);
+  const std::vector<double> preview = feedforward_preview(d, ref);
+  for (std::size_t k = 0; k + 3 + 2 < ref.size(); ++k) {
+    const std::size_t i = k + 3 + 2;
+    if (i < 5) continue;
+    EXPECT_EQ(preview[k], 0.75 * ref[i] + 0.25 * ref[i - 5]) << k;
+  }
+}
+
+// A learning loop's step feeds the PID's reference the correction c_j(k) and the feedforward's preview
+// the correction lead samples ahead, c_j(k + lead) (loop_design.hpp). A pure gain q = 1 (model_scale 1)
+// with no PID gains commands the preview itself: 0.3 + c(k + 5) for a warm-started c(i) = 0.001 i.
+TEST(Learning, LoopStepAddsTheCorrectionLeadSamplesAheadToThePreview) {
+  LoopDesign d;
+  d.feedforward.model_scale = 1.0;
+  d.feedforward_lead = 5;
+  const PiParams model{1.0, {}, {}, {0.0, 0.6}, {}};
+  Controller c = make_controller(d, model);
+  LearningParams lp;
+  lp.period = 50;
+  lp.gain = 0.5;
+  lp.lookahead = 5;
+  IterativeLearning ilc(lp);
+  std::vector<double> c0(lp.period);
+  for (std::size_t i = 0; i < c0.size(); ++i) c0[i] = 0.001 * static_cast<double>(i);
+  ilc.reset(c0);
+  for (std::size_t k = 0; k + 5 < lp.period; ++k) {
+    const LoopOutput o = step(c, ilc, d, 0.3, 0.3, 0.3, 0.3);
+    EXPECT_NEAR(o.command_mpa, 0.3 + c0[k + 5], 1e-12) << k;
   }
 }
 

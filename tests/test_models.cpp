@@ -176,6 +176,12 @@ TEST(Envelopes, ValueDerivativeInverse) {
   EXPECT_THROW(t.inverse_checked(1.5, "here"), Error);  // range (-0.5, 1.5) is open
   EXPECT_EQ(t.inverse(2.0), std::numeric_limits<double>::infinity());
   EXPECT_EQ(t.inverse(-1.0), -std::numeric_limits<double>::infinity());
+  // the range's ends themselves are outside the open range: -inf / +inf (atan's tan(pi / 2) would be a
+  // finite 1.6e16)
+  for (const Envelope& b : {t, Envelope::atan(1.0, 1.0, 0.0, 0.0), Envelope::atan(1.2, 3.0, 0.5, -0.1)}) {
+    EXPECT_EQ(b.inverse(b.range_hi()), std::numeric_limits<double>::infinity()) << envelope_name(b.kind);
+    EXPECT_EQ(b.inverse(b.range_lo()), -std::numeric_limits<double>::infinity()) << envelope_name(b.kind);
+  }
   try {
     Envelope::tanh(-1.0, 1.0, 0.0, 0.0).validate("gpi: c");
     FAIL() << "negative c0 accepted";
@@ -305,6 +311,32 @@ TEST(Models, ZeroThresholdsFoldIntoQAndOrderDoesNotMatter) {
   std::mt19937_64 rng(1);
   for (double x : random_walk(rng, 500, -1, 1)) ASSERT_NEAR(ma.step(x), mb.step(x), 1e-15);
   EXPECT_EQ(ma.num_operators(), 2u);
+  // equal thresholds are one play (the same state for every input): their weights add, 0.3 + 0.4 at r = 0.2;
+  // so do dead zones at one z (0.25 + 0.5 at z = 0.3)
+  PiParams c{1.0, {0.2, 0.5, 0.2}, {0.3, 0.1, 0.4}, {}, {}};
+  PiParams d{1.0, {0.2, 0.5}, {0.7, 0.1}, {}, {}};
+  MpiDeadzoneParams e{1.0, {0.2}, {0.3}, 1.0, {0.3, -0.4, 0.3}, {0.25, 0.1, 0.5}, {}, {}};
+  MpiDeadzoneParams f{1.0, {0.2}, {0.3}, 1.0, {0.3, -0.4}, {0.75, 0.1}, {}, {}};
+  Model mc(c), md(d), me(e), mf(f);
+  for (double x : random_walk(rng, 500, -1, 1)) {
+    ASSERT_NEAR(mc.step(x), md.step(x), 1e-14);
+    ASSERT_NEAR(me.step(x), mf.step(x), 1e-14);
+  }
+  EXPECT_EQ(mc.num_operators(), 2u);
+}
+
+// An input beyond the model's input bound (its output could overflow: accepts() false) is a fault: the
+// output held, not inf; reset() is a fresh start (output 0, what a fault then holds).
+TEST(Models, InputBeyondTheBoundIsHeldAndResetStartsAtZero) {
+  Model m(PiParams{1.0, {0.1}, {1.0}, {}, {}});
+  EXPECT_EQ(m.step(0.5), 0.5 + 0.4);  // q x + p max(x - r, min(x + r, 0))
+  ASSERT_FALSE(m.accepts(1e308));
+  EXPECT_EQ(m.step(1e308), 0.9);
+  EXPECT_EQ(m.step(-1e308), 0.9);
+  EXPECT_EQ(m.faults(), 2u);
+  m.reset();
+  EXPECT_EQ(m.output(), 0.0);
+  EXPECT_EQ(m.step(NAN), 0.0);
 }
 
 // ---- inverses --------------------------------------------------------------------
@@ -465,6 +497,87 @@ TEST(Inverse, SaturatesAtLimitsAndStaysExact) {
   }
 }
 
+// A desired output the model reaches exactly at an input limit is reached, not saturated (as the numerical
+// inverses' y > f(hi)): q = 1, r = 0.5, p = 1 (Eq. 11: q' = 1, r' = 0.5, p' = -1 / 2, all exact) from the
+// virgin state outputs 1 + 0.5 = 1.5 at x = 1; just beyond it saturates.
+TEST(Inverse, OutputReachedExactlyAtTheLimitIsNotSaturated) {
+  const PiParams p{1.0, {0.5}, {1.0}, {}, {}};
+  Model fwd(p);
+  ASSERT_EQ(fwd.step(1.0), 1.5);
+  Inverse inv(p, InverseOptions{{-1.0, 1.0}});
+  EXPECT_EQ(inv.step(1.5), 1.0);
+  EXPECT_FALSE(inv.saturated());
+  Inverse beyond(p, InverseOptions{{-1.0, 1.0}});
+  EXPECT_EQ(beyond.step(1.5000001), 1.0);
+  EXPECT_TRUE(beyond.saturated());
+  // mpi-asym (numerical inverse): ascending x, descending 1.5 x, q = 1, r = 0.5, p = 1 from the virgin
+  // state at x = 1: q (1 + 1.5) / 2 + p max(1 - 0.5, min(1.5 + 0.5, 0)) = 1.25 + 0.5 = 1.75
+  MpiAsymParams a;
+  a.ascending = Envelope::affine(1.0, 0.0);
+  a.descending = Envelope::affine(1.5, 0.0);
+  a.q = 1.0;
+  a.r = {0.5};
+  a.p = {1.0};
+  Model fwd_a(a);
+  ASSERT_EQ(fwd_a.step(1.0), 1.75);
+  Inverse inv_a(a, InverseOptions{{-1.0, 1.0}});
+  EXPECT_EQ(inv_a.step(1.75), 1.0);
+  EXPECT_FALSE(inv_a.saturated());
+  EXPECT_EQ(inv_a.step(1.7500001), 1.0);
+  EXPECT_TRUE(inv_a.saturated());
+}
+
+// Beyond the reachable range is saturation also where the model reaches its bound |v| <= B(u) at the limit
+// (a pure gain, q = 2 on [-1, 1]: v = 2 x reaches B(1) = 2): 100 and -100 saturate, 1 is x = 0.5.
+TEST(Inverse, PureGainBeyondItsRangeSaturates) {
+  Inverse inv(PiParams{2.0, {}, {}, {}, {}}, InverseOptions{{-1.0, 1.0}});
+  EXPECT_EQ(inv.step(100.0), 1.0);
+  EXPECT_TRUE(inv.saturated());
+  EXPECT_EQ(inv.step(-100.0), -1.0);
+  EXPECT_TRUE(inv.saturated());
+  EXPECT_EQ(inv.step(1.0), 0.5);
+  EXPECT_FALSE(inv.saturated());
+}
+
+// A saturated command is the limit itself, also where the units map's round trip does not return it
+// (origin 0.1, scale 0.3: 0.41 and 0.04 come back as 0.41 - 1 ulp and 0.04 + 1 ulp).
+TEST(Inverse, SaturatedCommandIsTheLimitItself) {
+  PiParams p{1.0, {}, {}, {}, {}};
+  p.units.input_origin = 0.1;
+  p.units.input_scale = 0.3;
+  Inverse inv(p, InverseOptions{{0.04, 0.41}});
+  EXPECT_EQ(inv.step(100.0), 0.41);
+  EXPECT_TRUE(inv.saturated());
+  EXPECT_EQ(inv.step(-100.0), 0.04);
+  EXPECT_TRUE(inv.saturated());
+}
+
+// reset() is the virgin state of a new inverse (matching Model::reset()): after steps that moved the state
+// and ended saturated, the same snapshot as a fresh inverse, and from there the same inputs as it and a
+// forward model fed them reaching every reachable desired output.
+TEST(Inverse, ResetIsTheStateOfANewInverse) {
+  std::mt19937_64 rng(31);
+  for (const ModelParams& p : {ModelParams(random_gpi(rng)), ModelParams(random_pi(rng, false)),
+                               ModelParams(random_mpi_dz(rng)), ModelParams(random_mpi_asym(rng))}) {
+    const InverseOptions opt{{-0.5, 0.6}};
+    Inverse used(p, opt), fresh(p, opt);
+    for (double y : random_walk(rng, 200, -3, 3)) used.step(y);
+    used.step(50.0);  // saturated last
+    ASSERT_TRUE(used.saturated()) << model_name(p);
+    used.reset();
+    EXPECT_EQ(used.snapshot(), fresh.snapshot()) << model_name(p);
+    Model fwd(p);
+    for (double y : {-40.0, 0.3, -0.2, 40.0, 0.1}) {  // saturating first: the state is re-derived
+      const double x = used.step(y);
+      EXPECT_EQ(x, fresh.step(y)) << model_name(p);
+      const double out = fwd.step(x);
+      if (!used.saturated()) {
+        EXPECT_NEAR(out, y, 1e-10) << model_name(p) << " y " << y;
+      }
+    }
+  }
+}
+
 TEST(Inverse, TanhWithoutLimitsNeverReturnsInfinity) {
   GpiParams g;
   g.envelope = Envelope::tanh(1, 1, 0, 0);
@@ -528,6 +641,8 @@ TEST(Inverse, RejectsUnreachableStartState) {
   Inverse inv(p);
   EXPECT_THROW(inv.reset(ModelState{{0.0, 0.5}, 0.0}), Error);  // |d_2| = 0.5 > r_2
   EXPECT_THROW(inv.reset(ModelState{{0.0}, 0.0}), Error);       // wrong size
+  // |d_1| = 0.1 <= r_1, but |d_2 - d_1| = 0.15 > r_2 - r_1 = 0.1 (though < r_2): no input path leaves it
+  EXPECT_THROW(inv.reset(ModelState{{-0.1, 0.05}, 0.0}), Error);
   EXPECT_NO_THROW(inv.reset(ModelState{{0.05, 0.1}, 0.0}));
 }
 

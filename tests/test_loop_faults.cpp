@@ -195,6 +195,30 @@ TEST(LoopFaults, StepFeedforwardIsStepAroundAGivenFeedforward) {
   }
 }
 
+// After reset() a loop has no correction yet: a first sample the PID holds (no measurement yet)
+// commands this sample's feedforward itself, whatever the loop held before the reset (the mutant
+// "reset keeps ff_held" commanded the old run's feedforward difference on top of it).
+TEST(LoopFaults, AFirstHeldSampleAfterAResetCommandsTheFeedforward) {
+  const GpiParams model = test::rig_like_gpi();
+  FeedforwardParams ff;
+  ff.sample_time = 1e-3;
+  ff.pressure_limits = {0.0, 0.6};
+  CascadeParams cp = cascade_params();
+  cp.feedforward = ff;
+  FeedforwardPidController fp(model, ff, gpi_paper_pid(1e-3));
+  CascadePwmController cc(model, cp);
+  for (int k = 0; k < 2000; ++k) {  // a run that leaves a correction and a feedforward far from the next one's
+    const double r = 0.07 + 0.02 * std::sin(2 * M_PI * k / 1000.0);
+    (void)fp.step_feedforward(r, 0.45, r - 0.003);
+    (void)cc.step_feedforward(r, 0.45, r - 0.003, 0.4);
+  }
+  fp.reset();
+  cc.reset();
+  EXPECT_EQ(fp.step_feedforward(0.02, 0.12, kNaN), 0.12);
+  (void)cc.step_feedforward(0.02, 0.12, kNaN, 0.1);
+  EXPECT_EQ(cc.desired_pressure(), 0.12);
+}
+
 // A 1 s dropout of the position sensor in the feedforward+PID loop (gpi-pid's compensated loop) on the
 // simulated rig: the loop keeps feeding forward, its error stays far below that of the command frozen over the
 // dropout. The bound: the nominal run's error plus a quarter of what freezing the command adds to it.

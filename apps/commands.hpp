@@ -45,6 +45,10 @@ CLI::Validator non_negative_integer(std::uint64_t max = std::numeric_limits<std:
 // CLI11 validator: one of `names`, else "TEXT not in {A,B,...} (did you mean X?)" with io::closest_name's
 // suggestion, as for a mistyped command or option (--model gpii, experiment gpi-pd); --help shows {A,B,...}.
 CLI::Validator one_of(std::vector<std::string> names);
+// Every FLOAT option of `app` and its subcommands reads its number by io/numbers.hpp's rule (a
+// decimal literal, the whole text, finite): CLI11's own conversion takes hexadecimal ("0x1p-10")
+// and "inf". Call once every option is added.
+void check_float_options(CLI::App& app);
 // --control-period S (experiment, demo, sweep): the loop's sample time [s] into `period`
 // (ExperimentOptions::control_period, which checks it before anything runs or is written).
 void add_control_period_option(CLI::App* cmd, double& period);

@@ -151,6 +151,16 @@ CLI::Validator one_of(std::vector<std::string> names) {
       set);
 }
 
+void check_float_options(CLI::App& app) {
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) check_float_options(*sub);
+  for (CLI::Option* opt : app.get_options([](const CLI::Option* o) { return o->get_type_name() == "FLOAT"; }))
+    opt->check(CLI::Validator(
+        [](std::string& text) -> std::string {
+          return io::finite_number(text) ? std::string() : fmt::format("{} is not a finite decimal number", text);
+        },
+        ""));
+}
+
 void add_control_period_option(CLI::App* cmd, double& period) {
   cmd->add_option("--control-period", period,
                   "The controller's sample time [s], also the logging period (default 0.001): within "

@@ -126,6 +126,7 @@ int main(int argc, char** argv) {
   hysteron::cli::add_export(app, action);
   hysteron::cli::add_sweep(app, action);
   hysteron::cli::add_rig(app, action);
+  hysteron::cli::check_float_options(app);
   if (const int rc = check_names(app, argc, argv); rc >= 0) return rc;
   try {
     app.parse(argc, argv);

@@ -189,6 +189,13 @@ TEST(UniformDraw, IsLibstdcxxUniformRealWrittenOut) {
     (void)dist;
 #endif
   }
+  // a value derived without any standard library's distribution: std::mt19937's first two words
+  // with the default seed 5489 are 3499211612 and 581869302 (the standard fixes the engine), so
+  // the first draw is (3499211612 + 581869302 * 2^32) / 2^64 = 0.1354770042967805 on [0, 1), and
+  // 0.2 of it less 0.1 on [-0.1, 0.1)
+  std::mt19937 g(5489u), h(5489u);
+  EXPECT_EQ(hysteron::detail::uniform_draw(g, 0.0, 1.0), 0.1354770042967805);
+  EXPECT_EQ(hysteron::detail::uniform_draw(h, -0.1, 0.1), -0.0729045991406439);
   // two words per draw: after n draws the engine is 2n words on
   std::mt19937 c(7), d(7);
   for (int k = 0; k < 10; ++k) (void)hysteron::detail::uniform_draw(c, 0.0, 1.0);

@@ -754,13 +754,6 @@ TEST(Control, PidTracksTheGpiSinusoidOnTheRig) {
   std::printf("PID-only tracking of Eq. 18 (5..20 s): max %.3f mm, rms %.3f mm\n", max_err * 1e3, rms * 1e3);
 }
 
-// A model whose output decreases with the pressure (a displacement sensor that reads the muscle's
-// length instead of its contraction, a force read with the other sign) is one the controllers
-// must feed back with the other sign: their PID gains are magnitudes. Each controller on the
-// negated model, tracking the negated reference on the negated plant, commands exactly what it
-// commands on the original (the PID sees sign * (r, y); the inverse of -y on the negated model is
-// the inverse of y on the original, bit for bit). Without the sign, the loop on the negated model
-// is positive feedback and runs to a pressure limit.
 // The open loop's position PID is limited to +- the pressure span ("as built", compensation.hpp):
 // limits [0, 0.6], span 0.6; a PID given no limits gets [-0.6, 0.6], and its conditional anti-windup stops
 // the integral there (K_i T_s e = -2.5 per sample on a reference far below the measurement).
@@ -814,6 +807,13 @@ TEST(Compensation, FeedforwardPidIntegralStopsAtThePressureLimits) {
   EXPECT_EQ(c.pid().state().integral, 2.5);
 }
 
+// A model whose output decreases with the pressure (a displacement sensor that reads the muscle's
+// length instead of its contraction, a force read with the other sign) is one the controllers
+// must feed back with the other sign: their PID gains are magnitudes. Each controller on the
+// negated model, tracking the negated reference on the negated plant, commands exactly what it
+// commands on the original (the PID sees sign * (r, y); the inverse of -y on the negated model is
+// the inverse of y on the original, bit for bit). Without the sign, the loop on the negated model
+// is positive feedback and runs to a pressure limit.
 TEST(Compensation, ADecreasingModelIsFedBackWithItsSign) {
   const auto gpi = [](double gain, double offset) {
     return io::model_from_json(

@@ -232,10 +232,12 @@ indices clamped to the record, as hysteron experiment's tracking runs do.)doc");
             std::vector<std::string> in_dir;
             if (report_path.empty()) return in_dir;
             report::write_experiment_report(r, report_path, command);
-            // a report in the directory is one of this run's files, not an earlier run's to remove
+            // a report in the directory is one of this run's files, not an earlier run's to remove:
+            // the directories compared (through links), the report's own name kept (a link named
+            // report.html in out stays, as the CLI keeps it)
             std::error_code ec;
-            const std::filesystem::path rp = std::filesystem::weakly_canonical(report_path, ec);
-            if (!ec && rp.parent_path() == std::filesystem::weakly_canonical(out_dir, ec) && !ec)
+            const std::filesystem::path rp(report_path);
+            if (std::filesystem::equivalent(std::filesystem::absolute(rp, ec).parent_path(), out_dir, ec) && !ec)
               in_dir.push_back(rp.filename().string());
             return in_dir;
           });
@@ -398,9 +400,9 @@ set="documented", issue 11's documented set. plant: the base rig (dict or JSON p
 nominal), always run first as "nominal". identify_on_base: identify and tune every run on the
 base rig and track on the variant's (a rig that changed after its identification; default:
 each variant identified on its own rig). seed, learning_periods, model, paper_references,
-control_period: as run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run and raises
-KeyboardInterrupt once the runs under way end (seconds to tens of seconds; nothing written). out: the CSV table,
-report: the HTML page (written after every run finished). Returns the JSON document of
+control_period: as run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run, abandons the
+runs under way within a fraction of a second and raises KeyboardInterrupt (nothing written). out: the CSV table,
+report: the HTML page (written after every run finished, the two replaced together). Returns the JSON document of
 `hysteron sweep --json` as a dict (variants, runs with their tracking errors, target_misses,
 learning_not_below_compensated, notes, failures, ...) and "text", the text table. A failed run
 is recorded in the result (failures > 0), not raised; bad input raises hysteron.Error.)doc");

@@ -146,3 +146,11 @@ def test_outputs_and_report_are_replaced_together(tmp_path):
         hysteron.run_experiment("gpi-pid", out=str(out), report=str(inside), **fast)
         assert inside.exists() and "<html" in inside.read_text()[:2000].lower()
     assert (out / "result.json").read_text() != "earlier run"
+    # ... also where it is a link to a page elsewhere: the link stays, its target is the page
+    pub = tmp_path / "pub"
+    pub.mkdir()
+    inside.unlink()
+    inside.symlink_to("../pub/index.html")
+    for _ in range(2):
+        hysteron.run_experiment("gpi-pid", out=str(out), report=str(inside), **fast)
+        assert inside.is_symlink() and "<html" in (pub / "index.html").read_text()[:2000].lower()

@@ -317,10 +317,10 @@ std::vector<Reference> fit_to_reach(const ExperimentOptions& o, const Identifica
                                            ref.name, mm(rr.paper_min_mm), mm(rr.paper_max_mm), why));
       }
     } else if (!known_top && rr.paper_max_mm > res.reach_max_mm) {
-      res.messages.push_back(fmt::format("reference {}: its top, {:.1f} mm, lies above the {:.1f} mm the "
+      res.messages.push_back(fmt::format("reference {}: its top, {} mm, lies above the {:.1f} mm the "
                                          "identification run reached, whose pressure stayed below {:.2f} MPa; the "
                                          "rig's reach above it is not known, and the reference is kept",
-                                         ref.name, rr.paper_max_mm, res.reach_max_mm, p_limit));
+                                         ref.name, mm(rr.paper_max_mm), res.reach_max_mm, p_limit));
     }
     res.reference_ranges.push_back(rr);
   }

@@ -1,10 +1,11 @@
 // Numbers read from text (numbers.hpp).
 #include "hysteron/io/numbers.hpp"
 
+#include <locale.h>
+#include <stdlib.h>
+
 #include <charconv>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
 #include <string>
 
 namespace hysteron::io {
@@ -22,9 +23,11 @@ NumberParse parse_number(std::string_view s, double& out) {
   if (res.ptr != s.data() + s.size()) return NumberParse::malformed;
   if (res.ec == std::errc::result_out_of_range) {
     // from_chars also reports underflow (to a subnormal or 0) as out of range: only an overflow
-    // is an error; strtod of the same (decimal) text tells the two apart
+    // is an error; strtod of the same (decimal) text tells the two apart, in the "C" locale
+    // whatever the process's LC_NUMERIC (a German one would stop "1.5e400" at the '.')
+    static const locale_t c_locale = newlocale(LC_NUMERIC_MASK, "C", static_cast<locale_t>(nullptr));
     const std::string t(s);
-    v = std::strtod(t.c_str(), nullptr);
+    v = c_locale ? strtod_l(t.c_str(), nullptr, c_locale) : std::strtod(t.c_str(), nullptr);
     if (!std::isfinite(v)) return NumberParse::out_of_range;
     out = v;
     return NumberParse::ok;

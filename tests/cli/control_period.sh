@@ -24,8 +24,11 @@ expect_error() {
 for cmd in experiment demo; do
   args=(gpi-pid)
   [ $cmd = demo ] && args=()
-  expect_error "$cmd nan" "control_period = nan s must be within [rig dt = 0.0001 s, 0.01 s]" "$T/o" \
+  # nan and hex are no decimal number (io/numbers.hpp, for every FLOAT option: CLI11 alone read "0x1p-10")
+  expect_error "$cmd nan" "--control-period: nan is not a finite decimal number" "$T/o" \
     "$BIN" $cmd "${args[@]}" --control-period nan --out "$T/o"
+  expect_error "$cmd hex" "--control-period: 0x1p-10 is not a finite decimal number" "$T/o" \
+    "$BIN" $cmd "${args[@]}" --control-period 0x1p-10 --out "$T/o"
   expect_error "$cmd 0" "control_period = 0 s must be within" "$T/o" "$BIN" $cmd "${args[@]}" --control-period 0 --out "$T/o"
   expect_error "$cmd negative" "control_period = -0.001 s must be within" "$T/o" \
     "$BIN" $cmd "${args[@]}" --control-period -0.001 --out "$T/o"

@@ -273,6 +273,43 @@ TEST(AdaptiveInverse, LearnsChangedWeightsAndInvertsTheChangedModel) {
   EXPECT_LT(worst, 2e-2);  // the estimate's error of a few 1e-3 times the output
 }
 
+// The guard (mutant A2 of the core's mutation testing: "always the adapted weights" went
+// unnoticed): the record is the fitted model itself plus noise, so the fitted weights are the
+// truth and an estimate with a short memory, chasing the noise, predicts worse at times. At every
+// commit the inverse uses the adapted weights exactly where their forgetting sum of a-priori errors
+// is at most the fitted weights' (experiment.hpp), and the fitted weights themselves otherwise.
+TEST(AdaptiveInverse, TheGuardKeepsTheFittedWeightsWhileTheEstimatePredictsWorse) {
+  const ModelParams model = pi_model({0.3, -0.1, 0.2, 0.05});
+  Model truth(model);
+  std::vector<double> px, py;
+  for (int k = 0; k < 2000; ++k) {
+    px.push_back(input_at(k, -2, 2));
+    py.push_back(truth.step(px.back()));
+  }
+  AdaptiveInverseParams ap;
+  ap.lambda = 0.98;  // a memory of 50 samples: the estimate follows the noise
+  AdaptiveInverse a(model, px, py, ap);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::size_t worse = 0, better = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const double x = input_at(k, -2, 2);
+    a.update(x, truth.step(x) + noise(rng));
+    const bool adapted_worse = a.adapted_error() > a.fitted_error();
+    worse += adapted_worse;
+    better += !adapted_worse;
+    ASSERT_EQ(a.adapted_in_use(), !adapted_worse) << "sample " << k;
+    const auto in_use = a.weights_in_use(), fitted = a.fitted_weights();
+    if (adapted_worse) {
+      for (std::size_t i = 0; i < in_use.size(); ++i) ASSERT_EQ(in_use[i], fitted[i]) << "sample " << k;
+    }
+    ASSERT_EQ(a.inverse().structure().q, in_use[0]) << "sample " << k;
+    for (std::size_t i = 1; i < in_use.size(); ++i) ASSERT_EQ(a.inverse().structure().p[i - 1], in_use[i]);
+  }
+  EXPECT_GT(worse, 100u) << "the estimate never predicted worse: the test shows nothing";
+  EXPECT_EQ(a.counters().fallback, worse);
+}
+
 TEST(AdaptiveInverse, UpdateAndStepDoNotAllocate) {
   const ModelParams model = gpi_free({0.05, 0.04, -0.02, 0.03, 0.01});
   Model truth(model);

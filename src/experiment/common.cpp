@@ -252,7 +252,7 @@ void check_stop(const ExperimentOptions& o) {
 }
 
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
-                  std::size_t lead, bool periodic, const Law& law, double p_max) {
+                  std::size_t lead, bool periodic, const Law& law) {
   PamRig rig(o.tracking_rig ? *o.tracking_rig : o.rig, seed);
   rig.reset();
   TrackingRun run;

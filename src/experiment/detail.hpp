@@ -234,11 +234,10 @@ std::string sensor_gap(const TrackingRun& run, std::size_t from, std::size_t to,
 std::string sensor_gap_note(const std::vector<std::string>& gaps, const PamRigParams& identified,
                             const PamRigParams& tracked);
 // Runs one tracking experiment: `reference` sampled at the control period, the
-// preview `lead` samples ahead (wrapping around for a periodic reference); p_max [MPa]: the
-// run's limit (its saturated samples are counted once the scored samples are known,
-// saturated_samples).
+// preview `lead` samples ahead (wrapping around for a periodic reference). Its saturated samples
+// are counted once the scored samples are known (saturated_samples).
 TrackingRun track(const ExperimentOptions& o, std::uint64_t seed, const std::vector<double>& ref_m,
-                  std::size_t lead, bool periodic, const Law& law, double p_max);
+                  std::size_t lead, bool periodic, const Law& law);
 // Throws hysteron::Stopped where o.stop_requested says stop (ExperimentOptions::stop_requested).
 void check_stop(const ExperimentOptions& o);
 

@@ -134,7 +134,7 @@ TrackingRun learning_run(const ExperimentOptions& o, const Context& ctx, const R
     return in;
   };
   if (preview) law = with_preview(std::move(law), preview, lead);  // shaped first, the correction added to it
-  TrackingRun run = track(o, seed, r, lead, true, law, p_max);
+  TrackingRun run = track(o, seed, r, lead, true, law);
   for (int j = 0; j < o.learning_periods; ++j) {
     const std::size_t b = n0 + static_cast<std::size_t>(j) * ref.period;
     run.periods.push_back(errors_of(run, b, b + ref.period));
@@ -338,7 +338,7 @@ GainTrial gain_trial(const ExperimentOptions& o, const Variant& compensated, Con
           return inner(s);
         };
       }
-      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law, c.pressure_max);
+      const TrackingRun run = track(on_identified_rig, o.seed + 86028121, trap, lead, false, law);
       rms = errors_of(run, scored_from, run.t.size()).rms_error_mm;
       if (!std::isfinite(rms)) rms = inf;
     } catch (const Stopped&) {  // above the best: a lower bound of its RMS
@@ -662,7 +662,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o) {
                                         shaper_timing(zv, tc));
       }
       TrackingRun run = track(o, track_seed, ref.ref_m, v.preview ? lead : 0, false,
-                              guard_from(loop.law, loop, ref.pre_roll), p_max);
+                              guard_from(loop.law, loop, ref.pre_roll));
       run.variant = v.name;
       run.reference = ref.name;
       run.description = loop.description;

@@ -13,6 +13,8 @@
 #include "hysteron/experiment.hpp"
 #include "hysteron/identify.hpp"
 #include "hysteron/models.hpp"
+#include "../src/identify/detail.hpp"
+#include "temp_dir.hpp"
 
 using namespace hysteron;
 
@@ -57,6 +59,56 @@ TEST(UsableCpus, CountsTheAffinityMaskOfTheCallingThread) {
   t.join();
   EXPECT_EQ(in_thread, 1u);  // hardware_concurrency() said CPU_COUNT of the machine here
   EXPECT_EQ(usable_cpus(), all);
+}
+
+// The cgroup CPU limit (detail::cgroup_cpu_limit) on cgroup trees built here, each with the
+// quota worked out by hand: QUOTA / PERIOD rounded up, the least over the process's cgroup and its
+// ancestors. Before 2026-12-01 only ROOT/cpu.max was read: the slice, the tighter quota deeper
+// down and the v1 container gave 0 (no limit).
+TEST(UsableCpus, TheCgroupLimitIsTheLeastQuotaUpTheHierarchy) {
+  namespace fs = std::filesystem;
+  const auto put = [](const fs::path& file, const std::string& text) {
+    fs::create_directories(file.parent_path());
+    std::ofstream(file) << text << "\n";
+  };
+  using detail::cgroup_cpu_limit;
+  {  // no cgroup file at all, and a malformed one
+    test::TempDir d;
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), "0::/\n"), 0u);
+    put(d.path() / "cpu.max", "lots 100000");
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), "0::/\n"), 0u);
+  }
+  {  // cgroup v2 only (cgroup.controllers at the root): a container's own cgroup at the root, 0.5 CPU
+    test::TempDir d;
+    put(d.path() / "cgroup.controllers", "cpu memory");
+    put(d.path() / "cpu.max", "50000 100000");
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), "0::/\n"), 1u);
+    // a systemd slice with CPUQuota=150 % around the process's scope, which has none: 2 CPUs
+    put(d.path() / "cpu.max", "max 100000");
+    put(d.path() / "user.slice" / "cpu.max", "150000 100000");
+    put(d.path() / "user.slice" / "app.scope" / "cpu.max", "max 100000");
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), "0::/user.slice/app.scope\n"), 2u);
+    // a tighter quota deeper down wins: 3 CPUs inside a 4-CPU slice
+    put(d.path() / "user.slice" / "cpu.max", "400000 100000");
+    put(d.path() / "user.slice" / "app.scope" / "cpu.max", "300000 100000");
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), "0::/user.slice/app.scope\n"), 3u);
+    // a path not below the mount (a container without its own cgroup namespace): the mount's root
+    put(d.path() / "cpu.max", "250000 100000");
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), "0::/elsewhere/abc\n"), 3u);
+  }
+  {  // cgroup v1 (a hybrid host, as this VM): the cpu controller at ROOT/cpu, a container 2.5 CPUs
+    test::TempDir d;
+    put(d.path() / "cpu" / "cpu.cfs_quota_us", "-1");
+    put(d.path() / "cpu" / "cpu.cfs_period_us", "100000");
+    put(d.path() / "cpu" / "docker" / "c1" / "cpu.cfs_quota_us", "250000");
+    put(d.path() / "cpu" / "docker" / "c1" / "cpu.cfs_period_us", "100000");
+    fs::create_directories(d.path() / "unified");
+    const std::string self = "4:memory:/docker/c1\n3:cpu,cpuacct:/docker/c1\n0::/docker/c1\n";
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), self), 3u);
+    // unlimited everywhere (-1): none
+    put(d.path() / "cpu" / "docker" / "c1" / "cpu.cfs_quota_us", "-1");
+    EXPECT_EQ(cgroup_cpu_limit(d.path().string(), self), 0u);
+  }
 }
 
 TEST(FitStop, AStopEndsTheFitWithStoppedAndNoReport) {

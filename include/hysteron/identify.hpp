@@ -311,9 +311,10 @@ std::vector<double> simulate_record(const ModelParams& params, std::span<const d
                                     InitialState initial = InitialState::virgin);
 
 // The CPUs this process may run on: those of its affinity mask (taskset, sched_setaffinity),
-// at most the cgroup v2 quota (/sys/fs/cgroup/cpu.max, rounded up), at least 1; where neither
-// can be read, std::thread::hardware_concurrency(). The default thread count of fit() and
-// run_sweep().
+// at most its cgroups' CPU quota (rounded up; the least over its cgroup and the ancestors, cgroup
+// v2 cpu.max or v1 cpu.cfs_quota_us: a container's --cpus, a systemd slice's CPUQuota), at least
+// 1; where neither can be read, std::thread::hardware_concurrency(). The default thread count of
+// fit() and run_sweep(). (Before 2026-12-01 only /sys/fs/cgroup/cpu.max was read.)
 unsigned usable_cpus() noexcept;
 
 // Options of fit(). Every field has a sensible default; is_valid() checks them.

@@ -15,6 +15,16 @@
 
 namespace hysteron::detail {
 
+// The CPU limit of this process's cgroups [CPUs, rounded up], 0 where there is none:
+// `self_cgroup` is /proc/self/cgroup's text ("ID:CONTROLLERS:PATH" lines), `cgroup_root` where
+// the hierarchies are mounted (/sys/fs/cgroup). The least quota over the process's cgroup and its
+// ancestors, in cgroup v2 (cpu.max; the unified hierarchy at the root, or at root/unified on a
+// hybrid host) and in v1's CPU controller (cpu.cfs_quota_us / cpu.cfs_period_us under root/cpu):
+// a systemd slice's CPUQuota binds the cgroups inside it, a v1 container's --cpus is at its
+// mount's root. A path not below the mount (a container that sees only its own cgroup there)
+// reads the mount's root. Without a readable line, root/cpu.max as before (2026-12-01).
+unsigned cgroup_cpu_limit(const std::string& cgroup_root, const std::string& self_cgroup) noexcept;
+
 // A uniform draw in [a, b) from two 32-bit words of `rng` (std::mt19937, whose sequence the
 // standard fixes), computed as libstdc++'s uniform_real_distribution<double> computes it
 // (generate_canonical<double, 53>: (w1 + 2^32 w2) / 2^64, below 1), written out so that a fit

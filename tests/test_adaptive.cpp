@@ -94,6 +94,20 @@ double input_at(int k, double lo, double hi) {
   return c + a * std::sin(0.013 * k) * (0.55 + 0.45 * std::cos(0.0021 * k));
 }
 
+// The record the inverse's weights were fitted on: n samples of input_at stepped through `m`
+// (which keeps its state for the run that follows).
+struct Record {
+  std::vector<double> x, y;
+};
+Record prior_record(Model& m, int n, double lo, double hi) {
+  Record r;
+  for (int k = 0; k < n; ++k) {
+    r.x.push_back(input_at(k, lo, hi));
+    r.y.push_back(m.step(r.x.back()));
+  }
+  return r;
+}
+
 }  // namespace
 
 // After set_weights the inverse inverts the forward model with the new weights started from
@@ -209,11 +223,7 @@ TEST(AdaptiveInverse, WeightsStayInvertibleAtEverySample) {
     const bool gpi = std::holds_alternative<GpiParams>(model);
     const double lo = gpi ? 0.0 : -2.0, hi = gpi ? 0.6 : 2.0;
     Model truth(model);
-    std::vector<double> px, py;
-    for (int k = 0; k < 3000; ++k) {
-      px.push_back(input_at(k, lo, hi));
-      py.push_back(truth.step(px.back()));
-    }
+    const auto [px, py] = prior_record(truth, 3000, lo, hi);
     AdaptiveInverseParams ap;
     ap.lambda = 0.995;
     AdaptiveInverse a(model, px, py, ap);
@@ -242,11 +252,7 @@ TEST(AdaptiveInverse, LearnsChangedWeightsAndInvertsTheChangedModel) {
   const std::vector<double> p_fit{0.3, -0.1, 0.2, 0.05}, p_true{0.5, 0.1, 0.0, 0.15};
   const ModelParams fitted = pi_model(p_fit, 1.0), truth = pi_model(p_true, 0.7);
   Model f(fitted);
-  std::vector<double> px, py;
-  for (int k = 0; k < 2000; ++k) {
-    px.push_back(input_at(k, -2, 2));
-    py.push_back(f.step(px.back()));
-  }
+  const auto [px, py] = prior_record(f, 2000, -2, 2);
   AdaptiveInverseParams ap;
   ap.lambda = 0.999;
   AdaptiveInverse a(fitted, px, py, ap);
@@ -281,11 +287,7 @@ TEST(AdaptiveInverse, LearnsChangedWeightsAndInvertsTheChangedModel) {
 TEST(AdaptiveInverse, TheGuardKeepsTheFittedWeightsWhileTheEstimatePredictsWorse) {
   const ModelParams model = pi_model({0.3, -0.1, 0.2, 0.05});
   Model truth(model);
-  std::vector<double> px, py;
-  for (int k = 0; k < 2000; ++k) {
-    px.push_back(input_at(k, -2, 2));
-    py.push_back(truth.step(px.back()));
-  }
+  const auto [px, py] = prior_record(truth, 2000, -2, 2);
   AdaptiveInverseParams ap;
   ap.lambda = 0.98;  // a memory of 50 samples: the estimate follows the noise
   AdaptiveInverse a(model, px, py, ap);
@@ -313,11 +315,7 @@ TEST(AdaptiveInverse, TheGuardKeepsTheFittedWeightsWhileTheEstimatePredictsWorse
 TEST(AdaptiveInverse, UpdateAndStepDoNotAllocate) {
   const ModelParams model = gpi_free({0.05, 0.04, -0.02, 0.03, 0.01});
   Model truth(model);
-  std::vector<double> px, py;
-  for (int k = 0; k < 2000; ++k) {
-    px.push_back(input_at(k, 0.0, 0.6));
-    py.push_back(truth.step(px.back()));
-  }
+  const auto [px, py] = prior_record(truth, 2000, 0.0, 0.6);
   AdaptiveInverse a(model, px, py, {});
   std::mt19937_64 rng(3);
   std::normal_distribution<double> noise(0.0, 0.5);

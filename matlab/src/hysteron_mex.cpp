@@ -372,14 +372,14 @@ void cmd_evaluate(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
                              would);
   }
   m["clipping_warning"] = clipping;
-  m["input_coverage_warning"] = input_coverage_warning(coverage, "hysteron_evaluate");
+  m["input_coverage_warning"] = input_coverage_warning(coverage, "hysteron_evaluate's record");
   // The diagnosis and verdict of hysteron evaluate (judge_evaluation) against the training error the
   // model's "training" records (hysteron_fit's model and hysteron fit's file carry it): the output
   // map's warning or the input map's (an input in another zero or unit), and useless
   const FitMetrics train = io::training_metrics(io::ModelDocument{spec.params, spec.extra});
   const IndexRange rr = range.resolved(x.size());
   const EvaluationVerdict v = judge_evaluation(spec.params, x, y, range, init, censored, e.output_map, e.metrics, train,
-                                               coverage.span_share, "hysteron_evaluate",
+                                               coverage.span_share, "hysteron_evaluate's record",
                                                fmt::format("samples {}..{}", rr.begin + 1, rr.end));  // 1-based
   m["output_map_warning"] = v.diagnosis.warning;
   const InputMap& im = v.diagnosis.input_map;

@@ -275,12 +275,12 @@ usable by hysteron.Model (it may not be invertible).)doc");
                 would);
         }
         d["clipping_warning"] = clip_warning;
-        d["input_coverage_warning"] = input_coverage_warning(coverage, "evaluate");
+        d["input_coverage_warning"] = input_coverage_warning(coverage, "evaluate's record");
         // The CLI's diagnosis and verdict (judge_evaluation): the output map's warning, or the input map's where
         // the input is in another zero or unit, and useless against the model's training error
         const IndexRange rr = r.resolved(xs.size());
         const EvaluationVerdict v = judge_evaluation(spec, xs, ys, r, init, censored, map, met, train,
-                                                     coverage.span_share, "evaluate",
+                                                     coverage.span_share, "evaluate's record",
                                                      fmt::format("samples {}..{}", rr.begin, rr.end));
         d["output_map_warning"] = v.diagnosis.warning;
         if (v.diagnosis.input_map.found) {
@@ -307,7 +307,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         d["useless"] = v.useless;
         d["useless_warning"] = v.useless_warning;
         py::list ws;  // the non-empty warnings, in the CLI's order (after this one's clipping_warning)
-        for (const std::string& w : {clip_warning, input_coverage_warning(coverage, "evaluate"), v.diagnosis.warning,
+        for (const std::string& w : {clip_warning, input_coverage_warning(coverage, "evaluate's record"), v.diagnosis.warning,
                                      v.useless_warning})
           if (!w.empty()) ws.append(w);
         d["warnings"] = ws;
@@ -329,7 +329,7 @@ clips clipping_warning says how many samples the CLI's default would not count a
 output_map: {gain, offset, r2, r2_mapped, rms, rms_mapped, span}, y ~ gain * prediction +
 offset by least squares on the range. output_map_warning, input_map, useless and
 useless_warning are the diagnosis and verdict of `hysteron evaluate` (the same C++,
-judge_evaluation; "evaluate" names the record), judged against the training error that the
+judge_evaluation; "evaluate's record" names the record), judged against the training error that the
 model file's "training" records (a dict from fit()'s "model", a file hysteron fit wrote or a
 Model made of either carries it; "training" here: {rms, r2, samples}, or None):
 output_map_warning: "" where nothing is to be said; else where a sign, unit or zero of the

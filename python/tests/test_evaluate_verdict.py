@@ -63,7 +63,9 @@ def test_an_input_in_another_unit_or_zero_is_named_and_useless(fitted, how):
     assert e["rms"] > 2 * model["training"]["rms"]
     assert e["useless"] is (e["r2"] <= 0) and e["useless"] is (how == "MPa"), e
     if e["useless"]:
-        assert "the evaluation is useless" in e["useless_warning"] and e["warnings"][-1] == e["useless_warning"]
+        useless = "the evaluation is useless: the model predicts evaluate's record (samples 0.."
+        assert useless in e["useless_warning"], e["useless_warning"]
+        assert e["warnings"][-1] == e["useless_warning"]
     else:
         assert e["useless_warning"] == ""
 
@@ -118,8 +120,8 @@ def test_python_says_what_the_cli_says(fitted, case):
     assert e["rms"] == pytest.approx(cli["metrics"]["rms"]) and e["r2"] == pytest.approx(cli["metrics"]["r2"])
     # the CLI names the record by its file and adds its exit code to the useless warning
     suffix = ": evaluate exits 3"
-    expected = [w.replace(data, "evaluate")[: -len(suffix)] if w.endswith(suffix) else w.replace(data, "evaluate")
-                for w in cli["warnings"]]
+    named = [w.replace(data, "evaluate's record") for w in cli["warnings"]]
+    expected = [w[: -len(suffix)] if w.endswith(suffix) else w for w in named]
     diagnosis = [w for w in expected if not w.startswith("the evaluation is useless")
                  and "input_limits" not in w]  # (the output map's or the input map's)
     assert e["output_map_warning"] == (diagnosis[0] if diagnosis else "")

@@ -86,7 +86,7 @@ function test_evaluate_verdict(cli)
       if isempty(doc.warnings)
         cw = {};
       end
-      cw = strrep(strrep(strrep(cw, data, 'hysteron_evaluate'), 'samples 0..', 'samples 1..'), ': evaluate exits 3', '');
+      cw = strrep(strrep(strrep(cw, data, 'hysteron_evaluate''s record'), 'samples 0..', 'samples 1..'), ': evaluate exits 3', '');
       fails = fails + check_that(isequal(ws(:), cw(:)), '%s: warnings differ:\n  %s\n  CLI: %s', records{c, 3}, ...
                             strjoin(ws, '\n  '), strjoin(cw, '\n  '));
     end

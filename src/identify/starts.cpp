@@ -289,9 +289,37 @@ double fit_tau(const std::vector<double>& r, const std::vector<double>& p) {
   return -(sw * sxy - sx * sy) / det;
 }
 
-// The record decimated to about 2500 samples (every s-th sample from the start)
-// for the screening of start candidates; the operators are rate independent, so
-// the ranking is nearly that of the full record at 1/s of the cost.
+// Reversals of the input over [begin, end) taken every `step`-th sample: direction changes by
+// more than `band` (each counted once).
+std::size_t count_reversals(std::span<const double> x, std::size_t begin, std::size_t end, std::size_t step,
+                            double band) {
+  if (begin >= end) return 0;
+  std::size_t n = 0;
+  int dir = 0;
+  double lo = x[begin], hi = x[begin];  // the extreme since the last reversal
+  for (std::size_t k = begin; k < end; k += step) {
+    const double v = x[k];
+    if (dir >= 0 && v > hi) hi = v;
+    if (dir <= 0 && v < lo) lo = v;
+    if (dir >= 0 && v < hi - band) {  // falling from hi
+      n += dir > 0;
+      dir = -1;
+      lo = v;
+    } else if (dir <= 0 && v > lo + band) {  // rising from lo
+      n += dir < 0;
+      dir = 1;
+      hi = v;
+    }
+  }
+  return n;
+}
+
+// The record decimated to about 2500 samples for the screening of start candidates; the
+// operators are rate independent, so the ranking is nearly that of the full record at 1/s of
+// the cost. Every s-th sample from the start, unless that loses the input's reversals (a long
+// periodic record whose period divides s: the strided input is constant, and no start survived;
+// or aliased into fewer, smaller loops): then each block of 2 s samples gives its least and its
+// largest input, in order, which keeps every reversal wider than a block.
 struct Decimated {
   std::vector<double> x, y;
   Data d;
@@ -300,11 +328,47 @@ Decimated decimate(const Data& d) {
   const std::size_t m = d.train.end - d.train.begin;
   const std::size_t st = std::max<std::size_t>(1, m / kDecimatedSamples);
   Decimated out;
-  for (std::size_t k = 0; k < d.train.end; k += st) out.x.push_back(d.x[k]), out.y.push_back(d.y[k]);
+  IndexRange tr;
+  bool strided = true;
+  if (st > 1) {
+    const auto [lo, hi] = std::minmax_element(d.x.begin() + static_cast<std::ptrdiff_t>(d.train.begin),
+                                              d.x.begin() + static_cast<std::ptrdiff_t>(d.train.end));
+    const double band = 0.1 * (*hi - *lo);
+    const std::size_t first = (d.train.begin + st - 1) / st * st;  // the first strided sample in the range
+    double slo = std::numeric_limits<double>::infinity(), shi = -slo;
+    for (std::size_t k = first; k < d.train.end; k += st) slo = std::min(slo, d.x[k]), shi = std::max(shi, d.x[k]);
+    const std::size_t full = count_reversals(d.x, d.train.begin, d.train.end, 1, band);
+    const std::size_t kept = count_reversals(d.x, first, d.train.end, st, band);
+    strided = !(shi - slo < 0.9 * (*hi - *lo)) && 2 * kept >= full;
+  }
+  if (strided) {
+    for (std::size_t k = 0; k < d.train.end; k += st) out.x.push_back(d.x[k]), out.y.push_back(d.y[k]);
+    tr = {(d.train.begin + st - 1) / st, out.x.size()};
+  } else {
+    const std::size_t b = 2 * st;
+    std::size_t begin_out = 0;
+    for (const auto& [from, to] : {std::pair{std::size_t{0}, d.train.begin}, std::pair{d.train.begin, d.train.end}}) {
+      if (from == d.train.begin) begin_out = out.x.size();
+      for (std::size_t k = from; k < to; k += b) {
+        const std::size_t e = std::min(to, k + b);
+        std::size_t imin = k, imax = k;
+        for (std::size_t i = k; i < e; ++i) {
+          if (d.x[i] < d.x[imin]) imin = i;
+          if (d.x[i] > d.x[imax]) imax = i;
+        }
+        for (const std::size_t i : {std::min(imin, imax), std::max(imin, imax)}) {
+          out.x.push_back(d.x[i]);
+          out.y.push_back(d.y[i]);
+          if (imin == imax) break;
+        }
+      }
+    }
+    tr = {begin_out, out.x.size()};
+  }
   out.d = d;
   out.d.x = out.x;
   out.d.y = out.y;
-  out.d.train = {(d.train.begin + st - 1) / st, out.x.size()};
+  out.d.train = tr;
   out.d.huber = 0;
   return out;
 }

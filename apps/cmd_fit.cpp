@@ -475,9 +475,9 @@ void add_fit(CLI::App& app, Action& action) {
   sub->add_option("--starts", c->starts, "number of initial guesses refined by LM, an integer in 1..54 (default 2)")
       ->check(non_negative_integer(54, 1));
   sub->add_option("--threads", c->threads,
-                  "threads refining the starts concurrently (default 0: one per hardware thread, fewer on a long "
-                  "record so that the concurrent starts hold at most about 512 MB; 1: sequential; the result does "
-                  "not depend on it)");
+                  "threads refining the starts concurrently (default 0: one per usable CPU: the affinity mask "
+                  "within the cgroups' CPU quota; fewer on a long record so that the concurrent starts hold at "
+                  "most about 512 MB; 1: sequential; the result does not depend on it)");
   sub->add_option("--max-iterations", c->max_iterations, "LM iterations per start (default 200)");
   sub->add_option("--min-slope", c->min_slope,
                   fmt::format("minimum slope of the model relative to span(y)/span(x), bounds the inverse's slope "

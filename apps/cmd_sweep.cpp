@@ -229,7 +229,9 @@ void add_sweep(CLI::App& app, Action& action) {
                 "Identify and tune every run on the base rig and track on the variant's: a rig that changed after "
                 "its identification (another load, a wider band), the loops not re-tuned (docs/plant.md); default: "
                 "each variant identified and tuned on its own rig");
-  cmd->add_option("--jobs,-j", args->jobs, "Runs at once, an integer in 1..1024 (default: the number of cores)")
+  cmd->add_option("--jobs,-j", args->jobs,
+                  "Runs at once, an integer in 1..1024 (default: one per usable CPU: the affinity mask within the "
+                  "cgroups' CPU quota)")
       ->check(non_negative_integer(1024, 1));
   cmd->add_option("--out", args->out, "The table (CSV): one row per experiment, variant, reference and kind");
   cmd->add_option("--report", args->report, "HTML page: every error, target misses, RMS against each parameter");

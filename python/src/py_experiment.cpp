@@ -400,7 +400,7 @@ set="documented", issue 11's documented set. plant: the base rig (dict or JSON p
 nominal), always run first as "nominal". identify_on_base: identify and tune every run on the
 base rig and track on the variant's (a rig that changed after its identification; default:
 each variant identified on its own rig). seed, learning_periods, model, paper_references,
-control_period: as run_experiment, for every run. jobs: runs at once (0: the number of cores); Ctrl-C starts no further run, abandons the
+control_period: as run_experiment, for every run. jobs: runs at once (0: one per usable CPU); Ctrl-C starts no further run, abandons the
 runs under way within a fraction of a second and raises KeyboardInterrupt (nothing written). out: the CSV table,
 report: the HTML page (written after every run finished, the two replaced together). Returns the JSON document of
 `hysteron sweep --json` as a dict (variants, runs with their tracking errors, target_misses,

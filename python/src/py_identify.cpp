@@ -172,7 +172,7 @@ mirror: mpi-asym: also fit the input negated (the descending bound taking priori
 envelopes cross) and keep the orientation with the lower training cost (docs/models.md).
 train: (begin, end) sample range entering the cost (None = all; end None = to the end).
 num_starts: initial guesses refined by LM, on up to num_threads threads (0: one per
-hardware thread, 1: sequential; the result does not depend on it). max_iterations:
+usable CPU (affinity mask, cgroup quota), 1: sequential; the result does not depend on it). max_iterations:
 LM iterations per start (as the C++ default, 200). stall_iterations, stall_tolerance:
 LM also ends as converged when the cost falls by at most stall_tolerance (relative)
 over the last stall_iterations iterations (0 disables it).

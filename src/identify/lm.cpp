@@ -377,7 +377,7 @@ std::pair<std::vector<Solved>, std::size_t> solve_starts(const std::vector<const
                                                          const std::vector<int>& held, const FitOptions& o,
                                                          FitReport& rep) {
   std::vector<Solved> solved(starts.size());
-  // With the default thread count (0: one per hardware thread) the concurrent starts of an
+  // With the default thread count (0: one per usable CPU) the concurrent starts of an
   // uncompressed cost (the full problems of detail::set_lm_compression(false)) are capped by memory: each holds about
   // kLmCopies m x p Jacobian-sized buffers (Ceres' dense Jacobian and its evaluation scratch,
   // residual vectors), so on a long record they run one after the other instead of

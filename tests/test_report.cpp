@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -179,6 +180,67 @@ TEST(Plot, MissingGnuplotIsAClearError) {
   ::unsetenv("HYSTERON_GNUPLOT");
   EXPECT_NE(e.find("gnuplot"), std::string::npos) << e;
   EXPECT_NE(e.find("/nonexistent/gnuplot"), std::string::npos) << e;
+}
+
+// A long periodic record's loop (output against input, 1e6 samples, 400 periods that go round
+// three nested loops in turn, all through the origin): gnuplot is replaced by a script that keeps
+// the generated data. The drawn path must follow the loops: no segment longer than 3 % of the
+// box's diagonal (the record moves 0.1 % per sample; bucketing by y over the sample order drew
+// chords across the loops), every 101st sample within 1 % of a drawn point, at most max_points.
+TEST(Plot, ALongLoopIsThinnedAlongItsPath) {
+  Tmp tmp;
+  const std::string fake = tmp / "gnuplot.sh", kept = tmp / "script.gp";
+  {
+    std::ofstream f(fake);
+    f << "#!/bin/sh\ncp \"$1\" '" << kept << "'\n"
+      << "out=$(sed -n \"s/^set output '\\(.*\\)'$/\\1/p\" \"$1\")\nprintf '<svg></svg>' > \"$out\"\n";
+  }
+  fs::permissions(fake, fs::perms::owner_all);
+  const std::size_t n = 1'000'000, period = 2500;
+  const double pi = std::acos(-1.0), phase = 0.5;
+  std::vector<double> x(n), y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = std::array{1.0, 0.6, 0.3}[(i / period) % 3];
+    const double th = 2 * pi * static_cast<double>(i % period) / static_cast<double>(period);
+    x[i] = a * std::sin(th);
+    y[i] = a * (std::sin(th - phase) + std::sin(phase));
+  }
+  PlotSpec spec;
+  spec.labels = {"Loops", {"Pressure", "MPa"}, {"Force", "N"}};
+  spec.series.push_back({"measured", x, y});
+  ::setenv("HYSTERON_GNUPLOT", fake.c_str(), 1);
+  plot(spec, tmp / "loops.svg");
+  ::unsetenv("HYSTERON_GNUPLOT");
+
+  std::istringstream script(slurp(kept));
+  std::string line;
+  while (std::getline(script, line) && line != "$d0 << EOD") {
+  }
+  std::vector<std::array<double, 2>> drawn;
+  double longest = 0;
+  bool joined = false;  // the previous line was a point (not a break)
+  while (std::getline(script, line) && line != "EOD") {
+    if (line.empty()) {
+      joined = false;
+      continue;
+    }
+    std::array<double, 2> p{};
+    std::istringstream(line) >> p[0] >> p[1];
+    if (joined) longest = std::max(longest, std::hypot(p[0] - drawn.back()[0], p[1] - drawn.back()[1]));
+    drawn.push_back(p);
+    joined = true;
+  }
+  const double diagonal = std::hypot(2.0, *std::max_element(y.begin(), y.end()) - *std::min_element(y.begin(), y.end()));
+  ASSERT_GT(drawn.size(), 100u);
+  EXPECT_LE(drawn.size(), spec.max_points);
+  EXPECT_LT(longest, 0.03 * diagonal) << drawn.size() << " points drawn";
+  double farthest = 0;
+  for (std::size_t i = 0; i < n; i += 101) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const auto& p : drawn) nearest = std::min(nearest, std::hypot(p[0] - x[i], p[1] - y[i]));
+    farthest = std::max(farthest, nearest);
+  }
+  EXPECT_LT(farthest, 0.01 * diagonal);
 }
 
 // An evaluation document (`hysteron evaluate --report ev.json`): read back with its record (the

@@ -7,8 +7,10 @@
 // left in the temporary directory. The format follows the output path's
 // extension: .svg (vector, embeddable in HTML) or .png (pngcairo). Every axis
 // has a label with its unit, every figure a title and a legend. Long series are
-// decimated to max_points per series, keeping each bucket's minimum and maximum
-// (so error peaks survive). Throws hysteron::Error if a figure has no finite
+// thinned to about max_points per series: a series over time (x never decreases)
+// keeps each bucket's minimum and maximum (so error peaks survive); a path in the
+// plane (a loop) is drawn through the cells of a grid over its box that it enters
+// first, broken where it runs over cells already drawn. Throws hysteron::Error if a figure has no finite
 // data, if a label is empty, if the gnuplot binary cannot be run (the binary is
 // "gnuplot" on PATH, or $HYSTERON_GNUPLOT) or if gnuplot fails.
 //

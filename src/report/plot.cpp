@@ -86,16 +86,15 @@ constexpr double kOffsetRatio = 1e3;
 
 std::string axis_text(const Axis& a) { return a.unit.empty() ? a.label : fmt::format("{} [{}]", a.label, a.unit); }
 
-// Min/max bucket decimation keeping the order of the samples.
-std::vector<std::size_t> decimate(const Series& s, std::size_t max_points) {
+// Where a drawn line is broken (a blank line in gnuplot's data block).
+constexpr std::size_t kBreak = std::numeric_limits<std::size_t>::max();
+
+// Min/max bucket decimation keeping the order of the samples: for a series over time (x never
+// decreases), so that each bucket's extremes, the error peaks, survive.
+std::vector<std::size_t> decimate_over_x(const Series& s, std::size_t max_points) {
   const std::size_t n = s.x.size();
-  std::vector<std::size_t> idx;
-  if (n <= max_points) {
-    idx.resize(n);
-    for (std::size_t i = 0; i < n; ++i) idx[i] = i;
-    return idx;
-  }
   const std::size_t buckets = max_points / 2;
+  std::vector<std::size_t> idx;
   idx.reserve(max_points + 2);
   for (std::size_t b = 0; b < buckets; ++b) {
     const std::size_t lo = b * n / buckets, hi = (b + 1) * n / buckets;
@@ -112,6 +111,72 @@ std::vector<std::size_t> decimate(const Series& s, std::size_t max_points) {
     if (imin != imax) idx.push_back(std::max(imin, imax));
   }
   return idx;
+}
+
+// Thinning of a path in the plane (a loop: output against input, which goes back and forth):
+// the series' box is cut into g x g cells and the path is drawn through the first sample of
+// each cell it enters for the first time, broken where it goes on through cells already drawn.
+// Every sample lies in a drawn cell, and every drawn segment joins neighbouring cells (or two
+// consecutive samples), so the picture is the record's at the cells' resolution: bucketing by y
+// over the sample order instead joins the ends of a loop's branches across it (a solid band for
+// a long periodic record). g starts at 1024 cells and halves until at most max_points are drawn.
+std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
+  const std::size_t n = s.x.size();
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+      x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
+      y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
+    }
+  std::vector<std::size_t> idx;
+  std::vector<unsigned char> drawn;
+  for (std::size_t g = 1024;; g /= 2) {
+    const auto cell_of = [&](double v, double lo, double hi) {
+      if (!(hi > lo)) return std::size_t{0};
+      return std::min(g - 1, static_cast<std::size_t>(static_cast<double>(g) * ((v - lo) / (hi - lo))));
+    };
+    idx.clear();
+    drawn.assign(g * g, 0);
+    std::size_t cell = kBreak, first = kBreak;  // the cell the path is in, and its first sample
+    for (std::size_t i = 0; i < n && idx.size() <= max_points; ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+        if (!idx.empty() && idx.back() != kBreak) idx.push_back(kBreak);  // keep gaps visible
+        cell = first = kBreak;
+        continue;
+      }
+      const std::size_t c = cell_of(s.x[i], x0, x1) * g + cell_of(s.y[i], y0, y1);
+      if (c == cell) continue;
+      const std::size_t previous = first;
+      cell = c, first = i;
+      if (drawn[c]) continue;
+      drawn[c] = 1;
+      if (previous != kBreak && (idx.empty() || idx.back() != previous)) {  // enters from a drawn cell
+        if (!idx.empty() && idx.back() != kBreak) idx.push_back(kBreak);
+        idx.push_back(previous);
+      } else if (previous == kBreak && !idx.empty() && idx.back() != kBreak) {
+        idx.push_back(kBreak);
+      }
+      idx.push_back(i);
+    }
+    if (idx.size() <= max_points || g <= 16) return idx;
+  }
+}
+
+// The samples of a series to draw, in order (kBreak: break the line there), at most about
+// max_points of them.
+std::vector<std::size_t> decimate(const Series& s, std::size_t max_points) {
+  const std::size_t n = s.x.size();
+  std::vector<std::size_t> idx;
+  if (n <= max_points) {
+    idx.resize(n);
+    for (std::size_t i = 0; i < n; ++i) idx[i] = i;
+    return idx;
+  }
+  bool over_x = true;  // x never decreases over its finite samples: a series over time or index
+  double last = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n && over_x; ++i)
+    if (std::isfinite(s.x[i])) over_x = s.x[i] >= last, last = s.x[i];
+  return over_x ? decimate_over_x(s, max_points) : thin_path(s, max_points);
 }
 
 std::string script(const PlotSpec& spec, std::string_view format, const std::string& out) {
@@ -191,7 +256,7 @@ std::string script(const PlotSpec& spec, std::string_view format, const std::str
     g += fmt::format("$d{} << EOD\n", k);
     bool any = false;
     for (std::size_t i : decimate(s, spec.max_points)) {
-      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+      if (i != kBreak && std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
         g += fmt::format("{:.9g} {:.9g}\n", s.x[i] - x0, s.y[i] - y0);
         any = true;
       } else {

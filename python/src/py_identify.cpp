@@ -242,16 +242,30 @@ usable by hysteron.Model (it may not be invertible).)doc");
         const ModelParams& spec = doc.params;
         const FitMetrics train = io::training_metrics(doc);
         std::size_t count = 0;
-        const auto xs = as_span(x, "evaluate: x"), ys = as_span(y, "evaluate: y");
+        // copied: the work below runs without the GIL, and another thread may change the arrays meanwhile
+        const std::vector<double> xs = as_vector(x, "evaluate: x"), ys = as_vector(y, "evaluate: y");
         const IndexRange r = range_from(range, "evaluate: range");
         const InitialState init = initial_state_from(initial_state);
-        const FitMetrics met = evaluate_scored(spec, xs, ys, r, init, censored, &count);
+        FitMetrics met;
+        InputCoverage coverage;
+        OutputMap map;  // y ~ gain * prediction + offset, and the warning where that map explains a poor score
+        std::size_t would = 0;  // samples the CLI's default (censored) would not count as errors
+        EvaluationVerdict v;
+        {
+          py::gil_scoped_release release;
+          met = evaluate_scored(spec, xs, ys, r, init, censored, &count);
+          coverage = input_coverage(spec, xs, r);
+          map = output_map(spec, xs, ys, r, init, censored);
+          if (!censored) (void)evaluate_scored(spec, xs, ys, r, init, true, &would);
+          // The CLI's diagnosis and verdict (judge_evaluation): the output map's warning, or the input map's where
+          // the input is in another zero or unit, and useless against the model's training error
+          const IndexRange rr = r.resolved(xs.size());
+          v = judge_evaluation(spec, xs, ys, r, init, censored, map, met, train, coverage.span_share,
+                               "evaluate's record", fmt::format("samples {}..{}", rr.begin, rr.end));
+        }
         py::dict d = metrics_dict(met);
         if (censored) d["censored_samples"] = count;  // (as before: the key only when asked)
-        const InputCoverage coverage = input_coverage(spec, xs, r);
         d["outside_input_limits"] = coverage.outside;
-        // y ~ gain * prediction + offset, and the warning where that map explains a poor score
-        const OutputMap map = output_map(spec, xs, ys, r, init, censored);
         py::dict om;
         om["gain"] = map.gain;
         om["offset"] = map.offset;
@@ -265,8 +279,6 @@ usable by hysteron.Model (it may not be invertible).)doc");
         // say how many samples the CLI would not count as errors (a clipped Festo record: RMS 30.8 here, 3.34 there).
         std::string clip_warning;
         if (!censored) {
-          std::size_t would = 0;
-          (void)evaluate_scored(spec, xs, ys, r, init, true, &would);
           if (would > 0)
             clip_warning = fmt::format(
                 "evaluate: the output clips: {} samples at its limit where the model predicts beyond it are scored as "
@@ -276,12 +288,6 @@ usable by hysteron.Model (it may not be invertible).)doc");
         }
         d["clipping_warning"] = clip_warning;
         d["input_coverage_warning"] = input_coverage_warning(coverage, "evaluate's record");
-        // The CLI's diagnosis and verdict (judge_evaluation): the output map's warning, or the input map's where
-        // the input is in another zero or unit, and useless against the model's training error
-        const IndexRange rr = r.resolved(xs.size());
-        const EvaluationVerdict v = judge_evaluation(spec, xs, ys, r, init, censored, map, met, train,
-                                                     coverage.span_share, "evaluate's record",
-                                                     fmt::format("samples {}..{}", rr.begin, rr.end));
         d["output_map_warning"] = v.diagnosis.warning;
         if (v.diagnosis.input_map.found) {
           const InputMap& im = v.diagnosis.input_map;
@@ -317,7 +323,8 @@ usable by hysteron.Model (it may not be invertible).)doc");
       py::arg("initial_state") = "virgin", py::arg("censored") = false,
       R"doc(Simulate `model` (dict, file path or Model) over x from its start and return the
 error metrics {rms, max, mae, rms_percent_span, r2, n} against y on `range`
-((begin, end) or None for all samples).
+((begin, end) or None for all samples). x and y are copied first: the evaluation runs without
+the GIL, so other Python threads go on meanwhile.
 
 censored: where y clips (a sensor's limit, detected from the record), a sample at the limit
 where the model predicts beyond it is no error, as fit() treats such a record and as
@@ -353,11 +360,19 @@ they are more than 1 % (as `hysteron evaluate` warns; "" otherwise).)doc");
   m.def(
       "simulate_record",
       [](const py::object& model, const ArrayArg& x, const std::string& initial_state) {
-        return to_numpy(simulate_record(model_spec(model, "simulate_record: model"), as_span(x, "simulate_record: x"),
-                                        initial_state_from(initial_state)));
+        const ModelParams spec = model_spec(model, "simulate_record: model");
+        const std::vector<double> xs = as_vector(x, "simulate_record: x");  // (no GIL below)
+        const InitialState init = initial_state_from(initial_state);
+        std::vector<double> y;
+        {
+          py::gil_scoped_release release;
+          y = simulate_record(spec, xs, init);
+        }
+        return to_numpy(y);
       },
       py::arg("model"), py::arg("x"), py::arg("initial_state") = "virgin",
-      "Model output over a whole record, starting as fit() does (virgin or relaxed).");
+      "Model output over a whole record, starting as fit() does (virgin or relaxed). x is copied first: the\n"
+      "simulation runs without the GIL.");
 
   m.def(
       "compute_metrics",

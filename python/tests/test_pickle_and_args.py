@@ -222,6 +222,38 @@ def test_fit_is_not_disturbed_by_a_thread_changing_its_arrays():
     assert result["train"] == expected["train"]
 
 
+# 4b. evaluate and simulate_record copy their arrays and run without the GIL. With a switch interval
+# of 5 s the calling thread keeps the GIL until a call releases it: this thread then runs while the
+# call is in progress (no result yet) and changes the arrays, which the result does not see. Holding
+# the GIL, the call would end first (the result there when this thread runs again).
+def test_evaluate_and_simulate_record_run_without_the_gil():
+    x = np.tile(wave(1000, 7), 20)
+    y = hysteron.Model(GPI).simulate(x) + 0.01 * np.random.default_rng(8).standard_normal(x.size)
+    calls = {
+        "simulate_record": lambda a, b: hysteron.simulate_record(GPI, a),
+        "evaluate": lambda a, b: hysteron.evaluate(GPI, a, b),
+    }
+    for name, call in calls.items():
+        expected = call(x.copy(), y.copy())
+        xa, ya, result = x.copy(), y.copy(), {}
+        old = sys.getswitchinterval()
+        sys.setswitchinterval(5.0)
+        try:
+            t = threading.Thread(target=lambda: result.update(value=call(xa, ya)))
+            t.start()
+            during = "value" not in result
+            xa[:] = np.nan
+            ya[::-1] = ya.copy()
+            t.join()
+        finally:
+            sys.setswitchinterval(old)
+        assert during, f"{name} held the GIL until it ended"
+        if name == "evaluate":
+            assert {k: result["value"][k] for k in ("rms", "max", "n")} == {k: expected[k] for k in ("rms", "max", "n")}
+        else:
+            np.testing.assert_array_equal(result["value"], expected)
+
+
 # 5. Complex arrays are refused naming the argument (numpy would drop the imaginary part with a warning).
 def test_complex_arrays_are_refused():
     x = wave(50, 9)

@@ -49,8 +49,9 @@ test: build
 # and MATLAB off), at -O1 with line tables only (-g1: stack traces keep file:line; a full -g build
 # took 2.7x as long to compile). Every test runs except the long ones tests/sanitize_skip.txt lists
 # with the shorter test that covers the same code (the sanitizers make a test ~10x slower).
-SANITIZE_SKIP := $(shell sed -e 's/\#.*//' -e 's/[[:space:]]*$$//' -e '/^$$/d' tests/sanitize_skip.txt | paste -sd'|')
+SANITIZE_SKIP = $(shell sed -e 's/\#.*//' -e 's/[[:space:]]*$$//' -e '/^$$/d' $(dir $(lastword $(MAKEFILE_LIST)))tests/sanitize_skip.txt | paste -sd'|')
 test-asan: deps
+	$(if $(SANITIZE_SKIP),,$(error tests/sanitize_skip.txt gave no test to leave out))
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO='-O1 -g1 -DNDEBUG' \
 	  -DCMAKE_C_FLAGS_RELWITHDEBINFO='-O1 -g1 -DNDEBUG' -DHYSTERON_SANITIZE=ON \
 	  -DHYSTERON_BUILD_PYTHON=OFF -DHYSTERON_BUILD_BENCH=OFF -DHYSTERON_BUILD_EXAMPLES=OFF \

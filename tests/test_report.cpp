@@ -9,6 +9,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "hysteron/error.hpp"
@@ -31,6 +32,22 @@ struct Tmp {
   }
   ~Tmp() { fs::remove_all(dir); }
   std::string operator/(const std::string& name) const { return (dir / name).string(); }
+};
+
+// Sets an environment variable for a scope, restoring its value (or its absence) at the end.
+struct EnvGuard {
+  std::string name;
+  std::optional<std::string> old;
+  EnvGuard(std::string n, const std::string& value) : name(std::move(n)) {
+    if (const char* v = std::getenv(name.c_str())) old = v;
+    ::setenv(name.c_str(), value.c_str(), 1);
+  }
+  ~EnvGuard() {
+    if (old) ::setenv(name.c_str(), old->c_str(), 1);
+    else ::unsetenv(name.c_str());
+  }
+  EnvGuard(const EnvGuard&) = delete;
+  EnvGuard& operator=(const EnvGuard&) = delete;
 };
 
 std::string slurp(const std::string& p) {
@@ -191,11 +208,13 @@ TEST(Plot, ALongLoopIsThinnedAlongItsPath) {
   Tmp tmp;
   const std::string fake = tmp / "gnuplot.sh", kept = tmp / "script.gp";
   {
-    std::ofstream f(fake);
-    f << "#!/bin/sh\ncp \"$1\" '" << kept << "'\n"
-      << "out=$(sed -n \"s/^set output '\\(.*\\)'$/\\1/p\" \"$1\")\nprintf '<svg></svg>' > \"$out\"\n";
+    std::ofstream f(fake);  // (the output path as plot.cpp's quote() writes it: '' for ')
+    f << "#!/bin/sh\ncp \"$1\" \"$HYSTERON_TEST_KEEP\"\n"
+      << "out=$(sed -n \"s/^set output '\\(.*\\)'$/\\1/p\" \"$1\" | sed \"s/''/'/g\")\n"
+      << "printf '<svg></svg>' > \"$out\"\n";
   }
   fs::permissions(fake, fs::perms::owner_all);
+  const EnvGuard gnuplot("HYSTERON_GNUPLOT", fake), keep("HYSTERON_TEST_KEEP", kept);
   const std::size_t n = 1'000'000, period = 2500;
   const double pi = std::acos(-1.0), phase = 0.5;
   std::vector<double> x(n), y(n);
@@ -208,9 +227,7 @@ TEST(Plot, ALongLoopIsThinnedAlongItsPath) {
   PlotSpec spec;
   spec.labels = {"Loops", {"Pressure", "MPa"}, {"Force", "N"}};
   spec.series.push_back({"measured", x, y});
-  ::setenv("HYSTERON_GNUPLOT", fake.c_str(), 1);
   plot(spec, tmp / "loops.svg");
-  ::unsetenv("HYSTERON_GNUPLOT");
 
   std::istringstream script(slurp(kept));
   std::string line;

@@ -223,35 +223,36 @@ def test_fit_is_not_disturbed_by_a_thread_changing_its_arrays():
 
 
 # 4b. evaluate and simulate_record copy their arrays and run without the GIL. With a switch interval
-# of 5 s the calling thread keeps the GIL until a call releases it: this thread then runs while the
-# call is in progress (no result yet) and changes the arrays, which the result does not see. Holding
-# the GIL, the call would end first (the result there when this thread runs again).
+# of 5 s a thread keeps the GIL until a call releases it: a worker makes K calls in a row, and this
+# thread, waiting for the GIL in t.start(), runs again while one of them is in progress (fewer than
+# K results yet). Holding the GIL, the calls would all end first (K results when this thread runs;
+# the K calls take well under the 5 s). K chances, since the wake-up may take a time slice.
 def test_evaluate_and_simulate_record_run_without_the_gil():
     x = np.tile(wave(1000, 7), 20)
     y = hysteron.Model(GPI).simulate(x) + 0.01 * np.random.default_rng(8).standard_normal(x.size)
     calls = {
-        "simulate_record": lambda a, b: hysteron.simulate_record(GPI, a),
-        "evaluate": lambda a, b: hysteron.evaluate(GPI, a, b),
+        "simulate_record": (50, lambda: hysteron.simulate_record(GPI, x)),
+        "evaluate": (10, lambda: hysteron.evaluate(GPI, x, y)),
     }
-    for name, call in calls.items():
-        expected = call(x.copy(), y.copy())
-        xa, ya, result = x.copy(), y.copy(), {}
+    for name, (k, call) in calls.items():
+        expected = call()
+        results = []
         old = sys.getswitchinterval()
         sys.setswitchinterval(5.0)
         try:
-            t = threading.Thread(target=lambda: result.update(value=call(xa, ya)))
+            t = threading.Thread(target=lambda: results.extend(call() for _ in range(k)))
             t.start()
-            during = "value" not in result
-            xa[:] = np.nan
-            ya[::-1] = ya.copy()
+            during = len(results) < k
             t.join()
         finally:
             sys.setswitchinterval(old)
         assert during, f"{name} held the GIL until it ended"
-        if name == "evaluate":
-            assert {k: result["value"][k] for k in ("rms", "max", "n")} == {k: expected[k] for k in ("rms", "max", "n")}
-        else:
-            np.testing.assert_array_equal(result["value"], expected)
+        assert len(results) == k
+        for r in results:
+            if name == "evaluate":
+                assert {q: r[q] for q in ("rms", "max", "n")} == {q: expected[q] for q in ("rms", "max", "n")}
+            else:
+                np.testing.assert_array_equal(r, expected)
 
 
 # 5. Complex arrays are refused naming the argument (numpy would drop the imaginary part with a warning).

@@ -119,7 +119,9 @@ std::vector<std::size_t> decimate_over_x(const Series& s, std::size_t max_points
 // Every sample lies in a drawn cell, and every drawn segment joins neighbouring cells (or two
 // consecutive samples), so the picture is the record's at the cells' resolution: bucketing by y
 // over the sample order instead joins the ends of a loop's branches across it (a solid band for
-// a long periodic record). g starts at 1024 cells and halves until at most max_points are drawn.
+// a long periodic record). g starts at 1024 cells and halves until at most max_points are drawn;
+// the last g tried, the largest with 4 g^2 <= max_points (each new cell adds at most a break, a
+// start and its sample), always draws the whole path.
 std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
   const std::size_t n = s.x.size();
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
@@ -128,17 +130,22 @@ std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
       x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
       y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
     }
+  std::size_t g_last = 2;  // (max_points >= 16)
+  while (4 * (2 * g_last) * (2 * g_last) <= max_points && g_last < 1024) g_last *= 2;
   std::vector<std::size_t> idx;
   std::vector<unsigned char> drawn;
   for (std::size_t g = 1024;; g /= 2) {
+    const bool last = g <= g_last;
     const auto cell_of = [&](double v, double lo, double hi) {
-      if (!(hi > lo)) return std::size_t{0};
-      return std::min(g - 1, static_cast<std::size_t>(static_cast<double>(g) * ((v - lo) / (hi - lo))));
+      // halves: a box from -1e308 to 1e308 has no finite span
+      const double f = (0.5 * v - 0.5 * lo) / (0.5 * hi - 0.5 * lo);
+      if (!(f > 0)) return std::size_t{0};
+      return std::min(g - 1, static_cast<std::size_t>(static_cast<double>(g) * std::min(f, 1.0)));
     };
     idx.clear();
     drawn.assign(g * g, 0);
     std::size_t cell = kBreak, first = kBreak;  // the cell the path is in, and its first sample
-    for (std::size_t i = 0; i < n && idx.size() <= max_points; ++i) {
+    for (std::size_t i = 0; i < n && (last || idx.size() <= max_points); ++i) {
       if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
         if (!idx.empty() && idx.back() != kBreak) idx.push_back(kBreak);  // keep gaps visible
         cell = first = kBreak;
@@ -158,7 +165,7 @@ std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
       }
       idx.push_back(i);
     }
-    if (idx.size() <= max_points || g <= 16) return idx;
+    if (idx.size() <= max_points || last) return idx;
   }
 }
 

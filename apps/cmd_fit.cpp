@@ -206,10 +206,17 @@ int run_fit(const FitCliOptions& c) {
       sets.push_back({"", {}, {}, {}, IndexRange{train.end, x.size()}});
   }
 
-  if (isatty(fileno(stderr)))
+  if (isatty(fileno(stderr))) {
     o.progress = [](int start, int it, double cost) {
       fmt::print(stderr, "\rstart {} iteration {:3d} cost {:.6g}   ", start, it, cost);
     };
+    // auto's candidates fit silently (a minute on 1e5 samples): say how many have ended
+    o.candidate_done = [](std::size_t done, std::size_t total, FitModel kind) {
+      fmt::print(stderr, "\rauto: {} of {} candidate fits done (the last: {})        ", done, total,
+                 fit_model_name(kind));
+    };
+    if (o.model == FitModel::automatic) fmt::print(stderr, "auto: fitting every kind on two hold-out folds\n");
+  }
   FitReport rep = fit(x, y, o);
   // the time column's warnings concern rate-pi only: where it is the kind fitted (or auto chose it),
   // or where auto's rate-pi candidate could not be fitted because of them
@@ -217,7 +224,7 @@ int run_fit(const FitCliOptions& c) {
                                                                         o.sample_time == 0.0)))
     rep.warnings.insert(rep.warnings.end(), time_warnings.begin(), time_warnings.end());
   if (!axis_warning.empty()) rep.warnings.push_back(std::move(axis_warning));
-  if (o.progress) fmt::print(stderr, "\r{:60}\r", "");
+  if (o.progress) fmt::print(stderr, "\r{:80}\r", "");
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 
   // A validation record that clips is scored as censored, as the fit treats its own record

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -713,6 +714,34 @@ TEST(FitAuto, ConstantOutputIsRefusedAndUnrunCandidatesHaveNoMetrics) {
 }
 
 // ---- auto ---------------------------------------------------------------------------
+
+// auto reports each candidate fit as it ends (the CLI shows them on a terminal): one call per kind
+// and fold, counting 1..total in order, total twice the candidates the report lists.
+TEST(FitAuto, ReportsEachCandidateFitAsItEnds) {
+  const std::vector<double> x = triangle({6, 4, 5, 2}, 100);
+  std::vector<double> y;
+  for (double v : x) y.push_back(std::tanh(0.3 * v) + 0.05 * v);
+  FitOptions o = options_for(FitModel::automatic);
+  o.num_threads = 0;
+  std::vector<std::size_t> done, totals;
+  std::map<FitModel, int> kinds;
+  o.candidate_done = [&](std::size_t d, std::size_t total, FitModel kind) {
+    done.push_back(d);
+    totals.push_back(total);
+    ++kinds[kind];
+  };
+  const FitReport rep = fit(x, y, o);
+  ASSERT_FALSE(rep.candidates.empty()) << rep.full_report();
+  const std::size_t total = 2 * rep.candidates.size();
+  ASSERT_EQ(done.size(), total);
+  for (std::size_t i = 0; i < total; ++i) {
+    EXPECT_EQ(done[i], i + 1);
+    EXPECT_EQ(totals[i], total);
+  }
+  EXPECT_EQ(kinds.size(), rep.candidates.size());
+  for (const auto& c : rep.candidates) EXPECT_EQ(kinds[c.kind], 2) << fit_model_name(c.kind);
+}
+
 
 TEST(FitAuto, ChoosesOnTheHoldOutAndValidatesNearTheBestKind) {
   MpiAsymParams truth = std::get<MpiAsymParams>(sample_models()[3]);

@@ -408,6 +408,11 @@ struct FitOptions {
   // Called after each LM iteration with (start index, iteration, cost); e.g. progress output.
   // With num_threads != 1 it is called from worker threads, one call at a time.
   std::function<void(int, int, double)> progress;
+  // automatic: called as each candidate fit ends (one kind on one of the two hold-out folds) with
+  // the number ended so far, their total (2 x the kinds) and the kind; e.g. progress output. From
+  // worker threads, one call at a time, `done` counting 1..total. The chosen kind's refit on the
+  // whole training range then reports through `progress`.
+  std::function<void(std::size_t done, std::size_t total, FitModel kind)> candidate_done;
   // Optional: asked (from worker threads, so it must be thread-safe) after each LM iteration and
   // between the fits (starts, candidates, censored refits). Once it returns true the fit is
   // abandoned and fit() throws hysteron::Stopped: a stopped fit has no report.

@@ -817,6 +817,8 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   // With --huber the hold-outs are scored under the loss the fits minimised (huber_rms):
   // plain RMS would let a hold-out's outliers, which no kind predicts, flatten its ratios.
   std::vector<double> held_huber(2 * nk, std::numeric_limits<double>::quiet_NaN());
+  std::mutex done_mutex;  // candidate_done: one call at a time, in the order the fits end
+  std::size_t done = 0;
   detail::parallel_for(2 * nk, o.num_threads, [&](std::size_t j) {
     const std::size_t k = j / 2, fold = j % 2;
     FitOptions oc = o;
@@ -834,6 +836,10 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
                                       fit_model_name(oc.model), e.what()),
                           oc.model, t0);
       }
+    if (o.candidate_done) {
+      const std::lock_guard<std::mutex> lock(done_mutex);
+      o.candidate_done(++done, 2 * nk, oc.model);
+    }
   });
   const auto yt = y.subspan(tr.begin, m);
   const auto [ylo, yhi] = std::minmax_element(yt.begin(), yt.end());

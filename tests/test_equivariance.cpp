@@ -8,6 +8,7 @@
 #include <map>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -629,6 +630,37 @@ TEST(FitChecks, InverseSlopeIsBoundedOnEveryKind) {
   EXPECT_FALSE(neg.inverse.increasing);
   EXPECT_LT(units_map(neg.model).output_gain, 0);
   EXPECT_LE(neg.inverse.max_slope, sx / (0.02 * sy) * (1 + 1e-6));
+}
+
+// The inverse-jump warning is the same for the same sensor at 1x and 10x the sample rate: the
+// output's noise, and so the inverse's jitter, is the same per sample at any rate, while the
+// input's steps shrink with the rate (before 2026-12-02, 10x the rate warned where 1x did not).
+TEST(FitChecks, InverseJumpWarningDoesNotDependOnTheSampleRate) {
+  const ModelParams truth = sample_models()[0];
+  const auto warns = [](const FitReport& rep) {
+    return std::any_of(rep.warnings.begin(), rep.warnings.end(), [](const std::string& w) {
+      return w.find("the inverse driven by the measured output jumps") != std::string::npos;
+    });
+  };
+  int warned = 0, quiet = 0;
+  for (double sigma : {0.03, 0.15}) {
+    bool verdict[2] = {false, false};
+    for (int r = 0; r < 2; ++r) {
+      const int per_leg = r == 0 ? 150 : 1500;
+      const std::vector<double> x = triangle({6, 4, 5, 2, 3.5, 1}, per_leg);
+      const std::vector<double> y = noisy(simulate_record(truth, x), sigma, 11);
+      const FitReport rep = fit(x, y, options_for(FitModel::pi));
+      ASSERT_TRUE(rep.status == FitStatus::converged || rep.status == FitStatus::no_convergence) << rep.full_report();
+      verdict[r] = warns(rep);
+      std::printf("sigma %g per_leg %d: max_jump %.4g, max_input_step %.4g, max_slope %.4g, warns %d\n", sigma,
+                  per_leg, rep.inverse.max_jump, rep.inverse.max_input_step, rep.inverse.max_slope, verdict[r]);
+    }
+    EXPECT_EQ(verdict[0], verdict[1]) << "sigma " << sigma;
+    (verdict[0] ? warned : quiet) += 1;
+  }
+  // the test sees both verdicts
+  EXPECT_EQ(warned, 1);
+  EXPECT_EQ(quiet, 1);
 }
 
 TEST(FitChecks, UselessOrWorseThanReferenceIsPoorFit) {

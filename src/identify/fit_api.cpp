@@ -131,6 +131,11 @@ constexpr double kReversalFraction = 0.1;
 constexpr double kExcellent = 1e-3;
 // A model whose loops enclose less than this fraction of the record's area has lost its hysteresis.
 constexpr double kNarrowLoops = 0.1;
+// The inverse-jump warning: the inverse driven by the measured output moves in one sample by more
+// than kJumpStepFactor times the measured input's largest step and by more than kJumpSpanFraction
+// of the training input's span (a feedforward that jitters by 5 % of the range per sample).
+constexpr double kJumpStepFactor = 10.0;
+constexpr double kJumpSpanFraction = 0.05;
 
 // The reversals of x over [from, to) (by more than kReversalFraction of span): the sample of
 // each turning extremum and +1 for a maximum, -1 for a minimum.
@@ -633,10 +638,19 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
     rep.warnings.push_back(fmt::format("the model has no inverse: {}", rep.inverse.no_inverse));
   for (const auto& p : rep.parameters)
     if (p.at_bound) rep.warnings.push_back(fmt::format("parameter {} ended on its lower bound", p.name));
-  if (rep.inverse.max_input_step > 0 && rep.inverse.max_jump > 10 * rep.inverse.max_input_step)
+  // A jump that the measured input never makes, and that is a material part of its span. The span
+  // condition keeps the verdict independent of the sample rate: the output's noise, and so the
+  // inverse's jitter, is the same per sample at any rate, while the input's steps shrink with it
+  // (before 2026-12-02 the step ratio alone decided, and the same sensor warned at 10 kHz, not at 1).
+  if (rep.inverse.max_input_step > 0 && std::isfinite(rep.inverse.max_jump) && sx > 0 &&
+      rep.inverse.max_jump > kJumpStepFactor * rep.inverse.max_input_step &&
+      rep.inverse.max_jump > kJumpSpanFraction * sx)
     rep.warnings.push_back(fmt::format("the inverse driven by the measured output jumps by up to {:.4g} per sample "
-                                       "({:.3g}x the largest step of the measured input)",
-                                       rep.inverse.max_jump, rep.inverse.max_jump / rep.inverse.max_input_step));
+                                       "({:.3g} % of the training input's span, {:.3g}x the largest step of the "
+                                       "measured input): a feedforward driven by a measured signal passes its "
+                                       "noise on amplified by up to {:.4g} input units per output unit",
+                                       rep.inverse.max_jump, 100 * rep.inverse.max_jump / sx,
+                                       rep.inverse.max_jump / rep.inverse.max_input_step, rep.inverse.max_slope));
 
   // Honest status: useless or worse than the reference is never plain `converged`.
   std::string poor;

@@ -10,6 +10,7 @@
 #include <initializer_list>
 #include <limits>
 #include <optional>
+#include <random>
 #include <sstream>
 
 #include "hysteron/error.hpp"
@@ -56,6 +57,43 @@ std::string slurp(const std::string& p) {
   ss << in.rdbuf();
   return ss.str();
 }
+
+// gnuplot replaced by a script that keeps the generated gnuplot script in `path` and writes an
+// empty SVG where the plot was to go, for the life of the object.
+struct KeptScript {
+  std::string path;
+  std::optional<EnvGuard> gnuplot, keep;
+  explicit KeptScript(const Tmp& tmp) : path(tmp / "script.gp") {
+    const std::string fake = tmp / "gnuplot.sh";
+    {
+      std::ofstream f(fake);  // (the output path as plot.cpp's quote() writes it: '' for ')
+      f << "#!/bin/sh\ncp \"$1\" \"$HYSTERON_TEST_KEEP\"\n"
+        << "out=$(sed -n \"s/^set output '\\(.*\\)'$/\\1/p\" \"$1\" | sed \"s/''/'/g\")\n"
+        << "printf '<svg></svg>' > \"$out\"\n";
+    }
+    fs::permissions(fake, fs::perms::owner_all);
+    gnuplot.emplace("HYSTERON_GNUPLOT", fake);
+    keep.emplace("HYSTERON_TEST_KEEP", path);
+  }
+  // The data blocks of the last script: "$d0 << EOD" to "EOD", each line as written.
+  std::vector<std::vector<std::string>> data_blocks() const {
+    std::istringstream script(slurp(path));
+    std::vector<std::vector<std::string>> blocks;
+    std::string line;
+    bool in_block = false;
+    while (std::getline(script, line)) {
+      if (!in_block && line.starts_with("$d") && line.ends_with("<< EOD")) {
+        blocks.emplace_back();
+        in_block = true;
+      } else if (in_block && line == "EOD") {
+        in_block = false;
+      } else if (in_block) {
+        blocks.back().push_back(line);
+      }
+    }
+    return blocks;
+  }
+};
 
 std::size_t count(const std::string& s, const std::string& what) {
   std::size_t n = 0;
@@ -191,10 +229,9 @@ TEST(Plot, NoDataIsAClearError) {
 
 TEST(Plot, MissingGnuplotIsAClearError) {
   Tmp tmp;
-  ::setenv("HYSTERON_GNUPLOT", "/nonexistent/gnuplot", 1);
+  const EnvGuard gnuplot("HYSTERON_GNUPLOT", "/nonexistent/gnuplot");
   const std::vector<double> one{1.0, 2.0};
   const std::string e = error_of([&] { plot_tracking(one, one, one, kLabels, tmp / "x.svg"); });
-  ::unsetenv("HYSTERON_GNUPLOT");
   EXPECT_NE(e.find("gnuplot"), std::string::npos) << e;
   EXPECT_NE(e.find("/nonexistent/gnuplot"), std::string::npos) << e;
 }
@@ -206,15 +243,7 @@ TEST(Plot, MissingGnuplotIsAClearError) {
 // chords across the loops), every 101st sample within 1 % of a drawn point, at most max_points.
 TEST(Plot, ALongLoopIsThinnedAlongItsPath) {
   Tmp tmp;
-  const std::string fake = tmp / "gnuplot.sh", kept = tmp / "script.gp";
-  {
-    std::ofstream f(fake);  // (the output path as plot.cpp's quote() writes it: '' for ')
-    f << "#!/bin/sh\ncp \"$1\" \"$HYSTERON_TEST_KEEP\"\n"
-      << "out=$(sed -n \"s/^set output '\\(.*\\)'$/\\1/p\" \"$1\" | sed \"s/''/'/g\")\n"
-      << "printf '<svg></svg>' > \"$out\"\n";
-  }
-  fs::permissions(fake, fs::perms::owner_all);
-  const EnvGuard gnuplot("HYSTERON_GNUPLOT", fake), keep("HYSTERON_TEST_KEEP", kept);
+  const KeptScript kept(tmp);
   const std::size_t n = 1'000'000, period = 2500;
   const double pi = std::acos(-1.0), phase = 0.5;
   std::vector<double> x(n), y(n);
@@ -226,10 +255,10 @@ TEST(Plot, ALongLoopIsThinnedAlongItsPath) {
   }
   PlotSpec spec;
   spec.labels = {"Loops", {"Pressure", "MPa"}, {"Force", "N"}};
-  spec.series.push_back({"measured", x, y});
+  spec.series.push_back({"measured", x, y, "lines", "", false});
   plot(spec, tmp / "loops.svg");
 
-  std::istringstream script(slurp(kept));
+  std::istringstream script(slurp(kept.path));
   std::string line;
   while (std::getline(script, line) && line != "$d0 << EOD") {
   }
@@ -258,6 +287,56 @@ TEST(Plot, ALongLoopIsThinnedAlongItsPath) {
     farthest = std::max(farthest, nearest);
   }
   EXPECT_LT(farthest, 0.01 * diagonal);
+}
+
+// thin_for_plot gives the points render() draws: a plot of them writes the same data as a plot
+// of the whole series (so that reports build a long record's series from them instead of copying
+// it whole: 160 -> 74 bytes per sample for `evaluate --report` on 2e6 samples, history part 23),
+// over time with a gap, along a loop with a gap, and as points (actual against desired).
+TEST(Plot, ThinnedPointsDrawWhatTheWholeSeriesDraws) {
+  Tmp tmp;
+  const KeptScript kept(tmp);
+  const std::size_t n = 300'000;
+  const double pi = std::acos(-1.0);
+  std::vector<double> t(n), x(n), y(n), noise(n);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> nd(0.0, 0.01);
+  for (std::size_t i = 0; i < n; ++i) {
+    t[i] = 1e-3 * static_cast<double>(i);
+    const double a = std::array{1.0, 0.5}[(i / 3000) % 2];
+    x[i] = a * std::sin(2 * pi * static_cast<double>(i % 3000) / 3000.0);
+    y[i] = x[i] + 0.2 * a * std::cos(2 * pi * static_cast<double>(i % 3000) / 3000.0) + nd(rng);
+  }
+  for (std::size_t i = 120'000; i < 120'050; ++i) y[i] = std::nan("");
+  const auto blocks_of = [&](const PlotSpec& spec) {
+    plot(spec, tmp / "p.svg");
+    return kept.data_blocks();
+  };
+  struct Case {
+    std::span<const double> x, y;
+    std::string style;
+  };
+  for (const Case& c : {Case{t, y, "lines"}, Case{x, y, "lines"}, Case{x, y, "points"}}) {
+    PlotSpec whole;
+    whole.labels = {"Thinned", {"In", ""}, {"Out", ""}};
+    whole.series.push_back({"s", {c.x.begin(), c.x.end()}, {c.y.begin(), c.y.end()}, c.style, "", false});
+    const ThinnedPoints p = thin_for_plot(c.x, c.y, whole.max_points);
+    ASSERT_EQ(p.x.size(), p.y.size());
+    EXPECT_LE(p.x.size(), whole.max_points);
+    EXPECT_GT(p.x.size(), whole.max_points / 4);
+    EXPECT_TRUE(std::any_of(p.y.begin(), p.y.end(), [](double v) { return std::isnan(v); })) << "the gap is kept";
+    PlotSpec thin = whole;
+    thin.series[0].x = p.x, thin.series[0].y = p.y;
+    const auto a = blocks_of(whole), b = blocks_of(thin);
+    ASSERT_EQ(a.size(), 1u);
+    EXPECT_GT(a[0].size(), 100u);
+    EXPECT_EQ(a, b) << c.style << (c.x.data() == t.data() ? " over time" : " loop");
+  }
+  // a short series is its own points
+  const std::vector<double> few{1.0, 3.0, 2.0};
+  EXPECT_EQ(thin_for_plot(few, few).y, few);
+  EXPECT_NE(error_of([&] { thin_for_plot(few, std::span(few).first(2)); }).find("3 x and 2 y"), std::string::npos);
+  EXPECT_NE(error_of([&] { thin_for_plot(few, few, 8); }).find("max_points"), std::string::npos);
 }
 
 // An evaluation document (`hysteron evaluate --report ev.json`): read back with its record (the

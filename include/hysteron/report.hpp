@@ -70,6 +70,18 @@ void plot(const PlotSpec& spec, const std::string& path);
 // Renders and returns the file's bytes: an SVG document ("svg") or a PNG ("png").
 std::string render(const PlotSpec& spec, std::string_view format);
 
+// The points of (x, y) that render() draws of a series with at most max_points (>= 16) points,
+// in order, with NaN pairs where the drawn line breaks: a series whose x never decreases keeps
+// the least and the largest y of each of max_points / 2 buckets of samples; any other (a loop,
+// actual against desired) is thinned along its path on a grid over its box (docs/report.md).
+// A Series of these points draws the same picture as (x, y) (render() thins it no further), so
+// that a long record's series need not be copied whole into a PlotSpec. Throws Error when x and
+// y differ in length or max_points is below 16.
+struct ThinnedPoints {
+  std::vector<double> x, y;
+};
+ThinnedPoints thin_for_plot(std::span<const double> x, std::span<const double> y, std::size_t max_points = 4000);
+
 // Fig. 5 / Fig. 9: output against input. measured (and model, if non-empty)
 // against input; samples [0, major_end) are drawn as the major loop, the rest
 // as minor loops (major_end = 0: no split).

@@ -173,7 +173,7 @@ void parameter_table(Page& page, const FitReport& fit) {
   if (!fit.covariance_note.empty()) page.para("Standard errors: " + fit.covariance_note);
 }
 
-std::vector<double> difference(const std::vector<double>& a, const std::vector<double>& b) {
+std::vector<double> difference(std::span<const double> a, std::span<const double> b) {
   std::vector<double> d(std::min(a.size(), b.size()));
   for (std::size_t i = 0; i < d.size(); ++i) d[i] = a[i] - b[i];
   return d;
@@ -526,34 +526,39 @@ std::vector<double> try_simulate(Page& page, const ModelParams& model, std::span
   }
 }
 
+// A series of the points a plot draws of (x, y) (thin_for_plot): a long record is not copied whole.
+Series thinned(std::string label, std::span<const double> x, std::span<const double> y, const char* color,
+               bool dashed) {
+  ThinnedPoints p = thin_for_plot(x, y, PlotSpec{}.max_points);
+  return {std::move(label), std::move(p.x), std::move(p.y), "lines", color, dashed};
+}
+
 // Figures of one record: loops (output against input), output over the record, residuals.
 void record_figures(Page& page, const RecordView& v, std::span<const double> model, const std::string& kind,
                     const FitData& data, const std::string& range_note, bool with_series = true) {
   const std::size_t n = std::min(v.x.size(), v.y.size());
   const std::string suffix = v.name.empty() ? "" : fmt::format(" ({})", v.name);
-  std::vector<double> xs(v.x.begin(), v.x.begin() + static_cast<std::ptrdiff_t>(n));
-  std::vector<double> ys(v.y.begin(), v.y.begin() + static_cast<std::ptrdiff_t>(n));
+  const std::span<const double> xs = v.x.first(n), ys = v.y.first(n);
   const bool has_model = model.size() == n;
   PlotSpec loops{{"Hysteresis loops: measured and model" + suffix, data.input, data.output},
-                 {{"measured", xs, ys, "lines", "#d62728", false}}};
-  if (has_model)
-    loops.series.push_back({fmt::format("{} model", kind), xs, std::vector<double>(model.begin(), model.end()),
-                            "lines", "#1f77b4", true});
+                 {thinned("measured", xs, ys, "#d62728", false)}};
+  if (has_model) loops.series.push_back(thinned(fmt::format("{} model", kind), xs, model, "#1f77b4", true));
   page.figure(loops, fmt::format("{} against {}: measured and model{}.", data.output.label, data.input.label, suffix));
   const bool has_t = v.t.size() == n;
-  const std::vector<double> t = has_t ? std::vector<double>(v.t.begin(), v.t.end()) : sample_axis(n);
+  const std::vector<double> index = has_t ? std::vector<double>{} : sample_axis(n);
+  const std::span<const double> t = has_t ? v.t : std::span<const double>(index);
   const Axis ta = has_t ? Axis{"Time", "s"} : Axis{"Sample", ""};
   if (with_series) {
-    PlotSpec ts{{"Output over the record" + suffix, ta, data.output}, {{"measured", t, ys, "lines", "#d62728", false}}};
-    if (has_model) ts.series.push_back({"model", t, std::vector<double>(model.begin(), model.end()), "lines",
-                                        "#1f77b4", true});
+    PlotSpec ts{{"Output over the record" + suffix, ta, data.output}, {thinned("measured", t, ys, "#d62728", false)}};
+    if (has_model) ts.series.push_back(thinned("model", t, model, "#1f77b4", true));
     page.figure(ts, "Measured and model output over the record" + suffix + ".");
   }
-  if (has_model)
+  if (has_model) {
+    const std::vector<double> residual = difference(ys, model);
     page.figure({{"Residuals" + suffix, ta, {"Residual (measured - model)", data.output.unit}},
-                 {{"residual", t, difference(ys, std::vector<double>(model.begin(), model.end())), "lines", "#2ca02c",
-                   false}}},
+                 {thinned("residual", t, residual, "#2ca02c", false)}},
                 fmt::format("Residuals{}; {}.", suffix, range_note));
+  }
 }
 
 std::string validation_name(const ValidationData& v) { return v.name.empty() ? std::string("this record") : v.name; }

@@ -91,8 +91,8 @@ constexpr std::size_t kBreak = std::numeric_limits<std::size_t>::max();
 
 // Min/max bucket decimation keeping the order of the samples: for a series over time (x never
 // decreases), so that each bucket's extremes, the error peaks, survive.
-std::vector<std::size_t> decimate_over_x(const Series& s, std::size_t max_points) {
-  const std::size_t n = s.x.size();
+std::vector<std::size_t> decimate_over_x(std::span<const double> y, std::size_t max_points) {
+  const std::size_t n = y.size();
   const std::size_t buckets = max_points / 2;
   std::vector<std::size_t> idx;
   idx.reserve(max_points + 2);
@@ -100,12 +100,12 @@ std::vector<std::size_t> decimate_over_x(const Series& s, std::size_t max_points
     const std::size_t lo = b * n / buckets, hi = (b + 1) * n / buckets;
     std::size_t imin = lo, imax = lo;
     for (std::size_t i = lo; i < hi; ++i) {
-      if (!std::isfinite(s.y[i])) {  // keep gaps visible
+      if (!std::isfinite(y[i])) {  // keep gaps visible
         imin = imax = i;
         break;
       }
-      if (s.y[i] < s.y[imin]) imin = i;
-      if (s.y[i] > s.y[imax]) imax = i;
+      if (y[i] < y[imin]) imin = i;
+      if (y[i] > y[imax]) imax = i;
     }
     idx.push_back(std::min(imin, imax));
     if (imin != imax) idx.push_back(std::max(imin, imax));
@@ -122,13 +122,13 @@ std::vector<std::size_t> decimate_over_x(const Series& s, std::size_t max_points
 // a long periodic record). g starts at 1024 cells and halves until at most max_points are drawn;
 // the last g tried, the largest with 4 g^2 <= max_points (each new cell adds at most a break, a
 // start and its sample), always draws the whole path.
-std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
-  const std::size_t n = s.x.size();
+std::vector<std::size_t> thin_path(std::span<const double> x, std::span<const double> y, std::size_t max_points) {
+  const std::size_t n = x.size();
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (std::size_t i = 0; i < n; ++i)
-    if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
-      x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
-      y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
+    if (std::isfinite(x[i]) && std::isfinite(y[i])) {
+      x0 = std::min(x0, x[i]), x1 = std::max(x1, x[i]);
+      y0 = std::min(y0, y[i]), y1 = std::max(y1, y[i]);
     }
   std::size_t g_last = 2;  // (max_points >= 16)
   while (4 * (2 * g_last) * (2 * g_last) <= max_points && g_last < 1024) g_last *= 2;
@@ -146,12 +146,12 @@ std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
     drawn.assign(g * g, 0);
     std::size_t cell = kBreak, first = kBreak;  // the cell the path is in, and its first sample
     for (std::size_t i = 0; i < n && (last || idx.size() <= max_points); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+      if (!std::isfinite(x[i]) || !std::isfinite(y[i])) {
         if (!idx.empty() && idx.back() != kBreak) idx.push_back(kBreak);  // keep gaps visible
         cell = first = kBreak;
         continue;
       }
-      const std::size_t c = cell_of(s.x[i], x0, x1) * g + cell_of(s.y[i], y0, y1);
+      const std::size_t c = cell_of(x[i], x0, x1) * g + cell_of(y[i], y0, y1);
       if (c == cell) continue;
       const std::size_t previous = first;
       cell = c, first = i;
@@ -171,8 +171,8 @@ std::vector<std::size_t> thin_path(const Series& s, std::size_t max_points) {
 
 // The samples of a series to draw, in order (kBreak: break the line there), at most about
 // max_points of them.
-std::vector<std::size_t> decimate(const Series& s, std::size_t max_points) {
-  const std::size_t n = s.x.size();
+std::vector<std::size_t> decimate(std::span<const double> x, std::span<const double> y, std::size_t max_points) {
+  const std::size_t n = x.size();
   std::vector<std::size_t> idx;
   if (n <= max_points) {
     idx.resize(n);
@@ -182,8 +182,8 @@ std::vector<std::size_t> decimate(const Series& s, std::size_t max_points) {
   bool over_x = true;  // x never decreases over its finite samples: a series over time or index
   double last = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n && over_x; ++i)
-    if (std::isfinite(s.x[i])) over_x = s.x[i] >= last, last = s.x[i];
-  return over_x ? decimate_over_x(s, max_points) : thin_path(s, max_points);
+    if (std::isfinite(x[i])) over_x = x[i] >= last, last = x[i];
+  return over_x ? decimate_over_x(y, max_points) : thin_path(x, y, max_points);
 }
 
 std::string script(const PlotSpec& spec, std::string_view format, const std::string& out) {
@@ -262,7 +262,7 @@ std::string script(const PlotSpec& spec, std::string_view format, const std::str
     const Series& s = spec.series[k];
     g += fmt::format("$d{} << EOD\n", k);
     bool any = false;
-    for (std::size_t i : decimate(s, spec.max_points)) {
+    for (std::size_t i : decimate(s.x, s.y, spec.max_points)) {
       if (i != kBreak && std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
         g += fmt::format("{:.9g} {:.9g}\n", s.x[i] - x0, s.y[i] - y0);
         any = true;
@@ -352,9 +352,29 @@ void plot(const PlotSpec& spec, const std::string& path) {
   io::write_text_file(path, render(spec, format));
 }
 
+ThinnedPoints thin_for_plot(std::span<const double> x, std::span<const double> y, std::size_t max_points) {
+  if (x.size() != y.size())
+    throw Error(fmt::format("plot: cannot thin {} x and {} y values", x.size(), y.size()));
+  if (max_points < 16) throw Error("plot: max_points below 16");
+  ThinnedPoints p;
+  const std::vector<std::size_t> idx = decimate(x, y, max_points);
+  p.x.reserve(idx.size()), p.y.reserve(idx.size());
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i : idx) {
+    p.x.push_back(i == kBreak ? nan : x[i]);
+    p.y.push_back(i == kBreak ? nan : y[i]);
+  }
+  return p;
+}
+
 namespace {
 
-std::vector<double> vec(std::span<const double> s) { return {s.begin(), s.end()}; }
+// The points of a long series that a plot draws (thin_for_plot), as one Series.
+Series thinned_series(std::string label, std::span<const double> x, std::span<const double> y, std::string color, bool dashed,
+            std::string style = "lines") {
+  ThinnedPoints p = thin_for_plot(x, y, PlotSpec{}.max_points);
+  return {std::move(label), std::move(p.x), std::move(p.y), std::move(style), std::move(color), dashed};
+}
 
 std::vector<double> index_axis(std::size_t n) {
   std::vector<double> v(n);
@@ -379,9 +399,8 @@ void plot_hysteresis_loops(std::span<const double> input, std::span<const double
   const std::size_t split = major_end > 0 && major_end < n ? major_end : n;
   auto part = [&](std::span<const double> y, std::size_t b, std::size_t e, std::string label, std::string color,
                   bool dashed) {
-    Series s{std::move(label), vec(input.subspan(b, e - b)), vec(y.subspan(b, e - b)), "lines", std::move(color),
-             dashed};
-    spec.series.push_back(std::move(s));
+    spec.series.push_back(
+        thinned_series(std::move(label), input.subspan(b, e - b), y.subspan(b, e - b), std::move(color), dashed));
   };
   const bool split_loops = split < n;
   part(measured, 0, split, split_loops ? "measured, major loop" : "measured", "#d62728", false);
@@ -396,10 +415,10 @@ void plot_hysteresis_loops(std::span<const double> input, std::span<const double
 void plot_identification_input(std::span<const double> t, std::span<const double> command,
                                std::span<const double> measured, const Labels& labels, const std::string& path) {
   same_length(t, command, labels, "time and command");
-  PlotSpec spec{labels, {{"command", vec(t), vec(command), "lines", "#1f77b4", false}}};
+  PlotSpec spec{labels, {thinned_series("command", t, command, "#1f77b4", false)}};
   if (!measured.empty()) {
     same_length(t, measured, labels, "time and measured input");
-    spec.series.push_back({"measured", vec(t), vec(measured), "lines", "#d62728", false});
+    spec.series.push_back(thinned_series("measured", t, measured, "#d62728", false));
   }
   plot(spec, path);
 }
@@ -409,8 +428,7 @@ void plot_tracking(std::span<const double> t, std::span<const double> desired, s
   same_length(t, desired, labels, "time and desired output");
   same_length(t, actual, labels, "time and actual output");
   plot({labels,
-        {{"desired", vec(t), vec(desired), "lines", "#222222", true},
-         {"actual", vec(t), vec(actual), "lines", "#d62728", false}}},
+        {thinned_series("desired", t, desired, "#222222", true), thinned_series("actual", t, actual, "#d62728", false)}},
        path);
 }
 
@@ -420,7 +438,7 @@ void plot_tracking_error(std::span<const double> t, std::span<const double> desi
   same_length(t, actual, labels, "time and actual output");
   std::vector<double> e(t.size());
   for (std::size_t i = 0; i < e.size(); ++i) e[i] = desired[i] - actual[i];
-  plot({labels, {{"error (desired - actual)", vec(t), std::move(e), "lines", "#1f77b4", false}}}, path);
+  plot({labels, {thinned_series("error (desired - actual)", t, e, "#1f77b4", false)}}, path);
 }
 
 void plot_desired_vs_actual(std::span<const double> desired, std::span<const double> actual, const Labels& labels,
@@ -429,7 +447,7 @@ void plot_desired_vs_actual(std::span<const double> desired, std::span<const dou
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (double v : desired)
     if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
-  PlotSpec spec{labels, {{"actual", vec(desired), vec(actual), "points", "#d62728", false}}};
+  PlotSpec spec{labels, {thinned_series("actual", desired, actual, "#d62728", false, "points")}};
   if (hi >= lo) spec.series.push_back({"ideal (actual = desired)", {lo, hi}, {lo, hi}, "lines", "#222222", true});
   spec.equal_axes = true;
   spec.width = 640;
@@ -440,13 +458,14 @@ void plot_desired_vs_actual(std::span<const double> desired, std::span<const dou
 void plot_fit_residuals(std::span<const double> x, std::span<const double> measured,
                         std::span<const double> model, const Labels& labels, const std::string& path) {
   same_length(measured, model, labels, "measured and model output");
-  std::vector<double> xs = x.empty() ? index_axis(measured.size()) : vec(x);
+  const std::vector<double> index = x.empty() ? index_axis(measured.size()) : std::vector<double>{};
+  const std::span<const double> xs = x.empty() ? std::span<const double>(index) : x;
   if (xs.size() != measured.size())
     throw Error(fmt::format("plot '{}': x and residuals have different lengths ({} and {})", labels.title,
                             xs.size(), measured.size()));
   std::vector<double> r(measured.size());
   for (std::size_t i = 0; i < r.size(); ++i) r[i] = measured[i] - model[i];
-  plot({labels, {{"residual (measured - model)", std::move(xs), std::move(r), "lines", "#2ca02c", false}}}, path);
+  plot({labels, {thinned_series("residual (measured - model)", xs, r, "#2ca02c", false)}}, path);
 }
 
 }  // namespace hysteron::report

@@ -97,6 +97,7 @@ int run_evaluate(const EvaluateOptions& c) {
       judge_evaluation(model, rec.x, rec.y, range, initial, !c.uncensored, map, m, train, coverage.span_share,
                        c.sel.file, fmt::format("samples {}..{}", range.begin, range.end));
   if (!verdict.diagnosis.warning.empty()) warnings.push_back(std::move(verdict.diagnosis.warning));
+  if (!verdict.diagnosis.sensor_warning.empty()) warnings.push_back(std::move(verdict.diagnosis.sensor_warning));
   const bool useless = verdict.useless;
   if (useless) warnings.push_back(fmt::format("{}: evaluate exits {}", verdict.useless_warning, exit_poor_fit));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);

@@ -40,6 +40,8 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %                            range and no sign, unit or zero explains it (`hysteron
 %                            evaluate` exits 3 there)
 %     useless_warning        says so ('' otherwise)
+%     stuck_output_warning   where Y's reading sits frozen at one value inside its range
+%                            while X moves on: a stuck output sensor ('' otherwise)
 %   Each non-empty warning is also issued as a warning with identifier
 %   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).
 %
@@ -48,7 +50,8 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
     error('hysteron:badArgument', 'usage: metrics = hysteron_evaluate(model, x, y, ''range'', [first last])');
   end
   metrics = hysteron_mex('evaluate', model, x, y, hysteron_options('hysteron_evaluate', varargin{:}));
-  for f = {'clipping_warning', 'input_coverage_warning', 'output_map_warning', 'useless_warning'}
+  for f = {'clipping_warning', 'input_coverage_warning', 'output_map_warning', 'stuck_output_warning', ...
+           'useless_warning'}
     if ~isempty(metrics.(f{1}))
       warning('hysteron:evaluate', '%s', metrics.(f{1}));
     end

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -344,4 +345,73 @@ TEST(SensorFaults, ARestAtTheInputsLeastValueAndANoisyStaircaseAreNoSensorFault)
   Record s = staircase();
   for (std::size_t k = 0; k < s.y.size(); ++k) s.y[k] += 0.01 * std::sin(2.3 * static_cast<double>(k) + 1.1 * std::cos(0.7 * k));
   EXPECT_EQ(warning_with(fit_gpi(s), "levels over the training range"), "");
+}
+
+// A stuck output sensor (detail::stuck_runs): the output's reading frozen mid-sweep while the input moves on one
+// way. Named with its rows under offsets, scales and sign flips of either column, and never `converged`; not named
+// where the output holds inside a backlash after the input's reversal (a play's dead band), nor on the clean record.
+TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
+  const Record clean = loops();
+  Record stuck = clean;
+  for (std::size_t k = 330; k < 480; ++k) stuck.y[k] = stuck.y[330];  // x falls by about 40 % of its span meanwhile
+  const FitReport rs = fit_gpi(stuck);
+  const std::string w = warning_with(rs, "the output sensor is stuck there");
+  EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
+  EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;  // (here also worse than the reference PI)
+  for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
+                                   std::array{-1e4, 250.0, 0.0, -3.0}}) {
+    const FitReport rt = fit_gpi({affine(stuck.x, a, b), affine(stuck.y, c, d)});
+    EXPECT_NE(warning_with(rt, "the output sensor is stuck there").find("(samples 330:480)"), std::string::npos)
+        << a << " " << b << " " << c << " " << d << "\n" << with_warnings(rt);
+    EXPECT_NE(rt.status, FitStatus::converged);
+  }
+  // evaluate's and a --validate-data record's diagnosis names it too (diagnose_record)
+  EXPECT_NE(stuck_output_warning(stuck.x, stuck.y, {0, stuck.x.size()}, "b.csv").find("b.csv: the output sits exactly"),
+            std::string::npos);
+  const ModelParams truth = pi_truth();
+  const OutputMap map = output_map(truth, stuck.x, stuck.y, {0, stuck.x.size()}, InitialState::virgin, false);
+  EXPECT_NE(diagnose_record(truth, stuck.x, stuck.y, {0, stuck.x.size()}, InitialState::virgin, false, map,
+                            FitMetrics{}, 1.0, "b.csv")
+                .sensor_warning.find("(samples 330:480)"),
+            std::string::npos);
+  EXPECT_EQ(stuck_output_warning(clean.x, clean.y, {0, clean.x.size()}, "b.csv"), "");
+  const FitReport rc = fit_gpi(clean);
+  EXPECT_EQ(warning_with(rc, "stuck"), "") << with_warnings(rc);
+  EXPECT_EQ(rc.status, FitStatus::converged) << rc.message;
+
+  // A play of half-width 0.2 (a backlash): 0 -> 1 -> 0.3 -> 0.9. After the reversal at 0.3 the output holds at
+  // 0.5, inside its range 0..0.8, while the input rises by 0.4 (40 % of its span); that is the play, not a sensor.
+  Record play;
+  double out = 0.0;
+  const auto go = [&](double from, double to, int n) {
+    for (int k = 0; k < n; ++k) {
+      const double v = from + (to - from) * k / n;
+      out = std::clamp(out, v - 0.2, v + 0.2);
+      play.x.push_back(v), play.y.push_back(out);
+    }
+  };
+  go(0.0, 1.0, 500), go(1.0, 0.3, 350), go(0.3, 0.9, 300);
+  const detail::Stuck none = detail::stuck_runs(play.y, play.x, {0, play.x.size()});
+  EXPECT_EQ(none.runs, 0u) << "flagged " << none.first << ":" << none.last;
+  // nor with a noisy input (its extremum a few samples off the hold's start) and the output on a grid of 0.01
+  Record noisy = play;
+  for (std::size_t k = 0; k < noisy.x.size(); ++k) {
+    noisy.x[k] += 0.004 * std::sin(2.1 * static_cast<double>(k)) * std::cos(0.7 * static_cast<double>(k));
+    noisy.y[k] = 0.01 * std::round(noisy.y[k] / 0.01 + 0.3 * std::sin(1.3 * static_cast<double>(k)));
+  }
+  const detail::Stuck grid = detail::stuck_runs(noisy.y, noisy.x, {0, noisy.x.size()});
+  EXPECT_EQ(grid.runs, 0u) << "flagged " << grid.first << ":" << grid.last;
+  // nor where the output follows the play through a lag of a few samples, without noise: it holds a few samples
+  // after the input's reversal
+  Record lagged = play;
+  for (std::size_t k = 1; k < lagged.y.size(); ++k) {
+    lagged.y[k] = lagged.y[k - 1] + 0.5 * (play.y[k] - lagged.y[k - 1]);
+    if (std::abs(lagged.y[k] - play.y[k]) < 1e-6) lagged.y[k] = play.y[k];  // settled
+  }
+  const detail::Stuck lag = detail::stuck_runs(lagged.y, lagged.x, {0, lagged.x.size()});
+  EXPECT_EQ(lag.runs, 0u) << "flagged " << lag.first << ":" << lag.last;
+  // nor where the reading is frozen inside that dead band and on past it (one run from the reversal on)
+  Record held = play;
+  for (std::size_t k = 1000; k < 1100; ++k) held.y[k] = held.y[1000];
+  EXPECT_EQ(detail::stuck_runs(held.y, held.x, {0, held.x.size()}).runs, 0u);
 }

@@ -144,6 +144,12 @@ InputCoverage input_coverage(const ModelParams& params, std::span<const double> 
 // names the record (e.g. its file).
 std::string input_coverage_warning(const InputCoverage& c, std::string_view what);
 
+// A stuck output sensor on a scored record (fit() names one on its training record and makes the fit poor_fit,
+// docs/identification.md, "Sensor faults"): its output's reading frozen at one value inside its range while the
+// input moves on. "what: the output sits exactly at ...", or "" where there is none.
+std::string stuck_output_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
+                                 std::string_view what);
+
 // A fit that explains less than this share of its output's variance (R^2) is poor_fit whatever
 // else it beats; a model scored on another record below it (output_map_warning) is asked why.
 inline constexpr double kMinFitR2 = 0.5;
@@ -238,6 +244,7 @@ struct RecordDiagnosis {
   std::string warning;  // "" where nothing is to be said
   bool map_named = false;
   InputMap input_map;   // found where the warning is the input map's
+  std::string sensor_warning;  // stuck_output_warning's, "" where none
 };
 RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                                 IndexRange range, InitialState initial, bool censor, const OutputMap& map,

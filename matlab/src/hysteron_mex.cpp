@@ -382,6 +382,7 @@ void cmd_evaluate(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
                                                coverage.span_share, "hysteron_evaluate's record",
                                                fmt::format("samples {}..{}", rr.begin + 1, rr.end));  // 1-based
   m["output_map_warning"] = v.diagnosis.warning;
+  m["stuck_output_warning"] = v.diagnosis.sensor_warning;
   const InputMap& im = v.diagnosis.input_map;
   m["input_map"] = im.found ? nlohmann::json{{"scale", im.scale}, {"shift", im.shift}, {"rms", im.rms},
                                              {"r2", im.r2}, {"rms_as_is", im.rms_as_is}}

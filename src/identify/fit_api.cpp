@@ -322,6 +322,86 @@ std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std
   return out;
 }
 
+// stuck_runs (detail.hpp): a run at least this many times as long as any other run of one output value.
+constexpr double kStuckRatio = 10.0;
+
+detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const double> x, IndexRange r) {
+  Stuck out;
+  if (r.end - r.begin < 3) return out;
+  const auto [lo, hi] = minmax_of(y, r.begin, r.end);
+  const double sx = span_of(x.subspan(r.begin, r.end - r.begin));
+  if (!(sx > 0)) return out;
+  std::vector<std::size_t> turns;  // the input's reversals (by 10 % of its span), in order
+  for (const auto& [k, dir] : reversals(x, r.begin, r.end, sx)) turns.push_back(k);
+  // the output's noise (detect_clipping's sigma) times 8, as pinned_runs; 0 without noise
+  const double sigma = detect_clipping(y.subspan(r.begin, r.end - r.begin)).sigma;
+  const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0, sy = hi - lo;
+  std::size_t l1 = 0, l2 = 0;  // the two longest runs of one y value inside its range
+  for_each_run(y, r, [&](std::size_t s, std::size_t e) {
+    if (y[s] == lo || y[s] == hi) return;
+    const std::size_t len = e - s;
+    if (len > l1) l2 = l1, l1 = len;
+    else if (len > l2) l2 = len;
+  });
+  std::size_t longest_flagged = 0;
+  for_each_run(y, r, [&](std::size_t s, std::size_t e) {
+    if (y[s] == lo || y[s] == hi) return;
+    const std::size_t len = e - s;
+    const auto flagged = [&] {
+      const std::size_t other = std::max<std::size_t>(len == l1 ? l2 : l1, 1);
+      if (len < 3 || static_cast<double>(len) < kStuckRatio * static_cast<double>(other)) return false;
+      const auto [xl, xh] = minmax_of(x, s, e);
+      const double net = x[e - 1] - x[s];
+      if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl)) || !reversals(x, s, e, sx).empty())
+        return false;
+      // the output moved since the input's last reversal before the run (or the record's start): a play's dead
+      // band or a backlash holds the output from the reversal on, and a branch only steepens away from it
+      const auto after = std::upper_bound(turns.begin(), turns.end(), s);
+      if (after != turns.end() && *after < e) return false;  // the input turns inside the run
+      const std::size_t t = after == turns.begin() ? r.begin : *(after - 1);
+      const auto [yl, yh] = minmax_of(y, t, s + 1);
+      if (!(yh - yl > std::max(noise, kPinnedSpan * sy))) return false;
+      out.moved = std::max(out.moved, xh - xl);
+      return true;
+    };
+    if (!flagged()) {
+      out.longest_other = std::max(out.longest_other, len);
+      return;
+    }
+    ++out.runs;
+    out.samples += len;
+    if (len > longest_flagged) longest_flagged = len, out.first = s, out.last = e, out.value = y[s];
+  });
+  return out;
+}
+
+namespace {
+
+// "sits exactly at ...: the output sensor is stuck there (or its reading was held)" of a flagged Stuck
+std::string stuck_text(const detail::Stuck& st, std::span<const double> x, IndexRange r) {
+  const double sx = detail::span_of(x.subspan(r.begin, r.end - r.begin));
+  return fmt::format(
+      "sits exactly at {:.6g} for {} samples (samples {}:{}{}) while the input moves on one way by up to {:.4g} "
+      "({:.3g} % of its span), and no other run of one output value inside its range is longer than {} samples: "
+      "the output sensor is stuck there (or its reading was held)",
+      st.value, st.last - st.first, st.first, st.last,
+      st.runs > 1 ? fmt::format("; {} such runs, {} samples in all", st.runs, st.samples) : "", st.moved,
+      100 * st.moved / sx, st.longest_other);
+}
+
+}  // namespace
+
+std::string stuck_output_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
+                                 std::string_view what) {
+  detail::check_record(x, y, "stuck_output_warning");
+  const IndexRange r = detail::check_range(range, x.size(), "stuck_output_warning");
+  const detail::Stuck st = detail::stuck_runs(y, x, r);
+  if (st.runs == 0) return {};
+  return fmt::format("{}: the output {}; the model's score there is the sensor's: leave these rows out of the "
+                     "scored range",
+                     what, stuck_text(st, x, r));
+}
+
 namespace {
 
 // The warnings on the sensors' resolution (grid_of, detail.hpp): a column on at most kCoarseLevels levels, the
@@ -645,12 +725,15 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
   if (rep.inverse.max_input_step > 0 && std::isfinite(rep.inverse.max_jump) && sx > 0 &&
       rep.inverse.max_jump > kJumpStepFactor * rep.inverse.max_input_step &&
       rep.inverse.max_jump > kJumpSpanFraction * sx)
-    rep.warnings.push_back(fmt::format("the inverse driven by the measured output jumps by up to {:.4g} per sample "
-                                       "({:.3g} % of the training input's span, {:.3g}x the largest step of the "
-                                       "measured input): a feedforward driven by a measured signal passes its "
-                                       "noise on amplified by up to {:.4g} input units per output unit",
-                                       rep.inverse.max_jump, 100 * rep.inverse.max_jump / sx,
-                                       rep.inverse.max_jump / rep.inverse.max_input_step, rep.inverse.max_slope));
+    rep.warnings.push_back(fmt::format(
+        "the inverse driven by the measured output jumps by up to {:.4g} per sample ({:.3g} % of the training input's "
+        "span, {:.3g}x the largest step of the measured input){}",
+        rep.inverse.max_jump, 100 * rep.inverse.max_jump / sx, rep.inverse.max_jump / rep.inverse.max_input_step,
+        std::isfinite(rep.inverse.max_slope)
+            ? fmt::format(": a feedforward driven by a measured signal passes its noise on amplified by up to {:.4g} "
+                          "input units per output unit",
+                          rep.inverse.max_slope)
+            : std::string()));
 
   // Honest status: useless or worse than the reference is never plain `converged`.
   std::string poor;
@@ -1084,6 +1167,18 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
                                                               x_pinned[1].value)
                                                 : fmt::format("{:.6g}", x_pinned[x_low ? 0 : 1].value),
                                 rep.message);
+    }
+  }
+  // A stuck output sensor: the model is fitted to an output that was not measured there: never `converged`.
+  if (const detail::Stuck st = detail::stuck_runs(y, x, tr); st.runs > 0) {
+    rep.warnings.push_back(fmt::format("the training output {}, and the model is fitted to an output that was not "
+                                       "measured; exclude these rows (the --train and --validate ranges) or re-record",
+                                       stuck_text(st, x, tr)));
+    if (rep.status == FitStatus::converged) {
+      rep.status = FitStatus::poor_fit;
+      rep.message = fmt::format("poor fit: the training output is stuck at {:.6g} over samples {}:{} (see the "
+                                "warnings) (solver: converged: {})",
+                                st.value, st.first, st.last, rep.message);
     }
   }
   if (has_model(rep.status))

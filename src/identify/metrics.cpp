@@ -378,6 +378,7 @@ RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const doubl
       d.map_named = true;
       d.input_map = im;
     }
+  d.sensor_warning = stuck_output_warning(x, y, range, what);
   return d;
 }
 

@@ -41,7 +41,8 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %                            evaluate` exits 3 there)
 %     useless_warning        says so ('' otherwise)
 %     stuck_output_warning   where Y's reading sits frozen at one value inside its range
-%                            while X moves on: a stuck output sensor ('' otherwise)
+%                            while X moves on: a stuck output sensor ('' otherwise;
+%                            its samples are 0-based and half-open, as the CLI's)
 %   Each non-empty warning is also issued as a warning with identifier
 %   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).
 %

@@ -635,6 +635,8 @@ TEST(FitChecks, InverseSlopeIsBoundedOnEveryKind) {
 // The inverse-jump warning is the same for the same sensor at 1x and 10x the sample rate: the
 // output's noise, and so the inverse's jitter, is the same per sample at any rate, while the
 // input's steps shrink with the rate (before 2026-12-02, 10x the rate warned where 1x did not).
+// (At 150 samples per leg 10 input steps are 6.7 % of the span, above the rule's 5 %: a noise
+// whose jump falls between the two, 0.05 here, still warns at 1500 and not at 150.)
 TEST(FitChecks, InverseJumpWarningDoesNotDependOnTheSampleRate) {
   const ModelParams truth = sample_models()[0];
   const auto warns = [](const FitReport& rep) {

@@ -75,6 +75,14 @@ struct KeptScript {
     gnuplot.emplace("HYSTERON_GNUPLOT", fake);
     keep.emplace("HYSTERON_TEST_KEEP", path);
   }
+  // The last script's lines but the output file's.
+  std::vector<std::string> script_lines() const {
+    std::istringstream script(slurp(path));
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(script, line);)
+      if (!line.starts_with("set output ")) lines.push_back(line);
+    return lines;
+  }
   // The data blocks of the last script: "$d0 << EOD" to "EOD", each line as written.
   std::vector<std::vector<std::string>> data_blocks() const {
     std::istringstream script(slurp(path));
@@ -298,39 +306,53 @@ TEST(Plot, ThinnedPointsDrawWhatTheWholeSeriesDraws) {
   const KeptScript kept(tmp);
   const std::size_t n = 300'000;
   const double pi = std::acos(-1.0);
-  std::vector<double> t(n), x(n), y(n), noise(n);
+  std::vector<double> t(n), big_t(n), x(n), y(n);
   std::mt19937_64 rng(5);
   std::normal_distribution<double> nd(0.0, 0.01);
   for (std::size_t i = 0; i < n; ++i) {
     t[i] = 1e-3 * static_cast<double>(i);
+    // a Unix time axis whose midpoint, 1.7e9 + 50, is where its offset's reference rounds to 1.7e9 + 100
+    big_t[i] = 1.7e9 + 25.0 + 50.0 * static_cast<double>(i) / static_cast<double>(n - 1);
     const double a = std::array{1.0, 0.5}[(i / 3000) % 2];
     x[i] = a * std::sin(2 * pi * static_cast<double>(i % 3000) / 3000.0);
     y[i] = x[i] + 0.2 * a * std::cos(2 * pi * static_cast<double>(i % 3000) / 3000.0) + nd(rng);
   }
   for (std::size_t i = 120'000; i < 120'050; ++i) y[i] = std::nan("");
-  const auto blocks_of = [&](const PlotSpec& spec) {
-    plot(spec, tmp / "p.svg");
-    return kept.data_blocks();
-  };
   struct Case {
     std::span<const double> x, y;
     std::string style;
+    bool equal_axes;
+    const char* what;
   };
-  for (const Case& c : {Case{t, y, "lines"}, Case{x, y, "lines"}, Case{x, y, "points"}}) {
+  for (const Case& c : {Case{t, y, "lines", false, "over time"}, Case{big_t, y, "lines", false, "a Unix time axis"},
+                        Case{x, y, "lines", false, "a loop"}, Case{x, y, "points", true, "actual against desired"}}) {
     PlotSpec whole;
     whole.labels = {"Thinned", {"In", ""}, {"Out", ""}};
+    whole.equal_axes = c.equal_axes;
     whole.series.push_back({"s", {c.x.begin(), c.x.end()}, {c.y.begin(), c.y.end()}, c.style, "", false});
     const ThinnedPoints p = thin_for_plot(c.x, c.y, whole.max_points);
     ASSERT_EQ(p.x.size(), p.y.size());
     EXPECT_LE(p.x.size(), whole.max_points);
     EXPECT_GT(p.x.size(), whole.max_points / 4);
     EXPECT_TRUE(std::any_of(p.y.begin(), p.y.end(), [](double v) { return std::isnan(v); })) << "the gap is kept";
+    // the series' extremes are drawn (the axes' ranges and an offset's reference are computed from them)
+    const auto finite_range = [](std::span<const double> v) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (double u : v)
+        if (std::isfinite(u)) lo = std::min(lo, u), hi = std::max(hi, u);
+      return std::pair{lo, hi};
+    };
+    EXPECT_EQ(finite_range(p.x), finite_range(c.x)) << c.what;
+    EXPECT_EQ(finite_range(p.y), finite_range(c.y)) << c.what;
     PlotSpec thin = whole;
     thin.series[0].x = p.x, thin.series[0].y = p.y;
-    const auto a = blocks_of(whole), b = blocks_of(thin);
-    ASSERT_EQ(a.size(), 1u);
-    EXPECT_GT(a[0].size(), 100u);
-    EXPECT_EQ(a, b) << c.style << (c.x.data() == t.data() ? " over time" : " loop");
+    plot(whole, tmp / "p.svg");
+    const auto a = kept.script_lines();
+    const auto blocks = kept.data_blocks();
+    plot(thin, tmp / "p.svg");
+    ASSERT_EQ(blocks.size(), 1u);
+    EXPECT_GT(blocks[0].size(), 100u);
+    EXPECT_EQ(a, kept.script_lines()) << c.what;  // the same labels, ranges and data
   }
   // a short series is its own points
   const std::vector<double> few{1.0, 3.0, 2.0};

@@ -315,6 +315,16 @@ TEST(SensorFaults, TheFestoRecordClippedAndQuantised) {
             std::string::npos)
       << with_warnings(rt);
 
+  // the force frozen over samples 4500:6000 (9000:12000 of the file) while the pressure falls by 19 % of its span:
+  // converged at 4.08 % of span before, with no warning
+  Record frozen = festo;
+  for (std::size_t k = 4500; k < 6000; ++k) frozen.y[k] = frozen.y[4500];
+  const FitReport rf = fit_gpi(frozen);
+  EXPECT_NE(warning_with(rf, "the output sensor is stuck there").find("(samples 4500:6000)"), std::string::npos)
+      << with_warnings(rf);
+  EXPECT_EQ(rf.status, FitStatus::poor_fit);
+  EXPECT_NE(rf.message.find("stuck at"), std::string::npos) << rf.message;
+
   const FitReport rq = fit_gpi({festo.x, quantised(festo.y, 3)});
   EXPECT_NE(warning_with(rq, "the output is recorded on 8 levels over the training range"), "") << with_warnings(rq);
   EXPECT_NE(warning_with(rq, "limited by the sensor's resolution"), "") << with_warnings(rq);
@@ -365,6 +375,19 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
         << a << " " << b << " " << c << " " << d << "\n" << with_warnings(rt);
     EXPECT_NE(rt.status, FitStatus::converged);
   }
+  // a second frozen stretch (x rising) does not hide the first; both are counted
+  Record twice = stuck;
+  for (std::size_t k = 800; k < 880; ++k) twice.y[k] = twice.y[800];
+  const detail::Stuck two = detail::stuck_runs(twice.y, twice.x, {0, twice.x.size()});
+  EXPECT_EQ(two.runs, 2u);
+  EXPECT_EQ(two.samples, 230u);
+  EXPECT_EQ(two.first, 330u);
+  // a reading frozen within 10 % of the output's span from its least value (a dead zone's rest one count above
+  // the record's least reading) is not named
+  Record rest = clean;
+  const auto [ylo, yhi] = std::minmax_element(clean.y.begin(), clean.y.end());
+  for (std::size_t k = 330; k < 480; ++k) rest.y[k] = *ylo + 0.05 * (*yhi - *ylo);
+  EXPECT_EQ(detail::stuck_runs(rest.y, rest.x, {0, rest.x.size()}).runs, 0u);
   // evaluate's and a --validate-data record's diagnosis names it too (diagnose_record)
   EXPECT_NE(stuck_output_warning(stuck.x, stuck.y, {0, stuck.x.size()}, "b.csv").find("b.csv: the output sits exactly"),
             std::string::npos);

@@ -71,12 +71,14 @@ void plot(const PlotSpec& spec, const std::string& path);
 std::string render(const PlotSpec& spec, std::string_view format);
 
 // The points of (x, y) that render() draws of a series with at most max_points (>= 16) points,
-// in order, with NaN pairs where the drawn line breaks: a series whose x never decreases keeps
-// the least and the largest y of each of max_points / 2 buckets of samples; any other (a loop,
-// actual against desired) is thinned along its path on a grid over its box (docs/report.md).
-// A Series of these points draws the same picture as (x, y) (render() thins it no further), so
-// that a long record's series need not be copied whole into a PlotSpec. Throws Error when x and
-// y differ in length or max_points is below 16.
+// in order (a non-finite sample as it is, a NaN pair where the drawn line breaks): a series whose
+// x never decreases keeps its first and last samples and the least and the largest y of each of
+// (max_points - 2) / 2 buckets of samples; any other (a loop, actual against desired) is thinned
+// along its path on a grid over its box, with the samples at the box's edges (docs/report.md).
+// A Series of these points draws the same picture as (x, y) (render() thins it no further; the
+// axes' ranges and a large offset's reference come out the same), so that a long record's series
+// need not be copied whole into a PlotSpec. Throws Error when x and y differ in length or
+// max_points is below 16.
 struct ThinnedPoints {
   std::vector<double> x, y;
 };

@@ -97,18 +97,19 @@ struct Pinned {
 };
 std::array<Pinned, 2> pinned_runs(std::span<const double> a, std::span<const double> b, IndexRange range);
 
-// A stuck output sensor: runs of y at one value inside its range (neither its least nor its largest over `range`:
-// those are pinned_runs's clips) at least 10x as long as any other run of one y value there (and 3 samples or more),
-// during which x moves one way (no reversal by 10 % of its span inside the run) by more than 10 % of its span, and
-// y moved (by more than 8 noise widths, detect_clipping's sigma, and 10 % of its span) between x's last reversal
-// before the run (or the range's start) and the run: a dead band or a backlash holds the output from the input's
-// reversal on (after a lag's few samples), and a hysteresis branch only steepens away from its reversal. A sensor that stopped updating, or a reading held, while
-// the actuator moved on.
+// A stuck output sensor: runs of y at one value inside its range by more than 10 % of its span (a dead zone or a
+// stop rests at about its least or largest value; pinned_runs names clips there) at least 10x as long as the other
+// runs of one y value there (leaving out the longest 1 % of them, so that a second stuck stretch does not hide the
+// first) and 10 samples or more, during which x moves one way (no reversal by 10 % of its span inside the run) by
+// more than 10 % of its span, and y moved (by more than 8 noise widths, detect_clipping's sigma, and 10 % of its
+// span) between x's last reversal before the run (or the range's start) and the run: a dead band or a backlash
+// holds the output from the input's reversal on (after a lag's few samples), and a hysteresis branch only steepens
+// away from its reversal. A sensor that stopped updating, or a reading held, while the actuator moved on.
 struct Stuck {
   std::size_t runs = 0, samples = 0;  // flagged runs and their samples
   std::size_t first = 0, last = 0;    // the longest flagged run [first, last)
   double value = 0.0, moved = 0.0;    // y there, and the most x moves during a flagged run
-  std::size_t longest_other = 0;      // the longest run of one y value inside its range outside the flagged ones
+  std::size_t reference = 0;          // the longest run it was compared with (the 1 % longest left out)
 };
 Stuck stuck_runs(std::span<const double> y, std::span<const double> x, IndexRange range);
 

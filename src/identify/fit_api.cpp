@@ -329,48 +329,47 @@ detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const doub
   Stuck out;
   if (r.end - r.begin < 3) return out;
   const auto [lo, hi] = minmax_of(y, r.begin, r.end);
-  const double sx = span_of(x.subspan(r.begin, r.end - r.begin));
-  if (!(sx > 0)) return out;
+  const double sx = span_of(x.subspan(r.begin, r.end - r.begin)), sy = hi - lo;
+  if (!(sx > 0) || !(sy > 0)) return out;
+  // inside the output's range by more than 10 % of its span: a dead zone or a stop rests at (about) an extreme
+  const auto inside = [&](double v) { return v - lo > kPinnedSpan * sy && hi - v > kPinnedSpan * sy; };
   std::vector<std::size_t> turns;  // the input's reversals (by 10 % of its span), in order
   for (const auto& [k, dir] : reversals(x, r.begin, r.end, sx)) turns.push_back(k);
   // the output's noise (detect_clipping's sigma) times 8, as pinned_runs; 0 without noise
   const double sigma = detect_clipping(y.subspan(r.begin, r.end - r.begin)).sigma;
-  const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0, sy = hi - lo;
-  std::size_t l1 = 0, l2 = 0;  // the two longest runs of one y value inside its range
+  const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0;
+  std::vector<std::size_t> lengths;  // of the runs of one y value inside its range, longest first
   for_each_run(y, r, [&](std::size_t s, std::size_t e) {
-    if (y[s] == lo || y[s] == hi) return;
-    const std::size_t len = e - s;
-    if (len > l1) l2 = l1, l1 = len;
-    else if (len > l2) l2 = len;
+    if (inside(y[s])) lengths.push_back(e - s);
   });
+  std::sort(lengths.begin(), lengths.end(), std::greater<>());
+  // a run's reference: the longest other run, leaving out the longest 1 % (so that a second stuck stretch does
+  // not hide the first)
+  const std::size_t k = lengths.size() / 100;
+  const auto reference = [&](std::size_t len) -> std::size_t {
+    const std::size_t at = k < lengths.size() && len >= lengths[k] ? k + 1 : k;
+    return at < lengths.size() ? lengths[at] : 0;
+  };
   std::size_t longest_flagged = 0;
   for_each_run(y, r, [&](std::size_t s, std::size_t e) {
-    if (y[s] == lo || y[s] == hi) return;
-    const std::size_t len = e - s;
-    const auto flagged = [&] {
-      const std::size_t other = std::max<std::size_t>(len == l1 ? l2 : l1, 1);
-      if (len < 3 || static_cast<double>(len) < kStuckRatio * static_cast<double>(other)) return false;
-      const auto [xl, xh] = minmax_of(x, s, e);
-      const double net = x[e - 1] - x[s];
-      if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl)) || !reversals(x, s, e, sx).empty())
-        return false;
-      // the output moved since the input's last reversal before the run (or the record's start): a play's dead
-      // band or a backlash holds the output from the reversal on, and a branch only steepens away from it
-      const auto after = std::upper_bound(turns.begin(), turns.end(), s);
-      if (after != turns.end() && *after < e) return false;  // the input turns inside the run
-      const std::size_t t = after == turns.begin() ? r.begin : *(after - 1);
-      const auto [yl, yh] = minmax_of(y, t, s + 1);
-      if (!(yh - yl > std::max(noise, kPinnedSpan * sy))) return false;
-      out.moved = std::max(out.moved, xh - xl);
-      return true;
-    };
-    if (!flagged()) {
-      out.longest_other = std::max(out.longest_other, len);
+    if (!inside(y[s])) return;
+    const std::size_t len = e - s, ref = std::max<std::size_t>(reference(len), 1);
+    if (len < 3 || static_cast<double>(len) < kStuckRatio * static_cast<double>(ref)) return;
+    const auto [xl, xh] = minmax_of(x, s, e);
+    const double net = x[e - 1] - x[s];
+    if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl)) || !reversals(x, s, e, sx).empty())
       return;
-    }
+    // the output moved since the input's last reversal before the run (or the record's start): a play's dead
+    // band or a backlash holds the output from the reversal on, and a branch only steepens away from it
+    const auto after = std::upper_bound(turns.begin(), turns.end(), s);
+    if (after != turns.end() && *after < e) return;  // the input turns inside the run
+    const std::size_t t = after == turns.begin() ? r.begin : *(after - 1);
+    const auto [yl, yh] = minmax_of(y, t, s + 1);
+    if (!(yh - yl > std::max(noise, kPinnedSpan * sy))) return;
     ++out.runs;
     out.samples += len;
-    if (len > longest_flagged) longest_flagged = len, out.first = s, out.last = e, out.value = y[s];
+    out.moved = std::max(out.moved, xh - xl);
+    if (len > longest_flagged) longest_flagged = len, out.first = s, out.last = e, out.value = y[s], out.reference = ref;
   });
   return out;
 }
@@ -382,11 +381,11 @@ std::string stuck_text(const detail::Stuck& st, std::span<const double> x, Index
   const double sx = detail::span_of(x.subspan(r.begin, r.end - r.begin));
   return fmt::format(
       "sits exactly at {:.6g} for {} samples (samples {}:{}{}) while the input moves on one way by up to {:.4g} "
-      "({:.3g} % of its span), and no other run of one output value inside its range is longer than {} samples: "
-      "the output sensor is stuck there (or its reading was held)",
+      "({:.3g} % of its span), and the other runs of one output value inside its range are at most {} samples "
+      "long (but the longest 1 %): the output sensor is stuck there (or its reading was held)",
       st.value, st.last - st.first, st.first, st.last,
       st.runs > 1 ? fmt::format("; {} such runs, {} samples in all", st.runs, st.samples) : "", st.moved,
-      100 * st.moved / sx, st.longest_other);
+      100 * st.moved / sx, st.reference);
 }
 
 }  // namespace
@@ -719,9 +718,11 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
   for (const auto& p : rep.parameters)
     if (p.at_bound) rep.warnings.push_back(fmt::format("parameter {} ended on its lower bound", p.name));
   // A jump that the measured input never makes, and that is a material part of its span. The span
-  // condition keeps the verdict independent of the sample rate: the output's noise, and so the
-  // inverse's jitter, is the same per sample at any rate, while the input's steps shrink with it
-  // (before 2026-12-02 the step ratio alone decided, and the same sensor warned at 10 kHz, not at 1).
+  // condition keeps the verdict independent of the sample rate wherever the input's largest step is
+  // below 0.5 % of its span (10 steps below the 5 %: 200 samples or more per sweep of the span): the
+  // output's noise, and so the inverse's jitter, is the same per sample at any rate, while the input's
+  // steps shrink with it (before 2026-12-02 the step ratio alone decided, and the same sensor warned at
+  // 10 kHz, not at 1). Below that rate the step ratio decides, as before: a stepped input's own jumps.
   if (rep.inverse.max_input_step > 0 && std::isfinite(rep.inverse.max_jump) && sx > 0 &&
       rep.inverse.max_jump > kJumpStepFactor * rep.inverse.max_input_step &&
       rep.inverse.max_jump > kJumpSpanFraction * sx)

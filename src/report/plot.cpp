@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -90,10 +91,11 @@ std::string axis_text(const Axis& a) { return a.unit.empty() ? a.label : fmt::fo
 constexpr std::size_t kBreak = std::numeric_limits<std::size_t>::max();
 
 // Min/max bucket decimation keeping the order of the samples: for a series over time (x never
-// decreases), so that each bucket's extremes, the error peaks, survive.
+// decreases), so that each bucket's extremes, the error peaks, survive; the first and the last
+// sample too (the x range, and an offset's reference, are the whole series').
 std::vector<std::size_t> decimate_over_x(std::span<const double> y, std::size_t max_points) {
   const std::size_t n = y.size();
-  const std::size_t buckets = max_points / 2;
+  const std::size_t buckets = (max_points - 2) / 2;
   std::vector<std::size_t> idx;
   idx.reserve(max_points + 2);
   for (std::size_t b = 0; b < buckets; ++b) {
@@ -110,6 +112,8 @@ std::vector<std::size_t> decimate_over_x(std::span<const double> y, std::size_t 
     idx.push_back(std::min(imin, imax));
     if (imin != imax) idx.push_back(std::max(imin, imax));
   }
+  if (idx.front() != 0) idx.insert(idx.begin(), 0);
+  if (idx.back() != n - 1) idx.push_back(n - 1);
   return idx;
 }
 
@@ -125,10 +129,13 @@ std::vector<std::size_t> decimate_over_x(std::span<const double> y, std::size_t 
 std::vector<std::size_t> thin_path(std::span<const double> x, std::span<const double> y, std::size_t max_points) {
   const std::size_t n = x.size();
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
+  std::array<std::size_t, 4> extremes{kBreak, kBreak, kBreak, kBreak};  // the samples at x0, x1, y0, y1
   for (std::size_t i = 0; i < n; ++i)
     if (std::isfinite(x[i]) && std::isfinite(y[i])) {
-      x0 = std::min(x0, x[i]), x1 = std::max(x1, x[i]);
-      y0 = std::min(y0, y[i]), y1 = std::max(y1, y[i]);
+      if (x[i] < x0) x0 = x[i], extremes[0] = i;
+      if (x[i] > x1) x1 = x[i], extremes[1] = i;
+      if (y[i] < y0) y0 = y[i], extremes[2] = i;
+      if (y[i] > y1) y1 = y[i], extremes[3] = i;
     }
   std::size_t g_last = 2;  // (max_points >= 16)
   while (4 * (2 * g_last) * (2 * g_last) <= max_points && g_last < 1024) g_last *= 2;
@@ -165,7 +172,14 @@ std::vector<std::size_t> thin_path(std::span<const double> x, std::span<const do
       }
       idx.push_back(i);
     }
-    if (idx.size() <= max_points || last) return idx;
+    if (idx.size() + 8 <= max_points || last) {
+      // the samples at the box's edges too (a lone point each, where the path does not draw them), as far as
+      // max_points allows: the axes' ranges, and an offset's reference, are the whole series'
+      for (std::size_t e : extremes)
+        if (e != kBreak && idx.size() + 2 <= max_points && std::find(idx.begin(), idx.end(), e) == idx.end())
+          idx.push_back(kBreak), idx.push_back(e);
+      return idx;
+    }
   }
 }
 

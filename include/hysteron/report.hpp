@@ -83,6 +83,9 @@ struct ThinnedPoints {
   std::vector<double> x, y;
 };
 ThinnedPoints thin_for_plot(std::span<const double> x, std::span<const double> y, std::size_t max_points = 4000);
+// A Series of thin_for_plot's points for PlotSpec's default max_points.
+Series thinned_series(std::string label, std::span<const double> x, std::span<const double> y, std::string color,
+                      bool dashed = false, std::string style = "lines");
 
 // Fig. 5 / Fig. 9: output against input. measured (and model, if non-empty)
 // against input; samples [0, major_end) are drawn as the major loop, the rest

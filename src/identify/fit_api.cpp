@@ -357,8 +357,7 @@ detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const doub
     if (len < 3 || static_cast<double>(len) < kStuckRatio * static_cast<double>(ref)) return;
     const auto [xl, xh] = minmax_of(x, s, e);
     const double net = x[e - 1] - x[s];
-    if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl)) || !reversals(x, s, e, sx).empty())
-      return;
+    if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl))) return;
     // the output moved since the input's last reversal before the run (or the record's start): a play's dead
     // band or a backlash holds the output from the reversal on, and a branch only steepens away from it
     const auto after = std::upper_bound(turns.begin(), turns.end(), s);

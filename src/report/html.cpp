@@ -526,14 +526,8 @@ std::vector<double> try_simulate(Page& page, const ModelParams& model, std::span
   }
 }
 
-// A series of the points a plot draws of (x, y) (thin_for_plot): a long record is not copied whole.
-Series thinned(std::string label, std::span<const double> x, std::span<const double> y, const char* color,
-               bool dashed) {
-  ThinnedPoints p = thin_for_plot(x, y, PlotSpec{}.max_points);
-  return {std::move(label), std::move(p.x), std::move(p.y), "lines", color, dashed};
-}
-
-// Figures of one record: loops (output against input), output over the record, residuals.
+// Figures of one record: loops (output against input), output over the record, residuals, each series
+// thinned to the points a plot draws (thinned_series: a long record is not copied whole).
 void record_figures(Page& page, const RecordView& v, std::span<const double> model, const std::string& kind,
                     const FitData& data, const std::string& range_note, bool with_series = true) {
   const std::size_t n = std::min(v.x.size(), v.y.size());
@@ -541,22 +535,23 @@ void record_figures(Page& page, const RecordView& v, std::span<const double> mod
   const std::span<const double> xs = v.x.first(n), ys = v.y.first(n);
   const bool has_model = model.size() == n;
   PlotSpec loops{{"Hysteresis loops: measured and model" + suffix, data.input, data.output},
-                 {thinned("measured", xs, ys, "#d62728", false)}};
-  if (has_model) loops.series.push_back(thinned(fmt::format("{} model", kind), xs, model, "#1f77b4", true));
+                 {thinned_series("measured", xs, ys, "#d62728", false)}};
+  if (has_model) loops.series.push_back(thinned_series(fmt::format("{} model", kind), xs, model, "#1f77b4", true));
   page.figure(loops, fmt::format("{} against {}: measured and model{}.", data.output.label, data.input.label, suffix));
   const bool has_t = v.t.size() == n;
   const std::vector<double> index = has_t ? std::vector<double>{} : sample_axis(n);
   const std::span<const double> t = has_t ? v.t : std::span<const double>(index);
   const Axis ta = has_t ? Axis{"Time", "s"} : Axis{"Sample", ""};
   if (with_series) {
-    PlotSpec ts{{"Output over the record" + suffix, ta, data.output}, {thinned("measured", t, ys, "#d62728", false)}};
-    if (has_model) ts.series.push_back(thinned("model", t, model, "#1f77b4", true));
+    PlotSpec ts{{"Output over the record" + suffix, ta, data.output},
+                {thinned_series("measured", t, ys, "#d62728", false)}};
+    if (has_model) ts.series.push_back(thinned_series("model", t, model, "#1f77b4", true));
     page.figure(ts, "Measured and model output over the record" + suffix + ".");
   }
   if (has_model) {
     const std::vector<double> residual = difference(ys, model);
     page.figure({{"Residuals" + suffix, ta, {"Residual (measured - model)", data.output.unit}},
-                 {thinned("residual", t, residual, "#2ca02c", false)}},
+                 {thinned_series("residual", t, residual, "#2ca02c", false)}},
                 fmt::format("Residuals{}; {}.", suffix, range_note));
   }
 }

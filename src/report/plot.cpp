@@ -381,14 +381,13 @@ ThinnedPoints thin_for_plot(std::span<const double> x, std::span<const double> y
   return p;
 }
 
-namespace {
-
-// The points of a long series that a plot draws (thin_for_plot), as one Series.
-Series thinned_series(std::string label, std::span<const double> x, std::span<const double> y, std::string color, bool dashed,
-            std::string style = "lines") {
+Series thinned_series(std::string label, std::span<const double> x, std::span<const double> y, std::string color,
+                      bool dashed, std::string style) {
   ThinnedPoints p = thin_for_plot(x, y, PlotSpec{}.max_points);
   return {std::move(label), std::move(p.x), std::move(p.y), std::move(style), std::move(color), dashed};
 }
+
+namespace {
 
 std::vector<double> index_axis(std::size_t n) {
   std::vector<double> v(n);

@@ -98,6 +98,8 @@ int run_evaluate(const EvaluateOptions& c) {
                        c.sel.file, fmt::format("samples {}..{}", range.begin, range.end));
   if (!verdict.diagnosis.warning.empty()) warnings.push_back(std::move(verdict.diagnosis.warning));
   if (!verdict.diagnosis.sensor_warning.empty()) warnings.push_back(std::move(verdict.diagnosis.sensor_warning));
+  if (!verdict.diagnosis.input_sensor_warning.empty())
+    warnings.push_back(std::move(verdict.diagnosis.input_sensor_warning));
   const bool useless = verdict.useless;
   if (useless) warnings.push_back(fmt::format("{}: evaluate exits {}", verdict.useless_warning, exit_poor_fit));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);

@@ -43,6 +43,9 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %     stuck_output_warning   where Y's reading sits frozen at one value inside its range
 %                            while X moves on: a stuck output sensor ('' otherwise;
 %                            its samples are 0-based and half-open, as the CLI's)
+%     stuck_input_warning    where X's reading sits frozen at one value inside its range
+%                            while Y moves on and does not settle: a stuck input sensor
+%                            ('' otherwise; samples 0-based and half-open)
 %   Each non-empty warning is also issued as a warning with identifier
 %   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).
 %
@@ -52,7 +55,7 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
   end
   metrics = hysteron_mex('evaluate', model, x, y, hysteron_options('hysteron_evaluate', varargin{:}));
   for f = {'clipping_warning', 'input_coverage_warning', 'output_map_warning', 'stuck_output_warning', ...
-           'useless_warning'}
+           'stuck_input_warning', 'useless_warning'}
     if ~isempty(metrics.(f{1}))
       warning('hysteron:evaluate', '%s', metrics.(f{1}));
     end

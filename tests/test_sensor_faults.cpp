@@ -297,7 +297,7 @@ TEST(SensorFaults, TheFestoRecordClippedAndQuantised) {
   Record festo;  // every second row (2 ms -> 4 ms): half the time
   for (std::size_t k = 0; k < p.size(); k += 2) festo.x.push_back(p[k]), festo.y.push_back(f[k]);
   const FitReport plain = fit_gpi(festo);
-  for (const char* what : {"sensor clips", "levels over the training range", "limited by the sensor"})
+  for (const char* what : {"sensor clips", "levels over the training range", "limited by the sensor", "stuck"})
     EXPECT_EQ(warning_with(plain, what), "") << with_warnings(plain);
   EXPECT_EQ(plain.status, FitStatus::converged) << plain.message;
 
@@ -324,6 +324,15 @@ TEST(SensorFaults, TheFestoRecordClippedAndQuantised) {
       << with_warnings(rf);
   EXPECT_EQ(rf.status, FitStatus::poor_fit);
   EXPECT_NE(rf.message.find("stuck at"), std::string::npos) << rf.message;
+
+  // the pressure frozen over the same samples while the force (and the true pressure) falls: the input is stuck
+  Record frozen_p = festo;
+  for (std::size_t k = 4500; k < 6000; ++k) frozen_p.x[k] = frozen_p.x[4500];
+  const FitReport rp = fit_gpi(frozen_p);
+  EXPECT_NE(warning_with(rp, "the input sensor is stuck there").find("(samples 4500:6000)"), std::string::npos)
+      << with_warnings(rp);
+  EXPECT_EQ(rp.status, FitStatus::poor_fit);
+  EXPECT_NE(rp.message.find("input is stuck at"), std::string::npos) << rp.message;
 
   const FitReport rq = fit_gpi({festo.x, quantised(festo.y, 3)});
   EXPECT_NE(warning_with(rq, "the output is recorded on 8 levels over the training range"), "") << with_warnings(rq);
@@ -437,4 +446,80 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
   Record held = play;
   for (std::size_t k = 1000; k < 1100; ++k) held.y[k] = held.y[1000];
   EXPECT_EQ(detail::stuck_runs(held.y, held.x, {0, held.x.size()}).runs, 0u);
+}
+
+// A stuck input sensor (detail::stuck_input_runs): the input's reading frozen while the true input, and the output
+// with it, moves on. Named with its rows under offsets, scales and sign flips of either column, and never
+// `converged`; not named where a held command's output settles (after a step, with a creep) or on a staircase.
+TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
+  const Record clean = loops();
+  Record stuck = clean;
+  for (std::size_t k = 330; k < 480; ++k) stuck.x[k] = stuck.x[330];  // the true x falls by about 40 % of its span
+  const FitReport rs = fit_gpi(stuck);
+  const std::string w = warning_with(rs, "the input sensor is stuck there");
+  EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
+  EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;
+  EXPECT_NE(rs.message.find("input is stuck at"), std::string::npos) << rs.message;
+  EXPECT_EQ(warning_with(rs, "the output sensor is stuck"), "") << with_warnings(rs);
+  for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
+                                   std::array{-1e4, 250.0, 0.0, -3.0}}) {
+    const FitReport rt = fit_gpi({affine(stuck.x, a, b), affine(stuck.y, c, d)});
+    EXPECT_NE(warning_with(rt, "the input sensor is stuck there").find("(samples 330:480)"), std::string::npos)
+        << a << " " << b << " " << c << " " << d << "\n" << with_warnings(rt);
+    EXPECT_NE(rt.status, FitStatus::converged);
+  }
+  // a reading frozen across the input's reversal (the true x rises to its peak and falls back to about where it
+  // froze): no jump at the end, but the output does not settle (it rises and falls)
+  Record over = clean;
+  for (std::size_t k = 50; k < 345; ++k) over.x[k] = over.x[50];
+  const detail::Stuck ov = detail::stuck_input_runs(over.x, over.y, {0, over.x.size()});
+  EXPECT_EQ(ov.runs, 1u);
+  EXPECT_EQ(ov.first, 50u);
+  // a second frozen stretch (x rising) does not hide the first; both are counted
+  Record twice = stuck;
+  for (std::size_t k = 800; k < 880; ++k) twice.x[k] = twice.x[800];
+  const detail::Stuck two = detail::stuck_input_runs(twice.x, twice.y, {0, twice.x.size()});
+  EXPECT_EQ(two.runs, 2u);
+  EXPECT_EQ(two.samples, 230u);
+  EXPECT_EQ(two.first, 330u);
+  // evaluate's and a --validate-data record's diagnosis names it too (diagnose_record)
+  EXPECT_NE(stuck_input_warning(stuck.x, stuck.y, {0, stuck.x.size()}, "b.csv").find("b.csv: the input sits exactly"),
+            std::string::npos);
+  const ModelParams truth = pi_truth();
+  const OutputMap map = output_map(truth, stuck.x, stuck.y, {0, stuck.x.size()}, InitialState::virgin, false);
+  EXPECT_NE(diagnose_record(truth, stuck.x, stuck.y, {0, stuck.x.size()}, InitialState::virgin, false, map,
+                            FitMetrics{}, 1.0, "b.csv")
+                .input_sensor_warning.find("(samples 330:480)"),
+            std::string::npos);
+  EXPECT_EQ(stuck_input_warning(clean.x, clean.y, {0, clean.x.size()}, "b.csv"), "");
+  const FitReport rc = fit_gpi(clean);
+  EXPECT_EQ(warning_with(rc, "stuck"), "") << with_warnings(rc);
+  EXPECT_EQ(rc.status, FitStatus::converged) << rc.message;
+
+  // A held command is no stuck sensor: the output settles after it, or follows the step into it. A ramp up to the
+  // top over 2000 samples, a step down to the middle held for 600 samples, then the loops, the output following
+  // (a) through a lag of 40 samples (settled after the hold's first half), (b) through a lag of 400 samples (still
+  // moving in the hold's second half: named but for the step into it), (c) at once, with a creep of 15 % of its
+  // span (time constant 150 samples) during the hold.
+  const auto [ylo, yhi] = std::minmax_element(clean.y.begin(), clean.y.end());
+  const double span = *yhi - *ylo;
+  for (const double lag : {40.0, 400.0, 1.0}) {
+    Model model(pi_truth());
+    Record held;
+    double lagged = 0.0;
+    const bool creep = lag == 1.0;
+    const auto push = [&](double x, double c) {
+      lagged += (model.step(x) - lagged) / lag;
+      held.x.push_back(x);
+      held.y.push_back(lagged + c + 0.002 * std::sin(0.37 * static_cast<double>(held.x.size())));
+    };
+    for (int k = 0; k < 2000; ++k) push(0.05 + 0.9 * k / 1999.0, 0.0);
+    for (int k = 0; k < 600; ++k) push(0.5, creep ? 0.15 * span * (1.0 - std::exp(-k / 150.0)) : 0.0);
+    for (std::size_t k = 0; k < clean.x.size(); ++k) push(clean.x[k], creep ? 0.15 * span : 0.0);
+    const detail::Stuck st = detail::stuck_input_runs(held.x, held.y, {0, held.x.size()});
+    EXPECT_EQ(st.runs, 0u) << lag << ": flagged " << st.first << ":" << st.last;
+  }
+  // (c) A staircase: every level held alike, the output settling at each
+  const Record stairs = staircase();
+  EXPECT_EQ(detail::stuck_input_runs(stairs.x, stairs.y, {0, stairs.x.size()}).runs, 0u);
 }

@@ -149,6 +149,11 @@ std::string input_coverage_warning(const InputCoverage& c, std::string_view what
 // input moves on. "what: the output sits exactly at ...", or "" where there is none.
 std::string stuck_output_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                                  std::string_view what);
+// A stuck input sensor on a scored record, the same way: its input's reading frozen at one value inside its range
+// while the output moves on and does not settle (a held command's output settles). "what: the input sits exactly
+// at ...", or "".
+std::string stuck_input_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
+                                std::string_view what);
 
 // A fit that explains less than this share of its output's variance (R^2) is poor_fit whatever
 // else it beats; a model scored on another record below it (output_map_warning) is asked why.
@@ -244,7 +249,8 @@ struct RecordDiagnosis {
   std::string warning;  // "" where nothing is to be said
   bool map_named = false;
   InputMap input_map;   // found where the warning is the input map's
-  std::string sensor_warning;  // stuck_output_warning's, "" where none
+  std::string sensor_warning;        // stuck_output_warning's, "" where none
+  std::string input_sensor_warning;  // stuck_input_warning's, "" where none
 };
 RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                                 IndexRange range, InitialState initial, bool censor, const OutputMap& map,

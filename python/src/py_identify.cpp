@@ -290,6 +290,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         d["input_coverage_warning"] = input_coverage_warning(coverage, "evaluate's record");
         d["output_map_warning"] = v.diagnosis.warning;
         d["stuck_output_warning"] = v.diagnosis.sensor_warning;
+        d["stuck_input_warning"] = v.diagnosis.input_sensor_warning;
         if (v.diagnosis.input_map.found) {
           const InputMap& im = v.diagnosis.input_map;
           py::dict imd;
@@ -315,7 +316,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         d["useless_warning"] = v.useless_warning;
         py::list ws;  // the non-empty warnings, in the CLI's order (after this one's clipping_warning)
         for (const std::string& w : {clip_warning, input_coverage_warning(coverage, "evaluate's record"), v.diagnosis.warning,
-                                     v.diagnosis.sensor_warning, v.useless_warning})
+                                     v.diagnosis.sensor_warning, v.diagnosis.input_sensor_warning, v.useless_warning})
           if (!w.empty()) ws.append(w);
         d["warnings"] = ws;
         return d;
@@ -352,9 +353,11 @@ error, unless the input spans less than half the model's input range and no sign
 explains it (`hysteron evaluate` exits 3 there); useless_warning says so ("" otherwise).
 stuck_output_warning: where y's reading sits frozen at one value inside its range while x
 moves on (a stuck output sensor, as fit names one on its training record; "" otherwise).
+stuck_input_warning: where x's reading sits frozen at one value inside its range while y
+moves on and does not settle (a stuck input sensor, as fit names one; "" otherwise).
 warnings: the non-empty warnings, clipping_warning, input_coverage_warning,
-output_map_warning, stuck_output_warning, useless_warning in that order (the CLI's, less
-clipping_warning).
+output_map_warning, stuck_output_warning, stuck_input_warning, useless_warning in that order
+(the CLI's, less clipping_warning).
 
 outside_input_limits: the samples of the range whose input lies outside the model's
 input_limits (fit() sets them to the training range's input) by more than 2 % of their span:

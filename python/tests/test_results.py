@@ -41,6 +41,25 @@ def test_a_stuck_output_sensor_is_named_by_fit_and_evaluate():
     assert hysteron.evaluate(good["model"], x, y)["stuck_output_warning"] == ""
 
 
+def test_a_stuck_input_sensor_is_named_by_fit_and_evaluate():
+    """The input's reading frozen over samples 40:120 while the true input rises by 53 % of its span (and the
+    output with it): fit's training record is poor_fit with the rows named, evaluate's record has
+    stuck_input_warning."""
+    x, y = record()
+    stuck = x.copy()
+    stuck[40:120] = stuck[40]
+    r = hysteron.fit(stuck, y, model="gpi", min_slope=0.01)
+    assert r["status"] == "poor_fit", r["message"]
+    assert any("(samples 40:120)" in w and "input sensor is stuck" in w for w in r["warnings"]), r["warnings"]
+    good = hysteron.fit(x, y, model="gpi", min_slope=0.01)
+    assert not any("stuck" in w for w in good["warnings"])
+    m = hysteron.evaluate(good["model"], stuck, y)
+    assert "(samples 40:120)" in m["stuck_input_warning"]
+    assert m["stuck_input_warning"] in m["warnings"]
+    assert m["stuck_output_warning"] == ""
+    assert hysteron.evaluate(good["model"], x, y)["stuck_input_warning"] == ""
+
+
 def test_names_include_poor_fit_and_auto():
     assert "poor_fit" in hysteron.fit_statuses
     assert {"auto", "gpi", "pi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip",
@@ -61,9 +80,9 @@ def test_fit_report_fields():
     m = hysteron.evaluate(r["model"], x, y, range=(0, 1200))
     assert set(m) == METRIC_KEYS | {"outside_input_limits", "output_map", "output_map_warning", "clipping_warning",
                                     "input_coverage_warning", "input_map", "training", "useless", "useless_warning",
-                                    "stuck_output_warning", "warnings"}
+                                    "stuck_output_warning", "stuck_input_warning", "warnings"}
     assert m["output_map_warning"] == ""  # the model on its own training record
-    assert m["stuck_output_warning"] == ""
+    assert m["stuck_output_warning"] == "" and m["stuck_input_warning"] == ""
     assert m["useless"] is False and m["warnings"] == [] and m["input_map"] is None
     assert m["outside_input_limits"] == 0  # the training range itself
     # an input beyond the range the model was fitted on is counted (input_limits: that range)

@@ -373,6 +373,78 @@ detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const doub
   return out;
 }
 
+// stuck_input_runs (detail.hpp): y's range over a flagged run's second half is more than this share of its range
+// over the run: a first-order settle leaves less from a hold of 2 time constants on (0.27 at 2, 0.12 at 4), a
+// ramp's response 0.5
+constexpr double kStuckNotSettled = 0.25;
+
+detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<const double> y, IndexRange r) {
+  Stuck out;
+  if (r.end - r.begin < 3) return out;
+  const auto [lo, hi] = minmax_of(x, r.begin, r.end);
+  const double sx = hi - lo, sy = span_of(y.subspan(r.begin, r.end - r.begin));
+  if (!(sx > 0) || !(sy > 0)) return out;
+  // inside the input's range by more than 10 % of its span: a clip sits at an extreme (pinned_runs)
+  const auto inside = [&](double v) { return v - lo > kPinnedSpan * sx && hi - v > kPinnedSpan * sx; };
+  std::vector<std::size_t> lengths;  // of the runs of one x value inside its range, longest first
+  for_each_run(x, r, [&](std::size_t s, std::size_t e) {
+    if (inside(x[s])) lengths.push_back(e - s);
+  });
+  std::sort(lengths.begin(), lengths.end(), std::greater<>());
+  const std::size_t k = lengths.size() / 100;  // the longest 1 % left out of a run's reference (as stuck_runs)
+  const auto reference = [&](std::size_t len) -> std::size_t {
+    const std::size_t at = k < lengths.size() && len >= lengths[k] ? k + 1 : k;
+    return std::max<std::size_t>(at < lengths.size() ? lengths[at] : 0, 1);
+  };
+  const auto long_run = [&](std::size_t len) {
+    return len >= 10 && static_cast<double>(len) >= kStuckRatio * static_cast<double>(reference(len));
+  };
+  // the most y moves during the other runs (a held command's settling or creep, a coarse sensor's step)
+  double moves = 0.0;
+  for_each_run(x, r, [&](std::size_t s, std::size_t e) {
+    if (!inside(x[s]) || long_run(e - s)) return;
+    const auto [l, h] = minmax_of(y, s, e);
+    moves = std::max(moves, h - l);
+  });
+  const double sigma = detect_clipping(y.subspan(r.begin, r.end - r.begin)).sigma;
+  const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0;
+  const double bound = std::max({kPinnedRatio * moves, noise, kPinnedSpan * sy});
+  // the way y goes with x over the range (the sign of their covariance; 0: none), to tell which jump of the reading
+  // explains y's move during a run
+  double mx = 0.0, my = 0.0, cov = 0.0;
+  for (std::size_t j = r.begin; j < r.end; ++j) mx += x[j], my += y[j];
+  mx /= static_cast<double>(r.end - r.begin), my /= static_cast<double>(r.end - r.begin);
+  for (std::size_t j = r.begin; j < r.end; ++j) cov += (x[j] - mx) * (y[j] - my);
+  const double way = cov > 0 ? 1.0 : cov < 0 ? -1.0 : 0.0;
+  // a jump of the reading by more than 10 % of x's span that explains y's net move dy (any way where there is none)
+  const auto explains = [&](double jump, double dy) {
+    return std::abs(jump) > kPinnedSpan * sx && (way == 0.0 || jump * way * dy > 0.0);
+  };
+  std::size_t longest_flagged = 0;
+  for_each_run(x, r, [&](std::size_t s, std::size_t e) {
+    const std::size_t len = e - s;
+    if (!inside(x[s]) || !long_run(len)) return;
+    const auto [l, h] = minmax_of(y, s, e);
+    if (!(h - l > bound)) return;
+    const double dy = y[e - 1] - y[s];
+    // a held command: the reading stepped into the run the way y then went (y follows a step late)
+    if (s > r.begin && explains(x[s] - x[s - 1], dy)) return;
+    // y does not settle, or the reading jumps at the run's end the way y went (the sensor catching up)
+    const auto [l2, h2] = minmax_of(y, s + len / 2, e);
+    const bool unsettled = h2 - l2 > std::max(noise, kStuckNotSettled * (h - l));
+    if (!unsettled && !(e < r.end && explains(x[e] - x[e - 1], dy))) return;
+    ++out.runs;
+    out.samples += len;
+    out.moved = std::max(out.moved, h - l);
+    if (len > longest_flagged) {
+      longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = reference(len);
+      out.jump = unsettled ? 0.0 : x[e] - x[e - 1];
+    }
+  });
+  out.other_moves = moves;
+  return out;
+}
+
 namespace {
 
 // "sits exactly at ...: the output sensor is stuck there (or its reading was held)" of a flagged Stuck
@@ -387,7 +459,38 @@ std::string stuck_text(const detail::Stuck& st, std::span<const double> x, Index
       100 * st.moved / sx, st.reference);
 }
 
+// "sits exactly at ...: the input sensor is stuck there (or its reading was held)" of a flagged input Stuck
+std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x, std::span<const double> y,
+                             IndexRange r) {
+  const double sx = detail::span_of(x.subspan(r.begin, r.end - r.begin));
+  const double sy = detail::span_of(y.subspan(r.begin, r.end - r.begin));
+  return fmt::format(
+      "sits exactly at {:.6g} for {} samples (samples {}:{}{}) while the output moves by up to {:.4g} ({:.3g} % of "
+      "its span) {}; during the other runs of one input value inside its range (at most {} samples long, but the "
+      "longest 1 %) it moves by at most {:.4g}: the input sensor is stuck there (or its reading was held while the "
+      "input moved on)",
+      st.value, st.last - st.first, st.first, st.last,
+      st.runs > 1 ? fmt::format("; {} such runs, {} samples in all", st.runs, st.samples) : "", st.moved,
+      100 * st.moved / sy,
+      st.jump == 0.0 ? std::string("and does not settle")
+                     : fmt::format("and the reading then jumps by {:.4g} ({:.3g} % of its span) the way the output "
+                                   "moved",
+                                   st.jump, 100 * std::abs(st.jump) / sx),
+      st.reference, st.other_moves);
+}
+
 }  // namespace
+
+std::string stuck_input_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
+                                std::string_view what) {
+  detail::check_record(x, y, "stuck_input_warning");
+  const IndexRange r = detail::check_range(range, x.size(), "stuck_input_warning");
+  const detail::Stuck st = detail::stuck_input_runs(x, y, r);
+  if (st.runs == 0) return {};
+  return fmt::format("{}: the input {}; the model is driven there by an input that was not applied: leave these "
+                     "rows out of the scored range",
+                     what, stuck_input_text(st, x, y, r));
+}
 
 std::string stuck_output_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                                  std::string_view what) {
@@ -1177,6 +1280,18 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training output is stuck at {:.6g} over samples {}:{} (see the "
+                                "warnings) (solver: converged: {})",
+                                st.value, st.first, st.last, rep.message);
+    }
+  }
+  // A stuck input sensor: the model is fitted to an input that was not applied there: never `converged`.
+  if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0) {
+    rep.warnings.push_back(fmt::format("the training input {}, and the model is fitted to an input that was not "
+                                       "applied; exclude these rows (the --train and --validate ranges) or re-record",
+                                       stuck_input_text(st, x, y, tr)));
+    if (rep.status == FitStatus::converged) {
+      rep.status = FitStatus::poor_fit;
+      rep.message = fmt::format("poor fit: the training input is stuck at {:.6g} over samples {}:{} (see the "
                                 "warnings) (solver: converged: {})",
                                 st.value, st.first, st.last, rep.message);
     }

@@ -379,6 +379,7 @@ RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const doubl
       d.input_map = im;
     }
   d.sensor_warning = stuck_output_warning(x, y, range, what);
+  d.input_sensor_warning = stuck_input_warning(x, y, range, what);
   return d;
 }
 

@@ -44,7 +44,7 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %                            while X moves on: a stuck output sensor ('' otherwise;
 %                            its samples are 0-based and half-open, as the CLI's)
 %     stuck_input_warning    where X's reading sits frozen at one value inside its range
-%                            while Y moves on and does not settle: a stuck input sensor
+%                            while Y moves on, then jumps to where X went: a stuck input sensor
 %                            ('' otherwise; samples 0-based and half-open)
 %   Each non-empty warning is also issued as a warning with identifier
 %   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).

@@ -468,13 +468,14 @@ TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
         << a << " " << b << " " << c << " " << d << "\n" << with_warnings(rt);
     EXPECT_NE(rt.status, FitStatus::converged);
   }
-  // a reading frozen across the input's reversal (the true x rises to its peak and falls back to about where it
-  // froze): no jump at the end, but the output does not settle (it rises and falls)
+  // not named (the data cannot tell it from a held command): a reading frozen across the input's reversal (the true
+  // x rises to its peak and falls back to about where it froze: no jump at the end), nor one frozen from the
+  // range's start
   Record over = clean;
   for (std::size_t k = 50; k < 345; ++k) over.x[k] = over.x[50];
-  const detail::Stuck ov = detail::stuck_input_runs(over.x, over.y, {0, over.x.size()});
-  EXPECT_EQ(ov.runs, 1u);
-  EXPECT_EQ(ov.first, 50u);
+  EXPECT_EQ(detail::stuck_input_runs(over.x, over.y, {0, over.x.size()}).runs, 0u);
+  EXPECT_EQ(detail::stuck_input_runs(stuck.x, stuck.y, {330, stuck.x.size()}).runs, 0u);
+  EXPECT_EQ(detail::stuck_input_runs(stuck.x, stuck.y, {300, stuck.x.size()}).runs, 1u);
   // a second frozen stretch (x rising) does not hide the first; both are counted
   Record twice = stuck;
   for (std::size_t k = 800; k < 880; ++k) twice.x[k] = twice.x[800];
@@ -496,11 +497,10 @@ TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
   EXPECT_EQ(warning_with(rc, "stuck"), "") << with_warnings(rc);
   EXPECT_EQ(rc.status, FitStatus::converged) << rc.message;
 
-  // A held command is no stuck sensor: the output settles after it, or follows the step into it. A ramp up to the
-  // top over 2000 samples, a step down to the middle held for 600 samples, then the loops, the output following
-  // (a) through a lag of 40 samples (settled after the hold's first half), (b) through a lag of 400 samples (still
-  // moving in the hold's second half: named but for the step into it), (c) at once, with a creep of 15 % of its
-  // span (time constant 150 samples) during the hold.
+  // A held command is no stuck sensor: the reading resumes where it was, or the reading stepped into the hold as
+  // much as out of it. A ramp up to the top over 2000 samples, a step down to the middle held for 600 samples, then
+  // the loops, the output following (a) through a lag of 40 samples, (b) through a lag of 400 samples (still moving
+  // at the hold's end), (c) at once, with a creep of 15 % of its span (time constant 150 samples) during the hold.
   const auto [ylo, yhi] = std::minmax_element(clean.y.begin(), clean.y.end());
   const double span = *yhi - *ylo;
   for (const double lag : {40.0, 400.0, 1.0}) {
@@ -519,7 +519,24 @@ TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
     const detail::Stuck st = detail::stuck_input_runs(held.x, held.y, {0, held.x.size()});
     EXPECT_EQ(st.runs, 0u) << lag << ": flagged " << st.first << ":" << st.last;
   }
-  // (c) A staircase: every level held alike, the output settling at each
+  // (d) A staircase: every level held alike, the output settling at each
   const Record stairs = staircase();
   EXPECT_EQ(detail::stuck_input_runs(stairs.x, stairs.y, {0, stairs.x.size()}).runs, 0u);
+  // (e) A step test: abrupt steps up to 0.4 and 0.7 (each held 600 samples, the output following through a lag of
+  // 150 samples, so that it rises during each hold the way the reading then steps), back to 0.05, then the loops
+  {
+    Model model(pi_truth());
+    Record steps;
+    double lagged = 0.0;
+    const auto push = [&](double x) {
+      lagged += (model.step(x) - lagged) / 150.0;
+      steps.x.push_back(x);
+      steps.y.push_back(lagged + 0.002 * std::sin(0.37 * static_cast<double>(steps.x.size())));
+    };
+    for (const double level : {0.05, 0.4, 0.7, 0.05})
+      for (int k = 0; k < 600; ++k) push(level);
+    for (std::size_t k = 0; k < clean.x.size(); ++k) push(clean.x[k]);
+    const detail::Stuck st = detail::stuck_input_runs(steps.x, steps.y, {0, steps.x.size()});
+    EXPECT_EQ(st.runs, 0u) << "flagged " << st.first << ":" << st.last;
+  }
 }

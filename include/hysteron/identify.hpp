@@ -150,8 +150,8 @@ std::string input_coverage_warning(const InputCoverage& c, std::string_view what
 std::string stuck_output_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                                  std::string_view what);
 // A stuck input sensor on a scored record, the same way: its input's reading frozen at one value inside its range
-// while the output moves on and does not settle (a held command's output settles). "what: the input sits exactly
-// at ...", or "".
+// while the output moves on, and then jumping to where the input went (a held command resumes where it was).
+// "what: the input sits exactly at ...", or "".
 std::string stuck_input_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                                 std::string_view what);
 

@@ -354,7 +354,8 @@ explains it (`hysteron evaluate` exits 3 there); useless_warning says so ("" oth
 stuck_output_warning: where y's reading sits frozen at one value inside its range while x
 moves on (a stuck output sensor, as fit names one on its training record; "" otherwise).
 stuck_input_warning: where x's reading sits frozen at one value inside its range while y
-moves on and does not settle (a stuck input sensor, as fit names one; "" otherwise).
+moves on, and then jumps to where x went (a stuck input sensor, as fit names one; ""
+otherwise).
 warnings: the non-empty warnings, clipping_warning, input_coverage_warning,
 output_map_warning, stuck_output_warning, stuck_input_warning, useless_warning in that order
 (the CLI's, less clipping_warning).

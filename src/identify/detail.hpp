@@ -111,7 +111,7 @@ struct Stuck {
   double value = 0.0, moved = 0.0;    // y there, and the most x moves during a flagged run
   std::size_t reference = 0;          // the longest run it was compared with (the 1 % longest left out)
   // stuck_input_runs: the most y moves during the other runs of one x value, and the reading's jump at the end of
-  // the longest flagged run where that run was named for it (0 where y does not settle there)
+  // the longest flagged run
   double other_moves = 0.0, jump = 0.0;
 };
 Stuck stuck_runs(std::span<const double> y, std::span<const double> x, IndexRange range);
@@ -120,12 +120,11 @@ Stuck stuck_runs(std::span<const double> y, std::span<const double> x, IndexRang
 // clips at its least and largest values), at least 10x as long as the other runs of one x value there (leaving out
 // the longest 1 %, as stuck_runs) and 10 samples or more, during which y moves (its range over the run) by more than
 // 8 noise widths, 10 % of its span and 3x the most it moves during any of those other runs (a staircase's settling
-// at each level), and that move is not a held command's: the reading did not step into the run by more than 10 % of
-// x's span the way y then went (y follows a step late), and either y does not settle (its range over the run's
-// second half is more than a quarter of its range over the run and 8 noise widths: after a held command the output
-// settles or creeps, most of its move early; an input that moved on moves the output on) or the reading jumps at
-// the run's end by more than 10 % of x's span the way that explains y's move (the sensor catching up with an input
-// that moved on and then held). "The way": the sign of x and y's covariance over the range. Stuck::value is x's
+// at each level), and after which the reading jumps, in one sample, by more than 10 % of x's span the way that
+// explains y's move (the sensor catching up with the input that moved on; a held command resumes where it was),
+// unless the reading stepped into the run, in one sample, by more than 10 % of x's span and half that jump, either
+// way (a step test's or a staircase's held command, which y follows late, or behind a lag still goes on from before
+// it; a stuck reading freezes where it was). Not at the range's start or end (nothing to judge by). "The way": the sign of x and y's covariance over the range. Stuck::value is x's
 // value there, `moved` the most y moves in a flagged run. (fit_api.cpp)
 Stuck stuck_input_runs(std::span<const double> x, std::span<const double> y, IndexRange range);
 

@@ -373,11 +373,6 @@ detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const doub
   return out;
 }
 
-// stuck_input_runs (detail.hpp): y's range over a flagged run's second half is more than this share of its range
-// over the run: a first-order settle leaves less from a hold of 2 time constants on (0.27 at 2, 0.12 at 4), a
-// ramp's response 0.5
-constexpr double kStuckNotSettled = 0.25;
-
 detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<const double> y, IndexRange r) {
   Stuck out;
   if (r.end - r.begin < 3) return out;
@@ -423,23 +418,26 @@ detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<cons
   std::size_t longest_flagged = 0;
   for_each_run(x, r, [&](std::size_t s, std::size_t e) {
     const std::size_t len = e - s;
-    if (!inside(x[s]) || !long_run(len)) return;
+    // a run at the range's start or end has no move into it or out of it to judge by
+    if (s == r.begin || e == r.end || !inside(x[s]) || !long_run(len)) return;
     const auto [l, h] = minmax_of(y, s, e);
     if (!(h - l > bound)) return;
     const double dy = y[e - 1] - y[s];
-    // a held command: the reading stepped into the run the way y then went (y follows a step late)
-    if (s > r.begin && explains(x[s] - x[s - 1], dy)) return;
-    // y does not settle, or the reading jumps at the run's end the way y went (the sensor catching up)
-    const auto [l2, h2] = minmax_of(y, s + len / 2, e);
-    const bool unsettled = h2 - l2 > std::max(noise, kStuckNotSettled * (h - l));
-    if (!unsettled && !(e < r.end && explains(x[e] - x[e - 1], dy))) return;
+    // the sensor catching up: the reading jumps at the run's end, in one sample, the way y went meanwhile (a held
+    // command resumes where it was, and y settles or creeps during it whichever way)
+    const double exit = x[e] - x[e - 1];
+    if (!explains(exit, dy)) return;
+    // ... unless the reading stepped into the run, in one sample, by more than 10 % of x's span and half as much or
+    // more, either way: a step test's or a staircase's held command, which y follows late (the way of the step) or
+    // behind a lag still goes on from before it (the other way); a stuck reading freezes where it was
+    const double entry = x[s] - x[s - 1];
+    if (std::abs(entry) > kPinnedSpan * sx && std::abs(entry) >= 0.5 * std::abs(exit)) return;
     ++out.runs;
     out.samples += len;
     out.moved = std::max(out.moved, h - l);
-    if (len > longest_flagged) {
-      longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = reference(len);
-      out.jump = unsettled ? 0.0 : x[e] - x[e - 1];
-    }
+    if (len > longest_flagged)
+      longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = reference(len),
+      out.jump = exit;
   });
   out.other_moves = moves;
   return out;
@@ -466,17 +464,15 @@ std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x,
   const double sy = detail::span_of(y.subspan(r.begin, r.end - r.begin));
   return fmt::format(
       "sits exactly at {:.6g} for {} samples (samples {}:{}{}) while the output moves by up to {:.4g} ({:.3g} % of "
-      "its span) {}; during the other runs of one input value inside its range (at most {} samples long, but the "
-      "longest 1 %) it moves by at most {:.4g}: the input sensor is stuck there (or its reading was held while the "
-      "input moved on)",
+      "its span), and the reading then jumps by {:.4g} ({:.3g} % of its span) the way the output moved; {}: the "
+      "input sensor is stuck there (or its reading was held while the input moved on)",
       st.value, st.last - st.first, st.first, st.last,
       st.runs > 1 ? fmt::format("; {} such runs, {} samples in all", st.runs, st.samples) : "", st.moved,
-      100 * st.moved / sy,
-      st.jump == 0.0 ? std::string("and does not settle")
-                     : fmt::format("and the reading then jumps by {:.4g} ({:.3g} % of its span) the way the output "
-                                   "moved",
-                                   st.jump, 100 * std::abs(st.jump) / sx),
-      st.reference, st.other_moves);
+      100 * st.moved / sy, st.jump, 100 * std::abs(st.jump) / sx,
+      st.reference > 1 ? fmt::format("during the other runs of one input value inside its range (at most {} samples "
+                                     "long, but the longest 1 %) it moves by at most {:.4g}",
+                                     st.reference, st.other_moves)
+                       : std::string("the input holds no other value inside its range for two samples or more"));
 }
 
 }  // namespace

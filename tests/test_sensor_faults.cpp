@@ -539,4 +539,23 @@ TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
     const detail::Stuck st = detail::stuck_input_runs(steps.x, steps.y, {0, steps.x.size()});
     EXPECT_EQ(st.runs, 0u) << "flagged " << st.first << ":" << st.last;
   }
+  // (f) The review's sine (period 3000 samples) with a step down from 0.5 to 0.35 into a hold of 1000 samples and
+  // back up, the output following through a lag of 500 samples: it rises on during the hold (from before the step,
+  // against it) the way the reading then steps back up
+  {
+    Model model(pi_truth());
+    Record lag;
+    double lagged = 0.0;
+    const auto push = [&](double x) {
+      lagged += (model.step(x) - lagged) / 500.0;
+      lag.x.push_back(x);
+      lag.y.push_back(lagged + 0.002 * std::sin(0.37 * static_cast<double>(lag.x.size())));
+    };
+    const auto sine = [](int k) { return 0.5 + 0.45 * std::sin(2 * M_PI * k / 3000.0); };
+    for (int k = 0; k < 3000; ++k) push(sine(k));
+    for (int k = 0; k < 1000; ++k) push(0.35);
+    for (int k = 3000; k < 15000; ++k) push(sine(k));
+    const detail::Stuck st = detail::stuck_input_runs(lag.x, lag.y, {0, lag.x.size()});
+    EXPECT_EQ(st.runs, 0u) << "flagged " << st.first << ":" << st.last;
+  }
 }

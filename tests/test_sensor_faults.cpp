@@ -331,8 +331,6 @@ TEST(SensorFaults, TheFestoRecordClippedAndQuantised) {
   const FitReport rp = fit_gpi(frozen_p);
   EXPECT_NE(warning_with(rp, "the input sensor is stuck there").find("(samples 4500:6000)"), std::string::npos)
       << with_warnings(rp);
-  EXPECT_EQ(rp.status, FitStatus::poor_fit);
-  EXPECT_NE(rp.message.find("input is stuck at"), std::string::npos) << rp.message;
 
   const FitReport rq = fit_gpi({festo.x, quantised(festo.y, 3)});
   EXPECT_NE(warning_with(rq, "the output is recorded on 8 levels over the training range"), "") << with_warnings(rq);
@@ -449,24 +447,23 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
 }
 
 // A stuck input sensor (detail::stuck_input_runs): the input's reading frozen while the true input, and the output
-// with it, moves on. Named with its rows under offsets, scales and sign flips of either column, and never
-// `converged`; not named where a held command's output settles (after a step, with a creep) or on a staircase.
-TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
+// with it, moves on. Named with its rows under offsets, scales and sign flips of either column (a warning: the fit's
+// status is the solver's); not named where a held command's output settles (after a step, with a creep), on a
+// staircase, or where the reading steps into the hold.
+TEST(SensorFaults, AStuckInputSensorIsNamed) {
   const Record clean = loops();
   Record stuck = clean;
   for (std::size_t k = 330; k < 480; ++k) stuck.x[k] = stuck.x[330];  // the true x falls by about 40 % of its span
   const FitReport rs = fit_gpi(stuck);
   const std::string w = warning_with(rs, "the input sensor is stuck there");
   EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
-  EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;
-  EXPECT_NE(rs.message.find("input is stuck at"), std::string::npos) << rs.message;
+  EXPECT_EQ(rs.message.find("stuck"), std::string::npos) << rs.message;  // a warning, not a status
   EXPECT_EQ(warning_with(rs, "the output sensor is stuck"), "") << with_warnings(rs);
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
                                    std::array{-1e4, 250.0, 0.0, -3.0}}) {
     const FitReport rt = fit_gpi({affine(stuck.x, a, b), affine(stuck.y, c, d)});
     EXPECT_NE(warning_with(rt, "the input sensor is stuck there").find("(samples 330:480)"), std::string::npos)
         << a << " " << b << " " << c << " " << d << "\n" << with_warnings(rt);
-    EXPECT_NE(rt.status, FitStatus::converged);
   }
   // not named (the data cannot tell it from a held command): a reading frozen across the input's reversal (the true
   // x rises to its peak and falls back to about where it froze: no jump at the end), nor one frozen from the
@@ -537,6 +534,22 @@ TEST(SensorFaults, AStuckInputSensorIsNamedAndNeverConverged) {
       for (int k = 0; k < 600; ++k) push(level);
     for (std::size_t k = 0; k < clean.x.size(); ++k) push(clean.x[k]);
     const detail::Stuck st = detail::stuck_input_runs(steps.x, steps.y, {0, steps.x.size()});
+    EXPECT_EQ(st.runs, 0u) << "flagged " << st.first << ":" << st.last;
+  }
+  // (g) The second review's staircase whose steps grow: a one-sample step of 0.15 into a hold of 600 samples with a
+  // creep of 15 % of the output's span, then a one-sample step of 0.35 out, the way the output crept
+  {
+    Model model(pi_truth());
+    Record grow;
+    const auto push = [&](double x, double c) {
+      grow.x.push_back(x);
+      grow.y.push_back(model.step(x) + c + 0.002 * std::sin(0.37 * static_cast<double>(grow.x.size())));
+    };
+    for (int k = 0; k < 1000; ++k) push(0.5 + 0.45 * std::cos(M_PI * k / 1000.0), 0.0);  // 0.95 down to 0.05
+    for (int k = 0; k < 200; ++k) push(0.05 + 0.15 * k / 200.0, 0.0);
+    for (int k = 0; k < 600; ++k) push(0.35, 0.15 * span * (1.0 - std::exp(-k / 150.0)));
+    for (std::size_t k = 0; k < clean.x.size(); ++k) push(0.7 + 0.25 * std::sin(0.008 * k), 0.15 * span);
+    const detail::Stuck st = detail::stuck_input_runs(grow.x, grow.y, {0, grow.x.size()});
     EXPECT_EQ(st.runs, 0u) << "flagged " << st.first << ":" << st.last;
   }
   // (f) The review's sine (period 3000 samples) with a step down from 0.5 to 0.35 into a hold of 1000 samples and

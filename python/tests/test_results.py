@@ -43,13 +43,12 @@ def test_a_stuck_output_sensor_is_named_by_fit_and_evaluate():
 
 def test_a_stuck_input_sensor_is_named_by_fit_and_evaluate():
     """The input's reading frozen over samples 40:120 while the true input rises by 53 % of its span (and the
-    output with it): fit's training record is poor_fit with the rows named, evaluate's record has
+    output with it): fit warns with the rows named (its status is the solver's), evaluate's record has
     stuck_input_warning."""
     x, y = record()
     stuck = x.copy()
     stuck[40:120] = stuck[40]
     r = hysteron.fit(stuck, y, model="gpi", min_slope=0.01)
-    assert r["status"] == "poor_fit", r["message"]
     assert any("(samples 40:120)" in w and "input sensor is stuck" in w for w in r["warnings"]), r["warnings"]
     good = hysteron.fit(x, y, model="gpi", min_slope=0.01)
     assert not any("stuck" in w for w in good["warnings"])

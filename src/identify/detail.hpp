@@ -121,11 +121,12 @@ Stuck stuck_runs(std::span<const double> y, std::span<const double> x, IndexRang
 // the longest 1 %, as stuck_runs) and 10 samples or more, during which y moves (its range over the run) by more than
 // 8 noise widths, 10 % of its span and 3x the most it moves during any of those other runs (a staircase's settling
 // at each level), and after which the reading jumps, in one sample, by more than 10 % of x's span the way that
-// explains y's move (the sensor catching up with the input that moved on; a held command resumes where it was),
-// unless the reading stepped into the run, in one sample, by more than 10 % of x's span and half that jump, either
-// way (a step test's or a staircase's held command, which y follows late, or behind a lag still goes on from before
-// it; a stuck reading freezes where it was). Not at the range's start or end (nothing to judge by). "The way": the sign of x and y's covariance over the range. Stuck::value is x's
-// value there, `moved` the most y moves in a flagged run. (fit_api.cpp)
+// explains y's net move, itself more than half y's range over the run (the sensor catching up with the input that
+// moved on; a held command resumes where it was), unless the reading stepped into the run, in one sample, by more
+// than 10 % of x's span, either way (a step test's or a staircase's held command, which y follows late, or behind a
+// lag still goes on from before it; a stuck reading freezes where it was). Not at the range's start or end. "The
+// way": the sign of x and y's covariance over the range. Stuck::value is x's value there, `moved` the most y moves
+// in a flagged run. fit() warns, its status unchanged. (fit_api.cpp)
 Stuck stuck_input_runs(std::span<const double> x, std::span<const double> y, IndexRange range);
 
 // Runs fn(k) for k = 0..count-1, spread over up to `threads` threads (0: one per

@@ -423,15 +423,16 @@ detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<cons
     const auto [l, h] = minmax_of(y, s, e);
     if (!(h - l > bound)) return;
     const double dy = y[e - 1] - y[s];
+    if (!(std::abs(dy) > 0.5 * (h - l))) return;  // y moved mostly one way (not a ringing's phase at the end)
     // the sensor catching up: the reading jumps at the run's end, in one sample, the way y went meanwhile (a held
     // command resumes where it was, and y settles or creeps during it whichever way)
     const double exit = x[e] - x[e - 1];
     if (!explains(exit, dy)) return;
-    // ... unless the reading stepped into the run, in one sample, by more than 10 % of x's span and half as much or
-    // more, either way: a step test's or a staircase's held command, which y follows late (the way of the step) or
-    // behind a lag still goes on from before it (the other way); a stuck reading freezes where it was
+    // ... unless the reading stepped into the run, in one sample, by more than 10 % of x's span, either way: a step
+    // test's or a staircase's held command, which y follows late (the way of the step) or behind a lag still goes
+    // on from before it (the other way); a stuck reading freezes where it was
     const double entry = x[s] - x[s - 1];
-    if (std::abs(entry) > kPinnedSpan * sx && std::abs(entry) >= 0.5 * std::abs(exit)) return;
+    if (std::abs(entry) > kPinnedSpan * sx) return;
     ++out.runs;
     out.samples += len;
     out.moved = std::max(out.moved, h - l);
@@ -472,7 +473,8 @@ std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x,
       st.reference > 1 ? fmt::format("during the other runs of one input value inside its range (at most {} samples "
                                      "long, but the longest 1 %) it moves by at most {:.4g}",
                                      st.reference, st.other_moves)
-                       : std::string("the input holds no other value inside its range for two samples or more"));
+                       : std::string("the input holds no other value inside its range for two samples or more (but "
+                                     "the longest 1 % of its runs)"));
 }
 
 }  // namespace
@@ -1280,18 +1282,13 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
                                 st.value, st.first, st.last, rep.message);
     }
   }
-  // A stuck input sensor: the model is fitted to an input that was not applied there: never `converged`.
-  if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0) {
-    rep.warnings.push_back(fmt::format("the training input {}, and the model is fitted to an input that was not "
-                                       "applied; exclude these rows (the --train and --validate ranges) or re-record",
+  // A stuck input sensor: a warning, not a status: a held command that then steps the way the output went, or two
+  // records joined there, look the same in the data (docs/identification.md, "Sensor faults").
+  if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0)
+    rep.warnings.push_back(fmt::format("the training input {}; if so, the model is fitted to an input that was not "
+                                       "applied there: exclude these rows or re-record (a held command that then steps "
+                                       "the way the output moved, or two records joined there, look the same)",
                                        stuck_input_text(st, x, y, tr)));
-    if (rep.status == FitStatus::converged) {
-      rep.status = FitStatus::poor_fit;
-      rep.message = fmt::format("poor fit: the training input is stuck at {:.6g} over samples {}:{} (see the "
-                                "warnings) (solver: converged: {})",
-                                st.value, st.first, st.last, rep.message);
-    }
-  }
   if (has_model(rep.status))
     for (std::string& w : resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();

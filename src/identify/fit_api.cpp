@@ -272,6 +272,34 @@ std::pair<double, double> minmax_of(std::span<const double> b, std::size_t s, st
   return {*l, *h};
 }
 
+// stuck_runs, stuck_input_runs (detail.hpp): a run at least this many times as long as the other runs of one value.
+constexpr double kStuckRatio = 10.0;
+
+// The runs of one value of v over r whose value `keep` accepts, for the stuck-sensor rules: a run is long where it
+// is at least kStuckRatio times its reference, the longest other such run leaving out the longest 1 % (so that a
+// second stuck stretch does not hide the first), at least 1 (so 10 samples or more).
+class RunLengths {
+ public:
+  template <class Keep>
+  RunLengths(std::span<const double> v, IndexRange r, Keep keep) {
+    for_each_run(v, r, [&](std::size_t s, std::size_t e) {
+      if (keep(v[s])) sorted_.push_back(e - s);
+    });
+    std::sort(sorted_.begin(), sorted_.end(), std::greater<>());
+  }
+  std::size_t reference(std::size_t len) const {
+    const std::size_t k = sorted_.size() / 100;
+    const std::size_t at = k < sorted_.size() && len >= sorted_[k] ? k + 1 : k;
+    return std::max<std::size_t>(at < sorted_.size() ? sorted_[at] : 0, 1);
+  }
+  bool long_run(std::size_t len) const {
+    return static_cast<double>(len) >= kStuckRatio * static_cast<double>(reference(len));
+  }
+
+ private:
+  std::vector<std::size_t> sorted_;  // longest first
+};
+
 }  // namespace
 
 detail::Grid detail::grid_of(std::span<const double> v) {
@@ -322,9 +350,6 @@ std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std
   return out;
 }
 
-// stuck_runs (detail.hpp): a run at least this many times as long as any other run of one output value.
-constexpr double kStuckRatio = 10.0;
-
 detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const double> x, IndexRange r) {
   Stuck out;
   if (r.end - r.begin < 3) return out;
@@ -338,23 +363,12 @@ detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const doub
   // the output's noise (detect_clipping's sigma) times 8, as pinned_runs; 0 without noise
   const double sigma = detect_clipping(y.subspan(r.begin, r.end - r.begin)).sigma;
   const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0;
-  std::vector<std::size_t> lengths;  // of the runs of one y value inside its range, longest first
-  for_each_run(y, r, [&](std::size_t s, std::size_t e) {
-    if (inside(y[s])) lengths.push_back(e - s);
-  });
-  std::sort(lengths.begin(), lengths.end(), std::greater<>());
-  // a run's reference: the longest other run, leaving out the longest 1 % (so that a second stuck stretch does
-  // not hide the first)
-  const std::size_t k = lengths.size() / 100;
-  const auto reference = [&](std::size_t len) -> std::size_t {
-    const std::size_t at = k < lengths.size() && len >= lengths[k] ? k + 1 : k;
-    return at < lengths.size() ? lengths[at] : 0;
-  };
+  const RunLengths runs(y, r, inside);
   std::size_t longest_flagged = 0;
   for_each_run(y, r, [&](std::size_t s, std::size_t e) {
-    if (!inside(y[s])) return;
-    const std::size_t len = e - s, ref = std::max<std::size_t>(reference(len), 1);
-    if (len < 3 || static_cast<double>(len) < kStuckRatio * static_cast<double>(ref)) return;
+    const std::size_t len = e - s;
+    if (!inside(y[s]) || !runs.long_run(len)) return;
+    const std::size_t ref = runs.reference(len);
     const auto [xl, xh] = minmax_of(x, s, e);
     const double net = x[e - 1] - x[s];
     if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl))) return;
@@ -381,23 +395,11 @@ detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<cons
   if (!(sx > 0) || !(sy > 0)) return out;
   // inside the input's range by more than 10 % of its span: a clip sits at an extreme (pinned_runs)
   const auto inside = [&](double v) { return v - lo > kPinnedSpan * sx && hi - v > kPinnedSpan * sx; };
-  std::vector<std::size_t> lengths;  // of the runs of one x value inside its range, longest first
-  for_each_run(x, r, [&](std::size_t s, std::size_t e) {
-    if (inside(x[s])) lengths.push_back(e - s);
-  });
-  std::sort(lengths.begin(), lengths.end(), std::greater<>());
-  const std::size_t k = lengths.size() / 100;  // the longest 1 % left out of a run's reference (as stuck_runs)
-  const auto reference = [&](std::size_t len) -> std::size_t {
-    const std::size_t at = k < lengths.size() && len >= lengths[k] ? k + 1 : k;
-    return std::max<std::size_t>(at < lengths.size() ? lengths[at] : 0, 1);
-  };
-  const auto long_run = [&](std::size_t len) {
-    return len >= 10 && static_cast<double>(len) >= kStuckRatio * static_cast<double>(reference(len));
-  };
+  const RunLengths runs(x, r, inside);
   // the most y moves during the other runs (a held command's settling or creep, a coarse sensor's step)
   double moves = 0.0;
   for_each_run(x, r, [&](std::size_t s, std::size_t e) {
-    if (!inside(x[s]) || long_run(e - s)) return;
+    if (!inside(x[s]) || runs.long_run(e - s)) return;
     const auto [l, h] = minmax_of(y, s, e);
     moves = std::max(moves, h - l);
   });
@@ -419,7 +421,7 @@ detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<cons
   for_each_run(x, r, [&](std::size_t s, std::size_t e) {
     const std::size_t len = e - s;
     // a run at the range's start or end has no move into it or out of it to judge by
-    if (s == r.begin || e == r.end || !inside(x[s]) || !long_run(len)) return;
+    if (s == r.begin || e == r.end || !inside(x[s]) || !runs.long_run(len)) return;
     const auto [l, h] = minmax_of(y, s, e);
     if (!(h - l > bound)) return;
     const double dy = y[e - 1] - y[s];
@@ -437,7 +439,7 @@ detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<cons
     out.samples += len;
     out.moved = std::max(out.moved, h - l);
     if (len > longest_flagged)
-      longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = reference(len),
+      longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = runs.reference(len),
       out.jump = exit;
   });
   out.other_moves = moves;
@@ -485,8 +487,8 @@ std::string stuck_input_warning(std::span<const double> x, std::span<const doubl
   const IndexRange r = detail::check_range(range, x.size(), "stuck_input_warning");
   const detail::Stuck st = detail::stuck_input_runs(x, y, r);
   if (st.runs == 0) return {};
-  return fmt::format("{}: the input {}; the model is driven there by an input that was not applied: leave these "
-                     "rows out of the scored range",
+  return fmt::format("{}: the input {}; if so, the model is driven there by an input that was not applied: leave "
+                     "these rows out of the scored range",
                      what, stuck_input_text(st, x, y, r));
 }
 

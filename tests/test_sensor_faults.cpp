@@ -101,6 +101,18 @@ std::string longest_run_at(const std::vector<double>& v, double value) {
   return fmt::format("{}:{}", a, b);
 }
 
+// The longest stretch of [0, n) between the half-open runs `bad` (in order), as "A:B": where a warning of an output
+// fault tells the user to train
+std::string longest_clean(std::size_t n, std::vector<std::array<std::size_t, 2>> bad) {
+  std::size_t at = 0, a = 0, b = 0;
+  bad.push_back({n, n});
+  for (const auto& [s, e] : bad) {
+    if (s > at && s - at > b - a) a = at, b = s;
+    at = e;
+  }
+  return fmt::format("{}:{}", a, b);
+}
+
 // An identification by a held command: a staircase of 8 levels up and down (holds of 250 samples), the output
 // settling to the PI's after each step (a lag of 25 samples) with noise of 0.3 % of its span: a hold at the top
 // and the bottom too, where the output drifts one way only.
@@ -163,6 +175,8 @@ TEST(SensorFaults, AClippedInputIsNamedAndNeverConverged) {
   EXPECT_NE(w.find(fmt::format("(first run: samples {})", run)), std::string::npos)
       << w << "\n" << with_warnings(rep);
   EXPECT_NE(w.find("the input sensor clips there"), std::string::npos) << w;
+  // where to train instead: before the first clip (the model runs through the wrong input after it)
+  EXPECT_NE(w.find(fmt::format("before them: --train 0:{},", run.substr(0, run.find(':')))), std::string::npos) << w;
   EXPECT_EQ(rep.status, FitStatus::poor_fit) << rep.message;
   EXPECT_NE(rep.message.find("the training input clips"), std::string::npos) << rep.message;
 
@@ -374,6 +388,9 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
   const FitReport rs = fit_gpi(stuck);
   const std::string w = warning_with(rs, "the output sensor is stuck there");
   EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
+  // where to train instead: the longest stretch without the frozen rows (the input was applied through them)
+  EXPECT_NE(w.find("without them: --train " + longest_clean(stuck.x.size(), {{330, 480}}) + ","), std::string::npos)
+      << w;
   EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;  // (here also worse than the reference PI)
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
                                    std::array{-1e4, 250.0, 0.0, -3.0}}) {
@@ -389,6 +406,10 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
   EXPECT_EQ(two.runs, 2u);
   EXPECT_EQ(two.samples, 230u);
   EXPECT_EQ(two.first, 330u);
+  EXPECT_NE(warning_with(fit_gpi(twice), "the output sensor is stuck there")
+                .find("without them: --train " + longest_clean(twice.x.size(), {{330, 480}, {800, 880}}) + ","),
+            std::string::npos)
+      << with_warnings(fit_gpi(twice));
   // a reading frozen within 10 % of the output's span from its least value (a dead zone's rest one count above
   // the record's least reading) is not named
   Record rest = clean;
@@ -457,6 +478,7 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
   const FitReport rs = fit_gpi(stuck);
   const std::string w = warning_with(rs, "the input sensor is stuck there");
   EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
+  EXPECT_NE(w.find("before them: --train 0:330,"), std::string::npos) << w;  // not after: the state is wrong there
   EXPECT_EQ(rs.message.find("stuck"), std::string::npos) << rs.message;  // a warning, not a status
   EXPECT_EQ(warning_with(rs, "the output sensor is stuck"), "") << with_warnings(rs);
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
@@ -480,6 +502,16 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
   EXPECT_EQ(two.runs, 2u);
   EXPECT_EQ(two.samples, 230u);
   EXPECT_EQ(two.first, 330u);
+  {  // a training range that starts later: the stretch before the first frozen run starts with it
+    FitOptions o;
+    o.model = FitModel::gpi;
+    o.num_threads = 1;
+    o.train = {100, twice.x.size()};
+    const FitReport r100 = fit(twice.x, twice.y, o);
+    EXPECT_NE(warning_with(r100, "the input sensor is stuck there").find("before them: --train 100:330, 7.93 % of it"),
+              std::string::npos)
+        << with_warnings(r100);
+  }
   // evaluate's and a --validate-data record's diagnosis names it too (diagnose_record)
   EXPECT_NE(stuck_input_warning(stuck.x, stuck.y, {0, stuck.x.size()}, "b.csv").find("b.csv: the input sits exactly"),
             std::string::npos);

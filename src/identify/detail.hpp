@@ -94,6 +94,7 @@ struct Pinned {
   double moved = 0.0;                            // the most b moves in them
   double moves = 0.0;                            // the most b moves during any run of a at another value
   std::size_t holds = 0;  // runs of a at another value of 2 samples or more (none: `moves` is 0, no measurement)
+  std::vector<IndexRange> flagged;  // every flagged run, in order
 };
 std::array<Pinned, 2> pinned_runs(std::span<const double> a, std::span<const double> b, IndexRange range);
 
@@ -113,6 +114,7 @@ struct Stuck {
   // stuck_input_runs: the most y moves during the other runs of one x value, and the reading's jump at the end of
   // the longest flagged run
   double other_moves = 0.0, jump = 0.0;
+  std::vector<IndexRange> flagged;  // every flagged run, in order
 };
 Stuck stuck_runs(std::span<const double> y, std::span<const double> x, IndexRange range);
 

@@ -345,6 +345,7 @@ std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std
     if (!(turn > std::max(kPinnedNoise * sigma, kPinnedTurn * (h - l)))) return;
     if (p.samples == 0) p.first = s, p.last = e;
     p.samples += e - s;
+    p.flagged.push_back({s, e});
     p.moved = std::max(p.moved, h - l);
   });
   return out;
@@ -381,6 +382,7 @@ detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const doub
     if (!(yh - yl > std::max(noise, kPinnedSpan * sy))) return;
     ++out.runs;
     out.samples += len;
+    out.flagged.push_back({s, e});
     out.moved = std::max(out.moved, xh - xl);
     if (len > longest_flagged) longest_flagged = len, out.first = s, out.last = e, out.value = y[s], out.reference = ref;
   });
@@ -437,6 +439,7 @@ detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<cons
     if (std::abs(entry) > kPinnedSpan * sx) return;
     ++out.runs;
     out.samples += len;
+    out.flagged.push_back({s, e});
     out.moved = std::max(out.moved, h - l);
     if (len > longest_flagged)
       longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = runs.reference(len),
@@ -477,6 +480,37 @@ std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x,
                                      st.reference, st.other_moves)
                        : std::string("the input holds no other value inside its range for two samples or more (but "
                                      "the longest 1 % of its runs)"));
+}
+
+// Where to train instead, for fit's sensor-fault warnings (the flagged runs of detail::Pinned, detail::Stuck):
+// "exclude these rows (...)". An output fault leaves the model's state right (the input was applied), so the longest
+// stretch of the training range between the flagged runs will do; an input fault drives the model by an input that
+// was not applied, and the model runs through every sample from the record's start (FitOptions::train), so only the
+// stretch before the first flagged run will.
+std::string exclude_advice(std::vector<IndexRange> flagged, IndexRange tr, bool input) {
+  std::sort(flagged.begin(), flagged.end(), [](const IndexRange& a, const IndexRange& b) { return a.begin < b.begin; });
+  IndexRange best{tr.begin, tr.begin};
+  if (input) {
+    best.end = flagged.empty() ? tr.end : std::max(tr.begin, flagged.front().begin);
+  } else {
+    std::size_t at = tr.begin;  // the end of the flagged runs so far
+    for (const IndexRange& f : flagged) {
+      if (f.begin > at && f.begin - at > best.end - best.begin) best = {at, f.begin};
+      at = std::max(at, f.end);
+    }
+    if (tr.end > at && tr.end - at > best.end - best.begin) best = {at, tr.end};
+  }
+  const std::size_t n = best.end - best.begin;
+  const char* const why = input ? "the model runs through every sample from the record's start, so a range after "
+                                  "them would start from the state the wrong input left"
+                                : "a --validate range must leave them out too";
+  if (n == 0)
+    return fmt::format("exclude these rows (no stretch of the training range lies {} them; {}{})",
+                       input ? "before" : "outside", why, input ? ": cut the record after them" : "");
+  return fmt::format("exclude these rows (the {}stretch of the training range {} them: --train {}:{}, {:.3g} % of it; "
+                     "{})",
+                     input ? "" : "longest ", input ? "before" : "without", best.begin, best.end,
+                     100.0 * static_cast<double>(n) / static_cast<double>(tr.end - tr.begin), why);
 }
 
 }  // namespace
@@ -1245,8 +1279,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     if (!(low ? clip.low : clip.high)) continue;
     if (pinned_only[low ? 0 : 1])
       rep.warnings.push_back(pinned(low ? &y_pinned[0] : nullptr, low ? nullptr : &y_pinned[1], false) + censoring +
-                             "; exclude these rows (the --train and --validate ranges) or re-record with the "
-                             "sensor's range covering the signal");
+                             "; " + exclude_advice(y_pinned[low ? 0 : 1].flagged, tr, false) +
+                             " or re-record with the sensor's range covering the signal");
     else
       rep.warnings.push_back(fmt::format(
           "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "
@@ -1259,9 +1293,12 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   const auto x_pinned = detail::pinned_runs(x, y, tr);
   const bool x_low = x_pinned[0].samples > 0, x_high = x_pinned[1].samples > 0;
   if (x_low || x_high) {  // one warning, naming both ends where both clip
+    std::vector<IndexRange> rows = x_pinned[0].flagged;
+    rows.insert(rows.end(), x_pinned[1].flagged.begin(), x_pinned[1].flagged.end());
     rep.warnings.push_back(pinned(x_low ? &x_pinned[0] : nullptr, x_high ? &x_pinned[1] : nullptr, true) +
-                           "the model is fitted to an input that was not applied there: exclude these rows (the "
-                           "--train and --validate ranges) or re-record with the sensor's range covering the signal");
+                           "the model is fitted to an input that was not applied there: " +
+                           exclude_advice(std::move(rows), tr, true) +
+                           " or re-record with the sensor's range covering the signal");
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training input clips at {} (see the warnings), and the model is "
@@ -1275,8 +1312,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   // A stuck output sensor: the model is fitted to an output that was not measured there: never `converged`.
   if (const detail::Stuck st = detail::stuck_runs(y, x, tr); st.runs > 0) {
     rep.warnings.push_back(fmt::format("the training output {}, and the model is fitted to an output that was not "
-                                       "measured; exclude these rows (the --train and --validate ranges) or re-record",
-                                       stuck_text(st, x, tr)));
+                                       "measured; {} or re-record",
+                                       stuck_text(st, x, tr), exclude_advice(st.flagged, tr, false)));
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training output is stuck at {:.6g} over samples {}:{} (see the "
@@ -1288,9 +1325,9 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   // records joined there, look the same in the data (docs/identification.md, "Sensor faults").
   if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0)
     rep.warnings.push_back(fmt::format("the training input {}; if so, the model is fitted to an input that was not "
-                                       "applied there: exclude these rows or re-record (a held command that then steps "
-                                       "the way the output moved, or two records joined there, look the same)",
-                                       stuck_input_text(st, x, y, tr)));
+                                       "applied there: {} or re-record (a held command that then steps the way the "
+                                       "output moved, or two records joined there, look the same)",
+                                       stuck_input_text(st, x, y, tr), exclude_advice(st.flagged, tr, true)));
   if (has_model(rep.status))
     for (std::string& w : resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -9,6 +9,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hysteron/identify.hpp"
@@ -69,12 +70,20 @@ ModelParams with_weights(const ModelParams& model, const Structure<double>& s, d
 
 double span_of(std::span<const double> v);
 
+// An input reversal: the input moves back from its last extremum by more than this fraction of its training span
+// (noise and small wiggles are not reversals).
+inline constexpr double kReversalFraction = 0.1;
+// The reversals of x over [from, to) (by more than kReversalFraction of span): the sample of each turning extremum
+// and +1 for a maximum, -1 for a minimum. (sensor_faults.cpp)
+std::vector<std::pair<std::size_t, int>> reversals(std::span<const double> x, std::size_t from, std::size_t to,
+                                                   double span);
+
 // The grid a column was recorded on (an ADC's or a printout's resolution): step = the least spacing of its
 // distinct values (values within 1e-9 of their magnitude are one: rounding after an offset or a scale; levels
 // left unused are no matter), refined to span / round(span / spacing), when every value lies within a tenth of a
 // step of min + k step and there are at least 4 samples per level; {0, 0} otherwise (a column off any grid, or
 // too short to tell). levels = span / step + 1.
-// (fit_api.cpp)
+// (sensor_faults.cpp)
 struct Grid {
   double step = 0.0;
   std::size_t levels = 0;
@@ -87,7 +96,7 @@ Grid grid_of(std::span<const double> v);
 // step), 8 noise widths of b (detect_clipping's sigma) and 10 % of b's span (a creep where a holds only at its
 // ends), and in which b turns back: its extreme inside the run lies beyond both of the run's ends by more than 8
 // noise widths and 5 % of its range there (an output that settles while the input rests at 0 is monotone). A
-// clipped sensor's true value went on beyond its range and came back while its reading stayed. (fit_api.cpp)
+// clipped sensor's true value went on beyond its range and came back while its reading stayed. (sensor_faults.cpp)
 struct Pinned {
   double value = 0.0;                            // a's least or largest value
   std::size_t samples = 0, first = 0, last = 0;  // samples in the flagged runs; the first one is [first, last)
@@ -128,8 +137,21 @@ Stuck stuck_runs(std::span<const double> y, std::span<const double> x, IndexRang
 // than 10 % of x's span, either way (a step test's or a staircase's held command, which y follows late, or behind a
 // lag still goes on from before it; a stuck reading freezes where it was). Not at the range's start or end. "The
 // way": the sign of x and y's covariance over the range. Stuck::value is x's value there, `moved` the most y moves
-// in a flagged run. fit() warns, its status unchanged. (fit_api.cpp)
+// in a flagged run. fit() warns, its status unchanged. (sensor_faults.cpp)
 Stuck stuck_input_runs(std::span<const double> x, std::span<const double> y, IndexRange range);
+
+// The texts of fit()'s and the scored records' stuck-sensor warnings: "sits exactly at ...: the output (input)
+// sensor is stuck there ..." of a flagged Stuck over the range r. (sensor_faults.cpp)
+std::string stuck_text(const Stuck& st, std::span<const double> x, IndexRange r);
+std::string stuck_input_text(const Stuck& st, std::span<const double> x, std::span<const double> y, IndexRange r);
+// "exclude these rows (... --train A:B ...)": where to train instead of the flagged runs over the training range tr,
+// for a fault of the input (the stretch before the first run: the model runs through a wrong input from the record's
+// start) or of the output (the longest stretch between the runs). (sensor_faults.cpp)
+std::string exclude_advice(std::vector<IndexRange> flagged, IndexRange tr, bool input);
+// fit()'s warnings on a coarse input or output sensor (grid_of) and whether the training RMS is near the output's
+// floor. (sensor_faults.cpp)
+std::vector<std::string> resolution_warnings(std::span<const double> x, std::span<const double> y, IndexRange tr,
+                                             double rms);
 
 // Runs fn(k) for k = 0..count-1, spread over up to `threads` threads (0: one per
 // usable CPU; 1: in order on this thread). Each k must be independent, so the

@@ -122,9 +122,6 @@ constexpr double kNoiseFactor = 1.2;
 // this) describes none of the record's shape (a butterfly loop, a clockwise loop for a kind
 // with nonnegative weights): a poor fit, whatever the line or the reference PI leave.
 constexpr double kMinR2 = kMinFitR2;
-// An input reversal: the input moves back from its last extremum by more than this fraction of
-// its training span (noise and small wiggles are not reversals).
-constexpr double kReversalFraction = 0.1;
 // A fit whose training RMS is at most this fraction of the output's span is not poor for being
 // some multiple of the reference PI's (a PI record on the reference's own threshold grid,
 // which the reference fits to rounding: a pi fit at 0.032 % of span was refused).
@@ -137,31 +134,6 @@ constexpr double kNarrowLoops = 0.1;
 constexpr double kJumpStepFactor = 10.0;
 constexpr double kJumpSpanFraction = 0.05;
 
-// The reversals of x over [from, to) (by more than kReversalFraction of span): the sample of
-// each turning extremum and +1 for a maximum, -1 for a minimum.
-std::vector<std::pair<std::size_t, int>> reversals(std::span<const double> x, std::size_t from, std::size_t to,
-                                                   double span) {
-  const double h = kReversalFraction * span;
-  std::vector<std::pair<std::size_t, int>> out;
-  int dir = 0;  // +1 rising, -1 falling, 0 not yet known (the first move is no reversal)
-  std::size_t ihi = from, ilo = from;
-  for (std::size_t k = from + 1; k < to; ++k) {
-    const double v = x[k];
-    if (dir == 0) {
-      if (v > x[ihi]) ihi = k;
-      if (v < x[ilo]) ilo = k;
-      if (v < x[ihi] - h) dir = -1, ilo = k;
-      else if (v > x[ilo] + h) dir = 1, ihi = k;
-    } else if (dir > 0) {
-      if (v > x[ihi]) ihi = k;
-      else if (v < x[ihi] - h) out.emplace_back(ihi, 1), dir = -1, ilo = k;
-    } else {
-      if (v < x[ilo]) ilo = k;
-      else if (v > x[ilo] + h) out.emplace_back(ilo, -1), dir = 1, ihi = k;
-    }
-  }
-  return out;
-}
 
 // The factor absorb_scales applies to a reported parameter (a = input_scale, b = |gain|);
 // the names are the model file's keys, the factors the kind's (kind_*.cpp).
@@ -239,357 +211,6 @@ std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t
                      count, which, rows, count > 5 ? ", ..." : "", lo, hi);
 }
 
-// pinned_runs's bound (detail.hpp): multiples of the most b moves during another run of a and of b's noise, and a
-// fraction of b's span.
-constexpr double kPinnedRatio = 3.0, kPinnedNoise = 8.0, kPinnedSpan = 0.1;
-// ... and b must turn back inside the run by more than this fraction of its range there (and 8 noise widths): a
-// clipped sine 58 %, Festo test8 clipped at 90 % 14 %; an output settling at a rest 0-1 % (the review's records).
-constexpr double kPinnedTurn = 0.05;
-// A column on at most this many levels over the training range (6 bits) has a coarse resolution: its step is at
-// least 1/63 of its span, and step / sqrt(12) at least 0.46 % of it, as much as a model leaves on a good record.
-constexpr std::size_t kCoarseLevels = 64;
-// A fit whose RMS is within this factor of the resolution's floor is limited by it (the floor is then at least
-// 64 % of its mean square error).
-constexpr double kResolutionNear = 1.25;
-// A coarse input is a sensor's reading (not a held command, a staircase) when the output, over the second half of
-// the input's runs at one level, drifts (the mean of the last quarter less that of the third) by at least this
-// fraction of what one step means (step x mean slope) on average.
-constexpr double kHeldMoves = 0.25;
-
-// f(s, e) for each run [s, e) of equal values of a over r.
-template <class F>
-void for_each_run(std::span<const double> a, IndexRange r, F f) {
-  for (std::size_t s = r.begin, e; s < r.end; s = e) {
-    for (e = s + 1; e < r.end && a[e] == a[s];) ++e;
-    f(s, e);
-  }
-}
-
-// b's least and largest values over [s, e)
-std::pair<double, double> minmax_of(std::span<const double> b, std::size_t s, std::size_t e) {
-  const auto [l, h] = std::minmax_element(b.begin() + static_cast<std::ptrdiff_t>(s),
-                                          b.begin() + static_cast<std::ptrdiff_t>(e));
-  return {*l, *h};
-}
-
-// stuck_runs, stuck_input_runs (detail.hpp): a run at least this many times as long as the other runs of one value.
-constexpr double kStuckRatio = 10.0;
-
-// The runs of one value of v over r whose value `keep` accepts, for the stuck-sensor rules: a run is long where it
-// is at least kStuckRatio times its reference, the longest other such run leaving out the longest 1 % (so that a
-// second stuck stretch does not hide the first), at least 1 (so 10 samples or more).
-class RunLengths {
- public:
-  template <class Keep>
-  RunLengths(std::span<const double> v, IndexRange r, Keep keep) {
-    for_each_run(v, r, [&](std::size_t s, std::size_t e) {
-      if (keep(v[s])) sorted_.push_back(e - s);
-    });
-    std::sort(sorted_.begin(), sorted_.end(), std::greater<>());
-  }
-  std::size_t reference(std::size_t len) const {
-    const std::size_t k = sorted_.size() / 100;
-    const std::size_t at = k < sorted_.size() && len >= sorted_[k] ? k + 1 : k;
-    return std::max<std::size_t>(at < sorted_.size() ? sorted_[at] : 0, 1);
-  }
-  bool long_run(std::size_t len) const {
-    return static_cast<double>(len) >= kStuckRatio * static_cast<double>(reference(len));
-  }
-
- private:
-  std::vector<std::size_t> sorted_;  // longest first
-};
-
-}  // namespace
-
-detail::Grid detail::grid_of(std::span<const double> v) {
-  std::vector<double> s(v.begin(), v.end());
-  std::sort(s.begin(), s.end());
-  if (s.empty()) return {};
-  const double lo = s.front(), hi = s.back(), tol = 1e-9 * std::max(std::abs(lo), std::abs(hi));
-  double gap = hi - lo;  // the least spacing of distinct values
-  for (std::size_t k = 1; k < s.size(); ++k)
-    if (s[k] - s[k - 1] > tol) gap = std::min(gap, s[k] - s[k - 1]);
-  const double m = std::round((hi - lo) / gap);  // steps across the span
-  if (!(m >= 1) || static_cast<double>(s.size()) < 4 * (m + 1)) return {};
-  const double q = (hi - lo) / m;
-  for (double x : s)
-    if (std::abs((x - lo) / q - std::round((x - lo) / q)) > 0.1) return {};
-  return {q, static_cast<std::size_t>(m) + 1};
-}
-
-std::array<detail::Pinned, 2> detail::pinned_runs(std::span<const double> a, std::span<const double> b,
-                                                  IndexRange r) {
-  const auto [lo, hi] = minmax_of(a, r.begin, r.end);
-  const auto [blo, bhi] = minmax_of(b, r.begin, r.end);
-  double moves = 0.0;
-  std::size_t holds = 0;
-  for_each_run(a, r, [&](std::size_t s, std::size_t e) {
-    if (a[s] == lo || a[s] == hi) return;
-    const auto [l, h] = minmax_of(b, s, e);
-    moves = std::max(moves, h - l);
-    holds += e - s >= 2;
-  });
-  const double sigma = detect_clipping(b.subspan(r.begin, r.end - r.begin)).sigma;
-  const double bound = std::max({kPinnedRatio * moves, kPinnedNoise * sigma, kPinnedSpan * (bhi - blo)});
-  std::array<Pinned, 2> out;
-  for (int k : {0, 1}) out[k].value = k ? hi : lo, out[k].moves = moves, out[k].holds = holds;
-  for_each_run(a, r, [&](std::size_t s, std::size_t e) {
-    if (e - s < 3 || (a[s] != lo && a[s] != hi)) return;
-    const auto [l, h] = minmax_of(b, s, e);
-    Pinned& p = out[a[s] == hi ? 1 : 0];
-    if (!(h - l > bound)) return;
-    // a clip hides an excursion beyond the limit and back, so b turns back inside the run: its extreme lies beyond
-    // both ends of the run; a rest or hold there (a vented muscle, a commanded 0) lets b settle monotonically
-    const double turn = std::max(h - std::max(b[s], b[e - 1]), std::min(b[s], b[e - 1]) - l);
-    if (!(turn > std::max(kPinnedNoise * sigma, kPinnedTurn * (h - l)))) return;
-    if (p.samples == 0) p.first = s, p.last = e;
-    p.samples += e - s;
-    p.flagged.push_back({s, e});
-    p.moved = std::max(p.moved, h - l);
-  });
-  return out;
-}
-
-detail::Stuck detail::stuck_runs(std::span<const double> y, std::span<const double> x, IndexRange r) {
-  Stuck out;
-  if (r.end - r.begin < 3) return out;
-  const auto [lo, hi] = minmax_of(y, r.begin, r.end);
-  const double sx = span_of(x.subspan(r.begin, r.end - r.begin)), sy = hi - lo;
-  if (!(sx > 0) || !(sy > 0)) return out;
-  // inside the output's range by more than 10 % of its span: a dead zone or a stop rests at (about) an extreme
-  const auto inside = [&](double v) { return v - lo > kPinnedSpan * sy && hi - v > kPinnedSpan * sy; };
-  std::vector<std::size_t> turns;  // the input's reversals (by 10 % of its span), in order
-  for (const auto& [k, dir] : reversals(x, r.begin, r.end, sx)) turns.push_back(k);
-  // the output's noise (detect_clipping's sigma) times 8, as pinned_runs; 0 without noise
-  const double sigma = detect_clipping(y.subspan(r.begin, r.end - r.begin)).sigma;
-  const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0;
-  const RunLengths runs(y, r, inside);
-  std::size_t longest_flagged = 0;
-  for_each_run(y, r, [&](std::size_t s, std::size_t e) {
-    const std::size_t len = e - s;
-    if (!inside(y[s]) || !runs.long_run(len)) return;
-    const std::size_t ref = runs.reference(len);
-    const auto [xl, xh] = minmax_of(x, s, e);
-    const double net = x[e - 1] - x[s];
-    if (!(xh - xl > kPinnedSpan * sx) || !(std::abs(net) > 0.5 * (xh - xl))) return;
-    // the output moved since the input's last reversal before the run (or the record's start): a play's dead
-    // band or a backlash holds the output from the reversal on, and a branch only steepens away from it
-    const auto after = std::upper_bound(turns.begin(), turns.end(), s);
-    if (after != turns.end() && *after < e) return;  // the input turns inside the run
-    const std::size_t t = after == turns.begin() ? r.begin : *(after - 1);
-    const auto [yl, yh] = minmax_of(y, t, s + 1);
-    if (!(yh - yl > std::max(noise, kPinnedSpan * sy))) return;
-    ++out.runs;
-    out.samples += len;
-    out.flagged.push_back({s, e});
-    out.moved = std::max(out.moved, xh - xl);
-    if (len > longest_flagged) longest_flagged = len, out.first = s, out.last = e, out.value = y[s], out.reference = ref;
-  });
-  return out;
-}
-
-detail::Stuck detail::stuck_input_runs(std::span<const double> x, std::span<const double> y, IndexRange r) {
-  Stuck out;
-  if (r.end - r.begin < 3) return out;
-  const auto [lo, hi] = minmax_of(x, r.begin, r.end);
-  const double sx = hi - lo, sy = span_of(y.subspan(r.begin, r.end - r.begin));
-  if (!(sx > 0) || !(sy > 0)) return out;
-  // inside the input's range by more than 10 % of its span: a clip sits at an extreme (pinned_runs)
-  const auto inside = [&](double v) { return v - lo > kPinnedSpan * sx && hi - v > kPinnedSpan * sx; };
-  const RunLengths runs(x, r, inside);
-  // the most y moves during the other runs (a held command's settling or creep, a coarse sensor's step)
-  double moves = 0.0;
-  for_each_run(x, r, [&](std::size_t s, std::size_t e) {
-    if (!inside(x[s]) || runs.long_run(e - s)) return;
-    const auto [l, h] = minmax_of(y, s, e);
-    moves = std::max(moves, h - l);
-  });
-  const double sigma = detect_clipping(y.subspan(r.begin, r.end - r.begin)).sigma;
-  const double noise = std::isfinite(sigma) ? kPinnedNoise * sigma : 0.0;
-  const double bound = std::max({kPinnedRatio * moves, noise, kPinnedSpan * sy});
-  // the way y goes with x over the range (the sign of their covariance; 0: none), to tell which jump of the reading
-  // explains y's move during a run
-  double mx = 0.0, my = 0.0, cov = 0.0;
-  for (std::size_t j = r.begin; j < r.end; ++j) mx += x[j], my += y[j];
-  mx /= static_cast<double>(r.end - r.begin), my /= static_cast<double>(r.end - r.begin);
-  for (std::size_t j = r.begin; j < r.end; ++j) cov += (x[j] - mx) * (y[j] - my);
-  const double way = cov > 0 ? 1.0 : cov < 0 ? -1.0 : 0.0;
-  // a jump of the reading by more than 10 % of x's span that explains y's net move dy (any way where there is none)
-  const auto explains = [&](double jump, double dy) {
-    return std::abs(jump) > kPinnedSpan * sx && (way == 0.0 || jump * way * dy > 0.0);
-  };
-  std::size_t longest_flagged = 0;
-  for_each_run(x, r, [&](std::size_t s, std::size_t e) {
-    const std::size_t len = e - s;
-    // a run at the range's start or end has no move into it or out of it to judge by
-    if (s == r.begin || e == r.end || !inside(x[s]) || !runs.long_run(len)) return;
-    const auto [l, h] = minmax_of(y, s, e);
-    if (!(h - l > bound)) return;
-    const double dy = y[e - 1] - y[s];
-    if (!(std::abs(dy) > 0.5 * (h - l))) return;  // y moved mostly one way (not a ringing's phase at the end)
-    // the sensor catching up: the reading jumps at the run's end, in one sample, the way y went meanwhile (a held
-    // command resumes where it was, and y settles or creeps during it whichever way)
-    const double exit = x[e] - x[e - 1];
-    if (!explains(exit, dy)) return;
-    // ... unless the reading stepped into the run, in one sample, by more than 10 % of x's span, either way: a step
-    // test's or a staircase's held command, which y follows late (the way of the step) or behind a lag still goes
-    // on from before it (the other way); a stuck reading freezes where it was
-    const double entry = x[s] - x[s - 1];
-    if (std::abs(entry) > kPinnedSpan * sx) return;
-    ++out.runs;
-    out.samples += len;
-    out.flagged.push_back({s, e});
-    out.moved = std::max(out.moved, h - l);
-    if (len > longest_flagged)
-      longest_flagged = len, out.first = s, out.last = e, out.value = x[s], out.reference = runs.reference(len),
-      out.jump = exit;
-  });
-  out.other_moves = moves;
-  return out;
-}
-
-namespace {
-
-// "sits exactly at ...: the output sensor is stuck there (or its reading was held)" of a flagged Stuck
-std::string stuck_text(const detail::Stuck& st, std::span<const double> x, IndexRange r) {
-  const double sx = detail::span_of(x.subspan(r.begin, r.end - r.begin));
-  return fmt::format(
-      "sits exactly at {:.6g} for {} samples (samples {}:{}{}) while the input moves on one way by up to {:.4g} "
-      "({:.3g} % of its span), and the other runs of one output value inside its range are at most {} samples "
-      "long (but the longest 1 %): the output sensor is stuck there (or its reading was held)",
-      st.value, st.last - st.first, st.first, st.last,
-      st.runs > 1 ? fmt::format("; {} such runs, {} samples in all", st.runs, st.samples) : "", st.moved,
-      100 * st.moved / sx, st.reference);
-}
-
-// "sits exactly at ...: the input sensor is stuck there (or its reading was held)" of a flagged input Stuck
-std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x, std::span<const double> y,
-                             IndexRange r) {
-  const double sx = detail::span_of(x.subspan(r.begin, r.end - r.begin));
-  const double sy = detail::span_of(y.subspan(r.begin, r.end - r.begin));
-  return fmt::format(
-      "sits exactly at {:.6g} for {} samples (samples {}:{}{}) while the output moves by up to {:.4g} ({:.3g} % of "
-      "its span), and the reading then jumps by {:.4g} ({:.3g} % of its span) the way the output moved; {}: the "
-      "input sensor is stuck there (or its reading was held while the input moved on)",
-      st.value, st.last - st.first, st.first, st.last,
-      st.runs > 1 ? fmt::format("; {} such runs, {} samples in all", st.runs, st.samples) : "", st.moved,
-      100 * st.moved / sy, st.jump, 100 * std::abs(st.jump) / sx,
-      st.reference > 1 ? fmt::format("during the other runs of one input value inside its range (at most {} samples "
-                                     "long, but the longest 1 %) it moves by at most {:.4g}",
-                                     st.reference, st.other_moves)
-                       : std::string("the input holds no other value inside its range for two samples or more (but "
-                                     "the longest 1 % of its runs)"));
-}
-
-// Where to train instead, for fit's sensor-fault warnings (the flagged runs of detail::Pinned, detail::Stuck):
-// "exclude these rows (...)". An output fault leaves the model's state right (the input was applied), so the longest
-// stretch of the training range between the flagged runs will do; an input fault drives the model by an input that
-// was not applied, and the model runs through every sample from the record's start (FitOptions::train), so only the
-// stretch before the first flagged run will.
-std::string exclude_advice(std::vector<IndexRange> flagged, IndexRange tr, bool input) {
-  std::sort(flagged.begin(), flagged.end(), [](const IndexRange& a, const IndexRange& b) { return a.begin < b.begin; });
-  IndexRange best{tr.begin, tr.begin};
-  if (input) {
-    best.end = flagged.empty() ? tr.end : std::max(tr.begin, flagged.front().begin);
-  } else {
-    std::size_t at = tr.begin;  // the end of the flagged runs so far
-    for (const IndexRange& f : flagged) {
-      if (f.begin > at && f.begin - at > best.end - best.begin) best = {at, f.begin};
-      at = std::max(at, f.end);
-    }
-    if (tr.end > at && tr.end - at > best.end - best.begin) best = {at, tr.end};
-  }
-  const std::size_t n = best.end - best.begin;
-  const char* const why = input ? "the model runs through every sample from the record's start, so a range after "
-                                  "them would start from the state the wrong input left"
-                                : "a --validate range must leave them out too";
-  if (n == 0)
-    return fmt::format("exclude these rows (no stretch of the training range lies {} them; {}{})",
-                       input ? "before" : "outside", why, input ? ": cut the record after them" : "");
-  return fmt::format("exclude these rows (the {}stretch of the training range {} them: --train {}:{}, {:.3g} % of it; "
-                     "{})",
-                     input ? "" : "longest ", input ? "before" : "without", best.begin, best.end,
-                     100.0 * static_cast<double>(n) / static_cast<double>(tr.end - tr.begin), why);
-}
-
-}  // namespace
-
-std::string stuck_input_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
-                                std::string_view what) {
-  detail::check_record(x, y, "stuck_input_warning");
-  const IndexRange r = detail::check_range(range, x.size(), "stuck_input_warning");
-  const detail::Stuck st = detail::stuck_input_runs(x, y, r);
-  if (st.runs == 0) return {};
-  return fmt::format("{}: the input {}; if so, the model is driven there by an input that was not applied: leave "
-                     "these rows out of the scored range",
-                     what, stuck_input_text(st, x, y, r));
-}
-
-std::string stuck_output_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
-                                 std::string_view what) {
-  detail::check_record(x, y, "stuck_output_warning");
-  const IndexRange r = detail::check_range(range, x.size(), "stuck_output_warning");
-  const detail::Stuck st = detail::stuck_runs(y, x, r);
-  if (st.runs == 0) return {};
-  return fmt::format("{}: the output {}; the model's score there is the sensor's: leave these rows out of the "
-                     "scored range",
-                     what, stuck_text(st, x, r));
-}
-
-namespace {
-
-// The warnings on the sensors' resolution (grid_of, detail.hpp): a column on at most kCoarseLevels levels, the
-// RMS error that step alone leaves (step / sqrt(12); for the input, in the output's units through the record's
-// mean slope span(y) / span(x), and only where the output keeps moving while the input holds a level: a sensor's
-// reading, not a held command; an estimate: the local slope and where the input dwells change it), and whether the
-// fit's training RMS is near the output's floor.
-std::vector<std::string> resolution_warnings(std::span<const double> x, std::span<const double> y, IndexRange tr,
-                                             double rms) {
-  std::vector<std::string> out;
-  const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
-  const double sx = detail::span_of(xt), sy = detail::span_of(yt), root12 = std::sqrt(12.0);
-  const detail::Grid gy = detail::grid_of(yt), gx = detail::grid_of(xt);
-  const auto coarse = [](const detail::Grid& g) { return g.levels > 0 && g.levels <= kCoarseLevels; };
-  if (coarse(gy)) {
-    const double floor = gy.step / root12;
-    out.push_back(fmt::format("the output is recorded on {} levels over the training range (step {:.4g}, {:.3g} % "
-                              "of its span): that resolution alone leaves an RMS error of about step/sqrt(12) = "
-                              "{:.4g} ({:.3g} % of the span)",
-                              gy.levels, gy.step, 100 * gy.step / sy, floor, 100 * floor / sy));
-    if (rms <= kResolutionNear * floor)
-      out.push_back(fmt::format("the fit's training RMS {:.4g} is within {}x of {:.4g}, what the output sensor's "
-                                "resolution alone leaves: the fit is limited by the sensor's resolution rather than "
-                                "by the model; a sensor with finer steps over the signal's span would let it go lower",
-                                rms, kResolutionNear, floor));
-  }
-  if (!coarse(gx)) return out;
-  // the output's drift over the second half of the input's runs (at least 8 samples): twice the mean of their last
-  // quarter less that of their third (a trend, not the noise's range; a ramp's change over the half)
-  double held = 0.0;
-  std::size_t runs = 0;
-  const auto mean = [&](std::size_t a, std::size_t b) {
-    double m = 0.0;
-    for (std::size_t k = a; k < b; ++k) m += y[k];
-    return m / static_cast<double>(b - a);
-  };
-  for_each_run(x, tr, [&](std::size_t s, std::size_t e) {
-    if (e - s < 8) return;
-    const std::size_t q = (e - s) / 4;
-    held += 2.0 * std::abs(mean(e - q, e) - mean(e - 2 * q, e - q)), ++runs;
-  });
-  const double per_step = gx.step * sy / sx;  // the output's change over one input step, at the mean slope
-  // never a floor above what the fit reached
-  if (runs > 0 && held / static_cast<double>(runs) >= kHeldMoves * per_step)
-    out.push_back(fmt::format("the input is recorded on {} levels over the training range (step {:.4g}, {:.3g} % of "
-                              "its span), and the output keeps moving while the input holds a level (a sensor's "
-                              "resolution, not a held command): that alone leaves an RMS error of up to about "
-                              "{:.4g} in the output ({:.3g} % of its span; step/sqrt(12) times the record's mean "
-                              "slope {:.4g}, an estimate: the fit's training RMS is {:.4g})",
-                              gx.levels, gx.step, 100 * gx.step / sx, per_step / root12,
-                              100 * per_step / root12 / sy, sy / sx, rms));
-  return out;
-}
 
 TrainingRanges training_ranges(std::span<const double> x, std::span<const double> y, IndexRange tr) {
   const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
@@ -739,7 +360,7 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
   add_units_parameters(rep);
   rep.train = evaluate(rep.model, x, y, tr, o.initial_state);
   if (sign < 0) rep.warnings.emplace_back(kDecreasingWarning);
-  const auto turns = reversals(x, tr.begin, tr.end, sx);
+  const auto turns = detail::reversals(x, tr.begin, tr.end, sx);
   // the loops' orientation, over whole cycles: from the first reversal to the last one of the
   // same kind, sum y dx (normalised, y rising with x) closed by the chord back to the start is
   // minus the area the loops enclose when they turn the usual way (the output lags: lower on
@@ -797,7 +418,7 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
     rep.warnings.push_back(fmt::format(
         "the training input {} (by more than {:.0f} % of its span): {}; validate on a record with loops "
         "(--validate-data) before using the model",
-        rev == 0 ? "never reverses" : "reverses once", 100 * kReversalFraction,
+        rev == 0 ? "never reverses" : "reverses once", 100 * detail::kReversalFraction,
         rev == 0 ? "the fit saw one branch only, and the other branch and every inner loop are extrapolated"
                  : "the fit saw one rising and one falling branch, and the inner (minor) loops are extrapolated"));
 
@@ -1279,7 +900,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     if (!(low ? clip.low : clip.high)) continue;
     if (pinned_only[low ? 0 : 1])
       rep.warnings.push_back(pinned(low ? &y_pinned[0] : nullptr, low ? nullptr : &y_pinned[1], false) + censoring +
-                             "; " + exclude_advice(y_pinned[low ? 0 : 1].flagged, tr, false) +
+                             "; " + detail::exclude_advice(y_pinned[low ? 0 : 1].flagged, tr, false) +
                              " or re-record with the sensor's range covering the signal");
     else
       rep.warnings.push_back(fmt::format(
@@ -1297,7 +918,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     rows.insert(rows.end(), x_pinned[1].flagged.begin(), x_pinned[1].flagged.end());
     rep.warnings.push_back(pinned(x_low ? &x_pinned[0] : nullptr, x_high ? &x_pinned[1] : nullptr, true) +
                            "the model is fitted to an input that was not applied there: " +
-                           exclude_advice(std::move(rows), tr, true) +
+                           detail::exclude_advice(std::move(rows), tr, true) +
                            " or re-record with the sensor's range covering the signal");
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
@@ -1313,7 +934,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   if (const detail::Stuck st = detail::stuck_runs(y, x, tr); st.runs > 0) {
     rep.warnings.push_back(fmt::format("the training output {}, and the model is fitted to an output that was not "
                                        "measured; {} or re-record",
-                                       stuck_text(st, x, tr), exclude_advice(st.flagged, tr, false)));
+                                       detail::stuck_text(st, x, tr), detail::exclude_advice(st.flagged, tr, false)));
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training output is stuck at {:.6g} over samples {}:{} (see the "
@@ -1327,9 +948,9 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     rep.warnings.push_back(fmt::format("the training input {}; if so, the model is fitted to an input that was not "
                                        "applied there: {} or re-record (a held command that then steps the way the "
                                        "output moved, or two records joined there, look the same)",
-                                       stuck_input_text(st, x, y, tr), exclude_advice(st.flagged, tr, true)));
+                                       detail::stuck_input_text(st, x, y, tr), detail::exclude_advice(st.flagged, tr, true)));
   if (has_model(rep.status))
-    for (std::string& w : resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
+    for (std::string& w : detail::resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return rep;
 }

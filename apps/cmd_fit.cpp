@@ -216,6 +216,13 @@ int run_fit(const FitCliOptions& c) {
                  fit_model_name(kind));
     };
     if (o.model == FitModel::automatic) fmt::print(stderr, "auto: fitting every kind on two hold-out folds\n");
+  } else if (o.model == FitModel::automatic) {
+    // not a terminal (a log, a pipe): one line as each candidate fit ends, so that a long auto fit is seen to move
+    fmt::print(stderr, "auto: fitting every kind on two hold-out folds\n");
+    o.candidate_done = [](std::size_t done, std::size_t total, FitModel kind) {
+      fmt::print(stderr, "auto: {} of {} candidate fits done (the last: {})\n", done, total, fit_model_name(kind));
+      std::fflush(stderr);
+    };
   }
   FitReport rep = fit(x, y, o);
   // the time column's warnings concern rate-pi only: where it is the kind fitted (or auto chose it),

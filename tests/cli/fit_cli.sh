@@ -101,6 +101,10 @@ for s in ("trained on samples 0..960", "refit on the whole training range (sampl
           "status (fold 0)", "train RMS (fold 0)", "validate RMS (fold 0)"):
     assert s in text, s
 PYEOF
+# not on a terminal (here a file), auto says as each of its 18 candidate fits (9 kinds x 2 folds) ends, one line each
+[ "$(grep -c '^auto: [0-9]* of 18 candidate fits done (the last: ' "$T/auto.err")" = 18 ] &&
+  grep -q '^auto: 18 of 18 candidate fits done' "$T/auto.err" ||
+  fail "--model auto off a terminal: no line per candidate fit: $(cat "$T/auto.err")"
 # the HTML report of that document (hysteron report reads fit_range back) labels them alike
 "$BIN" report "$T/auto_report.json" --out "$T/auto_report.html" > /dev/null 2> "$T/auto_html.err" ||
   fail "report of the auto document: $(cat "$T/auto_html.err")"

@@ -100,6 +100,7 @@ int run_evaluate(const EvaluateOptions& c) {
   if (!verdict.diagnosis.sensor_warning.empty()) warnings.push_back(std::move(verdict.diagnosis.sensor_warning));
   if (!verdict.diagnosis.input_sensor_warning.empty())
     warnings.push_back(std::move(verdict.diagnosis.input_sensor_warning));
+  if (!verdict.diagnosis.outlier_warning.empty()) warnings.push_back(std::move(verdict.diagnosis.outlier_warning));
   const bool useless = verdict.useless;
   if (useless) warnings.push_back(fmt::format("{}: evaluate exits {}", verdict.useless_warning, exit_poor_fit));
   for (const auto& w : warnings) fmt::print(stderr, "warning: {}\n", w);

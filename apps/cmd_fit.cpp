@@ -298,7 +298,8 @@ int run_fit(const FitCliOptions& c) {
                                       v.file.empty() ? c.sel.file : v.file, v.range.begin, v.range.end, m->r2,
                                       m->rms, m->rms_percent_span));
       std::vector<std::string> ws = {input_coverage_warning(cov, what), std::move(dg.warning),
-                                     std::move(dg.sensor_warning), std::move(dg.input_sensor_warning)};
+                                     std::move(dg.sensor_warning), std::move(dg.input_sensor_warning),
+                                     std::move(dg.outlier_warning)};
       if (!v.file.empty()) {
         auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                      v.file, c.sel.time_column);

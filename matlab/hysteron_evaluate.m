@@ -46,6 +46,9 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
 %     stuck_input_warning    where X's reading sits frozen at one value inside its range
 %                            while Y moves on, then jumps to where X went: a stuck input sensor
 %                            ('' otherwise; samples 0-based and half-open)
+%     outlier_warning        where samples of X or Y lie far outside the rest: a glitch,
+%                            a spike or a sensor's overrange value ('' otherwise; samples
+%                            0-based)
 %   Each non-empty warning is also issued as a warning with identifier
 %   hysteron:evaluate (warning('off', 'hysteron:evaluate') silences them).
 %
@@ -55,7 +58,7 @@ function metrics = hysteron_evaluate(model, x, y, varargin)
   end
   metrics = hysteron_mex('evaluate', model, x, y, hysteron_options('hysteron_evaluate', varargin{:}));
   for f = {'clipping_warning', 'input_coverage_warning', 'output_map_warning', 'stuck_output_warning', ...
-           'stuck_input_warning', 'useless_warning'}
+           'stuck_input_warning', 'outlier_warning', 'useless_warning'}
     if ~isempty(metrics.(f{1}))
       warning('hysteron:evaluate', '%s', metrics.(f{1}));
     end

@@ -604,3 +604,43 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
     EXPECT_EQ(st.runs, 0u) << "flagged " << st.first << ":" << st.last;
   }
 }
+
+// A spike in a scored record (outlier_warning, in diagnose_record): fit refuses a training record with one, and
+// evaluate scored it silently, its largest error the spike's. Named by its column and sample, under an offset, a
+// scale and a sign flip of the column; not on the clean record, nor where the record rests at its least value.
+TEST(SensorFaults, ASpikeInAScoredRecordIsNamed) {
+  const Record clean = loops();
+  const std::size_t n = clean.x.size(), k = 1234;
+  EXPECT_EQ(outlier_warning(clean.x, clean.y, {0, n}, "b.csv"), "");
+  for (const auto& [a, b] : {std::array{0.0, 1.0}, std::array{100.0, -3.0}, std::array{-7.0, 1e3}}) {  // a + b v
+    Record sx{affine(clean.x, a, b), clean.y};
+    const auto [lo, hi] = std::minmax_element(sx.x.begin(), sx.x.end());
+    sx.x[k] = *hi + 2.0 * (*hi - *lo);  // a glitch: twice the span beyond the largest value, for one sample
+    const std::string w = outlier_warning(sx.x, sx.y, {0, n}, "b.csv");
+    EXPECT_NE(w.find(fmt::format("b.csv: 1 sample(s) of the input lie far outside the rest (sample {} (", k)),
+              std::string::npos)
+        << a << " " << w;
+    EXPECT_EQ(w.find("of the output"), std::string::npos) << w;
+    Record sy{clean.x, affine(clean.y, a, b)};
+    const auto [ylo, yhi] = std::minmax_element(sy.y.begin(), sy.y.end());
+    sy.y[k + 5] = *ylo - 3.0 * (*yhi - *ylo);
+    const std::string wy = outlier_warning(sy.x, sy.y, {0, n}, "b.csv");
+    EXPECT_NE(wy.find(fmt::format("1 sample(s) of the output lie far outside the rest (sample {} (", k + 5)),
+              std::string::npos)
+        << a << " " << wy;
+    // outside the scored range: not named
+    EXPECT_EQ(outlier_warning(sy.x, sy.y, {k + 6, n}, "b.csv"), "");
+  }
+  // evaluate's diagnosis carries it
+  Record s = clean;
+  s.x[k] = 5.0;
+  const ModelParams truth = pi_truth();
+  const OutputMap map = output_map(truth, s.x, s.y, {0, n}, InitialState::virgin, false);
+  EXPECT_NE(diagnose_record(truth, s.x, s.y, {0, n}, InitialState::virgin, false, map, FitMetrics{}, 1.0, "b.csv")
+                .outlier_warning.find(fmt::format("(sample {} (5)", k)),
+            std::string::npos);
+  // a rest at the input's least value for a fifth of the record is no outlier
+  Record rest = clean;
+  for (std::size_t j = 0; j < n / 5; ++j) rest.x[j] = 0.0, rest.y[j] = clean.y[0];
+  EXPECT_EQ(outlier_warning(rest.x, rest.y, {0, n}, "b.csv"), "");
+}

@@ -154,6 +154,12 @@ std::string stuck_output_warning(std::span<const double> x, std::span<const doub
 // "what: the input sits exactly at ...", or "".
 std::string stuck_input_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                                 std::string_view what);
+// Samples of a scored record's input or output far outside the rest, beyond its central 99 % by more than half that
+// range's width (a glitch, a spike, a sensor's overrange value; fit() refuses a training record with them): an input
+// spike drives the model and sets its memory, an output spike sets the largest error. "what: N sample(s) of the
+// input lie far outside the rest (sample K (value), ...; ...)...", or "" where there are none.
+std::string outlier_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
+                            std::string_view what);
 
 // A fit that explains less than this share of its output's variance (R^2) is poor_fit whatever
 // else it beats; a model scored on another record below it (output_map_warning) is asked why.
@@ -251,6 +257,7 @@ struct RecordDiagnosis {
   InputMap input_map;   // found where the warning is the input map's
   std::string sensor_warning;        // stuck_output_warning's, "" where none
   std::string input_sensor_warning;  // stuck_input_warning's, "" where none
+  std::string outlier_warning;       // outlier_warning's, "" where none
 };
 RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const double> x, std::span<const double> y,
                                 IndexRange range, InitialState initial, bool censor, const OutputMap& map,

@@ -384,6 +384,7 @@ void cmd_evaluate(int, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   m["output_map_warning"] = v.diagnosis.warning;
   m["stuck_output_warning"] = v.diagnosis.sensor_warning;
   m["stuck_input_warning"] = v.diagnosis.input_sensor_warning;
+  m["outlier_warning"] = v.diagnosis.outlier_warning;
   const InputMap& im = v.diagnosis.input_map;
   m["input_map"] = im.found ? nlohmann::json{{"scale", im.scale}, {"shift", im.shift}, {"rms", im.rms},
                                              {"r2", im.r2}, {"rms_as_is", im.rms_as_is}}

@@ -291,6 +291,7 @@ usable by hysteron.Model (it may not be invertible).)doc");
         d["output_map_warning"] = v.diagnosis.warning;
         d["stuck_output_warning"] = v.diagnosis.sensor_warning;
         d["stuck_input_warning"] = v.diagnosis.input_sensor_warning;
+        d["outlier_warning"] = v.diagnosis.outlier_warning;
         if (v.diagnosis.input_map.found) {
           const InputMap& im = v.diagnosis.input_map;
           py::dict imd;
@@ -316,7 +317,8 @@ usable by hysteron.Model (it may not be invertible).)doc");
         d["useless_warning"] = v.useless_warning;
         py::list ws;  // the non-empty warnings, in the CLI's order (after this one's clipping_warning)
         for (const std::string& w : {clip_warning, input_coverage_warning(coverage, "evaluate's record"), v.diagnosis.warning,
-                                     v.diagnosis.sensor_warning, v.diagnosis.input_sensor_warning, v.useless_warning})
+                                     v.diagnosis.sensor_warning, v.diagnosis.input_sensor_warning,
+                                     v.diagnosis.outlier_warning, v.useless_warning})
           if (!w.empty()) ws.append(w);
         d["warnings"] = ws;
         return d;

@@ -59,6 +59,26 @@ def test_a_stuck_input_sensor_is_named_by_fit_and_evaluate():
     assert hysteron.evaluate(good["model"], x, y)["stuck_input_warning"] == ""
 
 
+def test_a_spike_in_an_evaluated_record_is_named():
+    """One input sample at 3x the input's largest value (a glitch) and, separately, one output sample far off: fit
+    refuses such a training record; evaluate scored it silently (its largest error the spike's). Now
+    outlier_warning names the sample and the column."""
+    x, y = record()
+    good = hysteron.fit(x, y, model="gpi", min_slope=0.01)
+    assert hysteron.evaluate(good["model"], x, y)["outlier_warning"] == ""
+    k = len(x) // 2
+    xs = x.copy()
+    xs[k] = 3.0 * np.max(x)
+    m = hysteron.evaluate(good["model"], xs, y)
+    assert f"sample(s) of the input lie far outside the rest (sample {k} (" in m["outlier_warning"], m["warnings"]
+    assert m["outlier_warning"] in m["warnings"]
+    ys = y.copy()
+    ys[k + 7] = np.max(y) + 5.0 * (np.max(y) - np.min(y))
+    m = hysteron.evaluate(good["model"], x, ys)
+    assert f"sample(s) of the output lie far outside the rest (sample {k + 7} (" in m["outlier_warning"], m["warnings"]
+    assert "of the input" not in m["outlier_warning"]
+
+
 def test_names_include_poor_fit_and_auto():
     assert "poor_fit" in hysteron.fit_statuses
     assert {"auto", "gpi", "pi", "mpi-deadzone", "mpi-asym", "preisach", "kp", "bouc-wen", "maxwell-slip",
@@ -79,9 +99,9 @@ def test_fit_report_fields():
     m = hysteron.evaluate(r["model"], x, y, range=(0, 1200))
     assert set(m) == METRIC_KEYS | {"outside_input_limits", "output_map", "output_map_warning", "clipping_warning",
                                     "input_coverage_warning", "input_map", "training", "useless", "useless_warning",
-                                    "stuck_output_warning", "stuck_input_warning", "warnings"}
+                                    "stuck_output_warning", "stuck_input_warning", "outlier_warning", "warnings"}
     assert m["output_map_warning"] == ""  # the model on its own training record
-    assert m["stuck_output_warning"] == "" and m["stuck_input_warning"] == ""
+    assert m["stuck_output_warning"] == "" and m["stuck_input_warning"] == "" and m["outlier_warning"] == ""
     assert m["useless"] is False and m["warnings"] == [] and m["input_map"] is None
     assert m["outside_input_limits"] == 0  # the training range itself
     # an input beyond the range the model was fitted on is counted (input_limits: that range)

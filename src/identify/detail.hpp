@@ -9,6 +9,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -148,6 +149,11 @@ std::string stuck_input_text(const Stuck& st, std::span<const double> x, std::sp
 // for a fault of the input (the stretch before the first run: the model runs through a wrong input from the record's
 // start) or of the output (the longest stretch between the runs). (sensor_faults.cpp)
 std::string exclude_advice(std::vector<IndexRange> flagged, IndexRange tr, bool input);
+// Samples of v[from, to) far outside the bulk of the rest (a glitch, a spike, a sensor's overrange value): "N
+// sample(s) of the {which} lie far outside the rest (sample ...; 99 % of the samples lie within [lo, hi]): ...", ""
+// where there are none. fit() refuses a training record with them; outlier_warning names them on a scored record.
+// (sensor_faults.cpp)
+std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which);
 // fit()'s warnings on a coarse input or output sensor (grid_of) and whether the training RMS is near the output's
 // floor. (sensor_faults.cpp)
 std::vector<std::string> resolution_warnings(std::span<const double> x, std::span<const double> y, IndexRange tr,

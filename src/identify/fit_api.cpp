@@ -169,48 +169,6 @@ struct TrainingRanges {
   std::string x_outliers, y_outliers;  // outliers_of's description, "" where there are none
 };
 
-// Samples of v[from, to) far outside the bulk of the rest, beyond the range of its central 99 %
-// (its 0.5 % and 99.5 % quantiles) by more than half that range's width: a glitch, a spike or a
-// sensor's overrange value (9.9e37). A run of such samples is one when it is short (at most 5
-// samples or 0.05 % of them) inside the range and jumps there and back by more than that half
-// width in one sample each way, or when it lies beyond the bulk by more than 10 of its widths
-// anywhere. Never the peaks of a smooth signal (its top 0.5 % of samples lie within a small
-// fraction of its span of each other), a rest at the start or the end, a step from rest, or a
-// vent of more than a few samples. The description names the count and the first rows; empty
-// where there are none.
-std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, const char* which) {
-  std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(from), v.begin() + static_cast<std::ptrdiff_t>(to));
-  const std::size_t n = s.size();
-  const auto at = [&](double q) {
-    const auto k = static_cast<std::size_t>(q * static_cast<double>(n - 1));
-    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
-    return s[k];
-  };
-  const double lo = at(0.005), hi = at(0.995);
-  const double margin = 0.5 * (hi - lo);
-  if (!(margin > 0.0)) return {};  // a column constant over 99 % of the record: nothing to tell them by
-  const auto beyond = [&](std::size_t k) { return v[k] < lo - margin || v[k] > hi + margin; };
-  std::size_t count = 0;
-  std::string rows;
-  const std::size_t short_run = std::max<std::size_t>(5, n / 2000);
-  for (std::size_t a = from; a < to; ++a) {
-    if (!beyond(a)) continue;
-    std::size_t b = a;  // the run [a, b)
-    double far = 0.0;   // its farthest distance beyond the bulk
-    while (b < to && beyond(b)) far = std::max({far, lo - v[b], v[b] - hi}), ++b;
-    const bool spike = a > from && b < to && b - a <= short_run && std::abs(v[a] - v[a - 1]) > margin &&
-                       std::abs(v[b - 1] - v[b]) > margin;
-    if (spike || far > 20.0 * margin)
-      for (std::size_t k = a; k < b; ++k)
-        if (++count <= 5) rows += fmt::format("{}{} ({:.6g})", rows.empty() ? "" : ", ", k, v[k]);
-    a = b;
-  }
-  if (count == 0) return {};
-  return fmt::format("{} sample(s) of the training {} lie far outside the rest (sample {}{}; 99 % of the samples lie "
-                     "within [{:.6g}, {:.6g}]): a glitch, a spike or a sensor's overrange value",
-                     count, which, rows, count > 5 ? ", ..." : "", lo, hi);
-}
-
 
 TrainingRanges training_ranges(std::span<const double> x, std::span<const double> y, IndexRange tr) {
   const auto xt = x.subspan(tr.begin, tr.end - tr.begin), yt = y.subspan(tr.begin, tr.end - tr.begin);
@@ -225,8 +183,8 @@ TrainingRanges training_ranges(std::span<const double> x, std::span<const double
   if (!(r.xhi - r.xlo > 0)) r.constant = why("input", r.xlo);
   else if (!(r.yhi - r.ylo > 0)) r.constant = why("output", r.ylo);
   if (!r.constant.empty()) return r;
-  r.x_outliers = outliers_of(x, tr.begin, tr.end, "input");
-  r.y_outliers = outliers_of(y, tr.begin, tr.end, "output");
+  r.x_outliers = detail::outliers_of(x, tr.begin, tr.end, "training input");
+  r.y_outliers = detail::outliers_of(y, tr.begin, tr.end, "training output");
   return r;
 }
 

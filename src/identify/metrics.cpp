@@ -380,6 +380,7 @@ RecordDiagnosis diagnose_record(const ModelParams& params, std::span<const doubl
     }
   d.sensor_warning = stuck_output_warning(x, y, range, what);
   d.input_sensor_warning = stuck_input_warning(x, y, range, what);
+  d.outlier_warning = outlier_warning(x, y, range, what);
   return d;
 }
 

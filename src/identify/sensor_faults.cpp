@@ -396,4 +396,62 @@ std::vector<std::pair<std::size_t, int>> detail::reversals(std::span<const doubl
   return out;
 }
 
+// Samples of v[from, to) far outside the bulk of the rest, beyond the range of its central 99 %
+// (its 0.5 % and 99.5 % quantiles) by more than half that range's width: a glitch, a spike or a
+// sensor's overrange value (9.9e37). A run of such samples is one when it is short (at most 5
+// samples or 0.05 % of them) inside the range and jumps there and back by more than that half
+// width in one sample each way, or when it lies beyond the bulk by more than 10 of its widths
+// anywhere. Never the peaks of a smooth signal (its top 0.5 % of samples lie within a small
+// fraction of its span of each other), a rest at the start or the end, a step from rest, or a
+// vent of more than a few samples. The description names the count and the first rows; empty
+// where there are none.
+std::string detail::outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which) {
+  std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(from), v.begin() + static_cast<std::ptrdiff_t>(to));
+  const std::size_t n = s.size();
+  const auto at = [&](double q) {
+    const auto k = static_cast<std::size_t>(q * static_cast<double>(n - 1));
+    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
+    return s[k];
+  };
+  const double lo = at(0.005), hi = at(0.995);
+  const double margin = 0.5 * (hi - lo);
+  if (!(margin > 0.0)) return {};  // a column constant over 99 % of the record: nothing to tell them by
+  const auto beyond = [&](std::size_t k) { return v[k] < lo - margin || v[k] > hi + margin; };
+  std::size_t count = 0;
+  std::string rows;
+  const std::size_t short_run = std::max<std::size_t>(5, n / 2000);
+  for (std::size_t a = from; a < to; ++a) {
+    if (!beyond(a)) continue;
+    std::size_t b = a;  // the run [a, b)
+    double far = 0.0;   // its farthest distance beyond the bulk
+    while (b < to && beyond(b)) far = std::max({far, lo - v[b], v[b] - hi}), ++b;
+    const bool spike = a > from && b < to && b - a <= short_run && std::abs(v[a] - v[a - 1]) > margin &&
+                       std::abs(v[b - 1] - v[b]) > margin;
+    if (spike || far > 20.0 * margin)
+      for (std::size_t k = a; k < b; ++k)
+        if (++count <= 5) rows += fmt::format("{}{} ({:.6g})", rows.empty() ? "" : ", ", k, v[k]);
+    a = b;
+  }
+  if (count == 0) return {};
+  return fmt::format("{} sample(s) of the {} lie far outside the rest (sample {}{}; 99 % of the samples lie "
+                     "within [{:.6g}, {:.6g}]): a glitch, a spike or a sensor's overrange value",
+                     count, which, rows, count > 5 ? ", ..." : "", lo, hi);
+}
+
+std::string outlier_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
+                            std::string_view what) {
+  detail::check_record(x, y, "outlier_warning");
+  const IndexRange r = detail::check_range(range, x.size(), "outlier_warning");
+  if (r.end - r.begin < 2) return {};
+  const std::string in = detail::outliers_of(x, r.begin, r.end, "input");
+  const std::string out = detail::outliers_of(y, r.begin, r.end, "output");
+  if (in.empty() && out.empty()) return {};
+  std::string w = fmt::format("{}: ", what);
+  if (!in.empty())
+    w += in + "; the model is driven by them, and its memory after them, so the errors there and after are theirs";
+  if (!out.empty())
+    w += (in.empty() ? "" : "; ") + out + "; the errors there are theirs";
+  return w + ": repair them or leave them out of the scored range (fit refuses a training record with them)";
+}
+
 }  // namespace hysteron

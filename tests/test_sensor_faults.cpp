@@ -175,8 +175,22 @@ TEST(SensorFaults, AClippedInputIsNamedAndNeverConverged) {
   EXPECT_NE(w.find(fmt::format("(first run: samples {})", run)), std::string::npos)
       << w << "\n" << with_warnings(rep);
   EXPECT_NE(w.find("the input sensor clips there"), std::string::npos) << w;
-  // where to train instead: before the first clip (the model runs through the wrong input after it)
-  EXPECT_NE(w.find(fmt::format("before them: --train 0:{},", run.substr(0, run.find(':')))), std::string::npos) << w;
+  // where to train instead (one warning after the faults'): the clip (the decaying sine's first peak only) leaves
+  // the model's memory wrong until the input has come within 5 % of its span of its least value (it leaves the clip
+  // at its largest); from there to the end is the longest stretch
+  {
+    const std::size_t end = std::stoul(run.substr(run.find(':') + 1));
+    const auto [lo, hi] = std::minmax_element(r.x.begin(), r.x.end());
+    std::size_t from = end;
+    while (from < r.x.size() && r.x[from] > *lo + 0.05 * (*hi - *lo)) ++from;
+    const std::string adv = warning_with(rep, "to fit without the rows the warnings above name");
+    EXPECT_NE(adv.find(fmt::format("(samples {} (input)): train on samples {}:{} (--train {}:{},", run, from,
+                                   r.x.size(), from, r.x.size())),
+              std::string::npos)
+        << with_warnings(rep);
+    EXPECT_NE(adv.find("from where the input has swept its span after an input fault"), std::string::npos) << adv;
+    EXPECT_NE(w.find("a following warning names a --train range"), std::string::npos) << w;
+  }
   EXPECT_EQ(rep.status, FitStatus::poor_fit) << rep.message;
   EXPECT_NE(rep.message.find("the training input clips"), std::string::npos) << rep.message;
 
@@ -389,8 +403,10 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
   const std::string w = warning_with(rs, "the output sensor is stuck there");
   EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
   // where to train instead: the longest stretch without the frozen rows (the input was applied through them)
-  EXPECT_NE(w.find("without them: --train " + longest_clean(stuck.x.size(), {{330, 480}}) + ","), std::string::npos)
-      << w;
+  EXPECT_NE(warning_with(rs, "to fit without the rows")
+                .find("(--train " + longest_clean(stuck.x.size(), {{330, 480}}) + ","),
+            std::string::npos)
+      << with_warnings(rs);
   EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;  // (here also worse than the reference PI)
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
                                    std::array{-1e4, 250.0, 0.0, -3.0}}) {
@@ -406,8 +422,9 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
   EXPECT_EQ(two.runs, 2u);
   EXPECT_EQ(two.samples, 230u);
   EXPECT_EQ(two.first, 330u);
-  EXPECT_NE(warning_with(fit_gpi(twice), "the output sensor is stuck there")
-                .find("without them: --train " + longest_clean(twice.x.size(), {{330, 480}, {800, 880}}) + ","),
+  EXPECT_NE(warning_with(fit_gpi(twice), "to fit without the rows")
+                .find("(samples 330:480 (output), 800:880 (output)): train on samples " +
+                      longest_clean(twice.x.size(), {{330, 480}, {800, 880}})),
             std::string::npos)
       << with_warnings(fit_gpi(twice));
   // a reading frozen within 10 % of the output's span from its least value (a dead zone's rest one count above
@@ -478,7 +495,11 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
   const FitReport rs = fit_gpi(stuck);
   const std::string w = warning_with(rs, "the input sensor is stuck there");
   EXPECT_NE(w.find("for 150 samples (samples 330:480)"), std::string::npos) << with_warnings(rs);
-  EXPECT_NE(w.find("before them: --train 0:330,"), std::string::npos) << w;  // not after: the state is wrong there
+  // not after: the decaying sine never again comes near its largest value, so the model's memory keeps the wrong
+  // reading to the end
+  EXPECT_NE(warning_with(rs, "to fit without the rows").find("(--train 0:330, 11 % of the training range)"),
+            std::string::npos)
+      << with_warnings(rs);
   EXPECT_EQ(rs.message.find("stuck"), std::string::npos) << rs.message;  // a warning, not a status
   EXPECT_EQ(warning_with(rs, "the output sensor is stuck"), "") << with_warnings(rs);
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
@@ -508,9 +529,9 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
     o.num_threads = 1;
     o.train = {100, twice.x.size()};
     const FitReport r100 = fit(twice.x, twice.y, o);
-    EXPECT_NE(warning_with(r100, "the input sensor is stuck there").find("before them: --train 100:330, 7.93 % of it"),
-              std::string::npos)
-        << with_warnings(r100);
+    const std::string adv = warning_with(r100, "to fit without the rows");
+    EXPECT_NE(adv.find("(--train 100:330, 7.93 % of the training range)"), std::string::npos) << with_warnings(r100);
+    EXPECT_NE(adv.find("less than 10 % of the training range"), std::string::npos) << adv;
   }
   // evaluate's and a --validate-data record's diagnosis names it too (diagnose_record)
   EXPECT_NE(stuck_input_warning(stuck.x, stuck.y, {0, stuck.x.size()}, "b.csv").find("b.csv: the input sits exactly"),
@@ -526,6 +547,21 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
   EXPECT_EQ(warning_with(rc, "stuck"), "") << with_warnings(rc);
   EXPECT_EQ(rc.status, FitStatus::converged) << rc.message;
 
+  {  // a triangle of one amplitude: after the frozen stretch the input sweeps its span again, and the model's memory
+     // is its own from there: the advice starts there, not at the stretch's end nor before it
+    Record tri = record([](int k) { const int p = k % 400; return (p < 200 ? p : 400 - p) / 200.0; }, 3000);
+    for (std::size_t k = 250; k < 350; ++k) tri.x[k] = tri.x[250];  // the true x falls from 0.75 to 0.25
+    std::size_t low = 350, from;
+    while (tri.x[low] > 0.05) ++low;  // the least value's band, then the largest's
+    for (from = low; tri.x[from] < 0.95;) ++from;
+    const FitReport rt = fit_gpi(tri);
+    EXPECT_NE(warning_with(rt, "the input sensor is stuck there").find("(samples 250:350)"), std::string::npos)
+        << with_warnings(rt);
+    EXPECT_NE(warning_with(rt, "to fit without the rows")
+                  .find(fmt::format("(samples 250:350 (input)): train on samples {}:3000 (--train {}:3000,", from, from)),
+              std::string::npos)
+        << from << "\n" << with_warnings(rt);
+  }
   // A held command is no stuck sensor: the reading resumes where it was, or the reading stepped into the hold as
   // much as out of it. A ramp up to the top over 2000 samples, a step down to the middle held for 600 samples, then
   // the loops, the output following (a) through a lag of 40 samples, (b) through a lag of 400 samples (still moving

@@ -145,10 +145,23 @@ Stuck stuck_input_runs(std::span<const double> x, std::span<const double> y, Ind
 // sensor is stuck there ..." of a flagged Stuck over the range r. (sensor_faults.cpp)
 std::string stuck_text(const Stuck& st, std::span<const double> x, IndexRange r);
 std::string stuck_input_text(const Stuck& st, std::span<const double> x, std::span<const double> y, IndexRange r);
-// "exclude these rows (... --train A:B ...)": where to train instead of the flagged runs over the training range tr,
-// for a fault of the input (the stretch before the first run: the model runs through a wrong input from the record's
-// start) or of the output (the longest stretch between the runs). (sensor_faults.cpp)
-std::string exclude_advice(std::vector<IndexRange> flagged, IndexRange tr, bool input);
+// The rows of a sensor fault fit() names: of the input (a clip, a stuck reading: the model, simulated through every
+// sample from the record's start, holds the wrong input in its memory until the input sweeps its span) or of the
+// output (the input was applied: the state after them is right).
+struct FaultRun {
+  IndexRange rows;
+  bool input = false;
+};
+// fit()'s warning on where to train instead of every flagged row: the longest stretch of the training range tr free
+// of them, each stretch after an input fault starting only once x has been within 5 % of its span of one extreme of
+// the range and then of the other (every play of threshold up to 0.45 span is then set by the input alone, whatever
+// the wrong reading left; sweep_after); with the runs named (up to 6), "--train A:B", its share of the range, that
+// a --validate range must leave them out where the default (the samples after --train) holds them, and where the
+// stretch is under 10 % of the range, that it is. (sensor_faults.cpp)
+std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr);
+// The first sample at or after `from` (before tr.end) by which x has come within 5 % of its span over tr of one
+// extreme and then of the other; tr.end where it does not. (sensor_faults.cpp)
+std::size_t sweep_after(std::span<const double> x, IndexRange tr, std::size_t from);
 // Samples of v[from, to) far outside the bulk of the rest (a glitch, a spike, a sensor's overrange value): "N
 // sample(s) of the {which} lie far outside the rest (sample ...; 99 % of the samples lie within [lo, hi]): ...", ""
 // where there are none. fit() refuses a training record with them; outlier_warning names them on a scored record.

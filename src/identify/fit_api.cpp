@@ -854,13 +854,15 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
                        "range; ",
                        a, at, both ? "; " + others : "", a, both ? "at both ends" : "there");
   };
+  // the rows of every sensor fault that is not censored, for the one warning that says where to train instead
+  std::vector<detail::FaultRun> faults;
   for (const bool low : {true, false}) {
     if (!(low ? clip.low : clip.high)) continue;
-    if (pinned_only[low ? 0 : 1])
+    if (pinned_only[low ? 0 : 1]) {
       rep.warnings.push_back(pinned(low ? &y_pinned[0] : nullptr, low ? nullptr : &y_pinned[1], false) + censoring +
-                             "; " + detail::exclude_advice(y_pinned[low ? 0 : 1].flagged, tr, false) +
-                             " or re-record with the sensor's range covering the signal");
-    else
+                             "; exclude these rows (a following warning names a --train range free of every flagged row) or re-record with the sensor's range covering the signal");
+      for (const IndexRange& f : y_pinned[low ? 0 : 1].flagged) faults.push_back({f, false});
+    } else
       rep.warnings.push_back(fmt::format(
           "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "
           "of it, where noise alone would put about half: a sensor's limit (or a stop recorded without noise); {}",
@@ -875,9 +877,9 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     std::vector<IndexRange> rows = x_pinned[0].flagged;
     rows.insert(rows.end(), x_pinned[1].flagged.begin(), x_pinned[1].flagged.end());
     rep.warnings.push_back(pinned(x_low ? &x_pinned[0] : nullptr, x_high ? &x_pinned[1] : nullptr, true) +
-                           "the model is fitted to an input that was not applied there: " +
-                           detail::exclude_advice(std::move(rows), tr, true) +
-                           " or re-record with the sensor's range covering the signal");
+                           "the model is fitted to an input that was not applied there: exclude these rows (a following warning names a --train range free of every flagged row) or "
+                           "re-record with the sensor's range covering the signal");
+    for (const IndexRange& f : rows) faults.push_back({f, true});
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training input clips at {} (see the warnings), and the model is "
@@ -891,8 +893,9 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   // A stuck output sensor: the model is fitted to an output that was not measured there: never `converged`.
   if (const detail::Stuck st = detail::stuck_runs(y, x, tr); st.runs > 0) {
     rep.warnings.push_back(fmt::format("the training output {}, and the model is fitted to an output that was not "
-                                       "measured; {} or re-record",
-                                       detail::stuck_text(st, x, tr), detail::exclude_advice(st.flagged, tr, false)));
+                                       "measured; exclude these rows (a following warning names a --train range free of every flagged row) or re-record",
+                                       detail::stuck_text(st, x, tr)));
+    for (const IndexRange& f : st.flagged) faults.push_back({f, false});
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training output is stuck at {:.6g} over samples {}:{} (see the "
@@ -902,11 +905,14 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   }
   // A stuck input sensor: a warning, not a status: a held command that then steps the way the output went, or two
   // records joined there, look the same in the data (docs/identification.md, "Sensor faults").
-  if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0)
+  if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0) {
     rep.warnings.push_back(fmt::format("the training input {}; if so, the model is fitted to an input that was not "
-                                       "applied there: {} or re-record (a held command that then steps the way the "
-                                       "output moved, or two records joined there, look the same)",
-                                       detail::stuck_input_text(st, x, y, tr), detail::exclude_advice(st.flagged, tr, true)));
+                                       "applied there: exclude these rows (a following warning names a --train range free of every flagged row) or re-record (a held command that then steps "
+                                       "the way the output moved, or two records joined there, look the same)",
+                                       detail::stuck_input_text(st, x, y, tr)));
+    for (const IndexRange& f : st.flagged) faults.push_back({f, true});
+  }
+  if (!faults.empty()) rep.warnings.push_back(detail::exclude_advice(std::move(faults), x, tr));
   if (has_model(rep.status))
     for (std::string& w : detail::resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();

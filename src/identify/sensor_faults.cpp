@@ -259,36 +259,69 @@ std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x,
                                      "the longest 1 % of its runs)"));
 }
 
-// Where to train instead, for fit's sensor-fault warnings (the flagged runs of detail::Pinned, detail::Stuck):
-// "exclude these rows (...)". An output fault leaves the model's state right (the input was applied), so the longest
-// stretch of the training range between the flagged runs will do; an input fault drives the model by an input that
-// was not applied, and the model runs through every sample from the record's start (FitOptions::train), so only the
-// stretch before the first flagged run will.
-std::string exclude_advice(std::vector<IndexRange> flagged, IndexRange tr, bool input) {
-  std::sort(flagged.begin(), flagged.end(), [](const IndexRange& a, const IndexRange& b) { return a.begin < b.begin; });
-  IndexRange best{tr.begin, tr.begin};
-  if (input) {
-    best.end = flagged.empty() ? tr.end : std::max(tr.begin, flagged.front().begin);
-  } else {
-    std::size_t at = tr.begin;  // the end of the flagged runs so far
-    for (const IndexRange& f : flagged) {
-      if (f.begin > at && f.begin - at > best.end - best.begin) best = {at, f.begin};
-      at = std::max(at, f.end);
-    }
-    if (tr.end > at && tr.end - at > best.end - best.begin) best = {at, tr.end};
+// sweep_after's band: within this fraction of x's span of an extreme.
+constexpr double kSweepBand = 0.05;
+// exclude_advice: a stretch under this share of the training range is said to be short.
+constexpr double kShortStretch = 0.1;
+
+std::size_t sweep_after(std::span<const double> x, IndexRange tr, std::size_t from) {
+  if (tr.end <= tr.begin) return tr.end;
+  const auto [lo, hi] = minmax_of(x, tr.begin, tr.end);
+  const double band = kSweepBand * (hi - lo);
+  int seen = 0;  // the extreme reached first: -1 the least, +1 the largest
+  for (std::size_t k = std::max(from, tr.begin); k < tr.end; ++k) {
+    const int at = x[k] <= lo + band ? -1 : x[k] >= hi - band ? 1 : 0;
+    if (at == 0) continue;
+    if (seen == 0) seen = at;
+    else if (at != seen) return k;
   }
-  const std::size_t n = best.end - best.begin;
-  const char* const why = input ? "the model runs through every sample from the record's start, so a range after "
-                                  "them would start from the state the wrong input left"
-                                : "a --validate range must leave them out too";
-  if (n == 0)
-    return fmt::format("exclude these rows (no stretch of the training range lies {} them; {}{})",
-                       input ? "before" : "outside", why, input ? ": cut the record after them" : "");
-  return fmt::format("exclude these rows (the {}stretch of the training range {} them: --train {}:{}, {:.3g} % of it; "
-                     "{})",
-                     input ? "" : "longest ", input ? "before" : "without", best.begin, best.end,
-                     100.0 * static_cast<double>(n) / static_cast<double>(tr.end - tr.begin), why);
+  return tr.end;
 }
+
+std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr) {
+  std::sort(runs.begin(), runs.end(),
+            [](const FaultRun& a, const FaultRun& b) { return a.rows.begin < b.rows.begin; });
+  IndexRange best{tr.begin, tr.begin};
+  bool best_swept = false;
+  std::size_t at = tr.begin;  // where a stretch after the runs so far may start
+  bool swept = false;         // ... set by an input fault's sweep
+  const auto consider = [&](std::size_t end) {
+    if (end > at && end - at > best.end - best.begin) best = {at, end}, best_swept = swept;
+  };
+  for (const FaultRun& f : runs) {
+    consider(f.rows.begin);
+    const std::size_t next = f.input ? sweep_after(x, tr, f.rows.end) : f.rows.end;
+    if (next > at) at = next, swept = f.input && next > f.rows.end;
+  }
+  consider(tr.end);
+  std::string list;
+  for (std::size_t i = 0; i < runs.size() && i < 6; ++i)
+    list += fmt::format("{}{}:{} ({})", i ? ", " : "", runs[i].rows.begin, runs[i].rows.end,
+                        runs[i].input ? "input" : "output");
+  if (runs.size() > 6) list += fmt::format(", and {} more", runs.size() - 6);
+  const std::size_t n = best.end - best.begin, m = tr.end - tr.begin;
+  if (n == 0)
+    return fmt::format("the rows the warnings above name (samples {}) leave no stretch of the training range free of "
+                       "them{}: re-record",
+                       list, swept ? " (after an input fault, the input must sweep its span before the model's memory "
+                                     "is free of the wrong reading)" : "");
+  std::string w = fmt::format(
+      "to fit without the rows the warnings above name (samples {}): train on samples {}:{} (--train {}:{}, {:.3g} % of "
+      "the training range), the longest stretch of it free of them{}",
+      list, best.begin, best.end, best.begin, best.end, 100.0 * static_cast<double>(n) / static_cast<double>(m),
+      best_swept ? ", from where the input has swept its span after an input fault (the model's memory holds the wrong "
+                   "reading until then, and the errors there are the fault's)"
+                 : "");
+  if (best.end < tr.end)
+    w += "; a --validate range must leave them out too (without one, the samples after --train are validated, and "
+         "they hold them)";
+  if (static_cast<double>(n) < kShortStretch * static_cast<double>(m))
+    w += fmt::format("; that is less than {:.0f} % of the training range: re-record, or fit it knowing how little "
+                     "it holds",
+                     100 * kShortStretch);
+  return w;
+}
+
 
 }  // namespace detail
 

@@ -156,8 +156,10 @@ std::string stuck_input_warning(std::span<const double> x, std::span<const doubl
                                 std::string_view what);
 // Samples of a scored record's input or output far outside the rest, beyond its central 99 % by more than half that
 // range's width (a glitch, a spike, a sensor's overrange value; fit() refuses a training record with them): an input
-// spike drives the model and sets its memory, an output spike sets the largest error. "what: N sample(s) of the
-// input lie far outside the rest (sample K (value), ...; ...)...", or "" where there are none.
+// spike drives the model and sets its memory, an output spike sets the largest error. Judged against the whole
+// record's bulk; the input over every sample before range's end (the model runs from the record's start), the
+// output over range. "what: N sample(s) of the input lie far outside the rest (sample K (value), ...; ...)...", or
+// "" where there are none.
 std::string outlier_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                             std::string_view what);
 

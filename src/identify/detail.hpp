@@ -164,9 +164,11 @@ std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x
 std::size_t sweep_after(std::span<const double> x, IndexRange tr, std::size_t from);
 // Samples of v[from, to) far outside the bulk of the rest (a glitch, a spike, a sensor's overrange value): "N
 // sample(s) of the {which} lie far outside the rest (sample ...; 99 % of the samples lie within [lo, hi]): ...", ""
-// where there are none. fit() refuses a training record with them; outlier_warning names them on a scored record.
+// where there are none. fit() refuses a training record with them; outlier_warning names them on a scored record,
+// against the whole record's bulk (`bulk`: the samples whose quantiles set it; default [from, to)).
 // (sensor_faults.cpp)
-std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which);
+std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which,
+                        IndexRange bulk = {0, 0});
 // fit()'s warnings on a coarse input or output sensor (grid_of) and whether the training RMS is near the output's
 // floor. (sensor_faults.cpp)
 std::vector<std::string> resolution_warnings(std::span<const double> x, std::span<const double> y, IndexRange tr,

@@ -437,9 +437,13 @@ std::vector<std::pair<std::size_t, int>> detail::reversals(std::span<const doubl
 // anywhere. Never the peaks of a smooth signal (its top 0.5 % of samples lie within a small
 // fraction of its span of each other), a rest at the start or the end, a step from rest, or a
 // vent of more than a few samples. The description names the count and the first rows; empty
-// where there are none.
-std::string detail::outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which) {
-  std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(from), v.begin() + static_cast<std::ptrdiff_t>(to));
+// where there are none. The bulk (the quantiles, a short run's length, the samples a spike jumps from and back to)
+// is that of v[bulk] where bulk is given (it holds [from, to)), else of v[from, to).
+std::string detail::outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which,
+                                IndexRange bulk) {
+  if (bulk.end == 0) bulk = {from, to};
+  std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(bulk.begin),
+                        v.begin() + static_cast<std::ptrdiff_t>(bulk.end));
   const std::size_t n = s.size();
   const auto at = [&](double q) {
     const auto k = static_cast<std::size_t>(q * static_cast<double>(n - 1));
@@ -458,7 +462,7 @@ std::string detail::outliers_of(std::span<const double> v, std::size_t from, std
     std::size_t b = a;  // the run [a, b)
     double far = 0.0;   // its farthest distance beyond the bulk
     while (b < to && beyond(b)) far = std::max({far, lo - v[b], v[b] - hi}), ++b;
-    const bool spike = a > from && b < to && b - a <= short_run && std::abs(v[a] - v[a - 1]) > margin &&
+    const bool spike = a > bulk.begin && b < bulk.end && b - a <= short_run && std::abs(v[a] - v[a - 1]) > margin &&
                        std::abs(v[b - 1] - v[b]) > margin;
     if (spike || far > 20.0 * margin)
       for (std::size_t k = a; k < b; ++k)
@@ -476,8 +480,11 @@ std::string outlier_warning(std::span<const double> x, std::span<const double> y
   detail::check_record(x, y, "outlier_warning");
   const IndexRange r = detail::check_range(range, x.size(), "outlier_warning");
   if (r.end - r.begin < 2) return {};
-  const std::string in = detail::outliers_of(x, r.begin, r.end, "input");
-  const std::string out = detail::outliers_of(y, r.begin, r.end, "output");
+  // against the whole record's bulk (a quiet stretch's noise is no spike), the input's over every sample the model
+  // is driven by (from the record's start), the output's over the scored range
+  const IndexRange all{0, x.size()};
+  const std::string in = detail::outliers_of(x, 0, r.end, "input", all);
+  const std::string out = detail::outliers_of(y, r.begin, r.end, "output", all);
   if (in.empty() && out.empty()) return {};
   std::string w = fmt::format("{}: ", what);
   if (!in.empty())

@@ -206,21 +206,18 @@ int run_fit(const FitCliOptions& c) {
       sets.push_back({"", {}, {}, {}, IndexRange{train.end, x.size()}});
   }
 
-  if (isatty(fileno(stderr))) {
+  // auto's candidates fit silently (a minute on 1e5 samples): say how many have ended, on a terminal in one line
+  // rewritten, off one (a log, a pipe) one line as each ends, so that a long auto fit is seen to move
+  const bool terminal = isatty(fileno(stderr));
+  if (terminal)
     o.progress = [](int start, int it, double cost) {
       fmt::print(stderr, "\rstart {} iteration {:3d} cost {:.6g}   ", start, it, cost);
     };
-    // auto's candidates fit silently (a minute on 1e5 samples): say how many have ended
-    o.candidate_done = [](std::size_t done, std::size_t total, FitModel kind) {
-      fmt::print(stderr, "\rauto: {} of {} candidate fits done (the last: {})        ", done, total,
-                 fit_model_name(kind));
-    };
-    if (o.model == FitModel::automatic) fmt::print(stderr, "auto: fitting every kind on two hold-out folds\n");
-  } else if (o.model == FitModel::automatic) {
-    // not a terminal (a log, a pipe): one line as each candidate fit ends, so that a long auto fit is seen to move
+  if (o.model == FitModel::automatic) {
     fmt::print(stderr, "auto: fitting every kind on two hold-out folds\n");
-    o.candidate_done = [](std::size_t done, std::size_t total, FitModel kind) {
-      fmt::print(stderr, "auto: {} of {} candidate fits done (the last: {})\n", done, total, fit_model_name(kind));
+    o.candidate_done = [terminal](std::size_t done, std::size_t total, FitModel kind) {
+      fmt::print(stderr, "{}auto: {} of {} candidate fits done (the last: {}){}", terminal ? "\r" : "", done, total,
+                 fit_model_name(kind), terminal ? "        " : "\n");
       std::fflush(stderr);
     };
   }
@@ -231,6 +228,11 @@ int run_fit(const FitCliOptions& c) {
                                                                         o.sample_time == 0.0)))
     rep.warnings.insert(rep.warnings.end(), time_warnings.begin(), time_warnings.end());
   if (!axis_warning.empty()) rep.warnings.push_back(std::move(axis_warning));
+  // the stretch the sensor-fault advice names in samples, in seconds where --train was (the time column increases)
+  if (rep.fault_free_train && time && in_seconds(c.train) && time->size() >= 2)
+    rep.warnings.push_back(fmt::format("the sensor faults' --train {}:{} above, in seconds: --train {}",
+                                       rep.fault_free_train->begin, rep.fault_free_train->end,
+                                       seconds_range(*time, *rep.fault_free_train)));
   if (o.progress) fmt::print(stderr, "\r{:80}\r", "");
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 

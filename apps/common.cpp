@@ -209,6 +209,23 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
   return r;
 }
 
+std::string seconds_range(const std::vector<double>& time, IndexRange r) {
+  const std::size_t m = time.size();
+  if (m < 2 || r.begin >= r.end || r.end > m) throw Error(fmt::format("seconds_range: no range [{}, {}) of {} stamps",
+                                                                     r.begin, r.end, m));
+  const double a = time[r.begin], b = r.end < m ? time[r.end] : time.back() + (time.back() - time[m - 2]);
+  // the fewest digits (6 or more) that parse_range reads back as r: 1.3s, not 1.3000000000000003s
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::string text = fmt::format("{:.{}g}s:{:.{}g}s", a, digits, b, digits);
+    try {
+      const IndexRange back = parse_range(text, "seconds_range", &time, m);
+      if (back.begin == r.begin && back.end == r.end) return text;
+    } catch (const Error&) {
+    }
+  }
+  return fmt::format("{}s:{}s", a, b);
+}
+
 report::Axis parse_axis(const std::string& text, const std::string& fallback) {
   const std::string t = trim(text);
   if (t.empty()) return {fallback.empty() ? std::string("value") : fallback, ""};

@@ -33,7 +33,9 @@ function [model, report] = hysteron_fit(x, y, varargin)
 %   the fit produced none. REPORT is a struct: status ('converged', 'no_convergence',
 %   'failed', 'poor_fit'), ok, message, model_kind, parameters (struct array: name,
 %   value, std_error, held, at_bound), train and reference metrics (rms, max, mae,
-%   rms_percent_span, r2, n), inverse, warnings, candidates ('auto'), costs,
+%   rms_percent_span, r2, n), inverse, warnings, fault_free_train (where the warnings
+%   name sensor-fault rows: [first last], 1-based, the longest stretch of the training
+%   range free of them, to pass as 'train'; [] otherwise), candidates ('auto'), costs,
 %   iterations, time_s and report (the text the command line prints).
 %   A status other than 'converged' gives a warning (identifier hysteron:fitStatus).
 %

@@ -100,6 +100,11 @@ void expect_same(const FitReport& a, const FitReport& b) {
   expect_same(a.reference, b.reference);
   expect_same(a.inverse, b.inverse);
   EXPECT_EQ(a.warnings, b.warnings);
+  ASSERT_EQ(a.fault_free_train.has_value(), b.fault_free_train.has_value());
+  if (a.fault_free_train) {
+    EXPECT_EQ(a.fault_free_train->begin, b.fault_free_train->begin);
+    EXPECT_EQ(a.fault_free_train->end, b.fault_free_train->end);
+  }
   ASSERT_EQ(a.candidates.size(), b.candidates.size());
   for (std::size_t i = 0; i < a.candidates.size(); ++i) expect_same(a.candidates[i], b.candidates[i]);
 }
@@ -153,6 +158,7 @@ FitReport test_report() {
   r.reference = metrics(0.029, 1200);
   r.inverse = {inf_v, 0.062, 0.004, false, "its least slope over its input limits is 0"};
   r.warnings = {"q + p1 on its lower bound", "tau at bound"};
+  r.fault_free_train = IndexRange{130, 1500};
   FitCandidate c1;
   c1.kind = FitModel::gpi;
   c1.status = FitStatus::converged;
@@ -203,6 +209,11 @@ TEST(Results, CandidateAndFitReportRoundTrip) {
   EXPECT_EQ(j["model_kind"], "pi");
   EXPECT_EQ(j["candidates"][1]["kind"], "mpi-deadzone");
   EXPECT_TRUE(j["candidates"][1]["model"].is_null());
+  EXPECT_EQ(j["fault_free_train"], nlohmann::json::array({130, 1500}));
+  FitReport none = r;  // none: null, read back as none
+  none.fault_free_train.reset();
+  EXPECT_TRUE(io::to_json(none)["fault_free_train"].is_null());
+  expect_same(round_trip(none), none);
   // every status name reads back
   for (FitStatus s : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
                       FitStatus::poor_fit, FitStatus::invalid_input})

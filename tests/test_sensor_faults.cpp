@@ -407,6 +407,11 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
                 .find("(--train " + longest_clean(stuck.x.size(), {{330, 480}}) + ","),
             std::string::npos)
       << with_warnings(rs);
+  // ... and the same stretch as a range, to train on (FitReport::fault_free_train)
+  ASSERT_TRUE(rs.fault_free_train.has_value());
+  EXPECT_EQ(fmt::format("{}:{}", rs.fault_free_train->begin, rs.fault_free_train->end),
+            longest_clean(stuck.x.size(), {{330, 480}}));
+  EXPECT_FALSE(fit_gpi(clean).fault_free_train.has_value());
   EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;  // (here also worse than the reference PI)
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
                                    std::array{-1e4, 250.0, 0.0, -3.0}}) {
@@ -532,6 +537,9 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
     const std::string adv = warning_with(r100, "to fit without the rows");
     EXPECT_NE(adv.find("(--train 100:330, 7.93 % of the training range)"), std::string::npos) << with_warnings(r100);
     EXPECT_NE(adv.find("less than 10 % of the training range"), std::string::npos) << adv;
+    ASSERT_TRUE(r100.fault_free_train.has_value());
+    EXPECT_EQ(r100.fault_free_train->begin, 100u);
+    EXPECT_EQ(r100.fault_free_train->end, 330u);
   }
   // evaluate's and a --validate-data record's diagnosis names it too (diagnose_record)
   EXPECT_NE(stuck_input_warning(stuck.x, stuck.y, {0, stuck.x.size()}, "b.csv").find("b.csv: the input sits exactly"),
@@ -561,6 +569,8 @@ TEST(SensorFaults, AStuckInputSensorIsNamed) {
                   .find(fmt::format("(samples 250:350 (input)): train on samples {}:3000 (--train {}:3000,", from, from)),
               std::string::npos)
         << from << "\n" << with_warnings(rt);
+    // its stretch holds loops: nothing said of its reversals
+    EXPECT_EQ(warning_with(rt, "to fit without the rows").find("reverses"), std::string::npos) << with_warnings(rt);
   }
   // A held command is no stuck sensor: the reading resumes where it was, or the reading stepped into the hold as
   // much as out of it. A ramp up to the top over 2000 samples, a step down to the middle held for 600 samples, then
@@ -692,4 +702,31 @@ TEST(SensorFaults, ASpikeInAScoredRecordIsNamed) {
   Record rest = clean;
   for (std::size_t j = 0; j < n / 5; ++j) rest.x[j] = 0.0, rest.y[j] = clean.y[0];
   EXPECT_EQ(outlier_warning(rest.x, rest.y, {0, n}, "b.csv"), "");
+}
+
+// Where the stretch free of the flagged rows holds fewer than two reversals of the input (as fit() counts them on
+// it as a training range), the advice says that a fit on it sees one branch or no inner loop: one slow rise and fall
+// with the output frozen on the rise.
+TEST(SensorFaults, AnAdvisedStretchWithoutLoopsIsSaid) {
+  const auto up_down = [](int k) { return k < 1000 ? k / 1000.0 : 2.0 - k / 1000.0; };
+  Record rise = record(up_down, 2000);
+  for (std::size_t k = 500; k < 650; ++k) rise.y[k] = rise.y[500];  // x rises by 15 % of its span meanwhile
+  const FitReport a = fit_gpi(rise);
+  ASSERT_NE(warning_with(a, "the output sensor is stuck there"), "") << with_warnings(a);
+  const std::string adv = warning_with(a, "to fit without the rows");
+  EXPECT_NE(adv.find("train on samples 650:2000"), std::string::npos) << adv;  // it peaks at 1000, once
+  EXPECT_NE(adv.find("the input reverses once there"), std::string::npos) << adv;
+  EXPECT_NE(adv.find("no inner (minor) loop"), std::string::npos) << adv;
+  // trained on the rise only, frozen over 400:550: the longer stretch, 550:1000, is one branch
+  Record early = record(up_down, 2000);
+  for (std::size_t k = 400; k < 550; ++k) early.y[k] = early.y[400];
+  FitOptions o;
+  o.model = FitModel::gpi;
+  o.num_threads = 1;
+  o.train = {0, 1000};
+  const FitReport b = fit(early.x, early.y, o);
+  const std::string adv_b = warning_with(b, "to fit without the rows");
+  EXPECT_NE(adv_b.find("train on samples 550:1000"), std::string::npos) << with_warnings(b);
+  EXPECT_NE(adv_b.find("the input never reverses there"), std::string::npos) << adv_b;
+  EXPECT_NE(adv_b.find("one branch only"), std::string::npos) << adv_b;
 }

@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -525,6 +526,10 @@ struct FitReport {
   InverseCheck inverse;         // slope and jump of the fitted model's inverse
   std::vector<std::string> warnings;     // bounds hit, poor-fit reasons, ...
   std::vector<FitCandidate> candidates;  // FitModel::automatic only
+  // Where the warnings name sensor-fault rows (a clip, a stuck reading): the longest stretch of the training range
+  // free of them, to train on instead (after an input fault, from where the input has swept its span); empty where
+  // none was flagged or no stretch is left.
+  std::optional<IndexRange> fault_free_train;
 
   bool ok() const noexcept { return status == FitStatus::converged; }
   // One-line summary; multi-line report with the parameter table.

@@ -494,6 +494,10 @@ void cmd_fit(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   if (auto it = rep.find("candidates"); it != rep.end() && it->is_array())
     for (auto& c : *it)
       if (c.is_object() && c.contains("model")) limits_to_infinite(c["model"]);
+  // as the option train: [first last], 1-based and inclusive ([] where none)
+  rep["fault_free_train"] = r.fault_free_train ? nlohmann::json::array({r.fault_free_train->begin + 1,
+                                                                         r.fault_free_train->end})
+                                               : nlohmann::json::array();
   rep["ok"] = r.ok();
   rep["report"] = r.full_report();
   // the model with its training error ("training"), as hysteron fit's model file and the report's model

@@ -14,7 +14,7 @@ TRUE_GPI = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rh
             "alpha": 2.0}
 REPORT_KEYS = {"status", "ok", "message", "model_kind", "model", "parameters", "train", "reference", "inverse",
                "warnings", "candidates", "initial_cost", "final_cost", "iterations", "total_iterations",
-               "num_starts", "time_s", "covariance_note", "report"}
+               "num_starts", "time_s", "covariance_note", "fault_free_train", "report"}
 METRIC_KEYS = {"rms", "max", "mae", "rms_percent_span", "r2", "n"}
 
 
@@ -33,8 +33,16 @@ def test_a_stuck_output_sensor_is_named_by_fit_and_evaluate():
     r = hysteron.fit(x, stuck, model="gpi", min_slope=0.01)
     assert r["status"] == "poor_fit", r["message"]
     assert any("(samples 360:440)" in w and "stuck" in w for w in r["warnings"]), r["warnings"]
+    # where to train instead, as a range to pass back: the longest stretch without the frozen rows, the record's
+    # last 1360 samples; trained there, nothing is stuck
+    assert r["fault_free_train"] == [440, 1800], r["fault_free_train"]
+    assert any("train on samples 440:1800" in w for w in r["warnings"]), r["warnings"]
+    again = hysteron.fit(x, stuck, model="gpi", min_slope=0.01, train=tuple(r["fault_free_train"]))
+    assert again["status"] == "converged" and again["train"]["n"] == 1360, again["message"]
+    assert again["fault_free_train"] is None and not any("stuck" in w for w in again["warnings"])
     good = hysteron.fit(x, y, model="gpi", min_slope=0.01)
     assert not any("stuck" in w for w in good["warnings"])
+    assert good["fault_free_train"] is None
     m = hysteron.evaluate(good["model"], x, stuck)
     assert "(samples 360:440)" in m["stuck_output_warning"]
     assert m["stuck_output_warning"] in m["warnings"]

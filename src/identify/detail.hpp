@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -157,18 +158,24 @@ struct FaultRun {
 // the range and then of the other (every play of threshold up to 0.45 span is then set by the input alone, whatever
 // the wrong reading left; sweep_after); with the runs named (up to 6), "--train A:B", its share of the range, that
 // a --validate range must leave them out where the default (the samples after --train) holds them, and where the
-// stretch is under 10 % of the range, that it is. (sensor_faults.cpp)
-std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr);
-// The first sample at or after `from` (before tr.end) by which x has come within 5 % of its span over tr of one
-// extreme and then of the other; tr.end where it does not. (sensor_faults.cpp)
-std::size_t sweep_after(std::span<const double> x, IndexRange tr, std::size_t from);
+// stretch is under 10 % of the range, that it is; where its input reverses fewer than twice (as fit() counts them
+// over it as a training range), that a fit there is blind to a branch or the inner loops. `train`: the stretch, none
+// where no stretch is left. (sensor_faults.cpp)
+struct ExcludeAdvice {
+  std::string text;
+  std::optional<IndexRange> train;
+};
+ExcludeAdvice exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr);
+// The first sample in [from, end) by which x has come within 5 % of hi - lo of one of its extremes lo, hi (over the
+// training range) and then of the other; `end` where it does not. (sensor_faults.cpp)
+std::size_t sweep_after(std::span<const double> x, std::size_t from, std::size_t end, double lo, double hi);
 // Samples of v[from, to) far outside the bulk of the rest (a glitch, a spike, a sensor's overrange value): "N
 // sample(s) of the {which} lie far outside the rest (sample ...; 99 % of the samples lie within [lo, hi]): ...", ""
 // where there are none. fit() refuses a training record with them; outlier_warning names them on a scored record,
-// against the whole record's bulk (`bulk`: the samples whose quantiles set it; default [from, to)).
-// (sensor_faults.cpp)
+// against the whole record's bulk (`bulk`: the samples whose quantiles set it, holding [from, to); default [from,
+// to)). (sensor_faults.cpp)
 std::string outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which,
-                        IndexRange bulk = {0, 0});
+                        std::optional<IndexRange> bulk = std::nullopt);
 // fit()'s warnings on a coarse input or output sensor (grid_of) and whether the training RMS is near the output's
 // floor. (sensor_faults.cpp)
 std::vector<std::string> resolution_warnings(std::span<const double> x, std::span<const double> y, IndexRange tr,

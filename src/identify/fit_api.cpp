@@ -126,6 +126,9 @@ constexpr double kMinR2 = kMinFitR2;
 // some multiple of the reference PI's (a PI record on the reference's own threshold grid,
 // which the reference fits to rounding: a pi fit at 0.032 % of span was refused).
 constexpr double kExcellent = 1e-3;
+// The end of every sensor-fault warning of fit(), before "re-record ...": exclude_advice's warning follows them.
+constexpr const char* kExcludeRows =
+    "exclude these rows (a following warning names a --train range free of every flagged row) or ";
 // A model whose loops enclose less than this fraction of the record's area has lost its hysteresis.
 constexpr double kNarrowLoops = 0.1;
 // The inverse-jump warning: the inverse driven by the measured output moves in one sample by more
@@ -860,7 +863,7 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     if (!(low ? clip.low : clip.high)) continue;
     if (pinned_only[low ? 0 : 1]) {
       rep.warnings.push_back(pinned(low ? &y_pinned[0] : nullptr, low ? nullptr : &y_pinned[1], false) + censoring +
-                             "; exclude these rows (a following warning names a --train range free of every flagged row) or re-record with the sensor's range covering the signal");
+                             "; " + kExcludeRows + "re-record with the sensor's range covering the signal");
       for (const IndexRange& f : y_pinned[low ? 0 : 1].flagged) faults.push_back({f, false});
     } else
       rep.warnings.push_back(fmt::format(
@@ -874,12 +877,11 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   const auto x_pinned = detail::pinned_runs(x, y, tr);
   const bool x_low = x_pinned[0].samples > 0, x_high = x_pinned[1].samples > 0;
   if (x_low || x_high) {  // one warning, naming both ends where both clip
-    std::vector<IndexRange> rows = x_pinned[0].flagged;
-    rows.insert(rows.end(), x_pinned[1].flagged.begin(), x_pinned[1].flagged.end());
     rep.warnings.push_back(pinned(x_low ? &x_pinned[0] : nullptr, x_high ? &x_pinned[1] : nullptr, true) +
-                           "the model is fitted to an input that was not applied there: exclude these rows (a following warning names a --train range free of every flagged row) or "
+                           "the model is fitted to an input that was not applied there: " + kExcludeRows +
                            "re-record with the sensor's range covering the signal");
-    for (const IndexRange& f : rows) faults.push_back({f, true});
+    for (const detail::Pinned& p : x_pinned)
+      for (const IndexRange& f : p.flagged) faults.push_back({f, true});
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
       rep.message = fmt::format("poor fit: the training input clips at {} (see the warnings), and the model is "
@@ -893,8 +895,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   // A stuck output sensor: the model is fitted to an output that was not measured there: never `converged`.
   if (const detail::Stuck st = detail::stuck_runs(y, x, tr); st.runs > 0) {
     rep.warnings.push_back(fmt::format("the training output {}, and the model is fitted to an output that was not "
-                                       "measured; exclude these rows (a following warning names a --train range free of every flagged row) or re-record",
-                                       detail::stuck_text(st, x, tr)));
+                                       "measured; {}re-record",
+                                       detail::stuck_text(st, x, tr), kExcludeRows));
     for (const IndexRange& f : st.flagged) faults.push_back({f, false});
     if (rep.status == FitStatus::converged) {
       rep.status = FitStatus::poor_fit;
@@ -907,12 +909,16 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   // records joined there, look the same in the data (docs/identification.md, "Sensor faults").
   if (const detail::Stuck st = detail::stuck_input_runs(x, y, tr); st.runs > 0) {
     rep.warnings.push_back(fmt::format("the training input {}; if so, the model is fitted to an input that was not "
-                                       "applied there: exclude these rows (a following warning names a --train range free of every flagged row) or re-record (a held command that then steps "
-                                       "the way the output moved, or two records joined there, look the same)",
-                                       detail::stuck_input_text(st, x, y, tr)));
+                                       "applied there: {}re-record (a held command that then steps the way the output "
+                                       "moved, or two records joined there, look the same)",
+                                       detail::stuck_input_text(st, x, y, tr), kExcludeRows));
     for (const IndexRange& f : st.flagged) faults.push_back({f, true});
   }
-  if (!faults.empty()) rep.warnings.push_back(detail::exclude_advice(std::move(faults), x, tr));
+  if (!faults.empty()) {
+    detail::ExcludeAdvice advice = detail::exclude_advice(std::move(faults), x, tr);
+    rep.warnings.push_back(std::move(advice.text));
+    rep.fault_free_train = advice.train;
+  }
   if (has_model(rep.status))
     for (std::string& w : detail::resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));
   rep.time_s = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -264,23 +264,22 @@ constexpr double kSweepBand = 0.05;
 // exclude_advice: a stretch under this share of the training range is said to be short.
 constexpr double kShortStretch = 0.1;
 
-std::size_t sweep_after(std::span<const double> x, IndexRange tr, std::size_t from) {
-  if (tr.end <= tr.begin) return tr.end;
-  const auto [lo, hi] = minmax_of(x, tr.begin, tr.end);
+std::size_t sweep_after(std::span<const double> x, std::size_t from, std::size_t end, double lo, double hi) {
   const double band = kSweepBand * (hi - lo);
   int seen = 0;  // the extreme reached first: -1 the least, +1 the largest
-  for (std::size_t k = std::max(from, tr.begin); k < tr.end; ++k) {
+  for (std::size_t k = from; k < end; ++k) {
     const int at = x[k] <= lo + band ? -1 : x[k] >= hi - band ? 1 : 0;
     if (at == 0) continue;
     if (seen == 0) seen = at;
     else if (at != seen) return k;
   }
-  return tr.end;
+  return end;
 }
 
-std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr) {
+ExcludeAdvice exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr) {
   std::sort(runs.begin(), runs.end(),
             [](const FaultRun& a, const FaultRun& b) { return a.rows.begin < b.rows.begin; });
+  const auto [lo, hi] = minmax_of(x, tr.begin, tr.end);  // the extremes an input fault's sweep reaches
   IndexRange best{tr.begin, tr.begin};
   bool best_swept = false;
   std::size_t at = tr.begin;  // where a stretch after the runs so far may start
@@ -290,7 +289,7 @@ std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x
   };
   for (const FaultRun& f : runs) {
     consider(f.rows.begin);
-    const std::size_t next = f.input ? sweep_after(x, tr, f.rows.end) : f.rows.end;
+    const std::size_t next = f.input ? sweep_after(x, std::max(f.rows.end, tr.begin), tr.end, lo, hi) : f.rows.end;
     if (next > at) at = next, swept = f.input && next > f.rows.end;
   }
   consider(tr.end);
@@ -301,10 +300,11 @@ std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x
   if (runs.size() > 6) list += fmt::format(", and {} more", runs.size() - 6);
   const std::size_t n = best.end - best.begin, m = tr.end - tr.begin;
   if (n == 0)
-    return fmt::format("the rows the warnings above name (samples {}) leave no stretch of the training range free of "
-                       "them{}: re-record",
-                       list, swept ? " (after an input fault, the input must sweep its span before the model's memory "
-                                     "is free of the wrong reading)" : "");
+    return {fmt::format("the rows the warnings above name (samples {}) leave no stretch of the training range free of "
+                        "them{}: re-record",
+                        list, swept ? " (after an input fault, the input must sweep its span before the model's "
+                                      "memory is free of the wrong reading)" : ""),
+            std::nullopt};
   std::string w = fmt::format(
       "to fit without the rows the warnings above name (samples {}): train on samples {}:{} (--train {}:{}, {:.3g} % of "
       "the training range), the longest stretch of it free of them{}",
@@ -319,7 +319,14 @@ std::string exclude_advice(std::vector<FaultRun> runs, std::span<const double> x
     w += fmt::format("; that is less than {:.0f} % of the training range: re-record, or fit it knowing how little "
                      "it holds",
                      100 * kShortStretch);
-  return w;
+  // fit()'s rule on the stretch as a training range (its own span): fewer than two reversals leave a branch or the
+  // inner loops unseen
+  if (const std::size_t rev = reversals(x, best.begin, best.end, span_of(x.subspan(best.begin, n))).size(); rev < 2)
+    w += fmt::format("; the input {} there (by more than {:.0f} % of its span there), so a fit on it sees {}: "
+                     "re-record",
+                     rev == 0 ? "never reverses" : "reverses once", 100 * kReversalFraction,
+                     rev == 0 ? "one branch only" : "no inner (minor) loop");
+  return {std::move(w), best};
 }
 
 
@@ -440,8 +447,8 @@ std::vector<std::pair<std::size_t, int>> detail::reversals(std::span<const doubl
 // where there are none. The bulk (the quantiles, a short run's length, the samples a spike jumps from and back to)
 // is that of v[bulk] where bulk is given (it holds [from, to)), else of v[from, to).
 std::string detail::outliers_of(std::span<const double> v, std::size_t from, std::size_t to, std::string_view which,
-                                IndexRange bulk) {
-  if (bulk.end == 0) bulk = {from, to};
+                                std::optional<IndexRange> bulk_rows) {
+  const IndexRange bulk = bulk_rows.value_or(IndexRange{from, to});
   std::vector<double> s(v.begin() + static_cast<std::ptrdiff_t>(bulk.begin),
                         v.begin() + static_cast<std::ptrdiff_t>(bulk.end));
   const std::size_t n = s.size();

@@ -193,6 +193,7 @@ json to_json(const FitReport& r) {
           {"reference", to_json(r.reference)},
           {"inverse", to_json(r.inverse)},
           {"warnings", r.warnings},
+          {"fault_free_train", r.fault_free_train ? to_json(*r.fault_free_train) : json(nullptr)},
           {"candidates", candidates}};
 }
 
@@ -223,6 +224,11 @@ void from_json(const json& j, FitReport& r, std::string_view where) {
       if (!w[i].is_string()) wrong_type(w[i], fmt::format("warnings[{}]", i), where, "a string");
       r.warnings.push_back(w[i].get<std::string>());
     }
+  }
+  if (j.contains("fault_free_train") && !j["fault_free_train"].is_null()) {  // absent in files before it
+    IndexRange t;
+    from_json(j["fault_free_train"], t, key_where(where, "fault_free_train"));
+    r.fault_free_train = t;
   }
   if (j.contains("candidates")) {
     const json& cs = get_array(j, "candidates", where);

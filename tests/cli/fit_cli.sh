@@ -250,5 +250,36 @@ grep -q "as the fit treated them" "$T/r0.html" && fail "regenerated report of a 
 $PY -c "import json,sys; d=[json.load(open(f))['data']['censored'] for f in sys.argv[1:]]; assert d == [True, False], d" \
   "$T/r2.report.json" "$T/r0.report.json" || fail "data.censored in the fit documents"
 
+# a stuck output sensor in a record trained on in seconds: the advised stretch is said in seconds too, in the
+# fewest digits that read back as its samples (1.3s, not 1.3000000000000003s: the stamps are i * 0.01), and
+# --train in those seconds trains on the same samples as --train in those indices; --json carries it as a range
+$PY - "$T/a.csv" "$T/stuck.csv" <<'PYEOF' || fail "stuck record"
+import sys
+rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n")[1:] if r]
+with open(sys.argv[2], "w") as f:
+    f.write("t_s,p,y\n")
+    for i, (t, p, y) in enumerate(rows):
+        f.write(f"{t},{p},{rows[60][2] if 60 <= i < 130 else y}\n")  # frozen while p rises by 47 % of its span
+PYEOF
+"$BIN" fit --model gpi --data "$T/stuck.csv" --input p --output y --time-column t_s --train 0s:15s --threads 1 \
+  --out "$T/stuck.json" --json > "$T/stuck_fit.json" 2> "$T/stuck.err"
+grep -q "the output sensor is stuck there" "$T/stuck_fit.json" || fail "stuck output not named: $(head -c 600 "$T/stuck_fit.json")"
+grep -q "train on samples 130:1500 (--train 130:1500," "$T/stuck_fit.json" || fail "stuck: no advice 130:1500"
+grep -q "the sensor faults' --train 130:1500 above, in seconds: --train 1.3s:15s" "$T/stuck_fit.json" \
+  || fail "stuck: the advice in seconds"
+for r in 1.3s:15s 130:1500; do
+  "$BIN" fit --model gpi --data "$T/stuck.csv" --input p --output y --time-column t_s --train $r --threads 1 \
+    --force --out "$T/stuck_r.json" --json > "$T/stuck_$r.json" 2> /dev/null
+done
+$PY - "$T/stuck_fit.json" "$T/stuck_1.3s:15s.json" "$T/stuck_130:1500.json" <<'PYEOF' || fail "stuck: ranges"
+import json, sys
+d, s, i = (json.load(open(f)) for f in sys.argv[1:])
+d = d.get("fit", d)
+assert d["fault_free_train"] == [130, 1500], d["fault_free_train"]
+s, i = s.get("fit", s), i.get("fit", i)
+assert s["train"]["n"] == i["train"]["n"] == 1370, (s["train"]["n"], i["train"]["n"])
+assert s["fault_free_train"] is None and i["fault_free_train"] is None
+PYEOF
+
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

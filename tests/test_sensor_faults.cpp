@@ -705,28 +705,40 @@ TEST(SensorFaults, ASpikeInAScoredRecordIsNamed) {
 }
 
 // Where the stretch free of the flagged rows holds fewer than two reversals of the input (as fit() counts them on
-// it as a training range), the advice says that a fit on it sees one branch or no inner loop: one slow rise and fall
-// with the output frozen on the rise.
+// it as a training range) and fewer than the training range, the advice says that a fit on it sees one branch or no
+// inner loop; where the training range has no more (fit()'s own warning says it then), it does not.
 TEST(SensorFaults, AnAdvisedStretchWithoutLoopsIsSaid) {
-  const auto up_down = [](int k) { return k < 1000 ? k / 1000.0 : 2.0 - k / 1000.0; };
-  Record rise = record(up_down, 2000);
-  for (std::size_t k = 500; k < 650; ++k) rise.y[k] = rise.y[500];  // x rises by 15 % of its span meanwhile
-  const FitReport a = fit_gpi(rise);
+  // rise, fall, rise (reversals at 1000 and 2000), the output frozen on the fall while x falls by 15 % of its span
+  const auto zigzag = [](int k) { return k < 1000 ? k / 1000.0 : k < 2000 ? 2.0 - k / 1000.0 : k / 1000.0 - 2.0; };
+  Record three = record(zigzag, 3000);
+  for (std::size_t k = 1300; k < 1450; ++k) three.y[k] = three.y[1300];
+  const FitReport a = fit_gpi(three);
   ASSERT_NE(warning_with(a, "the output sensor is stuck there"), "") << with_warnings(a);
   const std::string adv = warning_with(a, "to fit without the rows");
-  EXPECT_NE(adv.find("train on samples 650:2000"), std::string::npos) << adv;  // it peaks at 1000, once
+  EXPECT_NE(adv.find("train on samples 1450:3000"), std::string::npos) << adv;  // its least value at 2000, once
   EXPECT_NE(adv.find("the input reverses once there"), std::string::npos) << adv;
   EXPECT_NE(adv.find("no inner (minor) loop"), std::string::npos) << adv;
-  // trained on the rise only, frozen over 400:550: the longer stretch, 550:1000, is one branch
-  Record early = record(up_down, 2000);
-  for (std::size_t k = 400; k < 550; ++k) early.y[k] = early.y[400];
+  // trained on the rise and the fall (one reversal), frozen on both: the longest stretch, 0:650, is one branch
   FitOptions o;
   o.model = FitModel::gpi;
   o.num_threads = 1;
-  o.train = {0, 1000};
-  const FitReport b = fit(early.x, early.y, o);
+  o.train = {0, 2000};
+  Record two = record(zigzag, 3000);
+  for (std::size_t k = 650; k < 800; ++k) two.y[k] = two.y[650];
+  for (std::size_t k = 1250; k < 1400; ++k) two.y[k] = two.y[1250];
+  const FitReport b = fit(two.x, two.y, o);
   const std::string adv_b = warning_with(b, "to fit without the rows");
-  EXPECT_NE(adv_b.find("train on samples 550:1000"), std::string::npos) << with_warnings(b);
+  EXPECT_NE(adv_b.find("(samples 650:800 (output), 1250:1400 (output)): train on samples 0:650"), std::string::npos)
+      << with_warnings(b);
   EXPECT_NE(adv_b.find("the input never reverses there"), std::string::npos) << adv_b;
   EXPECT_NE(adv_b.find("one branch only"), std::string::npos) << adv_b;
+  // trained on the rise and the fall, frozen on the rise only: the stretch 750:2000 reverses once, as the training
+  // range does: nothing more said
+  Record one = record(zigzag, 3000);
+  for (std::size_t k = 600; k < 750; ++k) one.y[k] = one.y[600];
+  const FitReport c = fit(one.x, one.y, o);
+  const std::string adv_c = warning_with(c, "to fit without the rows");
+  EXPECT_NE(adv_c.find("train on samples 750:2000"), std::string::npos) << with_warnings(c);
+  EXPECT_EQ(adv_c.find("reverses"), std::string::npos) << adv_c;
+  EXPECT_NE(warning_with(c, "the training input reverses once"), "") << with_warnings(c);
 }

@@ -159,7 +159,8 @@ struct FaultRun {
 // the wrong reading left; sweep_after); with the runs named (up to 6), "--train A:B", its share of the range, that
 // a --validate range must leave them out where the default (the samples after --train) holds them, and where the
 // stretch is under 10 % of the range, that it is; where its input reverses fewer than twice (as fit() counts them
-// over it as a training range), that a fit there is blind to a branch or the inner loops. `train`: the stretch, none
+// over it as a training range) and fewer times than over tr, that a fit there is blind to a branch or the inner
+// loops. `train`: the stretch, none
 // where no stretch is left. (sensor_faults.cpp)
 struct ExcludeAdvice {
   std::string text;

@@ -320,8 +320,9 @@ ExcludeAdvice exclude_advice(std::vector<FaultRun> runs, std::span<const double>
                      "it holds",
                      100 * kShortStretch);
   // fit()'s rule on the stretch as a training range (its own span): fewer than two reversals leave a branch or the
-  // inner loops unseen
-  if (const std::size_t rev = reversals(x, best.begin, best.end, span_of(x.subspan(best.begin, n))).size(); rev < 2)
+  // inner loops unseen; said where the training range had more (else fit()'s own warning says it of both)
+  const std::size_t rev = reversals(x, best.begin, best.end, span_of(x.subspan(best.begin, n))).size();
+  if (rev < 2 && rev < reversals(x, tr.begin, tr.end, span_of(x.subspan(tr.begin, m))).size())
     w += fmt::format("; the input {} there (by more than {:.0f} % of its span there), so a fit on it sees {}: "
                      "re-record",
                      rev == 0 ? "never reverses" : "reverses once", 100 * kReversalFraction,

@@ -229,10 +229,15 @@ int run_fit(const FitCliOptions& c) {
     rep.warnings.insert(rep.warnings.end(), time_warnings.begin(), time_warnings.end());
   if (!axis_warning.empty()) rep.warnings.push_back(std::move(axis_warning));
   // the stretch the sensor-fault advice names in samples, in seconds where --train was (the time column increases)
-  if (rep.fault_free_train && time && in_seconds(c.train) && time->size() >= 2)
-    rep.warnings.push_back(fmt::format("the sensor faults' --train {}:{} above, in seconds: --train {}",
-                                       rep.fault_free_train->begin, rep.fault_free_train->end,
-                                       seconds_range(*time, *rep.fault_free_train)));
+  if (rep.fault_free_train && time && in_seconds(c.train)) {
+    const IndexRange f = *rep.fault_free_train;
+    const std::optional<std::string> s = seconds_range(*time, f);
+    rep.warnings.push_back(s ? fmt::format("the sensor faults' --train {}:{} above, in seconds: --train {}", f.begin,
+                                           f.end, *s)
+                             : fmt::format("the sensor faults' --train {}:{} above has no range in seconds (the "
+                                           "time column repeats a stamp at one of its ends): give it in samples",
+                                           f.begin, f.end));
+  }
   if (o.progress) fmt::print(stderr, "\r{:80}\r", "");
   if (rep.status == FitStatus::invalid_input) throw Error(fmt::format("{}: {}", c.sel.file, rep.message));
 

@@ -80,9 +80,10 @@ ModelUnits model_units(const io::ModelDocument& doc);
 // "A:B" (sample indices, half-open; either side may be empty) or "As:Bs" (seconds, needs
 // `time`); both sides in the same unit. Throws hysteron::Error naming `opt`.
 IndexRange parse_range(const std::string& text, std::string_view opt, const std::vector<double>* time, std::size_t n);
-// "As:Bs", which parse_range reads back as r over the increasing time column `time` (seconds), in the fewest digits
-// (6 or more) that do: a range of samples said in seconds.
-std::string seconds_range(const std::vector<double>& time, IndexRange r);
+// "As:Bs" ("As:" where r ends at the record's end), which parse_range reads back as r over the time column `time`
+// (seconds, not decreasing), in the fewest digits (6 or more) that do: a range of samples said in seconds; none
+// where no text does (a stamp repeated at one of r's ends).
+std::optional<std::string> seconds_range(const std::vector<double>& time, IndexRange r);
 // "Pressure [kPa]" -> {"Pressure", "kPa"}; "" -> {fallback, ""}.
 report::Axis parse_axis(const std::string& text, const std::string& fallback);
 // Reports: a path ending in .html or .htm (any case) is HTML, anything else JSON.

@@ -209,21 +209,21 @@ IndexRange parse_range(const std::string& text, std::string_view opt, const std:
   return r;
 }
 
-std::string seconds_range(const std::vector<double>& time, IndexRange r) {
+std::optional<std::string> seconds_range(const std::vector<double>& time, IndexRange r) {
   const std::size_t m = time.size();
-  if (m < 2 || r.begin >= r.end || r.end > m) throw Error(fmt::format("seconds_range: no range [{}, {}) of {} stamps",
-                                                                     r.begin, r.end, m));
-  const double a = time[r.begin], b = r.end < m ? time[r.end] : time.back() + (time.back() - time[m - 2]);
-  // the fewest digits (6 or more) that parse_range reads back as r: 1.3s, not 1.3000000000000003s
+  if (r.begin >= r.end || r.end > m) return std::nullopt;
+  // the fewest digits (6 or more) that parse_range reads back as r: 1.3s, not 1.3000000000000003s; a range to the
+  // record's end is left open ("As:"), which no rounding of a stamp past the last one can move
   for (int digits = 6; digits <= 17; ++digits) {
-    std::string text = fmt::format("{:.{}g}s:{:.{}g}s", a, digits, b, digits);
+    std::string text = fmt::format("{:.{}g}s:", time[r.begin], digits);
+    if (r.end < m) text += fmt::format("{:.{}g}s", time[r.end], digits);
     try {
       const IndexRange back = parse_range(text, "seconds_range", &time, m);
       if (back.begin == r.begin && back.end == r.end) return text;
     } catch (const Error&) {
     }
   }
-  return fmt::format("{}s:{}s", a, b);
+  return std::nullopt;  // a stamp repeated at an end: the first sample at or after it is another one
 }
 
 report::Axis parse_axis(const std::string& text, const std::string& fallback) {

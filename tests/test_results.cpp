@@ -214,6 +214,18 @@ TEST(Results, CandidateAndFitReportRoundTrip) {
   none.fault_free_train.reset();
   EXPECT_TRUE(io::to_json(none)["fault_free_train"].is_null());
   expect_same(round_trip(none), none);
+  for (const char* bad : {"[1500, 130]", "[130, null]", "[7, 7]"}) {  // a range no fit writes: refused, named
+    nlohmann::json jb = j;
+    jb["fault_free_train"] = nlohmann::json::parse(bad);
+    FitReport got;
+    try {
+      io::from_json(jb, got, "r.json");
+      ADD_FAILURE() << bad << " was read";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("r.json"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("fault_free_train"), std::string::npos) << e.what();
+    }
+  }
   // every status name reads back
   for (FitStatus s : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
                       FitStatus::poor_fit, FitStatus::invalid_input})

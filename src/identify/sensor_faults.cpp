@@ -315,18 +315,18 @@ ExcludeAdvice exclude_advice(std::vector<FaultRun> runs, std::span<const double>
   if (best.end < tr.end)
     w += "; a --validate range must leave them out too (without one, the samples after --train are validated, and "
          "they hold them)";
-  if (static_cast<double>(n) < kShortStretch * static_cast<double>(m))
-    w += fmt::format("; that is less than {:.0f} % of the training range: re-record, or fit it knowing how little "
-                     "it holds",
-                     100 * kShortStretch);
   // fit()'s rule on the stretch as a training range (its own span): fewer than two reversals leave a branch or the
   // inner loops unseen; said where the training range had more (else fit()'s own warning says it of both)
   const std::size_t rev = reversals(x, best.begin, best.end, span_of(x.subspan(best.begin, n))).size();
-  if (rev < 2 && rev < reversals(x, tr.begin, tr.end, span_of(x.subspan(tr.begin, m))).size())
-    w += fmt::format("; the input {} there (by more than {:.0f} % of its span there), so a fit on it sees {}: "
-                     "re-record",
+  const bool loops_lost = rev < 2 && rev < reversals(x, tr.begin, tr.end, span_of(x.subspan(tr.begin, m))).size();
+  const bool short_stretch = static_cast<double>(n) < kShortStretch * static_cast<double>(m);
+  if (short_stretch)
+    w += fmt::format("; that is less than {:.0f} % of the training range", 100 * kShortStretch);
+  if (loops_lost)
+    w += fmt::format("; the input {} there (by more than {:.0f} % of its span there), so a fit on it sees {}",
                      rev == 0 ? "never reverses" : "reverses once", 100 * kReversalFraction,
                      rev == 0 ? "one branch only" : "no inner (minor) loop");
+  if (short_stretch || loops_lost) w += ": re-record, or fit it knowing how little it holds";
   return {std::move(w), best};
 }
 

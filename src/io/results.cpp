@@ -227,7 +227,11 @@ void from_json(const json& j, FitReport& r, std::string_view where) {
   }
   if (j.contains("fault_free_train") && !j["fault_free_train"].is_null()) {  // absent in files before it
     IndexRange t;
-    from_json(j["fault_free_train"], t, key_where(where, "fault_free_train"));
+    const std::string at = key_where(where, "fault_free_train");
+    from_json(j["fault_free_train"], t, at);
+    if (t.end == IndexRange::npos || t.begin >= t.end)
+      throw Error(fmt::format("{}: expected a range [begin, end] of samples with begin < end, got {}", at,
+                              j["fault_free_train"].dump()));
     r.fault_free_train = t;
   }
   if (j.contains("candidates")) {

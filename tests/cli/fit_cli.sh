@@ -251,35 +251,50 @@ $PY -c "import json,sys; d=[json.load(open(f))['data']['censored'] for f in sys.
   "$T/r2.report.json" "$T/r0.report.json" || fail "data.censored in the fit documents"
 
 # a stuck output sensor in a record trained on in seconds: the advised stretch is said in seconds too, in the
-# fewest digits that read back as its samples (1.3s, not 1.3000000000000003s: the stamps are i * 0.01), and
-# --train in those seconds trains on the same samples as --train in those indices; --json carries it as a range
-$PY - "$T/a.csv" "$T/stuck.csv" <<'PYEOF' || fail "stuck record"
+# fewest digits that read back as its samples (4.35s, not 4.3500000000000005s: the stamps are i * 0.01), open where
+# it runs to the record's end, and --train in those seconds trains on the same samples as --train in those
+# indices; --json carries it as a range. Where the time column repeats the stretch's first stamp, no range in
+# seconds reads back as it: said so, not a range that holds a flagged sample.
+$PY - "$T/a.csv" "$T/stuck.csv" "$T/stuck_dup.csv" <<'PYEOF' || fail "stuck record"
 import sys
 rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n")[1:] if r]
-with open(sys.argv[2], "w") as f:
-    f.write("t_s,p,y\n")
-    for i, (t, p, y) in enumerate(rows):
-        f.write(f"{t},{p},{rows[60][2] if 60 <= i < 130 else y}\n")  # frozen while p rises by 47 % of its span
+for name, dup in ((sys.argv[2], False), (sys.argv[3], True)):
+    with open(name, "w") as f:
+        f.write("t_s,p,y\n")
+        for i, (t, p, y) in enumerate(rows):
+            t = rows[434][0] if dup and i == 435 else t
+            f.write(f"{t},{p},{rows[365][2] if 365 <= i < 435 else y}\n")  # frozen while p rises by 38 % of its span
 PYEOF
-"$BIN" fit --model gpi --data "$T/stuck.csv" --input p --output y --time-column t_s --train 0s:15s --threads 1 \
-  --out "$T/stuck.json" --json > "$T/stuck_fit.json" 2> "$T/stuck.err"
-grep -q "the output sensor is stuck there" "$T/stuck_fit.json" || fail "stuck output not named: $(head -c 600 "$T/stuck_fit.json")"
-grep -q "train on samples 130:1500 (--train 130:1500," "$T/stuck_fit.json" || fail "stuck: no advice 130:1500"
-grep -q "the sensor faults' --train 130:1500 above, in seconds: --train 1.3s:15s" "$T/stuck_fit.json" \
-  || fail "stuck: the advice in seconds"
-for r in 1.3s:15s 130:1500; do
+for r in 0s:15s 0s:; do
+  "$BIN" fit --model gpi --data "$T/stuck.csv" --input p --output y --time-column t_s --train $r --threads 1 \
+    --force --out "$T/stuck.json" --json > "$T/stuck_fit_$r.json" 2> /dev/null
+done
+grep -q "the output sensor is stuck there" "$T/stuck_fit_0s:15s.json" \
+  || fail "stuck output not named: $(head -c 600 "$T/stuck_fit_0s:15s.json")"
+grep -q "train on samples 435:1500 (--train 435:1500," "$T/stuck_fit_0s:15s.json" || fail "stuck: no advice 435:1500"
+grep -q "the sensor faults' --train 435:1500 above, in seconds: --train 4.35s:15s\"" "$T/stuck_fit_0s:15s.json" \
+  || fail "stuck: the advice in seconds: $(grep -o "the sensor faults[^\"]*" "$T/stuck_fit_0s:15s.json")"
+grep -q "the sensor faults' --train 435:1800 above, in seconds: --train 4.35s:\"" "$T/stuck_fit_0s:.json" \
+  || fail "stuck: the advice in seconds to the end: $(grep -o "the sensor faults[^\"]*" "$T/stuck_fit_0s:.json")"
+for r in 4.35s:15s 435:1500 4.35s: 435:; do
   "$BIN" fit --model gpi --data "$T/stuck.csv" --input p --output y --time-column t_s --train $r --threads 1 \
     --force --out "$T/stuck_r.json" --json > "$T/stuck_$r.json" 2> /dev/null
 done
-$PY - "$T/stuck_fit.json" "$T/stuck_1.3s:15s.json" "$T/stuck_130:1500.json" <<'PYEOF' || fail "stuck: ranges"
+$PY - "$T" <<'PYEOF' || fail "stuck: ranges"
 import json, sys
-d, s, i = (json.load(open(f)) for f in sys.argv[1:])
-d = d.get("fit", d)
-assert d["fault_free_train"] == [130, 1500], d["fault_free_train"]
-s, i = s.get("fit", s), i.get("fit", i)
-assert s["train"]["n"] == i["train"]["n"] == 1370, (s["train"]["n"], i["train"]["n"])
-assert s["fault_free_train"] is None and i["fault_free_train"] is None
+t = sys.argv[1]
+d = {r: json.load(open(f"{t}/stuck_{r}.json")) for r in ("fit_0s:15s", "fit_0s:", "4.35s:15s", "435:1500", "4.35s:", "435:")}
+assert d["fit_0s:15s"]["fault_free_train"] == [435, 1500], d["fit_0s:15s"]["fault_free_train"]
+assert d["fit_0s:"]["fault_free_train"] == [435, 1800], d["fit_0s:"]["fault_free_train"]
+n = {r: d[r]["train"]["n"] for r in ("4.35s:15s", "435:1500", "4.35s:", "435:")}
+assert n == {"4.35s:15s": 1065, "435:1500": 1065, "4.35s:": 1365, "435:": 1365}, n
+assert all(d[r]["fault_free_train"] is None for r in n), [d[r]["fault_free_train"] for r in n]
 PYEOF
+"$BIN" fit --model gpi --data "$T/stuck_dup.csv" --input p --output y --time-column t_s --train 0s:15s --threads 1 \
+  --force --out "$T/stuck.json" > "$T/stuck_dup.txt" 2>&1
+grep -q "the sensor faults' --train 435:1500 above has no range in seconds (the time column repeats a stamp" \
+  "$T/stuck_dup.txt" || fail "stuck, a repeated stamp: $(grep "sensor faults'" "$T/stuck_dup.txt")"
+grep -q "in seconds: --train" "$T/stuck_dup.txt" && fail "stuck, a repeated stamp: a range in seconds"
 
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

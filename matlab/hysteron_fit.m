@@ -33,9 +33,11 @@ function [model, report] = hysteron_fit(x, y, varargin)
 %   the fit produced none. REPORT is a struct: status ('converged', 'no_convergence',
 %   'failed', 'poor_fit'), ok, message, model_kind, parameters (struct array: name,
 %   value, std_error, held, at_bound), train and reference metrics (rms, max, mae,
-%   rms_percent_span, r2, n), inverse, warnings, fault_free_train (where the warnings
-%   name sensor-fault rows: [first last], 1-based, the longest stretch of the training
-%   range free of them, to pass as 'train'; [] otherwise), candidates ('auto'), costs,
+%   rms_percent_span, r2, n), inverse, warnings, fault_runs (the runs the sensor-fault
+%   warnings name: struct array of rows, [first last] 1-based, and column, 'input' or
+%   'output'; [] where none), fault_free_train (where there are fault_runs: [first last],
+%   1-based, the longest stretch of the training range free of them, to pass as 'train';
+%   [] otherwise), candidates ('auto'), costs,
 %   iterations, time_s and report (the text the command line prints).
 %   A status other than 'converged' gives a warning (identifier hysteron:fitStatus).
 %

@@ -100,6 +100,12 @@ void expect_same(const FitReport& a, const FitReport& b) {
   expect_same(a.reference, b.reference);
   expect_same(a.inverse, b.inverse);
   EXPECT_EQ(a.warnings, b.warnings);
+  ASSERT_EQ(a.fault_runs.size(), b.fault_runs.size());
+  for (std::size_t i = 0; i < a.fault_runs.size(); ++i) {
+    EXPECT_EQ(a.fault_runs[i].rows.begin, b.fault_runs[i].rows.begin);
+    EXPECT_EQ(a.fault_runs[i].rows.end, b.fault_runs[i].rows.end);
+    EXPECT_EQ(a.fault_runs[i].input, b.fault_runs[i].input);
+  }
   ASSERT_EQ(a.fault_free_train.has_value(), b.fault_free_train.has_value());
   if (a.fault_free_train) {
     EXPECT_EQ(a.fault_free_train->begin, b.fault_free_train->begin);
@@ -158,6 +164,7 @@ FitReport test_report() {
   r.reference = metrics(0.029, 1200);
   r.inverse = {inf_v, 0.062, 0.004, false, "its least slope over its input limits is 0"};
   r.warnings = {"q + p1 on its lower bound", "tau at bound"};
+  r.fault_runs = {{{60, 130}, false}, {{1500, 1600}, true}};
   r.fault_free_train = IndexRange{130, 1500};
   FitCandidate c1;
   c1.kind = FitModel::gpi;
@@ -210,6 +217,8 @@ TEST(Results, CandidateAndFitReportRoundTrip) {
   EXPECT_EQ(j["candidates"][1]["kind"], "mpi-deadzone");
   EXPECT_TRUE(j["candidates"][1]["model"].is_null());
   EXPECT_EQ(j["fault_free_train"], nlohmann::json::array({130, 1500}));
+  EXPECT_EQ(j["fault_runs"], nlohmann::json::parse(R"([{"rows": [60, 130], "column": "output"},
+                                                         {"rows": [1500, 1600], "column": "input"}])"));
   FitReport none = r;  // none: null, read back as none
   none.fault_free_train.reset();
   EXPECT_TRUE(io::to_json(none)["fault_free_train"].is_null());
@@ -217,6 +226,17 @@ TEST(Results, CandidateAndFitReportRoundTrip) {
   for (const char* bad : {"[1500, 130]", "[130, null]", "[7, 7]"}) {  // a range no fit writes: refused, named
     nlohmann::json jb = j;
     jb["fault_free_train"] = nlohmann::json::parse(bad);
+    nlohmann::json jr = j;
+    jr["fault_runs"][1]["rows"] = nlohmann::json::parse(bad);
+    for (const nlohmann::json& doc : {jb, jr}) {
+      FitReport got;
+      try {
+        io::from_json(doc, got, "r.json");
+        ADD_FAILURE() << bad << " was read";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("r.json"), std::string::npos) << e.what();
+      }
+    }
     FitReport got;
     try {
       io::from_json(jb, got, "r.json");
@@ -226,6 +246,10 @@ TEST(Results, CandidateAndFitReportRoundTrip) {
       EXPECT_NE(std::string(e.what()).find("fault_free_train"), std::string::npos) << e.what();
     }
   }
+  nlohmann::json jc = j;  // a column other than input and output
+  jc["fault_runs"][0]["column"] = "pressure";
+  FitReport got;
+  EXPECT_THROW(io::from_json(jc, got, "r.json"), Error);
   // every status name reads back
   for (FitStatus s : {FitStatus::not_run, FitStatus::converged, FitStatus::no_convergence, FitStatus::failed,
                       FitStatus::poor_fit, FitStatus::invalid_input})

@@ -189,6 +189,9 @@ TEST(SensorFaults, AClippedInputIsNamedAndNeverConverged) {
               std::string::npos)
         << with_warnings(rep);
     EXPECT_NE(adv.find("from where the input has swept its span after an input fault"), std::string::npos) << adv;
+    ASSERT_FALSE(rep.fault_runs.empty());
+    EXPECT_EQ(fmt::format("{}:{}", rep.fault_runs[0].rows.begin, rep.fault_runs[0].rows.end), run);
+    for (const SensorFaultRun& f : rep.fault_runs) EXPECT_TRUE(f.input);
     EXPECT_NE(w.find("a following warning names a --train range"), std::string::npos) << w;
   }
   EXPECT_EQ(rep.status, FitStatus::poor_fit) << rep.message;
@@ -412,6 +415,11 @@ TEST(SensorFaults, AStuckOutputSensorIsNamedAndNeverConverged) {
   EXPECT_EQ(fmt::format("{}:{}", rs.fault_free_train->begin, rs.fault_free_train->end),
             longest_clean(stuck.x.size(), {{330, 480}}));
   EXPECT_FALSE(fit_gpi(clean).fault_free_train.has_value());
+  ASSERT_EQ(rs.fault_runs.size(), 1u);  // the run the warning names, of the output
+  EXPECT_EQ(rs.fault_runs[0].rows.begin, 330u);
+  EXPECT_EQ(rs.fault_runs[0].rows.end, 480u);
+  EXPECT_FALSE(rs.fault_runs[0].input);
+  EXPECT_TRUE(fit_gpi(clean).fault_runs.empty());
   EXPECT_EQ(rs.status, FitStatus::poor_fit) << rs.message;  // (here also worse than the reference PI)
   for (const auto& [a, b, c, d] : {std::array{3.0, -20.0, 1.0, 1.0}, std::array{0.0, 1.0, 7.0, -0.01},
                                    std::array{-1e4, 250.0, 0.0, -3.0}}) {

@@ -508,6 +508,13 @@ struct InverseCheck {
   std::string no_inverse;
 };
 
+// A run of samples a sensor-fault warning of fit() names: an input that clips, an output that clips where fit()
+// could not fit it as censored data, a stuck output or input reading (docs/identification.md, "Sensor faults").
+struct SensorFaultRun {
+  IndexRange rows;     // half-open, in the record's samples
+  bool input = false;  // the input's reading (else the output's)
+};
+
 struct FitReport {
   FitStatus status = FitStatus::not_run;
   std::string message;
@@ -526,9 +533,10 @@ struct FitReport {
   InverseCheck inverse;         // slope and jump of the fitted model's inverse
   std::vector<std::string> warnings;     // bounds hit, poor-fit reasons, ...
   std::vector<FitCandidate> candidates;  // FitModel::automatic only
-  // Where the warnings name sensor-fault rows (a clip, a stuck reading): the longest stretch of the training range
-  // free of them, to train on instead (after an input fault, from where the input has swept its span); empty where
-  // none was flagged or no stretch is left.
+  // The runs the sensor-fault warnings name, in order of their first sample (none on a record without such faults).
+  std::vector<SensorFaultRun> fault_runs;
+  // Where there are fault_runs: the longest stretch of the training range free of them, to train on instead (after
+  // an input fault, from where the input has swept its span); empty where there are none or no stretch is left.
   std::optional<IndexRange> fault_free_train;
 
   bool ok() const noexcept { return status == FitStatus::converged; }

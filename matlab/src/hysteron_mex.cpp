@@ -495,6 +495,7 @@ void cmd_fit(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
     for (auto& c : *it)
       if (c.is_object() && c.contains("model")) limits_to_infinite(c["model"]);
   // as the option train: [first last], 1-based and inclusive ([] where none)
+  for (nlohmann::json& f : rep["fault_runs"]) f["rows"] = {f["rows"][0].get<std::size_t>() + 1, f["rows"][1]};
   rep["fault_free_train"] = r.fault_free_train ? nlohmann::json::array({r.fault_free_train->begin + 1,
                                                                          r.fault_free_train->end})
                                                : nlohmann::json::array();

@@ -194,8 +194,10 @@ None) with "status" (one of hysteron.fit_statuses: "converged", "no_convergence"
 model dict usable by hysteron.Model), "parameters" (list of {name, value,
 std_error, held, at_bound}), "train" and "reference" metrics (the reference PI on the
 training range), "inverse" ({max_slope, max_jump, max_input_step, increasing}),
-"warnings" (list of str), "fault_free_train" (where the warnings name sensor-fault rows: [begin, end], the
-longest stretch of the training range free of them, to pass as train=; None otherwise), "candidates" (model="auto": list of {kind, fit_range, status,
+"warnings" (list of str), "fault_runs" (the runs the sensor-fault warnings name: list of {"rows": [begin, end],
+"column": "input" or "output"}, in order; [] where none), "fault_free_train" (where there are fault_runs: [begin,
+end], the longest stretch of the training range free of them, to pass as train=; None otherwise), "candidates"
+(model="auto": list of {kind, fit_range, status,
 message, train, holdout, holdout_score, num_parameters, time_s, chosen, model}: status, message, train,
 num_parameters and model are the kind's fold-0 fit on fit_range, [begin, end], the training range without
 its last 20 %, not the chosen kind's refit on the whole range), costs, iterations and

@@ -14,7 +14,7 @@ TRUE_GPI = {"model": "gpi", "n": 10, "c": [60.0, 4.0, -0.5, 30.0], "q": 0.8, "rh
             "alpha": 2.0}
 REPORT_KEYS = {"status", "ok", "message", "model_kind", "model", "parameters", "train", "reference", "inverse",
                "warnings", "candidates", "initial_cost", "final_cost", "iterations", "total_iterations",
-               "num_starts", "time_s", "covariance_note", "fault_free_train", "report"}
+               "num_starts", "time_s", "covariance_note", "fault_runs", "fault_free_train", "report"}
 METRIC_KEYS = {"rms", "max", "mae", "rms_percent_span", "r2", "n"}
 
 
@@ -35,6 +35,7 @@ def test_a_stuck_output_sensor_is_named_by_fit_and_evaluate():
     assert any("(samples 360:440)" in w and "stuck" in w for w in r["warnings"]), r["warnings"]
     # where to train instead, as a range to pass back: the longest stretch without the frozen rows, the record's
     # last 1360 samples; trained there, nothing is stuck
+    assert r["fault_runs"] == [{"rows": [360, 440], "column": "output"}], r["fault_runs"]
     assert r["fault_free_train"] == [440, 1800], r["fault_free_train"]
     assert any("train on samples 440:1800" in w for w in r["warnings"]), r["warnings"]
     again = hysteron.fit(x, stuck, model="gpi", min_slope=0.01, train=tuple(r["fault_free_train"]))
@@ -42,7 +43,7 @@ def test_a_stuck_output_sensor_is_named_by_fit_and_evaluate():
     assert again["fault_free_train"] is None and not any("stuck" in w for w in again["warnings"])
     good = hysteron.fit(x, y, model="gpi", min_slope=0.01)
     assert not any("stuck" in w for w in good["warnings"])
-    assert good["fault_free_train"] is None
+    assert good["fault_free_train"] is None and good["fault_runs"] == []
     m = hysteron.evaluate(good["model"], x, stuck)
     assert "(samples 360:440)" in m["stuck_output_warning"]
     assert m["stuck_output_warning"] in m["warnings"]

@@ -149,12 +149,9 @@ std::string stuck_input_text(const Stuck& st, std::span<const double> x, std::sp
 // The rows of a sensor fault fit() names: of the input (a clip, a stuck reading: the model, simulated through every
 // sample from the record's start, holds the wrong input in its memory until the input sweeps its span) or of the
 // output (the input was applied: the state after them is right).
-struct FaultRun {
-  IndexRange rows;
-  bool input = false;
-};
-// fit()'s warning on where to train instead of every flagged row: the longest stretch of the training range tr free
-// of them, each stretch after an input fault starting only once x has been within 5 % of its span of one extreme of
+using FaultRun = SensorFaultRun;
+// fit()'s warning on where to train instead of every flagged row (runs: in order of their first sample): the longest
+// stretch of the training range tr free of them, each stretch after an input fault starting only once x has been within 5 % of its span of one extreme of
 // the range and then of the other (every play of threshold up to 0.45 span is then set by the input alone, whatever
 // the wrong reading left; sweep_after); with the runs named (up to 6), "--train A:B", its share of the range, that
 // a --validate range must leave them out where the default (the samples after --train) holds them, and where the
@@ -166,7 +163,7 @@ struct ExcludeAdvice {
   std::string text;
   std::optional<IndexRange> train;
 };
-ExcludeAdvice exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr);
+ExcludeAdvice exclude_advice(std::span<const FaultRun> runs, std::span<const double> x, IndexRange tr);
 // The first sample in [from, end) by which x has come within 5 % of hi - lo of one of its extremes lo, hi (over the
 // training range) and then of the other; `end` where it does not. (sensor_faults.cpp)
 std::size_t sweep_after(std::span<const double> x, std::size_t from, std::size_t end, double lo, double hi);

@@ -915,9 +915,13 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
     for (const IndexRange& f : st.flagged) faults.push_back({f, true});
   }
   if (!faults.empty()) {
-    detail::ExcludeAdvice advice = detail::exclude_advice(std::move(faults), x, tr);
+    std::stable_sort(faults.begin(), faults.end(), [](const detail::FaultRun& a, const detail::FaultRun& b) {
+      return a.rows.begin < b.rows.begin;
+    });
+    detail::ExcludeAdvice advice = detail::exclude_advice(faults, x, tr);
     rep.warnings.push_back(std::move(advice.text));
     rep.fault_free_train = advice.train;
+    rep.fault_runs = std::move(faults);
   }
   if (has_model(rep.status))
     for (std::string& w : detail::resolution_warnings(x, y, tr, rep.train.rms)) rep.warnings.push_back(std::move(w));

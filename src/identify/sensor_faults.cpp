@@ -276,9 +276,7 @@ std::size_t sweep_after(std::span<const double> x, std::size_t from, std::size_t
   return end;
 }
 
-ExcludeAdvice exclude_advice(std::vector<FaultRun> runs, std::span<const double> x, IndexRange tr) {
-  std::sort(runs.begin(), runs.end(),
-            [](const FaultRun& a, const FaultRun& b) { return a.rows.begin < b.rows.begin; });
+ExcludeAdvice exclude_advice(std::span<const FaultRun> runs, std::span<const double> x, IndexRange tr) {
   const auto [lo, hi] = minmax_of(x, tr.begin, tr.end);  // the extremes an input fault's sweep reaches
   IndexRange best{tr.begin, tr.begin};
   bool best_swept = false;

@@ -177,6 +177,9 @@ json to_json(const FitReport& r) {
   for (const auto& p : r.parameters) params.push_back(to_json(p));
   json candidates = json::array();
   for (const auto& c : r.candidates) candidates.push_back(to_json(c));
+  json faults = json::array();
+  for (const SensorFaultRun& f : r.fault_runs)
+    faults.push_back({{"rows", to_json(f.rows)}, {"column", f.input ? "input" : "output"}});
   return {{"status", std::string(fit_status_name(r.status))},
           {"message", r.message},
           {"model_kind", std::string(fit_model_name(r.model_kind))},
@@ -193,6 +196,7 @@ json to_json(const FitReport& r) {
           {"reference", to_json(r.reference)},
           {"inverse", to_json(r.inverse)},
           {"warnings", r.warnings},
+          {"fault_runs", faults},
           {"fault_free_train", r.fault_free_train ? to_json(*r.fault_free_train) : json(nullptr)},
           {"candidates", candidates}};
 }
@@ -225,15 +229,26 @@ void from_json(const json& j, FitReport& r, std::string_view where) {
       r.warnings.push_back(w[i].get<std::string>());
     }
   }
-  if (j.contains("fault_free_train") && !j["fault_free_train"].is_null()) {  // absent in files before it
+  // a range of samples a fit names: [begin, end] with begin < end
+  const auto rows = [&](const json& v, const std::string& at) {
     IndexRange t;
-    const std::string at = key_where(where, "fault_free_train");
-    from_json(j["fault_free_train"], t, at);
+    from_json(v, t, at);
     if (t.end == IndexRange::npos || t.begin >= t.end)
-      throw Error(fmt::format("{}: expected a range [begin, end] of samples with begin < end, got {}", at,
-                              j["fault_free_train"].dump()));
-    r.fault_free_train = t;
+      throw Error(fmt::format("{}: expected a range [begin, end] of samples with begin < end, got {}", at, v.dump()));
+    return t;
+  };
+  if (j.contains("fault_runs")) {  // absent in files before them
+    const json& fs = get_array(j, "fault_runs", where);
+    for (std::size_t i = 0; i < fs.size(); ++i) {
+      const std::string at = fmt::format("{}.fault_runs[{}]", where, i);
+      const std::string column = get_string(fs[i], "column", at);
+      if (column != "input" && column != "output")
+        throw Error(fmt::format("{}.column: expected \"input\" or \"output\", got \"{}\"", at, column));
+      r.fault_runs.push_back({rows(need(fs[i], "rows", at), at + ".rows"), column == "input"});
+    }
   }
+  if (j.contains("fault_free_train") && !j["fault_free_train"].is_null())
+    r.fault_free_train = rows(j["fault_free_train"], key_where(where, "fault_free_train"));
   if (j.contains("candidates")) {
     const json& cs = get_array(j, "candidates", where);
     for (std::size_t i = 0; i < cs.size(); ++i)

@@ -528,16 +528,34 @@ std::vector<double> try_simulate(Page& page, const ModelParams& model, std::span
 
 // Figures of one record: loops (output against input), output over the record, residuals, each series
 // thinned to the points a plot draws (thinned_series: a long record is not copied whole).
+// The samples of the runs of one column (input or output) of `faults` within [0, n), as points of (a, b): the
+// sensor-fault rows a fit's warnings name, drawn over its record's figures.
+std::optional<Series> fault_points(std::span<const SensorFaultRun> faults, bool input, std::span<const double> a,
+                                   std::span<const double> b) {
+  std::vector<double> pa, pb;
+  for (const SensorFaultRun& f : faults)
+    if (f.input == input)
+      for (std::size_t k = f.rows.begin; k < std::min(f.rows.end, a.size()); ++k) pa.push_back(a[k]), pb.push_back(b[k]);
+  if (pa.empty()) return std::nullopt;
+  return thinned_series(input ? "input sensor fault (see the warnings)" : "output sensor fault (see the warnings)",
+                        pa, pb, input ? "#ff7f0e" : "#9467bd", false, "points");
+}
+
 void record_figures(Page& page, const RecordView& v, std::span<const double> model, const std::string& kind,
-                    const FitData& data, const std::string& range_note, bool with_series = true) {
+                    const FitData& data, const std::string& range_note, bool with_series = true,
+                    std::span<const SensorFaultRun> faults = {}) {
   const std::size_t n = std::min(v.x.size(), v.y.size());
   const std::string suffix = v.name.empty() ? "" : fmt::format(" ({})", v.name);
   const std::span<const double> xs = v.x.first(n), ys = v.y.first(n);
   const bool has_model = model.size() == n;
+  const std::string faulty = faults.empty() ? "" : "; the rows the sensor-fault warnings name are marked";
   PlotSpec loops{{"Hysteresis loops: measured and model" + suffix, data.input, data.output},
                  {thinned_series("measured", xs, ys, "#d62728", false)}};
   if (has_model) loops.series.push_back(thinned_series(fmt::format("{} model", kind), xs, model, "#1f77b4", true));
-  page.figure(loops, fmt::format("{} against {}: measured and model{}.", data.output.label, data.input.label, suffix));
+  for (const bool input : {true, false})
+    if (auto p = fault_points(faults, input, xs, ys)) loops.series.push_back(std::move(*p));
+  page.figure(loops, fmt::format("{} against {}: measured and model{}{}.", data.output.label, data.input.label, suffix,
+                                 faulty));
   const bool has_t = v.t.size() == n;
   const std::vector<double> index = has_t ? std::vector<double>{} : sample_axis(n);
   const std::span<const double> t = has_t ? v.t : std::span<const double>(index);
@@ -546,7 +564,9 @@ void record_figures(Page& page, const RecordView& v, std::span<const double> mod
     PlotSpec ts{{"Output over the record" + suffix, ta, data.output},
                 {thinned_series("measured", t, ys, "#d62728", false)}};
     if (has_model) ts.series.push_back(thinned_series("model", t, model, "#1f77b4", true));
-    page.figure(ts, "Measured and model output over the record" + suffix + ".");
+    for (const bool input : {true, false})
+      if (auto p = fault_points(faults, input, t, ys)) ts.series.push_back(std::move(*p));
+    page.figure(ts, "Measured and model output over the record" + suffix + faulty + ".");
   }
   if (has_model) {
     const std::vector<double> residual = difference(ys, model);
@@ -724,7 +744,7 @@ void write_fit_report(const FitReport& fit, const FitData& data, const std::stri
   } else {
     record_figures(page, {"", std::span(data.x).first(n), std::span(data.y).first(n), data.t}, model,
                    std::string(fit_model_name(fit.model_kind)), data,
-                   fmt::format("training samples {}..{} of {}", tr.begin, tr.end, n));
+                   fmt::format("training samples {}..{} of {}", tr.begin, tr.end, n), true, fit.fault_runs);
     for (const auto& v : vals) {
       if (v.v->x.empty() || !can_simulate) continue;  // a range of the record above: already shown
       const std::vector<double> vm = try_simulate(page, fit.model, v.x, data.initial_state, v.v->name);

@@ -45,4 +45,26 @@ echo '{"status": ' > "$T/bad.json"
 if "$BIN" report "$T/bad.json" --out "$T/x.html" 2> "$T/err"; then exit 1; fi
 grep -q "bad.json: not valid JSON" "$T/err"
 [ ! -e "$T/x.html" ]
+# the rows a sensor-fault warning names are marked on the record's figures (loops and output over the record), in
+# the page fit writes and in the one regenerated from its JSON; a clean record's page marks none
+grep -q "sensor fault (see the warnings)" "$T/r0.html" && { echo "a clean record's report marks sensor faults"; exit 1; }
+/usr/bin/python3 - "$T/data.csv" "$T/stuck.csv" <<'PYEOF'
+import sys
+rows = [r.split(",") for r in open(sys.argv[1]).read().split("\n") if r]
+with open(sys.argv[2], "w") as f:
+    f.write(",".join(rows[0]) + "\n")
+    for i, r in enumerate(rows[1:]):
+        f.write(f"{r[0]},{rows[1 + 365][1] if 365 <= i < 435 else r[1]}\n")  # the output frozen while the input rises
+PYEOF
+set +e
+"$BIN" fit --data "$T/stuck.csv" --input input --output output --out "$T/ms.json" --report "$T/stuck.html" > /dev/null 2>&1
+"$BIN" fit --data "$T/stuck.csv" --input input --output output --out "$T/ms.json" --force --report "$T/stuck.json" > /dev/null 2>&1
+set -e
+"$BIN" report "$T/stuck.json" --out "$T/stuck_again.html"
+for page in stuck.html stuck_again.html; do
+  [ "$(grep -c "output sensor fault (see the warnings)" "$T/$page")" -ge 2 ] \
+    || { echo "$page: the stuck rows are not marked on both figures"; exit 1; }
+  grep -q "input sensor fault" "$T/$page" && { echo "$page: an input fault marked"; exit 1; }
+  grep -q "the rows the sensor-fault warnings name are marked" "$T/$page" || { echo "$page: no caption"; exit 1; }
+done
 echo "report_fit: ok"

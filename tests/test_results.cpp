@@ -228,22 +228,14 @@ TEST(Results, CandidateAndFitReportRoundTrip) {
     jb["fault_free_train"] = nlohmann::json::parse(bad);
     nlohmann::json jr = j;
     jr["fault_runs"][1]["rows"] = nlohmann::json::parse(bad);
-    for (const nlohmann::json& doc : {jb, jr}) {
+    for (const auto& [doc, key] : {std::pair{jb, "r.json.fault_free_train"}, std::pair{jr, "r.json.fault_runs[1]"}}) {
       FitReport got;
       try {
         io::from_json(doc, got, "r.json");
         ADD_FAILURE() << bad << " was read";
       } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("r.json"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
       }
-    }
-    FitReport got;
-    try {
-      io::from_json(jb, got, "r.json");
-      ADD_FAILURE() << bad << " was read";
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find("r.json"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("fault_free_train"), std::string::npos) << e.what();
     }
   }
   nlohmann::json jc = j;  // a column other than input and output

@@ -150,9 +150,10 @@ int run_fit(const FitCliOptions& c) {
   if (!rate && time && time->size() > 1) try {
       (void)require_increasing_time(*time, c.sel.file, c.sel.time_column, "a time axis", true);
     } catch (const Error& e) {
-      axis_warning = (fmt::format("{}: the fit does not use it, but hysteron report's time axis does (give "
-                                          "--no-time where the column is no time)",
-                                          e.what()));
+      axis_warning = fmt::format("{}: the fit does not use it, but its report's time axis does (where the column "
+                                 "is no time, leave out --time-column; hysteron report --no-time draws a report "
+                                 "without it)",
+                                 e.what());
     }
   // rate-pi's dt is in seconds: a record sampled slower than 10 Hz or at 1 MHz or faster is rare for it, a time
   // column in another unit (or a wrong --time-unit) common; 1 us within the 1 % tolerance: a 1 kHz column in s read

@@ -124,6 +124,11 @@ TEST(FitQuality, ARecordWithoutReversalsSaysWhatTheFitSaw) {
 // branch (the review's cases: an open path's sum y dx is its chord's area, not an orientation).
 TEST(FitQuality, ClockwiseLoopsAreNamed) {
   EXPECT_TRUE(warned(fit_kind(loops(150), FitModel::kp), "turn clockwise"));
+  EXPECT_TRUE(warned(fit_kind(loops(150), FitModel::kp), "or compare with --model pi"));
+  // pi is told of them too, but not to compare with itself
+  const FitReport pi = fit_kind(loops(150), FitModel::pi);
+  EXPECT_TRUE(warned(pi, "turn clockwise")) << pi.full_report();
+  EXPECT_FALSE(warned(pi, "--model pi")) << pi.full_report();
   EXPECT_FALSE(warned(fit_kind(loops(), FitModel::kp), "turn clockwise"));
   const double w = 2.0 * std::acos(-1.0) / 1000.0;  // 1000 samples per cycle
   const Record open = record([&](int k) { return 0.5 - 0.4 * std::cos(w * k); }, 4500);  // 4.5 cycles: ends on top

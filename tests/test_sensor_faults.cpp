@@ -750,3 +750,30 @@ TEST(SensorFaults, AnAdvisedStretchWithoutLoopsIsSaid) {
   EXPECT_EQ(adv_c.find("reverses"), std::string::npos) << adv_c;
   EXPECT_NE(warning_with(c, "the training input reverses once"), "") << with_warnings(c);
 }
+
+// Where the input over the stretch free of the flagged rows covers less than half its span over the training range,
+// the advice says that a model fitted there extrapolates, and names the stretch that covers the most: one sweep of
+// the whole span, then small loops at its foot (a fifth of the span), the output frozen at the sweep's end.
+TEST(SensorFaults, ANarrowAdvisedStretchIsSaid) {
+  const auto sweep_then_small = [](int k) {
+    if (k < 600) return k < 300 ? k / 300.0 : 2.0 - k / 300.0;
+    const int p = (k - 600) % 100;
+    return 0.2 * (p < 50 ? p : 100 - p) / 50.0;
+  };
+  Record r = record(sweep_then_small, 3000);
+  for (std::size_t k = 480; k < 580; ++k) r.y[k] = r.y[480];  // x falls from 0.4 to 0.07 meanwhile
+  const FitReport f = fit_gpi(r);
+  ASSERT_NE(warning_with(f, "the output sensor is stuck there"), "") << with_warnings(f);
+  const std::string adv = warning_with(f, "to fit without the rows");
+  EXPECT_NE(adv.find("train on samples 580:3000"), std::string::npos) << adv;
+  EXPECT_NE(adv.find("the input covers only 20 % of its span over the training range there (0 to 0.2 of 0 to 1)"),
+            std::string::npos)
+      << adv;
+  EXPECT_NE(adv.find("(samples 0:480, 16 % of the training range, cover 100 %)"), std::string::npos) << adv;
+  EXPECT_NE(adv.find(": re-record, or fit it knowing how little it holds"), std::string::npos) << adv;
+  // the stuck-output test's stretch covers the span: nothing said of it
+  Record wide = loops();
+  for (std::size_t k = 330; k < 480; ++k) wide.y[k] = wide.y[330];
+  EXPECT_EQ(warning_with(fit_gpi(wide), "to fit without the rows").find("covers only"), std::string::npos);
+}
+

@@ -157,7 +157,8 @@ using FaultRun = SensorFaultRun;
 // a --validate range must leave them out where the default (the samples after --train) holds them, and where the
 // stretch is under 10 % of the range, that it is; where its input reverses fewer than twice (as fit() counts them
 // over it as a training range) and fewer times than over tr, that a fit there is blind to a branch or the inner
-// loops. `train`: the stretch, none
+// loops; where its input covers less than half its span over tr, that a model fitted there extrapolates (and the
+// stretch that covers the most, where it covers at least half and 1.5x as much). `train`: the stretch, none
 // where no stretch is left. (sensor_faults.cpp)
 struct ExcludeAdvice {
   std::string text;

@@ -364,16 +364,21 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
                        : "turn the other way (clockwise)",
             100 * -area / (0.5 * path),
             !lost_loops ? "this kind cannot follow the record's counterclockwise loops"
-            : jittered  ? "the fit has lost the hysteresis, e.g. stopped where its hysteresis parameters have no "
-                          "gradient; try jittered starts (--seed 1, 2, ...) or another kind"
+            : jittered  ? fmt::format("the fit has lost the hysteresis, e.g. stopped where its hysteresis parameters "
+                                      "have no gradient; try {} or another kind",
+                                      o.seed == 0 ? "other jittered starts (--seed 2, 3, ...: seed 1's were tried "
+                                                    "and were no better)"
+                                                  : fmt::format("other jittered starts (--seed {}, {}, ...)",
+                                                                o.seed + 1, o.seed + 2))
                         : "the fit has lost the hysteresis; try another kind"));
     }
     if (path > 0 && area / (0.5 * path) > kNegligible)
-      rep.warnings.push_back(
+      rep.warnings.push_back(std::string(
           "the record's loops turn clockwise in (input, output): the output runs ahead of the input on each branch, "
           "where hysteresis lags; a time shift between the columns (an input sensor's delay), a rate effect or "
           "swapped columns can turn them. Kinds with nonnegative weights (gpi, mpi-asym, preisach, kp) cannot follow "
-          "such loops; check the columns' timing, or compare with --model pi");
+          "such loops; check the columns' timing") +
+          (o.model == FitModel::pi ? "" : ", or compare with --model pi, which allows negative weights"));
   }
   if (const std::size_t rev = turns.size(); rev < 2)
     rep.warnings.push_back(fmt::format(

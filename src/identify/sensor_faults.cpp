@@ -263,6 +263,8 @@ std::string stuck_input_text(const detail::Stuck& st, std::span<const double> x,
 constexpr double kSweepBand = 0.05;
 // exclude_advice: a stretch under this share of the training range is said to be short.
 constexpr double kShortStretch = 0.1;
+// ... and one whose input covers less than this share of its span over the training range, narrow.
+constexpr double kNarrowStretch = 0.5;
 
 std::size_t sweep_after(std::span<const double> x, std::size_t from, std::size_t end, double lo, double hi) {
   const double band = kSweepBand * (hi - lo);
@@ -282,8 +284,11 @@ ExcludeAdvice exclude_advice(std::span<const FaultRun> runs, std::span<const dou
   bool best_swept = false;
   std::size_t at = tr.begin;  // where a stretch after the runs so far may start
   bool swept = false;         // ... set by an input fault's sweep
+  std::vector<IndexRange> stretches;  // every stretch free of the runs
   const auto consider = [&](std::size_t end) {
-    if (end > at && end - at > best.end - best.begin) best = {at, end}, best_swept = swept;
+    if (end <= at) return;
+    stretches.push_back({at, end});
+    if (end - at > best.end - best.begin) best = {at, end}, best_swept = swept;
   };
   for (const FaultRun& f : runs) {
     consider(f.rows.begin);
@@ -324,7 +329,27 @@ ExcludeAdvice exclude_advice(std::span<const FaultRun> runs, std::span<const dou
     w += fmt::format("; the input {} there (by more than {:.0f} % of its span there), so a fit on it sees {}",
                      rev == 0 ? "never reverses" : "reverses once", 100 * kReversalFraction,
                      rev == 0 ? "one branch only" : "no inner (minor) loop");
-  if (short_stretch || loops_lost) w += ": re-record, or fit it knowing how little it holds";
+  // the share of the training range's input span a stretch covers: a model fitted there extrapolates beyond it
+  const auto coverage = [&](IndexRange r) {
+    const auto [a, b] = minmax_of(x, r.begin, r.end);
+    return hi > lo ? (b - a) / (hi - lo) : 1.0;
+  };
+  const double covered = coverage(best);
+  const bool narrow = covered < kNarrowStretch;
+  if (narrow) {
+    const auto [a, b] = minmax_of(x, best.begin, best.end);
+    w += fmt::format("; the input covers only {:.3g} % of its span over the training range there ({:.6g} to {:.6g} of "
+                     "{:.6g} to {:.6g}), and a model fitted there extrapolates beyond it",
+                     100 * covered, a, b, lo, hi);
+    IndexRange wide = best;  // the stretch that covers the most, if much more
+    for (const IndexRange& r : stretches)
+      if (coverage(r) > coverage(wide)) wide = r;
+    if (coverage(wide) >= std::max(kNarrowStretch, 1.5 * covered))
+      w += fmt::format(" (samples {}:{}, {:.3g} % of the training range, cover {:.3g} %)", wide.begin, wide.end,
+                       100.0 * static_cast<double>(wide.end - wide.begin) / static_cast<double>(m),
+                       100 * coverage(wide));
+  }
+  if (short_stretch || loops_lost || narrow) w += ": re-record, or fit it knowing how little it holds";
   return {std::move(w), best};
 }
 

@@ -270,6 +270,10 @@ int run_fit(const FitCliOptions& c) {
   // Sets the model cannot be run on (an input sample beyond its bound) count as useless too: a
   // validation asked for is never left out (listed with its error, exit_poor_fit).
   std::vector<std::string> useless, unrun;
+  // a training input that reverses fewer than twice (fit() warns: validate on a record with loops): whether each
+  // validation record has them
+  const std::size_t train_turns = input_reversals(x, train);
+  const auto turns_text = [](std::size_t n) { return n == 0 ? "never reverses" : "reverses once"; };
   if (fitted)
     for (const auto& v : sets) {
       std::size_t censored = 0;
@@ -308,6 +312,16 @@ int run_fit(const FitCliOptions& c) {
       std::vector<std::string> ws = {input_coverage_warning(cov, what), std::move(dg.warning),
                                      std::move(dg.sensor_warning), std::move(dg.input_sensor_warning),
                                      std::move(dg.outlier_warning)};
+      if (train_turns < 2) {
+        const std::size_t turns = input_reversals(input_of(v), v.range);
+        ws.push_back(turns < 2 ? fmt::format("{}: its input {} (by more than 10 % of its span there), as the training "
+                                             "input {}: it does not score the inner loops the fit extrapolates; "
+                                             "validate on a record with loops",
+                                             what, turns_text(turns), turns_text(train_turns))
+                               : fmt::format("{}: its input reverses {} times (by more than 10 % of its span there): "
+                                             "it scores the loops the training input did not hold",
+                                             what, turns));
+      }
       if (!v.file.empty()) {
         auto rw = rate_time_warnings(rep.model, v.t.empty() ? nullptr : &v.t, v.t.empty() ? o.sample_time : 0.0,
                                      v.file, c.sel.time_column);

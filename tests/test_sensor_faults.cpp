@@ -267,6 +267,22 @@ TEST(SensorFaults, AShortClippedOutputIsNamedAndCensored) {
       << with_warnings(rep);
   EXPECT_NE(w.find("fitted as censored data"), std::string::npos) << w;
   EXPECT_TRUE(has_model(rep.status)) << rep.message;
+  // censored, not a fault to train around: no rows to exclude, no stretch advised (a review of 2026-12-03: both
+  // were given, and the report marked the censored samples as a sensor fault)
+  EXPECT_EQ(w.find("exclude these rows"), std::string::npos) << w;
+  EXPECT_NE(w.find("to fit them as measured, re-record"), std::string::npos) << w;
+  EXPECT_TRUE(rep.fault_runs.empty()) << with_warnings(rep);
+  EXPECT_FALSE(rep.fault_free_train.has_value());
+  EXPECT_EQ(warning_with(rep, "to fit without the rows"), "") << with_warnings(rep);
+  FitOptions as_recorded;  // --censor-passes 0: fitted to the limit, and then a fault to train around
+  as_recorded.model = FitModel::gpi;
+  as_recorded.num_threads = 1;
+  as_recorded.censor_passes = 0;
+  const FitReport r0 = fit(c.x, c.y, as_recorded);
+  EXPECT_NE(warning_with(r0, "the training output sits exactly at its largest value").find("exclude these rows"),
+            std::string::npos)
+      << with_warnings(r0);
+  EXPECT_FALSE(r0.fault_runs.empty()) << with_warnings(r0);
   const FitReport rt = fit_gpi({c.x, affine(c.y, 2.0, -50.0)});
   EXPECT_NE(warning_with(rt, "the training output sits exactly at its least value"), "") << with_warnings(rt);
 }
@@ -769,7 +785,10 @@ TEST(SensorFaults, ANarrowAdvisedStretchIsSaid) {
   EXPECT_NE(adv.find("the input covers only 20 % of its span over the training range there (0 to 0.2 of 0 to 1)"),
             std::string::npos)
       << adv;
-  EXPECT_NE(adv.find("(samples 0:480, 16 % of the training range, cover 100 %)"), std::string::npos) << adv;
+  EXPECT_NE(adv.find("; the stretch that covers the most is samples 0:480 (--train 0:480, 16 % of the training range, "
+                     "100 % of the span)"),
+            std::string::npos)
+      << adv;
   EXPECT_NE(adv.find(": re-record, or fit it knowing how little it holds"), std::string::npos) << adv;
   // the stuck-output test's stretch covers the span: nothing said of it
   Record wide = loops();

@@ -163,6 +163,10 @@ std::string stuck_input_warning(std::span<const double> x, std::span<const doubl
 // "" where there are none.
 std::string outlier_warning(std::span<const double> x, std::span<const double> y, IndexRange range,
                             std::string_view what);
+// The input's reversals over range as fit() counts them on a training range: moves back from the last extremum by
+// more than 10 % of the input's span over range. Under two on a training range, fit() warns that it saw one branch
+// (none) or one of each (one), and the inner loops are extrapolated.
+std::size_t input_reversals(std::span<const double> x, IndexRange range = {});
 
 // A fit that explains less than this share of its output's variance (R^2) is poor_fit whatever
 // else it beats; a model scored on another record below it (output_map_warning) is asked why.

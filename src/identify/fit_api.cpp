@@ -867,9 +867,14 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   for (const bool low : {true, false}) {
     if (!(low ? clip.low : clip.high)) continue;
     if (pinned_only[low ? 0 : 1]) {
+      // censored: the fit is not fitted to the limit there, and nothing needs excluding
       rep.warnings.push_back(pinned(low ? &y_pinned[0] : nullptr, low ? nullptr : &y_pinned[1], false) + censoring +
-                             "; " + kExcludeRows + "re-record with the sensor's range covering the signal");
-      for (const IndexRange& f : y_pinned[low ? 0 : 1].flagged) faults.push_back({f, false});
+                             (passes > 0 ? std::string("; to fit them as measured, re-record with the sensor's range "
+                                                       "covering the signal")
+                                         : "; " + std::string(kExcludeRows) +
+                                               "re-record with the sensor's range covering the signal"));
+      if (passes == 0)
+        for (const IndexRange& f : y_pinned[low ? 0 : 1].flagged) faults.push_back({f, false});
     } else
       rep.warnings.push_back(fmt::format(
           "the output sits at its {} reading {:.6g} on {:.1f} % of the training samples within 3 noise widths ({:.3g}) "

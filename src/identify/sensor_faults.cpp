@@ -345,7 +345,9 @@ ExcludeAdvice exclude_advice(std::span<const FaultRun> runs, std::span<const dou
     for (const IndexRange& r : stretches)
       if (coverage(r) > coverage(wide)) wide = r;
     if (coverage(wide) >= std::max(kNarrowStretch, 1.5 * covered))
-      w += fmt::format(" (samples {}:{}, {:.3g} % of the training range, cover {:.3g} %)", wide.begin, wide.end,
+      w += fmt::format("; the stretch that covers the most is samples {}:{} (--train {}:{}, {:.3g} % of the training "
+                       "range, {:.3g} % of the span)",
+                       wide.begin, wide.end, wide.begin, wide.end,
                        100.0 * static_cast<double>(wide.end - wide.begin) / static_cast<double>(m),
                        100 * coverage(wide));
   }
@@ -504,6 +506,11 @@ std::string detail::outliers_of(std::span<const double> v, std::size_t from, std
   return fmt::format("{} sample(s) of the {} lie far outside the rest (sample {}{}; 99 % of the samples lie "
                      "within [{:.6g}, {:.6g}]): a glitch, a spike or a sensor's overrange value",
                      count, which, rows, count > 5 ? ", ..." : "", lo, hi);
+}
+
+std::size_t input_reversals(std::span<const double> x, IndexRange range) {
+  const IndexRange r = detail::check_range(range, x.size(), "input_reversals");
+  return detail::reversals(x, r.begin, r.end, detail::span_of(x.subspan(r.begin, r.end - r.begin))).size();
 }
 
 std::string outlier_warning(std::span<const double> x, std::span<const double> y, IndexRange range,

@@ -231,6 +231,8 @@ void from_json(const json& j, FitReport& r, std::string_view where) {
   }
   // a range of samples a fit names: [begin, end] with begin < end
   const auto rows = [&](const json& v, const std::string& at) {
+    if (!v.is_array() || v.size() != 2 || v[1].is_null())
+      throw Error(fmt::format("{}: expected a range [begin, end] of samples with begin < end, got {}", at, v.dump()));
     IndexRange t;
     from_json(v, t, at);
     if (t.end == IndexRange::npos || t.begin >= t.end)

@@ -296,5 +296,19 @@ grep -q "the sensor faults' --train 435:1500 above has no range in seconds (the 
   "$T/stuck_dup.txt" || fail "stuck, a repeated stamp: $(grep "sensor faults'" "$T/stuck_dup.txt")"
 grep -q "in seconds: --train" "$T/stuck_dup.txt" && fail "stuck, a repeated stamp: a range in seconds"
 
+# trained on one rising branch (fit: "validate on a record with loops"): each validation record says whether it
+# has them: a.csv's 6 triangles do, the first rise of b.csv does not
+head -n 151 "$T/b.csv" > "$T/b_rise.csv"
+"$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --train 0:150 --threads 1 --validate-data "$T/a.csv" \
+  --validate-data "$T/b_rise.csv" --force --out "$T/rise.json" > "$T/rise.txt" 2>&1
+grep -q "^warning: the training input never reverses" "$T/rise.txt" || fail "one branch: no fit warning"
+grep -q "^warning: $T/a.csv: its input reverses 11 times (by more than 10 % of its span there): it scores the loops the training input did not hold" \
+  "$T/rise.txt" || fail "one branch: a.csv's loops not said: $(grep "$T/a.csv: its input" "$T/rise.txt")"
+grep -q "^warning: $T/b_rise.csv: its input never reverses (by more than 10 % of its span there), as the training input never reverses: it does not score the inner loops" \
+  "$T/rise.txt" || fail "one branch: b_rise.csv's lack of loops not said: $(grep "b_rise.csv: its input" "$T/rise.txt")"
+"$BIN" fit --model gpi --data "$T/a.csv" --input p --output y --threads 1 --validate-data "$T/b_rise.csv" --force \
+  --out "$T/all.json" > "$T/all.txt" 2>&1
+grep -q "its input never reverses\|its input reverses" "$T/all.txt" && fail "trained on loops: a validation's reversals said"
+
 if [ $fails -ne 0 ]; then echo "fit_cli: $fails failures"; exit 1; fi
 echo "fit_cli: ok"

@@ -129,6 +129,12 @@ TEST(FitQuality, ClockwiseLoopsAreNamed) {
   const FitReport pi = fit_kind(loops(150), FitModel::pi);
   EXPECT_TRUE(warned(pi, "turn clockwise")) << pi.full_report();
   EXPECT_FALSE(warned(pi, "--model pi")) << pi.full_report();
+  // auto has compared pi: the warning says so instead
+  const FitReport a = fit_kind(loops(150), FitModel::automatic);
+  ASSERT_NE(a.model_kind, FitModel::pi) << a.full_report();  // (it chooses another kind: the case to check)
+  EXPECT_TRUE(warned(a, "turn clockwise")) << a.full_report();
+  EXPECT_FALSE(warned(a, "--model pi")) << a.full_report();
+  EXPECT_TRUE(warned(a, "pi, which allows negative weights, is among the candidates")) << a.full_report();
   EXPECT_FALSE(warned(fit_kind(loops(), FitModel::kp), "turn clockwise"));
   const double w = 2.0 * std::acos(-1.0) / 1000.0;  // 1000 samples per cycle
   const Record open = record([&](int k) { return 0.5 - 0.4 * std::cos(w * k); }, 4500);  // 4.5 cycles: ends on top

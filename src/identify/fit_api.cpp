@@ -210,6 +210,8 @@ std::string refusal(const TrainingRanges& r) {
 FitReport fit_one(std::span<const double> x, std::span<const double> y, const FitOptions& o, IndexRange tr,
                   Clock::time_point t0);
 
+// The end of the clockwise-loops warning of a kind other than pi; auto's refit replaces it (pi is a candidate).
+constexpr std::string_view kComparePi = ", or compare with --model pi, which allows negative weights";
 constexpr std::string_view kDecreasingWarning = "the output decreases with the input: the model has a negative output_gain";
 
 // One orientation of the record: the input as it is.
@@ -378,7 +380,7 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
           "where hysteresis lags; a time shift between the columns (an input sensor's delay), a rate effect or "
           "swapped columns can turn them. Kinds with nonnegative weights (gpi, mpi-asym, preisach, kp) cannot follow "
           "such loops; check the columns' timing") +
-          (o.model == FitModel::pi ? "" : ", or compare with --model pi, which allows negative weights"));
+          (o.model == FitModel::pi ? "" : std::string(kComparePi)));
   }
   if (const std::size_t rev = turns.size(); rev < 2)
     rep.warnings.push_back(fmt::format(
@@ -754,6 +756,9 @@ FitReport fit_auto(std::span<const double> x, std::span<const double> y, const F
   FitOptions of = o;
   of.model = cands[best].kind;
   FitReport rep = fit_one(x, y, of, tr, t0);
+  for (std::string& w : rep.warnings)  // pi was compared: it is among the candidates
+    if (w.ends_with(kComparePi)) w.replace(w.size() - kComparePi.size(), kComparePi.size(), "; pi, which allows "
+                                           "negative weights, is among the candidates");
   rep.candidates = std::move(cands);
   rep.message = fmt::format(
       "auto: {} chosen (hold-out score {:.4g}: the geometric mean over the first and the last {:.0f}% of the "

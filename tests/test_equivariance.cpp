@@ -732,6 +732,16 @@ TEST(FitAuto, ConstantOutputIsRefusedAndUnrunCandidatesHaveNoMetrics) {
                                        x.size(), x.size())),
             std::string::npos)
       << c.message;
+  // refused: no sensor-fault warnings on what was not fitted (a review of 2026-12-03: "the output sensor clips
+  // there ... the model is fitted to the limit there", and its rows in fault_runs)
+  for (const FitModel kind : {FitModel::automatic, FitModel::gpi}) {
+    const FitReport k = fit(x, std::vector<double>(x.size(), 5.0), options_for(kind));
+    EXPECT_EQ(k.status, FitStatus::invalid_input);
+    EXPECT_TRUE(k.fault_runs.empty()) << k.full_report();
+    EXPECT_FALSE(std::any_of(k.warnings.begin(), k.warnings.end(),
+                             [](const std::string& w) { return w.find("clips") != std::string::npos; }))
+        << k.full_report();
+  }
   o.sample_time = 0;  // rate-pi cannot run
   std::vector<double> y;
   for (double v : x) y.push_back(std::tanh(0.3 * v) + 0.05 * v);

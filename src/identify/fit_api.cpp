@@ -358,6 +358,8 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
       // (a dead band around 0: a model without loops has an area of rounding's sign)
       lost_loops = std::abs(ratio) < kNarrowLoops;
       const bool jittered = o.model == FitModel::gpi && !o.gpi_free_weights;  // FitOptions::seed jitters its starts
+      // the k-th seed after o.seed, past the wrap to 0 (seed 0: no jitter)
+      const auto next_seed = [&](unsigned k) { const unsigned s = o.seed + k; return s < k ? s + 1 : s; };
       if (ratio < kNarrowLoops)
         rep.warnings.push_back(fmt::format(
             "the model's loops over the training range {} (the record's mean loop width is {:.2g} % of the output's "
@@ -371,7 +373,7 @@ FitReport fit_oriented(std::span<const double> x, std::span<const double> y, con
                                       o.seed == 0 ? "other jittered starts (--seed 2, 3, ...: seed 1's were tried "
                                                     "and were no better)"
                                                   : fmt::format("other jittered starts (--seed {}, {}, ...)",
-                                                                o.seed + 1, o.seed + 2))
+                                                                next_seed(1), next_seed(2)))
                         : "the fit has lost the hysteresis; try another kind"));
     }
     if (path > 0 && area / (0.5 * path) > kNegligible)
@@ -810,6 +812,8 @@ FitReport fit(std::span<const double> x, std::span<const double> y, const FitOpt
   };
   FitReport rep = run(y);
   detail::check_stop(options);  // a fit that saw the stop after its LM has no report either
+  // refused data (a constant output, too few samples): its message says why, and there is no fit to warn about
+  if (rep.status == FitStatus::invalid_input) return rep;
   Clipping clip = detect_clipping(y.subspan(tr.begin, tr.end - tr.begin));
   // An output pinned at its least or largest value while the input moves on (pinned_runs), where detect_clipping
   // saw no limit (fewer than 50 samples at it or 100 in all, no noise to tell it by): a limit as well.
